@@ -1,0 +1,138 @@
+"""Input signals and estimation results: the data containers of roadbank.
+
+Everything is SI and ISO 8855 (x forward, y left, z up; yaw rate positive
+turning left; ``ay`` positive to the left; roll and bank positive left side up).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .params import VehicleParams
+
+CHANNELS = ("t", "vx", "ay", "r", "delta_f")
+
+
+def _as_1d(name: str, a) -> np.ndarray:
+    try:
+        arr = np.asarray(a, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"Signals.{name}: not numeric ({exc})") from None
+    if arr.ndim == 0:
+        arr = arr.reshape(1)
+    if arr.ndim != 1:
+        raise ValueError(f"Signals.{name}: expected a 1-D array, got shape {arr.shape}")
+    return arr
+
+
+@dataclass(frozen=True)
+class Signals:
+    """ESP signals of one log, validated.
+
+    Parameters
+    ----------
+    t : array (s)
+        Sample times, finite and strictly increasing.
+    vx : array (m/s)
+        Longitudinal speed.
+    ay : array (m/s^2)
+        Measured lateral acceleration (specific force), positive to the left.
+    r : array (rad/s)
+        Yaw rate, positive turning left.
+    delta_f : array (rad)
+        Front road-wheel angle, positive to the left. Use
+        :meth:`from_steering_wheel` when the log holds the steering-wheel angle.
+
+    NaN / inf samples in ``vx, ay, r, delta_f`` are allowed: the estimators hold
+    their output there and flag it not valid. The time base itself must be clean.
+    """
+
+    t: np.ndarray
+    vx: np.ndarray
+    ay: np.ndarray
+    r: np.ndarray
+    delta_f: np.ndarray
+
+    def __post_init__(self) -> None:
+        arrays = {name: _as_1d(name, getattr(self, name)) for name in CHANNELS}
+        n = len(arrays["t"])
+        if n == 0:
+            raise ValueError("Signals: empty arrays (no samples)")
+        lengths = {name: len(a) for name, a in arrays.items()}
+        if len(set(lengths.values())) != 1:
+            raise ValueError(f"Signals: mismatched lengths {lengths}")
+        t = arrays["t"]
+        if not np.all(np.isfinite(t)):
+            bad = int(np.flatnonzero(~np.isfinite(t))[0])
+            raise ValueError(f"Signals.t: non-finite time at sample {bad}")
+        if n > 1:
+            dt = np.diff(t)
+            if np.any(dt <= 0):
+                bad = int(np.flatnonzero(dt <= 0)[0])
+                raise ValueError(
+                    f"Signals.t: time not strictly increasing at sample {bad + 1} "
+                    f"(t[{bad}]={t[bad]!r}, t[{bad + 1}]={t[bad + 1]!r})")
+        for name, a in arrays.items():
+            a.setflags(write=False)
+            object.__setattr__(self, name, a)
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    def __getitem__(self, index: slice) -> "Signals":
+        """Samples ``index`` (a slice) as a new :class:`Signals`."""
+        if not isinstance(index, slice):
+            raise TypeError("Signals can only be sliced with a slice")
+        return Signals(*(getattr(self, c)[index] for c in CHANNELS))
+
+    @classmethod
+    def from_steering_wheel(cls, t, vx, ay, r, steering_wheel_angle,
+                            params: VehicleParams | None = None) -> "Signals":
+        """Build signals from the steering-wheel angle (rad) instead of the road-wheel angle.
+
+        ``delta_f = steering_wheel_angle / params.steering_ratio``.
+        """
+        return cls(t, vx, ay, r, road_wheel_angle(steering_wheel_angle, params))
+
+
+def road_wheel_angle(steering_wheel_angle, params: VehicleParams | None = None) -> np.ndarray:
+    """Front road-wheel angle (rad) from the steering-wheel angle (rad) by the steering ratio."""
+    p = params or VehicleParams()
+    return np.asarray(steering_wheel_angle, dtype=np.float64) / p.steering_ratio
+
+
+@dataclass
+class Estimate:
+    """Output of one estimator over a log.
+
+    Attributes
+    ----------
+    name : str
+        Estimator name (one of :data:`roadbank.estimators.NAMES`).
+    t : array (s)
+    w : array (-)
+        Estimated ``sin(theta)`` (the observers' disturbance).
+    theta : array (rad)
+        Raw observer angle ``asin(w)`` = bank + body roll.
+    phi_b : array (rad)
+        Road bank after roll separation, ``theta - phi_hat``.
+    valid : bool array
+        False where the sample could not be used (NaN/inf input, vx below
+        v_min, a non-increasing time stamp); the outputs are held there.
+    states : dict of arrays
+        Estimator-specific internal states (e.g. ``vy``, ``r`` of the observer,
+        ``phi`` the estimated body roll), SI.
+    """
+
+    name: str
+    t: np.ndarray
+    w: np.ndarray
+    theta: np.ndarray
+    phi_b: np.ndarray
+    valid: np.ndarray
+    states: dict[str, np.ndarray] = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.t)
