@@ -1,0 +1,57 @@
+"""Bank-angle estimators behind one interface (SPEC 4).
+
+>>> from roadbank import estimators
+>>> est = estimators.make("pif-modified")
+>>> estimate = est.run(signals)           # doctest: +SKIP
+
+``NAMES`` lists the eight estimators; ``make(name, params, **tuning)`` builds one.
+Each has ``run(signals) -> Estimate``, ``step(t, vx, ay, r, delta_f)`` and ``reset()``.
+"""
+
+from __future__ import annotations
+
+from functools import partial
+
+from ..params import VehicleParams
+from .base import Estimator, StepResult
+from .dfc import DFC
+from .kalman import Kalman
+from .kinematic import Kinematic
+from .pif import PIF
+from .pio import PIO
+from .synthesis import NoStabilisingSolution
+from .uio import UIO
+
+_FACTORIES = {
+    "kinematic": Kinematic,
+    "dfc": DFC,
+    "uio": UIO,
+    "pio-original": partial(PIO, model="original"),
+    "pio-modified": partial(PIO, model="modified"),
+    "pif-modified": partial(PIF, model="modified"),
+    "pif-original": partial(PIF, model="original"),
+    "kalman": Kalman,
+}
+
+#: names of all estimators, in the order the reports list them
+NAMES = tuple(_FACTORIES)
+
+
+def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
+    """Build the estimator ``name`` (one of :data:`NAMES`) for ``params``.
+
+    ``tuning`` are the estimator's keyword options (see each class) plus the
+    common ones ``v_min`` (m/s), ``roll``, ``max_substep`` (s), ``max_gap`` (s).
+    """
+    try:
+        factory = _FACTORIES[name]
+    except KeyError:
+        raise ValueError(f"unknown estimator {name!r}; choose one of {', '.join(NAMES)}") from None
+    try:
+        return factory(params, **tuning)
+    except TypeError as exc:
+        raise ValueError(f"{name}: bad tuning option ({exc})") from None
+
+
+__all__ = ["NAMES", "make", "Estimator", "StepResult", "NoStabilisingSolution",
+           "Kinematic", "DFC", "UIO", "PIO", "PIF", "Kalman"]

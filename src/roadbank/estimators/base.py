@@ -1,0 +1,236 @@
+"""The shared estimator interface: batch ``run()``, streaming ``step()``, ``reset()``.
+
+Every estimator of roadbank is an :class:`Estimator`. Subclasses only design
+their tables (Python, once per parameter set); the per-sample recursion runs in
+one of the compiled kernels of :mod:`roadbank.estimators.kernels`, the same
+code for ``run()`` and ``step()``, so streaming and batch give identical numbers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..models.bicycle import augment, disturbance_output, modified_model, original_model
+from ..models.roll import roll_state_space
+from ..params import VehicleParams
+from ..signals import Estimate, Signals
+from . import kernels as K
+
+#: Default speed grid of the gain schedules (m/s): v_min .. V_GRID_MAX.
+V_GRID_MAX = 100.0
+V_GRID_STEP = 0.25
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """Output of :meth:`Estimator.step` for one sample.
+
+    ``w`` (-), ``theta`` and ``phi_b`` (rad), ``valid`` (bool).
+    """
+
+    w: float
+    theta: float
+    phi_b: float
+    valid: bool
+
+
+def speed_grid(v_min: float, v_max: float = V_GRID_MAX, step: float = V_GRID_STEP) -> np.ndarray:
+    """Uniform speed grid (m/s) of the gain schedules, from ``v_min`` to at least ``v_max``."""
+    n = int(np.ceil((v_max - v_min) / step)) + 1
+    return v_min + step * np.arange(n)
+
+
+class Estimator:
+    """Base class of all bank-angle estimators.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        Design parameters (the estimator's model of the car).
+    v_min : float, default 5.0
+        Minimum speed (m/s); below it the outputs are held and flagged not valid.
+    roll : {"static", "dynamic", "none"}, default "static"
+        Roll model used to separate the body roll from ``theta`` (SPEC 5).
+    max_substep : float, default 0.02
+        Longest integration substep (s) of the discretisation.
+    max_gap : float, default 1.0
+        A gap between valid samples longer than this (s) re-initialises the state.
+
+    Subclasses set ``name``, ``kernel`` ("lpv", "dfc" or "riccati"), the channel
+    usage and build ``self._tab`` / ``self._cfg_extra`` in ``_design()``.
+    """
+
+    name = "base"
+    kernel = "lpv"
+    #: which of (delta_f, ay, r) the estimator reads; others may be NaN
+    uses = (True, True, True)
+    #: names of the observer states reported in Estimate.states
+    state_names: tuple[str, ...] = ()
+
+    def __init__(self, params: VehicleParams | None = None, *, v_min: float = 5.0,
+                 roll: str = "static", max_substep: float = 0.02, max_gap: float = 1.0):
+        self.params = params if params is not None else VehicleParams()
+        if not isinstance(self.params, VehicleParams):
+            raise TypeError("params must be a roadbank.VehicleParams")
+        for label, v in (("v_min", v_min), ("max_substep", max_substep), ("max_gap", max_gap)):
+            if not np.isfinite(v) or v <= 0:
+                raise ValueError(f"{self.name}: {label} must be > 0, got {v}")
+        if v_min >= V_GRID_MAX:
+            raise ValueError(f"{self.name}: v_min must be below {V_GRID_MAX} m/s")
+        self.v_min = float(v_min)
+        self.roll = roll
+        self.max_substep = float(max_substep)
+        self.max_gap = float(max_gap)
+        self._roll = roll_state_space(self.params, roll)
+        self.vgrid = speed_grid(self.v_min)
+        self._tab, self._nstate, extra = self._design()
+        self._cfg = self._build_cfg(extra)
+        self._run_fn = getattr(K, f"{self.kernel}_run")
+        self._step_fn = getattr(K, f"{self.kernel}_step")
+        n = self._nstate
+        self._work = np.zeros(64 + 20 * n * n + 8 * n * K.NETA + 4 * n)
+        self.reset()
+
+    # -- to implement ------------------------------------------------------
+    def _design(self):  # pragma: no cover - abstract
+        """Return (table (ngrid, k), number of observer states, extra cfg floats)."""
+        raise NotImplementedError
+
+    def _initial_memory(self, mem: np.ndarray) -> None:
+        """Hook to set estimator-specific initial memory (e.g. Riccati P0)."""
+
+    # -- configuration -----------------------------------------------------
+    def _build_cfg(self, extra: np.ndarray) -> np.ndarray:
+        F, G, H, D = self._roll
+        nr = F.shape[0]
+        J = -np.linalg.solve(F, G).ravel() if nr else np.zeros(0)
+        head = np.zeros(K.C_ROLL)
+        head[K.C_N] = self._nstate
+        head[K.C_V0] = self.vgrid[0]
+        head[K.C_DV] = self.vgrid[1] - self.vgrid[0]
+        head[K.C_NG] = len(self.vgrid)
+        head[K.C_VMIN] = self.v_min
+        head[K.C_SUB] = self.max_substep
+        head[K.C_GAP] = self.max_gap
+        head[K.C_G] = self.params.g
+        head[K.C_NR] = nr
+        head[K.C_USE:K.C_USE + 3] = [float(u) for u in self.uses]
+        self._fill_cfg_head(head)
+        roll = np.concatenate([F.ravel(), G.ravel(), H.ravel(), D.ravel(), J])
+        return np.ascontiguousarray(np.concatenate([head, roll, np.asarray(extra, float).ravel()]))
+
+    def _fill_cfg_head(self, head: np.ndarray) -> None:
+        """Hook for estimator scalars stored in the cfg head (e.g. DFC a_ref)."""
+
+    # -- public API ----------------------------------------------------------
+    def reset(self) -> None:
+        """Forget all history: the next sample initialises the estimator."""
+        nr = self._roll[0].shape[0]
+        n = self._nstate
+        self._mem = np.zeros(K.M_X + n + nr + n * n + 2)
+        self._initial_memory(self._mem)
+
+    def step(self, t: float, vx: float, ay: float, r: float, delta_f: float = float("nan")) -> StepResult:
+        """Process one sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), delta_f (rad).
+
+        Returns the estimate after this sample. An unusable sample (NaN/inf,
+        ``vx < v_min``, time not after the last valid sample) leaves the state
+        unchanged and returns the held outputs with ``valid=False``.
+        """
+        ok = self._step_fn(self._mem, self._cfg, self._tab, self._work, float(t), float(vx),
+                           float(delta_f), float(ay), float(r))
+        m = self._mem
+        return StepResult(float(m[K.M_W]), float(m[K.M_THETA]), float(m[K.M_PHIB]), bool(ok))
+
+    def run(self, signals: Signals, *, reset: bool = True) -> Estimate:
+        """Estimate over a whole log.
+
+        Parameters
+        ----------
+        signals : Signals
+            The log (SI, ISO 8855).
+        reset : bool, default True
+            Start from scratch. ``reset=False`` continues from the current state,
+            so a log processed in consecutive chunks equals one run.
+        """
+        if not isinstance(signals, Signals):
+            raise TypeError("run() expects a roadbank.Signals")
+        if reset:
+            self.reset()
+        n = len(signals)
+        w = np.empty(n)
+        theta = np.empty(n)
+        phib = np.empty(n)
+        phi = np.empty(n)
+        valid = np.empty(n, dtype=np.bool_)
+        xs = np.empty((n, max(self._nstate, 2)))
+        self._run_fn(self._mem, self._cfg, self._tab, signals.t, signals.vx, signals.delta_f,
+                     signals.ay, signals.r, w, theta, phib, phi, valid, xs)
+        states = {name: xs[:, i] for i, name in enumerate(self.state_names)}
+        states["phi"] = phi
+        return Estimate(self.name, signals.t.copy(), w, theta, phib, valid, states)
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.name!r} v_min={self.v_min} roll={self.roll!r}>"
+
+
+def equilibrium_map(F: np.ndarray, G: np.ndarray) -> np.ndarray:
+    """Equilibrium ``xi = -F^{-1} G eta`` of ``xi' = F xi + G eta`` (F nonsingular)."""
+    if F.shape[0] == 0:
+        return np.zeros((0, G.shape[1]))
+    return -np.linalg.solve(F, G)
+
+
+class ScheduledObserver(Estimator):
+    """A linear observer whose matrices are scheduled on speed (``lpv`` kernel).
+
+    Subclasses implement :meth:`observer(vx)` returning ``(F, G, H, D)`` of
+    ``xi' = F xi + G eta``, ``w = H xi + D eta`` with ``eta = [delta_f, ay, r]``.
+    """
+
+    kernel = "lpv"
+
+    def observer(self, vx: float):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _design(self):
+        rows = []
+        n = None
+        for v in self.vgrid:
+            F, G, H, D = self.observer(float(v))
+            n = F.shape[0]
+            J = equilibrium_map(F, G)
+            rows.append(np.concatenate([F.ravel(), G.ravel(), np.ravel(H), np.ravel(D), J.ravel()]))
+        return np.ascontiguousarray(np.array(rows)), n, np.zeros(0)
+
+    def error_dynamics(self, vx: float) -> np.ndarray:
+        """Continuous-time matrix ``F(vx)`` (1/s) governing the estimation error."""
+        return self.observer(vx)[0]
+
+
+def embed_inputs(cols: dict[int, np.ndarray], n_rows: int) -> np.ndarray:
+    """Matrix with columns placed at eta positions {0: delta_f, 1: ay, 2: r}."""
+    M = np.zeros((n_rows, K.NETA))
+    for j, c in cols.items():
+        M[:, j] = np.ravel(c)
+    return M
+
+
+def augmented_design_model(params, vx: float, model: str):
+    """``(A, B, C, Dy, Lw, Ew)`` of the augmented model with inputs embedded in ``eta = [delta_f, ay, r]``.
+
+    The innovation is ``Dy eta - C x`` (measured outputs minus model outputs).
+    """
+    if model == "modified":
+        A, Bm, Ew, C, _ = augment(modified_model(params, vx))
+        B = embed_inputs({1: Bm}, 3)
+        Dy = embed_inputs({2: [1.0]}, 1)                      # y = r
+    elif model == "original":
+        A, Bo, Ew, C, D = augment(original_model(params, vx))
+        B = embed_inputs({0: Bo}, 3)
+        Dy = embed_inputs({0: -D[:, 0], 1: [1.0, 0.0], 2: [0.0, 1.0]}, 2)  # y = [ay, r] - D delta
+    else:
+        raise ValueError(f"model must be 'modified' or 'original', got {model!r}")
+    return A, B, C, Dy, disturbance_output(A.shape[0]), Ew

@@ -1,0 +1,57 @@
+r"""DFC — dynamic filter compensation (Tseng 2001; paper eq 9-15).
+
+The kinematic estimate :math:`w_v = (a_y - v_x r)/g` is trusted only as far as
+the car is near steady state. With the original model's steady-state gains
+(:func:`roadbank.models.steady_state_gains`) the DFC indicator
+
+.. math::
+    DFC = H_{aw0}(w_a - w_v) + v_x H_{rw0}(w_r - w_v),\quad
+    w_a = (a_y - H_{au0}\delta_f)/H_{aw0},\quad w_r = (r - H_{ru0}\delta_f)/H_{rw0}
+
+is zero in steady state when the model is right and approximates
+:math:`\dot v_y` in transients (m/s^2). Update law (our reading of the
+garbled eq 10, as the spec gives it):
+
+.. math::
+    w_{dfc} = w_v \max(0, 1 - |DFC|/a_{ref})
+
+followed by the paper's first-order low-pass (time constant 2/3 s). With a
+wrong ``Cf`` the gains are wrong, DFC stays non-zero in steady state (eq 14)
+and the estimate keeps a steady-state error that grows with the error.
+``a_ref`` defaults to 1.0 m/s^2 (a transient with |dvy/dt| >= 1 m/s^2 discards
+the kinematic estimate entirely; chosen by hand on the paper's scenarios).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..models.bicycle import steady_state_gains
+from . import kernels as K
+from .base import Estimator
+
+A_REF = 1.0
+TAU_LPF = 2.0 / 3.0
+
+
+class DFC(Estimator):
+    """Dynamic filter compensation. States: ``w_lpf`` (low-passed estimate), ``dfc`` (m/s^2)."""
+
+    name = "dfc"
+    kernel = "dfc"
+    uses = (True, True, True)
+    state_names = ("w_lpf", "dfc")
+
+    def __init__(self, params=None, *, a_ref=A_REF, tau=TAU_LPF, **kw):
+        if not (a_ref > 0 and tau > 0):
+            raise ValueError("dfc: a_ref and tau must be > 0")
+        self.a_ref, self.tau = float(a_ref), float(tau)
+        super().__init__(params, **kw)
+
+    def _design(self):
+        tab = np.array([steady_state_gains(self.params, float(v)) for v in self.vgrid])
+        return np.ascontiguousarray(tab), 2, np.zeros(0)
+
+    def _fill_cfg_head(self, head):
+        head[K.C_AREF] = self.a_ref
+        head[K.C_TAU] = self.tau

@@ -1,0 +1,574 @@
+r"""Compiled per-sample recursions of all estimators (numba, ``cache=True``).
+
+This is the only module with compiled estimator code; Python prepares the
+arrays. Three families share the same sample handling:
+
+* ``lpv``  — linear observers with a speed-scheduled table (kinematic, UIO,
+  PIO, steady-state PIF, Kalman): :math:`\xi' = F(v_x)\xi + G(v_x)\eta`,
+  :math:`w = H(v_x)\xi + D(v_x)\eta` with :math:`\eta = [\delta_f, a_y, r]`.
+* ``riccati`` — the PIF with the time-varying Riccati ODE (paper eq 43).
+* ``dfc`` — dynamic filter compensation (nonlinear gate + low-pass).
+
+Discretisation: the trapezoidal rule (Tustin), which is A-stable — for a
+frozen ``vx`` the discrete map :math:`(I - hF/2)^{-1}(I + hF/2)` is a contraction
+whenever ``F`` is Hurwitz, at any step ``h`` — with the step split into
+substeps of at most ``max_substep`` seconds so that the stiff low-speed poles
+(about -150 1/s) are not mapped close to -1 at low sample rates. The input is
+interpolated linearly between the previous and the current sample. The Riccati
+ODE is advanced with the same trapezoidal rule applied to its linear
+Hamiltonian form :math:`[X; Y]' = \mathcal{H}[X; Y]`, :math:`P = Y X^{-1}`.
+
+Sample handling (all families): a sample is *valid* when the time is finite
+and later than the last valid sample, ``vx`` is finite and ``>= v_min`` and
+every input channel the estimator uses is finite. Invalid samples leave the
+state untouched and repeat the last outputs. After a gap longer than
+``max_gap`` (or at the first valid sample) the state is re-initialised at the
+observer's equilibrium for the current inputs, ``xi = -F^{-1} G eta``.
+
+Memory layout of the state vector ``mem`` and the configuration ``cfg``
+are given by the ``M_*`` and ``C_*`` offsets below.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+# --- state vector ``mem`` -------------------------------------------------
+M_INIT = 0      # 1.0 once initialised
+M_TLAST = 1     # time of the last valid sample (s)
+M_W = 2         # outputs held between samples: w, theta, phi_b, phi
+M_THETA = 3
+M_PHIB = 4
+M_PHI = 5
+M_AUX = 6       # DFC: previous gated estimate
+M_ETA = 8       # previous inputs [delta_f, ay, r] (3)
+M_X = 11        # observer state (n), then roll state (nr), then Riccati P (n*n)
+
+# --- configuration ``cfg`` --------------------------------------------------
+C_N = 0         # observer states n
+C_P = 1         # Riccati: number of outputs p
+C_V0 = 2        # speed grid start (m/s), step (m/s), points
+C_DV = 3
+C_NG = 4
+C_VMIN = 5      # v_min (m/s)
+C_SUB = 6       # max substep (s)
+C_GAP = 7       # max gap before re-initialisation (s)
+C_G = 8         # gravity (m/s^2)
+C_NR = 9        # roll-model states (0 or 2)
+C_USE = 10      # uses delta_f, ay, r (3 flags)
+C_AREF = 13     # DFC a_ref (m/s^2)
+C_TAU = 14      # DFC low-pass time constant (s)
+C_ROLL = 16     # roll model: F (nr*nr), G (nr), H (nr), D (1), J (nr)
+# Riccati constants follow the roll block: Rinv (p*p), W (n*n), Mneg (n*n)
+
+NETA = 3
+
+
+@njit(cache=True)
+def _lu(M, piv, n):
+    """In-place LU factorisation with partial pivoting of ``M[:n, :n]``."""
+    for k in range(n):
+        p = k
+        big = abs(M[k, k])
+        for i in range(k + 1, n):
+            if abs(M[i, k]) > big:
+                big = abs(M[i, k])
+                p = i
+        piv[k] = p
+        if p != k:
+            for j in range(n):
+                tmp = M[k, j]
+                M[k, j] = M[p, j]
+                M[p, j] = tmp
+        d = M[k, k]
+        if d == 0.0:
+            continue
+        for i in range(k + 1, n):
+            M[i, k] /= d
+            f = M[i, k]
+            for j in range(k + 1, n):
+                M[i, j] -= f * M[k, j]
+
+
+@njit(cache=True)
+def _lu_solve(M, piv, b, n):
+    """Solve ``M x = b`` in place in ``b`` with the factors from :func:`_lu`."""
+    for k in range(n):
+        p = int(piv[k])
+        if p != k:
+            tmp = b[k]
+            b[k] = b[p]
+            b[p] = tmp
+    for i in range(n):
+        s = b[i]
+        for j in range(i):
+            s -= M[i, j] * b[j]
+        b[i] = s
+    for i in range(n - 1, -1, -1):
+        s = b[i]
+        for j in range(i + 1, n):
+            s -= M[i, j] * b[j]
+        b[i] = s / M[i, i]
+
+
+@njit(cache=True)
+def _tustin(x, F, G, e0, e1, dt, max_sub, Mw, piv, rhs):
+    """Advance ``x' = F x + G e`` over ``dt`` (trapezoidal rule, substeps, e linear in time)."""
+    n = x.shape[0]
+    if n == 0:
+        return
+    m = e0.shape[0]
+    nsub = max(1, int(math.ceil(dt / max_sub - 1e-9)))
+    h = dt / nsub
+    hh = 0.5 * h
+    for i in range(n):
+        for j in range(n):
+            Mw[i, j] = -hh * F[i, j]
+        Mw[i, i] += 1.0
+    _lu(Mw, piv, n)
+    for k in range(nsub):
+        a = (2.0 * k + 1.0) / nsub  # e0*(1-a0)+e1*a0 + e0*(1-a1)+e1*a1 = 2 e0 + (e1-e0)*(a0+a1)
+        for i in range(n):
+            s = x[i]
+            for j in range(n):
+                s += hh * F[i, j] * x[j]
+            for j in range(m):
+                s += hh * G[i, j] * (2.0 * e0[j] + a * (e1[j] - e0[j]))
+            rhs[i] = s
+        _lu_solve(Mw, piv, rhs, n)
+        for i in range(n):
+            x[i] = rhs[i]
+
+
+@njit(cache=True)
+def _grid(cfg, vx):
+    """Index and weight of ``vx`` on the speed grid (clamped at both ends)."""
+    s = (vx - cfg[C_V0]) / cfg[C_DV]
+    last = int(cfg[C_NG]) - 1
+    if last == 0 or s <= 0.0:
+        return 0, 0.0
+    if s >= last:
+        return last - 1, 1.0
+    i = int(s)
+    return i, s - i
+
+
+@njit(cache=True)
+def _lerp(tab, i, a, off, out2d):
+    """Fill ``out2d`` (row-major) from ``tab[i:i+2, off:...]`` interpolated with weight ``a``."""
+    r, c = out2d.shape
+    i1 = min(i + 1, tab.shape[0] - 1)
+    k = off
+    for p in range(r):
+        for q in range(c):
+            out2d[p, q] = tab[i, k] + a * (tab[i1, k] - tab[i, k])
+            k += 1
+    return k
+
+
+@njit(cache=True)
+def _sample_valid(mem, cfg, t, vx, d, ay, r):
+    if not (math.isfinite(t) and math.isfinite(vx)) or vx < cfg[C_VMIN]:
+        return False
+    if cfg[C_USE] > 0 and not math.isfinite(d):
+        return False
+    if cfg[C_USE + 1] > 0 and not math.isfinite(ay):
+        return False
+    if cfg[C_USE + 2] > 0 and not math.isfinite(r):
+        return False
+    if mem[M_INIT] > 0 and t <= mem[M_TLAST]:
+        return False
+    return True
+
+
+@njit(cache=True)
+def _roll_views(cfg, mem):
+    n = int(cfg[C_N])
+    nr = int(cfg[C_NR])
+    o = C_ROLL
+    F = cfg[o:o + nr * nr].reshape((nr, nr))
+    o += nr * nr
+    G = cfg[o:o + nr].reshape((nr, 1))
+    o += nr
+    H = cfg[o:o + nr]
+    o += nr
+    D = cfg[o]
+    o += 1
+    J = cfg[o:o + nr]
+    z = mem[M_X + n:M_X + n + nr]
+    return F, G, H, D, J, z
+
+
+@njit(cache=True)
+def _finish(mem, cfg, w, ay, dt, restart, Mw, piv, rhs, e0, e1):
+    """Roll separation and output of one valid sample: updates the held outputs."""
+    F, G, H, D, J, z = _roll_views(cfg, mem)
+    nr = z.shape[0]
+    if restart:
+        for i in range(nr):
+            z[i] = J[i] * ay
+    else:
+        e0[0] = mem[M_AUX + 1]
+        e1[0] = ay
+        _tustin(z, F, G, e0[:1], e1[:1], dt, cfg[C_SUB], Mw, piv, rhs)
+    mem[M_AUX + 1] = ay
+    phi = D * ay
+    for i in range(nr):
+        phi += H[i] * z[i]
+    wc = min(1.0, max(-1.0, w))
+    theta = math.asin(wc)
+    mem[M_W] = w
+    mem[M_THETA] = theta
+    mem[M_PHI] = phi
+    mem[M_PHIB] = theta - phi
+
+
+@njit(cache=True)
+def _begin(mem, cfg, t):
+    """Common start of a valid sample: returns (dt, restart) and records the time."""
+    restart = mem[M_INIT] == 0.0 or (t - mem[M_TLAST]) > cfg[C_GAP]
+    dt = 0.0 if restart else t - mem[M_TLAST]
+    mem[M_INIT] = 1.0
+    mem[M_TLAST] = t
+    return dt, restart
+
+
+# --------------------------------------------------------------------------
+# LPV observers
+# --------------------------------------------------------------------------
+
+@njit(cache=True)
+def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
+    """One sample of a scheduled linear observer. Returns True if the sample was valid.
+
+    ``tab`` rows (one per grid speed): F (n*n), G (n*3), H (n), D (3), J (n*3).
+    ``work`` is a scratch array of at least ``6 + 4 n + 3 n^2 + 8`` floats.
+    """
+    if not _sample_valid(mem, cfg, t, vx, d, ay, r):
+        return False
+    n = int(cfg[C_N])
+    i, a = _grid(cfg, vx)
+    o = 0
+    F = work[o:o + n * n].reshape((n, n))
+    o += n * n
+    G = work[o:o + n * NETA].reshape((n, NETA))
+    o += n * NETA
+    H = work[o:o + n].reshape((1, n))
+    o += n
+    Dm = work[o:o + NETA].reshape((1, NETA))
+    o += NETA
+    e1 = work[o:o + NETA]
+    o += NETA
+    rhs = work[o:o + max(n, 2)]
+    o += max(n, 2)
+    Mw = work[o:o + max(n, 2) * max(n, 2)].reshape((max(n, 2), max(n, 2)))
+    o += max(n, 2) * max(n, 2)
+    piv = work[o:o + max(n, 2)]
+    o += max(n, 2)
+    er = work[o:o + 2]
+    o += 2
+    e1[0] = d if cfg[C_USE] > 0 else 0.0
+    e1[1] = ay if cfg[C_USE + 1] > 0 else 0.0
+    e1[2] = r if cfg[C_USE + 2] > 0 else 0.0
+    e0 = mem[M_ETA:M_ETA + NETA]
+    x = mem[M_X:M_X + n]
+    k = _lerp(tab, i, a, 0, F)
+    k = _lerp(tab, i, a, k, G)
+    k = _lerp(tab, i, a, k, H)
+    k = _lerp(tab, i, a, k, Dm)
+    dt, restart = _begin(mem, cfg, t)
+    if restart:
+        J = work[o:o + n * NETA].reshape((n, NETA))
+        _lerp(tab, i, a, k, J)
+        for p in range(n):
+            s = 0.0
+            for q in range(NETA):
+                s += J[p, q] * e1[q]
+            x[p] = s
+    else:
+        _tustin(x, F, G, e0, e1, dt, cfg[C_SUB], Mw, piv, rhs)
+    w = 0.0
+    for p in range(n):
+        w += H[0, p] * x[p]
+    for q in range(NETA):
+        w += Dm[0, q] * e1[q]
+    for q in range(NETA):
+        e0[q] = e1[q]
+    _finish(mem, cfg, w, ay, dt, restart, Mw, piv, rhs, er[0:1], er[1:2])
+    return True
+
+
+@njit(cache=True)
+def lpv_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
+            out_x):
+    """Batch version of :func:`lpv_step` (same arithmetic, sample by sample)."""
+    n = int(cfg[C_N])
+    work = np.zeros(16 + 8 * n + 4 * n * n + 4 * NETA * max(n, 1))
+    for k in range(t.shape[0]):
+        ok = lpv_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])
+        out_valid[k] = ok
+        out_w[k] = mem[M_W]
+        out_theta[k] = mem[M_THETA]
+        out_phib[k] = mem[M_PHIB]
+        out_phi[k] = mem[M_PHI]
+        for p in range(n):
+            out_x[k, p] = mem[M_X + p]
+
+
+# --------------------------------------------------------------------------
+# Dynamic filter compensation
+# --------------------------------------------------------------------------
+
+@njit(cache=True)
+def dfc_step(mem, cfg, tab, work, t, vx, d, ay, r):
+    r"""One sample of the DFC estimator. ``tab`` rows: Haw0, Hrw0, Hau0, Hru0.
+
+    .. math::
+        w_v = (a_y - v_x r)/g,\quad
+        DFC = H_{aw0}(w_a - w_v) + v_x H_{rw0}(w_r - w_v)
+            = (a_y - H_{au0}\delta) + v_x (r - H_{ru0}\delta) - (H_{aw0} + v_x H_{rw0}) w_v
+
+    (the second form avoids dividing by ``Hrw0``, which vanishes for a neutral
+    steer car), gate :math:`w_v \max(0, 1 - |DFC|/a_{ref})`, then a first-order
+    low-pass of time constant ``tau``. State ``mem[M_X]`` is the low-pass output,
+    ``mem[M_X+1]`` the DFC indicator (m/s^2).
+    """
+    if not _sample_valid(mem, cfg, t, vx, d, ay, r):
+        return False
+    i, a = _grid(cfg, vx)
+    H4 = work[0:4].reshape((1, 4))
+    _lerp(tab, i, a, 0, H4)
+    g = cfg[C_G]
+    wv = (ay - vx * r) / g
+    dfc = (ay - H4[0, 2] * d) + vx * (r - H4[0, 3] * d) - (H4[0, 0] + vx * H4[0, 1]) * wv
+    gated = wv * max(0.0, 1.0 - abs(dfc) / cfg[C_AREF])
+    dt, restart = _begin(mem, cfg, t)
+    Mw = work[4:8].reshape((2, 2))
+    rhs = work[8:10]
+    e0 = work[10:11]
+    e1 = work[11:12]
+    piv = work[14:16]
+    x = mem[M_X:M_X + 1]
+    if restart:
+        x[0] = gated
+    else:
+        F = work[12:13].reshape((1, 1))
+        G = work[13:14].reshape((1, 1))
+        F[0, 0] = -1.0 / cfg[C_TAU]
+        G[0, 0] = 1.0 / cfg[C_TAU]
+        e0[0] = mem[M_AUX]
+        e1[0] = gated
+        _tustin(x, F, G, e0, e1, dt, cfg[C_SUB], Mw, piv, rhs)
+    mem[M_AUX] = gated
+    mem[M_X + 1] = dfc
+    _finish(mem, cfg, x[0], ay, dt, restart, Mw, piv, rhs, e0, e1)
+    return True
+
+
+@njit(cache=True)
+def dfc_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
+            out_x):
+    """Batch version of :func:`dfc_step`."""
+    work = np.zeros(16)
+    for k in range(t.shape[0]):
+        ok = dfc_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])
+        out_valid[k] = ok
+        out_w[k] = mem[M_W]
+        out_theta[k] = mem[M_THETA]
+        out_phib[k] = mem[M_PHIB]
+        out_phi[k] = mem[M_PHI]
+        out_x[k, 0] = mem[M_X]
+        out_x[k, 1] = mem[M_X + 1]
+
+
+# --------------------------------------------------------------------------
+# PIF with the time-varying Riccati equation
+# --------------------------------------------------------------------------
+
+@njit(cache=True)
+def _riccati_views(cfg, mem):
+    n = int(cfg[C_N])
+    p = int(cfg[C_P])
+    nr = int(cfg[C_NR])
+    o = C_ROLL + nr * nr + 3 * nr + 1
+    Rinv = cfg[o:o + p * p].reshape((p, p))
+    o += p * p
+    W = cfg[o:o + n * n].reshape((n, n))
+    o += n * n
+    Mneg = cfg[o:o + n * n].reshape((n, n))
+    P = mem[M_X + n + nr:M_X + n + nr + n * n].reshape((n, n))
+    return n, p, Rinv, W, Mneg, P
+
+
+@njit(cache=True)
+def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
+    r"""One sample of the PIF with the Riccati ODE (paper eq 42-43).
+
+    ``tab`` rows: A (n*n), B (n*3), C (p*n), Dy (p*3), J (n*3) where the
+    innovation is ``Dy eta - C x``. ``cfg`` holds ``R^-1``, ``W = Ew Q Ew^T`` and
+    ``Mneg = th Lw^T S Lw``. Gain ``K = P C^T R^-1``;
+    :math:`\dot P = AP + PA^T + W - P(C^T R^{-1} C - \theta L^T S L)P`.
+    States after the observer and roll states: P (n*n). If P stops being
+    finite (no bounded solution for this ``th``) the sample is flagged invalid
+    and P restarts from its initial value held in ``cfg`` (not reached with
+    the default tuning).
+    """
+    if not _sample_valid(mem, cfg, t, vx, d, ay, r):
+        return False
+    n, p, Rinv, W, Mneg, P = _riccati_views(cfg, mem)
+    i, a = _grid(cfg, vx)
+    o = 0
+    A = work[o:o + n * n].reshape((n, n))
+    o += n * n
+    B = work[o:o + n * NETA].reshape((n, NETA))
+    o += n * NETA
+    C = work[o:o + p * n].reshape((p, n))
+    o += p * n
+    Dy = work[o:o + p * NETA].reshape((p, NETA))
+    o += p * NETA
+    J = work[o:o + n * NETA].reshape((n, NETA))
+    o += n * NETA
+    K = work[o:o + n * p].reshape((n, p))
+    o += n * p
+    F = work[o:o + n * n].reshape((n, n))
+    o += n * n
+    G = work[o:o + n * NETA].reshape((n, NETA))
+    o += n * NETA
+    Hm = work[o:o + 4 * n * n].reshape((2 * n, 2 * n))
+    o += 4 * n * n
+    Mw = work[o:o + 4 * n * n].reshape((2 * n, 2 * n))
+    o += 4 * n * n
+    Z = work[o:o + 2 * n * n].reshape((2 * n, n))
+    o += 2 * n * n
+    col = work[o:o + 2 * n]
+    o += 2 * n
+    e1 = work[o:o + NETA]
+    o += NETA
+    piv = work[o:o + 2 * n]
+    o += 2 * n
+    er = work[o:o + 2]
+    o += 2
+    e1[0] = d if cfg[C_USE] > 0 else 0.0
+    e1[1] = ay if cfg[C_USE + 1] > 0 else 0.0
+    e1[2] = r if cfg[C_USE + 2] > 0 else 0.0
+    e0 = mem[M_ETA:M_ETA + NETA]
+    x = mem[M_X:M_X + n]
+    k = _lerp(tab, i, a, 0, A)
+    k = _lerp(tab, i, a, k, B)
+    k = _lerp(tab, i, a, k, C)
+    k = _lerp(tab, i, a, k, Dy)
+    _lerp(tab, i, a, k, J)
+    dt, restart = _begin(mem, cfg, t)
+    if restart:
+        for q in range(n):
+            s = 0.0
+            for j in range(NETA):
+                s += J[q, j] * e1[j]
+            x[q] = s
+    else:
+        nsub = max(1, int(math.ceil(dt / cfg[C_SUB] - 1e-9)))
+        h = dt / nsub
+        for sub in range(nsub):
+            # gain from the current P, then the state over the substep
+            for q in range(n):
+                for j in range(p):
+                    s = 0.0
+                    for l in range(n):
+                        for mm in range(p):
+                            s += P[q, l] * C[mm, l] * Rinv[mm, j]
+                    K[q, j] = s
+            for q in range(n):
+                for j in range(n):
+                    s = A[q, j]
+                    for l in range(p):
+                        s -= K[q, l] * C[l, j]
+                    F[q, j] = s
+                for j in range(NETA):
+                    s = B[q, j]
+                    for l in range(p):
+                        s += K[q, l] * Dy[l, j]
+                    G[q, j] = s
+            a0 = sub / nsub
+            a1 = (sub + 1.0) / nsub
+            for j in range(NETA):
+                col[j] = e0[j] + a0 * (e1[j] - e0[j])
+                col[NETA + j] = e0[j] + a1 * (e1[j] - e0[j])
+            _tustin(x, F, G, col[:NETA].copy(), col[NETA:2 * NETA].copy(), h, h, Mw, piv, Z[:, 0].copy())
+            # Riccati via the Hamiltonian: Z' = Hm Z, Hm = [[-A^T, M], [W, A]], Z = [I; P]
+            for q in range(n):
+                for j in range(n):
+                    mpos = 0.0
+                    for l in range(p):
+                        for mm in range(p):
+                            mpos += C[l, q] * Rinv[l, mm] * C[mm, j]
+                    Hm[q, j] = -A[j, q]
+                    Hm[q, n + j] = mpos - Mneg[q, j]
+                    Hm[n + q, j] = W[q, j]
+                    Hm[n + q, n + j] = A[q, j]
+            for q in range(2 * n):
+                for j in range(2 * n):
+                    Mw[q, j] = -0.5 * h * Hm[q, j]
+                Mw[q, q] += 1.0
+            _lu(Mw, piv, 2 * n)
+            for j in range(n):
+                for q in range(2 * n):
+                    zq = 1.0 if q == j else 0.0
+                    if q >= n:
+                        zq = P[q - n, j]
+                    col[q] = zq
+                for q in range(2 * n):
+                    s = col[q]
+                    for l in range(2 * n):
+                        zl = (1.0 if l == j else 0.0) if l < n else P[l - n, j]
+                        s += 0.5 * h * Hm[q, l] * zl
+                    Z[q, j] = s
+            for j in range(n):
+                for q in range(2 * n):
+                    col[q] = Z[q, j]
+                _lu_solve(Mw, piv, col, 2 * n)
+                for q in range(2 * n):
+                    Z[q, j] = col[q]
+            # P = Y X^-1  <=>  X^T P^T = Y^T ; P symmetric
+            X = Z[:n, :].copy()
+            Xt = X.T.copy()
+            _lu(Xt, piv, n)
+            for j in range(n):
+                for q in range(n):
+                    col[q] = Z[n + j, q]
+                _lu_solve(Xt, piv, col, n)
+                for q in range(n):
+                    F[j, q] = col[q]
+            ok = True
+            for q in range(n):
+                for j in range(n):
+                    v = 0.5 * (F[q, j] + F[j, q])
+                    if not math.isfinite(v):
+                        ok = False
+                    P[q, j] = v
+            if not ok:
+                return False
+    w = x[n - 1]
+    for q in range(NETA):
+        e0[q] = e1[q]
+    _finish(mem, cfg, w, ay, dt, restart, Mw, piv, col, er[0:1], er[1:2])
+    return True
+
+
+@njit(cache=True)
+def riccati_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
+                out_x):
+    """Batch version of :func:`riccati_step`."""
+    n = int(cfg[C_N])
+    work = np.zeros(64 + 20 * n * n + 8 * n * NETA + 4 * n)
+    for k in range(t.shape[0]):
+        ok = riccati_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])
+        out_valid[k] = ok
+        out_w[k] = mem[M_W]
+        out_theta[k] = mem[M_THETA]
+        out_phib[k] = mem[M_PHIB]
+        out_phi[k] = mem[M_PHI]
+        for q in range(n):
+            out_x[k, q] = mem[M_X + q]

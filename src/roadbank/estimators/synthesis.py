@@ -1,0 +1,75 @@
+r"""Gain synthesis for the observers: game-type Riccati (H-infinity / Kalman) and pole placement.
+
+All functions are pure numpy/scipy and work on one frozen speed; the
+estimators call them on every point of their speed grid.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.linalg import solve_continuous_are
+from scipy.signal import place_poles
+
+
+class NoStabilisingSolution(ValueError):
+    """The filter Riccati equation has no stabilising, positive-definite solution."""
+
+
+def game_are(A: np.ndarray, C: np.ndarray, Lw: np.ndarray, W: np.ndarray, R: np.ndarray,
+             S: np.ndarray, th: float, *, where: str = "") -> np.ndarray:
+    r"""Stabilising solution of the filter (game-type) algebraic Riccati equation (paper eq 44).
+
+    .. math::
+        A P + P A^T + W - P (C^T R^{-1} C - \theta L_w^T S L_w) P = 0
+
+    solved as the dual control ARE of ``scipy.linalg.solve_continuous_are`` with
+    ``a = A^T``, ``b = [C^T, L_w^T]``, ``q = W``, ``r = diag(R, -S^{-1}/\theta)``.
+    ``th = 0`` gives the Kalman-Bucy filter ARE.
+
+    Raises
+    ------
+    NoStabilisingSolution
+        if no solution exists, or it is not positive definite, or the filter
+        ``A - P C^T R^{-1} C`` or the game closed loop is not Hurwitz. ``where``
+        (e.g. ``"vx=12.0 m/s"``) is added to the message.
+    """
+    R = np.atleast_2d(R).astype(float)
+    S = np.atleast_2d(S).astype(float)
+    if th < 0:
+        raise ValueError(f"th must be >= 0, got {th}")
+    try:
+        if th == 0:
+            P = solve_continuous_are(A.T, C.T, W, R)
+        else:
+            b = np.hstack([C.T, Lw.T])
+            r = np.zeros((b.shape[1], b.shape[1]))
+            p = C.shape[0]
+            r[:p, :p] = R
+            r[p:, p:] = -np.linalg.inv(S) / th
+            P = solve_continuous_are(A.T, b, W, r)
+    except (np.linalg.LinAlgError, ValueError) as exc:
+        raise NoStabilisingSolution(
+            f"no stabilising solution of the H-infinity Riccati equation for th={th} {where}: {exc}. "
+            "Lower th (th=0 is the Kalman filter).") from None
+    P = 0.5 * (P + P.T)
+    Rinv = np.linalg.inv(R)
+    eig_p = np.linalg.eigvalsh(P)
+    if not np.all(np.isfinite(P)) or eig_p.min() <= 0:
+        raise NoStabilisingSolution(
+            f"H-infinity Riccati solution is not positive definite for th={th} {where} "
+            f"(smallest eigenvalue {eig_p.min():.3g}): the H-infinity bound 1/th is not achievable; "
+            "lower th.")
+    filt = A - P @ C.T @ Rinv @ C
+    game = A - P @ (C.T @ Rinv @ C - th * Lw.T @ S @ Lw)
+    for label, M in (("filter", filt), ("game closed loop", game)):
+        worst = np.linalg.eigvals(M).real.max()
+        if worst >= 0:
+            raise NoStabilisingSolution(
+                f"H-infinity {label} not stable for th={th} {where} (eigenvalue real part "
+                f"{worst:.3g}); lower th.")
+    return P
+
+
+def place_observer(A: np.ndarray, C: np.ndarray, poles) -> np.ndarray:
+    """Observer gain ``K`` with ``eig(A - K C) = poles`` (scipy ``place_poles`` on the dual)."""
+    return place_poles(A.T, C.T, np.asarray(poles)).gain_matrix.T
