@@ -1,0 +1,15 @@
+"""Reading real logs: CSV, Parquet, MDF4 and comma2k19 -> :class:`Log` (SI, ISO 8855).
+
+Entry point: :func:`load_log`. Channel maps (TOML) name the columns and their
+units / sign convention (:mod:`roadbank.io.channels`); channels at different
+rates are put on one time base (:mod:`roadbank.io.resample`). Every bad input
+raises :class:`LogError` naming the file, the channel and the problem.
+"""
+
+from .channels import ChannelMap, ChannelSpec, default_channel_map, read_channel_map
+from .errors import LogError
+from .log import Log, load_log
+from .readers import FORMATS, detect_format
+
+__all__ = ["load_log", "Log", "LogError", "ChannelMap", "ChannelSpec", "default_channel_map",
+           "read_channel_map", "FORMATS", "detect_format"]

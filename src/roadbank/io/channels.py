@@ -1,0 +1,337 @@
+"""Channel maps: which column of a log is which signal, in which unit and sign convention.
+
+A channel map is a small TOML file (read with the standard-library ``tomllib``)::
+
+    convention = "ISO"        # sign/axis convention of the log: "ISO" (ISO 8855:
+                              # x forward, y left, z up) or "FRD" (x forward,
+                              # y right, z down); a channel may override it
+    steering_ratio = 15.0     # optional; steering-wheel / road-wheel angle
+
+    [resample]                # optional, see roadbank.io.resample
+    time_base = "auto"        # "auto", "uniform" or a role name, e.g. "lateral_acceleration"
+    rate_hz = 100.0           # rate of the uniform grid
+    max_gap_s = 0.5           # longer gaps in a channel become NaN, never bridged
+
+    [channels]
+    time = { column = "timestamp", unit = "ms" }
+    speed = { column = "v", unit = "km/h" }
+    lateral_acceleration = { column = "acc_y", unit = "g" }
+    yaw_rate = { column = "gyro_z", unit = "deg/s", convention = "FRD" }
+    steering_wheel_angle = { column = "swa", unit = "deg", invert = true }
+    reference_roll = { column = "roll", unit = "deg" }   # optional
+
+Roles (the keys of ``[channels]``) and their accepted units:
+
+==========================  ===================  ==================================
+role                        units                FRD -> ISO sign
+==========================  ===================  ==================================
+time                        s, ms, us, ns        --
+speed                       m/s, km/h, mph       none (x axis)
+lateral_acceleration        m/s^2, g             flipped (y axis)
+yaw_rate                    rad/s, deg/s         flipped (z axis)
+steering_wheel_angle        rad, deg             flipped (rotation about z)
+road_wheel_angle            rad, deg             flipped (rotation about z)
+reference_roll              rad, deg             none (rotation about x: right
+                                                 side down in FRD = left side up
+                                                 in ISO)
+==========================  ===================  ==================================
+
+``time``, ``speed``, ``lateral_acceleration``, ``yaw_rate`` and one of
+``road_wheel_angle`` / ``steering_wheel_angle`` are required (if both are given,
+the road-wheel angle is used when its column exists in the file). ``invert = true``
+flips a channel's sign on top of the convention, for sensors whose sign is odd.
+All conversion to SI and ISO 8855 happens here, at the edge; inside roadbank
+everything is SI/ISO.
+
+The default map (:func:`default_channel_map`) is roadbank's own column set, the
+one ``roadbank simulate`` writes (SI, ISO): ``t, vx, ay, r, delta_f`` (or
+``steering_wheel_angle`` divided by the steering ratio when ``delta_f`` is
+absent) and the ``true_*`` truth columns, which are carried along as
+:attr:`roadbank.io.Log.truth`.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from . import units
+from .errors import LogError, channel_error
+
+#: role -> (unit kind, axis it lies along / rotates about; None for time)
+ROLES: dict[str, tuple[str, str | None]] = {
+    "time": ("time", None),
+    "speed": ("speed", "x"),
+    "lateral_acceleration": ("acceleration", "y"),
+    "yaw_rate": ("angular_rate", "z"),
+    "steering_wheel_angle": ("angle", "z"),
+    "road_wheel_angle": ("angle", "z"),
+    "reference_roll": ("angle", "x"),
+}
+REQUIRED = ("time", "speed", "lateral_acceleration", "yaw_rate")
+STEERING = ("road_wheel_angle", "steering_wheel_angle")
+CONVENTIONS = ("ISO", "FRD")
+TIME_BASES = ("auto", "uniform")
+
+
+@dataclass(frozen=True)
+class ChannelSpec:
+    """Where one signal is in a log and how to convert it.
+
+    Parameters
+    ----------
+    role : str
+        One of :data:`ROLES`.
+    column : str
+        Column (CSV/Parquet) or channel (MDF4) name.
+    unit : str
+        Unit of the stored values (see :mod:`roadbank.io.units`).
+    convention : str or None
+        "ISO" or "FRD"; None means the map's default.
+    invert : bool
+        Extra sign flip on top of the convention.
+    """
+
+    role: str
+    column: str
+    unit: str
+    convention: str | None = None
+    invert: bool = False
+
+    @property
+    def kind(self) -> str:
+        return ROLES[self.role][0]
+
+
+@dataclass(frozen=True)
+class ChannelMap:
+    """Which column is which signal, with units and sign convention.
+
+    Attributes
+    ----------
+    channels : dict role -> ChannelSpec
+    convention : str
+        Default convention of the channels, "ISO" or "FRD".
+    steering_ratio : float or None
+        Steering-wheel / road-wheel angle; None -> the vehicle parameters' ratio.
+    time_base, rate_hz, max_gap_s
+        Resampling settings, see :func:`roadbank.io.resample.common_time_base`.
+    truth_prefix : str or None
+        Columns starting with it are carried as truth (SI, ISO, no conversion).
+    source : str
+        Where the map came from (file name or "default"), for messages.
+    """
+
+    channels: dict[str, ChannelSpec]
+    convention: str = "ISO"
+    steering_ratio: float | None = None
+    time_base: str = "auto"
+    rate_hz: float = 100.0
+    max_gap_s: float = 0.5
+    truth_prefix: str | None = None
+    source: str = "<map>"
+
+    def __post_init__(self) -> None:
+        src = self.source
+        if self.convention not in CONVENTIONS:
+            raise LogError(f"{src}: convention must be one of {CONVENTIONS}, got '{self.convention}'")
+        for role in REQUIRED:
+            if role not in self.channels:
+                raise LogError(f"{src}: channel map has no '{role}' channel (required)")
+        if not any(r in self.channels for r in STEERING):
+            raise LogError(f"{src}: channel map needs 'road_wheel_angle' or 'steering_wheel_angle'")
+        for role, spec in self.channels.items():
+            if role not in ROLES:
+                raise LogError(f"{src}: unknown channel role '{role}' (known: {', '.join(ROLES)})")
+            try:
+                units.factor(ROLES[role][0], spec.unit)
+            except ValueError as exc:
+                raise channel_error(src, role, spec.column, str(exc)) from None
+            if spec.convention is not None and spec.convention not in CONVENTIONS:
+                raise channel_error(src, role, spec.column,
+                                    f"convention must be one of {CONVENTIONS}, got '{spec.convention}'")
+        if self.time_base not in TIME_BASES and self.time_base not in ROLES:
+            raise LogError(f"{src}: resample.time_base must be 'auto', 'uniform' or a role name, "
+                           f"got '{self.time_base}'")
+        if not (self.rate_hz > 0 and np.isfinite(self.rate_hz)):
+            raise LogError(f"{src}: resample.rate_hz must be > 0, got {self.rate_hz}")
+        if not self.max_gap_s > 0:
+            raise LogError(f"{src}: resample.max_gap_s must be > 0, got {self.max_gap_s}")
+        if self.steering_ratio is not None and not self.steering_ratio > 0:
+            raise LogError(f"{src}: steering_ratio must be > 0, got {self.steering_ratio}")
+
+    def sign(self, role: str) -> float:
+        """Sign factor taking a stored value of ``role`` to ISO 8855."""
+        spec = self.channels[role]
+        conv = spec.convention or self.convention
+        axis = ROLES[role][1]
+        s = -1.0 if (conv == "FRD" and axis in ("y", "z")) else 1.0
+        return -s if spec.invert else s
+
+    def to_si_iso(self, role: str, values: np.ndarray) -> np.ndarray:
+        """Convert stored values of ``role`` to SI and ISO 8855 signs."""
+        spec = self.channels[role]
+        f = units.factor(spec.kind, spec.unit)
+        s = self.sign(role) if role != "time" else 1.0
+        return np.asarray(values, dtype=np.float64) * (f * s)
+
+
+def default_channel_map() -> ChannelMap:
+    """roadbank's own columns (as written by ``roadbank simulate``): SI, ISO 8855."""
+    ch = {
+        "time": ChannelSpec("time", "t", "s"),
+        "speed": ChannelSpec("speed", "vx", "m/s"),
+        "lateral_acceleration": ChannelSpec("lateral_acceleration", "ay", "m/s^2"),
+        "yaw_rate": ChannelSpec("yaw_rate", "r", "rad/s"),
+        "road_wheel_angle": ChannelSpec("road_wheel_angle", "delta_f", "rad"),
+        "steering_wheel_angle": ChannelSpec("steering_wheel_angle", "steering_wheel_angle", "rad"),
+    }
+    return ChannelMap(ch, truth_prefix="true_", source="default channel map")
+
+
+_TOP_KEYS = {"convention", "steering_ratio", "resample", "channels", "truth_prefix"}
+_RESAMPLE_KEYS = {"time_base", "rate_hz", "max_gap_s"}
+_CHANNEL_KEYS = {"column", "unit", "convention", "invert"}
+
+
+def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
+    """Build a :class:`ChannelMap` from the parsed TOML structure (see module doc)."""
+    if not isinstance(d, dict):
+        raise LogError(f"{source}: a channel map must be a table")
+    unknown = set(d) - _TOP_KEYS
+    if unknown:
+        raise LogError(f"{source}: unknown key(s) {sorted(unknown)} (known: {sorted(_TOP_KEYS)})")
+    chans = d.get("channels")
+    if not isinstance(chans, dict) or not chans:
+        raise LogError(f"{source}: missing [channels] table")
+    specs = {}
+    for role, entry in chans.items():
+        if role not in ROLES:
+            raise LogError(f"{source}: unknown channel role '{role}' (known: {', '.join(ROLES)})")
+        if isinstance(entry, str):
+            entry = {"column": entry}
+        if not isinstance(entry, dict):
+            raise LogError(f"{source}: channel '{role}' must be a table like "
+                           "{ column = \"...\", unit = \"...\" }")
+        bad = set(entry) - _CHANNEL_KEYS
+        if bad:
+            raise LogError(f"{source}: channel '{role}': unknown key(s) {sorted(bad)} "
+                           f"(known: {sorted(_CHANNEL_KEYS)})")
+        if "column" not in entry:
+            raise LogError(f"{source}: channel '{role}': no 'column'")
+        if "unit" not in entry:
+            raise channel_error(source, role, entry["column"],
+                                f"no 'unit' (SI would be '{units.SI_UNIT[ROLES[role][0]]}'; "
+                                "state it explicitly)")
+        conv = entry.get("convention")
+        specs[role] = ChannelSpec(role, str(entry["column"]), str(entry["unit"]),
+                                  None if conv is None else str(conv).upper(),
+                                  bool(entry.get("invert", False)))
+    rs = d.get("resample", {})
+    if not isinstance(rs, dict):
+        raise LogError(f"{source}: [resample] must be a table")
+    bad = set(rs) - _RESAMPLE_KEYS
+    if bad:
+        raise LogError(f"{source}: [resample]: unknown key(s) {sorted(bad)} (known: {sorted(_RESAMPLE_KEYS)})")
+    try:
+        return ChannelMap(
+            specs,
+            convention=str(d.get("convention", "ISO")).upper(),
+            steering_ratio=None if d.get("steering_ratio") is None else float(d["steering_ratio"]),
+            time_base=str(rs.get("time_base", "auto")),
+            rate_hz=float(rs.get("rate_hz", 100.0)),
+            max_gap_s=float(rs.get("max_gap_s", 0.5)),
+            truth_prefix=d.get("truth_prefix"),
+            source=source,
+        )
+    except (TypeError, ValueError) as exc:
+        if isinstance(exc, LogError):
+            raise
+        raise LogError(f"{source}: {exc}") from None
+
+
+def read_channel_map(path) -> ChannelMap:
+    """Read a channel map from a TOML file.
+
+    Raises
+    ------
+    LogError
+        If the file is missing, not valid TOML, or the map is incomplete / uses
+        an unknown role, unit or convention.
+    """
+    p = Path(path)
+    try:
+        with open(p, "rb") as fh:
+            d = tomllib.load(fh)
+    except FileNotFoundError:
+        raise LogError(f"{p}: channel map not found") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise LogError(f"{p}: not a valid TOML channel map ({exc})") from None
+    return channel_map_from_dict(d, source=str(p))
+
+
+# ---------------------------------------------------------------- plausibility
+def check_plausible(source, role: str, column: str, declared_unit: str,
+                    t_si: np.ndarray | None, v_si: np.ndarray) -> list[str]:
+    """Catch units that are obviously wrong, after conversion to SI.
+
+    Raises :class:`LogError` for values impossible for a road car in the
+    declared unit (naming the channel and the likely unit); returns warning
+    strings for values that are merely suspicious.
+    """
+    warn: list[str] = []
+    v = v_si[np.isfinite(v_si)]
+    if role == "time":
+        if len(v) > 2:
+            dt = float(np.median(np.diff(v)))
+            if dt > 1.0:
+                raise channel_error(source, role, column,
+                                    f"median sample period {dt:g} s with unit '{declared_unit}': "
+                                    "implausible for an ESP log (is the unit ms?)")
+            if 0 < dt < 1e-5:
+                raise channel_error(source, role, column,
+                                    f"median sample period {dt:g} s with unit '{declared_unit}' "
+                                    "(> 100 kHz): implausible (is the unit s rather than ms/us?)")
+        return warn
+    if len(v) == 0:
+        return warn
+    a = np.abs(v)
+    med = float(np.median(a))
+    p99 = float(np.percentile(a, 99))
+    if role == "speed" and med > 70.0:
+        hint = " -- probably km/h" if units.normalise_unit(declared_unit) == "m/s" else ""
+        raise channel_error(source, role, column,
+                            f"median speed {med:.1f} m/s after converting from '{declared_unit}' "
+                            f"exceeds 70 m/s{hint}")
+    if role == "lateral_acceleration" and p99 > 25.0:
+        hint = " -- probably m/s^2, not g" if units.normalise_unit(declared_unit) == "g" else ""
+        raise channel_error(source, role, column,
+                            f"99th-percentile |ay| = {p99:.1f} m/s^2 after converting from "
+                            f"'{declared_unit}' exceeds 2.5 g{hint}")
+    if role == "yaw_rate" and p99 > 2.0:
+        hint = " -- probably deg/s" if units.normalise_unit(declared_unit) == "rad/s" else ""
+        raise channel_error(source, role, column,
+                            f"99th-percentile |yaw rate| = {p99:.2f} rad/s after converting from "
+                            f"'{declared_unit}' exceeds 2 rad/s (115 deg/s){hint}")
+    if role == "steering_wheel_angle":
+        mx = float(a.max())
+        if mx > 4 * np.pi:
+            raise channel_error(source, role, column,
+                                f"|steering-wheel angle| reaches {mx:.1f} rad (> 720 deg) after "
+                                f"converting from '{declared_unit}' -- probably deg")
+        if p99 > 2 * np.pi:
+            warn.append(f"{source}: channel '{role}' (column '{column}'): 99th-percentile "
+                        f"|angle| {np.degrees(p99):.0f} deg exceeds one turn; check the unit")
+    if role == "road_wheel_angle" and p99 > 1.0:
+        raise channel_error(source, role, column,
+                            f"99th-percentile |road-wheel angle| = {p99:.2f} rad after converting "
+                            f"from '{declared_unit}' exceeds 1 rad -- probably deg, or a "
+                            "steering-wheel angle mapped as road-wheel angle")
+    if role == "reference_roll" and p99 > 0.6:
+        raise channel_error(source, role, column,
+                            f"99th-percentile |roll| = {p99:.2f} rad after converting from "
+                            f"'{declared_unit}' exceeds 0.6 rad (34 deg) -- probably deg")
+    return warn

@@ -1,0 +1,178 @@
+"""``load_log``: any supported file -> :class:`Log` (validated :class:`~roadbank.Signals`, SI, ISO 8855)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..params import VehicleParams
+from ..signals import Signals
+from . import readers
+from .channels import ChannelMap, check_plausible, default_channel_map, read_channel_map
+from .errors import LogError, channel_error
+from .resample import common_time_base, resample
+
+
+@dataclass
+class Log:
+    """One driving log, ready for the estimators.
+
+    Attributes
+    ----------
+    signals : Signals
+        ``t`` (s), ``vx`` (m/s), ``ay`` (m/s^2), ``r`` (rad/s), ``delta_f`` (rad), ISO 8855.
+    reference_roll : array or None
+        Reference roll angle (rad, ISO: left side up) on ``signals.t``, if the log has one.
+    source : Path
+        The file (or segment directory) read.
+    format : str
+        "csv", "parquet", "mdf4" or "comma2k19".
+    metadata : dict
+        File metadata (e.g. the scenario/condition/seed of a ``roadbank simulate`` Parquet file).
+    truth : dict name -> array
+        Truth columns (``true_*`` of simulated logs), SI, on ``signals.t``.
+    warnings : list of str
+        Suspicious but usable things found while reading (e.g. a unit that looks odd).
+    channel_map : ChannelMap or None
+        The map used (None for comma2k19, whose layout is fixed).
+    """
+
+    signals: Signals
+    reference_roll: np.ndarray | None = None
+    source: Path = Path()
+    format: str = ""
+    metadata: dict = field(default_factory=dict)
+    truth: dict = field(default_factory=dict)
+    warnings: list = field(default_factory=list)
+    channel_map: ChannelMap | None = None
+
+    def __len__(self) -> int:
+        return len(self.signals)
+
+
+def _check_time(source, column: str, t: np.ndarray, raw, label: str = "time") -> None:
+    """Time stamps must be finite and non-decreasing (duplicates are dropped later)."""
+    def where(i: int) -> str:
+        if raw is not None and raw.rownums is not None:
+            return f"{raw.row_label} {raw.rownums[i]}"
+        return f"sample {i}"
+    bad = np.flatnonzero(~np.isfinite(t))
+    if len(bad):
+        raise channel_error(source, label, column, f"missing or non-finite time at {where(int(bad[0]))}")
+    d = np.diff(t)
+    back = np.flatnonzero(d < 0)
+    if len(back):
+        i = int(back[0]) + 1
+        raise channel_error(source, label, column,
+                            f"time goes backwards at {where(i)} ({t[i - 1]!r} -> {t[i]!r})")
+
+
+def load_log(path, channels: ChannelMap | str | Path | None = None, format: str | None = None,
+             params: VehicleParams | None = None) -> Log:
+    """Read one log into SI / ISO 8855 signals on one time base.
+
+    Parameters
+    ----------
+    path : path-like
+        A CSV, Parquet or MDF4 file, or a comma2k19 segment directory.
+    channels : ChannelMap or path to a TOML channel map, optional
+        Default: roadbank's own columns (what ``roadbank simulate`` writes).
+        Not used for comma2k19 (fixed layout).
+    format : str, optional
+        "csv", "parquet", "mdf4" or "comma2k19"; default from the suffix.
+    params : VehicleParams, optional
+        Supplies the steering ratio when the map gives a steering-wheel angle
+        and no ``steering_ratio`` of its own.
+
+    Raises
+    ------
+    LogError
+        For every kind of bad input, naming the file, the channel and the problem.
+    """
+    p = Path(path)
+    fmt = (format or readers.detect_format(p)).lower()
+    if fmt not in readers.FORMATS:
+        raise LogError(f"{p}: unknown format '{fmt}' (known: {', '.join(readers.FORMATS)})")
+    if fmt == "comma2k19":
+        from .comma2k19 import load_comma2k19
+        return load_comma2k19(p, params=params)
+    if not p.exists():
+        raise LogError(f"{p}: file not found")
+    cmap = channels if isinstance(channels, ChannelMap) else (
+        read_channel_map(channels) if channels is not None else default_channel_map())
+    params = params or VehicleParams()
+
+    wanted = {spec.column: role for role, spec in cmap.channels.items()}
+    raw = readers.READERS[fmt](p, wanted, cmap.truth_prefix)
+    have = set(raw.data)
+
+    # steering: road-wheel angle if its column exists, else steering-wheel angle
+    steer_roles = [r for r in ("road_wheel_angle", "steering_wheel_angle") if r in cmap.channels]
+    present = [r for r in steer_roles if cmap.channels[r].column in have]
+    roles = ["speed", "lateral_acceleration", "yaw_rate"]
+    if not present:
+        cols = " or ".join(f"'{cmap.channels[r].column}'" for r in steer_roles)
+        raise LogError(f"{p}: channel 'steering' missing: no column {cols} in the file "
+                       f"(it has: {', '.join(raw.names) or 'nothing'})")
+    roles.append(present[0])
+    if "reference_roll" in cmap.channels:
+        roles.append("reference_roll")
+    for role in roles:
+        col = cmap.channels[role].column
+        if col not in have:
+            raise channel_error(p, role, col, f"column not found in the file "
+                                f"(it has: {', '.join(raw.names) or 'nothing'})")
+
+    warns: list[str] = []
+    series: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    shared = None
+    if fmt != "mdf4":
+        tspec = cmap.channels["time"]
+        if tspec.column not in have:
+            raise channel_error(p, "time", tspec.column, f"column not found in the file "
+                                f"(it has: {', '.join(raw.names) or 'nothing'})")
+        t = cmap.to_si_iso("time", raw.data[tspec.column])
+        _check_time(p, tspec.column, t, raw)
+        check_plausible(p, "time", tspec.column, tspec.unit, None, t)
+        shared = t
+    for role in roles:
+        spec = cmap.channels[role]
+        v = cmap.to_si_iso(role, raw.data[spec.column])
+        if fmt == "mdf4":
+            tr = raw.times[spec.column]
+            _check_time(p, spec.column, tr, None, label=role)
+        else:
+            tr = shared
+        if not np.any(np.isfinite(v)):
+            raise channel_error(p, role, spec.column, "no finite values")
+        warns += check_plausible(p, role, spec.column, spec.unit, tr, v)
+        series[role] = (tr, v)
+
+    try:
+        t_base = common_time_base(series, cmap.time_base, cmap.rate_hz, shared_clock=shared)
+        values = resample(series, t_base, cmap.max_gap_s, shared_clock=shared)
+    except LogError as exc:
+        raise LogError(f"{p}: {exc}") from None
+    if len(t_base) < 2:
+        raise LogError(f"{p}: fewer than 2 samples on the common time base")
+
+    steer = present[0]
+    if steer == "road_wheel_angle":
+        delta = values[steer]
+    else:
+        ratio = cmap.steering_ratio or params.steering_ratio
+        delta = values[steer] / ratio
+    try:
+        sig = Signals(t_base, values["speed"], values["lateral_acceleration"], values["yaw_rate"], delta)
+    except ValueError as exc:
+        raise LogError(f"{p}: {exc}") from None
+
+    truth = {}
+    if cmap.truth_prefix and shared is not None:
+        for c, arr in raw.data.items():
+            if c.startswith(cmap.truth_prefix) and c not in wanted:
+                truth[c] = arr if t_base is shared else np.interp(t_base, shared, arr)
+    return Log(signals=sig, reference_roll=values.get("reference_roll"), source=p, format=fmt,
+               metadata=dict(raw.metadata), truth=truth, warnings=warns, channel_map=cmap)

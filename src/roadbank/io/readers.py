@@ -1,0 +1,241 @@
+"""File readers: CSV, Parquet and MDF4 -> raw numeric columns.
+
+A reader knows file formats, not physics: it returns the requested columns as
+float64 arrays (missing values as NaN) in the file's own units, and reports
+anything it cannot read as a :class:`~roadbank.io.errors.LogError` naming the
+file, the column and the line/row.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .errors import LogError
+
+#: strings read as a missing sample (NaN) rather than an error
+MISSING = {"", "nan", "na", "n/a", "null", "none", "-nan", "+nan"}
+
+FORMATS = ("csv", "parquet", "mdf4", "comma2k19")
+_SUFFIX = {".csv": "csv", ".txt": "csv", ".tsv": "csv", ".parquet": "parquet", ".pq": "parquet",
+           ".mf4": "mdf4", ".mdf": "mdf4", ".mf3": "mdf4"}
+
+
+@dataclass
+class RawTable:
+    """Columns read from one file.
+
+    Attributes
+    ----------
+    names : list of str
+        Every column / channel name the file has.
+    data : dict name -> float64 array
+        The requested columns that exist, in stored units.
+    times : dict name -> float64 array
+        Per-channel time stamps (s) for formats where each channel has its own
+        clock (MDF4); empty for tables with a time column.
+    metadata : dict
+        File-level key/value metadata (Parquet schema metadata, MDF header comment).
+    row_label : str
+        How rows are counted in messages ("line" for CSV, "row" otherwise).
+    rownums : sequence of int or None
+        Row number (in that counting) of each data row, for messages (CSV:
+        file line numbers, the header being line 1). None for MDF4.
+    """
+
+    names: list[str]
+    data: dict[str, np.ndarray]
+    times: dict[str, np.ndarray] = field(default_factory=dict)
+    metadata: dict[str, str] = field(default_factory=dict)
+    row_label: str = "row"
+    rownums: object = None
+
+
+def detect_format(path) -> str:
+    """Format of ``path`` from its suffix (or a comma2k19 segment directory)."""
+    p = Path(path)
+    if p.is_dir():
+        if (p / "processed_log").is_dir():
+            return "comma2k19"
+        raise LogError(f"{p}: a directory, but not a comma2k19 segment (no processed_log/)")
+    fmt = _SUFFIX.get(p.suffix.lower())
+    if fmt is None:
+        raise LogError(f"{p}: cannot tell the format from the suffix '{p.suffix}' "
+                       f"(use --format, one of {', '.join(FORMATS)})")
+    return fmt
+
+
+def _label(labels: dict[str, str], col: str) -> str:
+    role = labels.get(col)
+    return f"channel '{role}' (column '{col}')" if role and role != col else f"column '{col}'"
+
+
+def _parse_floats(path, col: str, label: str, values, row_label: str, rownums) -> np.ndarray:
+    """Strings -> float64; missing markers -> NaN; anything else -> LogError with its row."""
+    out = np.empty(len(values), dtype=np.float64)
+    for i, s in enumerate(values):
+        if s is None:
+            out[i] = math.nan
+            continue
+        s = str(s).strip()
+        try:
+            out[i] = float(s)
+        except ValueError:
+            if s.lower() in MISSING:
+                out[i] = math.nan
+            else:
+                raise LogError(f"{path}: {label}: non-numeric value {s!r} at {row_label} "
+                               f"{rownums[i]}") from None
+    return out
+
+
+def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTable:
+    """Read a delimited text file with a header line.
+
+    Parameters
+    ----------
+    path : path-like
+    wanted : dict column -> role
+        Columns to convert (roles are used in error messages).
+    prefix : str, optional
+        Also convert every column whose name starts with it.
+    """
+    p = Path(path)
+    try:
+        with open(p, newline="", encoding="utf-8-sig") as fh:
+            text = fh.read()
+    except FileNotFoundError:
+        raise LogError(f"{p}: file not found") from None
+    except UnicodeDecodeError as exc:
+        raise LogError(f"{p}: not a text (UTF-8) CSV file ({exc.reason} at byte {exc.start})") from None
+    except OSError as exc:
+        raise LogError(f"{p}: cannot read ({exc.strerror})") from None
+    if not text.strip():
+        raise LogError(f"{p}: file is empty")
+    lines = text.splitlines()
+    header_line = lines[0]
+    delim = max((",", ";", "\t"), key=header_line.count)
+    reader = csv.reader(lines, delimiter=delim)
+    try:
+        header = [h.strip() for h in next(reader)]
+        rows = []
+        for lineno, row in enumerate(reader, start=2):
+            if not row or all(not c.strip() for c in row):
+                continue
+            if len(row) != len(header):
+                raise LogError(f"{p}: line {lineno} has {len(row)} field(s) but the header has "
+                               f"{len(header)} (truncated or corrupt file)")
+            rows.append((lineno, row))
+    except csv.Error as exc:
+        raise LogError(f"{p}: corrupt CSV ({exc})") from None
+    if len(set(header)) != len(header):
+        dup = sorted({h for h in header if header.count(h) > 1})
+        raise LogError(f"{p}: duplicate column name(s) {dup} in the header")
+    if not rows:
+        raise LogError(f"{p}: no data rows after the header")
+    linenos = [ln for ln, _ in rows]
+    cols = [c for c in header if c in wanted or (prefix and c.startswith(prefix))]
+    data = {}
+    for c in cols:
+        j = header.index(c)
+        data[c] = _parse_floats(p, c, _label(wanted, c), [row[j] for _, row in rows], "line", linenos)
+    return RawTable(header, data, row_label="line", rownums=linenos)
+
+
+def read_parquet(path, wanted: dict[str, str], prefix: str | None = None) -> RawTable:
+    """Read a Parquet file (pyarrow); schema metadata become :attr:`RawTable.metadata`."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+    import pyarrow.parquet as pq
+
+    p = Path(path)
+    if not p.exists():
+        raise LogError(f"{p}: file not found")
+    if p.stat().st_size == 0:
+        raise LogError(f"{p}: file is empty")
+    try:
+        pf = pq.ParquetFile(p)
+        schema = pf.schema_arrow
+        names = list(schema.names)
+        cols = [c for c in names if c in wanted or (prefix and c.startswith(prefix))]
+        table = pf.read(columns=cols)
+    except (pa.ArrowException, OSError, ValueError) as exc:
+        raise LogError(f"{p}: not a readable Parquet file (truncated or corrupt?): {exc}") from None
+    if table.num_rows == 0:
+        raise LogError(f"{p}: no data rows")
+    meta = {}
+    for k, v in (schema.metadata or {}).items():
+        key = k.decode("utf-8", "replace")
+        if key == "ARROW:schema":
+            continue
+        meta[key] = v.decode("utf-8", "replace")
+    data = {}
+    for c in cols:
+        col = table.column(c)
+        label = _label(wanted, c)
+        t = col.type
+        if pa.types.is_timestamp(t):
+            ns = pc.cast(col, pa.int64()).to_numpy(zero_copy_only=False)
+            data[c] = ns.astype(np.float64) * 1e-9  # seconds since the epoch
+        elif pa.types.is_integer(t) or pa.types.is_floating(t) or pa.types.is_boolean(t) \
+                or pa.types.is_decimal(t):
+            data[c] = pc.cast(col, pa.float64()).to_numpy(zero_copy_only=False)
+        elif pa.types.is_string(t) or pa.types.is_large_string(t):
+            data[c] = _parse_floats(p, c, label, col.to_pylist(), "row", range(table.num_rows))
+        else:
+            raise LogError(f"{p}: {label}: unsupported column type {t} (need numbers)")
+    return RawTable(names, data, metadata=meta, row_label="row", rownums=range(table.num_rows))
+
+
+def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTable:
+    """Read channels of an ASAM MDF4 file (needs the optional ``asammdf``: ``pip install roadbank[mdf]``).
+
+    Each MDF channel carries its own time stamps (its master channel, s); the
+    channel map's ``time`` entry is not used for MDF4.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise LogError(f"{p}: file not found")
+    if p.stat().st_size == 0:
+        raise LogError(f"{p}: file is empty")
+    try:
+        from asammdf import MDF
+    except ImportError:
+        raise LogError(f"{p}: reading MDF4 needs the optional dependency asammdf "
+                       "(pip install 'roadbank[mdf]')") from None
+    try:
+        mdf = MDF(str(p))
+    except Exception as exc:  # asammdf raises many types for corrupt files
+        raise LogError(f"{p}: not a readable MDF file (truncated or corrupt?): {exc}") from None
+    try:
+        names = [n for n in mdf.channels_db if n not in ("time", "t")] if hasattr(mdf, "channels_db") else []
+        data, times = {}, {}
+        for c in names:
+            if c in wanted or (prefix and c.startswith(prefix)):
+                try:
+                    sig = mdf.get(c)
+                except Exception as exc:
+                    raise LogError(f"{p}: {_label(wanted, c)}: cannot read ({exc})") from None
+                s = np.asarray(sig.samples)
+                if s.dtype.kind not in "fiub":
+                    s = _parse_floats(p, c, _label(wanted, c),
+                                      [x.decode() if isinstance(x, bytes) else x for x in s],
+                                      "sample", range(len(s)))
+                data[c] = np.asarray(s, dtype=np.float64)
+                times[c] = np.asarray(sig.timestamps, dtype=np.float64)
+                if len(data[c]) == 0:
+                    raise LogError(f"{p}: {_label(wanted, c)}: no samples")
+        meta = {}
+        comment = getattr(getattr(mdf, "header", None), "comment", None)
+        if comment:
+            meta["comment"] = str(comment)
+    finally:
+        mdf.close()
+    return RawTable(names, data, times=times, metadata=meta, row_label="sample", rownums=None)
+
+
+READERS = {"csv": read_csv, "parquet": read_parquet, "mdf4": read_mdf4}
