@@ -112,6 +112,11 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     steer_roles = [r for r in ("road_wheel_angle", "steering_wheel_angle") if r in cmap.channels]
     present = [r for r in steer_roles if cmap.channels[r].column in have]
     roles = ["speed", "lateral_acceleration", "yaw_rate"]
+    for role in roles:
+        col = cmap.channels[role].column
+        if col not in have:
+            raise channel_error(p, role, col, f"column not found in the file "
+                                f"(it has: {', '.join(raw.names) or 'nothing'})")
     if not present:
         cols = " or ".join(f"'{cmap.channels[r].column}'" for r in steer_roles)
         raise LogError(f"{p}: channel 'steering' missing: no column {cols} in the file "
@@ -119,10 +124,9 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     roles.append(present[0])
     if "reference_roll" in cmap.channels:
         roles.append("reference_roll")
-    for role in roles:
-        col = cmap.channels[role].column
+        col = cmap.channels["reference_roll"].column
         if col not in have:
-            raise channel_error(p, role, col, f"column not found in the file "
+            raise channel_error(p, "reference_roll", col, f"column not found in the file "
                                 f"(it has: {', '.join(raw.names) or 'nothing'})")
 
     warns: list[str] = []
