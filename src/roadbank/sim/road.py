@@ -1,0 +1,343 @@
+"""Roads: curvature, grade and a bank that varies along the path and across it.
+
+A road is described in curvilinear (Frenet) coordinates around a reference
+line: path distance ``s`` (m) along the line and lateral offset ``n`` (m, left
+positive) measured in the road surface. All profiles are piecewise linear in
+their knots and held constant beyond the end knots:
+
+* ``curvature(s)`` (1/m): in-surface (geodesic) curvature of the reference
+  line, positive turning left. On a banked curve whose lanes are horizontal
+  circles it equals the horizontal curvature times ``cos(bank)``.
+* ``grade(s)`` (rad): positive nose up (uphill).
+* ``bank(s, n) = bank_factor(s) * bank_profile(n)`` (rad): positive = left side
+  up (ISO). The profile across the road lets a flat lane lie beside a banked
+  one, or a track's bank grow towards the outer lanes; the factor along ``s``
+  fades the bank in and out (e.g. in a curve's entry transition).
+
+Truth bank
+----------
+Like CarSim, the truth road bank ``phi_b`` is computed from the heights of the
+left and right tyre contact points: the surface height across the road is
+``z(n) = int_0^n sin(bank) dn'`` and its horizontal coordinate
+``h(n) = int_0^n cos(bank) dn'``; per axle ``phi_b = atan2(z_L - z_R, h_L - h_R)``,
+averaged over the two axles (:func:`truth_bank`). On a uniformly banked road it
+is exactly the road bank.
+
+The plant uses the cheaper *secant bank* :func:`bank_under_vehicle` (the mean of
+the profile between the wheel tracks, with the vehicle aligned with the road),
+which differs from the contact-height bank by O(bank * dbank^2).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+
+LANE_WIDTH_TRACK = 16.2 / 4.0  #: lane width of the test track (m)
+
+
+def _knots(name, xs, ys, increasing=True):
+    x = np.atleast_1d(np.asarray(xs, dtype=np.float64))
+    y = np.atleast_1d(np.asarray(ys, dtype=np.float64))
+    if x.ndim != 1 or x.shape != y.shape or len(x) == 0:
+        raise ValueError(f"Road.{name}: knots must be two 1-D arrays of equal, non-zero length")
+    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+        raise ValueError(f"Road.{name}: knots must be finite")
+    if increasing and len(x) > 1 and np.any(np.diff(x) <= 0):
+        raise ValueError(f"Road.{name}: knot positions must be strictly increasing")
+    return x, y
+
+
+@dataclass(frozen=True)
+class Road:
+    """A road (see the module docstring for the coordinates and conventions).
+
+    Parameters
+    ----------
+    curvature : (s_knots, kappa_knots)
+        Reference-line curvature (1/m) against path distance (m).
+    bank_profile : (n_knots, bank_knots)
+        Bank (rad) across the road against lateral offset (m).
+    bank_factor : (s_knots, factor_knots)
+        Multiplier of the bank profile along the path (-).
+    grade : (s_knots, grade_knots)
+        Grade angle (rad) against path distance.
+    lanes : dict name -> lateral offset (m) of the lane centre.
+    closed_length : float
+        If > 0 the road is a closed loop of this length and ``s`` wraps.
+    name : str
+    """
+
+    curvature: tuple = ((0.0,), (0.0,))
+    bank_profile: tuple = ((0.0,), (0.0,))
+    bank_factor: tuple = ((0.0,), (1.0,))
+    grade: tuple = ((0.0,), (0.0,))
+    lanes: dict = field(default_factory=lambda: {"lane": 0.0})
+    closed_length: float = 0.0
+    name: str = "road"
+
+    def __post_init__(self) -> None:
+        for nm in ("curvature", "bank_profile", "bank_factor", "grade"):
+            xs, ys = _knots(nm, *getattr(self, nm))
+            object.__setattr__(self, nm, (xs, ys))
+        if np.any(np.abs(self.bank_profile[1]) * np.max(np.abs(self.bank_factor[1])) >= math.radians(60)):
+            raise ValueError("Road: |bank| must stay below 60 deg")
+        if np.any(np.abs(self.grade[1]) >= math.radians(30)):
+            raise ValueError("Road: |grade| must stay below 30 deg")
+        if not (math.isfinite(self.closed_length) and self.closed_length >= 0):
+            raise ValueError("Road.closed_length must be >= 0")
+
+    def pack(self) -> tuple:
+        """Tuple of float64 arrays for the compiled code."""
+        pn, pb = self.bank_profile
+        cum = np.zeros(len(pn))
+        for k in range(1, len(pn)):
+            cum[k] = cum[k - 1] + 0.5 * (pb[k] + pb[k - 1]) * (pn[k] - pn[k - 1])
+        return (self.curvature[0], self.curvature[1], self.bank_factor[0], self.bank_factor[1],
+                pn, pb, cum, self.grade[0], self.grade[1], np.array([float(self.closed_length)]))
+
+    # -- Python-side conveniences (vectorised over numpy arrays) -------------
+    def bank(self, s, n):
+        """Road bank (rad) at path distance ``s`` and offset ``n`` (profile value, no averaging)."""
+        s = self._wrap(np.asarray(s, dtype=float))
+        return np.interp(s, *self.bank_factor) * np.interp(n, *self.bank_profile)
+
+    def curvature_at(self, s):
+        """Reference-line curvature (1/m) at ``s``."""
+        return np.interp(self._wrap(np.asarray(s, dtype=float)), *self.curvature)
+
+    def grade_at(self, s):
+        """Grade (rad) at ``s``."""
+        return np.interp(self._wrap(np.asarray(s, dtype=float)), *self.grade)
+
+    def _wrap(self, s):
+        return np.mod(s, self.closed_length) if self.closed_length > 0 else s
+
+
+# ---- constructors --------------------------------------------------------------
+
+def straight_road(bank: float = 0.0, grade: float = 0.0, name: str = "straight") -> Road:
+    """Straight road with a uniform bank (rad, left side up positive) and grade (rad)."""
+    return Road(bank_profile=((0.0,), (bank,)), grade=((0.0,), (grade,)), name=name)
+
+
+def flat_road() -> Road:
+    """Flat, straight, unbounded road (for open-loop manoeuvres such as the S-curve)."""
+    return straight_road(0.0, 0.0, name="flat")
+
+
+def two_lane_road(bank_left: float = math.atan(0.25), bank_right: float = 0.0,
+                  lane_width: float = 3.5, transition: float = 1.0) -> Road:
+    """Straight road with two lanes of different bank (rad).
+
+    The right lane (centre ``-lane_width/2``) has bank ``bank_right``, the left
+    lane (``+lane_width/2``) ``bank_left``; the bank changes linearly over a strip
+    ``transition`` wide (m) centred on the lane line, so the surface has a
+    crease there, as a banked lane next to a flat one does.
+    """
+    if transition <= 0 or transition >= lane_width:
+        raise ValueError("two_lane_road: need 0 < transition < lane_width")
+    h = transition / 2.0
+    return Road(bank_profile=((-h, h), (bank_right, bank_left)),
+                lanes={"right": -lane_width / 2.0, "left": lane_width / 2.0}, name="two-lane")
+
+
+#: Banks of the test-track lanes in the curves (rad), lane 1 (inner) to 4 (outer).
+TRACK_LANE_BANKS_DEG = (10.0, 20.0, 30.0, 40.0)
+
+
+def test_track(radius: float = 300.0, straight: float = 500.0, transition: float = 100.0,
+               lane_banks_deg=TRACK_LANE_BANKS_DEG) -> Road:
+    """High-speed oval: two straights and two banked 180-degree curves, 4 lanes, 16.2 m wide.
+
+    Driven clockwise (right-hand curves), so the inside is on the right and the
+    banks are positive (left side up), as in the paper's figures. The reference
+    line runs along the track centre (between lanes 2 and 3); lane ``k`` has its
+    centre at ``n = (k - 2.5) * 4.05`` m (lane 1 innermost, ``n = -6.075``).
+
+    Geometry (along ``s``): straight, a clothoid-like entry transition of length
+    ``transition`` in which curvature and bank ramp linearly, an arc of radius
+    ``radius`` (at the reference line), an exit transition, and the same again.
+    Across the road the curve bank is piecewise linear through the lane centres
+    (``lane_banks_deg``, default 10/20/30/40 deg), constant beyond lanes 1 and 4.
+    The straights are flat.
+
+    The default radius (300 m) makes lane 3 (30 deg) nearly neutral at the
+    paper's 140 km/h and lane 1 (10 deg) need about 3.7 m/s^2 of lateral force
+    at 143 km/h, in line with the paper's Fig 6-7 signal levels.
+    """
+    w = LANE_WIDTH_TRACK
+    centres = [(k - 2.5) * w for k in (1, 2, 3, 4)]
+    kap = -1.0 / radius
+    arc = math.pi * radius - transition
+    s, k, f = [0.0], [0.0], [0.0]
+    pos = 0.0
+    for _ in range(2):
+        pos += straight
+        s += [pos]; k += [0.0]; f += [0.0]
+        pos += transition
+        s += [pos]; k += [kap]; f += [1.0]
+        pos += arc
+        s += [pos]; k += [kap]; f += [1.0]
+        pos += transition
+        s += [pos]; k += [0.0]; f += [0.0]
+    banks = [math.radians(b) for b in lane_banks_deg]
+    return Road(curvature=(s, k), bank_factor=(s, f), bank_profile=(centres, banks),
+                lanes={f"lane{i + 1}": c for i, c in enumerate(centres)},
+                closed_length=pos, name="test-track")
+
+
+def track_curve_start(road: Road) -> float:
+    """Path distance (m) where the first arc of :func:`test_track` starts (after its entry transition)."""
+    s, k = road.curvature
+    return float(s[2])
+
+
+# ---- compiled lookups ------------------------------------------------------------
+
+@njit(cache=True, inline="always")
+def _wrap(road, s):
+    L = road[9][0]
+    if L > 0.0:
+        s = s - L * math.floor(s / L)
+    return s
+
+
+@njit(cache=True)
+def interp1(xs, ys, x):
+    """Piecewise-linear interpolation, constant beyond the end knots."""
+    n = xs.shape[0]
+    if n == 1 or x <= xs[0]:
+        return ys[0]
+    if x >= xs[n - 1]:
+        return ys[n - 1]
+    lo, hi = 0, n - 1
+    while hi - lo > 1:
+        mid = (lo + hi) >> 1
+        if xs[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    u = (x - xs[lo]) / (xs[hi] - xs[lo])
+    return ys[lo] + u * (ys[hi] - ys[lo])
+
+
+@njit(cache=True)
+def road_curvature(road, s):
+    """Reference-line curvature (1/m) at ``s``."""
+    return interp1(road[0], road[1], _wrap(road, s))
+
+
+@njit(cache=True)
+def road_grade(road, s):
+    """Grade (rad) at ``s``."""
+    return interp1(road[7], road[8], _wrap(road, s))
+
+
+@njit(cache=True)
+def road_bank_factor(road, s):
+    return interp1(road[2], road[3], _wrap(road, s))
+
+
+@njit(cache=True)
+def _profile_integral(pn, pb, cum, n):
+    """int_{pn[0]}^{n} bank_profile(n') dn' (rad m)."""
+    m = pn.shape[0]
+    if n <= pn[0] or m == 1:
+        return pb[0] * (n - pn[0])
+    if n >= pn[m - 1]:
+        return cum[m - 1] + pb[m - 1] * (n - pn[m - 1])
+    k = 0
+    while pn[k + 1] < n:
+        k += 1
+    d = n - pn[k]
+    slope = (pb[k + 1] - pb[k]) / (pn[k + 1] - pn[k])
+    return cum[k] + pb[k] * d + 0.5 * slope * d * d
+
+
+@njit(cache=True)
+def bank_under_vehicle(road, s, n, half_track):
+    """Secant bank (rad): bank factor at ``s`` times the mean profile over ``n +- half_track``."""
+    pn, pb, cum = road[4], road[5], road[6]
+    if pn.shape[0] == 1:
+        return road_bank_factor(road, s) * pb[0]
+    mean = (_profile_integral(pn, pb, cum, n + half_track)
+            - _profile_integral(pn, pb, cum, n - half_track)) / (2.0 * half_track)
+    return road_bank_factor(road, s) * mean
+
+
+@njit(cache=True)
+def _seg_int(f, b0, slope, a, b):
+    """(int sin(f*bank), int cos(f*bank)) over [a, b] where bank(n') = b0 + slope*(n' - a)."""
+    d = b - a
+    if d == 0.0:
+        return 0.0, 0.0
+    t0 = f * b0
+    t1 = f * (b0 + slope * d)
+    if abs(t1 - t0) < 1e-9:
+        tm = 0.5 * (t0 + t1)
+        return math.sin(tm) * d, math.cos(tm) * d
+    k = d / (t1 - t0)
+    return (math.cos(t0) - math.cos(t1)) * k, (math.sin(t1) - math.sin(t0)) * k
+
+
+@njit(cache=True)
+def _height_from_first_knot(pn, pb, f, n):
+    """(z, h) of the surface at ``n`` relative to the first profile knot."""
+    m = pn.shape[0]
+    if n <= pn[0] or m == 1:
+        z, h = _seg_int(f, pb[0], 0.0, pn[0], n) if n >= pn[0] else _seg_int(f, pb[0], 0.0, n, pn[0])
+        if n < pn[0]:
+            return -z, -h
+        return z, h
+    z, h = 0.0, 0.0
+    k = 0
+    while k < m - 1 and pn[k + 1] <= n:
+        slope = (pb[k + 1] - pb[k]) / (pn[k + 1] - pn[k])
+        dz, dh = _seg_int(f, pb[k], slope, pn[k], pn[k + 1])
+        z += dz
+        h += dh
+        k += 1
+    if k < m - 1:
+        slope = (pb[k + 1] - pb[k]) / (pn[k + 1] - pn[k])
+    else:
+        slope = 0.0
+    dz, dh = _seg_int(f, pb[k], slope, pn[k], n)
+    return z + dz, h + dh
+
+
+@njit(cache=True)
+def contact_height(road, s, n):
+    """Surface height ``z`` and horizontal coordinate ``h`` (m) at ``(s, n)``, up to a constant per ``s``."""
+    f = road_bank_factor(road, s)
+    return _height_from_first_knot(road[4], road[5], f, n)
+
+
+@njit(cache=True)
+def truth_bank(road, s, n, psi, lf, lr, tf, tr):
+    """Truth bank (rad) from the left/right contact heights, averaged over both axles.
+
+    ``psi`` is the heading relative to the reference line (rad); wheel contact
+    points are at body ``(lf, +-tf/2)`` and ``(-lr, +-tr/2)``.
+    """
+    c = math.cos(psi)
+    sn = math.sin(psi)
+    tot = 0.0
+    for axle in range(2):
+        x = lf if axle == 0 else -lr
+        hw = 0.5 * (tf if axle == 0 else tr)
+        sl = s + x * c - hw * sn
+        nl = n + x * sn + hw * c
+        sr = s + x * c + hw * sn
+        nr = n + x * sn - hw * c
+        zl, hl = contact_height(road, sl, nl)
+        zr, hr = contact_height(road, sr, nr)
+        # heights at different s share the same datum only if the factor is equal;
+        # the factor changes slowly (transitions of ~100 m), so this is second order.
+        # horizontal distance between the contacts (across and along the road)
+        dist = math.sqrt((hl - hr) ** 2 + (sl - sr) ** 2)
+        tot += math.atan2(zl - zr, dist)
+    return 0.5 * tot
