@@ -172,6 +172,25 @@ class Estimator:
         states["phi"] = phi
         return Estimate(self.name, signals.t.copy(), w, theta, phib, valid, states)
 
+    def transition_matrix(self, vx: float, dt: float) -> np.ndarray:
+        """Per-sample map of the observer state with zero inputs, measured on the compiled kernel.
+
+        Runs one step of ``dt`` seconds at speed ``vx`` from each unit state and
+        returns the columns; its eigenvalues are the discrete error dynamics.
+        Resets the estimator.
+        """
+        n = self._nstate
+        phi = np.zeros((n, n))
+        for i in range(n):
+            self.reset()
+            self._step_fn(self._mem, self._cfg, self._tab, self._work, 0.0, float(vx), 0.0, 0.0, 0.0)
+            self._mem[K.M_X:K.M_X + n] = np.eye(n)[i]
+            self._step_fn(self._mem, self._cfg, self._tab, self._work, float(dt), float(vx),
+                          0.0, 0.0, 0.0)
+            phi[:, i] = self._mem[K.M_X:K.M_X + n]
+        self.reset()
+        return phi
+
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r} v_min={self.v_min} roll={self.roll!r}>"
 
