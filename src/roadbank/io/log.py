@@ -66,7 +66,7 @@ def _check_time(source, column: str, t: np.ndarray, raw, label: str = "time") ->
     if len(back):
         i = int(back[0]) + 1
         raise channel_error(source, label, column,
-                            f"time goes backwards at {where(i)} ({t[i - 1]!r} -> {t[i]!r})")
+                            f"time goes backwards at {where(i)} ({float(t[i - 1])!r} -> {float(t[i])!r})")
 
 
 def load_log(path, channels: ChannelMap | str | Path | None = None, format: str | None = None,
