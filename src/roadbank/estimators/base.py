@@ -22,6 +22,8 @@ from . import kernels as K
 V_GRID_MAX = 100.0
 V_GRID_STEP = 0.25
 
+_DESIGN_CACHE: dict = {}
+
 
 @dataclass(frozen=True)
 class StepResult:
@@ -85,7 +87,7 @@ class Estimator:
         self.max_gap = float(max_gap)
         self._roll = roll_state_space(self.params, roll)
         self.vgrid = speed_grid(self.v_min)
-        self._tab, self._nstate, extra = self._design()
+        self._tab, self._nstate, extra = self._cached_design()
         self._cfg = self._build_cfg(extra)
         self._run_fn = getattr(K, f"{self.kernel}_run")
         self._step_fn = getattr(K, f"{self.kernel}_step")
@@ -100,6 +102,19 @@ class Estimator:
 
     def _initial_memory(self, mem: np.ndarray) -> None:
         """Hook to set estimator-specific initial memory (e.g. Riccati P0)."""
+
+    def _cached_design(self):
+        """``_design()`` memoised on the estimator type and every setting made so far
+        (parameters and tuning): building the same estimator again costs nothing."""
+        key = (type(self).__name__,
+               tuple(sorted((k, repr(v)) for k, v in vars(self).items() if not k.startswith("_"))))
+        hit = _DESIGN_CACHE.get(key)
+        if hit is None:
+            hit = self._design()
+            if len(_DESIGN_CACHE) > 256:
+                _DESIGN_CACHE.clear()
+            _DESIGN_CACHE[key] = hit
+        return hit
 
     # -- configuration -----------------------------------------------------
     def _build_cfg(self, extra: np.ndarray) -> np.ndarray:
