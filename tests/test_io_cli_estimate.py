@@ -1,0 +1,63 @@
+"""``roadbank estimate``: outputs, batch processing with a bad file, exit codes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+from click.testing import CliRunner
+
+from roadbank.cli import main
+
+
+def _sim_table(n=400, bank=0.05):
+    t = np.arange(n) * 0.01
+    vx = np.full(n, 20.0)
+    ay = np.full(n, 9.81 * np.sin(bank))   # straight, banked road: ay = g sin(theta)
+    z = np.zeros(n)
+    return {"t": t, "vx": vx, "ay": ay, "r": z, "delta_f": z, "steering_wheel_angle": z}
+
+
+def test_estimate_single_csv_and_plot(tmp_path):
+    p = tmp_path / "a.parquet"
+    pq.write_table(pa.table(_sim_table()), p)
+    out, png = tmp_path / "o.csv", tmp_path / "o.png"
+    res = CliRunner().invoke(main, ["estimate", str(p), "-e", "kinematic", "-o", str(out), "--plot", str(png)])
+    assert res.exit_code == 0, res.output
+    header = out.read_text().splitlines()[0].split(",")
+    assert header == ["t", "kinematic.theta", "kinematic.phi_b", "kinematic.valid"]
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    # kinematic: w = (ay - vx r)/g = sin(0.05) -> theta = 0.05 rad
+    np.testing.assert_allclose(data[:, 1], 0.05, atol=1e-9)
+    assert png.stat().st_size > 1000
+
+
+def test_batch_bad_file_reported_and_others_written(tmp_path):
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    for name in ("a", "b"):
+        pq.write_table(pa.table(_sim_table()), logs / f"{name}.parquet")
+    (logs / "broken.parquet").write_bytes(b"PAR1 not really")
+    outdir = tmp_path / "out"
+    res = CliRunner().invoke(main, ["estimate", *sorted(map(str, logs.iterdir())), "-e", "kinematic,dfc",
+                                    "-o", str(outdir) + "/", "--output-format", "parquet"])
+    assert res.exit_code == 1
+    assert "broken.parquet" in res.output and "not a readable Parquet file" in res.output
+    assert "Traceback" not in res.output
+    assert sorted(p.name for p in outdir.iterdir()) == ["a.bank.parquet", "b.bank.parquet"]
+    cols = pq.read_table(outdir / "a.bank.parquet").column_names
+    assert cols == ["t", "kinematic.theta", "kinematic.phi_b", "kinematic.valid",
+                    "dfc.theta", "dfc.phi_b", "dfc.valid"]
+
+
+def test_batch_all_good_exit_zero(tmp_path):
+    p = tmp_path / "a.csv"
+    cols = _sim_table(100)
+    np.savetxt(p, np.column_stack(list(cols.values())), delimiter=",", header=",".join(cols), comments="")
+    res = CliRunner().invoke(main, ["estimate", str(p), str(p), "-e", "kinematic", "-o", str(tmp_path / "o")])
+    assert res.exit_code == 0, res.output
+
+
+def test_unknown_estimator_is_usage_error(tmp_path):
+    res = CliRunner().invoke(main, ["estimate", "x.csv", "-e", "nope", "-o", str(tmp_path / "o.csv")])
+    assert res.exit_code == 2 and "unknown estimator" in res.output

@@ -1,0 +1,85 @@
+"""comma2k19 layout: pose-derived roll geometry (independent constructions) and the real segment."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from roadbank.io import LogError, load_log
+from roadbank.io.comma2k19 import ellipsoid_down_ecef, pose_roll
+
+SEGMENT = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "comma2k19-example"
+needs_data = pytest.mark.skipif(not SEGMENT.is_dir(), reason=f"comma2k19 example segment absent at {SEGMENT}")
+
+
+def test_ellipsoid_normal_from_geodetic_position():
+    # position on the WGS-84 ellipsoid at geodetic latitude 37.4 deg, longitude -122.2 deg
+    a, f = 6378137.0, 1 / 298.257223563
+    e2 = f * (2 - f)
+    lat, lon = math.radians(37.4), math.radians(-122.2)
+    N = a / math.sqrt(1 - e2 * math.sin(lat) ** 2)
+    h = 30.0
+    pos = np.array([[(N + h) * math.cos(lat) * math.cos(lon), (N + h) * math.cos(lat) * math.sin(lon),
+                     (N * (1 - e2) + h) * math.sin(lat)]])
+    up = np.array([math.cos(lat) * math.cos(lon), math.cos(lat) * math.sin(lon), math.sin(lat)])
+    np.testing.assert_allclose(ellipsoid_down_ecef(pos)[0], -up, atol=1e-9)
+
+
+@pytest.mark.parametrize("phi_deg", [-3.0, 0.0, 1.25, 10.0])
+def test_pose_roll_sign_and_value(phi_deg):
+    # Camera at the equator, longitude 0: down = -X. Facing north (+Z): right = east (+Y).
+    # Rolling right side down by phi (ISO positive) must give roll = +phi.
+    phi = math.radians(phi_deg)
+    f = np.array([0.0, 0.0, 1.0])
+    r = np.array([0.0, 1.0, 0.0])
+    d = np.array([-1.0, 0.0, 0.0])
+    r2 = r * math.cos(phi) + d * math.sin(phi)
+    d2 = d * math.cos(phi) - r * math.sin(phi)
+    R = np.column_stack([f, r2, d2])          # camera axes in ECEF: maps camera -> ECEF
+    x, y, z, w = Rotation.from_matrix(R).as_quat()   # scipy: scalar last
+    q = np.array([[w, x, y, z]])
+    pos = np.array([[6378137.0, 0.0, 0.0]])
+    assert pose_roll(pos, q)[0] == pytest.approx(phi, abs=1e-12)
+
+
+@needs_data
+def test_real_segment_loads_with_iso_signs():
+    log = load_log(SEGMENT)
+    s = log.signals
+    assert log.format == "comma2k19"
+    np.testing.assert_allclose(np.diff(s.t), 0.01, atol=1e-9)
+    acc = np.load(SEGMENT / "processed_log/IMU/accelerometer/value", allow_pickle=False)
+    acc_t = np.load(SEGMENT / "processed_log/IMU/accelerometer/t", allow_pickle=False)
+    gyr = np.load(SEGMENT / "processed_log/IMU/gyro/value", allow_pickle=False)
+    # at an IMU sample time inside the grid the value is the (negated) raw sample
+    k = 1000
+    i = int(np.argmin(np.abs(s.t - acc_t[k])))
+    if abs(s.t[i] - acc_t[k]) < 1e-9:
+        assert s.ay[i] == pytest.approx(-acc[k, 1])
+    # means are the negated raw means (interpolation preserves them closely)
+    assert np.mean(s.ay) == pytest.approx(-np.mean(acc[:, 1]), abs=0.02)
+    assert np.mean(s.r) == pytest.approx(-np.mean(gyr[:, 2]), abs=0.002)
+    # README: reference roll about 0.4 to 1.8 deg, mean about 1.25 deg
+    ref = np.degrees(log.reference_roll)
+    assert 0.3 < ref.min() < 0.5 and 1.7 < ref.max() < 1.9
+    assert np.mean(ref) == pytest.approx(1.25, abs=0.1)
+    # speed 8-20 m/s, steering: left turn -> positive delta (correlates with ISO yaw rate)
+    assert 7.5 < s.vx.min() and s.vx.max() < 20.5
+    assert np.corrcoef(s.delta_f, s.r)[0, 1] > 0.5
+
+
+def test_missing_and_truncated_segment_files(tmp_path):
+    seg = tmp_path / "seg"
+    (seg / "processed_log" / "IMU" / "accelerometer").mkdir(parents=True)
+    with pytest.raises(LogError, match="processed_log/IMU/accelerometer/t' is missing"):
+        load_log(seg)
+    np.save(seg / "processed_log/IMU/accelerometer/t.npy", np.arange(10.0))
+    (seg / "processed_log/IMU/accelerometer/t.npy").rename(seg / "processed_log/IMU/accelerometer/t")
+    b = (seg / "processed_log/IMU/accelerometer/t").read_bytes()
+    (seg / "processed_log/IMU/accelerometer/t").write_bytes(b[:-20])
+    with pytest.raises(LogError, match="unreadable"):
+        load_log(seg)

@@ -1,0 +1,53 @@
+"""``roadbank validate comma2k19``: JSON contract and sanity of the scores on the real segment."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from roadbank import estimators
+from roadbank.cli import main
+from roadbank.validation.comma2k19 import lowpass
+
+SEGMENT = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "comma2k19-example"
+needs_data = pytest.mark.skipif(not SEGMENT.is_dir(), reason=f"comma2k19 example segment absent at {SEGMENT}")
+
+
+def test_lowpass_is_first_order_with_unit_gain():
+    dt, tau = 0.01, 2.0 / 3.0
+    x = np.ones(2000)
+    np.testing.assert_allclose(lowpass(x, tau, dt), 1.0, atol=1e-9)
+    step = np.r_[np.zeros(10), np.ones(2000)]
+    y = lowpass(step, tau, dt, zero_phase=False)
+    # causal first-order response: 1 - exp(-t/tau) (discretisation error < 1 %)
+    k = int(round(tau / dt))
+    assert y[10 + k] == pytest.approx(1 - np.exp(-1), abs=0.01)
+
+
+@needs_data
+def test_validate_json_and_report(tmp_path):
+    out = tmp_path / "real-data.md"
+    res = CliRunner().invoke(main, ["validate", "comma2k19", str(SEGMENT), "--json", "--no-sensitivity",
+                                    "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.stdout)
+    assert set(data) == set(estimators.NAMES)
+    for name, v in data.items():
+        assert set(v) == {"r", "rms_deg", "offset_deg"}
+        assert -1 <= v["r"] <= 1 and v["rms_deg"] >= 0 and np.isfinite(v["offset_deg"])
+    # the README's rough first look: the kinematic estimate correlates clearly (about 0.55+)
+    assert data["kinematic"]["r"] > 0.5
+    # offsets are a fraction of a degree to ~1 deg: the reference mean is ~1.25 deg
+    assert all(abs(v["offset_deg"]) < 2.0 for v in data.values())
+    text = out.read_text()
+    assert "| pif-modified |" in text and out.with_suffix(".png").exists()
+
+
+def test_validate_missing_path_is_clean_error(tmp_path):
+    res = CliRunner().invoke(main, ["validate", "comma2k19", str(tmp_path / "nope")])
+    assert res.exit_code == 1
+    assert "error:" in res.output and "Traceback" not in res.output
