@@ -35,7 +35,7 @@ from .road import road_curvature
 
 MODE_OPEN_LOOP, MODE_PATH = 0, 1
 (G_MODE, G_KPV, G_KIV, G_TPREV, G_LPMIN, G_KILAT, G_TAUS, G_SWARATE, G_KUS, G_L, G_RATIO,
- G_M, G_RW, G_TDRIVE, G_PDRIVE, G_TBRAKE, G_SWAMAX, N_GAINS) = range(18)
+ G_M, G_RW, G_TDRIVE, G_PDRIVE, G_TBRAKE, G_SWAMAX, G_COAST, N_GAINS) = range(19)
 D_VINT, D_LATINT, D_SWA = 0, 1, 2
 ND = 3
 
@@ -67,27 +67,31 @@ class Driver:
         Reference lateral offset (m) against path distance (m), raised-cosine
         interpolation; held beyond the end knots.
     kp_speed, ki_speed : float
-        Speed PI gains (1/s, 1/s^2). Defaults 1.0, 0.3.
+        Speed PI gains (1/s, 1/s^2). Defaults 1.5, 0.5.
     preview_time, preview_min : float
         Preview time (s) and minimum preview distance (m). Defaults 1.0 s, 12 m.
     ki_lateral : float
-        Integral gain on the preview error (rad/(m s)). Default 0.004.
+        Integral gain on the preview error (rad/(m s)). Default 0.02.
     steer_lag : float
         Time constant of the driver's steering (s). Default 0.08.
     steer_rate_max : float
         Steering-wheel rate limit (rad/s). Default 12 (about 700 deg/s).
+    coast : bool
+        If True the pedals stay released (no speed control); ``speed`` then only
+        gives the initial speed.
     """
 
     speed: object = 22.2
     steering: object = None
     path: object = None
-    kp_speed: float = 1.0
-    ki_speed: float = 0.3
+    kp_speed: float = 1.5
+    ki_speed: float = 0.5
     preview_time: float = 1.0
     preview_min: float = 12.0
-    ki_lateral: float = 0.004
+    ki_lateral: float = 0.02
     steer_lag: float = 0.08
     steer_rate_max: float = 12.0
+    coast: bool = False
 
     def __post_init__(self) -> None:
         sp = self.speed
@@ -124,6 +128,7 @@ class Driver:
         g[G_L], g[G_RATIO], g[G_M], g[G_RW] = v.L, v.steering_ratio, v.m, v.wheel_radius
         g[G_TDRIVE], g[G_PDRIVE], g[G_TBRAKE] = plant.drive_torque_max, plant.drive_power_max, plant.brake_torque_max
         g[G_SWAMAX] = math.radians(720.0)
+        g[G_COAST] = 1.0 if self.coast else 0.0
         st = self.steering if self.steering is not None else (np.zeros(1), np.zeros(1))
         pa = self.path if self.path is not None else (np.zeros(1), np.zeros(1))
         return (g, self.speed[0], self.speed[1], st[0], st[1], pa[0], pa[1])
@@ -171,25 +176,34 @@ def driver_step(t, x, dstate, drv, road, u, dt):
     # ---- speed ------------------------------------------------------------------
     e_v = interp_lin(drv[1], drv[2], t) - vx
     a_cmd = g[G_KPV] * e_v + dstate[D_VINT]
-    vint = dstate[D_VINT] + g[G_KIV] * e_v * dt
-    if vint > 6.0:
-        vint = 6.0
-    elif vint < -8.0:
-        vint = -8.0
-    dstate[D_VINT] = vint
     force = g[G_M] * a_cmd
+    saturated = False
     if force >= 0.0:
         om = vx / g[G_RW]
         t_av = g[G_TDRIVE]
         if om > 1.0 and g[G_PDRIVE] / om < t_av:
             t_av = g[G_PDRIVE] / om
         thr = force * g[G_RW] / t_av
+        saturated = thr >= 1.0
         u[1] = thr if thr < 1.0 else 1.0
         u[2] = 0.0
     else:
         brk = -force * g[G_RW] / g[G_TBRAKE]
+        saturated = brk >= 1.0
         u[1] = 0.0
         u[2] = brk if brk < 1.0 else 1.0
+    # conditional integration (anti-windup): freeze the integrator while the
+    # pedal is saturated in the direction of the error
+    if g[G_COAST] != 0.0:
+        u[1] = 0.0
+        u[2] = 0.0
+    elif not (saturated and e_v * force > 0.0):
+        vint = dstate[D_VINT] + g[G_KIV] * e_v * dt
+        if vint > 6.0:
+            vint = 6.0
+        elif vint < -8.0:
+            vint = -8.0
+        dstate[D_VINT] = vint
     # ---- steering -----------------------------------------------------------------
     if g[G_MODE] == MODE_OPEN_LOOP:
         u[0] = interp_cos(drv[3], drv[4], t)
