@@ -187,7 +187,18 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     for tt in (0.25, 0.5, 2.0 / 3.0, 1.0, 1.5, 2.0, 3.0):
         ks, rs2 = lowpass(kin, tt, dt), lowpass(ref, tt, dt)
         tau_sweep[tt] = _r(ks[m_sc], rs2[m_sc])
+    # what the steering channel means in lateral acceleration (steady-state bicycle model)
+    L_ = params.L
+    kus = params.m / L_ * (params.Lr / params.Cf - params.Lf / params.Cr)
+    vx_ = np.nan_to_num(s.vx)
+    ay_steer = vx_ ** 2 * np.nan_to_num(s.delta_f) / (L_ + kus * vx_ ** 2)
+    vmed = float(np.median(vx_))
     data = {
+        "ay_from_steering_mean": float(np.mean(ay_steer[m_all])),
+        "ay_from_steering_std": float(np.std(ay_steer[m_all])),
+        "ay_measured_mean": float(np.nanmean(s.ay[m_all])),
+        "steer_step_ay": float(vmed ** 2 * np.radians(0.1) / params.steering_ratio / (L_ + kus * vmed ** 2)),
+        "v_median": vmed,
         "duration_s": float(t[-1] - t[0]),
         "speed_range": (float(np.nanmin(s.vx)), float(np.nanmax(s.vx))),
         "ref_range_deg": (float(np.degrees(ref.min())), float(np.degrees(ref.max()))),

@@ -104,7 +104,7 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
              f"{st['fit_fraction']:.0%} of the remaining span (up to t = "
              f"{res.split_time - res.t[0]:.1f} s), r and RMS on the remaining "
              f"{1 - st['fit_fraction']:.0%}. Samples flagged not valid hold the last value "
-             f"(valid fraction: {min(sc.valid_fraction for sc in res.scores.values()):.2f} or more).\n")
+             f"(valid fraction at least {min(sc.valid_fraction for sc in res.scores.values()):.2f}).\n")
     if "suv" in res.sensitivity:
         L.append("## Sensitivity\n")
         L.append("Paper SUV parameters (`VehicleParams()` defaults, steering ratio 16) instead of the sedan:\n")
@@ -127,7 +127,7 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
     L.append(f"- The signal is small: the smoothed reference varies by only {d['ref_std_deg_scored']:.3f} deg "
              f"(std over the scored part; {d['ref_std_deg_raw_scored']:.3f} deg unsmoothed), i.e. "
              f"{d['signal_ay_equiv_std']:.3f} m/s^2 of lateral acceleration. The reference's own "
-             f"high-frequency content (above ~1 Hz) is {d['ref_highfreq_std_deg']:.3f} deg std.")
+             f"high-frequency content (above ~0.8 Hz) is {d['ref_highfreq_std_deg']:.3f} deg std.")
     L.append(f"- The phone accelerometer carries {d['ay_vibration_std']:.3f} m/s^2 std of vibration "
              f"(ay minus its 1 s moving average) -- {d['ay_vibration_std'] / d['signal_ay_equiv_std']:.0f} "
              f"times the bank signal; even its 1 s average varies by {d['ay_1s_mean_std']:.3f} m/s^2. "
@@ -142,8 +142,23 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
              f"After the same smoothing its residual against the reference is {d['kin_residual_rms_deg']:.3f} deg RMS.")
     L.append("- Best correlation the kinematic estimate reaches with other smoothing constants (same "
              "filter on both signals): " + ", ".join(f"tau {k:.2f} s: {v:.3f}" for k, v in sw.items())
-             + f"; the best is {sw[best_tau]:.3f} at tau = {best_tau:.2f} s. This is roughly the "
-             "ceiling for this segment with the available signals.")
+             + f"; the best is {sw[best_tau]:.3f} at tau = {best_tau:.2f} s. That is about the ceiling "
+             "for a lag-free estimate smoothed this way on this segment (the lag-shifted scores in the "
+             "result table look ahead in time and are diagnostics, not achievable causally).")
+    L.append(f"- The estimators that use the steering angle (dfc, uio, pio-original, pif-original, kalman) "
+             "need the road-wheel angle to predict the lateral acceleration to a small fraction of the "
+             "bank signal. Here the steering term is larger than the bank signal itself: through the "
+             "steady-state bicycle model the steering angle accounts for "
+             f"{d['ay_from_steering_std']:.3f} m/s^2 (std) of lateral acceleration, "
+             f"{d['ay_from_steering_std'] / d['signal_ay_equiv_std']:.1f} times the "
+             f"{d['signal_ay_equiv_std']:.3f} m/s^2 bank signal, so a 10 % error in the assumed steering "
+             "ratio or cornering stiffness already moves them by a third of the bank variation; one "
+             "0.1 deg step of the CAN steering angle is "
+             f"{d['steer_step_ay']:.3f} m/s^2 (= {math.degrees(d['steer_step_ay'] / 9.81):.2f} deg of "
+             f"bank) at the median speed {d['v_median']:.1f} m/s. An unknown steering offset, ratio "
+             "and cornering stiffness therefore bias these estimators by amounts comparable to the whole "
+             "bank variation; the modified-model estimators (pio-modified, pif-modified) do not use the "
+             "steering angle and are immune to this.")
     pif = res.scores.get("pif-modified")
     if pif is not None:
         verdict = "reaches" if pif.r >= 0.9 else "does not reach"
