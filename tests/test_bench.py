@@ -1,0 +1,51 @@
+"""The benchmark runner works on a tiny input (no timing assertions: benchmarks are not tests)."""
+
+import json
+import math
+
+from click.testing import CliRunner
+
+from roadbank.cli import main
+from roadbank.cli.bench import TARGETS, markdown, run_suite, synthetic_log
+
+REQUIRED = ("pif_ns_per_sample", "pif_vs_filterpy", "step_us_median", "step_us_p99",
+            "plant_realtime_factor", "plant_vs_commonroad", "reproduce_s")
+
+
+def _positive_or_explained(res, key):
+    v = res[key]
+    if v is None:
+        assert isinstance(res["reasons"].get(key), str) and res["reasons"][key]
+    else:
+        assert isinstance(v, (int, float)) and math.isfinite(v) and v > 0, (key, v)
+
+
+def test_bench_cli_tiny_json_and_markdown(tmp_path):
+    out = tmp_path / "bench.md"
+    result = CliRunner().invoke(main, ["bench", "--tiny", "--json", "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    res = json.loads(result.stdout)
+    for key in REQUIRED:
+        assert key in res
+        _positive_or_explained(res, key)
+    assert res["reproduce_s"] is None            # never run on a tiny input
+    assert res["machine"]["cores_usable"] >= 1
+    assert set(res["targets"]) == set(TARGETS)
+    text = out.read_text()
+    assert text.startswith("# Benchmarks")
+    assert "roadbank bench" in text and "| what | value | peer | ratio | target | met? |" in text
+
+
+def test_suite_reports_every_estimator_and_rejects_no_numbers():
+    res = run_suite("tiny")
+    names = [e["name"] for e in res["estimators"]]
+    assert "pif-modified" in names and "pif-modified (riccati)" in names
+    for e in res["estimators"]:
+        assert e["ns_per_sample"] > 0 and e["design_s"] >= 0
+    assert "# Benchmarks" in markdown(res, "roadbank bench --tiny")
+
+
+def test_synthetic_log_is_deterministic_and_covers_the_schedule():
+    a, b = synthetic_log(20.0), synthetic_log(20.0)
+    assert len(a) == 2001 and (a.vx == b.vx).all()
+    assert synthetic_log(600.0).vx.min() < 10 and synthetic_log(600.0).vx.max() > 30
