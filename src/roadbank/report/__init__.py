@@ -1,0 +1,1 @@
+"""Reporting: the paper-reproduction study, its tables, figures, claims and report."""

@@ -1,0 +1,114 @@
+"""The paper's qualitative claims (SPEC 7) and the issue's accuracy aims, checked on a study's metrics.
+
+Each check returns a :class:`Claim` with the numbers it used, so the report can
+show why it holds or not; the test suite asserts them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .tables import lookup
+
+
+@dataclass(frozen=True)
+class Claim:
+    """One claim: ``holds`` and the evidence (``detail``, degrees)."""
+
+    key: str
+    text: str
+    holds: bool
+    detail: str
+
+
+def _get(values, sc, cond, name):
+    return values.get((sc, cond, name), np.nan)
+
+
+def claim_steady_state(rows, scenario="const-bank") -> Claim:
+    """Claim 1: PIF and PIO have a smaller steady-state error than DFC and UIO, every condition."""
+    ss = lookup(rows, "theta", "steady_deg")
+    conds = sorted({c for (s, c, _) in ss if s == scenario})
+    ok, parts = True, []
+    for c in conds:
+        good = max(abs(_get(ss, scenario, c, n)) for n in ("pif-modified", "pio-original"))
+        bad = min(abs(_get(ss, scenario, c, n)) for n in ("dfc", "uio"))
+        ok &= bool(good < bad)
+        parts.append(f"{c}: max(PIF, PIO) {good:.2f} vs min(DFC, UIO) {bad:.2f}")
+    return Claim("steady_state", f"{scenario}: PIF and PIO steady-state |error| below DFC's and UIO's "
+                 "in every condition", ok and bool(conds), "; ".join(parts))
+
+
+def claim_cf_growth(rows, scenario="const-bank", stiff="cf120") -> Claim:
+    """Claim 1b: the DFC and UIO steady-state error grows from Cf = Cf_ss to ``stiff``."""
+    ss = lookup(rows, "theta", "steady_deg")
+    ok, parts = True, []
+    for n in ("dfc", "uio"):
+        a, b = abs(_get(ss, scenario, "nominal", n)), abs(_get(ss, scenario, stiff, n))
+        ok &= bool(b > a)
+        parts.append(f"{n}: {a:.2f} -> {b:.2f}")
+    return Claim(f"cf_growth_{scenario}", f"{scenario}: DFC and UIO steady-state error grows from "
+                 f"nominal to {stiff}", ok, "; ".join(parts))
+
+
+def claim_pif_cf_robust(rows, scenario="s-curve", margin=0.5) -> Claim:
+    """Claim 3: PIF-modified bank RMS at cf50/cf150 within ``margin`` deg of cf100;
+    PIF-original degrades by more than ``margin`` in at least one of them."""
+    rms = lookup(rows, "bank", "rms_deg")
+    base_m, base_o = _get(rms, scenario, "nominal", "pif-modified"), _get(rms, scenario, "nominal", "pif-original")
+    dm = [abs(_get(rms, scenario, c, "pif-modified") - base_m) for c in ("cf50", "cf150")]
+    do = [_get(rms, scenario, c, "pif-original") - base_o for c in ("cf50", "cf150")]
+    ok = bool(max(dm) <= margin and max(do) > margin)
+    detail = (f"PIF-modified |dRMS| cf50 {dm[0]:.2f}, cf150 {dm[1]:.2f} (base {base_m:.2f}); "
+              f"PIF-original dRMS cf50 {do[0]:+.2f}, cf150 {do[1]:+.2f} (base {base_o:.2f})")
+    return Claim(f"pif_cf_robust_{scenario}", f"{scenario}: PIF on the modified model robust to Cf 50/150 % "
+                 f"(within {margin} deg), PIF on the original model not", ok, detail)
+
+
+def claim_pif_best(rows, conditions=("low-mu", "misaligned", "cf120"), scenario="const-bank") -> Claim:
+    """Claim 2: on low mu, with misalignment and with Cf error the modified-model PIF stays
+    best among the paper's methods (PIF, PIO, DFC, UIO) in theta RMS."""
+    rms = lookup(rows, "theta", "rms_deg")
+    ok, parts = True, []
+    for c in conditions:
+        pif = _get(rms, scenario, c, "pif-modified")
+        others = {n: _get(rms, scenario, c, n) for n in ("pio-original", "dfc", "uio")}
+        best_other = min(others.values())
+        ok &= bool(pif <= best_other + 0.1)
+        parts.append(f"{c}: PIF {pif:.2f} vs best other {best_other:.2f}")
+    return Claim(f"pif_best_{scenario}", f"{scenario}: PIF best of PIF/PIO/DFC/UIO (within 0.1 deg) under "
+                 + ", ".join(conditions), ok, "; ".join(parts))
+
+
+def all_claims(rows) -> list[Claim]:
+    """Every claim that the rows have data for."""
+    scen = {r["scenario"] for r in rows}
+    out = []
+    if "const-bank" in scen:
+        out += [claim_steady_state(rows), claim_cf_growth(rows), claim_pif_best(rows)]
+    if "bank-lane-change" in scen:
+        out.append(claim_pif_best(rows, scenario="bank-lane-change"))
+    if "track-lane1" in scen:
+        out.append(claim_cf_growth(rows, scenario="track-lane1"))
+    for sc in ("s-curve", "track-lane-change"):
+        if sc in scen:
+            out.append(claim_pif_cf_robust(rows, scenario=sc))
+    return out
+
+
+def accuracy_aims(rows, rms_aim=0.5, max_aim=1.5, best_margin=0.1) -> dict:
+    """The issue's aims for the modified-model PIF, per cell and overall."""
+    rms, mx = lookup(rows, "bank", "rms_deg"), lookup(rows, "bank", "max_deg")
+    cells = sorted({(s, c) for (s, c, _) in rms})
+    per_cell, n_best = [], 0
+    for s, c in cells:
+        pif_r, pif_m = _get(rms, s, c, "pif-modified"), _get(mx, s, c, "pif-modified")
+        best = min(v for (s2, c2, _), v in rms.items() if (s2, c2) == (s, c) and np.isfinite(v))
+        near = bool(pif_r <= best + best_margin)
+        n_best += near
+        per_cell.append({"scenario": s, "condition": c, "rms_deg": pif_r, "max_deg": pif_m,
+                         "rms_ok": bool(pif_r <= rms_aim), "max_ok": bool(pif_m <= max_aim),
+                         "best_deg": best, "near_best": near})
+    return {"cells": per_cell, "near_best_fraction": n_best / max(len(cells), 1)}

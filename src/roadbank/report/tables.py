@@ -1,0 +1,63 @@
+"""Tidy metric tables (CSV + Parquet) and the pivoted summaries used by the report."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.csv as pacsv
+import pyarrow.parquet as pq
+
+COLUMNS = ("scenario", "condition", "estimator", "reference", "metric", "value")
+
+
+def write_tables(rows: list[dict], outdir: Path) -> list[Path]:
+    """Write ``metrics.csv`` and ``metrics.parquet`` (columns :data:`COLUMNS`; deg / s)."""
+    table = pa.table({c: [r[c] for r in rows] for c in COLUMNS})
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    pq.write_table(table, outdir / "metrics.parquet")
+    pacsv.write_csv(table, outdir / "metrics.csv")
+    return [outdir / "metrics.csv", outdir / "metrics.parquet"]
+
+
+def lookup(rows: list[dict], reference: str, metric: str) -> dict:
+    """``{(scenario, condition, estimator): value}`` for one reference and metric."""
+    return {(r["scenario"], r["condition"], r["estimator"]): r["value"] for r in rows
+            if r["reference"] == reference and r["metric"] == metric}
+
+
+def cell_order(rows: list[dict]) -> tuple[list, list]:
+    """Ordered unique (scenario, condition) cells and estimator names of ``rows``."""
+    cells, names = [], []
+    for r in rows:
+        key = (r["scenario"], r["condition"])
+        if key not in cells:
+            cells.append(key)
+        if r["estimator"] not in names:
+            names.append(r["estimator"])
+    return cells, names
+
+
+def markdown_table(rows: list[dict], reference: str, metric: str, *, digits: int = 2,
+                   highlight_best: bool = True) -> str:
+    """Markdown table: one line per cell, one column per estimator; the best value in bold."""
+    from .labels import label
+    values = lookup(rows, reference, metric)
+    cells, names = cell_order(rows)
+    head = "| scenario | condition | " + " | ".join(label(n) for n in names) + " |"
+    sep = "|---|---|" + "---:|" * len(names)
+    lines = [head, sep]
+    for sc, cond in cells:
+        vals = [values.get((sc, cond, n), np.nan) for n in names]
+        finite = [abs(v) for v in vals if np.isfinite(v)]
+        best = min(finite) if finite else None
+        txt = []
+        for v in vals:
+            s = "n/a" if not np.isfinite(v) else f"{v:.{digits}f}"
+            if highlight_best and best is not None and np.isfinite(v) and abs(v) == best:
+                s = f"**{s}**"
+            txt.append(s)
+        lines.append(f"| {sc} | {cond} | " + " | ".join(txt) + " |")
+    return "\n".join(lines)
