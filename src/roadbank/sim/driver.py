@@ -115,8 +115,8 @@ class Driver:
     def initial_speed(self) -> float:
         return float(self.speed[1][0])
 
-    def pack(self, plant) -> tuple:
-        """Tuple of arrays for the compiled driver; ``plant`` is a :class:`PlantParams`."""
+    def pack(self, plant) -> np.ndarray:
+        """Flat float64 array for the compiled driver; ``plant`` is a :class:`PlantParams`."""
         v: VehicleParams = plant.vehicle
         g = np.zeros(N_GAINS)
         g[G_MODE] = MODE_PATH if self.closed_loop else MODE_OPEN_LOOP
@@ -131,37 +131,45 @@ class Driver:
         g[G_COAST] = 1.0 if self.coast else 0.0
         st = self.steering if self.steering is not None else (np.zeros(1), np.zeros(1))
         pa = self.path if self.path is not None else (np.zeros(1), np.zeros(1))
-        return (g, self.speed[0], self.speed[1], st[0], st[1], pa[0], pa[1])
+        # one flat array: gains, then (offset, count) of the speed, steering and path
+        # knots, then the knots (no tuple of arrays: no reference counting when compiled)
+        hdr = np.zeros(6)
+        off = N_GAINS + 6
+        for j, (xs, _) in enumerate((self.speed, st, pa)):
+            hdr[2 * j], hdr[2 * j + 1] = off, len(xs)
+            off += 2 * len(xs)
+        return np.concatenate([g, hdr, self.speed[0], self.speed[1], st[0], st[1], pa[0], pa[1]])
 
 
 @njit(cache=True)
-def interp_cos(xs, ys, x):
-    """Raised-cosine interpolation through knots (held beyond the ends)."""
-    n = xs.shape[0]
-    if n == 1 or x <= xs[0]:
-        return ys[0]
-    if x >= xs[n - 1]:
-        return ys[n - 1]
+def interp_cos(a, off, n, x):
+    """Raised-cosine interpolation through knots ``a[off:off+n]`` -> ``a[off+n:off+2n]`` (held beyond the ends)."""
+    ys = off + n
+    if n == 1 or x <= a[off]:
+        return a[ys]
+    if x >= a[off + n - 1]:
+        return a[ys + n - 1]
     k = 0
-    while xs[k + 1] < x:
+    while a[off + k + 1] < x:
         k += 1
-    u = (x - xs[k]) / (xs[k + 1] - xs[k])
+    u = (x - a[off + k]) / (a[off + k + 1] - a[off + k])
     w = 0.5 - 0.5 * math.cos(math.pi * u)
-    return ys[k] + w * (ys[k + 1] - ys[k])
+    return a[ys + k] + w * (a[ys + k + 1] - a[ys + k])
 
 
 @njit(cache=True)
-def interp_lin(xs, ys, x):
-    n = xs.shape[0]
-    if n == 1 or x <= xs[0]:
-        return ys[0]
-    if x >= xs[n - 1]:
-        return ys[n - 1]
+def interp_lin(a, off, n, x):
+    """Piecewise-linear interpolation through knots ``a[off:off+n]`` -> ``a[off+n:off+2n]``."""
+    ys = off + n
+    if n == 1 or x <= a[off]:
+        return a[ys]
+    if x >= a[off + n - 1]:
+        return a[ys + n - 1]
     k = 0
-    while xs[k + 1] < x:
+    while a[off + k + 1] < x:
         k += 1
-    u = (x - xs[k]) / (xs[k + 1] - xs[k])
-    return ys[k] + u * (ys[k + 1] - ys[k])
+    u = (x - a[off + k]) / (a[off + k + 1] - a[off + k])
+    return a[ys + k] + u * (a[ys + k + 1] - a[ys + k])
 
 
 @njit(cache=True)
@@ -171,10 +179,11 @@ def driver_step(t, x, dstate, drv, road, u, dt):
     ``x`` is the plant state (see :mod:`roadbank.sim.plant`), ``dstate`` =
     [speed integrator (m/s^2), lateral integrator (rad), steering-wheel angle (rad)].
     """
-    g = drv[0]
+    g = drv
+    H = N_GAINS
     vx = x[3]
     # ---- speed ------------------------------------------------------------------
-    e_v = interp_lin(drv[1], drv[2], t) - vx
+    e_v = interp_lin(drv, int(drv[H]), int(drv[H + 1]), t) - vx
     a_cmd = g[G_KPV] * e_v + dstate[D_VINT]
     force = g[G_M] * a_cmd
     saturated = False
@@ -206,7 +215,7 @@ def driver_step(t, x, dstate, drv, road, u, dt):
         dstate[D_VINT] = vint
     # ---- steering -----------------------------------------------------------------
     if g[G_MODE] == MODE_OPEN_LOOP:
-        u[0] = interp_cos(drv[3], drv[4], t)
+        u[0] = interp_cos(drv, int(drv[H + 2]), int(drv[H + 3]), t)
         dstate[D_SWA] = u[0]
         return
     s = x[0]
@@ -217,7 +226,7 @@ def driver_step(t, x, dstate, drv, road, u, dt):
     if lp < g[G_LPMIN]:
         lp = g[G_LPMIN]
     heading = psi + x[4] / vxs
-    e = interp_cos(drv[5], drv[6], s + lp) - (n + lp * math.sin(heading))
+    e = interp_cos(drv, int(drv[H + 4]), int(drv[H + 5]), s + lp) - (n + lp * math.sin(heading))
     kap = road_curvature(road, s + 0.5 * lp)
     den = 1.0 - n * kap
     kap_cmd = kap / den + 2.0 * e / (lp * lp)

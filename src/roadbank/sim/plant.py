@@ -99,14 +99,14 @@ NAUX = 27
 _VX_FLOOR = 1.0  # m/s, denominator floor of the slip definitions
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", fastmath=True)
 def _sin_cos_small(a):
     """(sin a, cos a) for |a| < pi/2 with the polynomial sine."""
     s = fast_sin(a)
     return s, math.sqrt(1.0 - s * s)
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=True)
 def plant_eval(x, u, road, p, dx, aux, want_aux):
     """Evaluate the plant: write dx/dt into ``dx`` and, if ``want_aux``, outputs into ``aux``.
 
@@ -277,7 +277,7 @@ def plant_eval(x, u, road, p, dx, aux, want_aux):
         aux[A_DELTA] = delta
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=True)
 def f(x, u, road, params):
     """Pure right-hand side ``dx/dt = f(x, u, road, params)`` (allocates the result).
 
@@ -289,7 +289,7 @@ def f(x, u, road, params):
     return dx
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath=True)
 def outputs(x, u, road, params):
     """Auxiliary outputs (``A_*`` indices) at one state: loads, forces, specific forces, dvy/dt."""
     dx = np.empty(NX)

@@ -37,6 +37,7 @@ import numpy as np
 from numba import njit
 
 LANE_WIDTH_TRACK = 16.2 / 4.0  #: lane width of the test track (m)
+_HDR = 10  # header length of the packed road
 
 
 def _knots(name, xs, ys, increasing=True):
@@ -90,14 +91,32 @@ class Road:
         if not (math.isfinite(self.closed_length) and self.closed_length >= 0):
             raise ValueError("Road.closed_length must be >= 0")
 
-    def pack(self) -> tuple:
-        """Tuple of float64 arrays for the compiled code."""
+    def pack(self) -> np.ndarray:
+        """One flat float64 array for the compiled code (header of offsets, then the knots).
+
+        Layout: ``[closed_length, off_curv, n_curv, off_factor, n_factor, off_profile,
+        n_profile, off_cum, off_grade, n_grade, <data>]``; passing one array (not a
+        tuple of arrays) keeps the compiled calls free of reference counting.
+        """
         pn, pb = self.bank_profile
         cum = np.zeros(len(pn))
         for k in range(1, len(pn)):
             cum[k] = cum[k - 1] + 0.5 * (pb[k] + pb[k - 1]) * (pn[k] - pn[k - 1])
-        return (self.curvature[0], self.curvature[1], self.bank_factor[0], self.bank_factor[1],
-                pn, pb, cum, self.grade[0], self.grade[1], np.array([float(self.closed_length)]))
+        parts = [self.curvature[0], self.curvature[1], self.bank_factor[0], self.bank_factor[1],
+                 pn, pb, cum, self.grade[0], self.grade[1]]
+        header = np.zeros(_HDR)
+        header[0] = self.closed_length
+        off = _HDR
+        offs = []
+        for a in parts:
+            offs.append(off)
+            off += len(a)
+        header[1], header[2] = offs[0], len(self.curvature[0])
+        header[3], header[4] = offs[2], len(self.bank_factor[0])
+        header[5], header[6] = offs[4], len(pn)
+        header[7] = offs[6]
+        header[8], header[9] = offs[7], len(self.grade[0])
+        return np.concatenate([header] + [np.asarray(a, dtype=np.float64) for a in parts])
 
     # -- Python-side conveniences (vectorised over numpy arrays) -------------
     def bank(self, s, n):
@@ -197,75 +216,79 @@ def track_curve_start(road: Road) -> float:
 
 
 # ---- compiled lookups ------------------------------------------------------------
+# All take the packed road (one float64 array, see Road.pack).
 
 @njit(cache=True, inline="always")
 def _wrap(road, s):
-    L = road[9][0]
+    L = road[0]
     if L > 0.0:
         s = s - L * math.floor(s / L)
     return s
 
 
-@njit(cache=True)
-def interp1(xs, ys, x):
-    """Piecewise-linear interpolation, constant beyond the end knots."""
-    n = xs.shape[0]
-    if n == 1 or x <= xs[0]:
-        return ys[0]
-    if x >= xs[n - 1]:
-        return ys[n - 1]
+@njit(cache=True, inline="always")
+def interp1(a, off, n, x):
+    """Piecewise-linear interpolation of knots ``a[off:off+n]`` (x) -> ``a[off+n:off+2n]`` (y), held at the ends."""
+    ys = off + n
+    if n == 1 or x <= a[off]:
+        return a[ys]
+    if x >= a[off + n - 1]:
+        return a[ys + n - 1]
     lo, hi = 0, n - 1
     while hi - lo > 1:
         mid = (lo + hi) >> 1
-        if xs[mid] <= x:
+        if a[off + mid] <= x:
             lo = mid
         else:
             hi = mid
-    u = (x - xs[lo]) / (xs[hi] - xs[lo])
-    return ys[lo] + u * (ys[hi] - ys[lo])
+    x0 = a[off + lo]
+    u = (x - x0) / (a[off + hi] - x0)
+    return a[ys + lo] + u * (a[ys + hi] - a[ys + lo])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def road_curvature(road, s):
     """Reference-line curvature (1/m) at ``s``."""
-    return interp1(road[0], road[1], _wrap(road, s))
+    return interp1(road, int(road[1]), int(road[2]), _wrap(road, s))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def road_grade(road, s):
     """Grade (rad) at ``s``."""
-    return interp1(road[7], road[8], _wrap(road, s))
+    return interp1(road, int(road[8]), int(road[9]), _wrap(road, s))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def road_bank_factor(road, s):
-    return interp1(road[2], road[3], _wrap(road, s))
+    """Bank factor (-) at ``s``."""
+    return interp1(road, int(road[3]), int(road[4]), _wrap(road, s))
 
 
-@njit(cache=True)
-def _profile_integral(pn, pb, cum, n):
-    """int_{pn[0]}^{n} bank_profile(n') dn' (rad m)."""
-    m = pn.shape[0]
-    if n <= pn[0] or m == 1:
-        return pb[0] * (n - pn[0])
-    if n >= pn[m - 1]:
-        return cum[m - 1] + pb[m - 1] * (n - pn[m - 1])
+@njit(cache=True, inline="always")
+def _profile_integral(road, n):
+    """int_{n_0}^{n} bank_profile(n') dn' (rad m), n_0 the first profile knot."""
+    off = int(road[5])
+    m = int(road[6])
+    pb = off + m
+    cum = int(road[7])
+    if n <= road[off] or m == 1:
+        return road[pb] * (n - road[off])
+    if n >= road[off + m - 1]:
+        return road[cum + m - 1] + road[pb + m - 1] * (n - road[off + m - 1])
     k = 0
-    while pn[k + 1] < n:
+    while road[off + k + 1] < n:
         k += 1
-    d = n - pn[k]
-    slope = (pb[k + 1] - pb[k]) / (pn[k + 1] - pn[k])
-    return cum[k] + pb[k] * d + 0.5 * slope * d * d
+    d = n - road[off + k]
+    slope = (road[pb + k + 1] - road[pb + k]) / (road[off + k + 1] - road[off + k])
+    return road[cum + k] + road[pb + k] * d + 0.5 * slope * d * d
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def bank_under_vehicle(road, s, n, half_track):
     """Secant bank (rad): bank factor at ``s`` times the mean profile over ``n +- half_track``."""
-    pn, pb, cum = road[4], road[5], road[6]
-    if pn.shape[0] == 1:
-        return road_bank_factor(road, s) * pb[0]
-    mean = (_profile_integral(pn, pb, cum, n + half_track)
-            - _profile_integral(pn, pb, cum, n - half_track)) / (2.0 * half_track)
+    if int(road[6]) == 1:
+        return road_bank_factor(road, s) * road[int(road[5]) + 1]
+    mean = (_profile_integral(road, n + half_track) - _profile_integral(road, n - half_track)) / (2.0 * half_track)
     return road_bank_factor(road, s) * mean
 
 
@@ -285,35 +308,31 @@ def _seg_int(f, b0, slope, a, b):
 
 
 @njit(cache=True)
-def _height_from_first_knot(pn, pb, f, n):
-    """(z, h) of the surface at ``n`` relative to the first profile knot."""
-    m = pn.shape[0]
-    if n <= pn[0] or m == 1:
-        z, h = _seg_int(f, pb[0], 0.0, pn[0], n) if n >= pn[0] else _seg_int(f, pb[0], 0.0, n, pn[0])
-        if n < pn[0]:
-            return -z, -h
-        return z, h
+def contact_height(road, s, n):
+    """Surface height ``z`` and horizontal coordinate ``h`` (m) at ``(s, n)``, relative to the first profile knot."""
+    f = road_bank_factor(road, s)
+    off = int(road[5])
+    m = int(road[6])
+    pb = off + m
+    if n <= road[off] or m == 1:
+        if n >= road[off]:
+            return _seg_int(f, road[pb], 0.0, road[off], n)
+        z, h = _seg_int(f, road[pb], 0.0, n, road[off])
+        return -z, -h
     z, h = 0.0, 0.0
     k = 0
-    while k < m - 1 and pn[k + 1] <= n:
-        slope = (pb[k + 1] - pb[k]) / (pn[k + 1] - pn[k])
-        dz, dh = _seg_int(f, pb[k], slope, pn[k], pn[k + 1])
+    while k < m - 1 and road[off + k + 1] <= n:
+        slope = (road[pb + k + 1] - road[pb + k]) / (road[off + k + 1] - road[off + k])
+        dz, dh = _seg_int(f, road[pb + k], slope, road[off + k], road[off + k + 1])
         z += dz
         h += dh
         k += 1
     if k < m - 1:
-        slope = (pb[k + 1] - pb[k]) / (pn[k + 1] - pn[k])
+        slope = (road[pb + k + 1] - road[pb + k]) / (road[off + k + 1] - road[off + k])
     else:
         slope = 0.0
-    dz, dh = _seg_int(f, pb[k], slope, pn[k], n)
+    dz, dh = _seg_int(f, road[pb + k], slope, road[off + k], n)
     return z + dz, h + dh
-
-
-@njit(cache=True)
-def contact_height(road, s, n):
-    """Surface height ``z`` and horizontal coordinate ``h`` (m) at ``(s, n)``, up to a constant per ``s``."""
-    f = road_bank_factor(road, s)
-    return _height_from_first_knot(road[4], road[5], f, n)
 
 
 @njit(cache=True)
@@ -321,7 +340,8 @@ def truth_bank(road, s, n, psi, lf, lr, tf, tr):
     """Truth bank (rad) from the left/right contact heights, averaged over both axles.
 
     ``psi`` is the heading relative to the reference line (rad); wheel contact
-    points are at body ``(lf, +-tf/2)`` and ``(-lr, +-tr/2)``.
+    points are at body ``(lf, +-tf/2)`` and ``(-lr, +-tr/2)``. Per axle
+    ``atan2(z_L - z_R, d)`` with ``d`` the horizontal distance of the contacts.
     """
     c = math.cos(psi)
     sn = math.sin(psi)
@@ -335,8 +355,6 @@ def truth_bank(road, s, n, psi, lf, lr, tf, tr):
         nr = n + x * sn - hw * c
         zl, hl = contact_height(road, sl, nl)
         zr, hr = contact_height(road, sr, nr)
-        # heights at different s share the same datum only if the factor is equal;
-        # the factor changes slowly (transitions of ~100 m), so this is second order.
         # horizontal distance between the contacts (across and along the road)
         dist = math.sqrt((hl - hr) ** 2 + (sl - sr) ** 2)
         tot += math.atan2(zl - zr, dist)

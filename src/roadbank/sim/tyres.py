@@ -28,7 +28,7 @@ _A0, _A1, _A2, _A3, _A4, _A5, _A6, _A7, _A8 = (
     -0.0015896368777204358)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", fastmath=True)
 def fast_atan(x):
     """Arc tangent (rad), |error| < 2e-9, branch-light."""
     a = abs(x)
@@ -42,7 +42,7 @@ def fast_atan(x):
     return r if x >= 0.0 else -r
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", fastmath=True)
 def fast_sin(x):
     """Sine for |x| <= 2.6 (Taylor to x^15, error < 5e-8)."""
     u = x * x
@@ -50,7 +50,7 @@ def fast_sin(x):
         1.0 / 362880.0 + u * (-1.0 / 39916800.0 + u * (1.0 / 6227020800.0 + u * (-1.0 / 1307674368000.0))))))))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", fastmath=True)
 def magic_formula(x, K, C, D, E):
     """Pure-slip Magic Formula force.
 
@@ -75,7 +75,7 @@ def magic_formula(x, K, C, D, E):
     return D * fast_sin(C * fast_atan(bx - E * (bx - fast_atan(bx))))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", fastmath=True)
 def load_stiffness_factor(fz, fz0, pky2):
     """Cornering stiffness at load ``fz`` relative to the one at ``fz0`` (-).
 
@@ -87,7 +87,7 @@ def load_stiffness_factor(fz, fz0, pky2):
     return (y / (1.0 + y * y)) * ((1.0 + y0 * y0) / y0)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, inline="always", fastmath=True)
 def tyre_forces(tan_alpha, kappa, fz, mu, ky0, fz0, pky2, Cy, Ey, pdy2,
                 kx_per_fz, Cx, Ex, pdx2, rby1, rby2, rbx1, rbx2):
     """Combined-slip tyre forces in the wheel frame.
