@@ -185,39 +185,112 @@ def _sample_valid(mem, cfg, t, vx, d, ay, r):
 
 
 @njit(cache=True)
-def _roll_views(cfg, mem):
-    n = int(cfg[C_N])
-    nr = int(cfg[C_NR])
-    o = C_ROLL
-    F = cfg[o:o + nr * nr].reshape((nr, nr))
-    o += nr * nr
-    G = cfg[o:o + nr].reshape((nr, 1))
-    o += nr
-    H = cfg[o:o + nr]
-    o += nr
-    D = cfg[o]
-    o += 1
-    J = cfg[o:o + nr]
-    z = mem[M_X + n:M_X + n + nr]
-    return F, G, H, D, J, z
+def _lu_flat(M, o, piv, op, n):
+    """:func:`_lu` on the row-major ``n x n`` matrix stored in ``M[o:o + n*n]`` (pivots in ``piv[op:]``)."""
+    for k in range(n):
+        p = k
+        big = abs(M[o + k * n + k])
+        for i in range(k + 1, n):
+            if abs(M[o + i * n + k]) > big:
+                big = abs(M[o + i * n + k])
+                p = i
+        piv[op + k] = p
+        if p != k:
+            for j in range(n):
+                tmp = M[o + k * n + j]
+                M[o + k * n + j] = M[o + p * n + j]
+                M[o + p * n + j] = tmp
+        d = M[o + k * n + k]
+        if d == 0.0:
+            continue
+        for i in range(k + 1, n):
+            M[o + i * n + k] /= d
+            f = M[o + i * n + k]
+            for j in range(k + 1, n):
+                M[o + i * n + j] -= f * M[o + k * n + j]
 
 
 @njit(cache=True)
-def _finish(mem, cfg, w, ay, dt, restart, Mw, piv, rhs, e0, e1):
-    """Roll separation and output of one valid sample: updates the held outputs."""
-    F, G, H, D, J, z = _roll_views(cfg, mem)
-    nr = z.shape[0]
+def _lu_solve_flat(M, o, piv, op, b, ob, n):
+    """:func:`_lu_solve` on flat storage: solves in place in ``b[ob:ob + n]``."""
+    for k in range(n):
+        p = int(piv[op + k])
+        if p != k:
+            tmp = b[ob + k]
+            b[ob + k] = b[ob + p]
+            b[ob + p] = tmp
+    for i in range(n):
+        s = b[ob + i]
+        for j in range(i):
+            s -= M[o + i * n + j] * b[ob + j]
+        b[ob + i] = s
+    for i in range(n - 1, -1, -1):
+        s = b[ob + i]
+        for j in range(i + 1, n):
+            s -= M[o + i * n + j] * b[ob + j]
+        b[ob + i] = s / M[o + i * n + i]
+
+
+@njit(cache=True)
+def _tustin_flat(x, ox, n, A, oF, oG, m, E0, oe0, E1, oe1, dt, max_sub, W, oM):
+    """:func:`_tustin` on flat storage, without array views (the per-sample hot path).
+
+    State ``x[ox:ox+n]``; ``F`` (n x n) at ``A[oF:]`` and ``G`` (n x m) at
+    ``A[oG:]``, row-major; inputs ``e0``/``e1`` at ``E0[oe0:]``/``E1[oe1:]``;
+    scratch ``W[oM:]`` of ``n*n + 2n`` floats (matrix, pivots, right-hand side).
+    Same arithmetic, in the same order, as :func:`_tustin`.
+    """
+    if n == 0:
+        return
+    opiv = oM + n * n
+    orhs = opiv + n
+    nsub = max(1, int(math.ceil(dt / max_sub - 1e-9)))
+    h = dt / nsub
+    hh = 0.5 * h
+    for i in range(n):
+        for j in range(n):
+            W[oM + i * n + j] = -hh * A[oF + i * n + j]
+        W[oM + i * n + i] += 1.0
+    _lu_flat(W, oM, W, opiv, n)
+    for k in range(nsub):
+        a = (2.0 * k + 1.0) / nsub
+        for i in range(n):
+            s = x[ox + i]
+            for j in range(n):
+                s += hh * A[oF + i * n + j] * x[ox + j]
+            for j in range(m):
+                s += hh * A[oG + i * m + j] * (2.0 * E0[oe0 + j] + a * (E1[oe1 + j] - E0[oe0 + j]))
+            W[orhs + i] = s
+        _lu_solve_flat(W, oM, W, opiv, W, orhs, n)
+        for i in range(n):
+            x[ox + i] = W[orhs + i]
+
+
+@njit(cache=True)
+def _finish(mem, cfg, w, ay, dt, restart, work, o):
+    """Roll separation and output of one valid sample: updates the held outputs.
+
+    ``work[o:]`` is scratch of at least ``nr*nr + 2 nr + 2`` floats.
+    """
+    n = int(cfg[C_N])
+    nr = int(cfg[C_NR])
+    oF = C_ROLL
+    oG = oF + nr * nr
+    oH = oG + nr
+    oD = oH + nr
+    oJ = oD + 1
+    oz = M_X + n
     if restart:
         for i in range(nr):
-            z[i] = J[i] * ay
-    else:
-        e0[0] = mem[M_AUX + 1]
-        e1[0] = ay
-        _tustin(z, F, G, e0[:1], e1[:1], dt, cfg[C_SUB], Mw, piv, rhs)
+            mem[oz + i] = cfg[oJ + i] * ay
+    elif nr > 0:
+        work[o] = mem[M_AUX + 1]
+        work[o + 1] = ay
+        _tustin_flat(mem, oz, nr, cfg, oF, oG, 1, work, o, work, o + 1, dt, cfg[C_SUB], work, o + 2)
     mem[M_AUX + 1] = ay
-    phi = D * ay
+    phi = cfg[oD] * ay
     for i in range(nr):
-        phi += H[i] * z[i]
+        phi += cfg[oH + i] * mem[oz + i]
     wc = min(1.0, max(-1.0, w))
     theta = math.asin(wc)
     mem[M_W] = w
@@ -241,63 +314,56 @@ def _begin(mem, cfg, t):
 # --------------------------------------------------------------------------
 
 @njit(cache=True)
+def lpv_work_size(n: int) -> int:
+    """Floats of scratch :func:`lpv_step` needs for ``n`` observer states."""
+    return 3 * n * n + 3 * n * NETA + 4 * n + 2 * NETA + 16
+
+
+@njit(cache=True)
 def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     """One sample of a scheduled linear observer. Returns True if the sample was valid.
 
     ``tab`` rows (one per grid speed): F (n*n), G (n*3), H (n), D (3), J (n*3).
-    ``work`` is a scratch array of at least ``6 + 4 n + 3 n^2 + 8`` floats.
+    ``work`` is a scratch array of at least :func:`lpv_work_size` floats. The
+    code indexes flat storage (no array views: a view costs reference counting
+    per sample) and interpolates only F, G, H, D (J only at a restart).
     """
     if not _sample_valid(mem, cfg, t, vx, d, ay, r):
         return False
     n = int(cfg[C_N])
     i, a = _grid(cfg, vx)
-    o = 0
-    F = work[o:o + n * n].reshape((n, n))
-    o += n * n
-    G = work[o:o + n * NETA].reshape((n, NETA))
-    o += n * NETA
-    H = work[o:o + n].reshape((1, n))
-    o += n
-    Dm = work[o:o + NETA].reshape((1, NETA))
-    o += NETA
-    e1 = work[o:o + NETA]
-    o += NETA
-    rhs = work[o:o + max(n, 2)]
-    o += max(n, 2)
-    Mw = work[o:o + max(n, 2) * max(n, 2)].reshape((max(n, 2), max(n, 2)))
-    o += max(n, 2) * max(n, 2)
-    piv = work[o:o + max(n, 2)]
-    o += max(n, 2)
-    er = work[o:o + 2]
-    o += 2
-    e1[0] = d if cfg[C_USE] > 0 else 0.0
-    e1[1] = ay if cfg[C_USE + 1] > 0 else 0.0
-    e1[2] = r if cfg[C_USE + 2] > 0 else 0.0
-    e0 = mem[M_ETA:M_ETA + NETA]
-    x = mem[M_X:M_X + n]
-    k = _lerp(tab, i, a, 0, F)
-    k = _lerp(tab, i, a, k, G)
-    k = _lerp(tab, i, a, k, H)
-    k = _lerp(tab, i, a, k, Dm)
+    i1 = min(i + 1, tab.shape[0] - 1)
+    # work: F | G | H | D | e1 | tustin scratch (n*n + 2n) | finish scratch
+    oG = n * n
+    oH = oG + n * NETA
+    oD = oH + n
+    oE1 = oD + NETA
+    oT = oE1 + NETA
+    oR = oT + n * n + 2 * n
+    nk = oE1        # F, G, H, D are the first nk entries of a table row, in this order
+    for k in range(nk):
+        work[k] = tab[i, k] + a * (tab[i1, k] - tab[i, k])
+    work[oE1] = d if cfg[C_USE] > 0 else 0.0
+    work[oE1 + 1] = ay if cfg[C_USE + 1] > 0 else 0.0
+    work[oE1 + 2] = r if cfg[C_USE + 2] > 0 else 0.0
     dt, restart = _begin(mem, cfg, t)
     if restart:
-        J = work[o:o + n * NETA].reshape((n, NETA))
-        _lerp(tab, i, a, k, J)
         for p in range(n):
             s = 0.0
             for q in range(NETA):
-                s += J[p, q] * e1[q]
-            x[p] = s
+                k = nk + p * NETA + q
+                s += (tab[i, k] + a * (tab[i1, k] - tab[i, k])) * work[oE1 + q]
+            mem[M_X + p] = s
     else:
-        _tustin(x, F, G, e0, e1, dt, cfg[C_SUB], Mw, piv, rhs)
+        _tustin_flat(mem, M_X, n, work, 0, oG, NETA, mem, M_ETA, work, oE1, dt, cfg[C_SUB], work, oT)
     w = 0.0
     for p in range(n):
-        w += H[0, p] * x[p]
+        w += work[oH + p] * mem[M_X + p]
     for q in range(NETA):
-        w += Dm[0, q] * e1[q]
+        w += work[oD + q] * work[oE1 + q]
     for q in range(NETA):
-        e0[q] = e1[q]
-    _finish(mem, cfg, w, ay, dt, restart, Mw, piv, rhs, er[0:1], er[1:2])
+        mem[M_ETA + q] = work[oE1 + q]
+    _finish(mem, cfg, w, ay, dt, restart, work, oR)
     return True
 
 
@@ -306,7 +372,7 @@ def lpv_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi,
             out_x):
     """Batch version of :func:`lpv_step` (same arithmetic, sample by sample)."""
     n = int(cfg[C_N])
-    work = np.zeros(16 + 8 * n + 4 * n * n + 4 * NETA * max(n, 1))
+    work = np.zeros(lpv_work_size(n))
     for k in range(t.shape[0]):
         ok = lpv_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])
         out_valid[k] = ok
@@ -317,10 +383,6 @@ def lpv_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi,
         for p in range(n):
             out_x[k, p] = mem[M_X + p]
 
-
-# --------------------------------------------------------------------------
-# Dynamic filter compensation
-# --------------------------------------------------------------------------
 
 @njit(cache=True)
 def dfc_step(mem, cfg, tab, work, t, vx, d, ay, r):
@@ -364,7 +426,7 @@ def dfc_step(mem, cfg, tab, work, t, vx, d, ay, r):
         _tustin(x, F, G, e0, e1, dt, cfg[C_SUB], Mw, piv, rhs)
     mem[M_AUX] = gated
     mem[M_X + 1] = dfc
-    _finish(mem, cfg, x[0], ay, dt, restart, Mw, piv, rhs, e0, e1)
+    _finish(mem, cfg, x[0], ay, dt, restart, work, 16)
     return True
 
 
@@ -372,7 +434,7 @@ def dfc_step(mem, cfg, tab, work, t, vx, d, ay, r):
 def dfc_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
             out_x):
     """Batch version of :func:`dfc_step`."""
-    work = np.zeros(16)
+    work = np.zeros(32)
     for k in range(t.shape[0]):
         ok = dfc_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])
         out_valid[k] = ok
@@ -553,7 +615,7 @@ def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
     w = x[n - 1]
     for q in range(NETA):
         e0[q] = e1[q]
-    _finish(mem, cfg, w, ay, dt, restart, Mw, piv, col, er[0:1], er[1:2])
+    _finish(mem, cfg, w, ay, dt, restart, work, o)
     return True
 
 
