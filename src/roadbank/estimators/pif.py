@@ -35,6 +35,9 @@ from .synthesis import game_are
 
 #: paper Table 4
 TABLE4 = dict(Q=0.1, R=0.0035, S=1.0, th=1.0, P0=(0.0, 0.0, 0.5))
+#: Table 4's R read in the ESP sensor's own unit, (deg/s)^2, converted to (rad/s)^2: an
+#: alternative interpretation of the paper's units (see docs/estimators.md); not the default.
+R_TABLE4_DEG_UNITS = 0.0035 * (np.pi / 180.0) ** 2
 #: weight of the lateral-acceleration output of the original-model PIF (see module doc)
 R_AY_ORIGINAL = 0.0035 * (0.005 * 9.81 / np.deg2rad(0.3)) ** 2
 
