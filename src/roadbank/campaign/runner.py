@@ -1,0 +1,187 @@
+"""The per-run work of a campaign: simulate one :class:`RunSpec`, run every estimator, score it.
+
+:func:`run_one` returns flat rows, one per estimator, holding the run's
+parameters (``RunSpec`` fields), the scores of the estimator's bank estimate
+``phi_b`` against the plant's contact-height bank (degrees), timings (seconds)
+and an ``error`` text. It never raises for a bad run: an exception in the
+simulator or an estimator becomes rows with ``error`` set (type and message)
+and NaN scores, so one failing run never stops a campaign.
+
+Failure of an estimator in a run (:data:`FAIL_RMS_DEG`): any non-finite output,
+a bank RMS error above 2 deg, or an error raised. ``failed`` is that flag.
+
+Estimators are built once per process (:func:`estimators_for`) and reused with
+``run(reset=True)``: they all keep the design parameters, only the plant varies.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+import traceback
+from dataclasses import dataclass
+
+import numpy as np
+
+from .sampling import RunSpec
+
+#: an estimator "fails" a run when its bank RMS error exceeds this (deg) ...
+FAIL_RMS_DEG = 2.0
+#: ... or when any output sample is non-finite, or it raised.
+
+#: row columns besides the RunSpec fields
+SCORE_COLUMNS = ("estimator", "rms_deg", "max_deg", "bias_deg", "steady_deg", "theta_rms_deg",
+                 "valid_frac", "nonfinite", "failed", "max_beta_deg", "min_vx", "sim_s", "est_s",
+                 "duration_s", "error")
+
+
+@dataclass(frozen=True)
+class RunOptions:
+    """How runs are simulated and scored (the same for every run of a campaign).
+
+    Attributes
+    ----------
+    names : tuple of str
+        Estimators to run (default: all of :data:`roadbank.estimators.NAMES`).
+    duration_scale : float
+        Factor on each scenario's duration (1 = the paper's 15/25 s). A value
+        below 1 shortens the manoeuvres (truncates them) and is stated in the report.
+    pre_roll : float or None
+        Settling time simulated before t = 0 (s); None keeps the scenario's 5 s.
+    sim_dt : float
+        Integration step of the plant (s); 1e-3 is the simulator's default.
+    settle : float
+        Seconds at the start excluded from the scores.
+    """
+
+    names: tuple = ()
+    duration_scale: float = 1.0
+    pre_roll: float | None = None
+    sim_dt: float = 1e-3
+    settle: float = 2.0
+
+    def __post_init__(self) -> None:
+        if not (0 < self.duration_scale <= 1.0):
+            raise ValueError("duration_scale must be in (0, 1]")
+        if not (0 < self.sim_dt <= 0.01):
+            raise ValueError("sim_dt must be in (0, 0.01] s")
+        if self.pre_roll is not None and not self.pre_roll >= 0:
+            raise ValueError("pre_roll must be >= 0")
+
+    def estimator_names(self) -> tuple:
+        from .. import estimators as E
+
+        return tuple(self.names) or E.NAMES
+
+    def as_dict(self) -> dict:
+        d = dataclasses.asdict(self)
+        d["names"] = list(self.estimator_names())
+        return d
+
+
+_ESTIMATORS: dict = {}
+
+
+def estimators_for(names) -> dict:
+    """Estimators ``name -> Estimator`` with the design parameters, built once per process."""
+    from .. import estimators as E
+
+    out = {}
+    for name in names:
+        if name not in _ESTIMATORS:
+            _ESTIMATORS[name] = E.make(name)
+        out[name] = _ESTIMATORS[name]
+    return out
+
+
+def _scenario(spec: RunSpec, options: RunOptions):
+    from ..sim import SCENARIOS
+
+    sc = SCENARIOS[spec.scenario]
+    changes = {}
+    if options.duration_scale != 1.0:
+        changes["duration"] = sc.duration * options.duration_scale
+    if options.pre_roll is not None:
+        changes["pre_roll"] = options.pre_roll
+    return dataclasses.replace(sc, **changes) if changes else sc
+
+
+def _error_text(exc: BaseException) -> str:
+    tb = traceback.extract_tb(exc.__traceback__)
+    where = f" at {tb[-1].filename.rsplit('/', 1)[-1]}:{tb[-1].lineno}" if tb else ""
+    return f"{type(exc).__name__}: {exc}{where}"
+
+
+def run_one(spec: RunSpec, options: RunOptions = RunOptions()) -> list[dict]:
+    """Simulate ``spec``, run and score every estimator; one row per estimator. Never raises
+    for a failing run (see the module docstring)."""
+    from ..evaluation import error_metrics
+    from ..sim import run as sim_run
+
+    names = options.estimator_names()
+    base = spec.as_dict()
+    t0 = time.perf_counter()
+    try:
+        plant, sensors = spec.plant_and_sensors()
+        sim = sim_run(_scenario(spec, options), plant, sensors, seed=spec.noise_seed, dt=options.sim_dt)
+    except Exception as exc:  # a failing run is data, not a crash
+        err = f"simulation: {_error_text(exc)}"
+        return [_row(base, name, error=err, sim_s=time.perf_counter() - t0) for name in names]
+    sim_s = time.perf_counter() - t0
+    tr, sig = sim.truth, sim.signals
+    with np.errstate(all="ignore"):
+        beta = np.degrees(np.abs(np.arctan2(tr.vy, np.abs(tr.vx))))
+    extra = {"max_beta_deg": float(np.nanmax(beta)), "min_vx": float(np.nanmin(tr.vx)),
+             "duration_s": float(sig.t[-1] - sig.t[0]), "sim_s": sim_s}
+    rows = []
+    for name, est in estimators_for(names).items():
+        t1 = time.perf_counter()
+        try:
+            e = est.run(sig)
+            nonfinite = not (np.all(np.isfinite(e.phi_b)) and np.all(np.isfinite(e.theta)))
+            m = error_metrics(sig.t, e.phi_b, tr.phi_b, e.valid, settle=options.settle)
+            mt = error_metrics(sig.t, e.theta, tr.theta, e.valid, settle=options.settle)
+        except Exception as exc:
+            rows.append(_row(base, name, error=f"estimator: {_error_text(exc)}",
+                             est_s=time.perf_counter() - t1, **extra))
+            continue
+        failed = bool(nonfinite or not (m.rms_deg <= FAIL_RMS_DEG))
+        rows.append(_row(base, name, rms_deg=m.rms_deg, max_deg=m.max_deg, bias_deg=m.bias_deg,
+                         steady_deg=m.steady_deg, theta_rms_deg=mt.rms_deg,
+                         valid_frac=float(np.mean(e.valid)), nonfinite=nonfinite, failed=failed,
+                         est_s=time.perf_counter() - t1, **extra))
+    return rows
+
+
+def _row(base: dict, name: str, **values) -> dict:
+    nan = math.nan
+    row = dict(base)
+    row.update({"estimator": name, "rms_deg": nan, "max_deg": nan, "bias_deg": nan, "steady_deg": nan,
+                "theta_rms_deg": nan, "valid_frac": nan, "nonfinite": False, "failed": True,
+                "max_beta_deg": nan, "min_vx": nan, "sim_s": nan, "est_s": nan, "duration_s": nan,
+                "error": ""})
+    row.update(values)
+    return row
+
+
+def warm_up(options: RunOptions = RunOptions()) -> float:
+    """Build the estimators and run a 0.5 s simulation in this process, so the numba
+    kernels are loaded (or compiled) before a campaign is timed. Returns seconds spent."""
+    from ..sim import SCENARIOS
+    from ..sim import run as sim_run
+
+    t0 = time.perf_counter()
+    sc = dataclasses.replace(SCENARIOS["const-bank"], duration=0.5, pre_roll=0.1)
+    sim = sim_run(sc, dt=options.sim_dt)
+    for est in estimators_for(options.estimator_names()).values():
+        est.run(sim.signals)
+    return time.perf_counter() - t0
+
+
+def run_batch(specs, options: RunOptions = RunOptions()) -> list[dict]:
+    """:func:`run_one` over a batch of specs (one Dask task); rows of all of them."""
+    rows = []
+    for spec in specs:
+        rows.extend(run_one(spec, options))
+    return rows
