@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import click
@@ -29,6 +30,7 @@ def reproduce(outdir, scenarios, names, jobs, seed, docs_results):
     from ..report.reproduce import plan, run_study, write_outputs
     from ..report.tables import lookup
 
+    t_start = time.perf_counter()
     names = _split(names) or list(estimators.NAMES)
     scenarios = _split(scenarios) or None
     try:
@@ -46,7 +48,8 @@ def reproduce(outdir, scenarios, names, jobs, seed, docs_results):
     with click.progressbar(length=len(cells), label=f"{len(cells)} cells x {len(names)} estimators",
                            file=click.get_text_stream("stderr")) as bar:
         study = run_study(scenarios, names, jobs=jobs, seed=seed, progress=lambda res: bar.update(1))
-    written = write_outputs(study, outdir, docs_results=docs_results)
+    written = write_outputs(study, outdir, docs_results=docs_results, jobs=jobs)
+    total_s = time.perf_counter() - t_start
 
     rms = lookup(study.rows, "bank", "rms_deg")
     show = [n for n in ("pif-modified", "pio-original", "dfc", "uio", "kalman") if n in names] or names
@@ -54,4 +57,5 @@ def reproduce(outdir, scenarios, names, jobs, seed, docs_results):
     click.echo(f"{'scenario':18s} {'condition':11s} " + " ".join(f"{n[:12]:>12s}" for n in show))
     for (sc, cond) in study.cells:
         click.echo(f"{sc:18s} {cond:11s} " + " ".join(f"{rms.get((sc, cond, n), float('nan')):12.2f}" for n in show))
-    click.echo(f"\nReport: {written['report'][0]}  Tables: {written['tables'][0]}")
+    click.echo(f"\nReport: {written['report'][0]}  Tables: {written['tables'][0]}  "
+               f"(total {total_s:.1f} s)")

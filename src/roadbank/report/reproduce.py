@@ -108,21 +108,38 @@ def _collect(study: Study, res: CellResult, progress) -> None:
         progress(res)
 
 
-def write_outputs(study: Study, outdir: Path, *, docs_results: Path | None = None) -> dict:
-    """Write tables, figures and the report into ``outdir``; returns the written paths by kind."""
-    from .document import write_report
+def _scenario_figures(sc: str, cells: dict, figdir: Path) -> dict:
     from .figures import robustness_figure, scenario_figure
+    figs = {sc: scenario_figure(sc, cells, figdir / sc)}
+    rob = robustness_figure(sc, cells, figdir / f"{sc}-cf-robustness")
+    if rob:
+        figs[f"{sc}-cf-robustness"] = rob
+    return figs
+
+
+def write_outputs(study: Study, outdir: Path, *, docs_results: Path | None = None,
+                  jobs: int | None = 1) -> dict:
+    """Write tables, figures (scenarios in ``jobs`` processes) and the report into ``outdir``.
+
+    Returns the written paths by kind: ``tables``, ``figures`` (name -> paths), ``report``.
+    """
+    from .document import write_report
     from .tables import write_tables
     outdir = Path(outdir)
     figdir = outdir / "figures"
     figdir.mkdir(parents=True, exist_ok=True)
     written = {"tables": write_tables(study.rows, outdir)}
-    figs = {}
-    for sc, cells in study.by_scenario().items():
-        figs[sc] = scenario_figure(sc, cells, figdir / sc)
-        rob = robustness_figure(sc, cells, figdir / f"{sc}-cf-robustness")
-        if rob:
-            figs[f"{sc}-cf-robustness"] = rob
+    by_sc = study.by_scenario()
+    jobs = max(1, min(jobs or os.cpu_count() or 1, len(by_sc)))
+    figs: dict = {}
+    if jobs == 1:
+        for sc, cells in by_sc.items():
+            figs.update(_scenario_figures(sc, cells, figdir))
+    else:
+        with ProcessPoolExecutor(max_workers=jobs) as pool:
+            futures = [pool.submit(_scenario_figures, sc, cells, figdir) for sc, cells in by_sc.items()]
+            for fut in futures:
+                figs.update(fut.result())
     written["figures"] = figs
     written["report"] = write_report(study, outdir, figs, docs_results=docs_results)
     return written
