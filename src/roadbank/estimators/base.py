@@ -8,7 +8,7 @@ code for ``run()`` and ``step()``, so streaming and batch give identical numbers
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -25,17 +25,21 @@ V_GRID_STEP = 0.25
 _DESIGN_CACHE: dict = {}
 
 
-@dataclass(frozen=True)
-class StepResult:
-    """Output of :meth:`Estimator.step` for one sample.
+class StepResult(NamedTuple):
+    """Output of :meth:`Estimator.step` for one sample (immutable).
 
-    ``w`` (-), ``theta`` and ``phi_b`` (rad), ``valid`` (bool).
+    ``w`` (-), ``theta`` and ``phi_b`` (rad), ``valid`` (bool). A named tuple
+    rather than a dataclass: building it costs about 0.15 us instead of 0.6 us,
+    a third of the whole ``step()`` call.
     """
 
     w: float
     theta: float
     phi_b: float
     valid: bool
+
+
+_new_result = tuple.__new__
 
 
 def speed_grid(v_min: float, v_max: float = V_GRID_MAX, step: float = V_GRID_STEP) -> np.ndarray:
@@ -91,6 +95,7 @@ class Estimator:
         self._cfg = self._build_cfg(extra)
         self._run_fn = getattr(K, f"{self.kernel}_run")
         self._step_fn = getattr(K, f"{self.kernel}_step")
+        self._step_out = getattr(K, f"{self.kernel}_step_out")
         n = self._nstate
         self._work = np.zeros(64 + 20 * n * n + 8 * n * K.NETA + 4 * n)
         self.reset()
@@ -154,10 +159,11 @@ class Estimator:
         ``vx < v_min``, time not after the last valid sample) leaves the state
         unchanged and returns the held outputs with ``valid=False``.
         """
-        ok = self._step_fn(self._mem, self._cfg, self._tab, self._work, float(t), float(vx),
-                           float(delta_f), float(ay), float(r))
-        m = self._mem
-        return StepResult(float(m[K.M_W]), float(m[K.M_THETA]), float(m[K.M_PHIB]), bool(ok))
+        # One compiled call returns the outputs (no numpy scalar reads afterwards);
+        # float() keeps numpy scalars / ints from triggering a new compilation.
+        return _new_result(StepResult, self._step_out(self._mem, self._cfg, self._tab, self._work,
+                                                      float(t), float(vx), float(delta_f), float(ay),
+                                                      float(r)))
 
     def run(self, signals: Signals, *, reset: bool = True) -> Estimate:
         """Estimate over a whole log.

@@ -735,3 +735,28 @@ def riccati_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, out_
         out_phi[k] = mem[M_PHI]
         for q in range(n):
             out_x[k, q] = mem[M_X + q]
+
+
+# --------------------------------------------------------------------------
+# Streaming entry points: one sample, outputs returned (no reads from Python)
+# --------------------------------------------------------------------------
+
+@njit(cache=True)
+def lpv_step_out(mem, cfg, tab, work, t, vx, d, ay, r):
+    """:func:`lpv_step` returning ``(w, theta, phi_b, valid)`` (what ``Estimator.step`` reports)."""
+    ok = lpv_step(mem, cfg, tab, work, t, vx, d, ay, r)
+    return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
+
+
+@njit(cache=True)
+def dfc_step_out(mem, cfg, tab, work, t, vx, d, ay, r):
+    """:func:`dfc_step` returning ``(w, theta, phi_b, valid)``."""
+    ok = dfc_step(mem, cfg, tab, work, t, vx, d, ay, r)
+    return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
+
+
+@njit(cache=True)
+def riccati_step_out(mem, cfg, tab, work, t, vx, d, ay, r):
+    """:func:`riccati_step` returning ``(w, theta, phi_b, valid)``."""
+    ok = riccati_step(mem, cfg, tab, work, t, vx, d, ay, r)
+    return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
