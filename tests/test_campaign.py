@@ -150,9 +150,13 @@ def test_cli_campaign_on_a_scheduler_and_bad_input(tmp_path, cluster):
     res = r.invoke(main, ["campaign", "--runs", "2", "-o", str(out), "--scheduler", cluster.scheduler_address,
                           "--duration-scale", "0.15", "--estimators", "kinematic,pif-modified"])
     assert res.exit_code == 1 and "--resume" in res.output and "Traceback" not in res.output
-    res = r.invoke(main, ["campaign", "--runs", "1", "-o", str(tmp_path / "y"), "--scheduler",
-                          "tcp://127.0.0.1:1"])
-    assert res.exit_code == 1 and "scheduler" in res.output and "Traceback" not in res.output
+
+
+def test_unreachable_scheduler_is_a_clear_error(tmp_path):
+    from roadbank.campaign.execute import run_campaign
+
+    with pytest.raises(ConnectionError, match="scheduler at tcp://127.0.0.1:1"):
+        run_campaign(tmp_path / "y", 1, scheduler="tcp://127.0.0.1:1", connect_timeout=1.0)
 
 
 def test_missing_dask_gives_an_install_hint(tmp_path, monkeypatch):

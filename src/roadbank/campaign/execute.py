@@ -88,7 +88,8 @@ def _batches(ids: list[int], size: int) -> list[list[int]]:
 
 def run_campaign(outdir, runs: int, *, seed: int = 0, options: RunOptions | None = None,
                  scheduler: str | None = None, workers: int = 2, batch_size: int = 50,
-                 resume: bool = False, sampler=draw, on_part=None, progress=None) -> CampaignResult:
+                 resume: bool = False, sampler=draw, on_part=None, progress=None,
+                 connect_timeout: float = 20.0) -> CampaignResult:
     """Run (or resume) a campaign of ``runs`` randomised runs into ``outdir``.
 
     Parameters
@@ -115,6 +116,8 @@ def run_campaign(outdir, runs: int, *, seed: int = 0, options: RunOptions | None
     on_part : callable ``(path, rows)``, optional
         Called after each part is stored (progress, tests).
     progress : callable ``(done, total)``, optional
+    connect_timeout : float
+        Seconds to wait for the scheduler at ``scheduler``.
 
     Returns
     -------
@@ -150,7 +153,7 @@ def run_campaign(outdir, runs: int, *, seed: int = 0, options: RunOptions | None
         client = dd.Client(cluster)
     else:
         try:
-            client = dd.Client(scheduler, timeout="20s")
+            client = dd.Client(scheduler, timeout=f"{connect_timeout}s")
         except (OSError, TimeoutError) as exc:
             raise ConnectionError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
     try:
