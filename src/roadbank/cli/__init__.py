@@ -14,7 +14,6 @@ import click
 
 #: sub-command name -> "module:function" inside roadbank.cli
 COMMANDS = {
-    "demo": "demo:demo",
     "simulate": "simulate:simulate",
     "estimate": "estimate:estimate",
     "validate": "validate:validate",
