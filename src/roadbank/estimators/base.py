@@ -187,7 +187,7 @@ class Estimator:
         phi = np.empty(n)
         valid = np.empty(n, dtype=np.bool_)
         xs = np.empty((n, max(self._nstate, 2)))
-        self._run_fn(self._mem, self._cfg, self._tab, signals.t, signals.vx, signals.delta_f,
+        self._run_fn(self._mem, self._cfg, self._tab, self._work, signals.t, signals.vx, signals.delta_f,
                      signals.ay, signals.r, w, theta, phib, phi, valid, xs)
         states = {name: xs[:, i] for i, name in enumerate(self.state_names)}
         states["phi"] = phi
