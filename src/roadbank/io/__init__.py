@@ -7,9 +7,10 @@ raises :class:`LogError` naming the file, the channel and the problem.
 """
 
 from .channels import ChannelMap, ChannelSpec, default_channel_map, read_channel_map
+from .consistency import check_consistency
 from .errors import LogError
 from .log import Log, load_log
 from .readers import FORMATS, detect_format
 
 __all__ = ["load_log", "Log", "LogError", "ChannelMap", "ChannelSpec", "default_channel_map",
-           "read_channel_map", "FORMATS", "detect_format"]
+           "read_channel_map", "FORMATS", "detect_format", "check_consistency"]

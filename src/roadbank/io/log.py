@@ -11,6 +11,7 @@ from ..params import VehicleParams
 from ..signals import Signals
 from . import readers
 from .channels import ChannelMap, check_plausible, default_channel_map, read_channel_map
+from .consistency import check_consistency
 from .errors import LogError, channel_error
 from .resample import common_time_base, resample
 
@@ -172,6 +173,8 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
         sig = Signals(t_base, values["speed"], values["lateral_acceleration"], values["yaw_rate"], delta)
     except ValueError as exc:
         raise LogError(f"{p}: {exc}") from None
+    warns += check_consistency(sig, p, {role: cmap.channels[role].column for role in
+                                        ("speed", "lateral_acceleration", "yaw_rate")})
 
     truth = {}
     if cmap.truth_prefix and shared is not None:

@@ -1,0 +1,88 @@
+"""Cross-channel unit check: lateral acceleration, speed and yaw rate must agree.
+
+Physics: ``ay = dvy/dt + vx r + g sin(theta)`` (SPEC eq 2). On any drivable
+road ``|g sin(theta)|`` stays below ``g sin(35 deg)`` (bank + roll) and
+``|dvy/dt|`` is small on average, so over the turning part of a log the median
+of ``|ay - vx r|`` is well under :data:`LIMIT` (0.8 g). A speed logged in km/h
+but declared m/s, a yaw rate in deg/s declared rad/s, or an inverted sign
+convention breaks this by far as soon as the car turns — even when each channel
+alone looks plausible (60 km/h read as 60 m/s passes the per-channel check).
+
+:func:`check_consistency` tries the usual mistakes and names the channel whose
+correction restores the balance. Driving straight (``vx r`` near 0) shows
+nothing: then no conclusion is drawn.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .errors import LogError
+
+G = 9.81
+LIMIT = 0.8 * G          #: median |ay - vx r| above this (m/s^2) is physically impossible
+FIXED = 0.45 * G         #: ... and below this after a correction means the correction is right
+TURN = 3.0               #: samples with |vx r| above this (m/s^2) are "turning"
+MIN_SAMPLES = 100        #: turning samples needed to conclude anything
+
+#: (channel role, description, correction of (vx, ay, r))
+CANDIDATES = (
+    ("speed", "speed looks like km/h declared as m/s", lambda vx, ay, r: (vx / 3.6, ay, r)),
+    ("speed", "speed looks like mph declared as m/s", lambda vx, ay, r: (vx * 0.44704, ay, r)),
+    ("yaw_rate", "yaw rate looks like deg/s declared as rad/s", lambda vx, ay, r: (vx, ay, r * math.pi / 180)),
+    ("lateral_acceleration", "lateral acceleration looks like g declared as m/s^2",
+     lambda vx, ay, r: (vx, ay * G, r)),
+    ("lateral_acceleration", "lateral acceleration has the opposite sign convention (positive right)",
+     lambda vx, ay, r: (vx, -ay, r)),
+    ("yaw_rate", "yaw rate has the opposite sign convention (positive clockwise)",
+     lambda vx, ay, r: (vx, ay, -r)),
+)
+
+
+def _residual(vx, ay, r) -> tuple[float, int]:
+    with np.errstate(invalid="ignore", over="ignore"):
+        vr = vx * r
+        sel = np.isfinite(vr) & np.isfinite(ay) & (np.abs(vr) > TURN) & (vx >= 5.0)
+    n = int(sel.sum())
+    return (float(np.median(np.abs(ay[sel] - vr[sel]))) if n else 0.0), n
+
+
+def check_consistency(signals, source="signals", columns: dict | None = None) -> list[str]:
+    """Check that ``ay``, ``vx`` and ``r`` of ``signals`` (SI) balance (module docstring).
+
+    Parameters
+    ----------
+    signals : roadbank.Signals
+    source : str or path
+        Named in the messages (the file).
+    columns : dict role -> column name, optional
+        Column names to quote in the messages.
+
+    Returns
+    -------
+    list of str
+        Warnings (inconsistent, but no single correction explains it).
+
+    Raises
+    ------
+    LogError
+        When the log is inconsistent and one correction (unit or sign of one
+        channel) makes it consistent; the message names that channel.
+    """
+    vx, ay, r = (np.asarray(a, float) for a in (signals.vx, signals.ay, signals.r))
+    res, n = _residual(vx, ay, r)
+    if n < MIN_SAMPLES or res <= LIMIT:
+        return []
+    cols = columns or {}
+    for role, text, fix in CANDIDATES:
+        fres, fn = _residual(*fix(vx, ay, r))
+        if fn >= MIN_SAMPLES and fres <= FIXED:
+            col = f" (column '{cols[role]}')" if role in cols else ""
+            raise LogError(f"{source}: channel '{role}'{col}: {text}: ay, vx and yaw rate do not balance "
+                           f"(median |ay - vx r| = {res:.1f} m/s^2 over {n} turning samples, "
+                           f"{fres:.1f} m/s^2 after correcting it); fix the unit or sign in the channel map")
+    return [f"{source}: ay, vx and yaw rate do not balance (median |ay - vx r| = {res:.1f} m/s^2 over "
+            f"{n} turning samples, more than 0.8 g): check the units and sign conventions of "
+            "'speed', 'lateral_acceleration' and 'yaw_rate'"]
