@@ -82,6 +82,21 @@ def worst_cells(cells, top: int = 3):
     return c.groupby("estimator", sort=False).head(top)
 
 
+def scenario_table(df):
+    """95th percentile of the bank RMS error (deg) per scenario (rows) and estimator (columns)."""
+    ok = df[(df["error"] == "") & np.isfinite(df["rms_deg"])]
+    t = ok.pivot_table(index="scenario", columns="estimator", values="rms_deg",
+                       aggfunc=lambda s: float(np.percentile(s, 95)))
+    names = [n for n in dict.fromkeys(df["estimator"]) if n in t.columns]
+    return t[names].reset_index()
+
+
+def lost_control(df, beta_deg: float = 10.0) -> int:
+    """Runs in which the plant itself lost control (max sideslip above ``beta_deg``)."""
+    runs = df.drop_duplicates("run_id")
+    return int((runs["max_beta_deg"] > beta_deg).sum())
+
+
 def box_plot(df, path: Path) -> None:
     """Box plot of the bank RMS error (deg) per estimator, log axis, the goal line dashed."""
     import matplotlib
@@ -156,6 +171,9 @@ def write_report(outdir, df, settings: dict, throughput: dict | None = None) -> 
         lines += [f"**PIF (modified model) 95th-percentile bank RMS: {p95:.2f} deg** — {verdict} the "
                   f"{PIF_GOAL_P95_DEG:g} deg goal.", ""]
     lines += ["## Bank error per estimator (deg)", "", _md_table(summ), "", "![box plot](boxplot.png)", "",
+              "## 95th-percentile bank RMS (deg) per scenario", "", _md_table(scenario_table(df)), "",
+              f"Runs in which the plant lost control (max sideslip > 10 deg; the largest errors of every "
+              f"estimator): {lost_control(df)}.", "",
               "## Where estimators fail (worst one-parameter cells)", "",
               "Failure rate per cell of one parameter (bins of the plant's front/rear cornering stiffness "
               "scale, friction, mass scale, or the scenario); full table in failure_cells.csv.", ""]
