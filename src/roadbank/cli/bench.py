@@ -345,29 +345,44 @@ def commonroad_peer(duration: float, vx0: float = 60 / 3.6) -> dict:
 # reproduce and cold start (fresh processes)
 # --------------------------------------------------------------------------
 
+def _timed_reproduce(outdir: Path, timeout: float, env=None):
+    """Run ``roadbank reproduce -o outdir`` in a fresh process: ``(wall s, None)`` or ``(None, reason)``."""
+    cmd = [sys.executable, "-m", "roadbank.cli", "reproduce", "-o", str(outdir)]
+    t0 = time.perf_counter()
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
+    except subprocess.TimeoutExpired:
+        return None, f"roadbank reproduce exceeded {timeout:.0f} s"
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        tail = (proc.stderr or proc.stdout).strip().splitlines()[-1:] or ["?"]
+        return None, f"roadbank reproduce failed (exit {proc.returncode}): {tail[0]}"
+    return wall, None
+
+
 def reproduce_bench(timeout: float = 900.0, warm_runs: int = 2) -> dict:
-    """Wall time of ``roadbank reproduce`` in fresh processes: one cold run, then
-    ``warm_runs`` with a warm numba cache (median reported). Default ``-j``
-    (all cores)."""
+    """Wall time of ``roadbank reproduce`` in fresh processes (default ``-j``: all cores).
+
+    One cold run, then ``warm_runs`` with a warm numba cache (median reported),
+    then one warm run with single-threaded BLAS (``OPENBLAS_NUM_THREADS=1``):
+    the gain-schedule designs call LAPACK on 3x3 to 6x6 matrices, where
+    OpenBLAS worker threads only add spinning, badly so when processes share
+    the cores.
+    """
     import importlib.util
     if importlib.util.find_spec("roadbank.cli.reproduce") is None:
         return {"reproduce_s": None, "reason": "roadbank reproduce is not available yet (issue 4)"}
     walls = []
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(1 + warm_runs):
-            cmd = [sys.executable, "-m", "roadbank.cli", "reproduce", "-o", str(Path(tmp) / f"r{k}")]
-            t0 = time.perf_counter()
-            try:
-                proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
-            except subprocess.TimeoutExpired:
-                return {"reproduce_s": None, "reason": f"roadbank reproduce exceeded {timeout:.0f} s"}
-            walls.append(time.perf_counter() - t0)
-            if proc.returncode != 0:
-                tail = (proc.stderr or proc.stdout).strip().splitlines()[-1:] or ["?"]
-                return {"reproduce_s": None,
-                        "reason": f"roadbank reproduce failed (exit {proc.returncode}): {tail[0]}"}
+            wall, reason = _timed_reproduce(Path(tmp) / f"r{k}", timeout)
+            if wall is None:
+                return {"reproduce_s": None, "reason": reason}
+            walls.append(wall)
+        env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+        blas1, _ = _timed_reproduce(Path(tmp) / "blas1", timeout, env)
     return {"reproduce_s": _median(walls[1:]), "reproduce_cold_s": walls[0], "reproduce_warm_all_s": walls[1:],
-            "command": "roadbank reproduce -o DIR"}
+            "reproduce_blas1_s": blas1, "command": "roadbank reproduce -o DIR"}
 
 
 _COLD_SCRIPT = r"""
@@ -598,7 +613,8 @@ def markdown(res: dict, command: str) -> str:
                   f"`{rep['command']}` (default `-j` = all cores) in fresh processes: first run "
                   f"{rep['reproduce_cold_s']:.1f} s (numba cache possibly stale: compiles in every worker), "
                   f"then warm runs {', '.join(f'{w:.1f}' for w in rep['reproduce_warm_all_s'])} s "
-                  f"(median {rep['reproduce_s']:.1f} s).", ""]
+                  f"(median {rep['reproduce_s']:.1f} s). Warm with `OPENBLAS_NUM_THREADS=1`: "
+                  f"{_fmt(rep.get('reproduce_blas1_s'))} s.", ""]
     lines += ["## step() latency", "",
               f"{st['calls']} calls of `pif-modified` `step()`, each timed with `perf_counter_ns` "
               f"(timer overhead {st['timer_overhead_us'] * 1e3:.0f} ns, included): median "

@@ -365,7 +365,9 @@ def _lpv3(mem, tab, i, i1, a, u0, u1, u2, dt, max_sub, restart):
         p1 = mem[M_ETA + 1]
         p2 = mem[M_ETA + 2]
         nsub = max(1, int(math.ceil(dt / max_sub - 1e-9)))
-        hh = 0.5 * (dt / nsub)
+        # one substep (sample time <= max_substep, e.g. 100 Hz): dt / 1 == dt exactly,
+        # so skipping the division changes no bit
+        hh = 0.5 * dt if nsub == 1 else 0.5 * (dt / nsub)
         # M = I - hh F and its inverse (adjugate / determinant)
         m00 = 1.0 - hh * f00
         m01 = -hh * f01
@@ -387,7 +389,7 @@ def _lpv3(mem, tab, i, i1, a, u0, u1, u2, dt, max_sub, restart):
         c22 = m00 * m11 - m01 * m10
         inv = 1.0 / (m00 * c00 + m01 * c10 + m02 * c20)
         for k in range(nsub):
-            s = (2.0 * k + 1.0) / nsub
+            s = 1.0 if nsub == 1 else (2.0 * k + 1.0) / nsub
             v0 = 2.0 * p0 + s * (u0 - p0)
             v1 = 2.0 * p1 + s * (u1 - p1)
             v2 = 2.0 * p2 + s * (u2 - p2)
