@@ -77,7 +77,7 @@ from .params import (P_BRAKEF, P_CDA, P_CROLL, P_CX, P_CY, P_EX, P_EY, P_FRR, P_
                      P_RBX1, P_RBX2, P_RBY1, P_RBY2, P_RHO, P_RW, P_SHAREF, P_SIGX, P_TAULOAD,
                      P_TBRAKE, P_TDRIVE, P_TF, P_TR)
 from .road import bank_under_vehicle, road_curvature, road_grade
-from .tyres import fast_sin, tyre_forces
+from .tyres import fast_sin, fast_sincos, tyre_core
 
 # state indices
 X_S, X_N, X_PSI, X_VX, X_VY, X_R, X_PHI, X_DPHI = range(8)
@@ -98,23 +98,59 @@ NAUX = 27
 
 _VX_FLOOR = 1.0  # m/s, denominator floor of the slip definitions
 
+# ---- derived constants (prepare(p)): scalars, then per-wheel blocks of 4 (FL, FR, RL, RR) --------
+# Everything the plant needs that does not depend on the state, reciprocals
+# instead of divisions, and the wheel data as struct-of-arrays so that the loop
+# over the four wheels compiles to SIMD code.
+(Q_M, Q_G, Q_INV_M, Q_HALF_TRACK, Q_INV_RATIO, Q_TDRIVE, Q_PDRIVE, Q_TBRAKE, Q_MU,
+ Q_CY, Q_EY, Q_PDY2, Q_KX, Q_CX, Q_EX, Q_PDX2, Q_RBY1SQ, Q_RBY2, Q_RBX1SQ, Q_RBX2, Q_KYNORM,
+ Q_RW, Q_FRR_RW, Q_INV_IW, Q_INV_SIGX, Q_AERO, Q_MSH, Q_IXX, Q_INV_IZ, Q_INV_TAU, Q_HSENS,
+ Q_KROLL, Q_CROLL, NQS) = range(34)
+Q_XW = NQS            # wheel x position (m)
+Q_YW = Q_XW + 4       # wheel y position (m)
+Q_KY0 = Q_YW + 4      # cornering stiffness at static load (N/rad)
+Q_INVFZ0 = Q_KY0 + 4  # 1 / static load
+Q_INVFZPK = Q_INVFZ0 + 4  # 1 / (pky2 static load)
+Q_LN = Q_INVFZPK + 4  # load per unit normal force m f_z (-)
+Q_LX = Q_LN + 4       # load per unit lagged f_x (kg)
+Q_LR = Q_LX + 4       # load per unit roll moment (1/m)
+Q_LY = Q_LR + 4       # load per unit lagged f_y (kg)
+Q_DRIVE = Q_LY + 4    # share of the drive torque
+Q_BRAKE = Q_DRIVE + 4  # share of the brake torque
+# per-step blocks (step_inputs) and per-evaluation scratch (plant_core): the wheel loop reads
+# and writes only this array, so LLVM sees no aliasing and vectorises it
+Q_CW = Q_BRAKE + 4    # cos of the wheel steer angle (1 at the rear)
+Q_SW = Q_CW + 4       # sin of the wheel steer angle (0 at the rear)
+Q_TB = Q_SW + 4       # brake torque per wheel (N m)
+Q_OM = Q_TB + 4       # in: wheel spins
+Q_KA = Q_OM + 4       # in: transient slips
+Q_OFXC = Q_KA + 4     # out: chassis-frame forces, yaw moments, state derivatives, aux
+Q_OFYC = Q_OFXC + 4
+Q_OMZ = Q_OFYC + 4
+Q_ODOM = Q_OMZ + 4
+Q_ODKA = Q_ODOM + 4
+Q_OFZ = Q_ODKA + 4
+Q_OFXW = Q_OFZ + 4
+Q_OFYW = Q_OFXW + 4
+Q_OTANA = Q_OFYW + 4
+NQ = Q_OTANA + 4
 
-@njit(cache=True, inline="always", fastmath=True)
+# ---- per-step scalars (step_inputs(u, q, c)): the inputs are held over an RK4 step ---------
+(C_DELTA, C_THROTTLE, NC) = range(3)
+
+
+@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
 def _sin_cos_small(a):
     """(sin a, cos a) for |a| < pi/2 with the polynomial sine."""
     s = fast_sin(a)
     return s, math.sqrt(1.0 - s * s)
 
 
-@njit(cache=True, fastmath=True)
-def plant_eval(x, u, road, p, dx, aux, want_aux):
-    """Evaluate the plant: write dx/dt into ``dx`` and, if ``want_aux``, outputs into ``aux``.
-
-    ``x`` (NX,), ``u`` (NU,), ``road`` from :meth:`Road.pack`, ``p`` from
-    :meth:`PlantParams.pack`. No allocation.
-    """
+@njit(cache=True, fastmath=True, error_model="numpy")
+def prepare(p):
+    """Derived constants ``q`` (``Q_*`` indices) from the packed parameters ``p`` (once per run)."""
+    q = np.zeros(NQ)
     m = p[P_M]
-    g = p[P_G]
     lf = p[P_LF]
     lr = p[P_LR]
     L = lf + lr
@@ -123,6 +159,89 @@ def plant_eval(x, u, road, p, dx, aux, want_aux):
     rw = p[P_RW]
     ms = p[P_MS]
     h = p[P_HROLL]
+    q[Q_M] = m
+    q[Q_G] = p[P_G]
+    q[Q_INV_M] = 1.0 / m
+    q[Q_HALF_TRACK] = 0.25 * (tf + tr)
+    q[Q_INV_RATIO] = 1.0 / p[P_RATIO]
+    q[Q_TDRIVE] = p[P_TDRIVE]
+    q[Q_PDRIVE] = p[P_PDRIVE]
+    q[Q_TBRAKE] = p[P_TBRAKE]
+    q[Q_MU] = p[P_MU]
+    q[Q_CY] = p[P_CY]
+    q[Q_EY] = p[P_EY]
+    q[Q_PDY2] = p[P_PDY2]
+    q[Q_KX] = p[P_KX]
+    q[Q_CX] = p[P_CX]
+    q[Q_EX] = p[P_EX]
+    q[Q_PDX2] = p[P_PDX2]
+    q[Q_RBY1SQ] = p[P_RBY1] * p[P_RBY1]
+    q[Q_RBY2] = p[P_RBY2]
+    q[Q_RBX1SQ] = p[P_RBX1] * p[P_RBX1]
+    q[Q_RBX2] = p[P_RBX2]
+    y0 = 1.0 / p[P_PKY2]
+    q[Q_KYNORM] = (1.0 + y0 * y0) / y0
+    q[Q_RW] = rw
+    q[Q_FRR_RW] = p[P_FRR] * rw
+    q[Q_INV_IW] = 1.0 / p[P_IW]
+    q[Q_INV_SIGX] = 1.0 / p[P_SIGX]
+    q[Q_AERO] = 0.5 * p[P_RHO] * p[P_CDA]
+    q[Q_MSH] = ms * h
+    q[Q_IXX] = p[P_IXX]
+    q[Q_INV_IZ] = 1.0 / p[P_IZ]
+    q[Q_INV_TAU] = 1.0 / p[P_TAULOAD]
+    q[Q_HSENS] = p[P_HSENS]
+    q[Q_KROLL] = p[P_KROLL]
+    q[Q_CROLL] = p[P_CROLL]
+    hrc = p[P_HCG] - h
+    mu_ax = 0.5 * p[P_MUNSPRUNG]
+    share = p[P_SHAREF]
+    bf = p[P_BRAKEF]
+    for i in range(4):
+        front = i < 2
+        left = i == 0 or i == 2
+        sgn = -1.0 if left else 1.0  # the left wheels unload for a positive roll moment / f_y
+        track = tf if front else tr
+        q[Q_XW + i] = lf if front else -lr
+        q[Q_YW + i] = (0.5 if left else -0.5) * track
+        q[Q_KY0 + i] = p[P_KY0F] if front else p[P_KY0R]
+        fz0 = p[P_FZ0F] if front else p[P_FZ0R]
+        q[Q_INVFZ0 + i] = 1.0 / fz0
+        q[Q_INVFZPK + i] = 1.0 / (p[P_PKY2] * fz0)
+        q[Q_LN + i] = 0.5 * (lr if front else lf) / L
+        q[Q_LX + i] = (-0.5 if front else 0.5) * m * p[P_HCG] / L
+        q[Q_LR + i] = sgn * (share if front else 1.0 - share) / track
+        q[Q_LY + i] = sgn * (ms * (lr if front else lf) / L * hrc + mu_ax * rw) / track
+        q[Q_DRIVE + i] = 0.5 if front else 0.0
+        q[Q_BRAKE + i] = 0.5 * bf if front else 0.5 * (1.0 - bf)
+    return q
+
+
+@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
+def step_inputs(u, q, c):
+    """Per-step constants ``c`` (``C_*``) from the inputs ``u``: steer angle and its sine/cosine, pedals."""
+    delta = u[U_SWA] * q[Q_INV_RATIO]
+    sd, cd = fast_sincos(delta)
+    c[C_DELTA] = delta
+    c[C_THROTTLE] = u[U_THROTTLE]
+    tb = u[U_BRAKE] * q[Q_TBRAKE]
+    for i in range(4):
+        front = i < 2
+        q[Q_CW + i] = cd if front else 1.0
+        q[Q_SW + i] = sd if front else 0.0
+        q[Q_TB + i] = tb * q[Q_BRAKE + i]
+
+
+@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
+def plant_core(x, road, q, c, dx, aux, want_aux):
+    """The plant's right-hand side on derived constants ``q`` and per-step constants ``c``.
+
+    Writes dx/dt into ``dx`` and, if ``want_aux`` (a compile-time literal in the
+    callers), the outputs into ``aux``. No allocation, no calls with arrays
+    (inlined into its callers: no reference counting in the integration loop).
+    """
+    m = q[Q_M]
+    g = q[Q_G]
 
     s = x[X_S]
     n = x[X_N]
@@ -133,16 +252,13 @@ def plant_eval(x, u, road, p, dx, aux, want_aux):
     phi = x[X_PHI]
     dphi = x[X_DPHI]
 
-    delta = u[U_SWA] / p[P_RATIO]
-
     # ---- road and gravity --------------------------------------------------
     kap = road_curvature(road, s)
     grade = road_grade(road, s)
-    phib = bank_under_vehicle(road, s, n, 0.25 * (tf + tr))
+    phib = bank_under_vehicle(road, s, n, q[Q_HALF_TRACK])
     sb, cb = _sin_cos_small(phib)
     sg, cg = _sin_cos_small(grade)
-    cpsi = math.cos(psi)
-    spsi = math.sin(psi)
+    spsi, cpsi = fast_sincos(psi)
     g_t = -g * sg
     g_l = -g * sb * cg
     g_n = -g * cb * cg
@@ -152,116 +268,111 @@ def plant_eval(x, u, road, p, dx, aux, want_aux):
     den = 1.0 - n * kap
     if den < 0.1:
         den = 0.1
+    inv_den = 1.0 / den
     vt = vx * cpsi - vy * spsi
-    sdot = vt / den
-    a_n = -vt * vt * (kap / den) * (sb / cb)
+    sdot = vt * inv_den
+    a_n = -vt * vt * (kap * inv_den) * (sb / cb)
     fz_spec = a_n - g_n
 
-    # ---- wheel loads -------------------------------------------------------
+    # ---- loads and drive ---------------------------------------------------------
     fxl = x[X_FXL]
     fyl = x[X_FYL]
     ntot = m * fz_spec
-    fzf = ntot * lr / L - m * p[P_HCG] * fxl / L
-    fzr = ntot * lf / L + m * p[P_HCG] * fxl / L
-    mroll = p[P_KROLL] * phi + p[P_CROLL] * dphi
-    hrc = p[P_HCG] - h
-    mu_ax = 0.5 * p[P_MUNSPRUNG]
-    share = p[P_SHAREF]
-    dff = (share * mroll + (ms * lr / L * hrc + mu_ax * rw) * fyl) / tf
-    dfr = ((1.0 - share) * mroll + (ms * lf / L * hrc + mu_ax * rw) * fyl) / tr
-
-    # ---- drive and brake torques ---------------------------------------------
+    mroll = q[Q_KROLL] * phi + q[Q_CROLL] * dphi
     om_f = 0.5 * (x[X_OMEGA] + x[X_OMEGA + 1])
-    t_avail = p[P_TDRIVE]
-    if om_f > 1.0 and p[P_PDRIVE] / om_f < t_avail:
-        t_avail = p[P_PDRIVE] / om_f
-    t_drive = 0.5 * u[U_THROTTLE] * t_avail
-    t_brake = u[U_BRAKE] * p[P_TBRAKE]
-    bf = p[P_BRAKEF]
+    t_avail = q[Q_TDRIVE]
+    if om_f > 1.0 and q[Q_PDRIVE] / om_f < t_avail:
+        t_avail = q[Q_PDRIVE] / om_f
+    t_drive = c[C_THROTTLE] * t_avail
 
-    cd = math.cos(delta)
-    sd = math.sin(delta)
-    sum_fx = 0.0
-    sum_fy = 0.0
-    sum_mz = 0.0
-    mu = p[P_MU]
+    # ---- the four wheels: one branch-free loop on q only (SIMD over the wheels) ----
     for i in range(4):
-        front = i < 2
-        xw = lf if front else -lr
-        if front:
-            yw = 0.5 * tf if i == 0 else -0.5 * tf
-            fz = 0.5 * fzf - dff if i == 0 else 0.5 * fzf + dff
-            ky0 = p[P_KY0F]
-            fz0 = p[P_FZ0F]
-        else:
-            yw = 0.5 * tr if i == 2 else -0.5 * tr
-            fz = 0.5 * fzr - dfr if i == 2 else 0.5 * fzr + dfr
-            ky0 = p[P_KY0R]
-            fz0 = p[P_FZ0R]
+        q[Q_OM + i] = x[X_OMEGA + i]
+        q[Q_KA + i] = x[X_KAPPA + i]
+    mu = q[Q_MU]
+    rw = q[Q_RW]
+    kynorm = q[Q_KYNORM]
+    cy = q[Q_CY]
+    ey = q[Q_EY]
+    pdy2 = q[Q_PDY2]
+    kx = q[Q_KX]
+    cx = q[Q_CX]
+    ex = q[Q_EX]
+    pdx2 = q[Q_PDX2]
+    rby1sq = q[Q_RBY1SQ]
+    rby2 = q[Q_RBY2]
+    rbx1sq = q[Q_RBX1SQ]
+    rbx2 = q[Q_RBX2]
+    frr_rw = q[Q_FRR_RW]
+    inv_iw = q[Q_INV_IW]
+    inv_sigx = q[Q_INV_SIGX]
+    for i in range(4):
+        xw = q[Q_XW + i]
+        yw = q[Q_YW + i]
+        cw = q[Q_CW + i]
+        sw = q[Q_SW + i]
+        fz = ntot * q[Q_LN + i] + fxl * q[Q_LX + i] + mroll * q[Q_LR + i] + fyl * q[Q_LY + i]
         vxc = vx - yw * r
         vyc = vy + xw * r
-        if front:
-            vxw = vxc * cd + vyc * sd
-            vyw = -vxc * sd + vyc * cd
-        else:
-            vxw = vxc
-            vyw = vyc
+        vxw = vxc * cw + vyc * sw
+        vyw = vyc * cw - vxc * sw
         avx = abs(vxw)
-        tana = -vyw / (avx if avx > _VX_FLOOR else _VX_FLOOR)
-        kappa = x[X_KAPPA + i]
-        fxw, fyw = tyre_forces(tana, kappa, fz, mu, ky0, fz0, p[P_PKY2], p[P_CY], p[P_EY], p[P_PDY2],
-                               p[P_KX], p[P_CX], p[P_EX], p[P_PDX2],
-                               p[P_RBY1], p[P_RBY2], p[P_RBX1], p[P_RBX2])
-        if front:
-            fxc = fxw * cd - fyw * sd
-            fyc = fxw * sd + fyw * cd
-        else:
-            fxc = fxw
-            fyc = fyw
-        sum_fx += fxc
-        sum_fy += fyc
-        sum_mz += xw * fyc - yw * fxc
+        tana = -vyw / max(avx, _VX_FLOOR)
+        kappa = q[Q_KA + i]
+        fxw, fyw = tyre_core(tana, kappa, fz, mu, q[Q_KY0 + i], q[Q_INVFZ0 + i], kynorm, q[Q_INVFZPK + i],
+                             cy, ey, pdy2, kx, cx, ex, pdx2, rby1sq, rby2, rbx1sq, rbx2)
+        fxc = fxw * cw - fyw * sw
+        fyc = fxw * sw + fyw * cw
+        q[Q_OFXC + i] = fxc
+        q[Q_OFYC + i] = fyc
+        q[Q_OMZ + i] = xw * fyc - yw * fxc
         # wheel spin and transient slip
-        om = x[X_OMEGA + i]
+        om = q[Q_OM + i]
         sgn = om / (abs(om) + 0.5)
-        tb = t_brake * (0.5 * bf if front else 0.5 * (1.0 - bf))
-        fzp = fz if fz > 0.0 else 0.0
-        torque = (t_drive if front else 0.0) - tb * sgn - p[P_FRR] * fzp * rw * sgn - rw * fxw
-        dx[X_OMEGA + i] = torque / p[P_IW]
-        dx[X_KAPPA + i] = ((rw * om - vxw) - avx * kappa) / p[P_SIGX]
+        torque = t_drive * q[Q_DRIVE + i] - q[Q_TB + i] * sgn - frr_rw * max(fz, 0.0) * sgn - rw * fxw
+        q[Q_ODOM + i] = torque * inv_iw
+        q[Q_ODKA + i] = ((rw * om - vxw) - avx * kappa) * inv_sigx
+        q[Q_OFZ + i] = fz
+        q[Q_OFXW + i] = fxw
+        q[Q_OFYW + i] = fyw
+        q[Q_OTANA + i] = tana
+    sum_fx = (q[Q_OFXC] + q[Q_OFXC + 1]) + (q[Q_OFXC + 2] + q[Q_OFXC + 3])
+    sum_fy = (q[Q_OFYC] + q[Q_OFYC + 1]) + (q[Q_OFYC + 2] + q[Q_OFYC + 3])
+    sum_mz = (q[Q_OMZ] + q[Q_OMZ + 1]) + (q[Q_OMZ + 2] + q[Q_OMZ + 3])
+    for i in range(4):
+        dx[X_OMEGA + i] = q[Q_ODOM + i]
+        dx[X_KAPPA + i] = q[Q_ODKA + i]
         if want_aux:
-            aux[A_FZW + i] = fz
-            aux[A_FXW + i] = fxw
-            aux[A_FYW + i] = fyw
-            aux[A_TANA + i] = tana
+            aux[A_FZW + i] = q[Q_OFZ + i]
+            aux[A_FXW + i] = q[Q_OFXW + i]
+            aux[A_FYW + i] = q[Q_OFYW + i]
+            aux[A_TANA + i] = q[Q_OTANA + i]
 
-    f_aero = 0.5 * p[P_RHO] * p[P_CDA] * vx * abs(vx)
+    f_aero = q[Q_AERO] * vx * abs(vx)
 
     # ---- body dynamics -------------------------------------------------------
-    sphi = math.sin(phi)
-    cphi = math.cos(phi)
-    msh = ms * h
+    sphi, cphi = fast_sincos(phi)
+    msh = q[Q_MSH]
     a12 = -msh * cphi
-    ixx = p[P_IXX]
+    ixx = q[Q_IXX]
     b1 = sum_fy + m * gy - m * vx * r - msh * dphi * dphi * sphi
     b2 = msh * cphi * (vx * r - gy) + msh * sphi * fz_spec - mroll
-    det = m * ixx - a12 * a12
-    dvy = (ixx * b1 - a12 * b2) / det
-    ddphi = (m * b2 - a12 * b1) / det
-    fx_spec = (sum_fx - f_aero) / m
-    fy_spec = sum_fy / m
+    inv_det = 1.0 / (m * ixx - a12 * a12)
+    dvy = (ixx * b1 - a12 * b2) * inv_det
+    ddphi = (m * b2 - a12 * b1) * inv_det
+    fx_spec = (sum_fx - f_aero) * q[Q_INV_M]
+    fy_spec = sum_fy * q[Q_INV_M]
 
     dx[X_S] = sdot
     dx[X_N] = vx * spsi + vy * cpsi
     dx[X_PSI] = r - kap * sdot
     dx[X_VX] = vy * r + gx + fx_spec
     dx[X_VY] = dvy
-    dx[X_R] = sum_mz / p[P_IZ]
+    dx[X_R] = sum_mz * q[Q_INV_IZ]
     dx[X_PHI] = dphi
     dx[X_DPHI] = ddphi
-    tau = p[P_TAULOAD]
-    dx[X_FXL] = (fx_spec - fxl) / tau
-    dx[X_FYL] = (fy_spec - fyl) / tau
+    dx[X_FXL] = (fx_spec - fxl) * q[Q_INV_TAU]
+    dx[X_FYL] = (fy_spec - fyl) * q[Q_INV_TAU]
 
     if want_aux:
         aux[A_PHIB] = phib
@@ -270,14 +381,32 @@ def plant_eval(x, u, road, p, dx, aux, want_aux):
         aux[A_FX] = fx_spec
         aux[A_FY] = fy_spec
         aux[A_FZ] = fz_spec
-        aux[A_AY] = (dvy + vx * r - gy) * cphi + fz_spec * sphi - p[P_HSENS] * ddphi
+        aux[A_AY] = (dvy + vx * r - gy) * cphi + fz_spec * sphi - q[Q_HSENS] * ddphi
         aux[A_AX] = fx_spec
         aux[A_DVY] = dvy
         aux[A_DDPHI] = ddphi
-        aux[A_DELTA] = delta
+        aux[A_DELTA] = c[C_DELTA]
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True, fastmath=True, error_model="numpy")
+def plant_eval(x, u, road, p, dx, aux, want_aux):
+    """Evaluate the plant: write dx/dt into ``dx`` and, if ``want_aux``, outputs into ``aux``.
+
+    ``x`` (NX,), ``u`` (NU,), ``road`` from :meth:`Road.pack`, ``p`` from
+    :meth:`PlantParams.pack`. Convenience entry (derives the constants on every
+    call); the integration loop uses :func:`prepare`, :func:`step_inputs` and
+    :func:`plant_core` directly.
+    """
+    q = prepare(p)
+    c = np.empty(NC)
+    step_inputs(u, q, c)
+    if want_aux:
+        plant_core(x, road, q, c, dx, aux, True)
+    else:
+        plant_core(x, road, q, c, dx, aux, False)
+
+
+@njit(cache=True, fastmath=True, error_model="numpy")
 def f(x, u, road, params):
     """Pure right-hand side ``dx/dt = f(x, u, road, params)`` (allocates the result).
 
@@ -289,7 +418,7 @@ def f(x, u, road, params):
     return dx
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True, fastmath=True, error_model="numpy")
 def outputs(x, u, road, params):
     """Auxiliary outputs (``A_*`` indices) at one state: loads, forces, specific forces, dvy/dt."""
     dx = np.empty(NX)

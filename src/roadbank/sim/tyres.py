@@ -28,21 +28,24 @@ _A0, _A1, _A2, _A3, _A4, _A5, _A6, _A7, _A8 = (
     -0.0015896368777204358)
 
 
-@njit(cache=True, inline="always", fastmath=True)
+@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
 def fast_atan(x):
-    """Arc tangent (rad), |error| < 2e-9, branch-light."""
+    """Arc tangent (rad), |error| < 2e-9, branch-free (vectorises over the four wheels).
+
+    ``z = min(|x|, 1) / max(|x|, 1)`` is ``|x|`` or ``1/|x|`` exactly, so one
+    division serves both ranges.
+    """
     a = abs(x)
     inv = a > 1.0
-    z = 1.0 / a if inv else a
+    z = min(a, 1.0) / max(a, 1.0)
     u = z * z
     q = _A0 + u * (_A1 + u * (_A2 + u * (_A3 + u * (_A4 + u * (_A5 + u * (_A6 + u * (_A7 + u * _A8)))))))
     r = z * (1.0 + u * q)
-    if inv:
-        r = _HALF_PI - r
-    return r if x >= 0.0 else -r
+    r = _HALF_PI - r if inv else r
+    return math.copysign(r, x)
 
 
-@njit(cache=True, inline="always", fastmath=True)
+@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
 def fast_sin(x):
     """Sine for |x| <= 2.6 (Taylor to x^15, error < 5e-8)."""
     u = x * x
@@ -50,7 +53,39 @@ def fast_sin(x):
         1.0 / 362880.0 + u * (-1.0 / 39916800.0 + u * (1.0 / 6227020800.0 + u * (-1.0 / 1307674368000.0))))))))
 
 
-@njit(cache=True, inline="always", fastmath=True)
+_PIO2_HI = 1.5707963267341256     # pi/2 split for the range reduction of fast_sincos
+_PIO2_LO = 6.077100506506192e-11  # (Cody-Waite: k * _PIO2_HI is exact for |k| < 2^20)
+_TWO_OVER_PI = 2.0 / math.pi
+
+
+@njit(cache=True, error_model="numpy")  # no fastmath: keeps the two-part reduction exact
+def fast_sincos(a):
+    """``(sin a, cos a)`` for any |a| < 1e5 rad, error < 1e-15 (no libm call).
+
+    Reduction to ``r = a - k pi/2`` in [-pi/4, pi/4] (two-part pi/2), Taylor
+    series of sin to r^17 and cos to r^18 there (truncation < 3e-18), then the
+    quadrant ``k mod 4``.
+    """
+    k = math.floor(a * _TWO_OVER_PI + 0.5)
+    r = (a - k * _PIO2_HI) - k * _PIO2_LO
+    u = r * r
+    s = r * (1.0 + u * (-1.0 / 6.0 + u * (1.0 / 120.0 + u * (-1.0 / 5040.0 + u * (
+        1.0 / 362880.0 + u * (-1.0 / 39916800.0 + u * (1.0 / 6227020800.0 + u * (
+            -1.0 / 1307674368000.0 + u * (1.0 / 355687428096000.0)))))))))
+    c = 1.0 + u * (-0.5 + u * (1.0 / 24.0 + u * (-1.0 / 720.0 + u * (1.0 / 40320.0 + u * (
+        -1.0 / 3628800.0 + u * (1.0 / 479001600.0 + u * (-1.0 / 87178291200.0 + u * (
+            1.0 / 20922789888000.0 + u * (-1.0 / 6402373705728000.0)))))))))
+    q = int(k) & 3
+    if q == 0:
+        return s, c
+    if q == 1:
+        return c, -s
+    if q == 2:
+        return -s, -c
+    return -c, s
+
+
+@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
 def magic_formula(x, K, C, D, E):
     """Pure-slip Magic Formula force.
 
@@ -75,7 +110,7 @@ def magic_formula(x, K, C, D, E):
     return D * fast_sin(C * fast_atan(bx - E * (bx - fast_atan(bx))))
 
 
-@njit(cache=True, inline="always", fastmath=True)
+@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
 def load_stiffness_factor(fz, fz0, pky2):
     """Cornering stiffness at load ``fz`` relative to the one at ``fz0`` (-).
 
@@ -87,7 +122,37 @@ def load_stiffness_factor(fz, fz0, pky2):
     return (y / (1.0 + y * y)) * ((1.0 + y0 * y0) / y0)
 
 
-@njit(cache=True, inline="always", fastmath=True)
+@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
+def tyre_core(tan_alpha, kappa, fz, mu, ky0, inv_fz0, ky_norm, inv_fzpk, Cy, Ey, pdy2,
+              kx_per_fz, Cx, Ex, pdx2, rby1_sq, rby2, rbx1_sq, rbx2):
+    """Branch-free body of :func:`tyre_forces` on precomputed constants.
+
+    ``inv_fz0 = 1/fz0``, ``inv_fzpk = 1/(pky2 fz0)``, ``ky_norm = (1 + y0^2)/y0``
+    with ``y0 = 1/pky2``, ``rby1_sq = rby1^2``, ``rbx1_sq = rbx1^2``. Written
+    without branches or calls so that the plant's loop over the four wheels
+    compiles to SIMD code. The combined-slip weights use
+    ``1/sqrt(1 + (B k)^2)`` with ``B = b1/sqrt(A)`` = ``sqrt(A / (A + b1^2 k^2))``
+    (one square root and one division instead of two of each).
+    """
+    on = fz > 0.0
+    fzc = fz if on else 1.0  # placeholder load of a lifted wheel (its forces are masked to 0)
+    dfz = fzc * inv_fz0 - 1.0
+    dy = mu * (1.0 + pdy2 * dfz) * fzc
+    dx = mu * (1.0 + pdx2 * dfz) * fzc
+    y = fzc * inv_fzpk
+    ky = ky0 * ky_norm * (y / (1.0 + y * y))
+    fy0 = magic_formula(tan_alpha, ky, Cy, dy, Ey)
+    fx0 = magic_formula(kappa, kx_per_fz * fzc, Cx, dx, Ex)
+    ta2 = tan_alpha * tan_alpha
+    k2 = kappa * kappa
+    ay = 1.0 + rby2 * rby2 * ta2
+    ax = 1.0 + rbx2 * rbx2 * k2
+    fy = fy0 * math.sqrt(ay / (ay + rby1_sq * k2))
+    fx = fx0 * math.sqrt(ax / (ax + rbx1_sq * ta2))
+    return (fx if on else 0.0), (fy if on else 0.0)
+
+
+@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
 def tyre_forces(tan_alpha, kappa, fz, mu, ky0, fz0, pky2, Cy, Ey, pdy2,
                 kx_per_fz, Cx, Ex, pdx2, rby1, rby2, rbx1, rbx2):
     """Combined-slip tyre forces in the wheel frame.
@@ -113,16 +178,6 @@ def tyre_forces(tan_alpha, kappa, fz, mu, ky0, fz0, pky2, Cy, Ey, pdy2,
     (Fx, Fy) : tuple of float
         Longitudinal and lateral force (N) in the wheel frame.
     """
-    if fz <= 0.0:
-        return 0.0, 0.0
-    dfz = (fz - fz0) / fz0
-    dy = mu * (1.0 + pdy2 * dfz) * fz
-    dx = mu * (1.0 + pdx2 * dfz) * fz
-    ky = ky0 * load_stiffness_factor(fz, fz0, pky2)
-    fy0 = magic_formula(tan_alpha, ky, Cy, dy, Ey)
-    fx0 = magic_formula(kappa, kx_per_fz * fz, Cx, dx, Ex)
-    byk = rby1 / math.sqrt(1.0 + (rby2 * tan_alpha) ** 2)
-    bxa = rbx1 / math.sqrt(1.0 + (rbx2 * kappa) ** 2)
-    fy = fy0 / math.sqrt(1.0 + (byk * kappa) ** 2)
-    fx = fx0 / math.sqrt(1.0 + (bxa * tan_alpha) ** 2)
-    return fx, fy
+    y0 = 1.0 / pky2
+    return tyre_core(tan_alpha, kappa, fz, mu, ky0, 1.0 / fz0, (1.0 + y0 * y0) / y0, 1.0 / (pky2 * fz0),
+                     Cy, Ey, pdy2, kx_per_fz, Cx, Ex, pdx2, rby1 * rby1, rby2, rbx1 * rbx1, rbx2)
