@@ -145,6 +145,7 @@ def run_campaign(outdir, runs: int, *, seed: int = 0, options: RunOptions | None
 
     t0 = time.perf_counter()
     cluster = None
+    futures: dict = {}
     if scheduler is None:
         cluster = dd.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                   dashboard_address=None, silence_logs=logging.ERROR,
@@ -161,7 +162,6 @@ def run_campaign(outdir, runs: int, *, seed: int = 0, options: RunOptions | None
         client.run(warm_up, options)          # load / compile the kernels on every worker
         result.startup_s = time.perf_counter() - t0
         t1 = time.perf_counter()
-        futures = {}
         for ids in _batches(todo, batch_size):
             specs = [sampler(i, seed) for i in ids]
             fut = client.submit(run_batch, specs, options, pure=False)
