@@ -32,6 +32,7 @@ from numba import njit
 
 from ..params import VehicleParams
 from .road import road_curvature
+from .tyres import fast_sincos
 
 MODE_OPEN_LOOP, MODE_PATH = 0, 1
 (G_MODE, G_KPV, G_KIV, G_TPREV, G_LPMIN, G_KILAT, G_TAUS, G_SWARATE, G_KUS, G_L, G_RATIO,
@@ -141,7 +142,7 @@ class Driver:
         return np.concatenate([g, hdr, self.speed[0], self.speed[1], st[0], st[1], pa[0], pa[1]])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always", error_model="numpy")
 def interp_cos(a, off, n, x):
     """Raised-cosine interpolation through knots ``a[off:off+n]`` -> ``a[off+n:off+2n]`` (held beyond the ends)."""
     ys = off + n
@@ -153,11 +154,11 @@ def interp_cos(a, off, n, x):
     while a[off + k + 1] < x:
         k += 1
     u = (x - a[off + k]) / (a[off + k + 1] - a[off + k])
-    w = 0.5 - 0.5 * math.cos(math.pi * u)
+    w = 0.5 - 0.5 * fast_sincos(math.pi * u)[1]
     return a[ys + k] + w * (a[ys + k + 1] - a[ys + k])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always", error_model="numpy")
 def interp_lin(a, off, n, x):
     """Piecewise-linear interpolation through knots ``a[off:off+n]`` -> ``a[off+n:off+2n]``."""
     ys = off + n
@@ -172,7 +173,7 @@ def interp_lin(a, off, n, x):
     return a[ys + k] + u * (a[ys + k + 1] - a[ys + k])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always", error_model="numpy")
 def driver_step(t, x, dstate, drv, road, u, dt):
     """Driver at time ``t``: write plant inputs into ``u`` and advance ``dstate`` by ``dt``.
 

@@ -39,7 +39,11 @@ def fast_atan(x):
     inv = a > 1.0
     z = min(a, 1.0) / max(a, 1.0)
     u = z * z
-    q = _A0 + u * (_A1 + u * (_A2 + u * (_A3 + u * (_A4 + u * (_A5 + u * (_A6 + u * (_A7 + u * _A8)))))))
+    # q(u) by Estrin's scheme (shorter dependency chain than Horner)
+    u2 = u * u
+    u4 = u2 * u2
+    q = (((_A0 + u * _A1) + u2 * (_A2 + u * _A3)) + u4 * ((_A4 + u * _A5) + u2 * (_A6 + u * _A7))
+         + (u4 * u4) * _A8)
     r = z * (1.0 + u * q)
     r = _HALF_PI - r if inv else r
     return math.copysign(r, x)
@@ -49,8 +53,11 @@ def fast_atan(x):
 def fast_sin(x):
     """Sine for |x| <= 2.6 (Taylor to x^15, error < 5e-8)."""
     u = x * x
-    return x * (1.0 + u * (-1.0 / 6.0 + u * (1.0 / 120.0 + u * (-1.0 / 5040.0 + u * (
-        1.0 / 362880.0 + u * (-1.0 / 39916800.0 + u * (1.0 / 6227020800.0 + u * (-1.0 / 1307674368000.0))))))))
+    u2 = u * u
+    # Estrin's scheme (shorter dependency chain than Horner)
+    p03 = (1.0 + u * (-1.0 / 6.0)) + u2 * (1.0 / 120.0 + u * (-1.0 / 5040.0))
+    p47 = (1.0 / 362880.0 + u * (-1.0 / 39916800.0)) + u2 * (1.0 / 6227020800.0 + u * (-1.0 / 1307674368000.0))
+    return x * (p03 + (u2 * u2) * p47)
 
 
 _PIO2_HI = 1.5707963267341256     # pi/2 split for the range reduction of fast_sincos
@@ -111,6 +118,13 @@ def magic_formula(x, K, C, D, E):
 
 
 @njit(cache=True, inline="always", fastmath=True, error_model="numpy")
+def magic_formula_b(x, B, C, D, E):
+    """:func:`magic_formula` with the stiffness factor ``B = K/(C D)`` given."""
+    bx = B * x
+    return D * fast_sin(C * fast_atan(bx - E * (bx - fast_atan(bx))))
+
+
+@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
 def load_stiffness_factor(fz, fz0, pky2):
     """Cornering stiffness at load ``fz`` relative to the one at ``fz0`` (-).
 
@@ -140,9 +154,12 @@ def tyre_core(tan_alpha, kappa, fz, mu, ky0, inv_fz0, ky_norm, inv_fzpk, Cy, Ey,
     dy = mu * (1.0 + pdy2 * dfz) * fzc
     dx = mu * (1.0 + pdx2 * dfz) * fzc
     y = fzc * inv_fzpk
-    ky = ky0 * ky_norm * (y / (1.0 + y * y))
-    fy0 = magic_formula(tan_alpha, ky, Cy, dy, Ey)
-    fx0 = magic_formula(kappa, kx_per_fz * fzc, Cx, dx, Ex)
+    # B = K/(C D) with K = ky0 ky_norm y/(1 + y^2) (lateral), K = kx_per_fz Fz (longitudinal):
+    # one division each
+    by = (ky0 * ky_norm * y) / ((1.0 + y * y) * (Cy * dy))
+    bxk = (kx_per_fz * fzc) / (Cx * dx)
+    fy0 = magic_formula_b(tan_alpha, by, Cy, dy, Ey)
+    fx0 = magic_formula_b(kappa, bxk, Cx, dx, Ex)
     ta2 = tan_alpha * tan_alpha
     k2 = kappa * kappa
     ay = 1.0 + rby2 * rby2 * ta2
