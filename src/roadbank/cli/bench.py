@@ -49,13 +49,16 @@ TARGETS = {
 SIZES = {
     "full": dict(log_s=3600.0, repeats=5, riccati_s=600.0, peer_n=30000, step_n=50000,
                  cr_s=25.0, plant_repeats=5, reproduce=True, cold=True),
-    "quick": dict(log_s=3600.0, repeats=3, riccati_s=120.0, peer_n=5000, step_n=20000,
+    "quick": dict(log_s=3600.0, repeats=3, riccati_s=60.0, peer_n=3000, step_n=20000,
                   cr_s=25.0, plant_repeats=3, reproduce=False, cold=True),
     "tiny": dict(log_s=10.0, repeats=1, riccati_s=10.0, peer_n=300, step_n=300,
                  cr_s=0.5, plant_repeats=1, reproduce=False, cold=False),
 }
 
 RATE_HZ = 100.0
+
+#: environment variables the bench command set for itself (not passed on to `reproduce`)
+_SET_BY_BENCH: set[str] = set()
 
 
 # --------------------------------------------------------------------------
@@ -81,6 +84,7 @@ def machine_info() -> dict:
     import scipy
     load = os.getloadavg() if hasattr(os, "getloadavg") else (float("nan"),) * 3
     return {"cpu": cpu, "cores_logical": os.cpu_count(), "cores_usable": usable, "load_1min": load[0],
+            "openblas_num_threads": os.environ.get("OPENBLAS_NUM_THREADS", "default"),
             "os": platform.platform(), "python": platform.python_version(),
             "numpy": numpy.__version__, "scipy": scipy.__version__, "numba": numba.__version__}
 
@@ -348,6 +352,8 @@ def commonroad_peer(duration: float, vx0: float = 60 / 3.6) -> dict:
 def _timed_reproduce(outdir: Path, timeout: float, env=None):
     """Run ``roadbank reproduce -o outdir`` in a fresh process: ``(wall s, None)`` or ``(None, reason)``."""
     cmd = [sys.executable, "-m", "roadbank.cli", "reproduce", "-o", str(outdir)]
+    if env is None:   # the user's environment, as `roadbank reproduce` would see it
+        env = {k: v for k, v in os.environ.items() if k not in _SET_BY_BENCH}
     t0 = time.perf_counter()
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
@@ -412,24 +418,31 @@ print(json.dumps({"import_s": t1 - t0, "design_s": t2 - t1, "first_run_s": t3 - 
 """
 
 
-def cold_start() -> dict:
+def _probe(env) -> dict:
+    proc = subprocess.run([sys.executable, "-c", _COLD_SCRIPT], capture_output=True, text=True,
+                          env=env, timeout=600)
+    if proc.returncode != 0:
+        raise RuntimeError(f"cold-start probe failed: {proc.stderr.strip().splitlines()[-1:]}")
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def cold_start(compile_: bool = True) -> dict:
     """First-call cost of ``pif-modified`` in fresh processes.
 
-    Two processes share an empty temporary ``NUMBA_CACHE_DIR``: the first
-    compiles (cold, no cache), the second loads the cache (cold, cached). Also
-    lists the kernels a ``pif-modified`` process loaded (the others are never
-    compiled: numba compiles lazily on first call).
+    With ``compile_``, two processes share an empty temporary ``NUMBA_CACHE_DIR``:
+    the first compiles (cold, no cache), the second loads the cache (cold,
+    cached). Without, one process uses the normal cache (``--quick``: a full
+    compilation takes longer than the quick budget). Also lists the kernels
+    the process loaded (numba compiles lazily: the others are never compiled).
     """
-    out = {}
-    with tempfile.TemporaryDirectory() as cache:
-        env = dict(os.environ, NUMBA_CACHE_DIR=cache)
-        for label in ("compile", "cache_load"):
-            proc = subprocess.run([sys.executable, "-c", _COLD_SCRIPT], capture_output=True, text=True,
-                                  env=env, timeout=600)
-            if proc.returncode != 0:
-                return {"reason": f"cold-start probe failed: {proc.stderr.strip().splitlines()[-1:]}"}
-            out[label] = json.loads(proc.stdout.strip().splitlines()[-1])
-    return out
+    try:
+        if not compile_:
+            return {"cache_load": _probe(dict(os.environ))}
+        with tempfile.TemporaryDirectory() as cache:
+            env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+            return {"compile": _probe(env), "cache_load": _probe(env)}
+    except (RuntimeError, subprocess.TimeoutExpired) as exc:
+        return {"reason": str(exc)}
 
 
 # --------------------------------------------------------------------------
@@ -450,9 +463,16 @@ def run_suite(size: str = "full", progress=None) -> dict:
     import numpy as np
 
     cfg = SIZES[size]
-    say = progress or (lambda msg: None)
-    res = {"size": size, "machine": machine_info(), "reasons": {}}
+    res = {"size": size, "machine": machine_info(), "reasons": {}, "phase_s": {}}
     wall0 = time.perf_counter()
+    marks = [("setup", wall0)]
+
+    def say(msg):
+        now = time.perf_counter()
+        res["phase_s"][marks[-1][0]] = now - marks[-1][1]
+        marks.append((msg, now))
+        if progress:
+            progress(msg)
 
     say("synthetic log")
     log = synthetic_log(cfg["log_s"])
@@ -507,7 +527,8 @@ def run_suite(size: str = "full", progress=None) -> dict:
 
     if cfg["cold"]:
         say("cold start (fresh processes)")
-        res["cold_start"] = cold_start()
+        res["cold_start"] = cold_start(compile_=size == "full")
+    say("done")
     res["targets"] = {key: target_status(res.get(key), key) for key in TARGETS}
     res["suite_wall_s"] = time.perf_counter() - wall0
     return res
@@ -621,11 +642,13 @@ def markdown(res: dict, command: str) -> str:
               f"{st['step_us_median']:.3f} us, p99 {st['step_us_p99']:.3f} us, mean {st['step_us_mean']:.3f} us; "
               f"first call in process {st['step_first_call_us']:.0f} us.", ""]
     cs = res.get("cold_start")
-    if cs and "compile" in cs:
+    if cs and "cache_load" in cs:
         lines += ["## Cold start: compilation vs numba cache (fresh processes, pif-modified)", "",
                   "| | import roadbank (s) | design (s) | first run() (s) | second run() (s) "
                   "| first step() (s) |", "|---|---|---|---|---|---|"]
         for label, text in (("compile", "cold, empty cache (compiles)"), ("cache_load", "cold, cached")):
+            if label not in cs:
+                continue
             c = cs[label]
             lines.append(f"| {text} | {c['import_s']:.3f} | {c['design_s']:.3f} | {c['first_run_s']:.3f} | "
                          f"{c['second_run_s']:.5f} | {c['first_step_s']:.3f} |")
@@ -658,6 +681,13 @@ def to_json(res: dict) -> dict:
 def bench(output, quick, tiny, as_json):
     """Benchmark the estimators, the plant and reproduce against peers (issue 5)."""
     size = "tiny" if tiny else "quick" if quick else "full"
+    # The kernels are single-threaded; the designs call LAPACK on 3x3..6x6 matrices
+    # where BLAS worker threads only spin (badly so on shared cores). Only effective
+    # when numpy is not imported yet (always the case for the `roadbank` command).
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        if var not in os.environ:
+            os.environ[var] = "1"
+            _SET_BY_BENCH.add(var)
     command = "roadbank bench" + "".join(f" {a}" for a in sys.argv[2:]) if sys.argv[1:2] == ["bench"] \
         else "roadbank bench" + (f" -o {output}" if output else "") + (f" --{size}" if size != "full" else "")
     res = run_suite(size, progress=lambda msg: click.echo(f"[bench] {msg}", err=True))
