@@ -517,7 +517,7 @@ def run_suite(size: str = "full", progress=None) -> dict:
         res["reasons"]["plant_vs_commonroad"] = plant.get("reason") or cr.get("reason")
 
     if cfg["reproduce"]:
-        say("roadbank reproduce (two fresh processes: cold, then warm)")
+        say("roadbank reproduce (fresh processes: cold, 2 warm, 1 warm with single-threaded BLAS)")
         rep = reproduce_bench()
     else:
         rep = {"reproduce_s": None, "reason": f"not run with --{size} (run the full suite)"}
@@ -569,6 +569,7 @@ def markdown(res: dict, command: str) -> str:
              f"{res['suite_wall_s']:.0f} s).", "",
              f"Machine: {m['cpu']}, {m['cores_usable']} usable / {m['cores_logical']} logical cores; "
              f"load average {m['load_1min']:.2f} at start (other processes share the cores); "
+             f"BLAS threads in the bench process: {m.get('openblas_num_threads', 'default')}; "
              f"{m['os']}; Python {m['python']}, numpy {m['numpy']}, scipy {m['scipy']}, numba {m['numba']}.",
              "", "All numbers are warm (kernels compiled or loaded from the numba cache) medians "
              "unless marked otherwise; single-threaded except `reproduce`.", "",
@@ -678,7 +679,8 @@ def obstacles(res: dict) -> list[str]:
             "24 table entries, solves the 3x3 trapezoidal step (adjugate, one division), takes an "
             "asin and stores 8 outputs; x[k+1] depends on x[k], so samples cannot be vectorised "
             "within one log. Wall time on a shared machine (load average above) includes time "
-            "descheduled; the CPU column is the code's own cost. 1000x filterpy needs "
+            "descheduled; the CPU column excludes that, though not the cache and memory "
+            "interference of the other processes. 1000x filterpy needs "
             f"<= {_fmt((res['filterpy_ns_per_sample'] or 0) / 1000)} ns/sample against this filterpy "
             "measurement. What would still help: a per-log discrete table for a fixed "
             "sample time (interpolating discrete instead of continuous matrices: no solve per "
