@@ -141,7 +141,9 @@ NQ = Q_OTANA + 4
 
 @njit(cache=True, inline="always", fastmath=True, error_model="numpy")
 def _sin_cos_small(a):
-    """(sin a, cos a) for |a| < pi/2 with the polynomial sine."""
+    """(sin a, cos a) for |a| < pi/2 with the polynomial sine (exactly (0, 1) at 0: flat roads skip it)."""
+    if a == 0.0:
+        return 0.0, 1.0
     s = fast_sin(a)
     return s, math.sqrt(1.0 - s * s)
 
@@ -271,7 +273,9 @@ def plant_core(x, road, q, c, dx, aux, want_aux):
     inv_den = 1.0 / den
     vt = vx * cpsi - vy * spsi
     sdot = vt * inv_den
-    a_n = -vt * vt * (kap * inv_den) * (sb / cb)
+    # (zero unless banked *and* curved: skipping it then keeps the heading's sine and
+    # cosine off the path to the wheel loads)
+    a_n = -vt * vt * (kap * inv_den) * (sb / cb) if kap != 0.0 and sb != 0.0 else 0.0
     fz_spec = a_n - g_n
 
     # ---- loads and drive ---------------------------------------------------------
