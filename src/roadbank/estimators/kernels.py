@@ -620,6 +620,10 @@ def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
     o += 2 * n
     er = work[o:o + 2]
     o += 2
+    rhs = work[o:o + n]
+    o += n
+    Xt = work[o:o + n * n].reshape((n, n))
+    o += n * n
     e1[0] = d if cfg[C_USE] > 0 else 0.0
     e1[1] = ay if cfg[C_USE + 1] > 0 else 0.0
     e1[2] = r if cfg[C_USE + 2] > 0 else 0.0
@@ -665,7 +669,7 @@ def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
             for j in range(NETA):
                 col[j] = e0[j] + a0 * (e1[j] - e0[j])
                 col[NETA + j] = e0[j] + a1 * (e1[j] - e0[j])
-            _tustin(x, F, G, col[:NETA].copy(), col[NETA:2 * NETA].copy(), h, h, Mw, piv, Z[:, 0].copy())
+            _tustin(x, F, G, col[:NETA], col[NETA:2 * NETA], h, h, Mw, piv, rhs)
             # Riccati via the Hamiltonian: Z' = Hm Z, Hm = [[-A^T, M], [W, A]], Z = [I; P]
             for q in range(n):
                 for j in range(n):
@@ -701,8 +705,9 @@ def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
                 for q in range(2 * n):
                     Z[q, j] = col[q]
             # P = Y X^-1  <=>  X^T P^T = Y^T ; P symmetric
-            X = Z[:n, :].copy()
-            Xt = X.T.copy()
+            for q in range(n):
+                for j in range(n):
+                    Xt[q, j] = Z[j, q]
             _lu(Xt, piv, n)
             for j in range(n):
                 for q in range(n):
