@@ -10,7 +10,7 @@ from roadbank.sim import (Driver, PlantParams, Scenario, SensorConfig, TyreParam
                           two_lane_road)
 from roadbank.sim.plant import NX, X_OMEGA, X_VX, f, outputs, A_FYW
 from roadbank.sim.road import truth_bank
-from roadbank.sim.tyres import fast_atan, fast_sin, tyre_forces
+from roadbank.sim.tyres import fast_atan, fast_sin, fast_sincos, tyre_forces
 
 
 def test_fast_kernels_accuracy():
@@ -18,6 +18,10 @@ def test_fast_kernels_accuracy():
     assert max(abs(fast_atan(v) - math.atan(v)) for v in x[::97]) < 3e-9
     y = np.linspace(-2.6, 2.6, 10001)
     assert max(abs(fast_sin(v) - math.sin(v)) for v in y) < 1e-7
+    # the libm-free sine/cosine pair used for heading, roll and steer angle
+    z = np.concatenate([np.linspace(-1000.0, 1000.0, 20001), np.linspace(-1.0, 1.0, 2001), [0.0, math.pi]])
+    err = max(max(abs(fast_sincos(v)[0] - math.sin(v)), abs(fast_sincos(v)[1] - math.cos(v))) for v in z)
+    assert err < 1e-15
 
 
 def test_tyre_linear_stiffness_matches_axle_stiffness():

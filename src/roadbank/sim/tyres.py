@@ -65,7 +65,30 @@ _PIO2_LO = 6.077100506506192e-11  # (Cody-Waite: k * _PIO2_HI is exact for |k| <
 _TWO_OVER_PI = 2.0 / math.pi
 
 
-@njit(cache=True, error_model="numpy")  # no fastmath: keeps the two-part reduction exact
+@njit(cache=True, fastmath=True, error_model="numpy")
+def _sincos_reduced(r, q):
+    """(sin, cos) of ``r + q pi/2`` for |r| <= pi/4: Taylor polynomials (Estrin) and the quadrant."""
+    u = r * r
+    u2 = u * u
+    u4 = u2 * u2
+    s = r * (((1.0 + u * (-1.0 / 6.0)) + u2 * (1.0 / 120.0 + u * (-1.0 / 5040.0)))
+             + u4 * (((1.0 / 362880.0 + u * (-1.0 / 39916800.0)) + u2 * (1.0 / 6227020800.0 + u * (
+                 -1.0 / 1307674368000.0))) + u4 * (1.0 / 355687428096000.0)))
+    c = (((1.0 + u * (-0.5)) + u2 * (1.0 / 24.0 + u * (-1.0 / 720.0)))
+         + u4 * (((1.0 / 40320.0 + u * (-1.0 / 3628800.0)) + u2 * (1.0 / 479001600.0 + u * (
+             -1.0 / 87178291200.0))) + u4 * (1.0 / 20922789888000.0 + u * (-1.0 / 6402373705728000.0))))
+    if q == 0:
+        return s, c
+    if q == 1:
+        return c, -s
+    if q == 2:
+        return -s, -c
+    return -c, s
+
+
+# fastmath without reassociation, set explicitly (else inherited from fastmath callers): the
+# two-part reduction must not be folded into k * (hi + lo); FMA contraction keeps it exact
+@njit(cache=True, fastmath={"nnan", "ninf", "nsz", "arcp", "contract", "afn"}, error_model="numpy")
 def fast_sincos(a):
     """``(sin a, cos a)`` for any |a| < 1e5 rad, error < 1e-15 (no libm call).
 
@@ -75,21 +98,7 @@ def fast_sincos(a):
     """
     k = math.floor(a * _TWO_OVER_PI + 0.5)
     r = (a - k * _PIO2_HI) - k * _PIO2_LO
-    u = r * r
-    s = r * (1.0 + u * (-1.0 / 6.0 + u * (1.0 / 120.0 + u * (-1.0 / 5040.0 + u * (
-        1.0 / 362880.0 + u * (-1.0 / 39916800.0 + u * (1.0 / 6227020800.0 + u * (
-            -1.0 / 1307674368000.0 + u * (1.0 / 355687428096000.0)))))))))
-    c = 1.0 + u * (-0.5 + u * (1.0 / 24.0 + u * (-1.0 / 720.0 + u * (1.0 / 40320.0 + u * (
-        -1.0 / 3628800.0 + u * (1.0 / 479001600.0 + u * (-1.0 / 87178291200.0 + u * (
-            1.0 / 20922789888000.0 + u * (-1.0 / 6402373705728000.0)))))))))
-    q = int(k) & 3
-    if q == 0:
-        return s, c
-    if q == 1:
-        return c, -s
-    if q == 2:
-        return -s, -c
-    return -c, s
+    return _sincos_reduced(r, int(k) & 3)
 
 
 @njit(cache=True, inline="always", fastmath=True, error_model="numpy")
