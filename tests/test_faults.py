@@ -158,13 +158,10 @@ def test_speed_reversing_is_flagged_and_never_divides_by_zero():
         assert np.all(np.isfinite(e.phi_b))
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "estimators/kernels.py (_finish / valid flag): an estimate |w_hat| = |sin(theta)| > 1 has no "
-    "angle; theta is clipped to +-90 deg and the sample is still reported valid=True. Under an "
-    "extreme steering input (0.7 rad road wheel, 1 s) UIO reaches w = -10.7 and the original-model "
-    "PIF -8.7, both valid=True: silent garbage. Expected: valid=False wherever |w| > 1."))
 @pytest.mark.parametrize("name", ["uio", "pif-original"])
 def test_impossible_w_is_flagged_not_valid(base, name):
+    """|w| = |sin(theta)| > 1 has no angle (e.g. UIO w = -10.7 under 0.7 rad road-wheel steering):
+    the output is flagged valid=False, never silent garbage."""
     stream, _ = base
     e = feed(E.make(name), apply(stream, "extreme-steering", 6.0, 7.0))
     impossible = np.abs(e.w) > 1.0

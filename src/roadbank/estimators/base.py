@@ -157,7 +157,10 @@ class Estimator:
 
         Returns the estimate after this sample. An unusable sample (NaN/inf,
         ``vx < v_min``, time not after the last valid sample) leaves the state
-        unchanged and returns the held outputs with ``valid=False``.
+        unchanged and returns the held outputs with ``valid=False``. An output
+        with ``|w| > 1`` (no angle: the model has failed, e.g. a saturated front
+        tyre in an original-model observer) is returned with theta clipped to
+        +-90 deg and ``valid=False``.
         """
         # One compiled call returns the outputs (no numpy scalar reads afterwards);
         # float() keeps numpy scalars / ints from triggering a new compilation.

@@ -268,7 +268,12 @@ def _tustin_flat(x, ox, n, A, oF, oG, m, E0, oe0, E1, oe1, dt, max_sub, W, oM):
 
 @njit(cache=True, inline="always")
 def _finish(mem, cfg, w, ay, dt, restart, work, o):
-    """Roll separation and output of one valid sample: updates the held outputs.
+    """Roll separation and output of one used sample: updates the held outputs.
+
+    Returns whether the output is plausible: ``|w| <= 1`` (``w = sin theta``);
+    beyond that the model has failed (e.g. a saturated front tyre in an
+    original-model observer), theta is clipped to +-90 deg and the caller
+    flags the sample not valid.
 
     ``work[o:]`` is scratch of at least ``nr*nr + 2 nr + 2`` floats.
     """
@@ -297,6 +302,7 @@ def _finish(mem, cfg, w, ay, dt, restart, work, o):
     mem[M_THETA] = theta
     mem[M_PHI] = phi
     mem[M_PHIB] = theta - phi
+    return abs(w) <= 1.0
 
 
 @njit(cache=True, inline="always")
@@ -434,8 +440,7 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
         u2 = r if cfg[C_USE + 2] > 0 else 0.0
         dt, restart = _begin(mem, cfg, t)
         w = _lpv3(mem, tab, i, i1, a, u0, u1, u2, dt, cfg[C_SUB], restart)
-        _finish(mem, cfg, w, ay, dt, restart, work, 0)
-        return True
+        return _finish(mem, cfg, w, ay, dt, restart, work, 0)
     # work: F | G | H | D | e1 | tustin scratch (n*n + 2n) | finish scratch
     oG = n * n
     oH = oG + n * NETA
@@ -466,8 +471,7 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
         w += work[oD + q] * work[oE1 + q]
     for q in range(NETA):
         mem[M_ETA + q] = work[oE1 + q]
-    _finish(mem, cfg, w, ay, dt, restart, work, oR)
-    return True
+    return _finish(mem, cfg, w, ay, dt, restart, work, oR)
 
 
 @njit(cache=True, _nrt=False)
@@ -534,8 +538,7 @@ def dfc_step(mem, cfg, tab, work, t, vx, d, ay, r):
         _tustin(x, F, G, e0, e1, dt, cfg[C_SUB], Mw, piv, rhs)
     mem[M_AUX] = gated
     mem[M_X + 1] = dfc
-    _finish(mem, cfg, x[0], ay, dt, restart, work, 16)
-    return True
+    return _finish(mem, cfg, x[0], ay, dt, restart, work, 16)
 
 
 @njit(cache=True)
@@ -727,8 +730,7 @@ def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
     w = x[n - 1]
     for q in range(NETA):
         e0[q] = e1[q]
-    _finish(mem, cfg, w, ay, dt, restart, work, o)
-    return True
+    return _finish(mem, cfg, w, ay, dt, restart, work, o)
 
 
 @njit(cache=True)

@@ -11,7 +11,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 #: metric names in report order
-METRICS = ("rms_deg", "max_deg", "bias_deg", "steady_deg", "t_conv_s")
+METRICS = ("rms_deg", "max_deg", "bias_deg", "steady_deg", "t_conv_s", "flagged_pct")
 
 
 @dataclass(frozen=True)
