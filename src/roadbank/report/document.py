@@ -19,6 +19,7 @@ TABLES = (
     ("theta", "steady_deg", "Steady-state error of theta (deg): mean over the final 3 s"),
     ("theta_ref", "rms_deg", "theta RMS error (deg) vs the paper's test reference (eq 45, low-passed)"),
     ("bank", "t_conv_s", "Time to converge within 0.5 deg of the bank (s; n/a = never)"),
+    ("bank", "flagged_pct", "Scored samples the estimator flagged not valid (%; |w| > 1: the model failed)"),
 )
 
 
@@ -47,7 +48,7 @@ def _md_blocks(study, figs, *, with_figures: bool, fig_prefix: str = "") -> list
                    f"{c['max_deg']:.2f} | {'yes' if c['max_ok'] else 'no'} | {c['best_deg']:.2f} |")
     for ref, metric, title in TABLES:
         out += ["", f"## {title}", "", markdown_table(rows, ref, metric,
-                                                       highlight_best=metric != "t_conv_s")]
+                                                       highlight_best=metric not in ("t_conv_s", "flagged_pct"))]
     if with_figures:
         out += ["", "## Figures", ""]
         for key, paths in figs.items():
