@@ -161,10 +161,10 @@ def markdown(rows: list[dict], scenario: str, command: str) -> str:  # noqa: C90
               "updated by them, so these faults cost (almost) no accuracy.",
               "- Dropouts are not flagged (no samples arrive); a gap longer than max_gap (1 s) "
               "re-initialises the estimators, which then re-converge from scratch.",
-              "- An estimate with |w| = |sin(theta)| > 1 has no angle: theta is clipped to +-90 deg. "
-              "Extreme steering drives UIO and the original-model PIF there with `valid=True` "
-              "(a bug in the validity flag, see tests/test_faults.py "
-              "`test_impossible_w_is_flagged_not_valid`).",
+              "- An estimate with |w| = |sin(theta)| > 1 has no angle: it is flagged `valid=False` "
+              "(the UIO and the original-model PIF get there under extreme steering; they used to "
+              "report it valid, found with this table, tests/test_faults.py "
+              "`test_impossible_w_is_flagged_not_valid`), so their flagged % there is not 0.",
               "- Stuck sensors, bias steps, saturation and an impossible steering angle are *plausible* "
               "values: nothing in a single sample flags them, so they show as error (max err) and as "
               "recovery time. Detecting them needs cross-channel plausibility checks (see below).",
