@@ -112,7 +112,8 @@ class Estimator:
         """``_design()`` memoised on the estimator type and every setting made so far
         (parameters and tuning): building the same estimator again costs nothing."""
         key = (type(self).__name__,
-               tuple(sorted((k, repr(v)) for k, v in vars(self).items() if not k.startswith("_"))))
+               tuple(sorted((k, repr(v)) for k, v in vars(self).items()
+                            if not k.startswith("_") and k != "vgrid")))   # vgrid follows v_min
         hit = _DESIGN_CACHE.get(key)
         if hit is None:
             hit = self._design()
