@@ -93,6 +93,16 @@ def _parse_floats(path, col: str, label: str, values, row_label: str, rownums) -
     return out
 
 
+def _existing_nonempty(path) -> Path:
+    """``Path(path)``, or a :class:`LogError` if the file is missing or empty."""
+    p = Path(path)
+    if not p.exists():
+        raise LogError(f"{p}: file not found")
+    if p.stat().st_size == 0:
+        raise LogError(f"{p}: file is empty")
+    return p
+
+
 def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTable:
     """Read a delimited text file with a header line.
 
@@ -152,11 +162,7 @@ def read_parquet(path, wanted: dict[str, str], prefix: str | None = None) -> Raw
     import pyarrow.compute as pc
     import pyarrow.parquet as pq
 
-    p = Path(path)
-    if not p.exists():
-        raise LogError(f"{p}: file not found")
-    if p.stat().st_size == 0:
-        raise LogError(f"{p}: file is empty")
+    p = _existing_nonempty(path)
     try:
         pf = pq.ParquetFile(p)
         schema = pf.schema_arrow
@@ -197,11 +203,7 @@ def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTab
     Each MDF channel carries its own time stamps (its master channel, s); the
     channel map's ``time`` entry is not used for MDF4.
     """
-    p = Path(path)
-    if not p.exists():
-        raise LogError(f"{p}: file not found")
-    if p.stat().st_size == 0:
-        raise LogError(f"{p}: file is empty")
+    p = _existing_nonempty(path)
     try:
         from asammdf import MDF
     except ImportError:

@@ -143,33 +143,38 @@ class Driver:
 
 
 @njit(cache=True, inline="always", error_model="numpy")
-def interp_cos(a, off, n, x):
-    """Raised-cosine interpolation through knots ``a[off:off+n]`` -> ``a[off+n:off+2n]`` (held beyond the ends)."""
-    ys = off + n
+def _segment(a, off, n, x):
+    """Segment ``k`` and fraction ``u`` of ``x`` among the increasing knots ``a[off:off+n]``.
+
+    ``u = -1`` flags ``x`` outside the knots (value held at knot ``k``)."""
     if n == 1 or x <= a[off]:
-        return a[ys]
+        return 0, -1.0
     if x >= a[off + n - 1]:
-        return a[ys + n - 1]
+        return n - 1, -1.0
     k = 0
     while a[off + k + 1] < x:
         k += 1
-    u = (x - a[off + k]) / (a[off + k + 1] - a[off + k])
+    return k, (x - a[off + k]) / (a[off + k + 1] - a[off + k])
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def interp_cos(a, off, n, x):
+    """Raised-cosine interpolation through knots ``a[off:off+n]`` -> ``a[off+n:off+2n]`` (held beyond the ends)."""
+    ys = off + n
+    k, u = _segment(a, off, n, x)
+    if u < 0.0:
+        return a[ys + k]
     w = 0.5 - 0.5 * fast_sincos(math.pi * u)[1]
     return a[ys + k] + w * (a[ys + k + 1] - a[ys + k])
 
 
 @njit(cache=True, inline="always", error_model="numpy")
 def interp_lin(a, off, n, x):
-    """Piecewise-linear interpolation through knots ``a[off:off+n]`` -> ``a[off+n:off+2n]``."""
+    """Piecewise-linear interpolation through knots ``a[off:off+n]`` -> ``a[off+n:off+2n]`` (held beyond the ends)."""
     ys = off + n
-    if n == 1 or x <= a[off]:
-        return a[ys]
-    if x >= a[off + n - 1]:
-        return a[ys + n - 1]
-    k = 0
-    while a[off + k + 1] < x:
-        k += 1
-    u = (x - a[off + k]) / (a[off + k + 1] - a[off + k])
+    k, u = _segment(a, off, n, x)
+    if u < 0.0:
+        return a[ys + k]
     return a[ys + k] + u * (a[ys + k + 1] - a[ys + k])
 
 
