@@ -58,3 +58,23 @@ def test_step_with_repeated_timestamp_is_flagged_not_raised():
 def test_run_rejects_non_signals():
     with pytest.raises(TypeError):
         E.make("kinematic").run({"t": [0.0]})
+
+
+@pytest.mark.parametrize("name", ["uio", "pif-original"])
+def test_implausible_angle_is_flagged(name):
+    """A saturated front tyre (0.35 rad road-wheel angle at 20 m/s on a linear-model
+    observer's inputs that a real car cannot follow) drives the estimate beyond 60 deg:
+    flagged, not reported as a valid bank."""
+    t = np.arange(0, 6, 0.01)
+    n = len(t)
+    d = np.where(t > 1, 0.35, 0.0)
+    ay = np.where(t > 1, 7.0, 0.0)                 # tyres saturated: ay far below the linear model
+    r = ay / 20.0
+    e = E.make(name).run(Signals(t, np.full(n, 20.0), ay, r, d))
+    big = np.abs(e.theta) > np.deg2rad(60)
+    assert big.any()
+    assert not e.valid[big].any()
+    tighter = E.make(name, max_angle=np.deg2rad(10)).run(Signals(t, np.full(n, 20.0), ay, r, d))
+    assert not tighter.valid[np.abs(tighter.theta) > np.deg2rad(10)].any()
+    with pytest.raises(ValueError, match="max_angle"):
+        E.make(name, max_angle=2.0)

@@ -121,7 +121,8 @@ class Estimate:
     valid : bool array
         False where the sample could not be used (NaN/inf input, vx below
         v_min, a non-increasing time stamp; the outputs are held there) or the
-        estimate is impossible (``|w| > 1``: theta clipped to +-90 deg).
+        estimate is implausible (``|theta| > max_angle``, default 60 deg; ``|w| > 1``
+        has no angle and theta is clipped to +-90 deg).
     states : dict of arrays
         Estimator-specific internal states (e.g. ``vy``, ``r`` of the observer,
         ``phi`` the estimated body roll), SI.

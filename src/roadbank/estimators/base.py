@@ -63,6 +63,10 @@ class Estimator:
         Longest integration substep (s) of the discretisation.
     max_gap : float, default 1.0
         A gap between valid samples longer than this (s) re-initialises the state.
+    max_angle : float, default 60 deg (rad)
+        Largest plausible |theta| = |bank + roll| (rad). A larger estimate means
+        the estimator's model has failed; it is output but flagged not valid.
+        60 deg leaves room for the steepest banked test-track lanes (~40 deg).
 
     Subclasses set ``name``, ``kernel`` ("lpv", "dfc" or "riccati"), the channel
     usage and build ``self._tab`` / ``self._cfg_extra`` in ``_design()``.
@@ -76,7 +80,8 @@ class Estimator:
     state_names: tuple[str, ...] = ()
 
     def __init__(self, params: VehicleParams | None = None, *, v_min: float = 5.0,
-                 roll: str = "static", max_substep: float = 0.02, max_gap: float = 1.0):
+                 roll: str = "static", max_substep: float = 0.02, max_gap: float = 1.0,
+                 max_angle: float = np.deg2rad(60.0)):
         self.params = params if params is not None else VehicleParams()
         if not isinstance(self.params, VehicleParams):
             raise TypeError("params must be a roadbank.VehicleParams")
@@ -89,6 +94,9 @@ class Estimator:
         self.roll = roll
         self.max_substep = float(max_substep)
         self.max_gap = float(max_gap)
+        if not 0 < max_angle <= np.pi / 2:
+            raise ValueError(f"{self.name}: max_angle must be in (0, pi/2] rad, got {max_angle}")
+        self.max_angle = float(max_angle)
         self._roll = roll_state_space(self.params, roll)
         self.vgrid = speed_grid(self.v_min)
         self._tab, self._nstate, extra = self._cached_design()
@@ -135,6 +143,7 @@ class Estimator:
         head[K.C_VMIN] = self.v_min
         head[K.C_SUB] = self.max_substep
         head[K.C_GAP] = self.max_gap
+        head[K.C_WMAX] = np.sin(self.max_angle)
         head[K.C_G] = self.params.g
         head[K.C_NR] = nr
         head[K.C_USE:K.C_USE + 3] = [float(u) for u in self.uses]
@@ -159,9 +168,9 @@ class Estimator:
         Returns the estimate after this sample. An unusable sample (NaN/inf,
         ``vx < v_min``, time not after the last valid sample) leaves the state
         unchanged and returns the held outputs with ``valid=False``. An output
-        with ``|w| > 1`` (no angle: the model has failed, e.g. a saturated front
-        tyre in an original-model observer) is returned with theta clipped to
-        +-90 deg and ``valid=False``.
+        beyond ``max_angle`` (the model has failed, e.g. a saturated front tyre in
+        an original-model observer; ``|w| > 1`` has no angle and theta is clipped
+        to +-90 deg) is returned with ``valid=False``.
         """
         # One compiled call returns the outputs (no numpy scalar reads afterwards);
         # float() keeps numpy scalars / ints from triggering a new compilation.

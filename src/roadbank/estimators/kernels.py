@@ -61,6 +61,7 @@ C_NR = 9        # roll-model states (0 or 2)
 C_USE = 10      # uses delta_f, ay, r (3 flags)
 C_AREF = 13     # DFC a_ref (m/s^2)
 C_TAU = 14      # DFC low-pass time constant (s)
+C_WMAX = 15     # sin(max_angle): larger |w| is flagged implausible
 C_ROLL = 16     # roll model: F (nr*nr), G (nr), H (nr), D (1), J (nr)
 # Riccati constants follow the roll block: Rinv (p*p), W (n*n), Mneg (n*n)
 
@@ -270,10 +271,10 @@ def _tustin_flat(x, ox, n, A, oF, oG, m, E0, oe0, E1, oe1, dt, max_sub, W, oM):
 def _finish(mem, cfg, w, ay, dt, restart, work, o):
     """Roll separation and output of one used sample: updates the held outputs.
 
-    Returns whether the output is plausible: ``|w| <= 1`` (``w = sin theta``);
-    beyond that the model has failed (e.g. a saturated front tyre in an
-    original-model observer), theta is clipped to +-90 deg and the caller
-    flags the sample not valid.
+    Returns whether the output is plausible: ``|w| <= sin(max_angle)``
+    (``w = sin theta``). Beyond that the model has failed (e.g. a saturated
+    front tyre in an original-model observer; ``|w| > 1`` has no angle at all
+    and theta is clipped to +-90 deg) and the caller flags the sample not valid.
 
     ``work[o:]`` is scratch of at least ``nr*nr + 2 nr + 2`` floats.
     """
@@ -302,7 +303,7 @@ def _finish(mem, cfg, w, ay, dt, restart, work, o):
     mem[M_THETA] = theta
     mem[M_PHI] = phi
     mem[M_PHIB] = theta - phi
-    return abs(w) <= 1.0
+    return abs(w) <= cfg[C_WMAX]
 
 
 @njit(cache=True, inline="always")

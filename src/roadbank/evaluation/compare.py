@@ -8,7 +8,7 @@ true ``dvy/dt`` (the optical sensor), low-passed with 2/3 s.
 
 Scored samples are the same for every estimator: those whose inputs are usable
 (finite, ``vx >= v_min``). An estimator's own flag is not used to drop samples —
-an output it flags as implausible (``|w| > 1``) is scored with its clipped angle —
+an output it flags as implausible (``|theta| > max_angle``) is scored with its clipped angle —
 and the share of scored samples it flagged is reported as ``flagged_pct``.
 """
 

@@ -19,7 +19,7 @@ TABLES = (
     ("theta", "steady_deg", "Steady-state error of theta (deg): mean over the final 3 s"),
     ("theta_ref", "rms_deg", "theta RMS error (deg) vs the paper's test reference (eq 45, low-passed)"),
     ("bank", "t_conv_s", "Time to converge within 0.5 deg of the bank (s; n/a = never)"),
-    ("bank", "flagged_pct", "Scored samples the estimator flagged not valid (%; |w| > 1: the model failed)"),
+    ("bank", "flagged_pct", "Scored samples the estimator flagged not valid (%; |theta| > 60 deg: the model failed)"),
 )
 
 
