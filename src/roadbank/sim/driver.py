@@ -31,7 +31,7 @@ import numpy as np
 from numba import njit
 
 from ..params import VehicleParams
-from .road import road_curvature
+from .road import knots, road_curvature
 from .tyres import fast_sincos
 
 MODE_OPEN_LOOP, MODE_PATH = 0, 1
@@ -39,18 +39,6 @@ MODE_OPEN_LOOP, MODE_PATH = 0, 1
  G_M, G_RW, G_TDRIVE, G_PDRIVE, G_TBRAKE, G_SWAMAX, G_COAST, N_GAINS) = range(19)
 D_VINT, D_LATINT, D_SWA = 0, 1, 2
 ND = 3
-
-
-def _knots(name, xs, ys):
-    x = np.atleast_1d(np.asarray(xs, dtype=np.float64))
-    y = np.atleast_1d(np.asarray(ys, dtype=np.float64))
-    if x.ndim != 1 or x.shape != y.shape or len(x) == 0:
-        raise ValueError(f"Driver.{name}: knots must be two 1-D arrays of equal, non-zero length")
-    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
-        raise ValueError(f"Driver.{name}: knots must be finite")
-    if len(x) > 1 and np.any(np.diff(x) <= 0):
-        raise ValueError(f"Driver.{name}: knot positions must be strictly increasing")
-    return x, y
 
 
 @dataclass(frozen=True)
@@ -98,13 +86,13 @@ class Driver:
         sp = self.speed
         if isinstance(sp, (int, float)):
             sp = ((0.0,), (float(sp),))
-        object.__setattr__(self, "speed", _knots("speed", *sp))
+        object.__setattr__(self, "speed", knots("Driver.speed", *sp))
         if (self.steering is None) == (self.path is None):
             raise ValueError("Driver: give exactly one of steering (open loop) or path (closed loop)")
         if self.steering is not None:
-            object.__setattr__(self, "steering", _knots("steering", *self.steering))
+            object.__setattr__(self, "steering", knots("Driver.steering", *self.steering))
         else:
-            object.__setattr__(self, "path", _knots("path", *self.path))
+            object.__setattr__(self, "path", knots("Driver.path", *self.path))
         for name in ("preview_time", "preview_min", "steer_lag", "steer_rate_max"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"Driver.{name} must be > 0")

@@ -40,15 +40,17 @@ LANE_WIDTH_TRACK = 16.2 / 4.0  #: lane width of the test track (m)
 _HDR = 10  # header length of the packed road
 
 
-def _knots(name, xs, ys, increasing=True):
+def knots(label, xs, ys, increasing=True):
+    """Validated knot arrays ``(x, y)`` of a piecewise profile; ``label`` (e.g. ``"Road.grade"``)
+    names the field in the error messages."""
     x = np.atleast_1d(np.asarray(xs, dtype=np.float64))
     y = np.atleast_1d(np.asarray(ys, dtype=np.float64))
     if x.ndim != 1 or x.shape != y.shape or len(x) == 0:
-        raise ValueError(f"Road.{name}: knots must be two 1-D arrays of equal, non-zero length")
+        raise ValueError(f"{label}: knots must be two 1-D arrays of equal, non-zero length")
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
-        raise ValueError(f"Road.{name}: knots must be finite")
+        raise ValueError(f"{label}: knots must be finite")
     if increasing and len(x) > 1 and np.any(np.diff(x) <= 0):
-        raise ValueError(f"Road.{name}: knot positions must be strictly increasing")
+        raise ValueError(f"{label}: knot positions must be strictly increasing")
     return x, y
 
 
@@ -82,7 +84,7 @@ class Road:
 
     def __post_init__(self) -> None:
         for nm in ("curvature", "bank_profile", "bank_factor", "grade"):
-            xs, ys = _knots(nm, *getattr(self, nm))
+            xs, ys = knots(f"Road.{nm}", *getattr(self, nm))
             object.__setattr__(self, nm, (xs, ys))
         if np.any(np.abs(self.bank_profile[1]) * np.max(np.abs(self.bank_factor[1])) >= math.radians(60)):
             raise ValueError("Road: |bank| must stay below 60 deg")
