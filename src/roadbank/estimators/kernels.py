@@ -316,6 +316,18 @@ def _begin(mem, cfg, t):
     return dt, restart
 
 
+@njit(cache=True, inline="always", _nrt=False)
+def _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x):
+    """Copy sample ``k``'s outputs and first ``n`` states from ``mem`` into the batch arrays."""
+    out_valid[k] = ok
+    out_w[k] = mem[M_W]
+    out_theta[k] = mem[M_THETA]
+    out_phib[k] = mem[M_PHIB]
+    out_phi[k] = mem[M_PHI]
+    for p in range(n):
+        out_x[k, p] = mem[M_X + p]
+
+
 # --------------------------------------------------------------------------
 # LPV observers
 # --------------------------------------------------------------------------
@@ -488,13 +500,7 @@ def lpv_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, ou
     n = int(cfg[C_N])
     for k in range(t.shape[0]):
         ok = lpv_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])
-        out_valid[k] = ok
-        out_w[k] = mem[M_W]
-        out_theta[k] = mem[M_THETA]
-        out_phib[k] = mem[M_PHIB]
-        out_phi[k] = mem[M_PHI]
-        for p in range(n):
-            out_x[k, p] = mem[M_X + p]
+        _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
 
 
 @njit(cache=True)
@@ -548,13 +554,7 @@ def dfc_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, ou
     """Batch version of :func:`dfc_step` (``work``: scratch of at least 32 floats)."""
     for k in range(t.shape[0]):
         ok = dfc_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])
-        out_valid[k] = ok
-        out_w[k] = mem[M_W]
-        out_theta[k] = mem[M_THETA]
-        out_phib[k] = mem[M_PHIB]
-        out_phi[k] = mem[M_PHI]
-        out_x[k, 0] = mem[M_X]
-        out_x[k, 1] = mem[M_X + 1]
+        _store(mem, k, 2, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
 
 
 # --------------------------------------------------------------------------
@@ -741,13 +741,7 @@ def riccati_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib
     n = int(cfg[C_N])
     for k in range(t.shape[0]):
         ok = riccati_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])
-        out_valid[k] = ok
-        out_w[k] = mem[M_W]
-        out_theta[k] = mem[M_THETA]
-        out_phib[k] = mem[M_PHIB]
-        out_phi[k] = mem[M_PHI]
-        for q in range(n):
-            out_x[k, q] = mem[M_X + q]
+        _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
 
 
 # --------------------------------------------------------------------------
