@@ -88,15 +88,21 @@ class PIF(ScheduledObserver):
 
     def riccati_solution(self, vx: float) -> np.ndarray:
         """Stabilising solution ``P`` of the algebraic Riccati equation (eq 44) at ``vx`` (m/s)."""
-        A, B, C, Dy, Lw, Ew = augmented_design_model(self.params, vx, self.model)
+        return self._riccati(augmented_design_model(self.params, vx, self.model), vx)
+
+    def _riccati(self, model, vx: float) -> np.ndarray:
+        A, B, C, Dy, Lw, Ew = model
         return game_are(A, C, Lw, self.Q * Ew @ Ew.T, self.R, np.atleast_2d(self.S), self.th,
                         where=f"at vx={vx:.2f} m/s ({self.name})")
 
+    def _observer(self, model, vx: float):
+        A, B, C, Dy, Lw, _ = model
+        Kg = self._riccati(model, vx) @ C.T @ np.linalg.inv(self.R)
+        return A - Kg @ C, B + Kg @ Dy, Lw, np.zeros((1, 3))
+
     def observer(self, vx: float):
         """``(F, G, H, D)`` of the steady-state filter at ``vx`` (see ScheduledObserver)."""
-        A, B, C, Dy, Lw, _ = augmented_design_model(self.params, vx, self.model)
-        Kg = self.riccati_solution(vx) @ C.T @ np.linalg.inv(self.R)
-        return A - Kg @ C, B + Kg @ Dy, Lw, np.zeros((1, 3))
+        return self._observer(augmented_design_model(self.params, vx, self.model), vx)
 
     def _design(self):
         if self.variant == "steady":
@@ -105,8 +111,9 @@ class PIF(ScheduledObserver):
         # the steady-state filter) also checks that the ARE is solvable everywhere.
         rows = []
         for v in self.vgrid:
-            F, G, _, _ = self.observer(float(v))
-            A, B, C, Dy, Lw, Ew = augmented_design_model(self.params, float(v), self.model)
+            model = augmented_design_model(self.params, float(v), self.model)
+            F, G, _, _ = self._observer(model, float(v))
+            A, B, C, Dy, Lw, Ew = model
             rows.append(np.concatenate([A.ravel(), B.ravel(), C.ravel(), Dy.ravel(),
                                         equilibrium_map(F, G).ravel()]))
         extra = np.concatenate([np.linalg.inv(self.R).ravel(), (self.Q * Ew @ Ew.T).ravel(),

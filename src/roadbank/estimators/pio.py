@@ -70,12 +70,15 @@ class PIO(ScheduledObserver):
 
     def gain(self, vx: float) -> np.ndarray:
         """Observer gain ``[K1; K2]`` at ``vx`` (m/s)."""
-        A, B, C, Dy, Lw, _ = augmented_design_model(self.params, vx, self.model)
+        return self._gain(augmented_design_model(self.params, vx, self.model), vx)
+
+    def _gain(self, model, vx: float) -> np.ndarray:
         if self.gains == "table3":
             return table3_gain(self.params, vx)
-        return place_observer(A, C, self.poles)
+        return place_observer(model[0], model[2], self.poles)
 
     def observer(self, vx: float):
-        A, B, C, Dy, Lw, _ = augmented_design_model(self.params, vx, self.model)
-        Kg = self.gain(vx)
+        model = augmented_design_model(self.params, vx, self.model)
+        A, B, C, Dy, Lw, _ = model
+        Kg = self._gain(model, vx)
         return A - Kg @ C, B + Kg @ Dy, Lw, np.zeros((1, 3))
