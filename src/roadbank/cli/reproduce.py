@@ -27,7 +27,7 @@ def _split(values):
 def reproduce(outdir, scenarios, names, jobs, seed, docs_results):
     """Run every estimator on every scenario x condition of the paper and write the report."""
     from .. import estimators
-    from ..report.reproduce import plan, run_study, write_outputs
+    from ..report.reproduce import check_estimators, plan, run_study, write_outputs
     from ..report.tables import lookup
 
     t_start = time.perf_counter()
@@ -35,9 +35,7 @@ def reproduce(outdir, scenarios, names, jobs, seed, docs_results):
     scenarios = _split(scenarios) or None
     try:
         cells = plan(scenarios)
-        bad = [n for n in names if n not in estimators.NAMES]
-        if bad:
-            raise ValueError(f"unknown estimator(s) {bad}; choose from {list(estimators.NAMES)}")
+        check_estimators(names)
     except ValueError as exc:
         raise click.BadParameter(str(exc)) from None
     try:

@@ -80,12 +80,12 @@ def evaluate(sim, names=est_mod.NAMES, params: VehicleParams | None = None, *, s
         estimates[name] = e
         usable = usable_samples(s, est.v_min)
         row = {"scenario": sim.scenario, "condition": sim.condition, "estimator": name}
+        flagged = float(100.0 * np.mean(~e.valid[usable])) if usable.any() else float("nan")
         for ref_name, ref in refs.items():
             angle = e.phi_b if ref_name == "bank" else e.theta
             m = error_metrics(t, angle, ref, usable, settle=settle)
             for metric, value in m.as_dict().items():
                 if metric != "n":
                     rows.append({**row, "reference": ref_name, "metric": metric, "value": value})
-            flagged = 100.0 * np.mean(~e.valid[usable]) if usable.any() else float("nan")
-            rows.append({**row, "reference": ref_name, "metric": "flagged_pct", "value": float(flagged)})
+            rows.append({**row, "reference": ref_name, "metric": "flagged_pct", "value": flagged})
     return Evaluation(sim.scenario, sim.condition, estimates, refs, rows)

@@ -59,6 +59,13 @@ def plan(scenarios=None) -> list[tuple[str, str]]:
     return [(s, c) for s in names for c in CONDITIONS_BY_SCENARIO[s]]
 
 
+def check_estimators(names) -> None:
+    """Raise ValueError naming any of ``names`` that is not an estimator."""
+    unknown = [n for n in names if n not in estimators.NAMES]
+    if unknown:
+        raise ValueError(f"unknown estimator(s) {unknown}; choose from {list(estimators.NAMES)}")
+
+
 def run_cell(scenario: str, condition: str, names=estimators.NAMES, seed: int = 0,
              settle: float = 2.0) -> CellResult:
     """Simulate one cell and evaluate the estimators on it."""
@@ -81,9 +88,7 @@ def run_study(scenarios=None, names=estimators.NAMES, *, jobs: int | None = None
     ``progress`` is an optional callable invoked with each finished :class:`CellResult`.
     """
     cells = plan(scenarios)
-    unknown = [n for n in names if n not in estimators.NAMES]
-    if unknown:
-        raise ValueError(f"unknown estimator(s) {unknown}; choose from {list(estimators.NAMES)}")
+    check_estimators(names)
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(cells)))
     study = Study()
     t0 = time.perf_counter()
