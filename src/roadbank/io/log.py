@@ -37,7 +37,10 @@ class Log:
     warnings : list of str
         Suspicious but usable things found while reading (e.g. a unit that looks odd).
     channel_map : ChannelMap or None
-        The map used (None for comma2k19, whose layout is fixed).
+        The map used (None for comma2k19 and kitti-oxts, whose layouts are fixed).
+    extra : dict name -> array
+        Further channels on ``signals.t``, unit in the name (kitti-oxts: ``lat_deg``,
+        ``lon_deg`` for maps).
     """
 
     signals: Signals
@@ -48,6 +51,7 @@ class Log:
     truth: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
     channel_map: ChannelMap | None = None
+    extra: dict = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.signals)
@@ -77,12 +81,14 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     Parameters
     ----------
     path : path-like
-        A CSV, Parquet or MDF4 file, or a comma2k19 segment directory.
+        A CSV, Parquet or MDF4 file, a comma2k19 segment directory, or a KITTI raw
+        drive (its ``oxts`` folder, the drive folder or a folder holding one drive).
     channels : ChannelMap or path to a TOML channel map, optional
         Default: roadbank's own columns (what ``roadbank simulate`` writes).
         Not used for comma2k19 (fixed layout).
     format : str, optional
-        "csv", "parquet", "mdf4" or "comma2k19"; default from the suffix.
+        "csv", "parquet", "mdf4", "comma2k19" or "kitti-oxts"; default from the
+        suffix or the directory layout.
     params : VehicleParams, optional
         Supplies the steering ratio when the map gives a steering-wheel angle
         and no ``steering_ratio`` of its own.
@@ -99,6 +105,9 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     if fmt == "comma2k19":
         from .comma2k19 import load_comma2k19
         return load_comma2k19(p, params=params)
+    if fmt == "kitti-oxts":
+        from .kitti import load_kitti_oxts
+        return load_kitti_oxts(p)
     if not p.exists():
         raise LogError(f"{p}: file not found")
     cmap = channels if isinstance(channels, ChannelMap) else (

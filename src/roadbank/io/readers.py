@@ -20,7 +20,7 @@ from .errors import LogError
 #: strings read as a missing sample (NaN) rather than an error
 MISSING = {"", "nan", "na", "n/a", "null", "none", "-nan", "+nan"}
 
-FORMATS = ("csv", "parquet", "mdf4", "comma2k19")
+FORMATS = ("csv", "parquet", "mdf4", "comma2k19", "kitti-oxts")
 _SUFFIX = {".csv": "csv", ".txt": "csv", ".tsv": "csv", ".parquet": "parquet", ".pq": "parquet",
            ".mf4": "mdf4", ".mdf": "mdf4", ".mf3": "mdf4"}
 
@@ -56,12 +56,16 @@ class RawTable:
 
 
 def detect_format(path) -> str:
-    """Format of ``path`` from its suffix (or a comma2k19 segment directory)."""
+    """Format of ``path`` from its suffix (or a comma2k19 segment / KITTI raw drive directory)."""
     p = Path(path)
     if p.is_dir():
         if (p / "processed_log").is_dir():
             return "comma2k19"
-        raise LogError(f"{p}: a directory, but not a comma2k19 segment (no processed_log/)")
+        from .kitti import find_oxts_dirs
+        if find_oxts_dirs(p):
+            return "kitti-oxts"
+        raise LogError(f"{p}: a directory, but neither a comma2k19 segment (no processed_log/) "
+                       "nor a KITTI raw drive (no oxts/timestamps.txt)")
     fmt = _SUFFIX.get(p.suffix.lower())
     if fmt is None:
         raise LogError(f"{p}: cannot tell the format from the suffix '{p.suffix}' "
