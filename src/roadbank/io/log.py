@@ -115,7 +115,18 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     params = params or VehicleParams()
 
     wanted = {spec.column: role for role, spec in cmap.channels.items()}
-    raw = readers.READERS[fmt](p, wanted, cmap.truth_prefix)
+    warns: list[str] = []
+    if fmt == "mdf4" and cmap.dbc is not None:
+        fmt = "mdf4-can"                  # an MDF4 file with a DBC: bus logging
+    if fmt in readers.CAN_FORMATS:
+        from .can import read_can
+        raw, warns = read_can(p, cmap, fmt)
+    elif fmt in readers.ROS_FORMATS:
+        from .ros import read_ros
+        raw, warns = read_ros(p, cmap, fmt)
+    else:
+        raw = readers.READERS[fmt](p, wanted, cmap.truth_prefix)
+    timed = fmt == "mdf4" or fmt in readers.CAN_FORMATS or fmt in readers.ROS_FORMATS
     have = set(raw.data)
 
     # steering: road-wheel angle if its column exists, else steering-wheel angle
@@ -139,10 +150,11 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
             raise channel_error(p, "reference_roll", col, f"column not found in the file "
                                 f"(it has: {', '.join(raw.names) or 'nothing'})")
 
-    warns: list[str] = []
     series: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     shared = None
-    if fmt != "mdf4":
+    if not timed:
+        if "time" not in cmap.channels:
+            raise LogError(f"{cmap.source}: channel map has no 'time' channel (required for {fmt})")
         tspec = cmap.channels["time"]
         if tspec.column not in have:
             raise channel_error(p, "time", tspec.column, f"column not found in the file "
@@ -154,7 +166,7 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     for role in roles:
         spec = cmap.channels[role]
         v = cmap.to_si_iso(role, raw.data[spec.column])
-        if fmt == "mdf4":
+        if timed:
             tr = raw.times[spec.column]
             _check_time(p, spec.column, tr, None, label=role)
         else:
@@ -191,4 +203,31 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
             if c.startswith(cmap.truth_prefix) and c not in wanted:
                 truth[c] = arr if t_base is shared else np.interp(t_base, shared, arr)
     return Log(signals=sig, reference_roll=values.get("reference_roll"), source=p, format=fmt,
-               metadata=dict(raw.metadata), truth=truth, warnings=warns, channel_map=cmap)
+               metadata=dict(raw.metadata), truth=truth, warnings=warns, channel_map=cmap,
+               extra=_gnss(p, cmap, raw, shared, t_base))
+
+
+#: GNSS fixes come at 1-20 Hz: a gap up to this long (s) is interpolated across
+GNSS_MAX_GAP_S = 2.0
+
+
+def _gnss(p, cmap: ChannelMap, raw, shared, t_base) -> dict:
+    """``lat_deg`` / ``lon_deg`` on ``t_base`` when the map has ``latitude`` and ``longitude`` (else {})."""
+    from .resample import interpolate
+
+    if not {"latitude", "longitude"} <= set(cmap.channels):
+        return {}
+    out = {}
+    for role, key in (("latitude", "lat_deg"), ("longitude", "lon_deg")):
+        spec = cmap.channels[role]
+        if spec.column not in raw.data:
+            raise channel_error(p, role, spec.column, f"column not found in the file "
+                                f"(it has: {', '.join(raw.names) or 'nothing'})")
+        v = np.degrees(cmap.to_si_iso(role, raw.data[spec.column]))
+        t = raw.times.get(spec.column, shared)
+        limit = 90.0 if role == "latitude" else 180.0
+        if np.nanmax(np.abs(v)) > limit:
+            raise channel_error(p, role, spec.column, f"|value| beyond {limit:g} deg after converting "
+                                f"from '{spec.unit}'")
+        out[key] = interpolate(t, v, t_base, GNSS_MAX_GAP_S)
+    return out

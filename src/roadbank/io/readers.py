@@ -20,9 +20,13 @@ from .errors import LogError
 #: strings read as a missing sample (NaN) rather than an error
 MISSING = {"", "nan", "na", "n/a", "null", "none", "-nan", "+nan"}
 
-FORMATS = ("csv", "parquet", "mdf4", "comma2k19", "kitti-oxts")
+#: raw CAN logs decoded with a DBC (roadbank.io.can) and ROS bags / MCAP (roadbank.io.ros)
+CAN_FORMATS = ("blf", "asc", "trc", "candump", "mdf4-can")
+ROS_FORMATS = ("rosbag1", "rosbag2", "mcap")
+FORMATS = ("csv", "parquet", "mdf4", "comma2k19", "kitti-oxts") + CAN_FORMATS + ROS_FORMATS
 _SUFFIX = {".csv": "csv", ".txt": "csv", ".tsv": "csv", ".parquet": "parquet", ".pq": "parquet",
-           ".mf4": "mdf4", ".mdf": "mdf4", ".mf3": "mdf4"}
+           ".mf4": "mdf4", ".mdf": "mdf4", ".mf3": "mdf4", ".blf": "blf", ".asc": "asc", ".trc": "trc",
+           ".log": "candump", ".bag": "rosbag1", ".mcap": "mcap", ".db3": "rosbag2"}
 
 
 @dataclass
@@ -61,12 +65,16 @@ def detect_format(path) -> str:
     if p.is_dir():
         if (p / "processed_log").is_dir():
             return "comma2k19"
+        if (p / "metadata.yaml").is_file():
+            return "rosbag2"
         from .kitti import find_oxts_dirs
         if find_oxts_dirs(p):
             return "kitti-oxts"
         raise LogError(f"{p}: a directory, but neither a comma2k19 segment (no processed_log/) "
                        "nor a KITTI raw drive (no oxts/timestamps.txt)")
     fmt = _SUFFIX.get(p.suffix.lower())
+    if fmt == "mcap" and (p.parent / "metadata.yaml").is_file():
+        fmt = "rosbag2"
     if fmt is None:
         raise LogError(f"{p}: cannot tell the format from the suffix '{p.suffix}' "
                        f"(use --format, one of {', '.join(FORMATS)})")
