@@ -1,0 +1,190 @@
+r"""Understeer gradient, axle cornering stiffnesses and steering offset from one linear regression.
+
+Linear bicycle model (SPEC 3.1), tyre forces :math:`F_{yf} = C_f\alpha_f`,
+:math:`F_{yr} = C_r\alpha_r`. The two axle forces follow from the measured
+motion, without the unknown lateral velocity:
+
+.. math::
+    m a_t = F_{yf} + F_{yr},\qquad I_z\dot r = L_f F_{yf} - L_r F_{yr}
+
+(:math:`a_t` the tyre-force specific acceleration, see :func:`tyre_acceleration`),
+and the slip angles differ by a known amount,
+:math:`\alpha_f - \alpha_r = \delta_f - L r / v_x`. Hence
+
+.. math::
+    \delta_f - \frac{L r}{v_x} = K_{us}\, a_t + S \frac{I_z}{L}\dot r,\qquad
+    K_{us} = \frac{m}{L}\Big(\frac{L_r}{C_f} - \frac{L_f}{C_r}\Big),\quad
+    S = \frac{1}{C_f} + \frac{1}{C_r}
+
+which is linear in :math:`(K_{us}, S)`. With a steering offset
+:math:`b_\delta` (measured = true + offset) the left side gains the constant
+:math:`b_\delta`. Steady cornering (:math:`\dot r = 0`) gives only
+:math:`K_{us}`; the yaw transients (corner entries and exits, lane changes)
+give :math:`S`, and then
+
+.. math::
+    \frac{1}{C_f} = \frac{K_{us}}{m} + \frac{L_f}{L} S,\qquad
+    \frac{1}{C_r} = \frac{L_r}{L} S - \frac{K_{us}}{m}.
+
+The relation holds on banked roads too (the bank enters :math:`a_t` and the
+slip angles alike), needs ``m, Iz, Lf, Lr`` from the base vehicle (``S`` scales
+with ``1/Iz``) and is exact for the linear model, so a zero-phase low-pass
+applied to both sides keeps it exact while removing the noise. Uncertainty:
+block bootstrap of the whole regression.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.signal import cont2discrete, lfilter, lfiltic
+
+from ..params import VehicleParams
+from .blocks import bootstrap, chop, normal_equations, robust_std, solve
+from .offsets import Offsets
+from .prepare import derivative, lowpass
+from .results import Quantity, refused
+from .segments import Segmented
+from .settings import IdentifySettings
+
+
+#: Largest Kus standard uncertainty always accepted (rad s^2/m, 0.03 deg per m/s^2): a near-neutral car
+#: has Kus ~ 0, where a relative limit would refuse a well-determined value.
+KUS_STD_FLOOR = 5e-4
+
+
+def tyre_acceleration(ay: np.ndarray, fs: float, p: VehicleParams, roll_gain: float) -> np.ndarray:
+    r"""Tyre-force specific acceleration :math:`a_t = (F_{yf}+F_{yr})/m` from the measured ``ay``.
+
+    The accelerometer rolls with the body: it reads
+    :math:`a_y = a_t + g\phi + (m_s h/m)\ddot\phi` (the sprung mass's roll
+    acceleration moves the CG). The roll follows
+    :math:`I_{xx}\ddot\phi + c\dot\phi + k\phi = m_s h a_y` scaled so that its
+    steady gain per *cornering* acceleration is ``roll_gain``
+    (``k_phi = m_s h/(k - m_s g h)`` for the base vehicle's roll data).
+
+    Parameters
+    ----------
+    ay : array (m/s^2), offset removed, uniform sampling at ``fs`` (Hz)
+    p : VehicleParams
+        ``ms, h_roll, Ixx, k_roll, c_roll, m, g``.
+    roll_gain : float
+        Steady roll per cornering acceleration (rad per m/s^2).
+
+    Returns
+    -------
+    array (m/s^2)
+    """
+    if roll_gain == 0.0 or len(ay) < 3:
+        return np.asarray(ay, dtype=float).copy()
+    wn2, c2 = p.k_roll / p.Ixx, p.c_roll / p.Ixx
+    gain = roll_gain / (1.0 + p.g * roll_gain)   # roll per measured ay
+    num, den = [gain * wn2], [1.0, c2, wn2]
+    bd, ad, _ = cont2discrete((num, den), 1.0 / fs, method="bilinear")
+    bd = np.ravel(bd)
+    zi = lfiltic(bd, ad, np.full(2, gain * ay[0]), np.full(2, ay[0]))
+    phi, _ = lfilter(bd, ad, ay, zi=zi)
+    phi_dd = derivative(derivative(phi, fs), fs)
+    return ay - p.g * phi - p.ms * p.h_roll / p.m * phi_dd
+
+
+def regression_rows(seg: Segmented, off: Offsets, p: VehicleParams, roll_gain: float, s: IdentifySettings):
+    """Low-passed regression rows of one log.
+
+    Returns ``X`` (n, 3) with columns ``[a_t (m/s^2), Iz/L dr/dt (N), 1]``,
+    ``y`` (n,) ``= delta_f - L r / vx`` (rad), both offset-corrected, and the
+    block spans over the rows (samples in the linear range only).
+    """
+    Xs, ys, spans, base = [], [], [], 0
+    L = p.L
+    for piece in seg.pieces:
+        rc = piece.r - off.r
+        at = tyre_acceleration(piece.ay - off.ay, seg.fs, p, roll_gain)
+        y = lowpass(piece.delta - L * rc / piece.vx, seg.fs, s.f_cut)
+        a_f = lowpass(at, seg.fs, s.f_cut)
+        rdot = derivative(lowpass(rc, seg.fs, s.f_cut), seg.fs)
+        X = np.column_stack([a_f, p.Iz / L * rdot, np.ones_like(y), a_f**3, p.Iz / L * rdot * a_f**2])
+        Xs.append(X)
+        ys.append(y)
+        spans += [(a + base, b + base) for a, b in chop(piece.regress, int(round(s.block * seg.fs)),
+                                                        int(round(s.block * seg.fs / 2)))]
+        base += len(y)
+    if not Xs:
+        return np.zeros((0, 3)), np.zeros(0), []
+    return np.concatenate(Xs), np.concatenate(ys), spans
+
+
+def _stiffness(theta: np.ndarray, p: VehicleParams) -> tuple[np.ndarray, np.ndarray]:
+    """(Cf, Cr) in N/rad from (Kus, S) arrays (inf / negative where the data allow no positive value)."""
+    kus, S = theta[..., 0], theta[..., 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return 1.0 / (kus / p.m + p.Lf / p.L * S), 1.0 / (p.Lr / p.L * S - kus / p.m)
+
+
+def identify_stiffness(segs: list[Segmented], offs: list[Offsets], p: VehicleParams, roll_gain: float,
+                       s: IdentifySettings, offsets_known: bool) -> dict[str, Quantity]:
+    """``Kus`` (rad s^2/m), ``Cf``, ``Cr`` (N/rad) and ``steering_offset`` (rad) from the logs.
+
+    Parameters
+    ----------
+    segs : list of Segmented
+        Usable logs.
+    offs : list of Offsets
+        Offsets to remove from each log.
+    p : VehicleParams
+        Base vehicle (m, Iz, Lf, Lr, roll data).
+    roll_gain : float
+        Steady roll per cornering acceleration (rad per m/s^2).
+    s : IdentifySettings
+    offsets_known : bool
+        False when the sensor offsets could not be identified (then the
+        steering offset is refused: its constant mixes with them).
+
+    Returns
+    -------
+    dict name -> Quantity
+    """
+    rows = [regression_rows(seg, off, p, roll_gain, s) for seg, off in zip(segs, offs)]
+    XtX = np.concatenate([normal_equations(X, y, sp)[0] for X, y, sp in rows if sp] or [np.zeros((0, 5, 5))])
+    Xty = np.concatenate([normal_equations(X, y, sp)[1] for X, y, sp in rows if sp] or [np.zeros((0, 5))])
+    n_corners = sum(seg.n_corners for seg in segs)
+    corner_s = sum(seg.seconds["corners"] for seg in segs)
+    out: dict[str, Quantity] = {}
+    names = (("Kus", "rad s^2/m"), ("Cf", "N/rad"), ("Cr", "N/rad"), ("steering_offset", "rad"))
+    if n_corners < s.min_corners or len(XtX) < s.min_blocks:
+        why = (f"too few quasi-steady corners: {n_corners} (|ay| >= {s.corner_ay:g} m/s^2 held >= "
+               f"{s.corner_min:g} s at >= {s.v_min:g} m/s, {corner_s:.1f} s in all) and "
+               f"{len(XtX)} blocks of {s.block:g} s in the linear range (|ay| <= {s.ay_max:g} m/s^2); "
+               f"needs >= {s.min_corners} corners and >= {s.min_blocks} blocks")
+        return {k: refused(k, u, why) for k, u in names}
+    theta = solve(XtX.sum(0), Xty.sum(0))
+    boot = bootstrap(XtX, Xty, s.n_boot, s.seed)
+    cf, cr = _stiffness(theta, p)
+    cf_b, cr_b = _stiffness(boot, p)
+    n_s = sum(len(sp) for _, _, sp in rows) * s.block
+    method = f"linear regression (tyre forces from ay and dr/dt) over {len(XtX)} blocks (~{n_s:.0f} s); block bootstrap"
+    kus_std = robust_std(boot[:, 0])
+    if not kus_std <= max(s.max_rel_std * abs(theta[0]), KUS_STD_FLOOR):
+        why = (f"understeer gradient not determined: {theta[0]:.2e} +- {kus_std:.1e} rad s^2/m; "
+               f"needs more quasi-steady cornering (now {n_corners} corners, {corner_s:.1f} s)")
+        out["Kus"] = refused("Kus", "rad s^2/m", why)
+    else:
+        out["Kus"] = Quantity("Kus", float(theta[0]), kus_std, "rad s^2/m", method)
+    for name, val, b in (("Cf", cf, cf_b), ("Cr", cr, cr_b)):
+        sd = robust_std(b)
+        bad = float(np.mean(~np.isfinite(b) | (b <= 0)))
+        if not (np.isfinite(val) and val > 0 and bad < 0.025 and sd <= s.max_rel_std * val):
+            rel = f"{100 * sd / val:.0f} %" if np.isfinite(val) and val > 0 and np.isfinite(sd) else "unbounded"
+            why = (f"{name} not separable from the understeer gradient: relative uncertainty {rel} "
+                   f"(limit {100 * s.max_rel_std:.0f} %); needs more yaw transients "
+                   f"(corner entries and exits, lane changes) in the linear range")
+            out[name] = refused(name, "N/rad", why)
+        else:
+            out[name] = Quantity(name, float(val), sd, "N/rad",
+                                 method + f"; needs m, Iz, Lf, Lr of the base vehicle (Iz {p.Iz:g} kg m^2)")
+    if offsets_known:
+        out["steering_offset"] = Quantity("steering_offset", float(theta[2]), robust_std(boot[:, 2]), "rad",
+                                          "road-wheel angle, measured minus true; constant of the regression")
+    else:
+        out["steering_offset"] = refused("steering_offset", "rad",
+                                         "needs the sensor offsets from straight driving (see ay_offset)")
+    return out
