@@ -21,7 +21,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .blocks import chop, robust_std
-from .results import Quantity, refused
+from .prepare import runs
+from .quantisation import mean_bias_bound, quantisation_step
+from .results import Quantity, measured, refused
 from .segments import Segmented
 from .settings import IdentifySettings
 
@@ -43,6 +45,16 @@ def _block_sums(seg: Segmented, s: IdentifySettings) -> np.ndarray:
     return np.array(rows, dtype=float).reshape(-1, 3)
 
 
+def straight_bias_bound(segs: list[Segmented], channel: str, s: IdentifySettings) -> float:
+    """Largest quantisation bias (:func:`.quantisation.mean_bias_bound`) of ``channel``
+    (``"r"``, ``"ay"`` or ``"delta"``) over the straights of the logs (its units; ``inf`` when the
+    channel never changes in a log, so its resolution cannot be told)."""
+    bounds = [mean_bias_bound([getattr(p, channel)[a:b] for p in seg.pieces for a, b in runs(p.straight)],
+                              quantisation_step(np.concatenate([getattr(p, channel) for p in seg.pieces])))
+              for seg in segs]
+    return max(bounds, default=0.0)
+
+
 def straight_offsets(segs: list[Segmented], s: IdentifySettings, g: float, roll_gain: float
                      ) -> tuple[list[Offsets | None], Quantity, Quantity]:
     """Offsets per log and pooled over all logs.
@@ -61,7 +73,8 @@ def straight_offsets(segs: list[Segmented], s: IdentifySettings, g: float, roll_
     per_log : list of Offsets or None
         Offsets of each log that has at least ``s.min_straight`` s of straight driving.
     yaw_rate_offset, ay_offset : Quantity
-        Pooled estimates (rad/s, m/s^2) with block-bootstrap standard deviations, or refusals.
+        Pooled estimates (rad/s, m/s^2) with block-bootstrap standard deviations (and the
+        quantisation bias bound in quadrature), or refusals.
     """
     bank_term = g * np.sin(s.straight_bank) * (1.0 + g * roll_gain)
     per_log, all_rows, used = [], [], 0.0
@@ -89,9 +102,40 @@ def straight_offsets(segs: list[Segmented], s: IdentifySettings, g: float, roll_
     br_boot = tot[:, 1] / tot[:, 0]
     ba_boot = tot[:, 2] / tot[:, 0] - bank_term
     n = rows[:, 0].sum()
-    note = f"mean over {used:.0f} s of straight driving; block bootstrap"
-    q_r = Quantity("yaw_rate_offset", float(rows[:, 1].sum() / n), robust_std(br_boot), "rad/s", note)
-    q_a = Quantity("ay_offset", float(rows[:, 2].sum() / n - bank_term), robust_std(ba_boot), "m/s^2",
+    note = f"mean over {used:.0f} s of straight driving; block bootstrap + quantisation bias bound"
+    sd_r = float(np.hypot(robust_std(br_boot), straight_bias_bound(segs, "r", s)))
+    sd_a = float(np.hypot(robust_std(ba_boot), straight_bias_bound(segs, "ay", s)))
+    q_r = measured("yaw_rate_offset", float(rows[:, 1].sum() / n), sd_r, "rad/s", note)
+    q_a = measured("ay_offset", float(rows[:, 2].sum() / n - bank_term), sd_a, "m/s^2",
                    note + f"; relative to an assumed mean bank of the straights of "
                           f"{np.degrees(s.straight_bank):.2f} deg")
     return per_log, q_r, q_a
+
+
+def straight_steering_offset(segs: list[Segmented], kus: float, s: IdentifySettings, g: float) -> Quantity:
+    r"""Steering offset (rad, road-wheel angle) from the straights alone.
+
+    On a straight, :math:`\delta_f = b_\delta + K_{us}\, g\sin\bar\phi_b` (the
+    steady-state relation with :math:`r = 0` and the tyre force that holds the car
+    on the assumed mean bank), so :math:`b_\delta` is the mean steering angle less
+    that term. Used when the logs have no cornering to run the regression of
+    :mod:`.stiffness`; ``kus`` (rad s^2/m) is then the base vehicle's.
+    """
+    rows = []
+    for seg in segs:
+        for p in seg.pieces:
+            for a, b in chop(p.straight, int(round(s.block * seg.fs)), 1):
+                rows.append((b - a, p.delta[a:b].sum()))
+    rows = np.array(rows, dtype=float).reshape(-1, 2)
+    secs = sum(seg.seconds["straight"] for seg in segs)
+    if len(rows) < 2 or secs < s.min_straight:
+        return refused("steering_offset", "rad",
+                       f"needs straight driving (>= {s.min_straight:g} s, found {secs:.1f} s) or cornering")
+    turn = kus * g * np.sin(s.straight_bank)
+    rng = np.random.default_rng(s.seed)
+    counts = rng.multinomial(len(rows), np.full(len(rows), 1.0 / len(rows)), size=s.n_boot)
+    tot = counts @ rows
+    sd = float(np.hypot(robust_std(tot[:, 1] / tot[:, 0]), straight_bias_bound(segs, "delta", s)))
+    return measured("steering_offset", float(rows[:, 1].sum() / rows[:, 0].sum() - turn), sd, "rad",
+                    f"mean road-wheel angle over {secs:.0f} s of straight driving (measured minus true), "
+                    f"base vehicle's Kus for the bank term; block bootstrap + quantisation bias bound")

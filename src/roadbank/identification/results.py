@@ -52,6 +52,14 @@ def refused(name: str, unit: str, reason: str) -> Quantity:
     return Quantity(name, None, None, unit, refused=reason)
 
 
+def measured(name: str, value: float, std: float, unit: str, note: str) -> Quantity:
+    """A :class:`Quantity`, or a refusal when ``std`` is not finite (the data cannot bound the error)."""
+    if not (math.isfinite(value) and math.isfinite(std)):
+        return refused(name, unit, "uncertainty cannot be bounded: a channel never changes in a log, so its "
+                                   "resolution (and how far quantisation biases its mean) cannot be told")
+    return Quantity(name, float(value), float(std), unit, note)
+
+
 @dataclass
 class LogReport:
     """What one log contributed.

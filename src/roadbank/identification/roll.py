@@ -73,6 +73,11 @@ def identify_roll_gain(segs: list[Segmented], offs: list[Offsets], s: IdentifySe
     A, c = np.concatenate(XtX), np.concatenate(Xty)
     k = float(solve(A.sum(0), c.sum(0))[0])
     sd = robust_std(bootstrap(A, c, s.n_boot, s.seed)[:, 0])
+    if not (k > 0 and sd <= s.max_rel_std * k):
+        return refused("roll_gain", "rad/(m/s^2)",
+                       f"roll gain {k:.3g} +- {sd:.2g} rad/(m/s^2) is not a positive, well-determined body roll: "
+                       f"the reference roll is dominated by bank that changes with the cornering "
+                       f"(superelevated curves) or by noise; needs cornering on flat or crowned roads")
     return Quantity("roll_gain", k, sd, "rad/(m/s^2)",
                     f"reference roll against vx r ({cornering:.0f} s of cornering), bank assumed uncorrelated "
                     f"with cornering; block bootstrap")
