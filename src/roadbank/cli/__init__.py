@@ -30,6 +30,7 @@ COMMANDS = {
     "bench": "bench:bench",
     "campaign": "campaign:campaign",
     "robustness": "robustness:robustness",
+    "export": "export:export",
 }
 
 

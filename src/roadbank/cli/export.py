@@ -1,0 +1,76 @@
+"""``roadbank export c``: generate a self-contained C99 module of a designed estimator.
+
+Writes ``roadbank_<estimator>.h``, ``roadbank_<estimator>.c`` and
+``README_roadbank_<estimator>.md`` (interface, units, footprint) into the output
+directory. The module is the Python ``lpv`` kernel written out in C, with the
+designed speed schedule as ``static const`` tables (docs/embedded.md).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+try:
+    from .options import vehicle_option
+except ImportError:  # pragma: no cover - the shared option lands with the vehicle files
+    def vehicle_option(help_extra: str = ""):
+        def _to_vehicle(ctx, param, value):
+            from ..vehicle import VehicleFileError, load_vehicle
+
+            try:
+                return load_vehicle(value)
+            except VehicleFileError as exc:
+                raise click.BadParameter(str(exc), ctx=ctx, param=param) from None
+        return click.option("--vehicle", "vehicle", default=None, metavar="PATH|NAME",
+                            callback=_to_vehicle, help=f"Vehicle file (.toml) or built-in car. {help_extra}")
+
+
+@click.group()
+def export():
+    """Export a designed estimator for embedded targets."""
+
+
+@export.command("c")
+@vehicle_option("The estimator is designed for this car, with its [tuning.<estimator>] options.")
+@click.option("--estimator", "-e", "name", default="pif-modified", show_default=True,
+              help="Estimator to export (a speed-scheduled linear observer: kinematic, uio, pio-*, "
+                   "pif-* steady-state, kalman, ...).")
+@click.option("--rate", type=float, default=None,
+              help="Nominal sample rate of the target (Hz). Default: the vehicle's sensor rate (100).")
+@click.option("--float32", "float32", is_flag=True, help="Single precision (tables, state and arithmetic).")
+@click.option("--roll", type=click.Choice(["static", "dynamic", "none"]), default=None,
+              help="Roll separation (default: the vehicle's tuning, else static).")
+@click.option("--output", "-o", required=True, type=click.Path(file_okay=False, path_type=Path),
+              help="Output directory (created if missing).")
+def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: str | None, output: Path):
+    """Write roadbank_<estimator>.h/.c (C99, no malloc, tables in flash) and its README."""
+    from .. import estimators
+    from ..export import NotExportable, export_c
+    from ..estimators import NoStabilisingSolution
+
+    if name not in estimators.NAMES:
+        raise click.BadParameter(f"unknown estimator '{name}' (choose from {', '.join(estimators.NAMES)})",
+                                 param_hint="--estimator")
+    if rate is None:
+        rate = float(getattr(getattr(vehicle, "sensors", None), "rate", 100.0))
+    if not rate > 0 or rate != rate or rate == float("inf"):
+        raise click.BadParameter(f"must be a positive number of Hz, got {rate}", param_hint="--rate")
+    overrides = {} if roll is None else {"roll": roll}
+    try:
+        est = vehicle.make(name, **overrides)
+    except (ValueError, TypeError, NoStabilisingSolution) as exc:
+        raise click.ClickException(f"{name}: cannot design for vehicle {vehicle.name!r}: {exc}") from None
+    try:
+        res = export_c(est, output, rate=rate, float32=float32)
+    except NotExportable as exc:
+        raise click.ClickException(str(exc)) from None
+    except OSError as exc:
+        raise click.ClickException(f"cannot write into {output}: {exc.strerror or exc}") from None
+    d = res.design
+    click.echo(f"{name} for {vehicle.name} ({'float32' if float32 else 'float64'}, {rate:g} Hz, "
+               f"{d.n} observer states, roll {est.roll}): tables {res.table_bytes} bytes "
+               f"({d.ng} speeds x {d.nk}), fingerprint {d.fingerprint()}")
+    for path in (res.header, res.source, res.readme):
+        click.echo(f"  {path}")

@@ -1,0 +1,250 @@
+"""C export (issue 13): the generated C99 module computes what Estimator.step() computes.
+
+Every exportable estimator (lpv kernel) is generated, compiled with strict C99 warnings
+as errors, loaded through ctypes and compared sample by sample with the Python
+``Estimator.step()`` on every paper scenario and on a log with gaps, a low-speed
+stretch, NaN/inf samples, repeated and backward time stamps and irregular steps:
+float64 within 1e-9 rad, float32 within 1e-3 deg of bank, the same valid flags.
+A driver program built with AddressSanitizer/UBSan runs the same log.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from roadbank import estimators as E
+from roadbank.export import CModule, NotExportable, build_driver, export_c, measure_c_step_ns
+from roadbank.export.build import object_report
+from roadbank.sim import SCENARIOS, run_scenario
+
+#: estimators built once (designs are cached by the estimators module too)
+BUILT = {name: E.make(name) for name in E.NAMES}
+EXPORTABLE = [n for n, est in BUILT.items() if est.kernel == "lpv"]
+NOT_EXPORTABLE = [n for n in E.NAMES if n not in EXPORTABLE]
+
+TOL64 = 1e-9                     # rad
+TOL32_BANK = np.deg2rad(1e-3)    # rad
+
+
+@pytest.fixture(scope="module")
+def scenarios():
+    """Every paper scenario simulated once (nominal condition), as raw arrays."""
+    out = {}
+    for name in SCENARIOS:
+        s = run_scenario(name).signals
+        out[name] = tuple(np.array(a) for a in (s.t, s.vx, s.ay, s.r, s.delta_f))
+    return out
+
+
+def hard_log(scenarios, *, nan_time=True):
+    """bank-lane-change with a 2.5 s gap, a slow stretch, NaN/inf inputs, a repeated and a
+    backward time stamp and irregular steps up to 45 ms (several substeps)."""
+    t, vx, ay, r, d = (a.copy() for a in scenarios["bank-lane-change"])
+    n = len(t)
+    t[400:] += 2.5
+    vx[600:700] = 3.0
+    ay[800:805] = np.nan
+    r[900] = np.inf
+    d[950:960] = np.nan
+    vx[1000] = np.nan
+    t[1100] = t[1099]
+    t[1200] = t[1150]
+    if nan_time:
+        t[1300] = np.nan
+    t[1400:] += np.cumsum(np.random.default_rng(0).uniform(0.0, 0.035, n - 1400))
+    return t, vx, ay, r, d
+
+
+def python_steps(est, cols):
+    est.reset()
+    res = [est.step(*a) for a in zip(*cols)]
+    return {"w": np.array([o.w for o in res]), "theta": np.array([o.theta for o in res]),
+            "phi_b": np.array([o.phi_b for o in res]), "valid": np.array([o.valid for o in res])}
+
+
+def assert_same(py, c, tol_angle, tol_bank, what):
+    assert np.array_equal(py["valid"], c["valid"]), f"{what}: valid flags differ at " \
+        f"{np.flatnonzero(py['valid'] != c['valid'])[:10]}"
+    assert np.max(np.abs(py["phi_b"] - c["phi_b"])) <= tol_bank, what
+    if tol_angle is not None:
+        assert np.max(np.abs(py["theta"] - c["theta"])) <= tol_angle, what
+        assert np.max(np.abs(py["w"] - c["w"])) <= tol_angle, what
+
+
+@pytest.fixture(scope="module")
+def built_modules(tmp_path_factory):
+    """Generated and compiled (strict flags) modules, built on first use: {(name, float32): CModule}."""
+    root = tmp_path_factory.mktemp("export")
+    cache = {}
+
+    def get(name, float32=False, est=None, tag=""):
+        key = (name, float32, tag)
+        if key not in cache:
+            d = root / f"{name}{tag}-{'f32' if float32 else 'f64'}"
+            res = export_c(est or BUILT[name], d, rate=100.0, float32=float32)
+            cache[key] = CModule(res.source, d)
+        return cache[key]
+    return get
+
+
+def test_the_issue_list_is_exportable_and_the_others_say_why():
+    assert {"kinematic", "pio-original", "pio-modified", "pif-modified", "pif-original",
+            "kalman"} <= set(EXPORTABLE)
+    assert "dfc" in NOT_EXPORTABLE
+    for name in NOT_EXPORTABLE:
+        with pytest.raises(NotExportable, match=f"{name}: not exportable: .+"):
+            export_c(BUILT[name], "/nonexistent/never-written", rate=100.0)
+    riccati = E.make("pif-modified", variant="riccati", roll="dynamic")   # the design test_streaming uses
+    with pytest.raises(NotExportable, match="Riccati.*steady"):
+        export_c(riccati, "/nonexistent/never-written", rate=100.0)
+
+
+@pytest.mark.parametrize("name", EXPORTABLE)
+def test_float64_equals_step_on_every_scenario_and_a_hard_log(name, scenarios, built_modules):
+    mod = built_modules(name)
+    est = BUILT[name]
+    for scen, cols in {**scenarios, "hard": hard_log(scenarios)}.items():
+        py = python_steps(est, cols)
+        assert_same(py, mod.run(*cols), TOL64, TOL64, f"{name} on {scen}")
+        if scen == "hard":
+            assert 50 < np.count_nonzero(~py["valid"]) < len(py["valid"]) // 2   # the log exercises flags
+    # the dt entry point (time since the previous call) on the same log, time stamps all finite
+    cols = hard_log(scenarios, nan_time=False)
+    assert_same(python_steps(est, cols), mod.run(*cols, use_dt=True), TOL64, TOL64, f"{name} step_dt")
+
+
+@pytest.mark.parametrize("name", EXPORTABLE)
+def test_float32_within_a_thousandth_of_a_degree(name, scenarios, built_modules):
+    mod = built_modules(name, float32=True)
+    assert mod.float32
+    est = BUILT[name]
+    worst = 0.0
+    for scen, cols in {**scenarios, "hard": hard_log(scenarios)}.items():
+        py = python_steps(est, cols)
+        c = mod.run(*cols)
+        assert_same(py, c, None, TOL32_BANK, f"{name} float32 on {scen}")
+        worst = max(worst, np.max(np.abs(py["phi_b"] - c["phi_b"])))
+    assert worst > 0.0          # it really is single precision
+
+
+@pytest.mark.parametrize("name,roll", [("pif-modified", "dynamic"), ("uio", "dynamic"), ("kinematic", "none"),
+                                       ("kalman", "dynamic")])
+def test_roll_models_and_the_general_observer_path(name, roll, scenarios, built_modules):
+    est = E.make(name, roll=roll)
+    mod = built_modules(name, est=est, tag=roll)
+    for scen in ("hard", "track-lane-change"):
+        cols = hard_log(scenarios) if scen == "hard" else scenarios[scen]
+        assert_same(python_steps(est, cols), mod.run(*cols), TOL64, TOL64, f"{name} roll={roll} {scen}")
+
+
+def test_ctypes_step_by_step_and_reset(scenarios, built_modules):
+    est = BUILT["pif-modified"]
+    mod = built_modules("pif-modified")
+    cols = hard_log(scenarios)
+    py = python_steps(est, cols)
+    mod.reset()
+    first = mod.step(*(c[0] for c in cols))
+    assert first.valid and abs(first.phi_b - py["phi_b"][0]) <= TOL64
+    mod.reset()
+    out = [mod.step(*a) for a in zip(*cols)]
+    assert np.array_equal([o.valid for o in out], py["valid"])
+    assert np.max(np.abs(np.array([o.phi_b for o in out]) - py["phi_b"])) <= TOL64
+    mod.reset()                                  # a reset state starts like a new one
+    again = mod.step(*(c[0] for c in cols))
+    assert again == first
+
+
+def test_sanitizers_on_a_driver_linking_several_modules(scenarios, tmp_path):
+    """-fsanitize=address,undefined: four modules in one program (prefixed symbols), t and dt entry points."""
+    variants = {"pif": (E.make("pif-modified", roll="dynamic"), False),
+                "uio": (BUILT["uio"], False), "kin": (BUILT["kinematic"], False),
+                "pif32": (E.make("pif-modified", roll="dynamic"), True)}
+    sources = {}
+    for key, (est, f32) in variants.items():
+        d = tmp_path / key
+        src = export_c(est, d, rate=100.0, float32=f32).source
+        if key == "pif32":                       # same name: give it its own prefix in the program
+            text = src.read_text().replace("roadbank_pif_modified", "roadbank_pif_modified32")
+            text = text.replace("ROADBANK_PIF_MODIFIED", "ROADBANK_PIF_MODIFIED32")
+            hdr = src.with_suffix(".h").read_text().replace("roadbank_pif_modified", "roadbank_pif_modified32")
+            hdr = hdr.replace("ROADBANK_PIF_MODIFIED", "ROADBANK_PIF_MODIFIED32")
+            src = d / "roadbank_pif_modified32.c"
+            src.write_text(text)
+            src.with_suffix(".h").write_text(hdr)
+        sources[key] = src
+    exe = build_driver(sources, tmp_path / "driver")
+    env = dict(os.environ, ASAN_OPTIONS="detect_leaks=1:abort_on_error=0",
+               UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1")
+    for use_dt in (False, True):
+        cols = hard_log(scenarios, nan_time=not use_dt)
+        n = len(cols[0])
+        inp = tmp_path / "in.bin"
+        inp.write_bytes(np.int64(n).tobytes() + np.concatenate(cols).astype(np.float64).tobytes())
+        for key, (est, f32) in variants.items():
+            outp = tmp_path / f"out-{key}.bin"
+            proc = subprocess.run([str(exe), key, str(inp), str(outp), "dt" if use_dt else "t"],
+                                  capture_output=True, text=True, env=env)
+            assert proc.returncode == 0, proc.stderr
+            assert "runtime error" not in proc.stderr and "AddressSanitizer" not in proc.stderr
+            raw = outp.read_bytes()
+            vals = np.frombuffer(raw[:n * 32], dtype=np.float64).reshape(4, n)
+            c = {"w": vals[0], "theta": vals[1], "phi_b": vals[2],
+                 "valid": np.frombuffer(raw[n * 32:], dtype=np.uint8).astype(bool)}
+            assert_same(python_steps(est, cols), c, None if f32 else TOL64,
+                        TOL32_BANK if f32 else TOL64, f"driver {key} dt={use_dt}")
+
+
+def test_generated_object_has_no_heap_no_mutable_globals_no_recursion(tmp_path):
+    for name, roll in (("uio", "dynamic"), ("pif-modified", "static")):
+        src = export_c(E.make(name, roll=roll), tmp_path / name, rate=100.0).source
+        rep = object_report(src)
+        assert rep["mutable_symbols"] == set()
+        assert rep["sections"].get(".data", 0) == 0 and rep["sections"].get(".bss", 0) == 0
+        assert rep["undefined"] <= {"asin", "fabs", "ceil"}, rep["undefined"]
+        assert all(q in ("static", "dynamic,bounded") for _, q in rep["stack"].values()), rep["stack"]
+        # no recursion: the call graph (no inlining at -O0) is acyclic
+        graph = {}
+        for a, b in rep["calls"]:
+            graph.setdefault(a, set()).add(b)
+        state = {}
+
+        def visit(f):
+            state[f] = 1
+            for g in graph.get(f, ()):
+                assert state.get(g) != 1, f"recursion through {f} -> {g}"
+                if g not in state:
+                    visit(g)
+            state[f] = 2
+        for f in list(graph):
+            if f not in state:
+                visit(f)
+        # the tables are in read-only data, 8 bytes per value
+        assert rep["sections"][".rodata"] >= export_c(E.make(name, roll=roll), tmp_path / name,
+                                                      rate=100.0).table_bytes
+
+
+def test_cli_writes_the_module_and_refuses_dfc(tmp_path):
+    from roadbank.cli import main
+
+    runner = CliRunner()
+    res = runner.invoke(main, ["export", "c", "--estimator", "pio-modified", "--rate", "50", "--float32",
+                               "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    files = sorted(p.name for p in (tmp_path / "out").iterdir())
+    assert files == ["README_roadbank_pio_modified.md", "roadbank_pio_modified.c", "roadbank_pio_modified.h"]
+    header = (tmp_path / "out" / "roadbank_pio_modified.h").read_text()
+    assert "typedef float roadbank_pio_modified_real;" in header and "RATE_HZ 50.0" in header
+    res = runner.invoke(main, ["export", "c", "--estimator", "dfc", "-o", str(tmp_path / "dfc")])
+    assert res.exit_code != 0 and "not exportable" in res.output and "Traceback" not in res.output
+    res = runner.invoke(main, ["export", "c", "--estimator", "nope", "-o", str(tmp_path / "x")])
+    assert res.exit_code == 2 and "unknown estimator" in res.output
+
+
+def test_measure_c_step_ns_times_the_compiled_step():
+    ns = measure_c_step_ns(BUILT["pif-modified"], repeats=1, min_samples=20_000)
+    assert 0.5 < ns < 1e5
