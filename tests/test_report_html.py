@@ -175,7 +175,7 @@ def test_missing_figure_is_a_clear_error(tmp_path):
 def reproduced(tmp_path_factory):
     out = tmp_path_factory.mktemp("repro")
     res = CliRunner().invoke(main, ["reproduce", "-o", str(out), "--scenarios", "const-bank", "-j", "1",
-                                    "--estimators", "pif-modified,pio-original,dfc,uio,pif-original",
+                                    "--estimators", "pif-modified,pio-original,dfc,uio",
                                     "--docs", str(out / "results.md")])
     assert res.exit_code == 0, res.output
     return out
@@ -220,3 +220,95 @@ def test_campaign_report_html(tmp_path):
     tables = check_report(tmp_path / "report.md", tmp_path / "report.html")
     per_scenario = next(t for t in tables if t["header"] == ["scenario", "kinematic", "dfc"])
     assert best_cells_are_minimal(per_scenario, 1) == len(per_scenario["rows"]) == 5
+
+
+needs_segment = pytest.mark.skipif(not SEGMENT.is_dir(), reason=f"comma2k19 example segment absent at {SEGMENT}")
+
+
+@needs_segment
+def test_validate_comma2k19_report_and_figure_render(tmp_path):
+    from roadbank.report.html import write_document
+    from roadbank.validation import markdown, plot, validate_comma2k19
+
+    res = validate_comma2k19(SEGMENT, names=["kinematic", "pif-modified", "dfc"], sensitivity=False)
+    plot(res, tmp_path / "real-data.png")
+    text = markdown(res, figure="real-data.png")
+    write_document(tmp_path / "real-data.md", text)
+    write_document(tmp_path / "real-data.html", text, "validation")
+    tables = check_report(tmp_path / "real-data.md", tmp_path / "real-data.html")
+    result = tables[0]
+    assert result["header"][:4] == ["estimator", "r", "rms_deg", "offset_deg"]
+    # the largest r is the bold one in its column
+    r = {_text(row[0]): (float(_text(row[1])), row[1].find("strong") is not None) for row in result["rows"]}
+    top = max(v for v, _ in r.values())
+    assert all(bold == (v == top) for v, bold in r.values())
+
+
+# ------------------------------------------------------------------ time plots
+def _synthetic_log():
+    """20 s at 100 Hz on a 3 deg -> 8 deg bank ramp; ay NaN in [5, 6) s, vx = 2 m/s in [12, 13) s."""
+    from roadbank import Signals
+
+    t = 100.0 + np.arange(0.0, 20.0, 0.01)          # the log does not start at 0
+    rel = t - t[0]
+    bank = np.radians(3.0 + 5.0 * np.clip((rel - 8.0) / 4.0, 0, 1))
+    ay = 9.81 * np.sin(bank)
+    vx = np.full_like(t, 20.0)
+    ay[(rel >= 5.0) & (rel < 6.0)] = np.nan
+    vx[(rel >= 12.0) & (rel < 13.0)] = 2.0
+    return Signals(t, vx, ay, np.zeros_like(t), np.zeros_like(t)), bank
+
+
+def test_flagged_spans_cover_exactly_the_flagged_samples():
+    from roadbank.report.timeseries import flagged_spans
+
+    t = np.arange(10) * 0.5
+    valid = np.array([0, 1, 1, 0, 0, 1, 1, 1, 0, 0], bool)
+    assert flagged_spans(t, valid) == [(0.0, 0.5), (1.5, 2.5), (4.0, 4.5)]
+    assert flagged_spans(t, np.ones(10, bool)) == []
+
+
+def test_estimate_figure_draws_truth_error_flags_and_units():
+    from roadbank import estimators
+    from roadbank.report.timeseries import estimate_figure
+
+    sig, bank = _synthetic_log()
+    est = estimators.make("kinematic").run(sig)
+    assert not est.valid.all()
+    fig = estimate_figure(sig.t, [est], truth={"true_phi_b": bank, "true_theta": bank}, title="synthetic")
+    ax_theta, ax_bank, ax_err = fig.axes
+    for ax in fig.axes:
+        assert ax.get_ylabel().endswith("(deg)")
+    assert ax_err.get_xlabel() == "time from log start (s)"
+    # the truth is drawn, in degrees, against time from the log start
+    truth_line = next(ln for ln in ax_bank.get_lines() if ln.get_label() == "true bank")
+    np.testing.assert_allclose(truth_line.get_xdata(), sig.t - sig.t[0])
+    np.testing.assert_allclose(truth_line.get_ydata(), np.degrees(bank))
+    # error panel: phi_b - truth (deg) where valid, gaps where flagged
+    err = next(ln for ln in ax_err.get_lines() if ln.get_label() == "kinematic").get_ydata()
+    expect = np.where(est.valid, np.degrees(est.phi_b - bank), np.nan)
+    np.testing.assert_allclose(err, expect, equal_nan=True)
+    # shaded spans: exactly where the estimator flagged its output, on every panel
+    spans = sorted((p.get_x(), p.get_x() + p.get_width()) if hasattr(p, "get_width") else
+                   tuple(p.get_xy()[[0, 2], 0]) for p in ax_err.patches)
+    rel = sig.t - sig.t[0]
+    bad = ~est.valid
+    assert len(spans) == 2
+    assert spans[0][0] == pytest.approx(rel[bad][0]) and spans[0][0] == pytest.approx(5.0, abs=0.011)
+    assert spans[1][1] == pytest.approx(13.0, abs=0.011)
+    assert len(ax_theta.patches) == len(ax_bank.patches) == 2
+    import matplotlib.pyplot as plt
+    plt.close(fig)
+
+
+def test_estimate_figure_without_reference_has_no_error_panel():
+    from roadbank import estimators
+    from roadbank.report.timeseries import estimate_figure
+
+    sig, bank = _synthetic_log()
+    fig = estimate_figure(sig.t, [estimators.make("kinematic").run(sig)])
+    assert len(fig.axes) == 2
+    fig2 = estimate_figure(sig.t, [estimators.make("kinematic").run(sig)], reference_roll=bank)
+    assert fig2.axes[2].get_ylabel() == "theta - reference roll (deg)"
+    import matplotlib.pyplot as plt
+    plt.close("all")

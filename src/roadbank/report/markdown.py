@@ -1,5 +1,5 @@
 """Markdown tables for every generated report: escaped cells, numbers right-aligned,
-the best value of a row in bold.
+the best value of a row (or of a column) in bold.
 
 The output is GitHub-flavoured markdown (CommonMark plus the table extension), so
 the same text renders in a markdown viewer and through :func:`roadbank.report.html.md_to_html`.
@@ -79,7 +79,8 @@ def _column_spec(spec, header: Sequence[str], j: int, default):
 
 def md_table(header: Sequence, rows: Sequence[Sequence], *, digits: int | Sequence | Mapping = 2,
              formats: str | Sequence | Mapping | None = None, align: str | Sequence | None = None,
-             best: str | None = None, best_columns: Sequence | None = None, na: str = "n/a") -> str:
+             best: str | Mapping | None = None, best_columns: Sequence | None = None, best_in: str = "row",
+             na: str = "n/a") -> str:
     """One markdown table; every cell escaped, numbers formatted and right-aligned.
 
     Parameters
@@ -97,10 +98,15 @@ def md_table(header: Sequence, rows: Sequence[Sequence], *, digits: int | Sequen
     align : str or sequence, optional
         ``"l"``, ``"r"`` or ``"c"`` per column (a string like ``"llrr"`` or a sequence).
         Default: right for columns whose cells are all numbers (or empty), left otherwise.
-    best : {"min", "max", "absmin"}, optional
-        Mark the best value of each row in bold, among the numeric cells of
-        ``best_columns`` (titles or positions; default every numeric column). Values
-        are compared as printed, so equal-looking values are all marked.
+    best : {"min", "max", "absmin"} or mapping column -> one of them, optional
+        Mark the best value of each row (``best_in="row"``) or of each column
+        (``best_in="column"``) in bold, among the numeric cells of ``best_columns``
+        (titles or positions; default every numeric column, or those of the mapping's
+        keys that the table has).
+        Values are compared as printed, so equal-looking values are all marked; a
+        row or column with fewer than two numbers is left unmarked.
+    best_in : {"row", "column"}
+        Where the best value is looked for.
     na : str
         Text of a missing or non-finite number.
 
@@ -115,8 +121,15 @@ def md_table(header: Sequence, rows: Sequence[Sequence], *, digits: int | Sequen
     for i, r in enumerate(rows):
         if len(r) != ncol:
             raise ValueError(f"md_table: row {i} has {len(r)} cells, the header has {ncol}: {r!r}")
-    if best is not None and best not in BEST:
-        raise ValueError(f"md_table: best must be one of {sorted(BEST)}, not {best!r}")
+    rules = best if isinstance(best, Mapping) else {}
+    for rule in (list(rules.values()) if rules else [best] if best is not None else []):
+        if rule not in BEST:
+            raise ValueError(f"md_table: best must be one of {sorted(BEST)}, not {rule!r}")
+    if best_in not in ("row", "column"):
+        raise ValueError(f"md_table: best_in must be 'row' or 'column', not {best_in!r}")
+
+    def col(c) -> int:
+        return c if isinstance(c, int) else header.index(c)
 
     def fmt(v, j) -> str:
         if v is None or (_is_number(v) and not _finite(v)):
@@ -132,18 +145,17 @@ def md_table(header: Sequence, rows: Sequence[Sequence], *, digits: int | Sequen
     numeric = [all(_is_number(r[j]) or r[j] is None for r in rows) and any(_is_number(r[j]) for r in rows)
                for j in range(ncol)]
     if best is not None:
-        cols = range(ncol) if best_columns is None else [
-            header.index(c) if not isinstance(c, int) else c for c in best_columns]
-        key = BEST[best]
-        for r, tr in zip(rows, text):
-            cand = [j for j in cols if _finite(r[j])]
-            if len(cand) < 2:          # nothing to compare with
-                continue
-            shown = {j: float(tr[j]) if _parses(tr[j]) else float(r[j]) for j in cand}
-            top = min(key(v) for v in shown.values())
-            for j in cand:
-                if key(shown[j]) == top:
-                    tr[j] = f"**{tr[j]}**"
+        if best_columns is not None:
+            cols = [col(c) for c in best_columns]
+        else:        # a mapping may name columns this table does not have
+            cols = [col(c) for c in rules if isinstance(c, int) or c in header] if rules else range(ncol)
+        rule_of = {col(c): r for c, r in rules.items() if isinstance(c, int) or c in header}
+        if best_in == "row":
+            groups = [([(i, j) for j in cols], best) for i in range(len(rows))]
+        else:
+            groups = [([(i, j) for i in range(len(rows))], rule_of.get(j, best)) for j in cols]
+        for cells, rule in groups:
+            _mark_best(rows, text, cells, BEST[rule])
     if align is None:
         align = ["r" if numeric[j] else "l" for j in range(ncol)]
     align = list(align)
@@ -154,6 +166,18 @@ def md_table(header: Sequence, rows: Sequence[Sequence], *, digits: int | Sequen
              "|" + "|".join(sep[a] for a in align) + "|"]
     lines += ["| " + " | ".join(tr) + " |" for tr in text]
     return "\n".join(lines)
+
+
+def _mark_best(rows, text, cells, key) -> None:
+    """Bold the cells (i, j) whose printed value is best by ``key`` (at least two numbers needed)."""
+    cand = [(i, j) for i, j in cells if _finite(rows[i][j])]
+    if len(cand) < 2:
+        return
+    shown = {c: float(text[c[0]][c[1]]) if _parses(text[c[0]][c[1]]) else float(rows[c[0]][c[1]]) for c in cand}
+    top = min(key(v) for v in shown.values())
+    for (i, j), v in shown.items():
+        if key(v) == top:
+            text[i][j] = f"**{text[i][j]}**"
 
 
 def _parses(s: str) -> bool:

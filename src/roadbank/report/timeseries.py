@@ -12,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["flagged_spans", "shade_flagged", "estimate_figure", "plot_estimates", "save_figure"]
+__all__ = ["flagged_spans", "shade_flagged", "estimate_figure", "plot_estimates", "reference_figure",
+           "save_figure"]
 
 FLAG_STYLE = {"color": "tab:red", "alpha": 0.12, "lw": 0}
 FLAG_LABEL = "flagged not valid"
@@ -125,6 +126,69 @@ def estimate_figure(t, estimates, *, reference_roll=None, truth: dict | None = N
         ax.legend(fontsize=7, ncol=4, loc="best")
     if title:
         axes[0].set_title(title, fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def reference_figure(t, reference, estimates: dict, *, valid: dict | None = None, unscored=None,
+                     split_time: float | None = None, quantity: str = "roll",
+                     reference_label: str = "reference", title: str = ""):
+    """Estimates against a reference (deg) and their error, against time from the log start (s).
+
+    Parameters
+    ----------
+    t : array (s)
+    reference : array (rad)
+        The reference angle on ``t`` (e.g. the INS or pose roll).
+    estimates : dict name -> array (rad)
+        Estimates comparable with the reference, on ``t``.
+    valid : dict name -> bool array, optional
+        The estimators' valid flags; spans where any is False are shaded red.
+    unscored : bool array, optional
+        Samples left out of the scores (warm-up, below the speed gate), shaded grey.
+    split_time : float (s, same clock as ``t``), optional
+        End of the offset-fit part (dotted line); scored after it.
+    quantity, reference_label, title : str
+        Panel label (``"<quantity> (deg)"``), legend entry of the reference, figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two panels: the angles, and estimate - reference.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = np.asarray(t, dtype=float)
+    tt = t - t[0]
+    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(9, 5.6), gridspec_kw={"height_ratios": [3, 2]})
+    axes[0].plot(tt, _deg(reference), "k", lw=1.8, label=reference_label, zorder=3)
+    for name, x in estimates.items():
+        axes[0].plot(tt, _deg(x), lw=1.0, label=name)
+        axes[1].plot(tt, _deg(x) - _deg(reference), lw=1.0, label=name)
+    axes[1].axhline(0.0, color="k", lw=0.6)
+    if unscored is not None:
+        for k, (a, b) in enumerate(flagged_spans(t, ~np.asarray(unscored, bool))):
+            for j, ax in enumerate(axes):
+                ax.axvspan(a - t[0], b - t[0], color="grey", alpha=0.15, lw=0,
+                           label="not scored" if (k == 0 and j == 0) else None)
+    if valid:
+        ok = np.logical_and.reduce([np.asarray(v, bool) for v in valid.values()])
+        shade_flagged(axes, t, ok, t0=t[0])
+    if split_time is not None:
+        for j, ax in enumerate(axes):
+            ax.axvline(split_time - t[0], color="grey", ls=":", lw=1.2,
+                       label="offset fitted before, scored after" if j == 0 else None)
+    axes[0].set_ylabel(f"{quantity} (deg)")
+    axes[1].set_ylabel("estimate - reference (deg)")
+    axes[1].set_xlabel("time from log start (s)")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7, ncol=3, loc="best")
+    if title:
+        axes[0].set_title(title, fontsize=9)
     fig.tight_layout()
     return fig
 
