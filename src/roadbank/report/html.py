@@ -18,15 +18,15 @@ __all__ = ["md_to_html", "write_document", "STYLE"]
 
 STYLE = """
 body{font:15px/1.5 system-ui,-apple-system,"Segoe UI",Roboto,Helvetica,Arial,sans-serif;color:#1d1d1f;
- max-width:76rem;margin:0 auto;padding:0.5rem 1.2rem 3rem}
+ max-width:88rem;margin:0 auto;padding:0.5rem 1rem 3rem}
 h1{font-size:1.6rem;line-height:1.25}h2{font-size:1.25rem;margin-top:2.2rem;border-bottom:1px solid #ddd}
 h3{font-size:1.05rem;margin-top:1.6rem}
-p,li{max-width:60rem}
+p,li,h1{max-width:62rem}
 code{font:0.88em ui-monospace,SFMono-Regular,Menlo,Consolas,monospace;background:#f2f3f5;padding:0 0.2em;
  border-radius:3px}
 .table{overflow-x:auto;margin:0.6rem 0 1rem}
-table{border-collapse:collapse;font-size:13px;font-variant-numeric:tabular-nums}
-th,td{border:1px solid #c9ccd1;padding:3px 7px;vertical-align:top}
+table{border-collapse:collapse;font-size:12.5px;font-variant-numeric:tabular-nums}
+th,td{border:1px solid #c9ccd1;padding:2px 5px;vertical-align:top}
 th{background:#eef0f3;font-weight:600;text-align:left}
 tbody tr:nth-child(even){background:#f8f9fa}
 td[style*="right"]{white-space:nowrap}
