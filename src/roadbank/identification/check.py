@@ -74,7 +74,7 @@ def check_case(case: SimCase, settings: IdentifySettings | None = None) -> list[
     Returns
     -------
     list of dict
-        Per quantity: ``case, quantity, truth, value, std`` (SI; value/std None if
+        Per quantity: ``case, quantity, unit, truth, value, std`` (SI; value/std None if
         refused), ``rel_err`` (-), ``z`` = error / std, ``refused`` (reason or "").
     """
     log, truth = simulate_case(case)
@@ -83,7 +83,8 @@ def check_case(case: SimCase, settings: IdentifySettings | None = None) -> list[
     rows = []
     for name, q in res.quantities.items():
         t = truth[name]
-        row = {"case": f"{case.name} seed {case.seed}", "quantity": name, "truth": t, "value": q.value,
+        row = {"case": f"{case.name} seed {case.seed}", "quantity": name, "unit": q.unit, "truth": t,
+               "value": q.value,
                "std": q.std, "rel_err": None, "z": None, "refused": q.refused or ""}
         if q.ok:
             row["rel_err"] = (q.value - t) / t if t else None

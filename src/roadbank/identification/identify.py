@@ -86,7 +86,8 @@ def identify(logs, params: VehicleParams | None = None, settings: IdentifySettin
         quantities["roll_gain"] = q
         if q.ok and q.value > 0:
             roll_gain = q.value
-    quantities.update(identify_stiffness(segs, offs, p, roll_gain, s, q_r.ok and q_a.ok))
+    offsets_std = (q_r.std, q_a.std) if q_r.ok and q_a.ok else None
+    quantities.update(identify_stiffness(segs, offs, p, roll_gain, s, offsets_std))
     quantities = {k: quantities[k] for k in ORDER if k in quantities}
     out_p = p
     if quantities["Cf"].ok and quantities["Cr"].ok:

@@ -140,7 +140,7 @@ def _stiffness(theta: np.ndarray, p: VehicleParams) -> tuple[np.ndarray, np.ndar
 
 
 def identify_stiffness(segs: list[Segmented], offs: list[Offsets], p: VehicleParams, roll_gain: float,
-                       s: IdentifySettings, offsets_known: bool) -> dict[str, Quantity]:
+                       s: IdentifySettings, offsets_std: tuple[float, float] | None) -> dict[str, Quantity]:
     """``Kus`` (rad s^2/m), ``Cf``, ``Cr`` (N/rad) and ``steering_offset`` (rad) from the logs.
 
     Parameters
@@ -154,8 +154,9 @@ def identify_stiffness(segs: list[Segmented], offs: list[Offsets], p: VehiclePar
     roll_gain : float
         Steady roll per cornering acceleration (rad per m/s^2).
     s : IdentifySettings
-    offsets_known : bool
-        False when the sensor offsets could not be identified (then the
+    offsets_std : (float, float) or None
+        Standard uncertainties of the yaw-rate (rad/s) and ay (m/s^2) offsets, propagated
+        into the steering offset; None when they could not be identified (then the
         steering offset is refused: its constant mixes with them).
 
     Returns
@@ -175,7 +176,7 @@ def identify_stiffness(segs: list[Segmented], offs: list[Offsets], p: VehiclePar
                f"{len(XtX)} blocks of {s.block:g} s in the linear range (|ay| <= {s.ay_max:g} m/s^2); "
                f"needs >= {s.min_corners} corners and >= {s.min_blocks} blocks")
         out = {k: refused(k, u, why) for k, u in names}
-        if offsets_known:
+        if offsets_std is not None:
             out["steering_offset"] = straight_steering_offset(segs, understeer_gradient(p), s, p.g)
         return out
     theta = solve(XtX.sum(0), Xty.sum(0))
@@ -212,11 +213,14 @@ def identify_stiffness(segs: list[Segmented], offs: list[Offsets], p: VehiclePar
         else:
             out[name] = Quantity(name, float(val), sd, "N/rad",
                                  method + f"; needs m, Iz, Lf, Lr of the base vehicle (Iz {p.Iz:g} kg m^2)")
-    if offsets_known:
-        sd = float(np.hypot(robust_std(boot[:, 2]), straight_bias_bound(segs, "delta", s)))
+    if offsets_std is not None:
+        # the intercept absorbs the offsets' errors: L/vx per yaw-rate error, Kus per ay error
+        inv_vx = np.mean(np.concatenate([1.0 / pc.vx[pc.regress] for seg in segs for pc in seg.pieces]))
+        prop = np.hypot(p.L * inv_vx * offsets_std[0], theta[0] / (1.0 + p.g * roll_gain) * offsets_std[1])
+        sd = float(np.sqrt(robust_std(boot[:, 2]) ** 2 + straight_bias_bound(segs, "delta", s) ** 2 + prop**2))
         out["steering_offset"] = measured("steering_offset", float(theta[2]), sd, "rad",
                                           "road-wheel angle, measured minus true; constant of the regression; "
-                                          "block bootstrap + quantisation bias bound")
+                                          "block bootstrap + quantisation bias bound + offsets' uncertainty")
     else:
         out["steering_offset"] = refused("steering_offset", "rad",
                                          "needs the sensor offsets from straight driving (see ay_offset)")
