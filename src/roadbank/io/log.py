@@ -74,6 +74,42 @@ def _check_time(source, column: str, t: np.ndarray, raw, label: str = "time") ->
                             f"time goes backwards at {where(i)} ({float(t[i - 1])!r} -> {float(t[i])!r})")
 
 
+def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
+    """Roles to read: speed, lateral_acceleration, yaw_rate, the steering role, [reference_roll].
+
+    The steering role is the road-wheel angle if its column exists, else the
+    steering-wheel angle. ``have`` are the columns present; ``names`` all the
+    file's columns (for messages). LogError for a missing column.
+    """
+    steer_roles = [r for r in ("road_wheel_angle", "steering_wheel_angle") if r in cmap.channels]
+    present = [r for r in steer_roles if cmap.channels[r].column in have]
+    roles = ["speed", "lateral_acceleration", "yaw_rate"]
+    for role in roles:
+        col = cmap.channels[role].column
+        if col not in have:
+            raise channel_error(p, role, col, f"column not found in the file "
+                                f"(it has: {', '.join(names) or 'nothing'})")
+    if not present:
+        cols = " or ".join(f"'{cmap.channels[r].column}'" for r in steer_roles)
+        raise LogError(f"{p}: channel 'steering' missing: no column {cols} in the file "
+                       f"(it has: {', '.join(names) or 'nothing'})")
+    roles.append(present[0])
+    if "reference_roll" in cmap.channels:
+        roles.append("reference_roll")
+        col = cmap.channels["reference_roll"].column
+        if col not in have:
+            raise channel_error(p, "reference_roll", col, f"column not found in the file "
+                                f"(it has: {', '.join(names) or 'nothing'})")
+    return roles
+
+
+def road_wheel_angle(cmap: ChannelMap, params: VehicleParams, steer_role: str, values: np.ndarray) -> np.ndarray:
+    """``delta_f`` (rad): the road-wheel angle, or the steering-wheel angle over the steering ratio."""
+    if steer_role == "road_wheel_angle":
+        return values
+    return values / (cmap.steering_ratio or params.steering_ratio)
+
+
 def load_log(path, channels: ChannelMap | str | Path | None = None, format: str | None = None,
              params: VehicleParams | None = None) -> Log:
     """Read one log into SI / ISO 8855 signals on one time base.
@@ -128,27 +164,7 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
         raw = readers.READERS[fmt](p, wanted, cmap.truth_prefix)
     timed = fmt == "mdf4" or fmt in readers.CAN_FORMATS or fmt in readers.ROS_FORMATS
     have = set(raw.data)
-
-    # steering: road-wheel angle if its column exists, else steering-wheel angle
-    steer_roles = [r for r in ("road_wheel_angle", "steering_wheel_angle") if r in cmap.channels]
-    present = [r for r in steer_roles if cmap.channels[r].column in have]
-    roles = ["speed", "lateral_acceleration", "yaw_rate"]
-    for role in roles:
-        col = cmap.channels[role].column
-        if col not in have:
-            raise channel_error(p, role, col, f"column not found in the file "
-                                f"(it has: {', '.join(raw.names) or 'nothing'})")
-    if not present:
-        cols = " or ".join(f"'{cmap.channels[r].column}'" for r in steer_roles)
-        raise LogError(f"{p}: channel 'steering' missing: no column {cols} in the file "
-                       f"(it has: {', '.join(raw.names) or 'nothing'})")
-    roles.append(present[0])
-    if "reference_roll" in cmap.channels:
-        roles.append("reference_roll")
-        col = cmap.channels["reference_roll"].column
-        if col not in have:
-            raise channel_error(p, "reference_roll", col, f"column not found in the file "
-                                f"(it has: {', '.join(raw.names) or 'nothing'})")
+    roles = select_roles(p, cmap, have, raw.names)
 
     series: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     shared = None
@@ -184,12 +200,7 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     if len(t_base) < 2:
         raise LogError(f"{p}: fewer than 2 samples on the common time base")
 
-    steer = present[0]
-    if steer == "road_wheel_angle":
-        delta = values[steer]
-    else:
-        ratio = cmap.steering_ratio or params.steering_ratio
-        delta = values[steer] / ratio
+    delta = road_wheel_angle(cmap, params, roles[3], values[roles[3]])
     try:
         sig = Signals(t_base, values["speed"], values["lateral_acceleration"], values["yaw_rate"], delta)
     except ValueError as exc:

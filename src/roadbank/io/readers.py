@@ -171,7 +171,6 @@ def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTabl
 def read_parquet(path, wanted: dict[str, str], prefix: str | None = None) -> RawTable:
     """Read a Parquet file (pyarrow); schema metadata become :attr:`RawTable.metadata`."""
     import pyarrow as pa
-    import pyarrow.compute as pc
     import pyarrow.parquet as pq
 
     p = _existing_nonempty(path)
@@ -185,28 +184,35 @@ def read_parquet(path, wanted: dict[str, str], prefix: str | None = None) -> Raw
         raise LogError(f"{p}: not a readable Parquet file (truncated or corrupt?): {exc}") from None
     if table.num_rows == 0:
         raise LogError(f"{p}: no data rows")
+    data = {c: arrow_column_floats(p, c, _label(wanted, c), table.column(c)) for c in cols}
+    return RawTable(names, data, metadata=parquet_metadata(schema), row_label="row",
+                    rownums=range(table.num_rows))
+
+
+def parquet_metadata(schema) -> dict[str, str]:
+    """Schema key/value metadata of a Parquet file as text (pyarrow's own schema entry left out)."""
     meta = {}
     for k, v in (schema.metadata or {}).items():
         key = k.decode("utf-8", "replace")
-        if key == "ARROW:schema":
-            continue
-        meta[key] = v.decode("utf-8", "replace")
-    data = {}
-    for c in cols:
-        col = table.column(c)
-        label = _label(wanted, c)
-        t = col.type
-        if pa.types.is_timestamp(t):
-            ns = pc.cast(col, pa.int64()).to_numpy(zero_copy_only=False)
-            data[c] = ns.astype(np.float64) * 1e-9  # seconds since the epoch
-        elif pa.types.is_integer(t) or pa.types.is_floating(t) or pa.types.is_boolean(t) \
-                or pa.types.is_decimal(t):
-            data[c] = pc.cast(col, pa.float64()).to_numpy(zero_copy_only=False)
-        elif pa.types.is_string(t) or pa.types.is_large_string(t):
-            data[c] = _parse_floats(p, c, label, col.to_pylist(), "row", range(table.num_rows))
-        else:
-            raise LogError(f"{p}: {label}: unsupported column type {t} (need numbers)")
-    return RawTable(names, data, metadata=meta, row_label="row", rownums=range(table.num_rows))
+        if key != "ARROW:schema":
+            meta[key] = v.decode("utf-8", "replace")
+    return meta
+
+
+def arrow_column_floats(p, c: str, label: str, col, row0: int = 0) -> np.ndarray:
+    """One Arrow column -> float64 (timestamps -> s since the epoch); ``row0`` numbers rows in messages."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    t = col.type
+    if pa.types.is_timestamp(t):
+        ns = pc.cast(col, pa.int64()).to_numpy(zero_copy_only=False)
+        return ns.astype(np.float64) * 1e-9  # seconds since the epoch
+    if pa.types.is_integer(t) or pa.types.is_floating(t) or pa.types.is_boolean(t) or pa.types.is_decimal(t):
+        return pc.cast(col, pa.float64()).to_numpy(zero_copy_only=False)
+    if pa.types.is_string(t) or pa.types.is_large_string(t):
+        return _parse_floats(p, c, label, col.to_pylist(), "row", range(row0, row0 + len(col)))
+    raise LogError(f"{p}: {label}: unsupported column type {t} (need numbers)")
 
 
 def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTable:
