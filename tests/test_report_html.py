@@ -218,6 +218,10 @@ def test_campaign_report_html(tmp_path):
     df = pd.DataFrame([row for k in range(6) for row in run_one(draw(k, 1), opts)])
     write_report(tmp_path, df, settings_of(6, 1, opts))
     tables = check_report(tmp_path / "report.md", tmp_path / "report.html")
+    summary = tables[0]
+    for j in (3, 4, 11):                              # rms_median, rms_p95, fail_rate: smallest in bold
+        col = [(float(_text(r[j])), r[j].find("strong") is not None) for r in summary["rows"]]
+        assert all(bold == (v == min(c[0] for c in col)) for v, bold in col), summary["header"][j]
     per_scenario = next(t for t in tables if t["header"] == ["scenario", "kinematic", "dfc"])
     assert best_cells_are_minimal(per_scenario, 1) == len(per_scenario["rows"]) == 5
 

@@ -122,13 +122,18 @@ def box_plot(df, path: Path) -> None:
     plt.close(fig)
 
 
-def _md_table(frame, best: str | None = None) -> str:
+def _md_table(frame, best=None, best_in: str = "row") -> str:
     """A data frame as a markdown table (:func:`roadbank.report.markdown.md_table`; floats to 2 decimals)."""
     from ..report.markdown import md_table
 
     rows = [[v.item() if isinstance(v, np.generic) else v for v in r]
             for r in frame.itertuples(index=False, name=None)]
-    return md_table([str(c) for c in frame.columns], rows, best=best)
+    return md_table([str(c) for c in frame.columns], rows, best=best, best_in=best_in)
+
+
+#: the summary's error columns: the smallest of each column is the best estimator
+SUMMARY_BEST = {c: "min" for c in ("rms_median", "rms_p95", "rms_max", "max_median", "max_p95", "max_max",
+                                   "fail_rate")}
 
 
 def write_report(outdir, df, settings: dict, throughput: dict | None = None) -> Path:
@@ -169,7 +174,8 @@ def write_report(outdir, df, settings: dict, throughput: dict | None = None) -> 
         verdict = "meets" if p95 <= PIF_GOAL_P95_DEG else "misses"
         lines += [f"**PIF (modified model) 95th-percentile bank RMS: {p95:.2f} deg** — {verdict} the "
                   f"{PIF_GOAL_P95_DEG:g} deg goal.", ""]
-    lines += ["## Bank error per estimator (deg)", "", _md_table(summ), "", "![box plot](boxplot.png)", "",
+    lines += ["## Bank error per estimator (deg)", "", _md_table(summ, SUMMARY_BEST, "column"), "",
+              "Best (smallest) error and failure rate of each column in bold.", "", "![box plot](boxplot.png)", "",
               "## 95th-percentile bank RMS (deg) per scenario", "", _md_table(scenario_table(df), best="min"), "",
               "Best (smallest) value of each line in bold.", "",
               f"Runs in which the plant lost control (max sideslip > 10 deg; the largest errors of every "
