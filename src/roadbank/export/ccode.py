@@ -440,6 +440,18 @@ static void rb_tustin(real_t *x, int n, const real_t *F, const real_t *G, int m,
 
 """
 
+_LERP_ROW = """\
+/* F | G | H | D of the speed between two table rows */
+static void rb_lerp_row(const real_t *t0, const real_t *t1, real_t a, real_t *c)
+{
+    int k;
+    for (k = 0; k < RB_NKC; ++k) {
+        c[k] = rb_lerp(t0, t1, a, k);
+    }
+}
+
+"""
+
 _OBSERVER3 = """\
 /* Three-state observer: interpolated F, G, H, D; restart at xi = J eta or one
  * trapezoidal step with M = I - (h/2) F inverted through its adjugate. Returns w. */
@@ -451,9 +463,7 @@ static real_t rb_observer(state_t *st, const real_t *t0, const real_t *t1, real_
     real_t x1;
     real_t x2;
     int k;
-    for (k = 0; k < RB_NKC; ++k) {
-        c[k] = rb_lerp(t0, t1, a, k);
-    }
+    rb_lerp_row(t0, t1, a, c);
     if (restart) {
         int q;
         x0 = 0.0_R;
@@ -524,12 +534,9 @@ static real_t rb_observer(state_t *st, const real_t *t0, const real_t *t1, real_
 {
     real_t c[RB_NKC];   /* F | G | H | D */
     real_t w = 0.0_R;
-    int k;
     int p;
     int q;
-    for (k = 0; k < RB_NKC; ++k) {
-        c[k] = rb_lerp(t0, t1, a, k);
-    }
+    rb_lerp_row(t0, t1, a, c);
     if (restart) {
         for (p = 0; p < RB_N; ++p) {
             real_t acc = 0.0_R;
@@ -580,7 +587,7 @@ def _observer_tustin(d: ExportDesign) -> str:
     """The observer update of today's general path (continuous tables, Tustin per sample)."""
     if d.n == 0:
         return _OBSERVER_0
-    return _OBSERVER3 if d.n == 3 else _OBSERVER_N
+    return _LERP_ROW + (_OBSERVER3 if d.n == 3 else _OBSERVER_N)
 
 
 def _roll_parts(d: ExportDesign, float32: bool) -> dict:

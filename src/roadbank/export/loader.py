@@ -56,7 +56,7 @@ class CModule:
         # a distinct file per source text: the dynamic loader caches libraries by path
         digest = hashlib.sha256(source.read_bytes() + opt.encode()).hexdigest()[:12]
         self.path = compile_c([source, harness], build_dir / f"lib{self.prefix}-{digest}.so", shared=True,
-                              flags=(opt,), include=[source.parent])
+                              flags=tuple(opt.split()), include=[source.parent])
         lib = ctypes.CDLL(str(self.path))
         lib.rbh_state_size.restype = ctypes.c_size_t
         lib.rbh_init.argtypes = [ctypes.c_void_p]
