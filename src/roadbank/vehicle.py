@@ -510,7 +510,11 @@ class Vehicle:
 # parsing and checking
 
 def _fmt(value) -> str:
-    return repr(value) if isinstance(value, str) else _toml_value(value)
+    """A value as it would be written in the file (for messages)."""
+    try:
+        return _toml_value(value)
+    except TypeError:
+        return repr(value)
 
 
 def _fmt_options(options: Mapping) -> str:
@@ -647,25 +651,27 @@ def _check_document(doc: dict, source: str) -> None:
             _check_free_table(source, table, sub, values)
 
 
-def _params_error(source: str, veh_raw: dict, exc: Exception) -> VehicleFileError:
-    """Turn a VehicleParams/SensorSpec validation error into one naming the file and key."""
+def _params_error(source: str, table: str, raw: dict, exc: Exception) -> VehicleFileError:
+    """Turn a VehicleParams/SensorSpec validation error into one naming the file and the key:
+    the first key of the file the message mentions (else the table)."""
     msg = str(exc)
-    m = re.search(r"(?:VehicleParams|SensorSpec)\.(\w+)", msg)
-    key = m.group(1) if m else None
-    text = re.sub(r"^(?:VehicleParams|SensorSpec)(?:\.\w+)?:?\s*", "", msg)
-    if key is not None and key in veh_raw:
-        return VehicleFileError(f"{source}: [{'vehicle' if key in PLAUSIBLE else 'sensors'}] {key} = "
-                                f"{_fmt(veh_raw[key])}: {text}")
-    return VehicleFileError(f"{source}: [vehicle]: {msg}")
+    text = re.sub(r"\b(?:VehicleParams|SensorSpec)(?:\.|: )", "", msg)
+    mentioned = sorted((m.start(), m.group(0)) for key in raw
+                       for m in [re.search(rf"\b{re.escape(key)}\b", msg)] if m)
+    if mentioned:
+        key = mentioned[0][1]
+        return VehicleFileError(f"{source}: [{table}] {key} = {_fmt(raw[key])}: {text}")
+    return VehicleFileError(f"{source}: [{table}]: {msg}")
 
 
 def _from_document(doc: dict, source: str, default_name: str) -> Vehicle:
     for table, value in doc.items():
-        if table not in TABLES:
-            raise VehicleFileError(f"{source}: [{table}]: {_unknown(table, TABLES, 'table')}")
         if not isinstance(value, dict):
             raise VehicleFileError(f"{source}: {table} = {_fmt(value) if _is_scalar(value) else '...'}: "
-                                   f"must be a table [{table}], got {_toml_type(value)}")
+                                   f"a key outside any table; keys belong in one of "
+                                   f"[{'], ['.join(TABLES[:4])}]")
+        if table not in TABLES:
+            raise VehicleFileError(f"{source}: [{table}]: {_unknown(table, TABLES, 'table')}")
     meta = doc.get("meta", {})
     for key, value in meta.items():
         if key not in META_KEYS:
@@ -698,7 +704,7 @@ def _from_document(doc: dict, source: str, default_name: str) -> Vehicle:
     try:
         params = VehicleParams(**values)
     except (ValueError, TypeError) as exc:
-        raise _params_error(source, veh_raw, exc) from None
+        raise _params_error(source, "vehicle", veh_raw, exc) from None
 
     sens_raw = doc.get("sensors", {})
     for key in sens_raw:
@@ -708,7 +714,7 @@ def _from_document(doc: dict, source: str, default_name: str) -> Vehicle:
         sensors = SensorSpec(**{k: _quantity(source, "sensors", k, v, *SENSOR_FIELDS[k])
                                 for k, v in sens_raw.items()})
     except (ValueError, TypeError) as exc:
-        raise _params_error(source, sens_raw, exc) from None
+        raise _params_error(source, "sensors", sens_raw, exc) from None
 
     plant_raw = doc.get("plant", {})
     plant = {}

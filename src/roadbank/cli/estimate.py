@@ -7,6 +7,8 @@ from pathlib import Path
 
 import click
 
+from .options import vehicle_option
+
 
 def _parse_estimators(values: tuple[str, ...]) -> list[str]:
     from .. import estimators
@@ -84,7 +86,8 @@ def _unique_stem(stem: str, used: set[str]) -> str:
 @click.option("--steering-ratio", type=float, default=None,
               help="Steering-wheel / road-wheel ratio when the log has a steering-wheel angle "
                    "(default: the channel map's, else VehicleParams' 16).")
-def estimate(logs, channels, fmt, est_names, output, output_format, plot, steering_ratio):
+@vehicle_option("Every estimator is designed for this car: its parameters and its [tuning] tables.")
+def estimate(logs, channels, fmt, est_names, output, output_format, plot, steering_ratio, vehicle):
     """Estimate the road bank angle on recorded LOGS and write t, theta, phi_b, valid per estimator.
 
     \b
@@ -97,13 +100,11 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     from .. import estimators
     from ..io import LogError, load_log, read_channel_map
     from ..io.writers import estimate_table, write_table
-    from ..params import VehicleParams
 
     names = _parse_estimators(est_names)
-    params = VehicleParams()
     if steering_ratio is not None:
         try:
-            params = params.replace(steering_ratio=steering_ratio)
+            vehicle = vehicle.with_params(steering_ratio=steering_ratio)
         except ValueError as exc:
             raise click.BadParameter(str(exc), param_hint="--steering-ratio")
     cmap = None
@@ -117,7 +118,8 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     if not batch and output.suffix.lower() not in (".csv", ".parquet", ".pq"):
         raise click.BadParameter("for one log, -o must end in .csv or .parquet (or be a directory)",
                                  param_hint="-o")
-    ests = [estimators.make(n, params=params) for n in names]
+    params = vehicle.params
+    ests = [vehicle.make(n) for n in names]
     failures: list[tuple[Path, str]] = []
     used: set[str] = set()
     written = 0

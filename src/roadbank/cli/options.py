@@ -1,0 +1,39 @@
+"""Click options shared by several ``roadbank`` commands.
+
+``vehicle_option`` adds ``--vehicle PATH|NAME``: the value reaching the command is a
+:class:`roadbank.vehicle.Vehicle` (the paper's SUV when the option is absent). A
+malformed file is a usage error (exit code 2) with the file/key message, no traceback.
+"""
+
+from __future__ import annotations
+
+import click
+
+#: shipped cars, listed in the help text (kept in sync with src/roadbank/vehicles/*.toml by a test)
+_BUILTIN_HELP = "suv-paper (default), compact, sedan, van"
+
+
+def _to_vehicle(ctx, param, value):
+    from ..vehicle import VehicleFileError, load_vehicle
+
+    try:
+        vehicle = load_vehicle(value)
+        if value is not None:
+            vehicle.check()  # every [tuning.<estimator>] table designs
+    except VehicleFileError as exc:
+        raise click.BadParameter(str(exc), ctx=ctx, param=param) from None
+    return vehicle
+
+
+def vehicle_option(help_extra: str = ""):
+    """Decorator: ``--vehicle PATH|NAME`` giving the command a ``vehicle`` argument (a Vehicle).
+
+    Parameters
+    ----------
+    help_extra : str
+        Appended to the help text (what the command does with the car).
+    """
+    text = (f"Vehicle file (.toml, see docs/vehicles.md) or a built-in car: {_BUILTIN_HELP}. "
+            "Default: the paper's SUV." + (f" {help_extra}" if help_extra else ""))
+    return click.option("--vehicle", "vehicle", default=None, metavar="PATH|NAME", callback=_to_vehicle,
+                        help=text)
