@@ -42,8 +42,9 @@ def scenarios():
 
 
 def hard_log(scenarios, *, nan_time=True):
-    """bank-lane-change with a 2.5 s gap, a slow stretch, NaN/inf inputs, a repeated and a
-    backward time stamp and irregular steps up to 45 ms (several substeps)."""
+    """bank-lane-change with a 2.5 s gap, a slow stretch, speeds at and beyond the grid's
+    ends, an implausible lateral acceleration, NaN/inf inputs, a repeated and a backward
+    time stamp and irregular steps up to 45 ms (several substeps)."""
     t, vx, ay, r, d = (a.copy() for a in scenarios["bank-lane-change"])
     n = len(t)
     t[400:] += 2.5
@@ -52,6 +53,9 @@ def hard_log(scenarios, *, nan_time=True):
     r[900] = np.inf
     d[950:960] = np.nan
     vx[1000] = np.nan
+    vx[720:740] = 5.0                                  # exactly v_min: the first grid speed
+    vx[740:760] = 130.0                                # beyond the grid: clamped schedule
+    ay[1020:1040] = 40.0                               # |w| > sin(max_angle): flagged implausible
     t[1100] = t[1099]
     t[1200] = t[1150]
     if nan_time:

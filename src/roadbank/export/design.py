@@ -161,8 +161,12 @@ def export_design(est, rate: float) -> ExportDesign:
     if not (math.isfinite(rate) and rate > 0):
         raise ValueError(f"rate must be a positive number of Hz, got {rate}")
     n = int(est._nstate)
-    table = np.array(est._tab, dtype=np.float64, copy=True)
+    # the continuous-time schedule (the kernels' general path); estimators with a
+    # fixed-rate path keep it apart from the discrete tables appended for one rate
+    table = np.array(getattr(est, "_tab_cont", est._tab), dtype=np.float64, copy=True)
     nk = n * n + NETA * n + n + NETA + NETA * n
+    if table.ndim == 2 and table.shape[1] > nk and getattr(est, "_tab_cont", None) is None:
+        table = table[:, :nk]
     if table.ndim != 2 or table.shape[1] != nk:
         raise NotExportable(f"{est.name}: not exportable: its table rows have {table.shape[-1]} "
                             f"entries, the scheduled-observer layout needs {nk} for {n} states")
