@@ -31,6 +31,7 @@ COMMANDS = {
     "campaign": "campaign:campaign",
     "robustness": "robustness:robustness",
     "export": "export:export",
+    "identify": "identify:identify",
 }
 
 
