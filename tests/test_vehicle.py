@@ -67,8 +67,9 @@ def test_copies_and_make_merge_tuning(rich_vehicle):
     v = rich_vehicle.with_tuning("pif-modified", {"Q": 3.0})
     assert v.tuning["pif-modified"] == {"Q": 3.0}  # replaced, not merged
     assert v.scores == rich_vehicle.scores  # scores untouched without new ones
-    est = v.make("pif-modified", th=0.25)
-    assert (est.params, est.Q, est.th) == (v.params, 3.0, 0.25)
+    v = v.with_tuning("dfc", {"a_ref": 2.0, "tau": 0.5})
+    est = v.make("dfc", tau=0.25)  # file options, then overrides
+    assert (est.params, est.a_ref, est.tau) == (v.params, 2.0, 0.25)
     w = v.with_params(Cr=2e5)
     assert w.params == v.params.replace(Cr=2e5) and v.params.Cr != 2e5
     assert v.with_identified({"Cr": {"value": 1.0}}).identified["Cr"] == {"value": 1.0}
@@ -76,10 +77,12 @@ def test_copies_and_make_merge_tuning(rich_vehicle):
 
 
 def test_make_uses_the_vehicle_params_and_tuning():
-    v = load_vehicle("van").with_tuning("kalman", {"R": [0.02, 3e-5]})
-    a = v.make("kalman").run(_signals())
-    b = __import__("roadbank.estimators", fromlist=["make"]).make("kalman", v.params, R=[0.02, 3e-5]).run(_signals())
-    np.testing.assert_array_equal(a.theta, b.theta)
+    from roadbank import estimators
+
+    v = load_vehicle("van").with_tuning("dfc", {"a_ref": 1.5})
+    a = v.make("dfc").run(_signals())
+    np.testing.assert_array_equal(a.theta, estimators.make("dfc", v.params, a_ref=1.5).run(_signals()).theta)
+    assert not np.array_equal(a.theta, estimators.make("dfc", v.params).run(_signals()).theta)
 
 
 def _signals():
@@ -357,14 +360,14 @@ def test_estimate_designs_for_the_vehicle(sedan_run, tmp_path):
     outs = {}
     for label, extra in (("car", ["--vehicle", str(path)]), ("suv", [])):
         out = tmp_path / f"{label}.csv"
-        r = CliRunner().invoke(main, ["estimate", str(sedan_run), "-e", "pif-modified,kalman", "-o", str(out)] + extra)
+        r = CliRunner().invoke(main, ["estimate", str(sedan_run), "-e", "pif-modified", "-o", str(out)] + extra)
         assert r.exit_code == 0, r.output
         outs[label] = out
     import pandas as pd
 
     got = pd.read_csv(outs["car"])
     signals = load_log(sedan_run, params=car.params).signals
-    for name in ("pif-modified", "kalman"):
+    for name in ("pif-modified",):
         lib = car.make(name).run(signals)
         col = [c for c in got.columns if c.startswith(name) and "phi_b" in c][0]
         np.testing.assert_allclose(got[col].to_numpy(), lib.phi_b, rtol=0, atol=1e-12)
