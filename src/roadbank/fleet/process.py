@@ -112,8 +112,8 @@ def concat_estimates(parts: list):
 
 
 def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, format: str | None = None,
-                 params=None, chunk_rows: int | None = None, metadata: dict | None = None,
-                 keep: bool = False) -> LogSummary:
+                 params=None, vehicle=None, chunk_rows: int | None = None, metadata: dict | None = None,
+                 keep: bool = False, plot=None) -> LogSummary:
     """Estimate the bank on one log, streamed in chunks, and write the result table incrementally.
 
     Parameters
@@ -127,13 +127,17 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
         Estimator names (:data:`roadbank.estimators.NAMES`); the first one is summarised.
     channels, format, params
         As for :func:`roadbank.io.load_log`.
+    vehicle : roadbank.vehicle.Vehicle, optional
+        Builds the estimators (its parameters and tuning) and supplies ``params``.
     chunk_rows : int, optional
         Rows per chunk (default :data:`roadbank.io.stream.CHUNK_ROWS`).
     metadata : dict, optional
         Written into the Parquet schema.
     keep : bool
         Also keep the whole series in ``summary.kept`` = ``(t, [Estimate], reference_roll, truth)``
-        (for plotting; memory then grows with the log).
+        (memory then grows with the log).
+    plot : path-like, optional
+        Draw theta / phi_b against time into this PNG (keeps the whole series).
 
     Returns
     -------
@@ -151,7 +155,12 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
     summary = LogSummary(log=str(path), estimator=names[0] if names else "")
     writer = None
     try:
-        ests = [E.make(n, params=params) for n in names]
+        if vehicle is not None:
+            params = vehicle.params
+            ests = [vehicle.make(n) for n in names]
+        else:
+            ests = [E.make(n, params=params) for n in names]
+        keep = keep or plot is not None
         stats = _BankStats()
         warns: list[str] = []
         kept = {"t": [], "est": [[] for _ in ests], "roll": [], "truth": {}}
@@ -178,6 +187,10 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
             summary.kept = (np.concatenate(kept["t"]), [concat_estimates(x) for x in kept["est"]],
                             np.concatenate(kept["roll"]) if kept["roll"] else None,
                             {c: np.concatenate(v) for c, v in kept["truth"].items()})
+        if plot is not None:
+            from ..report.timeseries import plot_estimates
+            t, results, roll, truth = summary.kept
+            plot_estimates(plot, t, results, roll, title=str(path), truth=truth)
     except (LogError, ValueError, OSError) as exc:
         summary.status, summary.error = "error", str(exc)
     except Exception as exc:  # never a traceback for one bad file

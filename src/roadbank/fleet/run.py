@@ -140,18 +140,19 @@ class FleetResult:
         return [s for s in self.summaries if s.status != "ok"]
 
 
-def _warm(names, params):
+def _warm(names, params, vehicle=None):
     """Build the estimators once on a worker (loads the compiled kernels and the designs)."""
     from .. import estimators as E
     for n in names:
-        E.make(n, params=params)
+        vehicle.make(n) if vehicle is not None else E.make(n, params=params)
     return True
 
 
 def run_fleet(logs, outdir, estimators=("pif-modified",), *, channels=None, format: str | None = None,
-              params=None, output_format: str = "parquet", workers: int = 1, scheduler: str | None = None,
-              resume: bool = False, chunk_rows: int | None = None, metadata: dict | None = None,
-              on_result=None, connect_timeout: float = 20.0) -> FleetResult:
+              params=None, vehicle=None, output_format: str = "parquet", workers: int = 1,
+              scheduler: str | None = None, resume: bool = False, chunk_rows: int | None = None,
+              metadata: dict | None = None, plot_dir=None, on_result=None,
+              connect_timeout: float = 20.0) -> FleetResult:
     """Estimate the bank on many logs, writing each result and a summary row as soon as a log finishes.
 
     Parameters
@@ -164,6 +165,8 @@ def run_fleet(logs, outdir, estimators=("pif-modified",), *, channels=None, form
     channels : ChannelMap or path, optional
     format : str, optional
     params : VehicleParams, optional
+    vehicle : roadbank.vehicle.Vehicle, optional
+        Builds the estimators (see :func:`estimate_log`).
     output_format : {"parquet", "csv"}
     workers : int
         1: in this process, one log after another. More: a Dask LocalCluster of
@@ -176,6 +179,8 @@ def run_fleet(logs, outdir, estimators=("pif-modified",), *, channels=None, form
         Streaming chunk size (rows).
     metadata : dict, optional
         Extra Parquet metadata of every output (``source`` is added per log).
+    plot_dir : path-like, optional
+        One PNG of theta / phi_b per log, ``<stem>.png``.
     on_result : callable(LogSummary), optional
         Called in the client as each log finishes.
 
@@ -199,8 +204,10 @@ def run_fleet(logs, outdir, estimators=("pif-modified",), *, channels=None, form
     todo = [p for p in paths if str(p) not in done]
     result = FleetResult(skipped=[str(p) for p in paths if str(p) in done])
     summary = _SummaryFile(outdir, resume)
-    jobs = [(p, outdir / names[p], dict(metadata or {}, source=str(p))) for p in todo]
-    kw = dict(channels=channels, format=format, params=params, chunk_rows=chunk_rows)
+    jobs = [(p, outdir / names[p], dict(metadata or {}, source=str(p)),
+             None if plot_dir is None else Path(plot_dir) / (names[p].split(".bank.")[0] + ".png"))
+            for p in todo]
+    kw = dict(channels=channels, format=format, params=params, vehicle=vehicle, chunk_rows=chunk_rows)
 
     def finish(s: LogSummary):
         summary.add(s)
@@ -211,17 +218,17 @@ def run_fleet(logs, outdir, estimators=("pif-modified",), *, channels=None, form
     t0 = time.perf_counter()
     try:
         if scheduler is None and int(workers) <= 1:
-            for p, out, meta in jobs:
-                finish(estimate_log(p, out, estimators, metadata=meta, **kw))
+            for p, out, meta, png in jobs:
+                finish(estimate_log(p, out, estimators, metadata=meta, plot=png, **kw))
         elif jobs:
-            _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result, params)
+            _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result)
     finally:
         summary.close()
         result.wall_s = time.perf_counter() - t0
     return result
 
 
-def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result, params):
+def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result):
     from ..campaign.execute import _distributed, open_client
 
     dd = _distributed()
@@ -229,9 +236,9 @@ def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish,
     futures = {}
     try:
         result.workers = sum(client.nthreads().values())
-        client.run(_warm, list(estimators), params)
-        for p, out, meta in jobs:
-            fut = client.submit(estimate_log, p, out, list(estimators), metadata=meta, pure=False, **kw)
+        client.run(_warm, list(estimators), kw["params"], kw["vehicle"])
+        for p, out, meta, png in jobs:
+            fut = client.submit(estimate_log, p, out, list(estimators), metadata=meta, plot=png, pure=False, **kw)
             futures[fut] = p
         for fut in dd.as_completed(list(futures)):
             p = futures.pop(fut)
