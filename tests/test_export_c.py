@@ -18,7 +18,7 @@ import pytest
 from click.testing import CliRunner
 
 from roadbank import estimators as E
-from roadbank.export import CModule, NotExportable, build_driver, export_c, measure_c_step_ns
+from roadbank.export import CModule, NotExportable, build_driver, export_c, export_design, measure_c_step_ns
 from roadbank.export.build import object_report
 from roadbank.sim import SCENARIOS, run_scenario
 
@@ -126,6 +126,8 @@ def test_float64_equals_step_on_every_scenario_and_a_hard_log(name, scenarios, b
 def test_float32_within_a_thousandth_of_a_degree(name, scenarios, built_modules):
     mod = built_modules(name, float32=True)
     assert mod.float32
+    assert mod.state_size == export_design(BUILT[name], 100.0).state_bytes(float32=True)
+    assert built_modules(name).state_size == export_design(BUILT[name], 100.0).state_bytes()
     est = BUILT[name]
     worst = 0.0
     for scen, cols in {**scenarios, "hard": hard_log(scenarios)}.items():
@@ -141,6 +143,7 @@ def test_float32_within_a_thousandth_of_a_degree(name, scenarios, built_modules)
 def test_roll_models_and_the_general_observer_path(name, roll, scenarios, built_modules):
     est = E.make(name, roll=roll)
     mod = built_modules(name, est=est, tag=roll)
+    assert mod.state_size == export_design(est, 100.0).state_bytes()
     for scen in ("hard", "track-lane-change"):
         cols = hard_log(scenarios) if scen == "hard" else scenarios[scen]
         assert_same(python_steps(est, cols), mod.run(*cols), TOL64, TOL64, f"{name} roll={roll} {scen}")

@@ -109,6 +109,17 @@ class ExportDesign:
         nroll = self.roll_F.size + self.roll_G.size + self.roll_H.size + 1 + self.roll_J.size
         return (self.table.size + nroll) * (4 if float32 else 8)
 
+    def state_bytes(self, float32: bool = False) -> int:
+        """Size (bytes) of the generated state struct where ``double`` is 8-byte aligned
+        (x86-64, ARM EABI): int flag, double time, then reals."""
+        r = 4 if float32 else 8
+        fields = [(4, 4), (8, 8), (r, r), (3 * r, r)] + ([(self.n * r, r)] if self.n else []) \
+            + ([(self.nr * r, r)] if self.nr else []) + [(r, r)] * 5
+        size = 0
+        for nbytes, align in fields:
+            size = -(-size // align) * align + nbytes
+        return -(-size // 8) * 8
+
     def fingerprint(self) -> str:
         """SHA-256 (first 16 hex digits) of the tables and constants: identifies a design."""
         h = hashlib.sha256()

@@ -71,7 +71,10 @@ Sample handling (identical to roadbank's Python `Estimator.step()`):
 
 - Tables (flash): {tab} bytes ({d.ng} grid speeds x {d.nk} values{' + roll model' if d.nr else ''},
   {4 if float32 else 8} bytes each).
-- State (RAM): one `{state}`; stack per step: a few hundred bytes at most.
+- State (RAM): one `{state}` per instance, {d.state_bytes(float32)} bytes where `double` is
+  8-byte aligned (x86-64, ARM EABI); stack per step: under 0.5 kB.
+- For results bit-identical to roadbank's Python (float64), compile without floating-point
+  contraction into fused multiply-adds: `-ffp-contract=off` (gcc's default with `-std=c99`).
 
 ## Design
 
