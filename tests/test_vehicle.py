@@ -377,7 +377,8 @@ def test_estimate_designs_for_the_vehicle(sedan_run, tmp_path):
 
 
 @pytest.mark.parametrize("command", [["simulate", "const-bank", "-o", "{out}.csv"],
-                                     ["estimate", "{log}", "-o", "{out}.csv"]])
+                                     ["estimate", "{log}", "-o", "{out}.csv"],
+                                     ["reproduce", "-o", "{out}"]])
 def test_bad_vehicle_file_on_the_cli(command, tmp_path, sedan_run):
     bad = tmp_path / "car.toml"
     bad.write_text(_car(m="-5"))
@@ -400,3 +401,21 @@ def test_dataclass_fields_are_all_in_the_file_format():
 
     assert [f.name for f in dataclasses.fields(VehicleParams)] == list(PLAUSIBLE)
     assert [f.name for f in dataclasses.fields(SensorSpec)] == list(SENSOR_FIELDS)
+
+
+def test_reproduce_cell_with_a_vehicle():
+    """--vehicle on reproduce: the car is plant and design; its tuning drives every column but the
+    published PIF (Table 4), so pif-default is the car's tuned PIF."""
+    from roadbank import estimators
+    from roadbank.report.reproduce import run_cell
+
+    car = load_vehicle("van").with_tuning("pif-modified", {"tuning": "paper", "Q": 3.0}) \
+                             .with_tuning("dfc", {"a_ref": 1.5})
+    cell = run_cell("const-bank", "nominal", names=("pif-modified", "pif-default", "dfc"), vehicle=car)
+    sim = car.simulate("const-bank", "nominal")
+    np.testing.assert_array_equal(cell.inputs["vx"], sim.truth.vx)
+    s = sim.signals
+    np.testing.assert_array_equal(cell.phi_b["pif-default"], car.make("pif-modified").run(s).phi_b)
+    np.testing.assert_array_equal(cell.phi_b["dfc"], car.make("dfc").run(s).phi_b)
+    published = estimators.make("pif-modified", car.params, tuning="paper").run(s).phi_b
+    np.testing.assert_array_equal(cell.phi_b["pif-modified"], published)
