@@ -32,6 +32,7 @@ COMMANDS = {
     "robustness": "robustness:robustness",
     "export": "export:export",
     "identify": "identify:identify",
+    "tune": "tune:tune",
 }
 
 
