@@ -310,10 +310,15 @@ int ${p}_step_dt(state_t *s, real_t dt, real_t vx, real_t ay, real_t r, real_t d
 """)
 
 _NSUB = """\
-/* substeps of a step dt: max(1, ceil(dt / max_substep - 1e-9)) */
+/* substeps of a step dt: max(1, ceil(dt / max_substep - 1e-9)); one without the
+ * ceil call when dt <= max_substep (then dt / max_substep <= 1: the same result) */
 static int rb_nsub(real_t dt)
 {
-    int nsub = (int)RB_CEIL(dt / RB_SUB - 1e-9_R);
+    int nsub;
+    if (dt <= RB_SUB) {
+        return 1;
+    }
+    nsub = (int)RB_CEIL(dt / RB_SUB - 1e-9_R);
     if (nsub < 1) {
         nsub = 1;
     }
