@@ -80,7 +80,8 @@ def _kitti_figures(v, out_dir: Path, stem: str) -> dict:
 @click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
               help="Write the markdown report (KITTI section) here and one PNG per drive next to it.")
 @_ESTIMATORS
-def kitti(paths, as_json, output, names):
+@click.option("--no-sensitivity", is_flag=True, help="Skip the runs with the paper's SUV parameters.")
+def kitti(paths, as_json, output, names, no_sensitivity):
     """Score every estimator against the INS roll of KITTI raw drives.
 
     PATHS: drive folders (holding oxts/), oxts folders, or folders holding drive folders.
@@ -90,7 +91,7 @@ def kitti(paths, as_json, output, names):
     from ..validation.kitti_report import markdown, to_json
 
     sel = _names(names)
-    v = validate_kitti(paths, names=sel)
+    v = validate_kitti(paths, names=sel, sensitivity=not no_sensitivity)
     for e in v.errors:
         click.echo(f"error: {e}", err=True)
     if not v.drives:

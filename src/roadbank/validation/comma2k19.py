@@ -160,8 +160,8 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
                                       ref, m_fit, m_sc, scoring)
         if "pif-modified" in names:
             sens["pif_Q"] = {}
-            for Q in (0.01, 0.1, 1.0, 10.0):
-                est = estimators.make("pif-modified", params=params, Q=Q).run(s)
+            for Q in (0.01, 0.1, 1.0, 10.0):   # Table 4 weights with Q varied
+                est = estimators.make("pif-modified", params=params, tuning="paper", Q=Q).run(s)
                 sens["pif_Q"][Q] = score(t, hold_invalid(est.theta), hold_invalid(est.phi_b), est.valid,
                                          ref, m_fit, m_sc, scoring)
     settings = {"tau": tau, "warmup_s": warmup_s, "fit_fraction": fit_fraction, "dt": dt,

@@ -64,7 +64,7 @@ def drive_data(log, run, scoring: Scoring) -> dict:
 
 
 def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
-                         scoring: Scoring = KITTI_SCORING) -> ValidationResult:
+                         scoring: Scoring = KITTI_SCORING, sensitivity: bool = True) -> ValidationResult:
     """Run every estimator on one KITTI drive and score ``theta`` against the INS roll.
 
     Parameters
@@ -75,10 +75,11 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
         Estimators (default: all of :data:`roadbank.estimators.NAMES`).
     params : VehicleParams, optional
         Default :data:`~roadbank.validation.SEDAN` (KITTI's car, a VW Passat B6,
-        has a 2.71 m wheelbase like it; the modified-model estimators' ``theta``
-        does not depend on the vehicle data).
+        is a mid-size car of the same 2.7 m wheelbase class).
     scoring : Scoring
         Default :data:`KITTI_SCORING`.
+    sensitivity : bool
+        Also score with the paper's SUV parameters (``VehicleParams()``).
     """
     from .. import estimators
     from ..io.kitti import load_kitti_oxts
@@ -87,13 +88,16 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     names = list(names or estimators.NAMES)
     log = load_kitti_oxts(path)
     run = run_and_score(log.signals, log.reference_roll, names, params, scoring)
+    sens = {}
+    if sensitivity:
+        sens["suv"] = run_and_score(log.signals, log.reference_roll, names, VehicleParams(), scoring).scores
     t = log.signals.t
     first = np.flatnonzero(run.scored)
     settings = {"tau": scoring.tau, "warmup_s": scoring.warmup_s, "fit_fraction": scoring.fit_fraction,
                 "v_gate": scoring.v_gate, "dt": float(np.median(np.diff(t))), "path": str(path)}
     return ValidationResult(scores=run.scores, params=params, t=t, reference=run.reference,
                             estimates=run.estimates, split_time=float(t[first[0]]) if len(first) else float(t[0]),
-                            data=drive_data(log, run, scoring), settings=settings, run=run,
+                            data=drive_data(log, run, scoring), sensitivity=sens, settings=settings, run=run,
                             label=log.metadata["drive"], dataset="kitti", valid=run.valid)
 
 
@@ -109,14 +113,14 @@ def expand_drives(paths) -> list[Path]:
 
 
 def validate_kitti(paths, names=None, params: VehicleParams | None = None,
-                   scoring: Scoring = KITTI_SCORING) -> KittiValidation:
+                   scoring: Scoring = KITTI_SCORING, sensitivity: bool = True) -> KittiValidation:
     """Validate any number of KITTI drives; a drive that cannot be read is reported, the others go on.
 
     Parameters
     ----------
     paths : sequence of path-like
         Drive folders, oxts folders, or folders holding drive folders.
-    names, params, scoring
+    names, params, scoring, sensitivity
         As :func:`validate_kitti_drive`.
     """
     from .. import estimators
@@ -126,7 +130,7 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
     drives, errors = [], []
     for p in expand_drives(paths):
         try:
-            drives.append(validate_kitti_drive(p, names, params, scoring))
+            drives.append(validate_kitti_drive(p, names, params, scoring, sensitivity))
         except (LogError, OSError) as exc:
             errors.append(str(exc))
     return KittiValidation(drives=drives, pooled=pooled([d.run for d in drives], names), errors=errors,

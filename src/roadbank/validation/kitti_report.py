@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
-import numpy as np
-
+from ..report.markdown import md_table
 from .kitti import KittiValidation
 
 #: issue 14 targets for the default PIF on KITTI (theta vs INS roll, raw, vx > 5 m/s)
 TARGET_RMS_DEG = 0.5
+#: the best value of each score column: smallest RMS, largest correlation
+_BEST = {"rms raw (deg)": "min", "r raw": "max", "rms smoothed (deg)": "min", "r smoothed": "max", "r causal LP": "max"}
 
 
 def _f(x, nd=3):
@@ -35,59 +35,47 @@ def to_json(v: KittiValidation) -> dict:
 
 
 def plot_drive(res, path, show=("kinematic", "pio-modified", "pif-modified")) -> None:
-    """Raw theta of some estimators and the INS roll (deg) against time; unscored spans shaded."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    """Raw theta of some estimators and the INS roll (deg), and their error, against time from the
+    drive start (s); unscored spans grey, spans an estimator flagged not valid red."""
+    from ..report.timeseries import reference_figure, save_figure
 
     run = res.run
-    t = res.t - res.t[0]
-    fig, ax = plt.subplots(figsize=(9, 3.6))
-    ax.plot(t, np.degrees(run.raw_reference), "k", lw=1.8, label="INS roll (reference)")
-    for name in show:
-        if name in run.raw_estimates and res.scores[name].valid_fraction > 0:
-            ax.plot(t, np.degrees(run.raw_estimates[name]), lw=1.0, label=f"{name} theta")
-    off = ~run.scored
-    edges = np.flatnonzero(np.diff(np.r_[0, off.astype(int), 0]))
-    for a, b in zip(edges[::2], edges[1::2]):
-        ax.axvspan(t[a], t[min(b, len(t) - 1)], color="grey", alpha=0.15, lw=0)
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("roll (deg)")
-    ax.legend(fontsize=8, ncol=2)
-    ax.grid(alpha=0.3)
-    ax.set_title(f"KITTI {res.label}: theta vs INS roll (grey: not scored, vx < 5 m/s or warm-up)", fontsize=9)
-    fig.tight_layout()
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    names = [n for n in show if n in run.raw_estimates and res.scores[n].valid_fraction > 0]
+    fig = reference_figure(res.t, run.raw_reference, {f"{n} theta": run.raw_estimates[n] for n in names},
+                           valid={f"{n} theta": run.valid[n] for n in names if n in run.valid},
+                           unscored=~run.scored,
+                           quantity="roll", reference_label="INS roll (reference)",
+                           title=f"KITTI {res.label}: theta vs INS roll (grey: not scored, vx < 5 m/s or warm-up)")
+    save_figure(fig, path)
 
 
 def _table(L, rows):
-    L.append("| estimator | rms raw (deg) | r raw | rms smoothed (deg) | r smoothed | r causal LP | "
-             "lag for max r (s) | valid |")
-    L.append("|---|---|---|---|---|---|---|---|")
+    """Per-estimator scores (best of each score column in bold) appended to the lines ``L``."""
+    body = []
     for name, s in rows:
         if s.valid_fraction == 0:
-            L.append(f"| {name} | n/a | n/a | n/a | n/a | n/a | n/a | 0.00 (needs the steering angle) |")
-            continue
-        L.append(f"| {name} | **{_f(s.rms_raw_deg)}** | {_f(s.r_raw)} | {_f(s.rms_deg)} | {_f(s.r)} | "
-                 f"{_f(s.r_causal)} | {s.best_lag_s:+.2f} | {s.valid_fraction:.2f} |")
+            body.append([name] + [None] * 6 + ["0.00 (needs the steering angle)"])
+        else:
+            body.append([name, s.rms_raw_deg, s.r_raw, s.rms_deg, s.r, s.r_causal, s.best_lag_s,
+                         f"{s.valid_fraction:.2f}"])
+    L.append(md_table(["estimator", "rms raw (deg)", "r raw", "rms smoothed (deg)", "r smoothed", "r causal LP",
+                       "lag for max r (s)", "valid"], body, digits=3, formats={"lag for max r (s)": "+.2f"},
+                      align="lrrrrrrr", best=_BEST, best_in="column"))
     L.append("")
 
 
-def target_lines(v: KittiValidation) -> list[str]:
+def target_rows(v: KittiValidation) -> list[list]:
     """The issue-14 targets checked per drive for the default PIF (raw RMS, and smoothed for reference)."""
-    L = []
+    rows = []
     for d in v.drives:
         pif, kin = d.scores.get("pif-modified"), d.scores.get("kinematic")
         if pif is None or kin is None:
             continue
         ok1 = pif.rms_raw_deg <= TARGET_RMS_DEG
         ok2 = pif.rms_raw_deg < kin.rms_raw_deg
-        L.append(f"| {d.label} | {_f(pif.rms_raw_deg)} | {_f(kin.rms_raw_deg)} | {'met' if ok1 else 'NOT met'} | "
-                 f"{'met' if ok2 else 'NOT met'} | {_f(pif.rms_deg)} | {_f(kin.rms_deg)} |")
-    return L
+        rows.append([d.label, pif.rms_raw_deg, kin.rms_raw_deg, "met" if ok1 else "NOT met",
+                     "met" if ok2 else "NOT met", pif.rms_deg, kin.rms_deg])
+    return rows
 
 
 def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) -> str:
@@ -99,41 +87,45 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
              "INS roll (bank + body roll, ISO, left side up); inputs = the INS forward speed `vf`, lateral "
              "specific force `ay` and yaw rate `wz`. No steering angle. Licence CC BY-NC-SA 3.0 (Geiger, "
              "Lenz, Stiller, Urtasun, IJRR 2013): the data stay outside the repository.\n")
-    L.append("| drive | duration (s) | frames (dropped) | step (s) | speed (m/s) | roll (deg) | max yaw rate (rad/s) | scored (s) |")
-    L.append("|---|---|---|---|---|---|---|---|")
-    for d in v.drives:
-        x = d.data
-        L.append(f"| {d.label} | {x['duration_s']:.1f} | {x['frames']} ({x['dropped_frames']}) | "
-                 f"{x['dt_range'][0]:.3f}-{x['dt_range'][1]:.3f} | {x['speed_range'][0]:.1f}-{x['speed_range'][1]:.1f} | "
-                 f"{x['ref_range_deg'][0]:+.2f} .. {x['ref_range_deg'][1]:+.2f} | {x['yaw_rate_max']:.2f} | "
-                 f"{x['scored_s']:.1f} |")
+    L.append(md_table(["drive", "duration (s)", "frames (dropped)", "step (s)", "speed (m/s)", "roll (deg)",
+                       "max yaw rate (rad/s)", "scored (s)"],
+                      [[d.label, d.data["duration_s"], f"{d.data['frames']} ({d.data['dropped_frames']})",
+                        "{:.3f}-{:.3f}".format(*d.data["dt_range"]), "{:.1f}-{:.1f}".format(*d.data["speed_range"]),
+                        "{:+.2f} .. {:+.2f}".format(*d.data["ref_range_deg"]), d.data["yaw_rate_max"],
+                        d.data["scored_s"]] for d in v.drives],
+                      digits={"duration (s)": 1, "scored (s)": 1}, align="lrrrrrrr"))
     L.append("")
     for e in v.errors:
         L.append(f"- not read: {e}")
     if v.errors:
         L.append("")
     L.append(f"{h}# Targets (issue 14: default `pif-modified`, raw theta RMS vs INS roll at vx > 5 m/s)\n")
-    L.append(f"| drive | PIF rms raw (deg) | kinematic rms raw (deg) | PIF <= {TARGET_RMS_DEG} deg | PIF < kinematic | "
-             "PIF rms smoothed | kinematic rms smoothed |")
-    L.append("|---|---|---|---|---|---|---|")
-    L += target_lines(v)
+    L.append(md_table(["drive", "PIF rms raw (deg)", "kinematic rms raw (deg)", f"PIF <= {TARGET_RMS_DEG} deg",
+                       "PIF < kinematic", "PIF rms smoothed", "kinematic rms smoothed"], target_rows(v), digits=3))
     L.append("")
     for d in v.drives:
         L.append(f"{h}# {d.label}\n")
         _table(L, d.scores.items())
         if figures and d.label in figures:
             L.append(f"![{d.label}: theta vs INS roll]({figures[d.label]})\n")
+    if any("suv" in d.sensitivity for d in v.drives):
+        L.append(f"{h}# Sensitivity to the vehicle data\n")
+        L.append("Raw theta RMS (deg) with the paper's SUV (`VehicleParams()`) instead of `SEDAN`:\n")
+        names = [n for n, s in v.drives[0].scores.items() if s.valid_fraction > 0]
+        body = []
+        for d in v.drives:
+            suv = d.sensitivity.get("suv", {})
+            body.append([d.label] + [f"{_f(d.scores[n].rms_raw_deg)} / {_f(suv[n].rms_raw_deg) if n in suv else 'n/a'}"
+                                     for n in names])
+        L.append(md_table(["drive"] + [f"{n} sedan / SUV" for n in names], body, align="l" + "r" * len(names)))
+        L.append("")
     L.append(f"{h}# Pooled over the drives\n")
     L.append("Every scored sample of every drive together (n samples).\n")
-    L.append("| estimator | rms raw (deg) | r raw | rms smoothed (deg) | r smoothed | n |")
-    L.append("|---|---|---|---|---|---|")
-    for name, p in v.pooled.items():
-        if p["n"] == 0:
-            L.append(f"| {name} | n/a | n/a | n/a | n/a | 0 |")
-        else:
-            L.append(f"| {name} | **{_f(p['rms_raw_deg'])}** | {_f(p['r_raw'])} | {_f(p['rms_deg'])} | "
-                     f"{_f(p['r'])} | {p['n']} |")
-    L.append("")
+    L.append(md_table(["estimator", "rms raw (deg)", "r raw", "rms smoothed (deg)", "r smoothed", "n"],
+                      [[name] + ([p["rms_raw_deg"], p["r_raw"], p["rms_deg"], p["r"]] if p["n"] else [None] * 4)
+                       + [int(p["n"])] for name, p in v.pooled.items()],
+                      digits=3, best=_BEST, best_in="column"))
+    L.append("\nBest of each score column in bold (smallest RMS, largest r).\n")
     L.append(f"{h}# Method (KITTI)\n")
     L.append(f"- Reader: `roadbank.io.load_log(drive)` (format `kitti-oxts`, detected from the folder): "
              "columns 8 `vf` -> vx, 12 `ay` -> ay, 19 `wz` -> r, 3 `roll` -> reference, 0/1 lat/lon kept "
@@ -154,8 +146,8 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
              "it favours a lag-free estimate (the kinematic one) over any causal observer; it is the "
              "primary score on comma2k19 only because the phone IMU's vibration hides the bank there.")
     L.append("- Estimators that read the steering angle (dfc, uio, pio-original, pif-original, kalman) have "
-             "no valid sample on KITTI and are listed as n/a. Vehicle data: `SEDAN` (KITTI's VW Passat B6 "
-             "has the same 2.71 m wheelbase class); the modified-model observers' `theta` does not use "
-             "the vehicle data.")
+             "no valid sample on KITTI and are listed as n/a. Vehicle data: `SEDAN` (KITTI's car, a VW "
+             "Passat B6, is a mid-size car of the same 2.7 m wheelbase class); the kinematic estimate does "
+             "not use vehicle data, the modified-model observers only weakly (sensitivity table above).")
     L.append("- These drives are validation data: no estimator weight or setting was chosen from them.\n")
     return "\n".join(L) + "\n"
