@@ -138,11 +138,13 @@ def test_float32_within_a_thousandth_of_a_degree(name, scenarios, built_modules)
     assert worst > 0.0          # it really is single precision
 
 
-@pytest.mark.parametrize("name,roll", [("pif-modified", "dynamic"), ("uio", "dynamic"), ("kinematic", "none"),
-                                       ("kalman", "dynamic")])
-def test_roll_models_and_the_general_observer_path(name, roll, scenarios, built_modules):
-    est = E.make(name, roll=roll)
-    mod = built_modules(name, est=est, tag=roll)
+@pytest.mark.parametrize("name,roll,grid", [("pif-modified", "dynamic", {}), ("uio", "dynamic", {}),
+                                            ("kinematic", "none", {}), ("kalman", "dynamic", {}),
+                                            ("pio-modified", "static", {"v_step": 1.0, "v_max": 60.0})])
+def test_roll_models_grids_and_the_general_observer_path(name, roll, grid, scenarios, built_modules):
+    """Static, dynamic and no roll; the four-state (LU) path; a coarse, short speed grid."""
+    est = E.make(name, roll=roll, **grid)
+    mod = built_modules(name, est=est, tag=roll + "".join(f"-{k}{v}" for k, v in grid.items()))
     assert mod.state_size == export_design(est, 100.0).state_bytes()
     for scen in ("hard", "track-lane-change"):
         cols = hard_log(scenarios) if scen == "hard" else scenarios[scen]
@@ -246,6 +248,10 @@ def test_cli_writes_the_module_and_refuses_dfc(tmp_path):
     assert files == ["README_roadbank_pio_modified.md", "roadbank_pio_modified.c", "roadbank_pio_modified.h"]
     header = (tmp_path / "out" / "roadbank_pio_modified.h").read_text()
     assert "typedef float roadbank_pio_modified_real;" in header and "RATE_HZ 50.0" in header
+    res = runner.invoke(main, ["export", "c", "-e", "kinematic", "--v-step", "1", "--v-max", "41",
+                               "-o", str(tmp_path / "coarse")])
+    assert res.exit_code == 0, res.output
+    assert "RB_NG = 37," in (tmp_path / "coarse" / "roadbank_kinematic.c").read_text()   # 5, 6, .., 41 m/s
     res = runner.invoke(main, ["export", "c", "--estimator", "dfc", "-o", str(tmp_path / "dfc")])
     assert res.exit_code != 0 and "not exportable" in res.output and "Traceback" not in res.output
     res = runner.invoke(main, ["export", "c", "--estimator", "nope", "-o", str(tmp_path / "x")])

@@ -42,9 +42,14 @@ def export():
 @click.option("--float32", "float32", is_flag=True, help="Single precision (tables, state and arithmetic).")
 @click.option("--roll", type=click.Choice(["static", "dynamic", "none"]), default=None,
               help="Roll separation (default: the vehicle's tuning, else static).")
+@click.option("--v-step", "v_step", type=float, default=None,
+              help="Spacing of the schedule's speed grid (m/s; default 0.25). Coarser: smaller tables.")
+@click.option("--v-max", "v_max", type=float, default=None,
+              help="Last speed of the schedule (m/s; default 100); faster samples use its gains.")
 @click.option("--output", "-o", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Output directory (created if missing).")
-def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: str | None, output: Path):
+def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: str | None,
+                 v_step: float | None, v_max: float | None, output: Path):
     """Write roadbank_<estimator>.h/.c (C99, no malloc, tables in flash) and its README."""
     from .. import estimators
     from ..export import NotExportable, export_c
@@ -57,7 +62,7 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
         rate = float(getattr(getattr(vehicle, "sensors", None), "rate", 100.0))
     if not rate > 0 or rate != rate or rate == float("inf"):
         raise click.BadParameter(f"must be a positive number of Hz, got {rate}", param_hint="--rate")
-    overrides = {} if roll is None else {"roll": roll}
+    overrides = {k: v for k, v in (("roll", roll), ("v_step", v_step), ("v_max", v_max)) if v is not None}
     try:
         est = vehicle.make(name, **overrides)
     except (ValueError, TypeError, NoStabilisingSolution) as exc:
