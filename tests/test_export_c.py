@@ -252,6 +252,14 @@ def test_cli_writes_the_module_and_refuses_dfc(tmp_path):
                                "-o", str(tmp_path / "coarse")])
     assert res.exit_code == 0, res.output
     assert "RB_NG = 37," in (tmp_path / "coarse" / "roadbank_kinematic.c").read_text()   # 5, 6, .., 41 m/s
+    from roadbank.vehicle import load_vehicle                 # the car's tuning reaches the design
+
+    car = load_vehicle("sedan").with_tuning("pif-modified", {"v_step": 1.0})
+    car.to_toml(tmp_path / "car.toml")
+    res = runner.invoke(main, ["export", "c", "--vehicle", str(tmp_path / "car.toml"), "-o", str(tmp_path / "car")])
+    assert res.exit_code == 0, res.output
+    text = (tmp_path / "car" / "roadbank_pif_modified.c").read_text()
+    assert "RB_NG = 96," in text and f"m={car.params.m:.6g}" in text
     res = runner.invoke(main, ["export", "c", "--estimator", "dfc", "-o", str(tmp_path / "dfc")])
     assert res.exit_code != 0 and "not exportable" in res.output and "Traceback" not in res.output
     res = runner.invoke(main, ["export", "c", "--estimator", "nope", "-o", str(tmp_path / "x")])
