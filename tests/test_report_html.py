@@ -230,18 +230,15 @@ needs_segment = pytest.mark.skipif(not SEGMENT.is_dir(), reason=f"comma2k19 exam
 
 
 @needs_segment
-def test_validate_comma2k19_report_and_figure_render(tmp_path):
-    from roadbank.report.html import write_document
-    from roadbank.validation import markdown, plot, validate_comma2k19
-
-    res = validate_comma2k19(SEGMENT, names=["kinematic", "pif-modified", "dfc"], sensitivity=False)
-    plot(res, tmp_path / "real-data.png")
-    text = markdown(res, figure="real-data.png")
-    write_document(tmp_path / "real-data.md", text)
-    write_document(tmp_path / "real-data.html", text, "validation")
-    tables = check_report(tmp_path / "real-data.md", tmp_path / "real-data.html")
+def test_validate_comma2k19_html_report(tmp_path):
+    out = tmp_path / "real-data.html"
+    res = CliRunner().invoke(main, ["validate", "comma2k19", str(SEGMENT), "--no-sensitivity",
+                                    "-e", "kinematic,pif-modified,dfc", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert out.with_suffix(".png").exists()
+    tables = check_html(out, n_images=1)
     result = tables[0]
-    assert result["header"][:4] == ["estimator", "r", "rms_deg", "offset_deg"]
+    assert result["header"][:4] == ["estimator", "r", "rms_deg", "offset_deg"] and len(result["rows"]) == 3
     # the largest r is the bold one in its column
     r = {_text(row[0]): (float(_text(row[1])), row[1].find("strong") is not None) for row in result["rows"]}
     top = max(v for v, _ in r.values())

@@ -99,15 +99,12 @@ def md_to_html(markdown: str, title: str | None = None, *, base_dir=None, embed:
 
 
 def write_document(path, markdown: str, title: str | None = None) -> Path:
-    """Write a report as markdown (``.md``) or as a self-contained HTML page (``.html``/``.htm``),
-    chosen by the suffix of ``path``; relative figures are resolved against ``path``'s folder."""
+    """Write a report as a self-contained HTML page when ``path`` ends in ``.html``/``.htm``
+    (relative figures resolved against ``path``'s folder and embedded), else as markdown."""
     path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix in (".html", ".htm"):
+    if path.suffix.lower() in (".html", ".htm"):
         text = md_to_html(markdown, title, base_dir=path.parent)
-    elif suffix in (".md", ".markdown"):
-        text = markdown if markdown.endswith("\n") else markdown + "\n"
     else:
-        raise ValueError(f"{path}: report file must end in .md or .html")
+        text = markdown if markdown.endswith("\n") else markdown + "\n"
     path.write_text(text, encoding="utf-8")
     return path

@@ -140,10 +140,11 @@ def reference_figure(t, reference, estimates: dict, *, valid: dict | None = None
     t : array (s)
     reference : array (rad)
         The reference angle on ``t`` (e.g. the INS or pose roll).
-    estimates : dict name -> array (rad)
+    estimates : dict label -> array (rad)
         Estimates comparable with the reference, on ``t``.
-    valid : dict name -> bool array, optional
-        The estimators' valid flags; spans where any is False are shaded red.
+    valid : dict label -> bool array, optional
+        The estimators' valid flags (same keys as ``estimates``): each line leaves out its
+        flagged samples, and spans where any is False are shaded red.
     unscored : bool array, optional
         Samples left out of the scores (warm-up, below the speed gate), shaded grey.
     split_time : float (s, same clock as ``t``), optional
@@ -166,8 +167,11 @@ def reference_figure(t, reference, estimates: dict, *, valid: dict | None = None
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(9, 5.6), gridspec_kw={"height_ratios": [3, 2]})
     axes[0].plot(tt, _deg(reference), "k", lw=1.8, label=reference_label, zorder=3)
     for name, x in estimates.items():
-        axes[0].plot(tt, _deg(x), lw=1.0, label=name)
-        axes[1].plot(tt, _deg(x) - _deg(reference), lw=1.0, label=name)
+        x = _deg(x)
+        if valid and name in valid:
+            x = np.where(valid[name], x, np.nan)
+        axes[0].plot(tt, x, lw=1.0, label=name)
+        axes[1].plot(tt, x - _deg(reference), lw=1.0, label=name)
     axes[1].axhline(0.0, color="k", lw=0.6)
     if unscored is not None:
         for k, (a, b) in enumerate(flagged_spans(t, ~np.asarray(unscored, bool))):

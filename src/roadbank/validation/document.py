@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..report.markdown import md_table
 from . import kitti_report, report
 
 
@@ -53,10 +54,9 @@ def jitter_markdown(results, level: int = 2) -> str:
              "theta (bank + body roll) at each run's own samples, after 2 s. Generated with "
              "`roadbank.validation.jitter.jitter_study`; `tests/test_validate_kitti.py` checks the same.\n")
     names = list(results[0].rms_100hz)
-    L.append("| scenario | " + " | ".join(f"{n} 100 Hz / 10 Hz" for n in names) + " |")
-    L.append("|---|" + "---|" * len(names))
-    for r in results:
-        L.append(f"| {r.scenario} | " + " | ".join(f"{r.rms_100hz[n]:.3f} / {r.rms_10hz[n]:.3f}" for n in names) + " |")
+    L.append(md_table(["scenario"] + [f"{n} 100 Hz / 10 Hz" for n in names],
+                      [[r.scenario] + [f"{r.rms_100hz[n]:.3f} / {r.rms_10hz[n]:.3f}" for n in names] for r in results],
+                      align="l" + "r" * len(names)))
     L.append("")
     L.append("RMS in deg. Halving `max_substep` to 5 ms leaves every 10 Hz number unchanged to 0.001 deg and "
              "one trapezoidal step per sample (no substeps) changes them by at most 0.02 deg at these speeds: "
@@ -92,22 +92,23 @@ def real_data_markdown(comma=None, kitti=None, jitter=(), figures=None, command:
          "What differs per data set is said in its section: the offset (fitted only where the reference is "
          "a device mounted at an unknown angle) and which columns are primary.\n"]
     L.append("## Summary\n")
-    L.append("| data | log | kinematic rms raw / smoothed (deg) | default pif-modified rms raw / smoothed (deg) | "
-             "pif-modified r raw / smoothed |")
-    L.append("|---|---|---|---|---|")
+    rows = []
 
     def row(data, label, sc):
         k, p = sc.get("kinematic"), sc.get("pif-modified")
         f = kitti_report._f
         if k is None or p is None:
             return
-        L.append(f"| {data} | {label} | {f(k.rms_raw_deg)} / {f(k.rms_deg)} | {f(p.rms_raw_deg)} / {f(p.rms_deg)} | "
-                 f"{f(p.r_raw)} / {f(p.r)} |")
+        rows.append([data, label, f"{f(k.rms_raw_deg)} / {f(k.rms_deg)}", f"{f(p.rms_raw_deg)} / {f(p.rms_deg)}",
+                     f"{f(p.r_raw)} / {f(p.r)}"])
     if comma is not None:
         row("comma2k19", "example segment (offset fitted)", comma.scores)
     if kitti is not None:
         for d in kitti.drives:
             row("KITTI", d.label, d.scores)
+    L.append(md_table(["data", "log", "kinematic rms raw / smoothed (deg)",
+                       "default pif-modified rms raw / smoothed (deg)", "pif-modified r raw / smoothed"],
+                      rows, align="llrrr"))
     L.append("")
     if comma is not None:
         L.append("## comma2k19 (phone IMU, CAN, GNSS/INS/vision pose)\n")

@@ -23,14 +23,13 @@ def to_json(res: ValidationResult) -> dict:
 
 def plot(res: ValidationResult, path, show=("kinematic", "pif-modified", "kalman", "dfc")) -> None:
     """Smoothed estimates (theta + offset) against the pose roll and their error (deg) vs time (s):
-    warm-up shaded grey, spans an estimator flagged not valid red (when ``res.valid`` holds the
-    flags, name -> bool array), the offset-fit / scored split dotted."""
+    warm-up shaded grey, spans an estimator flagged not valid red, the offset-fit / scored split dotted."""
     from ..report.timeseries import reference_figure, save_figure
 
     names = [n for n in show if n in res.estimates]
-    valid = getattr(res, "valid", None) or {}
+    valid = res.run.valid if res.run is not None else {}
     fig = reference_figure(res.t, res.reference, {f"{n} theta + offset": res.estimates[n] for n in names},
-                           valid={n: valid[n] for n in names if n in valid},
+                           valid={f"{n} theta + offset": valid[n] for n in names if n in valid},
                            unscored=res.t < res.t[0] + res.settings["warmup_s"], split_time=res.split_time,
                            quantity=f"roll, smoothed tau = {res.settings['tau']:.2f} s",
                            reference_label="reference (pose roll)",
