@@ -20,7 +20,7 @@ from roadbank.identification.simdrive import DriveSpec
 from roadbank.io import Log
 from roadbank.io.writers import write_table
 from roadbank.sim import Driver, Scenario, run, straight_road
-from roadbank.vehicle import Vehicle
+from roadbank.vehicle import Vehicle, load_vehicle
 
 CROWN = 0.02  # 2 % cross slope on the straights
 
@@ -72,6 +72,19 @@ def test_wrong_bank_assumption_shows_up_in_the_ay_offset(drive, result):
     flat = identify([log], case.params, IdentifySettings(straight_bank=0.0))
     shift = flat.quantities["ay_offset"].value - result.quantities["ay_offset"].value
     assert shift == pytest.approx(9.81 * math.sin(CROWN) * 1.098, rel=0.02)
+
+
+@pytest.mark.parametrize("car, scales", [("compact", (0.85, 1.10)), ("van", (1.15, 0.90))])
+def test_other_cars(car, scales):
+    """Shipped cars with plant tyres off their vehicle file: Cr within 10 %, Cf and Kus within 2 sigma."""
+    v = load_vehicle(car)
+    case = SimCase(name=car, params=v.params, sensors=v.sensors.to_sim(), scale_front=scales[0],
+                   scale_rear=scales[1], seed=2, drive=DriveSpec(n_corners=6), with_roll=False)
+    log, truth = simulate_case(case)
+    q = identify([log], v.params).quantities
+    assert abs(q["Cr"].value / truth["Cr"] - 1) < 0.10
+    for name in ("Cf", "Kus"):
+        assert abs(q[name].value - truth[name]) <= 2 * q[name].std, (name, q[name].value, truth[name])
 
 
 def _linear_log(p: VehicleParams, vx=20.0, T=150.0, fs=100.0, seed=3):
@@ -180,3 +193,21 @@ def test_cli_only_unusable_logs_writes_nothing(tmp_path):
     res = CliRunner().invoke(main, ["identify", str(p), "-o", str(out)])
     assert res.exit_code == 1 and not out.exists()
     assert "too slow" in res.output and "Traceback" not in res.output
+
+
+COMMA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "comma2k19-example"
+
+
+@pytest.mark.skipif(not COMMA.is_dir(), reason=f"comma2k19 example segment absent at {COMMA}")
+def test_comma2k19_near_straight_highway_refuses_stiffness():
+    """One minute of near-straight highway: the stiffnesses are refused (no corners), the offsets are
+    read from the straights with small uncertainties."""
+    from roadbank.io import load_log
+
+    res = identify([load_log(COMMA)])
+    q = res.quantities
+    for name in ("Cf", "Cr", "Kus"):
+        assert "quasi-steady corners" in q[name].refused
+    assert q["yaw_rate_offset"].ok and q["yaw_rate_offset"].std < math.radians(0.05)
+    assert q["ay_offset"].ok and q["ay_offset"].std < 0.05
+    assert not q["roll_gain"].ok  # a roll reference is there, but no cornering

@@ -135,7 +135,13 @@ def identify(logs, vehicle, channels, fmt, output, straight_bank, ay_max, as_jso
     if not identified:
         click.echo("error: nothing could be identified from these logs; no file written", err=True)
         sys.exit(1)
-    out = vehicle.replace(params=result.params).with_identified(identified)
+    used = [str(r.source) for r in result.logs if r.used]
+    what = "Cf, Cr" if "Cf" in identified and "Cr" in identified else "nothing of the [vehicle] table"
+    out = vehicle.replace(
+        name=output.stem, params=result.params,
+        description=f"{vehicle.description or vehicle.name}; {what} identified from logs by roadbank identify",
+        sources=(*vehicle.sources, f"roadbank identify on {len(used)} log(s): {', '.join(used)}"),
+    ).with_identified(identified)
     try:
         output.parent.mkdir(parents=True, exist_ok=True)
         out.to_toml(output)

@@ -80,14 +80,14 @@ def identify(logs, params: VehicleParams | None = None, settings: IdentifySettin
     pooled = Offsets(q_r.value, q_a.value) if q_r.ok and q_a.ok else Offsets(0.0, 0.0)
     offs = [o if o is not None else pooled for o in per_log]
     quantities = {"yaw_rate_offset": q_r, "ay_offset": q_a}
-    roll_gain = base_roll
+    roll_gain, roll_std = base_roll, s.roll_gain_rel_std * base_roll
     if any(pc.roll is not None for seg in segs for pc in seg.pieces):
         q = identify_roll_gain(segs, offs, s)
         quantities["roll_gain"] = q
         if q.ok and q.value > 0:
-            roll_gain = q.value
+            roll_gain, roll_std = q.value, q.std
     offsets_std = (q_r.std, q_a.std) if q_r.ok and q_a.ok else None
-    quantities.update(identify_stiffness(segs, offs, p, roll_gain, s, offsets_std))
+    quantities.update(identify_stiffness(segs, offs, p, roll_gain, s, offsets_std, roll_std))
     quantities = {k: quantities[k] for k in ORDER if k in quantities}
     out_p = p
     if quantities["Cf"].ok and quantities["Cr"].ok:

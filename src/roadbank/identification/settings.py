@@ -54,6 +54,10 @@ class IdentifySettings:
     max_rel_std : float
         A stiffness or understeer gradient whose relative standard uncertainty
         exceeds this is refused (not excited enough). Default 0.2.
+    roll_gain_rel_std : float
+        Relative uncertainty of the base vehicle's roll gain (used to turn ``ay``
+        into tyre forces when the log has no roll reference), propagated into
+        ``Kus``, ``Cf``, ``Cr``. Default 0.1.
     straight_bank : float
         Assumed mean bank (rad, ISO: left side up) of the straights driven; the ay
         offset is relative to it. Default 0 (flat; a 2 % crown is 0.02).
@@ -78,6 +82,7 @@ class IdentifySettings:
     min_corners: int = 3
     min_blocks: int = 8
     max_rel_std: float = 0.2
+    roll_gain_rel_std: float = 0.1
     straight_bank: float = 0.0
 
     def __post_init__(self) -> None:

@@ -58,6 +58,11 @@ KUS_STD_FLOOR = 5e-4
 #: block, so no resampling can see it.
 KUS_MODEL_FLOOR = 3e-5
 
+#: Relative model error of Cf and Cr not seen by the bootstrap nor by the half-range, roll-gain and
+#: (tested, not used) half-bandwidth or speed-split checks: on the simulated fleet the compact car's
+#: Cf and Cr come out 1.3 % and 3 % low at every amplitude, bandwidth and speed. Added in quadrature.
+CF_MODEL_FLOOR, CR_MODEL_FLOOR = 0.01, 0.02
+
 
 def tyre_acceleration(ay: np.ndarray, fs: float, p: VehicleParams, roll_gain: float) -> np.ndarray:
     r"""Tyre-force specific acceleration :math:`a_t = (F_{yf}+F_{yr})/m` from the measured ``ay``.
@@ -140,7 +145,8 @@ def _stiffness(theta: np.ndarray, p: VehicleParams) -> tuple[np.ndarray, np.ndar
 
 
 def identify_stiffness(segs: list[Segmented], offs: list[Offsets], p: VehicleParams, roll_gain: float,
-                       s: IdentifySettings, offsets_std: tuple[float, float] | None) -> dict[str, Quantity]:
+                       s: IdentifySettings, offsets_std: tuple[float, float] | None,
+                       roll_gain_std: float = 0.0) -> dict[str, Quantity]:
     """``Kus`` (rad s^2/m), ``Cf``, ``Cr`` (N/rad) and ``steering_offset`` (rad) from the logs.
 
     Parameters
@@ -158,6 +164,9 @@ def identify_stiffness(segs: list[Segmented], offs: list[Offsets], p: VehiclePar
         Standard uncertainties of the yaw-rate (rad/s) and ay (m/s^2) offsets, propagated
         into the steering offset; None when they could not be identified (then the
         steering offset is refused: its constant mixes with them).
+    roll_gain_std : float
+        Uncertainty of ``roll_gain`` (rad per m/s^2); the change of the results when the
+        roll gain is moved by it is added to their uncertainty.
 
     Returns
     -------
@@ -191,9 +200,16 @@ def identify_stiffness(segs: list[Segmented], offs: list[Offsets], p: VehiclePar
         th_h = solve(XtX_h.sum(0), Xty_h.sum(0))
         cf_h, cr_h = _stiffness(th_h, p)
         sys = np.nan_to_num(np.abs([theta[0] - th_h[0], cf - cf_h, cr - cr_h]), nan=np.inf)
+    if roll_gain_std > 0:
+        # the tyre forces come from ay through the roll model: propagate the roll gain's uncertainty
+        rows_r = [regression_rows(seg, off, p, roll_gain + roll_gain_std, s) for seg, off in zip(segs, offs)]
+        th_r = solve(*(a.sum(0) for a in _blocks(rows_r, fs_list, s, s.ay_max)))
+        cf_r, cr_r = _stiffness(th_r, p)
+        sys = np.hypot(sys, np.nan_to_num(np.abs([theta[0] - th_r[0], cf - cf_r, cr - cr_r]), nan=np.inf))
     n_s = sum(int(m.sum()) / fs for (_, _, m), fs in zip(rows, fs_list))
     method = (f"linear regression (tyre forces from ay and dr/dt) over {len(XtX)} blocks (~{n_s:.0f} s); "
-              f"block bootstrap + model-error term (fit on |ay| <= {s.ay_max / 2:g} m/s^2)")
+              f"block bootstrap + model-error term (fit on |ay| <= {s.ay_max / 2:g} m/s^2) + roll gain "
+              f"{roll_gain:.3g} +- {roll_gain_std:.2g} rad/(m/s^2) propagated + model-error floor")
     kus_std = float(np.sqrt(robust_std(boot[:, 0]) ** 2 + sys[0] ** 2 + KUS_MODEL_FLOOR ** 2))
     if not kus_std <= max(s.max_rel_std * abs(theta[0]), KUS_STD_FLOOR):
         why = (f"understeer gradient not determined: {theta[0]:.2e} +- {kus_std:.1e} rad s^2/m; "
@@ -201,8 +217,9 @@ def identify_stiffness(segs: list[Segmented], offs: list[Offsets], p: VehiclePar
         out["Kus"] = refused("Kus", "rad s^2/m", why)
     else:
         out["Kus"] = Quantity("Kus", float(theta[0]), kus_std, "rad s^2/m", method)
-    for name, val, b, extra in (("Cf", cf, cf_b, sys[1]), ("Cr", cr, cr_b, sys[2])):
-        sd = float(np.hypot(robust_std(b), extra))
+    for name, val, b, extra, floor in (("Cf", cf, cf_b, sys[1], CF_MODEL_FLOOR),
+                                       ("Cr", cr, cr_b, sys[2], CR_MODEL_FLOOR)):
+        sd = float(np.sqrt(robust_std(b) ** 2 + extra**2 + (floor * val) ** 2))
         bad = float(np.mean(~np.isfinite(b) | (b <= 0)))
         if not (np.isfinite(val) and val > 0 and bad < 0.025 and sd <= s.max_rel_std * val):
             rel = f"{100 * sd / val:.0f} %" if np.isfinite(val) and val > 0 and np.isfinite(sd) else "unbounded"
