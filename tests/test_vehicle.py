@@ -419,3 +419,31 @@ def test_reproduce_cell_with_a_vehicle():
     np.testing.assert_array_equal(cell.phi_b["dfc"], car.make("dfc").run(s).phi_b)
     published = estimators.make("pif-modified", car.params, tuning="paper").run(s).phi_b
     np.testing.assert_array_equal(cell.phi_b["pif-modified"], published)
+
+
+def test_campaign_runs_perturb_the_vehicle():
+    from roadbank.campaign.runner import RunOptions, run_one
+    from roadbank.campaign.sampling import draw
+
+    spec = draw(3, base_seed=1)
+    van = load_vehicle("van")
+    plant, sensors = spec.plant_and_sensors(van)
+    assert plant.vehicle.m == pytest.approx(van.params.m * spec.mass_scale)
+    assert plant.vehicle.Lf == van.params.Lf and plant.CdA == van.plant["CdA"]
+    assert plant.axle_cornering_stiffness == pytest.approx((spec.cf_scale * van.params.Cf,
+                                                            spec.cr_scale * van.params.Cr))
+    assert spec.plant_and_sensors(load_vehicle(None)) == spec.plant_and_sensors()  # SUV = no vehicle
+    assert "vehicle" not in RunOptions().as_dict()  # stored campaigns without cars still resume
+    opts = RunOptions(names=("dfc",), duration_scale=0.15, pre_roll=0.5, settle=0.5,
+                      vehicle=van.with_tuning("dfc", {"a_ref": 1.5}))
+    assert Vehicle.loads(opts.as_dict()["vehicle"]) == opts.vehicle
+    rows = run_one(spec, opts)
+    assert [r["estimator"] for r in rows] == ["dfc"] and rows[0]["error"] == ""
+    assert pickle.loads(pickle.dumps(opts)) == opts  # shipped to Dask workers
+
+
+def test_campaign_cli_bad_vehicle(tmp_path):
+    bad = tmp_path / "car.toml"
+    bad.write_text(TABLE1 + "[tuning.pif-modified]\nq = 3.0\n")
+    r = CliRunner().invoke(main, ["campaign", "-n", "1", "-o", str(tmp_path / "c"), "--vehicle", str(bad)])
+    assert r.exit_code == 2 and "[tuning.pif-modified] q: unknown option" in r.output
