@@ -313,3 +313,29 @@ def test_estimate_figure_without_reference_has_no_error_panel():
     assert fig2.axes[2].get_ylabel() == "theta - reference roll (deg)"
     import matplotlib.pyplot as plt
     plt.close("all")
+
+
+def test_estimate_plot_gets_the_logs_truth_and_reference(tmp_path, monkeypatch):
+    """``roadbank estimate --plot`` hands the simulated log's truth columns to the figure."""
+    import pandas as pd
+
+    import roadbank.report.timeseries as ts
+
+    sig, bank = _synthetic_log()
+    csv = tmp_path / "drive.csv"
+    pd.DataFrame({"t": sig.t, "vx": sig.vx, "ay": sig.ay, "r": sig.r, "delta_f": sig.delta_f,
+                  "true_phi_b": bank, "true_theta": bank}).to_csv(csv, index=False)
+    seen = {}
+    real = ts.plot_estimates
+
+    def spy(path, t, estimates, reference_roll=None, title="", truth=None):
+        seen.update(truth=truth, n=len(t))
+        return real(path, t, estimates, reference_roll, title=title, truth=truth)
+
+    monkeypatch.setattr(ts, "plot_estimates", spy)
+    png = tmp_path / "drive.png"
+    res = CliRunner().invoke(main, ["estimate", str(csv), "-e", "kinematic", "-o", str(tmp_path / "out.csv"),
+                                    "--plot", str(png)])
+    assert res.exit_code == 0, res.output
+    assert png.stat().st_size > 10_000
+    np.testing.assert_allclose(seen["truth"]["true_phi_b"], bank, atol=1e-9)
