@@ -65,6 +65,20 @@ def test_every_quantity_within_its_uncertainty(drive, result):
     assert abs(result.quantities["ay_offset"].value - truth["ay_offset"]) < 0.01
 
 
+def test_sporadic_dropouts_do_not_cut_the_log(drive, result):
+    """2 % of the samples lost (NaN, as dropped CAN frames): short gaps are bridged, same result."""
+    case, log, truth = drive
+    s = log.signals
+    lost = np.random.default_rng(5).random(len(s.t)) < 0.02
+    holed = Log(signals=Signals(s.t, np.where(lost, np.nan, s.vx), np.where(lost, np.nan, s.ay), s.r, s.delta_f),
+                reference_roll=log.reference_roll, source=Path("holed"))
+    res = identify([holed], case.params, IdentifySettings(straight_bank=CROWN))
+    assert res.logs[0].seconds["usable"] > 0.95 * result.logs[0].seconds["usable"]
+    for name in ("Cf", "Cr", "Kus"):
+        q0, q1 = result.quantities[name], res.quantities[name]
+        assert abs(q1.value - q0.value) < q0.std, name
+
+
 def test_wrong_bank_assumption_shows_up_in_the_ay_offset(drive, result):
     """The ay offset is relative to the assumed mean bank of the straights: assuming flat roads
     moves it by about g sin(crown) (1 + g k_roll)."""

@@ -31,7 +31,23 @@ class Grid:
     fs: float
 
 
-def to_grid(t, vx, ay, r, delta, roll=None, max_gap: float = 0.5) -> Grid:
+def fill_short_gaps(x: np.ndarray, max_len: int) -> np.ndarray:
+    """``x`` with NaN stretches of at most ``max_len`` samples between finite samples linearly interpolated
+    (sporadic dropouts would otherwise cut a log into pieces too short to use)."""
+    x = np.asarray(x, dtype=float).copy()
+    bad = ~np.isfinite(x)
+    if not bad.any() or bad.all():
+        return x
+    idx = np.arange(len(x))
+    fill = np.zeros(len(x), dtype=bool)
+    for a, b in runs(bad):
+        if a > 0 and b < len(x) and b - a <= max_len:
+            fill[a:b] = True
+    x[fill] = np.interp(idx[fill], idx[~bad], x[~bad])
+    return x
+
+
+def to_grid(t, vx, ay, r, delta, roll=None, max_gap: float = 0.5, max_fill: float = 0.1) -> Grid:
     """Resample channels onto a uniform grid at the log's median sample rate.
 
     Parameters
@@ -41,6 +57,8 @@ def to_grid(t, vx, ay, r, delta, roll=None, max_gap: float = 0.5) -> Grid:
     roll : array (rad) or None
     max_gap : float
         Samples further than this (s) from a valid sample of a channel become NaN.
+    max_fill : float
+        Gaps (NaN) up to this long (s) are linearly interpolated (dropped CAN frames).
 
     Returns
     -------
@@ -71,6 +89,8 @@ def to_grid(t, vx, ay, r, delta, roll=None, max_gap: float = 0.5) -> Grid:
             gap = tv[i] - tv[i - 1]
             y[(gap > max_gap) | (tg < tv[0]) | (tg > tv[-1])] = np.nan
             out[k] = y
+    n_fill = int(round(max_fill / dt))
+    out = {k: fill_short_gaps(v, n_fill) for k, v in out.items()}
     return Grid(tg, out["vx"], out["ay"], out["r"], out["delta"], out.get("roll"), 1.0 / dt)
 
 
