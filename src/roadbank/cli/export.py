@@ -46,10 +46,13 @@ def export():
               help="Spacing of the schedule's speed grid (m/s; default 0.25). Coarser: smaller tables.")
 @click.option("--v-max", "v_max", type=float, default=None,
               help="Last speed of the schedule (m/s; default 100); faster samples use its gains.")
+@click.option("--name", "module_name", default=None,
+              help="Module name: files roadbank_<name>.h/.c, symbols roadbank_<name>_* (default: the "
+                   "estimator's name). Two tunings of one estimator in one program need two names.")
 @click.option("--output", "-o", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Output directory (created if missing).")
 def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: str | None,
-                 v_step: float | None, v_max: float | None, output: Path):
+                 v_step: float | None, v_max: float | None, module_name: str | None, output: Path):
     """Write roadbank_<estimator>.h/.c (C99, no malloc, tables in flash) and its README."""
     from .. import estimators
     from ..export import NotExportable, export_c
@@ -62,15 +65,24 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
         rate = float(getattr(getattr(vehicle, "sensors", None), "rate", 100.0))
     if not rate > 0 or rate != rate or rate == float("inf"):
         raise click.BadParameter(f"must be a positive number of Hz, got {rate}", param_hint="--rate")
+    if module_name is not None:
+        from ..export.design import c_identifier
+
+        try:
+            c_identifier(module_name)
+        except ValueError as exc:
+            raise click.BadParameter(str(exc), param_hint="--name") from None
     overrides = {k: v for k, v in (("roll", roll), ("v_step", v_step), ("v_max", v_max)) if v is not None}
     try:
         est = vehicle.make(name, **overrides)
     except (ValueError, TypeError, NoStabilisingSolution) as exc:
         raise click.ClickException(f"{name}: cannot design for vehicle {vehicle.name!r}: {exc}") from None
     try:
-        res = export_c(est, output, rate=rate, float32=float32)
+        res = export_c(est, output, rate=rate, float32=float32, module_name=module_name)
     except NotExportable as exc:
         raise click.ClickException(str(exc)) from None
+    except ValueError as exc:
+        raise click.ClickException(f"{name}: cannot export: {exc}") from None
     except OSError as exc:
         raise click.ClickException(f"cannot write into {output}: {exc.strerror or exc}") from None
     d = res.design

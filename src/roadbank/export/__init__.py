@@ -46,7 +46,7 @@ class ExportResult:
         return self.design.table_bytes(self.float32)
 
 
-def export_c(est, out_dir, *, rate: float, float32: bool = False) -> ExportResult:
+def export_c(est, out_dir, *, rate: float, float32: bool = False, module_name: str | None = None) -> ExportResult:
     """Write ``roadbank_<name>.h/.c`` and ``README_roadbank_<name>.md`` of ``est`` into ``out_dir``.
 
     Parameters
@@ -59,13 +59,16 @@ def export_c(est, out_dir, *, rate: float, float32: bool = False) -> ExportResul
         Nominal sample rate (Hz) of the target.
     float32 : bool
         Single precision (tables, state and arithmetic); default double.
+    module_name : str, optional
+        Module name: files ``roadbank_<module_name>.*`` and symbols ``roadbank_<module_name>_*``
+        (non-identifier characters become ``_``); default the estimator's name.
 
     Raises
     ------
     NotExportable
         When the estimator's runtime is not a scheduled linear observer.
     """
-    design = export_design(est, rate)
+    design = export_design(est, rate, module_name)
     files = generate(design, float32=float32)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -151,7 +151,7 @@ def check_exportable(est) -> None:
         raise NotExportable(f"{est.name}: not exportable: {why}")
 
 
-def export_design(est, rate: float) -> ExportDesign:
+def export_design(est, rate: float, module_name: str | None = None) -> ExportDesign:
     """Read the tables of a designed estimator (see :class:`ExportDesign`).
 
     Parameters
@@ -160,6 +160,9 @@ def export_design(est, rate: float) -> ExportDesign:
         A designed estimator on the ``lpv`` kernel.
     rate : float
         Nominal sample rate (Hz) of the target.
+    module_name : str, optional
+        Name of the C module (files and symbols ``roadbank_<module_name>_*``); default
+        the estimator's name. Two designs of one estimator in one program need two names.
 
     Raises
     ------
@@ -197,7 +200,7 @@ def export_design(est, rate: float) -> ExportDesign:
                   "vehicle": {k: getattr(p, k) for k in p.__dataclass_fields__}
                   if hasattr(p, "__dataclass_fields__") else repr(p)}
     return ExportDesign(
-        name=est.name, ident=c_identifier(est.name), n=n, nr=int(nr),
+        name=est.name, ident=c_identifier(module_name or est.name), n=n, nr=int(nr),
         v0=float(vgrid[0]), dv=float(vgrid[1] - vgrid[0]), table=table,
         roll_F=np.array(F, float), roll_G=np.array(G, float).ravel(), roll_H=np.array(H, float).ravel(),
         roll_D=float(np.ravel(D)[0]), roll_J=np.array(J, float),
