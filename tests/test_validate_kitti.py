@@ -142,3 +142,36 @@ def test_10hz_jitter_against_100hz_on_the_truth():
         assert r.rms_10hz[name] <= 1.2 * r.rms_100hz[name] + 0.05, (name, r.rms_100hz, r.rms_10hz)
     # and the PIF stays well below the kinematic estimate's error at 10 Hz (the transient it rejects)
     assert r.rms_10hz["pif-modified"] < r.rms_10hz["kinematic"]
+
+
+# ---------------------------------------------------------------- the combined report
+def test_find_datasets_layouts(tmp_path):
+    from roadbank.validation.document import find_datasets
+
+    (tmp_path / "seg" / "processed_log").mkdir(parents=True)
+    for drive in ("kitti/2011_01_01_drive_0001_sync", "kitti/2011_01_01_drive_0002_sync"):
+        (tmp_path / drive / "oxts" / "data").mkdir(parents=True)
+        (tmp_path / drive / "oxts" / "timestamps.txt").write_text("2011-01-01 12:00:00.0\n")
+    found = find_datasets(tmp_path)
+    assert found["comma2k19"] == [tmp_path / "seg"]
+    assert [p.name for p in found["kitti"]] == ["2011_01_01_drive_0001_sync", "2011_01_01_drive_0002_sync"]
+    assert find_datasets(tmp_path / "kitti")["kitti"] == found["kitti"]
+
+
+@needs_kitti
+def test_validate_all_writes_one_report(tmp_path):
+    data = tmp_path / "data"
+    data.mkdir()
+    drive = next(KITTI.glob("*/oxts")).parent
+    (data / drive.name).symlink_to(drive)                # KITTI only: no comma2k19 run, no jitter study
+    out = tmp_path / "docs" / "real-data.md"
+    res = CliRunner().invoke(main, ["validate", "all", str(data), "-o", str(out), "--no-jitter"])
+    assert res.exit_code == 0, res.output
+    text = out.read_text()
+    assert text.startswith("# Real-data validation") and "## Summary" in text
+    assert f"| KITTI | {drive.name} |" in text and "## KITTI raw drives" in text
+    assert (out.parent / f"real-data-kitti-{drive.name}.png").exists()
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    res = CliRunner().invoke(main, ["validate", "all", str(empty), "-o", str(out)])
+    assert res.exit_code == 1 and "no comma2k19 segment or KITTI drive" in res.output
