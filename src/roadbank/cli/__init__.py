@@ -30,6 +30,7 @@ COMMANDS = {
     "bench": "bench:bench",
     "campaign": "campaign:campaign",
     "robustness": "robustness:robustness",
+    "map": "map:map_command",
     "export": "export:export",
     "identify": "identify:identify",
     "tune": "tune:tune",
