@@ -447,3 +447,26 @@ def test_campaign_cli_bad_vehicle(tmp_path):
     bad.write_text(TABLE1 + "[tuning.pif-modified]\nq = 3.0\n")
     r = CliRunner().invoke(main, ["campaign", "-n", "1", "-o", str(tmp_path / "c"), "--vehicle", str(bad)])
     assert r.exit_code == 2 and "[tuning.pif-modified] q: unknown option" in r.output
+
+
+COMMA = ROOT / ".." / "shared" / "data" / "comma2k19-example"
+
+
+@pytest.mark.skipif(not COMMA.is_dir(), reason=f"comma2k19 example segment absent at {COMMA}")
+def test_validate_designs_for_the_vehicle(tmp_path):
+    """validate comma2k19 --vehicle: the car's params and tuning; without it the data set's SEDAN."""
+    import json
+
+    from roadbank.validation import SEDAN, validate_comma2k19
+
+    car = load_vehicle("van").with_tuning("dfc", {"a_ref": 1.5})
+    path = tmp_path / "car.toml"
+    car.to_toml(path)
+    args = ["validate", "comma2k19", str(COMMA), "--json", "--no-sensitivity", "-e", "dfc"]
+    with_car = json.loads(CliRunner().invoke(main, args + ["--vehicle", str(path)]).stdout)
+    default = json.loads(CliRunner().invoke(main, args).stdout)
+    lib = validate_comma2k19(COMMA, names=["dfc"], params=car.params, tuning=car.tuning, sensitivity=False)
+    assert with_car["dfc"]["rms_deg"] == pytest.approx(lib.scores["dfc"].rms_deg, abs=6e-5)  # JSON: 4 decimals
+    sedan = validate_comma2k19(COMMA, names=["dfc"], params=SEDAN, sensitivity=False)
+    assert default["dfc"]["rms_deg"] == pytest.approx(sedan.scores["dfc"].rms_deg, abs=6e-5)
+    assert abs(lib.scores["dfc"].rms_deg - sedan.scores["dfc"].rms_deg) > 1e-3

@@ -16,6 +16,8 @@ _BUILTIN_HELP = "suv-paper (default), compact, sedan, van"
 def _to_vehicle(ctx, param, value):
     from ..vehicle import VehicleFileError, load_vehicle
 
+    if value is None and getattr(param, "none_if_absent", False):
+        return None
     try:
         vehicle = load_vehicle(value)
         if value is not None:
@@ -25,15 +27,27 @@ def _to_vehicle(ctx, param, value):
     return vehicle
 
 
-def vehicle_option(help_extra: str = ""):
+class _VehicleOption(click.Option):
+    def __init__(self, *args, none_if_absent: bool = False, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.none_if_absent = none_if_absent
+
+
+def vehicle_option(help_extra: str = "", *, default_help: str = "the paper's SUV",
+                   none_if_absent: bool = False):
     """Decorator: ``--vehicle PATH|NAME`` giving the command a ``vehicle`` argument (a Vehicle).
 
     Parameters
     ----------
     help_extra : str
         Appended to the help text (what the command does with the car).
+    default_help : str
+        What the command uses without ``--vehicle`` (for the help text).
+    none_if_absent : bool
+        Without ``--vehicle`` the argument is None (the command keeps its own default car)
+        instead of the paper's SUV.
     """
     text = (f"Vehicle file (.toml, see docs/vehicles.md) or a built-in car: {_BUILTIN_HELP}. "
-            "Default: the paper's SUV." + (f" {help_extra}" if help_extra else ""))
-    return click.option("--vehicle", "vehicle", default=None, metavar="PATH|NAME", callback=_to_vehicle,
-                        help=text)
+            f"Default: {default_help}." + (f" {help_extra}" if help_extra else ""))
+    return click.option("--vehicle", "vehicle", cls=_VehicleOption, default=None, metavar="PATH|NAME",
+                        callback=_to_vehicle, none_if_absent=none_if_absent, help=text)

@@ -61,7 +61,7 @@ class ValidationResult:
 
 def validate_comma2k19(path, names=None, params: VehicleParams | None = None, tau: float = 2.0 / 3.0,
                        warmup_s: float = 5.0, fit_fraction: float = 0.3,
-                       sensitivity: bool = True) -> ValidationResult:
+                       sensitivity: bool = True, tuning=None) -> ValidationResult:
     """Run every estimator on a comma2k19 segment and score it against the pose roll.
 
     Parameters
@@ -78,6 +78,8 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
         Warm-up dropped (s); fraction of the rest used to fit the offset.
     sensitivity : bool
         Also score with the paper's default SUV parameters and a PIF Q sweep.
+    tuning : mapping, optional
+        ``{estimator: {option: value}}`` for the main scores (a vehicle file's ``[tuning]``).
     """
     from .. import estimators
     from ..io.comma2k19 import load_comma2k19
@@ -89,7 +91,7 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     s, ref = log.signals, hold_invalid(log.reference_roll)
     t = s.t
     dt = float(np.median(np.diff(t)))
-    run = run_and_score(s, ref, names, params, scoring)
+    run = run_and_score(s, ref, names, params, scoring, per_estimator=tuning)
     scores, smoothed = run.scores, run.estimates
     m_fit, m_sc = run.fit, run.scored
     m_all = m_fit | m_sc

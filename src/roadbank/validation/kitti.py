@@ -27,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..params import VehicleParams
+from ..params import G, VehicleParams
 from .comma2k19 import SEDAN, ValidationResult
-from .scoring import Scoring, pooled, run_and_score
+from .scoring import Scoring, hold_invalid, lowpass_t, pooled, run_and_score
 
 #: KITTI scoring: no offset fitted (reference and inputs come from one INS frame).
 KITTI_SCORING = Scoring(fit_fraction=0.0)
@@ -43,6 +43,17 @@ class KittiValidation:
     pooled: dict
     errors: list[str] = field(default_factory=list)
     settings: dict = field(default_factory=dict)
+
+
+def kinematic_residual(signals, ref, mask, taus) -> dict:
+    """RMS (deg) over ``mask`` of kinematic theta minus ``ref`` (rad), after a zero-phase low-pass of each tau (s; 0 = none)."""
+    kin = np.arcsin(np.clip((signals.ay - signals.vx * signals.r) / G, -1.0, 1.0))
+    e = hold_invalid(kin - ref)
+    out = {}
+    for tau in taus:
+        x = lowpass_t(e, signals.t, tau) if tau > 0 else e
+        out[tau] = float(np.degrees(np.sqrt(np.mean(x[mask] ** 2)))) if mask.any() else float("nan")
+    return out
 
 
 def drive_data(log, run, scoring: Scoring) -> dict:
@@ -60,11 +71,16 @@ def drive_data(log, run, scoring: Scoring) -> dict:
             "gated_fraction": float(np.mean(gate)), "scored_fraction": float(np.mean(run.scored)),
             "scored_s": float(np.sum(np.r_[dt, dt[-1]][run.scored])),
             "ref_std_deg_scored": float(np.std(ref[run.scored])) if run.scored.any() else float("nan"),
+            # sample-to-sample noise of ay (white part: std of the difference / sqrt 2), m/s^2
+            "ay_noise_std": float(np.std(np.diff(s.ay[run.scored])) / np.sqrt(2)) if run.scored.sum() > 2 else float("nan"),
+            # kinematic residual (deg RMS over the scored samples) after low-passes of growing tau (s)
+            "kin_residual_deg": kinematic_residual(s, log.reference_roll, run.scored, (0.0, 0.1, 0.3, 1.0)),
             "lat_lon": (log.extra.get("lat_deg"), log.extra.get("lon_deg"))}
 
 
 def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
-                         scoring: Scoring = KITTI_SCORING, sensitivity: bool = True) -> ValidationResult:
+                         scoring: Scoring = KITTI_SCORING, sensitivity: bool = True,
+                         tuning=None) -> ValidationResult:
     """Run every estimator on one KITTI drive and score ``theta`` against the INS roll.
 
     Parameters
@@ -80,6 +96,8 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
         Default :data:`KITTI_SCORING`.
     sensitivity : bool
         Also score with the paper's SUV parameters (``VehicleParams()``).
+    tuning : mapping, optional
+        ``{estimator: {option: value}}`` for the main scores (a vehicle file's ``[tuning]``).
     """
     from .. import estimators
     from ..io.kitti import load_kitti_oxts
@@ -87,7 +105,7 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     params = params or SEDAN
     names = list(names or estimators.NAMES)
     log = load_kitti_oxts(path)
-    run = run_and_score(log.signals, log.reference_roll, names, params, scoring)
+    run = run_and_score(log.signals, log.reference_roll, names, params, scoring, per_estimator=tuning)
     sens = {}
     if sensitivity:
         sens["suv"] = run_and_score(log.signals, log.reference_roll, names, VehicleParams(), scoring).scores
@@ -113,14 +131,15 @@ def expand_drives(paths) -> list[Path]:
 
 
 def validate_kitti(paths, names=None, params: VehicleParams | None = None,
-                   scoring: Scoring = KITTI_SCORING, sensitivity: bool = True) -> KittiValidation:
+                   scoring: Scoring = KITTI_SCORING, sensitivity: bool = True,
+                   tuning=None) -> KittiValidation:
     """Validate any number of KITTI drives; a drive that cannot be read is reported, the others go on.
 
     Parameters
     ----------
     paths : sequence of path-like
         Drive folders, oxts folders, or folders holding drive folders.
-    names, params, scoring, sensitivity
+    names, params, scoring, sensitivity, tuning
         As :func:`validate_kitti_drive`.
     """
     from .. import estimators
@@ -130,7 +149,7 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
     drives, errors = [], []
     for p in expand_drives(paths):
         try:
-            drives.append(validate_kitti_drive(p, names, params, scoring, sensitivity))
+            drives.append(validate_kitti_drive(p, names, params, scoring, sensitivity, tuning))
         except (LogError, OSError) as exc:
             errors.append(str(exc))
     return KittiValidation(drives=drives, pooled=pooled([d.run for d in drives], names), errors=errors,

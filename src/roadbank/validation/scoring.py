@@ -212,7 +212,7 @@ class Scored:
     valid: dict
 
 
-def run_and_score(signals, ref, names, params, scoring: Scoring, **tuning) -> Scored:
+def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=None, **tuning) -> Scored:
     """Run each estimator (``roadbank.estimators.make(name, params, **tuning)``) and score ``theta``.
 
     Parameters
@@ -227,15 +227,19 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, **tuning) -> Sc
         The estimators' vehicle model.
     scoring : Scoring
         Settings.
+    per_estimator : mapping, optional
+        ``{name: {option: value}}`` on top of ``tuning`` for that estimator (a vehicle file's
+        ``[tuning]`` tables).
     """
     from .. import estimators
 
+    per_estimator = per_estimator or {}
     t = signals.t
     ref = hold_invalid(ref)
     fit, scored = masks(t, signals.vx, scoring)
     scores, smooth, raw, flags = {}, {}, {}, {}
     for name in names:
-        est = estimators.make(name, params=params, **tuning).run(signals)
+        est = estimators.make(name, params=params, **{**tuning, **per_estimator.get(name, {})}).run(signals)
         th, pb = hold_invalid(est.theta), hold_invalid(est.phi_b)
         sc = score(t, th, pb, est.valid, ref, fit, scored, scoring)
         scores[name] = sc
