@@ -79,6 +79,28 @@ def test_sporadic_dropouts_do_not_cut_the_log(drive, result):
         assert abs(q1.value - q0.value) < q0.std, name
 
 
+def test_without_straights_the_yaw_offset_comes_from_the_speed_spread(drive):
+    """No straight accepted: the yaw-rate offset is the coefficient of L/vx (speeds 19-29 m/s here);
+    the steering offset, mixed with the ay offset in the constant, is refused."""
+    case, log, truth = drive
+    res = identify([log], case.params, IdentifySettings(straight_bank=CROWN, min_straight=1e6))
+    q = res.quantities
+    assert q["yaw_rate_offset"].ok, q["yaw_rate_offset"].refused
+    assert abs(q["yaw_rate_offset"].value - truth["yaw_rate_offset"]) <= 3 * q["yaw_rate_offset"].std
+    assert q["yaw_rate_offset"].std < math.radians(0.05)
+    assert not q["steering_offset"].ok and not q["ay_offset"].ok
+    assert abs(q["Cr"].value / truth["Cr"] - 1) < 0.10
+
+
+def test_one_speed_without_straights_refuses_the_yaw_offset():
+    case = SimCase(drive=DriveSpec(n_corners=4, speeds=(20.0, 20.0)), seed=3, with_roll=False)
+    log, _ = simulate_case(case)
+    q = identify([log], case.params, IdentifySettings(min_straight=1e6)).quantities
+    assert not q["yaw_rate_offset"].ok
+    assert "speed spread" in q["yaw_rate_offset"].refused
+    assert q["Kus"].ok  # the understeer gradient needs no speed spread
+
+
 def test_wrong_bank_assumption_shows_up_in_the_ay_offset(drive, result):
     """The ay offset is relative to the assumed mean bank of the straights: assuming flat roads
     moves it by about g sin(crown) (1 + g k_roll)."""

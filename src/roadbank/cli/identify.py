@@ -115,7 +115,11 @@ def identify(logs, vehicle, channels, fmt, output, straight_bank, ay_max, as_jso
     if not loaded:
         click.echo("error: no log could be read; nothing identified", err=True)
         sys.exit(1)
-    result = run_identify(loaded, params, settings)
+    try:
+        result = run_identify(loaded, params, settings)
+    except Exception as exc:  # never a traceback from the command line
+        click.echo(f"error: identification failed: {type(exc).__name__}: {exc}", err=True)
+        sys.exit(1)
     if not any(r.used for r in result.logs):
         for r in result.logs:
             click.echo(f"NOT USED {r.source}: {r.problem}", err=True)

@@ -17,7 +17,7 @@ from ..models.roll import steady_roll_gain
 from ..params import VehicleParams
 from .offsets import Offsets, straight_offsets
 from .prepare import to_grid
-from .results import IdentificationResult, LogReport
+from .results import IdentificationResult, LogReport, Quantity, refused
 from .roll import identify_roll_gain
 from .segments import segment
 from .settings import IdentifySettings
@@ -38,6 +38,13 @@ def _usable_problem(seg, s: IdentifySettings) -> str:
                 f"of log; identification needs >= {MIN_USABLE_S:g} s of driving at >= {s.v_min:g} m/s")
     return (f"too little driving at >= {s.v_min:g} m/s: {secs['usable']:.1f} s of {secs['total']:.0f} s; "
             f"needs >= {MIN_USABLE_S:g} s")
+
+
+def _merge_refusal(straights: Quantity, regression: Quantity) -> Quantity:
+    """The regression's yaw-rate offset, or both refusal reasons (straights and speed spread)."""
+    if regression.ok:
+        return regression
+    return refused(straights.name, straights.unit, f"{straights.refused}; {regression.refused}")
 
 
 def identify(logs, params: VehicleParams | None = None, settings: IdentifySettings | None = None
@@ -68,8 +75,8 @@ def identify(logs, params: VehicleParams | None = None, settings: IdentifySettin
         sig = log.signals
         try:
             seg = segment(to_grid(sig.t, sig.vx, sig.ay, sig.r, sig.delta_f, log.reference_roll), s)
-        except ValueError as exc:
-            reports.append(LogReport(source, False, str(exc)))
+        except Exception as exc:  # one log that cannot be analysed never loses the others
+            reports.append(LogReport(source, False, f"cannot be analysed: {type(exc).__name__}: {exc}"))
             continue
         problem = _usable_problem(seg, s)
         reports.append(LogReport(source, not problem, problem, dict(seg.seconds), seg.n_corners, seg.speed_range))
@@ -87,7 +94,10 @@ def identify(logs, params: VehicleParams | None = None, settings: IdentifySettin
         if q.ok and q.value > 0:
             roll_gain, roll_std = q.value, q.std
     offsets_std = (q_r.std, q_a.std) if q_r.ok and q_a.ok else None
-    quantities.update(identify_stiffness(segs, offs, p, roll_gain, s, offsets_std, roll_std))
+    fit = identify_stiffness(segs, offs, p, roll_gain, s, offsets_std, roll_std)
+    if "yaw_rate_offset" in fit:  # no straights: the regression's estimate or both reasons
+        fit["yaw_rate_offset"] = _merge_refusal(q_r, fit["yaw_rate_offset"])
+    quantities.update(fit)
     quantities = {k: quantities[k] for k in ORDER if k in quantities}
     out_p = p
     if quantities["Cf"].ok and quantities["Cr"].ok:

@@ -61,7 +61,7 @@ def _mode(x: np.ndarray, width: float) -> float:
     lo = np.floor(x.min() / width) * width
     nb = max(1, int(np.ceil((x.max() - lo) / width)) + 1)
     h, e = np.histogram(x, bins=nb, range=(lo, lo + nb * width))
-    k = int(np.argmax(np.convolve(h, [1, 2, 1], mode="same")))
+    k = int(np.argmax(np.convolve(h, [1, 2, 1])[1:-1]))  # same length as h, smoothed
     return float(0.5 * (e[k] + e[k + 1]))
 
 

@@ -64,6 +64,12 @@ KUS_MODEL_FLOOR = 3e-5
 CF_MODEL_FLOOR, CR_MODEL_FLOOR = 0.01, 0.02
 
 
+#: Largest yaw-rate offset uncertainty (rad/s, 0.05 deg/s) accepted from the speed dependence alone.
+YAW_OFFSET_MAX_STD = np.radians(0.05)
+#: Smallest relative spread (std / mean) of 1/vx for that.
+MIN_INV_SPEED_SPREAD = 0.05
+
+
 def tyre_acceleration(ay: np.ndarray, fs: float, p: VehicleParams, roll_gain: float) -> np.ndarray:
     r"""Tyre-force specific acceleration :math:`a_t = (F_{yf}+F_{yr})/m` from the measured ``ay``.
 
@@ -99,14 +105,16 @@ def tyre_acceleration(ay: np.ndarray, fs: float, p: VehicleParams, roll_gain: fl
     return ay - p.g * phi - p.ms * p.h_roll / p.m * phi_dd
 
 
-def regression_rows(seg: Segmented, off: Offsets, p: VehicleParams, roll_gain: float, s: IdentifySettings):
+def regression_rows(seg: Segmented, off: Offsets, p: VehicleParams, roll_gain: float, s: IdentifySettings,
+                    yaw_offset_column: bool = False):
     """Low-passed regression rows of one log.
 
     Returns ``X`` (n, 5) with columns ``[a_t (m/s^2), Iz/L dr/dt (N), 1, a_t^3, Iz/L dr/dt a_t^2]``
     (the last two absorb the tyres' and load transfer's loss of stiffness with
     lateral acceleration, so the first two give the small-signal values),
     ``y`` (n,) ``= delta_f - L r / vx`` (rad), both offset-corrected, and the
-    mask of the rows in the linear range.
+    mask of the rows in the linear range. With ``yaw_offset_column`` a sixth
+    column ``-L/vx`` (s) carries the yaw-rate offset (when no straight gave it).
     """
     Xs, ys, masks = [], [], []
     L = p.L
@@ -116,17 +124,21 @@ def regression_rows(seg: Segmented, off: Offsets, p: VehicleParams, roll_gain: f
         y = lowpass(piece.delta - L * rc / piece.vx, seg.fs, s.f_cut)
         a_f = lowpass(at, seg.fs, s.f_cut)
         rdot = derivative(lowpass(rc, seg.fs, s.f_cut), seg.fs)
-        Xs.append(np.column_stack([a_f, p.Iz / L * rdot, np.ones_like(y), a_f**3, p.Iz / L * rdot * a_f**2]))
+        cols = [a_f, p.Iz / L * rdot, np.ones_like(y), a_f**3, p.Iz / L * rdot * a_f**2]
+        if yaw_offset_column:
+            cols.append(lowpass(-L / piece.vx, seg.fs, s.f_cut))
+        Xs.append(np.column_stack(cols))
         ys.append(y)
         masks.append(piece.regress)
     if not Xs:
-        return np.zeros((0, 5)), np.zeros(0), np.zeros(0, dtype=bool)
+        return np.zeros((0, 6 if yaw_offset_column else 5)), np.zeros(0), np.zeros(0, dtype=bool)
     return np.concatenate(Xs), np.concatenate(ys), np.concatenate(masks)
 
 
 def _blocks(rows, fs_list, s: IdentifySettings, ay_limit: float):
     """Per-block normal equations of the rows with |a_t| <= ``ay_limit`` (all logs stacked)."""
-    XtX, Xty = [np.zeros((0, 5, 5))], [np.zeros((0, 5))]
+    k = rows[0][0].shape[1] if rows else 5
+    XtX, Xty = [np.zeros((0, k, k))], [np.zeros((0, k))]
     for (X, y, m), fs in zip(rows, fs_list):
         n = int(round(s.block * fs))
         spans = chop(m & (np.abs(X[:, 0]) <= ay_limit), n, n // 2)
@@ -172,7 +184,8 @@ def identify_stiffness(segs: list[Segmented], offs: list[Offsets], p: VehiclePar
     -------
     dict name -> Quantity
     """
-    rows = [regression_rows(seg, off, p, roll_gain, s) for seg, off in zip(segs, offs)]
+    yaw_col = offsets_std is None  # no straights: the yaw-rate offset has to come from the regression
+    rows = [regression_rows(seg, off, p, roll_gain, s, yaw_col) for seg, off in zip(segs, offs)]
     fs_list = [seg.fs for seg in segs]
     XtX, Xty = _blocks(rows, fs_list, s, s.ay_max)
     n_corners = sum(seg.n_corners for seg in segs)
@@ -187,6 +200,10 @@ def identify_stiffness(segs: list[Segmented], offs: list[Offsets], p: VehiclePar
         out = {k: refused(k, u, why) for k, u in names}
         if offsets_std is not None:
             out["steering_offset"] = straight_steering_offset(segs, understeer_gradient(p), s, p.g)
+        else:
+            out["steering_offset"] = refused("steering_offset", "rad",
+                                             "needs the sensor offsets from straight driving (see ay_offset) "
+                                             "and cornering; " + why)
         return out
     theta = solve(XtX.sum(0), Xty.sum(0))
     boot = bootstrap(XtX, Xty, s.n_boot, s.seed)
@@ -202,7 +219,8 @@ def identify_stiffness(segs: list[Segmented], offs: list[Offsets], p: VehiclePar
         sys = np.nan_to_num(np.abs([theta[0] - th_h[0], cf - cf_h, cr - cr_h]), nan=np.inf)
     if roll_gain_std > 0:
         # the tyre forces come from ay through the roll model: propagate the roll gain's uncertainty
-        rows_r = [regression_rows(seg, off, p, roll_gain + roll_gain_std, s) for seg, off in zip(segs, offs)]
+        rows_r = [regression_rows(seg, off, p, roll_gain + roll_gain_std, s, yaw_col)
+                  for seg, off in zip(segs, offs)]
         th_r = solve(*(a.sum(0) for a in _blocks(rows_r, fs_list, s, s.ay_max)))
         cf_r, cr_r = _stiffness(th_r, p)
         sys = np.hypot(sys, np.nan_to_num(np.abs([theta[0] - th_r[0], cf - cf_r, cr - cr_r]), nan=np.inf))
@@ -240,5 +258,27 @@ def identify_stiffness(segs: list[Segmented], offs: list[Offsets], p: VehiclePar
                                           "block bootstrap + quantisation bias bound + offsets' uncertainty")
     else:
         out["steering_offset"] = refused("steering_offset", "rad",
-                                         "needs the sensor offsets from straight driving (see ay_offset)")
+                                         "needs the sensor offsets from straight driving (see ay_offset): "
+                                         "without them the constant mixes steering and ay offsets")
+        out["yaw_rate_offset"] = _yaw_offset_from_speed_spread(theta, boot, segs, s)
     return out
+
+
+def _yaw_offset_from_speed_spread(theta, boot, segs: list[Segmented], s: IdentifySettings) -> Quantity:
+    """The yaw-rate offset (rad/s) as the coefficient of ``-L/vx``: without straights it separates
+    from the steering offset only through the speed dependence, so it needs a spread of speeds."""
+    vx = np.concatenate([pc.vx[pc.regress] for seg in segs for pc in seg.pieces])
+    sd = robust_std(boot[:, 5])
+    spread = float(np.std(1.0 / vx) / np.mean(1.0 / vx))
+    # with (nearly) one speed the column is collinear with the constant: the least-squares solution
+    # is then a minimum-norm split whose bootstrap spread means nothing, so the spread is checked first
+    if not (spread >= MIN_INV_SPEED_SPREAD and sd <= YAW_OFFSET_MAX_STD):
+        return refused("yaw_rate_offset", "rad/s",
+                       f"no straight driving, and too little speed spread to tell the yaw-rate offset from the "
+                       f"steering offset through L/vx: speeds {vx.min():.1f}-{vx.max():.1f} m/s (1/vx varies by "
+                       f"{100 * spread:.0f} %) give +-{np.degrees(sd):.2f} deg/s (limit "
+                       f"{np.degrees(YAW_OFFSET_MAX_STD):.2f}, spread >= {100 * MIN_INV_SPEED_SPREAD:.0f} %); "
+                       f"needs straights or cornering at several speeds")
+    return Quantity("yaw_rate_offset", float(theta[5]), sd, "rad/s",
+                    f"no straights: coefficient of L/vx in the regression (speeds {vx.min():.1f}-{vx.max():.1f} m/s); "
+                    f"block bootstrap")
