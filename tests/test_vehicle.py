@@ -470,3 +470,11 @@ def test_validate_designs_for_the_vehicle(tmp_path):
     sedan = validate_comma2k19(COMMA, names=["dfc"], params=SEDAN, sensitivity=False)
     assert default["dfc"]["rms_deg"] == pytest.approx(sedan.scores["dfc"].rms_deg, abs=6e-5)
     assert abs(lib.scores["dfc"].rms_deg - sedan.scores["dfc"].rms_deg) > 1e-3
+
+
+def test_design_failure_in_a_file_names_the_file(tmp_path):
+    path = tmp_path / "car.toml"
+    path.write_text(TABLE1 + "[tuning.pif-modified]\nvariant = \"exact\"\n")
+    r = CliRunner().invoke(main, ["simulate", "const-bank", "-o", str(tmp_path / "o.csv"), "--vehicle", str(path)])
+    assert r.exit_code == 2
+    assert f"{path}: [tuning.pif-modified] {{variant = \"exact\"}}: " in r.output

@@ -355,6 +355,9 @@ class Vehicle:
     plant : mapping
         Simulator-only :class:`roadbank.sim.PlantParams` fields (``drive_power_max``, ``CdA``, ...);
         missing ones take the PlantParams defaults.
+    source : str
+        The file it was read from ("" if built in code); names it in :meth:`check` errors.
+        Not part of equality or of the written file.
     """
 
     name: str = "suv-paper"
@@ -366,6 +369,7 @@ class Vehicle:
     scores: Mapping[str, Mapping[str, object]] = field(default_factory=dict)
     identified: Mapping[str, Mapping[str, object]] = field(default_factory=dict)
     plant: Mapping[str, float] = field(default_factory=dict)
+    source: str = field(default="", compare=False, repr=False)
 
     __hash__ = None  # holds dicts
 
@@ -402,7 +406,7 @@ class Vehicle:
             raise VehicleFileError(f"{path}: no such vehicle file") from None
         except (OSError, UnicodeDecodeError) as exc:
             raise VehicleFileError(f"{path}: cannot read ({exc})") from None
-        return cls.loads(text, source=str(path), default_name=path.stem)
+        return dataclasses.replace(cls.loads(text, source=str(path), default_name=path.stem), source=str(path))
 
     @classmethod
     def loads(cls, text: str, source: str = "<string>", default_name: str = "vehicle") -> "Vehicle":
@@ -455,7 +459,7 @@ class Vehicle:
             try:
                 self.make(name)
             except (ValueError, TypeError, NoStabilisingSolution) as exc:
-                raise VehicleFileError(f"<vehicle {self.name}>: [tuning.{name}] "
+                raise VehicleFileError(f"{self.source or f'<vehicle {self.name}>'}: [tuning.{name}] "
                                        f"{_fmt_options(options)}: {exc}") from None
         return self
 
@@ -487,23 +491,23 @@ class Vehicle:
         """Copy with ``tuning[name] = options`` (replaced, not merged) and, if given, ``scores[name]``."""
         tuning = {**self.tuning, name: dict(options)}
         new_scores = {**self.scores, name: dict(scores)} if scores is not None else self.scores
-        return dataclasses.replace(self, tuning=tuning, scores=new_scores)
+        return dataclasses.replace(self, tuning=tuning, scores=new_scores, source="")
 
     def with_params(self, **changes: float) -> "Vehicle":
         """Copy with :class:`VehicleParams` fields changed (validated)."""
-        return dataclasses.replace(self, params=self.params.replace(**changes))
+        return dataclasses.replace(self, params=self.params.replace(**changes), source="")
 
     def with_sensors(self, **changes: float) -> "Vehicle":
         """Copy with :class:`SensorSpec` fields changed (validated)."""
-        return dataclasses.replace(self, sensors=self.sensors.replace(**changes))
+        return dataclasses.replace(self, sensors=self.sensors.replace(**changes), source="")
 
     def with_identified(self, identified: Mapping[str, Mapping[str, object]]) -> "Vehicle":
         """Copy with the given ``identified`` quantities added (a quantity present is replaced)."""
-        return dataclasses.replace(self, identified={**self.identified, **identified})
+        return dataclasses.replace(self, identified={**self.identified, **identified}, source="")
 
     def replace(self, **changes) -> "Vehicle":
         """Copy with :class:`Vehicle` fields changed (``name``, ``description``, ``sensors`` ...)."""
-        return dataclasses.replace(self, **changes)
+        return dataclasses.replace(self, **{"source": "", **changes})
 
 
 # ---------------------------------------------------------------------------------------------
