@@ -478,3 +478,11 @@ def test_design_failure_in_a_file_names_the_file(tmp_path):
     r = CliRunner().invoke(main, ["simulate", "const-bank", "-o", str(tmp_path / "o.csv"), "--vehicle", str(path)])
     assert r.exit_code == 2
     assert f"{path}: [tuning.pif-modified] {{variant = \"exact\"}}: " in r.output
+
+
+def test_numpy_values_from_the_tools_are_written_as_toml():
+    v = load_vehicle(None).with_tuning("kalman", {"R": np.array([0.01, 2.5e-5]), "q": (1.0, 2.0, 3.0)},
+                                       scores={"rms": np.float64(0.25), "n": np.int64(3)})
+    assert v.tuning["kalman"] == {"R": [0.01, 2.5e-5], "q": [1.0, 2.0, 3.0]}
+    back = Vehicle.loads(v.dumps())
+    assert back == v and type(back.scores["kalman"]["n"]) is int

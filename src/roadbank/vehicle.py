@@ -325,10 +325,21 @@ class SensorSpec:
 # ---------------------------------------------------------------------------------------------
 # the vehicle
 
+def _py(v):
+    """numpy scalars/arrays and tuples -> Python scalars and lists (what TOML holds)."""
+    if hasattr(v, "tolist") and not isinstance(v, (str, bytes)):  # numpy scalar or array
+        v = v.tolist()
+    if isinstance(v, (list, tuple)):
+        return [_py(x) for x in v]
+    return v
+
+
 def _plain(mapping, depth: int):
-    """Deep copy of nested mappings into plain dicts (picklable, comparable)."""
+    """Deep copy of nested mappings into plain dicts of Python values (picklable, comparable)."""
+    if not isinstance(mapping, Mapping):
+        return mapping  # reported by the checks
     if depth == 0:
-        return {str(k): (list(v) if isinstance(v, (list, tuple)) else v) for k, v in mapping.items()}
+        return {str(k): _py(v) for k, v in mapping.items()}
     return {str(k): _plain(v, depth - 1) for k, v in mapping.items()}
 
 
