@@ -31,7 +31,9 @@ Tunings (``tuning=``; explicit ``Q``, ``R``, ``S``, ``th``, ``P0`` override the 
   (:func:`yaw_rate_noise_density`, paper ESP sensor: 0.1 deg/s noise, 0.3 deg/s
   resolution, 100 Hz), and ``Q``, ``th`` come from ``roadbank tune`` on the default
   car (:data:`DEFAULT_TUNING`, docs/estimators.md). ``Q`` is then the spectral
-  density of the bank rate (1/s), ``R`` of the yaw-rate noise ((rad/s)^2 s).
+  density of the bank rate (1/s), ``R`` of the yaw-rate noise ((rad/s)^2 s). The
+  tuning also chose the dynamic roll model for the roll separation (``roll="dynamic"``
+  unless given).
 
 For the original model the second output (ay) needs a weight the paper does not
 give: ``R_ay = 0.307`` = R scaled by the squared ratio of the sensors'
@@ -71,9 +73,10 @@ def yaw_rate_noise_density(noise_std: float, resolution: float, rate: float) -> 
 #: R of the paper's ESP yaw-rate sensor (0.1 deg/s noise, 0.3 deg/s resolution, 100 Hz)
 R_ESP = yaw_rate_noise_density(np.deg2rad(0.1), np.deg2rad(0.3), 100.0)
 
-#: Q (1/s) and th (-) found by ``roadbank tune`` for the default car and sensors with R = R_ESP
-#: (see docs/estimators.md for the run and its scores); S = 1.
-DEFAULT_TUNING = dict(Q=30.0 * R_ESP / 0.0035, th=0.0035 / R_ESP)
+#: Q (1/s), th (-) and the roll model found by ``roadbank tune`` (seed 0, budget 240) for the
+#: default car and sensors with R = R_ESP, S = 1 (docs/estimators.md: the run and its scores).
+#: In Table 4's scale (R = 0.0035) this is Q = 12.8, th = 2.64.
+DEFAULT_TUNING = dict(Q=1.9512492264850162e-04, th=1.7309294384267123e05, roll="dynamic")
 
 
 def _scaled_p0(R: float) -> tuple:
@@ -128,6 +131,8 @@ class PIF(ScheduledObserver):
         if tuning not in TUNINGS:
             raise ValueError(f"tuning must be one of {', '.join(TUNINGS)}, got {tuning!r}")
         preset = TUNINGS[tuning]
+        if tuning == "default":
+            kw.setdefault("roll", DEFAULT_TUNING["roll"])
         Q, R, S, th, P0 = (preset[k] if v is None else v
                            for k, v in (("Q", Q), ("R", R), ("S", S), ("th", th), ("P0", P0)))
         self.model = model

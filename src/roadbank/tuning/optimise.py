@@ -7,7 +7,8 @@ evaluated in parallel by a mapper: local worker processes (:class:`LocalMapper`,
 they inherit the training set) or a Dask cluster (:class:`DaskMapper`, the set is sent to
 every worker once). A design without a stabilising Riccati solution
 (:class:`~roadbank.estimators.NoStabilisingSolution`, e.g. ``th`` too large for ``Q``) or
-any invalid option is infeasible: it scores :data:`INFEASIBLE`.
+any invalid option is infeasible: it scores :data:`INFEASIBLE`. At the optimum the roll
+model of the roll separation (``roll``, :data:`ROLL_CHOICES`) is chosen on the training set.
 
 The search designs the gain schedules on a coarse grid (:data:`SEARCH_V_STEP`, the whole
 speed range, so a weight without a stabilising solution at some speed is infeasible there
@@ -32,6 +33,8 @@ from .spaces import SearchSpace
 INFEASIBLE = 1e3
 #: speed-grid spacing (m/s) of the designs during the search
 SEARCH_V_STEP = 2.0
+#: roll models tried at the optimum (the estimators' ``roll`` option)
+ROLL_CHOICES = ("static", "dynamic")
 
 #: drive sets by key, in every process that evaluates objectives (see the module docstring)
 _DRIVES: dict = {}
@@ -154,15 +157,16 @@ class TuneResult:
 
 
 def _feasible_design(space: SearchSpace, params, x, x0, tries: int = 12):
-    """``(estimator, x)`` designed on the full grid at ``x``, or halfway back towards ``x0``
-    (repeatedly) where the full grid has no stabilising solution."""
+    """``x`` if its full-grid design exists, else ``x`` moved halfway back towards ``x0``
+    (repeatedly) until the full grid has a stabilising solution everywhere."""
     from .. import estimators
     for _ in range(tries):
         try:
-            return estimators.make(space.name, params, **space.options(x)), x
+            estimators.make(space.name, params, **space.options(x))
+            return x
         except estimators.NoStabilisingSolution:
             x = x0 + 0.5 * (x - x0)
-    return estimators.make(space.name, params, **space.options(x0)), x0
+    return x0
 
 
 def population_plan(budget: int, ndim: int) -> tuple[int, int]:
@@ -218,8 +222,15 @@ def tune_estimator(space: SearchSpace, params, key: str, *, budget: int, seed: i
                                  tol=0.0, atol=0.0, polish=False, init="latinhypercube", x0=x0,
                                  updating="deferred", workers=counted)
     x = np.asarray(res.x) if res.fun <= start_value else x0
-    est = _feasible_design(space, params, x, x0)
-    x = est[1]
-    train = score_set(est[0], _DRIVES[key])
-    return TuneResult(space.name, space.options(x), x, train, start_value, n_evals[0],
-                      time.perf_counter() - t0)
+    x = _feasible_design(space, params, x, x0)
+    # the roll model that separates body roll from theta (a choice, not a weight): keep the
+    # better one on the training set
+    from .. import estimators
+    best = None
+    for roll in ROLL_CHOICES:
+        options = {**space.options(x), "roll": roll}
+        scores = score_set(estimators.make(space.name, params, **options), _DRIVES[key])
+        n_evals[0] += 1
+        if best is None or scores.objective < best[1].objective:
+            best = (options, scores)
+    return TuneResult(space.name, best[0], x, best[1], start_value, n_evals[0], time.perf_counter() - t0)

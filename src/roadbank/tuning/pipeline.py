@@ -15,7 +15,7 @@ from .optimise import DaskMapper, LocalMapper, register_drives, tune_estimator
 from .spaces import TUNABLE, search_space
 
 #: default objective evaluations per estimator (``roadbank tune --budget``)
-DEFAULT_BUDGET = 160
+DEFAULT_BUDGET = 240
 #: default sizes of the sets (drives of 20 s)
 DEFAULT_TRAIN = 48
 DEFAULT_VALIDATION = 40
