@@ -10,7 +10,7 @@ from __future__ import annotations
 import click
 
 #: shipped cars, listed in the help text (kept in sync with src/roadbank/vehicles/*.toml by a test)
-_BUILTIN_HELP = "suv-paper (default), compact, sedan, van"
+_BUILTIN_HELP = "suv-paper, compact, sedan, van"
 
 
 def _to_vehicle(ctx, param, value):
