@@ -33,12 +33,15 @@ def _md_blocks(study, figs, *, with_figures: bool, fig_prefix: str = "") -> list
            + ", ".join(f"{label(n)} (`{n}`)" for n in _names(rows)) + ".", "",
            "Plant: roadbank's nonlinear vehicle simulator (`roadbank.sim`), ESP sensors at 100 Hz, seed 0. "
            "Estimators are always designed with Table 1 (Cf_ss); conditions change the plant and sensors. "
-           "Metrics are computed on valid samples after the first 2 s.", ""]
+           "Metrics are computed on valid samples after the first 2 s. "
+           "PIF (`pif-modified`) and PIF (original model) use the paper's Table 4 weights (SI reading), "
+           "with which the paper's claims are checked; PIF (roadbank default) (`pif-default`) is "
+           "`estimators.make(\"pif-modified\")`, roadbank's default tuning (docs/estimators.md).", ""]
     out += ["## The paper's claims on our plant", "",
             md_table(["claim", "holds", "evidence"],
                      [[c.text, "yes" if c.holds else Markdown("**no**"), c.detail] for c in all_claims(rows)])]
     aims = accuracy_aims(rows)
-    out += ["", "## Accuracy aims for the PIF (modified model, roll separation)", "",
+    out += ["", f"## Accuracy aims for the {label(aims['estimator'])} (`{aims['estimator']}`)", "",
             "Aim: bank RMS <= 0.5 deg and max <= 1.5 deg after 2 s in every cell; PIF best or within "
             f"0.1 deg of the best estimator in >= 90 % of cells. Reached: within 0.1 deg of best in "
             f"{100 * aims['near_best_fraction']:.0f} % of cells.", "",
