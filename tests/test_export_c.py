@@ -153,6 +153,30 @@ def test_roll_models_grids_and_the_general_observer_path(name, roll, grid, scena
         assert_same(python_steps(est, cols), mod.run(*cols), TOL64, TOL64, f"{name} roll={roll} {scen}")
 
 
+@pytest.mark.parametrize("name,roll", [("pif-modified", "dynamic"), ("uio", "static"), ("kinematic", "dynamic")])
+def test_fixed_rate_tables_follow_the_kernels_fixed_rate_path(name, roll, scenarios, tmp_path):
+    """``discrete=True`` adds the kernels' fixed-rate tables (Estimator.discrete_tables): the module
+    then equals step() with that sample rate set; without a fixed-rate path it says so."""
+    est = E.make(name, roll=roll)
+    if not hasattr(est, "discrete_tables"):
+        with pytest.raises(NotExportable, match="no fixed-rate tables"):
+            export_c(est, tmp_path, rate=100.0, discrete=True)
+        return
+    cols_all = {**scenarios, "hard": hard_log(scenarios)}
+    for f32 in (False, True):
+        res = export_c(est, tmp_path / str(f32), rate=100.0, float32=f32, discrete=True)
+        assert res.table_bytes > export_c(est, tmp_path / "g", rate=100.0).table_bytes * (0.5 if f32 else 1)
+        mod = CModule(res.source, tmp_path / str(f32))
+        for scen, cols in cols_all.items():
+            est.set_sample_rate(100.0)
+            est.reset()
+            res_py = [est.step(*a) for a in zip(*cols)]
+            py = {k: np.array([getattr(o, k) for o in res_py]) for k in ("w", "theta", "phi_b", "valid")}
+            assert_same(py, mod.run(*cols), None if f32 else TOL64, TOL32_BANK if f32 else TOL64,
+                        f"{name} fixed-rate {'float32' if f32 else 'float64'} on {scen}")
+    est.set_sample_rate(None)
+
+
 def test_ctypes_step_by_step_and_reset(scenarios, built_modules):
     est = BUILT["pif-modified"]
     mod = built_modules("pif-modified")
@@ -249,11 +273,12 @@ def test_cli_writes_the_module_and_refuses_dfc(tmp_path):
     assert "RB_NG = 37," in (tmp_path / "coarse" / "roadbank_kinematic.c").read_text()   # 5, 6, .., 41 m/s
     from roadbank.vehicle import load_vehicle                 # the car's tuning reaches the design
 
-    car = load_vehicle("sedan").with_tuning("pif-modified", {"v_step": 1.0})
+    car = load_vehicle("sedan").with_tuning("kalman", {"v_step": 1.0})
     car.to_toml(tmp_path / "car.toml")
-    res = runner.invoke(main, ["export", "c", "--vehicle", str(tmp_path / "car.toml"), "-o", str(tmp_path / "car")])
+    res = runner.invoke(main, ["export", "c", "--vehicle", str(tmp_path / "car.toml"), "-e", "kalman",
+                               "-o", str(tmp_path / "car")])
     assert res.exit_code == 0, res.output
-    text = (tmp_path / "car" / "roadbank_pif_modified.c").read_text()
+    text = (tmp_path / "car" / "roadbank_kalman.c").read_text()
     assert "RB_NG = 96," in text and f"m={car.params.m:.6g}" in text
     res = runner.invoke(main, ["export", "c", "--estimator", "dfc", "-o", str(tmp_path / "dfc")])
     assert res.exit_code != 0 and "not exportable" in res.output and "Traceback" not in res.output

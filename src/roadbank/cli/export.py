@@ -40,6 +40,9 @@ def export():
 @click.option("--rate", type=float, default=None,
               help="Nominal sample rate of the target (Hz). Default: the vehicle's sensor rate (100).")
 @click.option("--float32", "float32", is_flag=True, help="Single precision (tables, state and arithmetic).")
+@click.option("--fixed-rate", "fixed_rate", is_flag=True,
+              help="Add the exact discrete tables for --rate (the kernels' fixed-rate path): samples at "
+                   "that rate cost one small matrix update; others take the general path. More flash.")
 @click.option("--roll", type=click.Choice(["static", "dynamic", "none"]), default=None,
               help="Roll separation (default: the vehicle's tuning, else static).")
 @click.option("--v-step", "v_step", type=float, default=None,
@@ -52,7 +55,8 @@ def export():
 @click.option("--output", "-o", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Output directory (created if missing).")
 def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: str | None,
-                 v_step: float | None, v_max: float | None, module_name: str | None, output: Path):
+                 v_step: float | None, v_max: float | None, module_name: str | None, fixed_rate: bool,
+                 output: Path):
     """Write roadbank_<estimator>.h/.c (C99, no malloc, tables in flash) and its README."""
     from .. import estimators
     from ..export import NotExportable, export_c
@@ -78,7 +82,7 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
     except (ValueError, TypeError, NoStabilisingSolution) as exc:
         raise click.ClickException(f"{name}: cannot design for vehicle {vehicle.name!r}: {exc}") from None
     try:
-        res = export_c(est, output, rate=rate, float32=float32, module_name=module_name)
+        res = export_c(est, output, rate=rate, float32=float32, module_name=module_name, discrete=fixed_rate)
     except NotExportable as exc:
         raise click.ClickException(str(exc)) from None
     except ValueError as exc:
@@ -86,7 +90,8 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
     except OSError as exc:
         raise click.ClickException(f"cannot write into {output}: {exc.strerror or exc}") from None
     d = res.design
-    click.echo(f"{name} for {vehicle.name} ({'float32' if float32 else 'float64'}, {rate:g} Hz, "
+    click.echo(f"{name} for {vehicle.name} ({'float32' if float32 else 'float64'}, {rate:g} Hz"
+               f"{' with fixed-rate tables' if fixed_rate else ''}, "
                f"{d.n} observer states, roll {est.roll}): tables {res.table_bytes} bytes "
                f"({d.ng} speeds x {d.nk}), fingerprint {d.fingerprint()}")
     for path in (res.header, res.source, res.readme):

@@ -46,7 +46,8 @@ class ExportResult:
         return self.design.table_bytes(self.float32)
 
 
-def export_c(est, out_dir, *, rate: float, float32: bool = False, module_name: str | None = None) -> ExportResult:
+def export_c(est, out_dir, *, rate: float, float32: bool = False, module_name: str | None = None,
+             discrete: bool = False) -> ExportResult:
     """Write ``roadbank_<name>.h/.c`` and ``README_roadbank_<name>.md`` of ``est`` into ``out_dir``.
 
     Parameters
@@ -62,13 +63,15 @@ def export_c(est, out_dir, *, rate: float, float32: bool = False, module_name: s
     module_name : str, optional
         Module name: files ``roadbank_<module_name>.*`` and symbols ``roadbank_<module_name>_*``
         (non-identifier characters become ``_``); default the estimator's name.
+    discrete : bool
+        Add the fixed-rate tables for ``rate`` (see :func:`export_design`).
 
     Raises
     ------
     NotExportable
         When the estimator's runtime is not a scheduled linear observer.
     """
-    design = export_design(est, rate, module_name)
+    design = export_design(est, rate, module_name, discrete=discrete)
     files = generate(design, float32=float32)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

@@ -193,14 +193,14 @@ ${roll_tables}
 static const real_t RB_TAB[RB_NG][RB_NK] = {
 ${table}
 };
-
+${discrete_tables}
 static real_t rb_lerp(const real_t *t0, const real_t *t1, real_t a, int k)
 {
     return t0[k] + a * (t1[k] - t0[k]);
 }
 
 ${nsub_fn}${lu_fns}${tustin_fn}${observer_fn}
-static int rb_finish(state_t *st, real_t w, real_t ay, real_t dt, int restart)
+static int rb_finish(state_t *st, real_t w, real_t ay, real_t dt, int restart, int fixed)
 {
     real_t phi;
     real_t wc;
@@ -227,8 +227,10 @@ static int rb_inputs_ok(real_t vx, real_t ay, real_t r, real_t d)
 }
 
 /* One usable sample: returns 1 if the estimate is plausible. */
-static int rb_update(state_t *st, int restart, real_t dt, real_t vx, real_t ay, real_t r, real_t d)
+static int rb_update(state_t *st, int restart, int fixed, real_t dt, real_t vx, real_t ay, real_t r,
+                     real_t d)
 {
+    real_t w;
     real_t sg;
     real_t a;
     int i;
@@ -248,7 +250,7 @@ static int rb_update(state_t *st, int restart, real_t dt, real_t vx, real_t ay, 
     u[0] = RB_USES[0] ? d : 0.0_R;
     u[1] = RB_USES[1] ? ay : 0.0_R;
     u[2] = RB_USES[2] ? r : 0.0_R;
-    return rb_finish(st, rb_observer(st, RB_TAB[i], RB_TAB[i + 1], a, u, dt, restart), ay, dt, restart);
+${observer_call}    return rb_finish(st, w, ay, dt, restart, fixed);
 }
 
 static int rb_output(const state_t *st, int ok, output_t *out)
@@ -285,9 +287,9 @@ int ${p}_step(state_t *s, double t, real_t vx, real_t ay, real_t r, real_t delta
     if (isfinite(t) && (!s->initialised || t > s->t_last) && rb_inputs_ok(vx, ay, r, delta_f)) {
         int restart = !s->initialised || (t - s->t_last) > (double)RB_GAP;
         real_t dt = restart ? 0.0_R : (real_t)(t - s->t_last);
-        s->initialised = 1;
+${fixed_t}        s->initialised = 1;
         s->t_last = t;
-        ok = rb_update(s, restart, dt, vx, ay, r, delta_f);
+        ok = rb_update(s, restart, fixed, dt, vx, ay, r, delta_f);
     }
     return rb_output(s, ok, out);
 }
@@ -300,9 +302,9 @@ int ${p}_step_dt(state_t *s, real_t dt, real_t vx, real_t ay, real_t r, real_t d
         if ((!s->initialised || s->since_valid > 0.0_R) && rb_inputs_ok(vx, ay, r, delta_f)) {
             int restart = !s->initialised || s->since_valid > RB_GAP;
             real_t h = restart ? 0.0_R : s->since_valid;
-            s->initialised = 1;
+${fixed_dt}            s->initialised = 1;
             s->since_valid = 0.0_R;
-            ok = rb_update(s, restart, h, vx, ay, r, delta_f);
+            ok = rb_update(s, restart, fixed, h, vx, ay, r, delta_f);
         }
     }
     return rb_output(s, ok, out);
@@ -595,10 +597,91 @@ def _observer_tustin(d: ExportDesign) -> str:
     return _LERP_ROW + (_OBSERVER3 if d.n == 3 else _OBSERVER_N)
 
 
+_OBSERVER_FIXED = """\
+/* Fixed-rate sample (interval RB_DT_FIX within RB_DT_TOL): the exact discrete map
+ * xi = Phi(vx) xi + Gam0(vx) eta_prev + Gam1(vx) eta, tables interpolated on the grid. */
+static real_t rb_observer_fixed(state_t *st, const real_t *t0, const real_t *t1, const real_t *d0,
+                                const real_t *d1, real_t a, const real_t *u)
+{
+    real_t c[RB_NKD];   /* Phi | Gam0 | Gam1 */
+    real_t y[RB_N];
+    real_t w = 0.0_R;
+    int k;
+    int p;
+    int q;
+    for (k = 0; k < RB_NKD; ++k) {
+        c[k] = rb_lerp(d0, d1, a, k);
+    }
+    for (p = 0; p < RB_N; ++p) {
+        real_t acc = 0.0_R;
+        for (k = 0; k < RB_N; ++k) {
+            acc += c[p * RB_N + k] * st->x[k];
+        }
+        for (q = 0; q < 3; ++q) {
+            acc += c[RB_N * RB_N + p * 3 + q] * st->eta[q] + c[RB_N * RB_N + 3 * RB_N + p * 3 + q] * u[q];
+        }
+        y[p] = acc;
+    }
+    for (p = 0; p < RB_N; ++p) {
+        st->x[p] = y[p];
+        w += rb_lerp(t0, t1, a, RB_N * RB_N + 3 * RB_N + p) * y[p];
+    }
+    for (q = 0; q < 3; ++q) {
+        w += rb_lerp(t0, t1, a, RB_N * RB_N + 4 * RB_N + q) * u[q];
+        st->eta[q] = u[q];
+    }
+    return w;
+}
+
+"""
+
+
+def _discrete_parts(d: ExportDesign, float32: bool) -> dict:
+    """Pieces of the fixed-rate mode (or their general-path stand-ins)."""
+    general_call = "    w = rb_observer(st, RB_TAB[i], RB_TAB[i + 1], a, u, dt, restart);\n"
+    if d.discrete is None:
+        return {"discrete_tables": "", "observer_fixed_fn": "",
+                "observer_call": general_call,
+                "fixed_t": "        const int fixed = 0;\n", "fixed_dt": "            const int fixed = 0;\n"}
+    x = d.discrete
+    h = float(x["dt"])
+    consts = (f"#define RB_DT_FIX ({real_literal(h, float32)})   /* s, interval of the fixed-rate tables */\n"
+              f"#define RB_DT_TOL ({real_literal(d.dt_tol, float32)})   /* relative tolerance on it */\n"
+              f"#define RB_DT_FIX_D ({real_literal(h, False)})\n"
+              f"#define RB_DT_TOL_D ({real_literal(d.dt_tol, False)})\n")
+    tables = consts
+    if d.n > 0:
+        g = d.ng
+        rows = np.concatenate([np.reshape(x["Phi"], (g, -1)), np.reshape(x["Gam0"], (g, -1)),
+                               np.reshape(x["Gam1"], (g, -1))], axis=1)
+        body = ",\n".join(f"    /* vx = {d.v0 + k * d.dv:.2f} m/s */\n    {{{_array(rows[k], float32, 4, '     ')}}}"
+                          for k in range(g))
+        tables += (f"\nenum {{ RB_NKD = {rows.shape[1]} }};   /* floats per discrete row: Phi | Gam0 | Gam1 */\n\n"
+                   f"/* Fixed-rate tables for {1.0 / h:g} Hz (exact first-order-hold discretisation of row k\n"
+                   " * of RB_TAB over RB_DT_FIX): Phi (n x n) | Gam0 (n x 3) | Gam1 (n x 3). */\n"
+                   f"static const real_t RB_DTAB[RB_NG][RB_NKD] = {{\n{body}\n}};\n")
+        call = ("    if (fixed) {\n"
+                "        w = rb_observer_fixed(st, RB_TAB[i], RB_TAB[i + 1], RB_DTAB[i], RB_DTAB[i + 1], a, u);\n"
+                "    } else {\n    " + general_call.replace("\n", "\n    ").rstrip(" ") + "    }\n")
+        fixed_fn = _OBSERVER_FIXED
+    else:
+        call = general_call
+        fixed_fn = ""
+    if d.nr > 0:
+        tables += (f"static const real_t RB_ROLL_PHI[RB_NR * RB_NR] = {{{_array(x['Phi_r'], float32, 8, '')}}};\n"
+                   f"static const real_t RB_ROLL_GAM0[RB_NR] = {{{_array(x['Gam0_r'], float32, 8, '')}}};\n"
+                   f"static const real_t RB_ROLL_GAM1[RB_NR] = {{{_array(x['Gam1_r'], float32, 8, '')}}};\n")
+    return {"discrete_tables": tables, "observer_fixed_fn": fixed_fn, "observer_call": call,
+            "fixed_t": "        const int fixed = !restart && fabs((t - s->t_last) - RB_DT_FIX_D) <= "
+                       "RB_DT_TOL_D * RB_DT_FIX_D;\n",
+            "fixed_dt": "            const int fixed = !restart && RB_FABS(s->since_valid - RB_DT_FIX) <= "
+                        "RB_DT_TOL * RB_DT_FIX;\n"}
+
+
 def _roll_parts(d: ExportDesign, float32: bool) -> dict:
     if d.nr == 0:
         return {"roll_tables": "",
-                "finish_roll": "    (void)dt;\n    (void)restart;\n",
+                "finish_roll": "    (void)dt;\n    (void)restart;\n    (void)fixed;\n",
                 "finish_phi": "", "init_z": ""}
     tables = (f"/* roll model z' = F z + G ay (F {d.nr}x{d.nr}, G {d.nr}x1), phi = H z + D ay; "
               "J = -F^-1 G */\n"
@@ -606,14 +689,29 @@ def _roll_parts(d: ExportDesign, float32: bool) -> dict:
               f"static const real_t RB_ROLL_G[RB_NR] = {{{_array(d.roll_G, float32, 8, '')}}};\n"
               f"static const real_t RB_ROLL_H[RB_NR] = {{{_array(d.roll_H, float32, 8, '')}}};\n"
               f"static const real_t RB_ROLL_J[RB_NR] = {{{_array(d.roll_J, float32, 8, '')}}};\n")
+    fixed_roll = ("    } else if (fixed) {\n"
+                  "        real_t y[RB_NR];\n"
+                  "        int i;\n"
+                  "        int j;\n"
+                  "        for (i = 0; i < RB_NR; ++i) {\n"
+                  "            real_t acc = RB_ROLL_GAM0[i] * st->ay_last + RB_ROLL_GAM1[i] * ay;\n"
+                  "            for (j = 0; j < RB_NR; ++j) {\n"
+                  "                acc += RB_ROLL_PHI[i * RB_NR + j] * st->z[j];\n"
+                  "            }\n"
+                  "            y[i] = acc;\n"
+                  "        }\n"
+                  "        for (i = 0; i < RB_NR; ++i) {\n"
+                  "            st->z[i] = y[i];\n"
+                  "        }\n") if d.discrete is not None else ""
     finish = ("    if (restart) {\n"
               "        int i;\n"
               "        for (i = 0; i < RB_NR; ++i) {\n"
               "            st->z[i] = RB_ROLL_J[i] * ay;\n"
               "        }\n"
+              + fixed_roll +
               "    } else {\n"
               "        rb_tustin(st->z, RB_NR, RB_ROLL_F, RB_ROLL_G, 1, &st->ay_last, &ay, dt);\n"
-              "    }\n")
+              "    }\n" + ("" if d.discrete is not None else "    (void)fixed;\n"))
     phi = ("    {\n"
            "        int i;\n"
            "        for (i = 0; i < RB_NR; ++i) {\n"
@@ -691,8 +789,9 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
         lu_fns=(f"enum {{ RB_NT = {nt} }};   /* size of the LU / Tustin scratch */\n\n" + _LU)
         if helpers_needed else "",
         tustin_fn=_TUSTIN if helpers_needed else "",
-        observer_fn=_observer_tustin(d),
+        observer_fn=_observer_tustin(d) + _discrete_parts(d, float32)["observer_fixed_fn"],
         init_x=("    for (k = 0; k < RB_N; ++k) {\n        s->x[k] = 0.0_R;\n    }\n" if d.n else ""),
+        **{k: v for k, v in _discrete_parts(d, float32).items() if k != "observer_fixed_fn"},
         **_roll_parts(d, float32))
     p = names["p"]
     return {f"{p}.h": _fix_literals(header, float32),

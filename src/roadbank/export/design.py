@@ -83,6 +83,10 @@ class ExportDesign:
     rate: float
     state_names: tuple = ()
     provenance: dict = field(default_factory=dict)
+    #: fixed-rate tables (``Estimator.discrete_tables(1/rate)``) or None (general path only)
+    discrete: dict | None = None
+    #: relative tolerance on the interval for the fixed-rate tables
+    dt_tol: float = 0.0
 
     @property
     def ng(self) -> int:
@@ -107,6 +111,10 @@ class ExportDesign:
     def table_bytes(self, float32: bool = False) -> int:
         """Flash taken by the ``static const`` tables (bytes): schedule plus roll constants."""
         nroll = self.roll_F.size + self.roll_G.size + self.roll_H.size + 1 + self.roll_J.size
+        if self.discrete is not None:
+            x = self.discrete
+            nroll += x["Phi_r"].size + x["Gam0_r"].size + x["Gam1_r"].size
+            nroll += x["Phi"].size + x["Gam0"].size + x["Gam1"].size
         return (self.table.size + nroll) * (4 if float32 else 8)
 
     def state_bytes(self, float32: bool = False) -> int:
@@ -125,7 +133,10 @@ class ExportDesign:
         h = hashlib.sha256()
         for a in (self.table, self.roll_F, self.roll_G, self.roll_H, self.roll_J,
                   np.array([self.roll_D, self.v0, self.dv, self.v_min, self.max_substep,
-                            self.max_gap, self.wmax], float), np.array(self.uses, float)):
+                            self.max_gap, self.wmax], float), np.array(self.uses, float),
+                  *([] if self.discrete is None else
+                    [np.asarray(self.discrete[k], float) for k in ("Phi", "Gam0", "Gam1", "Phi_r", "Gam0_r",
+                                                                   "Gam1_r", "dt")])):
             h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
         return h.hexdigest()[:16]
 
@@ -151,7 +162,7 @@ def check_exportable(est) -> None:
         raise NotExportable(f"{est.name}: not exportable: {why}")
 
 
-def export_design(est, rate: float, module_name: str | None = None) -> ExportDesign:
+def export_design(est, rate: float, module_name: str | None = None, *, discrete: bool = False) -> ExportDesign:
     """Read the tables of a designed estimator (see :class:`ExportDesign`).
 
     Parameters
@@ -163,6 +174,10 @@ def export_design(est, rate: float, module_name: str | None = None) -> ExportDes
     module_name : str, optional
         Name of the C module (files and symbols ``roadbank_<module_name>_*``); default
         the estimator's name. Two designs of one estimator in one program need two names.
+    discrete : bool
+        Add the fixed-rate tables for ``rate`` (the kernels' fixed-rate path,
+        ``Estimator.discrete_tables``): samples ``1/rate`` apart then cost one small
+        matrix update; other intervals, gaps and restarts take the general path.
 
     Raises
     ------
@@ -193,6 +208,15 @@ def export_design(est, rate: float, module_name: str | None = None) -> ExportDes
     nr = F.shape[0]
     # the same expressions as Estimator._build_cfg, so the constants are the same bits
     J = -np.linalg.solve(F, G).ravel() if nr else np.zeros(0)
+    disc, dt_tol = None, 0.0
+    if discrete:
+        if not hasattr(est, "discrete_tables"):
+            raise NotExportable(f"{est.name}: no fixed-rate tables: this roadbank has no fixed-rate "
+                                "path (Estimator.discrete_tables); export the general path")
+        from ..estimators import layout
+
+        disc = est.discrete_tables(1.0 / rate)
+        dt_tol = float(layout.DT_REL_TOL)
     p = est.params
     provenance = {"estimator": repr(est), "class": type(est).__name__,
                   "settings": {k: v for k, v in vars(est).items()
@@ -207,4 +231,5 @@ def export_design(est, rate: float, module_name: str | None = None) -> ExportDes
         uses=tuple(bool(u) for u in est.uses), v_min=float(est.v_min),
         max_substep=float(est.max_substep), max_gap=float(est.max_gap),
         max_angle=float(est.max_angle), wmax=float(np.sin(est.max_angle)), rate=float(rate),
-        state_names=tuple(getattr(est, "state_names", ())), provenance=provenance)
+        state_names=tuple(getattr(est, "state_names", ())), provenance=provenance,
+        discrete=disc, dt_tol=dt_tol)
