@@ -12,19 +12,7 @@ from pathlib import Path
 
 import click
 
-try:
-    from .options import vehicle_option
-except ImportError:  # pragma: no cover - the shared option lands with the vehicle files
-    def vehicle_option(help_extra: str = ""):
-        def _to_vehicle(ctx, param, value):
-            from ..vehicle import VehicleFileError, load_vehicle
-
-            try:
-                return load_vehicle(value)
-            except VehicleFileError as exc:
-                raise click.BadParameter(str(exc), ctx=ctx, param=param) from None
-        return click.option("--vehicle", "vehicle", default=None, metavar="PATH|NAME",
-                            callback=_to_vehicle, help=f"Vehicle file (.toml) or built-in car. {help_extra}")
+from .options import vehicle_option
 
 
 @click.group()
