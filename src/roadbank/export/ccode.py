@@ -393,7 +393,7 @@ static void rb_lu_solve(const real_t *M, const int *piv, real_t *b, int n)
         }
         b[i] = acc;
     }
-    for (i = n - 1; i >= 0; --i) {
+    for (i = (n < RB_NT ? n : RB_NT) - 1; i >= 0; --i) {
         real_t acc = b[i];
         for (j = i + 1; j < n && j < RB_NT; ++j) {
             acc -= M[i * n + j] * b[j];
