@@ -128,3 +128,17 @@ def test_tune_cli_writes_a_vehicle_file_that_reproduces_its_scores(tmp_path, mon
 def test_tune_cli_rejects_untunable_estimators(tmp_path):
     r = CliRunner().invoke(main, ["tune", "-o", str(tmp_path / "x.toml"), "--estimators", "uio"])
     assert r.exit_code == 2 and "cannot tune uio" in r.output
+
+
+def test_default_th_adapts_to_the_car_explicit_th_raises(monkeypatch):
+    from roadbank.estimators import pif
+    monkeypatch.setitem(pif.TUNINGS, "default", dict(pif.TUNINGS["default"], th=1e9))
+    est = E.make("pif-modified")
+    assert 0 <= est.th < 1e9
+    with pytest.raises(E.NoStabilisingSolution):
+        E.make("pif-modified", th=1e9)
+    # the shipped cars all get the default th itself
+    from roadbank.vehicle import builtin_names, load_vehicle
+    monkeypatch.undo()
+    for name in builtin_names():
+        assert E.make("pif-modified", load_vehicle(name).params).th == pif.DEFAULT_TUNING["th"]
