@@ -97,13 +97,15 @@ def synthetic_drive(rate: float = 100.0, duration: float = 60.0) -> tuple:
 
 
 def measure_c_step_ns(est, signals=None, *, rate: float = 100.0, float32: bool = False,
-                      repeats: int = 5, min_samples: int = 200_000, opt: str = "-O2") -> float:
+                      discrete: bool = False, repeats: int = 5, min_samples: int = 200_000,
+                      opt: str = "-O2") -> float:
     """C step cost of ``est`` exported (ns/sample): best of ``repeats`` timed passes.
 
     Generates the module into a temporary directory, compiles it with a small
     timing loop (``opt``, strict C99 flags) and runs ``<prefix>_step_dt()`` over
     ``signals`` (a :class:`roadbank.Signals`; default :func:`synthetic_drive` at
-    ``rate``) at least ``min_samples`` times in one call.
+    ``rate``) at least ``min_samples`` times in one call. ``discrete`` times the module
+    with the fixed-rate tables for ``rate`` (see :func:`export_c`).
 
     Raises
     ------
@@ -119,6 +121,6 @@ def measure_c_step_ns(est, signals=None, *, rate: float = 100.0, float32: bool =
     else:
         cols = (signals.t, signals.vx, signals.ay, signals.r, signals.delta_f)
     with tempfile.TemporaryDirectory(prefix="roadbank-cbench-") as tmp:
-        res = export_c(est, tmp, rate=rate, float32=float32)
+        res = export_c(est, tmp, rate=rate, float32=float32, discrete=discrete)
         return CModule(res.source, tmp, opt=opt).bench_ns(*cols, min_samples=min_samples,
                                                           repeats=repeats)
