@@ -339,3 +339,8 @@ def test_estimate_plot_gets_the_logs_truth_and_reference(tmp_path, monkeypatch):
     assert res.exit_code == 0, res.output
     assert png.stat().st_size > 10_000
     np.testing.assert_allclose(seen["truth"]["true_phi_b"], bank, atol=1e-9)
+
+
+@pytest.mark.parametrize("doc", GENERATED_DOCS, ids=[p.name for p in GENERATED_DOCS])
+def test_generated_docs_tables_are_consistent(doc):
+    assert check_md(doc.read_text(), str(doc)), f"{doc}: no table"
