@@ -3,7 +3,7 @@
 Runs ``--runs N`` randomised runs (plant and sensor perturbations around the
 design values, the paper's five scenarios) through every estimator, storing
 results in ``OUTDIR/parts/*.parquet`` as batches finish, then writes the report
-(``OUTDIR/report.md``, ``summary.csv``, ``failure_cells.csv``, ``boxplot.png``).
+(``OUTDIR/report.md`` and the self-contained ``report.html``, ``summary.csv``, ``failure_cells.csv``, ``boxplot.png``).
 Interrupted (Ctrl-C)? Run the same command with ``--resume``.
 """
 
