@@ -10,6 +10,7 @@ A driver program built with AddressSanitizer/UBSan runs the same log.
 
 from __future__ import annotations
 
+import inspect
 import os
 import subprocess
 
@@ -18,12 +19,22 @@ import pytest
 from click.testing import CliRunner
 
 from roadbank import estimators as E
+from roadbank.estimators.base import Estimator
 from roadbank.export import CModule, NotExportable, build_driver, export_c, export_design, measure_c_step_ns
 from roadbank.export.build import object_report
 from roadbank.sim import SCENARIOS, run_scenario
 
+#: the Python estimators on their general (per-sample trapezoidal) path, which the default
+#: export runs: where the kernels have a fixed-rate path, its automatic rate is switched off
+_GENERAL = {"sample_rate": None} if "sample_rate" in inspect.signature(Estimator.__init__).parameters else {}
+
+
+def make(name, **kw):
+    return E.make(name, **_GENERAL, **kw)
+
+
 #: estimators built once (designs are cached by the estimators module too)
-BUILT = {name: E.make(name) for name in E.NAMES}
+BUILT = {name: make(name) for name in E.NAMES}
 EXPORTABLE = [n for n, est in BUILT.items() if est.kernel == "lpv"]
 NOT_EXPORTABLE = [n for n in E.NAMES if n not in EXPORTABLE]
 
@@ -65,8 +76,6 @@ def hard_log(scenarios, *, nan_time=True):
 
 
 def python_steps(est, cols):
-    if getattr(est, "fixed_dt", None) is not None:   # the module runs the general (per-sample Tustin) path
-        est.set_sample_rate(None)
     est.reset()
     res = [est.step(*a) for a in zip(*cols)]
     return {"w": np.array([o.w for o in res]), "theta": np.array([o.theta for o in res]),
@@ -105,7 +114,7 @@ def test_the_issue_list_is_exportable_and_the_others_say_why():
     for name in NOT_EXPORTABLE:
         with pytest.raises(NotExportable, match=f"{name}: not exportable: .+"):
             export_c(BUILT[name], "/nonexistent/never-written", rate=100.0)
-    riccati = E.make("pif-modified", variant="riccati", roll="dynamic")   # the design test_streaming uses
+    riccati = make("pif-modified", variant="riccati", roll="dynamic")   # the design test_streaming uses
     with pytest.raises(NotExportable, match="Riccati.*steady"):
         export_c(riccati, "/nonexistent/never-written", rate=100.0)
 
@@ -145,7 +154,7 @@ def test_float32_within_a_thousandth_of_a_degree(name, scenarios, built_modules)
                                             ("pio-modified", "static", {"v_step": 1.0, "v_max": 60.0})])
 def test_roll_models_grids_and_the_general_observer_path(name, roll, grid, scenarios, built_modules):
     """Static, dynamic and no roll; the four-state (LU) path; a coarse, short speed grid."""
-    est = E.make(name, roll=roll, **grid)
+    est = make(name, roll=roll, **grid)
     mod = built_modules(name, est=est, tag=roll + "".join(f"-{k}{v}" for k, v in grid.items()))
     assert mod.state_size == export_design(est, 100.0).state_bytes()
     for scen in ("hard", "track-lane-change"):
@@ -157,7 +166,7 @@ def test_roll_models_grids_and_the_general_observer_path(name, roll, grid, scena
 def test_fixed_rate_tables_follow_the_kernels_fixed_rate_path(name, roll, scenarios, tmp_path):
     """``discrete=True`` adds the kernels' fixed-rate tables (Estimator.discrete_tables): the module
     then equals step() with that sample rate set; without a fixed-rate path it says so."""
-    est = E.make(name, roll=roll)
+    est = make(name, roll=roll)
     if not hasattr(est, "discrete_tables"):
         with pytest.raises(NotExportable, match="no fixed-rate tables"):
             export_c(est, tmp_path, rate=100.0, discrete=True)
@@ -196,9 +205,9 @@ def test_ctypes_step_by_step_and_reset(scenarios, built_modules):
 
 def test_sanitizers_on_a_driver_linking_several_modules(scenarios, tmp_path):
     """-fsanitize=address,undefined: four modules in one program (prefixed symbols), t and dt entry points."""
-    variants = {"pif": (E.make("pif-modified", roll="dynamic"), False),
+    variants = {"pif": (make("pif-modified", roll="dynamic"), False),
                 "uio": (BUILT["uio"], False), "kin": (BUILT["kinematic"], False),
-                "pif32": (E.make("pif-modified", roll="dynamic"), True)}
+                "pif32": (make("pif-modified", roll="dynamic"), True)}
     sources = {}
     for key, (est, f32) in variants.items():
         # the same estimator twice in one program: the float32 one gets its own module name
@@ -229,7 +238,7 @@ def test_sanitizers_on_a_driver_linking_several_modules(scenarios, tmp_path):
 
 def test_generated_object_has_no_heap_no_mutable_globals_no_recursion(tmp_path):
     for name, roll in (("uio", "dynamic"), ("pif-modified", "static")):
-        src = export_c(E.make(name, roll=roll), tmp_path / name, rate=100.0).source
+        src = export_c(make(name, roll=roll), tmp_path / name, rate=100.0).source
         rep = object_report(src)
         assert rep["mutable_symbols"] == set()
         assert rep["sections"].get(".data", 0) == 0 and rep["sections"].get(".bss", 0) == 0
@@ -252,7 +261,7 @@ def test_generated_object_has_no_heap_no_mutable_globals_no_recursion(tmp_path):
             if f not in state:
                 visit(f)
         # the tables are in read-only data, 8 bytes per value
-        assert rep["sections"][".rodata"] >= export_c(E.make(name, roll=roll), tmp_path / name,
+        assert rep["sections"][".rodata"] >= export_c(make(name, roll=roll), tmp_path / name,
                                                       rate=100.0).table_bytes
 
 
