@@ -34,7 +34,7 @@ class CModule:
     build_dir : path, optional
         Where the shared library goes (default: a new temporary directory).
     opt : str
-        Optimisation flag of the build.
+        Optimisation flags of the build, space-separated (e.g. ``"-O2 -march=native"``).
 
     ``step()`` and ``run()`` take and return SI float64 values as
     :meth:`roadbank.estimators.base.Estimator.step` does; in a float32 build the
