@@ -186,9 +186,15 @@ def test_reproduce_report_html_and_markdown(reproduced):
     check_md((reproduced / "results.md").read_text(), "results.md")
     claims = tables[0]
     assert claims["header"] == ["claim", "holds", "evidence"]
-    # a claim containing |error| keeps its pipes as text in one cell
-    assert any("|error|" in _text(r[0]) for r in claims["rows"])
-    assert "\\|error\\|" in (reproduced / "report.md").read_text()
+    # every claim and its evidence show verbatim, pipes included (e.g. "|error|"), one per row
+    import pyarrow.csv as pacsv
+
+    from roadbank.report.claims import all_claims
+
+    rows = pacsv.read_csv(reproduced / "metrics.csv").to_pylist()
+    expected = [(c.text, c.detail) for c in all_claims(rows)]
+    assert [(_text(r[0]), _text(r[2])) for r in claims["rows"]] == expected
+    assert any("|" in text for text, _ in expected)
     # the metric tables: one row per cell, the smallest |value| of each row in bold
     rms = next(t for t in tables if t["header"][:3] == ["scenario", "condition", "PIF"])
     assert len(rms["rows"]) == 4                      # const-bank: 4 conditions
