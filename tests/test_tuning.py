@@ -142,3 +142,19 @@ def test_default_th_adapts_to_the_car_explicit_th_raises(monkeypatch):
     monkeypatch.undo()
     for name in builtin_names():
         assert E.make("pif-modified", load_vehicle(name).params).th == pif.DEFAULT_TUNING["th"]
+
+
+def test_tune_on_dask_gives_the_local_result(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    import logging
+    import tomllib
+    args = ["tune", "--budget", "6", "--train-drives", "4", "--validation-drives", "4", "--estimators", "dfc"]
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None,
+                                  silence_logs=logging.ERROR) as cluster:
+        r = CliRunner().invoke(main, args + ["-o", str(tmp_path / "d.toml"), "--scheduler", cluster.scheduler_address])
+    assert r.exit_code == 0, r.output
+    r = CliRunner().invoke(main, args + ["-o", str(tmp_path / "l.toml"), "--jobs", "1"])
+    assert r.exit_code == 0, r.output
+    dask_run, local_run = (tomllib.loads((tmp_path / f).read_text()) for f in ("d.toml", "l.toml"))
+    assert dask_run["tuning"] == local_run["tuning"]
+    assert dask_run["scores"]["dfc"]["validation_median_rms_deg"] == local_run["scores"]["dfc"]["validation_median_rms_deg"]
