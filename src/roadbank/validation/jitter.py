@@ -20,13 +20,19 @@ from ..signals import Signals
 
 @dataclass
 class JitterResult:
-    """RMS theta error (deg) per estimator at 100 Hz and at jittered 10 Hz; the 10 Hz steps (s)."""
+    """RMS theta error (deg) per estimator at 100 Hz and at jittered 10 Hz; the 10 Hz steps (s).
+
+    ``substep_diff``: per estimator, the largest |theta| difference (deg) on the 10 Hz run
+    between the default 20 ms substeps and 5 ms ones (``"5ms"``; bounds the substeps'
+    integration error) and one trapezoidal step per sample (``"none"``).
+    """
 
     scenario: str
     rms_100hz: dict
     rms_10hz: dict
     steps: np.ndarray
     substeps: tuple
+    substep_diff: dict
 
 
 def jittered_indices(n: int, dt_fine: float, dt_range=(0.06, 0.14), seed: int = 0) -> np.ndarray:
@@ -69,6 +75,7 @@ def jitter_study(scenario: str = "bank-lane-change", names=("kinematic", "pio-mo
     s, truth = sim.signals, sim.truth.theta
     runs = {"100": np.arange(0, len(s.t), 10), "10": jittered_indices(len(s.t), 1e-3, dt_range, seed)}
     out = {"100": {}, "10": {}}
+    diff = {}
     for key, idx in runs.items():
         sub = subsample(s, idx)
         m = sub.t >= warmup_s
@@ -76,7 +83,13 @@ def jitter_study(scenario: str = "bank-lane-change", names=("kinematic", "pio-mo
             est = estimators.make(name).run(sub)
             ok = m & est.valid
             out[key][name] = float(np.degrees(np.sqrt(np.mean((est.theta[ok] - truth[idx][ok]) ** 2))))
+            if key == "10":
+                diff[name] = {}
+                for label, h in (("5ms", 0.005), ("none", 1.0)):
+                    other = estimators.make(name, max_substep=h).run(sub)
+                    both = ok & other.valid
+                    diff[name][label] = float(np.degrees(np.max(np.abs(other.theta[both] - est.theta[both]))))
     steps = np.diff(s.t[runs["10"]])
     sub_max = Estimator.__init__.__kwdefaults__["max_substep"]
     n_sub = (int(np.ceil(steps.min() / sub_max - 1e-9)), int(np.ceil(steps.max() / sub_max - 1e-9)))
-    return JitterResult(scenario, out["100"], out["10"], steps, n_sub)
+    return JitterResult(scenario, out["100"], out["10"], steps, n_sub, diff)
