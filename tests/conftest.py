@@ -2,14 +2,21 @@
 
 from __future__ import annotations
 
-from pathlib import Path
+import os
 
-import numpy as np
-import pytest
-from scipy.signal import StateSpace as ScipySS
-from scipy.signal import lsim
+# Small matrices everywhere (3x3..6x6 designs): a multi-threaded BLAS only spins, and on a
+# loaded 2-core machine it made each gain-schedule design 10-20x slower. As the CLI does.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
-from roadbank import Signals, VehicleParams
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from scipy.signal import StateSpace as ScipySS  # noqa: E402
+from scipy.signal import lsim  # noqa: E402
+
+from roadbank import Signals, VehicleParams  # noqa: E402
 
 DATA_DIR = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 

@@ -16,7 +16,7 @@ P = VehicleParams()
 @pytest.mark.parametrize("vx", [5.0, 12.0, 22.2, 45.0, 70.0])
 def test_steady_pif_gain_against_python_control(model, vx):
     control = pytest.importorskip("control")
-    est = E.make(f"pif-{model}")
+    est = E.make(f"pif-{model}", tuning="paper")
     Pr = est.riccati_solution(vx)
     A, B, C, Dy, Lw, Ew = augmented_design_model(P, vx, model)
     R = est.R
@@ -34,16 +34,16 @@ def test_steady_pif_gain_against_python_control(model, vx):
 
 
 def test_pif_fast_pole_at_low_speed_matches_spec():
-    est = E.make("pif-modified", v_min=2.5)
+    est = E.make("pif-modified", v_min=2.5, tuning="paper")
     fastest = np.linalg.eigvals(est.error_dynamics(3.0)).real.min()
     assert -160 < fastest < -140           # SPEC 4: about -150 1/s at 3 m/s
 
 
 def test_pif_reports_missing_stabilising_solution():
     with pytest.raises(E.NoStabilisingSolution, match=r"th=50.0 at vx="):
-        E.make("pif-modified", th=50.0)
+        E.make("pif-modified", th=50.0, tuning="paper")
     with pytest.raises(E.NoStabilisingSolution):
-        E.make("pif-modified", th=50.0, variant="riccati")
+        E.make("pif-modified", th=50.0, variant="riccati", tuning="paper")
 
 
 def test_pio_table3_error_dynamics_hurwitz_and_slow_pole():

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import csv
+from pathlib import Path
+
 import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
@@ -44,7 +47,11 @@ def test_batch_bad_file_reported_and_others_written(tmp_path):
     assert res.exit_code == 1
     assert "broken.parquet" in res.output and "not a readable Parquet file" in res.output
     assert "Traceback" not in res.output
-    assert sorted(p.name for p in outdir.iterdir()) == ["a.bank.parquet", "b.bank.parquet"]
+    # the results of the good logs, and the summary table (one row per log, the bad one with its error)
+    assert sorted(p.name for p in outdir.iterdir()) == ["a.bank.parquet", "b.bank.parquet", "summary.csv"]
+    rows = {Path(r["log"]).name: r for r in csv.DictReader(open(outdir / "summary.csv"))}
+    assert rows["broken.parquet"]["status"] == "error" and "not a readable Parquet" in rows["broken.parquet"]["error"]
+    assert rows["a.parquet"]["status"] == "ok" and rows["a.parquet"]["estimator"] == "kinematic"
     cols = pq.read_table(outdir / "a.bank.parquet").column_names
     assert cols == ["t", "kinematic.theta", "kinematic.phi_b", "kinematic.valid",
                     "dfc.theta", "dfc.phi_b", "dfc.valid"]

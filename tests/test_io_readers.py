@@ -323,7 +323,8 @@ def test_bad_channel_map(tmp_path):
     m2 = _write_map(tmp_path / "bad2.toml", "this is = = not toml")
     with pytest.raises(LogError, match="not a valid TOML"):
         read_channel_map(m2)
-    m3 = _write_map(tmp_path / "bad3.toml", MAP_FRD.replace('convention = "FRD"', 'convention = "NED"'))
+    # NED (PX4-style body axes) is accepted as FRD, FLU (ROS REP-103) as ISO: see test_io_ros.py
+    m3 = _write_map(tmp_path / "bad3.toml", MAP_FRD.replace('convention = "FRD"', 'convention = "XYZ"'))
     with pytest.raises(LogError, match="convention must be one of"):
         read_channel_map(m3)
 

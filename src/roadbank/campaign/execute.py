@@ -77,6 +77,25 @@ class CampaignResult:
         return self.completed / self.wall_s if self.completed and self.wall_s > 0 else float("nan")
 
 
+def open_client(scheduler: str | None, workers: int, connect_timeout: float = 20.0):
+    """``(client, cluster)``: a Dask client on the scheduler at ``scheduler``, or on a new
+    LocalCluster of ``workers`` single-threaded processes (``cluster`` None when connecting).
+
+    Raises DaskMissing without dask.distributed, ConnectionError if the scheduler is unreachable.
+    """
+    dd = _distributed()
+    if scheduler is None:
+        cluster = dd.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                  dashboard_address=None, silence_logs=logging.ERROR,
+                                  env={"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
+                                       "MKL_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"})
+        return dd.Client(cluster), cluster
+    try:
+        return dd.Client(scheduler, timeout=f"{connect_timeout}s"), None
+    except (OSError, TimeoutError) as exc:
+        raise ConnectionError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
+
+
 def settings_of(runs: int, seed: int, options: RunOptions) -> dict:
     """The campaign settings recorded in ``campaign.json`` (``runs`` may grow on resume)."""
     return {"runs": int(runs), "seed": int(seed), "options": options.as_dict(), "sampler": "roadbank.campaign.sampling.draw/1"}
@@ -144,19 +163,8 @@ def run_campaign(outdir, runs: int, *, seed: int = 0, options: RunOptions | None
         return result
 
     t0 = time.perf_counter()
-    cluster = None
     futures: dict = {}
-    if scheduler is None:
-        cluster = dd.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                  dashboard_address=None, silence_logs=logging.ERROR,
-                                  env={"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
-                                       "MKL_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"})
-        client = dd.Client(cluster)
-    else:
-        try:
-            client = dd.Client(scheduler, timeout=f"{connect_timeout}s")
-        except (OSError, TimeoutError) as exc:
-            raise ConnectionError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
+    client, cluster = open_client(scheduler, workers, connect_timeout)
     try:
         result.workers = sum(client.nthreads().values())
         client.run(warm_up, options)          # load / compile the kernels on every worker

@@ -9,7 +9,8 @@ run and estimator). Output in the campaign directory:
   (binned plant front / rear stiffness scale, friction, mass scale, scenario);
 - ``errors.csv`` — runs that raised, with seed and error text;
 - ``boxplot.png`` — bank RMS error distribution per estimator (log axis);
-- ``report.md`` — all of it in one page, with the throughput of the campaign.
+- ``report.md`` — all of it in one page, with the throughput of the campaign;
+- ``report.html`` — the same page, self-contained (the box plot embedded).
 
 Failure of an estimator in a run is defined in :mod:`roadbank.campaign.runner`
 (non-finite output, bank RMS > 2 deg, or an error).
@@ -121,20 +122,23 @@ def box_plot(df, path: Path) -> None:
     plt.close(fig)
 
 
-def _md_table(frame, floatfmt: str = ".2f") -> str:
-    cols = list(frame.columns)
-    lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
-    for _, r in frame.iterrows():
-        cells = []
-        for c in cols:
-            v = r[c]
-            cells.append(format(v, floatfmt) if isinstance(v, (float, np.floating)) else str(v))
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+def _md_table(frame, best=None, best_in: str = "row") -> str:
+    """A data frame as a markdown table (:func:`roadbank.report.markdown.md_table`; floats to 2 decimals)."""
+    from ..report.markdown import md_table
+
+    rows = [[v.item() if isinstance(v, np.generic) else v for v in r]
+            for r in frame.itertuples(index=False, name=None)]
+    return md_table([str(c) for c in frame.columns], rows, best=best, best_in=best_in)
+
+
+#: the summary's error columns: the smallest of each column is the best estimator
+SUMMARY_BEST = {c: "min" for c in ("rms_median", "rms_p95", "rms_max", "max_median", "max_p95", "max_max",
+                                   "fail_rate")}
 
 
 def write_report(outdir, df, settings: dict, throughput: dict | None = None) -> Path:
-    """Write summary.csv, failure_cells.csv, errors.csv, boxplot.png and report.md into ``outdir``.
+    """Write summary.csv, failure_cells.csv, errors.csv, boxplot.png, report.md and report.html into
+    ``outdir``; returns the path of report.md.
 
     Parameters
     ----------
@@ -170,8 +174,10 @@ def write_report(outdir, df, settings: dict, throughput: dict | None = None) -> 
         verdict = "meets" if p95 <= PIF_GOAL_P95_DEG else "misses"
         lines += [f"**PIF (modified model) 95th-percentile bank RMS: {p95:.2f} deg** — {verdict} the "
                   f"{PIF_GOAL_P95_DEG:g} deg goal.", ""]
-    lines += ["## Bank error per estimator (deg)", "", _md_table(summ), "", "![box plot](boxplot.png)", "",
-              "## 95th-percentile bank RMS (deg) per scenario", "", _md_table(scenario_table(df)), "",
+    lines += ["## Bank error per estimator (deg)", "", _md_table(summ, SUMMARY_BEST, "column"), "",
+              "Best (smallest) error and failure rate of each column in bold.", "", "![box plot](boxplot.png)", "",
+              "## 95th-percentile bank RMS (deg) per scenario", "", _md_table(scenario_table(df), best="min"), "",
+              "Best (smallest) value of each line in bold.", "",
               f"Runs in which the plant lost control (max sideslip > 10 deg; the largest errors of every "
               f"estimator): {lost_control(df)}.", "",
               "## Where estimators fail (worst one-parameter cells)", "",
@@ -187,6 +193,8 @@ def write_report(outdir, df, settings: dict, throughput: dict | None = None) -> 
                   f"{throughput['startup_s']:.1f} s cluster start-up and warm-up. Mean per-run cost in "
                   f"the workers: simulation {runs['sim_s'].mean() * 1e3:.1f} ms, all estimators "
                   f"{df.groupby('run_id')['est_s'].sum().mean() * 1e3:.1f} ms.", ""]
-    path = out / "report.md"
-    path.write_text("\n".join(lines))
-    return path
+    from ..report.html import write_document
+
+    text = "\n".join(lines)
+    write_document(out / "report.html", text, f"roadbank campaign: {n} runs")
+    return write_document(out / "report.md", text)

@@ -53,6 +53,9 @@ class RunOptions:
         Integration step of the plant (s); 1e-3 is the simulator's default.
     settle : float
         Seconds at the start excluded from the scores.
+    vehicle : roadbank.vehicle.Vehicle or None
+        The car: perturbed plant and sensors around it, estimators designed for it (its
+        parameters and ``[tuning]`` tables). None: the paper's SUV.
     """
 
     names: tuple = ()
@@ -60,6 +63,9 @@ class RunOptions:
     pre_roll: float | None = None
     sim_dt: float = 1e-3
     settle: float = 2.0
+    vehicle: object = None
+
+    __hash__ = None  # a Vehicle holds dicts
 
     def __post_init__(self) -> None:
         if not (0 < self.duration_scale <= 1.0):
@@ -75,7 +81,10 @@ class RunOptions:
         return tuple(self.names) or E.NAMES
 
     def as_dict(self) -> dict:
-        d = dataclasses.asdict(self)
+        d = dataclasses.asdict(dataclasses.replace(self, vehicle=None))
+        del d["vehicle"]  # absent for the paper SUV: campaigns stored before vehicles resume
+        if self.vehicle is not None:
+            d["vehicle"] = self.vehicle.dumps()
         d["names"] = list(self.estimator_names())
         return d
 
@@ -83,15 +92,20 @@ class RunOptions:
 _ESTIMATORS: dict = {}
 
 
-def estimators_for(names) -> dict:
-    """Estimators ``name -> Estimator`` with the design parameters, built once per process."""
+def estimators_for(names, vehicle=None) -> dict:
+    """Estimators ``name -> Estimator`` with the design parameters, built once per process.
+
+    ``vehicle`` (a :class:`roadbank.vehicle.Vehicle`): designed for it (``vehicle.make(name)``).
+    """
     from .. import estimators as E
 
     out = {}
+    car = None if vehicle is None else vehicle.dumps()
     for name in names:
-        if name not in _ESTIMATORS:
-            _ESTIMATORS[name] = E.make(name)
-        out[name] = _ESTIMATORS[name]
+        key = (name, car)
+        if key not in _ESTIMATORS:
+            _ESTIMATORS[key] = E.make(name) if vehicle is None else vehicle.make(name)
+        out[name] = _ESTIMATORS[key]
     return out
 
 
@@ -123,7 +137,7 @@ def run_one(spec: RunSpec, options: RunOptions = RunOptions()) -> list[dict]:
     base = spec.as_dict()
     t0 = time.perf_counter()
     try:
-        plant, sensors = spec.plant_and_sensors()
+        plant, sensors = spec.plant_and_sensors(options.vehicle)
         sim = sim_run(_scenario(spec, options), plant, sensors, seed=spec.noise_seed, dt=options.sim_dt)
     except Exception as exc:  # a failing run is data, not a crash
         err = f"simulation: {_error_text(exc)}"
@@ -135,7 +149,7 @@ def run_one(spec: RunSpec, options: RunOptions = RunOptions()) -> list[dict]:
     extra = {"max_beta_deg": float(np.nanmax(beta)), "min_vx": float(np.nanmin(tr.vx)),
              "duration_s": float(sig.t[-1] - sig.t[0]), "sim_s": sim_s}
     rows = []
-    for name, est in estimators_for(names).items():
+    for name, est in estimators_for(names, options.vehicle).items():
         t1 = time.perf_counter()
         try:
             e = est.run(sig)
@@ -174,7 +188,7 @@ def warm_up(options: RunOptions = RunOptions()) -> float:
     t0 = time.perf_counter()
     sc = dataclasses.replace(SCENARIOS["const-bank"], duration=0.5, pre_roll=0.1)
     sim = sim_run(sc, dt=options.sim_dt)
-    for est in estimators_for(options.estimator_names()).values():
+    for est in estimators_for(options.estimator_names(), options.vehicle).values():
         est.run(sim.signals)
     return time.perf_counter() - t0
 

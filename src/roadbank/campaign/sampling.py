@@ -4,8 +4,10 @@ Each run gets its own generator ``numpy.random.default_rng([base_seed, run_id])`
 so run ``k`` is the same whatever the number of runs, the batching, the worker it
 lands on or the order runs finish in — which is what makes resuming exact.
 
-Perturbations (around the design values of :class:`roadbank.VehicleParams`; the
-estimators keep the design values, only the plant and sensors change):
+Perturbations (around the design values of the car -- :class:`roadbank.VehicleParams`
+and the simulator's default sensors, or a :class:`roadbank.vehicle.Vehicle` given to
+:meth:`RunSpec.plant_and_sensors`; the estimators keep the design values, only the plant
+and sensors change; the drawn biases and misalignment add to the car's own):
 
 ============================  =====================================================
 plant front cornering stiffness  ``Cf`` x U(0.5, 1.5)
@@ -105,24 +107,28 @@ class RunSpec:
     def as_dict(self) -> dict:
         return dataclasses.asdict(self)
 
-    def plant_and_sensors(self):
-        """``(PlantParams, SensorConfig)`` of this run (the simulator's objects)."""
+    def plant_and_sensors(self, vehicle=None):
+        """``(PlantParams, SensorConfig)`` of this run (the simulator's objects).
+
+        ``vehicle`` (a :class:`roadbank.vehicle.Vehicle`, default the paper's SUV) is the car
+        perturbed: its plant (``Vehicle.to_plant()``) and sensors (``SensorSpec.to_sim()``).
+        """
         from ..sim import PlantParams, SensorConfig
 
-        base = PlantParams()
+        base = PlantParams() if vehicle is None else vehicle.to_plant()
+        s = SensorConfig() if vehicle is None else vehicle.sensors.to_sim()
         v = base.vehicle
         vehicle = v.replace(m=v.m * self.mass_scale, ms=v.ms * self.mass_scale, Iz=v.Iz * self.iz_scale)
         plant = base.replace(vehicle=vehicle, mu=self.mu, cornering_scale_front=self.cf_scale,
                              cornering_scale_rear=self.cr_scale)
-        s = SensorConfig()
         k = self.noise_scale
         sensors = s.replace(
             yaw_rate=dataclasses.replace(s.yaw_rate, noise_std=s.yaw_rate.noise_std * k,
-                                         bias=math.radians(self.r_bias_dps)),
-            ay=dataclasses.replace(s.ay, noise_std=s.ay.noise_std * k, bias=self.ay_bias),
+                                         bias=s.yaw_rate.bias + math.radians(self.r_bias_dps)),
+            ay=dataclasses.replace(s.ay, noise_std=s.ay.noise_std * k, bias=s.ay.bias + self.ay_bias),
             speed=dataclasses.replace(s.speed, noise_std=s.speed.noise_std * k),
             steering=dataclasses.replace(s.steering, noise_std=s.steering.noise_std * k),
-            ay_misalignment=math.radians(self.misalign_deg), ay_cross_axis=True)
+            ay_misalignment=s.ay_misalignment + math.radians(self.misalign_deg), ay_cross_axis=True)
         return plant, sensors
 
 

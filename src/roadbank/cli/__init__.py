@@ -30,6 +30,10 @@ COMMANDS = {
     "bench": "bench:bench",
     "campaign": "campaign:campaign",
     "robustness": "robustness:robustness",
+    "map": "map:map_command",
+    "export": "export:export",
+    "identify": "identify:identify",
+    "tune": "tune:tune",
 }
 
 

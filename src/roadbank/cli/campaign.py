@@ -3,7 +3,7 @@
 Runs ``--runs N`` randomised runs (plant and sensor perturbations around the
 design values, the paper's five scenarios) through every estimator, storing
 results in ``OUTDIR/parts/*.parquet`` as batches finish, then writes the report
-(``OUTDIR/report.md``, ``summary.csv``, ``failure_cells.csv``, ``boxplot.png``).
+(``OUTDIR/report.md`` and the self-contained ``report.html``, ``summary.csv``, ``failure_cells.csv``, ``boxplot.png``).
 Interrupted (Ctrl-C)? Run the same command with ``--resume``.
 """
 
@@ -12,6 +12,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import click
+
+from .options import vehicle_option
 
 
 @click.command()
@@ -31,7 +33,10 @@ import click
 @click.option("--sim-dt", type=click.FloatRange(0.0, 0.01, min_open=True), default=1e-3, show_default=True,
               help="Plant integration step (s).")
 @click.option("--estimators", default="", help="Comma-separated estimator names (default: all).")
-def campaign(runs, outdir, scheduler, workers, resume, seed, batch_size, duration_scale, sim_dt, estimators):
+@vehicle_option("Runs perturb this car (plant and sensors); the estimators are designed for it "
+                "(parameters and [tuning] tables).")
+def campaign(runs, outdir, scheduler, workers, resume, seed, batch_size, duration_scale, sim_dt, estimators,
+             vehicle):
     """Run a Monte-Carlo campaign and write its report into OUTDIR."""
     from ..campaign import store
     from ..campaign.runner import RunOptions
@@ -43,7 +48,11 @@ def campaign(runs, outdir, scheduler, workers, resume, seed, batch_size, duratio
         if bad:
             raise click.BadParameter(f"unknown estimator(s) {', '.join(bad)} (choose from {', '.join(NAMES)})",
                                      param_hint="--estimators")
-    options = RunOptions(names=names, duration_scale=duration_scale, sim_dt=sim_dt)
+    from ..vehicle import load_vehicle
+
+    # the paper SUV stays None: its campaigns resume those stored before vehicle files
+    options = RunOptions(names=names, duration_scale=duration_scale, sim_dt=sim_dt,
+                         vehicle=None if vehicle == load_vehicle(None) else vehicle)
     from ..campaign.execute import DaskMissing, run_campaign, settings_of
 
     def progress(done, total):

@@ -7,6 +7,9 @@ from pathlib import Path
 
 import click
 
+from ..io.readers import FORMATS
+from .options import vehicle_option
+
 
 def _parse_estimators(values: tuple[str, ...]) -> list[str]:
     from .. import estimators
@@ -27,52 +30,12 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
     return list(dict.fromkeys(names)) or ["pif-modified"]
 
 
-def plot_estimates(path, t, estimates, reference_roll=None, title: str = "") -> None:
-    """theta and phi_b (deg) against time, one line per estimator (Agg backend)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(9, 6))
-    tt = np.asarray(t) - t[0]
-    for est in estimates:
-        th = np.where(est.valid, np.degrees(est.theta), np.nan)
-        pb = np.where(est.valid, np.degrees(est.phi_b), np.nan)
-        axes[0].plot(tt, th, lw=0.9, label=est.name)
-        axes[1].plot(tt, pb, lw=0.9, label=est.name)
-    if reference_roll is not None:
-        axes[0].plot(tt, np.degrees(reference_roll), "k--", lw=1.0, label="reference roll")
-    axes[0].set_ylabel("theta = bank + roll (deg)")
-    axes[1].set_ylabel("phi_b road bank (deg)")
-    axes[1].set_xlabel(f"time from {t[0]:.2f} s (s)")
-    axes[0].legend(fontsize=8, ncol=3)
-    for ax in axes:
-        ax.grid(alpha=0.3)
-    if title:
-        axes[0].set_title(title, fontsize=10)
-    fig.tight_layout()
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
-
-def _unique_stem(stem: str, used: set[str]) -> str:
-    s, k = stem, 1
-    while s in used:
-        k += 1
-        s = f"{stem}-{k}"
-    used.add(s)
-    return s
-
-
 @click.command()
 @click.argument("logs", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("--channels", "channels", type=click.Path(path_type=Path), default=None,
               help="Channel map (TOML). Default: roadbank's own columns (roadbank simulate files).")
-@click.option("--format", "fmt", type=click.Choice(["csv", "parquet", "mdf4", "comma2k19"]), default=None,
-              help="Input format. Default: from the file suffix (a directory = comma2k19 segment).")
+@click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default=None,
+              help="Input format. Default: from the file suffix or the directory layout (docs/io.md).")
 @click.option("--estimators", "-e", "est_names", multiple=True, default=("pif-modified",),
               show_default=True, help="Estimators, comma-separated or repeated; 'all' for every one.")
 @click.option("-o", "--output", required=True, type=click.Path(path_type=Path),
@@ -80,32 +43,49 @@ def _unique_stem(stem: str, used: set[str]) -> str:
 @click.option("--output-format", type=click.Choice(["csv", "parquet"]), default="parquet", show_default=True,
               help="Table format of the files written into an output directory.")
 @click.option("--plot", type=click.Path(path_type=Path), default=None,
-              help="PNG of theta/phi_b (deg) vs time; for several logs, a directory of PNGs.")
+              help="PNG of theta, phi_b and their error against the log's truth or reference roll "
+                   "(deg) vs time, flagged spans shaded; for several logs, a directory of PNGs.")
 @click.option("--steering-ratio", type=float, default=None,
               help="Steering-wheel / road-wheel ratio when the log has a steering-wheel angle "
                    "(default: the channel map's, else VehicleParams' 16).")
-def estimate(logs, channels, fmt, est_names, output, output_format, plot, steering_ratio):
+@vehicle_option("Every estimator is designed for this car: its parameters and its [tuning] tables.")
+@click.option("--workers", type=int, default=1, show_default=True,
+              help="Logs in parallel on a Dask LocalCluster of N single-threaded processes (1: in this process).")
+@click.option("--scheduler", default=None, metavar="ADDR",
+              help="Run on the Dask scheduler at ADDR (tcp://host:8786) instead of a LocalCluster.")
+@click.option("--resume", is_flag=True,
+              help="Skip logs the output directory's summary.csv lists as finished (failed ones are retried).")
+@click.option("--chunk-rows", type=int, default=None,
+              help="Rows per streamed chunk (Parquet, MDF4); default 50000.")
+def estimate(logs, channels, fmt, est_names, output, output_format, plot, steering_ratio, vehicle,
+             workers, scheduler, resume, chunk_rows):
     """Estimate the road bank angle on recorded LOGS and write t, theta, phi_b, valid per estimator.
 
     \b
     roadbank estimate drive.parquet -o drive_bank.csv --plot drive.png
     roadbank estimate logs/*.csv --channels car.toml -e kinematic,pif-modified -o out/
+    roadbank estimate fleet/ --channels car.toml --workers 2 -o out/ [--resume]
 
-    A bad log is reported (name and reason) and skipped; the exit code is 1 if
-    any log failed, 0 otherwise. Output columns are SI (rad).
+    LOGS are files, log directories (comma2k19 segment, ROS 2 bag, KITTI drive),
+    directories of logs or glob patterns. Parquet and MDF4 logs are streamed in
+    chunks (bounded memory) and the output is written as it is computed. With
+    several logs, -o is a directory: one table per log plus summary.csv (per log:
+    duration, valid share, bank mean/min/max, error), appended as each log
+    finishes. A bad log is reported (name and reason) and never stops the
+    others; the exit code is 1 if any log failed, 0 otherwise. Output columns
+    are SI (rad); the summary is in degrees.
     """
-    from .. import estimators
-    from ..io import LogError, load_log, read_channel_map
-    from ..io.writers import estimate_table, write_table
-    from ..params import VehicleParams
+    from ..fleet import estimate_log, expand_logs, run_fleet
+    from ..io import LogError, read_channel_map
 
     names = _parse_estimators(est_names)
-    params = VehicleParams()
     if steering_ratio is not None:
         try:
-            params = params.replace(steering_ratio=steering_ratio)
+            vehicle = vehicle.with_params(steering_ratio=steering_ratio)
         except ValueError as exc:
             raise click.BadParameter(str(exc), param_hint="--steering-ratio")
+    if workers < 1:
+        raise click.BadParameter("must be >= 1", param_hint="--workers")
     cmap = None
     if channels is not None:
         try:
@@ -113,42 +93,58 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
         except LogError as exc:
             click.echo(f"error: {exc}", err=True)
             sys.exit(1)
-    batch = len(logs) > 1 or str(output).endswith(("/", "\\")) or output.is_dir()
+    paths = expand_logs(logs)
+    if not paths:
+        click.echo(f"error: no logs found in {', '.join(map(str, logs))}", err=True)
+        sys.exit(1)
+    batch = (len(paths) > 1 or len(logs) != 1 or paths[0] != Path(logs[0]) or str(output).endswith(("/", "\\"))
+             or output.is_dir() or workers > 1 or scheduler is not None or resume)
     if not batch and output.suffix.lower() not in (".csv", ".parquet", ".pq"):
         raise click.BadParameter("for one log, -o must end in .csv or .parquet (or be a directory)",
                                  param_hint="-o")
-    ests = [estimators.make(n, params=params) for n in names]
-    failures: list[tuple[Path, str]] = []
-    used: set[str] = set()
-    written = 0
-    with click.progressbar(logs, label=f"estimating ({', '.join(names)})", file=sys.stderr,
-                           item_show_func=lambda p: p.name if p else "") as bar:
-        for path in bar:
+    params = vehicle.params
+    meta = {"estimators": ",".join(names),
+            "steering_ratio": str(cmap.steering_ratio if cmap and cmap.steering_ratio else params.steering_ratio)}
+    if not batch:
+        s = estimate_log(paths[0], output, names, channels=cmap, format=fmt, vehicle=vehicle,
+                         chunk_rows=chunk_rows, metadata=dict(meta, source=str(paths[0])), plot=plot)
+        summaries = [s]
+    else:
+        with click.progressbar(length=len(paths), label=f"estimating ({', '.join(names)})", file=sys.stderr,
+                               item_show_func=lambda s: Path(s.log).name if s else "") as bar:
+            def progress(s):
+                bar.update(1, s)
             try:
-                log = load_log(path, channels=cmap, format=fmt, params=params)
-                results = [e.run(log.signals) for e in ests]
-                for w in log.warnings:
-                    click.echo(f"\nwarning: {w}", err=True)
-                cols = estimate_table(log.signals.t, results, log.reference_roll)
-                meta = {"source": str(path), "estimators": ",".join(names),
-                        "steering_ratio": str(cmap.steering_ratio if cmap and cmap.steering_ratio
-                                              else params.steering_ratio)}
-                if batch:
-                    stem = _unique_stem(path.stem if path.is_file() else path.name, used)
-                    out = output / f"{stem}.bank.{output_format}"
-                    png = plot / f"{stem}.png" if plot is not None else None
-                else:
-                    out, png = output, plot
-                write_table(out, cols, meta)
-                if png is not None:
-                    plot_estimates(png, log.signals.t, results, log.reference_roll, title=str(path))
-                written += 1
-            except (LogError, ValueError, OSError) as exc:
-                failures.append((path, str(exc)))
-            except Exception as exc:  # never a traceback for one bad file
-                failures.append((path, f"{type(exc).__name__}: {exc}"))
-    for path, reason in failures:
-        click.echo(f"FAILED {reason}" if reason.startswith(str(path)) else f"FAILED {path}: {reason}",
-                   err=True)
-    click.echo(f"{written} log(s) written, {len(failures)} failed", err=True)
+                res = run_fleet(paths, output, names, channels=cmap, format=fmt, vehicle=vehicle,
+                                output_format=output_format, workers=workers, scheduler=scheduler, resume=resume,
+                                chunk_rows=chunk_rows, metadata=meta, plot_dir=plot, on_result=progress)
+            except (ConnectionError, RuntimeError) as exc:
+                click.echo(f"\nerror: {exc}", err=True)
+                sys.exit(1)
+        summaries = res.summaries
+        if res.skipped:
+            click.echo(f"{len(res.skipped)} log(s) already finished (--resume), skipped", err=True)
+        click.echo(summary_table(summaries, names[0]))
+        click.echo(f"summary: {Path(output) / 'summary.csv'}", err=True)
+    for s in summaries:
+        for w in filter(None, s.warnings.split("; ")):
+            click.echo(f"warning: {w}", err=True)
+    failures = [s for s in summaries if s.status != "ok"]
+    for s in failures:
+        click.echo(f"FAILED {s.error}" if s.error.startswith(s.log) else f"FAILED {s.log}: {s.error}", err=True)
+    click.echo(f"{len(summaries) - len(failures)} log(s) written, {len(failures)} failed", err=True)
     sys.exit(1 if failures else 0)
+
+
+def summary_table(summaries, estimator: str) -> str:
+    """Plain-text table: per log duration, valid share and bank mean/min/max (deg) of ``estimator``, or its error."""
+    head = f"{'log':<32} {'duration':>9} {'valid':>6} {'bank mean':>9} {'min':>7} {'max':>7}  ({estimator}, deg)"
+    lines = [head, "-" * len(head)]
+    for s in summaries:
+        name = Path(s.log).name[-32:]
+        if s.status != "ok":
+            lines.append(f"{name:<32} ERROR {s.error[:150]}")
+            continue
+        lines.append(f"{name:<32} {s.duration_s:>8.1f}s {100 * s.valid_share:>5.1f}% {s.bank_mean_deg:>9.2f} "
+                     f"{s.bank_min_deg:>7.2f} {s.bank_max_deg:>7.2f}")
+    return "\n".join(lines)

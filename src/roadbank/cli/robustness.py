@@ -9,7 +9,8 @@ import click
 
 @click.command()
 @click.option("--output", "-o", required=True, type=click.Path(dir_okay=False, path_type=Path),
-              help="Markdown file to write (e.g. docs/robustness.md); a .csv with the same stem is written too.")
+              help="Report to write: markdown (e.g. docs/robustness.md) or, ending in .html, a "
+                   "self-contained HTML page; a .csv with the same stem is written too.")
 @click.option("--scenario", default="bank-lane-change", show_default=True, help="Simulated base scenario.")
 @click.option("--estimators", default="", help="Comma-separated estimator names (default: all).")
 def robustness(output: Path, scenario: str, estimators: str) -> None:
@@ -25,14 +26,17 @@ def robustness(output: Path, scenario: str, estimators: str) -> None:
     if bad:
         raise click.BadParameter(f"unknown estimator(s) {', '.join(bad)} (choose from {', '.join(NAMES)})",
                                  param_hint="--estimators")
+    if output.suffix.lower() not in (".md", ".markdown", ".html", ".htm"):
+        raise click.BadParameter(f"{output}: the report must end in .md or .html", param_hint="--output")
     if not output.parent.exists():
         raise click.ClickException(f"cannot write {output}: directory {output.parent} does not exist")
     from ..faults.table import markdown, robustness_rows
+    from ..report.html import write_document
 
     rows = robustness_rows(scenario, names=names)
     cmd = f"roadbank robustness -o {output}" + (f" --scenario {scenario}" if scenario != "bank-lane-change" else "")
     try:
-        output.write_text(markdown(rows, scenario, cmd))
+        write_document(output, markdown(rows, scenario, cmd), "roadbank robustness")
         import csv
 
         with open(output.with_suffix(".csv"), "w", newline="") as fh:

@@ -14,11 +14,16 @@ from pathlib import Path
 
 import click
 
+from .options import vehicle_option
+
 FORMATS = (".parquet", ".csv")
 
 
-def write_result(result, path: Path) -> None:
-    """Write a :class:`roadbank.sim.SimResult` as Parquet or CSV (by extension)."""
+def write_result(result, path: Path, vehicle: str | None = None) -> None:
+    """Write a :class:`roadbank.sim.SimResult` as Parquet or CSV (by extension).
+
+    ``vehicle`` (the car's name) is stored as ``roadbank.vehicle`` in the Parquet metadata.
+    """
     import numpy as np
 
     cols = result.table()
@@ -26,6 +31,8 @@ def write_result(result, path: Path) -> None:
     meta = {"roadbank.scenario": result.scenario, "roadbank.condition": result.condition,
             "roadbank.seed": str(result.seed), "roadbank.units": "SI (s, m/s, m/s^2, rad, rad/s)",
             "roadbank.sample_rate_hz": repr(result.sensors.rate)}
+    if vehicle is not None:
+        meta["roadbank.vehicle"] = vehicle
     if ext == ".parquet":
         import pyarrow as pa
         import pyarrow.parquet as pq
@@ -45,7 +52,8 @@ def write_result(result, path: Path) -> None:
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the sensor noise.")
 @click.option("--output", "-o", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="Output file, .parquet or .csv.")
-def simulate(scenario: str, condition: str, seed: int, output: Path) -> None:
+@vehicle_option("The simulated car (plant: its parameters and [plant] table; sensors: its [sensors]).")
+def simulate(scenario: str, condition: str, seed: int, output: Path, vehicle) -> None:
     """Simulate SCENARIO (const-bank, bank-lane-change, s-curve, track-lane1,
     track-lane-change) and write the sensor signals and the truth."""
     from ..sim.scenarios import CONDITIONS, SCENARIOS
@@ -61,12 +69,10 @@ def simulate(scenario: str, condition: str, seed: int, output: Path) -> None:
                                  param_hint="--output")
     if not output.parent.exists():
         raise click.ClickException(f"cannot write {output}: directory {output.parent} does not exist")
-    from ..sim import run_scenario
-
-    result = run_scenario(scenario, condition=condition, seed=seed)
+    result = vehicle.simulate(scenario, condition=condition, seed=seed)
     try:
-        write_result(result, output)
+        write_result(result, output, vehicle=vehicle.name)
     except OSError as exc:
         raise click.ClickException(f"cannot write {output}: {exc.strerror or exc}") from None
-    click.echo(f"{scenario} [{condition}, seed {seed}]: {len(result.signals)} samples "
+    click.echo(f"{scenario} [{condition}, seed {seed}, {vehicle.name}]: {len(result.signals)} samples "
                f"({result.signals.t[-1]:.1f} s) -> {output}")

@@ -8,10 +8,37 @@ from pathlib import Path
 
 import click
 
+from ..report.html import write_document
+from .options import vehicle_option
+
+_VEHICLE = vehicle_option("The estimators are designed for this car: its parameters and [tuning] tables.",
+                          default_help="roadbank.validation.SEDAN (a mid-size sedan, docs/real-data.md)",
+                          none_if_absent=True)
+
+
+def _car(vehicle) -> dict:
+    """``validate_*`` keyword arguments for ``--vehicle`` (none: the data set's default car)."""
+    return {} if vehicle is None else {"params": vehicle.params, "tuning": dict(vehicle.tuning)}
+
 
 @click.group()
 def validate():
     """Validate the estimators on real data sets."""
+
+
+def _names(names: str) -> list[str]:
+    """``--estimators`` value -> list of names (BadParameter for an unknown one)."""
+    from .. import estimators
+
+    sel = list(estimators.NAMES) if names.strip() == "all" else [n.strip() for n in names.split(",") if n.strip()]
+    bad = [n for n in sel if n not in estimators.NAMES]
+    if bad:
+        raise click.BadParameter(f"unknown estimator(s) {bad}", param_hint="--estimators")
+    return sel
+
+
+_ESTIMATORS = click.option("--estimators", "-e", "names", default="all", show_default=True,
+                           help="Comma-separated estimator names or 'all'.")
 
 
 @validate.command("comma2k19")
@@ -19,34 +46,137 @@ def validate():
 @click.option("--json", "as_json", is_flag=True,
               help='Print {estimator: {"r", "rms_deg", "offset_deg"}} on stdout.')
 @click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
-              help="Write the markdown report here (e.g. docs/real-data.md) and a PNG next to it.")
-@click.option("--estimators", "-e", "names", default="all", show_default=True,
-              help="Comma-separated estimator names or 'all'.")
+              help="Write the markdown report here (e.g. docs/real-data.md; .html: a self-contained page) "
+                   "and a PNG next to it.")
+@_ESTIMATORS
 @click.option("--no-sensitivity", is_flag=True, help="Skip the SUV-parameter and PIF-Q sensitivity runs.")
-def comma2k19(path, as_json, output, names, no_sensitivity):
+@_VEHICLE
+def comma2k19(path, as_json, output, names, no_sensitivity, vehicle):
     """Score every estimator against the pose-derived roll of a comma2k19 segment at PATH."""
-    from .. import estimators
     from ..io import LogError
     from ..validation import markdown, plot, to_json, validate_comma2k19
 
-    sel = list(estimators.NAMES) if names.strip() == "all" else [n.strip() for n in names.split(",") if n.strip()]
-    bad = [n for n in sel if n not in estimators.NAMES]
-    if bad:
-        raise click.BadParameter(f"unknown estimator(s) {bad}", param_hint="--estimators")
+    sel = _names(names)
     try:
-        res = validate_comma2k19(path, names=sel, sensitivity=not no_sensitivity)
+        res = validate_comma2k19(path, names=sel, sensitivity=not no_sensitivity, **_car(vehicle))
     except (LogError, ValueError, OSError) as exc:
         click.echo(f"error: {exc}", err=True)
         sys.exit(1)
     if output is not None:
         fig = output.with_suffix(".png")
         plot(res, fig)
-        cmd = f"roadbank validate comma2k19 {path} -o {output}"
+        cmd = f"roadbank validate comma2k19 {path} -o {output}" + (f" --vehicle {vehicle.name}" if vehicle else "")
         output.parent.mkdir(parents=True, exist_ok=True)
-        output.write_text(markdown(res, figure=fig.name, command=cmd))
+        write_document(output, markdown(res, figure=fig.name, command=cmd))
         click.echo(f"wrote {output} and {fig}", err=True)
     if as_json:
         click.echo(json.dumps(to_json(res), indent=2))
     elif output is None:
         for name, v in to_json(res).items():
             click.echo(f"{name:14s} r = {v['r']:.3f}  rms = {v['rms_deg']:.3f} deg  offset = {v['offset_deg']:+.3f} deg")
+
+
+def _kitti_figures(v, out_dir: Path, stem: str) -> dict:
+    from ..validation.kitti_report import plot_drive
+
+    figs = {}
+    for d in v.drives:
+        f = out_dir / f"{stem}-kitti-{d.label}.png"
+        plot_drive(d, f)
+        figs[d.label] = f.name
+    return figs
+
+
+@validate.command("kitti")
+@click.argument("paths", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option("--json", "as_json", is_flag=True,
+              help='Print {"drives": {drive: {estimator: scores}}, "pooled": {...}, "errors": [...]} on stdout.')
+@click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
+              help="Write the markdown report (KITTI section; .html: a self-contained page) here and one "
+                   "PNG per drive next to it.")
+@_ESTIMATORS
+@click.option("--no-sensitivity", is_flag=True, help="Skip the runs with the paper's SUV parameters.")
+@_VEHICLE
+def kitti(paths, as_json, output, names, no_sensitivity, vehicle):
+    """Score every estimator against the INS roll of KITTI raw drives.
+
+    PATHS: drive folders (holding oxts/), oxts folders, or folders holding drive folders.
+    A drive that cannot be read is reported and the others are still scored (exit code 1 then).
+    """
+    from ..validation.kitti import validate_kitti
+    from ..validation.kitti_report import markdown, to_json
+
+    sel = _names(names)
+    v = validate_kitti(paths, names=sel, sensitivity=not no_sensitivity, **_car(vehicle))
+    for e in v.errors:
+        click.echo(f"error: {e}", err=True)
+    if not v.drives:
+        click.echo("error: no KITTI drive could be read", err=True)
+        sys.exit(1)
+    if output is not None:
+        output.parent.mkdir(parents=True, exist_ok=True)
+        figs = _kitti_figures(v, output.parent, output.stem)
+        cmd = ("roadbank validate kitti " + " ".join(map(str, paths)) + f" -o {output}"
+               + (f" --vehicle {vehicle.name}" if vehicle else ""))
+        write_document(output, f"# Real-data validation: KITTI\n\n_Generated by `{cmd}`; do not edit by hand._\n\n"
+                       + markdown(v, figs, level=2))
+        click.echo(f"wrote {output} and {len(figs)} figure(s)", err=True)
+    if as_json:
+        click.echo(json.dumps(to_json(v), indent=2))
+    elif output is None:
+        for d in v.drives:
+            click.echo(d.label)
+            for name, sc in d.scores.items():
+                if sc.valid_fraction == 0:
+                    click.echo(f"  {name:14s} no valid sample (needs the steering angle)")
+                else:
+                    click.echo(f"  {name:14s} rms raw = {sc.rms_raw_deg:.3f} deg  r raw = {sc.r_raw:.3f}  "
+                               f"rms smoothed = {sc.rms_deg:.3f} deg  r smoothed = {sc.r:.3f}")
+    if v.errors:
+        sys.exit(1)
+
+
+@validate.command("all")
+@click.argument("data_dir", type=click.Path(path_type=Path, exists=True, file_okay=False))
+@click.option("-o", "--output", type=click.Path(path_type=Path), required=True,
+              help="The combined report (e.g. docs/real-data.md; .html: a self-contained page); figures "
+                   "are written next to it.")
+@click.option("--no-jitter", is_flag=True, help="Skip the 10 Hz-with-jitter simulation study.")
+def all_(data_dir, output, no_jitter):
+    """One report over every real data set under DATA_DIR (comma2k19 segments, KITTI drives).
+
+    Regenerate docs/real-data.md with: roadbank validate all ../shared/data -o docs/real-data.md
+    """
+    from ..validation import plot, validate_comma2k19
+    from ..validation.document import find_datasets, real_data_markdown
+    from ..validation.jitter import jitter_study
+    from ..validation.kitti import validate_kitti
+
+    found = find_datasets(data_dir)
+    if not found["comma2k19"] and not found["kitti"]:
+        click.echo(f"error: {data_dir}: no comma2k19 segment or KITTI drive found", err=True)
+        sys.exit(1)
+    output.parent.mkdir(parents=True, exist_ok=True)
+    figs, comma, kv, failed = {}, None, None, False
+    if found["comma2k19"]:
+        seg = found["comma2k19"][0]
+        try:
+            comma = validate_comma2k19(seg)
+            f = output.with_suffix(".png")
+            plot(comma, f)
+            figs["comma2k19"] = f.name
+        except (ValueError, OSError) as exc:
+            click.echo(f"error: {exc}", err=True)
+            failed = True
+    if found["kitti"]:
+        kv = validate_kitti(found["kitti"])
+        for e in kv.errors:
+            click.echo(f"error: {e}", err=True)
+        failed |= bool(kv.errors)
+        figs.update(_kitti_figures(kv, output.parent, output.stem))
+    jit = [] if no_jitter else [jitter_study(sc) for sc in ("bank-lane-change", "s-curve", "track-lane-change")]
+    cmd = f"roadbank validate all {data_dir} -o {output}"
+    write_document(output, real_data_markdown(comma, kv, jit, figs, command=cmd))
+    click.echo(f"wrote {output} and {len(figs)} figure(s)", err=True)
+    if failed:
+        sys.exit(1)

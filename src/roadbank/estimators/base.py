@@ -82,6 +82,10 @@ class Estimator:
         between time stamps after a reset sets the rate (same rule in
         :meth:`run` and :meth:`step`, so both give identical numbers), kept
         until :meth:`set_sample_rate` changes it. ``None``: general path only.
+    v_step, v_max : float, default 0.25, 100 m/s
+        Spacing and end of the speed grid of the gain schedules; above ``v_max``
+        the gains of ``v_max`` are held. A coarse, short grid designs faster
+        (``roadbank tune`` searches on one).
 
     Subclasses set ``name``, ``kernel`` ("lpv", "dfc" or "riccati"), the channel
     usage and build ``self._tab`` / ``self._cfg_extra`` in ``_design()``.
@@ -96,15 +100,18 @@ class Estimator:
 
     def __init__(self, params: VehicleParams | None = None, *, v_min: float = 5.0,
                  roll: str = "static", max_substep: float = 0.02, max_gap: float = 1.0,
-                 max_angle: float = np.deg2rad(60.0), sample_rate: float | str | None = "auto"):
+                 max_angle: float = np.deg2rad(60.0), v_step: float = V_GRID_STEP,
+                 v_max: float = V_GRID_MAX, sample_rate: float | str | None = "auto"):
         self.params = params if params is not None else VehicleParams()
         if not isinstance(self.params, VehicleParams):
             raise TypeError("params must be a roadbank.VehicleParams")
         for label, v in (("v_min", v_min), ("max_substep", max_substep), ("max_gap", max_gap)):
             if not np.isfinite(v) or v <= 0:
                 raise ValueError(f"{self.name}: {label} must be > 0, got {v}")
-        if v_min >= V_GRID_MAX:
-            raise ValueError(f"{self.name}: v_min must be below {V_GRID_MAX} m/s")
+        if not (v_max > v_min and 0 < v_step <= v_max - v_min):
+            raise ValueError(f"{self.name}: need v_min < v_max (got {v_min}, {v_max} m/s) and "
+                             f"0 < v_step <= v_max - v_min (got {v_step} m/s)")
+        self.v_step, self.v_max = float(v_step), float(v_max)
         self.v_min = float(v_min)
         self.roll = roll
         self.max_substep = float(max_substep)
@@ -113,7 +120,7 @@ class Estimator:
             raise ValueError(f"{self.name}: max_angle must be in (0, pi/2] rad, got {max_angle}")
         self.max_angle = float(max_angle)
         self._roll = roll_state_space(self.params, roll)
-        self.vgrid = speed_grid(self.v_min)
+        self.vgrid = speed_grid(self.v_min, self.v_max, self.v_step)
         self._tab_cont, self._nstate, self._extra = self._cached_design()
         self._run_fn = getattr(K, f"{self.kernel}_run")
         self._step_fn = getattr(K, f"{self.kernel}_step")

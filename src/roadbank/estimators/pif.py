@@ -20,10 +20,25 @@ algebraic Riccati equation (eq 44) per speed as a gain schedule — what an ECU
 would run; ``variant="riccati"`` integrates the Riccati ODE (eq 43) from
 ``P0``. Both start at the observer equilibrium for the first inputs.
 
-Tuning defaults are Table 4: ``Q = 0.1, R = 0.0035, S = 1, th = 1,
-P0 = diag(0, 0, 0.5)``. For the original model the second output (ay) needs a
-weight the paper does not give: ``R_ay = 0.307`` = R scaled by the squared ratio
-of the sensors' resolutions ((0.005 g)/(0.3 deg/s))^2 (interpretation).
+Tunings (``tuning=``; explicit ``Q``, ``R``, ``S``, ``th``, ``P0`` override the preset):
+
+* ``"paper"``: Table 4 read in SI, ``Q = 0.1, R = 0.0035, S = 1, th = 1,
+  P0 = diag(0, 0, 0.5)`` — what ``roadbank reproduce`` checks the paper's claims with,
+  and the default of ``pif-original``.
+* ``"paper-deg"``: Table 4 with R read in (deg/s)^2 (:data:`R_TABLE4_DEG_UNITS`).
+* ``"default"`` (the default of ``pif-modified``): ``R`` is the noise density of the
+  yaw-rate sensor, (noise variance + resolution^2/12) / sample rate
+  (:func:`yaw_rate_noise_density`, paper ESP sensor: 0.1 deg/s noise, 0.3 deg/s
+  resolution, 100 Hz), and ``Q``, ``th`` come from ``roadbank tune`` on the default
+  car (:data:`DEFAULT_TUNING`, docs/estimators.md). ``Q`` is then the spectral
+  density of the bank rate (1/s), ``R`` of the yaw-rate noise ((rad/s)^2 s). The
+  tuning also chose the dynamic roll model for the roll separation (``roll="dynamic"``
+  unless given). Where the default ``th`` has no stabilising solution for a car, it is
+  halved until it has (explicit ``th`` values still raise).
+
+For the original model the second output (ay) needs a weight the paper does not
+give: ``R_ay = 0.307`` = R scaled by the squared ratio of the sensors'
+resolutions ((0.005 g)/(0.3 deg/s))^2 (interpretation).
 """
 
 from __future__ import annotations
@@ -32,7 +47,7 @@ import numpy as np
 
 from . import layout
 from .base import ScheduledObserver, augmented_design_model, equilibrium_map
-from .synthesis import game_are
+from .synthesis import NoStabilisingSolution, game_are
 
 #: paper Table 4
 TABLE4 = dict(Q=0.1, R=0.0035, S=1.0, th=1.0, P0=(0.0, 0.0, 0.5))
@@ -43,6 +58,46 @@ R_TABLE4_DEG_UNITS = 0.0035 * (np.pi / 180.0) ** 2
 R_AY_ORIGINAL = 0.0035 * (0.005 * 9.81 / np.deg2rad(0.3)) ** 2
 
 
+def yaw_rate_noise_density(noise_std: float, resolution: float, rate: float) -> float:
+    """Noise density ``R`` ((rad/s)^2 s) of a sampled yaw-rate sensor for the continuous filter.
+
+    ``(noise_std^2 + resolution^2 / 12) / rate``: white noise of standard deviation
+    ``noise_std`` (rad/s) plus uniform quantisation error of step ``resolution`` (rad/s),
+    sampled at ``rate`` (Hz); a sampled white sequence of variance ``v`` acts on a
+    continuous filter like white noise of spectral density ``v / rate``.
+    """
+    if not (noise_std >= 0 and resolution >= 0 and rate > 0) or noise_std + resolution == 0:
+        raise ValueError("yaw_rate_noise_density: need noise_std, resolution >= 0 (not both 0) "
+                         f"and rate > 0, got {noise_std}, {resolution}, {rate}")
+    return (noise_std**2 + resolution**2 / 12.0) / rate
+
+
+#: R of the paper's ESP yaw-rate sensor (0.1 deg/s noise, 0.3 deg/s resolution, 100 Hz)
+R_ESP = yaw_rate_noise_density(np.deg2rad(0.1), np.deg2rad(0.3), 100.0)
+
+#: Q (1/s), th (-) and the roll model found by ``roadbank tune`` (seed 0, budget 240) for the
+#: default car and sensors with R = R_ESP, S = 1 (docs/estimators.md: the run and its scores).
+#: In Table 4's scale (R = 0.0035) this is Q = 12.8, th = 2.64. The default uses a quarter of
+#: the tuned th: any th in [0, th_tuned] scores within 0.1 % on the training set, and the tuned
+#: value sits at the edge of solvability (no stabilising solution near 98 m/s for the shipped
+#: compact, sedan and van).
+DEFAULT_TUNING = dict(Q=1.9512492264850162e-04, th=0.25 * 1.7309294384267123e05, roll="dynamic")
+
+
+def _scaled_p0(R: float) -> tuple:
+    """Table 4's P0 scaled like P (P scales with R when Q/R and th R are kept)."""
+    k = R / TABLE4["R"]
+    return tuple(k * p for p in TABLE4["P0"])
+
+
+#: named tunings (``tuning=`` of :class:`PIF`)
+TUNINGS = {
+    "paper": dict(TABLE4),
+    "paper-deg": dict(TABLE4, R=R_TABLE4_DEG_UNITS),
+    "default": dict(Q=DEFAULT_TUNING["Q"], R=R_ESP, S=1.0, th=DEFAULT_TUNING["th"], P0=_scaled_p0(R_ESP)),
+}
+
+
 class PIF(ScheduledObserver):
     """Proportional-integral H-infinity filter (see module docstring).
 
@@ -51,10 +106,14 @@ class PIF(ScheduledObserver):
     params : VehicleParams
     model : {"modified", "original"}
     variant : {"steady", "riccati"}
-    Q, R, S, th : float
-        Table 4 weights; ``R`` may be a 2-vector for the original model
-        (``[R_ay, R_r]``), a scalar R means ``[R_AY_ORIGINAL, R]`` there.
-    P0 : sequence of 3 floats
+    tuning : {"default", "paper", "paper-deg"}, optional
+        Named weights (:data:`TUNINGS`, module docstring). Default: ``"default"`` for
+        the modified model, ``"paper"`` (Table 4) for the original model.
+    Q, R, S, th : float, optional
+        Weights overriding the preset: Q (1/s), R ((rad/s)^2 s), S (-), th (-); ``R``
+        may be a 2-vector for the original model (``[R_ay, R_r]``), a scalar R means
+        ``[R_AY_ORIGINAL, R]`` there.
+    P0 : sequence of 3 floats, optional
         Diagonal of the initial Riccati matrix (``riccati`` variant).
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator`.
@@ -69,10 +128,19 @@ class PIF(ScheduledObserver):
     uses = (False, True, True)
     state_names = ("vy", "r", "w")
 
-    def __init__(self, params=None, *, model="modified", variant="steady", Q=TABLE4["Q"],
-                 R=TABLE4["R"], S=TABLE4["S"], th=TABLE4["th"], P0=TABLE4["P0"], **kw):
+    def __init__(self, params=None, *, model="modified", variant="steady", tuning=None, Q=None,
+                 R=None, S=None, th=None, P0=None, **kw):
         if variant not in ("steady", "riccati"):
             raise ValueError(f"variant must be 'steady' or 'riccati', got {variant!r}")
+        tuning = tuning or ("default" if model == "modified" else "paper")
+        if tuning not in TUNINGS:
+            raise ValueError(f"tuning must be one of {', '.join(TUNINGS)}, got {tuning!r}")
+        preset = TUNINGS[tuning]
+        if tuning == "default":
+            kw.setdefault("roll", DEFAULT_TUNING["roll"])
+        auto_th = tuning == "default" and th is None
+        Q, R, S, th, P0 = (preset[k] if v is None else v
+                           for k, v in (("Q", Q), ("R", R), ("S", S), ("th", th), ("P0", P0)))
         self.model = model
         self.variant = variant
         self.name = f"pif-{model}"
@@ -85,7 +153,16 @@ class PIF(ScheduledObserver):
             raise ValueError("PIF: R and S must be > 0 and Q >= 0")
         self.Q, self.R, self.S, self.th = float(Q), np.diag(Rv), float(S), float(th)
         self.P0 = np.diag(np.asarray(P0, dtype=float))
-        super().__init__(params, **kw)
+        while True:
+            try:
+                super().__init__(params, **kw)
+                return
+            except NoStabilisingSolution:
+                # the default th adapts to the car: halve it until the Riccati equation is
+                # solvable at every speed (th = 0, the Kalman filter, always is)
+                if not auto_th or self.th == 0.0:
+                    raise
+                self.th = self.th / 2.0 if self.th > preset["th"] / 1000.0 else 0.0
 
     def riccati_solution(self, vx: float) -> np.ndarray:
         """Stabilising solution ``P`` of the algebraic Riccati equation (eq 44) at ``vx`` (m/s)."""

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import estimators as E
+from ..report.markdown import Markdown, md_table
 from .inject import FAULTS, Stream, apply, feed
 
 T0 = 8.5                #: start of every fault window (s)
@@ -121,10 +122,18 @@ def robustness_rows(scenario: str = SCENARIO, seed: int = 0, names=E.NAMES) -> l
     return fault_rows(Stream.from_signals(sim.signals), sim.truth.t, sim.truth.phi_b, names, seed)
 
 
-def _cell(r: dict) -> str:
+def _cell(r: dict) -> Markdown:
     rec = "never" if math.isnan(r["recovery_s"]) else f"{r['recovery_s']:.2f}"
     bad = " **NON-FINITE**" if r["nonfinite"] else ""
-    return f"{r['flagged_pct']:.0f} / {r['max_err_deg']:.1f} / {r['max_dev_deg']:.1f} / {rec}{bad}"
+    return Markdown(f"{r['flagged_pct']:.0f} / {r['max_err_deg']:.1f} / {r['max_dev_deg']:.1f} / {rec}{bad}")
+
+
+def _table(rows: list[dict], names: list, faults: list, by: dict) -> str:
+    """The fault x estimator table (composite cells right-aligned) and the clean run's max error."""
+    body = [[f] + [_cell(by[(f, n)]) for n in names] for f in faults]
+    clean = {n: next(r["clean_max_err_deg"] for r in rows if r["estimator"] == n) for n in names}
+    body.append([Markdown("*clean run: max err*")] + [clean[n] for n in names])
+    return md_table(["fault"] + names, body, digits=1, align="l" + "r" * len(names))
 
 
 def markdown(rows: list[dict], scenario: str, command: str) -> str:  # noqa: C901
@@ -150,11 +159,7 @@ def markdown(rows: list[dict], scenario: str, command: str) -> str:  # noqa: C90
         f"- *recovery*: seconds after the fault ends until the output stays within {BAND_DEG:g} deg of "
         "the clean run of the same estimator (0 = never left the band; never = still outside at the end).",
         "", "Non-finite outputs: " + (", ".join(nonfinite) if nonfinite else "**none** in any cell."), "",
-        "| fault | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]
-    for f in faults:
-        lines.append(f"| {f} | " + " | ".join(_cell(by[(f, n)]) for n in names) + " |")
-    clean = {n: next(r["clean_max_err_deg"] for r in rows if r["estimator"] == n) for n in names}
-    lines.append("| *clean run: max err* | " + " | ".join(f"{clean[n]:.1f}" for n in names) + " |")
+        _table(rows, names, faults, by)]
     lines += ["", "## Reading the table", "",
               "- Bad samples (NaN/inf), repeated and decreasing time stamps, and speeds below v_min "
               "(5 m/s, including reversing) are flagged and the output is held; the state is not "

@@ -1,4 +1,4 @@
-"""Reading real logs: CSV, Parquet, MDF4 and comma2k19 -> :class:`Log` (SI, ISO 8855).
+"""Reading real logs: CSV, Parquet, MDF4, CAN, ROS, comma2k19 and KITTI raw -> :class:`Log` (SI, ISO 8855).
 
 Entry point: :func:`load_log`. Channel maps (TOML) name the columns and their
 units / sign convention (:mod:`roadbank.io.channels`); channels at different

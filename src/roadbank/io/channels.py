@@ -70,10 +70,15 @@ ROLES: dict[str, tuple[str, str | None]] = {
     "steering_wheel_angle": ("angle", "z"),
     "road_wheel_angle": ("angle", "z"),
     "reference_roll": ("angle", "x"),
+    "latitude": ("angle", None),
+    "longitude": ("angle", None),
 }
 REQUIRED = ("time", "speed", "lateral_acceleration", "yaw_rate")
 STEERING = ("road_wheel_angle", "steering_wheel_angle")
 CONVENTIONS = ("ISO", "FRD")
+#: other spellings of the body-axis conventions: ROS REP-103 bodies are FLU (= ISO 8855);
+#: NED systems (PX4, aerospace IMUs) give body rates and forces in FRD
+CONVENTION_ALIASES = {"FLU": "ISO", "NED": "FRD"}
 TIME_BASES = ("auto", "uniform")
 
 
@@ -86,13 +91,19 @@ class ChannelSpec:
     role : str
         One of :data:`ROLES`.
     column : str
-        Column (CSV/Parquet) or channel (MDF4) name.
+        Column (CSV/Parquet) or channel (MDF4) name; for raw CAN
+        ``"<message>.<signal>"`` (or the signal alone), for ROS ``"<topic>:<field>"``.
     unit : str
         Unit of the stored values (see :mod:`roadbank.io.units`).
     convention : str or None
         "ISO" or "FRD"; None means the map's default.
     invert : bool
         Extra sign flip on top of the convention.
+    message, signal : str or None
+        Raw CAN: DBC message (name or frame id, e.g. ``"0x130"``) and signal name.
+    topic, msg_field : str or None
+        ROS bags / MCAP: topic and dotted field path in its message
+        (``"angular_velocity.z"``, ``"twist.twist.linear.x"``).
     """
 
     role: str
@@ -100,6 +111,10 @@ class ChannelSpec:
     unit: str
     convention: str | None = None
     invert: bool = False
+    message: str | None = None
+    signal: str | None = None
+    topic: str | None = None
+    msg_field: str | None = None
 
     @property
     def kind(self) -> str:
@@ -123,6 +138,13 @@ class ChannelMap:
         Columns starting with it are carried as truth (SI, ISO, no conversion).
     source : str
         Where the map came from (file name or "default"), for messages.
+    dbc : str or None
+        Raw CAN logs: the DBC file decoding them (absolute, or resolved against the
+        map file's folder when read with :func:`read_channel_map`).
+    ros_time : str
+        ROS bags / MCAP: time stamp of a message, ``"header"`` (its ``header.stamp``,
+        falling back to the log time for messages without a header) or ``"log"``
+        (the time the recorder received it).
     """
 
     channels: dict[str, ChannelSpec]
@@ -133,12 +155,25 @@ class ChannelMap:
     max_gap_s: float = 0.5
     truth_prefix: str | None = None
     source: str = "<map>"
+    dbc: str | None = None
+    ros_time: str = "header"
+
+    @property
+    def timed_channels(self) -> bool:
+        """True when every channel carries its own time stamps (raw CAN, ROS): no ``time`` role."""
+        return self.dbc is not None or any(s.topic for s in self.channels.values())
 
     def __post_init__(self) -> None:
         src = self.source
         if self.convention not in CONVENTIONS:
             raise LogError(f"{src}: convention must be one of {CONVENTIONS}, got '{self.convention}'")
+        if self.dbc is None and any(s.signal for s in self.channels.values()):
+            raise LogError(f"{src}: channels name CAN signals but the map has no dbc = \"car.dbc\"")
+        if self.ros_time not in ("header", "log"):
+            raise LogError(f"{src}: ros_time must be 'header' or 'log', got '{self.ros_time}'")
         for role in REQUIRED:
+            if role == "time" and self.timed_channels:
+                continue
             if role not in self.channels:
                 raise LogError(f"{src}: channel map has no '{role}' channel (required)")
         if not any(r in self.channels for r in STEERING):
@@ -192,9 +227,33 @@ def default_channel_map() -> ChannelMap:
     return ChannelMap(ch, truth_prefix="true_", source="default channel map")
 
 
-_TOP_KEYS = {"convention", "steering_ratio", "resample", "channels", "truth_prefix"}
+_TOP_KEYS = {"convention", "steering_ratio", "resample", "channels", "truth_prefix", "dbc", "ros_time"}
 _RESAMPLE_KEYS = {"time_base", "rate_hz", "max_gap_s"}
-_CHANNEL_KEYS = {"column", "unit", "convention", "invert"}
+_CHANNEL_KEYS = {"column", "unit", "convention", "invert", "message", "signal", "topic", "field"}
+
+
+def _convention(value) -> str | None:
+    if value is None:
+        return None
+    c = str(value).upper()
+    return CONVENTION_ALIASES.get(c, c)
+
+
+def _column_of(source, role: str, entry: dict) -> str:
+    """The key a channel is stored under: ``column``, ``message.signal`` (CAN) or ``topic:field`` (ROS)."""
+    if "signal" in entry or "message" in entry:
+        if "signal" not in entry:
+            raise LogError(f"{source}: channel '{role}': 'message' without 'signal'")
+        msg = entry.get("message")
+        return f"{msg}.{entry['signal']}" if msg is not None else str(entry["signal"])
+    if "topic" in entry or "field" in entry:
+        if "topic" not in entry or "field" not in entry:
+            raise LogError(f"{source}: channel '{role}': a ROS channel needs both 'topic' and 'field'")
+        return f"{entry['topic']}:{entry['field']}"
+    if "column" not in entry:
+        raise LogError(f"{source}: channel '{role}': no 'column' (or 'signal' for CAN, "
+                       "'topic' + 'field' for ROS)")
+    return str(entry["column"])
 
 
 def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
@@ -220,16 +279,15 @@ def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
         if bad:
             raise LogError(f"{source}: channel '{role}': unknown key(s) {sorted(bad)} "
                            f"(known: {sorted(_CHANNEL_KEYS)})")
-        if "column" not in entry:
-            raise LogError(f"{source}: channel '{role}': no 'column'")
+        column = _column_of(source, role, entry)
         if "unit" not in entry:
-            raise channel_error(source, role, entry["column"],
+            raise channel_error(source, role, column,
                                 f"no 'unit' (SI would be '{units.SI_UNIT[ROLES[role][0]]}'; "
                                 "state it explicitly)")
-        conv = entry.get("convention")
-        specs[role] = ChannelSpec(role, str(entry["column"]), str(entry["unit"]),
-                                  None if conv is None else str(conv).upper(),
-                                  bool(entry.get("invert", False)))
+        opt = {k: (None if entry.get(k) is None else str(entry[k])) for k in ("message", "signal", "topic")}
+        specs[role] = ChannelSpec(role, column, str(entry["unit"]), _convention(entry.get("convention")),
+                                  bool(entry.get("invert", False)), msg_field=(
+                                      None if entry.get("field") is None else str(entry["field"])), **opt)
     rs = d.get("resample", {})
     if not isinstance(rs, dict):
         raise LogError(f"{source}: [resample] must be a table")
@@ -239,13 +297,15 @@ def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
     try:
         return ChannelMap(
             specs,
-            convention=str(d.get("convention", "ISO")).upper(),
+            convention=_convention(d.get("convention", "ISO")),
             steering_ratio=None if d.get("steering_ratio") is None else float(d["steering_ratio"]),
             time_base=str(rs.get("time_base", "auto")),
             rate_hz=float(rs.get("rate_hz", 100.0)),
             max_gap_s=float(rs.get("max_gap_s", 0.5)),
             truth_prefix=d.get("truth_prefix"),
             source=source,
+            dbc=None if d.get("dbc") is None else str(d["dbc"]),
+            ros_time=str(d.get("ros_time", "header")),
         )
     except (TypeError, ValueError) as exc:
         if isinstance(exc, LogError):
@@ -270,6 +330,8 @@ def read_channel_map(path) -> ChannelMap:
         raise LogError(f"{p}: channel map not found") from None
     except tomllib.TOMLDecodeError as exc:
         raise LogError(f"{p}: not a valid TOML channel map ({exc})") from None
+    if isinstance(d, dict) and isinstance(d.get("dbc"), str):
+        d = dict(d, dbc=str(p.parent / d["dbc"]))   # relative to the map file (absolute stays)
     return channel_map_from_dict(d, source=str(p))
 
 

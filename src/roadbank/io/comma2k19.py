@@ -17,6 +17,8 @@ Mapping to roadbank (SI, ISO 8855):
   example segment it correlates positively with the ISO yaw rate (left turn ->
   positive angle, r = +0.70 between the angle and ``r``), i.e. it is already
   ISO-positive. ``delta_f`` = angle / steering ratio.
+* ``extra["lat_deg"]``, ``extra["lon_deg"]``: WGS-84 position of the pose (deg),
+  for bank maps.
 * reference roll (device roll relative to gravity, rad, ISO positive left
   side up): local down (WGS-84 ellipsoid normal at the ECEF position) expressed
   in the camera frame, ``g = R^T down``, ``roll = atan2(g[1], g[2])``.
@@ -34,7 +36,7 @@ import numpy as np
 from ..params import VehicleParams
 from ..signals import Signals
 from .errors import LogError
-from .resample import common_time_base, resample
+from .resample import common_time_base, interpolate, resample
 
 # WGS-84
 _A = 6378137.0
@@ -59,8 +61,8 @@ def _load(path: Path, rel: str) -> np.ndarray:
         raise LogError(f"{path}: comma2k19 file '{rel}' is unreadable ({exc})") from None
 
 
-def ellipsoid_down_ecef(pos_ecef: np.ndarray) -> np.ndarray:
-    """Unit vector along the downward WGS-84 ellipsoid normal at ECEF positions (n, 3), m -> (n, 3)."""
+def ecef_to_latlon(pos_ecef: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Geodetic WGS-84 latitude and longitude (rad) of ECEF positions (n, 3) in m."""
     x, y, z = np.asarray(pos_ecef, dtype=np.float64).T
     lon = np.arctan2(y, x)
     p = np.hypot(x, y)
@@ -69,6 +71,12 @@ def ellipsoid_down_ecef(pos_ecef: np.ndarray) -> np.ndarray:
     ep2 = (_A ** 2 - b ** 2) / b ** 2
     th = np.arctan2(z * _A, p * b)
     lat = np.arctan2(z + ep2 * b * np.sin(th) ** 3, p - _E2 * _A * np.cos(th) ** 3)
+    return lat, lon
+
+
+def ellipsoid_down_ecef(pos_ecef: np.ndarray) -> np.ndarray:
+    """Unit vector along the downward WGS-84 ellipsoid normal at ECEF positions (n, 3), m -> (n, 3)."""
+    lat, lon = ecef_to_latlon(pos_ecef)
     up = np.stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)], axis=1)
     return -up
 
@@ -149,6 +157,7 @@ def load_comma2k19(path, params: VehicleParams | None = None, rate_hz: float = 1
         raise LogError(f"{p}: comma2k19 global_pose arrays have inconsistent shapes "
                        f"{ft.shape}, {pos.shape}, {quat.shape}")
     series["reference_roll"] = (ft, pose_roll(pos, quat))
+    lat, lon = ecef_to_latlon(pos)
     for name, (t, _) in series.items():
         if np.any(np.diff(t) < 0):
             raise LogError(f"{p}: comma2k19 channel '{name}': time goes backwards")
@@ -161,5 +170,8 @@ def load_comma2k19(path, params: VehicleParams | None = None, rate_hz: float = 1
                   vals["steering_wheel_angle"] / params.steering_ratio)
     meta = {"dataset": "comma2k19", "steering_ratio": str(params.steering_ratio),
             "time_origin": "boot time (s)"}
+    # GNSS position for bank maps (the pose positions, 20 Hz), deg, on the same grid
+    extra = {"lat_deg": interpolate(ft, np.degrees(lat), t_base, max_gap_s),
+             "lon_deg": interpolate(ft, np.degrees(lon), t_base, max_gap_s)}
     return Log(signals=sig, reference_roll=vals["reference_roll"], source=p, format="comma2k19",
-               metadata=meta)
+               metadata=meta, extra=extra)

@@ -37,7 +37,10 @@ class Log:
     warnings : list of str
         Suspicious but usable things found while reading (e.g. a unit that looks odd).
     channel_map : ChannelMap or None
-        The map used (None for comma2k19, whose layout is fixed).
+        The map used (None for comma2k19 and kitti-oxts, whose layouts are fixed).
+    extra : dict name -> array
+        Further channels on ``signals.t``, unit in the name (kitti-oxts: ``lat_deg``,
+        ``lon_deg`` for maps).
     """
 
     signals: Signals
@@ -48,6 +51,7 @@ class Log:
     truth: dict = field(default_factory=dict)
     warnings: list = field(default_factory=list)
     channel_map: ChannelMap | None = None
+    extra: dict = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.signals)
@@ -70,6 +74,42 @@ def _check_time(source, column: str, t: np.ndarray, raw, label: str = "time") ->
                             f"time goes backwards at {where(i)} ({float(t[i - 1])!r} -> {float(t[i])!r})")
 
 
+def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
+    """Roles to read: speed, lateral_acceleration, yaw_rate, the steering role, [reference_roll].
+
+    The steering role is the road-wheel angle if its column exists, else the
+    steering-wheel angle. ``have`` are the columns present; ``names`` all the
+    file's columns (for messages). LogError for a missing column.
+    """
+    steer_roles = [r for r in ("road_wheel_angle", "steering_wheel_angle") if r in cmap.channels]
+    present = [r for r in steer_roles if cmap.channels[r].column in have]
+    roles = ["speed", "lateral_acceleration", "yaw_rate"]
+    for role in roles:
+        col = cmap.channels[role].column
+        if col not in have:
+            raise channel_error(p, role, col, f"column not found in the file "
+                                f"(it has: {', '.join(names) or 'nothing'})")
+    if not present:
+        cols = " or ".join(f"'{cmap.channels[r].column}'" for r in steer_roles)
+        raise LogError(f"{p}: channel 'steering' missing: no column {cols} in the file "
+                       f"(it has: {', '.join(names) or 'nothing'})")
+    roles.append(present[0])
+    if "reference_roll" in cmap.channels:
+        roles.append("reference_roll")
+        col = cmap.channels["reference_roll"].column
+        if col not in have:
+            raise channel_error(p, "reference_roll", col, f"column not found in the file "
+                                f"(it has: {', '.join(names) or 'nothing'})")
+    return roles
+
+
+def road_wheel_angle(cmap: ChannelMap, params: VehicleParams, steer_role: str, values: np.ndarray) -> np.ndarray:
+    """``delta_f`` (rad): the road-wheel angle, or the steering-wheel angle over the steering ratio."""
+    if steer_role == "road_wheel_angle":
+        return values
+    return values / (cmap.steering_ratio or params.steering_ratio)
+
+
 def load_log(path, channels: ChannelMap | str | Path | None = None, format: str | None = None,
              params: VehicleParams | None = None) -> Log:
     """Read one log into SI / ISO 8855 signals on one time base.
@@ -77,12 +117,14 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     Parameters
     ----------
     path : path-like
-        A CSV, Parquet or MDF4 file, or a comma2k19 segment directory.
+        A CSV, Parquet or MDF4 file, a comma2k19 segment directory, or a KITTI raw
+        drive (its ``oxts`` folder, the drive folder or a folder holding one drive).
     channels : ChannelMap or path to a TOML channel map, optional
         Default: roadbank's own columns (what ``roadbank simulate`` writes).
         Not used for comma2k19 (fixed layout).
     format : str, optional
-        "csv", "parquet", "mdf4" or "comma2k19"; default from the suffix.
+        "csv", "parquet", "mdf4", "comma2k19" or "kitti-oxts"; default from the
+        suffix or the directory layout.
     params : VehicleParams, optional
         Supplies the steering ratio when the map gives a steering-wheel angle
         and no ``steering_ratio`` of its own.
@@ -99,6 +141,9 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     if fmt == "comma2k19":
         from .comma2k19 import load_comma2k19
         return load_comma2k19(p, params=params)
+    if fmt == "kitti-oxts":
+        from .kitti import load_kitti_oxts
+        return load_kitti_oxts(p)
     if not p.exists():
         raise LogError(f"{p}: file not found")
     cmap = channels if isinstance(channels, ChannelMap) else (
@@ -106,34 +151,26 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     params = params or VehicleParams()
 
     wanted = {spec.column: role for role, spec in cmap.channels.items()}
-    raw = readers.READERS[fmt](p, wanted, cmap.truth_prefix)
-    have = set(raw.data)
-
-    # steering: road-wheel angle if its column exists, else steering-wheel angle
-    steer_roles = [r for r in ("road_wheel_angle", "steering_wheel_angle") if r in cmap.channels]
-    present = [r for r in steer_roles if cmap.channels[r].column in have]
-    roles = ["speed", "lateral_acceleration", "yaw_rate"]
-    for role in roles:
-        col = cmap.channels[role].column
-        if col not in have:
-            raise channel_error(p, role, col, f"column not found in the file "
-                                f"(it has: {', '.join(raw.names) or 'nothing'})")
-    if not present:
-        cols = " or ".join(f"'{cmap.channels[r].column}'" for r in steer_roles)
-        raise LogError(f"{p}: channel 'steering' missing: no column {cols} in the file "
-                       f"(it has: {', '.join(raw.names) or 'nothing'})")
-    roles.append(present[0])
-    if "reference_roll" in cmap.channels:
-        roles.append("reference_roll")
-        col = cmap.channels["reference_roll"].column
-        if col not in have:
-            raise channel_error(p, "reference_roll", col, f"column not found in the file "
-                                f"(it has: {', '.join(raw.names) or 'nothing'})")
-
     warns: list[str] = []
+    if fmt == "mdf4" and cmap.dbc is not None:
+        fmt = "mdf4-can"                  # an MDF4 file with a DBC: bus logging
+    if fmt in readers.CAN_FORMATS:
+        from .can import read_can
+        raw, warns = read_can(p, cmap, fmt)
+    elif fmt in readers.ROS_FORMATS:
+        from .ros import read_ros
+        raw, warns = read_ros(p, cmap, fmt)
+    else:
+        raw = readers.READERS[fmt](p, wanted, cmap.truth_prefix)
+    timed = fmt == "mdf4" or fmt in readers.CAN_FORMATS or fmt in readers.ROS_FORMATS
+    have = set(raw.data)
+    roles = select_roles(p, cmap, have, raw.names)
+
     series: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     shared = None
-    if fmt != "mdf4":
+    if not timed:
+        if "time" not in cmap.channels:
+            raise LogError(f"{cmap.source}: channel map has no 'time' channel (required for {fmt})")
         tspec = cmap.channels["time"]
         if tspec.column not in have:
             raise channel_error(p, "time", tspec.column, f"column not found in the file "
@@ -145,7 +182,7 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     for role in roles:
         spec = cmap.channels[role]
         v = cmap.to_si_iso(role, raw.data[spec.column])
-        if fmt == "mdf4":
+        if timed:
             tr = raw.times[spec.column]
             _check_time(p, spec.column, tr, None, label=role)
         else:
@@ -163,12 +200,7 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     if len(t_base) < 2:
         raise LogError(f"{p}: fewer than 2 samples on the common time base")
 
-    steer = present[0]
-    if steer == "road_wheel_angle":
-        delta = values[steer]
-    else:
-        ratio = cmap.steering_ratio or params.steering_ratio
-        delta = values[steer] / ratio
+    delta = road_wheel_angle(cmap, params, roles[3], values[roles[3]])
     try:
         sig = Signals(t_base, values["speed"], values["lateral_acceleration"], values["yaw_rate"], delta)
     except ValueError as exc:
@@ -182,4 +214,31 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
             if c.startswith(cmap.truth_prefix) and c not in wanted:
                 truth[c] = arr if t_base is shared else np.interp(t_base, shared, arr)
     return Log(signals=sig, reference_roll=values.get("reference_roll"), source=p, format=fmt,
-               metadata=dict(raw.metadata), truth=truth, warnings=warns, channel_map=cmap)
+               metadata=dict(raw.metadata), truth=truth, warnings=warns, channel_map=cmap,
+               extra=_gnss(p, cmap, raw, shared, t_base))
+
+
+#: GNSS fixes come at 1-20 Hz: a gap up to this long (s) is interpolated across
+GNSS_MAX_GAP_S = 2.0
+
+
+def _gnss(p, cmap: ChannelMap, raw, shared, t_base) -> dict:
+    """``lat_deg`` / ``lon_deg`` on ``t_base`` when the map has ``latitude`` and ``longitude`` (else {})."""
+    from .resample import interpolate
+
+    if not {"latitude", "longitude"} <= set(cmap.channels):
+        return {}
+    out = {}
+    for role, key in (("latitude", "lat_deg"), ("longitude", "lon_deg")):
+        spec = cmap.channels[role]
+        if spec.column not in raw.data:
+            raise channel_error(p, role, spec.column, f"column not found in the file "
+                                f"(it has: {', '.join(raw.names) or 'nothing'})")
+        v = np.degrees(cmap.to_si_iso(role, raw.data[spec.column]))
+        t = raw.times.get(spec.column, shared)
+        limit = 90.0 if role == "latitude" else 180.0
+        if np.nanmax(np.abs(v)) > limit:
+            raise channel_error(p, role, spec.column, f"|value| beyond {limit:g} deg after converting "
+                                f"from '{spec.unit}'")
+        out[key] = interpolate(t, v, t_base, GNSS_MAX_GAP_S)
+    return out

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 from pathlib import Path
 
 import numpy as np
@@ -42,13 +43,104 @@ def write_table(path, cols: dict[str, np.ndarray], metadata: dict | None = None,
         meta = {k: (v if isinstance(v, str) else json.dumps(v)) for k, v in (metadata or {}).items()}
         table = pa.table({k: pa.array(v) for k, v in cols.items()})
         table = table.replace_schema_metadata(meta)
-        pq.write_table(table, p)
+        pq.write_table(table, p, use_dictionary=False)   # float columns: dictionaries cost 15x the time
     else:
-        names = list(cols)
-        arrays = [cols[n].astype(int) if cols[n].dtype == bool else cols[n] for n in names]
         with open(p, "w", newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(names)
-            for row in zip(*arrays):
-                w.writerow([repr(float(x)) if isinstance(x, (float, np.floating)) else int(x) for x in row])
+            csv.writer(fh).writerow(list(cols))
+            _csv_rows(fh, cols)
     return p
+
+
+def _csv_rows(fh, cols: dict[str, np.ndarray]) -> None:
+    """Append the rows of ``cols``: floats as repr (exact round trip), booleans as 0/1."""
+    arrays = [v.astype(int) if v.dtype == bool else v for v in cols.values()]
+    w = csv.writer(fh)
+    for row in zip(*arrays):
+        w.writerow([repr(float(x)) if isinstance(x, (float, np.floating)) else int(x) for x in row])
+
+
+class TableWriter:
+    """Write an output table chunk by chunk: Parquet row groups or CSV lines appended.
+
+    ``write(cols)`` takes the columns of one chunk (same names and types every
+    time, as :func:`estimate_table` makes them); memory holds one chunk only.
+    The file is written under a temporary name and renamed into place by
+    :meth:`close`, so an interrupted run never leaves a complete-looking file;
+    :meth:`abort` removes the partial file. Use as a context manager.
+
+    Parameters
+    ----------
+    path : path-like
+        ``.csv`` or ``.parquet`` (or ``format``).
+    metadata : dict, optional
+        Parquet schema metadata (values JSON-encoded unless text).
+    format : {"csv", "parquet"}, optional
+    """
+
+    def __init__(self, path, metadata: dict | None = None, format: str | None = None):
+        self.path = Path(path)
+        self.format = format or OUTPUT_FORMATS.get(self.path.suffix.lower())
+        if self.format not in ("csv", "parquet"):
+            raise ValueError(f"{self.path}: output must end in .csv or .parquet")
+        self.metadata = {k: (v if isinstance(v, str) else json.dumps(v)) for k, v in (metadata or {}).items()}
+        self.tmp = self.path.with_name(self.path.name + ".partial")
+        self.rows = 0
+        self.chunks = 0
+        self._pq = None
+        self._fh = None
+        self._names = None
+
+    def write(self, cols: dict[str, np.ndarray]) -> None:
+        """Append one chunk (dict name -> 1-D array, all the same length)."""
+        if self._names is None:
+            self._names = list(cols)
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        elif list(cols) != self._names:
+            raise ValueError(f"{self.path}: chunk columns {list(cols)} differ from {self._names}")
+        n = len(next(iter(cols.values()))) if cols else 0
+        if self.format == "parquet":
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+            table = pa.table({k: pa.array(v) for k, v in cols.items()})
+            if self._pq is None:
+                self._pq = pq.ParquetWriter(self.tmp, table.schema.with_metadata(self.metadata),
+                                            use_dictionary=False)
+            self._pq.write_table(table.replace_schema_metadata(self.metadata))
+        else:
+            if self._fh is None:
+                self._fh = open(self.tmp, "w", newline="")
+                csv.writer(self._fh).writerow(self._names)
+            _csv_rows(self._fh, cols)
+        self.rows += n
+        self.chunks += 1
+
+    def close(self) -> Path:
+        """Finish the file and move it into place; returns its path."""
+        if self._pq is not None:
+            self._pq.close()
+        if self._fh is not None:
+            self._fh.close()
+        if self._names is None:
+            raise ValueError(f"{self.path}: nothing was written")
+        os.replace(self.tmp, self.path)
+        return self.path
+
+    def abort(self) -> None:
+        """Close and delete the partial file."""
+        for h in (self._pq, self._fh):
+            try:
+                if h is not None:
+                    h.close()
+            except Exception:
+                pass
+        self.tmp.unlink(missing_ok=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is None:
+            self.close()
+        else:
+            self.abort()
+        return False

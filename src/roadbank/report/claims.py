@@ -98,17 +98,23 @@ def all_claims(rows) -> list[Claim]:
     return out
 
 
-def accuracy_aims(rows, rms_aim=0.5, max_aim=1.5, best_margin=0.1) -> dict:
-    """The issue's aims for the modified-model PIF, per cell and overall."""
+def accuracy_aims(rows, rms_aim=0.5, max_aim=1.5, best_margin=0.1, name=None) -> dict:
+    """The issue's aims for a PIF column, per cell and overall.
+
+    ``name`` defaults to ``pif-default`` (roadbank's default tuning) when the rows have
+    it, else ``pif-modified``; the result says which under ``"estimator"``.
+    """
     rms, mx = lookup(rows, "bank", "rms_deg"), lookup(rows, "bank", "max_deg")
+    if name is None:
+        name = "pif-default" if any(n == "pif-default" for (_, _, n) in rms) else "pif-modified"
     cells = sorted({(s, c) for (s, c, _) in rms})
     per_cell, n_best = [], 0
     for s, c in cells:
-        pif_r, pif_m = _get(rms, s, c, "pif-modified"), _get(mx, s, c, "pif-modified")
+        pif_r, pif_m = _get(rms, s, c, name), _get(mx, s, c, name)
         best = min(v for (s2, c2, _), v in rms.items() if (s2, c2) == (s, c) and np.isfinite(v))
         near = bool(pif_r <= best + best_margin)
         n_best += near
         per_cell.append({"scenario": s, "condition": c, "rms_deg": pif_r, "max_deg": pif_m,
                          "rms_ok": bool(pif_r <= rms_aim), "max_ok": bool(pif_m <= max_aim),
                          "best_deg": best, "near_best": near})
-    return {"cells": per_cell, "near_best_fraction": n_best / max(len(cells), 1)}
+    return {"cells": per_cell, "near_best_fraction": n_best / max(len(cells), 1), "estimator": name}

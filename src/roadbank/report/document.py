@@ -3,13 +3,14 @@ and optionally the repository's ``docs/results.md`` (the same without figures)."
 
 from __future__ import annotations
 
-import html
 import os
 import platform
 from pathlib import Path
 
 from .claims import accuracy_aims, all_claims
+from .html import md_to_html
 from .labels import label
+from .markdown import Markdown, escape, md_table
 from .tables import markdown_table
 
 TABLES = (
@@ -32,29 +33,37 @@ def _md_blocks(study, figs, *, with_figures: bool, fig_prefix: str = "") -> list
            + ", ".join(f"{label(n)} (`{n}`)" for n in _names(rows)) + ".", "",
            "Plant: roadbank's nonlinear vehicle simulator (`roadbank.sim`), ESP sensors at 100 Hz, seed 0. "
            "Estimators are always designed with Table 1 (Cf_ss); conditions change the plant and sensors. "
-           "Metrics are computed on valid samples after the first 2 s.", ""]
-    out += ["## The paper's claims on our plant", "", "| claim | holds | evidence |", "|---|---|---|"]
-    for c in all_claims(rows):
-        out.append(f"| {c.text} | {'yes' if c.holds else '**no**'} | {c.detail} |")
+           "Metrics are computed on valid samples after the first 2 s. "
+           "PIF (`pif-modified`) and PIF (original model) use the paper's Table 4 weights (SI reading), "
+           "with which the paper's claims are checked; PIF (roadbank default) (`pif-default`) is "
+           "`estimators.make(\"pif-modified\")`, roadbank's default tuning (docs/estimators.md).", ""]
+    out += ["## The paper's claims on our plant", "",
+            md_table(["claim", "holds", "evidence"],
+                     [[c.text, "yes" if c.holds else Markdown("**no**"), c.detail] for c in all_claims(rows)])]
     aims = accuracy_aims(rows)
-    out += ["", "## Accuracy aims for the PIF (modified model, roll separation)", "",
+    out += ["", f"## Accuracy aims for the {label(aims['estimator'])} (`{aims['estimator']}`)", "",
             "Aim: bank RMS <= 0.5 deg and max <= 1.5 deg after 2 s in every cell; PIF best or within "
             f"0.1 deg of the best estimator in >= 90 % of cells. Reached: within 0.1 deg of best in "
             f"{100 * aims['near_best_fraction']:.0f} % of cells.", "",
-            "| scenario | condition | PIF RMS | RMS <= 0.5 | PIF max | max <= 1.5 | best RMS (any) |",
-            "|---|---|---:|---|---:|---|---:|"]
-    for c in aims["cells"]:
-        out.append(f"| {c['scenario']} | {c['condition']} | {c['rms_deg']:.2f} | {'yes' if c['rms_ok'] else 'no'} | "
-                   f"{c['max_deg']:.2f} | {'yes' if c['max_ok'] else 'no'} | {c['best_deg']:.2f} |")
+            md_table(["scenario", "condition", "PIF RMS", "RMS <= 0.5", "PIF max", "max <= 1.5", "best RMS (any)"],
+                     [[c["scenario"], c["condition"], c["rms_deg"], _yes_no(c["rms_ok"]), c["max_deg"],
+                       _yes_no(c["max_ok"]), c["best_deg"]] for c in aims["cells"]])]
     for ref, metric, title in TABLES:
-        out += ["", f"## {title}", "", markdown_table(rows, ref, metric,
-                                                       highlight_best=metric not in ("t_conv_s", "flagged_pct"))]
+        best = metric not in ("t_conv_s", "flagged_pct")
+        out += ["", f"## {escape(title)}", ""]
+        if best:
+            out += ["Best (smallest magnitude) value of each line in bold.", ""]
+        out += [markdown_table(rows, ref, metric, highlight_best=best)]
     if with_figures:
         out += ["", "## Figures", ""]
         for key, paths in figs.items():
             png = [p for p in paths if p.suffix == ".png"][0]
             out += [f"### {key}", "", f"![{key}]({fig_prefix}{png.parent.name}/{png.name})", ""]
     return out
+
+
+def _yes_no(ok: bool):
+    return "yes" if ok else Markdown("**no**")
 
 
 def _names(rows):
@@ -65,53 +74,13 @@ def _names(rows):
     return names
 
 
-def _md_to_html(lines: list[str]) -> str:
-    """A small converter for the markdown this module writes (headings, tables, images, text)."""
-    body, table = [], []
-
-    def inline(s):
-        s = html.escape(s)
-        while "**" in s:
-            s = s.replace("**", "<b>", 1).replace("**", "</b>", 1)
-        while "`" in s:
-            s = s.replace("`", "<code>", 1).replace("`", "</code>", 1)
-        return s
-
-    def flush():
-        if table:
-            cells = [[c.strip() for c in ln.strip("|").split("|")] for ln in table if not set(ln) <= set("|-: ")]
-            body.append("<table><tr>" + "".join(f"<th>{inline(c)}</th>" for c in cells[0]) + "</tr>"
-                        + "".join("<tr>" + "".join(f"<td>{inline(c)}</td>" for c in row) + "</tr>"
-                                  for row in cells[1:]) + "</table>")
-            table.clear()
-
-    for ln in lines:
-        if ln.startswith("|"):
-            table.append(ln)
-            continue
-        flush()
-        if ln.startswith("#"):
-            level = len(ln) - len(ln.lstrip("#"))
-            body.append(f"<h{level}>{inline(ln[level:].strip())}</h{level}>")
-        elif ln.startswith("!["):
-            alt, src = ln[2:].split("](")
-            body.append(f'<p><img src="{html.escape(src[:-1].replace(".png", ".svg"))}" alt="{html.escape(alt)}" '
-                        'style="max-width:100%"></p>')
-        elif ln.strip():
-            body.append(f"<p>{inline(ln)}</p>")
-    flush()
-    style = ("body{font-family:sans-serif;max-width:1100px;margin:auto}table{border-collapse:collapse;"
-             "font-size:13px}td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}")
-    return ("<!doctype html><html><head><meta charset='utf-8'><title>roadbank reproduction</title>"
-            f"<style>{style}</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n")
-
-
 def write_report(study, outdir: Path, figs: dict, *, docs_results: Path | None = None) -> list[Path]:
     """Write ``report.md`` and ``report.html`` into ``outdir`` (and ``docs_results`` if given)."""
     outdir = Path(outdir)
-    lines = _md_blocks(study, figs, with_figures=True)
-    (outdir / "report.md").write_text("\n".join(lines) + "\n")
-    (outdir / "report.html").write_text(_md_to_html(lines))
+    text = "\n".join(_md_blocks(study, figs, with_figures=True)) + "\n"
+    (outdir / "report.md").write_text(text, encoding="utf-8")
+    (outdir / "report.html").write_text(md_to_html(text, "roadbank reproduction", base_dir=outdir),
+                                        encoding="utf-8")
     written = [outdir / "report.md", outdir / "report.html"]
     if docs_results is not None:
         docs_results = Path(docs_results)
@@ -120,6 +89,6 @@ def write_report(study, outdir: Path, figs: dict, *, docs_results: Path | None =
         doc.insert(2, "This file is generated by `roadbank reproduce -o results/ --docs docs/results.md`; "
                       "do not edit it by hand. Figures are in the output folder's `figures/`.")
         doc.insert(3, "")
-        docs_results.write_text("\n".join(doc) + "\n")
+        docs_results.write_text("\n".join(doc) + "\n", encoding="utf-8")
         written.append(docs_results)
     return written

@@ -43,7 +43,7 @@ def scenario_figure(scenario: str, cells: dict, path: Path, names=PAPER_SET) -> 
     ax.plot(t, np.rad2deg(first.inputs["steering_wheel_angle"]), label="Steering wheel angle (deg)")
     ax.plot(t, first.inputs["vx"] * 3.6, label="Speed (km/h)")
     ax.plot(t, 100 * first.inputs["throttle"], label="Throttle (%)")
-    ax.set_ylabel("Driver inputs")
+    ax.set_ylabel("Driver inputs (deg, km/h, %)")
     ax.set_title(f"{scenario}: driver inputs ({conds[0]})")
     ax.legend(fontsize=7, loc="best")
     ax.grid(alpha=0.3)

@@ -2,6 +2,7 @@
 
 LABELS = {
     "pif-modified": "PIF",
+    "pif-default": "PIF (roadbank default)",
     "pio-original": "PIO",
     "dfc": "DFC",
     "uio": "UIO",
@@ -12,7 +13,7 @@ LABELS = {
 }
 
 #: the methods the paper plots in its scenario figures, and ours
-PAPER_SET = ("pif-modified", "pio-original", "dfc", "uio", "kalman")
+PAPER_SET = ("pif-modified", "pio-original", "dfc", "uio", "kalman", "pif-default")
 
 CONDITION_LABELS = {
     "nominal": "mu = 0.85",

@@ -41,6 +41,7 @@ class Study:
     cells: dict = field(default_factory=dict)     # (scenario, condition) -> CellResult
     rows: list = field(default_factory=list)
     wall_s: float = 0.0
+    vehicle: str = "suv-paper"                    # the car simulated and designed for
 
     def by_scenario(self) -> dict:
         out: dict = {}
@@ -59,20 +60,61 @@ def plan(scenarios=None) -> list[tuple[str, str]]:
     return [(s, c) for s in names for c in CONDITIONS_BY_SCENARIO[s]]
 
 
+#: The study checks the paper's claims with the paper's methods as published: the PIFs
+#: with Table 4 (SI reading); every other estimator with its default.
+STUDY_TUNING = {"pif-modified": {"tuning": "paper"}, "pif-original": {"tuning": "paper"}}
+#: Further columns of the study: label -> (estimator, options). ``pif-default`` is
+#: ``estimators.make("pif-modified")``, roadbank's default tuning (docs/estimators.md).
+EXTRA_COLUMNS = {"pif-default": ("pif-modified", {})}
+#: every column of a full study, in report order
+COLUMNS = estimators.NAMES + tuple(EXTRA_COLUMNS)
+
+
 def check_estimators(names) -> None:
-    """Raise ValueError naming any of ``names`` that is not an estimator."""
-    unknown = [n for n in names if n not in estimators.NAMES]
+    """Raise ValueError naming any of ``names`` that is not an estimator or study column."""
+    unknown = [n for n in names if n not in COLUMNS]
     if unknown:
-        raise ValueError(f"unknown estimator(s) {unknown}; choose from {list(estimators.NAMES)}")
+        raise ValueError(f"unknown estimator(s) {unknown}; choose from {list(COLUMNS)}")
 
 
-def run_cell(scenario: str, condition: str, names=estimators.NAMES, seed: int = 0,
-             settle: float = 2.0) -> CellResult:
-    """Simulate one cell and evaluate the estimators on it."""
+def _evaluate_columns(sim, names, settle: float, vehicle=None):
+    """:func:`evaluate` for study columns: estimators with :data:`STUDY_TUNING`, then the
+    :data:`EXTRA_COLUMNS` relabelled; rows and estimates in the order of ``names``.
+
+    With a ``vehicle`` (:class:`roadbank.vehicle.Vehicle`) every estimator is designed for
+    its parameters; its ``[tuning]`` tables apply to every column except the published
+    PIFs, which keep :data:`STUDY_TUNING` (Table 4) -- so ``pif-default`` is the car's tuned PIF.
+    """
+    params = vehicle.params if vehicle is not None else None
+    car_tuning = dict(vehicle.tuning) if vehicle is not None else {}
+    ev = evaluate(sim, [n for n in names if n not in EXTRA_COLUMNS], params, settle=settle,
+                  tuning={**car_tuning, **STUDY_TUNING})
+    for lab in (n for n in names if n in EXTRA_COLUMNS):
+        base, options = EXTRA_COLUMNS[lab]
+        extra = evaluate(sim, [base], params, settle=settle,
+                         tuning={base: {**car_tuning.get(base, {}), **options}})
+        ev.estimates[lab] = extra.estimates[base]
+        ev.rows += [{**r, "estimator": lab} for r in extra.rows]
+    order = {n: i for i, n in enumerate(names)}
+    ev.rows.sort(key=lambda r: order[r["estimator"]])
+    ev.estimates = {n: ev.estimates[n] for n in names}
+    return ev
+
+
+def run_cell(scenario: str, condition: str, names=COLUMNS, seed: int = 0,
+             settle: float = 2.0, vehicle=None) -> CellResult:
+    """Simulate one cell and evaluate the study columns ``names`` on it.
+
+    ``vehicle`` (a :class:`roadbank.vehicle.Vehicle`, default the paper's SUV) is both the
+    simulated car (plant and sensors) and the one the estimators are designed for.
+    """
     from ..sim import run_scenario
     t0 = time.perf_counter()
-    sim = run_scenario(scenario, condition, seed=seed)
-    ev = evaluate(sim, names, settle=settle)
+    if vehicle is None:
+        sim = run_scenario(scenario, condition, seed=seed)
+    else:
+        sim = vehicle.simulate(scenario, condition, seed=seed)
+    ev = _evaluate_columns(sim, list(names), settle, vehicle)
     tr = sim.truth
     inputs = {"steering_wheel_angle": tr.steering_wheel_angle, "vx": tr.vx, "throttle": tr.throttle}
     return CellResult(scenario, condition, sim.signals.t, inputs, ev.references["bank"],
@@ -81,28 +123,29 @@ def run_cell(scenario: str, condition: str, names=estimators.NAMES, seed: int = 
                       time.perf_counter() - t0)
 
 
-def run_study(scenarios=None, names=estimators.NAMES, *, jobs: int | None = None, seed: int = 0,
-              progress=None) -> Study:
+def run_study(scenarios=None, names=COLUMNS, *, jobs: int | None = None, seed: int = 0,
+              progress=None, vehicle=None) -> Study:
     """Run every cell (in ``jobs`` processes; default: all cores) and collect the results.
 
-    ``progress`` is an optional callable invoked with each finished :class:`CellResult`.
+    ``progress`` is an optional callable invoked with each finished :class:`CellResult`;
+    ``vehicle`` the car simulated and designed for (see :func:`run_cell`; default the paper SUV).
     """
     cells = plan(scenarios)
     check_estimators(names)
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(cells)))
-    study = Study()
+    study = Study(vehicle=vehicle.name if vehicle is not None else "suv-paper")
     t0 = time.perf_counter()
     # The first cell runs here: it compiles/loads the numba kernels and designs the
     # estimators' gain schedules once, and forked workers inherit both (without this
     # warm-up each worker paid them again: 24 s instead of 7 s on 2 cores).
-    _collect(study, run_cell(*cells[0], names, seed), progress)
+    _collect(study, run_cell(*cells[0], names, seed, vehicle=vehicle), progress)
     rest = cells[1:]
     if jobs == 1 or not rest:
         for s, c in rest:
-            _collect(study, run_cell(s, c, names, seed), progress)
+            _collect(study, run_cell(s, c, names, seed, vehicle=vehicle), progress)
     else:
         with ProcessPoolExecutor(max_workers=jobs) as pool:
-            futures = [pool.submit(run_cell, s, c, tuple(names), seed) for s, c in rest]
+            futures = [pool.submit(run_cell, s, c, tuple(names), seed, vehicle=vehicle) for s, c in rest]
             for fut in as_completed(futures):
                 _collect(study, fut.result(), progress)
     study.cells = {k: study.cells[k] for k in cells}          # plan order

@@ -42,22 +42,12 @@ def cell_order(rows: list[dict]) -> tuple[list, list]:
 
 def markdown_table(rows: list[dict], reference: str, metric: str, *, digits: int = 2,
                    highlight_best: bool = True) -> str:
-    """Markdown table: one line per cell, one column per estimator; the best value in bold."""
+    """Markdown table of one reference and metric: one line per cell, one column per
+    estimator; the best (smallest magnitude) value of each line in bold."""
     from .labels import label
+    from .markdown import md_table
     values = lookup(rows, reference, metric)
     cells, names = cell_order(rows)
-    head = "| scenario | condition | " + " | ".join(label(n) for n in names) + " |"
-    sep = "|---|---|" + "---:|" * len(names)
-    lines = [head, sep]
-    for sc, cond in cells:
-        vals = [values.get((sc, cond, n), np.nan) for n in names]
-        finite = [abs(v) for v in vals if np.isfinite(v)]
-        best = min(finite) if finite else None
-        txt = []
-        for v in vals:
-            s = "n/a" if not np.isfinite(v) else f"{v:.{digits}f}"
-            if highlight_best and best is not None and np.isfinite(v) and abs(v) == best:
-                s = f"**{s}**"
-            txt.append(s)
-        lines.append(f"| {sc} | {cond} | " + " | ".join(txt) + " |")
-    return "\n".join(lines)
+    body = [[sc, cond] + [values.get((sc, cond, n), np.nan) for n in names] for sc, cond in cells]
+    return md_table(["scenario", "condition"] + [label(n) for n in names], body, digits=digits,
+                    best="absmin" if highlight_best else None)

@@ -7,7 +7,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..report.markdown import md_table
 from .comma2k19 import ValidationResult
+
+#: the best value of each score column: largest correlation, smallest error
+_BEST = {"r": "max", "rms_deg": "min", "r raw": "max", "r causal LP": "max", "r whole span": "max",
+         "r phi_b": "max", "rms phi_b (deg)": "min", "r at that lag": "max"}
 
 
 def to_json(res: ValidationResult) -> dict:
@@ -17,29 +22,19 @@ def to_json(res: ValidationResult) -> dict:
 
 
 def plot(res: ValidationResult, path, show=("kinematic", "pif-modified", "kalman", "dfc")) -> None:
-    import matplotlib
+    """Smoothed estimates (theta + offset) against the pose roll and their error (deg) vs time (s):
+    warm-up shaded grey, spans an estimator flagged not valid red, the offset-fit / scored split dotted."""
+    from ..report.timeseries import reference_figure, save_figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    t = res.t - res.t[0]
-    fig, ax = plt.subplots(figsize=(9, 4))
-    ax.plot(t, np.degrees(res.reference), "k", lw=1.8, label="reference (pose roll)")
-    for name in show:
-        if name in res.estimates:
-            ax.plot(t, np.degrees(res.estimates[name]), lw=1.0, label=f"{name} theta + offset")
-    ax.axvline(res.split_time - res.t[0], color="grey", ls=":", lw=1)
-    ax.axvspan(0, res.settings["warmup_s"], color="grey", alpha=0.15)
-    ax.set_xlabel("time (s)")
-    ax.set_ylabel("roll (deg), smoothed tau = 2/3 s")
-    ax.legend(fontsize=8, ncol=2)
-    ax.grid(alpha=0.3)
-    ax.set_title("comma2k19 example segment: estimates vs pose roll (offset fitted left of the dotted line)",
-                 fontsize=9)
-    fig.tight_layout()
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    names = [n for n in show if n in res.estimates]
+    valid = res.run.valid if res.run is not None else {}
+    fig = reference_figure(res.t, res.reference, {f"{n} theta + offset": res.estimates[n] for n in names},
+                           valid={f"{n} theta + offset": valid[n] for n in names if n in valid},
+                           unscored=res.t < res.t[0] + res.settings["warmup_s"], split_time=res.split_time,
+                           quantity=f"roll, smoothed tau = {res.settings['tau']:.2f} s",
+                           reference_label="reference (pose roll)",
+                           title="comma2k19 segment: estimates vs pose roll")
+    save_figure(fig, path)
 
 
 def _f(x, nd=3):
@@ -60,13 +55,12 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
     L.append("Estimate compared: `theta` (bank + body roll), because the reference is the device "
              "roll (bank + body roll + mounting offset). Primary columns: `r`, `rms_deg`, `offset_deg` "
              "(what `--json` prints).\n")
-    L.append("| estimator | r | rms_deg | offset_deg | r raw | r causal LP | r whole span | r phi_b | rms phi_b (deg) | lag for max r (s) | r at that lag |")
-    L.append("|---|---|---|---|---|---|---|---|---|---|---|")
-    for name, sc in res.scores.items():
-        L.append(f"| {name} | **{_f(sc.r)}** | {_f(sc.rms_deg)} | {_f(sc.offset_deg)} | {_f(sc.r_raw)} | "
-                 f"{_f(sc.r_causal)} | {_f(sc.r_whole)} | {_f(sc.r_phi_b)} | {_f(sc.rms_phi_b_deg)} | "
-                 f"{sc.best_lag_s:+.2f} | {_f(sc.r_at_best_lag)} |")
-    L.append("")
+    L.append(md_table(["estimator", "r", "rms_deg", "offset_deg", "r raw", "r causal LP", "r whole span", "r phi_b",
+                       "rms phi_b (deg)", "lag for max r (s)", "r at that lag"],
+                      [[name, sc.r, sc.rms_deg, sc.offset_deg, sc.r_raw, sc.r_causal, sc.r_whole, sc.r_phi_b,
+                        sc.rms_phi_b_deg, sc.best_lag_s, sc.r_at_best_lag] for name, sc in res.scores.items()],
+                      digits=3, formats={"lag for max r (s)": "+.2f"}, best=_BEST, best_in="column"))
+    L.append("\nBest value of each score column in bold (largest r, smallest RMS).\n")
     L.append("Columns: **r**, **rms_deg** -- Pearson correlation and RMS error (deg, after adding the "
              "offset) on the scored part, both signals smoothed; **offset_deg** -- reference minus "
              "estimate, fitted on the first part; **r raw** -- same split, no smoothing; **r causal LP** -- "
@@ -108,18 +102,18 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
     if "suv" in res.sensitivity:
         L.append("## Sensitivity\n")
         L.append("Paper SUV parameters (`VehicleParams()` defaults, steering ratio 16) instead of the sedan:\n")
-        L.append("| estimator | r | rms_deg | offset_deg |")
-        L.append("|---|---|---|---|")
-        for name, sc in res.sensitivity["suv"].items():
-            L.append(f"| {name} | {_f(sc.r)} | {_f(sc.rms_deg)} | {_f(sc.offset_deg)} |")
+        L.append(md_table(["estimator", "r", "rms_deg", "offset_deg"],
+                          [[name, sc.r, sc.rms_deg, sc.offset_deg] for name, sc in res.sensitivity["suv"].items()],
+                          digits=3, best=_BEST, best_in="column"))
         L.append("")
     if "pif_Q" in res.sensitivity:
         L.append("PIF (modified model) with other process-noise intensities `Q` (Table 4: Q = 0.1; larger Q = "
                  "faster bank dynamics, less lag, more noise, which the common smoothing then removes):\n")
-        L.append("| Q | r | rms_deg | r raw | lag for max r (s) |")
-        L.append("|---|---|---|---|---|")
-        for Q, sc in res.sensitivity["pif_Q"].items():
-            L.append(f"| {Q:g} | {_f(sc.r)} | {_f(sc.rms_deg)} | {_f(sc.r_raw)} | {sc.best_lag_s:+.2f} |")
+        L.append(md_table(["Q", "r", "rms_deg", "r raw", "lag for max r (s)"],
+                          [[f"{Q:g}", sc.r, sc.rms_deg, sc.r_raw, sc.best_lag_s]
+                           for Q, sc in res.sensitivity["pif_Q"].items()],
+                          digits=3, formats={"lag for max r (s)": "+.2f"}, align="rrrrr", best=_BEST,
+                          best_in="column"))
         L.append("")
     L.append("## What the data can support\n")
     sw = d["kin_tau_sweep"]

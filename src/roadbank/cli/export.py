@@ -1,0 +1,86 @@
+"""``roadbank export c``: generate a self-contained C99 module of a designed estimator.
+
+Writes ``roadbank_<estimator>.h``, ``roadbank_<estimator>.c`` and
+``README_roadbank_<estimator>.md`` (interface, units, footprint) into the output
+directory. The module is the Python ``lpv`` kernel written out in C, with the
+designed speed schedule as ``static const`` tables (docs/embedded.md).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from .options import vehicle_option
+
+
+@click.group()
+def export():
+    """Export a designed estimator for embedded targets."""
+
+
+@export.command("c")
+@vehicle_option("The estimator is designed for this car, with its [tuning.<estimator>] options.")
+@click.option("--estimator", "-e", "name", default="pif-modified", show_default=True,
+              help="Estimator to export (a speed-scheduled linear observer: kinematic, uio, pio-*, "
+                   "pif-* steady-state, kalman, ...).")
+@click.option("--rate", type=float, default=None,
+              help="Nominal sample rate of the target (Hz). Default: the vehicle's sensor rate (100).")
+@click.option("--float32", "float32", is_flag=True, help="Single precision (tables, state and arithmetic).")
+@click.option("--fixed-rate", "fixed_rate", is_flag=True,
+              help="Add the exact discrete tables for --rate (the kernels' fixed-rate path): samples at "
+                   "that rate cost one small matrix update; others take the general path. More flash.")
+@click.option("--roll", type=click.Choice(["static", "dynamic", "none"]), default=None,
+              help="Roll separation (default: the vehicle's tuning, else static).")
+@click.option("--v-step", "v_step", type=float, default=None,
+              help="Spacing of the schedule's speed grid (m/s; default 0.25). Coarser: smaller tables.")
+@click.option("--v-max", "v_max", type=float, default=None,
+              help="Last speed of the schedule (m/s; default 100); faster samples use its gains.")
+@click.option("--name", "module_name", default=None,
+              help="Module name: files roadbank_<name>.h/.c, symbols roadbank_<name>_* (default: the "
+                   "estimator's name). Two tunings of one estimator in one program need two names.")
+@click.option("--output", "-o", required=True, type=click.Path(file_okay=False, path_type=Path),
+              help="Output directory (created if missing).")
+def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: str | None,
+                 v_step: float | None, v_max: float | None, module_name: str | None, fixed_rate: bool,
+                 output: Path):
+    """Write roadbank_<estimator>.h/.c (C99, no malloc, tables in flash) and its README."""
+    from .. import estimators
+    from ..export import NotExportable, export_c
+    from ..estimators import NoStabilisingSolution
+
+    if name not in estimators.NAMES:
+        raise click.BadParameter(f"unknown estimator '{name}' (choose from {', '.join(estimators.NAMES)})",
+                                 param_hint="--estimator")
+    if rate is None:
+        rate = float(getattr(getattr(vehicle, "sensors", None), "rate", 100.0))
+    if not rate > 0 or rate != rate or rate == float("inf"):
+        raise click.BadParameter(f"must be a positive number of Hz, got {rate}", param_hint="--rate")
+    if module_name is not None:
+        from ..export.design import c_identifier
+
+        try:
+            c_identifier(module_name)
+        except ValueError as exc:
+            raise click.BadParameter(str(exc), param_hint="--name") from None
+    overrides = {k: v for k, v in (("roll", roll), ("v_step", v_step), ("v_max", v_max)) if v is not None}
+    try:
+        est = vehicle.make(name, **overrides)
+    except (ValueError, TypeError, NoStabilisingSolution) as exc:
+        raise click.ClickException(f"{name}: cannot design for vehicle {vehicle.name!r}: {exc}") from None
+    try:
+        res = export_c(est, output, rate=rate, float32=float32, module_name=module_name, discrete=fixed_rate)
+    except NotExportable as exc:
+        raise click.ClickException(str(exc)) from None
+    except ValueError as exc:
+        raise click.ClickException(f"{name}: cannot export: {exc}") from None
+    except OSError as exc:
+        raise click.ClickException(f"cannot write into {output}: {exc.strerror or exc}") from None
+    d = res.design
+    click.echo(f"{name} for {vehicle.name} ({'float32' if float32 else 'float64'}, {rate:g} Hz"
+               f"{' with fixed-rate tables' if fixed_rate else ''}, "
+               f"{d.n} observer states, roll {est.roll}): tables {res.table_bytes} bytes "
+               f"({d.ng} speeds x {d.nk}), fingerprint {d.fingerprint()}")
+    for path in (res.header, res.source, res.readme):
+        click.echo(f"  {path}")

@@ -1,0 +1,156 @@
+"""``roadbank identify``: what driving logs tell about a car -> a vehicle file."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import click
+
+from .options import vehicle_option
+
+#: display unit per quantity: (label, factor from SI)
+_DISPLAY = {
+    "Cf": ("kN/rad", 1e-3),
+    "Cr": ("kN/rad", 1e-3),
+    "Kus": ("deg/g", math.degrees(9.81)),
+    "steering_offset": ("deg road wheel", math.degrees(1.0)),
+    "yaw_rate_offset": ("deg/s", math.degrees(1.0)),
+    "ay_offset": ("m/s^2", 1.0),
+    "roll_gain": ("deg/(m/s^2)", math.degrees(1.0)),
+}
+
+
+def format_result(result) -> list[str]:
+    """Lines of the text report: one per quantity (value +- 1 sigma, or REFUSED and why), one per log."""
+    lines = []
+    for name, q in result.quantities.items():
+        unit, k = _DISPLAY.get(name, (q.unit, 1.0))
+        if q.ok:
+            lines.append(f"  {name:16s} {q.value * k:11.4g} +- {q.std * k:<9.2g} {unit:15s} ({q.note})")
+        else:
+            lines.append(f"  {name:16s} REFUSED: {q.refused}")
+    for r in result.logs:
+        if r.used:
+            s = r.seconds
+            lines.append(f"  log {r.source}: {s['usable']:.0f} s usable, {s['straight']:.0f} s straight, "
+                         f"{r.n_corners} quasi-steady corners ({s['corners']:.0f} s), "
+                         f"{r.speed_range[0]:.1f}-{r.speed_range[1]:.1f} m/s")
+        else:
+            lines.append(f"  log {r.source}: NOT USED: {r.problem}")
+    return lines
+
+
+def result_json(result, failed) -> dict:
+    """JSON-ready summary: quantities (SI, or the refusal), logs used or not, read failures."""
+    return {
+        "quantities": {k: ({"value": q.value, "std": q.std, "unit": q.unit, "note": q.note} if q.ok
+                           else {"refused": q.refused, "unit": q.unit}) for k, q in result.quantities.items()},
+        "logs": [{"source": str(r.source), "used": r.used, "problem": r.problem,
+                  "seconds": {k: float(v) for k, v in r.seconds.items()}, "n_corners": r.n_corners}
+                 for r in result.logs] + [{"source": str(p), "used": False, "problem": why} for p, why in failed],
+    }
+
+
+@click.command()
+@click.argument("logs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@vehicle_option("Its m, Iz, Lf, Lr and roll data are taken as known; the output starts from it.")
+@click.option("--channels", "channels", type=click.Path(path_type=Path), default=None,
+              help="Channel map (TOML), as for `roadbank estimate`.")
+@click.option("--format", "fmt", default=None,
+              help="Input format (csv, parquet, mdf4, comma2k19, ...). Default: from the file suffix.")
+@click.option("-o", "--output", required=True, type=click.Path(path_type=Path),
+              help="Vehicle file (.toml) to write: the base car with the identified Cf, Cr and an "
+                   "[identified] table.")
+@click.option("--straight-bank", type=float, default=0.0, show_default=True,
+              help="Assumed mean bank (deg, left side up) of the straights driven; the ay offset is relative "
+                   "to it (a 2 %% crown draining to the right is 1.15).")
+@click.option("--ay-max", type=float, default=4.0, show_default=True,
+              help="Linear range (m/s^2): samples with larger |ay| are left out of the stiffness regression.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON on stdout.")
+def identify(logs, vehicle, channels, fmt, output, straight_bank, ay_max, as_json):
+    """Identify the car behind LOGS: understeer gradient, axle cornering stiffnesses, steering,
+    yaw-rate and ay offsets, and the roll gain when the log has a roll reference.
+
+    \b
+    roadbank identify drive1.parquet drive2.parquet --vehicle sedan -o my-sedan.toml
+    roadbank identify logs/*.csv --channels map.toml --vehicle base.toml -o car.toml
+
+    Each value comes with a standard uncertainty (block bootstrap). A quantity the
+    logs do not excite (straight driving only, too slow, too few corners or yaw
+    transients) is REFUSED with the reason, never guessed. A log that cannot be
+    read or has no usable driving is reported and the others are used. The file is
+    written when anything was identified; the exit code is 0 only when every
+    quantity was identified from every log, else 1. Method: docs/identification.md.
+    """
+    from ..identification import IdentifySettings, identify as run_identify
+    from ..io import LogError, load_log, read_channel_map
+
+    try:
+        settings = IdentifySettings(straight_bank=math.radians(straight_bank), ay_max=ay_max)
+    except ValueError as exc:
+        raise click.UsageError(str(exc)) from None
+    if output.suffix.lower() != ".toml":
+        raise click.BadParameter("the output must be a .toml vehicle file", param_hint="-o")
+    cmap = None
+    if channels is not None:
+        try:
+            cmap = read_channel_map(channels)
+        except LogError as exc:
+            click.echo(f"error: {exc}", err=True)
+            sys.exit(1)
+    params = vehicle.params
+    loaded, failed = [], []
+    for path in logs:
+        try:
+            loaded.append(load_log(path, channels=cmap, format=fmt, params=params))
+        except (LogError, ValueError, OSError) as exc:
+            failed.append((path, str(exc)))
+        except Exception as exc:  # never a traceback for one bad file
+            failed.append((path, f"{type(exc).__name__}: {exc}"))
+    for path, why in failed:
+        click.echo(f"FAILED {why}" if why.startswith(str(path)) else f"FAILED {path}: {why}", err=True)
+    if not loaded:
+        click.echo("error: no log could be read; nothing identified", err=True)
+        sys.exit(1)
+    try:
+        result = run_identify(loaded, params, settings)
+    except Exception as exc:  # never a traceback from the command line
+        click.echo(f"error: identification failed: {type(exc).__name__}: {exc}", err=True)
+        sys.exit(1)
+    if not any(r.used for r in result.logs):
+        for r in result.logs:
+            click.echo(f"NOT USED {r.source}: {r.problem}", err=True)
+        click.echo("error: no usable log; nothing identified", err=True)
+        sys.exit(1)
+    if as_json:
+        click.echo(json.dumps(result_json(result, failed), indent=2))
+        for name, why in result.refusals().items():
+            click.echo(f"REFUSED {name}: {why}", err=True)
+    else:
+        click.echo(f"identified from {sum(r.used for r in result.logs)} of {len(logs)} log(s), "
+                   f"base vehicle {vehicle.name}:")
+        click.echo("\n".join(format_result(result)))
+        if result.refusals():
+            click.echo(f"{len(result.refusals())} quantities refused (see REFUSED above)", err=True)
+    identified = result.identified()
+    if not identified:
+        click.echo("error: nothing could be identified from these logs; no file written", err=True)
+        sys.exit(1)
+    used = [str(r.source) for r in result.logs if r.used]
+    what = "Cf, Cr" if "Cf" in identified and "Cr" in identified else "nothing of the [vehicle] table"
+    out = vehicle.replace(
+        name=output.stem, params=result.params,
+        description=f"{vehicle.description or vehicle.name}; {what} identified from logs by roadbank identify",
+        sources=(*vehicle.sources, f"roadbank identify on {len(used)} log(s): {', '.join(used)}"),
+    ).with_identified(identified)
+    try:
+        output.parent.mkdir(parents=True, exist_ok=True)
+        out.to_toml(output)
+    except OSError as exc:
+        click.echo(f"error: cannot write {output}: {exc}", err=True)
+        sys.exit(1)
+    click.echo(f"wrote {output} ({len(identified)} quantities identified)", err=True)
+    sys.exit(0 if result.complete and not failed else 1)

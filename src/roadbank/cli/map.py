@@ -1,0 +1,100 @@
+"""``roadbank map``: a road bank map from logs with GNSS positions."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+from ..io.readers import FORMATS
+from .options import vehicle_option
+
+
+def _origin(ctx, param, value):
+    if value is None:
+        return None
+    try:
+        lat, lon = (float(x) for x in value.split(","))
+    except ValueError:
+        raise click.BadParameter("give LAT,LON in degrees, e.g. 37.72,-122.47") from None
+    return lat, lon
+
+
+@click.command(name="map")
+@click.argument("logs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option("-o", "--output", required=True, type=click.Path(path_type=Path),
+              help="The map table (.parquet): one row per cell and heading sector.")
+@click.option("--geojson", type=click.Path(path_type=Path), default=None, help="Also write the cells as GeoJSON.")
+@click.option("--png", type=click.Path(path_type=Path), default=None, help="Also draw the map (PNG).")
+@click.option("--channels", type=click.Path(path_type=Path), default=None,
+              help="Channel map (TOML) with 'latitude' and 'longitude' channels (docs/io.md).")
+@click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default=None,
+              help="Input format (default: from the suffix / directory layout).")
+@click.option("--estimator", "-e", "estimator", default="pif-modified", show_default=True,
+              help="Estimator whose valid bank estimates are mapped.")
+@click.option("--cell", "cell_m", type=float, default=10.0, show_default=True, help="Cell edge (m).")
+@click.option("--sectors", type=int, default=4, show_default=True,
+              help="Heading sectors per cell (the bank's sign depends on the direction of travel); 1 = none.")
+@click.option("--origin", callback=_origin, default=None, metavar="LAT,LON",
+              help="Origin of the map's plane (deg); default: the first fix rounded to 0.01 deg.")
+@click.option("--chunk-rows", type=int, default=None, help="Rows per streamed chunk (default 50000).")
+@vehicle_option("The estimator is designed for this car.")
+def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, sectors, origin, chunk_rows, vehicle):
+    """Map the road bank: attach each valid bank estimate of LOGS to its GNSS position and aggregate per cell.
+
+    \b
+    roadbank map ../shared/data/comma2k19-example -o bank_map.parquet --geojson map.geojson --png map.png
+    roadbank map drives/ --channels car.toml --cell 5 -o bank_map.parquet
+
+    LOGS are files, log directories, directories of logs or glob patterns, with a
+    position: channel-map 'latitude'/'longitude' roles, comma2k19 (ECEF pose),
+    KITTI oxts, ROS NavSatFix. Columns: cell indices, cell-centre lat/lon, heading
+    sector, count, logs, bank mean/std/min/max (deg, left side up in the sector's
+    heading). A bad log is reported and skipped; exit code 1 if any failed.
+    """
+    from .. import estimators
+    from ..fleet import expand_logs
+    from ..io import LogError, read_channel_map
+    from ..mapping.build import map_logs, write_outputs
+
+    if estimator not in estimators.NAMES:
+        raise click.BadParameter(f"unknown estimator '{estimator}' (choose from {', '.join(estimators.NAMES)})",
+                                 param_hint="--estimator")
+    if output.suffix.lower() not in (".parquet", ".pq"):
+        raise click.BadParameter("the map table must end in .parquet", param_hint="-o")
+    cmap = None
+    if channels is not None:
+        try:
+            cmap = read_channel_map(channels)
+        except LogError as exc:
+            click.echo(f"error: {exc}", err=True)
+            sys.exit(1)
+    paths = expand_logs(logs)
+    if not paths:
+        click.echo(f"error: no logs found in {', '.join(map(str, logs))}", err=True)
+        sys.exit(1)
+    try:
+        with click.progressbar(length=len(paths), label=f"mapping ({estimator})", file=sys.stderr) as bar:
+            bmap, recs = map_logs(paths, estimator, channels=cmap, format=fmt, vehicle=vehicle, cell_m=cell_m,
+                                  sectors=sectors, origin=origin, chunk_rows=chunk_rows,
+                                  on_log=lambda r: bar.update(1))
+    except ValueError as exc:
+        raise click.BadParameter(str(exc)) from None
+    failed = [r for r in recs if r.status != "ok"]
+    for r in failed:
+        click.echo(f"FAILED {r.error}" if r.error.startswith(r.log) else f"FAILED {r.log}: {r.error}", err=True)
+    if bmap is None or len(bmap) == 0:
+        click.echo("error: no valid bank estimate with a position: nothing to map", err=True)
+        sys.exit(1)
+    files = write_outputs(bmap, output, geojson, png, {"estimator": estimator,
+                                                       "logs": ",".join(r.log for r in recs if r.status == "ok")})
+    tab = bmap.table()
+    mapped = sum(r.mapped for r in recs)
+    click.echo(f"{len(tab['ix'])} cell(s) x sector from {mapped} valid estimate(s) of "
+               f"{len(recs) - len(failed)} log(s); bank {tab['bank_mean_deg'].min():.1f} .. "
+               f"{tab['bank_mean_deg'].max():.1f} deg; origin {bmap.projection.lat0_deg:.5f}, "
+               f"{bmap.projection.lon0_deg:.5f}; cell {bmap.cell_m:g} m")
+    for f in files:
+        click.echo(f"wrote {f}", err=True)
+    sys.exit(1 if failed else 0)

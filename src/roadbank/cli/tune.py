@@ -1,0 +1,85 @@
+"""``roadbank tune``: tune a car's estimators on simulated drives and write them to its vehicle file.
+
+Draws a randomised training set of simulated drives for the car (bank steps, superelevated
+curves, lane changes, driving near the tyre limit; plant Cf, Cr, mass and accelerometer
+alignment perturbed), optimises each tunable estimator's weights on it (differential
+evolution, deterministic for ``--seed``), scores them on a separate validation set of road
+and car families the optimiser never sees, and writes ``[tuning.<estimator>]`` and
+``[scores.<estimator>]`` into the output TOML. See docs/estimators.md ("Tuning").
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import click
+
+from .options import vehicle_option
+
+
+@click.command()
+@vehicle_option("Its parameters design the estimators; its sensors and plant data shape the drives.")
+@click.option("-o", "--output", "out", required=True, type=click.Path(dir_okay=False, path_type=Path),
+              help="Vehicle file to write (the input car plus the tuned [tuning] and [scores] tables).")
+@click.option("--budget", type=click.IntRange(min=1), default=None,
+              help="Objective evaluations per estimator (default 240: about 2 min on 2 cores).")
+@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
+              help="Seed of the drive sets and the optimiser (same seed, same result).")
+@click.option("--estimators", "names", default="", help="Comma-separated estimators to tune "
+              "(default: pif-modified, kalman, pio-modified, dfc).")
+@click.option("--jobs", "-j", type=click.IntRange(min=1), default=2, show_default=True,
+              help="Local worker processes (ignored with --scheduler).")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Dask scheduler address (tcp://host:8786): evaluate there instead of locally.")
+@click.option("--train-drives", type=click.IntRange(min=4), default=None, help="Drives in the training set (48).")
+@click.option("--validation-drives", type=click.IntRange(min=4), default=None,
+              help="Drives in the validation set (40).")
+def tune(vehicle, out, budget, seed, names, jobs, scheduler, train_drives, validation_drives):
+    """Tune the estimators for a car (--vehicle) and write the result to a vehicle file."""
+    from ..tuning import pipeline
+    from ..tuning.spaces import TUNABLE
+
+    chosen = tuple(n.strip() for n in names.split(",") if n.strip()) or TUNABLE
+    bad = [n for n in chosen if n not in TUNABLE]
+    if bad:
+        raise click.BadParameter(f"cannot tune {', '.join(bad)} (tunable: {', '.join(TUNABLE)})",
+                                 param_hint="--estimators")
+    budget = budget or pipeline.DEFAULT_BUDGET
+    t0 = time.perf_counter()
+    bar = click.progressbar(length=budget * len(chosen), label=f"tuning {', '.join(chosen)}",
+                            file=click.get_text_stream("stderr"), show_pos=True)
+    last = [0]
+
+    def progress(stage, done, total):
+        if stage == "tuning":
+            bar.update(done - last[0])
+            last[0] = done
+        else:
+            click.echo(f"{stage}: {total} drives", err=True)
+
+    try:
+        with bar:
+            outcome = pipeline.tune_car(
+                vehicle.params, vehicle.to_plant(), vehicle.sensors.to_sim(), names=chosen, budget=budget,
+                seed=seed, n_train=train_drives or pipeline.DEFAULT_TRAIN,
+                n_validation=validation_drives or pipeline.DEFAULT_VALIDATION, jobs=jobs, scheduler=scheduler,
+                current=dict(vehicle.tuning), progress=progress)
+    except (ConnectionError, RuntimeError) as exc:
+        raise click.ClickException(str(exc)) from None
+    tuned = vehicle
+    for name in chosen:
+        tuned = tuned.with_tuning(name, outcome.options[name], outcome.scores[name])
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tuned.to_toml(out)
+    except OSError as exc:
+        raise click.ClickException(f"cannot write {out}: {exc}") from None
+
+    click.echo(f"\nValidation set ({outcome.validation[chosen[0]].n} drives, roads and cars not used "
+               "for tuning): bank error (deg)")
+    click.echo(f"{'estimator':24s} {'median RMS':>10s} {'p95 RMS':>8s} {'mean max':>9s}")
+    for name, s in sorted(outcome.validation.items(), key=lambda kv: kv[1].median_rms):
+        mark = " (tuned)" if name in chosen else ""
+        click.echo(f"{name + mark:24s} {s.median_rms:10.3f} {s.p95_rms:8.3f} {s.mean_max:9.3f}")
+    click.echo(f"\nwrote {out} ({time.perf_counter() - t0:.0f} s)")

@@ -1,0 +1,235 @@
+"""What an exported estimator is made of: its speed-scheduled tables and scalars.
+
+:func:`export_design` reads a designed :class:`~roadbank.estimators.base.Estimator`
+(any estimator on the ``lpv`` kernel: a linear observer scheduled on speed) and
+returns an :class:`ExportDesign`: the table rows exactly as the Python kernel
+interpolates them, the roll model and the sample-handling constants. Nothing
+here depends on particular weights: a re-tuned estimator or a new variant on
+the same kernel exports the same way.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+#: inputs of every observer, in table order: eta = [delta_f, ay, r]
+NETA = 3
+
+#: why an estimator on another kernel cannot be exported (kernel -> reason)
+_NOT_LPV_REASON = {
+    "dfc": "DFC gates its estimate by a nonlinear function of the dynamic-factor indicator "
+           "(|DFC| / a_ref): it is not a speed-scheduled linear observer",
+    "riccati": "this PIF variant integrates the time-varying Riccati equation (paper eq 43) at "
+               "every sample, a 6x6 Hamiltonian solve per substep, not a gain schedule; export the "
+               "steady-state variant (variant='steady', the default), which is what an ECU runs",
+}
+
+
+class NotExportable(ValueError):
+    """The estimator's runtime is not a speed-scheduled linear observer."""
+
+
+@dataclass(frozen=True)
+class ExportDesign:
+    """Everything the generated C needs, in SI units.
+
+    Attributes
+    ----------
+    name : str
+        Estimator name (e.g. ``"pif-modified"``); ``ident`` is its C identifier.
+    n : int
+        Observer states; ``nr`` roll-model states (0 static/none, 2 dynamic).
+    v0, dv : float
+        First speed (m/s) and spacing (m/s) of the schedule's grid.
+    table : array (ng, n*n + 3n + n + 3 + 3n)
+        One row per grid speed: F (n x n), G (n x 3), H (n), D (3), J (n x 3),
+        row-major; ``xi' = F xi + G eta``, ``w = H xi + D eta``, ``J = -F^-1 G``
+        (the equilibrium used at a (re)start).
+    roll_F, roll_G, roll_H, roll_D, roll_J : arrays
+        Roll model ``z' = F z + G ay``, ``phi = H z + D ay``, ``J = -F^-1 G``.
+    uses : tuple of 3 bool
+        Which of ``delta_f, ay, r`` the observer reads (others may be NaN).
+    v_min, max_substep, max_gap, max_angle, wmax : float
+        m/s, s, s, rad and ``sin(max_angle)``.
+    rate : float
+        Nominal sample rate (Hz) the module is generated for.
+    provenance : dict
+        Estimator settings and vehicle parameters, for the generated header.
+    """
+
+    name: str
+    ident: str
+    n: int
+    nr: int
+    v0: float
+    dv: float
+    table: np.ndarray
+    roll_F: np.ndarray
+    roll_G: np.ndarray
+    roll_H: np.ndarray
+    roll_D: float
+    roll_J: np.ndarray
+    uses: tuple
+    v_min: float
+    max_substep: float
+    max_gap: float
+    max_angle: float
+    wmax: float
+    rate: float
+    state_names: tuple = ()
+    provenance: dict = field(default_factory=dict)
+    #: fixed-rate tables (``Estimator.discrete_tables(1/rate)``) or None (general path only)
+    discrete: dict | None = None
+    #: relative tolerance on the interval for the fixed-rate tables
+    dt_tol: float = 0.0
+
+    @property
+    def ng(self) -> int:
+        """Number of grid speeds (table rows)."""
+        return int(self.table.shape[0])
+
+    @property
+    def nk(self) -> int:
+        """Floats per table row."""
+        return int(self.table.shape[1])
+
+    @property
+    def nsub_max(self) -> int:
+        """Most trapezoidal substeps one sample can need (a step never exceeds ``max_gap``)."""
+        return max(1, int(math.ceil(self.max_gap / self.max_substep - 1e-9)))
+
+    @property
+    def nsub_nominal(self) -> int:
+        """Substeps per sample at the nominal rate."""
+        return max(1, int(math.ceil((1.0 / self.rate) / self.max_substep - 1e-9)))
+
+    def table_bytes(self, float32: bool = False) -> int:
+        """Flash taken by the ``static const`` tables (bytes): schedule plus roll constants."""
+        nroll = self.roll_F.size + self.roll_G.size + self.roll_H.size + 1 + self.roll_J.size
+        if self.discrete is not None:
+            x = self.discrete
+            nroll += x["Phi_r"].size + x["Gam0_r"].size + x["Gam1_r"].size
+            nroll += x["Phi"].size + x["Gam0"].size + x["Gam1"].size
+        return (self.table.size + nroll) * (4 if float32 else 8)
+
+    def state_bytes(self, float32: bool = False) -> int:
+        """Size (bytes) of the generated state struct where ``double`` is 8-byte aligned
+        (x86-64, ARM EABI): int flag, double time, then reals."""
+        r = 4 if float32 else 8
+        fields = [(4, 4), (8, 8), (r, r), (3 * r, r)] + ([(self.n * r, r)] if self.n else []) \
+            + ([(self.nr * r, r)] if self.nr else []) + [(r, r)] * 5
+        size = 0
+        for nbytes, align in fields:
+            size = -(-size // align) * align + nbytes
+        return -(-size // 8) * 8
+
+    def fingerprint(self) -> str:
+        """SHA-256 (first 16 hex digits) of the tables and constants: identifies a design."""
+        h = hashlib.sha256()
+        for a in (self.table, self.roll_F, self.roll_G, self.roll_H, self.roll_J,
+                  np.array([self.roll_D, self.v0, self.dv, self.v_min, self.max_substep,
+                            self.max_gap, self.wmax], float), np.array(self.uses, float),
+                  *([] if self.discrete is None else
+                    [np.asarray(self.discrete[k], float) for k in ("Phi", "Gam0", "Gam1", "Phi_r", "Gam0_r",
+                                                                   "Gam1_r", "dt")])):
+            h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+        return h.hexdigest()[:16]
+
+
+def c_identifier(name: str) -> str:
+    """C identifier of an estimator name: ``"pif-modified"`` -> ``"pif_modified"``."""
+    ident = re.sub(r"[^0-9A-Za-z_]", "_", name).strip("_").lower()
+    if not ident:
+        raise ValueError(f"estimator name {name!r} has no usable characters for a C identifier")
+    return ident if not ident[0].isdigit() else f"e_{ident}"
+
+
+def check_exportable(est) -> None:
+    """Raise :class:`NotExportable` (saying why) unless ``est`` runs on the ``lpv`` kernel."""
+    from ..estimators.base import Estimator
+
+    if not isinstance(est, Estimator):
+        raise TypeError(f"expected a roadbank Estimator, got {type(est).__name__}")
+    kernel = getattr(est, "kernel", None)
+    if kernel != "lpv":
+        why = _NOT_LPV_REASON.get(kernel, f"its runtime is the {kernel!r} kernel, not a "
+                                          "speed-scheduled linear observer")
+        raise NotExportable(f"{est.name}: not exportable: {why}")
+
+
+def export_design(est, rate: float, module_name: str | None = None, *, discrete: bool = False) -> ExportDesign:
+    """Read the tables of a designed estimator (see :class:`ExportDesign`).
+
+    Parameters
+    ----------
+    est : Estimator
+        A designed estimator on the ``lpv`` kernel.
+    rate : float
+        Nominal sample rate (Hz) of the target.
+    module_name : str, optional
+        Name of the C module (files and symbols ``roadbank_<module_name>_*``); default
+        the estimator's name. Two designs of one estimator in one program need two names.
+    discrete : bool
+        Add the fixed-rate tables for ``rate`` (the kernels' fixed-rate path,
+        ``Estimator.discrete_tables``): samples ``1/rate`` apart then cost one small
+        matrix update; other intervals, gaps and restarts take the general path.
+
+    Raises
+    ------
+    NotExportable
+        For estimators whose runtime is not a scheduled linear observer.
+    ValueError
+        For a bad rate or tables that are not finite.
+    """
+    check_exportable(est)
+    if not (math.isfinite(rate) and rate > 0):
+        raise ValueError(f"rate must be a positive number of Hz, got {rate}")
+    n = int(est._nstate)
+    # the continuous-time schedule (the kernels' general path); estimators with a
+    # fixed-rate path keep it apart from the discrete tables appended for one rate
+    table = np.array(getattr(est, "_tab_cont", est._tab), dtype=np.float64, copy=True)
+    nk = n * n + NETA * n + n + NETA + NETA * n
+    if table.ndim == 2 and table.shape[1] > nk and getattr(est, "_tab_cont", None) is None:
+        table = table[:, :nk]
+    if table.ndim != 2 or table.shape[1] != nk:
+        raise NotExportable(f"{est.name}: not exportable: its table rows have {table.shape[-1]} "
+                            f"entries, the scheduled-observer layout needs {nk} for {n} states")
+    if not np.all(np.isfinite(table)):
+        raise ValueError(f"{est.name}: the designed tables are not finite; cannot export")
+    vgrid = np.asarray(est.vgrid, float)
+    if len(vgrid) < 2:
+        raise ValueError(f"{est.name}: the speed grid needs at least two points")
+    F, G, H, D = est._roll
+    nr = F.shape[0]
+    # the same expressions as Estimator._build_cfg, so the constants are the same bits
+    J = -np.linalg.solve(F, G).ravel() if nr else np.zeros(0)
+    disc, dt_tol = None, 0.0
+    if discrete:
+        if not hasattr(est, "discrete_tables"):
+            raise NotExportable(f"{est.name}: no fixed-rate tables: this roadbank has no fixed-rate "
+                                "path (Estimator.discrete_tables); export the general path")
+        from ..estimators import layout
+
+        disc = est.discrete_tables(1.0 / rate)
+        dt_tol = float(layout.DT_REL_TOL)
+    p = est.params
+    provenance = {"estimator": repr(est), "class": type(est).__name__,
+                  "settings": {k: v for k, v in vars(est).items()
+                               if not k.startswith("_") and k not in ("vgrid", "params")},
+                  "vehicle": {k: getattr(p, k) for k in p.__dataclass_fields__}
+                  if hasattr(p, "__dataclass_fields__") else repr(p)}
+    return ExportDesign(
+        name=est.name, ident=c_identifier(module_name or est.name), n=n, nr=int(nr),
+        v0=float(vgrid[0]), dv=float(vgrid[1] - vgrid[0]), table=table,
+        roll_F=np.array(F, float), roll_G=np.array(G, float).ravel(), roll_H=np.array(H, float).ravel(),
+        roll_D=float(np.ravel(D)[0]), roll_J=np.array(J, float),
+        uses=tuple(bool(u) for u in est.uses), v_min=float(est.v_min),
+        max_substep=float(est.max_substep), max_gap=float(est.max_gap),
+        max_angle=float(est.max_angle), wmax=float(np.sin(est.max_angle)), rate=float(rate),
+        state_names=tuple(getattr(est, "state_names", ())), provenance=provenance,
+        discrete=disc, dt_tol=dt_tol)

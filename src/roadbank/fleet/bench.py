@@ -1,0 +1,220 @@
+"""Long-log and fleet benchmarks: peak memory and end-to-end throughput of ``estimate`` on generated logs.
+
+Run ``python -m roadbank.fleet.bench [--hours 24] [--formats parquet,mdf4] [--peer-hours 2]
+[--fleet 200] [--json]``; results are recorded in docs/io.md ("Long logs" and "Fleets").
+
+* :func:`write_long_log` -- a 100 Hz log of any length: a simulated 25 s drive on the banked
+  test track (``track-lane-change``) tiled end to end on one continuous clock, written
+  chunk by chunk (Parquet row groups / MDF4 blocks), so making it needs little memory too.
+* :func:`measure` -- runs :func:`roadbank.fleet.estimate_log` on it in a fresh process and
+  reads that process's peak resident set size (``wait4`` rusage) and wall times: import,
+  estimator design, and the end-to-end run (read + resample + estimate + write).
+  The peer is the whole-log path (``load_log`` + one ``run()`` + ``write_table``) on a
+  shorter log, measured the same way.
+* :func:`fleet_speedup` -- many small logs with 1 and 2 worker processes.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+COLUMNS = ("t", "vx", "ay", "r", "delta_f")
+
+
+def _base_drive(scenario: str = "track-lane-change", seed: int = 0) -> dict[str, np.ndarray]:
+    from ..sim import run_scenario
+    s = run_scenario(scenario, seed=seed).signals
+    return {"vx": s.vx, "ay": s.ay, "r": s.r, "delta_f": s.delta_f}
+
+
+def write_long_log(path, hours: float = 24.0, rate_hz: float = 100.0, chunk_s: float = 1800.0) -> int:
+    """Write a ``hours``-long log at ``rate_hz`` to ``path`` (.parquet or .mf4); returns the sample count.
+
+    Columns / channels ``t`` (s), ``vx`` (m/s), ``ay`` (m/s^2), ``r`` (rad/s), ``delta_f`` (rad):
+    roadbank's default channel map.
+    """
+    p = Path(path)
+    base = _base_drive()
+    nb = len(base["vx"])
+    total = int(round(hours * 3600.0 * rate_hz))
+    step = int(chunk_s * rate_hz)
+    p.parent.mkdir(parents=True, exist_ok=True)
+
+    def chunk(k0):
+        k = np.arange(k0, min(k0 + step, total))
+        return {"t": k / rate_hz, **{c: v[k % nb] for c, v in base.items()}}
+
+    if p.suffix.lower() == ".parquet":
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+        writer = None
+        for k0 in range(0, total, step):
+            tab = pa.table(chunk(k0))
+            writer = writer or pq.ParquetWriter(p, tab.schema)
+            writer.write_table(tab, row_group_size=step)
+        writer.close()
+    elif p.suffix.lower() in (".mf4", ".mdf"):
+        from asammdf import MDF, Signal
+        mdf = MDF(version="4.10")
+        for j, k0 in enumerate(range(0, total, step)):
+            c = chunk(k0)
+            if j == 0:
+                mdf.append([Signal(c[n], c["t"], name=n) for n in COLUMNS[1:]], common_timebase=True)
+            else:
+                mdf.extend(0, [(c["t"], None)] + [(c[n], None) for n in COLUMNS[1:]])
+        mdf.save(p, overwrite=True)
+        mdf.close()
+    else:
+        raise ValueError(f"{p}: write .parquet or .mf4")
+    return total
+
+
+_CHILD = r"""
+import json, sys, time
+t0 = time.perf_counter()
+from roadbank import estimators
+from roadbank.fleet import estimate_log
+mode, log, out, est, chunk = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], int(sys.argv[5])
+t1 = time.perf_counter()
+estimators.make(est)
+t2 = time.perf_counter()
+res = {"import_s": t1 - t0, "design_s": t2 - t1, "samples": 0, "run_s": 0.0}
+if mode == "stream":
+    s = estimate_log(log, out, [est], chunk_rows=chunk)
+    if s.status != "ok":
+        raise SystemExit(s.error)
+    res.update(samples=s.samples, run_s=s.seconds, chunks=s.chunks)
+elif mode == "whole":
+    from roadbank.io import load_log
+    from roadbank.io.writers import estimate_table, write_table
+    t3 = time.perf_counter()
+    lg = load_log(log)
+    e = estimators.make(est).run(lg.signals)
+    write_table(out, estimate_table(lg.signals.t, [e]))
+    res.update(samples=len(lg), run_s=time.perf_counter() - t3, chunks=1)
+print(json.dumps(res))
+"""
+
+
+def measure(mode: str, log, out, estimator: str = "pif-modified", chunk_rows: int = 50_000) -> dict:
+    """Run one measurement in a fresh Python process.
+
+    Parameters
+    ----------
+    mode : {"stream", "whole", "baseline"}
+        ``stream``: :func:`roadbank.fleet.estimate_log` (chunks, incremental output);
+        ``whole``: load_log + run + write_table; ``baseline``: imports and the estimator design only.
+
+    Returns
+    -------
+    dict
+        ``peak_rss_mb`` (MiB, the child's ru_maxrss), ``samples``, ``run_s`` (s, read + estimate +
+        write), ``samples_per_s``, ``import_s``, ``design_s``, ``chunks``.
+    """
+    proc = subprocess.Popen([sys.executable, "-c", _CHILD, mode, str(log), str(out), estimator, str(chunk_rows)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=dict(os.environ, OMP_NUM_THREADS="1",
+                                                                                      OPENBLAS_NUM_THREADS="1"))
+    _, status, usage = os.wait4(proc.pid, 0)
+    out_text = proc.stdout.read().decode()
+    err = proc.stderr.read().decode()
+    proc.stdout.close()
+    proc.stderr.close()
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    if proc.returncode != 0:
+        raise RuntimeError(f"benchmark child ({mode}) failed: {err.strip()[-2000:]}")
+    res = json.loads(out_text.strip().splitlines()[-1])
+    res["peak_rss_mb"] = usage.ru_maxrss / 1024.0
+    res["samples_per_s"] = res["samples"] / res["run_s"] if res["run_s"] > 0 else float("nan")
+    res["mode"] = mode
+    return res
+
+
+def fleet_speedup(n_logs: int = 200, seconds: float = 60.0, workers=(1, 2), estimator: str = "pif-modified",
+                  bad_every: int = 20, workdir=None) -> list[dict]:
+    """Wall time of ``run_fleet`` on ``n_logs`` logs of ``seconds`` (100 Hz, every ``bad_every``-th corrupt).
+
+    Each worker count runs in a fresh output directory; Dask start-up (cluster + warm-up) is
+    reported apart from the processing wall time.
+    """
+    from .run import run_fleet
+    work = Path(workdir or tempfile.mkdtemp(prefix="roadbank-fleet-"))
+    logs = work / "logs"
+    logs.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for i in range(n_logs):
+        p = logs / f"log{i:04d}.parquet"
+        if not p.exists():
+            if bad_every and i % bad_every == bad_every - 1:
+                p.write_bytes(b"PAR1 truncated")
+            else:
+                write_long_log(p, hours=seconds / 3600.0, chunk_s=seconds)
+        paths.append(p)
+    rows = []
+    for w in workers:
+        t0 = time.perf_counter()
+        res = run_fleet(paths, work / f"out{w}", [estimator], workers=w)
+        total = time.perf_counter() - t0
+        rows.append({"workers": w, "logs": n_logs, "failed": len(res.failed), "wall_s": res.wall_s,
+                     "total_s": total, "logs_per_s": n_logs / res.wall_s})
+    return rows
+
+
+def main(argv=None) -> int:
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="python -m roadbank.fleet.bench", description=__doc__.split("\n")[0])
+    ap.add_argument("--hours", type=float, default=24.0)
+    ap.add_argument("--peer-hours", type=float, default=2.0)
+    ap.add_argument("--formats", default="parquet,mdf4")
+    ap.add_argument("--estimator", default="pif-modified")
+    ap.add_argument("--chunk-rows", type=int, default=50_000)
+    ap.add_argument("--fleet", type=int, default=0, help="also time N small logs with 1 and 2 workers")
+    ap.add_argument("--workdir", default=None)
+    ap.add_argument("--json", action="store_true")
+    a = ap.parse_args(argv)
+    work = Path(a.workdir or tempfile.mkdtemp(prefix="roadbank-bench-"))
+    results = {"baseline": measure("baseline", "-", "-", a.estimator)}
+    for fmt in a.formats.split(","):
+        suf = {"parquet": ".parquet", "mdf4": ".mf4"}[fmt]
+        log = work / f"long-{a.hours:g}h{suf}"
+        if not log.exists():
+            t = time.perf_counter()
+            write_long_log(log, a.hours)
+            print(f"wrote {log} ({log.stat().st_size / 2**20:.0f} MiB) in {time.perf_counter() - t:.0f} s",
+                  file=sys.stderr)
+        results[f"{fmt}-stream"] = measure("stream", log, work / f"out-{fmt}.parquet", a.estimator, a.chunk_rows)
+        peer = work / f"long-{a.peer_hours:g}h{suf}"
+        if a.peer_hours > 0:
+            if not peer.exists():
+                write_long_log(peer, a.peer_hours)
+            results[f"{fmt}-whole-{a.peer_hours:g}h"] = measure("whole", peer, work / f"whole-{fmt}.parquet",
+                                                                a.estimator)
+            results[f"{fmt}-stream-{a.peer_hours:g}h"] = measure("stream", peer, work / f"out2-{fmt}.parquet",
+                                                                 a.estimator, a.chunk_rows)
+    if a.fleet:
+        results["fleet"] = fleet_speedup(a.fleet, estimator=a.estimator, workdir=work / "fleet")
+    if a.json:
+        print(json.dumps(results, indent=1))
+    else:
+        for k, r in results.items():
+            if k == "fleet":
+                for row in r:
+                    print(f"fleet {row['workers']} worker(s): {row['logs']} logs in {row['wall_s']:.1f} s "
+                          f"({row['logs_per_s']:.1f} logs/s), {row['failed']} failed")
+                continue
+            print(f"{k:>22}: peak RSS {r['peak_rss_mb']:.0f} MiB, {r['samples']} samples in {r['run_s']:.2f} s "
+                  f"= {r['samples_per_s'] / 1e6:.2f} M samples/s (import {r['import_s']:.1f} s, design "
+                  f"{r['design_s']:.1f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,201 @@
+"""One log, streamed: read in chunks, estimate with continued state, write incrementally, summarise."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+#: columns of the summary table, in order (see LogSummary)
+SUMMARY_COLUMNS = ("log", "status", "error", "output", "estimator", "samples", "duration_s", "valid_share",
+                   "bank_mean_deg", "bank_min_deg", "bank_max_deg", "chunks", "seconds", "warnings")
+
+
+@dataclass
+class LogSummary:
+    """What :func:`estimate_log` did with one log (one row of the fleet summary table).
+
+    Attributes
+    ----------
+    log : str
+        The log's path.
+    status : str
+        "ok" or "error".
+    error : str
+        The reason (file, channel, problem) when status is "error".
+    output : str
+        The table written (empty on error: a partial file is removed).
+    estimator : str
+        The estimator the statistics below are of (the first one asked for).
+    samples : int
+        Samples on the estimator grid.
+    duration_s : float
+        Last minus first time stamp (s).
+    valid_share : float
+        Share of samples the estimator flagged valid (0..1).
+    bank_mean_deg, bank_min_deg, bank_max_deg : float
+        Road bank ``phi_b`` over the valid samples (deg; NaN if none).
+    chunks : int
+        Chunks the log was streamed in.
+    seconds : float
+        Wall time to read, estimate and write (s).
+    warnings : str
+        Reader warnings, "; "-separated.
+    """
+
+    log: str
+    status: str = "ok"
+    error: str = ""
+    output: str = ""
+    estimator: str = ""
+    samples: int = 0
+    duration_s: float = math.nan
+    valid_share: float = math.nan
+    bank_mean_deg: float = math.nan
+    bank_min_deg: float = math.nan
+    bank_max_deg: float = math.nan
+    chunks: int = 0
+    seconds: float = 0.0
+    warnings: str = ""
+    kept: object = field(default=None, repr=False, compare=False)
+
+    def row(self) -> dict:
+        """The summary-table row (every column of :data:`SUMMARY_COLUMNS`)."""
+        d = asdict(self)
+        d.pop("kept")
+        return {k: d[k] for k in SUMMARY_COLUMNS}
+
+
+class _BankStats:
+    """Running count / valid count / sum / min / max of phi_b over valid samples."""
+
+    def __init__(self):
+        self.n = self.nvalid = 0
+        self.sum = 0.0
+        self.min, self.max = math.inf, -math.inf
+        self.t0 = self.t1 = math.nan
+
+    def add(self, est) -> None:
+        v = est.phi_b[est.valid]
+        self.n += len(est.t)
+        if len(est.t):
+            self.t0 = est.t[0] if math.isnan(self.t0) else self.t0
+            self.t1 = est.t[-1]
+        if len(v):
+            self.nvalid += len(v)
+            self.sum += float(v.sum())
+            self.min = min(self.min, float(v.min()))
+            self.max = max(self.max, float(v.max()))
+
+    def fill(self, s: LogSummary) -> None:
+        s.samples = self.n
+        s.duration_s = float(self.t1 - self.t0) if self.n else math.nan
+        s.valid_share = self.nvalid / self.n if self.n else math.nan
+        if self.nvalid:
+            s.bank_mean_deg = math.degrees(self.sum / self.nvalid)
+            s.bank_min_deg = math.degrees(self.min)
+            s.bank_max_deg = math.degrees(self.max)
+
+
+def concat_estimates(parts: list):
+    """One :class:`~roadbank.signals.Estimate` from consecutive chunk estimates."""
+    from ..signals import Estimate
+
+    first = parts[0]
+    states = {k: np.concatenate([p.states[k] for p in parts]) for k in first.states}
+    return Estimate(first.name, np.concatenate([p.t for p in parts]), np.concatenate([p.w for p in parts]),
+                    np.concatenate([p.theta for p in parts]), np.concatenate([p.phi_b for p in parts]),
+                    np.concatenate([p.valid for p in parts]), states)
+
+
+def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, format: str | None = None,
+                 params=None, vehicle=None, chunk_rows: int | None = None, metadata: dict | None = None,
+                 keep: bool = False, plot=None) -> LogSummary:
+    """Estimate the bank on one log, streamed in chunks, and write the result table incrementally.
+
+    Parameters
+    ----------
+    path : path-like
+        The log (any format :func:`roadbank.io.load_log` reads; Parquet and MDF4 are streamed).
+    output : path-like
+        ``.csv`` or ``.parquet`` result table: ``t`` (s), ``<est>.theta``, ``<est>.phi_b`` (rad),
+        ``<est>.valid``, [``reference_roll`` (rad)] (see :mod:`roadbank.io.writers`).
+    estimators : sequence of str
+        Estimator names (:data:`roadbank.estimators.NAMES`); the first one is summarised.
+    channels, format, params
+        As for :func:`roadbank.io.load_log`.
+    vehicle : roadbank.vehicle.Vehicle, optional
+        Builds the estimators (its parameters and tuning) and supplies ``params``.
+    chunk_rows : int, optional
+        Rows per chunk (default :data:`roadbank.io.stream.CHUNK_ROWS`).
+    metadata : dict, optional
+        Written into the Parquet schema.
+    keep : bool
+        Also keep the whole series in ``summary.kept`` = ``(t, [Estimate], reference_roll, truth)``
+        (memory then grows with the log).
+    plot : path-like, optional
+        Draw theta / phi_b against time into this PNG (keeps the whole series).
+
+    Returns
+    -------
+    LogSummary
+        Never raises for a bad log: ``status = "error"`` and ``error`` say why,
+        and no partial output file is left behind.
+    """
+    from .. import estimators as E
+    from ..io import LogError
+    from ..io.stream import CHUNK_ROWS, stream_log
+    from ..io.writers import TableWriter, estimate_table
+
+    t_start = time.perf_counter()
+    names = list(estimators)
+    summary = LogSummary(log=str(path), estimator=names[0] if names else "")
+    writer = None
+    try:
+        if vehicle is not None:
+            params = vehicle.params
+            ests = [vehicle.make(n) for n in names]
+        else:
+            ests = [E.make(n, params=params) for n in names]
+        keep = keep or plot is not None
+        stats = _BankStats()
+        warns: list[str] = []
+        kept = {"t": [], "est": [[] for _ in ests], "roll": [], "truth": {}}
+        writer = TableWriter(output, metadata=metadata)
+        for k, chunk in enumerate(stream_log(path, channels=channels, format=format, params=params,
+                                             chunk_rows=chunk_rows or CHUNK_ROWS)):
+            warns += chunk.warnings
+            results = [e.run(chunk.signals, reset=(k == 0)) for e in ests]
+            writer.write(estimate_table(chunk.signals.t, results, chunk.reference_roll))
+            stats.add(results[0])
+            summary.chunks += 1
+            if keep:
+                kept["t"].append(chunk.signals.t)
+                for lst, r in zip(kept["est"], results):
+                    lst.append(r)
+                if chunk.reference_roll is not None:
+                    kept["roll"].append(chunk.reference_roll)
+                for c, v in chunk.truth.items():
+                    kept["truth"].setdefault(c, []).append(v)
+        summary.output = str(writer.close())
+        stats.fill(summary)
+        summary.warnings = "; ".join(warns)
+        if keep:
+            summary.kept = (np.concatenate(kept["t"]), [concat_estimates(x) for x in kept["est"]],
+                            np.concatenate(kept["roll"]) if kept["roll"] else None,
+                            {c: np.concatenate(v) for c, v in kept["truth"].items()})
+        if plot is not None:
+            from ..report.timeseries import plot_estimates
+            t, results, roll, truth = summary.kept
+            plot_estimates(plot, t, results, roll, title=str(path), truth=truth)
+    except (LogError, ValueError, OSError) as exc:
+        summary.status, summary.error = "error", str(exc)
+    except Exception as exc:  # never a traceback for one bad file
+        summary.status, summary.error = "error", f"{type(exc).__name__}: {exc}"
+    if summary.status == "error" and writer is not None:
+        writer.abort()
+    summary.seconds = time.perf_counter() - t_start
+    return summary

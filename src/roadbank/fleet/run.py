@@ -1,0 +1,257 @@
+"""Many logs: in-process or on dask.distributed, a summary table appended as each log finishes.
+
+Layout of an output directory::
+
+    OUTDIR/<stem>.bank.parquet   one result table per log (or .csv)
+    OUTDIR/summary.csv           one row per finished log (LogSummary columns), appended and
+                                 flushed the moment the log finishes
+
+``resume=True`` reads ``summary.csv`` and skips every log whose row says
+``ok`` and whose output file exists; logs that failed are tried again (a fixed
+file then goes through). A log's output name depends only on the sorted list of
+logs, so it is the same on every resume.
+"""
+
+from __future__ import annotations
+
+import csv
+import glob
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .process import SUMMARY_COLUMNS, LogSummary, estimate_log
+
+SUMMARY = "summary.csv"
+#: suffixes of log files picked up when a directory is given
+LOG_SUFFIXES = {".csv", ".parquet", ".pq", ".mf4", ".mdf", ".blf", ".asc", ".trc", ".log", ".bag", ".mcap"}
+
+
+def _is_log_dir(p: Path) -> bool:
+    """A directory that is itself one log (comma2k19 segment, ROS 2 bag, KITTI drive)."""
+    from ..io import detect_format
+    from ..io.errors import LogError
+    try:
+        detect_format(p)
+        return True
+    except LogError:
+        return False
+
+
+def expand_logs(args) -> list[Path]:
+    """Log paths from command-line arguments: files, log directories, directories of logs, glob patterns.
+
+    A directory that is not itself a log (comma2k19 segment, ROS 2 bag, KITTI
+    drive) contributes its files with a log suffix (:data:`LOG_SUFFIXES`) and
+    its log sub-directories, recursively. A pattern with ``*``, ``?`` or ``[``
+    that is not an existing path is expanded (``**`` recursive). Sorted, unique.
+    """
+    out: list[Path] = []
+    for a in args:
+        p = Path(a)
+        if not p.exists() and any(ch in str(a) for ch in "*?["):
+            out += [Path(x) for x in sorted(glob.glob(str(a), recursive=True))]
+        elif p.is_dir() and not _is_log_dir(p):
+            stack = [p]
+            while stack:
+                d = stack.pop()
+                for c in sorted(d.iterdir()):
+                    if c.is_dir():
+                        (out.append(c) if _is_log_dir(c) else stack.append(c))
+                    elif c.suffix.lower() in LOG_SUFFIXES and not c.name.endswith((".bank.csv", ".bank.parquet")) \
+                            and c.name != SUMMARY:
+                        out.append(c)
+        else:
+            out.append(p)
+    return sorted(dict.fromkeys(out))
+
+
+def output_names(paths: list[Path], suffix: str) -> dict[Path, str]:
+    """``<stem>.bank.<suffix>`` per log, made unique in the order of ``paths``."""
+    used: set[str] = set()
+    names = {}
+    for p in paths:
+        stem = p.stem if p.is_file() else p.name
+        s, k = stem, 1
+        while s in used:
+            k += 1
+            s = f"{stem}-{k}"
+        used.add(s)
+        names[p] = f"{s}.bank.{suffix}"
+    return names
+
+
+def read_summary(outdir) -> list[dict]:
+    """Rows of ``OUTDIR/summary.csv`` (empty list if there is none)."""
+    f = Path(outdir) / SUMMARY
+    if not f.exists():
+        return []
+    with open(f, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+class _SummaryFile:
+    """``summary.csv``, appended row by row and flushed at once."""
+
+    def __init__(self, outdir: Path, resume: bool):
+        self.path = outdir / SUMMARY
+        new = not (resume and self.path.exists())
+        self.fh = open(self.path, "w" if new else "a", newline="")
+        self.w = csv.DictWriter(self.fh, fieldnames=list(SUMMARY_COLUMNS))
+        if new:
+            self.w.writeheader()
+            self.fh.flush()
+
+    def add(self, s: LogSummary) -> None:
+        row = s.row()
+        row = {k: (f"{v:.6g}" if isinstance(v, float) and not math.isnan(v) else
+                   ("" if isinstance(v, float) else v)) for k, v in row.items()}
+        self.w.writerow(row)
+        self.fh.flush()
+
+    def close(self):
+        self.fh.close()
+
+
+@dataclass
+class FleetResult:
+    """What :func:`run_fleet` did.
+
+    Attributes
+    ----------
+    summaries : list of LogSummary
+        One per log processed by this call, in completion order.
+    skipped : list of str
+        Logs skipped because a previous call finished them (resume).
+    workers : int
+        Worker processes used (1: in-process, no Dask).
+    wall_s : float
+        Seconds from the first log started to the last one finished.
+    """
+
+    summaries: list = field(default_factory=list)
+    skipped: list = field(default_factory=list)
+    workers: int = 1
+    wall_s: float = 0.0
+
+    @property
+    def failed(self) -> list[LogSummary]:
+        return [s for s in self.summaries if s.status != "ok"]
+
+
+def _warm(names, params, vehicle=None):
+    """Build the estimators once on a worker (loads the compiled kernels and the designs)."""
+    from .. import estimators as E
+    for n in names:
+        vehicle.make(n) if vehicle is not None else E.make(n, params=params)
+    return True
+
+
+def run_fleet(logs, outdir, estimators=("pif-modified",), *, channels=None, format: str | None = None,
+              params=None, vehicle=None, output_format: str = "parquet", workers: int = 1,
+              scheduler: str | None = None, resume: bool = False, chunk_rows: int | None = None,
+              metadata: dict | None = None, plot_dir=None, on_result=None,
+              connect_timeout: float = 20.0) -> FleetResult:
+    """Estimate the bank on many logs, writing each result and a summary row as soon as a log finishes.
+
+    Parameters
+    ----------
+    logs : sequence of path-like
+        Log paths (see :func:`expand_logs` for directories and patterns).
+    outdir : path-like
+        Output directory (module doc).
+    estimators : sequence of str
+    channels : ChannelMap or path, optional
+    format : str, optional
+    params : VehicleParams, optional
+    vehicle : roadbank.vehicle.Vehicle, optional
+        Builds the estimators (see :func:`estimate_log`).
+    output_format : {"parquet", "csv"}
+    workers : int
+        1: in this process, one log after another. More: a Dask LocalCluster of
+        that many single-threaded worker processes.
+    scheduler : str, optional
+        Address of a running Dask scheduler (``tcp://host:8786``); overrides ``workers``.
+    resume : bool
+        Skip logs ``summary.csv`` lists as ok whose output exists.
+    chunk_rows : int, optional
+        Streaming chunk size (rows).
+    metadata : dict, optional
+        Extra Parquet metadata of every output (``source`` is added per log).
+    plot_dir : path-like, optional
+        One PNG of theta / phi_b per log, ``<stem>.png``.
+    on_result : callable(LogSummary), optional
+        Called in the client as each log finishes.
+
+    Returns
+    -------
+    FleetResult
+    """
+    from ..io import read_channel_map
+
+    outdir = Path(outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    if channels is not None and not hasattr(channels, "channels"):
+        channels = read_channel_map(channels)
+    paths = [Path(p) for p in logs]
+    names = output_names(paths, output_format)
+    done = set()
+    if resume:
+        for row in read_summary(outdir):
+            if row.get("status") == "ok" and row.get("output") and Path(row["output"]).exists():
+                done.add(row["log"])
+    todo = [p for p in paths if str(p) not in done]
+    result = FleetResult(skipped=[str(p) for p in paths if str(p) in done])
+    summary = _SummaryFile(outdir, resume)
+    jobs = [(p, outdir / names[p], dict(metadata or {}, source=str(p)),
+             None if plot_dir is None else Path(plot_dir) / (names[p].split(".bank.")[0] + ".png"))
+            for p in todo]
+    kw = dict(channels=channels, format=format, params=params, vehicle=vehicle, chunk_rows=chunk_rows)
+
+    def finish(s: LogSummary):
+        summary.add(s)
+        result.summaries.append(s)
+        if on_result is not None:
+            on_result(s)
+
+    t0 = time.perf_counter()
+    try:
+        if scheduler is None and int(workers) <= 1:
+            for p, out, meta, png in jobs:
+                finish(estimate_log(p, out, estimators, metadata=meta, plot=png, **kw))
+        elif jobs:
+            _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result)
+    finally:
+        summary.close()
+        result.wall_s = time.perf_counter() - t0
+    return result
+
+
+def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result):
+    from ..campaign.execute import _distributed, open_client
+
+    dd = _distributed()
+    client, cluster = open_client(scheduler, int(workers), connect_timeout)
+    futures = {}
+    try:
+        result.workers = sum(client.nthreads().values())
+        client.run(_warm, list(estimators), kw["params"], kw["vehicle"])
+        for p, out, meta, png in jobs:
+            fut = client.submit(estimate_log, p, out, list(estimators), metadata=meta, plot=png, pure=False, **kw)
+            futures[fut] = p
+        for fut in dd.as_completed(list(futures)):
+            p = futures.pop(fut)
+            try:
+                s = fut.result()
+            except Exception as exc:     # the worker died (memory, signal): this log only
+                s = LogSummary(log=str(p), status="error", error=f"worker failed: {type(exc).__name__}: {exc}")
+            finish(s)
+    except BaseException:
+        for fut in list(futures):
+            fut.cancel()
+        raise
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

@@ -1,0 +1,133 @@
+"""Tune a car's estimators end to end: draw the sets, optimise on training, score on validation.
+
+:func:`tune_car` is what ``roadbank tune`` runs. The validation set is drawn and scored only
+after every optimisation has finished; the optimiser never sees it.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+from .manoeuvres import drive_set
+from .objective import score_set
+from .optimise import DaskMapper, LocalMapper, register_drives, tune_estimator
+from .spaces import TUNABLE, search_space
+
+#: default objective evaluations per estimator (``roadbank tune --budget``)
+DEFAULT_BUDGET = 240
+#: default sizes of the sets (drives of 20 s)
+DEFAULT_TRAIN = 48
+DEFAULT_VALIDATION = 40
+
+
+@dataclass
+class TuningOutcome:
+    """What :func:`tune_car` found.
+
+    Attributes
+    ----------
+    options : dict
+        Estimator -> tuned keyword options.
+    scores : dict
+        Estimator -> flat scores (``train_*``, ``validation_*``, ``before_validation_*`` in deg,
+        ``evaluations``, ``budget``, ``seed``, ``seconds``) as written to ``[scores.<name>]``.
+    validation : dict
+        Every estimator compared (tuned ones with their new options, others with their
+        defaults, ``pif-modified (Table 4)``) -> :class:`~.objective.SetScores` on validation.
+    seconds : float
+        Wall time of the whole run.
+    """
+
+    options: dict = field(default_factory=dict)
+    scores: dict = field(default_factory=dict)
+    validation: dict = field(default_factory=dict)
+    seconds: float = 0.0
+
+
+def tune_car(params=None, plant=None, sensors=None, *, names=TUNABLE, budget: int = DEFAULT_BUDGET,
+             seed: int = 0, n_train: int = DEFAULT_TRAIN, n_validation: int = DEFAULT_VALIDATION,
+             jobs: int = 2, scheduler: str | None = None, current: dict | None = None,
+             compare=("kinematic", "uio", "pio-original", "pif-original"), progress=None) -> TuningOutcome:
+    """Tune ``names`` for one car and score them on the validation set.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        The car's design parameters (default: the paper's SUV).
+    plant : roadbank.sim.PlantParams, optional
+        The car in the simulator (default built from ``params``).
+    sensors : roadbank.sim.SensorConfig, optional
+        Its sensors (default the paper's ESP sensors).
+    names : estimators to tune (:data:`~.spaces.TUNABLE`).
+    budget : int
+        Objective evaluations per estimator.
+    seed : int
+        Seed of the sets and the optimiser: the same seed gives the same result.
+    n_train, n_validation : int
+        Drives in the training / validation set.
+    jobs : int
+        Local worker processes (ignored with ``scheduler``).
+    scheduler : str, optional
+        Dask scheduler address: evaluate the populations there.
+    current : dict, optional
+        Estimator -> options in use before (e.g. the vehicle file's); scored on validation as
+        ``before_validation_*``.
+    compare : estimators scored on validation with their defaults, for the comparison.
+    progress : callable ``(stage: str, done: int, total: int)``, optional
+    """
+    from .. import estimators
+    from ..params import VehicleParams
+    from ..sim import PlantParams, SensorConfig
+
+    t0 = time.perf_counter()
+    params = params or VehicleParams()
+    plant = plant or PlantParams(vehicle=params)
+    sensors = sensors or SensorConfig()
+    current = current or {}
+    for name in names:
+        search_space(name)                    # unknown / untunable names fail before any work
+    report = progress or (lambda stage, done, total: None)
+
+    report("training set", 0, n_train)
+    train = drive_set("train", n_train, seed, params, plant, sensors)
+    key = f"train-{seed}-{n_train}"
+    register_drives(key, train)
+    total = budget * len(names)
+    done = [0]
+
+    def step(n):
+        done[0] += n
+        report("tuning", min(done[0], total), total)
+
+    out = TuningOutcome()
+    results = {}
+    mapper = DaskMapper(scheduler, step) if scheduler else LocalMapper(jobs, step)
+    with mapper:
+        if scheduler:
+            mapper.share(key, train)
+        for name in names:
+            results[name] = tune_estimator(search_space(name, sensors), params, key, budget=budget,
+                                           seed=seed, mapper=mapper)
+    report("validation set", 0, n_validation)
+    valid = drive_set("validation", n_validation, seed, params, plant, sensors)
+    for name, res in results.items():
+        tuned = score_set(estimators.make(name, params, **res.options), valid)
+        before = score_set(estimators.make(name, params, **current.get(name, {})), valid)
+        out.options[name] = res.options
+        out.validation[name] = tuned
+        out.scores[name] = {**res.train.as_dict("train_"), **tuned.as_dict("validation_"),
+                            **{k: v for k, v in before.as_dict("before_validation_").items()
+                               if not k.endswith("drives")},
+                            "evaluations": res.evaluations, "budget": int(budget), "seed": int(seed),
+                            "seconds": round(res.seconds, 1)}
+    for name in compare:
+        out.validation[name] = score_set(estimators.make(name, params), valid)
+    if "pif-modified" in names:
+        out.validation["pif-modified (Table 4)"] = score_set(
+            estimators.make("pif-modified", params, tuning="paper"), valid)
+        out.scores["pif-modified"].update(
+            {k: v for k, v in out.validation["pif-modified (Table 4)"].as_dict("table4_validation_").items()
+             if not k.endswith("drives")})
+    out.seconds = time.perf_counter() - t0
+    return out

@@ -1,0 +1,99 @@
+"""Search spaces of the tunable estimators: which options ``roadbank tune`` varies, and how.
+
+Each :class:`SearchSpace` maps a point ``x`` of a box (the optimiser's coordinates, mostly
+log10 of a weight) to the keyword options of :func:`roadbank.estimators.make`, and knows the
+point of the estimator's current default (the optimiser's start).
+
+* ``pif-modified``: ``R`` is fixed to the yaw-rate sensor's noise density
+  (:func:`roadbank.estimators.pif.yaw_rate_noise_density`); ``x = (log10(Q/R), log10(th R))``.
+  Scaling ``(Q, R, th)`` to ``(kQ, kR, th/k)`` scales ``P`` by ``k`` and leaves the filter
+  unchanged, so fixing ``R`` loses nothing; ``S = 1`` (only ``th S`` enters).
+* ``kalman``: ``R`` stays at its default; ``x = log10`` of the three process-noise densities.
+* ``pio-modified``: poles ``-10^a (1, 1 + b, (1 + b)(1 + c))``, ``x = (a, b, c)``.
+* ``dfc``: ``x = log10(a_ref / (m/s^2))``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..estimators import dfc, kalman, pio
+from ..estimators.pif import DEFAULT_TUNING, R_ESP, yaw_rate_noise_density
+
+
+@dataclass(frozen=True)
+class SearchSpace:
+    """Options of one estimator as a function of a point in a box.
+
+    Attributes
+    ----------
+    name : str
+        Estimator (one of :data:`roadbank.estimators.NAMES`).
+    labels : tuple of str
+        Meaning of each coordinate.
+    bounds : tuple of (lo, hi)
+    fixed : dict
+        Options that do not vary (e.g. the PIF's ``R``).
+    """
+
+    name: str
+    labels: tuple
+    bounds: tuple
+    fixed: dict
+
+    def options(self, x) -> dict:
+        """Keyword options of :func:`roadbank.estimators.make` at ``x``."""
+        x = [float(v) for v in x]
+        f = self.fixed
+        if self.name == "pif-modified":
+            R = f["R"]
+            return {"Q": R * 10.0 ** x[0], "R": R, "S": 1.0, "th": 10.0 ** x[1] / R}
+        if self.name == "kalman":
+            return {"q": [10.0 ** v for v in x], "R": list(f["R"])}
+        if self.name == "pio-modified":
+            p1 = 10.0 ** x[0]
+            p2 = p1 * (1.0 + x[1])
+            return {"poles": [-p1, -p2, -p2 * (1.0 + x[2])]}
+        if self.name == "dfc":
+            return {"a_ref": 10.0 ** x[0]}
+        raise ValueError(f"no search space for {self.name!r}")
+
+    def start(self) -> np.ndarray:
+        """The point of the estimator's current default (clipped into the box)."""
+        f = self.fixed
+        if self.name == "pif-modified":
+            Q, th = DEFAULT_TUNING["Q"] * f["R"] / R_ESP, DEFAULT_TUNING["th"] * R_ESP / f["R"]
+            x = [np.log10(Q / f["R"]), np.log10(th * f["R"])]
+        elif self.name == "kalman":
+            x = list(np.log10(kalman.DEFAULT_Q))
+        elif self.name == "pio-modified":
+            p = sorted(-np.asarray(pio.DEFAULT_POLES_MODIFIED))
+            x = [np.log10(p[0]), p[1] / p[0] - 1.0, p[2] / p[1] - 1.0]
+        else:
+            x = [np.log10(dfc.A_REF)]
+        lo, hi = np.array(self.bounds).T
+        return np.clip(np.array(x, float), lo, hi)
+
+
+#: estimators ``roadbank tune`` tunes, in order
+TUNABLE = ("pif-modified", "kalman", "pio-modified", "dfc")
+
+
+def search_space(name: str, sensors=None) -> SearchSpace:
+    """The :class:`SearchSpace` of ``name`` for a car with ``sensors``
+    (:class:`roadbank.sim.SensorConfig`; default the paper's ESP sensors)."""
+    if name == "pif-modified":
+        R = R_ESP if sensors is None else yaw_rate_noise_density(
+            sensors.yaw_rate.noise_std, sensors.yaw_rate.resolution, sensors.rate)
+        return SearchSpace(name, ("log10(Q/R)", "log10(th R)"), ((1.0, 7.0), (-7.0, -1.5)), {"R": R})
+    if name == "kalman":
+        return SearchSpace(name, ("log10 q_vy", "log10 q_r", "log10 q_w"),
+                           ((-2.0, 3.0), (-4.0, 1.0), (-5.0, 0.0)), {"R": tuple(kalman.DEFAULT_R)})
+    if name == "pio-modified":
+        return SearchSpace(name, ("log10 |p1|", "p2/p1 - 1", "p3/p2 - 1"),
+                           ((-1.5, 1.5), (0.05, 3.0), (0.05, 3.0)), {})
+    if name == "dfc":
+        return SearchSpace(name, ("log10 a_ref",), ((-0.5, 1.7),), {})
+    raise ValueError(f"{name!r} is not tunable; tunable: {', '.join(TUNABLE)}")

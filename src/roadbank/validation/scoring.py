@@ -1,0 +1,286 @@
+"""Dataset-independent scoring of bank estimates against a measured reference roll.
+
+Used identically by every real-data validation (comma2k19, KITTI). Method,
+fixed before looking at any result and applied to every estimator alike:
+
+1. Run each estimator over the whole log (default tuning).
+2. Speed gate: only samples with ``vx >= v_gate`` (5 m/s, the estimators'
+   ``v_min``) are scored.
+3. Warm-up: samples less than ``warmup_s`` (5 s) after a start are dropped; a
+   start is the first gated sample of the log or after more than ``max_gap``
+   (1 s, the estimators' re-initialisation gap) below the gate.
+4. Smoothing: the reference and every estimate (held over not-valid samples) go
+   through the same zero-phase first-order low-pass (``tau`` = 2/3 s, the paper's
+   reference filter, run forward and backward so it adds no lag of its own).
+   Unsmoothed ("raw") scores are computed on the same samples too.
+5. Offset: where the reference frame differs from the vehicle frame by an unknown
+   constant (a device mount), ``offset = mean(reference - estimate)`` is fitted on
+   the first ``fit_fraction`` of the scored samples and those samples are not
+   scored. ``fit_fraction = 0``: no offset, every scored sample counts.
+6. Scores: Pearson r and RMS error (deg) of ``theta`` (bank + body roll, what a
+   measured roll contains), smoothed and raw; diagnostics: r with a causal
+   low-pass, r without the split, ``phi_b`` instead of ``theta``, the lag that
+   would maximise r, the valid fraction.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.signal import filtfilt, lfilter
+
+
+@dataclass(frozen=True)
+class Scoring:
+    """Settings of the scoring (see the module docstring).
+
+    Attributes
+    ----------
+    tau : float
+        Smoothing time constant (s).
+    warmup_s : float
+        Warm-up dropped after each start (s).
+    v_gate : float
+        Lowest scored speed (m/s).
+    fit_fraction : float
+        Fraction of the scored samples used to fit a constant offset (0 = none).
+    max_gap : float
+        Time below the gate (s) after which the warm-up starts again.
+    """
+
+    tau: float = 2.0 / 3.0
+    warmup_s: float = 5.0
+    v_gate: float = 5.0
+    fit_fraction: float = 0.3
+    max_gap: float = 1.0
+
+
+@dataclass
+class Score:
+    """Scores of one estimator on one log (angles in deg)."""
+
+    r: float            # Pearson r on the scored part (smoothed)
+    rms_deg: float      # RMS error on the scored part after the offset (smoothed, deg)
+    offset_deg: float   # offset reference - estimate fitted on the first part (deg; 0 if not fitted)
+    r_raw: float        # same samples, no smoothing
+    rms_raw_deg: float  # same samples, no smoothing (deg)
+    r_causal: float     # same samples, causal low-pass on both
+    r_whole: float      # fit + scored samples, no split (smoothed)
+    r_phi_b: float      # phi_b instead of theta (smoothed)
+    rms_phi_b_deg: float
+    best_lag_s: float   # lag of the estimate that would maximise r (diagnostic)
+    r_at_best_lag: float
+    valid_fraction: float  # valid share of the fit + scored samples
+
+
+def is_uniform(t: np.ndarray, rel: float = 1e-6) -> bool:
+    """True if the steps of ``t`` (s) are all equal within ``rel`` of the median step."""
+    d = np.diff(t)
+    return bool(np.all(np.abs(d - np.median(d)) <= rel * np.median(d)))
+
+
+def lowpass(x: np.ndarray, tau: float, dt: float, zero_phase: bool = True) -> np.ndarray:
+    """First-order low-pass 1/(tau s + 1) on a uniform grid of step ``dt`` (s).
+
+    Discretised as ``y += dt/(tau+dt) (x - y)``; zero-phase by forward-backward.
+    """
+    a = dt / (tau + dt)
+    b, den = [a], [1.0, -(1.0 - a)]
+    x = np.asarray(x, dtype=np.float64)
+    if zero_phase:
+        return filtfilt(b, den, x, padtype="constant")
+    y, _ = lfilter(b, den, x, zi=[(1.0 - a) * x[0]])
+    return y
+
+
+def _lowpass_steps(x: np.ndarray, a: np.ndarray) -> np.ndarray:
+    y = np.empty_like(x)
+    y[0] = x[0]
+    for k in range(1, len(x)):
+        y[k] = y[k - 1] + a[k - 1] * (x[k] - y[k - 1])
+    return y
+
+
+def lowpass_t(x: np.ndarray, t: np.ndarray, tau: float, zero_phase: bool = True) -> np.ndarray:
+    """:func:`lowpass` on any time grid ``t`` (s): per-step ``a = dt_k/(tau + dt_k)``.
+
+    A uniform grid uses :func:`lowpass` exactly; a jittered one (KITTI, 0.06-0.14 s)
+    runs the same recursion with each step's own ``dt``, forward then backward.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    t = np.asarray(t, dtype=np.float64)
+    if is_uniform(t):
+        return lowpass(x, tau, float(np.median(np.diff(t))), zero_phase)
+    d = np.diff(t)
+    a = d / (tau + d)
+    y = _lowpass_steps(x, a)
+    if zero_phase:
+        y = _lowpass_steps(y[::-1], a[::-1])[::-1]
+    return y
+
+
+def hold_invalid(x: np.ndarray) -> np.ndarray:
+    """Hold the last finite value over non-finite samples (the estimators already hold; NaN guard)."""
+    x = np.array(x, dtype=np.float64)
+    bad = ~np.isfinite(x)
+    if bad.any():
+        idx = np.where(~bad, np.arange(len(x)), 0)
+        np.maximum.accumulate(idx, out=idx)
+        x = x[idx]
+    return x
+
+
+def pearson_r(a, b) -> float:
+    """Pearson correlation of two equal-length arrays (NaN if fewer than 3 samples or constant)."""
+    if len(a) < 3 or np.std(a) == 0 or np.std(b) == 0:
+        return float("nan")
+    return float(np.corrcoef(a, b)[0, 1])
+
+
+def _rms_deg(e) -> float:
+    return float(np.degrees(np.sqrt(np.mean(e ** 2)))) if len(e) else float("nan")
+
+
+def masks(t: np.ndarray, vx: np.ndarray, scoring: Scoring) -> tuple[np.ndarray, np.ndarray]:
+    """``(fit, scored)`` boolean masks of the samples (see the module docstring, steps 2, 3, 5)."""
+    gate = np.isfinite(vx) & (vx >= scoring.v_gate)
+    keep = np.zeros(len(t), bool)
+    start = None
+    last = -np.inf
+    for k in np.flatnonzero(gate):
+        if start is None or t[k] - last > scoring.max_gap:
+            start = t[k]
+        last = t[k]
+        keep[k] = t[k] - start >= scoring.warmup_s
+    idx = np.flatnonzero(keep)
+    n_fit = int(scoring.fit_fraction * len(idx))
+    fit = np.zeros(len(t), bool)
+    fit[idx[:n_fit]] = True
+    return fit, keep & ~fit
+
+
+def score(t, theta, phi_b, valid, ref, fit, scored, scoring: Scoring, max_lag_s: float = 1.0) -> Score:
+    """Score one estimate (rad) against the reference roll (rad) on the given masks.
+
+    ``theta``, ``phi_b`` must already be held over not-valid samples (:func:`hold_invalid`).
+    Returns NaN scores when nothing usable is scored (e.g. every sample flagged not valid).
+    """
+    both = fit | scored
+    vf = float(np.mean(valid[both])) if both.any() else 0.0
+    if not scored.any() or vf == 0.0 or not np.all(np.isfinite(theta[both])):
+        nan = float("nan")
+        return Score(nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, vf)
+    f = lambda x: lowpass_t(x, t, scoring.tau)
+    rs, xs, ps = f(ref), f(theta), f(phi_b)
+    fitted = fit.any()
+    off = float(np.mean(rs[fit] - xs[fit])) if fitted else 0.0
+    offp = float(np.mean(rs[fit] - ps[fit])) if fitted else 0.0
+    rc = lowpass_t(ref, t, scoring.tau, False)
+    xc = lowpass_t(theta, t, scoring.tau, False)
+    dt = float(np.median(np.diff(t)))
+    nl = int(round(max_lag_s / dt))
+    lags = np.arange(-nl, nl + 1, max(1, int(round(0.01 / dt))))
+    idx = np.flatnonzero(scored)
+    idx = idx[(idx < len(xs) - nl) & (idx >= nl)]  # room for the lags at both ends
+    best = max(((pearson_r(xs[idx + k], rs[idx]), k) for k in lags), key=lambda z: -np.inf if np.isnan(z[0]) else z[0])
+    return Score(r=pearson_r(xs[scored], rs[scored]), rms_deg=_rms_deg(xs[scored] + off - rs[scored]),
+                 offset_deg=float(np.degrees(off)), r_raw=pearson_r(theta[scored], ref[scored]),
+                 rms_raw_deg=_rms_deg(theta[scored] + off - ref[scored]),
+                 r_causal=pearson_r(xc[scored], rc[scored]), r_whole=pearson_r(xs[both], rs[both]),
+                 r_phi_b=pearson_r(ps[scored], rs[scored]), rms_phi_b_deg=_rms_deg(ps[scored] + offp - rs[scored]),
+                 best_lag_s=float(best[1] * dt), r_at_best_lag=float(best[0]), valid_fraction=vf)
+
+
+@dataclass
+class Scored:
+    """Every estimator run and scored on one log.
+
+    ``reference`` and ``estimates`` are smoothed (rad; estimates + their offset),
+    ``raw_reference``/``raw_estimates`` unsmoothed (held over not-valid samples),
+    ``fit``/``scored`` the sample masks, ``valid`` each estimator's flags (name -> bool array).
+    """
+
+    scores: dict
+    t: np.ndarray
+    reference: np.ndarray
+    estimates: dict
+    raw_reference: np.ndarray
+    raw_estimates: dict
+    fit: np.ndarray
+    scored: np.ndarray
+    valid: dict
+
+
+def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=None, **tuning) -> Scored:
+    """Run each estimator (``roadbank.estimators.make(name, params, **tuning)``) and score ``theta``.
+
+    Parameters
+    ----------
+    signals : Signals
+        The log (SI, ISO 8855).
+    ref : array
+        Reference roll (rad, ISO: left side up) on ``signals.t``.
+    names : sequence of str
+        Estimator names.
+    params : VehicleParams
+        The estimators' vehicle model.
+    scoring : Scoring
+        Settings.
+    per_estimator : mapping, optional
+        ``{name: {option: value}}`` on top of ``tuning`` for that estimator (a vehicle file's
+        ``[tuning]`` tables).
+    """
+    from .. import estimators
+
+    per_estimator = per_estimator or {}
+    t = signals.t
+    ref = hold_invalid(ref)
+    fit, scored = masks(t, signals.vx, scoring)
+    scores, smooth, raw, flags = {}, {}, {}, {}
+    for name in names:
+        est = estimators.make(name, params=params, **{**tuning, **per_estimator.get(name, {})}).run(signals)
+        th, pb = hold_invalid(est.theta), hold_invalid(est.phi_b)
+        sc = score(t, th, pb, est.valid, ref, fit, scored, scoring)
+        scores[name] = sc
+        raw[name] = th
+        flags[name] = est.valid
+        smooth[name] = (lowpass_t(th, t, scoring.tau) + np.radians(sc.offset_deg)
+                        if np.all(np.isfinite(th)) else th)
+    return Scored(scores, t, lowpass_t(ref, t, scoring.tau), smooth, ref, raw, fit, scored, flags)
+
+
+def pooled(runs, names) -> dict[str, dict[str, float]]:
+    """Scores over the scored samples of several logs together.
+
+    Parameters
+    ----------
+    runs : sequence of Scored
+    names : sequence of str
+
+    Returns
+    -------
+    dict name -> {"r", "rms_deg", "r_raw", "rms_raw_deg", "n"}: Pearson r and RMS
+    error (deg) over all scored samples of all logs (each log's own offset),
+    smoothed and raw; n = number of samples.
+    """
+    out = {}
+    for name in names:
+        xs, rs, xr, rr = [], [], [], []
+        for run in runs:
+            m = run.scored
+            off = np.radians(run.scores[name].offset_deg)
+            if not np.isfinite(off):
+                continue
+            xs.append(run.estimates[name][m])
+            rs.append(run.reference[m])
+            xr.append(run.raw_estimates[name][m] + off)
+            rr.append(run.raw_reference[m])
+        if not xs:
+            out[name] = {"r": float("nan"), "rms_deg": float("nan"), "r_raw": float("nan"),
+                         "rms_raw_deg": float("nan"), "n": 0}
+            continue
+        xs, rs, xr, rr = (np.concatenate(v) for v in (xs, rs, xr, rr))
+        out[name] = {"r": pearson_r(xs, rs), "rms_deg": _rms_deg(xs - rs), "r_raw": pearson_r(xr, rr),
+                     "rms_raw_deg": _rms_deg(xr - rr), "n": int(len(xs))}
+    return out

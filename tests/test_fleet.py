@@ -1,0 +1,143 @@
+"""Fleets: 200 small logs (some corrupt) in one go, interrupted and resumed, and on a 2-worker Dask cluster.
+
+Truth: each good log's result table (recomputed statistics must equal its summary
+row), the list of corrupt files (each must be reported with its file and
+reason, none may stop the others), and the set of logs (each processed exactly
+once across an interruption and a resume).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+from click.testing import CliRunner
+
+from roadbank.cli import main
+from roadbank.fleet import expand_logs, run_fleet
+from roadbank.fleet.run import read_summary
+
+N_LOGS = 200
+EST = ("kinematic",)
+
+
+def _table(n, bank, vx=20.0):
+    t = np.arange(n) * 0.01
+    ay = np.full(n, 9.81 * math.sin(bank))
+    z = np.zeros(n)
+    return {"t": t, "vx": np.full(n, vx), "ay": ay, "r": z, "delta_f": z}
+
+
+@pytest.fixture(scope="module")
+def fleet(tmp_path_factory):
+    """200 logs in nested folders: Parquet and CSV, every 17th one corrupt in a different way."""
+    d = tmp_path_factory.mktemp("fleet")
+    bad = {}
+    kinds = ["truncated", "text", "missing", "empty"]
+    for i in range(N_LOGS):
+        sub = d / f"car{i % 4}"
+        sub.mkdir(exist_ok=True)
+        cols = _table(150 + i, bank=0.002 * i)
+        if i % 17 == 5:
+            kind = kinds[len(bad) % len(kinds)]
+            p = sub / f"log{i:03d}.parquet"
+            if kind == "truncated":
+                pq.write_table(pa.table(cols), p)
+                p.write_bytes(p.read_bytes()[:300])
+            elif kind == "text":
+                p = p.with_suffix(".csv")
+                lines = ["t,vx,ay,r,delta_f"] + [",".join(repr(float(cols[k][j])) for k in cols)
+                                                 for j in range(len(cols["t"]))]
+                lines[40] = lines[40].replace(lines[40].split(",")[2], "oops")
+                p.write_text("\n".join(lines) + "\n")
+            elif kind == "missing":
+                del cols["r"]
+                pq.write_table(pa.table(cols), p)
+            else:
+                p.write_bytes(b"")
+            bad[p] = kind
+        else:
+            pq.write_table(pa.table(cols), sub / f"log{i:03d}.parquet")
+    return d, bad
+
+
+def _check_outputs(outdir, paths, bad):
+    rows = read_summary(outdir)
+    by_log = {}
+    for r in rows:
+        assert r["log"] not in by_log, f"{r['log']} summarised twice"
+        by_log[r["log"]] = r
+    assert set(by_log) == {str(p) for p in paths}
+    for p in paths:
+        r = by_log[str(p)]
+        if p in bad:
+            assert r["status"] == "error" and p.name in r["error"] and r["output"] == ""
+            continue
+        assert r["status"] == "ok", r
+        tab = pq.read_table(r["output"])
+        pb = tab.column("kinematic.phi_b").to_numpy()[tab.column("kinematic.valid").to_numpy()]
+        assert int(r["samples"]) == tab.num_rows
+        assert float(r["valid_share"]) == pytest.approx(len(pb) / tab.num_rows, rel=1e-5)
+        assert float(r["bank_mean_deg"]) == pytest.approx(np.degrees(pb.mean()), rel=1e-5, abs=1e-6)
+        assert float(r["bank_max_deg"]) == pytest.approx(np.degrees(pb.max()), rel=1e-5, abs=1e-6)
+        assert float(r["duration_s"]) == pytest.approx(tab.column("t").to_numpy()[-1], rel=1e-5)
+    return by_log
+
+
+def test_200_logs_one_bad_never_stops_others_and_resume(fleet, tmp_path):
+    d, bad = fleet
+    paths = expand_logs([d])
+    assert len(paths) == N_LOGS and len(bad) >= 10
+    out = tmp_path / "out"
+    seen = []
+
+    def interrupt(s):
+        seen.append(s.log)
+        if len(seen) == 120:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_fleet(paths, out, EST, on_result=interrupt)
+    assert len(read_summary(out)) == 120                      # every finished log is already on disk
+    res = run_fleet(paths, out, EST, resume=True)
+    ok_before = sum(1 for p in seen if Path(p) not in bad)
+    assert len(res.skipped) == ok_before                       # finished logs are not redone
+    assert len(res.summaries) == N_LOGS - ok_before            # the rest, and the failed ones again
+    # the first run's error rows stay; the retried bad logs add a row each: keep the latest per log
+    rows = read_summary(out)
+    latest = {r["log"]: r for r in rows}
+    assert len(latest) == N_LOGS
+    with open(out / "summary.csv", "w", newline="") as fh:        # compact, then check every row
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(latest.values())
+    _check_outputs(out, paths, bad)
+    assert not list(out.glob("*.partial"))
+
+
+def test_cli_dask_scheduler_glob(fleet, tmp_path):
+    """On a running Dask scheduler (in-process, 2 worker threads, so the suite pays no process start-up;
+    ``--workers N`` starts a LocalCluster of processes the same way, timed in docs/io.md)."""
+    distributed = pytest.importorskip("distributed")
+    d, bad = fleet
+    pattern = str(d / "car[01]" / "*")
+    paths = expand_logs([pattern])
+    out = tmp_path / "dask"
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
+                                  dashboard_address=None) as cluster:
+        res = CliRunner().invoke(main, ["estimate", pattern, "-e", "kinematic", "--scheduler",
+                                        cluster.scheduler_address, "-o", str(out)])
+    assert res.exit_code == 1                                   # some logs were corrupt
+    assert "Traceback" not in res.output
+    by_log = _check_outputs(out, paths, bad)
+    assert sum(r["status"] == "ok" for r in by_log.values()) == len([p for p in paths if p not in bad])
+    for p in (p for p in paths if p in bad):
+        assert f"FAILED {p}" in res.output
+    assert "bank mean" in res.output and "ERROR" in res.output   # the summary table
+    again = CliRunner().invoke(main, ["estimate", pattern, "-e", "kinematic", "--resume", "-o", str(out)])
+    assert f"{len(paths) - len([p for p in paths if p in bad])} log(s) already finished" in again.output

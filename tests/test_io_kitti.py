@@ -1,0 +1,163 @@
+"""KITTI raw oxts reader: synthetic drives written by the tests (every malformed case) and the real drives."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from roadbank.io import LogError, detect_format, load_log
+from roadbank.io.kitti import N_FIELDS, find_oxts_dirs
+
+KITTI = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "kitti-oxts"
+DRIVES = sorted(KITTI.glob("*/oxts")) if KITTI.is_dir() else []
+needs_data = pytest.mark.skipif(not DRIVES, reason=f"KITTI oxts drives absent at {KITTI}")
+
+
+def frame_values(k: int) -> np.ndarray:
+    """30 distinct, recognisable values for frame k (column j holds 100 j + k / 10)."""
+    return 100.0 * np.arange(N_FIELDS) + k / 10.0
+
+
+def write_drive(root: Path, n: int = 6, stamps=None) -> Path:
+    """A KITTI-layout drive folder ``root/drive_sync/oxts`` with n frames at 10 Hz; returns the drive folder."""
+    oxts = root / "2011_01_01_drive_0001_sync" / "oxts"
+    (oxts / "data").mkdir(parents=True)
+    if stamps is None:
+        stamps = [f"2011-01-01 12:00:{k // 10:02d}.{(k % 10) * 100_000_000 + 123:09d}" for k in range(n)]
+    (oxts / "timestamps.txt").write_text("\n".join(stamps) + "\n")
+    for k in range(n):
+        (oxts / "data" / f"{k:010d}.txt").write_text(" ".join(f"{v:.6f}" for v in frame_values(k)) + "\n")
+    (oxts / "dataformat.txt").write_text("lat: latitude of the oxts-unit (deg)\n")
+    return oxts.parent
+
+
+def test_columns_time_and_detection(tmp_path):
+    drive = write_drive(tmp_path)
+    for p in (drive, drive / "oxts", tmp_path):          # drive folder, oxts folder, parent of one drive
+        assert detect_format(p) == "kitti-oxts"
+        log = load_log(p)
+        s = log.signals
+        assert log.format == "kitti-oxts" and log.metadata["drive"] == "2011_01_01_drive_0001_sync"
+        # 10 Hz from the nanosecond stamps, relative to the first frame
+        np.testing.assert_allclose(s.t, 0.1 * np.arange(6), atol=1e-6)
+        k = np.arange(6) / 10.0
+        np.testing.assert_allclose(s.vx, 800 + k)          # column 8 vf
+        np.testing.assert_allclose(s.ay, 1200 + k)         # column 12 ay
+        np.testing.assert_allclose(s.r, 1900 + k)          # column 19 wz
+        np.testing.assert_allclose(log.reference_roll, 300 + k)    # column 3 roll
+        np.testing.assert_allclose(log.extra["lat_deg"], k)
+        np.testing.assert_allclose(log.extra["lon_deg"], 100 + k)
+        assert np.all(np.isnan(s.delta_f))
+        assert log.metadata["time_origin"] == "2011-01-01 12:00:00.000000123 UTC"
+        assert log.metadata["dropped_frames"] == "0"
+    assert load_log(drive, format="kitti-oxts").signals.vx[0] == 800
+
+
+def test_parent_of_two_drives_is_refused_by_load_log_but_found(tmp_path):
+    write_drive(tmp_path)
+    other = tmp_path / "b"
+    write_drive(other)
+    (other / "2011_01_01_drive_0001_sync").rename(tmp_path / "2011_01_01_drive_0002_sync")
+    assert len(find_oxts_dirs(tmp_path)) == 2
+    with pytest.raises(LogError, match="holds 2 KITTI drives"):
+        load_log(tmp_path, format="kitti-oxts")
+
+
+def test_missing_frame_is_dropped_and_counted(tmp_path):
+    drive = write_drive(tmp_path, n=8)
+    (drive / "oxts" / "data" / "0000000003.txt").unlink()
+    log = load_log(drive)
+    assert log.metadata["dropped_frames"] == "1" and len(log) == 7
+    # the other frames keep their own time stamps: a 0.2 s step where frame 3 was
+    np.testing.assert_allclose(np.diff(log.signals.t), [0.1, 0.1, 0.2, 0.1, 0.1, 0.1], atol=1e-6)
+    np.testing.assert_allclose(log.signals.vx, 800 + np.array([0, 1, 2, 4, 5, 6, 7]) / 10.0)
+    assert any("0000000003.txt" in w and "dropped" in w for w in log.warnings)
+
+
+def _wrong_fields(d):
+    (d / "oxts/data/0000000002.txt").write_text(" ".join(["1.0"] * 29) + "\n")
+
+
+def _non_numeric(d):
+    vals = [f"{v}" for v in frame_values(2)]
+    vals[12] = "1.2.3"
+    (d / "oxts/data/0000000002.txt").write_text(" ".join(vals) + "\n")
+
+
+def _empty_frame(d):
+    (d / "oxts/data/0000000002.txt").write_text("")
+
+
+def _two_lines(d):
+    line = " ".join(f"{v}" for v in frame_values(2))
+    (d / "oxts/data/0000000002.txt").write_text(line + "\n" + line + "\n")
+
+
+def _stamps(d, lines):
+    (d / "oxts/timestamps.txt").write_text("\n".join(lines) + "\n")
+
+
+GOOD = [f"2011-01-01 12:00:00.{k}00000000" for k in range(6)]
+
+MALFORMED = {
+    "wrong field count": (_wrong_fields, r"0000000002\.txt: line 1: 29 fields, expected 30"),
+    "non-numeric field": (_non_numeric, r"0000000002\.txt: line 1: field 12 is not a number: '1\.2\.3'"),
+    "empty frame file": (_empty_frame, r"0000000002\.txt: expected one line of 30 values, found 0"),
+    "two lines in a frame": (_two_lines, r"0000000002\.txt: expected one line of 30 values, found 2"),
+    "unparsable time stamp": (lambda d: _stamps(d, GOOD[:3] + ["2011-01-01 12:00:0x.3"] + GOOD[4:]),
+                              r"timestamps\.txt: line 4: unparsable time stamp"),
+    "impossible date": (lambda d: _stamps(d, GOOD[:1] + ["2011-02-30 12:00:00.1"] + GOOD[2:]),
+                        r"timestamps\.txt: line 2: unparsable time stamp"),
+    "time stamps out of order": (lambda d: _stamps(d, GOOD[:2] + [GOOD[3], GOOD[2]] + GOOD[4:]),
+                                 r"timestamps\.txt: line 4: .* not later than line 3's"),
+    "repeated time stamp": (lambda d: _stamps(d, GOOD[:3] + [GOOD[2]] + GOOD[4:]),
+                            r"timestamps\.txt: line 4: .* out of order"),
+    "blank line inside the time stamps": (lambda d: _stamps(d, GOOD[:2] + [""] + GOOD[3:]),
+                                          r"timestamps\.txt: line 3: unparsable"),
+    "no time stamps": (lambda d: _stamps(d, []), r"timestamps\.txt: no time stamps"),
+    "frame without a time stamp": (lambda d: _stamps(d, GOOD[:4]), r"0000000004\.txt: frame 4 has no time stamp"),
+    "fewer than two frames": (lambda d: [f.unlink() for f in sorted((d / "oxts/data").iterdir())[1:]],
+                              r"1 frame file\(s\); at least 2"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(MALFORMED))
+def test_malformed_drive_names_file_and_line(tmp_path, case):
+    drive = write_drive(tmp_path, n=6, stamps=GOOD)
+    breaker, pattern = MALFORMED[case]
+    breaker(drive)
+    with pytest.raises(LogError, match=pattern):
+        load_log(drive)
+
+
+def test_not_a_drive(tmp_path):
+    with pytest.raises(LogError, match="neither a comma2k19 segment .* nor a KITTI raw drive"):
+        load_log(tmp_path)
+    with pytest.raises(LogError, match="not a KITTI raw drive"):
+        load_log(tmp_path, format="kitti-oxts")
+
+
+# README of ../shared/data/kitti-oxts: frames, duration, roll range, jitter, sign checks
+README_FACTS = {"2011_10_03_drive_0047": (837, 86.6, (-2.4, 3.5), 0.94, 0.96),
+                "2011_09_26_drive_0070": (420, 43.3, (-2.3, 4.3), 0.89, 0.94)}
+
+
+@needs_data
+@pytest.mark.parametrize("oxts", DRIVES, ids=lambda p: p.parent.name)
+def test_real_drive_matches_its_readme(oxts):
+    log = load_log(oxts.parent)
+    s = log.signals
+    frames, duration, (lo, hi), c_turn, c_roll = README_FACTS[oxts.parent.name]
+    assert len(s) == frames and log.metadata["dropped_frames"] == "0"
+    assert s.t[-1] == pytest.approx(duration, abs=0.1)
+    dt = np.diff(s.t)
+    assert 0.055 < dt.min() and dt.max() < 0.145 and np.median(dt) == pytest.approx(0.1, abs=0.002)
+    roll = np.degrees(log.reference_roll)
+    assert roll.min() == pytest.approx(lo, abs=0.05) and roll.max() == pytest.approx(hi, abs=0.05)
+    # ISO signs: left turns give positive ay and yaw rate; roll follows the kinematic bank
+    assert np.corrcoef(s.ay, s.vx * s.r)[0, 1] == pytest.approx(c_turn, abs=0.01)
+    assert np.corrcoef(log.reference_roll, (s.ay - s.vx * s.r) / 9.81)[0, 1] == pytest.approx(c_roll, abs=0.01)
+    assert 48.9 < log.extra["lat_deg"].min() and log.extra["lon_deg"].max() < 8.6   # Karlsruhe
+    assert log.warnings == []

@@ -1,0 +1,160 @@
+"""roadbank tune: drive sets, objective, optimiser, CLI, and the PIF's default and paper tunings."""
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from roadbank import VehicleParams
+from roadbank import estimators as E
+from roadbank.cli import main
+from roadbank.estimators.pif import R_ESP, R_TABLE4_DEG_UNITS, TABLE4, yaw_rate_noise_density
+from roadbank.tuning import (INFEASIBLE, TRAIN_ROADS, VALIDATION_ROADS, Objective, drive_set, register_drives,
+                             score_set, search_space, tune_estimator)
+from roadbank.tuning import pipeline
+
+P = VehicleParams()
+
+
+@pytest.fixture(scope="module")
+def sets():
+    train = drive_set("train", 4, seed=3)
+    valid = drive_set("validation", 4, seed=3)
+    register_drives("test-train", train)
+    return train, valid
+
+
+def test_train_and_validation_sets_are_disjoint(sets):
+    train, valid = sets
+    assert not set(TRAIN_ROADS) & set(VALIDATION_ROADS)
+    assert {d.road for d in train} == set(TRAIN_ROADS) and {d.road for d in valid} == set(VALIDATION_ROADS)
+    # validation cars change what training cars never do
+    held_out = {"tyre_Cy", "tyre_Ey", "iz_scale", "kroll_scale"}
+    assert all(held_out <= set(d.car) for d in valid) and not any(held_out & set(d.car) for d in train)
+    # independent random streams: no drive of one set equals a drive of the other
+    for a in train:
+        for b in valid:
+            assert a.car["cf_scale"] != b.car["cf_scale"]
+    # deterministic for a seed
+    again = drive_set("train", 2, seed=3)
+    assert all(np.array_equal(a.signals.ay, b.signals.ay) for a, b in zip(again, train))
+
+
+def test_drives_have_the_bank_they_were_drawn_with(sets):
+    train, _ = sets
+    bank_step = next(d for d in train if d.road == "bank-step")
+    assert np.degrees(np.abs(bank_step.phi_b).max()) > 2.0           # a banked lane of 4-25 %
+    curve = next(d for d in train if d.road == "superelevated-curve")
+    assert 1.0 < np.degrees(np.abs(curve.phi_b).max()) < 6.0          # 2-10 % superelevation
+
+
+def test_tuning_from_table4_improves_training_and_validation_scores(sets):
+    train, valid = sets
+    space = search_space("pif-modified")
+    # Table 4 in the search space's coordinates (Q/R and th R are what the filter depends on)
+    x_table4 = [np.log10(TABLE4["Q"] / TABLE4["R"]), np.log10(TABLE4["th"] * TABLE4["R"])]
+    res = tune_estimator(space, P, "test-train", budget=12, seed=1, x0=x_table4)
+    assert res.train.objective < res.start_objective - 0.05
+    tuned = score_set(E.make("pif-modified", P, **res.options), valid)
+    table4 = score_set(E.make("pif-modified", P, tuning="paper"), valid)
+    assert tuned.objective < table4.objective and tuned.median_rms < table4.median_rms
+    # deterministic for a seed
+    again = tune_estimator(space, P, "test-train", budget=12, seed=1, x0=x_table4)
+    assert again.options == res.options
+
+
+def test_infeasible_weights_score_as_infeasible(sets):
+    space = search_space("pif-modified")
+    objective = Objective(space, P, "test-train")
+    with pytest.raises(E.NoStabilisingSolution):
+        E.make("pif-modified", P, **space.options([3.0, -1.0]))
+    assert objective([3.0, -1.0]) == INFEASIBLE
+    assert objective([3.0, -3.0]) < 5.0
+
+
+def test_fixing_R_loses_nothing_the_filter_depends_on_Q_over_R_and_th_R():
+    a = E.make("pif-modified", tuning="paper")
+    k = 1e-4
+    b = E.make("pif-modified", Q=k * TABLE4["Q"], R=k * TABLE4["R"], th=TABLE4["th"] / k, S=1.0)
+    for vx in (6.0, 22.0, 60.0):
+        assert np.allclose(a.observer(vx)[0], b.observer(vx)[0], rtol=1e-6, atol=1e-9)
+
+
+def test_default_R_is_the_yaw_rate_sensor_noise_plus_quantisation_density():
+    res, noise, rate = np.radians(0.3), np.radians(0.1), 100.0
+    # quantisation error of a busy signal is uniform on a step: variance res^2 / 12 (measured)
+    x = np.random.default_rng(0).normal(0.0, 1.0, 200_000)
+    q_var = np.var(res * np.round(x / res) - x)
+    assert q_var == pytest.approx(res**2 / 12, rel=0.02)
+    assert yaw_rate_noise_density(noise, res, rate) == pytest.approx((noise**2 + q_var) / rate, rel=0.02)
+    assert R_ESP == pytest.approx((noise**2 + res**2 / 12) / rate, rel=1e-12)
+    assert E.make("pif-modified").R[0, 0] == R_ESP
+    with pytest.raises(ValueError):
+        yaw_rate_noise_density(0.0, 0.0, 100.0)
+
+
+def test_paper_tunings_are_table4():
+    est = E.make("pif-modified", tuning="paper")
+    assert (est.Q, est.R[0, 0], est.S, est.th) == (0.1, 0.0035, 1.0, 1.0)
+    assert np.array_equal(np.diag(est.P0), [0.0, 0.0, 0.5])
+    assert E.make("pif-modified", tuning="paper-deg").R[0, 0] == pytest.approx(0.0035 * (np.pi / 180) ** 2)
+    assert R_TABLE4_DEG_UNITS == pytest.approx(0.0035 * (np.pi / 180) ** 2)
+    assert E.make("pif-original").Q == 0.1 and E.make("pif-original").th == 1.0    # published as is
+    with pytest.raises(ValueError, match="tuning must be one of"):
+        E.make("pif-modified", tuning="fast")
+
+
+def test_tune_cli_writes_a_vehicle_file_that_reproduces_its_scores(tmp_path, monkeypatch):
+    from roadbank.vehicle import load_vehicle
+    calls = []
+    real = pipeline.drive_set
+    monkeypatch.setattr(pipeline, "drive_set", lambda kind, *a, **k: calls.append(kind) or real(kind, *a, **k))
+    real_tune = pipeline.tune_estimator
+    monkeypatch.setattr(pipeline, "tune_estimator", lambda *a, **k: calls.append("tune") or real_tune(*a, **k))
+    out = tmp_path / "car.toml"
+    r = CliRunner().invoke(main, ["tune", "-o", str(out), "--budget", "6", "--train-drives", "4",
+                                  "--validation-drives", "4", "--estimators", "pif-modified,dfc", "--jobs", "1"])
+    assert r.exit_code == 0, r.output
+    assert calls == ["train", "tune", "tune", "validation"]        # validation drawn after all tuning
+    car = load_vehicle(out)
+    assert set(car.tuning) >= {"pif-modified", "dfc"} and "pif-modified (tuned)" in r.output
+    valid = drive_set("validation", 4, 0, car.params, car.to_plant(), car.sensors.to_sim())
+    for name in ("pif-modified", "dfc"):
+        s = score_set(car.make(name), valid)
+        assert s.median_rms == pytest.approx(car.scores[name]["validation_median_rms_deg"], rel=1e-9)
+    assert car.scores["pif-modified"]["validation_objective_deg"] < \
+        car.scores["pif-modified"]["table4_validation_objective_deg"]
+
+
+def test_tune_cli_rejects_untunable_estimators(tmp_path):
+    r = CliRunner().invoke(main, ["tune", "-o", str(tmp_path / "x.toml"), "--estimators", "uio"])
+    assert r.exit_code == 2 and "cannot tune uio" in r.output
+
+
+def test_default_th_adapts_to_the_car_explicit_th_raises(monkeypatch):
+    from roadbank.estimators import pif
+    monkeypatch.setitem(pif.TUNINGS, "default", dict(pif.TUNINGS["default"], th=1e9))
+    est = E.make("pif-modified")
+    assert 0 <= est.th < 1e9
+    with pytest.raises(E.NoStabilisingSolution):
+        E.make("pif-modified", th=1e9)
+    # the shipped cars all get the default th itself
+    from roadbank.vehicle import builtin_names, load_vehicle
+    monkeypatch.undo()
+    for name in builtin_names():
+        assert E.make("pif-modified", load_vehicle(name).params).th == pif.DEFAULT_TUNING["th"]
+
+
+def test_tune_on_dask_gives_the_local_result(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    import logging
+    import tomllib
+    args = ["tune", "--budget", "6", "--train-drives", "4", "--validation-drives", "4", "--estimators", "dfc"]
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None,
+                                  silence_logs=logging.ERROR) as cluster:
+        r = CliRunner().invoke(main, args + ["-o", str(tmp_path / "d.toml"), "--scheduler", cluster.scheduler_address])
+    assert r.exit_code == 0, r.output
+    r = CliRunner().invoke(main, args + ["-o", str(tmp_path / "l.toml"), "--jobs", "1"])
+    assert r.exit_code == 0, r.output
+    dask_run, local_run = (tomllib.loads((tmp_path / f).read_text()) for f in ("d.toml", "l.toml"))
+    assert dask_run["tuning"] == local_run["tuning"]
+    assert dask_run["scores"]["dfc"]["validation_median_rms_deg"] == local_run["scores"]["dfc"]["validation_median_rms_deg"]

@@ -1,0 +1,179 @@
+"""``roadbank validate kitti`` / ``validate all``, the shared scoring, and the estimators at 10 Hz with jitter."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from roadbank.cli import main
+from roadbank.validation.jitter import jitter_study
+from roadbank.validation.scoring import Scoring, lowpass, lowpass_t, masks, pooled, score
+
+DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+KITTI = DATA / "kitti-oxts"
+needs_kitti = pytest.mark.skipif(not any(KITTI.glob("*/oxts")), reason=f"KITTI oxts drives absent at {KITTI}")
+STEERING = {"dfc", "uio", "pio-original", "pif-original", "kalman"}   # read delta_f, absent on KITTI
+CLI_NAMES = ("kinematic", "pio-modified", "pif-modified", "uio")          # uio: one that needs the steering
+
+
+# ---------------------------------------------------------------- scoring (dataset-independent)
+def test_masks_gate_and_warmup_restart():
+    t = np.arange(0.0, 40.0, 0.1)
+    vx = np.where((t >= 10) & (t < 12), 2.0, 10.0)      # 2 s below the gate: a restart
+    fit, sc = masks(t, vx, Scoring(fit_fraction=0.0, warmup_s=5.0))
+    assert not fit.any()
+    expect = ((t >= 5.0) & (t < 10.0)) | (t >= 17.0 - 1e-9)
+    np.testing.assert_array_equal(sc, expect)
+    # a short dip (< max_gap) does not restart the warm-up, the dip itself is not scored
+    vx2 = np.where((t >= 10) & (t < 10.5), 2.0, 10.0)
+    _, sc2 = masks(t, vx2, Scoring(fit_fraction=0.0))
+    np.testing.assert_array_equal(sc2, (t >= 5.0) & ~((t >= 10) & (t < 10.5 - 1e-9)))
+    fit3, sc3 = masks(t, np.full_like(t, 10.0), Scoring(fit_fraction=0.3))
+    n = int(np.sum(t >= 5.0))
+    assert fit3.sum() == int(0.3 * n) and sc3.sum() == n - int(0.3 * n) and not (fit3 & sc3).any()
+
+
+def test_lowpass_on_jittered_time_is_first_order():
+    rng = np.random.default_rng(1)
+    t = np.cumsum(rng.uniform(0.06, 0.14, 400))
+    np.testing.assert_allclose(lowpass_t(np.ones(400), t, 0.5), 1.0)
+    # causal step response of 1/(tau s + 1) sampled at jittered instants: 1 - exp(-t/tau) within 5 %
+    y = lowpass_t(np.r_[0.0, np.ones(399)], t, 2.0, zero_phase=False)
+    k = np.searchsorted(t - t[1], 2.0)
+    assert y[k] == pytest.approx(1 - np.exp(-(t[k] - t[1]) / 2.0), abs=0.05)
+    tu = np.arange(300) * 0.01                          # uniform: exactly the scipy path
+    x = np.sin(tu)
+    np.testing.assert_allclose(lowpass_t(x, tu, 0.3), lowpass(x, 0.3, 0.01), rtol=1e-12)
+
+
+def test_score_offset_and_rms_against_known_errors():
+    t = np.arange(0.0, 60.0, 0.1)
+    ref = np.radians(2.0) * np.sin(0.3 * t)
+    est = ref - np.radians(0.4)                          # a constant bias of 0.4 deg
+    valid = np.ones(len(t), bool)
+    for frac, rms in ((0.0, 0.4), (0.3, 0.0)):          # no offset: the bias counts; fitted: removed
+        sc_ = Scoring(fit_fraction=frac)
+        fit, sc = masks(t, np.full_like(t, 10.0), sc_)
+        s = score(t, est, est, valid, ref, fit, sc, sc_)
+        assert s.rms_raw_deg == pytest.approx(rms, abs=1e-9)
+        assert s.rms_deg == pytest.approx(rms, abs=2e-3) and s.r_raw == pytest.approx(1.0)
+    none = score(t, est, est, np.zeros(len(t), bool), ref, fit, sc, sc_)
+    assert np.isnan(none.rms_raw_deg) and none.valid_fraction == 0.0
+
+
+# ---------------------------------------------------------------- the real drives
+@pytest.fixture(scope="module")
+def kitti_cli(tmp_path_factory):
+    out = tmp_path_factory.mktemp("kitti") / "real-data.md"
+    res = CliRunner().invoke(main, ["validate", "kitti", str(KITTI), "--json", "-o", str(out),
+                                    "-e", ",".join(CLI_NAMES)])
+    return res, out
+
+
+@needs_kitti
+def test_validate_kitti_json_report_and_figures(kitti_cli):
+    res, out = kitti_cli
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.stdout)
+    drives = sorted(p.parent.name for p in KITTI.glob("*/oxts"))
+    assert sorted(data["drives"]) == drives and data["errors"] == []
+    for drive, scores in data["drives"].items():
+        assert set(scores) == set(CLI_NAMES)
+        for name, v in scores.items():
+            if name in STEERING:
+                assert v["rms_raw_deg"] is None        # no steering angle on KITTI: no valid sample
+            else:
+                assert 0 < v["rms_raw_deg"] < 3 and v["offset_deg"] == 0.0
+        # README: corr(roll, (ay - vx wz)/g) = 0.96 / 0.94 over the whole drive
+        assert scores["kinematic"]["r_raw"] > 0.9
+        assert (out.parent / f"real-data-kitti-{drive}.png").exists()
+    # pooled raw RMS^2 is the sample-weighted mean of the drives' (no offset on KITTI)
+    text = out.read_text()
+    assert "| pif-modified |" in text and "Pooled" in text
+    for name in ("kinematic", "pif-modified"):
+        assert data["pooled"][name]["n"] > 0
+    assert "Targets" in text
+
+
+@needs_kitti
+def test_pooled_equals_weighted_drive_rms():
+    from roadbank.validation.kitti import validate_kitti
+
+    v = validate_kitti([KITTI], names=["kinematic", "pif-modified"])
+    for name in ("kinematic", "pif-modified"):
+        ns = [int(d.run.scored.sum()) for d in v.drives]
+        ms = [d.scores[name].rms_raw_deg ** 2 for d in v.drives]
+        assert v.pooled[name]["rms_raw_deg"] == pytest.approx(np.sqrt(np.dot(ns, ms) / sum(ns)), rel=1e-9)
+        assert v.pooled[name]["n"] == sum(ns)
+    assert pooled([], ["kinematic"])["kinematic"]["n"] == 0
+
+
+@needs_kitti
+def test_one_bad_drive_does_not_lose_the_others(tmp_path):
+    bad = tmp_path / "2011_01_01_drive_0009_sync" / "oxts"
+    (bad / "data").mkdir(parents=True)
+    (bad / "timestamps.txt").write_text("2011-01-01 12:00:00.0\nnot a time\n")
+    good = next(KITTI.glob("*/oxts")).parent
+    res = CliRunner().invoke(main, ["validate", "kitti", str(bad.parent), str(good), "--json", "--no-sensitivity",
+                                    "-e", "kinematic"])
+    assert res.exit_code == 1 and "Traceback" not in res.output
+    data = json.loads(res.stdout)
+    assert list(data["drives"]) == [good.name]
+    assert "timestamps.txt: line 2: unparsable time stamp" in data["errors"][0]
+
+
+def test_validate_kitti_nothing_readable(tmp_path):
+    res = CliRunner().invoke(main, ["validate", "kitti", str(tmp_path)])
+    assert res.exit_code == 1 and "not a KITTI raw drive" in res.output and "Traceback" not in res.output
+
+
+# ---------------------------------------------------------------- 10 Hz with jitter
+def test_10hz_jitter_against_100hz_on_the_truth():
+    r = jitter_study("bank-lane-change", names=("kinematic", "pio-modified", "pif-modified"))
+    assert r.steps.min() >= 0.06 - 1e-9 and r.steps.max() <= 0.14 + 1e-9
+    assert r.steps.mean() == pytest.approx(0.1, abs=0.01)
+    assert r.substeps == (3, 7)                          # 20 ms substeps: 0.06 s -> 3, 0.14 s -> 7
+    for name in r.rms_100hz:
+        # the same run read at jittered 10 Hz is about as accurate against the truth as at 100 Hz
+        assert r.rms_10hz[name] <= 1.2 * r.rms_100hz[name] + 0.05, (name, r.rms_100hz, r.rms_10hz)
+    # the 20 ms substeps have converged at 10 Hz: 5 ms ones (16x smaller trapezoidal error) change
+    # theta by far less than the 10 Hz accuracy itself
+    for name, d in r.substep_diff.items():
+        assert d["5ms"] < 0.02, (name, d)
+
+
+# ---------------------------------------------------------------- the combined report
+def test_find_datasets_layouts(tmp_path):
+    from roadbank.validation.document import find_datasets
+
+    (tmp_path / "seg" / "processed_log").mkdir(parents=True)
+    for drive in ("kitti/2011_01_01_drive_0001_sync", "kitti/2011_01_01_drive_0002_sync"):
+        (tmp_path / drive / "oxts" / "data").mkdir(parents=True)
+        (tmp_path / drive / "oxts" / "timestamps.txt").write_text("2011-01-01 12:00:00.0\n")
+    found = find_datasets(tmp_path)
+    assert found["comma2k19"] == [tmp_path / "seg"]
+    assert [p.name for p in found["kitti"]] == ["2011_01_01_drive_0001_sync", "2011_01_01_drive_0002_sync"]
+    assert find_datasets(tmp_path / "kitti")["kitti"] == found["kitti"]
+
+
+@needs_kitti
+def test_validate_all_writes_one_report(tmp_path):
+    data = tmp_path / "data"
+    data.mkdir()
+    drive = next(KITTI.glob("*/oxts")).parent
+    (data / drive.name).symlink_to(drive)                # KITTI only: no comma2k19 run, no jitter study
+    out = tmp_path / "docs" / "real-data.md"
+    res = CliRunner().invoke(main, ["validate", "all", str(data), "-o", str(out), "--no-jitter"])
+    assert res.exit_code == 0, res.output
+    text = out.read_text()
+    assert text.startswith("# Real-data validation") and "## Summary" in text
+    assert f"| KITTI | {drive.name} |" in text and "## KITTI raw drives" in text
+    assert (out.parent / f"real-data-kitti-{drive.name}.png").exists()
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    res = CliRunner().invoke(main, ["validate", "all", str(empty), "-o", str(out)])
+    assert res.exit_code == 1 and "no comma2k19 segment or KITTI drive" in res.output
