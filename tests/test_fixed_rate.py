@@ -183,3 +183,10 @@ def test_fixed_rate_tables_only_for_the_scheduled_observers():
         E.make("dfc").discrete_tables(0.01)
     with pytest.raises(ValueError, match="interval"):
         E.make("pif-modified").discrete_tables(0.0)
+
+
+def test_tables_of_one_design_with_two_roll_models_are_not_mixed_up():
+    static = E.make("pif-modified", roll="static").discrete_tables(0.01)
+    dynamic = E.make("pif-modified", roll="dynamic").discrete_tables(0.01)
+    assert static["Phi_r"].shape == (0, 0) and dynamic["Phi_r"].shape == (2, 2)
+    assert np.array_equal(static["Phi"], dynamic["Phi"])      # the observer itself is shared

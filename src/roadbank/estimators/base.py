@@ -216,7 +216,7 @@ class Estimator:
         dt = float(dt)
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"{self.name}: sample interval must be > 0 s, got {dt}")
-        key = (self._design_key(), dt)
+        key = (self._design_key(), self.roll, dt)      # the roll model's tables are in there too
         hit = _DISCRETE_CACHE.get(key)
         if hit is None:
             hit = self._discretise(dt)
