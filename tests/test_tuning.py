@@ -158,3 +158,14 @@ def test_tune_on_dask_gives_the_local_result(tmp_path):
     dask_run, local_run = (tomllib.loads((tmp_path / f).read_text()) for f in ("d.toml", "l.toml"))
     assert dask_run["tuning"] == local_run["tuning"]
     assert dask_run["scores"]["dfc"]["validation_median_rms_deg"] == local_run["scores"]["dfc"]["validation_median_rms_deg"]
+
+
+def test_a_cars_default_pif_takes_R_from_its_yaw_rate_sensor():
+    from roadbank.vehicle import load_vehicle
+    car = load_vehicle("sedan")
+    assert car.make("pif-modified").R[0, 0] == pytest.approx(R_ESP, rel=1e-12)     # ESP sensors
+    noisy = car.with_sensors(r_noise=np.radians(0.5), rate=50.0)
+    expected = (np.radians(0.5) ** 2 + car.sensors.r_resolution ** 2 / 12) / 50.0
+    assert noisy.make("pif-modified").R[0, 0] == pytest.approx(expected, rel=1e-12)
+    assert noisy.make("pif-modified", tuning="paper").R[0, 0] == 0.0035            # Table 4 untouched
+    assert noisy.make("pif-modified", R=1e-6).R[0, 0] == 1e-6
