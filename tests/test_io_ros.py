@@ -9,7 +9,6 @@ body-axis convention (the ROS 1 bag carries an FRD/NED IMU, the others FLU).
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest

@@ -197,18 +197,13 @@ class _Mdf4Channels:
     """
 
     def __init__(self, p: Path, chunk_rows: int):
-        try:
-            from asammdf import MDF
-        except ImportError:
-            raise LogError(f"{p}: reading MDF4 needs the optional dependency asammdf "
-                           "(pip install 'roadbank[mdf]')") from None
         self.p = p
         self.fh = open(p, "rb")
         try:
-            self.mdf = MDF(self.fh)
-        except Exception as exc:
+            self.mdf = readers.open_mdf(p, self.fh)
+        except LogError:
             self.fh.close()
-            raise LogError(f"{p}: not a readable MDF file (truncated or corrupt?): {exc}") from None
+            raise
         self.names = [n for n in self.mdf.channels_db if n not in ("time", "t")]
         rec = max((int(g.channel_group.samples_byte_nr) + int(g.channel_group.invalidation_bytes_nr)
                    for g in self.mdf.groups), default=8)
