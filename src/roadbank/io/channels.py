@@ -34,7 +34,14 @@ road_wheel_angle            rad, deg             flipped (rotation about z)
 reference_roll              rad, deg             none (rotation about x: right
                                                  side down in FRD = left side up
                                                  in ISO)
+latitude, longitude         deg, rad             none (optional; for bank maps)
 ==========================  ===================  ==================================
+
+Raw CAN (``dbc = "car.dbc"``, channels ``{ message = "...", signal = "...", unit = "..." }``)
+and ROS (channels ``{ topic = "...", field = "...", unit = "..." }``, ``ros_time``) are
+described in :mod:`roadbank.io.can`, :mod:`roadbank.io.ros` and docs/io.md; their channels
+carry their own time stamps (no ``time`` role), and a ROS map may leave steering out.
+``convention`` also accepts ``FLU`` (= ISO) and ``NED`` (body axes FRD).
 
 ``time``, ``speed``, ``lateral_acceleration``, ``yaw_rate`` and one of
 ``road_wheel_angle`` / ``steering_wheel_angle`` are required (if both are given,
@@ -176,7 +183,8 @@ class ChannelMap:
                 continue
             if role not in self.channels:
                 raise LogError(f"{src}: channel map has no '{role}' channel (required)")
-        if not any(r in self.channels for r in STEERING):
+        ros = any(s.topic for s in self.channels.values())
+        if not any(r in self.channels for r in STEERING) and not ros:    # robots often have no steering topic
             raise LogError(f"{src}: channel map needs 'road_wheel_angle' or 'steering_wheel_angle'")
         for role, spec in self.channels.items():
             if role not in ROLES:

@@ -75,14 +75,16 @@ def _check_time(source, column: str, t: np.ndarray, raw, label: str = "time") ->
 
 
 def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
-    """Roles to read: speed, lateral_acceleration, yaw_rate, the steering role, [reference_roll].
+    """Roles to read: speed, lateral_acceleration, yaw_rate, [the steering role], [reference_roll].
 
     The steering role is the road-wheel angle if its column exists, else the
-    steering-wheel angle. ``have`` are the columns present; ``names`` all the
+    steering-wheel angle (none if the map has no steering channel: ROS maps). ``have`` are the columns present; ``names`` all the
     file's columns (for messages). LogError for a missing column.
     """
     steer_roles = [r for r in ("road_wheel_angle", "steering_wheel_angle") if r in cmap.channels]
     present = [r for r in steer_roles if cmap.channels[r].column in have]
+    if not steer_roles:      # allowed for ROS maps only (ChannelMap): no steering, delta_f NaN
+        present = [None]
     roles = ["speed", "lateral_acceleration", "yaw_rate"]
     for role in roles:
         col = cmap.channels[role].column
@@ -93,7 +95,8 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
         cols = " or ".join(f"'{cmap.channels[r].column}'" for r in steer_roles)
         raise LogError(f"{p}: channel 'steering' missing: no column {cols} in the file "
                        f"(it has: {', '.join(names) or 'nothing'})")
-    roles.append(present[0])
+    if present[0] is not None:
+        roles.append(present[0])
     if "reference_roll" in cmap.channels:
         roles.append("reference_roll")
         col = cmap.channels["reference_roll"].column
@@ -103,11 +106,14 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
     return roles
 
 
-def road_wheel_angle(cmap: ChannelMap, params: VehicleParams, steer_role: str, values: np.ndarray) -> np.ndarray:
-    """``delta_f`` (rad): the road-wheel angle, or the steering-wheel angle over the steering ratio."""
-    if steer_role == "road_wheel_angle":
-        return values
-    return values / (cmap.steering_ratio or params.steering_ratio)
+def road_wheel_angle(cmap: ChannelMap, params: VehicleParams, roles: list[str], values: dict) -> np.ndarray:
+    """``delta_f`` (rad): the road-wheel angle, or the steering-wheel angle over the steering ratio,
+    or NaN when the map has no steering channel (ROS robots; the modified-model estimators do not read it)."""
+    if "road_wheel_angle" in roles:
+        return values["road_wheel_angle"]
+    if "steering_wheel_angle" in roles:
+        return values["steering_wheel_angle"] / (cmap.steering_ratio or params.steering_ratio)
+    return np.full(len(values["speed"]), np.nan)
 
 
 def load_log(path, channels: ChannelMap | str | Path | None = None, format: str | None = None,
@@ -200,7 +206,7 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     if len(t_base) < 2:
         raise LogError(f"{p}: fewer than 2 samples on the common time base")
 
-    delta = road_wheel_angle(cmap, params, roles[3], values[roles[3]])
+    delta = road_wheel_angle(cmap, params, roles, values)
     try:
         sig = Signals(t_base, values["speed"], values["lateral_acceleration"], values["yaw_rate"], delta)
     except ValueError as exc:

@@ -276,7 +276,7 @@ def stream_log(path, channels: ChannelMap | str | Path | None = None, format: st
 
 
 def _chunk_log(p, fmt, cmap, params, roles, vals, meta, warns, truth=None) -> Log:
-    delta = road_wheel_angle(cmap, params, roles[3], vals[roles[3]])
+    delta = road_wheel_angle(cmap, params, roles, vals)
     try:
         sig = Signals(vals["t"], vals["speed"], vals["lateral_acceleration"], vals["yaw_rate"], delta)
     except ValueError as exc:
