@@ -221,7 +221,8 @@ class PIF(ScheduledObserver):
             mem[o:o + 9] = self.P0.ravel()
 
 
-#: tuning of :class:`PIFRate` found by ``roadbank tune`` (seed 0; docs/estimators.md), R = R_ESP, S = 1
+#: tuning of :class:`PIFRate`: differential evolution on ``roadbank tune``'s training set (seed 0,
+#: 48 drives; docs/estimators.md), R = R_ESP, S = 1
 RATE_TUNING = dict(Q=R_ESP * 10**2.88025985, Q_rate=R_ESP * 10**3.97104448, th=10**-2.10630825 / R_ESP,
                    roll="dynamic")
 #: named tunings of :class:`PIFRate`
