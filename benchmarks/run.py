@@ -1,7 +1,7 @@
 """Run the benchmark suite from a checkout: ``python benchmarks/run.py [-o docs/benchmarks.md] [--quick] [--json]``.
 
-Same as ``roadbank bench``; the suite itself lives in :mod:`roadbank.cli.bench`
-so that the installed command finds it.
+Same as ``roadbank bench``; the suite itself lives in :mod:`roadbank.bench`
+(the command only parses options and prints).
 """
 
 import sys

@@ -3,13 +3,17 @@
 import json
 import math
 
+import pytest
+
 from click.testing import CliRunner
 
 from roadbank.cli import main
-from roadbank.cli.bench import TARGETS, markdown, run_suite, synthetic_log
+from roadbank.bench import (FAMILY_PROBES, TARGETS, Section, markdown, probe_family, register_section,
+                            run_suite, synthetic_log)
 
 REQUIRED = ("pif_ns_per_sample", "pif_vs_filterpy", "step_us_median", "step_us_p99",
-            "plant_realtime_factor", "plant_vs_commonroad", "reproduce_s")
+            "plant_realtime_factor", "plant_vs_commonroad", "reproduce_s", "reproduce_cold_s",
+            "cold_compile_max_s")
 
 
 def _positive_or_explained(res, key):
@@ -29,6 +33,7 @@ def test_bench_cli_tiny_json_and_markdown(tmp_path):
         assert key in res
         _positive_or_explained(res, key)
     assert res["reproduce_s"] is None            # never run on a tiny input
+    assert set(res["cold_compile_s"]) == set(FAMILY_PROBES)
     assert res["machine"]["cores_usable"] >= 1
     assert set(res["targets"]) == set(TARGETS)
     text = out.read_text()
@@ -49,3 +54,30 @@ def test_synthetic_log_is_deterministic_and_covers_the_schedule():
     a, b = synthetic_log(20.0), synthetic_log(20.0)
     assert len(a) == 2001 and (a.vx == b.vx).all()
     assert synthetic_log(600.0).vx.min() < 10 and synthetic_log(600.0).vx.max() > 30
+
+
+@pytest.fixture
+def no_extra_sections():
+    from roadbank.bench import suite
+    saved = list(suite.SECTIONS)
+    suite.SECTIONS[:] = []
+    yield suite.SECTIONS
+    suite.SECTIONS[:] = saved
+
+
+def test_extra_sections_are_run_reported_and_isolated(no_extra_sections):
+    register_section(Section("c_step", "C step cost", lambda cfg: {"ns": 12.5, "size": cfg["size"]},
+                             lambda out: [f"C step: {out['ns']} ns"]))
+    register_section(Section("broken", "A failing section", lambda cfg: 1 / 0))
+    assert [s.name for s in no_extra_sections] == ["c_step", "broken"]
+    res = run_suite("tiny")
+    assert res["c_step"] == {"ns": 12.5, "size": "tiny"}
+    assert "ZeroDivisionError" in res["broken"]["reason"]
+    text = markdown(res, "roadbank bench --tiny")
+    assert "## C step cost" in text and "C step: 12.5 ns" in text and "## A failing section" in text
+
+
+def test_cold_compile_probe_of_one_family_in_a_fresh_process():
+    out = probe_family("dfc")
+    assert out["cold_compile_s"] > 0 and out["cpu_first_s"] > 0, out
+    assert out["again_s"] < out["first_s"]      # the second call runs compiled code

@@ -8,6 +8,7 @@ code for ``run()`` and ``step()``, so streaming and batch give identical numbers
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -17,12 +18,17 @@ from ..models.roll import roll_state_space
 from ..params import VehicleParams
 from ..signals import Estimate, Signals
 from . import kernels as K
+from . import layout as L
+from .discretise import foh
 
 #: Default speed grid of the gain schedules (m/s): v_min .. V_GRID_MAX.
 V_GRID_MAX = 100.0
 V_GRID_STEP = 0.25
 
 _DESIGN_CACHE: dict = {}
+#: settings that do not change the tables (vgrid follows v_min; the rest only enter cfg or the kernel)
+_NOT_DESIGN = ("vgrid", "fixed_dt", "max_substep", "max_gap", "max_angle", "roll")
+_DISCRETE_CACHE: dict = {}
 
 
 class StepResult(NamedTuple):
@@ -67,6 +73,15 @@ class Estimator:
         Largest plausible |theta| = |bank + roll| (rad). A larger estimate means
         the estimator's model has failed; it is output but flagged not valid.
         60 deg leaves room for the steepest banked test-track lanes (~40 deg).
+    sample_rate : float, "auto" or None, default "auto"
+        Sample rate (Hz) of the fixed-rate path (``lpv`` family): samples whose
+        interval is ``1/sample_rate`` (relative tolerance
+        :data:`~roadbank.estimators.layout.DT_REL_TOL`) are processed with the
+        exact discrete-time tables of :meth:`discrete_tables`, all others with
+        the general trapezoidal path. ``"auto"``: the first positive interval
+        between time stamps after a reset sets the rate (same rule in
+        :meth:`run` and :meth:`step`, so both give identical numbers), kept
+        until :meth:`set_sample_rate` changes it. ``None``: general path only.
     v_step, v_max : float, default 0.25, 100 m/s
         Spacing and end of the speed grid of the gain schedules; above ``v_max``
         the gains of ``v_max`` are held. A coarse, short grid designs faster
@@ -86,7 +101,7 @@ class Estimator:
     def __init__(self, params: VehicleParams | None = None, *, v_min: float = 5.0,
                  roll: str = "static", max_substep: float = 0.02, max_gap: float = 1.0,
                  max_angle: float = np.deg2rad(60.0), v_step: float = V_GRID_STEP,
-                 v_max: float = V_GRID_MAX):
+                 v_max: float = V_GRID_MAX, sample_rate: float | str | None = "auto"):
         self.params = params if params is not None else VehicleParams()
         if not isinstance(self.params, VehicleParams):
             raise TypeError("params must be a roadbank.VehicleParams")
@@ -106,13 +121,16 @@ class Estimator:
         self.max_angle = float(max_angle)
         self._roll = roll_state_space(self.params, roll)
         self.vgrid = speed_grid(self.v_min, self.v_max, self.v_step)
-        self._tab, self._nstate, extra = self._cached_design()
-        self._cfg = self._build_cfg(extra)
+        self._tab_cont, self._nstate, self._extra = self._cached_design()
         self._run_fn = getattr(K, f"{self.kernel}_run")
         self._step_fn = getattr(K, f"{self.kernel}_step")
-        self._step_out = getattr(K, f"{self.kernel}_step_out")
-        n = self._nstate
-        self._work = np.zeros(64 + 20 * n * n + 8 * n * K.NETA + 4 * n)
+        self._work = np.zeros(L.work_size(self._nstate))
+        self.fixed_dt = None
+        self._tab = self._tab_cont
+        self._cfg = self._build_cfg(None)
+        self._auto_rate = sample_rate == "auto" and self.kernel == "lpv"
+        if sample_rate is not None and sample_rate != "auto":
+            self.set_sample_rate(sample_rate)
         self.reset()
 
     # -- to implement ------------------------------------------------------
@@ -126,9 +144,7 @@ class Estimator:
     def _cached_design(self):
         """``_design()`` memoised on the estimator type and every setting made so far
         (parameters and tuning): building the same estimator again costs nothing."""
-        key = (type(self).__name__,
-               tuple(sorted((k, repr(v)) for k, v in vars(self).items()
-                            if not k.startswith("_") and k != "vgrid")))   # vgrid follows v_min
+        key = self._design_key()
         hit = _DESIGN_CACHE.get(key)
         if hit is None:
             hit = self._design()
@@ -137,26 +153,150 @@ class Estimator:
             _DESIGN_CACHE[key] = hit
         return hit
 
+    def _design_key(self) -> tuple:
+        """The estimator type and every public setting made so far (parameters and tuning)."""
+        return (type(self).__name__,
+                tuple(sorted((k, repr(v)) for k, v in vars(self).items()
+                             if not k.startswith("_") and k not in _NOT_DESIGN)))
+
     # -- configuration -----------------------------------------------------
-    def _build_cfg(self, extra: np.ndarray) -> np.ndarray:
+    def _build_cfg(self, roll_discrete) -> np.ndarray:
+        """``cfg`` (layout: :mod:`roadbank.estimators.layout`); ``roll_discrete`` is the roll
+        model's fixed-rate ``(Phi, Gam0, Gam1)`` or None."""
         F, G, H, D = self._roll
         nr = F.shape[0]
         J = -np.linalg.solve(F, G).ravel() if nr else np.zeros(0)
-        head = np.zeros(K.C_ROLL)
-        head[K.C_N] = self._nstate
-        head[K.C_V0] = self.vgrid[0]
-        head[K.C_DV] = self.vgrid[1] - self.vgrid[0]
-        head[K.C_NG] = len(self.vgrid)
-        head[K.C_VMIN] = self.v_min
-        head[K.C_SUB] = self.max_substep
-        head[K.C_GAP] = self.max_gap
-        head[K.C_WMAX] = np.sin(self.max_angle)
-        head[K.C_G] = self.params.g
-        head[K.C_NR] = nr
-        head[K.C_USE:K.C_USE + 3] = [float(u) for u in self.uses]
+        if roll_discrete is None:
+            roll_discrete = (np.zeros((nr, nr)), np.zeros(nr), np.zeros(nr))
+        head = np.zeros(L.NHEAD)
+        head[L.C_N] = self._nstate
+        head[L.C_V0] = self.vgrid[0]
+        head[L.C_DV] = self.vgrid[1] - self.vgrid[0]
+        head[L.C_NG] = len(self.vgrid)
+        head[L.C_VMIN] = self.v_min
+        head[L.C_SUB] = self.max_substep
+        head[L.C_GAP] = self.max_gap
+        head[L.C_WMAX] = np.sin(self.max_angle)
+        head[L.C_G] = self.params.g
+        head[L.C_NR] = nr
+        head[L.C_USE:L.C_USE + 3] = [float(u) for u in self.uses]
+        head[L.C_DTFIX] = self.fixed_dt or 0.0
+        head[L.C_DTOL] = L.DT_REL_TOL
+        head[L.C_OFAM] = L.roll_block(nr).end
         self._fill_cfg_head(head)
-        roll = np.concatenate([F.ravel(), G.ravel(), H.ravel(), D.ravel(), J])
-        return np.ascontiguousarray(np.concatenate([head, roll, np.asarray(extra, float).ravel()]))
+        roll = np.concatenate([F.ravel(), G.ravel(), H.ravel(), D.ravel(), J]
+                              + [np.ravel(m) for m in roll_discrete])
+        return np.ascontiguousarray(np.concatenate([head, roll, np.asarray(self._extra, float).ravel()]))
+
+    # -- fixed-rate path -----------------------------------------------------
+    def discrete_tables(self, dt: float) -> dict[str, np.ndarray]:
+        """Exact discrete-time observer per grid speed for the sample interval ``dt`` (s).
+
+        What the fixed-rate path runs (see :mod:`roadbank.estimators.kernels`),
+        as plain arrays for export (e.g. to an ECU). Per sample, with the
+        matrices interpolated linearly in ``vx`` between grid speeds::
+
+            xi  = Phi xi + Gam0 eta_prev + Gam1 eta,   w = H xi + D eta
+            z   = Phi_r z + Gam0_r ay_prev + Gam1_r ay, phi = H_r z + D_r ay
+
+        and at a (re)start ``xi = J eta``, ``z = J_r ay``;
+        ``eta = [delta_f, ay, r]`` (rad, m/s^2, rad/s) with unused channels set to 0.
+
+        Returns
+        -------
+        dict
+            ``vgrid`` (g,) m/s; ``Phi`` (g, n, n); ``Gam0``, ``Gam1``, ``J`` (g, n, 3);
+            ``H`` (g, n); ``D`` (g, 3); ``Phi_r`` (nr, nr); ``Gam0_r``, ``Gam1_r``,
+            ``H_r``, ``J_r`` (nr,); ``D_r`` (); ``uses`` (3,) 0/1 flags; ``dt`` (s).
+            The ``lpv`` family only (ScheduledObserver).
+        """
+        if self.kernel != "lpv":
+            raise ValueError(f"{self.name}: fixed-rate tables exist for the scheduled linear observers only "
+                             f"(this estimator runs the {self.kernel!r} kernel)")
+        dt = float(dt)
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"{self.name}: sample interval must be > 0 s, got {dt}")
+        key = (self._design_key(), self.roll, dt)      # the roll model's tables are in there too
+        hit = _DISCRETE_CACHE.get(key)
+        if hit is None:
+            hit = self._discretise(dt)
+            if len(_DISCRETE_CACHE) > 256:
+                _DISCRETE_CACHE.clear()
+            _DISCRETE_CACHE[key] = hit
+        return {k: v.copy() for k, v in hit.items()}
+
+    def _discretise(self, dt: float) -> dict[str, np.ndarray]:
+        n = self._nstate
+        row = L.lpv_row(n)
+        tab = self._tab_cont
+        g = tab.shape[0]
+        F = tab[:, row.F:row.G].reshape(g, n, n)
+        G = tab[:, row.G:row.H].reshape(g, n, L.NETA)
+        out = {"vgrid": self.vgrid.copy(), "dt": np.float64(dt),
+               "H": tab[:, row.H:row.D].copy(), "D": tab[:, row.D:row.J].copy(),
+               "J": tab[:, row.J:row.cont].reshape(g, n, L.NETA).copy(),
+               "uses": np.array([float(u) for u in self.uses])}
+        disc = [foh(F[k], G[k], dt) for k in range(g)]
+        out["Phi"] = np.array([d[0] for d in disc]).reshape(g, n, n)
+        out["Gam0"] = np.array([d[1] for d in disc]).reshape(g, n, L.NETA)
+        out["Gam1"] = np.array([d[2] for d in disc]).reshape(g, n, L.NETA)
+        Fr, Gr, Hr, Dr = self._roll
+        Phi_r, G0r, G1r = foh(Fr, Gr, dt)
+        out.update(Phi_r=Phi_r, Gam0_r=G0r.ravel(), Gam1_r=G1r.ravel(), H_r=np.ravel(Hr).copy(),
+                   D_r=np.float64(np.ravel(Dr)[0]) if np.size(Dr) else np.float64(0.0),
+                   J_r=(-np.linalg.solve(Fr, Gr).ravel() if Fr.shape[0] else np.zeros(0)))
+        return out
+
+    def set_sample_rate(self, rate: float | None) -> None:
+        """Use the fixed-rate path for samples ``1/rate`` seconds apart (Hz); ``None`` switches it off.
+
+        Builds (or takes from the cache) :meth:`discrete_tables`. Does not
+        reset the state. Only the ``lpv`` family has a fixed-rate path; for the
+        others this records nothing.
+        """
+        if rate is None or self.kernel != "lpv":
+            self.fixed_dt = None
+            self._tab = self._tab_cont
+            self._cfg = self._build_cfg(None)
+            return
+        if not (np.isfinite(rate) and rate > 0):
+            raise ValueError(f"{self.name}: sample_rate must be > 0 Hz, got {rate}")
+        dt = 1.0 / float(rate)
+        d = self.discrete_tables(dt)
+        g, n = d["Phi"].shape[0], self._nstate
+        self.fixed_dt = dt
+        self._tab = np.ascontiguousarray(np.hstack([self._tab_cont, d["Phi"].reshape(g, n * n),
+                                                    d["Gam0"].reshape(g, -1), d["Gam1"].reshape(g, -1)]))
+        self._cfg = self._build_cfg((d["Phi_r"], d["Gam0_r"], d["Gam1_r"]))
+
+    def _rate_from_interval(self, h: float) -> None:
+        rate = 1.0 / h
+        if abs(rate - round(rate)) <= 1e-9 * rate:    # time stamps k * h in floating point
+            rate = float(round(rate))
+        self.set_sample_rate(rate)
+
+    def _observe_time(self, t: float) -> None:
+        """Automatic rate (``sample_rate="auto"``), one sample: the first positive interval
+        between finite time stamps sets the rate."""
+        if not math.isfinite(t):
+            return
+        if t > self._det_t:                     # False while _det_t is NaN
+            self._rate_from_interval(t - self._det_t)
+        self._det_t = t
+
+    def _first_interval(self, t: np.ndarray) -> int:
+        """Index of the sample at which :meth:`_observe_time` would set the rate (``len(t)``:
+        none); updates the detector to the end of ``t`` when there is none."""
+        idx = np.flatnonzero(np.isfinite(t))
+        tf = np.concatenate([[self._det_t], t[idx]])
+        with np.errstate(invalid="ignore"):
+            hit = np.flatnonzero(np.diff(tf) > 0)
+        if hit.size:
+            self._det_t = float(tf[hit[0]])          # the detector just before that sample
+            return int(idx[hit[0]])
+        if idx.size:
+            self._det_t = float(tf[-1])
+        return len(t)
 
     def _fill_cfg_head(self, head: np.ndarray) -> None:
         """Hook for estimator scalars stored in the cfg head (e.g. DFC a_ref)."""
@@ -164,10 +304,9 @@ class Estimator:
     # -- public API ----------------------------------------------------------
     def reset(self) -> None:
         """Forget all history: the next sample initialises the estimator."""
-        nr = self._roll[0].shape[0]
-        n = self._nstate
-        self._mem = np.zeros(K.M_X + n + nr + n * n + 2)
+        self._mem = np.zeros(L.mem_size(self._nstate, self._roll[0].shape[0]))
         self._initial_memory(self._mem)
+        self._det_t = math.nan     # automatic rate detector (sample_rate="auto"): last finite time
 
     def step(self, t: float, vx: float, ay: float, r: float, delta_f: float = float("nan")) -> StepResult:
         """Process one sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), delta_f (rad).
@@ -181,7 +320,9 @@ class Estimator:
         """
         # One compiled call returns the outputs (no numpy scalar reads afterwards);
         # float() keeps numpy scalars / ints from triggering a new compilation.
-        return _new_result(StepResult, self._step_out(self._mem, self._cfg, self._tab, self._work,
+        if self._auto_rate and self.fixed_dt is None:
+            self._observe_time(float(t))
+        return _new_result(StepResult, self._step_fn(self._mem, self._cfg, self._tab, self._work,
                                                       float(t), float(vx), float(delta_f), float(ay),
                                                       float(r)))
 
@@ -195,6 +336,9 @@ class Estimator:
         reset : bool, default True
             Start from scratch. ``reset=False`` continues from the current state,
             so a log processed in consecutive chunks equals one run.
+
+        With ``sample_rate="auto"`` the first positive interval sets the rate,
+        exactly as in :meth:`step`.
         """
         if not isinstance(signals, Signals):
             raise TypeError("run() expects a roadbank.Signals")
@@ -207,8 +351,14 @@ class Estimator:
         phi = np.empty(n)
         valid = np.empty(n, dtype=np.bool_)
         xs = np.empty((n, max(self._nstate, 2)))
-        self._run_fn(self._mem, self._cfg, self._tab, self._work, signals.t, signals.vx, signals.delta_f,
-                     signals.ay, signals.r, w, theta, phib, phi, valid, xs)
+        k = self._first_interval(signals.t) if self._auto_rate and self.fixed_dt is None else n
+        for a, b in ((0, k), (k, n)):
+            if a == k and k < n:
+                self._observe_time(float(signals.t[k]))   # sets the rate (and the detector)
+            if b > a:
+                self._run_fn(self._mem, self._cfg, self._tab, self._work, signals.t[a:b], signals.vx[a:b],
+                             signals.delta_f[a:b], signals.ay[a:b], signals.r[a:b], w[a:b], theta[a:b],
+                             phib[a:b], phi[a:b], valid[a:b], xs[a:b])
         states = {name: xs[:, i] for i, name in enumerate(self.state_names)}
         states["phi"] = phi
         return Estimate(self.name, signals.t.copy(), w, theta, phib, valid, states)
@@ -218,17 +368,18 @@ class Estimator:
 
         Runs one step of ``dt`` seconds at speed ``vx`` from each unit state and
         returns the columns; its eigenvalues are the discrete error dynamics.
-        Resets the estimator.
+        This is the fixed-rate map when ``dt`` is the estimator's fixed interval,
+        else the general (trapezoidal) one. Resets the estimator.
         """
         n = self._nstate
         phi = np.zeros((n, n))
         for i in range(n):
             self.reset()
             self._step_fn(self._mem, self._cfg, self._tab, self._work, 0.0, float(vx), 0.0, 0.0, 0.0)
-            self._mem[K.M_X:K.M_X + n] = np.eye(n)[i]
+            self._mem[L.M_X:L.M_X + n] = np.eye(n)[i]
             self._step_fn(self._mem, self._cfg, self._tab, self._work, float(dt), float(vx),
                           0.0, 0.0, 0.0)
-            phi[:, i] = self._mem[K.M_X:K.M_X + n]
+            phi[:, i] = self._mem[L.M_X:L.M_X + n]
         self.reset()
         return phi
 
@@ -272,7 +423,7 @@ class ScheduledObserver(Estimator):
 
 def embed_inputs(cols: dict[int, np.ndarray], n_rows: int) -> np.ndarray:
     """Matrix with columns placed at eta positions {0: delta_f, 1: ay, 2: r}."""
-    M = np.zeros((n_rows, K.NETA))
+    M = np.zeros((n_rows, L.NETA))
     for j, c in cols.items():
         M[:, j] = np.ravel(c)
     return M

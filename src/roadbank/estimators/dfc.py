@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..models.bicycle import steady_state_gains
-from . import kernels as K
+from . import layout as L
 from .base import Estimator
 
 A_REF = 4.0
@@ -56,5 +56,5 @@ class DFC(Estimator):
         return np.ascontiguousarray(tab), 2, np.zeros(0)
 
     def _fill_cfg_head(self, head):
-        head[K.C_AREF] = self.a_ref
-        head[K.C_TAU] = self.tau
+        head[L.C_AREF] = self.a_ref
+        head[L.C_TAU] = self.tau

@@ -1,22 +1,14 @@
 r"""Compiled per-sample recursions of all estimators (numba, ``cache=True``).
 
 This is the only module with compiled estimator code; Python prepares the
-arrays. Three families share the same sample handling:
+arrays, whose layout :mod:`roadbank.estimators.layout` defines. Three families
+share the same sample handling:
 
 * ``lpv``  — linear observers with a speed-scheduled table (kinematic, UIO,
   PIO, steady-state PIF, Kalman): :math:`\xi' = F(v_x)\xi + G(v_x)\eta`,
   :math:`w = H(v_x)\xi + D(v_x)\eta` with :math:`\eta = [\delta_f, a_y, r]`.
 * ``riccati`` — the PIF with the time-varying Riccati ODE (paper eq 43).
 * ``dfc`` — dynamic filter compensation (nonlinear gate + low-pass).
-
-Discretisation: the trapezoidal rule (Tustin), which is A-stable — for a
-frozen ``vx`` the discrete map :math:`(I - hF/2)^{-1}(I + hF/2)` is a contraction
-whenever ``F`` is Hurwitz, at any step ``h`` — with the step split into
-substeps of at most ``max_substep`` seconds so that the stiff low-speed poles
-(about -150 1/s) are not mapped close to -1 at low sample rates. The input is
-interpolated linearly between the previous and the current sample. The Riccati
-ODE is advanced with the same trapezoidal rule applied to its linear
-Hamiltonian form :math:`[X; Y]' = \mathcal{H}[X; Y]`, :math:`P = Y X^{-1}`.
 
 Sample handling (all families): a sample is *valid* when the time is finite
 and later than the last valid sample, ``vx`` is finite and ``>= v_min`` and
@@ -25,48 +17,55 @@ state untouched and repeat the last outputs. After a gap longer than
 ``max_gap`` (or at the first valid sample) the state is re-initialised at the
 observer's equilibrium for the current inputs, ``xi = -F^{-1} G eta``.
 
-Memory layout of the state vector ``mem`` and the configuration ``cfg``
-are given by the ``M_*`` and ``C_*`` offsets below.
+Schedules are interpolated linearly in ``vx`` (the current sample's speed)
+between the two neighbouring grid speeds, entry by entry:
+``M(vx) = M[i] + a (M[i+1] - M[i])``, ``i = floor((vx - v0)/dv)``, ``a`` the
+remainder, clamped at both ends of the grid.
+
+**Fixed-rate path** (``lpv``, when the estimator has tables for a sample
+interval ``h`` and the sample's interval equals ``h`` within ``DT_REL_TOL``
+relative; what an ECU runs). Per sample, with the previous inputs ``eta-``::
+
+    xi  = Phi(vx) xi + Gam0(vx) eta- + Gam1(vx) eta
+    w   = H(vx) xi + D(vx) eta
+    z   = Phi_r z + Gam0_r ay- + Gam1_r ay          (roll model, speed independent)
+    phi = H_r z + D_r ay
+    theta = asin(clip(w, -1, 1)),  phi_b = theta - phi,  valid = |w| <= sin(max_angle)
+
+``Phi, Gam0, Gam1`` are the exact discretisation of the continuous observer at
+each grid speed for inputs varying linearly between samples (first-order hold,
+:meth:`Estimator.discrete_tables`), so this path is exact for a frozen speed.
+
+**General path** (any other interval: irregular sampling, jitter, after a
+gap): the trapezoidal rule (Tustin), which is A-stable — for a frozen ``vx``
+the discrete map :math:`(I - hF/2)^{-1}(I + hF/2)` is a contraction whenever
+``F`` is Hurwitz, at any step ``h`` — with the step split into substeps of at
+most ``max_substep`` seconds so that the stiff low-speed poles (about -150
+1/s) are not mapped close to -1 at low sample rates, on the interpolated
+continuous matrices, the input interpolated linearly between the previous and
+the current sample. The Riccati ODE is advanced with the same trapezoidal
+rule applied to its linear Hamiltonian form
+:math:`[X; Y]' = \mathcal{H}[X; Y]`, :math:`P = Y X^{-1}`.
+
+Compile time: every function is compiled once as a normal numba function
+(no numba-IR inlining, no ``fastmath``); LLVM inlines the small helpers. The
+``lpv`` kernels allocate nothing and are compiled without the numba runtime
+(``_nrt=False``), so no array is reference-counted in the per-sample loop.
 """
 
 from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit
 
-# --- state vector ``mem`` -------------------------------------------------
-M_INIT = 0      # 1.0 once initialised
-M_TLAST = 1     # time of the last valid sample (s)
-M_W = 2         # outputs held between samples: w, theta, phi_b, phi
-M_THETA = 3
-M_PHIB = 4
-M_PHI = 5
-M_AUX = 6       # DFC: previous gated estimate
-M_ETA = 8       # previous inputs [delta_f, ay, r] (3)
-M_X = 11        # observer state (n), then roll state (nr), then Riccati P (n*n)
+from .layout import (C_AREF, C_DTFIX, C_DTOL, C_DV, C_G, C_GAP, C_N, C_NG, C_NR, C_OFAM, C_P, C_ROLL,  # noqa: F401
+                     C_SUB, C_TAU, C_USE, C_V0, C_VMIN, C_WMAX, M_AY, M_ETA, M_GATED, M_INIT, M_PHI, M_PHIB,
+                     M_THETA, M_TLAST, M_W, M_X, NETA)
 
-# --- configuration ``cfg`` --------------------------------------------------
-C_N = 0         # observer states n
-C_P = 1         # Riccati: number of outputs p
-C_V0 = 2        # speed grid start (m/s), step (m/s), points
-C_DV = 3
-C_NG = 4
-C_VMIN = 5      # v_min (m/s)
-C_SUB = 6       # max substep (s)
-C_GAP = 7       # max gap before re-initialisation (s)
-C_G = 8         # gravity (m/s^2)
-C_NR = 9        # roll-model states (0 or 2)
-C_USE = 10      # uses delta_f, ay, r (3 flags)
-C_AREF = 13     # DFC a_ref (m/s^2)
-C_TAU = 14      # DFC low-pass time constant (s)
-C_WMAX = 15     # sin(max_angle): larger |w| is flagged implausible
-C_ROLL = 16     # roll model: F (nr*nr), G (nr), H (nr), D (1), J (nr)
-# Riccati constants follow the roll block: Rinv (p*p), W (n*n), Mneg (n*n)
-
-NETA = 3
-
+# ---------------------------------------------------------------------------------
+# linear algebra on small matrices
+# ---------------------------------------------------------------------------------
 
 @njit(cache=True)
 def _lu(M, piv, n):
@@ -144,19 +143,6 @@ def _tustin(x, F, G, e0, e1, dt, max_sub, Mw, piv, rhs):
             x[i] = rhs[i]
 
 
-@njit(cache=True, inline="always")
-def _grid(cfg, vx):
-    """Index and weight of ``vx`` on the speed grid (clamped at both ends)."""
-    s = (vx - cfg[C_V0]) / cfg[C_DV]
-    last = int(cfg[C_NG]) - 1
-    if last == 0 or s <= 0.0:
-        return 0, 0.0
-    if s >= last:
-        return last - 1, 1.0
-    i = int(s)
-    return i, s - i
-
-
 @njit(cache=True)
 def _lerp(tab, i, a, off, out2d):
     """Fill ``out2d`` (row-major) from ``tab[i:i+2, off:...]`` interpolated with weight ``a``."""
@@ -170,22 +156,7 @@ def _lerp(tab, i, a, off, out2d):
     return k
 
 
-@njit(cache=True, inline="always")
-def _sample_valid(mem, cfg, t, vx, d, ay, r):
-    if not (math.isfinite(t) and math.isfinite(vx)) or vx < cfg[C_VMIN]:
-        return False
-    if cfg[C_USE] > 0 and not math.isfinite(d):
-        return False
-    if cfg[C_USE + 1] > 0 and not math.isfinite(ay):
-        return False
-    if cfg[C_USE + 2] > 0 and not math.isfinite(r):
-        return False
-    if mem[M_INIT] > 0 and t <= mem[M_TLAST]:
-        return False
-    return True
-
-
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False, error_model="numpy")
 def _lu_flat(M, o, piv, op, n):
     """:func:`_lu` on the row-major ``n x n`` matrix stored in ``M[o:o + n*n]`` (pivots in ``piv[op:]``)."""
     for k in range(n):
@@ -211,7 +182,7 @@ def _lu_flat(M, o, piv, op, n):
                 M[o + i * n + j] -= f * M[o + k * n + j]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False, error_model="numpy")
 def _lu_solve_flat(M, o, piv, op, b, ob, n):
     """:func:`_lu_solve` on flat storage: solves in place in ``b[ob:ob + n]``."""
     for k in range(n):
@@ -232,9 +203,9 @@ def _lu_solve_flat(M, o, piv, op, b, ob, n):
         b[ob + i] = s / M[o + i * n + i]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, _nrt=False, error_model="numpy")
 def _tustin_flat(x, ox, n, A, oF, oG, m, E0, oe0, E1, oe1, dt, max_sub, W, oM):
-    """:func:`_tustin` on flat storage, without array views (the per-sample hot path).
+    """:func:`_tustin` on flat storage (the general path of the ``lpv`` family and the roll model).
 
     State ``x[ox:ox+n]``; ``F`` (n x n) at ``A[oF:]`` and ``G`` (n x m) at
     ``A[oG:]``, row-major; inputs ``e0``/``e1`` at ``E0[oe0:]``/``E1[oe1:]``;
@@ -254,7 +225,7 @@ def _tustin_flat(x, ox, n, A, oF, oG, m, E0, oe0, E1, oe1, dt, max_sub, W, oM):
         W[oM + i * n + i] += 1.0
     _lu_flat(W, oM, W, opiv, n)
     for k in range(nsub):
-        a = (2.0 * k + 1.0) / nsub
+        a = (2.0 * k + 1.0) / nsub  # e0*(1-a0)+e1*a0 + e0*(1-a1)+e1*a1 = 2 e0 + (e1-e0)*(a0+a1)
         for i in range(n):
             s = x[ox + i]
             for j in range(n):
@@ -267,8 +238,55 @@ def _tustin_flat(x, ox, n, A, oF, oG, m, E0, oe0, E1, oe1, dt, max_sub, W, oM):
             x[ox + i] = W[orhs + i]
 
 
-@njit(cache=True, inline="always")
-def _finish(mem, cfg, w, ay, dt, restart, work, o):
+# ---------------------------------------------------------------------------------
+# sample handling shared by the families
+# ---------------------------------------------------------------------------------
+
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+def _grid(cfg, vx):
+    """Index and weight of ``vx`` on the speed grid (clamped at both ends)."""
+    s = (vx - cfg[C_V0]) / cfg[C_DV]
+    last = int(cfg[C_NG]) - 1
+    if last == 0 or s <= 0.0:
+        return 0, 0.0
+    if s >= last:
+        return last - 1, 1.0
+    i = int(s)
+    return i, s - i
+
+
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+def _sample_valid(mem, cfg, t, vx, d, ay, r):
+    if not (math.isfinite(t) and math.isfinite(vx)) or vx < cfg[C_VMIN]:
+        return False
+    if cfg[C_USE] > 0 and not math.isfinite(d):
+        return False
+    if cfg[C_USE + 1] > 0 and not math.isfinite(ay):
+        return False
+    if cfg[C_USE + 2] > 0 and not math.isfinite(r):
+        return False
+    if mem[M_INIT] > 0 and t <= mem[M_TLAST]:
+        return False
+    return True
+
+
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+def _begin(mem, cfg, t):
+    """Common start of a valid sample: returns ``(dt, restart, fixed)`` and records the time.
+
+    ``fixed``: not a restart and the interval is the fixed rate's within the tolerance.
+    """
+    restart = mem[M_INIT] == 0.0 or (t - mem[M_TLAST]) > cfg[C_GAP]
+    dt = 0.0 if restart else t - mem[M_TLAST]
+    h = cfg[C_DTFIX]
+    fixed = (not restart) and h > 0.0 and abs(dt - h) <= cfg[C_DTOL] * h
+    mem[M_INIT] = 1.0
+    mem[M_TLAST] = t
+    return dt, restart, fixed
+
+
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+def _finish(mem, cfg, w, ay, dt, restart, fixed, work, o):
     """Roll separation and output of one used sample: updates the held outputs.
 
     Returns whether the output is plausible: ``|w| <= sin(max_angle)``
@@ -276,7 +294,9 @@ def _finish(mem, cfg, w, ay, dt, restart, work, o):
     front tyre in an original-model observer; ``|w| > 1`` has no angle at all
     and theta is clipped to +-90 deg) and the caller flags the sample not valid.
 
-    ``work[o:]`` is scratch of at least ``nr*nr + 2 nr + 2`` floats.
+    The roll block (offsets as :func:`roadbank.estimators.layout.roll_block`;
+    ``nr`` is 0 or 2) is advanced by its fixed-rate map when ``fixed``, else by
+    the trapezoidal rule. ``work[o:]`` is scratch of at least ``nr`` floats.
     """
     n = int(cfg[C_N])
     nr = int(cfg[C_NR])
@@ -285,15 +305,49 @@ def _finish(mem, cfg, w, ay, dt, restart, work, o):
     oH = oG + nr
     oD = oH + nr
     oJ = oD + 1
+    oPhi = oJ + nr
+    oG0 = oPhi + nr * nr
+    oG1 = oG0 + nr
     oz = M_X + n
     if restart:
         for i in range(nr):
             mem[oz + i] = cfg[oJ + i] * ay
-    elif nr > 0:
-        work[o] = mem[M_AUX + 1]
-        work[o + 1] = ay
-        _tustin_flat(mem, oz, nr, cfg, oF, oG, 1, work, o, work, o + 1, dt, cfg[C_SUB], work, o + 2)
-    mem[M_AUX + 1] = ay
+    elif fixed:
+        ay0 = mem[M_AY]
+        for i in range(nr):
+            s = cfg[oG0 + i] * ay0 + cfg[oG1 + i] * ay
+            for j in range(nr):
+                s += cfg[oPhi + i * nr + j] * mem[oz + j]
+            work[o + i] = s
+        for i in range(nr):
+            mem[oz + i] = work[o + i]
+    elif nr == 2:
+        # trapezoidal rule, substeps, ay linear in time; (I - hh F)^-1 by its adjugate
+        nsub = max(1, int(math.ceil(dt / cfg[C_SUB] - 1e-9)))
+        hh = 0.5 * (dt / nsub)
+        f00 = cfg[oF]
+        f01 = cfg[oF + 1]
+        f10 = cfg[oF + 2]
+        f11 = cfg[oF + 3]
+        g0 = cfg[oG]
+        g1 = cfg[oG + 1]
+        m00 = 1.0 - hh * f00
+        m01 = -hh * f01
+        m10 = -hh * f10
+        m11 = 1.0 - hh * f11
+        inv = 1.0 / (m00 * m11 - m01 * m10)
+        z0 = mem[oz]
+        z1 = mem[oz + 1]
+        ay0 = mem[M_AY]
+        for k in range(nsub):
+            u = 2.0 * ay0 + ((2.0 * k + 1.0) / nsub) * (ay - ay0)
+            b0 = z0 + hh * (f00 * z0 + f01 * z1) + hh * g0 * u
+            b1 = z1 + hh * (f10 * z0 + f11 * z1) + hh * g1 * u
+            z0 = (m11 * b0 - m01 * b1) * inv
+            z1 = (m00 * b1 - m10 * b0) * inv
+        mem[oz] = z0
+        mem[oz + 1] = z1
+    mem[M_AY] = ay
     phi = cfg[oD] * ay
     for i in range(nr):
         phi += cfg[oH + i] * mem[oz + i]
@@ -306,17 +360,7 @@ def _finish(mem, cfg, w, ay, dt, restart, work, o):
     return abs(w) <= cfg[C_WMAX]
 
 
-@njit(cache=True, inline="always")
-def _begin(mem, cfg, t):
-    """Common start of a valid sample: returns (dt, restart) and records the time."""
-    restart = mem[M_INIT] == 0.0 or (t - mem[M_TLAST]) > cfg[C_GAP]
-    dt = 0.0 if restart else t - mem[M_TLAST]
-    mem[M_INIT] = 1.0
-    mem[M_TLAST] = t
-    return dt, restart
-
-
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
 def _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x):
     """Copy sample ``k``'s outputs and first ``n`` states from ``mem`` into the batch arrays."""
     out_valid[k] = ok
@@ -328,66 +372,88 @@ def _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
         out_x[k, p] = mem[M_X + p]
 
 
-# --------------------------------------------------------------------------
+# ---------------------------------------------------------------------------------
 # LPV observers
-# --------------------------------------------------------------------------
+# ---------------------------------------------------------------------------------
 
-@njit(cache=True, inline="always")
-def _lpv3(mem, tab, i, i1, a, u0, u1, u2, dt, max_sub, restart):
-    """Three-state fast path of :func:`lpv_step` (PIF, PIO, Kalman): returns ``w``.
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+def _interp(tab, i, a, lo, hi, row):
+    """``row[k] = tab[i, k] + a (tab[i+1, k] - tab[i, k])`` for ``lo <= k < hi`` (schedule at ``vx``)."""
+    i1 = min(i + 1, tab.shape[0] - 1)
+    for k in range(lo, hi):
+        row[k] = tab[i, k] + a * (tab[i1, k] - tab[i, k])
 
-    The same recursion as the generic path, written on local scalars (the
-    compiler keeps them in registers: no scratch stores, no aliasing between
-    arrays), with the trapezoidal matrix ``M = I - (h/2) F`` inverted once
-    per sample through its adjugate instead of an LU factorisation. Both are
-    the same map; they differ only by rounding (about 1e-16 relative).
-    ``u0, u1, u2`` are the current inputs ``eta = [delta_f, ay, r]``.
+
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+def _lpv3(mem, tab, i, a, fixed, dt, max_sub, u0, u1, u2):
+    """Three-state observers (PIF, PIO, Kalman), not restarting: advances ``xi`` and returns ``w``.
+
+    The same maps as the generic loops of :func:`lpv_step`, on local scalars
+    read straight from the two table rows (layout.lpv_row(3): F 0, G 9, H 18,
+    D 21, J 24, Phi 33, Gam0 42, Gam1 51). Fixed rate:
+    ``xi = Phi xi + Gam0 eta- + Gam1 eta``. General: the trapezoidal rule with
+    ``M = I - (h/2) F`` inverted once per sample through its adjugate (the same
+    map as an LU solve up to rounding, about 1e-16 relative).
     """
-    f00 = tab[i, 0] + a * (tab[i1, 0] - tab[i, 0])
-    f01 = tab[i, 1] + a * (tab[i1, 1] - tab[i, 1])
-    f02 = tab[i, 2] + a * (tab[i1, 2] - tab[i, 2])
-    f10 = tab[i, 3] + a * (tab[i1, 3] - tab[i, 3])
-    f11 = tab[i, 4] + a * (tab[i1, 4] - tab[i, 4])
-    f12 = tab[i, 5] + a * (tab[i1, 5] - tab[i, 5])
-    f20 = tab[i, 6] + a * (tab[i1, 6] - tab[i, 6])
-    f21 = tab[i, 7] + a * (tab[i1, 7] - tab[i, 7])
-    f22 = tab[i, 8] + a * (tab[i1, 8] - tab[i, 8])
-    g00 = tab[i, 9] + a * (tab[i1, 9] - tab[i, 9])
-    g01 = tab[i, 10] + a * (tab[i1, 10] - tab[i, 10])
-    g02 = tab[i, 11] + a * (tab[i1, 11] - tab[i, 11])
-    g10 = tab[i, 12] + a * (tab[i1, 12] - tab[i, 12])
-    g11 = tab[i, 13] + a * (tab[i1, 13] - tab[i, 13])
-    g12 = tab[i, 14] + a * (tab[i1, 14] - tab[i, 14])
-    g20 = tab[i, 15] + a * (tab[i1, 15] - tab[i, 15])
-    g21 = tab[i, 16] + a * (tab[i1, 16] - tab[i, 16])
-    g22 = tab[i, 17] + a * (tab[i1, 17] - tab[i, 17])
-    h0 = tab[i, 18] + a * (tab[i1, 18] - tab[i, 18])
-    h1 = tab[i, 19] + a * (tab[i1, 19] - tab[i, 19])
-    h2 = tab[i, 20] + a * (tab[i1, 20] - tab[i, 20])
-    d0 = tab[i, 21] + a * (tab[i1, 21] - tab[i, 21])
-    d1 = tab[i, 22] + a * (tab[i1, 22] - tab[i, 22])
-    d2 = tab[i, 23] + a * (tab[i1, 23] - tab[i, 23])
-    if restart:
-        x0 = 0.0
-        x1 = 0.0
-        x2 = 0.0
-        for q in range(3):
-            uq = u0 if q == 0 else (u1 if q == 1 else u2)
-            x0 += (tab[i, 24 + q] + a * (tab[i1, 24 + q] - tab[i, 24 + q])) * uq
-            x1 += (tab[i, 27 + q] + a * (tab[i1, 27 + q] - tab[i, 27 + q])) * uq
-            x2 += (tab[i, 30 + q] + a * (tab[i1, 30 + q] - tab[i, 30 + q])) * uq
+    i1 = min(i + 1, tab.shape[0] - 1)
+    x0 = mem[M_X]
+    x1 = mem[M_X + 1]
+    x2 = mem[M_X + 2]
+    p0 = mem[M_ETA]
+    p1 = mem[M_ETA + 1]
+    p2 = mem[M_ETA + 2]
+    if fixed:
+        a00 = tab[i, 33] + a * (tab[i1, 33] - tab[i, 33])
+        a01 = tab[i, 34] + a * (tab[i1, 34] - tab[i, 34])
+        a02 = tab[i, 35] + a * (tab[i1, 35] - tab[i, 35])
+        a10 = tab[i, 36] + a * (tab[i1, 36] - tab[i, 36])
+        a11 = tab[i, 37] + a * (tab[i1, 37] - tab[i, 37])
+        a12 = tab[i, 38] + a * (tab[i1, 38] - tab[i, 38])
+        a20 = tab[i, 39] + a * (tab[i1, 39] - tab[i, 39])
+        a21 = tab[i, 40] + a * (tab[i1, 40] - tab[i, 40])
+        a22 = tab[i, 41] + a * (tab[i1, 41] - tab[i, 41])
+        b00 = tab[i, 42] + a * (tab[i1, 42] - tab[i, 42])
+        b01 = tab[i, 43] + a * (tab[i1, 43] - tab[i, 43])
+        b02 = tab[i, 44] + a * (tab[i1, 44] - tab[i, 44])
+        b10 = tab[i, 45] + a * (tab[i1, 45] - tab[i, 45])
+        b11 = tab[i, 46] + a * (tab[i1, 46] - tab[i, 46])
+        b12 = tab[i, 47] + a * (tab[i1, 47] - tab[i, 47])
+        b20 = tab[i, 48] + a * (tab[i1, 48] - tab[i, 48])
+        b21 = tab[i, 49] + a * (tab[i1, 49] - tab[i, 49])
+        b22 = tab[i, 50] + a * (tab[i1, 50] - tab[i, 50])
+        c00 = tab[i, 51] + a * (tab[i1, 51] - tab[i, 51])
+        c01 = tab[i, 52] + a * (tab[i1, 52] - tab[i, 52])
+        c02 = tab[i, 53] + a * (tab[i1, 53] - tab[i, 53])
+        c10 = tab[i, 54] + a * (tab[i1, 54] - tab[i, 54])
+        c11 = tab[i, 55] + a * (tab[i1, 55] - tab[i, 55])
+        c12 = tab[i, 56] + a * (tab[i1, 56] - tab[i, 56])
+        c20 = tab[i, 57] + a * (tab[i1, 57] - tab[i, 57])
+        c21 = tab[i, 58] + a * (tab[i1, 58] - tab[i, 58])
+        c22 = tab[i, 59] + a * (tab[i1, 59] - tab[i, 59])
+        y0 = a00 * x0 + a01 * x1 + a02 * x2 + b00 * p0 + b01 * p1 + b02 * p2 + c00 * u0 + c01 * u1 + c02 * u2
+        y1 = a10 * x0 + a11 * x1 + a12 * x2 + b10 * p0 + b11 * p1 + b12 * p2 + c10 * u0 + c11 * u1 + c12 * u2
+        y2 = a20 * x0 + a21 * x1 + a22 * x2 + b20 * p0 + b21 * p1 + b22 * p2 + c20 * u0 + c21 * u1 + c22 * u2
     else:
-        x0 = mem[M_X]
-        x1 = mem[M_X + 1]
-        x2 = mem[M_X + 2]
-        p0 = mem[M_ETA]
-        p1 = mem[M_ETA + 1]
-        p2 = mem[M_ETA + 2]
+        f00 = tab[i, 0] + a * (tab[i1, 0] - tab[i, 0])
+        f01 = tab[i, 1] + a * (tab[i1, 1] - tab[i, 1])
+        f02 = tab[i, 2] + a * (tab[i1, 2] - tab[i, 2])
+        f10 = tab[i, 3] + a * (tab[i1, 3] - tab[i, 3])
+        f11 = tab[i, 4] + a * (tab[i1, 4] - tab[i, 4])
+        f12 = tab[i, 5] + a * (tab[i1, 5] - tab[i, 5])
+        f20 = tab[i, 6] + a * (tab[i1, 6] - tab[i, 6])
+        f21 = tab[i, 7] + a * (tab[i1, 7] - tab[i, 7])
+        f22 = tab[i, 8] + a * (tab[i1, 8] - tab[i, 8])
+        g00 = tab[i, 9] + a * (tab[i1, 9] - tab[i, 9])
+        g01 = tab[i, 10] + a * (tab[i1, 10] - tab[i, 10])
+        g02 = tab[i, 11] + a * (tab[i1, 11] - tab[i, 11])
+        g10 = tab[i, 12] + a * (tab[i1, 12] - tab[i, 12])
+        g11 = tab[i, 13] + a * (tab[i1, 13] - tab[i, 13])
+        g12 = tab[i, 14] + a * (tab[i1, 14] - tab[i, 14])
+        g20 = tab[i, 15] + a * (tab[i1, 15] - tab[i, 15])
+        g21 = tab[i, 16] + a * (tab[i1, 16] - tab[i, 16])
+        g22 = tab[i, 17] + a * (tab[i1, 17] - tab[i, 17])
         nsub = max(1, int(math.ceil(dt / max_sub - 1e-9)))
-        # one substep (sample time <= max_substep, e.g. 100 Hz): dt / 1 == dt exactly,
-        # so skipping the division changes no bit
         hh = 0.5 * dt if nsub == 1 else 0.5 * (dt / nsub)
-        # M = I - hh F and its inverse (adjugate / determinant)
         m00 = 1.0 - hh * f00
         m01 = -hh * f01
         m02 = -hh * f02
@@ -407,105 +473,118 @@ def _lpv3(mem, tab, i, i1, a, u0, u1, u2, dt, max_sub, restart):
         c21 = m01 * m20 - m00 * m21
         c22 = m00 * m11 - m01 * m10
         inv = 1.0 / (m00 * c00 + m01 * c10 + m02 * c20)
+        y0 = x0
+        y1 = x1
+        y2 = x2
         for k in range(nsub):
             s = 1.0 if nsub == 1 else (2.0 * k + 1.0) / nsub
             v0 = 2.0 * p0 + s * (u0 - p0)
             v1 = 2.0 * p1 + s * (u1 - p1)
             v2 = 2.0 * p2 + s * (u2 - p2)
-            b0 = x0 + hh * (f00 * x0 + f01 * x1 + f02 * x2 + g00 * v0 + g01 * v1 + g02 * v2)
-            b1 = x1 + hh * (f10 * x0 + f11 * x1 + f12 * x2 + g10 * v0 + g11 * v1 + g12 * v2)
-            b2 = x2 + hh * (f20 * x0 + f21 * x1 + f22 * x2 + g20 * v0 + g21 * v1 + g22 * v2)
-            x0 = (c00 * b0 + c01 * b1 + c02 * b2) * inv
-            x1 = (c10 * b0 + c11 * b1 + c12 * b2) * inv
-            x2 = (c20 * b0 + c21 * b1 + c22 * b2) * inv
-    mem[M_X] = x0
-    mem[M_X + 1] = x1
-    mem[M_X + 2] = x2
+            b0 = y0 + hh * (f00 * y0 + f01 * y1 + f02 * y2 + g00 * v0 + g01 * v1 + g02 * v2)
+            b1 = y1 + hh * (f10 * y0 + f11 * y1 + f12 * y2 + g10 * v0 + g11 * v1 + g12 * v2)
+            b2 = y2 + hh * (f20 * y0 + f21 * y1 + f22 * y2 + g20 * v0 + g21 * v1 + g22 * v2)
+            y0 = (c00 * b0 + c01 * b1 + c02 * b2) * inv
+            y1 = (c10 * b0 + c11 * b1 + c12 * b2) * inv
+            y2 = (c20 * b0 + c21 * b1 + c22 * b2) * inv
+    mem[M_X] = y0
+    mem[M_X + 1] = y1
+    mem[M_X + 2] = y2
     mem[M_ETA] = u0
     mem[M_ETA + 1] = u1
     mem[M_ETA + 2] = u2
-    return h0 * x0 + h1 * x1 + h2 * x2 + d0 * u0 + d1 * u1 + d2 * u2
+    h0 = tab[i, 18] + a * (tab[i1, 18] - tab[i, 18])
+    h1 = tab[i, 19] + a * (tab[i1, 19] - tab[i, 19])
+    h2 = tab[i, 20] + a * (tab[i1, 20] - tab[i, 20])
+    d0 = tab[i, 21] + a * (tab[i1, 21] - tab[i, 21])
+    d1 = tab[i, 22] + a * (tab[i1, 22] - tab[i, 22])
+    d2 = tab[i, 23] + a * (tab[i1, 23] - tab[i, 23])
+    return h0 * y0 + h1 * y1 + h2 * y2 + d0 * u0 + d1 * u1 + d2 * u2
 
 
-@njit(cache=True)
-def lpv_work_size(n: int) -> int:
-    """Floats of scratch :func:`lpv_step` needs for ``n`` observer states."""
-    return 3 * n * n + 3 * n * NETA + 4 * n + 2 * NETA + 16
-
-
-@njit(cache=True, inline="always", _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
 def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
-    """One sample of a scheduled linear observer. Returns True if the sample was valid.
+    """One sample of a scheduled linear observer: returns ``(w, theta, phi_b, valid)``.
 
-    ``tab`` rows (one per grid speed): F (n*n), G (n*3), H (n), D (3), J (n*3).
-    ``work`` is a scratch array of at least :func:`lpv_work_size` floats. The
-    code indexes flat storage (no array views: a view costs reference counting
-    per sample) and interpolates only F, G, H, D (J only at a restart).
+    ``tab`` rows as :func:`roadbank.estimators.layout.lpv_row`: continuous
+    ``F, G, H, D, J``, then (when ``cfg[C_DTFIX] > 0``) the fixed-rate
+    ``Phi, Gam0, Gam1``. ``work`` (:func:`~roadbank.estimators.layout.work_size`
+    floats) receives the interpolated row at the same offsets, then scratch.
     """
     if not _sample_valid(mem, cfg, t, vx, d, ay, r):
-        return False
+        return mem[M_W], mem[M_THETA], mem[M_PHIB], False
     n = int(cfg[C_N])
     i, a = _grid(cfg, vx)
-    i1 = min(i + 1, tab.shape[0] - 1)
-    if n == 3:
-        u0 = d if cfg[C_USE] > 0 else 0.0
-        u1 = ay if cfg[C_USE + 1] > 0 else 0.0
-        u2 = r if cfg[C_USE + 2] > 0 else 0.0
-        dt, restart = _begin(mem, cfg, t)
-        w = _lpv3(mem, tab, i, i1, a, u0, u1, u2, dt, cfg[C_SUB], restart)
-        return _finish(mem, cfg, w, ay, dt, restart, work, 0)
-    # work: F | G | H | D | e1 | tustin scratch (n*n + 2n) | finish scratch
+    # row offsets (layout.lpv_row(n)); F at 0
     oG = n * n
     oH = oG + n * NETA
     oD = oH + n
-    oE1 = oD + NETA
-    oT = oE1 + NETA
-    oR = oT + n * n + 2 * n
-    nk = oE1        # F, G, H, D are the first nk entries of a table row, in this order
-    for k in range(nk):
-        work[k] = tab[i, k] + a * (tab[i1, k] - tab[i, k])
-    work[oE1] = d if cfg[C_USE] > 0 else 0.0
-    work[oE1 + 1] = ay if cfg[C_USE + 1] > 0 else 0.0
-    work[oE1 + 2] = r if cfg[C_USE + 2] > 0 else 0.0
-    dt, restart = _begin(mem, cfg, t)
+    oJ = oD + NETA
+    oPhi = oJ + n * NETA
+    oG0 = oPhi + n * n
+    oG1 = oG0 + n * NETA
+    oS = oG1 + n * NETA             # scratch after the row
+    eta = (d if cfg[C_USE] > 0 else 0.0, ay if cfg[C_USE + 1] > 0 else 0.0, r if cfg[C_USE + 2] > 0 else 0.0)
+    dt, restart, fixed = _begin(mem, cfg, t)
+    if n == 3 and not restart:
+        w = _lpv3(mem, tab, i, a, fixed, dt, cfg[C_SUB], eta[0], eta[1], eta[2])
+        ok = _finish(mem, cfg, w, ay, dt, restart, fixed, work, oS)
+        return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
     if restart:
+        # xi = J(vx) eta
+        _interp(tab, i, a, oH, oPhi, work)
         for p in range(n):
             s = 0.0
             for q in range(NETA):
-                k = nk + p * NETA + q
-                s += (tab[i, k] + a * (tab[i1, k] - tab[i, k])) * work[oE1 + q]
+                s += work[oJ + p * NETA + q] * eta[q]
             mem[M_X + p] = s
+    elif fixed:
+        # xi = Phi(vx) xi + Gam0(vx) eta- + Gam1(vx) eta
+        _interp(tab, i, a, oH, oJ, work)
+        _interp(tab, i, a, oPhi, oS, work)
+        for p in range(n):
+            s = 0.0
+            for q in range(NETA):
+                s += work[oG0 + p * NETA + q] * mem[M_ETA + q] + work[oG1 + p * NETA + q] * eta[q]
+            for j in range(n):
+                s += work[oPhi + p * n + j] * mem[M_X + j]
+            work[oS + p] = s
+        for p in range(n):
+            mem[M_X + p] = work[oS + p]
     else:
-        _tustin_flat(mem, M_X, n, work, 0, oG, NETA, mem, M_ETA, work, oE1, dt, cfg[C_SUB], work, oT)
+        # general path: trapezoidal rule on the interpolated F, G
+        _interp(tab, i, a, 0, oJ, work)
+        for q in range(NETA):
+            work[oS + q] = eta[q]
+        _tustin_flat(mem, M_X, n, work, 0, oG, NETA, mem, M_ETA, work, oS, dt, cfg[C_SUB], work, oS + NETA)
+    # w = H(vx) xi + D(vx) eta
     w = 0.0
+    for q in range(NETA):
+        w += work[oD + q] * eta[q]
+        mem[M_ETA + q] = eta[q]
     for p in range(n):
         w += work[oH + p] * mem[M_X + p]
-    for q in range(NETA):
-        w += work[oD + q] * work[oE1 + q]
-    for q in range(NETA):
-        mem[M_ETA + q] = work[oE1 + q]
-    return _finish(mem, cfg, w, ay, dt, restart, work, oR)
+    ok = _finish(mem, cfg, w, ay, dt, restart, fixed, work, oS)
+    return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def lpv_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
             out_x):
-    """Batch version of :func:`lpv_step` (same arithmetic, sample by sample).
-
-    Compiled without the numba runtime (``_nrt=False``): nothing is allocated,
-    so no array is reference-counted in the loop (the atomic increments and
-    decrements numba otherwise emits around inlined calls cost about 30
-    ns/sample). ``work`` is scratch of at least :func:`lpv_work_size` floats.
-    """
+    """Batch version of :func:`lpv_step` (same arithmetic, sample by sample)."""
     n = int(cfg[C_N])
     for k in range(t.shape[0]):
-        ok = lpv_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])
+        ok = lpv_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
         _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
 
 
-@njit(cache=True)
+# ---------------------------------------------------------------------------------
+# DFC
+# ---------------------------------------------------------------------------------
+
+@njit(cache=True, _nrt=False, error_model="numpy")
 def dfc_step(mem, cfg, tab, work, t, vx, d, ay, r):
-    r"""One sample of the DFC estimator. ``tab`` rows: Haw0, Hrw0, Hau0, Hru0.
+    r"""One sample of the DFC estimator (returns ``(w, theta, phi_b, valid)``). ``tab`` rows: Haw0, Hrw0, Hau0, Hru0.
 
     .. math::
         w_v = (a_y - v_x r)/g,\quad
@@ -514,50 +593,52 @@ def dfc_step(mem, cfg, tab, work, t, vx, d, ay, r):
 
     (the second form avoids dividing by ``Hrw0``, which vanishes for a neutral
     steer car), gate :math:`w_v \max(0, 1 - |DFC|/a_{ref})`, then a first-order
-    low-pass of time constant ``tau``. State ``mem[M_X]`` is the low-pass output,
-    ``mem[M_X+1]`` the DFC indicator (m/s^2).
+    low-pass :math:`x' = (g - x)/\tau` of time constant ``tau`` (trapezoidal rule,
+    substeps, gate linear between samples). State ``mem[M_X]`` is the low-pass
+    output, ``mem[M_X+1]`` the DFC indicator (m/s^2).
     """
     if not _sample_valid(mem, cfg, t, vx, d, ay, r):
-        return False
+        return mem[M_W], mem[M_THETA], mem[M_PHIB], False
     i, a = _grid(cfg, vx)
-    H4 = work[0:4].reshape((1, 4))
-    _lerp(tab, i, a, 0, H4)
-    g = cfg[C_G]
-    wv = (ay - vx * r) / g
-    dfc = (ay - H4[0, 2] * d) + vx * (r - H4[0, 3] * d) - (H4[0, 0] + vx * H4[0, 1]) * wv
+    i1 = min(i + 1, tab.shape[0] - 1)
+    haw = tab[i, 0] + a * (tab[i1, 0] - tab[i, 0])
+    hrw = tab[i, 1] + a * (tab[i1, 1] - tab[i, 1])
+    hau = tab[i, 2] + a * (tab[i1, 2] - tab[i, 2])
+    hru = tab[i, 3] + a * (tab[i1, 3] - tab[i, 3])
+    wv = (ay - vx * r) / cfg[C_G]
+    dfc = (ay - hau * d) + vx * (r - hru * d) - (haw + vx * hrw) * wv
     gated = wv * max(0.0, 1.0 - abs(dfc) / cfg[C_AREF])
-    dt, restart = _begin(mem, cfg, t)
-    Mw = work[4:8].reshape((2, 2))
-    rhs = work[8:10]
-    e0 = work[10:11]
-    e1 = work[11:12]
-    piv = work[14:16]
-    x = mem[M_X:M_X + 1]
+    dt, restart, fixed = _begin(mem, cfg, t)
     if restart:
-        x[0] = gated
+        x = gated
     else:
-        F = work[12:13].reshape((1, 1))
-        G = work[13:14].reshape((1, 1))
-        F[0, 0] = -1.0 / cfg[C_TAU]
-        G[0, 0] = 1.0 / cfg[C_TAU]
-        e0[0] = mem[M_AUX]
-        e1[0] = gated
-        _tustin(x, F, G, e0, e1, dt, cfg[C_SUB], Mw, piv, rhs)
-    mem[M_AUX] = gated
+        x = mem[M_X]
+        g0 = mem[M_GATED]
+        f = -1.0 / cfg[C_TAU]
+        gg = 1.0 / cfg[C_TAU]
+        nsub = max(1, int(math.ceil(dt / cfg[C_SUB] - 1e-9)))
+        hh = 0.5 * (dt / nsub)
+        m = 1.0 - hh * f
+        for k in range(nsub):
+            s = (2.0 * k + 1.0) / nsub
+            x = (x + hh * f * x + hh * gg * (2.0 * g0 + s * (gated - g0))) / m
+    mem[M_X] = x
+    mem[M_GATED] = gated
     mem[M_X + 1] = dfc
-    return _finish(mem, cfg, x[0], ay, dt, restart, work, 16)
+    ok = _finish(mem, cfg, x, ay, dt, restart, False, work, 0)
+    return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False, error_model="numpy")
 def dfc_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
             out_x):
-    """Batch version of :func:`dfc_step` (``work``: scratch of at least 32 floats)."""
+    """Batch version of :func:`dfc_step`."""
     for k in range(t.shape[0]):
-        ok = dfc_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])
+        ok = dfc_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
         _store(mem, k, 2, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
 
 
-# --------------------------------------------------------------------------
+# ---------------------------------------------------------------------------------
 # PIF with the time-varying Riccati equation
 # --------------------------------------------------------------------------
 
@@ -566,7 +647,7 @@ def _riccati_views(cfg, mem):
     n = int(cfg[C_N])
     p = int(cfg[C_P])
     nr = int(cfg[C_NR])
-    o = C_ROLL + nr * nr + 3 * nr + 1
+    o = int(cfg[C_OFAM])      # layout.riccati_block
     Rinv = cfg[o:o + p * p].reshape((p, p))
     o += p * p
     W = cfg[o:o + n * n].reshape((n, n))
@@ -578,7 +659,7 @@ def _riccati_views(cfg, mem):
 
 @njit(cache=True)
 def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
-    r"""One sample of the PIF with the Riccati ODE (paper eq 42-43).
+    r"""One sample of the PIF with the Riccati ODE (paper eq 42-43); returns ``(w, theta, phi_b, valid)``.
 
     ``tab`` rows: A (n*n), B (n*3), C (p*n), Dy (p*3), J (n*3) where the
     innovation is ``Dy eta - C x``. ``cfg`` holds ``R^-1``, ``W = Ew Q Ew^T`` and
@@ -590,7 +671,7 @@ def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
     the default tuning).
     """
     if not _sample_valid(mem, cfg, t, vx, d, ay, r):
-        return False
+        return mem[M_W], mem[M_THETA], mem[M_PHIB], False
     n, p, Rinv, W, Mneg, P = _riccati_views(cfg, mem)
     i, a = _grid(cfg, vx)
     o = 0
@@ -638,7 +719,7 @@ def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
     k = _lerp(tab, i, a, k, C)
     k = _lerp(tab, i, a, k, Dy)
     _lerp(tab, i, a, k, J)
-    dt, restart = _begin(mem, cfg, t)
+    dt, restart, _ = _begin(mem, cfg, t)
     if restart:
         for q in range(n):
             s = 0.0
@@ -727,11 +808,12 @@ def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
                         ok = False
                     P[q, j] = v
             if not ok:
-                return False
+                return mem[M_W], mem[M_THETA], mem[M_PHIB], False
     w = x[n - 1]
     for q in range(NETA):
         e0[q] = e1[q]
-    return _finish(mem, cfg, w, ay, dt, restart, work, o)
+    ok = _finish(mem, cfg, w, ay, dt, restart, False, work, o)
+    return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
 
 
 @njit(cache=True)
@@ -740,30 +822,5 @@ def riccati_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib
     """Batch version of :func:`riccati_step` (``work``: scratch as for the step)."""
     n = int(cfg[C_N])
     for k in range(t.shape[0]):
-        ok = riccati_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])
+        ok = riccati_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
         _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
-
-
-# --------------------------------------------------------------------------
-# Streaming entry points: one sample, outputs returned (no reads from Python)
-# --------------------------------------------------------------------------
-
-@njit(cache=True, _nrt=False)
-def lpv_step_out(mem, cfg, tab, work, t, vx, d, ay, r):
-    """:func:`lpv_step` returning ``(w, theta, phi_b, valid)`` (what ``Estimator.step`` reports)."""
-    ok = lpv_step(mem, cfg, tab, work, t, vx, d, ay, r)
-    return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
-
-
-@njit(cache=True)
-def dfc_step_out(mem, cfg, tab, work, t, vx, d, ay, r):
-    """:func:`dfc_step` returning ``(w, theta, phi_b, valid)``."""
-    ok = dfc_step(mem, cfg, tab, work, t, vx, d, ay, r)
-    return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
-
-
-@njit(cache=True)
-def riccati_step_out(mem, cfg, tab, work, t, vx, d, ay, r):
-    """:func:`riccati_step` returning ``(w, theta, phi_b, valid)``."""
-    ok = riccati_step(mem, cfg, tab, work, t, vx, d, ay, r)
-    return mem[M_W], mem[M_THETA], mem[M_PHIB], ok

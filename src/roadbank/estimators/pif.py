@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import layout
 from .base import ScheduledObserver, augmented_design_model, equilibrium_map
 from .synthesis import NoStabilisingSolution, game_are
 
@@ -210,14 +211,11 @@ class PIF(ScheduledObserver):
         return np.ascontiguousarray(np.array(rows)), A.shape[0], extra
 
     def _fill_cfg_head(self, head):
-        from . import kernels as K
-        head[K.C_P] = self.R.shape[0]
+        head[layout.C_P] = self.R.shape[0]
 
     def _initial_memory(self, mem):
         if self.variant == "riccati":
-            from . import kernels as K
-            nr = self._roll[0].shape[0]
-            o = K.M_X + 3 + nr
+            o = layout.riccati_p(3, self._roll[0].shape[0])
             mem[o:o + 9] = self.P0.ravel()
 
 

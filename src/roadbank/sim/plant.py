@@ -139,7 +139,7 @@ NQ = Q_OTANA + 4
 (C_DELTA, C_THROTTLE, NC) = range(3)
 
 
-@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def _sin_cos_small(a):
     """(sin a, cos a) for |a| < pi/2 with the polynomial sine (exactly (0, 1) at 0: flat roads skip it)."""
     if a == 0.0:
@@ -219,7 +219,7 @@ def prepare(p):
     return q
 
 
-@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def step_inputs(u, q, c):
     """Per-step constants ``c`` (``C_*``) from the inputs ``u``: steer angle and its sine/cosine, pedals."""
     delta = u[U_SWA] * q[Q_INV_RATIO]
@@ -234,7 +234,7 @@ def step_inputs(u, q, c):
         q[Q_TB + i] = tb * q[Q_BRAKE + i]
 
 
-@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def plant_core(x, road, q, c, dx, aux, want_aux):
     """The plant's right-hand side on derived constants ``q`` and per-step constants ``c``.
 

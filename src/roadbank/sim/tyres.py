@@ -28,7 +28,7 @@ _A0, _A1, _A2, _A3, _A4, _A5, _A6, _A7, _A8 = (
     -0.0015896368777204358)
 
 
-@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def fast_atan(x):
     """Arc tangent (rad), |error| < 2e-9, branch-free (vectorises over the four wheels).
 
@@ -49,7 +49,7 @@ def fast_atan(x):
     return math.copysign(r, x)
 
 
-@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def fast_sin(x):
     """Sine for |x| <= 2.6 (Taylor to x^15, error < 5e-8)."""
     u = x * x
@@ -101,7 +101,7 @@ def fast_sincos(a):
     return _sincos_reduced(r, int(k) & 3)
 
 
-@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def magic_formula(x, K, C, D, E):
     """Pure-slip Magic Formula force.
 
@@ -126,14 +126,14 @@ def magic_formula(x, K, C, D, E):
     return D * fast_sin(C * fast_atan(bx - E * (bx - fast_atan(bx))))
 
 
-@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def magic_formula_b(x, B, C, D, E):
     """:func:`magic_formula` with the stiffness factor ``B = K/(C D)`` given."""
     bx = B * x
     return D * fast_sin(C * fast_atan(bx - E * (bx - fast_atan(bx))))
 
 
-@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def load_stiffness_factor(fz, fz0, pky2):
     """Cornering stiffness at load ``fz`` relative to the one at ``fz0`` (-).
 
@@ -145,7 +145,7 @@ def load_stiffness_factor(fz, fz0, pky2):
     return (y / (1.0 + y * y)) * ((1.0 + y0 * y0) / y0)
 
 
-@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def tyre_core(tan_alpha, kappa, fz, mu, ky0, inv_fz0, ky_norm, inv_fzpk, Cy, Ey, pdy2,
               kx_per_fz, Cx, Ex, pdx2, rby1_sq, rby2, rbx1_sq, rbx2):
     """Branch-free body of :func:`tyre_forces` on precomputed constants.
@@ -178,7 +178,7 @@ def tyre_core(tan_alpha, kappa, fz, mu, ky0, inv_fz0, ky_norm, inv_fzpk, Cy, Ey,
     return (fx if on else 0.0), (fy if on else 0.0)
 
 
-@njit(cache=True, inline="always", fastmath=True, error_model="numpy")
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def tyre_forces(tan_alpha, kappa, fz, mu, ky0, fz0, pky2, Cy, Ey, pdy2,
                 kx_per_fz, Cx, Ex, pdx2, rby1, rby2, rbx1, rbx2):
     """Combined-slip tyre forces in the wheel frame.

@@ -1,0 +1,135 @@
+"""Cold start: numba compilation time per kernel family, in fresh processes with an empty cache.
+
+Each kernel family is exercised in its own fresh Python process whose
+``NUMBA_CACHE_DIR`` is a new empty directory, so nothing can be loaded from a
+cache: the measured time is compilation (typing, lowering, LLVM) plus a
+negligible amount of running. The families are what a user's first run
+compiles:
+
+* ``plant`` — the simulator (:mod:`roadbank.sim`): integration loop with the
+  inlined plant, driver and road, the auxiliary outputs and the truth bank;
+* ``lpv`` — the scheduled linear observers (PIF steady-state, PIO, UIO,
+  Kalman, kinematic), batch ``run()`` and streaming ``step()``, general and
+  fixed-rate paths;
+* ``dfc`` — dynamic filter compensation;
+* ``riccati`` — the PIF with the Riccati ODE.
+
+Each probe prints one JSON line; the compile time is measured as the wall
+time of the first calls minus the wall time of the same calls repeated
+(already compiled), and numba's own event API (``numba.core.event``) adds the
+time it records under ``numba:compile``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+#: probe code per family: ``work()`` is called twice (first: compile, second: run only)
+FAMILY_PROBES = {
+    "plant": """
+from roadbank.sim import SCENARIOS, run
+import dataclasses
+sc = dataclasses.replace(SCENARIOS["s-curve"], duration=0.5, pre_roll=0.1)
+def work():
+    run(sc)
+""",
+    "lpv": """
+import numpy as np
+from roadbank import Signals, estimators
+n = 60
+t = np.arange(n) * 0.01
+t_irr = t.copy(); t_irr[30:] += 0.003
+s = Signals(t, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
+s2 = Signals(t_irr, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
+ests = [estimators.make("pif-modified"), estimators.make("pio-modified")]
+def work():
+    for e in ests:
+        e.run(s); e.run(s2)
+        e.reset(); e.step(0.0, 20.0, 0.5, 0.01, 0.002); e.step(0.01, 20.0, 0.5, 0.01, 0.002)
+""",
+    "dfc": """
+import numpy as np
+from roadbank import Signals, estimators
+n = 60
+s = Signals(np.arange(n) * 0.01, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
+e = estimators.make("dfc")
+def work():
+    e.run(s); e.reset(); e.step(0.0, 20.0, 0.5, 0.01, 0.002); e.step(0.01, 20.0, 0.5, 0.01, 0.002)
+""",
+    "riccati": """
+import numpy as np
+from roadbank import Signals
+from roadbank.estimators.pif import PIF
+n = 60
+s = Signals(np.arange(n) * 0.01, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
+e = PIF(variant="riccati")
+def work():
+    e.run(s); e.reset(); e.step(0.0, 20.0, 0.5, 0.01, 0.002); e.step(0.01, 20.0, 0.5, 0.01, 0.002)
+""",
+}
+
+_HARNESS = r"""
+import json, time, resource
+from numba.core import event as _ev
+_rec = _ev.TimingListener()
+{setup}
+_ru0 = resource.getrusage(resource.RUSAGE_SELF)
+t0 = time.perf_counter()
+with _ev.install_listener("numba:compile", _rec):
+    work()
+t1 = time.perf_counter()
+_ru1 = resource.getrusage(resource.RUSAGE_SELF)
+work()
+t2 = time.perf_counter()
+print(json.dumps({{"first_s": t1 - t0, "again_s": t2 - t1,
+                  "cpu_first_s": (_ru1.ru_utime - _ru0.ru_utime) + (_ru1.ru_stime - _ru0.ru_stime),
+                  "numba_compile_event_s": _rec.duration if _rec.done else None}}))
+"""
+
+
+def probe_family(family: str, cache_dir: str | None = None, timeout: float = 900.0) -> dict:
+    """Compile time (s) of one kernel family in a fresh process.
+
+    Parameters
+    ----------
+    family : str
+        A key of :data:`FAMILY_PROBES`.
+    cache_dir : str, optional
+        ``NUMBA_CACHE_DIR`` of the process; default a new empty directory
+        (cold: everything compiles).
+
+    Returns
+    -------
+    dict
+        ``cold_compile_s`` (first calls minus the same calls again, s),
+        ``cpu_first_s`` (CPU time of the first calls, s),
+        ``numba_compile_event_s`` (numba's own compile timing, s) and the raw times;
+        ``{"cold_compile_s": None, "reason": ...}`` if the probe failed.
+    """
+    code = _HARNESS.format(setup=FAMILY_PROBES[family])
+    with tempfile.TemporaryDirectory() as tmp:
+        env = dict(os.environ, NUMBA_CACHE_DIR=cache_dir or tmp)
+        try:
+            proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                                  env=env, timeout=timeout)
+        except subprocess.TimeoutExpired:
+            return {"cold_compile_s": None, "reason": f"{family} probe exceeded {timeout:.0f} s"}
+    if proc.returncode != 0:
+        tail = (proc.stderr or proc.stdout).strip().splitlines()[-1:] or ["?"]
+        return {"cold_compile_s": None, "reason": f"{family} probe failed: {tail[0]}"}
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    out["cold_compile_s"] = max(0.0, out["first_s"] - out["again_s"])
+    return out
+
+
+def cold_compile(families=None) -> dict:
+    """:func:`probe_family` for every family (default all): ``{family: result}``."""
+    return {f: probe_family(f) for f in (families or FAMILY_PROBES)}
+
+
+if __name__ == "__main__":   # python -m roadbank.bench.cold [family ...]
+    print(json.dumps(cold_compile(sys.argv[1:] or None), indent=1))

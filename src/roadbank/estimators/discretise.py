@@ -1,0 +1,48 @@
+r"""Exact discretisation of the scheduled observers for a fixed sample interval (the fixed-rate path).
+
+For ``x' = F x + G e(t)`` with the input varying linearly between two samples
+``e(0) = e0``, ``e(h) = e1`` (first-order hold: the same input assumption as the
+general trapezoidal path), the exact solution after one interval ``h`` is
+
+.. math::
+    x(h) = \Phi x(0) + \Gamma_0 e_0 + \Gamma_1 e_1,\qquad
+    \exp\left(h\begin{bmatrix} F & G & 0\\ 0 & 0 & I\\ 0 & 0 & 0\end{bmatrix}\right)
+    = \begin{bmatrix} \Phi & A_1 & A_2\\ 0 & I & hI\\ 0 & 0 & I\end{bmatrix},\quad
+    \Gamma_1 = A_2/h,\ \Gamma_0 = A_1 - A_2/h
+
+(the augmented state ``[x, e, de/dt]`` with ``de/dt = (e1 - e0)/h`` constant).
+``scipy.linalg.expm`` evaluates the exponential.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.linalg import expm
+
+
+def foh(F: np.ndarray, G: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(Phi, Gam0, Gam1)`` of ``x' = F x + G e`` over ``h`` seconds with ``e`` linear in time.
+
+    Parameters
+    ----------
+    F : (n, n) array (1/s)
+    G : (n, m) array
+    h : float
+        Sample interval (s), > 0.
+
+    Returns
+    -------
+    Phi : (n, n) array, Gam0, Gam1 : (n, m) arrays
+        ``x(h) = Phi x(0) + Gam0 e(0) + Gam1 e(h)``.
+    """
+    n, m = G.shape
+    if n == 0:
+        return np.zeros((0, 0)), np.zeros((0, m)), np.zeros((0, m))
+    M = np.zeros((n + 2 * m, n + 2 * m))
+    M[:n, :n] = F
+    M[:n, n:n + m] = G
+    M[n:n + m, n + m:] = np.eye(m)
+    E = expm(M * h)
+    A1 = E[:n, n:n + m]
+    A2 = E[:n, n + m:]
+    return E[:n, :n], A1 - A2 / h, A2 / h

@@ -1,0 +1,176 @@
+r"""Memory layout of the compiled estimator kernels: the one place that says what lives where.
+
+The kernels (:mod:`roadbank.estimators.kernels`) work on four flat float64
+arrays, so that a call passes no Python objects and nothing is allocated per
+sample:
+
+``mem`` — the state of one estimator (written by the kernels, zeroed by ``reset()``)
+    ========  ===========================================================
+    offset    content
+    ========  ===========================================================
+    M_INIT    1.0 once initialised
+    M_TLAST   time of the last valid sample (s)
+    M_W ..    held outputs ``w`` (-), ``theta``, ``phi_b``, ``phi`` (rad)
+    M_GATED   DFC: previous gated estimate (-)
+    M_AY      previous lateral acceleration, input of the roll model (m/s^2)
+    M_ETA     previous inputs ``eta = [delta_f, ay, r]`` (3)
+    M_X       observer states (n), then :func:`roll_states` (nr), then
+              :func:`riccati_p` (n*n, Riccati variant only)
+    ========  ===========================================================
+
+``cfg`` — constants of one estimator (built once per design)
+    a head of scalars ``C_*``, then the roll model block at :data:`C_ROLL`
+    (:func:`roll_block`), then the fixed-rate roll block (:func:`roll_block`
+    ``["Phi", "Gam0", "Gam1"]``), then family-specific constants (Riccati:
+    ``R^-1``, ``W``, ``Mneg``; :func:`riccati_block`).
+
+``tab`` — the speed schedule, one row per grid speed ``v0 + k dv``
+    ``lpv`` rows: :func:`lpv_row` (continuous ``F, G, H, D, J``, then the
+    discrete ``Phi, Gam0, Gam1`` of the fixed-rate path when a sample rate is
+    set); ``dfc`` rows: ``Haw0, Hrw0, Hau0, Hru0``; ``riccati`` rows:
+    ``A, B, C, Dy, J``. Matrices are stored row-major.
+
+``work`` — scratch of the general path (:func:`work_size`).
+
+All offsets are plain integers, which numba folds into the compiled code as
+constants; the helpers below compute the variable-size blocks from the state
+dimensions, in Python and in compiled code alike.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+#: number of inputs ``eta = [delta_f, ay, r]``
+NETA = 3
+
+# --- mem ------------------------------------------------------------------------
+M_INIT = 0
+M_TLAST = 1
+M_W = 2
+M_THETA = 3
+M_PHIB = 4
+M_PHI = 5
+M_GATED = 6
+M_AY = 7
+M_ETA = 8
+M_X = M_ETA + NETA
+
+# --- cfg head -------------------------------------------------------------------
+C_N = 0         # observer states n
+C_P = 1         # Riccati: number of measured outputs p
+C_V0 = 2        # speed grid: first speed (m/s)
+C_DV = 3        #             step (m/s)
+C_NG = 4        #             number of points
+C_VMIN = 5      # v_min (m/s)
+C_SUB = 6       # longest substep of the general path (s)
+C_GAP = 7       # longest gap before re-initialisation (s)
+C_G = 8         # gravity (m/s^2)
+C_NR = 9        # roll-model states nr (0 or 2)
+C_USE = 10      # uses delta_f, ay, r: three flags (1.0 / 0.0)
+C_AREF = 13     # DFC a_ref (m/s^2)
+C_TAU = 14      # DFC low-pass time constant (s)
+C_WMAX = 15     # sin(max_angle): a larger |w| is flagged implausible
+C_DTFIX = 16    # sample interval of the fixed-rate path (s); 0: no fixed-rate tables
+C_DTOL = 17     # relative tolerance on the interval for the fixed-rate path (-)
+C_OFAM = 18     # offset of the family-specific constants (after the roll blocks)
+C_ROLL = 19     # start of the roll block
+NHEAD = C_ROLL
+
+#: relative deviation of a sample interval from the fixed rate's that still uses the fixed-rate path
+DT_REL_TOL = 1e-4
+
+
+class RollBlock(NamedTuple):
+    """Offsets in ``cfg`` of the roll model ``z' = F z + G ay``, ``phi = H z + D ay``,
+    ``z_eq = J ay`` and of its fixed-rate map ``z+ = Phi z + Gam0 ay- + Gam1 ay``."""
+
+    F: int
+    G: int
+    H: int
+    D: int
+    J: int
+    Phi: int
+    Gam0: int
+    Gam1: int
+    end: int
+
+
+def roll_block(nr: int) -> RollBlock:
+    """:class:`RollBlock` for ``nr`` roll states (sizes nr*nr, nr, nr, 1, nr, nr*nr, nr, nr)."""
+    F = C_ROLL
+    G = F + nr * nr
+    H = G + nr
+    D = H + nr
+    J = D + 1
+    Phi = J + nr
+    Gam0 = Phi + nr * nr
+    Gam1 = Gam0 + nr
+    return RollBlock(F, G, H, D, J, Phi, Gam0, Gam1, Gam1 + nr)
+
+
+class RiccatiBlock(NamedTuple):
+    """Offsets in ``cfg`` of the Riccati constants ``R^-1`` (p*p), ``W`` (n*n), ``Mneg`` (n*n)."""
+
+    Rinv: int
+    W: int
+    Mneg: int
+    end: int
+
+
+def riccati_block(n: int, p: int, nr: int) -> RiccatiBlock:
+    """:class:`RiccatiBlock` after the roll block of ``nr`` states."""
+    o = roll_block(nr).end
+    return RiccatiBlock(o, o + p * p, o + p * p + n * n, o + p * p + 2 * n * n)
+
+
+class LpvRow(NamedTuple):
+    """Offsets within one ``lpv`` table row (n observer states, 3 inputs).
+
+    Continuous: ``F`` (n*n), ``G`` (n*3), ``H`` (n), ``D`` (3), ``J`` (n*3, the
+    equilibrium ``xi = J eta``). Fixed rate: ``Phi`` (n*n), ``Gam0``, ``Gam1`` (n*3).
+    ``cont`` is the length of the continuous part, ``end`` of the whole row.
+    """
+
+    F: int
+    G: int
+    H: int
+    D: int
+    J: int
+    cont: int
+    Phi: int
+    Gam0: int
+    Gam1: int
+    end: int
+
+
+def lpv_row(n: int) -> LpvRow:
+    """:class:`LpvRow` for ``n`` observer states."""
+    G = n * n
+    H = G + n * NETA
+    D = H + n
+    J = D + NETA
+    cont = J + n * NETA
+    Gam0 = cont + n * n
+    Gam1 = Gam0 + n * NETA
+    return LpvRow(0, G, H, D, J, cont, cont, Gam0, Gam1, Gam1 + n * NETA)
+
+
+def roll_states(n: int) -> int:
+    """Offset in ``mem`` of the roll states (after the ``n`` observer states)."""
+    return M_X + n
+
+
+def riccati_p(n: int, nr: int) -> int:
+    """Offset in ``mem`` of the Riccati matrix ``P`` (n*n, row-major)."""
+    return M_X + n + nr
+
+
+def mem_size(n: int, nr: int) -> int:
+    """Length of ``mem`` for ``n`` observer and ``nr`` roll states (room for a Riccati ``P``)."""
+    return M_X + n + nr + n * n + 2
+
+
+def work_size(n: int) -> int:
+    """Length of the scratch array ``work`` for ``n`` observer states (every family)."""
+    return 64 + 20 * n * n + 8 * n * NETA + 4 * n
