@@ -153,6 +153,9 @@ def _warm(names, params, vehicle=None):
     sig = Signals(np.arange(n) * 0.01, np.full(n, 20.0), np.zeros(n), np.zeros(n), np.zeros(n))
     for name in names:
         (vehicle.make(name) if vehicle is not None else E.make(name, params=params)).run(sig)
+    import pyarrow.parquet  # noqa: F401  (the readers and writers every log needs)
+
+    from ..io import stream, writers  # noqa: F401
     return True
 
 
