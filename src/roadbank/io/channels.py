@@ -35,6 +35,8 @@ reference_roll              rad, deg             none (rotation about x: right
                                                  side down in FRD = left side up
                                                  in ISO)
 latitude, longitude         deg, rad             none (optional; for bank maps)
+ecef_x, ecef_y, ecef_z      m, km                none (optional, instead of latitude /
+                                                 longitude: WGS-84 ECEF position)
 ==========================  ===================  ==================================
 
 Raw CAN (``dbc = "car.dbc"``, channels ``{ message = "...", signal = "...", unit = "..." }``)
@@ -79,6 +81,9 @@ ROLES: dict[str, tuple[str, str | None]] = {
     "reference_roll": ("angle", "x"),
     "latitude": ("angle", None),
     "longitude": ("angle", None),
+    "ecef_x": ("length", None),
+    "ecef_y": ("length", None),
+    "ecef_z": ("length", None),
 }
 REQUIRED = ("time", "speed", "lateral_acceleration", "yaw_rate")
 STEERING = ("road_wheel_angle", "steering_wheel_angle")

@@ -228,23 +228,49 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
 GNSS_MAX_GAP_S = 2.0
 
 
+def gnss_roles(cmap: ChannelMap) -> list[str]:
+    """The map's position channels: ``latitude``, ``longitude``; or ``ecef_x/y/z``; or none."""
+    if {"latitude", "longitude"} <= set(cmap.channels):
+        return ["latitude", "longitude"]
+    if {"ecef_x", "ecef_y", "ecef_z"} <= set(cmap.channels):
+        return ["ecef_x", "ecef_y", "ecef_z"]
+    return []
+
+
+def gnss_extra(p, cmap: ChannelMap, vals: dict) -> dict:
+    """``{"lat_deg", "lon_deg"}`` (deg) from position channels already on the time base (SI: rad or m)."""
+    if "ecef_x" in vals:
+        from .comma2k19 import ecef_to_latlon
+        pos = np.stack([vals["ecef_x"], vals["ecef_y"], vals["ecef_z"]], axis=1)
+        r = np.linalg.norm(pos, axis=1)
+        r = r[np.isfinite(r)]
+        if len(r) and not 6.30e6 < float(np.median(r)) < 6.42e6:
+            spec = cmap.channels["ecef_x"]
+            raise channel_error(p, "ecef_x", spec.column, f"median distance from the Earth's centre "
+                                f"{float(np.median(r)):.4g} m after converting from '{spec.unit}': not an "
+                                "ECEF position (WGS-84 radius ~6.37e6 m)")
+        lat, lon = ecef_to_latlon(pos)
+    else:
+        lat, lon = vals["latitude"], vals["longitude"]
+    out = {"lat_deg": np.degrees(lat), "lon_deg": np.degrees(lon)}
+    for role, key, limit in (("latitude", "lat_deg", 90.0), ("longitude", "lon_deg", 180.0)):
+        if role in cmap.channels and np.nanmax(np.abs(out[key]), initial=0.0) > limit:
+            spec = cmap.channels[role]
+            raise channel_error(p, role, spec.column, f"|value| beyond {limit:g} deg after converting "
+                                f"from '{spec.unit}'")
+    return out
+
+
 def _gnss(p, cmap: ChannelMap, raw, shared, t_base) -> dict:
-    """``lat_deg`` / ``lon_deg`` on ``t_base`` when the map has ``latitude`` and ``longitude`` (else {})."""
+    """``lat_deg`` / ``lon_deg`` on ``t_base`` from the map's position channels (else {})."""
     from .resample import interpolate
 
-    if not {"latitude", "longitude"} <= set(cmap.channels):
-        return {}
-    out = {}
-    for role, key in (("latitude", "lat_deg"), ("longitude", "lon_deg")):
+    vals = {}
+    for role in gnss_roles(cmap):
         spec = cmap.channels[role]
         if spec.column not in raw.data:
             raise channel_error(p, role, spec.column, f"column not found in the file "
                                 f"(it has: {', '.join(raw.names) or 'nothing'})")
-        v = np.degrees(cmap.to_si_iso(role, raw.data[spec.column]))
-        t = raw.times.get(spec.column, shared)
-        limit = 90.0 if role == "latitude" else 180.0
-        if np.nanmax(np.abs(v)) > limit:
-            raise channel_error(p, role, spec.column, f"|value| beyond {limit:g} deg after converting "
-                                f"from '{spec.unit}'")
-        out[key] = interpolate(t, v, t_base, GNSS_MAX_GAP_S)
-    return out
+        v = cmap.to_si_iso(role, raw.data[spec.column])
+        vals[role] = interpolate(raw.times.get(spec.column, shared), v, t_base, GNSS_MAX_GAP_S)
+    return gnss_extra(p, cmap, vals) if vals else {}
