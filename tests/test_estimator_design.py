@@ -83,5 +83,6 @@ def test_unknown_name_and_bad_tuning():
         E.make("pif")
     with pytest.raises(ValueError, match="bad tuning"):
         E.make("kinematic", Q=3)
-    assert len(E.NAMES) == 8 and set(E.NAMES) == {
-        "kinematic", "dfc", "uio", "pio-original", "pio-modified", "pif-modified", "pif-original", "kalman"}
+    assert len(E.NAMES) == 9 and set(E.NAMES) == {
+        "kinematic", "dfc", "uio", "pio-original", "pio-modified", "pif-modified", "pif-original", "kalman",
+        "pif-rate"}

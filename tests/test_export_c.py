@@ -162,6 +162,19 @@ def test_roll_models_grids_and_the_general_observer_path(name, roll, grid, scena
         assert_same(python_steps(est, cols), mod.run(*cols), TOL64, TOL64, f"{name} roll={roll} {scen}")
 
 
+@pytest.mark.parametrize("car", ["suv-paper", "van"])
+def test_what_export_c_gives_by_default_for_a_car(car, scenarios, built_modules):
+    """The design `roadbank export c --vehicle CAR` exports (the car's default tuning of pif-modified)."""
+    from roadbank.vehicle import load_vehicle
+
+    est = load_vehicle(car).make("pif-modified", **_GENERAL)
+    for f32 in (False, True):
+        mod = built_modules("pif-modified", float32=f32, est=est, tag=car)
+        for scen, cols in {**scenarios, "hard": hard_log(scenarios)}.items():
+            assert_same(python_steps(est, cols), mod.run(*cols), None if f32 else TOL64,
+                        TOL32_BANK if f32 else TOL64, f"{car} pif-modified {'f32' if f32 else 'f64'} {scen}")
+
+
 @pytest.mark.parametrize("name,roll", [("pif-modified", "dynamic"), ("uio", "static"), ("kinematic", "dynamic")])
 def test_fixed_rate_tables_follow_the_kernels_fixed_rate_path(name, roll, scenarios, tmp_path):
     """``discrete=True`` adds the kernels' fixed-rate tables (Estimator.discrete_tables): the module

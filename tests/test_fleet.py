@@ -129,7 +129,7 @@ def test_cli_dask_scheduler_glob(fleet, tmp_path):
     paths = expand_logs([pattern])
     out = tmp_path / "dask"
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False,
-                                  dashboard_address=None) as cluster:
+                                  dashboard_address=":0") as cluster:
         res = CliRunner().invoke(main, ["estimate", pattern, "-e", "kinematic", "--scheduler",
                                         cluster.scheduler_address, "-o", str(out)])
     assert res.exit_code == 1                                   # some logs were corrupt

@@ -9,7 +9,6 @@ body-axis convention (the ROS 1 bag carries an FRD/NED IMU, the others FLU).
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -207,3 +206,15 @@ def test_truncated_bag(bags, tmp_path):
     mc.write_bytes(files["mcap"].read_bytes()[:5000])
     with pytest.raises(LogError, match=r"cut\.mcap: not a readable mcap file"):
         load_log(mc, channels=d / "ros2.toml")
+
+
+def test_robot_without_steering_topic(bags, tmp_path):
+    """The steering topic is optional for ROS: delta_f is NaN, the modified-model estimators still run."""
+    from roadbank import estimators
+    d, files = bags
+    text = "\n".join(ln for ln in (d / "ros2.toml").read_text().splitlines() if "steering_wheel_angle" not in ln)
+    (tmp_path / "nosteer.toml").write_text(text)
+    log = load_log(files["rosbag2-mcap"], channels=tmp_path / "nosteer.toml")
+    assert np.all(np.isnan(log.signals.delta_f))
+    est = estimators.make("kinematic").run(log.signals)
+    assert est.valid[log.signals.vx >= 5.0].all()

@@ -175,3 +175,39 @@ def test_log_without_position_reported_others_mapped(tmp_path):
     est = estimators.make("kinematic").run(Signals(t, cols["vx"], cols["ay"], cols["r"], cols["delta_f"]))
     np.testing.assert_allclose(tab["bank_mean_deg"], np.degrees(est.phi_b[est.valid].mean()), atol=1e-9)
     assert sum(tab["count"]) == est.valid[25:-25].sum()        # all of the good log, but the course's ends
+
+
+def _geodetic_to_ecef(lat_deg, lon_deg, h):
+    """WGS-84 geodetic -> ECEF (m), the closed-form forward transform."""
+    a, f = 6378137.0, 1 / 298.257223563
+    e2 = f * (2 - f)
+    la, lo = np.radians(lat_deg), np.radians(lon_deg)
+    n = a / np.sqrt(1 - e2 * np.sin(la) ** 2)
+    return ((n + h) * np.cos(la) * np.cos(lo), (n + h) * np.cos(la) * np.sin(lo), (n * (1 - e2) + h) * np.sin(la))
+
+
+def test_ecef_position_channels(tmp_path):
+    """ECEF positions (as comma2k19 records them) in any log: converted to lat/lon, also when streamed."""
+    from roadbank.io import LogError, load_log
+    from roadbank.io.stream import stream_log
+
+    n = 3000
+    t = np.arange(n) * 0.01
+    lat = 37.72 + 1e-5 * np.arange(n)
+    lon = -122.47 + 2e-6 * np.arange(n)
+    x, y, z = _geodetic_to_ecef(lat, lon, 30.0)
+    cols = {"t": t, "vx": np.full(n, 20.0), "ay": np.zeros(n), "r": np.zeros(n), "delta_f": np.zeros(n),
+            "X": x / 1000.0, "Y": y / 1000.0, "Z": z / 1000.0}
+    pq.write_table(pa.table(cols), tmp_path / "ecef.parquet")
+    text = MAP_TOML.split("latitude")[0] + "\n".join(f'ecef_{c.lower()} = {{ column = "{c}", unit = "km" }}'
+                                                     for c in "XYZ") + "\n"
+    (tmp_path / "m.toml").write_text(text)
+    log = load_log(tmp_path / "ecef.parquet", channels=tmp_path / "m.toml")
+    np.testing.assert_allclose(log.extra["lat_deg"], lat, atol=1e-8)     # ~1 mm
+    np.testing.assert_allclose(log.extra["lon_deg"], lon, atol=1e-8)
+    chunks = list(stream_log(tmp_path / "ecef.parquet", channels=tmp_path / "m.toml", chunk_rows=700))
+    np.testing.assert_array_equal(np.concatenate([c.extra["lat_deg"] for c in chunks]), log.extra["lat_deg"])
+    (tmp_path / "bad.toml").write_text(text.replace('unit = "km"', 'unit = "m"'))
+    with pytest.raises(LogError, match=r"ecef\.parquet: channel 'ecef_x' \(column 'X'\): median distance .* "
+                                       r"not an ECEF position"):
+        load_log(tmp_path / "ecef.parquet", channels=tmp_path / "bad.toml")

@@ -158,3 +158,49 @@ def test_tune_on_dask_gives_the_local_result(tmp_path):
     dask_run, local_run = (tomllib.loads((tmp_path / f).read_text()) for f in ("d.toml", "l.toml"))
     assert dask_run["tuning"] == local_run["tuning"]
     assert dask_run["scores"]["dfc"]["validation_median_rms_deg"] == local_run["scores"]["dfc"]["validation_median_rms_deg"]
+
+
+def test_a_cars_default_pif_takes_R_from_its_yaw_rate_sensor():
+    from roadbank.vehicle import load_vehicle
+    car = load_vehicle("sedan")
+    assert car.make("pif-modified").R[0, 0] == pytest.approx(R_ESP, rel=1e-12)     # ESP sensors
+    noisy = car.with_sensors(r_noise=np.radians(0.5), rate=50.0)
+    expected = (np.radians(0.5) ** 2 + car.sensors.r_resolution ** 2 / 12) / 50.0
+    assert noisy.make("pif-modified").R[0, 0] == pytest.approx(expected, rel=1e-12)
+    assert noisy.make("pif-modified", tuning="paper").R[0, 0] == 0.0035            # Table 4 untouched
+    assert noisy.make("pif-modified", R=1e-6).R[0, 0] == 1e-6
+
+
+def _ramp_bank_run(params, k_w, vx=22.2, T=40.0, fs=100.0):
+    """Original bicycle model (scipy lsim, written out here) on a bank whose w = sin(bank) grows
+    at ``k_w`` 1/s from 0.05, straight-ahead steering; returns Signals and the true w(t)."""
+    from scipy.signal import StateSpace, lsim
+    from roadbank import Signals
+    m, Iz, Lf, Lr, Cf, Cr, g = params.m, params.Iz, params.Lf, params.Lr, params.Cf, params.Cr, params.g
+    A = np.array([[-(Cf + Cr) / (m * vx), -vx - (Lf * Cf - Lr * Cr) / (m * vx)],
+                  [-(Lf * Cf - Lr * Cr) / (Iz * vx), -(Lf**2 * Cf + Lr**2 * Cr) / (Iz * vx)]])
+    B = np.array([[-g], [0.0]])
+    C = np.array([[-(Cf + Cr) / (m * vx), -(Lf * Cf - Lr * Cr) / (m * vx)], [0.0, 1.0]])
+    t = np.arange(0.0, T, 1.0 / fs)
+    w = 0.05 + k_w * t
+    x0 = -np.linalg.solve(A, B[:, 0] * w[0])
+    _, y, _ = lsim(StateSpace(A, B, C, np.zeros((2, 1))), w, t, X0=x0)
+    return Signals(t, np.full_like(t, vx), y[:, 0], y[:, 1], np.zeros_like(t)), w
+
+
+def test_pif_rate_follows_a_bank_ramp_without_lag_pif_modified_lags():
+    """The bank-rate state makes the filter type 2: zero steady error on a constant bank *rate*;
+    the paper's random-walk model (type 1) keeps a constant lag."""
+    signals, w = _ramp_bank_run(P, k_w=0.004)          # 0.23 deg/s, a superelevation transition
+    err_rate = E.make("pif-rate").run(signals).w[-500:] - w[-500:]
+    err_mod = E.make("pif-modified").run(signals).w[-500:] - w[-500:]
+    assert np.abs(err_mod).min() > 2e-4                       # constant lag (> 0.01 deg)
+    assert np.abs(err_rate).max() < 0.02 * np.abs(err_mod).min()
+
+
+@pytest.mark.parametrize("fc,fr", [(1.0, 1.0), (1.3, 0.7), (0.7, 1.3)])
+def test_pif_rate_has_zero_steady_state_error_on_a_constant_bank(fc, fr):
+    from conftest import linear_plant_run
+    signals, w = linear_plant_run(P.replace(Cf=fc * P.Cf, Cr=fr * P.Cr))
+    est_w = E.make("pif-rate").run(signals).w
+    assert np.abs(est_w[-200:] - w).max() < 1e-4

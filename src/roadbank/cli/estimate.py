@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from ..io.readers import FORMATS
+from .inputs import channel_map_and_logs
 from .options import vehicle_option
 
 
@@ -75,8 +76,7 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     others; the exit code is 1 if any log failed, 0 otherwise. Output columns
     are SI (rad); the summary is in degrees.
     """
-    from ..fleet import estimate_log, expand_logs, run_fleet
-    from ..io import LogError, read_channel_map
+    from ..fleet import estimate_log, run_fleet
 
     names = _parse_estimators(est_names)
     if steering_ratio is not None:
@@ -86,17 +86,7 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
             raise click.BadParameter(str(exc), param_hint="--steering-ratio")
     if workers < 1:
         raise click.BadParameter("must be >= 1", param_hint="--workers")
-    cmap = None
-    if channels is not None:
-        try:
-            cmap = read_channel_map(channels)
-        except LogError as exc:
-            click.echo(f"error: {exc}", err=True)
-            sys.exit(1)
-    paths = expand_logs(logs)
-    if not paths:
-        click.echo(f"error: no logs found in {', '.join(map(str, logs))}", err=True)
-        sys.exit(1)
+    cmap, paths = channel_map_and_logs(channels, logs)
     batch = (len(paths) > 1 or len(logs) != 1 or paths[0] != Path(logs[0]) or str(output).endswith(("/", "\\"))
              or output.is_dir() or workers > 1 or scheduler is not None or resume)
     if not batch and output.suffix.lower() not in (".csv", ".parquet", ".pq"):

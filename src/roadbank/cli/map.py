@@ -8,6 +8,7 @@ from pathlib import Path
 import click
 
 from ..io.readers import FORMATS
+from .inputs import channel_map_and_logs
 from .options import vehicle_option
 
 
@@ -54,8 +55,6 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
     heading). A bad log is reported and skipped; exit code 1 if any failed.
     """
     from .. import estimators
-    from ..fleet import expand_logs
-    from ..io import LogError, read_channel_map
     from ..mapping.build import map_logs, write_outputs
 
     if estimator not in estimators.NAMES:
@@ -63,17 +62,7 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
                                  param_hint="--estimator")
     if output.suffix.lower() not in (".parquet", ".pq"):
         raise click.BadParameter("the map table must end in .parquet", param_hint="-o")
-    cmap = None
-    if channels is not None:
-        try:
-            cmap = read_channel_map(channels)
-        except LogError as exc:
-            click.echo(f"error: {exc}", err=True)
-            sys.exit(1)
-    paths = expand_logs(logs)
-    if not paths:
-        click.echo(f"error: no logs found in {', '.join(map(str, logs))}", err=True)
-        sys.exit(1)
+    cmap, paths = channel_map_and_logs(channels, logs)
     try:
         with click.progressbar(length=len(paths), label=f"mapping ({estimator})", file=sys.stderr) as bar:
             bmap, recs = map_logs(paths, estimator, channels=cmap, format=fmt, vehicle=vehicle, cell_m=cell_m,

@@ -57,7 +57,7 @@ def reproduce(outdir, scenarios, names, jobs, seed, docs_results, vehicle):
     total_s = time.perf_counter() - t_start
 
     rms = lookup(study.rows, "bank", "rms_deg")
-    show = [n for n in ("pif-modified", "pif-default", "pio-original", "dfc", "uio", "kalman")
+    show = [n for n in ("pif-modified", "pif-default", "pif-rate", "pio-original", "dfc", "uio", "kalman")
             if n in names] or names
     click.echo(f"\nBank RMS error (deg) after 2 s, {vehicle.name} — {len(cells)} cells in {study.wall_s:.1f} s")
     click.echo(f"{'scenario':18s} {'condition':11s} " + " ".join(f"{n[:12]:>12s}" for n in show))

@@ -23,11 +23,11 @@ from .options import vehicle_option
 @click.option("-o", "--output", "out", required=True, type=click.Path(dir_okay=False, path_type=Path),
               help="Vehicle file to write (the input car plus the tuned [tuning] and [scores] tables).")
 @click.option("--budget", type=click.IntRange(min=1), default=None,
-              help="Objective evaluations per estimator (default 240: about 2 min on 2 cores).")
+              help="Objective evaluations per estimator (default 240: about 1 min on 2 cores).")
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
               help="Seed of the drive sets and the optimiser (same seed, same result).")
 @click.option("--estimators", "names", default="", help="Comma-separated estimators to tune "
-              "(default: pif-modified, kalman, pio-modified, dfc).")
+              "(default: pif-modified, pif-rate, kalman, pio-modified, dfc).")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=2, show_default=True,
               help="Local worker processes (ignored with --scheduler).")
 @click.option("--scheduler", default=None, metavar="ADDRESS",

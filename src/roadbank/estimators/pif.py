@@ -94,7 +94,8 @@ def _scaled_p0(R: float) -> tuple:
 TUNINGS = {
     "paper": dict(TABLE4),
     "paper-deg": dict(TABLE4, R=R_TABLE4_DEG_UNITS),
-    "default": dict(Q=DEFAULT_TUNING["Q"], R=R_ESP, S=1.0, th=DEFAULT_TUNING["th"], P0=_scaled_p0(R_ESP)),
+    "default": dict(Q=DEFAULT_TUNING["Q"], R=R_ESP, S=1.0, th=DEFAULT_TUNING["th"], P0=_scaled_p0(R_ESP),
+                    roll=DEFAULT_TUNING["roll"]),
 }
 
 
@@ -127,23 +128,26 @@ class PIF(ScheduledObserver):
 
     uses = (False, True, True)
     state_names = ("vy", "r", "w")
+    #: estimator name (None: ``pif-<model>``) and named tunings, for subclasses
+    label = None
+    tunings = TUNINGS
 
     def __init__(self, params=None, *, model="modified", variant="steady", tuning=None, Q=None,
                  R=None, S=None, th=None, P0=None, **kw):
         if variant not in ("steady", "riccati"):
             raise ValueError(f"variant must be 'steady' or 'riccati', got {variant!r}")
         tuning = tuning or ("default" if model == "modified" else "paper")
-        if tuning not in TUNINGS:
-            raise ValueError(f"tuning must be one of {', '.join(TUNINGS)}, got {tuning!r}")
-        preset = TUNINGS[tuning]
-        if tuning == "default":
-            kw.setdefault("roll", DEFAULT_TUNING["roll"])
+        if tuning not in self.tunings:
+            raise ValueError(f"tuning must be one of {', '.join(self.tunings)}, got {tuning!r}")
+        preset = self.tunings[tuning]
+        if "roll" in preset:
+            kw.setdefault("roll", preset["roll"])
         auto_th = tuning == "default" and th is None
         Q, R, S, th, P0 = (preset[k] if v is None else v
                            for k, v in (("Q", Q), ("R", R), ("S", S), ("th", th), ("P0", P0)))
         self.model = model
         self.variant = variant
-        self.name = f"pif-{model}"
+        self.name = self.label or f"pif-{model}"
         self.kernel = "lpv" if variant == "steady" else "riccati"
         self.uses = (False, True, True) if model == "modified" else (True, True, True)
         Rv = np.atleast_1d(np.asarray(R, dtype=float))
@@ -166,11 +170,19 @@ class PIF(ScheduledObserver):
 
     def riccati_solution(self, vx: float) -> np.ndarray:
         """Stabilising solution ``P`` of the algebraic Riccati equation (eq 44) at ``vx`` (m/s)."""
-        return self._riccati(augmented_design_model(self.params, vx, self.model), vx)
+        return self._riccati(self.design_model(vx), vx)
+
+    def design_model(self, vx: float):
+        """``(A, B, C, Dy, Lw, Ew)`` of the filter's design model at ``vx`` (m/s)."""
+        return augmented_design_model(self.params, vx, self.model)
+
+    def process_noise(self, Ew: np.ndarray) -> np.ndarray:
+        """Process-noise density ``W`` of the Riccati equation (``Q Ew Ew^T``: noise on ``w`` only)."""
+        return self.Q * Ew @ Ew.T
 
     def _riccati(self, model, vx: float) -> np.ndarray:
         A, B, C, Dy, Lw, Ew = model
-        return game_are(A, C, Lw, self.Q * Ew @ Ew.T, self.R, np.atleast_2d(self.S), self.th,
+        return game_are(A, C, Lw, self.process_noise(Ew), self.R, np.atleast_2d(self.S), self.th,
                         where=f"at vx={vx:.2f} m/s ({self.name})")
 
     def _observer(self, model, vx: float):
@@ -180,7 +192,7 @@ class PIF(ScheduledObserver):
 
     def observer(self, vx: float):
         """``(F, G, H, D)`` of the steady-state filter at ``vx`` (see ScheduledObserver)."""
-        return self._observer(augmented_design_model(self.params, vx, self.model), vx)
+        return self._observer(self.design_model(vx), vx)
 
     def _design(self):
         if self.variant == "steady":
@@ -189,12 +201,12 @@ class PIF(ScheduledObserver):
         # the steady-state filter) also checks that the ARE is solvable everywhere.
         rows = []
         for v in self.vgrid:
-            model = augmented_design_model(self.params, float(v), self.model)
+            model = self.design_model(float(v))
             F, G, _, _ = self._observer(model, float(v))
             A, B, C, Dy, Lw, Ew = model
             rows.append(np.concatenate([A.ravel(), B.ravel(), C.ravel(), Dy.ravel(),
                                         equilibrium_map(F, G).ravel()]))
-        extra = np.concatenate([np.linalg.inv(self.R).ravel(), (self.Q * Ew @ Ew.T).ravel(),
+        extra = np.concatenate([np.linalg.inv(self.R).ravel(), self.process_noise(Ew).ravel(),
                                 (self.th * self.S * Lw.T @ Lw).ravel()])
         return np.ascontiguousarray(np.array(rows)), A.shape[0], extra
 
@@ -205,3 +217,60 @@ class PIF(ScheduledObserver):
         if self.variant == "riccati":
             o = layout.riccati_p(3, self._roll[0].shape[0])
             mem[o:o + 9] = self.P0.ravel()
+
+
+#: tuning of :class:`PIFRate`: differential evolution on ``roadbank tune``'s training set (seed 0,
+#: 48 drives; docs/estimators.md), R = R_ESP, S = 1
+RATE_TUNING = dict(Q=R_ESP * 10**2.88025985, Q_rate=R_ESP * 10**3.97104448, th=10**-2.10630825 / R_ESP,
+                   roll="dynamic")
+#: named tunings of :class:`PIFRate`
+RATE_TUNINGS = {"default": dict(Q=RATE_TUNING["Q"], R=R_ESP, S=1.0, th=RATE_TUNING["th"],
+                                P0=_scaled_p0(R_ESP), roll=RATE_TUNING["roll"])}
+
+
+class PIFRate(PIF):
+    r"""``pif-rate`` (beyond the paper): the PIF on the modified model with the bank *rate* as a
+    state — an integrated random walk instead of the paper's random walk for ``w``.
+
+    States ``[vy, r, w, w_rate]``, ``w' = w_rate + n_w``, ``w_rate' = n_rate``; process-noise
+    densities ``Q`` (1/s) on ``w`` and ``Q_rate`` (1/s^3) on ``w_rate``. A bank that changes at
+    a constant rate (a superelevation transition, a lane change onto a banked lane) is then
+    followed without the constant lag of the paper's model, which only knows steps. Same
+    input (ay), output (yaw rate), H-infinity Riccati design and speed schedule (``lpv``
+    kernel); steady-state variant only. Defaults :data:`RATE_TUNING` (``R`` from the
+    yaw-rate sensor as for ``pif-modified``; ``th`` halved where it has no solution).
+
+    Parameters
+    ----------
+    Q_rate : float, optional
+        Process-noise density of the bank rate's derivative (1/s^3).
+    Q, R, S, th, tuning, **kw
+        As :class:`PIF` (``model`` and ``variant`` are fixed).
+    """
+
+    label = "pif-rate"
+    tunings = RATE_TUNINGS
+    state_names = ("vy", "r", "w", "w_rate")
+
+    def __init__(self, params=None, *, tuning=None, Q_rate=None, **kw):
+        if "model" in kw or "variant" in kw:
+            raise ValueError("pif-rate: model and variant are fixed (modified, steady)")
+        self.Q_rate = float(RATE_TUNING["Q_rate"] if Q_rate is None else Q_rate)
+        if not self.Q_rate >= 0:
+            raise ValueError(f"pif-rate: Q_rate must be >= 0, got {Q_rate}")
+        super().__init__(params, model="modified", variant="steady", tuning=tuning, **kw)
+
+    def design_model(self, vx: float):
+        """The augmented modified model with ``w_rate`` appended (``w' = w_rate``)."""
+        A3, B3, C3, Dy, _, _ = augmented_design_model(self.params, vx, "modified")
+        A = np.zeros((4, 4))
+        A[:3, :3] = A3
+        A[2, 3] = 1.0
+        B = np.vstack([B3, np.zeros((1, B3.shape[1]))])
+        C = np.hstack([C3, np.zeros((C3.shape[0], 1))])
+        Lw = np.array([[0.0, 0.0, 1.0, 0.0]])
+        Ew = np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+        return A, B, C, Dy, Lw, Ew
+
+    def process_noise(self, Ew: np.ndarray) -> np.ndarray:
+        return Ew @ np.diag([self.Q, self.Q_rate]) @ Ew.T

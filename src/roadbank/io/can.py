@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import LogError
-from .readers import RawTable, _existing_nonempty
+from .readers import RawTable, _existing_nonempty, open_mdf
 
 #: format name -> how it is recognised (suffix)
 CAN_FORMATS = {"blf": ".blf", "asc": ".asc", "trc": ".trc", "candump": ".log", "mdf4-can": ".mf4"}
@@ -123,15 +123,7 @@ def read_frames(path, fmt: str) -> Frames:
 
 
 def _read_mdf4_frames(p: Path) -> Frames:
-    try:
-        from asammdf import MDF
-    except ImportError:
-        raise LogError(f"{p}: reading MDF4 bus logging needs the optional dependency asammdf "
-                       "(pip install 'roadbank[mdf]')") from None
-    try:
-        mdf = MDF(str(p))
-    except Exception as exc:
-        raise LogError(f"{p}: not a readable MDF file (truncated or corrupt?): {exc}") from None
+    mdf = open_mdf(p)
     try:
         try:    # bus-logging time stamps are relative to the file's start time
             start = float(mdf.header.start_time.timestamp())

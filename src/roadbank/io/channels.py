@@ -34,7 +34,16 @@ road_wheel_angle            rad, deg             flipped (rotation about z)
 reference_roll              rad, deg             none (rotation about x: right
                                                  side down in FRD = left side up
                                                  in ISO)
+latitude, longitude         deg, rad             none (optional; for bank maps)
+ecef_x, ecef_y, ecef_z      m, km                none (optional, instead of latitude /
+                                                 longitude: WGS-84 ECEF position)
 ==========================  ===================  ==================================
+
+Raw CAN (``dbc = "car.dbc"``, channels ``{ message = "...", signal = "...", unit = "..." }``)
+and ROS (channels ``{ topic = "...", field = "...", unit = "..." }``, ``ros_time``) are
+described in :mod:`roadbank.io.can`, :mod:`roadbank.io.ros` and docs/io.md; their channels
+carry their own time stamps (no ``time`` role), and a ROS map may leave steering out.
+``convention`` also accepts ``FLU`` (= ISO) and ``NED`` (body axes FRD).
 
 ``time``, ``speed``, ``lateral_acceleration``, ``yaw_rate`` and one of
 ``road_wheel_angle`` / ``steering_wheel_angle`` are required (if both are given,
@@ -72,6 +81,9 @@ ROLES: dict[str, tuple[str, str | None]] = {
     "reference_roll": ("angle", "x"),
     "latitude": ("angle", None),
     "longitude": ("angle", None),
+    "ecef_x": ("length", None),
+    "ecef_y": ("length", None),
+    "ecef_z": ("length", None),
 }
 REQUIRED = ("time", "speed", "lateral_acceleration", "yaw_rate")
 STEERING = ("road_wheel_angle", "steering_wheel_angle")
@@ -176,7 +188,8 @@ class ChannelMap:
                 continue
             if role not in self.channels:
                 raise LogError(f"{src}: channel map has no '{role}' channel (required)")
-        if not any(r in self.channels for r in STEERING):
+        ros = any(s.topic for s in self.channels.values())
+        if not any(r in self.channels for r in STEERING) and not ros:    # robots often have no steering topic
             raise LogError(f"{src}: channel map needs 'road_wheel_angle' or 'steering_wheel_angle'")
         for role, spec in self.channels.items():
             if role not in ROLES:

@@ -75,14 +75,16 @@ def _check_time(source, column: str, t: np.ndarray, raw, label: str = "time") ->
 
 
 def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
-    """Roles to read: speed, lateral_acceleration, yaw_rate, the steering role, [reference_roll].
+    """Roles to read: speed, lateral_acceleration, yaw_rate, [the steering role], [reference_roll].
 
     The steering role is the road-wheel angle if its column exists, else the
-    steering-wheel angle. ``have`` are the columns present; ``names`` all the
+    steering-wheel angle (none if the map has no steering channel: ROS maps). ``have`` are the columns present; ``names`` all the
     file's columns (for messages). LogError for a missing column.
     """
     steer_roles = [r for r in ("road_wheel_angle", "steering_wheel_angle") if r in cmap.channels]
     present = [r for r in steer_roles if cmap.channels[r].column in have]
+    if not steer_roles:      # allowed for ROS maps only (ChannelMap): no steering, delta_f NaN
+        present = [None]
     roles = ["speed", "lateral_acceleration", "yaw_rate"]
     for role in roles:
         col = cmap.channels[role].column
@@ -93,7 +95,8 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
         cols = " or ".join(f"'{cmap.channels[r].column}'" for r in steer_roles)
         raise LogError(f"{p}: channel 'steering' missing: no column {cols} in the file "
                        f"(it has: {', '.join(names) or 'nothing'})")
-    roles.append(present[0])
+    if present[0] is not None:
+        roles.append(present[0])
     if "reference_roll" in cmap.channels:
         roles.append("reference_roll")
         col = cmap.channels["reference_roll"].column
@@ -103,11 +106,14 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
     return roles
 
 
-def road_wheel_angle(cmap: ChannelMap, params: VehicleParams, steer_role: str, values: np.ndarray) -> np.ndarray:
-    """``delta_f`` (rad): the road-wheel angle, or the steering-wheel angle over the steering ratio."""
-    if steer_role == "road_wheel_angle":
-        return values
-    return values / (cmap.steering_ratio or params.steering_ratio)
+def road_wheel_angle(cmap: ChannelMap, params: VehicleParams, roles: list[str], values: dict) -> np.ndarray:
+    """``delta_f`` (rad): the road-wheel angle, or the steering-wheel angle over the steering ratio,
+    or NaN when the map has no steering channel (ROS robots; the modified-model estimators do not read it)."""
+    if "road_wheel_angle" in roles:
+        return values["road_wheel_angle"]
+    if "steering_wheel_angle" in roles:
+        return values["steering_wheel_angle"] / (cmap.steering_ratio or params.steering_ratio)
+    return np.full(len(values["speed"]), np.nan)
 
 
 def load_log(path, channels: ChannelMap | str | Path | None = None, format: str | None = None,
@@ -200,7 +206,7 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     if len(t_base) < 2:
         raise LogError(f"{p}: fewer than 2 samples on the common time base")
 
-    delta = road_wheel_angle(cmap, params, roles[3], values[roles[3]])
+    delta = road_wheel_angle(cmap, params, roles, values)
     try:
         sig = Signals(t_base, values["speed"], values["lateral_acceleration"], values["yaw_rate"], delta)
     except ValueError as exc:
@@ -222,23 +228,49 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
 GNSS_MAX_GAP_S = 2.0
 
 
+def gnss_roles(cmap: ChannelMap) -> list[str]:
+    """The map's position channels: ``latitude``, ``longitude``; or ``ecef_x/y/z``; or none."""
+    if {"latitude", "longitude"} <= set(cmap.channels):
+        return ["latitude", "longitude"]
+    if {"ecef_x", "ecef_y", "ecef_z"} <= set(cmap.channels):
+        return ["ecef_x", "ecef_y", "ecef_z"]
+    return []
+
+
+def gnss_extra(p, cmap: ChannelMap, vals: dict) -> dict:
+    """``{"lat_deg", "lon_deg"}`` (deg) from position channels already on the time base (SI: rad or m)."""
+    if "ecef_x" in vals:
+        from .comma2k19 import ecef_to_latlon
+        pos = np.stack([vals["ecef_x"], vals["ecef_y"], vals["ecef_z"]], axis=1)
+        r = np.linalg.norm(pos, axis=1)
+        r = r[np.isfinite(r)]
+        if len(r) and not 6.30e6 < float(np.median(r)) < 6.42e6:
+            spec = cmap.channels["ecef_x"]
+            raise channel_error(p, "ecef_x", spec.column, f"median distance from the Earth's centre "
+                                f"{float(np.median(r)):.4g} m after converting from '{spec.unit}': not an "
+                                "ECEF position (WGS-84 radius ~6.37e6 m)")
+        lat, lon = ecef_to_latlon(pos)
+    else:
+        lat, lon = vals["latitude"], vals["longitude"]
+    out = {"lat_deg": np.degrees(lat), "lon_deg": np.degrees(lon)}
+    for role, key, limit in (("latitude", "lat_deg", 90.0), ("longitude", "lon_deg", 180.0)):
+        if role in cmap.channels and np.nanmax(np.abs(out[key]), initial=0.0) > limit:
+            spec = cmap.channels[role]
+            raise channel_error(p, role, spec.column, f"|value| beyond {limit:g} deg after converting "
+                                f"from '{spec.unit}'")
+    return out
+
+
 def _gnss(p, cmap: ChannelMap, raw, shared, t_base) -> dict:
-    """``lat_deg`` / ``lon_deg`` on ``t_base`` when the map has ``latitude`` and ``longitude`` (else {})."""
+    """``lat_deg`` / ``lon_deg`` on ``t_base`` from the map's position channels (else {})."""
     from .resample import interpolate
 
-    if not {"latitude", "longitude"} <= set(cmap.channels):
-        return {}
-    out = {}
-    for role, key in (("latitude", "lat_deg"), ("longitude", "lon_deg")):
+    vals = {}
+    for role in gnss_roles(cmap):
         spec = cmap.channels[role]
         if spec.column not in raw.data:
             raise channel_error(p, role, spec.column, f"column not found in the file "
                                 f"(it has: {', '.join(raw.names) or 'nothing'})")
-        v = np.degrees(cmap.to_si_iso(role, raw.data[spec.column]))
-        t = raw.times.get(spec.column, shared)
-        limit = 90.0 if role == "latitude" else 180.0
-        if np.nanmax(np.abs(v)) > limit:
-            raise channel_error(p, role, spec.column, f"|value| beyond {limit:g} deg after converting "
-                                f"from '{spec.unit}'")
-        out[key] = interpolate(t, v, t_base, GNSS_MAX_GAP_S)
-    return out
+        v = cmap.to_si_iso(role, raw.data[spec.column])
+        vals[role] = interpolate(raw.times.get(spec.column, shared), v, t_base, GNSS_MAX_GAP_S)
+    return gnss_extra(p, cmap, vals) if vals else {}

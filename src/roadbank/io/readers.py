@@ -229,6 +229,19 @@ def arrow_column_floats(p, c: str, label: str, col, row0: int = 0) -> np.ndarray
     raise LogError(f"{p}: {label}: unsupported column type {t} (need numbers)")
 
 
+def open_mdf(p: Path, source=None):
+    """An asammdf ``MDF`` of file ``p`` (or of the open file object ``source``); LogError if it cannot be opened."""
+    try:
+        from asammdf import MDF
+    except ImportError:
+        raise LogError(f"{p}: reading MDF4 needs the optional dependency asammdf "
+                       "(pip install 'roadbank[mdf]')") from None
+    try:
+        return MDF(str(p) if source is None else source)
+    except Exception as exc:  # asammdf raises many types for corrupt files
+        raise LogError(f"{p}: not a readable MDF file (truncated or corrupt?): {exc}") from None
+
+
 def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTable:
     """Read channels of an ASAM MDF4 file (needs the optional ``asammdf``: ``pip install roadbank[mdf]``).
 
@@ -236,15 +249,7 @@ def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTab
     channel map's ``time`` entry is not used for MDF4.
     """
     p = _existing_nonempty(path)
-    try:
-        from asammdf import MDF
-    except ImportError:
-        raise LogError(f"{p}: reading MDF4 needs the optional dependency asammdf "
-                       "(pip install 'roadbank[mdf]')") from None
-    try:
-        mdf = MDF(str(p))
-    except Exception as exc:  # asammdf raises many types for corrupt files
-        raise LogError(f"{p}: not a readable MDF file (truncated or corrupt?): {exc}") from None
+    mdf = open_mdf(p)
     try:
         names = [n for n in mdf.channels_db if n not in ("time", "t")] if hasattr(mdf, "channels_db") else []
         data, times = {}, {}

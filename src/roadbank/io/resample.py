@@ -85,9 +85,10 @@ def interpolate(t: np.ndarray, v: np.ndarray, t_new: np.ndarray, max_gap_s: floa
         return out
     out[inside] = np.interp(t_new[inside], tc, vc)
     # gap rule: bracketing valid samples more than max_gap_s apart -> NaN (exact hits excepted)
-    idx = np.clip(np.searchsorted(tc, t_new, side="right"), 1, len(tc) - 1)
+    right = np.searchsorted(tc, t_new, side="right")
+    idx = np.clip(right, 1, len(tc) - 1)
     gap = tc[idx] - tc[idx - 1]
-    exact = np.isin(t_new, tc)
+    exact = tc[np.maximum(right - 1, 0)] == t_new     # the last sample at or before t_new is t_new
     out[(gap > max_gap_s) & ~exact] = np.nan
     return out
 

@@ -34,13 +34,13 @@ from . import readers
 from .channels import ChannelMap, check_plausible, default_channel_map, read_channel_map
 from .consistency import check_consistency
 from .errors import LogError, channel_error
-from .log import GNSS_MAX_GAP_S, Log, _check_time, load_log, road_wheel_angle, select_roles
+from .log import (GNSS_MAX_GAP_S, Log, _check_time, gnss_extra, gnss_roles, load_log, road_wheel_angle,
+                  select_roles)
 from .resample import clean_series, interpolate
 
 #: default rows per chunk (per channel for MDF4): 50 000 samples = 8.3 min at 100 Hz (memory vs per-chunk overhead, docs/io.md)
 CHUNK_ROWS = 50_000
 STREAMED = ("parquet", "mdf4")
-_GNSS = (("latitude", "lat_deg"), ("longitude", "lon_deg"))
 
 
 class StreamResampler:
@@ -197,18 +197,13 @@ class _Mdf4Channels:
     """
 
     def __init__(self, p: Path, chunk_rows: int):
-        try:
-            from asammdf import MDF
-        except ImportError:
-            raise LogError(f"{p}: reading MDF4 needs the optional dependency asammdf "
-                           "(pip install 'roadbank[mdf]')") from None
         self.p = p
         self.fh = open(p, "rb")
         try:
-            self.mdf = MDF(self.fh)
-        except Exception as exc:
+            self.mdf = readers.open_mdf(p, self.fh)
+        except LogError:
             self.fh.close()
-            raise LogError(f"{p}: not a readable MDF file (truncated or corrupt?): {exc}") from None
+            raise
         self.names = [n for n in self.mdf.channels_db if n not in ("time", "t")]
         rec = max((int(g.channel_group.samples_byte_nr) + int(g.channel_group.invalidation_bytes_nr)
                    for g in self.mdf.groups), default=8)
@@ -281,25 +276,22 @@ def stream_log(path, channels: ChannelMap | str | Path | None = None, format: st
 
 
 def _chunk_log(p, fmt, cmap, params, roles, vals, meta, warns, truth=None) -> Log:
-    delta = road_wheel_angle(cmap, params, roles[3], vals[roles[3]])
+    delta = road_wheel_angle(cmap, params, roles, vals)
     try:
         sig = Signals(vals["t"], vals["speed"], vals["lateral_acceleration"], vals["yaw_rate"], delta)
     except ValueError as exc:
         raise LogError(f"{p}: {exc}") from None
-    extra = {key: vals[role] for role, key in _GNSS if role in vals}
+    pos = {r: vals[r] for r in gnss_roles(cmap) if r in vals}
+    extra = gnss_extra(p, cmap, pos) if pos else {}
     return Log(signals=sig, reference_roll=vals.get("reference_roll"), source=p, format=fmt, metadata=meta,
                truth=truth or {}, warnings=list(dict.fromkeys(warns)), channel_map=cmap, extra=extra)
-
-
-def _gnss_roles(cmap) -> list[str]:
-    return [r for r, _ in _GNSS] if {"latitude", "longitude"} <= set(cmap.channels) else []
 
 
 def _convert(p, cmap, role, raw_values, t, first: bool, warns: list) -> np.ndarray:
     spec = cmap.channels[role]
     v = cmap.to_si_iso(role, raw_values)
-    if role in ("latitude", "longitude"):
-        return np.degrees(v)
+    if role in ("latitude", "longitude", "ecef_x", "ecef_y", "ecef_z"):
+        return v
     w = check_plausible(p, role, spec.column, spec.unit, t, v)
     if first:
         warns += w
@@ -312,7 +304,7 @@ def _stream_table(p, cmap, params, chunk_rows):
         raise LogError(f"{cmap.source}: channel map has no 'time' channel (required for parquet)")
     have = set(names)
     roles = select_roles(p, cmap, have, names)
-    gnss = _gnss_roles(cmap)
+    gnss = gnss_roles(cmap)
     for r in gnss + ["time"]:
         if cmap.channels[r].column not in have:
             raise channel_error(p, r, cmap.channels[r].column, f"column not found in the file "
@@ -398,7 +390,7 @@ def _stream_mdf4(p, cmap, params, chunk_rows):
     try:
         have = set(src.names)
         roles = select_roles(p, cmap, have, src.names)
-        gnss = _gnss_roles(cmap)
+        gnss = gnss_roles(cmap)
         for r in gnss:
             if cmap.channels[r].column not in have:
                 raise channel_error(p, r, cmap.channels[r].column, "channel not found in the file "

@@ -20,11 +20,12 @@ FACTORS: dict[str, dict[str, float]] = {
     "acceleration": {"m/s^2": 1.0, "m/s2": 1.0, "g": G_UNIT},
     "angular_rate": {"rad/s": 1.0, "deg/s": math.pi / 180.0},
     "angle": {"rad": 1.0, "deg": math.pi / 180.0},
+    "length": {"m": 1.0, "km": 1000.0},
 }
 
 #: the SI unit of each kind
 SI_UNIT = {"time": "s", "speed": "m/s", "acceleration": "m/s^2",
-           "angular_rate": "rad/s", "angle": "rad"}
+           "angular_rate": "rad/s", "angle": "rad", "length": "m"}
 
 
 def normalise_unit(unit: str) -> str:

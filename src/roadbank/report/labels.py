@@ -9,6 +9,7 @@ LABELS = {
     "pio-modified": "PIO (modified model)",
     "pif-original": "PIF (original model)",
     "kalman": "Kalman (ours)",
+    "pif-rate": "PIF + bank rate (ours)",
     "kinematic": "Kinematic",
 }
 

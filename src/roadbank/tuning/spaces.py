@@ -8,6 +8,7 @@ point of the estimator's current default (the optimiser's start).
   (:func:`roadbank.estimators.pif.yaw_rate_noise_density`); ``x = (log10(Q/R), log10(th R))``.
   Scaling ``(Q, R, th)`` to ``(kQ, kR, th/k)`` scales ``P`` by ``k`` and leaves the filter
   unchanged, so fixing ``R`` loses nothing; ``S = 1`` (only ``th S`` enters).
+* ``pif-rate``: as ``pif-modified`` plus ``log10(Q_rate/R)``.
 * ``kalman``: ``R`` stays at its default; ``x = log10`` of the three process-noise densities.
 * ``pio-modified``: poles ``-10^a (1, 1 + b, (1 + b)(1 + c))``, ``x = (a, b, c)``.
 * ``dfc``: ``x = log10(a_ref / (m/s^2))``.
@@ -20,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..estimators import dfc, kalman, pio
-from ..estimators.pif import DEFAULT_TUNING, R_ESP, yaw_rate_noise_density
+from ..estimators.pif import DEFAULT_TUNING, R_ESP, RATE_TUNING, yaw_rate_noise_density
 
 
 @dataclass(frozen=True)
@@ -47,9 +48,12 @@ class SearchSpace:
         """Keyword options of :func:`roadbank.estimators.make` at ``x``."""
         x = [float(v) for v in x]
         f = self.fixed
-        if self.name == "pif-modified":
+        if self.name in ("pif-modified", "pif-rate"):
             R = f["R"]
-            return {"Q": R * 10.0 ** x[0], "R": R, "S": 1.0, "th": 10.0 ** x[1] / R}
+            out = {"Q": R * 10.0 ** x[0], "R": R, "S": 1.0, "th": 10.0 ** x[1] / R}
+            if self.name == "pif-rate":
+                out["Q_rate"] = R * 10.0 ** x[2]
+            return out
         if self.name == "kalman":
             return {"q": [10.0 ** v for v in x], "R": list(f["R"])}
         if self.name == "pio-modified":
@@ -63,9 +67,11 @@ class SearchSpace:
     def start(self) -> np.ndarray:
         """The point of the estimator's current default (clipped into the box)."""
         f = self.fixed
-        if self.name == "pif-modified":
-            Q, th = DEFAULT_TUNING["Q"] * f["R"] / R_ESP, DEFAULT_TUNING["th"] * R_ESP / f["R"]
-            x = [np.log10(Q / f["R"]), np.log10(th * f["R"])]
+        if self.name in ("pif-modified", "pif-rate"):
+            d = DEFAULT_TUNING if self.name == "pif-modified" else RATE_TUNING
+            x = [np.log10(d["Q"] / R_ESP), np.log10(d["th"] * R_ESP)]       # Q/R and th R as tuned
+            if self.name == "pif-rate":
+                x.append(np.log10(d["Q_rate"] / R_ESP))
         elif self.name == "kalman":
             x = list(np.log10(kalman.DEFAULT_Q))
         elif self.name == "pio-modified":
@@ -78,16 +84,19 @@ class SearchSpace:
 
 
 #: estimators ``roadbank tune`` tunes, in order
-TUNABLE = ("pif-modified", "kalman", "pio-modified", "dfc")
+TUNABLE = ("pif-modified", "pif-rate", "kalman", "pio-modified", "dfc")
 
 
 def search_space(name: str, sensors=None) -> SearchSpace:
     """The :class:`SearchSpace` of ``name`` for a car with ``sensors``
     (:class:`roadbank.sim.SensorConfig`; default the paper's ESP sensors)."""
-    if name == "pif-modified":
+    if name in ("pif-modified", "pif-rate"):
         R = R_ESP if sensors is None else yaw_rate_noise_density(
             sensors.yaw_rate.noise_std, sensors.yaw_rate.resolution, sensors.rate)
-        return SearchSpace(name, ("log10(Q/R)", "log10(th R)"), ((1.0, 7.0), (-7.0, -1.5)), {"R": R})
+        if name == "pif-modified":
+            return SearchSpace(name, ("log10(Q/R)", "log10(th R)"), ((1.0, 7.0), (-7.0, -1.5)), {"R": R})
+        return SearchSpace(name, ("log10(Q/R)", "log10(th R)", "log10(Q_rate/R)"),
+                           ((1.0, 7.0), (-7.0, -1.5), (-2.0, 8.0)), {"R": R})
     if name == "kalman":
         return SearchSpace(name, ("log10 q_vy", "log10 q_r", "log10 q_w"),
                            ((-2.0, 3.0), (-4.0, 1.0), (-5.0, 0.0)), {"R": tuple(kalman.DEFAULT_R)})
