@@ -385,15 +385,16 @@ def _interp(tab, i, a, lo, hi, row):
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
-def _lpv3(mem, tab, i, a, fixed, dt, max_sub, u0, u1, u2):
+def _lpv3(mem, tab, i, a, fixed, dt, max_sub, u0, u1, u2, work, o):
     """Three-state observers (PIF, PIO, Kalman), not restarting: advances ``xi`` and returns ``w``.
 
-    The same maps as the generic loops of :func:`lpv_step`, on local scalars
-    read straight from the two table rows (layout.lpv_row(3): F 0, G 9, H 18,
-    D 21, J 24, Phi 33, Gam0 42, Gam1 51). Fixed rate:
-    ``xi = Phi xi + Gam0 eta- + Gam1 eta``. General: the trapezoidal rule with
-    ``M = I - (h/2) F`` inverted once per sample through its adjugate (the same
-    map as an LU solve up to rounding, about 1e-16 relative).
+    The same maps as the generic loops of :func:`lpv_step` with the state on local
+    scalars (layout.lpv_row(3): F 0, G 9, H 18, D 21, J 24, Phi 33, Gam0 42, Gam1 51).
+    Fixed rate: ``xi = Phi xi + Gam0 eta- + Gam1 eta``, the table entries interpolated
+    as they are used (loops of constant length: LLVM unrolls them). General: the
+    trapezoidal rule with ``M = I - (h/2) F`` inverted once per sample through its
+    adjugate (the same map as an LU solve up to rounding, about 1e-16 relative).
+    ``work[:18]`` receives the interpolated ``F, G`` (general path), ``work[o:o + 9]`` is scratch.
     """
     i1 = min(i + 1, tab.shape[0] - 1)
     x0 = mem[M_X]
@@ -403,55 +404,43 @@ def _lpv3(mem, tab, i, a, fixed, dt, max_sub, u0, u1, u2):
     p1 = mem[M_ETA + 1]
     p2 = mem[M_ETA + 2]
     if fixed:
-        a00 = tab[i, 33] + a * (tab[i1, 33] - tab[i, 33])
-        a01 = tab[i, 34] + a * (tab[i1, 34] - tab[i, 34])
-        a02 = tab[i, 35] + a * (tab[i1, 35] - tab[i, 35])
-        a10 = tab[i, 36] + a * (tab[i1, 36] - tab[i, 36])
-        a11 = tab[i, 37] + a * (tab[i1, 37] - tab[i, 37])
-        a12 = tab[i, 38] + a * (tab[i1, 38] - tab[i, 38])
-        a20 = tab[i, 39] + a * (tab[i1, 39] - tab[i, 39])
-        a21 = tab[i, 40] + a * (tab[i1, 40] - tab[i, 40])
-        a22 = tab[i, 41] + a * (tab[i1, 41] - tab[i, 41])
-        b00 = tab[i, 42] + a * (tab[i1, 42] - tab[i, 42])
-        b01 = tab[i, 43] + a * (tab[i1, 43] - tab[i, 43])
-        b02 = tab[i, 44] + a * (tab[i1, 44] - tab[i, 44])
-        b10 = tab[i, 45] + a * (tab[i1, 45] - tab[i, 45])
-        b11 = tab[i, 46] + a * (tab[i1, 46] - tab[i, 46])
-        b12 = tab[i, 47] + a * (tab[i1, 47] - tab[i, 47])
-        b20 = tab[i, 48] + a * (tab[i1, 48] - tab[i, 48])
-        b21 = tab[i, 49] + a * (tab[i1, 49] - tab[i, 49])
-        b22 = tab[i, 50] + a * (tab[i1, 50] - tab[i, 50])
-        c00 = tab[i, 51] + a * (tab[i1, 51] - tab[i, 51])
-        c01 = tab[i, 52] + a * (tab[i1, 52] - tab[i, 52])
-        c02 = tab[i, 53] + a * (tab[i1, 53] - tab[i, 53])
-        c10 = tab[i, 54] + a * (tab[i1, 54] - tab[i, 54])
-        c11 = tab[i, 55] + a * (tab[i1, 55] - tab[i, 55])
-        c12 = tab[i, 56] + a * (tab[i1, 56] - tab[i, 56])
-        c20 = tab[i, 57] + a * (tab[i1, 57] - tab[i, 57])
-        c21 = tab[i, 58] + a * (tab[i1, 58] - tab[i, 58])
-        c22 = tab[i, 59] + a * (tab[i1, 59] - tab[i, 59])
-        y0 = a00 * x0 + a01 * x1 + a02 * x2 + b00 * p0 + b01 * p1 + b02 * p2 + c00 * u0 + c01 * u1 + c02 * u2
-        y1 = a10 * x0 + a11 * x1 + a12 * x2 + b10 * p0 + b11 * p1 + b12 * p2 + c10 * u0 + c11 * u1 + c12 * u2
-        y2 = a20 * x0 + a21 * x1 + a22 * x2 + b20 * p0 + b21 * p1 + b22 * p2 + c20 * u0 + c21 * u1 + c22 * u2
+        # v = [xi, eta-, eta]; row p of [Phi | Gam0 | Gam1] is 9 entries apart per block
+        work[o] = x0
+        work[o + 1] = x1
+        work[o + 2] = x2
+        work[o + 3] = p0
+        work[o + 4] = p1
+        work[o + 5] = p2
+        work[o + 6] = u0
+        work[o + 7] = u1
+        work[o + 8] = u2
+        for p in range(3):
+            s = 0.0
+            for b in range(3):
+                for q in range(3):
+                    k = 33 + 9 * b + 3 * p + q
+                    s += (tab[i, k] + a * (tab[i1, k] - tab[i, k])) * work[o + 3 * b + q]
+            mem[M_X + p] = s
     else:
-        f00 = tab[i, 0] + a * (tab[i1, 0] - tab[i, 0])
-        f01 = tab[i, 1] + a * (tab[i1, 1] - tab[i, 1])
-        f02 = tab[i, 2] + a * (tab[i1, 2] - tab[i, 2])
-        f10 = tab[i, 3] + a * (tab[i1, 3] - tab[i, 3])
-        f11 = tab[i, 4] + a * (tab[i1, 4] - tab[i, 4])
-        f12 = tab[i, 5] + a * (tab[i1, 5] - tab[i, 5])
-        f20 = tab[i, 6] + a * (tab[i1, 6] - tab[i, 6])
-        f21 = tab[i, 7] + a * (tab[i1, 7] - tab[i, 7])
-        f22 = tab[i, 8] + a * (tab[i1, 8] - tab[i, 8])
-        g00 = tab[i, 9] + a * (tab[i1, 9] - tab[i, 9])
-        g01 = tab[i, 10] + a * (tab[i1, 10] - tab[i, 10])
-        g02 = tab[i, 11] + a * (tab[i1, 11] - tab[i, 11])
-        g10 = tab[i, 12] + a * (tab[i1, 12] - tab[i, 12])
-        g11 = tab[i, 13] + a * (tab[i1, 13] - tab[i, 13])
-        g12 = tab[i, 14] + a * (tab[i1, 14] - tab[i, 14])
-        g20 = tab[i, 15] + a * (tab[i1, 15] - tab[i, 15])
-        g21 = tab[i, 16] + a * (tab[i1, 16] - tab[i, 16])
-        g22 = tab[i, 17] + a * (tab[i1, 17] - tab[i, 17])
+        _interp(tab, i, a, 0, 18, work)     # F, G at their row offsets
+        f00 = work[0]
+        f01 = work[1]
+        f02 = work[2]
+        f10 = work[3]
+        f11 = work[4]
+        f12 = work[5]
+        f20 = work[6]
+        f21 = work[7]
+        f22 = work[8]
+        g00 = work[9]
+        g01 = work[10]
+        g02 = work[11]
+        g10 = work[12]
+        g11 = work[13]
+        g12 = work[14]
+        g20 = work[15]
+        g21 = work[16]
+        g22 = work[17]
         nsub = max(1, int(math.ceil(dt / max_sub - 1e-9)))
         hh = 0.5 * dt if nsub == 1 else 0.5 * (dt / nsub)
         m00 = 1.0 - hh * f00
@@ -487,19 +476,19 @@ def _lpv3(mem, tab, i, a, fixed, dt, max_sub, u0, u1, u2):
             y0 = (c00 * b0 + c01 * b1 + c02 * b2) * inv
             y1 = (c10 * b0 + c11 * b1 + c12 * b2) * inv
             y2 = (c20 * b0 + c21 * b1 + c22 * b2) * inv
-    mem[M_X] = y0
-    mem[M_X + 1] = y1
-    mem[M_X + 2] = y2
+        mem[M_X] = y0
+        mem[M_X + 1] = y1
+        mem[M_X + 2] = y2
     mem[M_ETA] = u0
     mem[M_ETA + 1] = u1
     mem[M_ETA + 2] = u2
-    h0 = tab[i, 18] + a * (tab[i1, 18] - tab[i, 18])
-    h1 = tab[i, 19] + a * (tab[i1, 19] - tab[i, 19])
-    h2 = tab[i, 20] + a * (tab[i1, 20] - tab[i, 20])
-    d0 = tab[i, 21] + a * (tab[i1, 21] - tab[i, 21])
-    d1 = tab[i, 22] + a * (tab[i1, 22] - tab[i, 22])
-    d2 = tab[i, 23] + a * (tab[i1, 23] - tab[i, 23])
-    return h0 * y0 + h1 * y1 + h2 * y2 + d0 * u0 + d1 * u1 + d2 * u2
+    w = 0.0
+    for q in range(3):
+        k = 18 + q
+        w += (tab[i, k] + a * (tab[i1, k] - tab[i, k])) * mem[M_X + q]
+        k = 21 + q
+        w += (tab[i, k] + a * (tab[i1, k] - tab[i, k])) * mem[M_ETA + q]
+    return w
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
@@ -527,7 +516,7 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     eta = (d if cfg[C_USE] > 0 else 0.0, ay if cfg[C_USE + 1] > 0 else 0.0, r if cfg[C_USE + 2] > 0 else 0.0)
     dt, restart, fixed = _begin(mem, cfg, t)
     if n == 3 and not restart:
-        w = _lpv3(mem, tab, i, a, fixed, dt, cfg[C_SUB], eta[0], eta[1], eta[2])
+        w = _lpv3(mem, tab, i, a, fixed, dt, cfg[C_SUB], eta[0], eta[1], eta[2], work, oS)
         ok = _finish(mem, cfg, w, ay, dt, restart, fixed, work, oS)
         return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
     if restart:
