@@ -130,7 +130,7 @@ class Driver:
         return np.concatenate([g, hdr, self.speed[0], self.speed[1], st[0], st[1], pa[0], pa[1]])
 
 
-@njit(cache=True, forceinline=True, error_model="numpy")
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def _segment(a, off, n, x):
     """Segment ``k`` and fraction ``u`` of ``x`` among the increasing knots ``a[off:off+n]``.
 
@@ -145,7 +145,7 @@ def _segment(a, off, n, x):
     return k, (x - a[off + k]) / (a[off + k + 1] - a[off + k])
 
 
-@njit(cache=True, forceinline=True, error_model="numpy")
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def interp_cos(a, off, n, x):
     """Raised-cosine interpolation through knots ``a[off:off+n]`` -> ``a[off+n:off+2n]`` (held beyond the ends)."""
     ys = off + n
@@ -156,7 +156,7 @@ def interp_cos(a, off, n, x):
     return a[ys + k] + w * (a[ys + k + 1] - a[ys + k])
 
 
-@njit(cache=True, forceinline=True, error_model="numpy")
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def interp_lin(a, off, n, x):
     """Piecewise-linear interpolation through knots ``a[off:off+n]`` -> ``a[off+n:off+2n]`` (held beyond the ends)."""
     ys = off + n
@@ -166,7 +166,7 @@ def interp_lin(a, off, n, x):
     return a[ys + k] + u * (a[ys + k + 1] - a[ys + k])
 
 
-@njit(cache=True, forceinline=True, error_model="numpy")
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def driver_step(t, x, dstate, drv, road, u, dt):
     """Driver at time ``t``: write plant inputs into ``u`` and advance ``dstate`` by ``dt``.
 

@@ -220,7 +220,7 @@ def track_curve_start(road: Road) -> float:
 # ---- compiled lookups ------------------------------------------------------------
 # All take the packed road (one float64 array, see Road.pack).
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def _wrap(road, s):
     L = road[0]
     if L > 0.0:
@@ -228,7 +228,7 @@ def _wrap(road, s):
     return s
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def interp1(a, off, n, x):
     """Piecewise-linear interpolation of knots ``a[off:off+n]`` (x) -> ``a[off+n:off+2n]`` (y), held at the ends."""
     ys = off + n
@@ -248,25 +248,25 @@ def interp1(a, off, n, x):
     return a[ys + lo] + u * (a[ys + hi] - a[ys + lo])
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def road_curvature(road, s):
     """Reference-line curvature (1/m) at ``s``."""
     return interp1(road, int(road[1]), int(road[2]), _wrap(road, s))
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def road_grade(road, s):
     """Grade (rad) at ``s``."""
     return interp1(road, int(road[8]), int(road[9]), _wrap(road, s))
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def road_bank_factor(road, s):
     """Bank factor (-) at ``s``."""
     return interp1(road, int(road[3]), int(road[4]), _wrap(road, s))
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def _profile_integral(road, n):
     """int_{n_0}^{n} bank_profile(n') dn' (rad m), n_0 the first profile knot."""
     off = int(road[5])
@@ -285,7 +285,7 @@ def _profile_integral(road, n):
     return road[cum + k] + road[pb + k] * d + 0.5 * slope * d * d
 
 
-@njit(cache=True, forceinline=True)
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def bank_under_vehicle(road, s, n, half_track):
     """Secant bank (rad): bank factor at ``s`` times the mean profile over ``n +- half_track``."""
     if int(road[6]) == 1:
