@@ -10,7 +10,6 @@ A driver program built with AddressSanitizer/UBSan runs the same log.
 
 from __future__ import annotations
 
-import inspect
 import os
 import subprocess
 
@@ -19,18 +18,14 @@ import pytest
 from click.testing import CliRunner
 
 from roadbank import estimators as E
-from roadbank.estimators.base import Estimator
 from roadbank.export import CModule, NotExportable, build_driver, export_c, export_design, measure_c_step_ns
 from roadbank.export.build import object_report
 from roadbank.sim import SCENARIOS, run_scenario
 
-#: the Python estimators on their general (per-sample trapezoidal) path, which the default
-#: export runs: where the kernels have a fixed-rate path, its automatic rate is switched off
-_GENERAL = {"sample_rate": None} if "sample_rate" in inspect.signature(Estimator.__init__).parameters else {}
-
-
 def make(name, **kw):
-    return E.make(name, **_GENERAL, **kw)
+    """The estimator on its general (per-sample trapezoidal) path only (no automatic fixed rate):
+    the export then follows it without the fixed-rate tables."""
+    return E.make(name, sample_rate=None, **kw)
 
 
 #: estimators built once (designs are cached by the estimators module too)
@@ -164,12 +159,14 @@ def test_roll_models_grids_and_the_general_observer_path(name, roll, grid, scena
 
 @pytest.mark.parametrize("car", ["suv-paper", "van"])
 def test_what_export_c_gives_by_default_for_a_car(car, scenarios, built_modules):
-    """The design `roadbank export c --vehicle CAR` exports (the car's default tuning of pif-modified)."""
+    """What `roadbank export c --vehicle CAR` exports: the car's default pif-modified as roadbank runs
+    it by default (automatic sample rate: the fixed-rate path at 100 Hz), fixed-rate tables included."""
     from roadbank.vehicle import load_vehicle
 
-    est = load_vehicle(car).make("pif-modified", **_GENERAL)
+    est = load_vehicle(car).make("pif-modified")
     for f32 in (False, True):
         mod = built_modules("pif-modified", float32=f32, est=est, tag=car)
+        assert "RB_DTAB" in mod.source.read_text()
         for scen, cols in {**scenarios, "hard": hard_log(scenarios)}.items():
             assert_same(python_steps(est, cols), mod.run(*cols), None if f32 else TOL64,
                         TOL32_BANK if f32 else TOL64, f"{car} pif-modified {'f32' if f32 else 'f64'} {scen}")
@@ -178,16 +175,13 @@ def test_what_export_c_gives_by_default_for_a_car(car, scenarios, built_modules)
 @pytest.mark.parametrize("name,roll", [("pif-modified", "dynamic"), ("uio", "static"), ("kinematic", "dynamic")])
 def test_fixed_rate_tables_follow_the_kernels_fixed_rate_path(name, roll, scenarios, tmp_path):
     """``discrete=True`` adds the kernels' fixed-rate tables (Estimator.discrete_tables): the module
-    then equals step() with that sample rate set; without a fixed-rate path it says so."""
+    then equals step() with that sample rate set; an estimator fixed at another rate is refused."""
     est = make(name, roll=roll)
-    if not hasattr(est, "discrete_tables"):
-        with pytest.raises(NotExportable, match="no fixed-rate tables"):
-            export_c(est, tmp_path, rate=100.0, discrete=True)
-        return
     cols_all = {**scenarios, "hard": hard_log(scenarios)}
     for f32 in (False, True):
         res = export_c(est, tmp_path / str(f32), rate=100.0, float32=f32, discrete=True)
-        assert res.table_bytes > export_c(est, tmp_path / "g", rate=100.0).table_bytes * (0.5 if f32 else 1)
+        general = export_c(est, tmp_path / "g", rate=100.0, discrete=False)
+        assert res.table_bytes > general.table_bytes * (0.5 if f32 else 1)
         mod = CModule(res.source, tmp_path / str(f32))
         for scen, cols in cols_all.items():
             est.set_sample_rate(100.0)
@@ -196,6 +190,9 @@ def test_fixed_rate_tables_follow_the_kernels_fixed_rate_path(name, roll, scenar
             py = {k: np.array([getattr(o, k) for o in res_py]) for k in ("w", "theta", "phi_b", "valid")}
             assert_same(py, mod.run(*cols), None if f32 else TOL64, TOL32_BANK if f32 else TOL64,
                         f"{name} fixed-rate {'float32' if f32 else 'float64'} on {scen}")
+    est.set_sample_rate(50.0)
+    with pytest.raises(ValueError, match="fixed-rate path at 50 Hz, not at the export rate 100 Hz"):
+        export_c(est, tmp_path / "50", rate=100.0)
     est.set_sample_rate(None)
 
 

@@ -86,7 +86,8 @@ def identify(logs, vehicle, channels, fmt, output, straight_bank, ay_max, as_jso
     quantity was identified from every log, else 1. Method: docs/identification.md.
     """
     from ..identification import IdentifySettings, identify as run_identify
-    from ..io import LogError, load_log, read_channel_map
+    from ..io import LogError, load_log
+    from .inputs import channel_map_and_logs
 
     try:
         settings = IdentifySettings(straight_bank=math.radians(straight_bank), ay_max=ay_max)
@@ -94,13 +95,7 @@ def identify(logs, vehicle, channels, fmt, output, straight_bank, ay_max, as_jso
         raise click.UsageError(str(exc)) from None
     if output.suffix.lower() != ".toml":
         raise click.BadParameter("the output must be a .toml vehicle file", param_hint="-o")
-    cmap = None
-    if channels is not None:
-        try:
-            cmap = read_channel_map(channels)
-        except LogError as exc:
-            click.echo(f"error: {exc}", err=True)
-            sys.exit(1)
+    cmap, logs = channel_map_and_logs(channels, logs)
     params = vehicle.params
     loaded, failed = [], []
     for path in logs:

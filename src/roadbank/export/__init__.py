@@ -47,7 +47,7 @@ class ExportResult:
 
 
 def export_c(est, out_dir, *, rate: float, float32: bool = False, module_name: str | None = None,
-             discrete: bool = False) -> ExportResult:
+             discrete: bool | None = None) -> ExportResult:
     """Write ``roadbank_<name>.h/.c`` and ``README_roadbank_<name>.md`` of ``est`` into ``out_dir``.
 
     Parameters
@@ -63,8 +63,9 @@ def export_c(est, out_dir, *, rate: float, float32: bool = False, module_name: s
     module_name : str, optional
         Module name: files ``roadbank_<module_name>.*`` and symbols ``roadbank_<module_name>_*``
         (non-identifier characters become ``_``); default the estimator's name.
-    discrete : bool
-        Add the fixed-rate tables for ``rate`` (see :func:`export_design`).
+    discrete : bool or None
+        Add the fixed-rate tables for ``rate``; None: as the estimator runs in Python
+        (see :func:`export_design`).
 
     Raises
     ------
@@ -97,15 +98,15 @@ def synthetic_drive(rate: float = 100.0, duration: float = 60.0) -> tuple:
 
 
 def measure_c_step_ns(est, signals=None, *, rate: float = 100.0, float32: bool = False,
-                      discrete: bool = False, repeats: int = 5, min_samples: int = 200_000,
+                      discrete: bool | None = None, repeats: int = 5, min_samples: int = 200_000,
                       opt: str = "-O2") -> float:
     """C step cost of ``est`` exported (ns/sample): best of ``repeats`` timed passes.
 
     Generates the module into a temporary directory, compiles it with a small
     timing loop (``opt``, strict C99 flags) and runs ``<prefix>_step_dt()`` over
     ``signals`` (a :class:`roadbank.Signals`; default :func:`synthetic_drive` at
-    ``rate``) at least ``min_samples`` times in one call. ``discrete`` times the module
-    with the fixed-rate tables for ``rate`` (see :func:`export_c`).
+    ``rate``) at least ``min_samples`` times in one call. ``discrete``: with or without
+    the fixed-rate tables for ``rate`` (default: as the estimator runs, see :func:`export_c`).
 
     Raises
     ------

@@ -15,9 +15,10 @@ Rules of the generated code: C99, no dynamic memory, no recursion, no mutable
 global state (the state is a caller-owned struct), every loop bounded by a
 compile-time constant, tables as ``static const`` arrays.
 
-The observer update is produced by :func:`_observer_tustin` (today's general
-path: continuous tables discretised per sample); a discrete-table update for a
-fixed sample rate can be added beside it as another ``_observer_*`` function.
+The observer update of the general path (continuous tables discretised per
+sample) comes from :func:`_observer_tustin`; with the kernels' fixed-rate tables
+(:func:`_discrete_parts`), a sample at the design rate is instead one update with
+the exact discrete-time observer interpolated on the grid, as in the kernels.
 """
 
 from __future__ import annotations
@@ -155,7 +156,7 @@ ${provenance} *
  * the same order): the observer xi' = F(vx) xi + G(vx) eta, w = H(vx) xi + D(vx) eta,
  * eta = [delta_f, ay, r], with F, G, H, D interpolated linearly on a speed grid,
  * advanced by the trapezoidal rule in substeps of at most ${sub_lit} s with eta
- * interpolated linearly between the samples. C99; no dynamic memory, no
+ * interpolated linearly between the samples${fixed_note}. C99; no dynamic memory, no
  * recursion, no mutable global data; every loop has a compile-time bound.
  */
 #include "${p}.h"
@@ -780,6 +781,8 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
     helpers_needed = nt > 0
     source = _SOURCE.substitute(
         common, provenance=_provenance(d), sub_lit=f"{d.max_substep:g}",
+        fixed_note="" if d.discrete is None else
+        f" (a sample {1.0 / d.rate:g} s after the last: the exact discrete\n * observer for {d.rate:g} Hz, RB_DTAB)",
         asin="asinf" if float32 else "asin", fabs="fabsf" if float32 else "fabs",
         ceil="ceilf" if float32 else "ceil", ng=d.ng, nk=d.nk, nkc=nkc, nsub_max=d.nsub_max,
         v0=lit(d.v0), dv=lit(d.dv), vmin=lit(d.v_min), sub=lit(d.max_substep), gap=lit(d.max_gap),

@@ -162,7 +162,8 @@ def check_exportable(est) -> None:
         raise NotExportable(f"{est.name}: not exportable: {why}")
 
 
-def export_design(est, rate: float, module_name: str | None = None, *, discrete: bool = False) -> ExportDesign:
+def export_design(est, rate: float, module_name: str | None = None, *,
+                  discrete: bool | None = None) -> ExportDesign:
     """Read the tables of a designed estimator (see :class:`ExportDesign`).
 
     Parameters
@@ -174,28 +175,30 @@ def export_design(est, rate: float, module_name: str | None = None, *, discrete:
     module_name : str, optional
         Name of the C module (files and symbols ``roadbank_<module_name>_*``); default
         the estimator's name. Two designs of one estimator in one program need two names.
-    discrete : bool
+    discrete : bool or None
         Add the fixed-rate tables for ``rate`` (the kernels' fixed-rate path,
         ``Estimator.discrete_tables``): samples ``1/rate`` apart then cost one small
         matrix update; other intervals, gaps and restarts take the general path.
+        None (default): as the estimator runs in Python -- with the tables when it
+        uses its fixed-rate path (``sample_rate="auto"``, the default, or a set rate),
+        without them when it was built with ``sample_rate=None``.
 
     Raises
     ------
     NotExportable
         For estimators whose runtime is not a scheduled linear observer.
     ValueError
-        For a bad rate or tables that are not finite.
+        For a bad rate, tables that are not finite, or an estimator whose fixed rate
+        (``set_sample_rate``) is not ``rate``.
     """
     check_exportable(est)
     if not (math.isfinite(rate) and rate > 0):
         raise ValueError(f"rate must be a positive number of Hz, got {rate}")
     n = int(est._nstate)
-    # the continuous-time schedule (the kernels' general path); estimators with a
-    # fixed-rate path keep it apart from the discrete tables appended for one rate
-    table = np.array(getattr(est, "_tab_cont", est._tab), dtype=np.float64, copy=True)
+    # the continuous-time schedule (the kernels' general path), kept apart from the
+    # fixed-rate tables the estimator appends for its sample rate
+    table = np.array(est._tab_cont, dtype=np.float64, copy=True)
     nk = n * n + NETA * n + n + NETA + NETA * n
-    if table.ndim == 2 and table.shape[1] > nk and getattr(est, "_tab_cont", None) is None:
-        table = table[:, :nk]
     if table.ndim != 2 or table.shape[1] != nk:
         raise NotExportable(f"{est.name}: not exportable: its table rows have {table.shape[-1]} "
                             f"entries, the scheduled-observer layout needs {nk} for {n} states")
@@ -208,13 +211,15 @@ def export_design(est, rate: float, module_name: str | None = None, *, discrete:
     nr = F.shape[0]
     # the same expressions as Estimator._build_cfg, so the constants are the same bits
     J = -np.linalg.solve(F, G).ravel() if nr else np.zeros(0)
+    from ..estimators import layout
+
+    if est.fixed_dt is not None and abs(est.fixed_dt * rate - 1.0) > layout.DT_REL_TOL:
+        raise ValueError(f"{est.name}: the estimator runs its fixed-rate path at {1.0 / est.fixed_dt:g} Hz, "
+                         f"not at the export rate {rate:g} Hz")
+    if discrete is None:    # as in Python: est._auto_rate is the sample_rate="auto" setting
+        discrete = est.fixed_dt is not None or bool(getattr(est, "_auto_rate", False))
     disc, dt_tol = None, 0.0
     if discrete:
-        if not hasattr(est, "discrete_tables"):
-            raise NotExportable(f"{est.name}: no fixed-rate tables: this roadbank has no fixed-rate "
-                                "path (Estimator.discrete_tables); export the general path")
-        from ..estimators import layout
-
         disc = est.discrete_tables(1.0 / rate)
         dt_tol = float(layout.DT_REL_TOL)
     p = est.params

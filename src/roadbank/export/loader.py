@@ -43,6 +43,7 @@ class CModule:
 
     def __init__(self, source, build_dir=None, *, opt: str = "-O2"):
         source = Path(source)
+        self.source = source
         self.prefix = source.stem
         header = source.with_suffix(".h").read_text()
         self.float32 = f"typedef float {self.prefix}_real;" in header

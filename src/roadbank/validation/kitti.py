@@ -56,17 +56,6 @@ def kinematic_residual(signals, ref, mask, taus) -> dict:
     return out
 
 
-def kinematic_residual(signals, ref, mask, taus) -> dict:
-    """RMS (deg) over ``mask`` of kinematic theta minus ``ref`` (rad), after a zero-phase low-pass of each tau (s; 0 = none)."""
-    kin = np.arcsin(np.clip((signals.ay - signals.vx * signals.r) / G, -1.0, 1.0))
-    e = hold_invalid(kin - ref)
-    out = {}
-    for tau in taus:
-        x = lowpass_t(e, signals.t, tau) if tau > 0 else e
-        out[tau] = float(np.degrees(np.sqrt(np.mean(x[mask] ** 2)))) if mask.any() else float("nan")
-    return out
-
-
 def drive_data(log, run, scoring: Scoring) -> dict:
     """Description numbers of one drive (SI unless the key says deg)."""
     s = log.signals
@@ -82,10 +71,6 @@ def drive_data(log, run, scoring: Scoring) -> dict:
             "gated_fraction": float(np.mean(gate)), "scored_fraction": float(np.mean(run.scored)),
             "scored_s": float(np.sum(np.r_[dt, dt[-1]][run.scored])),
             "ref_std_deg_scored": float(np.std(ref[run.scored])) if run.scored.any() else float("nan"),
-            # sample-to-sample noise of ay (white part: std of the difference / sqrt 2), m/s^2
-            "ay_noise_std": float(np.std(np.diff(s.ay[run.scored])) / np.sqrt(2)) if run.scored.sum() > 2 else float("nan"),
-            # kinematic residual (deg RMS over the scored samples) after low-passes of growing tau (s)
-            "kin_residual_deg": kinematic_residual(s, log.reference_roll, run.scored, (0.0, 0.1, 0.3, 1.0)),
             # sample-to-sample noise of ay (white part: std of the difference / sqrt 2), m/s^2
             "ay_noise_std": float(np.std(np.diff(s.ay[run.scored])) / np.sqrt(2)) if run.scored.sum() > 2 else float("nan"),
             # kinematic residual (deg RMS over the scored samples) after low-passes of growing tau (s)
