@@ -81,3 +81,18 @@ def test_cold_compile_probe_of_one_family_in_a_fresh_process():
     out = probe_family("dfc")
     assert out["cold_compile_s"] > 0 and out["cpu_first_s"] > 0, out
     assert out["again_s"] < out["first_s"]      # the second call runs compiled code
+
+
+def test_builtin_sections_c_step_and_long_log_on_a_tiny_run():
+    from roadbank.bench.sections import C_ESTIMATORS, c_step, c_step_markdown, long_log
+
+    out = c_step({"size": "tiny", "repeats": 1})
+    if "reason" in out:                     # only when the machine has no C compiler
+        pytest.skip(out["reason"])
+    assert [r["name"] for r in out["rows"]] == [n for n, _ in C_ESTIMATORS]
+    for r in out["rows"]:
+        assert r["c_ns"] > 0 and r["python_ns"] > 0
+        assert r["python_over_c"] == pytest.approx(r["python_ns"] / r["c_ns"])
+    assert "c_f32_ns" in out["rows"][0]
+    assert "| `pif-modified` |" in "\n".join(c_step_markdown(out))
+    assert "full suite only" in long_log({"size": "tiny"})["reason"]
