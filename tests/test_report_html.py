@@ -350,3 +350,17 @@ def test_estimate_plot_gets_the_logs_truth_and_reference(tmp_path, monkeypatch):
 @pytest.mark.parametrize("doc", GENERATED_DOCS, ids=[p.name for p in GENERATED_DOCS])
 def test_generated_docs_tables_are_consistent(doc):
     assert check_md(doc.read_text(), str(doc)), f"{doc}: no table"
+
+
+def test_bench_report_html_and_markdown(tmp_path):
+    from roadbank.bench import markdown as bench_markdown, run_suite
+    from roadbank.report.html import write_document
+
+    text = bench_markdown(run_suite("tiny"), "roadbank bench --tiny")
+    md, page = write_document(tmp_path / "b.md", text), write_document(tmp_path / "b.html", text, "bench")
+    tables = check_report(md, page)
+    assert tables[0]["header"] == ["what", "value", "peer", "ratio", "target", "met?"]
+    throughput = next(t for t in tables if t["header"][0] == "estimator")
+    median = [(float(_text(r[1])), r[1].find("strong") is not None) for r in throughput["rows"]]
+    low = min(v for v, _ in median)
+    assert all(bold == (v == low) for v, bold in median)     # best per column, in bold

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from ..report.markdown import Markdown, md_table
 from . import suite as _suite
 from .suite import RATE_HZ, TARGETS
 
@@ -35,48 +36,51 @@ def markdown(res: dict, command: str) -> str:
              "unless marked otherwise; single-threaded except `reproduce`. The machine is shared "
              "(other processes load the cores): absolute timings are noisy, ratios are measured "
              "in the same run.", "",
-             "## Headline and targets (issues 5 and 11)", "",
-             "| what | value | peer | ratio | target | met? |", "|---|---|---|---|---|---|"]
+             "## Headline and targets (issues 5 and 11)", ""]
     fp = res["filterpy"]
     cr = res["commonroad"]
     peer_note = (f"{_fmt(fp['peer_ns_per_sample'])} ns/sample (filterpy, {fp.get('samples')} samples)"
                  if fp.get("peer_ns_per_sample") else f"n/a: {r.get('pif_vs_filterpy')}")
-    lines.append(f"| PIF (pif-modified, steady) batch, ns/sample | {_fmt(res['pif_ns_per_sample'])} | {peer_note} | "
-                 f"{_fmt(res['pif_vs_filterpy'])}x | {TARGETS['pif_ns_per_sample'][2]}; "
-                 f"{TARGETS['pif_vs_filterpy'][2]} | {_met(res, 'pif_ns_per_sample')}; {_met(res, 'pif_vs_filterpy')} |")
     st = res["step"]
-    lines.append(f"| `step()` latency, us per call (median / p99) | {st['step_us_median']:.2f} / "
-                 f"{st['step_us_p99']:.2f} | - | - | {TARGETS['step_us_median'][2]} median | "
-                 f"{_met(res, 'step_us_median')} |")
     pv = res["plant_realtime_factor"]
     crv = res["commonroad_realtime_factor"]
     cr_note = (f"{_fmt(crv)}x real time (CommonRoad MB, {cr['duration_s']:g} s)" if crv
                else f"n/a: {cr.get('reason')}")
-    lines.append(f"| plant, simulated s per wall s (25 s S-curve) | "
-                 f"{_fmt(pv) if pv else 'n/a: ' + str(r.get('plant_realtime_factor'))} | {cr_note} | "
-                 f"{_fmt(res['plant_vs_commonroad'])}x | {TARGETS['plant_realtime_factor'][2]}; "
-                 f"{TARGETS['plant_vs_commonroad'][2]} | {_met(res, 'plant_realtime_factor')}; "
-                 f"{_met(res, 'plant_vs_commonroad')} |")
     rp = res["reproduce_s"]
-    lines.append(f"| `roadbank reproduce` wall time, s (warm cache, median, {m['cores_usable']} cores) | "
-                 f"{_fmt(rp) if rp is not None else 'n/a: ' + str(r.get('reproduce_s'))} | - | - | "
-                 f"{TARGETS['reproduce_s'][2]} | {_met(res, 'reproduce_s')} |")
     rc = res.get("reproduce_cold_s")
-    lines.append(f"| first `roadbank reproduce` after install (empty numba cache), s | "
-                 f"{_fmt(rc) if rc is not None else 'n/a: ' + str(r.get('reproduce_cold_s'))} | - | - | "
-                 f"{TARGETS['reproduce_cold_s'][2]} | {_met(res, 'reproduce_cold_s')} |")
     cc = res.get("cold_compile_s") or {}
     cc_text = ", ".join(f"{f} {_fmt(v)}" for f, v in cc.items()) if res.get("cold_compile_max_s") is not None \
         else "n/a: " + str(r.get("cold_compile_max_s"))
-    lines.append(f"| numba compile per kernel family (fresh process, empty cache), s | {cc_text} | - | - | "
-                 f"{TARGETS['cold_compile_max_s'][2]} | {_met(res, 'cold_compile_max_s')} |")
+    head = [
+        ["PIF (pif-modified, steady) batch, ns/sample", _fmt(res["pif_ns_per_sample"]), peer_note,
+         f"{_fmt(res['pif_vs_filterpy'])}x", f"{TARGETS['pif_ns_per_sample'][2]}; {TARGETS['pif_vs_filterpy'][2]}",
+         Markdown(f"{_met(res, 'pif_ns_per_sample')}; {_met(res, 'pif_vs_filterpy')}")],
+        [Markdown("`step()` latency, us per call (median / p99)"),
+         f"{st['step_us_median']:.2f} / {st['step_us_p99']:.2f}", "-", "-",
+         f"{TARGETS['step_us_median'][2]} median", Markdown(_met(res, "step_us_median"))],
+        ["plant, simulated s per wall s (25 s S-curve)",
+         _fmt(pv) if pv else "n/a: " + str(r.get("plant_realtime_factor")), cr_note,
+         f"{_fmt(res['plant_vs_commonroad'])}x",
+         f"{TARGETS['plant_realtime_factor'][2]}; {TARGETS['plant_vs_commonroad'][2]}",
+         Markdown(f"{_met(res, 'plant_realtime_factor')}; {_met(res, 'plant_vs_commonroad')}")],
+        [Markdown(f"`roadbank reproduce` wall time, s (warm cache, median, {m['cores_usable']} cores)"),
+         _fmt(rp) if rp is not None else "n/a: " + str(r.get("reproduce_s")), "-", "-",
+         TARGETS["reproduce_s"][2], Markdown(_met(res, "reproduce_s"))],
+        [Markdown("first `roadbank reproduce` after install (empty numba cache), s"),
+         _fmt(rc) if rc is not None else "n/a: " + str(r.get("reproduce_cold_s")), "-", "-",
+         TARGETS["reproduce_cold_s"][2], Markdown(_met(res, "reproduce_cold_s"))],
+        ["numba compile per kernel family (fresh process, empty cache), s", cc_text, "-", "-",
+         TARGETS["cold_compile_max_s"][2], Markdown(_met(res, "cold_compile_max_s"))],
+    ]
+    lines.append(md_table(["what", "value", "peer", "ratio", "target", "met?"], head, align="lrlrll"))
     lines += ["", f"## Batch throughput of every estimator ({res['estimators'][0]['samples']} samples = "
               f"{(res['estimators'][0]['samples'] - 1) / RATE_HZ / 3600:.3g} h at 100 Hz)", "",
-              "| estimator | ns/sample (median) | ns/sample (best) | CPU ns/sample (median) | samples "
-              "| design (s, first build) | first run() call (s, cold in process) |", "|---|---|---|---|---|---|---|"]
-    for e in res["estimators"]:
-        lines.append(f"| {e['name']} | {_fmt(e['ns_per_sample'])} | {_fmt(e['ns_per_sample_best'])} | "
-                     f"{_fmt(e['cpu_ns_per_sample'])} | {e['samples']} | {e['design_s']:.3f} | {e['first_call_s']:.3f} |")
+              md_table(["estimator", "ns/sample (median)", "ns/sample (best)", "CPU ns/sample (median)",
+                        "samples", "design (s, first build)", "first run() call (s, cold in process)"],
+                       [[e["name"], e["ns_per_sample"], e["ns_per_sample_best"], e["cpu_ns_per_sample"],
+                         e["samples"], e["design_s"], e["first_call_s"]] for e in res["estimators"]],
+                       digits=[0, 1, 1, 1, 0, 3, 3], best="min", best_in="column",
+                       best_columns=["ns/sample (median)", "ns/sample (best)", "CPU ns/sample (median)"])]
     lines += ["", "Wall-clock ns/sample is the headline; CPU ns/sample (thread CPU time) is shown "
               "because other processes share this machine's cores: where the two differ, the "
               "difference is time the benchmark was descheduled.",
@@ -117,28 +121,23 @@ def markdown(res: dict, command: str) -> str:
     cs = res.get("cold_start")
     if cs and "cache_load" in cs:
         lines += ["## Cold start: compilation vs numba cache (fresh processes, pif-modified)", "",
-                  "| | import roadbank (s) | design (s) | first run() (s) | second run() (s) "
-                  "| first step() (s) |", "|---|---|---|---|---|---|"]
-        for label, text in (("compile", "cold, empty cache (compiles)"), ("cache_load", "cold, cached")):
-            if label not in cs:
-                continue
-            c = cs[label]
-            lines.append(f"| {text} | {c['import_s']:.3f} | {c['design_s']:.3f} | {c['first_run_s']:.3f} | "
-                         f"{c['second_run_s']:.5f} | {c['first_step_s']:.3f} |")
+                  md_table(["", "import roadbank (s)", "design (s)", "first run() (s)", "second run() (s)",
+                            "first step() (s)"],
+                           [[text, cs[label]["import_s"], cs[label]["design_s"], cs[label]["first_run_s"],
+                             cs[label]["second_run_s"], cs[label]["first_step_s"]]
+                            for label, text in (("compile", "cold, empty cache (compiles)"),
+                                                ("cache_load", "cold, cached")) if label in cs],
+                           digits=[0, 3, 3, 3, 5, 3])]
         lines += ["", f"Kernels loaded by a process that only used pif-modified: "
                   f"{', '.join(cs['cache_load']['kernels_loaded'])} (the others are never compiled).", ""]
     elif cs:
         lines += [f"Cold start: {cs.get('reason')}", ""]
     if res.get("cold_compile"):
         lines += ["## Compile time per kernel family (fresh process, empty `NUMBA_CACHE_DIR`)", "",
-                  "| family | compile, s (wall) | CPU s of the first calls | numba compile events, s |",
-                  "|---|---|---|---|"]
-        for f, v in res["cold_compile"].items():
-            if v.get("cold_compile_s") is None:
-                lines.append(f"| {f} | n/a: {v.get('reason')} | | |")
-            else:
-                lines.append(f"| {f} | {v['cold_compile_s']:.2f} | {v['cpu_first_s']:.2f} | "
-                             f"{_fmt(v.get('numba_compile_event_s'), 2)} |")
+                  md_table(["family", "compile, s (wall)", "CPU s of the first calls", "numba compile events, s"],
+                           [[f, v["cold_compile_s"], v["cpu_first_s"], v.get("numba_compile_event_s")]
+                            if v.get("cold_compile_s") is not None else [f, f"n/a: {v.get('reason')}", None, None]
+                            for f, v in res["cold_compile"].items()], align="lrrr")]
         lines += ["", "Each family's probe (`roadbank.bench.cold.FAMILY_PROBES`) runs what a user's first "
                   "run compiles: compile = wall time of the first calls minus the same calls repeated.", ""]
     for sec in _suite.SECTIONS:

@@ -18,6 +18,7 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
+from ..report.markdown import Markdown, md_table
 from .suite import Section, synthetic_log, time_batch
 
 #: estimators timed as C, and whether a float32 build is timed too
@@ -52,16 +53,13 @@ def c_step(cfg: dict) -> dict:
 
 
 def c_step_markdown(out: dict) -> list[str]:
-    lines = ["| estimator | C float64 (ns/sample) | C float32 | numba `run()` (ns/sample) | numba / C |",
-             "|---|---:|---:|---:|---:|"]
-    for r in out["rows"]:
-        f32 = f"{r['c_f32_ns']:.1f}" if "c_f32_ns" in r else "-"
-        lines.append(f"| `{r['name']}` | {r['c_ns']:.1f} | {f32} | {r['python_ns']:.1f} | "
-                     f"{r['python_over_c']:.2f}x |")
-    lines += ["", f"Both on the same synthetic 100 Hz log ({out['samples']} samples) in this run; the C "
-              "module is `roadbank export c` output with its fixed-rate tables, compiled with `-O2` "
-              "(docs/embedded.md)."]
-    return lines
+    rows = [[Markdown(f"`{r['name']}`"), r["c_ns"], r.get("c_f32_ns"), r["python_ns"], f"{r['python_over_c']:.2f}x"]
+            for r in out["rows"]]
+    return [md_table(["estimator", "C float64 (ns/sample)", "C float32",
+                      Markdown("numba `run()` (ns/sample)"), "numba / C"], rows, digits=1, na="-", align="lrrrr"),
+            "", f"Both on the same synthetic 100 Hz log ({out['samples']} samples) in this run; the C "
+            "module is `roadbank export c` output with its fixed-rate tables, compiled with `-O2` "
+            "(docs/embedded.md)."]
 
 
 def long_log(cfg: dict, hours: float = 24.0) -> dict:
@@ -85,12 +83,12 @@ def long_log(cfg: dict, hours: float = 24.0) -> dict:
 
 def long_log_markdown(out: dict) -> list[str]:
     met = out["met"]
-    return ["| what | value | target | met? |", "|---|---:|---:|---|",
-            f"| peak RSS, streamed {out['hours']:g} h Parquet log | {out['peak_rss_mb']:.0f} MiB | "
-            f"<= {LONG_LOG_TARGETS['peak_rss_mb']:.0f} MB | {'yes' if met['peak_rss_mb'] else '**no**'} |",
-            f"| the same process before reading any row | {out['baseline_rss_mb']:.0f} MiB | | |",
-            f"| end to end (read + resample + estimate + write) | {out['samples_per_s'] / 1e6:.2f} M samples/s | "
-            f">= 1 M samples/s | {'yes' if met['samples_per_s'] else '**no**'} |",
+    rows = [[f"peak RSS, streamed {out['hours']:g} h Parquet log", f"{out['peak_rss_mb']:.0f} MiB",
+             f"<= {LONG_LOG_TARGETS['peak_rss_mb']:.0f} MB", Markdown("yes" if met["peak_rss_mb"] else "**no**")],
+            ["the same process before reading any row", f"{out['baseline_rss_mb']:.0f} MiB", "", ""],
+            ["end to end (read + resample + estimate + write)", f"{out['samples_per_s'] / 1e6:.2f} M samples/s",
+             ">= 1 M samples/s", Markdown("yes" if met["samples_per_s"] else "**no**")]]
+    return [md_table(["what", "value", "target", "met?"], rows, align="lrrl"),
             "", f"{out['samples']} samples, `pif-modified`, each in a fresh process "
             "(`roadbank.fleet.bench.measure`); more formats and the fleet speed-up: "
             "`python -m roadbank.fleet.bench`, docs/io.md."]

@@ -13,7 +13,7 @@ import click
 
 @click.command()
 @click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
-              help="Write the markdown report here (e.g. docs/benchmarks.md).")
+              help="Write the report here: markdown (e.g. docs/benchmarks.md), or a self-contained page for .html.")
 @click.option("--quick", is_flag=True, help="Shorter repeats and peers; finishes within 45 s (no reproduce).")
 @click.option("--tiny", is_flag=True, help="A 10 s log, for tests: checks the runner, not the speed.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object with all results on stdout.")
@@ -29,12 +29,13 @@ def bench(output, quick, tiny, as_json):
             os.environ[var] = "1"
             suite._SET_BY_BENCH.add(var)
     from ..bench import markdown, run_suite, to_json
+    from ..report.html import write_document
     command = "roadbank bench" + "".join(f" {a}" for a in sys.argv[2:]) if sys.argv[1:2] == ["bench"] \
         else "roadbank bench" + (f" -o {output}" if output else "") + (f" --{size}" if size != "full" else "")
     res = run_suite(size, progress=lambda msg: click.echo(f"[bench] {msg}", err=True))
     if output is not None:
         output.parent.mkdir(parents=True, exist_ok=True)
-        output.write_text(markdown(res, shlex.join(shlex.split(command))))
+        write_document(output, markdown(res, shlex.join(shlex.split(command))), "roadbank benchmarks")
         click.echo(f"wrote {output}", err=True)
     if as_json:
         click.echo(json.dumps(to_json(res), indent=1))
