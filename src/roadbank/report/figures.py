@@ -20,11 +20,38 @@ from .labels import CONDITION_LABELS, PAPER_SET, label  # noqa: E402
 ROBUSTNESS_CONDITIONS = ("cf50", "nominal", "cf150")
 
 
+DPI = 110
+
+
+def _freeze_best_legends(fig, renderer) -> None:
+    """Pin every ``loc="best"`` legend where it was just placed (fraction of its anchor box),
+    so later draws do not search the lines again; the position is dpi independent."""
+    for ax in fig.axes:
+        leg = ax.get_legend()
+        if leg is None or leg._loc != 0:       # 0: "best" (matplotlib's code)
+            continue
+        box = leg.get_window_extent(renderer)
+        anchor = leg.get_bbox_to_anchor()
+        leg.set_loc(((box.x0 - anchor.x0) / anchor.width, (box.y0 - anchor.y0) / anchor.height))
+
+
 def _save(fig, path: Path) -> list[Path]:
+    """Write ``path`` as PNG and SVG, cropped to the drawn content (like ``bbox_inches="tight"``).
+
+    One layout pass serves both files: ``savefig(bbox_inches="tight")`` lays the figure out
+    twice per format (draw, then the tight box) before drawing it, and a ``"best"`` legend
+    searches every line each time. The PNG is pixel-identical to the ``"tight"`` one; the SVG
+    has the same box to within a fraction of a point. SVGs carry no date (reproducible files).
+    """
+    fig.set_dpi(DPI)
+    renderer = fig.canvas.get_renderer()
+    fig.draw_without_rendering()
+    _freeze_best_legends(fig, renderer)
+    bbox = fig.get_tightbbox(renderer).padded(matplotlib.rcParams["savefig.pad_inches"])
     out = []
-    for ext in (".png", ".svg"):
+    for ext, meta in ((".png", None), (".svg", {"Date": None})):
         p = path.with_suffix(ext)
-        fig.savefig(p, dpi=110, bbox_inches="tight")
+        fig.savefig(p, dpi=DPI, bbox_inches=bbox, metadata=meta)
         out.append(p)
     plt.close(fig)
     return out
