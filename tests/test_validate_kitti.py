@@ -99,11 +99,35 @@ def test_validate_kitti_json_report_and_figures(kitti_cli):
     assert "Targets" in text
 
 
-@needs_kitti
-def test_pooled_equals_weighted_drive_rms():
+def test_default_pif_noise_density_follows_the_log_rate():
+    from roadbank.estimators.pif import R_ESP
+    from roadbank.validation.scoring import log_rate_R
+
+    rng = np.random.default_rng(0)
+    t10 = np.cumsum(rng.uniform(0.06, 0.14, 500))             # KITTI-like jitter around 0.1 s
+    assert log_rate_R(np.arange(1000) * 0.01) == pytest.approx(R_ESP, rel=1e-9)
+    assert log_rate_R(t10) == pytest.approx(R_ESP * 100.0 / (1.0 / np.median(np.diff(t10))), rel=1e-9)
+    assert log_rate_R(t10) == pytest.approx(10 * R_ESP, rel=0.05)
+
+
+@pytest.fixture(scope="module")
+def kitti_default():
     from roadbank.validation.kitti import validate_kitti
 
-    v = validate_kitti([KITTI], names=["kinematic", "pif-modified"])
+    return validate_kitti([KITTI], names=["kinematic", "pif-modified"], sensitivity=False)
+
+
+@needs_kitti
+def test_default_pif_beats_the_kinematic_estimate_on_every_kitti_drive(kitti_default):
+    # issue 14's target, on validation data (never used for tuning); theta vs the INS roll, unsmoothed
+    assert len(kitti_default.drives) == 2
+    for d in kitti_default.drives:
+        assert d.scores["pif-modified"].rms_raw_deg < d.scores["kinematic"].rms_raw_deg, d.label
+
+
+@needs_kitti
+def test_pooled_equals_weighted_drive_rms(kitti_default):
+    v = kitti_default
     for name in ("kinematic", "pif-modified"):
         ns = [int(d.run.scored.sum()) for d in v.drives]
         ms = [d.scores[name].rms_raw_deg ** 2 for d in v.drives]

@@ -112,6 +112,10 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
              "INS roll (bank + body roll, ISO, left side up); inputs = the INS forward speed `vf`, lateral "
              "specific force `ay` and yaw rate `wz`. No steering angle. Licence CC BY-NC-SA 3.0 (Geiger, "
              "Lenz, Stiller, Urtasun, IJRR 2013): the data stay outside the repository.\n")
+    L.append("Estimators: the library defaults; the default PIFs' yaw-rate noise density R follows the log's "
+             "sample rate (`roadbank.validation.scoring.log_rate_R`: the ESP sensor's variance / rate, "
+             "docs/estimators.md), i.e. ten times the 100 Hz value at KITTI's 10 Hz. Nothing is tuned on "
+             "these drives.\n")
     L.append(md_table(["drive", "duration (s)", "frames (dropped)", "step (s)", "speed (m/s)", "roll (deg)",
                        "max yaw rate (rad/s)", "scored (s)"],
                       [[d.label, d.data["duration_s"], f"{d.data['frames']} ({d.data['dropped_frames']})",

@@ -212,6 +212,28 @@ class Scored:
     valid: dict
 
 
+#: estimators whose default R is the yaw-rate sensor's noise density (depends on the sample rate)
+SENSOR_R_ESTIMATORS = ("pif-modified", "pif-rate")
+
+
+def log_rate_R(t) -> float:
+    """Yaw-rate noise density ``R`` ((rad/s)^2 s) of the ESP sensor sampled at the log's rate.
+
+    The rate is 1 / the median positive sample interval of ``t`` (s); the noise and
+    resolution are those of :class:`roadbank.vehicle.SensorSpec` (paper ESP cluster). At
+    100 Hz this is the default PIF's ``R``; a 10 Hz log (KITTI) gets ten times that: the
+    same per-sample noise stands for a ten times larger density.
+    """
+    from ..estimators.pif import yaw_rate_noise_density
+    from ..vehicle import SensorSpec
+
+    dt = np.diff(np.asarray(t, dtype=float))
+    dt = dt[np.isfinite(dt) & (dt > 0)]
+    sensor = SensorSpec()
+    rate = 1.0 / float(np.median(dt)) if dt.size else sensor.rate
+    return yaw_rate_noise_density(sensor.r_noise, sensor.r_resolution, rate)
+
+
 def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=None, **tuning) -> Scored:
     """Run each estimator (``roadbank.estimators.make(name, params, **tuning)``) and score ``theta``.
 
@@ -230,6 +252,13 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     per_estimator : mapping, optional
         ``{name: {option: value}}`` on top of ``tuning`` for that estimator (a vehicle file's
         ``[tuning]`` tables).
+
+    Notes
+    -----
+    The default-tuned PIFs derive their yaw-rate noise density ``R`` from the sensor's
+    variance and sample rate (:func:`roadbank.estimators.pif.yaw_rate_noise_density`);
+    here the rate is the log's own (median sample interval), with the ESP sensor's noise
+    and resolution, unless ``R`` or another tuning is given (see :func:`log_rate_R`).
     """
     from .. import estimators
 
@@ -238,8 +267,12 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     ref = hold_invalid(ref)
     fit, scored = masks(t, signals.vx, scoring)
     scores, smooth, raw, flags = {}, {}, {}, {}
+    R_log = log_rate_R(t)
     for name in names:
-        est = estimators.make(name, params=params, **{**tuning, **per_estimator.get(name, {})}).run(signals)
+        options = {**tuning, **per_estimator.get(name, {})}
+        if name in SENSOR_R_ESTIMATORS and "R" not in options and options.get("tuning", "default") == "default":
+            options["R"] = R_log
+        est = estimators.make(name, params=params, **options).run(signals)
         th, pb = hold_invalid(est.theta), hold_invalid(est.phi_b)
         sc = score(t, th, pb, est.valid, ref, fit, scored, scoring)
         scores[name] = sc
