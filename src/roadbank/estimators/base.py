@@ -143,14 +143,33 @@ class Estimator:
 
     def _cached_design(self):
         """``_design()`` memoised on the estimator type and every setting made so far
-        (parameters and tuning): building the same estimator again costs nothing."""
+        (parameters and tuning): building the same estimator again costs nothing.
+        Also kept on disk (:mod:`roadbank.cache`), so a new process reads the tables
+        instead of solving one ARE per grid speed again."""
         key = self._design_key()
         hit = _DESIGN_CACHE.get(key)
         if hit is None:
-            hit = self._design()
+            hit = self._disk_design()
             if len(_DESIGN_CACHE) > 256:
                 _DESIGN_CACHE.clear()
             _DESIGN_CACHE[key] = hit
+        return hit
+
+    def _disk_design(self):
+        """``_design()`` through the on-disk cache, keyed on the class, the exact values of
+        every design setting and the speed grid."""
+        from .. import cache
+        cls = type(self)
+        key = cache.canonical((f"{cls.__module__}.{cls.__qualname__}", self.vgrid,
+                               sorted(((k, v) for k, v in vars(self).items()
+                                       if not k.startswith("_") and k not in _NOT_DESIGN), key=lambda kv: kv[0])))
+        z = cache.load("design", key)
+        if z is not None and {"tab", "nstate", "extra"} <= z.keys():
+            return z["tab"], int(z["nstate"]), z["extra"]
+        tab, nstate, extra = hit = self._design()
+        if (isinstance(tab, np.ndarray) and tab.dtype == np.float64 and isinstance(extra, np.ndarray)
+                and extra.dtype == np.float64 and isinstance(nstate, (int, np.integer))):
+            cache.store("design", key, {"tab": tab, "nstate": np.int64(nstate), "extra": extra})
         return hit
 
     def _design_key(self) -> tuple:

@@ -1,0 +1,153 @@
+"""A small on-disk cache of float arrays in the user's cache directory.
+
+Used for results that are expensive to compute and fully determined by their
+inputs, such as the estimators' gain schedules (one Riccati/ARE solution per
+grid speed). Entries are ``.npz`` files named by a SHA-256 of a canonical key;
+each file also stores the key text, checked on load. The key always includes
+roadbank's version and a fingerprint of its installed sources (so an edited
+checkout never reads results of older code), numpy's and scipy's versions.
+
+Safe under concurrent processes: a file is written under a temporary name and
+renamed into place (atomic), so a reader sees a complete entry or none.
+Unreadable or damaged entries count as misses and are rewritten; any failure
+to write (read-only disk, no permission) only costs the speed-up.
+
+Location: ``$ROADBANK_CACHE_DIR`` if set (``off`` disables the cache), else
+``$XDG_CACHE_HOME/roadbank`` or ``~/.cache/roadbank`` (``%LOCALAPPDATA%`` on
+Windows, ``~/Library/Caches`` on macOS).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+#: the most entries kept per kind; older ones (by modification time) are removed
+MAX_ENTRIES = 512
+_FINGERPRINT: str | None = None
+
+
+def cache_dir() -> Path | None:
+    """The cache directory (may not exist yet), or None when disabled (``ROADBANK_CACHE_DIR=off``)."""
+    env = os.environ.get("ROADBANK_CACHE_DIR")
+    if env is not None and env.strip():
+        return None if env.strip().lower() == "off" else Path(env).expanduser()
+    if sys.platform == "win32":
+        base = Path(os.environ.get("LOCALAPPDATA") or Path.home() / "AppData" / "Local")
+    elif sys.platform == "darwin":
+        base = Path.home() / "Library" / "Caches"
+    else:
+        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return base / "roadbank"
+
+
+def source_fingerprint() -> str:
+    """Version of roadbank, numpy and scipy and a hash of every roadbank source file's
+    path, size and modification time (computed once per process)."""
+    global _FINGERPRINT
+    if _FINGERPRINT is None:
+        import scipy
+
+        from . import __version__
+        h = hashlib.sha256(f"{__version__}|{np.__version__}|{scipy.__version__}".encode())
+        root = Path(__file__).resolve().parent
+        for p in sorted(root.rglob("*.py")):
+            st = p.stat()
+            h.update(f"{p.relative_to(root).as_posix()}|{st.st_size}|{st.st_mtime_ns}\n".encode())
+        _FINGERPRINT = h.hexdigest()
+    return _FINGERPRINT
+
+
+def canonical(obj) -> str:
+    """Exact, repeatable text of ``obj`` for cache keys: floats in hex, arrays by dtype,
+    shape and a hash of their bytes (``repr`` rounds and elides them), dataclasses by fields."""
+    if isinstance(obj, np.ndarray):
+        a = np.ascontiguousarray(obj)
+        return f"nd({a.dtype.str},{a.shape},{hashlib.sha256(a.tobytes()).hexdigest()})"
+    if isinstance(obj, (bool, np.bool_)) or obj is None:
+        return repr(bool(obj) if obj is not None else None)
+    if isinstance(obj, (float, np.floating)):
+        return float(obj).hex()
+    if isinstance(obj, (int, np.integer)):
+        return str(int(obj))
+    if isinstance(obj, (list, tuple)):
+        return type(obj).__name__ + "(" + ",".join(canonical(v) for v in obj) + ")"
+    if isinstance(obj, dict):
+        return "{" + ",".join(f"{canonical(k)}:{canonical(v)}" for k, v in sorted(obj.items(), key=lambda kv: repr(kv[0]))) + "}"
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return (type(obj).__qualname__ + "(" + ",".join(f"{f.name}={canonical(getattr(obj, f.name))}"
+                                                         for f in dataclasses.fields(obj)) + ")")
+    return repr(obj)
+
+
+def _entry(kind: str, key: str) -> tuple[Path, str] | None:
+    base = cache_dir()
+    if base is None:
+        return None
+    text = f"{source_fingerprint()}|{kind}|{key}"
+    return base / kind / (hashlib.sha256(text.encode()).hexdigest() + ".npz"), text
+
+
+def load(kind: str, key: str) -> dict[str, np.ndarray] | None:
+    """The arrays stored under ``key`` (text, see :func:`canonical`) in ``kind``, or None."""
+    entry = _entry(kind, key)
+    if entry is None:
+        return None
+    path, text = entry
+    try:
+        with np.load(path, allow_pickle=False) as z:
+            if str(z["__key__"]) != text:
+                return None
+            return {k: z[k] for k in z.files if k != "__key__"}
+    except Exception:     # missing, truncated, damaged or foreign file: a miss
+        return None
+
+
+def store(kind: str, key: str, arrays: dict[str, np.ndarray]) -> Path | None:
+    """Store ``arrays`` under ``key`` in ``kind`` (atomically); the path, or None if not written."""
+    entry = _entry(kind, key)
+    if entry is None:
+        return None
+    path, text = entry
+    tmp = None
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=path.parent)
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, __key__=np.array(text), **arrays)
+        os.replace(tmp, path)
+        tmp = None
+        _prune(path.parent)
+        return path
+    except OSError:
+        return None
+    finally:
+        if tmp is not None:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+
+
+def _prune(folder: Path, keep: int | None = None) -> None:
+    """Remove the oldest entries beyond ``keep`` (default :data:`MAX_ENTRIES`; another
+    process may remove them first)."""
+    keep = MAX_ENTRIES if keep is None else keep
+    try:
+        entries = [(e.stat().st_mtime, e.path) for e in os.scandir(folder) if e.name.endswith(".npz")
+                   and not e.name.startswith(".tmp-")]
+    except OSError:
+        return
+    if len(entries) <= keep:
+        return
+    for _, p in sorted(entries)[:len(entries) - keep]:
+        try:
+            os.unlink(p)
+        except OSError:
+            pass

@@ -1,0 +1,133 @@
+"""The on-disk cache of gain-schedule designs (roadbank.cache, Estimator._cached_design)."""
+
+import os
+import threading
+
+import numpy as np
+import pytest
+
+from roadbank import VehicleParams, cache
+from roadbank import estimators as E
+from roadbank.estimators import base
+
+GRID = {"v_step": 2.5, "v_max": 30.0}          # a short grid: each design takes milliseconds
+
+
+@pytest.fixture
+def disk(tmp_path, monkeypatch):
+    """An empty cache directory and an empty in-process memo (the global one is left alone)."""
+    monkeypatch.setenv("ROADBANK_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(base, "_DESIGN_CACHE", {})
+    return tmp_path / "design"
+
+
+def _fresh(name, **kw):
+    """An estimator built from scratch: no memo, no disk."""
+    est = E.make(name, **GRID, **kw)
+    return est._design()
+
+
+def _entries(folder):
+    return sorted(folder.glob("*.npz")) if folder.exists() else []
+
+
+@pytest.mark.parametrize("name,kw", [("pif-modified", {"tuning": "paper"}), ("dfc", {}), ("uio", {})])
+def test_disk_hit_returns_identical_tables_without_designing(disk, monkeypatch, name, kw):
+    first = E.make(name, **GRID, **kw)
+    assert len(_entries(disk)) == 1
+    base._DESIGN_CACHE.clear()                              # as in a new process
+
+    def no_design(self):
+        raise AssertionError("designed again despite a disk entry")
+    monkeypatch.setattr(type(first), "_design", no_design)
+    second = E.make(name, **GRID, **kw)
+    monkeypatch.undo()
+    tab, n, extra = _fresh(name, **kw)                      # independent: a new design
+    assert np.array_equal(second._tab_cont, tab) and second._tab_cont.dtype == np.float64
+    assert second._nstate == n == first._nstate and type(second._nstate) is int
+    assert np.array_equal(second._extra, extra)
+    assert second._tab_cont.flags.c_contiguous
+
+
+def test_damaged_entry_is_ignored_and_rewritten(disk):
+    E.make("pif-modified", tuning="paper", **GRID)
+    (entry,) = _entries(disk)
+    for junk in (b"", b"not an npz file", entry.read_bytes()[:200]):
+        entry.write_bytes(junk)
+        base._DESIGN_CACHE.clear()
+        est = E.make("pif-modified", tuning="paper", **GRID)
+        assert np.array_equal(est._tab_cont, _fresh("pif-modified", tuning="paper")[0])
+        with np.load(entry, allow_pickle=False) as z:        # rewritten, readable again
+            assert np.array_equal(z["tab"], est._tab_cont)
+
+
+def test_different_settings_get_different_entries(disk):
+    heavy = VehicleParams(m=VehicleParams().m * 1.2)
+    a = E.make("pif-modified", tuning="paper", **GRID)
+    b = E.make("pif-modified", VehicleParams(m=heavy.m), tuning="paper", **GRID)
+    c = E.make("pif-modified", **GRID)                                # default tuning
+    d = E.make("pif-modified", tuning="paper", v_step=2.0, v_max=30.0)  # another grid
+    assert len(_entries(disk)) == 4
+    assert not np.array_equal(a._tab_cont, b._tab_cont)
+    assert not np.array_equal(a._tab_cont, c._tab_cont)
+    assert a._tab_cont.shape != d._tab_cont.shape
+
+
+def test_key_is_exact_where_repr_rounds():
+    x = np.array([1.0, 2.0])
+    y = x + 1e-12                                          # repr shows the same digits
+    assert repr(x) == repr(y)
+    assert cache.canonical(x) != cache.canonical(y)
+    assert cache.canonical(0.1) != cache.canonical(np.nextafter(0.1, 1.0))
+    assert cache.canonical(VehicleParams()) == cache.canonical(VehicleParams())
+
+
+def test_entry_with_another_key_is_a_miss(disk):
+    cache.store("design", "key-a", {"tab": np.ones(3)})
+    (entry,) = _entries(disk)
+    path_b = cache._entry("design", "key-b")[0]
+    path_b.write_bytes(entry.read_bytes())                 # right name, wrong content
+    assert cache.load("design", "key-b") is None
+    assert np.array_equal(cache.load("design", "key-a")["tab"], np.ones(3))
+
+
+def test_off_disables_the_cache(tmp_path, monkeypatch):
+    monkeypatch.setenv("ROADBANK_CACHE_DIR", "off")
+    monkeypatch.setattr(base, "_DESIGN_CACHE", {})
+    assert cache.cache_dir() is None
+    assert cache.store("design", "k", {"a": np.ones(2)}) is None
+    E.make("dfc", **GRID)
+    assert not any(tmp_path.iterdir())
+
+
+def test_concurrent_writers_and_readers_see_whole_entries(disk):
+    """Writers replace the entry atomically: a reader gets the complete arrays or a miss."""
+    big = np.arange(200_000, dtype=float)
+    seen = []
+
+    def write():
+        for _ in range(10):
+            cache.store("design", "shared", {"tab": big})
+
+    def read():
+        for _ in range(40):
+            z = cache.load("design", "shared")
+            if z is not None:
+                seen.append(np.array_equal(z["tab"], big))
+
+    threads = [threading.Thread(target=f) for f in (write, write, read, read)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert all(seen)
+    assert len(_entries(disk)) == 1 and not list(disk.glob(".tmp-*"))
+
+
+def test_store_keeps_only_the_newest_entries(disk, monkeypatch):
+    monkeypatch.setattr(cache, "MAX_ENTRIES", 3)
+    for k in range(5):
+        p = cache.store("design", f"k{k}", {"a": np.full(2, k)})
+        os.utime(p, (1000 + k, 1000 + k))
+    kept = {int(cache.load("design", f"k{k}")["a"][0]) for k in range(5) if cache.load("design", f"k{k}") is not None}
+    assert kept == {2, 3, 4}
