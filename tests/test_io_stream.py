@@ -175,3 +175,14 @@ def test_table_writer_appends_and_aborts(tmp_path, suffix):
             w.write(cols)
             raise RuntimeError("interrupted")
     assert not bad.exists() and not list(tmp_path.glob("*.partial"))
+
+
+@pytest.mark.parametrize("n", [0, 1, 7, 8, 9, 1001])
+def test_arrow_conversion_equals_pyarrow_array(n):
+    # the writer's zero-copy conversion must give exactly what pa.array gives (bools bit-packed)
+    import pyarrow as pa
+    from roadbank.io.writers import _to_arrow
+
+    rng = np.random.default_rng(n)
+    for v in (rng.normal(size=n), rng.integers(-5, 5, n), rng.random(n) > 0.5, rng.normal(size=2 * n)[::2]):
+        assert _to_arrow(v).equals(pa.array(v)), v.dtype

@@ -59,6 +59,20 @@ def _csv_rows(fh, cols: dict[str, np.ndarray]) -> None:
         w.writerow([repr(float(x)) if isinstance(x, (float, np.floating)) else int(x) for x in row])
 
 
+def _to_arrow(v):
+    """1-D numpy array -> pyarrow array, zero-copy for numbers, without ``pa.array``'s
+    pandas checks (they import pandas, ~40 MB resident, into every streamed estimate)."""
+    import pyarrow as pa
+
+    v = np.ascontiguousarray(v)
+    if v.dtype == np.bool_:
+        bits = np.packbits(v, bitorder="little")
+        return pa.Array.from_buffers(pa.bool_(), len(v), [None, pa.py_buffer(bits)])
+    if v.dtype.kind in "fiu":
+        return pa.Array.from_buffers(pa.from_numpy_dtype(v.dtype), len(v), [None, pa.py_buffer(v)])
+    return pa.array(v)
+
+
 class TableWriter:
     """Write an output table chunk by chunk: Parquet row groups or CSV lines appended.
 
@@ -101,7 +115,7 @@ class TableWriter:
         if self.format == "parquet":
             import pyarrow as pa
             import pyarrow.parquet as pq
-            table = pa.table({k: pa.array(v) for k, v in cols.items()})
+            table = pa.table({k: _to_arrow(v) for k, v in cols.items()})
             if self._pq is None:
                 self._pq = pq.ParquetWriter(self.tmp, table.schema.with_metadata(self.metadata),
                                             use_dictionary=False)
