@@ -146,6 +146,9 @@ def run_study(scenarios=None, names=COLUMNS, *, jobs: int | None = None, seed: i
     else:
         with ProcessPoolExecutor(max_workers=jobs) as pool:
             futures = [pool.submit(run_cell, s, c, tuple(names), seed, vehicle=vehicle) for s, c in rest]
+            # while the workers run: load matplotlib here once, so that the figure
+            # workers forked later (write_outputs) inherit it instead of each importing it
+            from . import figures  # noqa: F401
             for fut in as_completed(futures):
                 _collect(study, fut.result(), progress)
     study.cells = {k: study.cells[k] for k in cells}          # plan order
@@ -160,13 +163,21 @@ def _collect(study: Study, res: CellResult, progress) -> None:
         progress(res)
 
 
-def _scenario_figures(sc: str, cells: dict, figdir: Path) -> dict:
+def _figure_tasks(by_sc: dict, figdir: Path) -> list[tuple]:
+    """``(key, kind, scenario, cells, path)`` of every figure, the most work (lines) first."""
+    from .figures import ROBUSTNESS_CONDITIONS
+    tasks = []
+    for sc, cells in by_sc.items():
+        tasks.append((sc, "scenario", sc, cells, figdir / sc))
+        rob = {c: cells[c] for c in ROBUSTNESS_CONDITIONS if c in cells}
+        if len(rob) >= 2:
+            tasks.append((f"{sc}-cf-robustness", "robustness", sc, rob, figdir / f"{sc}-cf-robustness"))
+    return sorted(tasks, key=lambda t: -sum(len(c.t) * (1 + len(c.phi_b)) for c in t[3].values()))
+
+
+def _draw(kind: str, sc: str, cells: dict, path: Path):
     from .figures import robustness_figure, scenario_figure
-    figs = {sc: scenario_figure(sc, cells, figdir / sc)}
-    rob = robustness_figure(sc, cells, figdir / f"{sc}-cf-robustness")
-    if rob:
-        figs[f"{sc}-cf-robustness"] = rob
-    return figs
+    return (scenario_figure if kind == "scenario" else robustness_figure)(sc, cells, path)
 
 
 def write_outputs(study: Study, outdir: Path, *, docs_results: Path | None = None,
@@ -180,18 +191,22 @@ def write_outputs(study: Study, outdir: Path, *, docs_results: Path | None = Non
     outdir = Path(outdir)
     figdir = outdir / "figures"
     figdir.mkdir(parents=True, exist_ok=True)
-    written = {"tables": write_tables(study.rows, outdir)}
     by_sc = study.by_scenario()
-    jobs = max(1, min(jobs or os.cpu_count() or 1, len(by_sc)))
-    figs: dict = {}
+    tasks = _figure_tasks(by_sc, figdir)
+    jobs = max(1, min(jobs or os.cpu_count() or 1, len(tasks)))
+    drawn: dict = {}
     if jobs == 1:
-        for sc, cells in by_sc.items():
-            figs.update(_scenario_figures(sc, cells, figdir))
-    else:
+        written = {"tables": write_tables(study.rows, outdir)}
+        for key, *args in tasks:
+            drawn[key] = _draw(*args)
+    else:       # one task per figure, the longest first, so that the workers finish together
         with ProcessPoolExecutor(max_workers=jobs) as pool:
-            futures = [pool.submit(_scenario_figures, sc, cells, figdir) for sc, cells in by_sc.items()]
-            for fut in futures:
-                figs.update(fut.result())
+            futures = {key: pool.submit(_draw, *args) for key, *args in tasks}
+            written = {"tables": write_tables(study.rows, outdir)}
+            drawn = {key: fut.result() for key, fut in futures.items()}
+    # report order: each scenario, then its robustness panel
+    order = [k for sc in by_sc for k in (sc, f"{sc}-cf-robustness")]
+    figs = {k: drawn[k] for k in order if drawn.get(k)}
     written["figures"] = figs
     written["report"] = write_report(study, outdir, figs, docs_results=docs_results)
     return written
