@@ -38,16 +38,16 @@ def _freeze_best_legends(fig, renderer) -> None:
 def _save(fig, path: Path) -> list[Path]:
     """Write ``path`` as PNG and SVG, cropped to the drawn content (like ``bbox_inches="tight"``).
 
-    One layout pass serves both files: ``savefig(bbox_inches="tight")`` lays the figure out
-    twice per format (draw, then the tight box) before drawing it, and a ``"best"`` legend
-    searches every line each time. The PNG is pixel-identical to the ``"tight"`` one; the SVG
-    has the same box to within a fraction of a point. SVGs carry no date (reproducible files).
+    One layout pass (the tight box, which also places ``"best"`` legends) serves both files:
+    ``savefig(bbox_inches="tight")`` lays the figure out twice per format (draw, then the
+    tight box) before drawing it, and a ``"best"`` legend searches every line each time.
+    The PNG is pixel-identical to the ``"tight"`` one; the SVG box agrees within a point
+    (it was measured with the SVG renderer). SVGs carry no date (reproducible files).
     """
     fig.set_dpi(DPI)
     renderer = fig.canvas.get_renderer()
-    fig.draw_without_rendering()
-    _freeze_best_legends(fig, renderer)
     bbox = fig.get_tightbbox(renderer).padded(matplotlib.rcParams["savefig.pad_inches"])
+    _freeze_best_legends(fig, renderer)
     out = []
     for ext, meta in ((".png", None), (".svg", {"Date": None})):
         p = path.with_suffix(ext)
