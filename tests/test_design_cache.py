@@ -131,3 +131,16 @@ def test_store_keeps_only_the_newest_entries(disk, monkeypatch):
         os.utime(p, (1000 + k, 1000 + k))
     kept = {int(cache.load("design", f"k{k}")["a"][0]) for k in range(5) if cache.load("design", f"k{k}") is not None}
     assert kept == {2, 3, 4}
+
+
+def test_no_home_directory_means_no_cache_not_an_error(monkeypatch):
+    monkeypatch.delenv("ROADBANK_CACHE_DIR", raising=False)
+    monkeypatch.delenv("XDG_CACHE_HOME", raising=False)
+    monkeypatch.setattr(base, "_DESIGN_CACHE", {})
+
+    def no_home():
+        raise RuntimeError("Could not determine home directory.")
+    monkeypatch.setattr(cache.Path, "home", staticmethod(no_home))
+    assert cache.cache_dir() is None
+    est = E.make("dfc", **GRID)
+    assert np.array_equal(est._tab_cont, _fresh("dfc")[0])
