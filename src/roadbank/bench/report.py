@@ -85,7 +85,8 @@ def markdown(res: dict, command: str) -> str:
               "because other processes share this machine's cores: where the two differ, the "
               "difference is time the benchmark was descheduled.",
               "", "Design = building the gain schedule (Riccati/ARE or pole placement per grid speed, "
-              "memoised per parameter set within a process).", ""]
+              "memoised per parameter set in the process and on disk, `roadbank.cache`; timed here "
+              "without either).", ""]
     lines += ["## Peers", "",
               f"- filterpy `KalmanFilter`: the modified augmented model (states vy, r, w; input ay; "
               f"output r), ZOH/Van Loan discretisation per grid speed (0.25 m/s), Table 4 weights, "
