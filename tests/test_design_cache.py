@@ -144,3 +144,33 @@ def test_no_home_directory_means_no_cache_not_an_error(monkeypatch):
     assert cache.cache_dir() is None
     est = E.make("dfc", **GRID)
     assert np.array_equal(est._tab_cont, _fresh("dfc")[0])
+
+
+def test_user_subclass_is_keyed_on_its_source_file(disk, tmp_path, monkeypatch):
+    """An estimator defined outside roadbank: editing its file must not return stale tables;
+    one without a source file (defined interactively) is never cached on disk."""
+    import importlib
+    import sys
+    src = tmp_path / "my_observer.py"
+    code = ("from roadbank.estimators.dfc import DFC\n"
+            "class Mine(DFC):\n"
+            "    def _design(self):\n"
+            "        tab, n, extra = super()._design()\n"
+            "        return tab * {f}, n, extra\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    tabs = []
+    for k, f in enumerate((1.0, 2.0)):
+        src.write_text(code.format(f=f))
+        os.utime(src, ns=(10**18 + k, 10**18 + k))         # a distinct modification time
+        sys.modules.pop("my_observer", None)
+        importlib.invalidate_caches()
+        mod = importlib.import_module("my_observer")
+        base._DESIGN_CACHE.clear()
+        tabs.append(mod.Mine(**GRID)._tab_cont)
+    assert np.array_equal(tabs[1], 2.0 * tabs[0])
+    assert len(_entries(disk)) == 2
+    Interactive = type("Interactive", (E.dfc.DFC,), {"__module__": "not_a_module"})
+    assert cache.code_stamp(Interactive) is None
+    base._DESIGN_CACHE.clear()
+    Interactive(**GRID)
+    assert len(_entries(disk)) == 2

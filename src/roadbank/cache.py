@@ -67,6 +67,27 @@ def source_fingerprint() -> str:
     return _FINGERPRINT
 
 
+def code_stamp(cls: type) -> str | None:
+    """Identity of the code of ``cls`` and its bases for a key: roadbank's own classes are
+    covered by :func:`source_fingerprint`; any other class by its module file's path, size and
+    modification time. None when a class has no source file (defined interactively): then
+    results built with it must not be cached on disk."""
+    stamps = []
+    for c in cls.__mro__:
+        mod = sys.modules.get(c.__module__)
+        if mod is None:
+            return None
+        if mod.__name__.split(".")[0] in ("roadbank", "builtins"):
+            continue
+        path = getattr(mod, "__file__", None)
+        try:
+            st = os.stat(path)
+        except (TypeError, OSError):
+            return None
+        stamps.append(f"{c.__module__}.{c.__qualname__}@{os.path.abspath(path)}|{st.st_size}|{st.st_mtime_ns}")
+    return ";".join(stamps)
+
+
 def canonical(obj) -> str:
     """Exact, repeatable text of ``obj`` for cache keys: floats in hex, arrays by dtype,
     shape and a hash of their bytes (``repr`` rounds and elides them), dataclasses by fields."""

@@ -160,7 +160,10 @@ class Estimator:
         every design setting and the speed grid."""
         from .. import cache
         cls = type(self)
-        key = cache.canonical((f"{cls.__module__}.{cls.__qualname__}", self.vgrid,
+        stamp = cache.code_stamp(cls)       # a subclass outside roadbank: its file's identity
+        if stamp is None:
+            return self._design()
+        key = cache.canonical((f"{cls.__module__}.{cls.__qualname__}", stamp, self.vgrid,
                                sorted(((k, v) for k, v in vars(self).items()
                                        if not k.startswith("_") and k not in _NOT_DESIGN), key=lambda kv: kv[0])))
         z = cache.load("design", key)
