@@ -12,7 +12,8 @@ compiles:
   Kalman, kinematic), batch ``run()`` and streaming ``step()``, general and
   fixed-rate paths;
 * ``dfc`` — dynamic filter compensation;
-* ``riccati`` — the PIF with the Riccati ODE.
+* ``riccati`` — the PIF with the Riccati ODE;
+* ``adaptive`` — ``pif-adaptive``, scheduled on speed and excitation (general path only).
 
 Each probe prints one JSON line; the compile time is measured as the wall
 time of the first calls minus the wall time of the same calls repeated
@@ -71,6 +72,15 @@ from roadbank.estimators.pif import PIF
 n = 60
 s = Signals(np.arange(n) * 0.01, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
 e = PIF(variant="riccati")
+def work():
+    e.run(s); e.reset(); e.step(0.0, 20.0, 0.5, 0.01, 0.002); e.step(0.01, 20.0, 0.5, 0.01, 0.002)
+""",
+    "adaptive": """
+import numpy as np
+from roadbank import Signals, estimators
+n = 60
+s = Signals(np.arange(n) * 0.01, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
+e = estimators.make("pif-adaptive", v_max=30.0)     # small design: scipy, not compilation
 def work():
     e.run(s); e.reset(); e.step(0.0, 20.0, 0.5, 0.01, 0.002); e.step(0.01, 20.0, 0.5, 0.01, 0.002)
 """,

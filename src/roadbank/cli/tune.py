@@ -27,7 +27,7 @@ from .options import vehicle_option
 @click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
               help="Seed of the drive sets and the optimiser (same seed, same result).")
 @click.option("--estimators", "names", default="", help="Comma-separated estimators to tune "
-              "(default: pif-modified, pif-rate, kalman, pio-modified, dfc).")
+              "(default: pif-modified, pif-rate, kalman, pio-modified, dfc; also pif-adaptive).")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=2, show_default=True,
               help="Local worker processes (ignored with --scheduler).")
 @click.option("--scheduler", default=None, metavar="ADDRESS",
@@ -38,12 +38,12 @@ from .options import vehicle_option
 def tune(vehicle, out, budget, seed, names, jobs, scheduler, train_drives, validation_drives):
     """Tune the estimators for a car (--vehicle) and write the result to a vehicle file."""
     from ..tuning import pipeline
-    from ..tuning.spaces import TUNABLE
+    from ..tuning.spaces import ON_REQUEST, TUNABLE
 
     chosen = tuple(n.strip() for n in names.split(",") if n.strip()) or TUNABLE
-    bad = [n for n in chosen if n not in TUNABLE]
+    bad = [n for n in chosen if n not in TUNABLE + ON_REQUEST]
     if bad:
-        raise click.BadParameter(f"cannot tune {', '.join(bad)} (tunable: {', '.join(TUNABLE)})",
+        raise click.BadParameter(f"cannot tune {', '.join(bad)} (tunable: {', '.join(TUNABLE + ON_REQUEST)})",
                                  param_hint="--estimators")
     budget = budget or pipeline.DEFAULT_BUDGET
     t0 = time.perf_counter()

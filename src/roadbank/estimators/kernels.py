@@ -9,6 +9,10 @@ share the same sample handling:
   :math:`w = H(v_x)\xi + D(v_x)\eta` with :math:`\eta = [\delta_f, a_y, r]`.
 * ``riccati`` — the PIF with the time-varying Riccati ODE (paper eq 43).
 * ``dfc`` — dynamic filter compensation (nonlinear gate + low-pass).
+* ``adaptive`` — linear observers scheduled on speed *and* excitation
+  (``pif-adaptive``): the ``lpv`` recursion with the matrices interpolated
+  bilinearly in ``(vx, e)``, ``e`` a peak follower of the low-passed ``|ay|``; general
+  (trapezoidal) path only, no fixed-rate tables.
 
 Sample handling (all families): a sample is *valid* when the time is finite
 and later than the last valid sample, ``vx`` is finite and ``>= v_min`` and
@@ -492,6 +496,41 @@ def _lpv3(mem, tab, i, a, fixed, dt, max_sub, u0, u1, u2, work, o):
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+def _restart_state(mem, work, oJ, n, eta):
+    """``xi = J eta`` (the observer's equilibrium) with ``J`` (n x 3) at ``work[oJ:]``.
+
+    This and the next two helpers are the restart, general path and output of
+    :func:`lpv_step`, written out there (calling them from ``lpv_step`` costs about
+    0.45 s more compile time of the ``lpv`` family) and used by :func:`adaptive_step`.
+    """
+    for p in range(n):
+        s = 0.0
+        for q in range(NETA):
+            s += work[oJ + p * NETA + q] * eta[q]
+        mem[M_X + p] = s
+
+
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+def _general_advance(mem, cfg, work, oG, oS, n, eta, dt):
+    """General path: trapezoidal rule on ``F`` (at ``work[0:]``), ``G`` (at ``work[oG:]``) over ``dt``."""
+    for q in range(NETA):
+        work[oS + q] = eta[q]
+    _tustin_flat(mem, M_X, n, work, 0, oG, NETA, mem, M_ETA, work, oS, dt, cfg[C_SUB], work, oS + NETA)
+
+
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+def _output(mem, work, oH, oD, n, eta):
+    """``w = H xi + D eta`` (``H``, ``D`` at ``work[oH:]``, ``work[oD:]``); records ``eta`` as the previous inputs."""
+    w = 0.0
+    for q in range(NETA):
+        w += work[oD + q] * eta[q]
+        mem[M_ETA + q] = eta[q]
+    for p in range(n):
+        w += work[oH + p] * mem[M_X + p]
+    return w
+
+
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
 def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     """One sample of a scheduled linear observer: returns ``(w, theta, phi_b, valid)``.
 
@@ -564,6 +603,90 @@ def lpv_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, ou
     n = int(cfg[C_N])
     for k in range(t.shape[0]):
         ok = lpv_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
+        _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
+
+
+# ---------------------------------------------------------------------------------
+# observers scheduled on speed and excitation
+# ---------------------------------------------------------------------------------
+
+@njit(cache=True, _nrt=False, error_model="numpy")
+def adaptive_step(mem, cfg, tab, work, t, vx, d, ay, r):
+    r"""One sample of an observer scheduled on speed and excitation; returns ``(w, theta, phi_b, valid)``.
+
+    Excitation ``e`` (m/s^2): ``|ay|`` through a first-order low-pass of time constant
+    ``tf`` (the tyre forces build up with a lag), :math:`a_f \mathrel{+}= (1 -
+    e^{-\Delta t/t_f})(|a_y| - a_f)`, then a peak follower that rises at once and decays
+    with the release time constant ``tau``: :math:`e_k = \max(a_f, e_{k-1}
+    e^{-\Delta t/\tau})`; ``a_f = e = |ay|`` at a (re)start. ``tab`` rows
+    (``layout.lpv_row(n)``, continuous part) for speed point
+    ``iv`` and excitation point ``ie`` at row ``iv * ne + ie``; the matrices at
+    ``(vx, e)`` are interpolated bilinearly (clamped at the ends of both grids), then the
+    state advances as on the general path of :func:`lpv_step`: trapezoidal rule with
+    substeps, the inputs linear between samples, the matrices frozen over the interval.
+    Grid, ``tau`` and ``tf`` at ``cfg[C_OFAM]``
+    (:func:`roadbank.estimators.layout.adaptive_block`); ``e``, ``a_f`` in ``mem`` after
+    the roll states (:func:`~roadbank.estimators.layout.excitation_state`).
+    """
+    if not _sample_valid(mem, cfg, t, vx, d, ay, r):
+        return mem[M_W], mem[M_THETA], mem[M_PHIB], False
+    n = int(cfg[C_N])
+    nr = int(cfg[C_NR])
+    o = int(cfg[C_OFAM])          # layout.adaptive_block: E0, DE, NE, TAU, TF
+    oe = M_X + n + nr             # layout.excitation_state: e, a_f
+    eta = (d if cfg[C_USE] > 0 else 0.0, ay if cfg[C_USE + 1] > 0 else 0.0, r if cfg[C_USE + 2] > 0 else 0.0)
+    dt, restart, _ = _begin(mem, cfg, t)
+    if restart:
+        af = abs(ay)
+        e = af
+    else:
+        af = mem[oe + 1] + (1.0 - math.exp(-dt / cfg[o + 4])) * (abs(ay) - mem[oe + 1])
+        e = max(af, mem[oe] * math.exp(-dt / cfg[o + 3]))
+    mem[oe] = e
+    mem[oe + 1] = af
+    # bilinear interpolation of the row at (vx, e)
+    iv, av = _grid(cfg, vx)
+    nv = int(cfg[C_NG])
+    ne = int(cfg[o + 2])
+    se = (e - cfg[o]) / cfg[o + 1]
+    if ne == 1 or se <= 0.0:
+        ie, ae = 0, 0.0
+    elif se >= ne - 1:
+        ie, ae = ne - 2, 1.0
+    else:
+        ie = int(se)
+        ae = se - ie
+    iv1 = min(iv + 1, nv - 1)
+    ie1 = min(ie + 1, ne - 1)
+    r00 = iv * ne + ie
+    r01 = iv * ne + ie1
+    r10 = iv1 * ne + ie
+    r11 = iv1 * ne + ie1
+    oG = n * n
+    oH = oG + n * NETA
+    oD = oH + n
+    oJ = oD + NETA
+    oS = oJ + n * NETA            # scratch after the row
+    for k in range(oS):
+        lo = tab[r00, k] + av * (tab[r10, k] - tab[r00, k])
+        hi = tab[r01, k] + av * (tab[r11, k] - tab[r01, k])
+        work[k] = lo + ae * (hi - lo)
+    if restart:
+        _restart_state(mem, work, oJ, n, eta)
+    else:
+        _general_advance(mem, cfg, work, oG, oS, n, eta, dt)
+    w = _output(mem, work, oH, oD, n, eta)
+    ok = _finish(mem, cfg, w, ay, dt, restart, False, work, oS)
+    return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
+
+
+@njit(cache=True, _nrt=False, error_model="numpy")
+def adaptive_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
+                 out_x):
+    """Batch version of :func:`adaptive_step` (same arithmetic, sample by sample)."""
+    n = int(cfg[C_N])
+    for k in range(t.shape[0]):
+        ok = adaptive_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
         _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
 
 

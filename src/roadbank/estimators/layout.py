@@ -15,7 +15,8 @@ sample:
     M_AY      previous lateral acceleration, input of the roll model (m/s^2)
     M_ETA     previous inputs ``eta = [delta_f, ay, r]`` (3)
     M_X       observer states (n), then :func:`roll_states` (nr), then
-              :func:`riccati_p` (n*n, Riccati variant only)
+              :func:`riccati_p` (n*n, Riccati variant only) or
+              :func:`excitation_state` (2, ``adaptive`` family only)
     ========  ===========================================================
 
 ``cfg`` — constants of one estimator (built once per design)
@@ -27,7 +28,9 @@ sample:
 ``tab`` — the speed schedule, one row per grid speed ``v0 + k dv``
     ``lpv`` rows: :func:`lpv_row` (continuous ``F, G, H, D, J``, then the
     discrete ``Phi, Gam0, Gam1`` of the fixed-rate path when a sample rate is
-    set); ``dfc`` rows: ``Haw0, Hrw0, Hau0, Hru0``; ``riccati`` rows:
+    set); ``adaptive`` (two-dimensional schedule, speed x excitation): the
+    continuous part of :func:`lpv_row`, row ``iv * ne + ie`` for speed point
+    ``iv`` and excitation point ``ie`` (:func:`adaptive_block`); ``dfc`` rows: ``Haw0, Hrw0, Hau0, Hru0``; ``riccati`` rows:
     ``A, B, C, Dy, J``. Matrices are stored row-major.
 
 ``work`` — scratch of the general path (:func:`work_size`).
@@ -163,6 +166,32 @@ def roll_states(n: int) -> int:
 
 def riccati_p(n: int, nr: int) -> int:
     """Offset in ``mem`` of the Riccati matrix ``P`` (n*n, row-major)."""
+    return M_X + n + nr
+
+
+class AdaptiveBlock(NamedTuple):
+    """Offsets in ``cfg`` of the ``adaptive`` family's excitation grid and filters:
+    first grid point ``E0`` (m/s^2), step ``DE`` (m/s^2), number of points ``NE``, release
+    time constant ``TAU`` (s) of the excitation's peak follower, time constant ``TF`` (s)
+    of the low-pass on ``|ay|`` before it."""
+
+    E0: int
+    DE: int
+    NE: int
+    TAU: int
+    TF: int
+    end: int
+
+
+def adaptive_block(nr: int) -> AdaptiveBlock:
+    """:class:`AdaptiveBlock` after the roll block of ``nr`` states (at ``cfg[C_OFAM]``)."""
+    o = roll_block(nr).end
+    return AdaptiveBlock(o, o + 1, o + 2, o + 3, o + 4, o + 5)
+
+
+def excitation_state(n: int, nr: int) -> int:
+    """Offset in ``mem`` of the ``adaptive`` family's excitation (m/s^2), followed by the
+    low-passed ``|ay|`` (m/s^2); where a Riccati P would be."""
     return M_X + n + nr
 
 

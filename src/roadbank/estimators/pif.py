@@ -43,6 +43,8 @@ resolutions ((0.005 g)/(0.3 deg/s))^2 (interpretation).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from . import layout
@@ -131,6 +133,8 @@ class PIF(ScheduledObserver):
     #: estimator name (None: ``pif-<model>``) and named tunings, for subclasses
     label = None
     tunings = TUNINGS
+    #: kernel family of the steady-state variant
+    steady_kernel = "lpv"
 
     def __init__(self, params=None, *, model="modified", variant="steady", tuning=None, Q=None,
                  R=None, S=None, th=None, P0=None, **kw):
@@ -148,7 +152,7 @@ class PIF(ScheduledObserver):
         self.model = model
         self.variant = variant
         self.name = self.label or f"pif-{model}"
-        self.kernel = "lpv" if variant == "steady" else "riccati"
+        self.kernel = self.steady_kernel if variant == "steady" else "riccati"
         self.uses = (False, True, True) if model == "modified" else (True, True, True)
         Rv = np.atleast_1d(np.asarray(R, dtype=float))
         if model == "original" and Rv.size == 1:
@@ -274,3 +278,102 @@ class PIFRate(PIF):
 
     def process_noise(self, Ew: np.ndarray) -> np.ndarray:
         return Ew @ np.diag([self.Q, self.Q_rate]) @ Ew.T
+
+
+#: excitation grid of :class:`PIFAdaptive` (m/s^2 of low-passed ``|ay|``): 0 to 10 m/s^2 in steps of
+#: 1 m/s^2; above it the last point's design holds
+EXCITATION_GRID = tuple(float(a) for a in range(11))
+#: default speed-grid step of :class:`PIFAdaptive` (m/s): coarser than the speed-only PIF's, as
+#: the design solves one Riccati equation per grid point (the gains are smooth in speed)
+ADAPTIVE_V_STEP = 1.0
+#: tuning of :class:`PIFAdaptive`: Q, th and the roll model of ``pif-modified``'s default (so that without
+#: the schedule it is that filter); mu from a scan on ``roadbank tune``'s training set (seed 0, 48 drives;
+#: optimum 0.85-0.9, the upper end for margin: a smaller mu overestimates the usage and costs more,
+#: docs/estimators.md); tau and tf chosen, not tuned
+ADAPTIVE_TUNING = dict(Q=DEFAULT_TUNING["Q"], th=DEFAULT_TUNING["th"], mu=0.9, tau=0.5, tf=0.1,
+                       roll=DEFAULT_TUNING["roll"])
+#: named tunings of :class:`PIFAdaptive`
+ADAPTIVE_TUNINGS = {"default": dict(Q=ADAPTIVE_TUNING["Q"], R=R_ESP, S=1.0, th=ADAPTIVE_TUNING["th"],
+                                    P0=_scaled_p0(R_ESP), roll=ADAPTIVE_TUNING["roll"])}
+
+
+def secant_stiffness_ratio(usage):
+    """Secant cornering stiffness of a brush tyre over its linear stiffness, ``F/(C alpha)`` (-),
+    at the friction usage ``u = |F|/(mu Fz)`` (-; clipped to [0, 1]).
+
+    The brush model with a parabolic pressure distribution gives
+    ``u = 1 - (1 - sigma)^3``, ``sigma = C |alpha| / (3 mu Fz)`` up to full sliding
+    (``sigma = 1``), so ``sigma = 1 - (1 - u)^(1/3)`` and ``F/(C alpha) = 1 - sigma + sigma^2/3``:
+    1 for small forces, 1/3 at the friction limit.
+    """
+    u = np.clip(np.asarray(usage, dtype=float), 0.0, 1.0)
+    sigma = 1.0 - np.cbrt(1.0 - u)
+    return 1.0 - sigma + sigma**2 / 3.0
+
+
+class PIFAdaptive(PIF):
+    r"""``pif-adaptive`` (beyond the paper): the steady-state PIF on the modified model with the
+    rear cornering stiffness scheduled on the friction usage as well as speed.
+
+    The modified model's yaw equation uses the rear axle force ``Cr alpha_r``. Near the tyre
+    limit the real force falls well below it (about 25 % at ``|ay| = 0.7 g``, 40-50 % while
+    the steering ramps to the limit), and a filter designed on ``Cr`` reads the mismatch as
+    a bank change. In quasi-steady cornering the rear axle carries ``m ay Lf / L`` on a load of
+    about ``m g Lf / L``, so its friction usage is ``|ay| / (mu g)``; the filter is designed
+    with the secant stiffness ``Cr_eff = Cr * secant_stiffness_ratio(e / (mu g))``
+    (:func:`secant_stiffness_ratio`, brush tyre) at the excitation ``e``: ``|ay|`` low-passed
+    with time constant ``tf`` (the force builds up with a lag) through a peak follower with
+    release time constant ``tau`` (see :func:`roadbank.estimators.kernels.adaptive_step`).
+    The H-infinity design (eq 44, same Q, R, S, th) is solved on a speed x excitation grid
+    (:data:`EXCITATION_GRID`) and interpolated bilinearly by the ``adaptive`` kernel. ``mu``
+    is the design friction coefficient: ``mu = inf`` (no scheduling) gives ``pif-modified``
+    with the same weights. General (trapezoidal) path only: no fixed-rate tables
+    (``sample_rate`` is ignored) and no C export.
+
+    Parameters
+    ----------
+    mu : float, optional
+        Design friction coefficient (-; > 0, ``inf`` switches the schedule off).
+    tau : float, optional
+        Release time constant of the excitation's peak follower (s).
+    tf : float, optional
+        Time constant of the low-pass on ``|ay|`` (s).
+    Q, R, S, th, tuning, **kw
+        As :class:`PIF` (``model`` and ``variant`` are fixed: modified, steady).
+    """
+
+    label = "pif-adaptive"
+    tunings = ADAPTIVE_TUNINGS
+    steady_kernel = "adaptive"
+
+    def __init__(self, params=None, *, tuning=None, mu=None, tau=None, tf=None, **kw):
+        if "model" in kw or "variant" in kw:
+            raise ValueError("pif-adaptive: model and variant are fixed (modified, steady)")
+        d = ADAPTIVE_TUNING
+        self.mu, self.tau, self.tf = (float(d[k] if v is None else v)
+                                      for k, v in (("mu", mu), ("tau", tau), ("tf", tf)))
+        if not (self.mu > 0 and self.tau > 0 and self.tf > 0) or np.isnan(self.tau + self.tf):
+            raise ValueError(f"pif-adaptive: need mu, tau, tf > 0; got {self.mu}, {self.tau}, {self.tf}")
+        self.egrid = EXCITATION_GRID
+        kw.setdefault("v_step", ADAPTIVE_V_STEP)
+        super().__init__(params, model="modified", variant="steady", tuning=tuning, **kw)
+
+    def rear_stiffness(self, e: float) -> float:
+        """Rear axle cornering stiffness (N/rad) of the design at excitation ``e`` (m/s^2)."""
+        return self.params.Cr * float(secant_stiffness_ratio(e / (self.mu * self.params.g)))
+
+    def observer_at(self, vx: float, e: float):
+        """``(F, G, H, D)`` of the steady-state filter at speed ``vx`` (m/s) and excitation ``e`` (m/s^2)."""
+        model = augmented_design_model(replace(self.params, Cr=self.rear_stiffness(e)), vx, "modified")
+        return self._observer(model, vx)
+
+    def _design(self):
+        rows = []
+        for v in self.vgrid:
+            for e in self.egrid:
+                F, G, H, D = self.observer_at(float(v), e)
+                rows.append(np.concatenate([F.ravel(), G.ravel(), np.ravel(H), np.ravel(D),
+                                            equilibrium_map(F, G).ravel()]))
+        eg = self.egrid
+        extra = [eg[0], (eg[1] - eg[0]) if len(eg) > 1 else 1.0, float(len(eg)), self.tau, self.tf]
+        return np.ascontiguousarray(np.array(rows)), 3, np.array(extra)

@@ -10,6 +10,7 @@ LABELS = {
     "pif-original": "PIF (original model)",
     "kalman": "Kalman (ours)",
     "pif-rate": "PIF + bank rate (ours)",
+    "pif-adaptive": "PIF + friction-usage schedule (ours)",
     "kinematic": "Kinematic",
 }
 
