@@ -213,7 +213,7 @@ class Scored:
 
 
 #: estimators whose default R is the yaw-rate sensor's noise density (depends on the sample rate)
-SENSOR_R_ESTIMATORS = ("pif-modified", "pif-rate")
+SENSOR_R_ESTIMATORS = ("pif-modified", "pif-rate", "pif-adaptive")
 
 
 def log_rate_R(t) -> float:
