@@ -460,7 +460,7 @@ class Vehicle:
 
         options = {**self.tuning.get(estimator_name, {}), **overrides}
         s = self.sensors
-        if (estimator_name in ("pif-modified", "pif-rate") and "R" not in options
+        if (estimator_name in ("pif-modified", "pif-rate", "pif-adaptive") and "R" not in options
                 and options.get("tuning", "default") == "default" and s.r_variance > 0):
             from .estimators.pif import yaw_rate_noise_density
             options["R"] = yaw_rate_noise_density(s.r_noise, s.r_resolution, s.rate)
