@@ -141,3 +141,17 @@ def test_cli_dask_scheduler_glob(fleet, tmp_path):
     assert "bank mean" in res.output and "ERROR" in res.output   # the summary table
     again = CliRunner().invoke(main, ["estimate", pattern, "-e", "kinematic", "--resume", "-o", str(out)])
     assert f"{len(paths) - len([p for p in paths if p in bad])} log(s) already finished" in again.output
+
+
+def test_long_log_benchmark_measures_the_child_alone(tmp_path):
+    # the benchmark's peak RSS is the fresh process's own, not the (large) parent's inherited through fork
+    import numpy as np
+
+    from roadbank.fleet.bench import measure, write_long_log
+
+    log = tmp_path / "short.parquet"
+    n = write_long_log(log, hours=0.05)                  # 3 min at 100 Hz
+    ballast = np.ones(50_000_000)                         # ~400 MB in this (parent) process
+    res = measure("stream", log, tmp_path / "out.parquet")
+    assert res["samples"] == n and res["samples_per_s"] > 0
+    assert 30 < res["peak_rss_mb"] < ballast.nbytes / 2**20
