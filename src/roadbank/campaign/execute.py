@@ -14,6 +14,7 @@ Dask is imported here, lazily: without it :class:`DaskMissing` says how to insta
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import time
 from dataclasses import dataclass, field
@@ -103,6 +104,26 @@ def open_client(scheduler: str | None, workers: int, connect_timeout: float = 20
         raise ConnectionError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
 
 
+@contextlib.contextmanager
+def dask_session(scheduler: str | None, workers: int, connect_timeout: float = 20.0):
+    """``with dask_session(...) as (client, pending)``: a client from :func:`open_client` and a
+    dict for the submitted futures. If the block raises (also ``KeyboardInterrupt``), every
+    future still in ``pending`` is cancelled before the exception goes on; the client and the
+    LocalCluster it started are closed on leaving the block."""
+    client, cluster = open_client(scheduler, workers, connect_timeout)
+    pending: dict = {}
+    try:
+        yield client, pending
+    except BaseException:
+        for fut in list(pending):
+            fut.cancel()
+        raise
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
 def settings_of(runs: int, seed: int, options: RunOptions) -> dict:
     """The campaign settings recorded in ``campaign.json`` (``runs`` may grow on resume)."""
     return {"runs": int(runs), "seed": int(seed), "options": options.as_dict(), "sampler": "roadbank.campaign.sampling.draw/1"}
@@ -170,39 +191,32 @@ def run_campaign(outdir, runs: int, *, seed: int = 0, options: RunOptions | None
         return result
 
     t0 = time.perf_counter()
-    futures: dict = {}
-    client, cluster = open_client(scheduler, workers, connect_timeout)
     try:
-        result.workers = sum(client.nthreads().values())
-        client.run(warm_up, options)          # load / compile the kernels on every worker
-        result.startup_s = time.perf_counter() - t0
-        t1 = time.perf_counter()
-        for ids in _batches(todo, batch_size):
-            specs = [sampler(i, seed) for i in ids]
-            fut = client.submit(run_batch, specs, options, pure=False)
-            futures[fut] = ids
-        for fut in dd.as_completed(list(futures)):
-            ids = futures.pop(fut)
-            rows = fut.result()
-            path = store.write_part(outdir, rows, f"{ids[0]:07d}")
-            result.completed += len(ids)
-            seen = set()
-            for row in rows:
-                if row["error"] and row["run_id"] not in seen:
-                    seen.add(row["run_id"])
-                    result.failed_runs.append((row["run_id"], row["noise_seed"], row["error"]))
-            result.wall_s = time.perf_counter() - t1
-            if on_part is not None:
-                on_part(path, rows)
-            if progress is not None:
-                progress(result.already_stored + result.completed, runs)
+        with dask_session(scheduler, workers, connect_timeout) as (client, futures):
+            result.workers = sum(client.nthreads().values())
+            client.run(warm_up, options)          # load / compile the kernels on every worker
+            result.startup_s = time.perf_counter() - t0
+            t1 = time.perf_counter()
+            for ids in _batches(todo, batch_size):
+                specs = [sampler(i, seed) for i in ids]
+                fut = client.submit(run_batch, specs, options, pure=False)
+                futures[fut] = ids
+            for fut in dd.as_completed(list(futures)):
+                ids = futures.pop(fut)
+                rows = fut.result()
+                path = store.write_part(outdir, rows, f"{ids[0]:07d}")
+                result.completed += len(ids)
+                seen = set()
+                for row in rows:
+                    if row["error"] and row["run_id"] not in seen:
+                        seen.add(row["run_id"])
+                        result.failed_runs.append((row["run_id"], row["noise_seed"], row["error"]))
+                result.wall_s = time.perf_counter() - t1
+                if on_part is not None:
+                    on_part(path, rows)
+                if progress is not None:
+                    progress(result.already_stored + result.completed, runs)
     except BaseException:
         result.interrupted = True
-        for fut in list(futures):
-            fut.cancel()
         raise
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
     return result

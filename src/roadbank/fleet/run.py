@@ -240,13 +240,11 @@ def run_fleet(logs, outdir, estimators=("pif-modified",), *, channels=None, form
 
 
 def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result):
-    from ..campaign.execute import _distributed, open_client
+    from ..campaign.execute import _distributed, dask_session
 
     dd = _distributed()
     t0 = time.perf_counter()
-    client, cluster = open_client(scheduler, int(workers), connect_timeout)
-    futures = {}
-    try:
+    with dask_session(scheduler, int(workers), connect_timeout) as (client, futures):
         result.workers = sum(client.nthreads().values())
         client.run(_warm, list(estimators), kw["params"], kw["vehicle"])
         result.startup_s = time.perf_counter() - t0
@@ -260,11 +258,3 @@ def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish,
             except Exception as exc:     # the worker died (memory, signal): this log only
                 s = LogSummary(log=str(p), status="error", error=f"worker failed: {type(exc).__name__}: {exc}")
             finish(s)
-    except BaseException:
-        for fut in list(futures):
-            fut.cancel()
-        raise
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()

@@ -100,14 +100,9 @@ class DaskMapper:
     every worker once."""
 
     def __init__(self, address: str, progress=None, timeout: float = 20.0):
-        try:
-            import distributed
-        except ImportError:
-            raise RuntimeError("--scheduler needs dask.distributed: pip install 'roadbank[campaign]'") from None
-        try:
-            self.client = distributed.Client(address, timeout=f"{timeout}s")
-        except (OSError, TimeoutError) as exc:
-            raise ConnectionError(f"cannot connect to the Dask scheduler at {address}: {exc}") from None
+        from ..campaign.execute import open_client   # DaskMissing / ConnectionError with a clear message
+
+        self.client, _ = open_client(address, 1, timeout)
         self.progress = progress
 
     def share(self, key: str, drives) -> None:
