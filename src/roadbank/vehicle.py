@@ -453,17 +453,17 @@ class Vehicle:
         """Build an estimator for this car: its params and its ``[tuning.<name>]`` options.
 
         ``estimators.make(name, self.params, **{**self.tuning.get(name, {}), **overrides})``.
-        The default-tuned ``pif-modified`` without an ``R`` gets the noise density of this
-        car's yaw-rate sensor (:func:`roadbank.estimators.pif.yaw_rate_noise_density`).
+        A default-tuned PIF without an ``R`` gets the noise density of this car's yaw-rate
+        sensor (:func:`roadbank.estimators.pif.with_sensor_R`).
         """
         from . import estimators
 
         options = {**self.tuning.get(estimator_name, {}), **overrides}
         s = self.sensors
-        if (estimator_name in ("pif-modified", "pif-rate", "pif-adaptive") and "R" not in options
-                and options.get("tuning", "default") == "default" and s.r_variance > 0):
-            from .estimators.pif import yaw_rate_noise_density
-            options["R"] = yaw_rate_noise_density(s.r_noise, s.r_resolution, s.rate)
+        if s.r_variance > 0:
+            from .estimators.pif import with_sensor_R, yaw_rate_noise_density
+            options = with_sensor_R(estimator_name, options,
+                                    yaw_rate_noise_density(s.r_noise, s.r_resolution, s.rate))
         return estimators.make(estimator_name, self.params, **options)
 
     def check(self) -> "Vehicle":

@@ -74,6 +74,20 @@ def yaw_rate_noise_density(noise_std: float, resolution: float, rate: float) -> 
     return (noise_std**2 + resolution**2 / 12.0) / rate
 
 
+#: estimators whose default ``R`` is the yaw-rate sensor's noise density (set by the caller
+#: that knows the sensor: :meth:`roadbank.vehicle.Vehicle.make`, the real-data validation)
+SENSOR_R_ESTIMATORS = ("pif-modified", "pif-rate", "pif-adaptive")
+
+
+def with_sensor_R(name: str, options: dict, R: float) -> dict:
+    """``make(name, ...)`` options with ``R`` = the sensor's noise density ``R`` ((rad/s)^2 s)
+    when ``name`` is a default-tuned PIF (:data:`SENSOR_R_ESTIMATORS`) given no ``R``;
+    otherwise ``options`` unchanged."""
+    if name in SENSOR_R_ESTIMATORS and "R" not in options and options.get("tuning", "default") == "default":
+        return {**options, "R": R}
+    return options
+
+
 #: R of the paper's ESP yaw-rate sensor (0.1 deg/s noise, 0.3 deg/s resolution, 100 Hz)
 R_ESP = yaw_rate_noise_density(np.deg2rad(0.1), np.deg2rad(0.3), 100.0)
 

@@ -212,10 +212,6 @@ class Scored:
     valid: dict
 
 
-#: estimators whose default R is the yaw-rate sensor's noise density (depends on the sample rate)
-SENSOR_R_ESTIMATORS = ("pif-modified", "pif-rate", "pif-adaptive")
-
-
 def log_rate_R(t) -> float:
     """Yaw-rate noise density ``R`` ((rad/s)^2 s) of the ESP sensor sampled at the log's rate.
 
@@ -261,6 +257,7 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     and resolution, unless ``R`` or another tuning is given (see :func:`log_rate_R`).
     """
     from .. import estimators
+    from ..estimators.pif import with_sensor_R
 
     per_estimator = per_estimator or {}
     t = signals.t
@@ -269,9 +266,7 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     scores, smooth, raw, flags = {}, {}, {}, {}
     R_log = log_rate_R(t)
     for name in names:
-        options = {**tuning, **per_estimator.get(name, {})}
-        if name in SENSOR_R_ESTIMATORS and "R" not in options and options.get("tuning", "default") == "default":
-            options["R"] = R_log
+        options = with_sensor_R(name, {**tuning, **per_estimator.get(name, {})}, R_log)
         est = estimators.make(name, params=params, **options).run(signals)
         th, pb = hold_invalid(est.theta), hold_invalid(est.phi_b)
         sc = score(t, th, pb, est.valid, ref, fit, scored, scoring)
