@@ -97,6 +97,17 @@ class Signals:
         return cls(t, vx, ay, r, road_wheel_angle(steering_wheel_angle, params))
 
 
+def sample_rate(t) -> float:
+    """Sample rate (Hz) of a time base ``t`` (s): 1 / its median positive finite interval.
+
+    NaN when ``t`` has no such interval (fewer than two distinct samples). Jittered
+    logs (KITTI's 0.06-0.14 s frames) get their typical rate (10 Hz).
+    """
+    dt = np.diff(np.asarray(t, dtype=np.float64))
+    dt = dt[np.isfinite(dt) & (dt > 0)]
+    return 1.0 / float(np.median(dt)) if dt.size else float("nan")
+
+
 def road_wheel_angle(steering_wheel_angle, params: VehicleParams | None = None) -> np.ndarray:
     """Front road-wheel angle (rad) from the steering-wheel angle (rad) by the steering ratio."""
     p = params or VehicleParams()

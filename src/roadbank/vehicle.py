@@ -280,6 +280,18 @@ class SensorSpec:
         """Yaw-rate measurement variance, noise + uniform quantisation: ``r_noise^2 + r_resolution^2/12`` ((rad/s)^2)."""
         return self.r_noise ** 2 + self.r_resolution ** 2 / 12.0
 
+    def r_noise_density(self, rate: float | None = None) -> float:
+        """Yaw-rate noise density ``R`` ((rad/s)^2 s) of this sensor sampled at ``rate`` (Hz).
+
+        ``r_variance / rate`` (:func:`roadbank.estimators.pif.yaw_rate_noise_density`): the
+        same per-sample noise and quantisation stand for a density ten times larger at 10 Hz
+        than at 100 Hz. ``rate`` None or not a positive finite number: the sensor's ``rate``.
+        """
+        from .estimators.pif import yaw_rate_noise_density
+
+        rate = rate if rate is not None and math.isfinite(rate) and rate > 0 else self.rate
+        return yaw_rate_noise_density(self.r_noise, self.r_resolution, rate)
+
     @property
     def ay_variance(self) -> float:
         """Lateral-acceleration measurement variance ``ay_noise^2 + ay_resolution^2/12`` ((m/s^2)^2)."""
@@ -320,6 +332,44 @@ class SensorSpec:
                                  range=self.steering_range),
             ay_misalignment=float(self.ay_misalignment))
         return cfg.replace(**changes) if changes else cfg
+
+
+# ---------------------------------------------------------------------------------------------
+# estimators for a car's sensors at a log's rate
+
+def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: SensorSpec | None = None,
+                   log_rate: float | None = None, **options):
+    """``estimators.make(name, params, **options)`` for a log sampled at ``log_rate`` by ``sensors``.
+
+    The one rule for the sensor-derived weight: a default-tuned PIF given no ``R``
+    (:func:`roadbank.estimators.pif.with_sensor_R`) gets the noise density of the yaw-rate
+    sensor's noise and resolution at the rate of the log it will run on
+    (:meth:`SensorSpec.r_noise_density`). ``roadbank estimate``/``map`` (:mod:`roadbank.fleet`,
+    :mod:`roadbank.mapping`), :meth:`Vehicle.make` and the real-data validation all build
+    their estimators here.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`roadbank.estimators.NAMES`.
+    params : VehicleParams, optional
+        The car (default the paper's SUV).
+    sensors : SensorSpec, optional
+        Its sensor cluster (default the paper's ESP sensors).
+    log_rate : float, optional
+        Sample rate (Hz) of the log (:func:`roadbank.signals.sample_rate` of its time
+        base). Default (or NaN): ``sensors.rate``.
+    **options
+        The estimator's keyword options; an explicit ``R`` or ``tuning`` keeps the sensor
+        out of it.
+    """
+    from . import estimators
+    from .estimators.pif import with_sensor_R
+
+    sensors = sensors if sensors is not None else SensorSpec()
+    if sensors.r_variance > 0:
+        options = with_sensor_R(name, options, sensors.r_noise_density(log_rate))
+    return estimators.make(name, params, **options)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -449,22 +499,16 @@ class Vehicle:
         }
 
     # ---- use --------------------------------------------------------------------------------
-    def make(self, estimator_name: str, **overrides):
-        """Build an estimator for this car: its params and its ``[tuning.<name>]`` options.
+    def make(self, estimator_name: str, *, log_rate: float | None = None, **overrides):
+        """Build an estimator for this car: its params, sensors and ``[tuning.<name>]`` options.
 
-        ``estimators.make(name, self.params, **{**self.tuning.get(name, {}), **overrides})``.
-        A default-tuned PIF without an ``R`` gets the noise density of this car's yaw-rate
-        sensor (:func:`roadbank.estimators.pif.with_sensor_R`).
+        :func:`make_estimator` ``(name, self.params, sensors=self.sensors, log_rate=log_rate,
+        **{**self.tuning.get(name, {}), **overrides})``: a default-tuned PIF without an ``R``
+        gets the noise density of this car's yaw-rate sensor at ``log_rate`` (Hz; default
+        the sensor's ``rate``).
         """
-        from . import estimators
-
-        options = {**self.tuning.get(estimator_name, {}), **overrides}
-        s = self.sensors
-        if s.r_variance > 0:
-            from .estimators.pif import with_sensor_R, yaw_rate_noise_density
-            options = with_sensor_R(estimator_name, options,
-                                    yaw_rate_noise_density(s.r_noise, s.r_resolution, s.rate))
-        return estimators.make(estimator_name, self.params, **options)
+        return make_estimator(estimator_name, self.params, sensors=self.sensors, log_rate=log_rate,
+                              **{**self.tuning.get(estimator_name, {}), **overrides})
 
     def check(self) -> "Vehicle":
         """Build every tuned estimator once; a failing design raises :class:`VehicleFileError`.

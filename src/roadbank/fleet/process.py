@@ -127,7 +127,11 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
     channels, format, params
         As for :func:`roadbank.io.load_log`.
     vehicle : roadbank.vehicle.Vehicle, optional
-        Builds the estimators (its parameters and tuning) and supplies ``params``.
+        Builds the estimators (its parameters, sensors and tuning) and supplies ``params``.
+        The estimators are built on the first chunk, for the log's sample rate
+        (:func:`roadbank.vehicle.make_estimator` with ``log_rate``): a default-tuned PIF's
+        ``R`` is the car's yaw-rate sensor (without ``vehicle``: the paper's ESP sensor)
+        at the rate the log is sampled at (10 Hz KITTI frames, a 50 Hz CSV, ...).
     chunk_rows : int, optional
         Rows per chunk (default :data:`roadbank.io.stream.CHUNK_ROWS`).
     metadata : dict, optional
@@ -144,10 +148,11 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
         Never raises for a bad log: ``status = "error"`` and ``error`` say why,
         and no partial output file is left behind.
     """
-    from .. import estimators as E
     from ..io import LogError
     from ..io.stream import CHUNK_ROWS, stream_log
     from ..io.writers import TableWriter, estimate_table
+    from ..signals import sample_rate
+    from ..vehicle import make_estimator
 
     t_start = time.perf_counter()
     names = list(estimators)
@@ -156,16 +161,18 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
     try:
         if vehicle is not None:
             params = vehicle.params
-            ests = [vehicle.make(n) for n in names]
-        else:
-            ests = [E.make(n, params=params) for n in names]
         keep = keep or plot is not None
         stats = _BankStats()
         warns: list[str] = []
-        kept = {"t": [], "est": [[] for _ in ests], "roll": [], "truth": {}}
+        ests = []
+        kept = {"t": [], "est": [[] for _ in names], "roll": [], "truth": {}}
         writer = TableWriter(output, metadata=metadata)
         for k, chunk in enumerate(stream_log(path, channels=channels, format=format, params=params,
                                              chunk_rows=chunk_rows or CHUNK_ROWS)):
+            if k == 0:  # designed for the log's own rate (chunks continue the first one's time base)
+                rate = sample_rate(chunk.signals.t)
+                ests = [vehicle.make(n, log_rate=rate) if vehicle is not None
+                        else make_estimator(n, params, log_rate=rate) for n in names]
             warns += chunk.warnings
             results = [e.run(chunk.signals, reset=(k == 0)) for e in ests]
             writer.write(estimate_table(chunk.signals.t, results, chunk.reference_roll))

@@ -59,15 +59,23 @@ def map_logs(logs, estimator: str = "pif-modified", *, channels=None, format: st
         None if no log gave a position. A bad log is reported in its MappedLog
         and never stops the others.
     """
-    from .. import estimators as E
     from ..io import LogError
     from ..io.stream import CHUNK_ROWS, stream_log
+    from ..signals import sample_rate
+    from ..vehicle import make_estimator
 
     if vehicle is not None:
         params = vehicle.params
-        est = vehicle.make(estimator)
-    else:
-        est = E.make(estimator, params=params)
+    # designed per log, for its sample rate (as roadbank estimate: roadbank.vehicle.make_estimator)
+    designs = {}
+
+    def design(t):
+        rate = sample_rate(t)
+        key = round(rate, 6) if np.isfinite(rate) else None
+        if key not in designs:
+            designs[key] = (vehicle.make(estimator, log_rate=rate) if vehicle is not None
+                            else make_estimator(estimator, params, log_rate=rate))
+        return designs[key]
     bmap = BankMap(LocalProjection(*origin), cell_m, sectors) if origin is not None else None
     done: list[MappedLog] = []
     for k_log, path in enumerate(logs):
@@ -78,6 +86,8 @@ def map_logs(logs, estimator: str = "pif-modified", *, channels=None, format: st
                 if "lat_deg" not in chunk.extra or "lon_deg" not in chunk.extra:
                     raise LogError(f"{path}: no GNSS position (map 'latitude' and 'longitude' in the channel "
                                    "map, or use a format that has one: comma2k19, kitti-oxts, ROS NavSatFix)")
+                if k == 0:
+                    est = design(chunk.signals.t)
                 out = est.run(chunk.signals, reset=(k == 0))
                 lat, lon = chunk.extra["lat_deg"], chunk.extra["lon_deg"]
                 if bmap is None:

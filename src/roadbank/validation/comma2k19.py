@@ -61,7 +61,7 @@ class ValidationResult:
 
 def validate_comma2k19(path, names=None, params: VehicleParams | None = None, tau: float = 2.0 / 3.0,
                        warmup_s: float = 5.0, fit_fraction: float = 0.3,
-                       sensitivity: bool = True, tuning=None) -> ValidationResult:
+                       sensitivity: bool = True, tuning=None, sensors=None) -> ValidationResult:
     """Run every estimator on a comma2k19 segment and score it against the pose roll.
 
     Parameters
@@ -80,6 +80,9 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
         Also score with the paper's default SUV parameters and a PIF Q sweep.
     tuning : mapping, optional
         ``{estimator: {option: value}}`` for the main scores (a vehicle file's ``[tuning]``).
+    sensors : roadbank.vehicle.SensorSpec, optional
+        The car's sensors (a vehicle file's ``[sensors]``; default the paper's ESP): the
+        default PIFs' ``R`` is their noise density at the log's rate.
     """
     from .. import estimators
     from ..io.comma2k19 import load_comma2k19
@@ -91,7 +94,7 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     s, ref = log.signals, hold_invalid(log.reference_roll)
     t = s.t
     dt = float(np.median(np.diff(t)))
-    run = run_and_score(s, ref, names, params, scoring, per_estimator=tuning)
+    run = run_and_score(s, ref, names, params, scoring, per_estimator=tuning, sensors=sensors)
     scores, smoothed = run.scores, run.estimates
     m_fit, m_sc = run.fit, run.scored
     m_all = m_fit | m_sc

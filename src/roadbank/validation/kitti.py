@@ -80,7 +80,7 @@ def drive_data(log, run, scoring: Scoring) -> dict:
 
 def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
                          scoring: Scoring = KITTI_SCORING, sensitivity: bool = True,
-                         tuning=None) -> ValidationResult:
+                         tuning=None, sensors=None) -> ValidationResult:
     """Run every estimator on one KITTI drive and score ``theta`` against the INS roll.
 
     Parameters
@@ -98,6 +98,9 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
         Also score with the paper's SUV parameters (``VehicleParams()``).
     tuning : mapping, optional
         ``{estimator: {option: value}}`` for the main scores (a vehicle file's ``[tuning]``).
+    sensors : roadbank.vehicle.SensorSpec, optional
+        The car's sensors (a vehicle file's ``[sensors]``): the default PIFs' ``R`` is their
+        noise density at the drive's rate (:func:`roadbank.vehicle.make_estimator`).
     """
     from .. import estimators
     from ..io.kitti import load_kitti_oxts
@@ -105,7 +108,8 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     params = params or SEDAN
     names = list(names or estimators.NAMES)
     log = load_kitti_oxts(path)
-    run = run_and_score(log.signals, log.reference_roll, names, params, scoring, per_estimator=tuning)
+    run = run_and_score(log.signals, log.reference_roll, names, params, scoring, per_estimator=tuning,
+                        sensors=sensors)
     sens = {}
     if sensitivity:
         sens["suv"] = run_and_score(log.signals, log.reference_roll, names, VehicleParams(), scoring).scores
@@ -132,14 +136,14 @@ def expand_drives(paths) -> list[Path]:
 
 def validate_kitti(paths, names=None, params: VehicleParams | None = None,
                    scoring: Scoring = KITTI_SCORING, sensitivity: bool = True,
-                   tuning=None) -> KittiValidation:
+                   tuning=None, sensors=None) -> KittiValidation:
     """Validate any number of KITTI drives; a drive that cannot be read is reported, the others go on.
 
     Parameters
     ----------
     paths : sequence of path-like
         Drive folders, oxts folders, or folders holding drive folders.
-    names, params, scoring, sensitivity, tuning
+    names, params, scoring, sensitivity, tuning, sensors
         As :func:`validate_kitti_drive`.
     """
     from .. import estimators
@@ -149,7 +153,7 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
     drives, errors = [], []
     for p in expand_drives(paths):
         try:
-            drives.append(validate_kitti_drive(p, names, params, scoring, sensitivity, tuning))
+            drives.append(validate_kitti_drive(p, names, params, scoring, sensitivity, tuning, sensors))
         except (LogError, OSError) as exc:
             errors.append(str(exc))
     return KittiValidation(drives=drives, pooled=pooled([d.run for d in drives], names), errors=errors,

@@ -212,25 +212,23 @@ class Scored:
     valid: dict
 
 
-def log_rate_R(t) -> float:
-    """Yaw-rate noise density ``R`` ((rad/s)^2 s) of the ESP sensor sampled at the log's rate.
+def log_rate_R(t, sensors=None) -> float:
+    """Yaw-rate noise density ``R`` ((rad/s)^2 s) of a sensor sampled at the log's rate.
 
-    The rate is 1 / the median positive sample interval of ``t`` (s); the noise and
-    resolution are those of :class:`roadbank.vehicle.SensorSpec` (paper ESP cluster). At
-    100 Hz this is the default PIF's ``R``; a 10 Hz log (KITTI) gets ten times that: the
-    same per-sample noise stands for a ten times larger density.
+    The rate is :func:`roadbank.signals.sample_rate` of ``t`` (s) (1 / the median positive
+    sample interval); the noise and resolution are those of ``sensors``
+    (:class:`roadbank.vehicle.SensorSpec`, default the paper's ESP cluster):
+    :meth:`~roadbank.vehicle.SensorSpec.r_noise_density`. At 100 Hz this is the default
+    PIF's ``R``; a 10 Hz log (KITTI) gets ten times that.
     """
-    from ..estimators.pif import yaw_rate_noise_density
+    from ..signals import sample_rate
     from ..vehicle import SensorSpec
 
-    dt = np.diff(np.asarray(t, dtype=float))
-    dt = dt[np.isfinite(dt) & (dt > 0)]
-    sensor = SensorSpec()
-    rate = 1.0 / float(np.median(dt)) if dt.size else sensor.rate
-    return yaw_rate_noise_density(sensor.r_noise, sensor.r_resolution, rate)
+    return (sensors or SensorSpec()).r_noise_density(sample_rate(t))
 
 
-def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=None, **tuning) -> Scored:
+def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=None, sensors=None,
+                  **tuning) -> Scored:
     """Run each estimator (``roadbank.estimators.make(name, params, **tuning)``) and score ``theta``.
 
     Parameters
@@ -248,26 +246,28 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     per_estimator : mapping, optional
         ``{name: {option: value}}`` on top of ``tuning`` for that estimator (a vehicle file's
         ``[tuning]`` tables).
+    sensors : SensorSpec, optional
+        The car's sensor cluster (a vehicle file's ``[sensors]``); default the paper's ESP.
 
     Notes
     -----
-    The default-tuned PIFs derive their yaw-rate noise density ``R`` from the sensor's
-    variance and sample rate (:func:`roadbank.estimators.pif.yaw_rate_noise_density`);
-    here the rate is the log's own (median sample interval), with the ESP sensor's noise
-    and resolution, unless ``R`` or another tuning is given (see :func:`log_rate_R`).
+    The estimators are built by :func:`roadbank.vehicle.make_estimator` for the log's sample
+    rate, as ``roadbank estimate`` builds them: the default-tuned PIFs' yaw-rate noise
+    density ``R`` is the sensor's noise and resolution at the log's own rate (median
+    sample interval), unless ``R`` or another tuning is given (see :func:`log_rate_R`).
     """
-    from .. import estimators
-    from ..estimators.pif import with_sensor_R
+    from ..signals import sample_rate
+    from ..vehicle import make_estimator
 
     per_estimator = per_estimator or {}
     t = signals.t
     ref = hold_invalid(ref)
     fit, scored = masks(t, signals.vx, scoring)
     scores, smooth, raw, flags = {}, {}, {}, {}
-    R_log = log_rate_R(t)
+    rate = sample_rate(t)
     for name in names:
-        options = with_sensor_R(name, {**tuning, **per_estimator.get(name, {})}, R_log)
-        est = estimators.make(name, params=params, **options).run(signals)
+        est = make_estimator(name, params, sensors=sensors, log_rate=rate,
+                             **{**tuning, **per_estimator.get(name, {})}).run(signals)
         th, pb = hold_invalid(est.theta), hold_invalid(est.phi_b)
         sc = score(t, th, pb, est.valid, ref, fit, scored, scoring)
         scores[name] = sc

@@ -1,0 +1,129 @@
+"""Estimators designed for the log's own sample rate (one rule: ``roadbank.vehicle.make_estimator``).
+
+Truth: the sensor-noise density formula R = (sigma^2 + res^2 / 12) / rate computed here
+from the sensor's data sheet numbers; an estimator built directly for the log's rate
+(what ``roadbank estimate`` must reproduce exactly); and ``validate kitti``'s own run on a
+shared KITTI drive (what ``roadbank estimate`` on that drive must reproduce).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from roadbank.cli import main
+from roadbank.params import VehicleParams
+from roadbank.signals import sample_rate
+from roadbank.vehicle import SensorSpec, load_vehicle, make_estimator
+
+KITTI = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "kitti-oxts"
+DRIVE = KITTI / "2011_09_26_drive_0070"
+needs_kitti = pytest.mark.skipif(not (DRIVE / "oxts").is_dir(), reason=f"KITTI drive absent at {DRIVE}")
+
+
+def _density(noise_deg_s, res_deg_s, rate):
+    return (math.radians(noise_deg_s) ** 2 + math.radians(res_deg_s) ** 2 / 12.0) / rate
+
+
+def test_sample_rate_of_uniform_jittered_and_degenerate_time_bases():
+    assert sample_rate(np.arange(100) * 0.02) == pytest.approx(50.0)
+    rng = np.random.default_rng(3)
+    t = np.cumsum(rng.uniform(0.06, 0.14, 400))            # KITTI-like frames
+    assert sample_rate(t) == pytest.approx(10.0, rel=0.05)
+    assert math.isnan(sample_rate([1.0])) and math.isnan(sample_rate([2.0, 2.0]))
+
+
+@pytest.mark.parametrize("name", ["pif-modified", "pif-rate", "pif-adaptive"])
+def test_default_pif_for_a_10_hz_log_has_the_sensor_density_at_10_hz(name):
+    # the paper's ESP yaw-rate sensor: 0.1 deg/s noise, 0.3 deg/s resolution
+    est = make_estimator(name, log_rate=10.0, v_max=30.0)
+    assert est.R[0, 0] == pytest.approx(_density(0.1, 0.3, 10.0), rel=1e-12)
+    # no rate (or no usable one): the sensor's own rate, i.e. the library default
+    assert make_estimator(name, v_max=30.0).R[0, 0] == pytest.approx(_density(0.1, 0.3, 100.0), rel=1e-12)
+    assert make_estimator(name, log_rate=float("nan"), v_max=30.0).R[0, 0] == pytest.approx(
+        _density(0.1, 0.3, 100.0), rel=1e-12)
+
+
+def test_a_cars_sensor_at_the_log_rate_and_explicit_weights_win():
+    car = load_vehicle("sedan").with_sensors(r_noise=math.radians(0.5), r_resolution=math.radians(0.1), rate=200.0)
+    est = car.make("pif-modified", log_rate=10.0, v_max=30.0)
+    assert est.R[0, 0] == pytest.approx(_density(0.5, 0.1, 10.0), rel=1e-12)
+    assert est.params == car.params
+    assert car.make("pif-modified", v_max=30.0).R[0, 0] == pytest.approx(_density(0.5, 0.1, 200.0), rel=1e-12)
+    # the user's weights are kept as given
+    assert car.make("pif-modified", log_rate=10.0, R=0.02, v_max=30.0).R[0, 0] == 0.02
+    tuned = car.with_tuning("pif-modified", {"R": 0.03})
+    assert tuned.make("pif-modified", log_rate=10.0, v_max=30.0).R[0, 0] == 0.03
+    paper = car.make("pif-modified", log_rate=10.0, tuning="paper", v_max=30.0)
+    assert paper.R[0, 0] == 0.0035                           # Table 4, not the sensor
+    assert SensorSpec().r_noise_density(10.0) == pytest.approx(_density(0.1, 0.3, 10.0), rel=1e-12)
+
+
+def _write_csv(path, t, cols):
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["t", *cols])
+        for i in range(len(t)):
+            w.writerow([repr(float(t[i]))] + [repr(float(cols[c][i])) for c in cols])
+
+
+def _read_csv(path):
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+
+
+@pytest.mark.parametrize("vehicle", [None, "van"])
+def test_roadbank_estimate_on_a_50_hz_csv_uses_the_sensor_at_50_hz(tmp_path, vehicle):
+    from roadbank.io import load_log
+
+    rng = np.random.default_rng(0)
+    n = 1500                                                   # 30 s at 50 Hz, uniform clock
+    t = np.arange(n) * 0.02
+    r = 0.15 * np.sin(0.5 * t) + rng.normal(0, math.radians(0.1), n)
+    vx = np.full(n, 20.0)
+    ay = vx * r + 9.81 * math.sin(math.radians(3.0)) * (t > 15) + rng.normal(0, 0.03, n)
+    log = tmp_path / "drive50.csv"
+    _write_csv(log, t, {"vx": vx, "ay": ay, "r": r, "delta_f": np.zeros(n)})
+    out = tmp_path / "bank.csv"
+    args = ["estimate", str(log), "-o", str(out), "-e", "pif-modified"] + (["--vehicle", vehicle] if vehicle else [])
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    got = _read_csv(out)
+    signals = load_log(log).signals
+    np.testing.assert_allclose(got["t"], t)
+    car = load_vehicle(vehicle)
+    at50 = car.make("pif-modified", log_rate=50.0).run(signals).theta
+    at100 = car.make("pif-modified").run(signals).theta           # designed for the 100 Hz ESP sensor
+    np.testing.assert_allclose(got["pif-modified.theta"], at50, rtol=0, atol=1e-12)
+    assert np.max(np.abs(at50 - at100)) > 1e-4                     # the rate matters: this test can fail
+
+
+@needs_kitti
+@pytest.mark.parametrize("vehicle", [None, "sedan"])
+def test_roadbank_estimate_on_a_kitti_drive_gives_the_theta_validate_kitti_scores(tmp_path, vehicle):
+    from roadbank.validation.kitti import validate_kitti_drive
+
+    out = tmp_path / "k.csv"
+    args = ["estimate", str(DRIVE), "-o", str(out), "-e", "pif-modified"] + (["--vehicle", vehicle] if vehicle else [])
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    got = _read_csv(out)
+    car = load_vehicle(vehicle)
+    run = validate_kitti_drive(DRIVE, names=["pif-modified"], params=car.params, tuning=dict(car.tuning),
+                               sensors=car.sensors, sensitivity=False).run
+    valid = run.valid["pif-modified"]
+    assert valid.sum() > 300 and np.array_equal(got["pif-modified.valid"].astype(bool), valid)
+    np.testing.assert_allclose(got["t"], run.t, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(got["pif-modified.theta"][valid], run.raw_estimates["pif-modified"][valid],
+                               rtol=0, atol=1e-12)
+    # and that is the 10 Hz design, not the 100 Hz one
+    assert sample_rate(run.t) == pytest.approx(10.0, rel=0.02)
+    from roadbank.io import load_log
+    at100 = car.make("pif-modified").run(load_log(DRIVE).signals).theta
+    assert np.max(np.abs(at100[valid] - run.raw_estimates["pif-modified"][valid])) > 1e-3
