@@ -1,4 +1,5 @@
-"""pif-adaptive: the PIF with the rear cornering stiffness scheduled on the friction usage."""
+"""pif-adaptive and pif-rate-adaptive: the PIF (without / with the bank-rate state) with the rear
+cornering stiffness scheduled on the friction usage."""
 
 import numpy as np
 import pytest
@@ -16,9 +17,13 @@ P = VehicleParams()
 SMALL = dict(v_max=40.0)
 
 
-@pytest.fixture(scope="module")
-def est():
-    return E.make("pif-adaptive", P, **SMALL)
+#: the scheduled filters and their speed-only counterparts (same weights, mu = inf)
+SCHEDULED = {"pif-adaptive": "pif-modified", "pif-rate-adaptive": "pif-rate"}
+
+
+@pytest.fixture(scope="module", params=list(SCHEDULED))
+def est(request):
+    return E.make(request.param, P, **SMALL)
 
 
 def _drive(n=600, seed=3):
@@ -41,7 +46,7 @@ def test_run_equals_step_bit_identical(est):
     assert np.array_equal(out[:, 0], batch.w, equal_nan=True)
     assert np.array_equal(out[:, 2], batch.phi_b, equal_nan=True)
     # the schedule was used: the excitation left the first grid point
-    assert est._mem[L.excitation_state(3, est._roll[0].shape[0])] > EXCITATION_GRID[1]
+    assert est._mem[L.excitation_state(len(est.state_names), est._roll[0].shape[0])] > EXCITATION_GRID[1]
 
 
 def test_finite_outputs_on_random_inputs(est):
@@ -54,25 +59,27 @@ def test_finite_outputs_on_random_inputs(est):
     assert np.all(np.isfinite(e.w)) and np.all(np.isfinite(e.phi_b))
 
 
+@pytest.mark.parametrize("name", SCHEDULED)
 @pytest.mark.parametrize("fc,fr", [(1.0, 1.0), (1.3, 0.7), (0.7, 1.3)])
-def test_zero_steady_state_bank_error_on_the_linear_plant(fc, fr):
+def test_zero_steady_state_bank_error_on_the_linear_plant(fc, fr, name):
     """Like the paper's filter: the steady-state w does not depend on Cr, so the stiffness
     schedule (active here: the steady cornering reaches |ay| of 3.5-5 m/s^2) keeps it exact."""
     signals, w = linear_plant_run(P.replace(Cf=fc * P.Cf, Cr=fr * P.Cr), delta=0.05)
     assert np.abs(signals.ay[-1]) > 3.0
-    est_w = E.make("pif-adaptive", P, **SMALL).run(signals).w
+    est_w = E.make(name, P, **SMALL).run(signals).w
     assert np.abs(est_w[-200:] - w).max() < 1e-4
 
 
-def test_reduces_to_the_speed_only_pif_without_a_schedule():
-    """mu = inf: no stiffness change at any excitation, the same filter as pif-modified with the
-    same weights (its general path, the same speed grid)."""
+@pytest.mark.parametrize("name", SCHEDULED)
+def test_reduces_to_the_speed_only_pif_without_a_schedule(name):
+    """mu = inf: no stiffness change at any excitation, the same filter as the speed-only PIF
+    (pif-modified, pif-rate) with the same weights (its general path, the same speed grid)."""
     s = _drive()
     opts = dict(Q=3e-4, th=5e3, v_step=1.0, **SMALL)
-    flat = E.make("pif-adaptive", P, mu=np.inf, **opts).run(s)
-    ref = E.make("pif-modified", P, sample_rate=None, roll="dynamic", **opts).run(s)
+    flat = E.make(name, P, mu=np.inf, **opts).run(s)
+    ref = E.make(SCHEDULED[name], P, sample_rate=None, roll="dynamic", **opts).run(s)
     assert np.allclose(flat.phi_b, ref.phi_b, rtol=0, atol=1e-12)
-    sched = E.make("pif-adaptive", P, **opts).run(s)
+    sched = E.make(name, P, **opts).run(s)
     assert np.abs(sched.phi_b - ref.phi_b).max() > 1e-3           # the schedule does change it
 
 
@@ -90,7 +97,7 @@ def test_secant_stiffness_of_the_brush_tyre():
 def test_discrete_error_dynamics_stable_over_the_whole_schedule(est, fs):
     """Per-sample map of the state (inputs held, so the excitation sits at |ay|) at each
     excitation of the grid: spectral radius < 1 for vx in [v_min, 40] m/s."""
-    n = 3
+    n = len(est.state_names)
     for ay in EXCITATION_GRID:
         for vx in (5.0, 10.0, 20.0, 40.0):
             cols = []
@@ -110,14 +117,18 @@ def test_general_path_only_and_not_exportable(est):
     assert est.fixed_dt is None
     with pytest.raises(ValueError, match="fixed-rate"):
         est.discrete_tables(0.01)
-    with pytest.raises(NotExportable, match="pif-adaptive.*friction usage"):
+    with pytest.raises(NotExportable, match="pif-(rate-)?adaptive.*friction usage"):
         check_exportable(est)
 
 
-def test_bad_options_rejected():
+@pytest.mark.parametrize("name", SCHEDULED)
+def test_bad_options_rejected(name):
     for kw in (dict(mu=0.0), dict(tau=-1.0), dict(tf=np.nan), dict(model="original")):
-        with pytest.raises(ValueError, match="pif-adaptive"):
-            E.make("pif-adaptive", P, **SMALL, **kw)
+        with pytest.raises(ValueError, match=f"{name}: "):
+            E.make(name, P, **SMALL, **kw)
+    if name == "pif-rate-adaptive":
+        with pytest.raises(ValueError, match="pif-rate-adaptive: Q_rate"):
+            E.make(name, P, Q_rate=-1.0, **SMALL)
 
 
 def test_tyre_limit_s_curve_error_smaller_than_the_speed_only_pif():

@@ -188,11 +188,12 @@ def _ramp_bank_run(params, k_w, vx=22.2, T=40.0, fs=100.0):
     return Signals(t, np.full_like(t, vx), y[:, 0], y[:, 1], np.zeros_like(t)), w
 
 
-def test_pif_rate_follows_a_bank_ramp_without_lag_pif_modified_lags():
+@pytest.mark.parametrize("name", ["pif-rate", "pif-rate-adaptive"])
+def test_pif_rate_follows_a_bank_ramp_without_lag_pif_modified_lags(name):
     """The bank-rate state makes the filter type 2: zero steady error on a constant bank *rate*;
     the paper's random-walk model (type 1) keeps a constant lag."""
     signals, w = _ramp_bank_run(P, k_w=0.004)          # 0.23 deg/s, a superelevation transition
-    err_rate = E.make("pif-rate").run(signals).w[-500:] - w[-500:]
+    err_rate = E.make(name).run(signals).w[-500:] - w[-500:]
     err_mod = E.make("pif-modified").run(signals).w[-500:] - w[-500:]
     assert np.abs(err_mod).min() > 2e-4                       # constant lag (> 0.01 deg)
     assert np.abs(err_rate).max() < 0.02 * np.abs(err_mod).min()

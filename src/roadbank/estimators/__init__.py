@@ -4,7 +4,7 @@
 >>> est = estimators.make("pif-modified")
 >>> estimate = est.run(signals)           # doctest: +SKIP
 
-``NAMES`` lists the estimators (the paper's, the Kalman peer, ``pif-rate`` and ``pif-adaptive``); ``make(name, params, **tuning)`` builds one.
+``NAMES`` lists the estimators (the paper's, the Kalman peer, ``pif-rate``, ``pif-adaptive`` and ``pif-rate-adaptive``); ``make(name, params, **tuning)`` builds one.
 Each has ``run(signals) -> Estimate``, ``step(t, vx, ay, r, delta_f)`` and ``reset()``.
 """
 
@@ -17,7 +17,7 @@ from .base import Estimator, StepResult
 from .dfc import DFC
 from .kalman import Kalman
 from .kinematic import Kinematic
-from .pif import PIF, PIFAdaptive, PIFRate
+from .pif import PIF, PIFAdaptive, PIFRate, PIFRateAdaptive
 from .pio import PIO
 from .synthesis import NoStabilisingSolution
 from .uio import UIO
@@ -33,6 +33,7 @@ _FACTORIES = {
     "kalman": Kalman,
     "pif-rate": PIFRate,
     "pif-adaptive": PIFAdaptive,
+    "pif-rate-adaptive": PIFRateAdaptive,
 }
 
 #: names of all estimators, in the order the reports list them
@@ -56,4 +57,4 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
 
 
 __all__ = ["NAMES", "make", "Estimator", "StepResult", "NoStabilisingSolution",
-           "Kinematic", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "Kalman"]
+           "Kinematic", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "Kalman"]

@@ -76,7 +76,7 @@ def yaw_rate_noise_density(noise_std: float, resolution: float, rate: float) -> 
 
 #: estimators whose default ``R`` is the yaw-rate sensor's noise density (set by the caller
 #: that knows the sensor: :meth:`roadbank.vehicle.Vehicle.make`, the real-data validation)
-SENSOR_R_ESTIMATORS = ("pif-modified", "pif-rate", "pif-adaptive")
+SENSOR_R_ESTIMATORS = ("pif-modified", "pif-rate", "pif-adaptive", "pif-rate-adaptive")
 
 
 def with_sensor_R(name: str, options: dict, R: float) -> dict:
@@ -192,7 +192,11 @@ class PIF(ScheduledObserver):
 
     def design_model(self, vx: float):
         """``(A, B, C, Dy, Lw, Ew)`` of the filter's design model at ``vx`` (m/s)."""
-        return augmented_design_model(self.params, vx, self.model)
+        return self._model_at(self.params, vx)
+
+    def _model_at(self, params, vx: float):
+        """The design model for the car ``params`` at ``vx`` (m/s)."""
+        return augmented_design_model(params, vx, self.model)
 
     def process_noise(self, Ew: np.ndarray) -> np.ndarray:
         """Process-noise density ``W`` of the Riccati equation (``Q Ew Ew^T``: noise on ``w`` only)."""
@@ -246,7 +250,38 @@ RATE_TUNINGS = {"default": dict(Q=RATE_TUNING["Q"], R=R_ESP, S=1.0, th=RATE_TUNI
                                 P0=_scaled_p0(R_ESP), roll=RATE_TUNING["roll"])}
 
 
-class PIFRate(PIF):
+class _BankRateState:
+    """The bank *rate* as a fourth filter state (mixin of :class:`PIFRate`, :class:`PIFRateAdaptive`).
+
+    States ``[vy, r, w, w_rate]``, ``w' = w_rate + n_w``, ``w_rate' = n_rate``; process-noise
+    densities ``Q`` (1/s) on ``w`` and ``Q_rate`` (1/s^3) on ``w_rate``.
+    """
+
+    state_names = ("vy", "r", "w", "w_rate")
+
+    def _set_rate_noise(self, Q_rate) -> None:
+        self.Q_rate = float(RATE_TUNING["Q_rate"] if Q_rate is None else Q_rate)
+        if not self.Q_rate >= 0:
+            raise ValueError(f"{self.label}: Q_rate must be >= 0, got {Q_rate}")
+
+    def _model_at(self, params, vx: float):
+        """The augmented modified model for ``params`` at ``vx`` (m/s) with ``w_rate`` appended (``w' = w_rate``)."""
+        A3, B3, C3, Dy, _, _ = augmented_design_model(params, vx, "modified")
+        A = np.zeros((4, 4))
+        A[:3, :3] = A3
+        A[2, 3] = 1.0
+        B = np.vstack([B3, np.zeros((1, B3.shape[1]))])
+        C = np.hstack([C3, np.zeros((C3.shape[0], 1))])
+        Lw = np.array([[0.0, 0.0, 1.0, 0.0]])
+        Ew = np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+        return A, B, C, Dy, Lw, Ew
+
+    def process_noise(self, Ew: np.ndarray) -> np.ndarray:
+        """``Ew diag(Q, Q_rate) Ew^T``: noise on ``w`` and on ``w_rate``."""
+        return Ew @ np.diag([self.Q, self.Q_rate]) @ Ew.T
+
+
+class PIFRate(_BankRateState, PIF):
     r"""``pif-rate`` (beyond the paper): the PIF on the modified model with the bank *rate* as a
     state — an integrated random walk instead of the paper's random walk for ``w``.
 
@@ -268,30 +303,12 @@ class PIFRate(PIF):
 
     label = "pif-rate"
     tunings = RATE_TUNINGS
-    state_names = ("vy", "r", "w", "w_rate")
 
     def __init__(self, params=None, *, tuning=None, Q_rate=None, **kw):
         if "model" in kw or "variant" in kw:
             raise ValueError("pif-rate: model and variant are fixed (modified, steady)")
-        self.Q_rate = float(RATE_TUNING["Q_rate"] if Q_rate is None else Q_rate)
-        if not self.Q_rate >= 0:
-            raise ValueError(f"pif-rate: Q_rate must be >= 0, got {Q_rate}")
+        self._set_rate_noise(Q_rate)
         super().__init__(params, model="modified", variant="steady", tuning=tuning, **kw)
-
-    def design_model(self, vx: float):
-        """The augmented modified model with ``w_rate`` appended (``w' = w_rate``)."""
-        A3, B3, C3, Dy, _, _ = augmented_design_model(self.params, vx, "modified")
-        A = np.zeros((4, 4))
-        A[:3, :3] = A3
-        A[2, 3] = 1.0
-        B = np.vstack([B3, np.zeros((1, B3.shape[1]))])
-        C = np.hstack([C3, np.zeros((C3.shape[0], 1))])
-        Lw = np.array([[0.0, 0.0, 1.0, 0.0]])
-        Ew = np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
-        return A, B, C, Dy, Lw, Ew
-
-    def process_noise(self, Ew: np.ndarray) -> np.ndarray:
-        return Ew @ np.diag([self.Q, self.Q_rate]) @ Ew.T
 
 
 #: excitation grid of :class:`PIFAdaptive` (m/s^2 of low-passed ``|ay|``): 0 to 10 m/s^2 in steps of
@@ -362,12 +379,12 @@ class PIFAdaptive(PIF):
 
     def __init__(self, params=None, *, tuning=None, mu=None, tau=None, tf=None, **kw):
         if "model" in kw or "variant" in kw:
-            raise ValueError("pif-adaptive: model and variant are fixed (modified, steady)")
+            raise ValueError(f"{self.label}: model and variant are fixed (modified, steady)")
         d = ADAPTIVE_TUNING
         self.mu, self.tau, self.tf = (float(d[k] if v is None else v)
                                       for k, v in (("mu", mu), ("tau", tau), ("tf", tf)))
         if not (self.mu > 0 and self.tau > 0 and self.tf > 0) or np.isnan(self.tau + self.tf):
-            raise ValueError(f"pif-adaptive: need mu, tau, tf > 0; got {self.mu}, {self.tau}, {self.tf}")
+            raise ValueError(f"{self.label}: need mu, tau, tf > 0; got {self.mu}, {self.tau}, {self.tf}")
         self.egrid = EXCITATION_GRID
         kw.setdefault("v_step", ADAPTIVE_V_STEP)
         super().__init__(params, model="modified", variant="steady", tuning=tuning, **kw)
@@ -378,8 +395,7 @@ class PIFAdaptive(PIF):
 
     def observer_at(self, vx: float, e: float):
         """``(F, G, H, D)`` of the steady-state filter at speed ``vx`` (m/s) and excitation ``e`` (m/s^2)."""
-        model = augmented_design_model(replace(self.params, Cr=self.rear_stiffness(e)), vx, "modified")
-        return self._observer(model, vx)
+        return self._observer(self._model_at(replace(self.params, Cr=self.rear_stiffness(e)), vx), vx)
 
     def _design(self):
         rows = []
@@ -390,4 +406,43 @@ class PIFAdaptive(PIF):
                                             equilibrium_map(F, G).ravel()]))
         eg = self.egrid
         extra = [eg[0], (eg[1] - eg[0]) if len(eg) > 1 else 1.0, float(len(eg)), self.tau, self.tf]
-        return np.ascontiguousarray(np.array(rows)), 3, np.array(extra)
+        return np.ascontiguousarray(np.array(rows)), len(self.state_names), np.array(extra)
+
+
+#: tuning of :class:`PIFRateAdaptive`: ``pif-rate``'s weights and ``pif-adaptive``'s schedule
+RATE_ADAPTIVE_TUNING = dict(Q=RATE_TUNING["Q"], Q_rate=RATE_TUNING["Q_rate"], th=RATE_TUNING["th"],
+                            mu=ADAPTIVE_TUNING["mu"], tau=ADAPTIVE_TUNING["tau"], tf=ADAPTIVE_TUNING["tf"],
+                            roll=RATE_TUNING["roll"])
+#: named tunings of :class:`PIFRateAdaptive`
+RATE_ADAPTIVE_TUNINGS = {"default": dict(Q=RATE_ADAPTIVE_TUNING["Q"], R=R_ESP, S=1.0, th=RATE_ADAPTIVE_TUNING["th"],
+                                         P0=_scaled_p0(R_ESP), roll=RATE_ADAPTIVE_TUNING["roll"])}
+
+
+class PIFRateAdaptive(_BankRateState, PIFAdaptive):
+    r"""``pif-rate-adaptive`` (beyond the paper): both extensions of the PIF on the modified model —
+    the bank-rate state of :class:`PIFRate` (no lag behind banks that change at a steady rate)
+    and the friction-usage schedule of the rear cornering stiffness of :class:`PIFAdaptive`
+    (no false bank near the tyre limit).
+
+    The H-infinity design (eq 44 with the four-state model) is solved on the speed x
+    excitation grid and run by the ``adaptive`` kernel, as for ``pif-adaptive``; general
+    (trapezoidal) path only, no C export. Defaults :data:`RATE_ADAPTIVE_TUNING`.
+
+    Parameters
+    ----------
+    Q_rate : float, optional
+        Process-noise density of the bank rate's derivative (1/s^3).
+    mu, tau, tf : float, optional
+        As :class:`PIFAdaptive`.
+    Q, R, S, th, tuning, **kw
+        As :class:`PIF` (``model`` and ``variant`` are fixed: modified, steady).
+    """
+
+    label = "pif-rate-adaptive"
+    tunings = RATE_ADAPTIVE_TUNINGS
+
+    def __init__(self, params=None, *, tuning=None, Q_rate=None, mu=None, tau=None, tf=None, **kw):
+        d = RATE_ADAPTIVE_TUNING
+        self._set_rate_noise(d["Q_rate"] if Q_rate is None else Q_rate)
+        super().__init__(params, tuning=tuning, mu=d["mu"] if mu is None else mu,
+                         tau=d["tau"] if tau is None else tau, tf=d["tf"] if tf is None else tf, **kw)

@@ -11,6 +11,7 @@ LABELS = {
     "kalman": "Kalman (ours)",
     "pif-rate": "PIF + bank rate (ours)",
     "pif-adaptive": "PIF + friction-usage schedule (ours)",
+    "pif-rate-adaptive": "PIF + bank rate + friction schedule (ours)",
     "kinematic": "Kinematic",
 }
 

@@ -11,6 +11,8 @@ point of the estimator's current default (the optimiser's start).
 * ``pif-rate``: as ``pif-modified`` plus ``log10(Q_rate/R)``.
 * ``pif-adaptive``: as ``pif-modified`` plus the design friction coefficient ``mu`` of its
   rear-stiffness schedule (not in :data:`TUNABLE`: tuned on request, ``names=``).
+* ``pif-rate-adaptive``: as ``pif-rate`` plus ``mu`` and ``log10(tau / s)``, the release time
+  constant of the excitation's peak follower (on request).
 * ``kalman``: ``R`` stays at its default; ``x = log10`` of the three process-noise densities.
 * ``pio-modified``: poles ``-10^a (1, 1 + b, (1 + b)(1 + c))``, ``x = (a, b, c)``.
 * ``dfc``: ``x = log10(a_ref / (m/s^2))``.
@@ -23,9 +25,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..estimators import dfc, kalman, pio
-from ..estimators.pif import ADAPTIVE_TUNING, DEFAULT_TUNING, R_ESP, RATE_TUNING, yaw_rate_noise_density
+from ..estimators.pif import (ADAPTIVE_TUNING, DEFAULT_TUNING, R_ESP, RATE_ADAPTIVE_TUNING, RATE_TUNING,
+                              yaw_rate_noise_density)
 
-_PIF_FAMILY = ("pif-modified", "pif-rate", "pif-adaptive")
+_PIF_FAMILY = ("pif-modified", "pif-rate", "pif-adaptive", "pif-rate-adaptive")
+_DEFAULTS = {"pif-modified": DEFAULT_TUNING, "pif-rate": RATE_TUNING, "pif-adaptive": ADAPTIVE_TUNING,
+             "pif-rate-adaptive": RATE_ADAPTIVE_TUNING}
 
 
 @dataclass(frozen=True)
@@ -55,10 +60,13 @@ class SearchSpace:
         if self.name in _PIF_FAMILY:
             R = f["R"]
             out = {"Q": R * 10.0 ** x[0], "R": R, "S": 1.0, "th": 10.0 ** x[1] / R}
-            if self.name == "pif-rate":
-                out["Q_rate"] = R * 10.0 ** x[2]
-            if self.name == "pif-adaptive":
-                out["mu"] = x[2]
+            extra = dict(zip(self.labels[2:], x[2:]))
+            if "log10(Q_rate/R)" in extra:
+                out["Q_rate"] = R * 10.0 ** extra["log10(Q_rate/R)"]
+            if "mu" in extra:
+                out["mu"] = extra["mu"]
+            if "log10(tau/s)" in extra:
+                out["tau"] = 10.0 ** extra["log10(tau/s)"]
             return out
         if self.name == "kalman":
             return {"q": [10.0 ** v for v in x], "R": list(f["R"])}
@@ -74,12 +82,10 @@ class SearchSpace:
         """The point of the estimator's current default (clipped into the box)."""
         f = self.fixed
         if self.name in _PIF_FAMILY:
-            d = {"pif-modified": DEFAULT_TUNING, "pif-rate": RATE_TUNING, "pif-adaptive": ADAPTIVE_TUNING}[self.name]
+            d = _DEFAULTS[self.name]
             x = [np.log10(d["Q"] / R_ESP), np.log10(d["th"] * R_ESP)]       # Q/R and th R as tuned
-            if self.name == "pif-rate":
-                x.append(np.log10(d["Q_rate"] / R_ESP))
-            if self.name == "pif-adaptive":
-                x.append(d["mu"])
+            x += [{"log10(Q_rate/R)": np.log10(d.get("Q_rate", 1.0) / R_ESP), "mu": d.get("mu"),
+                   "log10(tau/s)": np.log10(d.get("tau", 1.0))}[label] for label in self.labels[2:]]
         elif self.name == "kalman":
             x = list(np.log10(kalman.DEFAULT_Q))
         elif self.name == "pio-modified":
@@ -95,7 +101,7 @@ class SearchSpace:
 TUNABLE = ("pif-modified", "pif-rate", "kalman", "pio-modified", "dfc")
 #: further estimators ``roadbank tune --estimators`` accepts (not tuned by default: each design
 #: solves a Riccati equation per speed *and* excitation point, about 5x the time of pif-modified)
-ON_REQUEST = ("pif-adaptive",)
+ON_REQUEST = ("pif-adaptive", "pif-rate-adaptive")
 
 
 def search_space(name: str, sensors=None) -> SearchSpace:
@@ -109,8 +115,11 @@ def search_space(name: str, sensors=None) -> SearchSpace:
         if name == "pif-adaptive":
             return SearchSpace(name, ("log10(Q/R)", "log10(th R)", "mu"), ((1.0, 7.0), (-7.0, -1.5), (0.8, 2.0)),
                                {"R": R})
-        return SearchSpace(name, ("log10(Q/R)", "log10(th R)", "log10(Q_rate/R)"),
-                           ((1.0, 7.0), (-7.0, -1.5), (-2.0, 8.0)), {"R": R})
+        rate = (("log10(Q/R)", "log10(th R)", "log10(Q_rate/R)"), ((1.0, 7.0), (-7.0, -1.5), (-2.0, 8.0)))
+        if name == "pif-rate-adaptive":
+            return SearchSpace(name, rate[0] + ("mu", "log10(tau/s)"), rate[1] + ((0.8, 2.0), (-1.5, 0.5)),
+                               {"R": R})
+        return SearchSpace(name, *rate, {"R": R})
     if name == "kalman":
         return SearchSpace(name, ("log10 q_vy", "log10 q_r", "log10 q_w"),
                            ((-2.0, 3.0), (-4.0, 1.0), (-5.0, 0.0)), {"R": tuple(kalman.DEFAULT_R)})
