@@ -372,6 +372,12 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     return estimators.make(name, params, **options)
 
 
+#: ``[identified.<quantity>]`` sensor offsets (measured minus true) -> the Signals channel they
+#: are removed from by :meth:`Vehicle.correct`, and their unit (what ``roadbank identify`` writes)
+OFFSET_CHANNELS = {"yaw_rate_offset": ("r", "rad/s"), "ay_offset": ("ay", "m/s^2"),
+                   "steering_offset": ("delta_f", "rad")}
+
+
 # ---------------------------------------------------------------------------------------------
 # the vehicle
 
@@ -509,6 +515,60 @@ class Vehicle:
         """
         return make_estimator(estimator_name, self.params, sensors=self.sensors, log_rate=log_rate,
                               **{**self.tuning.get(estimator_name, {}), **overrides})
+
+    @property
+    def sensor_offsets(self) -> dict[str, float]:
+        """The identified sensor offsets (measured minus true, SI) by :class:`~roadbank.Signals` channel.
+
+        From the ``[identified]`` tables ``roadbank identify`` writes (:data:`OFFSET_CHANNELS`):
+        ``{"r": yaw_rate_offset (rad/s), "ay": ay_offset (m/s^2), "delta_f": steering_offset
+        (rad, road-wheel angle)}``, only those the vehicle has.
+
+        Raises
+        ------
+        VehicleFileError
+            An offset that is not a finite number or is in another unit than the one above.
+        """
+        out = {}
+        for quantity, (channel, unit) in OFFSET_CHANNELS.items():
+            entry = self.identified.get(quantity)
+            if entry is None:
+                continue
+            where = f"{self.source or f'<vehicle {self.name}>'}: [identified.{quantity}]"
+            value = entry.get("value")
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise VehicleFileError(f"{where} value = {_fmt(value)}: need a finite number ({unit})")
+            if entry.get("unit", unit) != unit:
+                raise VehicleFileError(f"{where} unit = {_fmt(entry['unit'])}: the offset must be in {unit} "
+                                       "(as roadbank identify writes it)")
+            out[channel] = float(value)
+        return out
+
+    def correct(self, signals):
+        """``signals`` with this car's identified sensor offsets subtracted (:attr:`sensor_offsets`).
+
+        What ``roadbank estimate`` / ``roadbank map`` do to every log before estimating when
+        given ``--vehicle`` (docs/identification.md). Returns ``signals`` itself when the car
+        has no identified offset.
+
+        Parameters
+        ----------
+        signals : roadbank.Signals
+            Measured ESP signals (SI, ISO 8855).
+
+        Returns
+        -------
+        roadbank.Signals
+            ``r - yaw_rate_offset`` (rad/s), ``ay - ay_offset`` (m/s^2), ``delta_f -
+            steering_offset`` (rad); ``t`` and ``vx`` unchanged.
+        """
+        offsets = self.sensor_offsets
+        if not offsets:
+            return signals
+        from .signals import CHANNELS, Signals
+
+        return Signals(*(getattr(signals, c) - offsets[c] if c in offsets else getattr(signals, c)
+                         for c in CHANNELS))
 
     def check(self) -> "Vehicle":
         """Build every tuned estimator once; a failing design raises :class:`VehicleFileError`.

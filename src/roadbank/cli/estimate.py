@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -10,6 +11,12 @@ import click
 from ..io.readers import FORMATS
 from .inputs import channel_map_and_logs
 from .options import vehicle_option
+
+
+#: how the removed offsets are printed (Signals channel -> text)
+_OFFSET_TEXT = {"r": lambda v: f"yaw rate {math.degrees(v):+.3f} deg/s",
+                "ay": lambda v: f"ay {v:+.3f} m/s^2",
+                "delta_f": lambda v: f"steering {math.degrees(v):+.3f} deg (road wheel)"}
 
 
 def _parse_estimators(values: tuple[str, ...]) -> list[str]:
@@ -74,7 +81,9 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     duration, valid share, bank mean/min/max, error), appended as each log
     finishes. A bad log is reported (name and reason) and never stops the
     others; the exit code is 1 if any log failed, 0 otherwise. Output columns
-    are SI (rad); the summary is in degrees.
+    are SI (rad); the summary is in degrees. With --vehicle, the sensor offsets
+    `roadbank identify` wrote into the file (yaw rate, ay, steering) are
+    subtracted from every log first (docs/identification.md).
     """
     from ..fleet import estimate_log, run_fleet
 
@@ -93,6 +102,13 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
         raise click.BadParameter("for one log, -o must end in .csv or .parquet (or be a directory)",
                                  param_hint="-o")
     params = vehicle.params
+    try:
+        offsets = vehicle.sensor_offsets
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="--vehicle")
+    if offsets:
+        click.echo("removing the sensor offsets identified in the vehicle file from every log: "
+                   + ", ".join(_OFFSET_TEXT[c](v) for c, v in offsets.items()), err=True)
     meta = {"estimators": ",".join(names),
             "steering_ratio": str(cmap.steering_ratio if cmap and cmap.steering_ratio else params.steering_ratio)}
     if not batch:

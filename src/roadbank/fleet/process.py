@@ -131,7 +131,9 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
         The estimators are built on the first chunk, for the log's sample rate
         (:func:`roadbank.vehicle.make_estimator` with ``log_rate``): a default-tuned PIF's
         ``R`` is the car's yaw-rate sensor (without ``vehicle``: the paper's ESP sensor)
-        at the rate the log is sampled at (10 Hz KITTI frames, a 50 Hz CSV, ...).
+        at the rate the log is sampled at (10 Hz KITTI frames, a 50 Hz CSV, ...). Its
+        identified sensor offsets (``[identified]`` yaw-rate, ay and steering offsets) are
+        subtracted from every chunk first (:meth:`roadbank.vehicle.Vehicle.correct`).
     chunk_rows : int, optional
         Rows per chunk (default :data:`roadbank.io.stream.CHUNK_ROWS`).
     metadata : dict, optional
@@ -174,7 +176,8 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
                 ests = [vehicle.make(n, log_rate=rate) if vehicle is not None
                         else make_estimator(n, params, log_rate=rate) for n in names]
             warns += chunk.warnings
-            results = [e.run(chunk.signals, reset=(k == 0)) for e in ests]
+            signals = chunk.signals if vehicle is None else vehicle.correct(chunk.signals)
+            results = [e.run(signals, reset=(k == 0)) for e in ests]
             writer.write(estimate_table(chunk.signals.t, results, chunk.reference_roll))
             stats.add(results[0])
             summary.chunks += 1

@@ -88,7 +88,8 @@ def map_logs(logs, estimator: str = "pif-modified", *, channels=None, format: st
                                    "map, or use a format that has one: comma2k19, kitti-oxts, ROS NavSatFix)")
                 if k == 0:
                     est = design(chunk.signals.t)
-                out = est.run(chunk.signals, reset=(k == 0))
+                signals = chunk.signals if vehicle is None else vehicle.correct(chunk.signals)
+                out = est.run(signals, reset=(k == 0))
                 lat, lon = chunk.extra["lat_deg"], chunk.extra["lon_deg"]
                 if bmap is None:
                     proj = _origin(lat, lon)
