@@ -15,6 +15,10 @@ import os
 # 2-core machine). Set before numpy is imported; an explicit user setting wins.
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
+# Arrow buffers from the C allocator rather than Arrow's default mimalloc pool, which
+# keeps its segments: 10-18 MiB less peak memory when a long log is streamed
+# (docs/io.md), no measurable cost at these buffer sizes. Read when pyarrow loads.
+os.environ.setdefault("ARROW_DEFAULT_MEMORY_POOL", "system")
 
 import importlib  # noqa: E402
 import importlib.util

@@ -64,7 +64,7 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
 @click.option("--resume", is_flag=True,
               help="Skip logs the output directory's summary.csv lists as finished (failed ones are retried).")
 @click.option("--chunk-rows", type=int, default=None,
-              help="Rows per streamed chunk (Parquet, MDF4); default 50000.")
+              help="Rows per streamed chunk (Parquet, MDF4); default 20000.")
 def estimate(logs, channels, fmt, est_names, output, output_format, plot, steering_ratio, vehicle,
              workers, scheduler, resume, chunk_rows):
     """Estimate the road bank angle on recorded LOGS and write t, theta, phi_b, valid per estimator.

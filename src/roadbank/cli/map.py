@@ -39,7 +39,7 @@ def _origin(ctx, param, value):
               help="Heading sectors per cell (the bank's sign depends on the direction of travel); 1 = none.")
 @click.option("--origin", callback=_origin, default=None, metavar="LAT,LON",
               help="Origin of the map's plane (deg); default: the first fix rounded to 0.01 deg.")
-@click.option("--chunk-rows", type=int, default=None, help="Rows per streamed chunk (default 50000).")
+@click.option("--chunk-rows", type=int, default=None, help="Rows per streamed chunk (default 20000).")
 @vehicle_option("The estimator is designed for this car.")
 def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, sectors, origin, chunk_rows, vehicle):
     """Map the road bank: attach each valid bank estimate of LOGS to its GNSS position and aggregate per cell.

@@ -80,6 +80,7 @@ def write_long_log(path, hours: float = 24.0, rate_hz: float = 100.0, chunk_s: f
 _CHILD = r"""
 import json, sys, time
 t0 = time.perf_counter()
+import roadbank.cli       # the process set-up of the roadbank command (BLAS threads, Arrow's allocator)
 from roadbank import estimators
 from roadbank.fleet import estimate_log
 mode, log, out, est, chunk = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], int(sys.argv[5])
@@ -99,7 +100,8 @@ elif mode.startswith("baseline-"):      # what every run pays before the first r
     estimators.make(est).run(Signals(np.arange(n) * 0.01, np.full(n, 20.0), np.zeros(n), np.zeros(n), np.zeros(n)))
     import pyarrow.parquet
     if mode == "baseline-mdf4":
-        import asammdf
+        from roadbank.io.mdfimport import import_asammdf
+        import_asammdf()                # as the MDF4 reader imports it
 elif mode == "whole":
     from roadbank.io import load_log
     from roadbank.io.writers import estimate_table, write_table
@@ -118,7 +120,7 @@ print(json.dumps(res))
 """
 
 
-def measure(mode: str, log, out, estimator: str = "pif-modified", chunk_rows: int = 50_000) -> dict:
+def measure(mode: str, log, out, estimator: str = "pif-modified", chunk_rows: int | None = None) -> dict:
     """Run one measurement in a fresh Python process.
 
     Parameters
@@ -129,12 +131,17 @@ def measure(mode: str, log, out, estimator: str = "pif-modified", chunk_rows: in
         pays first (imports, estimator design, the compiled kernel loaded by a first tiny
         ``run()``, the format's reader library).
 
+    chunk_rows : int, optional
+        Rows per chunk (default :data:`roadbank.io.stream.CHUNK_ROWS`, as ``roadbank estimate``).
+
     Returns
     -------
     dict
         ``peak_rss_mb`` (MiB, the child's peak resident set: VmHWM on Linux, else ru_maxrss), ``samples``, ``run_s`` (s, read + estimate +
         write), ``samples_per_s``, ``import_s``, ``design_s``, ``chunks``.
     """
+    from ..io.stream import CHUNK_ROWS
+    chunk_rows = chunk_rows or CHUNK_ROWS
     proc = subprocess.Popen([sys.executable, "-c", _CHILD, mode, str(log), str(out), estimator, str(chunk_rows)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=dict(os.environ, OMP_NUM_THREADS="1",
                                                                                       OPENBLAS_NUM_THREADS="1"))
@@ -191,7 +198,7 @@ def main(argv=None) -> int:
     ap.add_argument("--peer-hours", type=float, default=2.0)
     ap.add_argument("--formats", default="parquet,mdf4")
     ap.add_argument("--estimator", default="pif-modified")
-    ap.add_argument("--chunk-rows", type=int, default=50_000)
+    ap.add_argument("--chunk-rows", type=int, default=None, help="default: roadbank.io.stream.CHUNK_ROWS")
     ap.add_argument("--fleet", type=int, default=0, help="also time N small logs with 1 and 2 workers")
     ap.add_argument("--workdir", default=None)
     ap.add_argument("--json", action="store_true")

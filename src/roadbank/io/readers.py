@@ -231,8 +231,10 @@ def arrow_column_floats(p, c: str, label: str, col, row0: int = 0) -> np.ndarray
 
 def open_mdf(p: Path, source=None):
     """An asammdf ``MDF`` of file ``p`` (or of the open file object ``source``); LogError if it cannot be opened."""
+    from .mdfimport import import_asammdf
+
     try:
-        from asammdf import MDF
+        MDF = import_asammdf().MDF
     except ImportError:
         raise LogError(f"{p}: reading MDF4 needs the optional dependency asammdf "
                        "(pip install 'roadbank[mdf]')") from None

@@ -1,8 +1,8 @@
 """Long logs in bounded memory: :func:`stream_log` yields a log as consecutive chunks.
 
 Parquet files are read in record batches (pyarrow ``iter_batches``) and MDF4
-files in fragments per channel (asammdf ``iter_get`` with a read fragment size of
-about ``chunk_rows`` records),
+files in windows of ``chunk_rows`` records per channel group (asammdf ``select``
+with ``record_offset``/``record_count``, every wanted channel of the group at once),
 so memory stays bounded by the chunk size whatever the log's length. Other
 formats (CSV, raw CAN, ROS bags, comma2k19, ...) are read whole and yielded as
 one chunk.
@@ -38,8 +38,9 @@ from .log import (GNSS_MAX_GAP_S, Log, _check_time, gnss_extra, gnss_roles, load
                   select_roles)
 from .resample import clean_series, interpolate
 
-#: default rows per chunk (per channel for MDF4): 50 000 samples = 8.3 min at 100 Hz (memory vs per-chunk overhead, docs/io.md)
-CHUNK_ROWS = 50_000
+#: default rows per chunk (records per channel group for MDF4): 20 000 samples = 3.3 min at 100 Hz
+#: (memory vs per-chunk overhead: each 10 000 rows cost about 3.5 MiB of peak memory, docs/io.md)
+CHUNK_ROWS = 20_000
 STREAMED = ("parquet", "mdf4")
 
 
@@ -188,7 +189,14 @@ def _schema(p: Path, fmt: str) -> tuple[list[str], dict]:
 
 
 class _Mdf4Channels:
-    """MDF4 channels read fragment by fragment (asammdf ``iter_get``), each with its own master time stamps.
+    """MDF4 channels read window by window: ``chunk_rows`` records of a channel group at a
+    time (asammdf ``select`` with ``record_offset``/``record_count``), every wanted channel
+    of that group from one pass over its data, each with its master time stamps.
+
+    One window of one group is in memory at a time: a per-channel ``iter_get`` keeps
+    one data block (4 MiB as asammdf writes them) and one read buffer alive per
+    channel (about 6.5 MiB each). Channels of the group not asked for yet wait as
+    converted arrays (one window each).
 
     The file is opened as a Python file object rather than by name: asammdf then reads
     with ``read()`` instead of memory-mapping the file, whose touched pages would
@@ -205,26 +213,51 @@ class _Mdf4Channels:
             self.fh.close()
             raise
         self.names = [n for n in self.mdf.channels_db if n not in ("time", "t")]
+        self.chunk = max(1, int(chunk_rows))
         rec = max((int(g.channel_group.samples_byte_nr) + int(g.channel_group.invalidation_bytes_nr)
                    for g in self.mdf.groups), default=8)
-        self.mdf.configure(read_fragment_size=max(1, int(chunk_rows)) * max(rec, 8))
-        self.iters: dict = {}
+        self.mdf.configure(read_fragment_size=self.chunk * max(rec, 8))   # read buffer: one window
+        self.wanted: dict = {}       # key -> (group, index, label)
+        self.offset: dict = {}       # group -> next record to read
+        self.waiting: dict = {}      # key -> [(t, v)] read along with another channel of its group
 
-    def read(self, name: str, label: str):
-        """Next fragment of channel ``name``: (t, v), or None when exhausted."""
-        it = self.iters.get(name)
-        if it is None:
-            it = self.iters[name] = self.mdf.iter_get(name)
-        try:
-            sig = next(it)
-        except StopIteration:
+    def want(self, key, name: str, label: str) -> None:
+        """Read channel ``name`` as ``key`` (e.g. its role); call for every channel before :meth:`read`."""
+        where = self.mdf.whereis(name)
+        if len(where) != 1:
+            what = "not in the file" if not where else f"in {len(where)} channel groups {sorted(g for g, _ in where)}"
+            raise LogError(f"{self.p}: {label}: cannot read channel '{name}': it is {what}")
+        group, index = where[0]
+        self.wanted[key] = (int(group), int(index), label)
+        self.offset.setdefault(int(group), 0)
+
+    def read(self, key):
+        """Next window of channel ``key``: (t, v), or None when exhausted."""
+        queue = self.waiting.get(key)
+        if queue:
+            return queue.pop(0)
+        group, _, label = self.wanted[key]
+        start = self.offset[group]
+        if start >= int(self.mdf.groups[group].channel_group.cycles_nr):
             return None
+        keys = [k for k, w in self.wanted.items() if w[0] == group]
+        try:
+            sigs = self.mdf.select([(None, group, self.wanted[k][1]) for k in keys], record_offset=start,
+                                   record_count=self.chunk, copy_master=False)
         except Exception as exc:
             raise LogError(f"{self.p}: {label}: cannot read (truncated or corrupt?): {exc}") from None
-        s = np.asarray(sig.samples)
-        if s.dtype.kind not in "fiub":
-            raise LogError(f"{self.p}: {label}: not numeric ({s.dtype})")
-        return np.asarray(sig.timestamps, dtype=np.float64), np.asarray(s, dtype=np.float64)
+        self.offset[group] = start + self.chunk
+        got = None
+        for k, sig in zip(keys, sigs):
+            s = np.asarray(sig.samples)
+            if s.dtype.kind not in "fiub":
+                raise LogError(f"{self.p}: {self.wanted[k][2]}: not numeric ({s.dtype})")
+            tv = np.asarray(sig.timestamps, dtype=np.float64), np.asarray(s, dtype=np.float64)
+            if k == key:
+                got = tv
+            else:
+                self.waiting.setdefault(k, []).append(tv)
+        return got
 
     def close(self):
         try:
@@ -396,6 +429,8 @@ def _stream_mdf4(p, cmap, params, chunk_rows):
                 raise channel_error(p, r, cmap.channels[r].column, "channel not found in the file "
                                     f"(it has: {', '.join(src.names) or 'nothing'})")
         names = roles + gnss
+        for r in names:
+            src.want(r, cmap.channels[r].column, f"channel '{r}' (column '{cmap.channels[r].column}')")
         tb = "uniform" if cmap.time_base == "auto" else cmap.time_base
         rs = StreamResampler(roles, {r: GNSS_MAX_GAP_S for r in gnss}, tb, cmap.rate_hz, cmap.max_gap_s)
         last_t = {r: None for r in names}
@@ -412,7 +447,7 @@ def _stream_mdf4(p, cmap, params, chunk_rows):
             # read the channel that lags most, so no buffer runs far ahead of the others
             r = min(active, key=lambda k: -np.inf if last_t[k] is None else last_t[k])
             spec = cmap.channels[r]
-            got = src.read(spec.column, f"channel '{r}' (column '{spec.column}')")
+            got = src.read(r)
             if got is None:
                 if last_t[r] is None and r in roles:
                     raise channel_error(p, r, spec.column, "no samples")

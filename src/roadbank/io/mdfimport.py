@@ -1,0 +1,81 @@
+"""Import asammdf without loading sympy until a file needs it.
+
+asammdf imports ``from sympy import lambdify, symbols`` (inside ``try``: sympy is
+optional for asammdf) only to evaluate algebraic conversion formulas that numexpr
+cannot parse. Loading sympy costs every MDF4 read about 32 MiB of resident memory
+and 0.5 s of import time, although almost no log has such a formula.
+
+:func:`import_asammdf` imports asammdf while ``sympy`` resolves to a placeholder
+module whose ``lambdify`` and ``symbols`` import the real sympy on their first call
+and forward to it (any other attribute loads the real sympy at once). The
+placeholder is taken out of ``sys.modules`` as soon as asammdf is imported, so a
+later ``import sympy`` anywhere gets the real package. Conversions therefore work
+exactly as with a plain ``import asammdf``; only their cost moves to the first file
+that needs them. Without sympy installed nothing is replaced (asammdf's own
+fallback applies).
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import sys
+import threading
+import types
+
+#: modules asammdf imports only for rare work -> the names it takes from them
+DEFERRED = {"sympy": ("lambdify", "symbols")}
+_LOCK = threading.RLock()
+
+
+def _real(module: str, placeholder: types.ModuleType | None = None) -> types.ModuleType:
+    """The real ``module``, imported now (the placeholder, if still registered, makes way)."""
+    with _LOCK:
+        if placeholder is not None and sys.modules.get(module) is placeholder:
+            del sys.modules[module]
+        return importlib.import_module(module)
+
+
+def _placeholder(module: str, names) -> types.ModuleType:
+    stub = types.ModuleType(module, f"placeholder for {module}: loaded on first use (roadbank.io.mdfimport)")
+
+    def forward(name):
+        def call(*args, **kwargs):
+            return getattr(_real(module, stub), name)(*args, **kwargs)
+        call.__name__ = call.__qualname__ = name
+        return call
+
+    for n in names:
+        setattr(stub, n, forward(n))
+
+    def __getattr__(name):       # anything else: the real module now
+        if name.startswith("__"):
+            raise AttributeError(name)
+        return getattr(_real(module, stub), name)
+
+    stub.__getattr__ = __getattr__
+    return stub
+
+
+def import_asammdf() -> types.ModuleType:
+    """The ``asammdf`` module, imported with sympy deferred (see the module doc).
+
+    Raises
+    ------
+    ImportError
+        If asammdf (or one of its required dependencies) is not installed.
+    """
+    mod = sys.modules.get("asammdf")
+    if mod is not None:
+        return mod
+    with _LOCK:
+        placed = {}
+        for module, names in DEFERRED.items():
+            if module not in sys.modules and importlib.util.find_spec(module) is not None:
+                sys.modules[module] = placed[module] = _placeholder(module, names)
+        try:
+            return importlib.import_module("asammdf")
+        finally:
+            for module, stub in placed.items():
+                if sys.modules.get(module) is stub:
+                    del sys.modules[module]
