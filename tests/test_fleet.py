@@ -155,3 +155,6 @@ def test_long_log_benchmark_measures_the_child_alone(tmp_path):
     res = measure("stream", log, tmp_path / "out.parquet")
     assert res["samples"] == n and res["samples_per_s"] > 0
     assert 30 < res["peak_rss_mb"] < ballast.nbytes / 2**20
+    # CPU of the run itself (one thread): more than nothing, not more than its wall time allows
+    assert 0 < res["run_cpu_s"] <= 1.2 * res["run_s"] + 0.05
+    assert res["samples_per_cpu_s"] == pytest.approx(n / res["run_cpu_s"])
