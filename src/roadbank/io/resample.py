@@ -84,6 +84,8 @@ def interpolate(t: np.ndarray, v: np.ndarray, t_new: np.ndarray, max_gap_s: floa
         out[t_new == tc[0]] = vc[0]
         return out
     out[inside] = np.interp(t_new[inside], tc, vc)
+    if not (np.diff(tc) > max_gap_s).any():       # no gap anywhere: the rule below changes nothing
+        return out
     # gap rule: bracketing valid samples more than max_gap_s apart -> NaN (exact hits excepted)
     right = np.searchsorted(tc, t_new, side="right")
     idx = np.clip(right, 1, len(tc) - 1)
