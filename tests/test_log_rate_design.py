@@ -127,3 +127,21 @@ def test_roadbank_estimate_on_a_kitti_drive_gives_the_theta_validate_kitti_score
     from roadbank.io import load_log
     at100 = car.make("pif-modified").run(load_log(DRIVE).signals).theta
     assert np.max(np.abs(at100[valid] - run.raw_estimates["pif-modified"][valid])) > 1e-3
+
+
+@needs_kitti
+def test_validate_kitti_also_scores_the_default_pif_designed_for_100_hz():
+    from roadbank.io import load_log
+    from roadbank.validation import SEDAN
+    from roadbank.validation.kitti import validate_kitti_drive
+
+    res = validate_kitti_drive(DRIVE, names=["kinematic", "pif-modified"])
+    assert set(res.sensitivity["R_nominal"]) == {"pif-modified"}     # only the sensor-R estimators
+    ref, sc = res.run.raw_reference, res.run.scored
+    signals = load_log(DRIVE).signals
+    for key, rate in ((None, sample_rate(signals.t)), ("R_nominal", None)):
+        th = make_estimator("pif-modified", SEDAN, log_rate=rate).run(signals).theta
+        got = res.scores["pif-modified"] if key is None else res.sensitivity[key]["pif-modified"]
+        assert got.rms_raw_deg == pytest.approx(math.degrees(np.sqrt(np.mean((th[sc] - ref[sc]) ** 2))), rel=1e-9)
+    assert res.sensitivity["R_nominal"]["pif-modified"].rms_raw_deg != pytest.approx(
+        res.scores["pif-modified"].rms_raw_deg, abs=0.01)

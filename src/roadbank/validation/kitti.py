@@ -95,7 +95,9 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     scoring : Scoring
         Default :data:`KITTI_SCORING`.
     sensitivity : bool
-        Also score with the paper's SUV parameters (``VehicleParams()``).
+        Also score with the paper's SUV parameters (``VehicleParams()``, ``sensitivity["suv"]``)
+        and the default-R PIFs designed for the sensor's nominal rate instead of the drive's
+        (``sensitivity["R_nominal"]``).
     tuning : mapping, optional
         ``{estimator: {option: value}}`` for the main scores (a vehicle file's ``[tuning]``).
     sensors : roadbank.vehicle.SensorSpec, optional
@@ -113,6 +115,16 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     sens = {}
     if sensitivity:
         sens["suv"] = run_and_score(log.signals, log.reference_roll, names, VehicleParams(), scoring).scores
+        # the default PIFs designed for the sensor's nominal rate (100 Hz) instead of the drive's
+        from ..estimators.pif import SENSOR_R_ESTIMATORS
+        from ..vehicle import SensorSpec
+
+        at_rate = [n for n in names if n in SENSOR_R_ESTIMATORS and "R" not in (tuning or {}).get(n, {})]
+        if at_rate:
+            R_nominal = (sensors or SensorSpec()).r_noise_density()
+            sens["R_nominal"] = run_and_score(log.signals, log.reference_roll, at_rate, params, scoring,
+                                              per_estimator={n: {**(tuning or {}).get(n, {}), "R": R_nominal}
+                                                             for n in at_rate}).scores
     t = log.signals.t
     first = np.flatnonzero(run.scored)
     settings = {"tau": scoring.tau, "warmup_s": scoring.warmup_s, "fit_fraction": scoring.fit_fraction,

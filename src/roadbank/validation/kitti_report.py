@@ -113,9 +113,9 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
              "specific force `ay` and yaw rate `wz`. No steering angle. Licence CC BY-NC-SA 3.0 (Geiger, "
              "Lenz, Stiller, Urtasun, IJRR 2013): the data stay outside the repository.\n")
     L.append("Estimators: the library defaults; the default PIFs' yaw-rate noise density R follows the log's "
-             "sample rate (`roadbank.validation.scoring.log_rate_R`: the ESP sensor's variance / rate, "
-             "docs/estimators.md), i.e. ten times the 100 Hz value at KITTI's 10 Hz. Nothing is tuned on "
-             "these drives.\n")
+             "sample rate (`roadbank.vehicle.make_estimator`: the ESP sensor's variance / rate, as "
+             "`roadbank estimate` designs them; docs/estimators.md), i.e. ten times the 100 Hz value at "
+             "KITTI's 10 Hz. Nothing is tuned on these drives.\n")
     L.append(md_table(["drive", "duration (s)", "frames (dropped)", "step (s)", "speed (m/s)", "roll (deg)",
                        "max yaw rate (rad/s)", "scored (s)"],
                       [[d.label, d.data["duration_s"], f"{d.data['frames']} ({d.data['dropped_frames']})",
@@ -147,6 +147,17 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
             body.append([d.label] + [f"{_f(d.scores[n].rms_raw_deg)} / {_f(suv[n].rms_raw_deg) if n in suv else 'n/a'}"
                                      for n in names])
         L.append(md_table(["drive"] + [f"{n} sedan / SUV" for n in names], body, align="l" + "r" * len(names)))
+        L.append("")
+    if any("R_nominal" in d.sensitivity for d in v.drives):
+        L.append("Raw theta RMS (deg) of the default PIFs designed for the drive's rate (`R` = the ESP "
+                 "yaw-rate sensor's variance / 10 Hz, the default above) and for the sensor's nominal 100 Hz "
+                 "(`R` ten times smaller, a faster filter; see the 10 Hz section for the same comparison on "
+                 "the simulator):\n")
+        names = [n for n in v.drives[0].sensitivity.get("R_nominal", {})]
+        body = [[d.label] + [f"{_f(d.scores[n].rms_raw_deg)} / {_f(d.sensitivity['R_nominal'][n].rms_raw_deg)}"
+                             for n in names] for d in v.drives if "R_nominal" in d.sensitivity]
+        L.append(md_table(["drive"] + [f"{n} R for 10 Hz / 100 Hz" for n in names], body,
+                          align="l" + "r" * len(names)))
         L.append("")
     L.append(f"{h}# Pooled over the drives\n")
     L.append("Every scored sample of every drive together (n samples).\n")
