@@ -57,6 +57,36 @@ def _placeholder(module: str, names) -> types.ModuleType:
     return stub
 
 
+def import_deferring(module: str, deferred: dict) -> types.ModuleType:
+    """Import ``module`` while every module named in ``deferred`` (name -> the names ``module``
+    takes from it) that is installed but not loaded yet is a placeholder (see the module doc).
+
+    Returns
+    -------
+    module
+        ``module``, imported (or as already loaded).
+
+    Raises
+    ------
+    ImportError
+        If ``module`` (or one of its required dependencies) is not installed.
+    """
+    mod = sys.modules.get(module)
+    if mod is not None:
+        return mod
+    with _LOCK:
+        placed = {}
+        for name, names in deferred.items():
+            if name not in sys.modules and importlib.util.find_spec(name) is not None:
+                sys.modules[name] = placed[name] = _placeholder(name, names)
+        try:
+            return importlib.import_module(module)
+        finally:
+            for name, stub in placed.items():
+                if sys.modules.get(name) is stub:
+                    del sys.modules[name]
+
+
 def import_asammdf() -> types.ModuleType:
     """The ``asammdf`` module, imported with sympy deferred (see the module doc).
 
@@ -65,17 +95,4 @@ def import_asammdf() -> types.ModuleType:
     ImportError
         If asammdf (or one of its required dependencies) is not installed.
     """
-    mod = sys.modules.get("asammdf")
-    if mod is not None:
-        return mod
-    with _LOCK:
-        placed = {}
-        for module, names in DEFERRED.items():
-            if module not in sys.modules and importlib.util.find_spec(module) is not None:
-                sys.modules[module] = placed[module] = _placeholder(module, names)
-        try:
-            return importlib.import_module("asammdf")
-        finally:
-            for module, stub in placed.items():
-                if sys.modules.get(module) is stub:
-                    del sys.modules[module]
+    return import_deferring("asammdf", DEFERRED)
