@@ -131,9 +131,12 @@ def test_bad_options_rejected(name):
             E.make(name, P, Q_rate=-1.0, **SMALL)
 
 
-def test_tyre_limit_s_curve_error_smaller_than_the_speed_only_pif():
+@pytest.mark.parametrize("name,factor", [("pif-adaptive", 0.6), ("pif-rate-adaptive", 0.7)])
+def test_tyre_limit_s_curve_error_smaller_than_the_speed_only_pif(name, factor):
     """The nonlinear simulator's S-curve to about 0.85 g (rear force 25-50 % below Cr alpha_r):
-    the stiffness schedule halves the worst bank error of pif-modified (same weights)."""
+    the stiffness schedule cuts the worst bank error of the speed-only filter with the same
+    weights (pif-modified, pif-rate) by 40 % (30 % with the bank-rate state, whose faster
+    bank follows part of the remaining model error)."""
     from roadbank.sim import SCENARIOS, run
     sim = run(SCENARIOS["s-curve"])
     late = sim.signals.t > 2.0
@@ -143,4 +146,4 @@ def test_tyre_limit_s_curve_error_smaller_than_the_speed_only_pif():
         return np.rad2deg(np.abs(e.phi_b - sim.truth.phi_b)[late]).max()
 
     assert np.abs(sim.signals.ay).max() > 8.0
-    assert worst("pif-adaptive") < 0.6 * worst("pif-modified")
+    assert worst(name) < factor * worst(SCHEDULED[name])
