@@ -76,6 +76,20 @@ def test_copies_and_make_merge_tuning(rich_vehicle):
     assert "r_offset" in v.with_identified({"Cr": {"value": 1.0}}).identified
 
 
+@pytest.mark.parametrize("name,options", [
+    ("pif-rate", {"Q": 4e-5, "Q_rate": 5e-4, "th": 1e5, "roll": "dynamic"}),
+    ("pif-rate-adaptive", {"Q": 4e-5, "Q_rate": 5e-4, "mu": 1.1, "tau": 0.4}),
+    ("pif-adaptive", {"Q": 2e-4, "mu": 1.1, "tf": 0.2}),
+])
+def test_tuning_tables_accept_every_option_of_the_estimator(tmp_path, name, options):
+    """What ``roadbank tune`` writes for each PIF variant (options of the class and of its bases,
+    mixins included) is a valid [tuning] table, and the file round-trips into the estimator."""
+    v = load_vehicle("suv-paper").with_tuning(name, options)
+    v.to_toml(tmp_path / "car.toml")
+    est = load_vehicle(tmp_path / "car.toml").make(name)
+    assert all(getattr(est, k) == val for k, val in options.items() if k != "roll") and est.roll == options.get("roll", est.roll)
+
+
 def test_make_uses_the_vehicle_params_and_tuning():
     from roadbank import estimators
 

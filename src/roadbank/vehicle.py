@@ -727,7 +727,9 @@ def _estimator_options(name: str) -> set[str] | None:
     cls = getattr(factory, "func", factory)
     names: set[str] = set()
     for klass in (inspect.getmro(cls) if inspect.isclass(cls) else (cls,)):
-        init = klass.__init__ if inspect.isclass(klass) else klass
+        init = vars(klass).get("__init__") if inspect.isclass(klass) else klass
+        if init is None:            # a mixin without its own __init__: look further up
+            continue
         if init is object.__init__:
             break
         try:
