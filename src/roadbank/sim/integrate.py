@@ -25,7 +25,7 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from .driver import driver_step
-from .plant import NAUX, NC, NU, NX, plant_core, prepare, step_inputs
+from .plant import NAUX, NC, NQ, NU, NX, _fill_aux, plant_core, prepare, prepare_into, step_inputs
 
 
 @intrinsic
@@ -56,7 +56,8 @@ _A1, _A2, _A3 = 0.5, 0.5, 1.0
 @njit(cache=True, fastmath=True, error_model="numpy")
 def rk4_step(x, u, road, p, dt, k1, k2, k3, k4, tmp, aux):
     """One RK4 step in place on ``x`` (convenience entry; the loop in :func:`simulate_core` is fused)."""
-    q = prepare(p)
+    q = np.zeros(NQ)
+    prepare_into(p, q)
     c = np.empty(NC)
     step_inputs(u, q, c)
     k = np.empty((4, NX))
@@ -75,7 +76,7 @@ def _rk4_fused(x, road, q, c, dt, k, tmp, dx, aux):
     for i in range(NX):
         tmp[i] = x[i]
     for j in range(4):
-        plant_core(tmp, road, q, c, dx, aux, False)
+        plant_core(tmp, road, q, c, dx)
         a = (_A1 if j == 0 else (_A2 if j == 1 else _A3)) * dt
         for i in range(NX):
             k[j, i] = dx[i]
@@ -133,23 +134,33 @@ def simulate(x0, d0, t0: float, duration: float, dt: float, road_packed, drv_pac
     x = np.array(x0, dtype=np.float64)
     d = np.array(d0, dtype=np.float64)
     simulate_core(x, d, float(t0), n_steps, float(dt), np.ascontiguousarray(road_packed, dtype=np.float64),
-                  np.ascontiguousarray(drv_packed, dtype=np.float64), prepare(np.asarray(p, dtype=np.float64)),
+                  np.ascontiguousarray(drv_packed, dtype=np.float64), prepare(p),
                   X, U, np.zeros(NU), np.zeros(NC), np.zeros((4, NX)), np.zeros(NX), np.zeros(NX), np.zeros(NAUX))
     t = t0 + dt * np.arange(n_steps + 1)
     return t, X, U, d
 
 
-@njit(cache=True, fastmath=True, error_model="numpy")
-def outputs_at(X, U, idx, road, p):
-    """Plant auxiliary outputs (``A_*`` of :mod:`roadbank.sim.plant`) at rows ``idx``."""
+def outputs_at(X, U, idx, road, p) -> np.ndarray:
+    """Plant auxiliary outputs (``A_*`` of :mod:`roadbank.sim.plant`) at rows ``idx`` of ``X``, ``U``.
+
+    Returns an array (len(idx), NAUX); the units are those of the ``A_*`` entries.
+    """
+    X = np.ascontiguousarray(X, dtype=np.float64)
+    U = np.ascontiguousarray(U, dtype=np.float64)
+    idx = np.ascontiguousarray(idx, dtype=np.int64)
     out = np.empty((idx.shape[0], NAUX))
-    q = prepare(p)
-    c = np.empty(NC)
-    dx = np.empty(NX)
-    aux = np.empty(NAUX)
+    _outputs_into(X, U, idx, np.ascontiguousarray(road, dtype=np.float64), prepare(p), out,
+                  np.empty(NC), np.empty(NX), np.empty(NAUX))
+    return out
+
+
+@njit(cache=True, fastmath=True, error_model="numpy", no_cfunc_wrapper=True)
+def _outputs_into(X, U, idx, road, q, out, c, dx, aux):
+    """:func:`outputs_at` into ``out`` with the prepared constants ``q`` and work arrays ``c``, ``dx``, ``aux``."""
     for j in range(idx.shape[0]):
+        x = X[idx[j]]
         step_inputs(U[idx[j]], q, c)
-        plant_core(X[idx[j]], road, q, c, dx, aux, True)
+        plant_core(x, road, q, c, dx)
+        _fill_aux(x, q, c, dx, aux)
         for i in range(NAUX):
             out[j, i] = aux[i]
-    return out
