@@ -61,6 +61,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from .layout import (C_AREF, C_DTFIX, C_DTOL, C_DV, C_G, C_GAP, C_N, C_NG, C_NR, C_OFAM, C_P, C_ROLL,  # noqa: F401
@@ -71,96 +72,7 @@ from .layout import (C_AREF, C_DTFIX, C_DTOL, C_DV, C_G, C_GAP, C_N, C_NG, C_NR,
 # linear algebra on small matrices
 # ---------------------------------------------------------------------------------
 
-@njit(cache=True)
-def _lu(M, piv, n):
-    """In-place LU factorisation with partial pivoting of ``M[:n, :n]``."""
-    for k in range(n):
-        p = k
-        big = abs(M[k, k])
-        for i in range(k + 1, n):
-            if abs(M[i, k]) > big:
-                big = abs(M[i, k])
-                p = i
-        piv[k] = p
-        if p != k:
-            for j in range(n):
-                tmp = M[k, j]
-                M[k, j] = M[p, j]
-                M[p, j] = tmp
-        d = M[k, k]
-        if d == 0.0:
-            continue
-        for i in range(k + 1, n):
-            M[i, k] /= d
-            f = M[i, k]
-            for j in range(k + 1, n):
-                M[i, j] -= f * M[k, j]
-
-
-@njit(cache=True)
-def _lu_solve(M, piv, b, n):
-    """Solve ``M x = b`` in place in ``b`` with the factors from :func:`_lu`."""
-    for k in range(n):
-        p = int(piv[k])
-        if p != k:
-            tmp = b[k]
-            b[k] = b[p]
-            b[p] = tmp
-    for i in range(n):
-        s = b[i]
-        for j in range(i):
-            s -= M[i, j] * b[j]
-        b[i] = s
-    for i in range(n - 1, -1, -1):
-        s = b[i]
-        for j in range(i + 1, n):
-            s -= M[i, j] * b[j]
-        b[i] = s / M[i, i]
-
-
-@njit(cache=True)
-def _tustin(x, F, G, e0, e1, dt, max_sub, Mw, piv, rhs):
-    """Advance ``x' = F x + G e`` over ``dt`` (trapezoidal rule, substeps, e linear in time)."""
-    n = x.shape[0]
-    if n == 0:
-        return
-    m = e0.shape[0]
-    nsub = max(1, int(math.ceil(dt / max_sub - 1e-9)))
-    h = dt / nsub
-    hh = 0.5 * h
-    for i in range(n):
-        for j in range(n):
-            Mw[i, j] = -hh * F[i, j]
-        Mw[i, i] += 1.0
-    _lu(Mw, piv, n)
-    for k in range(nsub):
-        a = (2.0 * k + 1.0) / nsub  # e0*(1-a0)+e1*a0 + e0*(1-a1)+e1*a1 = 2 e0 + (e1-e0)*(a0+a1)
-        for i in range(n):
-            s = x[i]
-            for j in range(n):
-                s += hh * F[i, j] * x[j]
-            for j in range(m):
-                s += hh * G[i, j] * (2.0 * e0[j] + a * (e1[j] - e0[j]))
-            rhs[i] = s
-        _lu_solve(Mw, piv, rhs, n)
-        for i in range(n):
-            x[i] = rhs[i]
-
-
-@njit(cache=True)
-def _lerp(tab, i, a, off, out2d):
-    """Fill ``out2d`` (row-major) from ``tab[i:i+2, off:...]`` interpolated with weight ``a``."""
-    r, c = out2d.shape
-    i1 = min(i + 1, tab.shape[0] - 1)
-    k = off
-    for p in range(r):
-        for q in range(c):
-            out2d[p, q] = tab[i, k] + a * (tab[i1, k] - tab[i, k])
-            k += 1
-    return k
-
-
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _lu_flat(M, o, piv, op, n):
     """:func:`_lu` on the row-major ``n x n`` matrix stored in ``M[o:o + n*n]`` (pivots in ``piv[op:]``)."""
     for k in range(n):
@@ -186,11 +98,11 @@ def _lu_flat(M, o, piv, op, n):
                 M[o + i * n + j] -= f * M[o + k * n + j]
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _lu_solve_flat(M, o, piv, op, b, ob, n):
     """:func:`_lu_solve` on flat storage: solves in place in ``b[ob:ob + n]``."""
     for k in range(n):
-        p = int(piv[op + k])
+        p = np.int64(piv[op + k])
         if p != k:
             tmp = b[ob + k]
             b[ob + k] = b[ob + p]
@@ -207,7 +119,7 @@ def _lu_solve_flat(M, o, piv, op, b, ob, n):
         b[ob + i] = s / M[o + i * n + i]
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _tustin_flat(x, ox, n, A, oF, oG, m, E0, oe0, E1, oe1, dt, max_sub, W, oM):
     """:func:`_tustin` on flat storage (the general path of the ``lpv`` family and the roll model).
 
@@ -220,7 +132,9 @@ def _tustin_flat(x, ox, n, A, oF, oG, m, E0, oe0, E1, oe1, dt, max_sub, W, oM):
         return
     opiv = oM + n * n
     orhs = opiv + n
-    nsub = max(1, int(math.ceil(dt / max_sub - 1e-9)))
+    nsub = np.int64(math.ceil(dt / max_sub - 1e-9))
+    if nsub < 1:
+        nsub = 1
     h = dt / nsub
     hh = 0.5 * h
     for i in range(n):
@@ -246,20 +160,20 @@ def _tustin_flat(x, ox, n, A, oF, oG, m, E0, oe0, E1, oe1, dt, max_sub, W, oM):
 # sample handling shared by the families
 # ---------------------------------------------------------------------------------
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _grid(cfg, vx):
     """Index and weight of ``vx`` on the speed grid (clamped at both ends)."""
     s = (vx - cfg[C_V0]) / cfg[C_DV]
-    last = int(cfg[C_NG]) - 1
+    last = np.int64(cfg[C_NG]) - 1
     if last == 0 or s <= 0.0:
         return 0, 0.0
     if s >= last:
         return last - 1, 1.0
-    i = int(s)
+    i = np.int64(s)
     return i, s - i
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _sample_valid(mem, cfg, t, vx, d, ay, r):
     if not (math.isfinite(t) and math.isfinite(vx)) or vx < cfg[C_VMIN]:
         return False
@@ -274,7 +188,7 @@ def _sample_valid(mem, cfg, t, vx, d, ay, r):
     return True
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _begin(mem, cfg, t):
     """Common start of a valid sample: returns ``(dt, restart, fixed)`` and records the time.
 
@@ -289,7 +203,7 @@ def _begin(mem, cfg, t):
     return dt, restart, fixed
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _finish(mem, cfg, w, ay, dt, restart, fixed, work, o):
     """Roll separation and output of one used sample: updates the held outputs.
 
@@ -302,8 +216,8 @@ def _finish(mem, cfg, w, ay, dt, restart, fixed, work, o):
     ``nr`` is 0 or 2) is advanced by its fixed-rate map when ``fixed``, else by
     the trapezoidal rule. ``work[o:]`` is scratch of at least ``nr`` floats.
     """
-    n = int(cfg[C_N])
-    nr = int(cfg[C_NR])
+    n = np.int64(cfg[C_N])
+    nr = np.int64(cfg[C_NR])
     oF = C_ROLL
     oG = oF + nr * nr
     oH = oG + nr
@@ -327,7 +241,9 @@ def _finish(mem, cfg, w, ay, dt, restart, fixed, work, o):
             mem[oz + i] = work[o + i]
     elif nr == 2:
         # trapezoidal rule, substeps, ay linear in time; (I - hh F)^-1 by its adjugate
-        nsub = max(1, int(math.ceil(dt / cfg[C_SUB] - 1e-9)))
+        nsub = np.int64(math.ceil(dt / cfg[C_SUB] - 1e-9))
+        if nsub < 1:
+            nsub = 1
         hh = 0.5 * (dt / nsub)
         f00 = cfg[oF]
         f01 = cfg[oF + 1]
@@ -355,7 +271,8 @@ def _finish(mem, cfg, w, ay, dt, restart, fixed, work, o):
     phi = cfg[oD] * ay
     for i in range(nr):
         phi += cfg[oH + i] * mem[oz + i]
-    wc = min(1.0, max(-1.0, w))
+    wc = w if w > -1.0 else -1.0        # min(1, max(-1, w)), NaN -> -1 as Python's
+    wc = wc if wc < 1.0 else 1.0
     theta = math.asin(wc)
     mem[M_W] = w
     mem[M_THETA] = theta
@@ -364,7 +281,7 @@ def _finish(mem, cfg, w, ay, dt, restart, fixed, work, o):
     return abs(w) <= cfg[C_WMAX]
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x):
     """Copy sample ``k``'s outputs and first ``n`` states from ``mem`` into the batch arrays."""
     out_valid[k] = ok
@@ -380,15 +297,15 @@ def _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
 # LPV observers
 # ---------------------------------------------------------------------------------
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _interp(tab, i, a, lo, hi, row):
     """``row[k] = tab[i, k] + a (tab[i+1, k] - tab[i, k])`` for ``lo <= k < hi`` (schedule at ``vx``)."""
-    i1 = min(i + 1, tab.shape[0] - 1)
+    i1 = i + 1 if i + 1 < tab.shape[0] else tab.shape[0] - 1
     for k in range(lo, hi):
         row[k] = tab[i, k] + a * (tab[i1, k] - tab[i, k])
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _lpv3(mem, tab, i, a, fixed, dt, max_sub, u0, u1, u2, work, o):
     """Three-state observers (PIF, PIO, Kalman), not restarting: advances ``xi`` and returns ``w``.
 
@@ -400,7 +317,7 @@ def _lpv3(mem, tab, i, a, fixed, dt, max_sub, u0, u1, u2, work, o):
     adjugate (the same map as an LU solve up to rounding, about 1e-16 relative).
     ``work[:18]`` receives the interpolated ``F, G`` (general path), ``work[o:o + 9]`` is scratch.
     """
-    i1 = min(i + 1, tab.shape[0] - 1)
+    i1 = i + 1 if i + 1 < tab.shape[0] else tab.shape[0] - 1
     x0 = mem[M_X]
     x1 = mem[M_X + 1]
     x2 = mem[M_X + 2]
@@ -426,7 +343,8 @@ def _lpv3(mem, tab, i, a, fixed, dt, max_sub, u0, u1, u2, work, o):
                     s += (tab[i, k] + a * (tab[i1, k] - tab[i, k])) * work[o + 3 * b + q]
             mem[M_X + p] = s
     else:
-        _interp(tab, i, a, 0, 18, work)     # F, G at their row offsets
+        for k in range(18):                 # F, G at their row offsets (_interp)
+            work[k] = tab[i, k] + a * (tab[i1, k] - tab[i, k])
         f00 = work[0]
         f01 = work[1]
         f02 = work[2]
@@ -445,7 +363,9 @@ def _lpv3(mem, tab, i, a, fixed, dt, max_sub, u0, u1, u2, work, o):
         g20 = work[15]
         g21 = work[16]
         g22 = work[17]
-        nsub = max(1, int(math.ceil(dt / max_sub - 1e-9)))
+        nsub = np.int64(math.ceil(dt / max_sub - 1e-9))
+        if nsub < 1:
+            nsub = 1
         hh = 0.5 * dt if nsub == 1 else 0.5 * (dt / nsub)
         m00 = 1.0 - hh * f00
         m01 = -hh * f01
@@ -495,7 +415,7 @@ def _lpv3(mem, tab, i, a, fixed, dt, max_sub, u0, u1, u2, work, o):
     return w
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _restart_state(mem, work, oJ, n, eta):
     """``xi = J eta`` (the observer's equilibrium) with ``J`` (n x 3) at ``work[oJ:]``.
 
@@ -510,7 +430,7 @@ def _restart_state(mem, work, oJ, n, eta):
         mem[M_X + p] = s
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _general_advance(mem, cfg, work, oG, oS, n, eta, dt):
     """General path: trapezoidal rule on ``F`` (at ``work[0:]``), ``G`` (at ``work[oG:]``) over ``dt``."""
     for q in range(NETA):
@@ -518,7 +438,7 @@ def _general_advance(mem, cfg, work, oG, oS, n, eta, dt):
     _tustin_flat(mem, M_X, n, work, 0, oG, NETA, mem, M_ETA, work, oS, dt, cfg[C_SUB], work, oS + NETA)
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _output(mem, work, oH, oD, n, eta):
     """``w = H xi + D eta`` (``H``, ``D`` at ``work[oH:]``, ``work[oD:]``); records ``eta`` as the previous inputs."""
     w = 0.0
@@ -530,7 +450,7 @@ def _output(mem, work, oH, oD, n, eta):
     return w
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cfunc_wrapper=True)
 def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     """One sample of a scheduled linear observer: returns ``(w, theta, phi_b, valid)``.
 
@@ -541,7 +461,7 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     """
     if not _sample_valid(mem, cfg, t, vx, d, ay, r):
         return mem[M_W], mem[M_THETA], mem[M_PHIB], False
-    n = int(cfg[C_N])
+    n = np.int64(cfg[C_N])
     i, a = _grid(cfg, vx)
     # row offsets (layout.lpv_row(n)); F at 0
     oG = n * n
@@ -596,11 +516,11 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
 def lpv_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
             out_x):
     """Batch version of :func:`lpv_step` (same arithmetic, sample by sample)."""
-    n = int(cfg[C_N])
+    n = np.int64(cfg[C_N])
     for k in range(t.shape[0]):
         ok = lpv_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
         _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
@@ -610,7 +530,7 @@ def lpv_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, ou
 # observers scheduled on speed and excitation
 # ---------------------------------------------------------------------------------
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
 def adaptive_step(mem, cfg, tab, work, t, vx, d, ay, r):
     r"""One sample of an observer scheduled on speed and excitation; returns ``(w, theta, phi_b, valid)``.
 
@@ -630,9 +550,9 @@ def adaptive_step(mem, cfg, tab, work, t, vx, d, ay, r):
     """
     if not _sample_valid(mem, cfg, t, vx, d, ay, r):
         return mem[M_W], mem[M_THETA], mem[M_PHIB], False
-    n = int(cfg[C_N])
-    nr = int(cfg[C_NR])
-    o = int(cfg[C_OFAM])          # layout.adaptive_block: E0, DE, NE, TAU, TF
+    n = np.int64(cfg[C_N])
+    nr = np.int64(cfg[C_NR])
+    o = np.int64(cfg[C_OFAM])          # layout.adaptive_block: E0, DE, NE, TAU, TF
     oe = M_X + n + nr             # layout.excitation_state: e, a_f
     eta = (d if cfg[C_USE] > 0 else 0.0, ay if cfg[C_USE + 1] > 0 else 0.0, r if cfg[C_USE + 2] > 0 else 0.0)
     dt, restart, _ = _begin(mem, cfg, t)
@@ -641,23 +561,24 @@ def adaptive_step(mem, cfg, tab, work, t, vx, d, ay, r):
         e = af
     else:
         af = mem[oe + 1] + (1.0 - math.exp(-dt / cfg[o + 4])) * (abs(ay) - mem[oe + 1])
-        e = max(af, mem[oe] * math.exp(-dt / cfg[o + 3]))
+        e = mem[oe] * math.exp(-dt / cfg[o + 3])
+        e = e if e > af else af               # max(af, e)
     mem[oe] = e
     mem[oe + 1] = af
     # bilinear interpolation of the row at (vx, e)
     iv, av = _grid(cfg, vx)
-    nv = int(cfg[C_NG])
-    ne = int(cfg[o + 2])
+    nv = np.int64(cfg[C_NG])
+    ne = np.int64(cfg[o + 2])
     se = (e - cfg[o]) / cfg[o + 1]
     if ne == 1 or se <= 0.0:
         ie, ae = 0, 0.0
     elif se >= ne - 1:
         ie, ae = ne - 2, 1.0
     else:
-        ie = int(se)
+        ie = np.int64(se)
         ae = se - ie
-    iv1 = min(iv + 1, nv - 1)
-    ie1 = min(ie + 1, ne - 1)
+    iv1 = iv + 1 if iv + 1 < nv else nv - 1
+    ie1 = ie + 1 if ie + 1 < ne else ne - 1
     r00 = iv * ne + ie
     r01 = iv * ne + ie1
     r10 = iv1 * ne + ie
@@ -680,11 +601,11 @@ def adaptive_step(mem, cfg, tab, work, t, vx, d, ay, r):
     return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
 def adaptive_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
                  out_x):
     """Batch version of :func:`adaptive_step` (same arithmetic, sample by sample)."""
-    n = int(cfg[C_N])
+    n = np.int64(cfg[C_N])
     for k in range(t.shape[0]):
         ok = adaptive_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
         _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
@@ -694,7 +615,7 @@ def adaptive_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phi
 # DFC
 # ---------------------------------------------------------------------------------
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
 def dfc_step(mem, cfg, tab, work, t, vx, d, ay, r):
     r"""One sample of the DFC estimator (returns ``(w, theta, phi_b, valid)``). ``tab`` rows: Haw0, Hrw0, Hau0, Hru0.
 
@@ -712,14 +633,15 @@ def dfc_step(mem, cfg, tab, work, t, vx, d, ay, r):
     if not _sample_valid(mem, cfg, t, vx, d, ay, r):
         return mem[M_W], mem[M_THETA], mem[M_PHIB], False
     i, a = _grid(cfg, vx)
-    i1 = min(i + 1, tab.shape[0] - 1)
+    i1 = i + 1 if i + 1 < tab.shape[0] else tab.shape[0] - 1
     haw = tab[i, 0] + a * (tab[i1, 0] - tab[i, 0])
     hrw = tab[i, 1] + a * (tab[i1, 1] - tab[i, 1])
     hau = tab[i, 2] + a * (tab[i1, 2] - tab[i, 2])
     hru = tab[i, 3] + a * (tab[i1, 3] - tab[i, 3])
     wv = (ay - vx * r) / cfg[C_G]
     dfc = (ay - hau * d) + vx * (r - hru * d) - (haw + vx * hrw) * wv
-    gated = wv * max(0.0, 1.0 - abs(dfc) / cfg[C_AREF])
+    gate = 1.0 - abs(dfc) / cfg[C_AREF]
+    gated = wv * (gate if gate > 0.0 else 0.0)
     dt, restart, fixed = _begin(mem, cfg, t)
     if restart:
         x = gated
@@ -728,7 +650,9 @@ def dfc_step(mem, cfg, tab, work, t, vx, d, ay, r):
         g0 = mem[M_GATED]
         f = -1.0 / cfg[C_TAU]
         gg = 1.0 / cfg[C_TAU]
-        nsub = max(1, int(math.ceil(dt / cfg[C_SUB] - 1e-9)))
+        nsub = np.int64(math.ceil(dt / cfg[C_SUB] - 1e-9))
+        if nsub < 1:
+            nsub = 1
         hh = 0.5 * (dt / nsub)
         m = 1.0 - hh * f
         for k in range(nsub):
@@ -741,7 +665,7 @@ def dfc_step(mem, cfg, tab, work, t, vx, d, ay, r):
     return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
 def dfc_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
             out_x):
     """Batch version of :func:`dfc_step`."""
@@ -754,92 +678,69 @@ def dfc_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, ou
 # PIF with the time-varying Riccati equation
 # --------------------------------------------------------------------------
 
-@njit(cache=True)
-def _riccati_views(cfg, mem):
-    n = int(cfg[C_N])
-    p = int(cfg[C_P])
-    nr = int(cfg[C_NR])
-    o = int(cfg[C_OFAM])      # layout.riccati_block
-    Rinv = cfg[o:o + p * p].reshape((p, p))
-    o += p * p
-    W = cfg[o:o + n * n].reshape((n, n))
-    o += n * n
-    Mneg = cfg[o:o + n * n].reshape((n, n))
-    P = mem[M_X + n + nr:M_X + n + nr + n * n].reshape((n, n))
-    return n, p, Rinv, W, Mneg, P
-
-
-@njit(cache=True)
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
 def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
     r"""One sample of the PIF with the Riccati ODE (paper eq 42-43); returns ``(w, theta, phi_b, valid)``.
 
     ``tab`` rows: A (n*n), B (n*3), C (p*n), Dy (p*3), J (n*3) where the
     innovation is ``Dy eta - C x``. ``cfg`` holds ``R^-1``, ``W = Ew Q Ew^T`` and
-    ``Mneg = th Lw^T S Lw``. Gain ``K = P C^T R^-1``;
+    ``Mneg = th Lw^T S Lw`` (:func:`roadbank.estimators.layout.riccati_block`). Gain ``K = P C^T R^-1``;
     :math:`\dot P = AP + PA^T + W - P(C^T R^{-1} C - \theta L^T S L)P`.
     States after the observer and roll states: P (n*n). If P stops being
     finite (no bounded solution for this ``th``) the sample is flagged invalid
     and P restarts from its initial value held in ``cfg`` (not reached with
     the default tuning).
+
+    All matrices are row-major blocks of the flat arrays (no array views):
+    ``work`` holds the interpolated row at its table offsets, then ``K``, ``F``,
+    ``G``, the Hamiltonian ``Hm`` (2n x 2n), its trapezoidal matrix ``Mw`` with
+    pivots, ``Z = [X; Y]`` (2n x n), ``X^T`` with pivots and a column buffer.
     """
     if not _sample_valid(mem, cfg, t, vx, d, ay, r):
         return mem[M_W], mem[M_THETA], mem[M_PHIB], False
-    n, p, Rinv, W, Mneg, P = _riccati_views(cfg, mem)
+    n = np.int64(cfg[C_N])
+    p = np.int64(cfg[C_P])
+    nr = np.int64(cfg[C_NR])
+    oR = np.int64(cfg[C_OFAM])      # layout.riccati_block: R^-1 (p*p), W (n*n), Mneg (n*n)
+    oW = oR + p * p
+    oMn = oW + n * n
+    oP = M_X + n + nr               # layout.riccati_p
+    # work: the row (A, B, C, Dy, J) at its table offsets, then the scratch blocks
+    oA = 0
+    oB = oA + n * n
+    oC = oB + n * NETA
+    oDy = oC + p * n
+    oJ = oDy + p * NETA
+    oK = oJ + n * NETA
+    oF = oK + n * p
+    oG = oF + n * n
+    oHm = oG + n * NETA
+    oMw = oHm + 4 * n * n
+    opiv = oMw + 4 * n * n
+    oZ = opiv + 2 * n
+    oXt = oZ + 2 * n * n
+    opx = oXt + n * n
+    ocol = opx + n                  # 2n (>= 2 * NETA) floats
+    oe = ocol + 2 * n + 2 * NETA    # current inputs eta (3)
+    oS = oe + NETA                  # scratch of _finish
     i, a = _grid(cfg, vx)
-    o = 0
-    A = work[o:o + n * n].reshape((n, n))
-    o += n * n
-    B = work[o:o + n * NETA].reshape((n, NETA))
-    o += n * NETA
-    C = work[o:o + p * n].reshape((p, n))
-    o += p * n
-    Dy = work[o:o + p * NETA].reshape((p, NETA))
-    o += p * NETA
-    J = work[o:o + n * NETA].reshape((n, NETA))
-    o += n * NETA
-    K = work[o:o + n * p].reshape((n, p))
-    o += n * p
-    F = work[o:o + n * n].reshape((n, n))
-    o += n * n
-    G = work[o:o + n * NETA].reshape((n, NETA))
-    o += n * NETA
-    Hm = work[o:o + 4 * n * n].reshape((2 * n, 2 * n))
-    o += 4 * n * n
-    Mw = work[o:o + 4 * n * n].reshape((2 * n, 2 * n))
-    o += 4 * n * n
-    Z = work[o:o + 2 * n * n].reshape((2 * n, n))
-    o += 2 * n * n
-    col = work[o:o + 2 * n]
-    o += 2 * n
-    e1 = work[o:o + NETA]
-    o += NETA
-    piv = work[o:o + 2 * n]
-    o += 2 * n
-    er = work[o:o + 2]
-    o += 2
-    rhs = work[o:o + n]
-    o += n
-    Xt = work[o:o + n * n].reshape((n, n))
-    o += n * n
-    e1[0] = d if cfg[C_USE] > 0 else 0.0
-    e1[1] = ay if cfg[C_USE + 1] > 0 else 0.0
-    e1[2] = r if cfg[C_USE + 2] > 0 else 0.0
-    e0 = mem[M_ETA:M_ETA + NETA]
-    x = mem[M_X:M_X + n]
-    k = _lerp(tab, i, a, 0, A)
-    k = _lerp(tab, i, a, k, B)
-    k = _lerp(tab, i, a, k, C)
-    k = _lerp(tab, i, a, k, Dy)
-    _lerp(tab, i, a, k, J)
+    i1 = i + 1 if i + 1 < tab.shape[0] else tab.shape[0] - 1
+    for k in range(oK):
+        work[k] = tab[i, k] + a * (tab[i1, k] - tab[i, k])
+    work[oe] = d if cfg[C_USE] > 0 else 0.0
+    work[oe + 1] = ay if cfg[C_USE + 1] > 0 else 0.0
+    work[oe + 2] = r if cfg[C_USE + 2] > 0 else 0.0
     dt, restart, _ = _begin(mem, cfg, t)
     if restart:
         for q in range(n):
             s = 0.0
             for j in range(NETA):
-                s += J[q, j] * e1[j]
-            x[q] = s
+                s += work[oJ + q * NETA + j] * work[oe + j]
+            mem[M_X + q] = s
     else:
-        nsub = max(1, int(math.ceil(dt / cfg[C_SUB] - 1e-9)))
+        nsub = np.int64(math.ceil(dt / cfg[C_SUB] - 1e-9))
+        if nsub < 1:
+            nsub = 1
         h = dt / nsub
         for sub in range(nsub):
             # gain from the current P, then the state over the substep
@@ -848,91 +749,91 @@ def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
                     s = 0.0
                     for l in range(n):
                         for mm in range(p):
-                            s += P[q, l] * C[mm, l] * Rinv[mm, j]
-                    K[q, j] = s
+                            s += mem[oP + q * n + l] * work[oC + mm * n + l] * cfg[oR + mm * p + j]
+                    work[oK + q * p + j] = s
             for q in range(n):
                 for j in range(n):
-                    s = A[q, j]
+                    s = work[oA + q * n + j]
                     for l in range(p):
-                        s -= K[q, l] * C[l, j]
-                    F[q, j] = s
+                        s -= work[oK + q * p + l] * work[oC + l * n + j]
+                    work[oF + q * n + j] = s
                 for j in range(NETA):
-                    s = B[q, j]
+                    s = work[oB + q * NETA + j]
                     for l in range(p):
-                        s += K[q, l] * Dy[l, j]
-                    G[q, j] = s
+                        s += work[oK + q * p + l] * work[oDy + l * NETA + j]
+                    work[oG + q * NETA + j] = s
             a0 = sub / nsub
             a1 = (sub + 1.0) / nsub
             for j in range(NETA):
-                col[j] = e0[j] + a0 * (e1[j] - e0[j])
-                col[NETA + j] = e0[j] + a1 * (e1[j] - e0[j])
-            _tustin(x, F, G, col[:NETA], col[NETA:2 * NETA], h, h, Mw, piv, rhs)
+                work[ocol + j] = mem[M_ETA + j] + a0 * (work[oe + j] - mem[M_ETA + j])
+                work[ocol + NETA + j] = mem[M_ETA + j] + a1 * (work[oe + j] - mem[M_ETA + j])
+            _tustin_flat(mem, M_X, n, work, oF, oG, NETA, work, ocol, work, ocol + NETA, h, h, work, oMw)
             # Riccati via the Hamiltonian: Z' = Hm Z, Hm = [[-A^T, M], [W, A]], Z = [I; P]
+            m2 = 2 * n
             for q in range(n):
                 for j in range(n):
                     mpos = 0.0
                     for l in range(p):
                         for mm in range(p):
-                            mpos += C[l, q] * Rinv[l, mm] * C[mm, j]
-                    Hm[q, j] = -A[j, q]
-                    Hm[q, n + j] = mpos - Mneg[q, j]
-                    Hm[n + q, j] = W[q, j]
-                    Hm[n + q, n + j] = A[q, j]
-            for q in range(2 * n):
-                for j in range(2 * n):
-                    Mw[q, j] = -0.5 * h * Hm[q, j]
-                Mw[q, q] += 1.0
-            _lu(Mw, piv, 2 * n)
+                            mpos += work[oC + l * n + q] * cfg[oR + l * p + mm] * work[oC + mm * n + j]
+                    work[oHm + q * m2 + j] = -work[oA + j * n + q]
+                    work[oHm + q * m2 + n + j] = mpos - cfg[oMn + q * n + j]
+                    work[oHm + (n + q) * m2 + j] = cfg[oW + q * n + j]
+                    work[oHm + (n + q) * m2 + n + j] = work[oA + q * n + j]
+            for q in range(m2):
+                for j in range(m2):
+                    work[oMw + q * m2 + j] = -0.5 * h * work[oHm + q * m2 + j]
+                work[oMw + q * m2 + q] += 1.0
+            _lu_flat(work, oMw, work, opiv, m2)
             for j in range(n):
-                for q in range(2 * n):
-                    zq = 1.0 if q == j else 0.0
+                for q in range(m2):
                     if q >= n:
-                        zq = P[q - n, j]
-                    col[q] = zq
-                for q in range(2 * n):
-                    s = col[q]
-                    for l in range(2 * n):
-                        zl = (1.0 if l == j else 0.0) if l < n else P[l - n, j]
-                        s += 0.5 * h * Hm[q, l] * zl
-                    Z[q, j] = s
-            for j in range(n):
-                for q in range(2 * n):
-                    col[q] = Z[q, j]
-                _lu_solve(Mw, piv, col, 2 * n)
-                for q in range(2 * n):
-                    Z[q, j] = col[q]
+                        zq = mem[oP + (q - n) * n + j]
+                    else:
+                        zq = 1.0 if q == j else 0.0
+                    s = zq
+                    for l in range(m2):
+                        if l < n:
+                            zl = 1.0 if l == j else 0.0
+                        else:
+                            zl = mem[oP + (l - n) * n + j]
+                        s += 0.5 * h * work[oHm + q * m2 + l] * zl
+                    work[ocol + q] = s
+                _lu_solve_flat(work, oMw, work, opiv, work, ocol, m2)
+                for q in range(m2):
+                    work[oZ + q * n + j] = work[ocol + q]
             # P = Y X^-1  <=>  X^T P^T = Y^T ; P symmetric
             for q in range(n):
                 for j in range(n):
-                    Xt[q, j] = Z[j, q]
-            _lu(Xt, piv, n)
+                    work[oXt + q * n + j] = work[oZ + j * n + q]
+            _lu_flat(work, oXt, work, opx, n)
             for j in range(n):
                 for q in range(n):
-                    col[q] = Z[n + j, q]
-                _lu_solve(Xt, piv, col, n)
+                    work[ocol + q] = work[oZ + (n + j) * n + q]
+                _lu_solve_flat(work, oXt, work, opx, work, ocol, n)
                 for q in range(n):
-                    F[j, q] = col[q]
+                    work[oF + j * n + q] = work[ocol + q]
             ok = True
             for q in range(n):
                 for j in range(n):
-                    v = 0.5 * (F[q, j] + F[j, q])
+                    v = 0.5 * (work[oF + q * n + j] + work[oF + j * n + q])
                     if not math.isfinite(v):
                         ok = False
-                    P[q, j] = v
+                    mem[oP + q * n + j] = v
             if not ok:
                 return mem[M_W], mem[M_THETA], mem[M_PHIB], False
-    w = x[n - 1]
+    w = mem[M_X + n - 1]
     for q in range(NETA):
-        e0[q] = e1[q]
-    ok = _finish(mem, cfg, w, ay, dt, restart, False, work, o)
+        mem[M_ETA + q] = work[oe + q]
+    ok = _finish(mem, cfg, w, ay, dt, restart, False, work, oS)
     return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
 def riccati_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
                 out_x):
     """Batch version of :func:`riccati_step` (``work``: scratch as for the step)."""
-    n = int(cfg[C_N])
+    n = np.int64(cfg[C_N])
     for k in range(t.shape[0]):
         ok = riccati_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
         _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
