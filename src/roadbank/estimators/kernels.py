@@ -679,8 +679,9 @@ def dfc_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, ou
 # --------------------------------------------------------------------------
 
 @njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
-def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
-    r"""One sample of the PIF with the Riccati ODE (paper eq 42-43); returns ``(w, theta, phi_b, valid)``.
+def riccati_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
+                out_x):
+    r"""The PIF with the Riccati ODE (paper eq 42-43) over a batch of samples (outputs as :func:`lpv_run`).
 
     ``tab`` rows: A (n*n), B (n*3), C (p*n), Dy (p*3), J (n*3) where the
     innovation is ``Dy eta - C x``. ``cfg`` holds ``R^-1``, ``W = Ew Q Ew^T`` and
@@ -695,9 +696,11 @@ def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
     ``work`` holds the interpolated row at its table offsets, then ``K``, ``F``,
     ``G``, the Hamiltonian ``Hm`` (2n x 2n), its trapezoidal matrix ``Mw`` with
     pivots, ``Z = [X; Y]`` (2n x n), ``X^T`` with pivots and a column buffer.
+
+    The whole recursion is written out in this one function: it is the only compiled
+    code of the family (:func:`riccati_step` runs it on one-sample arrays), which halves
+    the family's compile time; the variant is not latency-critical (about 2 us per sample).
     """
-    if not _sample_valid(mem, cfg, t, vx, d, ay, r):
-        return mem[M_W], mem[M_THETA], mem[M_PHIB], False
     n = np.int64(cfg[C_N])
     p = np.int64(cfg[C_P])
     nr = np.int64(cfg[C_NR])
@@ -723,117 +726,125 @@ def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
     ocol = opx + n                  # 2n (>= 2 * NETA) floats
     oe = ocol + 2 * n + 2 * NETA    # current inputs eta (3)
     oS = oe + NETA                  # scratch of _finish
-    i, a = _grid(cfg, vx)
-    i1 = i + 1 if i + 1 < tab.shape[0] else tab.shape[0] - 1
-    for k in range(oK):
-        work[k] = tab[i, k] + a * (tab[i1, k] - tab[i, k])
-    work[oe] = d if cfg[C_USE] > 0 else 0.0
-    work[oe + 1] = ay if cfg[C_USE + 1] > 0 else 0.0
-    work[oe + 2] = r if cfg[C_USE + 2] > 0 else 0.0
-    dt, restart, _ = _begin(mem, cfg, t)
-    if restart:
-        for q in range(n):
-            s = 0.0
-            for j in range(NETA):
-                s += work[oJ + q * NETA + j] * work[oe + j]
-            mem[M_X + q] = s
-    else:
-        nsub = np.int64(math.ceil(dt / cfg[C_SUB] - 1e-9))
-        if nsub < 1:
-            nsub = 1
-        h = dt / nsub
-        for sub in range(nsub):
-            # gain from the current P, then the state over the substep
-            for q in range(n):
-                for j in range(p):
-                    s = 0.0
-                    for l in range(n):
-                        for mm in range(p):
-                            s += mem[oP + q * n + l] * work[oC + mm * n + l] * cfg[oR + mm * p + j]
-                    work[oK + q * p + j] = s
-            for q in range(n):
-                for j in range(n):
-                    s = work[oA + q * n + j]
-                    for l in range(p):
-                        s -= work[oK + q * p + l] * work[oC + l * n + j]
-                    work[oF + q * n + j] = s
-                for j in range(NETA):
-                    s = work[oB + q * NETA + j]
-                    for l in range(p):
-                        s += work[oK + q * p + l] * work[oDy + l * NETA + j]
-                    work[oG + q * NETA + j] = s
-            a0 = sub / nsub
-            a1 = (sub + 1.0) / nsub
-            for j in range(NETA):
-                work[ocol + j] = mem[M_ETA + j] + a0 * (work[oe + j] - mem[M_ETA + j])
-                work[ocol + NETA + j] = mem[M_ETA + j] + a1 * (work[oe + j] - mem[M_ETA + j])
-            _tustin_flat(mem, M_X, n, work, oF, oG, NETA, work, ocol, work, ocol + NETA, h, h, work, oMw)
-            # Riccati via the Hamiltonian: Z' = Hm Z, Hm = [[-A^T, M], [W, A]], Z = [I; P]
-            m2 = 2 * n
-            for q in range(n):
-                for j in range(n):
-                    mpos = 0.0
-                    for l in range(p):
-                        for mm in range(p):
-                            mpos += work[oC + l * n + q] * cfg[oR + l * p + mm] * work[oC + mm * n + j]
-                    work[oHm + q * m2 + j] = -work[oA + j * n + q]
-                    work[oHm + q * m2 + n + j] = mpos - cfg[oMn + q * n + j]
-                    work[oHm + (n + q) * m2 + j] = cfg[oW + q * n + j]
-                    work[oHm + (n + q) * m2 + n + j] = work[oA + q * n + j]
-            for q in range(m2):
-                for j in range(m2):
-                    work[oMw + q * m2 + j] = -0.5 * h * work[oHm + q * m2 + j]
-                work[oMw + q * m2 + q] += 1.0
-            _lu_flat(work, oMw, work, opiv, m2)
-            for j in range(n):
-                for q in range(m2):
-                    if q >= n:
-                        zq = mem[oP + (q - n) * n + j]
-                    else:
-                        zq = 1.0 if q == j else 0.0
-                    s = zq
-                    for l in range(m2):
-                        if l < n:
-                            zl = 1.0 if l == j else 0.0
-                        else:
-                            zl = mem[oP + (l - n) * n + j]
-                        s += 0.5 * h * work[oHm + q * m2 + l] * zl
-                    work[ocol + q] = s
-                _lu_solve_flat(work, oMw, work, opiv, work, ocol, m2)
-                for q in range(m2):
-                    work[oZ + q * n + j] = work[ocol + q]
-            # P = Y X^-1  <=>  X^T P^T = Y^T ; P symmetric
-            for q in range(n):
-                for j in range(n):
-                    work[oXt + q * n + j] = work[oZ + j * n + q]
-            _lu_flat(work, oXt, work, opx, n)
-            for j in range(n):
-                for q in range(n):
-                    work[ocol + q] = work[oZ + (n + j) * n + q]
-                _lu_solve_flat(work, oXt, work, opx, work, ocol, n)
-                for q in range(n):
-                    work[oF + j * n + q] = work[ocol + q]
-            ok = True
-            for q in range(n):
-                for j in range(n):
-                    v = 0.5 * (work[oF + q * n + j] + work[oF + j * n + q])
-                    if not math.isfinite(v):
-                        ok = False
-                    mem[oP + q * n + j] = v
-            if not ok:
-                return mem[M_W], mem[M_THETA], mem[M_PHIB], False
-    w = mem[M_X + n - 1]
-    for q in range(NETA):
-        mem[M_ETA + q] = work[oe + q]
-    ok = _finish(mem, cfg, w, ay, dt, restart, False, work, oS)
-    return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
-
-
-@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
-def riccati_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
-                out_x):
-    """Batch version of :func:`riccati_step` (``work``: scratch as for the step)."""
-    n = np.int64(cfg[C_N])
     for k in range(t.shape[0]):
-        ok = riccati_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
+        vxk = vx[k]
+        if not _sample_valid(mem, cfg, t[k], vxk, d[k], ay[k], r[k]):
+            _store(mem, k, n, False, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
+            continue
+        i, a = _grid(cfg, vxk)
+        i1 = i + 1 if i + 1 < tab.shape[0] else tab.shape[0] - 1
+        for c in range(oK):
+            work[c] = tab[i, c] + a * (tab[i1, c] - tab[i, c])
+        work[oe] = d[k] if cfg[C_USE] > 0 else 0.0
+        work[oe + 1] = ay[k] if cfg[C_USE + 1] > 0 else 0.0
+        work[oe + 2] = r[k] if cfg[C_USE + 2] > 0 else 0.0
+        dt, restart, _ = _begin(mem, cfg, t[k])
+        ok = True
+        if restart:
+            for q in range(n):
+                s = 0.0
+                for j in range(NETA):
+                    s += work[oJ + q * NETA + j] * work[oe + j]
+                mem[M_X + q] = s
+        else:
+            nsub = np.int64(math.ceil(dt / cfg[C_SUB] - 1e-9))
+            if nsub < 1:
+                nsub = 1
+            h = dt / nsub
+            for sub in range(nsub):
+                # gain from the current P, then the state over the substep
+                for q in range(n):
+                    for j in range(p):
+                        s = 0.0
+                        for l in range(n):
+                            for mm in range(p):
+                                s += mem[oP + q * n + l] * work[oC + mm * n + l] * cfg[oR + mm * p + j]
+                        work[oK + q * p + j] = s
+                for q in range(n):
+                    for j in range(n):
+                        s = work[oA + q * n + j]
+                        for l in range(p):
+                            s -= work[oK + q * p + l] * work[oC + l * n + j]
+                        work[oF + q * n + j] = s
+                    for j in range(NETA):
+                        s = work[oB + q * NETA + j]
+                        for l in range(p):
+                            s += work[oK + q * p + l] * work[oDy + l * NETA + j]
+                        work[oG + q * NETA + j] = s
+                a0 = sub / nsub
+                a1 = (sub + 1.0) / nsub
+                for j in range(NETA):
+                    work[ocol + j] = mem[M_ETA + j] + a0 * (work[oe + j] - mem[M_ETA + j])
+                    work[ocol + NETA + j] = mem[M_ETA + j] + a1 * (work[oe + j] - mem[M_ETA + j])
+                _tustin_flat(mem, M_X, n, work, oF, oG, NETA, work, ocol, work, ocol + NETA, h, h, work, oMw)
+                # Riccati via the Hamiltonian: Z' = Hm Z, Hm = [[-A^T, M], [W, A]], Z = [I; P]
+                m2 = 2 * n
+                for q in range(n):
+                    for j in range(n):
+                        mpos = 0.0
+                        for l in range(p):
+                            for mm in range(p):
+                                mpos += work[oC + l * n + q] * cfg[oR + l * p + mm] * work[oC + mm * n + j]
+                        work[oHm + q * m2 + j] = -work[oA + j * n + q]
+                        work[oHm + q * m2 + n + j] = mpos - cfg[oMn + q * n + j]
+                        work[oHm + (n + q) * m2 + j] = cfg[oW + q * n + j]
+                        work[oHm + (n + q) * m2 + n + j] = work[oA + q * n + j]
+                for q in range(m2):
+                    for j in range(m2):
+                        work[oMw + q * m2 + j] = -0.5 * h * work[oHm + q * m2 + j]
+                    work[oMw + q * m2 + q] += 1.0
+                _lu_flat(work, oMw, work, opiv, m2)
+                for j in range(n):
+                    for q in range(m2):
+                        if q >= n:
+                            zq = mem[oP + (q - n) * n + j]
+                        else:
+                            zq = 1.0 if q == j else 0.0
+                        s = zq
+                        for l in range(m2):
+                            if l < n:
+                                zl = 1.0 if l == j else 0.0
+                            else:
+                                zl = mem[oP + (l - n) * n + j]
+                            s += 0.5 * h * work[oHm + q * m2 + l] * zl
+                        work[ocol + q] = s
+                    _lu_solve_flat(work, oMw, work, opiv, work, ocol, m2)
+                    for q in range(m2):
+                        work[oZ + q * n + j] = work[ocol + q]
+                # P = Y X^-1  <=>  X^T P^T = Y^T ; P symmetric
+                for q in range(n):
+                    for j in range(n):
+                        work[oXt + q * n + j] = work[oZ + j * n + q]
+                _lu_flat(work, oXt, work, opx, n)
+                for j in range(n):
+                    for q in range(n):
+                        work[ocol + q] = work[oZ + (n + j) * n + q]
+                    _lu_solve_flat(work, oXt, work, opx, work, ocol, n)
+                    for q in range(n):
+                        work[oF + j * n + q] = work[ocol + q]
+                ok = True
+                for q in range(n):
+                    for j in range(n):
+                        v = 0.5 * (work[oF + q * n + j] + work[oF + j * n + q])
+                        if not math.isfinite(v):
+                            ok = False
+                        mem[oP + q * n + j] = v
+                if not ok:
+                    break
+        if ok:          # P finite: record the inputs, separate the roll
+            for q in range(NETA):
+                mem[M_ETA + q] = work[oe + q]
+            ok = _finish(mem, cfg, mem[M_X + n - 1], ay[k], dt, restart, False, work, oS)
         _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
+
+
+def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
+    """One sample of :func:`riccati_run`; returns ``(w, theta, phi_b, valid)`` (Python: one-sample arrays)."""
+    n = np.int64(cfg[C_N])
+    inp = np.array([t, vx, d, ay, r], dtype=np.float64)
+    inp.flags.writeable = False        # as Signals' arrays: the same compiled version as run()
+    out = np.empty((4, 1))
+    valid = np.empty(1, dtype=np.bool_)
+    riccati_run(mem, cfg, tab, work, inp[0:1], inp[1:2], inp[2:3], inp[3:4], inp[4:5], out[0], out[1], out[2],
+                out[3], valid, np.empty((1, max(n, 2))))
+    return float(out[0, 0]), float(out[1, 0]), float(out[2, 0]), bool(valid[0])
