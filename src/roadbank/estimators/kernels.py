@@ -516,14 +516,193 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
 
 
+@njit(cache=True, _nrt=False, error_model="numpy", no_cpython_wrapper=True, no_cfunc_wrapper=True)
+def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x, k0):
+    """The fixed-rate path of a three-state observer over consecutive samples from ``k0``.
+
+    Runs while the samples are valid and exactly one fixed interval apart (within
+    ``DT_REL_TOL``) and returns the index of the first sample it did not take
+    (the caller hands that one to :func:`lpv_step`). The same arithmetic, in the
+    same order, as :func:`lpv_step` on that path (so ``run()`` and ``step()`` agree
+    bit for bit), with what is constant over a log read once: the flags, the
+    grid, the roll model, and the state kept in registers between samples
+    (written back to ``mem`` on return). The estimator must be initialised
+    (``mem[M_INIT] > 0``), ``n == 3``, ``nr`` 0 or 2, ``cfg[C_DTFIX] > 0``.
+    """
+    N = t.shape[0]
+    nr = np.int64(cfg[C_NR])
+    h = cfg[C_DTFIX]
+    htol = cfg[C_DTOL] * h
+    gap = cfg[C_GAP]
+    vmin = cfg[C_VMIN]
+    use_d = cfg[C_USE] > 0
+    use_ay = cfg[C_USE + 1] > 0
+    use_r = cfg[C_USE + 2] > 0
+    wmax = cfg[C_WMAX]
+    v0 = cfg[C_V0]
+    dv = cfg[C_DV]
+    last = np.int64(cfg[C_NG]) - 1
+    i1max = tab.shape[0] - 1
+    # roll block (layout.roll_block(nr)); zeros when there is no roll model
+    oD = C_ROLL + nr * nr + 2 * nr
+    rD = cfg[oD]
+    rH0 = rH1 = rP00 = rP01 = rP10 = rP11 = rA0 = rA1 = rB0 = rB1 = 0.0
+    if nr == 2:
+        rH0 = cfg[oD - 2]
+        rH1 = cfg[oD - 1]
+        oPhi = oD + 1 + nr
+        rP00 = cfg[oPhi]
+        rP01 = cfg[oPhi + 1]
+        rP10 = cfg[oPhi + 2]
+        rP11 = cfg[oPhi + 3]
+        rA0 = cfg[oPhi + 4]
+        rA1 = cfg[oPhi + 5]
+        rB0 = cfg[oPhi + 6]
+        rB1 = cfg[oPhi + 7]
+    oz = M_X + 3
+    z0 = mem[oz] if nr == 2 else 0.0
+    z1 = mem[oz + 1] if nr == 2 else 0.0
+    x0 = mem[M_X]
+    x1 = mem[M_X + 1]
+    x2 = mem[M_X + 2]
+    p0 = mem[M_ETA]
+    p1 = mem[M_ETA + 1]
+    p2 = mem[M_ETA + 2]
+    ay0 = mem[M_AY]
+    tlast = mem[M_TLAST]
+    w = mem[M_W]
+    theta = mem[M_THETA]
+    phi = mem[M_PHI]
+    k = k0
+    while k < N:
+        tk = t[k]
+        vk = vx[k]
+        dk = d[k]
+        ak = ay[k]
+        rk = r[k]
+        # _sample_valid, then _begin's restart and fixed-interval tests
+        if not (math.isfinite(tk) and math.isfinite(vk)) or vk < vmin:
+            break
+        if (use_d and not math.isfinite(dk)) or (use_ay and not math.isfinite(ak)) \
+                or (use_r and not math.isfinite(rk)):
+            break
+        if tk <= tlast:
+            break
+        dt = tk - tlast
+        if dt > gap or not abs(dt - h) <= htol:
+            break
+        tlast = tk
+        u0 = dk if use_d else 0.0
+        u1 = ak if use_ay else 0.0
+        u2 = rk if use_r else 0.0
+        # _grid
+        s = (vk - v0) / dv
+        if last == 0 or s <= 0.0:
+            i = 0
+            a = 0.0
+        elif s >= last:
+            i = last - 1
+            a = 1.0
+        else:
+            i = np.int64(s)
+            a = s - i
+        i1 = i + 1 if i + 1 < i1max else i1max
+        # _lpv3, fixed: xi = Phi xi + Gam0 eta- + Gam1 eta (layout.lpv_row(3): Phi 33, Gam0 42, Gam1 51)
+        y0 = 0.0
+        y1 = 0.0
+        y2 = 0.0
+        for b in range(3):
+            for q in range(3):
+                v = (x0 if q == 0 else (x1 if q == 1 else x2)) if b == 0 else (
+                    (p0 if q == 0 else (p1 if q == 1 else p2)) if b == 1 else (u0 if q == 0 else (u1 if q == 1 else u2)))
+                kk = 33 + 9 * b + q
+                y0 += (tab[i, kk] + a * (tab[i1, kk] - tab[i, kk])) * v
+                kk += 3
+                y1 += (tab[i, kk] + a * (tab[i1, kk] - tab[i, kk])) * v
+                kk += 3
+                y2 += (tab[i, kk] + a * (tab[i1, kk] - tab[i, kk])) * v
+        x0 = y0
+        x1 = y1
+        x2 = y2
+        p0 = u0
+        p1 = u1
+        p2 = u2
+        # w = H xi + D eta (H 18, D 21)
+        w = 0.0
+        w += (tab[i, 18] + a * (tab[i1, 18] - tab[i, 18])) * x0
+        w += (tab[i, 21] + a * (tab[i1, 21] - tab[i, 21])) * u0
+        w += (tab[i, 19] + a * (tab[i1, 19] - tab[i, 19])) * x1
+        w += (tab[i, 22] + a * (tab[i1, 22] - tab[i, 22])) * u1
+        w += (tab[i, 20] + a * (tab[i1, 20] - tab[i, 20])) * x2
+        w += (tab[i, 23] + a * (tab[i1, 23] - tab[i, 23])) * u2
+        # _finish, fixed: roll model and output
+        if nr == 2:
+            s0 = rA0 * ay0 + rB0 * ak
+            s0 += rP00 * z0
+            s0 += rP01 * z1
+            s1 = rA1 * ay0 + rB1 * ak
+            s1 += rP10 * z0
+            s1 += rP11 * z1
+            z0 = s0
+            z1 = s1
+        ay0 = ak
+        phi = rD * ak
+        if nr == 2:
+            phi += rH0 * z0
+            phi += rH1 * z1
+        wc = w if w > -1.0 else -1.0
+        wc = wc if wc < 1.0 else 1.0
+        theta = math.asin(wc)
+        out_w[k] = w
+        out_theta[k] = theta
+        out_phib[k] = theta - phi
+        out_phi[k] = phi
+        out_valid[k] = abs(w) <= wmax
+        out_x[k, 0] = x0
+        out_x[k, 1] = x1
+        out_x[k, 2] = x2
+        k += 1
+    if k > k0:
+        mem[M_TLAST] = tlast
+        mem[M_X] = x0
+        mem[M_X + 1] = x1
+        mem[M_X + 2] = x2
+        if nr == 2:
+            mem[oz] = z0
+            mem[oz + 1] = z1
+        mem[M_ETA] = p0
+        mem[M_ETA + 1] = p1
+        mem[M_ETA + 2] = p2
+        mem[M_AY] = ay0
+        mem[M_W] = w
+        mem[M_THETA] = theta
+        mem[M_PHI] = phi
+        mem[M_PHIB] = theta - phi
+    return k
+
+
 @njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
 def lpv_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
             out_x):
-    """Batch version of :func:`lpv_step` (same arithmetic, sample by sample)."""
+    """Batch version of :func:`lpv_step` (same arithmetic, sample by sample).
+
+    Runs of samples on the fixed-rate path of a three-state observer go through
+    :func:`_lpv3_fixed_run`; every other sample through :func:`lpv_step`.
+    """
     n = np.int64(cfg[C_N])
-    for k in range(t.shape[0]):
+    nr = np.int64(cfg[C_NR])
+    fast = n == 3 and (nr == 0 or nr == 2) and cfg[C_DTFIX] > 0.0
+    N = t.shape[0]
+    k = 0
+    while k < N:
+        if fast and mem[M_INIT] > 0.0:
+            k = _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
+                                out_x, k)
+            if k >= N:
+                break
         ok = lpv_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
         _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
+        k += 1
 
 
 # ---------------------------------------------------------------------------------
