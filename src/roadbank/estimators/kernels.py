@@ -60,6 +60,7 @@ Compile time: every function is compiled once as a normal numba function
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 
 import numpy as np
 from numba import njit
@@ -67,6 +68,14 @@ from numba import njit
 from .layout import (C_AREF, C_DTFIX, C_DTOL, C_DV, C_G, C_GAP, C_N, C_NG, C_NR, C_OFAM, C_P, C_ROLL,  # noqa: F401
                      C_SUB, C_TAU, C_USE, C_V0, C_VMIN, C_WMAX, M_AY, M_ETA, M_GATED, M_INIT, M_PHI, M_PHIB,
                      M_THETA, M_TLAST, M_W, M_X, NETA)
+
+# asin(x) = x + x^3 (c_1 + c_2 x^2 + ... + c_12 x^22) + R for |x| <= ASIN_POLY_MAX, the Taylor
+# coefficients c_k = (2k)! / (4^k (k!)^2 (2k+1)) (exact fractions, rounded once);
+# 0 <= R <= c_13 x^27 / (1 - x^2) <= 4.9e-17 rad at |x| = 0.3 (the series' terms are positive).
+ASIN_POLY_MAX = 0.3
+(_AS1, _AS2, _AS3, _AS4, _AS5, _AS6, _AS7, _AS8, _AS9, _AS10, _AS11, _AS12) = (
+    float(Fraction(math.factorial(2 * k), 4 ** k * math.factorial(k) ** 2 * (2 * k + 1))) for k in range(1, 13))
+
 
 # ---------------------------------------------------------------------------------
 # linear algebra on small matrices
@@ -160,10 +169,33 @@ def _tustin_flat(x, ox, n, A, oF, oG, m, E0, oe0, E1, oe1, dt, max_sub, W, oM):
 # sample handling shared by the families
 # ---------------------------------------------------------------------------------
 
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cfunc_wrapper=True)
+def asin_fast(x):
+    """``asin(x)`` (rad) for ``|x| <= 1``: a polynomial for ``|x| <= ASIN_POLY_MAX`` (0.3, i.e. 17.5 deg), libm beyond.
+
+    The polynomial is the Taylor series to ``x^23`` (Estrin's scheme): truncation
+    below 4.9e-17 rad, so with rounding the result is within 1 ulp of the
+    correctly rounded angle (tests/test_kernels.py checks 2 ulp against libm on a dense
+    grid). About 2 ns instead of libm's 7 ns per call; road bank plus body roll
+    is almost always inside the polynomial's range.
+    """
+    if not abs(x) <= ASIN_POLY_MAX:
+        return math.asin(x)
+    u = x * x
+    u2 = u * u
+    u4 = u2 * u2
+    p = (((_AS1 + _AS2 * u) + (_AS3 + _AS4 * u) * u2) + ((_AS5 + _AS6 * u) + (_AS7 + _AS8 * u) * u2) * u4
+         + ((_AS9 + _AS10 * u) + (_AS11 + _AS12 * u) * u2) * (u4 * u4))
+    return x + x * u * p
+
+
 @njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _grid(cfg, vx):
-    """Index and weight of ``vx`` on the speed grid (clamped at both ends)."""
-    s = (vx - cfg[C_V0]) / cfg[C_DV]
+    """Index and weight of ``vx`` on the speed grid (clamped at both ends).
+
+    ``(vx - v0) * (1/dv)``: a batch loop computes ``1/dv`` once (:func:`_lpv3_fixed_run`), bit for bit the same.
+    """
+    s = (vx - cfg[C_V0]) * (1.0 / cfg[C_DV])
     last = np.int64(cfg[C_NG]) - 1
     if last == 0 or s <= 0.0:
         return 0, 0.0
@@ -273,7 +305,7 @@ def _finish(mem, cfg, w, ay, dt, restart, fixed, work, o):
         phi += cfg[oH + i] * mem[oz + i]
     wc = w if w > -1.0 else -1.0        # min(1, max(-1, w)), NaN -> -1 as Python's
     wc = wc if wc < 1.0 else 1.0
-    theta = math.asin(wc)
+    theta = asin_fast(wc)
     mem[M_W] = w
     mem[M_THETA] = theta
     mem[M_PHI] = phi
@@ -305,14 +337,38 @@ def _interp(tab, i, a, lo, hi, row):
         row[k] = tab[i, k] + a * (tab[i1, k] - tab[i, k])
 
 
+@njit(cache=True, _nrt=False, error_model="numpy", fastmath={"contract"}, forceinline=True, no_cpython_wrapper=True,
+      no_cfunc_wrapper=True)
+def _fixed3(ri, rj, a, x0, x1, x2, p0, p1, p2, u0, u1, u2):
+    """Fixed-rate map of a three-state observer between grid rows ``ri``, ``rj`` (weight ``a``).
+
+    ``xi+ = Phi xi + Gam0 eta- + Gam1 eta``, ``w = H xi+ + D eta`` (layout.lpv_row(3):
+    H 18, D 21, Phi 33, Gam0 42, Gam1 51), every entry interpolated as it is used. The
+    terms that do not depend on the state come first, so that one sample's state
+    reaches the next through three multiply-adds only (the recursion's latency is what
+    limits the batch loop); multiply-adds may be fused. Returns ``(xi+, w)`` as 4 floats.
+    The one copy of this arithmetic: :func:`lpv_step` and :func:`_lpv3_fixed_run` agree bit for bit.
+    """
+    c0 = (ri[42] + a * (rj[42] - ri[42])) * p0 + (ri[43] + a * (rj[43] - ri[43])) * p1 + (ri[44] + a * (rj[44] - ri[44])) * p2 + (ri[51] + a * (rj[51] - ri[51])) * u0 + (ri[52] + a * (rj[52] - ri[52])) * u1 \
+        + (ri[53] + a * (rj[53] - ri[53])) * u2
+    c1 = (ri[45] + a * (rj[45] - ri[45])) * p0 + (ri[46] + a * (rj[46] - ri[46])) * p1 + (ri[47] + a * (rj[47] - ri[47])) * p2 + (ri[54] + a * (rj[54] - ri[54])) * u0 + (ri[55] + a * (rj[55] - ri[55])) * u1 \
+        + (ri[56] + a * (rj[56] - ri[56])) * u2
+    c2 = (ri[48] + a * (rj[48] - ri[48])) * p0 + (ri[49] + a * (rj[49] - ri[49])) * p1 + (ri[50] + a * (rj[50] - ri[50])) * p2 + (ri[57] + a * (rj[57] - ri[57])) * u0 + (ri[58] + a * (rj[58] - ri[58])) * u1 \
+        + (ri[59] + a * (rj[59] - ri[59])) * u2
+    y0 = c0 + (ri[33] + a * (rj[33] - ri[33])) * x0 + (ri[34] + a * (rj[34] - ri[34])) * x1 + (ri[35] + a * (rj[35] - ri[35])) * x2
+    y1 = c1 + (ri[36] + a * (rj[36] - ri[36])) * x0 + (ri[37] + a * (rj[37] - ri[37])) * x1 + (ri[38] + a * (rj[38] - ri[38])) * x2
+    y2 = c2 + (ri[39] + a * (rj[39] - ri[39])) * x0 + (ri[40] + a * (rj[40] - ri[40])) * x1 + (ri[41] + a * (rj[41] - ri[41])) * x2
+    w = (ri[21] + a * (rj[21] - ri[21])) * u0 + (ri[22] + a * (rj[22] - ri[22])) * u1 + (ri[23] + a * (rj[23] - ri[23])) * u2 + (ri[18] + a * (rj[18] - ri[18])) * y0 + (ri[19] + a * (rj[19] - ri[19])) * y1 + (ri[20] + a * (rj[20] - ri[20])) * y2
+    return y0, y1, y2, w
+
+
 @njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _lpv3(mem, tab, i, a, fixed, dt, max_sub, u0, u1, u2, work, o):
     """Three-state observers (PIF, PIO, Kalman), not restarting: advances ``xi`` and returns ``w``.
 
     The same maps as the generic loops of :func:`lpv_step` with the state on local
     scalars (layout.lpv_row(3): F 0, G 9, H 18, D 21, J 24, Phi 33, Gam0 42, Gam1 51).
-    Fixed rate: ``xi = Phi xi + Gam0 eta- + Gam1 eta``, the table entries interpolated
-    as they are used (loops of constant length: LLVM unrolls them). General: the
+    Fixed rate: :func:`_fixed3` (``xi = Phi xi + Gam0 eta- + Gam1 eta``). General: the
     trapezoidal rule with ``M = I - (h/2) F`` inverted once per sample through its
     adjugate (the same map as an LU solve up to rounding, about 1e-16 relative).
     ``work[:18]`` receives the interpolated ``F, G`` (general path), ``work[o:o + 9]`` is scratch.
@@ -325,23 +381,14 @@ def _lpv3(mem, tab, i, a, fixed, dt, max_sub, u0, u1, u2, work, o):
     p1 = mem[M_ETA + 1]
     p2 = mem[M_ETA + 2]
     if fixed:
-        # v = [xi, eta-, eta]; row p of [Phi | Gam0 | Gam1] is 9 entries apart per block
-        work[o] = x0
-        work[o + 1] = x1
-        work[o + 2] = x2
-        work[o + 3] = p0
-        work[o + 4] = p1
-        work[o + 5] = p2
-        work[o + 6] = u0
-        work[o + 7] = u1
-        work[o + 8] = u2
-        for p in range(3):
-            s = 0.0
-            for b in range(3):
-                for q in range(3):
-                    k = 33 + 9 * b + 3 * p + q
-                    s += (tab[i, k] + a * (tab[i1, k] - tab[i, k])) * work[o + 3 * b + q]
-            mem[M_X + p] = s
+        y0, y1, y2, w = _fixed3(tab[i], tab[i1], a, x0, x1, x2, p0, p1, p2, u0, u1, u2)
+        mem[M_X] = y0
+        mem[M_X + 1] = y1
+        mem[M_X + 2] = y2
+        mem[M_ETA] = u0
+        mem[M_ETA + 1] = u1
+        mem[M_ETA + 2] = u2
+        return w
     else:
         for k in range(18):                 # F, G at their row offsets (_interp)
             work[k] = tab[i, k] + a * (tab[i1, k] - tab[i, k])
@@ -540,7 +587,7 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
     use_r = cfg[C_USE + 2] > 0
     wmax = cfg[C_WMAX]
     v0 = cfg[C_V0]
-    dv = cfg[C_DV]
+    inv_dv = 1.0 / cfg[C_DV]
     last = np.int64(cfg[C_NG]) - 1
     i1max = tab.shape[0] - 1
     # roll block (layout.roll_block(nr)); zeros when there is no roll model
@@ -575,11 +622,12 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
     phi = mem[M_PHI]
     k = k0
     while k < N:
-        tk = t[k]
-        vk = vx[k]
-        dk = d[k]
-        ak = ay[k]
-        rk = r[k]
+        ku = np.uint64(k)           # an unsigned index: no negative-index wraparound code
+        tk = t[ku]
+        vk = vx[ku]
+        dk = d[ku]
+        ak = ay[ku]
+        rk = r[ku]
         # _sample_valid, then _begin's restart and fixed-interval tests
         if not (math.isfinite(tk) and math.isfinite(vk)) or vk < vmin:
             break
@@ -596,7 +644,7 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
         u1 = ak if use_ay else 0.0
         u2 = rk if use_r else 0.0
         # _grid
-        s = (vk - v0) / dv
+        s = (vk - v0) * inv_dv
         if last == 0 or s <= 0.0:
             i = 0
             a = 0.0
@@ -607,34 +655,11 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
             i = np.int64(s)
             a = s - i
         i1 = i + 1 if i + 1 < i1max else i1max
-        # _lpv3, fixed: xi = Phi xi + Gam0 eta- + Gam1 eta (layout.lpv_row(3): Phi 33, Gam0 42, Gam1 51)
-        y0 = 0.0
-        y1 = 0.0
-        y2 = 0.0
-        for b in range(3):
-            for q in range(3):
-                v = (x0 if q == 0 else (x1 if q == 1 else x2)) if b == 0 else (
-                    (p0 if q == 0 else (p1 if q == 1 else p2)) if b == 1 else (u0 if q == 0 else (u1 if q == 1 else u2)))
-                kk = 33 + 9 * b + q
-                y0 += (tab[i, kk] + a * (tab[i1, kk] - tab[i, kk])) * v
-                kk += 3
-                y1 += (tab[i, kk] + a * (tab[i1, kk] - tab[i, kk])) * v
-                kk += 3
-                y2 += (tab[i, kk] + a * (tab[i1, kk] - tab[i, kk])) * v
-        x0 = y0
-        x1 = y1
-        x2 = y2
+        # _lpv3, fixed: xi = Phi xi + Gam0 eta- + Gam1 eta, w = H xi + D eta
+        x0, x1, x2, w = _fixed3(tab[np.uint64(i)], tab[np.uint64(i1)], a, x0, x1, x2, p0, p1, p2, u0, u1, u2)
         p0 = u0
         p1 = u1
         p2 = u2
-        # w = H xi + D eta (H 18, D 21)
-        w = 0.0
-        w += (tab[i, 18] + a * (tab[i1, 18] - tab[i, 18])) * x0
-        w += (tab[i, 21] + a * (tab[i1, 21] - tab[i, 21])) * u0
-        w += (tab[i, 19] + a * (tab[i1, 19] - tab[i, 19])) * x1
-        w += (tab[i, 22] + a * (tab[i1, 22] - tab[i, 22])) * u1
-        w += (tab[i, 20] + a * (tab[i1, 20] - tab[i, 20])) * x2
-        w += (tab[i, 23] + a * (tab[i1, 23] - tab[i, 23])) * u2
         # _finish, fixed: roll model and output
         if nr == 2:
             s0 = rA0 * ay0 + rB0 * ak
@@ -652,15 +677,15 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
             phi += rH1 * z1
         wc = w if w > -1.0 else -1.0
         wc = wc if wc < 1.0 else 1.0
-        theta = math.asin(wc)
-        out_w[k] = w
-        out_theta[k] = theta
-        out_phib[k] = theta - phi
-        out_phi[k] = phi
-        out_valid[k] = abs(w) <= wmax
-        out_x[k, 0] = x0
-        out_x[k, 1] = x1
-        out_x[k, 2] = x2
+        theta = asin_fast(wc)
+        out_w[ku] = w
+        out_theta[ku] = theta
+        out_phib[ku] = theta - phi
+        out_phi[ku] = phi
+        out_valid[ku] = abs(w) <= wmax
+        out_x[ku, 0] = x0
+        out_x[ku, 1] = x1
+        out_x[ku, 2] = x2
         k += 1
     if k > k0:
         mem[M_TLAST] = tlast
@@ -693,7 +718,7 @@ def lpv_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, ou
     nr = np.int64(cfg[C_NR])
     fast = n == 3 and (nr == 0 or nr == 2) and cfg[C_DTFIX] > 0.0
     N = t.shape[0]
-    k = 0
+    k = np.int64(0)              # not a literal: one compiled _lpv3_fixed_run
     while k < N:
         if fast and mem[M_INIT] > 0.0:
             k = _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
