@@ -339,127 +339,35 @@ def _interp(tab, i, a, lo, hi, row):
 
 @njit(cache=True, _nrt=False, error_model="numpy", fastmath={"contract"}, forceinline=True, no_cpython_wrapper=True,
       no_cfunc_wrapper=True)
+def _dot3(ri, rj, a, k, v0, v1, v2):
+    """``m[k] v0 + m[k+1] v1 + m[k+2] v2`` with ``m = ri + a (rj - ri)`` (a row of the schedule at ``vx``)."""
+    s = (ri[k] + a * (rj[k] - ri[k])) * v0
+    s += (ri[k + 1] + a * (rj[k + 1] - ri[k + 1])) * v1
+    s += (ri[k + 2] + a * (rj[k + 2] - ri[k + 2])) * v2
+    return s
+
+
+@njit(cache=True, _nrt=False, error_model="numpy", fastmath={"contract"}, forceinline=True, no_cpython_wrapper=True,
+      no_cfunc_wrapper=True)
 def _fixed3(ri, rj, a, x0, x1, x2, p0, p1, p2, u0, u1, u2):
     """Fixed-rate map of a three-state observer between grid rows ``ri``, ``rj`` (weight ``a``).
 
     ``xi+ = Phi xi + Gam0 eta- + Gam1 eta``, ``w = H xi+ + D eta`` (layout.lpv_row(3):
-    H 18, D 21, Phi 33, Gam0 42, Gam1 51), every entry interpolated as it is used. The
-    terms that do not depend on the state come first, so that one sample's state
-    reaches the next through three multiply-adds only (the recursion's latency is what
-    limits the batch loop); multiply-adds may be fused. Returns ``(xi+, w)`` as 4 floats.
-    The one copy of this arithmetic: :func:`lpv_step` and :func:`_lpv3_fixed_run` agree bit for bit.
+    H 18, D 21, Phi 33, Gam0 42, Gam1 51), every entry interpolated as it is used
+    (:func:`_dot3`). The terms that do not depend on the state come first, so that one
+    sample's state reaches the next through a few multiply-adds only (the recursion's
+    latency is what limits the batch loop); multiply-adds may be fused. Returns
+    ``(xi+, w)`` as 4 floats. The one copy of this arithmetic: :func:`lpv_step` and
+    :func:`_lpv3_fixed_run` agree bit for bit.
     """
-    c0 = (ri[42] + a * (rj[42] - ri[42])) * p0 + (ri[43] + a * (rj[43] - ri[43])) * p1 + (ri[44] + a * (rj[44] - ri[44])) * p2 + (ri[51] + a * (rj[51] - ri[51])) * u0 + (ri[52] + a * (rj[52] - ri[52])) * u1 \
-        + (ri[53] + a * (rj[53] - ri[53])) * u2
-    c1 = (ri[45] + a * (rj[45] - ri[45])) * p0 + (ri[46] + a * (rj[46] - ri[46])) * p1 + (ri[47] + a * (rj[47] - ri[47])) * p2 + (ri[54] + a * (rj[54] - ri[54])) * u0 + (ri[55] + a * (rj[55] - ri[55])) * u1 \
-        + (ri[56] + a * (rj[56] - ri[56])) * u2
-    c2 = (ri[48] + a * (rj[48] - ri[48])) * p0 + (ri[49] + a * (rj[49] - ri[49])) * p1 + (ri[50] + a * (rj[50] - ri[50])) * p2 + (ri[57] + a * (rj[57] - ri[57])) * u0 + (ri[58] + a * (rj[58] - ri[58])) * u1 \
-        + (ri[59] + a * (rj[59] - ri[59])) * u2
-    y0 = c0 + (ri[33] + a * (rj[33] - ri[33])) * x0 + (ri[34] + a * (rj[34] - ri[34])) * x1 + (ri[35] + a * (rj[35] - ri[35])) * x2
-    y1 = c1 + (ri[36] + a * (rj[36] - ri[36])) * x0 + (ri[37] + a * (rj[37] - ri[37])) * x1 + (ri[38] + a * (rj[38] - ri[38])) * x2
-    y2 = c2 + (ri[39] + a * (rj[39] - ri[39])) * x0 + (ri[40] + a * (rj[40] - ri[40])) * x1 + (ri[41] + a * (rj[41] - ri[41])) * x2
-    w = (ri[21] + a * (rj[21] - ri[21])) * u0 + (ri[22] + a * (rj[22] - ri[22])) * u1 + (ri[23] + a * (rj[23] - ri[23])) * u2 + (ri[18] + a * (rj[18] - ri[18])) * y0 + (ri[19] + a * (rj[19] - ri[19])) * y1 + (ri[20] + a * (rj[20] - ri[20])) * y2
+    k = np.int64(33)       # not a literal: one compiled _dot3
+    y0 = (_dot3(ri, rj, a, k + 9, p0, p1, p2) + _dot3(ri, rj, a, k + 18, u0, u1, u2)) + _dot3(ri, rj, a, k, x0, x1, x2)
+    y1 = (_dot3(ri, rj, a, k + 12, p0, p1, p2) + _dot3(ri, rj, a, k + 21, u0, u1, u2)) \
+        + _dot3(ri, rj, a, k + 3, x0, x1, x2)
+    y2 = (_dot3(ri, rj, a, k + 15, p0, p1, p2) + _dot3(ri, rj, a, k + 24, u0, u1, u2)) \
+        + _dot3(ri, rj, a, k + 6, x0, x1, x2)
+    w = _dot3(ri, rj, a, k - 12, u0, u1, u2) + _dot3(ri, rj, a, k - 15, y0, y1, y2)
     return y0, y1, y2, w
-
-
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
-def _lpv3(mem, tab, i, a, fixed, dt, max_sub, u0, u1, u2, work, o):
-    """Three-state observers (PIF, PIO, Kalman), not restarting: advances ``xi`` and returns ``w``.
-
-    The same maps as the generic loops of :func:`lpv_step` with the state on local
-    scalars (layout.lpv_row(3): F 0, G 9, H 18, D 21, J 24, Phi 33, Gam0 42, Gam1 51).
-    Fixed rate: :func:`_fixed3` (``xi = Phi xi + Gam0 eta- + Gam1 eta``). General: the
-    trapezoidal rule with ``M = I - (h/2) F`` inverted once per sample through its
-    adjugate (the same map as an LU solve up to rounding, about 1e-16 relative).
-    ``work[:18]`` receives the interpolated ``F, G`` (general path), ``work[o:o + 9]`` is scratch.
-    """
-    i1 = i + 1 if i + 1 < tab.shape[0] else tab.shape[0] - 1
-    x0 = mem[M_X]
-    x1 = mem[M_X + 1]
-    x2 = mem[M_X + 2]
-    p0 = mem[M_ETA]
-    p1 = mem[M_ETA + 1]
-    p2 = mem[M_ETA + 2]
-    if fixed:
-        y0, y1, y2, w = _fixed3(tab[i], tab[i1], a, x0, x1, x2, p0, p1, p2, u0, u1, u2)
-        mem[M_X] = y0
-        mem[M_X + 1] = y1
-        mem[M_X + 2] = y2
-        mem[M_ETA] = u0
-        mem[M_ETA + 1] = u1
-        mem[M_ETA + 2] = u2
-        return w
-    else:
-        for k in range(18):                 # F, G at their row offsets (_interp)
-            work[k] = tab[i, k] + a * (tab[i1, k] - tab[i, k])
-        f00 = work[0]
-        f01 = work[1]
-        f02 = work[2]
-        f10 = work[3]
-        f11 = work[4]
-        f12 = work[5]
-        f20 = work[6]
-        f21 = work[7]
-        f22 = work[8]
-        g00 = work[9]
-        g01 = work[10]
-        g02 = work[11]
-        g10 = work[12]
-        g11 = work[13]
-        g12 = work[14]
-        g20 = work[15]
-        g21 = work[16]
-        g22 = work[17]
-        nsub = np.int64(math.ceil(dt / max_sub - 1e-9))
-        if nsub < 1:
-            nsub = 1
-        hh = 0.5 * dt if nsub == 1 else 0.5 * (dt / nsub)
-        m00 = 1.0 - hh * f00
-        m01 = -hh * f01
-        m02 = -hh * f02
-        m10 = -hh * f10
-        m11 = 1.0 - hh * f11
-        m12 = -hh * f12
-        m20 = -hh * f20
-        m21 = -hh * f21
-        m22 = 1.0 - hh * f22
-        c00 = m11 * m22 - m12 * m21
-        c01 = m02 * m21 - m01 * m22
-        c02 = m01 * m12 - m02 * m11
-        c10 = m12 * m20 - m10 * m22
-        c11 = m00 * m22 - m02 * m20
-        c12 = m02 * m10 - m00 * m12
-        c20 = m10 * m21 - m11 * m20
-        c21 = m01 * m20 - m00 * m21
-        c22 = m00 * m11 - m01 * m10
-        inv = 1.0 / (m00 * c00 + m01 * c10 + m02 * c20)
-        y0 = x0
-        y1 = x1
-        y2 = x2
-        for k in range(nsub):
-            s = 1.0 if nsub == 1 else (2.0 * k + 1.0) / nsub
-            v0 = 2.0 * p0 + s * (u0 - p0)
-            v1 = 2.0 * p1 + s * (u1 - p1)
-            v2 = 2.0 * p2 + s * (u2 - p2)
-            b0 = y0 + hh * (f00 * y0 + f01 * y1 + f02 * y2 + g00 * v0 + g01 * v1 + g02 * v2)
-            b1 = y1 + hh * (f10 * y0 + f11 * y1 + f12 * y2 + g10 * v0 + g11 * v1 + g12 * v2)
-            b2 = y2 + hh * (f20 * y0 + f21 * y1 + f22 * y2 + g20 * v0 + g21 * v1 + g22 * v2)
-            y0 = (c00 * b0 + c01 * b1 + c02 * b2) * inv
-            y1 = (c10 * b0 + c11 * b1 + c12 * b2) * inv
-            y2 = (c20 * b0 + c21 * b1 + c22 * b2) * inv
-        mem[M_X] = y0
-        mem[M_X + 1] = y1
-        mem[M_X + 2] = y2
-    mem[M_ETA] = u0
-    mem[M_ETA + 1] = u1
-    mem[M_ETA + 2] = u2
-    w = 0.0
-    for q in range(3):
-        k = 18 + q
-        w += (tab[i, k] + a * (tab[i1, k] - tab[i, k])) * mem[M_X + q]
-        k = 21 + q
-        w += (tab[i, k] + a * (tab[i1, k] - tab[i, k])) * mem[M_ETA + q]
-    return w
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
@@ -521,8 +429,16 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     oS = oG1 + n * NETA             # scratch after the row
     eta = (d if cfg[C_USE] > 0 else 0.0, ay if cfg[C_USE + 1] > 0 else 0.0, r if cfg[C_USE + 2] > 0 else 0.0)
     dt, restart, fixed = _begin(mem, cfg, t)
-    if n == 3 and not restart:
-        w = _lpv3(mem, tab, i, a, fixed, dt, cfg[C_SUB], eta[0], eta[1], eta[2], work, oS)
+    if n == 3 and fixed:
+        # three states on the fixed-rate path: the batch loop's arithmetic (bit for bit)
+        i1 = i + 1 if i + 1 < tab.shape[0] else tab.shape[0] - 1
+        x0, x1, x2, w = _fixed3(tab[i], tab[i1], a, mem[M_X], mem[M_X + 1], mem[M_X + 2], mem[M_ETA],
+                                mem[M_ETA + 1], mem[M_ETA + 2], eta[0], eta[1], eta[2])
+        mem[M_X] = x0
+        mem[M_X + 1] = x1
+        mem[M_X + 2] = x2
+        for q in range(NETA):
+            mem[M_ETA + q] = eta[q]
         ok = _finish(mem, cfg, w, ay, dt, restart, fixed, work, oS)
         return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
     if restart:
@@ -547,8 +463,8 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
         for p in range(n):
             mem[M_X + p] = work[oS + p]
     else:
-        # general path: trapezoidal rule on the interpolated F, G
-        _interp(tab, i, a, 0, oJ, work)
+        # general path: trapezoidal rule on the interpolated F, G (F at oF = 0)
+        _interp(tab, i, a, oG - n * n, oJ, work)
         for q in range(NETA):
             work[oS + q] = eta[q]
         _tustin_flat(mem, M_X, n, work, 0, oG, NETA, mem, M_ETA, work, oS, dt, cfg[C_SUB], work, oS + NETA)
@@ -655,7 +571,7 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
             i = np.int64(s)
             a = s - i
         i1 = i + 1 if i + 1 < i1max else i1max
-        # _lpv3, fixed: xi = Phi xi + Gam0 eta- + Gam1 eta, w = H xi + D eta
+        # fixed rate (_fixed3, as lpv_step): xi = Phi xi + Gam0 eta- + Gam1 eta, w = H xi + D eta
         x0, x1, x2, w = _fixed3(tab[np.uint64(i)], tab[np.uint64(i1)], a, x0, x1, x2, p0, p1, p2, u0, u1, u2)
         p0 = u0
         p1 = u1
