@@ -153,15 +153,12 @@ def _sin_cos_small(a):
 
 
 def prepare(p) -> np.ndarray:
-    """Derived constants ``q`` (``Q_*`` indices, length ``NQ``) from the packed parameters ``p`` (once per run)."""
+    """Derived constants ``q`` (``Q_*`` indices, length ``NQ``) from the packed parameters ``p`` (once per run).
+
+    Plain Python (about 50 us, once per run): nothing to compile.
+    """
+    p = [float(v) for v in np.asarray(p, dtype=np.float64)]
     q = np.zeros(NQ)
-    prepare_into(np.ascontiguousarray(p, dtype=np.float64), q)
-    return q
-
-
-@njit(cache=True, fastmath=True, error_model="numpy", no_cfunc_wrapper=True)
-def prepare_into(p, q):
-    """:func:`prepare` into a zeroed array ``q`` of length ``NQ`` (compiled callers allocate it)."""
     m = p[P_M]
     lf = p[P_LF]
     lr = p[P_LR]
@@ -226,6 +223,7 @@ def prepare_into(p, q):
         q[Q_LY + i] = sgn * (ms * (lr if front else lf) / L * hrc + mu_ax * rw) / track
         q[Q_DRIVE + i] = 0.5 if front else 0.0
         q[Q_BRAKE + i] = 0.5 * bf if front else 0.5 * (1.0 - bf)
+    return q
 
 
 @njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
@@ -420,40 +418,41 @@ def _fill_aux(x, q, c, dx, aux):
         aux[A_TANA + i] = q[Q_OTANA + i]
 
 
-@njit(cache=True, fastmath=True, error_model="numpy")
-def plant_eval(x, u, road, p, dx, aux, want_aux):
-    """Evaluate the plant: write dx/dt into ``dx`` and, if ``want_aux``, outputs into ``aux``.
+@njit(cache=True, fastmath=True, error_model="numpy", no_cfunc_wrapper=True)
+def plant_eval_prepared(x, u, road, q, dx, aux):
+    """:func:`plant_eval` on :func:`prepare`'s constants ``q``: dx/dt into ``dx``, the outputs into ``aux``."""
+    c = np.empty(NC)
+    step_inputs(u, q, c)
+    plant_core(x, road, q, c, dx)
+    _fill_aux(x, q, c, dx, aux)
+
+
+def plant_eval(x, u, road, p, dx, aux, want_aux=True) -> None:
+    """Evaluate the plant: write dx/dt into ``dx`` and the outputs into ``aux`` (always; ``want_aux`` is kept
+    for compatibility).
 
     ``x`` (NX,), ``u`` (NU,), ``road`` from :meth:`Road.pack`, ``p`` from
     :meth:`PlantParams.pack`. Convenience entry (derives the constants on every
     call); the integration loop uses :func:`prepare`, :func:`step_inputs` and
     :func:`plant_core` directly.
     """
-    q = np.zeros(NQ)
-    prepare_into(p, q)
-    c = np.empty(NC)
-    step_inputs(u, q, c)
-    plant_core(x, road, q, c, dx)
-    if want_aux:
-        _fill_aux(x, q, c, dx, aux)
+    f64 = np.float64
+    plant_eval_prepared(np.ascontiguousarray(x, dtype=f64), np.ascontiguousarray(u, dtype=f64),
+                        np.ascontiguousarray(road, dtype=f64), prepare(p), dx, aux)
 
 
-@njit(cache=True, fastmath=True, error_model="numpy")
-def f(x, u, road, params):
-    """Pure right-hand side ``dx/dt = f(x, u, road, params)`` (allocates the result).
+def f(x, u, road, params) -> np.ndarray:
+    """Pure right-hand side ``dx/dt = f(x, u, road, params)`` (allocates the result; units of the states per second).
 
     See the module docstring for the states, inputs and equations.
     """
     dx = np.empty(NX)
-    aux = np.empty(NAUX)
-    plant_eval(x, u, road, params, dx, aux, False)
+    plant_eval(x, u, road, params, dx, np.empty(NAUX))
     return dx
 
 
-@njit(cache=True, fastmath=True, error_model="numpy")
-def outputs(x, u, road, params):
-    """Auxiliary outputs (``A_*`` indices) at one state: loads, forces, specific forces, dvy/dt."""
-    dx = np.empty(NX)
+def outputs(x, u, road, params) -> np.ndarray:
+    """Auxiliary outputs (``A_*`` indices) at one state: loads, forces, specific forces, dvy/dt (SI)."""
     aux = np.empty(NAUX)
-    plant_eval(x, u, road, params, dx, aux, True)
+    plant_eval(x, u, road, params, np.empty(NX), aux)
     return aux

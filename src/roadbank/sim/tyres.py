@@ -68,7 +68,7 @@ _TWO_OVER_PI = 2.0 / math.pi
 
 # fastmath without reassociation, set explicitly (else inherited from fastmath callers): the
 # two-part reduction must not be folded into k * (hi + lo); FMA contraction keeps it exact
-@njit(cache=True, fastmath={"nnan", "ninf", "nsz", "arcp", "contract", "afn"}, error_model="numpy")
+@njit(cache=True, forceinline=True, fastmath={"nnan", "ninf", "nsz", "arcp", "contract", "afn"}, error_model="numpy")
 def fast_sincos(a):
     """``(sin a, cos a)`` for any |a| < 1e5 rad, error < 1e-15 (no libm call).
 
