@@ -337,37 +337,24 @@ def _interp(tab, i, a, lo, hi, row):
         row[k] = tab[i, k] + a * (tab[i1, k] - tab[i, k])
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", fastmath={"contract"}, forceinline=True, no_cpython_wrapper=True,
-      no_cfunc_wrapper=True)
-def _dot3(ri, rj, a, k, v0, v1, v2):
-    """``m[k] v0 + m[k+1] v1 + m[k+2] v2`` with ``m = ri + a (rj - ri)`` (a row of the schedule at ``vx``)."""
-    s = (ri[k] + a * (rj[k] - ri[k])) * v0
-    s += (ri[k + 1] + a * (rj[k + 1] - ri[k + 1])) * v1
-    s += (ri[k + 2] + a * (rj[k + 2] - ri[k + 2])) * v2
-    return s
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+def _row3(ri, rj, a, kp, kg, x0, x1, x2, p0, p1, p2, u0, u1, u2):
+    """Row of the fixed-rate map of a three-state observer: ``Phi[p] xi + Gam0[p] eta- + Gam1[p] eta``.
 
-
-@njit(cache=True, _nrt=False, error_model="numpy", fastmath={"contract"}, forceinline=True, no_cpython_wrapper=True,
-      no_cfunc_wrapper=True)
-def _fixed3(ri, rj, a, x0, x1, x2, p0, p1, p2, u0, u1, u2):
-    """Fixed-rate map of a three-state observer between grid rows ``ri``, ``rj`` (weight ``a``).
-
-    ``xi+ = Phi xi + Gam0 eta- + Gam1 eta``, ``w = H xi+ + D eta`` (layout.lpv_row(3):
-    H 18, D 21, Phi 33, Gam0 42, Gam1 51), every entry interpolated as it is used
-    (:func:`_dot3`). The terms that do not depend on the state come first, so that one
-    sample's state reaches the next through a few multiply-adds only (the recursion's
-    latency is what limits the batch loop); multiply-adds may be fused. Returns
-    ``(xi+, w)`` as 4 floats. The one copy of this arithmetic: :func:`lpv_step` and
-    :func:`_lpv3_fixed_run` agree bit for bit.
+    ``Phi[p]`` at ``kp``, ``Gam0[p]`` at ``kg`` and ``Gam1[p]`` at ``kg + 9`` of the
+    grid rows ``ri``, ``rj``, every entry interpolated with weight ``a``. The same
+    operations in the same order as the generic fixed-rate loops of :func:`lpv_step`
+    (inputs first, the state last: one sample's state reaches the next through three
+    multiply-adds), so that :func:`_lpv3_fixed_run` and ``lpv_step`` agree bit for bit.
     """
-    k = np.int64(33)       # not a literal: one compiled _dot3
-    y0 = (_dot3(ri, rj, a, k + 9, p0, p1, p2) + _dot3(ri, rj, a, k + 18, u0, u1, u2)) + _dot3(ri, rj, a, k, x0, x1, x2)
-    y1 = (_dot3(ri, rj, a, k + 12, p0, p1, p2) + _dot3(ri, rj, a, k + 21, u0, u1, u2)) \
-        + _dot3(ri, rj, a, k + 3, x0, x1, x2)
-    y2 = (_dot3(ri, rj, a, k + 15, p0, p1, p2) + _dot3(ri, rj, a, k + 24, u0, u1, u2)) \
-        + _dot3(ri, rj, a, k + 6, x0, x1, x2)
-    w = _dot3(ri, rj, a, k - 12, u0, u1, u2) + _dot3(ri, rj, a, k - 15, y0, y1, y2)
-    return y0, y1, y2, w
+    s = 0.0
+    s += (ri[kg] + a * (rj[kg] - ri[kg])) * p0 + (ri[kg + 9] + a * (rj[kg + 9] - ri[kg + 9])) * u0
+    s += (ri[kg + 1] + a * (rj[kg + 1] - ri[kg + 1])) * p1 + (ri[kg + 10] + a * (rj[kg + 10] - ri[kg + 10])) * u1
+    s += (ri[kg + 2] + a * (rj[kg + 2] - ri[kg + 2])) * p2 + (ri[kg + 11] + a * (rj[kg + 11] - ri[kg + 11])) * u2
+    s += (ri[kp] + a * (rj[kp] - ri[kp])) * x0
+    s += (ri[kp + 1] + a * (rj[kp + 1] - ri[kp + 1])) * x1
+    s += (ri[kp + 2] + a * (rj[kp + 2] - ri[kp + 2])) * x2
+    return s
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
@@ -429,18 +416,6 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     oS = oG1 + n * NETA             # scratch after the row
     eta = (d if cfg[C_USE] > 0 else 0.0, ay if cfg[C_USE + 1] > 0 else 0.0, r if cfg[C_USE + 2] > 0 else 0.0)
     dt, restart, fixed = _begin(mem, cfg, t)
-    if n == 3 and fixed:
-        # three states on the fixed-rate path: the batch loop's arithmetic (bit for bit)
-        i1 = i + 1 if i + 1 < tab.shape[0] else tab.shape[0] - 1
-        x0, x1, x2, w = _fixed3(tab[i], tab[i1], a, mem[M_X], mem[M_X + 1], mem[M_X + 2], mem[M_ETA],
-                                mem[M_ETA + 1], mem[M_ETA + 2], eta[0], eta[1], eta[2])
-        mem[M_X] = x0
-        mem[M_X + 1] = x1
-        mem[M_X + 2] = x2
-        for q in range(NETA):
-            mem[M_ETA + q] = eta[q]
-        ok = _finish(mem, cfg, w, ay, dt, restart, fixed, work, oS)
-        return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
     if restart:
         # xi = J(vx) eta
         _interp(tab, i, a, oH, oPhi, work)
@@ -493,6 +468,8 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
     (``mem[M_INIT] > 0``), ``n == 3``, ``nr`` 0 or 2, ``cfg[C_DTFIX] > 0``.
     """
     N = t.shape[0]
+    kphi = np.int64(33)             # layout.lpv_row(3).Phi, .Gam0 (int64, not literals: one _row3)
+    kgam = np.int64(42)
     nr = np.int64(cfg[C_NR])
     h = cfg[C_DTFIX]
     htol = cfg[C_DTOL] * h
@@ -571,8 +548,22 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
             i = np.int64(s)
             a = s - i
         i1 = i + 1 if i + 1 < i1max else i1max
-        # fixed rate (_fixed3, as lpv_step): xi = Phi xi + Gam0 eta- + Gam1 eta, w = H xi + D eta
-        x0, x1, x2, w = _fixed3(tab[np.uint64(i)], tab[np.uint64(i1)], a, x0, x1, x2, p0, p1, p2, u0, u1, u2)
+        # fixed rate, as lpv_step's loops: xi = Phi xi + Gam0 eta- + Gam1 eta (lpv_row(3): Phi 33, Gam0 42, Gam1 51)
+        ri = tab[np.uint64(i)]
+        rj = tab[np.uint64(i1)]
+        y0 = _row3(ri, rj, a, kphi, kgam, x0, x1, x2, p0, p1, p2, u0, u1, u2)
+        y1 = _row3(ri, rj, a, kphi + 3, kgam + 3, x0, x1, x2, p0, p1, p2, u0, u1, u2)
+        x2 = _row3(ri, rj, a, kphi + 6, kgam + 6, x0, x1, x2, p0, p1, p2, u0, u1, u2)
+        x0 = y0
+        x1 = y1
+        # w = D eta + H xi (H 18, D 21), in lpv_step's order
+        w = 0.0
+        w += (ri[21] + a * (rj[21] - ri[21])) * u0
+        w += (ri[22] + a * (rj[22] - ri[22])) * u1
+        w += (ri[23] + a * (rj[23] - ri[23])) * u2
+        w += (ri[18] + a * (rj[18] - ri[18])) * x0
+        w += (ri[19] + a * (rj[19] - ri[19])) * x1
+        w += (ri[20] + a * (rj[20] - ri[20])) * x2
         p0 = u0
         p1 = u1
         p2 = u2
