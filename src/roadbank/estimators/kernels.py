@@ -39,6 +39,11 @@ relative; what an ECU runs). Per sample, with the previous inputs ``eta-``::
 ``Phi, Gam0, Gam1`` are the exact discretisation of the continuous observer at
 each grid speed for inputs varying linearly between samples (first-order hold,
 :meth:`Estimator.discrete_tables`), so this path is exact for a frozen speed.
+In a batch, consecutive samples on this path of a three-state observer run in
+:func:`_lpv3_fixed_run` (constants read once, the state in registers; the same
+operations in the same order as :func:`lpv_step`, so ``run()`` and ``step()``
+agree bit for bit). ``asin`` is :func:`asin_fast` (a polynomial within 2 ulp up
+to 17 deg, libm beyond) on every path.
 
 **General path** (any other interval: irregular sampling, jitter, after a
 gap): the trapezoidal rule (Tustin), which is A-stable — for a frozen ``vx``
@@ -51,10 +56,19 @@ the current sample. The Riccati ODE is advanced with the same trapezoidal
 rule applied to its linear Hamiltonian form
 :math:`[X; Y]' = \mathcal{H}[X; Y]`, :math:`P = Y X^{-1}`.
 
-Compile time: every function is compiled once as a normal numba function
-(no numba-IR inlining, no ``fastmath``); LLVM inlines the small helpers. The
-``lpv`` kernels allocate nothing and are compiled without the numba runtime
-(``_nrt=False``), so no array is reference-counted in the per-sample loop.
+Compile time (a fresh process with an empty cache compiles each family in a few
+seconds; ``python -m roadbank.bench.cold``): every function is compiled once as a
+normal numba function (no numba-IR inlining, no ``fastmath``; LLVM inlines the
+small helpers marked ``forceinline``) and in one specialisation only: no literal
+arguments (``np.int64`` offsets, not ``0``), no ``int()``/``min()``/``max()``
+(each an overload numba compiles per flag set; ``np.int64`` casts and conditional
+expressions instead), helpers without Python or C wrappers
+(``no_cpython_wrapper``), no array views or allocation (``_nrt=False``: nothing
+reference-counted in the per-sample loops). Numba links every callee's code into
+each caller and optimises and emits it again there, so the size of what a kernel
+reaches counts as much as the number of functions: the Riccati PIF is one
+function (``riccati_step`` runs ``riccati_run`` on one sample), and the general
+path has no per-dimension special cases.
 """
 
 from __future__ import annotations
