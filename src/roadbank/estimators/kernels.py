@@ -81,7 +81,11 @@ from numba import njit
 
 from .layout import (C_AREF, C_DTFIX, C_DTOL, C_DV, C_G, C_GAP, C_N, C_NG, C_NR, C_OFAM, C_P, C_ROLL,  # noqa: F401
                      C_SUB, C_TAU, C_USE, C_V0, C_VMIN, C_WMAX, M_AY, M_ETA, M_GATED, M_INIT, M_PHI, M_PHIB,
-                     M_THETA, M_TLAST, M_W, M_X, NETA)
+                     M_THETA, M_TLAST, M_W, M_X, NETA, lpv_row)
+
+#: offsets in a three-state lpv row (layout.lpv_row(3)) used by the batch loop
+_ROW3 = lpv_row(3)
+_R3_H, _R3_D, _R3_PHI, _R3_GAM0 = _ROW3.H, _ROW3.D, _ROW3.Phi, _ROW3.Gam0
 
 # asin(x) = x + x^3 (c_1 + c_2 x^2 + ... + c_12 x^22) + R for |x| <= ASIN_POLY_MAX, the Taylor
 # coefficients c_k = (2k)! / (4^k (k!)^2 (2k+1)) (exact fractions, rounded once);
@@ -482,8 +486,8 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
     (``mem[M_INIT] > 0``), ``n == 3``, ``nr`` 0 or 2, ``cfg[C_DTFIX] > 0``.
     """
     N = t.shape[0]
-    kphi = np.int64(33)             # layout.lpv_row(3).Phi, .Gam0 (int64, not literals: one _row3)
-    kgam = np.int64(42)
+    kphi = np.int64(_R3_PHI)        # int64, not literals: one compiled _row3
+    kgam = np.int64(_R3_GAM0)
     nr = np.int64(cfg[C_NR])
     h = cfg[C_DTFIX]
     htol = cfg[C_DTOL] * h
@@ -562,7 +566,7 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
             i = np.int64(s)
             a = s - i
         i1 = i + 1 if i + 1 < i1max else i1max
-        # fixed rate, as lpv_step's loops: xi = Phi xi + Gam0 eta- + Gam1 eta (lpv_row(3): Phi 33, Gam0 42, Gam1 51)
+        # fixed rate, as lpv_step's loops: xi = Phi xi + Gam0 eta- + Gam1 eta
         ri = tab[np.uint64(i)]
         rj = tab[np.uint64(i1)]
         y0 = _row3(ri, rj, a, kphi, kgam, x0, x1, x2, p0, p1, p2, u0, u1, u2)
@@ -570,14 +574,14 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
         x2 = _row3(ri, rj, a, kphi + 6, kgam + 6, x0, x1, x2, p0, p1, p2, u0, u1, u2)
         x0 = y0
         x1 = y1
-        # w = D eta + H xi (H 18, D 21), in lpv_step's order
+        # w = D eta + H xi, in lpv_step's order
         w = 0.0
-        w += (ri[21] + a * (rj[21] - ri[21])) * u0
-        w += (ri[22] + a * (rj[22] - ri[22])) * u1
-        w += (ri[23] + a * (rj[23] - ri[23])) * u2
-        w += (ri[18] + a * (rj[18] - ri[18])) * x0
-        w += (ri[19] + a * (rj[19] - ri[19])) * x1
-        w += (ri[20] + a * (rj[20] - ri[20])) * x2
+        w += (ri[_R3_D] + a * (rj[_R3_D] - ri[_R3_D])) * u0
+        w += (ri[_R3_D + 1] + a * (rj[_R3_D + 1] - ri[_R3_D + 1])) * u1
+        w += (ri[_R3_D + 2] + a * (rj[_R3_D + 2] - ri[_R3_D + 2])) * u2
+        w += (ri[_R3_H] + a * (rj[_R3_H] - ri[_R3_H])) * x0
+        w += (ri[_R3_H + 1] + a * (rj[_R3_H + 1] - ri[_R3_H + 1])) * x1
+        w += (ri[_R3_H + 2] + a * (rj[_R3_H + 2] - ri[_R3_H + 2])) * x2
         p0 = u0
         p1 = u1
         p2 = u2
