@@ -83,8 +83,14 @@ def markdown(res: dict, command: str) -> str:
                        best_columns=["ns/sample (median)", "ns/sample (best)", "CPU ns/sample (median)"])]
     lines += ["", "Wall-clock ns/sample is the headline; CPU ns/sample (thread CPU time) is shown "
               "because other processes share this machine's cores: where the two differ, the "
-              "difference is time the benchmark was descheduled.",
-              "", "Design = building the gain schedule (Riccati/ARE or pole placement per grid speed, "
+              "difference is time the benchmark was descheduled."]
+    pif = next((e for e in res["estimators"] if e["name"] == "pif-modified"), {})
+    if pif.get("kernel_cpu_ns_per_sample") is not None:
+        lines += ["", f"`run()` returns new output arrays: its time includes their first writes (page "
+                  f"faults of fresh memory, {pif.get('output_bytes_per_sample')} bytes per sample for "
+                  f"pif-modified). The compiled pif-modified kernel alone, into reused arrays: "
+                  f"{_fmt(pif['kernel_cpu_ns_per_sample'])} ns/sample CPU (`roadbank.bench.suite.time_kernel`)."]
+    lines += ["", "Design = building the gain schedule (Riccati/ARE or pole placement per grid speed, "
               "memoised per parameter set in the process and on disk, `roadbank.cache`; timed here "
               "without either).", ""]
     lines += ["## Peers", "",
@@ -165,18 +171,22 @@ def obstacles(res: dict) -> list[str]:
     kin = next(e for e in res["estimators"] if e["name"] == "kinematic")
     out = []
     if t["pif_ns_per_sample"] is False or t["pif_vs_filterpy"] is False:
+        kern = pif.get("kernel_cpu_ns_per_sample")
         out.append(
             f"- **PIF throughput** ({_fmt(pif['ns_per_sample'])} ns/sample wall, "
-            f"{_fmt(pif['cpu_ns_per_sample'])} ns CPU; the kinematic estimate, which has no observer "
-            f"state, costs {_fmt(kin['cpu_ns_per_sample'])} ns CPU through the same kernel, i.e. the "
-            "sample handling, not the observer, is most of the cost). Per sample on the fixed-rate "
-            "path the recursion checks validity, locates vx on the schedule (one division), "
-            "interpolates 33 table entries, does the 3x3 update (27 multiply-adds), takes an asin "
-            "and stores 8 outputs; x[k+1] depends on x[k], so samples cannot be vectorised within "
-            "one log. Wall time on a shared machine includes time descheduled. 1000x filterpy needs "
-            f"<= {_fmt((res['filterpy_ns_per_sample'] or 0) / 1000)} ns/sample against this filterpy "
-            "measurement. What would still help: several logs per call (SIMD across logs), a "
-            "polynomial asin, or storing fewer outputs per sample.")
+            f"{_fmt(pif['cpu_ns_per_sample'])} ns CPU for `run()`; the compiled kernel alone, writing into "
+            f"reused output arrays, {_fmt(kern)} ns CPU). The difference is mostly the page faults of "
+            f"the fresh output arrays `run()` returns ({pif.get('output_bytes_per_sample', 65)} bytes per "
+            "sample: w, theta, phi_b, phi, valid, the observer states and the copy of t), i.e. first "
+            "writes to new memory, which the kernel cannot avoid (how much depends on whether the C "
+            "library hands back freed memory, so it varies between runs). Per sample on the fixed-rate "
+            "path the batch loop checks validity, locates vx on the schedule, interpolates 33 table "
+            "entries, does the 3x3 update, evaluates asin (a polynomial) and stores 8 outputs; x[k+1] "
+            "depends on x[k], so samples cannot be vectorised within one log. 1000x filterpy needs "
+            f"<= {_fmt((res['filterpy_ns_per_sample'] or 0) / 1000)} ns/sample for everything against "
+            "this filterpy measurement, less than writing the outputs to fresh memory costs here. What "
+            "would still help: caller-provided output buffers reused across logs, fewer outputs per "
+            "sample, several logs per call (SIMD across logs).")
     if t["step_us_median"] is False:
         out.append("- **step()**: the numba dispatch of 9 arguments (4 arrays) and the Python "
                    "method call dominate (the compiled sample itself takes < 0.1 us); a fused "
@@ -184,11 +194,12 @@ def obstacles(res: dict) -> list[str]:
     if t.get("cold_compile_max_s") is False or t.get("reproduce_cold_s") is False:
         cc = res.get("cold_compile_s") or {}
         out.append("- **Cold start**: per-family compile " + ", ".join(f"{f} {_fmt(v)} s" for f, v in cc.items())
-                   + f"; first reproduce {_fmt(res.get('reproduce_cold_s'))} s. Numba compiles each "
-                   "function once (~0.1-0.3 s even for small helpers) and re-optimises every callee "
-                   "inside each caller; on a loaded machine wall time also includes waiting for a core. "
-                   "What would still help: fewer, flatter functions (the general-path LU helpers, the "
-                   "Riccati kernel's array views), or shipping the caches (ahead-of-time compilation).")
+                   + f"; first reproduce {_fmt(res.get('reproduce_cold_s'))} s. Numba types and "
+                   "lowers each function once (~0.05-0.3 s even for small helpers) and optimises and "
+                   "emits the code of every callee again inside each caller; on a loaded machine wall "
+                   "time also includes waiting for a core (see `python -m roadbank.bench.cold` for CPU "
+                   "time). What would still help: shipping the caches (ahead-of-time compilation), or "
+                   "one compiled step for both step() and run() (costs step() latency).")
     if t["plant_realtime_factor"] is False:
         out.append("- **Plant** (owned by the simulator): RK4 at 1 kHz means 4 plant evaluations "
                    "(18 states, 4 Magic-Formula tyres with combined slip) per simulated ms; 2000x "
@@ -196,7 +207,13 @@ def obstacles(res: dict) -> list[str]:
                    "wheel-spin/slip dynamics; options: a larger step with a semi-implicit "
                    "wheel-spin update, or an adaptive step.")
     if t["plant_vs_commonroad"] is False:
-        out.append("- **Plant vs CommonRoad**: follows from the plant's own real-time factor.")
+        out.append("- **Plant vs CommonRoad**: follows from the plant's own real-time factor. One RK4 "
+                   "step is four dependent plant evaluations (each waits for the previous stage), so "
+                   "its time is set by the latency of one evaluation (road lookup, heading and roll "
+                   "sine/cosine, four tyres, body equations), not by throughput; 150x needs about 30% "
+                   "less per step. Options: a cheaper integrator per simulated second (larger step "
+                   "with a semi-implicit wheel-spin/slip update), or fewer dependent operations per "
+                   "evaluation.")
     if t["reproduce_s"] is False:
         rep = res["reproduce"]
         out.append(

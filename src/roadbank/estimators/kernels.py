@@ -39,6 +39,11 @@ relative; what an ECU runs). Per sample, with the previous inputs ``eta-``::
 ``Phi, Gam0, Gam1`` are the exact discretisation of the continuous observer at
 each grid speed for inputs varying linearly between samples (first-order hold,
 :meth:`Estimator.discrete_tables`), so this path is exact for a frozen speed.
+In a batch, consecutive samples on this path of a three-state observer run in
+:func:`_lpv3_fixed_run` (constants read once, the state in registers; the same
+operations in the same order as :func:`lpv_step`, so ``run()`` and ``step()``
+agree bit for bit). ``asin`` is :func:`asin_fast` (a polynomial within 2 ulp up
+to 17 deg, libm beyond) on every path.
 
 **General path** (any other interval: irregular sampling, jitter, after a
 gap): the trapezoidal rule (Tustin), which is A-stable — for a frozen ``vx``
@@ -51,116 +56,50 @@ the current sample. The Riccati ODE is advanced with the same trapezoidal
 rule applied to its linear Hamiltonian form
 :math:`[X; Y]' = \mathcal{H}[X; Y]`, :math:`P = Y X^{-1}`.
 
-Compile time: every function is compiled once as a normal numba function
-(no numba-IR inlining, no ``fastmath``); LLVM inlines the small helpers. The
-``lpv`` kernels allocate nothing and are compiled without the numba runtime
-(``_nrt=False``), so no array is reference-counted in the per-sample loop.
+Compile time (a fresh process with an empty cache compiles each family in a few
+seconds; ``python -m roadbank.bench.cold``): every function is compiled once as a
+normal numba function (no numba-IR inlining, no ``fastmath``; LLVM inlines the
+small helpers marked ``forceinline``) and in one specialisation only: no literal
+arguments (``np.int64`` offsets, not ``0``), no ``int()``/``min()``/``max()``
+(each an overload numba compiles per flag set; ``np.int64`` casts and conditional
+expressions instead), helpers without Python or C wrappers
+(``no_cpython_wrapper``), no array views or allocation (``_nrt=False``: nothing
+reference-counted in the per-sample loops). Numba links every callee's code into
+each caller and optimises and emits it again there, so the size of what a kernel
+reaches counts as much as the number of functions: the Riccati PIF is one
+function (``riccati_step`` runs ``riccati_run`` on one sample), and the general
+path has no per-dimension special cases.
 """
 
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 
+import numpy as np
 from numba import njit
 
 from .layout import (C_AREF, C_DTFIX, C_DTOL, C_DV, C_G, C_GAP, C_N, C_NG, C_NR, C_OFAM, C_P, C_ROLL,  # noqa: F401
                      C_SUB, C_TAU, C_USE, C_V0, C_VMIN, C_WMAX, M_AY, M_ETA, M_GATED, M_INIT, M_PHI, M_PHIB,
-                     M_THETA, M_TLAST, M_W, M_X, NETA)
+                     M_THETA, M_TLAST, M_W, M_X, NETA, lpv_row)
+
+#: offsets in a three-state lpv row (layout.lpv_row(3)) used by the batch loop
+_ROW3 = lpv_row(3)
+_R3_H, _R3_D, _R3_PHI, _R3_GAM0 = _ROW3.H, _ROW3.D, _ROW3.Phi, _ROW3.Gam0
+
+# asin(x) = x + x^3 (c_1 + c_2 x^2 + ... + c_12 x^22) + R for |x| <= ASIN_POLY_MAX, the Taylor
+# coefficients c_k = (2k)! / (4^k (k!)^2 (2k+1)) (exact fractions, rounded once);
+# 0 <= R <= c_13 x^27 / (1 - x^2) <= 4.9e-17 rad at |x| = 0.3 (the series' terms are positive).
+ASIN_POLY_MAX = 0.3
+(_AS1, _AS2, _AS3, _AS4, _AS5, _AS6, _AS7, _AS8, _AS9, _AS10, _AS11, _AS12) = (
+    float(Fraction(math.factorial(2 * k), 4 ** k * math.factorial(k) ** 2 * (2 * k + 1))) for k in range(1, 13))
+
 
 # ---------------------------------------------------------------------------------
 # linear algebra on small matrices
 # ---------------------------------------------------------------------------------
 
-@njit(cache=True)
-def _lu(M, piv, n):
-    """In-place LU factorisation with partial pivoting of ``M[:n, :n]``."""
-    for k in range(n):
-        p = k
-        big = abs(M[k, k])
-        for i in range(k + 1, n):
-            if abs(M[i, k]) > big:
-                big = abs(M[i, k])
-                p = i
-        piv[k] = p
-        if p != k:
-            for j in range(n):
-                tmp = M[k, j]
-                M[k, j] = M[p, j]
-                M[p, j] = tmp
-        d = M[k, k]
-        if d == 0.0:
-            continue
-        for i in range(k + 1, n):
-            M[i, k] /= d
-            f = M[i, k]
-            for j in range(k + 1, n):
-                M[i, j] -= f * M[k, j]
-
-
-@njit(cache=True)
-def _lu_solve(M, piv, b, n):
-    """Solve ``M x = b`` in place in ``b`` with the factors from :func:`_lu`."""
-    for k in range(n):
-        p = int(piv[k])
-        if p != k:
-            tmp = b[k]
-            b[k] = b[p]
-            b[p] = tmp
-    for i in range(n):
-        s = b[i]
-        for j in range(i):
-            s -= M[i, j] * b[j]
-        b[i] = s
-    for i in range(n - 1, -1, -1):
-        s = b[i]
-        for j in range(i + 1, n):
-            s -= M[i, j] * b[j]
-        b[i] = s / M[i, i]
-
-
-@njit(cache=True)
-def _tustin(x, F, G, e0, e1, dt, max_sub, Mw, piv, rhs):
-    """Advance ``x' = F x + G e`` over ``dt`` (trapezoidal rule, substeps, e linear in time)."""
-    n = x.shape[0]
-    if n == 0:
-        return
-    m = e0.shape[0]
-    nsub = max(1, int(math.ceil(dt / max_sub - 1e-9)))
-    h = dt / nsub
-    hh = 0.5 * h
-    for i in range(n):
-        for j in range(n):
-            Mw[i, j] = -hh * F[i, j]
-        Mw[i, i] += 1.0
-    _lu(Mw, piv, n)
-    for k in range(nsub):
-        a = (2.0 * k + 1.0) / nsub  # e0*(1-a0)+e1*a0 + e0*(1-a1)+e1*a1 = 2 e0 + (e1-e0)*(a0+a1)
-        for i in range(n):
-            s = x[i]
-            for j in range(n):
-                s += hh * F[i, j] * x[j]
-            for j in range(m):
-                s += hh * G[i, j] * (2.0 * e0[j] + a * (e1[j] - e0[j]))
-            rhs[i] = s
-        _lu_solve(Mw, piv, rhs, n)
-        for i in range(n):
-            x[i] = rhs[i]
-
-
-@njit(cache=True)
-def _lerp(tab, i, a, off, out2d):
-    """Fill ``out2d`` (row-major) from ``tab[i:i+2, off:...]`` interpolated with weight ``a``."""
-    r, c = out2d.shape
-    i1 = min(i + 1, tab.shape[0] - 1)
-    k = off
-    for p in range(r):
-        for q in range(c):
-            out2d[p, q] = tab[i, k] + a * (tab[i1, k] - tab[i, k])
-            k += 1
-    return k
-
-
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _lu_flat(M, o, piv, op, n):
     """:func:`_lu` on the row-major ``n x n`` matrix stored in ``M[o:o + n*n]`` (pivots in ``piv[op:]``)."""
     for k in range(n):
@@ -186,11 +125,11 @@ def _lu_flat(M, o, piv, op, n):
                 M[o + i * n + j] -= f * M[o + k * n + j]
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _lu_solve_flat(M, o, piv, op, b, ob, n):
     """:func:`_lu_solve` on flat storage: solves in place in ``b[ob:ob + n]``."""
     for k in range(n):
-        p = int(piv[op + k])
+        p = np.int64(piv[op + k])
         if p != k:
             tmp = b[ob + k]
             b[ob + k] = b[ob + p]
@@ -207,7 +146,7 @@ def _lu_solve_flat(M, o, piv, op, b, ob, n):
         b[ob + i] = s / M[o + i * n + i]
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _tustin_flat(x, ox, n, A, oF, oG, m, E0, oe0, E1, oe1, dt, max_sub, W, oM):
     """:func:`_tustin` on flat storage (the general path of the ``lpv`` family and the roll model).
 
@@ -220,7 +159,9 @@ def _tustin_flat(x, ox, n, A, oF, oG, m, E0, oe0, E1, oe1, dt, max_sub, W, oM):
         return
     opiv = oM + n * n
     orhs = opiv + n
-    nsub = max(1, int(math.ceil(dt / max_sub - 1e-9)))
+    nsub = np.int64(math.ceil(dt / max_sub - 1e-9))
+    if nsub < 1:
+        nsub = 1
     h = dt / nsub
     hh = 0.5 * h
     for i in range(n):
@@ -246,20 +187,43 @@ def _tustin_flat(x, ox, n, A, oF, oG, m, E0, oe0, E1, oe1, dt, max_sub, W, oM):
 # sample handling shared by the families
 # ---------------------------------------------------------------------------------
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cfunc_wrapper=True)
+def asin_fast(x):
+    """``asin(x)`` (rad) for ``|x| <= 1``: a polynomial for ``|x| <= ASIN_POLY_MAX`` (0.3, i.e. 17.5 deg), libm beyond.
+
+    The polynomial is the Taylor series to ``x^23`` (Estrin's scheme): truncation
+    below 4.9e-17 rad, so with rounding the result is within 1 ulp of the
+    correctly rounded angle (tests/test_kernels.py checks 2 ulp against libm on a dense
+    grid). About 2 ns instead of libm's 7 ns per call; road bank plus body roll
+    is almost always inside the polynomial's range.
+    """
+    if not abs(x) <= ASIN_POLY_MAX:
+        return math.asin(x)
+    u = x * x
+    u2 = u * u
+    u4 = u2 * u2
+    p = (((_AS1 + _AS2 * u) + (_AS3 + _AS4 * u) * u2) + ((_AS5 + _AS6 * u) + (_AS7 + _AS8 * u) * u2) * u4
+         + ((_AS9 + _AS10 * u) + (_AS11 + _AS12 * u) * u2) * (u4 * u4))
+    return x + x * u * p
+
+
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _grid(cfg, vx):
-    """Index and weight of ``vx`` on the speed grid (clamped at both ends)."""
-    s = (vx - cfg[C_V0]) / cfg[C_DV]
-    last = int(cfg[C_NG]) - 1
+    """Index and weight of ``vx`` on the speed grid (clamped at both ends).
+
+    ``(vx - v0) * (1/dv)``: a batch loop computes ``1/dv`` once (:func:`_lpv3_fixed_run`), bit for bit the same.
+    """
+    s = (vx - cfg[C_V0]) * (1.0 / cfg[C_DV])
+    last = np.int64(cfg[C_NG]) - 1
     if last == 0 or s <= 0.0:
         return 0, 0.0
     if s >= last:
         return last - 1, 1.0
-    i = int(s)
+    i = np.int64(s)
     return i, s - i
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _sample_valid(mem, cfg, t, vx, d, ay, r):
     if not (math.isfinite(t) and math.isfinite(vx)) or vx < cfg[C_VMIN]:
         return False
@@ -274,7 +238,7 @@ def _sample_valid(mem, cfg, t, vx, d, ay, r):
     return True
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _begin(mem, cfg, t):
     """Common start of a valid sample: returns ``(dt, restart, fixed)`` and records the time.
 
@@ -289,7 +253,7 @@ def _begin(mem, cfg, t):
     return dt, restart, fixed
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _finish(mem, cfg, w, ay, dt, restart, fixed, work, o):
     """Roll separation and output of one used sample: updates the held outputs.
 
@@ -302,8 +266,8 @@ def _finish(mem, cfg, w, ay, dt, restart, fixed, work, o):
     ``nr`` is 0 or 2) is advanced by its fixed-rate map when ``fixed``, else by
     the trapezoidal rule. ``work[o:]`` is scratch of at least ``nr`` floats.
     """
-    n = int(cfg[C_N])
-    nr = int(cfg[C_NR])
+    n = np.int64(cfg[C_N])
+    nr = np.int64(cfg[C_NR])
     oF = C_ROLL
     oG = oF + nr * nr
     oH = oG + nr
@@ -327,7 +291,9 @@ def _finish(mem, cfg, w, ay, dt, restart, fixed, work, o):
             mem[oz + i] = work[o + i]
     elif nr == 2:
         # trapezoidal rule, substeps, ay linear in time; (I - hh F)^-1 by its adjugate
-        nsub = max(1, int(math.ceil(dt / cfg[C_SUB] - 1e-9)))
+        nsub = np.int64(math.ceil(dt / cfg[C_SUB] - 1e-9))
+        if nsub < 1:
+            nsub = 1
         hh = 0.5 * (dt / nsub)
         f00 = cfg[oF]
         f01 = cfg[oF + 1]
@@ -355,8 +321,9 @@ def _finish(mem, cfg, w, ay, dt, restart, fixed, work, o):
     phi = cfg[oD] * ay
     for i in range(nr):
         phi += cfg[oH + i] * mem[oz + i]
-    wc = min(1.0, max(-1.0, w))
-    theta = math.asin(wc)
+    wc = w if w > -1.0 else -1.0        # min(1, max(-1, w)), NaN -> -1 as Python's
+    wc = wc if wc < 1.0 else 1.0
+    theta = asin_fast(wc)
     mem[M_W] = w
     mem[M_THETA] = theta
     mem[M_PHI] = phi
@@ -364,7 +331,7 @@ def _finish(mem, cfg, w, ay, dt, restart, fixed, work, o):
     return abs(w) <= cfg[C_WMAX]
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x):
     """Copy sample ``k``'s outputs and first ``n`` states from ``mem`` into the batch arrays."""
     out_valid[k] = ok
@@ -380,122 +347,35 @@ def _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
 # LPV observers
 # ---------------------------------------------------------------------------------
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _interp(tab, i, a, lo, hi, row):
     """``row[k] = tab[i, k] + a (tab[i+1, k] - tab[i, k])`` for ``lo <= k < hi`` (schedule at ``vx``)."""
-    i1 = min(i + 1, tab.shape[0] - 1)
+    i1 = i + 1 if i + 1 < tab.shape[0] else tab.shape[0] - 1
     for k in range(lo, hi):
         row[k] = tab[i, k] + a * (tab[i1, k] - tab[i, k])
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
-def _lpv3(mem, tab, i, a, fixed, dt, max_sub, u0, u1, u2, work, o):
-    """Three-state observers (PIF, PIO, Kalman), not restarting: advances ``xi`` and returns ``w``.
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+def _row3(ri, rj, a, kp, kg, x0, x1, x2, p0, p1, p2, u0, u1, u2):
+    """Row of the fixed-rate map of a three-state observer: ``Phi[p] xi + Gam0[p] eta- + Gam1[p] eta``.
 
-    The same maps as the generic loops of :func:`lpv_step` with the state on local
-    scalars (layout.lpv_row(3): F 0, G 9, H 18, D 21, J 24, Phi 33, Gam0 42, Gam1 51).
-    Fixed rate: ``xi = Phi xi + Gam0 eta- + Gam1 eta``, the table entries interpolated
-    as they are used (loops of constant length: LLVM unrolls them). General: the
-    trapezoidal rule with ``M = I - (h/2) F`` inverted once per sample through its
-    adjugate (the same map as an LU solve up to rounding, about 1e-16 relative).
-    ``work[:18]`` receives the interpolated ``F, G`` (general path), ``work[o:o + 9]`` is scratch.
+    ``Phi[p]`` at ``kp``, ``Gam0[p]`` at ``kg`` and ``Gam1[p]`` at ``kg + 9`` of the
+    grid rows ``ri``, ``rj``, every entry interpolated with weight ``a``. The same
+    operations in the same order as the generic fixed-rate loops of :func:`lpv_step`
+    (inputs first, the state last: one sample's state reaches the next through three
+    multiply-adds), so that :func:`_lpv3_fixed_run` and ``lpv_step`` agree bit for bit.
     """
-    i1 = min(i + 1, tab.shape[0] - 1)
-    x0 = mem[M_X]
-    x1 = mem[M_X + 1]
-    x2 = mem[M_X + 2]
-    p0 = mem[M_ETA]
-    p1 = mem[M_ETA + 1]
-    p2 = mem[M_ETA + 2]
-    if fixed:
-        # v = [xi, eta-, eta]; row p of [Phi | Gam0 | Gam1] is 9 entries apart per block
-        work[o] = x0
-        work[o + 1] = x1
-        work[o + 2] = x2
-        work[o + 3] = p0
-        work[o + 4] = p1
-        work[o + 5] = p2
-        work[o + 6] = u0
-        work[o + 7] = u1
-        work[o + 8] = u2
-        for p in range(3):
-            s = 0.0
-            for b in range(3):
-                for q in range(3):
-                    k = 33 + 9 * b + 3 * p + q
-                    s += (tab[i, k] + a * (tab[i1, k] - tab[i, k])) * work[o + 3 * b + q]
-            mem[M_X + p] = s
-    else:
-        _interp(tab, i, a, 0, 18, work)     # F, G at their row offsets
-        f00 = work[0]
-        f01 = work[1]
-        f02 = work[2]
-        f10 = work[3]
-        f11 = work[4]
-        f12 = work[5]
-        f20 = work[6]
-        f21 = work[7]
-        f22 = work[8]
-        g00 = work[9]
-        g01 = work[10]
-        g02 = work[11]
-        g10 = work[12]
-        g11 = work[13]
-        g12 = work[14]
-        g20 = work[15]
-        g21 = work[16]
-        g22 = work[17]
-        nsub = max(1, int(math.ceil(dt / max_sub - 1e-9)))
-        hh = 0.5 * dt if nsub == 1 else 0.5 * (dt / nsub)
-        m00 = 1.0 - hh * f00
-        m01 = -hh * f01
-        m02 = -hh * f02
-        m10 = -hh * f10
-        m11 = 1.0 - hh * f11
-        m12 = -hh * f12
-        m20 = -hh * f20
-        m21 = -hh * f21
-        m22 = 1.0 - hh * f22
-        c00 = m11 * m22 - m12 * m21
-        c01 = m02 * m21 - m01 * m22
-        c02 = m01 * m12 - m02 * m11
-        c10 = m12 * m20 - m10 * m22
-        c11 = m00 * m22 - m02 * m20
-        c12 = m02 * m10 - m00 * m12
-        c20 = m10 * m21 - m11 * m20
-        c21 = m01 * m20 - m00 * m21
-        c22 = m00 * m11 - m01 * m10
-        inv = 1.0 / (m00 * c00 + m01 * c10 + m02 * c20)
-        y0 = x0
-        y1 = x1
-        y2 = x2
-        for k in range(nsub):
-            s = 1.0 if nsub == 1 else (2.0 * k + 1.0) / nsub
-            v0 = 2.0 * p0 + s * (u0 - p0)
-            v1 = 2.0 * p1 + s * (u1 - p1)
-            v2 = 2.0 * p2 + s * (u2 - p2)
-            b0 = y0 + hh * (f00 * y0 + f01 * y1 + f02 * y2 + g00 * v0 + g01 * v1 + g02 * v2)
-            b1 = y1 + hh * (f10 * y0 + f11 * y1 + f12 * y2 + g10 * v0 + g11 * v1 + g12 * v2)
-            b2 = y2 + hh * (f20 * y0 + f21 * y1 + f22 * y2 + g20 * v0 + g21 * v1 + g22 * v2)
-            y0 = (c00 * b0 + c01 * b1 + c02 * b2) * inv
-            y1 = (c10 * b0 + c11 * b1 + c12 * b2) * inv
-            y2 = (c20 * b0 + c21 * b1 + c22 * b2) * inv
-        mem[M_X] = y0
-        mem[M_X + 1] = y1
-        mem[M_X + 2] = y2
-    mem[M_ETA] = u0
-    mem[M_ETA + 1] = u1
-    mem[M_ETA + 2] = u2
-    w = 0.0
-    for q in range(3):
-        k = 18 + q
-        w += (tab[i, k] + a * (tab[i1, k] - tab[i, k])) * mem[M_X + q]
-        k = 21 + q
-        w += (tab[i, k] + a * (tab[i1, k] - tab[i, k])) * mem[M_ETA + q]
-    return w
+    s = 0.0
+    s += (ri[kg] + a * (rj[kg] - ri[kg])) * p0 + (ri[kg + 9] + a * (rj[kg + 9] - ri[kg + 9])) * u0
+    s += (ri[kg + 1] + a * (rj[kg + 1] - ri[kg + 1])) * p1 + (ri[kg + 10] + a * (rj[kg + 10] - ri[kg + 10])) * u1
+    s += (ri[kg + 2] + a * (rj[kg + 2] - ri[kg + 2])) * p2 + (ri[kg + 11] + a * (rj[kg + 11] - ri[kg + 11])) * u2
+    s += (ri[kp] + a * (rj[kp] - ri[kp])) * x0
+    s += (ri[kp + 1] + a * (rj[kp + 1] - ri[kp + 1])) * x1
+    s += (ri[kp + 2] + a * (rj[kp + 2] - ri[kp + 2])) * x2
+    return s
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _restart_state(mem, work, oJ, n, eta):
     """``xi = J eta`` (the observer's equilibrium) with ``J`` (n x 3) at ``work[oJ:]``.
 
@@ -510,7 +390,7 @@ def _restart_state(mem, work, oJ, n, eta):
         mem[M_X + p] = s
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _general_advance(mem, cfg, work, oG, oS, n, eta, dt):
     """General path: trapezoidal rule on ``F`` (at ``work[0:]``), ``G`` (at ``work[oG:]``) over ``dt``."""
     for q in range(NETA):
@@ -518,7 +398,7 @@ def _general_advance(mem, cfg, work, oG, oS, n, eta, dt):
     _tustin_flat(mem, M_X, n, work, 0, oG, NETA, mem, M_ETA, work, oS, dt, cfg[C_SUB], work, oS + NETA)
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _output(mem, work, oH, oD, n, eta):
     """``w = H xi + D eta`` (``H``, ``D`` at ``work[oH:]``, ``work[oD:]``); records ``eta`` as the previous inputs."""
     w = 0.0
@@ -530,7 +410,7 @@ def _output(mem, work, oH, oD, n, eta):
     return w
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True)
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cfunc_wrapper=True)
 def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     """One sample of a scheduled linear observer: returns ``(w, theta, phi_b, valid)``.
 
@@ -541,7 +421,7 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     """
     if not _sample_valid(mem, cfg, t, vx, d, ay, r):
         return mem[M_W], mem[M_THETA], mem[M_PHIB], False
-    n = int(cfg[C_N])
+    n = np.int64(cfg[C_N])
     i, a = _grid(cfg, vx)
     # row offsets (layout.lpv_row(n)); F at 0
     oG = n * n
@@ -554,10 +434,6 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     oS = oG1 + n * NETA             # scratch after the row
     eta = (d if cfg[C_USE] > 0 else 0.0, ay if cfg[C_USE + 1] > 0 else 0.0, r if cfg[C_USE + 2] > 0 else 0.0)
     dt, restart, fixed = _begin(mem, cfg, t)
-    if n == 3 and not restart:
-        w = _lpv3(mem, tab, i, a, fixed, dt, cfg[C_SUB], eta[0], eta[1], eta[2], work, oS)
-        ok = _finish(mem, cfg, w, ay, dt, restart, fixed, work, oS)
-        return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
     if restart:
         # xi = J(vx) eta
         _interp(tab, i, a, oH, oPhi, work)
@@ -580,8 +456,8 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
         for p in range(n):
             mem[M_X + p] = work[oS + p]
     else:
-        # general path: trapezoidal rule on the interpolated F, G
-        _interp(tab, i, a, 0, oJ, work)
+        # general path: trapezoidal rule on the interpolated F, G (F at oF = 0)
+        _interp(tab, i, a, oG - n * n, oJ, work)
         for q in range(NETA):
             work[oS + q] = eta[q]
         _tustin_flat(mem, M_X, n, work, 0, oG, NETA, mem, M_ETA, work, oS, dt, cfg[C_SUB], work, oS + NETA)
@@ -596,21 +472,194 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cpython_wrapper=True, no_cfunc_wrapper=True)
+def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x, k0):
+    """The fixed-rate path of a three-state observer over consecutive samples from ``k0``.
+
+    Runs while the samples are valid and exactly one fixed interval apart (within
+    ``DT_REL_TOL``) and returns the index of the first sample it did not take
+    (the caller hands that one to :func:`lpv_step`). The same arithmetic, in the
+    same order, as :func:`lpv_step` on that path (so ``run()`` and ``step()`` agree
+    bit for bit), with what is constant over a log read once: the flags, the
+    grid, the roll model, and the state kept in registers between samples
+    (written back to ``mem`` on return). The estimator must be initialised
+    (``mem[M_INIT] > 0``), ``n == 3``, ``nr`` 0 or 2, ``cfg[C_DTFIX] > 0``.
+    """
+    N = t.shape[0]
+    kphi = np.int64(_R3_PHI)        # int64, not literals: one compiled _row3
+    kgam = np.int64(_R3_GAM0)
+    nr = np.int64(cfg[C_NR])
+    h = cfg[C_DTFIX]
+    htol = cfg[C_DTOL] * h
+    gap = cfg[C_GAP]
+    vmin = cfg[C_VMIN]
+    use_d = cfg[C_USE] > 0
+    use_ay = cfg[C_USE + 1] > 0
+    use_r = cfg[C_USE + 2] > 0
+    wmax = cfg[C_WMAX]
+    v0 = cfg[C_V0]
+    inv_dv = 1.0 / cfg[C_DV]
+    last = np.int64(cfg[C_NG]) - 1
+    i1max = tab.shape[0] - 1
+    # roll block (layout.roll_block(nr)); zeros when there is no roll model
+    oD = C_ROLL + nr * nr + 2 * nr
+    rD = cfg[oD]
+    rH0 = rH1 = rP00 = rP01 = rP10 = rP11 = rA0 = rA1 = rB0 = rB1 = 0.0
+    if nr == 2:
+        rH0 = cfg[oD - 2]
+        rH1 = cfg[oD - 1]
+        oPhi = oD + 1 + nr
+        rP00 = cfg[oPhi]
+        rP01 = cfg[oPhi + 1]
+        rP10 = cfg[oPhi + 2]
+        rP11 = cfg[oPhi + 3]
+        rA0 = cfg[oPhi + 4]
+        rA1 = cfg[oPhi + 5]
+        rB0 = cfg[oPhi + 6]
+        rB1 = cfg[oPhi + 7]
+    oz = M_X + 3
+    z0 = mem[oz] if nr == 2 else 0.0
+    z1 = mem[oz + 1] if nr == 2 else 0.0
+    x0 = mem[M_X]
+    x1 = mem[M_X + 1]
+    x2 = mem[M_X + 2]
+    p0 = mem[M_ETA]
+    p1 = mem[M_ETA + 1]
+    p2 = mem[M_ETA + 2]
+    ay0 = mem[M_AY]
+    tlast = mem[M_TLAST]
+    w = mem[M_W]
+    theta = mem[M_THETA]
+    phi = mem[M_PHI]
+    k = k0
+    while k < N:
+        ku = np.uint64(k)           # an unsigned index: no negative-index wraparound code
+        tk = t[ku]
+        vk = vx[ku]
+        dk = d[ku]
+        ak = ay[ku]
+        rk = r[ku]
+        # _sample_valid, then _begin's restart and fixed-interval tests
+        if not (math.isfinite(tk) and math.isfinite(vk)) or vk < vmin:
+            break
+        if (use_d and not math.isfinite(dk)) or (use_ay and not math.isfinite(ak)) \
+                or (use_r and not math.isfinite(rk)):
+            break
+        if tk <= tlast:
+            break
+        dt = tk - tlast
+        if dt > gap or not abs(dt - h) <= htol:
+            break
+        tlast = tk
+        u0 = dk if use_d else 0.0
+        u1 = ak if use_ay else 0.0
+        u2 = rk if use_r else 0.0
+        # _grid
+        s = (vk - v0) * inv_dv
+        if last == 0 or s <= 0.0:
+            i = 0
+            a = 0.0
+        elif s >= last:
+            i = last - 1
+            a = 1.0
+        else:
+            i = np.int64(s)
+            a = s - i
+        i1 = i + 1 if i + 1 < i1max else i1max
+        # fixed rate, as lpv_step's loops: xi = Phi xi + Gam0 eta- + Gam1 eta
+        ri = tab[np.uint64(i)]
+        rj = tab[np.uint64(i1)]
+        y0 = _row3(ri, rj, a, kphi, kgam, x0, x1, x2, p0, p1, p2, u0, u1, u2)
+        y1 = _row3(ri, rj, a, kphi + 3, kgam + 3, x0, x1, x2, p0, p1, p2, u0, u1, u2)
+        x2 = _row3(ri, rj, a, kphi + 6, kgam + 6, x0, x1, x2, p0, p1, p2, u0, u1, u2)
+        x0 = y0
+        x1 = y1
+        # w = D eta + H xi, in lpv_step's order
+        w = 0.0
+        w += (ri[_R3_D] + a * (rj[_R3_D] - ri[_R3_D])) * u0
+        w += (ri[_R3_D + 1] + a * (rj[_R3_D + 1] - ri[_R3_D + 1])) * u1
+        w += (ri[_R3_D + 2] + a * (rj[_R3_D + 2] - ri[_R3_D + 2])) * u2
+        w += (ri[_R3_H] + a * (rj[_R3_H] - ri[_R3_H])) * x0
+        w += (ri[_R3_H + 1] + a * (rj[_R3_H + 1] - ri[_R3_H + 1])) * x1
+        w += (ri[_R3_H + 2] + a * (rj[_R3_H + 2] - ri[_R3_H + 2])) * x2
+        p0 = u0
+        p1 = u1
+        p2 = u2
+        # _finish, fixed: roll model and output
+        if nr == 2:
+            s0 = rA0 * ay0 + rB0 * ak
+            s0 += rP00 * z0
+            s0 += rP01 * z1
+            s1 = rA1 * ay0 + rB1 * ak
+            s1 += rP10 * z0
+            s1 += rP11 * z1
+            z0 = s0
+            z1 = s1
+        ay0 = ak
+        phi = rD * ak
+        if nr == 2:
+            phi += rH0 * z0
+            phi += rH1 * z1
+        wc = w if w > -1.0 else -1.0
+        wc = wc if wc < 1.0 else 1.0
+        theta = asin_fast(wc)
+        out_w[ku] = w
+        out_theta[ku] = theta
+        out_phib[ku] = theta - phi
+        out_phi[ku] = phi
+        out_valid[ku] = abs(w) <= wmax
+        out_x[ku, 0] = x0
+        out_x[ku, 1] = x1
+        out_x[ku, 2] = x2
+        k += 1
+    if k > k0:
+        mem[M_TLAST] = tlast
+        mem[M_X] = x0
+        mem[M_X + 1] = x1
+        mem[M_X + 2] = x2
+        if nr == 2:
+            mem[oz] = z0
+            mem[oz + 1] = z1
+        mem[M_ETA] = p0
+        mem[M_ETA + 1] = p1
+        mem[M_ETA + 2] = p2
+        mem[M_AY] = ay0
+        mem[M_W] = w
+        mem[M_THETA] = theta
+        mem[M_PHI] = phi
+        mem[M_PHIB] = theta - phi
+    return k
+
+
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
 def lpv_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
             out_x):
-    """Batch version of :func:`lpv_step` (same arithmetic, sample by sample)."""
-    n = int(cfg[C_N])
-    for k in range(t.shape[0]):
+    """Batch version of :func:`lpv_step` (same arithmetic, sample by sample).
+
+    Runs of samples on the fixed-rate path of a three-state observer go through
+    :func:`_lpv3_fixed_run`; every other sample through :func:`lpv_step`.
+    """
+    n = np.int64(cfg[C_N])
+    nr = np.int64(cfg[C_NR])
+    fast = n == 3 and (nr == 0 or nr == 2) and cfg[C_DTFIX] > 0.0
+    N = t.shape[0]
+    k = np.int64(0)              # not a literal: one compiled _lpv3_fixed_run
+    while k < N:
+        if fast and mem[M_INIT] > 0.0:
+            k = _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
+                                out_x, k)
+            if k >= N:
+                break
         ok = lpv_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
         _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
+        k += 1
 
 
 # ---------------------------------------------------------------------------------
 # observers scheduled on speed and excitation
 # ---------------------------------------------------------------------------------
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
 def adaptive_step(mem, cfg, tab, work, t, vx, d, ay, r):
     r"""One sample of an observer scheduled on speed and excitation; returns ``(w, theta, phi_b, valid)``.
 
@@ -630,9 +679,9 @@ def adaptive_step(mem, cfg, tab, work, t, vx, d, ay, r):
     """
     if not _sample_valid(mem, cfg, t, vx, d, ay, r):
         return mem[M_W], mem[M_THETA], mem[M_PHIB], False
-    n = int(cfg[C_N])
-    nr = int(cfg[C_NR])
-    o = int(cfg[C_OFAM])          # layout.adaptive_block: E0, DE, NE, TAU, TF
+    n = np.int64(cfg[C_N])
+    nr = np.int64(cfg[C_NR])
+    o = np.int64(cfg[C_OFAM])          # layout.adaptive_block: E0, DE, NE, TAU, TF
     oe = M_X + n + nr             # layout.excitation_state: e, a_f
     eta = (d if cfg[C_USE] > 0 else 0.0, ay if cfg[C_USE + 1] > 0 else 0.0, r if cfg[C_USE + 2] > 0 else 0.0)
     dt, restart, _ = _begin(mem, cfg, t)
@@ -641,23 +690,24 @@ def adaptive_step(mem, cfg, tab, work, t, vx, d, ay, r):
         e = af
     else:
         af = mem[oe + 1] + (1.0 - math.exp(-dt / cfg[o + 4])) * (abs(ay) - mem[oe + 1])
-        e = max(af, mem[oe] * math.exp(-dt / cfg[o + 3]))
+        e = mem[oe] * math.exp(-dt / cfg[o + 3])
+        e = e if e > af else af               # max(af, e)
     mem[oe] = e
     mem[oe + 1] = af
     # bilinear interpolation of the row at (vx, e)
     iv, av = _grid(cfg, vx)
-    nv = int(cfg[C_NG])
-    ne = int(cfg[o + 2])
+    nv = np.int64(cfg[C_NG])
+    ne = np.int64(cfg[o + 2])
     se = (e - cfg[o]) / cfg[o + 1]
     if ne == 1 or se <= 0.0:
         ie, ae = 0, 0.0
     elif se >= ne - 1:
         ie, ae = ne - 2, 1.0
     else:
-        ie = int(se)
+        ie = np.int64(se)
         ae = se - ie
-    iv1 = min(iv + 1, nv - 1)
-    ie1 = min(ie + 1, ne - 1)
+    iv1 = iv + 1 if iv + 1 < nv else nv - 1
+    ie1 = ie + 1 if ie + 1 < ne else ne - 1
     r00 = iv * ne + ie
     r01 = iv * ne + ie1
     r10 = iv1 * ne + ie
@@ -680,11 +730,11 @@ def adaptive_step(mem, cfg, tab, work, t, vx, d, ay, r):
     return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
 def adaptive_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
                  out_x):
     """Batch version of :func:`adaptive_step` (same arithmetic, sample by sample)."""
-    n = int(cfg[C_N])
+    n = np.int64(cfg[C_N])
     for k in range(t.shape[0]):
         ok = adaptive_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
         _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
@@ -694,7 +744,7 @@ def adaptive_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phi
 # DFC
 # ---------------------------------------------------------------------------------
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
 def dfc_step(mem, cfg, tab, work, t, vx, d, ay, r):
     r"""One sample of the DFC estimator (returns ``(w, theta, phi_b, valid)``). ``tab`` rows: Haw0, Hrw0, Hau0, Hru0.
 
@@ -712,14 +762,15 @@ def dfc_step(mem, cfg, tab, work, t, vx, d, ay, r):
     if not _sample_valid(mem, cfg, t, vx, d, ay, r):
         return mem[M_W], mem[M_THETA], mem[M_PHIB], False
     i, a = _grid(cfg, vx)
-    i1 = min(i + 1, tab.shape[0] - 1)
+    i1 = i + 1 if i + 1 < tab.shape[0] else tab.shape[0] - 1
     haw = tab[i, 0] + a * (tab[i1, 0] - tab[i, 0])
     hrw = tab[i, 1] + a * (tab[i1, 1] - tab[i, 1])
     hau = tab[i, 2] + a * (tab[i1, 2] - tab[i, 2])
     hru = tab[i, 3] + a * (tab[i1, 3] - tab[i, 3])
     wv = (ay - vx * r) / cfg[C_G]
     dfc = (ay - hau * d) + vx * (r - hru * d) - (haw + vx * hrw) * wv
-    gated = wv * max(0.0, 1.0 - abs(dfc) / cfg[C_AREF])
+    gate = 1.0 - abs(dfc) / cfg[C_AREF]
+    gated = wv * (gate if gate > 0.0 else 0.0)
     dt, restart, fixed = _begin(mem, cfg, t)
     if restart:
         x = gated
@@ -728,7 +779,9 @@ def dfc_step(mem, cfg, tab, work, t, vx, d, ay, r):
         g0 = mem[M_GATED]
         f = -1.0 / cfg[C_TAU]
         gg = 1.0 / cfg[C_TAU]
-        nsub = max(1, int(math.ceil(dt / cfg[C_SUB] - 1e-9)))
+        nsub = np.int64(math.ceil(dt / cfg[C_SUB] - 1e-9))
+        if nsub < 1:
+            nsub = 1
         hh = 0.5 * (dt / nsub)
         m = 1.0 - hh * f
         for k in range(nsub):
@@ -741,7 +794,7 @@ def dfc_step(mem, cfg, tab, work, t, vx, d, ay, r):
     return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
 
 
-@njit(cache=True, _nrt=False, error_model="numpy")
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
 def dfc_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
             out_x):
     """Batch version of :func:`dfc_step`."""
@@ -754,185 +807,173 @@ def dfc_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, ou
 # PIF with the time-varying Riccati equation
 # --------------------------------------------------------------------------
 
-@njit(cache=True)
-def _riccati_views(cfg, mem):
-    n = int(cfg[C_N])
-    p = int(cfg[C_P])
-    nr = int(cfg[C_NR])
-    o = int(cfg[C_OFAM])      # layout.riccati_block
-    Rinv = cfg[o:o + p * p].reshape((p, p))
-    o += p * p
-    W = cfg[o:o + n * n].reshape((n, n))
-    o += n * n
-    Mneg = cfg[o:o + n * n].reshape((n, n))
-    P = mem[M_X + n + nr:M_X + n + nr + n * n].reshape((n, n))
-    return n, p, Rinv, W, Mneg, P
-
-
-@njit(cache=True)
-def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
-    r"""One sample of the PIF with the Riccati ODE (paper eq 42-43); returns ``(w, theta, phi_b, valid)``.
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
+def riccati_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
+                out_x):
+    r"""The PIF with the Riccati ODE (paper eq 42-43) over a batch of samples (outputs as :func:`lpv_run`).
 
     ``tab`` rows: A (n*n), B (n*3), C (p*n), Dy (p*3), J (n*3) where the
     innovation is ``Dy eta - C x``. ``cfg`` holds ``R^-1``, ``W = Ew Q Ew^T`` and
-    ``Mneg = th Lw^T S Lw``. Gain ``K = P C^T R^-1``;
+    ``Mneg = th Lw^T S Lw`` (:func:`roadbank.estimators.layout.riccati_block`). Gain ``K = P C^T R^-1``;
     :math:`\dot P = AP + PA^T + W - P(C^T R^{-1} C - \theta L^T S L)P`.
     States after the observer and roll states: P (n*n). If P stops being
     finite (no bounded solution for this ``th``) the sample is flagged invalid
     and P restarts from its initial value held in ``cfg`` (not reached with
     the default tuning).
+
+    All matrices are row-major blocks of the flat arrays (no array views):
+    ``work`` holds the interpolated row at its table offsets, then ``K``, ``F``,
+    ``G``, the Hamiltonian ``Hm`` (2n x 2n), its trapezoidal matrix ``Mw`` with
+    pivots, ``Z = [X; Y]`` (2n x n), ``X^T`` with pivots and a column buffer.
+
+    The whole recursion is written out in this one function: it is the only compiled
+    code of the family (:func:`riccati_step` runs it on one-sample arrays), which halves
+    the family's compile time; the variant is not latency-critical (about 2 us per sample).
     """
-    if not _sample_valid(mem, cfg, t, vx, d, ay, r):
-        return mem[M_W], mem[M_THETA], mem[M_PHIB], False
-    n, p, Rinv, W, Mneg, P = _riccati_views(cfg, mem)
-    i, a = _grid(cfg, vx)
-    o = 0
-    A = work[o:o + n * n].reshape((n, n))
-    o += n * n
-    B = work[o:o + n * NETA].reshape((n, NETA))
-    o += n * NETA
-    C = work[o:o + p * n].reshape((p, n))
-    o += p * n
-    Dy = work[o:o + p * NETA].reshape((p, NETA))
-    o += p * NETA
-    J = work[o:o + n * NETA].reshape((n, NETA))
-    o += n * NETA
-    K = work[o:o + n * p].reshape((n, p))
-    o += n * p
-    F = work[o:o + n * n].reshape((n, n))
-    o += n * n
-    G = work[o:o + n * NETA].reshape((n, NETA))
-    o += n * NETA
-    Hm = work[o:o + 4 * n * n].reshape((2 * n, 2 * n))
-    o += 4 * n * n
-    Mw = work[o:o + 4 * n * n].reshape((2 * n, 2 * n))
-    o += 4 * n * n
-    Z = work[o:o + 2 * n * n].reshape((2 * n, n))
-    o += 2 * n * n
-    col = work[o:o + 2 * n]
-    o += 2 * n
-    e1 = work[o:o + NETA]
-    o += NETA
-    piv = work[o:o + 2 * n]
-    o += 2 * n
-    er = work[o:o + 2]
-    o += 2
-    rhs = work[o:o + n]
-    o += n
-    Xt = work[o:o + n * n].reshape((n, n))
-    o += n * n
-    e1[0] = d if cfg[C_USE] > 0 else 0.0
-    e1[1] = ay if cfg[C_USE + 1] > 0 else 0.0
-    e1[2] = r if cfg[C_USE + 2] > 0 else 0.0
-    e0 = mem[M_ETA:M_ETA + NETA]
-    x = mem[M_X:M_X + n]
-    k = _lerp(tab, i, a, 0, A)
-    k = _lerp(tab, i, a, k, B)
-    k = _lerp(tab, i, a, k, C)
-    k = _lerp(tab, i, a, k, Dy)
-    _lerp(tab, i, a, k, J)
-    dt, restart, _ = _begin(mem, cfg, t)
-    if restart:
-        for q in range(n):
-            s = 0.0
-            for j in range(NETA):
-                s += J[q, j] * e1[j]
-            x[q] = s
-    else:
-        nsub = max(1, int(math.ceil(dt / cfg[C_SUB] - 1e-9)))
-        h = dt / nsub
-        for sub in range(nsub):
-            # gain from the current P, then the state over the substep
-            for q in range(n):
-                for j in range(p):
-                    s = 0.0
-                    for l in range(n):
-                        for mm in range(p):
-                            s += P[q, l] * C[mm, l] * Rinv[mm, j]
-                    K[q, j] = s
-            for q in range(n):
-                for j in range(n):
-                    s = A[q, j]
-                    for l in range(p):
-                        s -= K[q, l] * C[l, j]
-                    F[q, j] = s
-                for j in range(NETA):
-                    s = B[q, j]
-                    for l in range(p):
-                        s += K[q, l] * Dy[l, j]
-                    G[q, j] = s
-            a0 = sub / nsub
-            a1 = (sub + 1.0) / nsub
-            for j in range(NETA):
-                col[j] = e0[j] + a0 * (e1[j] - e0[j])
-                col[NETA + j] = e0[j] + a1 * (e1[j] - e0[j])
-            _tustin(x, F, G, col[:NETA], col[NETA:2 * NETA], h, h, Mw, piv, rhs)
-            # Riccati via the Hamiltonian: Z' = Hm Z, Hm = [[-A^T, M], [W, A]], Z = [I; P]
-            for q in range(n):
-                for j in range(n):
-                    mpos = 0.0
-                    for l in range(p):
-                        for mm in range(p):
-                            mpos += C[l, q] * Rinv[l, mm] * C[mm, j]
-                    Hm[q, j] = -A[j, q]
-                    Hm[q, n + j] = mpos - Mneg[q, j]
-                    Hm[n + q, j] = W[q, j]
-                    Hm[n + q, n + j] = A[q, j]
-            for q in range(2 * n):
-                for j in range(2 * n):
-                    Mw[q, j] = -0.5 * h * Hm[q, j]
-                Mw[q, q] += 1.0
-            _lu(Mw, piv, 2 * n)
-            for j in range(n):
-                for q in range(2 * n):
-                    zq = 1.0 if q == j else 0.0
-                    if q >= n:
-                        zq = P[q - n, j]
-                    col[q] = zq
-                for q in range(2 * n):
-                    s = col[q]
-                    for l in range(2 * n):
-                        zl = (1.0 if l == j else 0.0) if l < n else P[l - n, j]
-                        s += 0.5 * h * Hm[q, l] * zl
-                    Z[q, j] = s
-            for j in range(n):
-                for q in range(2 * n):
-                    col[q] = Z[q, j]
-                _lu_solve(Mw, piv, col, 2 * n)
-                for q in range(2 * n):
-                    Z[q, j] = col[q]
-            # P = Y X^-1  <=>  X^T P^T = Y^T ; P symmetric
-            for q in range(n):
-                for j in range(n):
-                    Xt[q, j] = Z[j, q]
-            _lu(Xt, piv, n)
-            for j in range(n):
-                for q in range(n):
-                    col[q] = Z[n + j, q]
-                _lu_solve(Xt, piv, col, n)
-                for q in range(n):
-                    F[j, q] = col[q]
-            ok = True
-            for q in range(n):
-                for j in range(n):
-                    v = 0.5 * (F[q, j] + F[j, q])
-                    if not math.isfinite(v):
-                        ok = False
-                    P[q, j] = v
-            if not ok:
-                return mem[M_W], mem[M_THETA], mem[M_PHIB], False
-    w = x[n - 1]
-    for q in range(NETA):
-        e0[q] = e1[q]
-    ok = _finish(mem, cfg, w, ay, dt, restart, False, work, o)
-    return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
-
-
-@njit(cache=True)
-def riccati_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
-                out_x):
-    """Batch version of :func:`riccati_step` (``work``: scratch as for the step)."""
-    n = int(cfg[C_N])
+    n = np.int64(cfg[C_N])
+    p = np.int64(cfg[C_P])
+    nr = np.int64(cfg[C_NR])
+    oR = np.int64(cfg[C_OFAM])      # layout.riccati_block: R^-1 (p*p), W (n*n), Mneg (n*n)
+    oW = oR + p * p
+    oMn = oW + n * n
+    oP = M_X + n + nr               # layout.riccati_p
+    # work: the row (A, B, C, Dy, J) at its table offsets, then the scratch blocks
+    oA = 0
+    oB = oA + n * n
+    oC = oB + n * NETA
+    oDy = oC + p * n
+    oJ = oDy + p * NETA
+    oK = oJ + n * NETA
+    oF = oK + n * p
+    oG = oF + n * n
+    oHm = oG + n * NETA
+    oMw = oHm + 4 * n * n
+    opiv = oMw + 4 * n * n
+    oZ = opiv + 2 * n
+    oXt = oZ + 2 * n * n
+    opx = oXt + n * n
+    ocol = opx + n                  # 2n (>= 2 * NETA) floats
+    oe = ocol + 2 * n + 2 * NETA    # current inputs eta (3)
+    oS = oe + NETA                  # scratch of _finish
     for k in range(t.shape[0]):
-        ok = riccati_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
+        vxk = vx[k]
+        if not _sample_valid(mem, cfg, t[k], vxk, d[k], ay[k], r[k]):
+            _store(mem, k, n, False, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
+            continue
+        i, a = _grid(cfg, vxk)
+        i1 = i + 1 if i + 1 < tab.shape[0] else tab.shape[0] - 1
+        for c in range(oK):
+            work[c] = tab[i, c] + a * (tab[i1, c] - tab[i, c])
+        work[oe] = d[k] if cfg[C_USE] > 0 else 0.0
+        work[oe + 1] = ay[k] if cfg[C_USE + 1] > 0 else 0.0
+        work[oe + 2] = r[k] if cfg[C_USE + 2] > 0 else 0.0
+        dt, restart, _ = _begin(mem, cfg, t[k])
+        ok = True
+        if restart:
+            for q in range(n):
+                s = 0.0
+                for j in range(NETA):
+                    s += work[oJ + q * NETA + j] * work[oe + j]
+                mem[M_X + q] = s
+        else:
+            nsub = np.int64(math.ceil(dt / cfg[C_SUB] - 1e-9))
+            if nsub < 1:
+                nsub = 1
+            h = dt / nsub
+            for sub in range(nsub):
+                # gain from the current P, then the state over the substep
+                for q in range(n):
+                    for j in range(p):
+                        s = 0.0
+                        for l in range(n):
+                            for mm in range(p):
+                                s += mem[oP + q * n + l] * work[oC + mm * n + l] * cfg[oR + mm * p + j]
+                        work[oK + q * p + j] = s
+                for q in range(n):
+                    for j in range(n):
+                        s = work[oA + q * n + j]
+                        for l in range(p):
+                            s -= work[oK + q * p + l] * work[oC + l * n + j]
+                        work[oF + q * n + j] = s
+                    for j in range(NETA):
+                        s = work[oB + q * NETA + j]
+                        for l in range(p):
+                            s += work[oK + q * p + l] * work[oDy + l * NETA + j]
+                        work[oG + q * NETA + j] = s
+                a0 = sub / nsub
+                a1 = (sub + 1.0) / nsub
+                for j in range(NETA):
+                    work[ocol + j] = mem[M_ETA + j] + a0 * (work[oe + j] - mem[M_ETA + j])
+                    work[ocol + NETA + j] = mem[M_ETA + j] + a1 * (work[oe + j] - mem[M_ETA + j])
+                _tustin_flat(mem, M_X, n, work, oF, oG, NETA, work, ocol, work, ocol + NETA, h, h, work, oMw)
+                # Riccati via the Hamiltonian: Z' = Hm Z, Hm = [[-A^T, M], [W, A]], Z = [I; P]
+                m2 = 2 * n
+                for q in range(n):
+                    for j in range(n):
+                        mpos = 0.0
+                        for l in range(p):
+                            for mm in range(p):
+                                mpos += work[oC + l * n + q] * cfg[oR + l * p + mm] * work[oC + mm * n + j]
+                        work[oHm + q * m2 + j] = -work[oA + j * n + q]
+                        work[oHm + q * m2 + n + j] = mpos - cfg[oMn + q * n + j]
+                        work[oHm + (n + q) * m2 + j] = cfg[oW + q * n + j]
+                        work[oHm + (n + q) * m2 + n + j] = work[oA + q * n + j]
+                for q in range(m2):
+                    for j in range(m2):
+                        work[oMw + q * m2 + j] = -0.5 * h * work[oHm + q * m2 + j]
+                    work[oMw + q * m2 + q] += 1.0
+                _lu_flat(work, oMw, work, opiv, m2)
+                for j in range(n):
+                    for q in range(m2):
+                        if q >= n:
+                            zq = mem[oP + (q - n) * n + j]
+                        else:
+                            zq = 1.0 if q == j else 0.0
+                        s = zq
+                        for l in range(m2):
+                            if l < n:
+                                zl = 1.0 if l == j else 0.0
+                            else:
+                                zl = mem[oP + (l - n) * n + j]
+                            s += 0.5 * h * work[oHm + q * m2 + l] * zl
+                        work[ocol + q] = s
+                    _lu_solve_flat(work, oMw, work, opiv, work, ocol, m2)
+                    for q in range(m2):
+                        work[oZ + q * n + j] = work[ocol + q]
+                # P = Y X^-1  <=>  X^T P^T = Y^T ; P symmetric
+                for q in range(n):
+                    for j in range(n):
+                        work[oXt + q * n + j] = work[oZ + j * n + q]
+                _lu_flat(work, oXt, work, opx, n)
+                for j in range(n):
+                    for q in range(n):
+                        work[ocol + q] = work[oZ + (n + j) * n + q]
+                    _lu_solve_flat(work, oXt, work, opx, work, ocol, n)
+                    for q in range(n):
+                        work[oF + j * n + q] = work[ocol + q]
+                ok = True
+                for q in range(n):
+                    for j in range(n):
+                        v = 0.5 * (work[oF + q * n + j] + work[oF + j * n + q])
+                        if not math.isfinite(v):
+                            ok = False
+                        mem[oP + q * n + j] = v
+                if not ok:
+                    break
+        if ok:          # P finite: record the inputs, separate the roll
+            for q in range(NETA):
+                mem[M_ETA + q] = work[oe + q]
+            ok = _finish(mem, cfg, mem[M_X + n - 1], ay[k], dt, restart, False, work, oS)
         _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
+
+
+def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
+    """One sample of :func:`riccati_run`; returns ``(w, theta, phi_b, valid)`` (Python: one-sample arrays)."""
+    n = np.int64(cfg[C_N])
+    inp = np.array([t, vx, d, ay, r], dtype=np.float64)
+    inp.flags.writeable = False        # as Signals' arrays: the same compiled version as run()
+    out = np.empty((4, 1))
+    valid = np.empty(1, dtype=np.bool_)
+    riccati_run(mem, cfg, tab, work, inp[0:1], inp[1:2], inp[2:3], inp[3:4], inp[4:5], out[0], out[1], out[2],
+                out[3], valid, np.empty((1, max(n, 2))))
+    return float(out[0, 0]), float(out[1, 0]), float(out[2, 0]), bool(valid[0])

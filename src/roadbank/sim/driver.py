@@ -31,7 +31,7 @@ import numpy as np
 from numba import njit
 
 from ..params import VehicleParams
-from .road import knots, road_curvature
+from .road import _wrap, interp1, knots
 from .tyres import fast_sincos
 
 MODE_OPEN_LOOP, MODE_PATH = 0, 1
@@ -130,39 +130,27 @@ class Driver:
         return np.concatenate([g, hdr, self.speed[0], self.speed[1], st[0], st[1], pa[0], pa[1]])
 
 
-@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
-def _segment(a, off, n, x):
-    """Segment ``k`` and fraction ``u`` of ``x`` among the increasing knots ``a[off:off+n]``.
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy", no_cpython_wrapper=True,
+      no_cfunc_wrapper=True)
+def interp_knots(a, off, n, x, smooth):
+    """Interpolation through knots ``a[off:off+n]`` -> ``a[off+n:off+2n]``, held beyond the ends.
 
-    ``u = -1`` flags ``x`` outside the knots (value held at knot ``k``)."""
+    Between two knots the weight of the right one is the fraction ``u`` of the
+    way (``smooth = 0.0``: piecewise linear) or ``(1 - cos(pi u))/2``
+    (``smooth = 1.0``: raised cosine, zero slope at the knots). ``smooth`` is a
+    float so that one compiled version serves both.
+    """
+    ys = off + n
     if n == 1 or x <= a[off]:
-        return 0, -1.0
+        return a[ys]
     if x >= a[off + n - 1]:
-        return n - 1, -1.0
+        return a[ys + n - 1]
     k = 0
     while a[off + k + 1] < x:
         k += 1
-    return k, (x - a[off + k]) / (a[off + k + 1] - a[off + k])
-
-
-@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
-def interp_cos(a, off, n, x):
-    """Raised-cosine interpolation through knots ``a[off:off+n]`` -> ``a[off+n:off+2n]`` (held beyond the ends)."""
-    ys = off + n
-    k, u = _segment(a, off, n, x)
-    if u < 0.0:
-        return a[ys + k]
-    w = 0.5 - 0.5 * fast_sincos(math.pi * u)[1]
-    return a[ys + k] + w * (a[ys + k + 1] - a[ys + k])
-
-
-@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
-def interp_lin(a, off, n, x):
-    """Piecewise-linear interpolation through knots ``a[off:off+n]`` -> ``a[off+n:off+2n]`` (held beyond the ends)."""
-    ys = off + n
-    k, u = _segment(a, off, n, x)
-    if u < 0.0:
-        return a[ys + k]
+    u = (x - a[off + k]) / (a[off + k + 1] - a[off + k])
+    if smooth != 0.0:
+        u = 0.5 - 0.5 * fast_sincos(math.pi * u)[1]
     return a[ys + k] + u * (a[ys + k + 1] - a[ys + k])
 
 
@@ -177,7 +165,7 @@ def driver_step(t, x, dstate, drv, road, u, dt):
     H = N_GAINS
     vx = x[3]
     # ---- speed ------------------------------------------------------------------
-    e_v = interp_lin(drv, int(drv[H]), int(drv[H + 1]), t) - vx
+    e_v = interp_knots(drv, np.int64(drv[H]), np.int64(drv[H + 1]), t, 0.0) - vx
     a_cmd = g[G_KPV] * e_v + dstate[D_VINT]
     force = g[G_M] * a_cmd
     saturated = False
@@ -209,7 +197,7 @@ def driver_step(t, x, dstate, drv, road, u, dt):
         dstate[D_VINT] = vint
     # ---- steering -----------------------------------------------------------------
     if g[G_MODE] == MODE_OPEN_LOOP:
-        u[0] = interp_cos(drv, int(drv[H + 2]), int(drv[H + 3]), t)
+        u[0] = interp_knots(drv, np.int64(drv[H + 2]), np.int64(drv[H + 3]), t, 1.0)
         dstate[D_SWA] = u[0]
         return
     s = x[0]
@@ -220,8 +208,8 @@ def driver_step(t, x, dstate, drv, road, u, dt):
     if lp < g[G_LPMIN]:
         lp = g[G_LPMIN]
     heading = psi + x[4] / vxs
-    e = interp_cos(drv, int(drv[H + 4]), int(drv[H + 5]), s + lp) - (n + lp * math.sin(heading))
-    kap = road_curvature(road, s + 0.5 * lp)
+    e = interp_knots(drv, np.int64(drv[H + 4]), np.int64(drv[H + 5]), s + lp, 1.0) - (n + lp * math.sin(heading))
+    kap = interp1(road, np.int64(road[1]), np.int64(road[2]), _wrap(road, s + 0.5 * lp))   # road_curvature
     den = 1.0 - n * kap
     kap_cmd = kap / den + 2.0 * e / (lp * lp)
     dstate[D_LATINT] += g[G_KILAT] * e * dt

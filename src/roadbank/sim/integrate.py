@@ -25,7 +25,7 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from .driver import driver_step
-from .plant import NAUX, NC, NU, NX, plant_core, prepare, step_inputs
+from .plant import NAUX, NC, NU, NX, _fill_aux, plant_core, prepare, step_inputs
 
 
 @intrinsic
@@ -51,38 +51,6 @@ def _borrow(typingctx, arr):
 
 # RK4 stage weights: stage j is evaluated at x + _A[j] dt k_j-1
 _A1, _A2, _A3 = 0.5, 0.5, 1.0
-
-
-@njit(cache=True, fastmath=True, error_model="numpy")
-def rk4_step(x, u, road, p, dt, k1, k2, k3, k4, tmp, aux):
-    """One RK4 step in place on ``x`` (convenience entry; the loop in :func:`simulate_core` is fused)."""
-    q = prepare(p)
-    c = np.empty(NC)
-    step_inputs(u, q, c)
-    k = np.empty((4, NX))
-    dx = np.empty(NX)
-    _rk4_fused(x, road, q, c, dt, k, tmp, dx, aux)
-    for i in range(NX):
-        k1[i] = k[0, i]
-        k2[i] = k[1, i]
-        k3[i] = k[2, i]
-        k4[i] = k[3, i]
-
-
-@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
-def _rk4_fused(x, road, q, c, dt, k, tmp, dx, aux):
-    """RK4 step on ``x`` with the plant inlined once in a loop over the stages; ``k`` is (4, NX)."""
-    for i in range(NX):
-        tmp[i] = x[i]
-    for j in range(4):
-        plant_core(tmp, road, q, c, dx, aux, False)
-        a = (_A1 if j == 0 else (_A2 if j == 1 else _A3)) * dt
-        for i in range(NX):
-            k[j, i] = dx[i]
-            tmp[i] = x[i] + a * dx[i]
-    w = dt / 6.0
-    for i in range(NX):
-        x[i] += w * (k[0, i] + 2.0 * (k[1, i] + k[2, i]) + k[3, i])
 
 
 @njit(cache=True, fastmath=True, error_model="numpy")
@@ -117,7 +85,18 @@ def simulate_core(x, d, t0, n_steps, dt, road, drv, q, X, U, u, c, k, tmp, dx, a
         for i in range(NU):
             U[n, i] = u[i]
         step_inputs(u, q, c)
-        _rk4_fused(x, road, q, c, dt, k, tmp, dx, aux)
+        # RK4 with the plant inlined once in a loop over the four stages (k is (4, NX))
+        for i in range(NX):
+            tmp[i] = x[i]
+        for j in range(4):
+            plant_core(tmp, road, q, c, dx)
+            a = (_A1 if j == 0 else (_A2 if j == 1 else _A3)) * dt
+            for i in range(NX):
+                k[j, i] = dx[i]
+                tmp[i] = x[i] + a * dx[i]
+        w = dt / 6.0
+        for i in range(NX):
+            x[i] += w * (k[0, i] + 2.0 * (k[1, i] + k[2, i]) + k[3, i])
     driver_step(t0 + n_steps * dt, x, d, drv, road, u, dt)
     for i in range(NX):
         X[n_steps, i] = x[i]
@@ -133,23 +112,33 @@ def simulate(x0, d0, t0: float, duration: float, dt: float, road_packed, drv_pac
     x = np.array(x0, dtype=np.float64)
     d = np.array(d0, dtype=np.float64)
     simulate_core(x, d, float(t0), n_steps, float(dt), np.ascontiguousarray(road_packed, dtype=np.float64),
-                  np.ascontiguousarray(drv_packed, dtype=np.float64), prepare(np.asarray(p, dtype=np.float64)),
+                  np.ascontiguousarray(drv_packed, dtype=np.float64), prepare(p),
                   X, U, np.zeros(NU), np.zeros(NC), np.zeros((4, NX)), np.zeros(NX), np.zeros(NX), np.zeros(NAUX))
     t = t0 + dt * np.arange(n_steps + 1)
     return t, X, U, d
 
 
-@njit(cache=True, fastmath=True, error_model="numpy")
-def outputs_at(X, U, idx, road, p):
-    """Plant auxiliary outputs (``A_*`` of :mod:`roadbank.sim.plant`) at rows ``idx``."""
+def outputs_at(X, U, idx, road, p) -> np.ndarray:
+    """Plant auxiliary outputs (``A_*`` of :mod:`roadbank.sim.plant`) at rows ``idx`` of ``X``, ``U``.
+
+    Returns an array (len(idx), NAUX); the units are those of the ``A_*`` entries.
+    """
+    X = np.ascontiguousarray(X, dtype=np.float64)
+    U = np.ascontiguousarray(U, dtype=np.float64)
+    idx = np.ascontiguousarray(idx, dtype=np.int64)
     out = np.empty((idx.shape[0], NAUX))
-    q = prepare(p)
-    c = np.empty(NC)
-    dx = np.empty(NX)
-    aux = np.empty(NAUX)
+    _outputs_into(X, U, idx, np.ascontiguousarray(road, dtype=np.float64), prepare(p), out,
+                  np.empty(NC), np.empty(NX), np.empty(NAUX))
+    return out
+
+
+@njit(cache=True, fastmath=True, error_model="numpy", no_cfunc_wrapper=True)
+def _outputs_into(X, U, idx, road, q, out, c, dx, aux):
+    """:func:`outputs_at` into ``out`` with the prepared constants ``q`` and work arrays ``c``, ``dx``, ``aux``."""
     for j in range(idx.shape[0]):
+        x = X[idx[j]]
         step_inputs(U[idx[j]], q, c)
-        plant_core(X[idx[j]], road, q, c, dx, aux, True)
+        plant_core(x, road, q, c, dx)
+        _fill_aux(x, q, c, dx, aux)
         for i in range(NAUX):
             out[j, i] = aux[i]
-    return out

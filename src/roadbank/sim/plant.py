@@ -76,7 +76,7 @@ from .params import (P_BRAKEF, P_CDA, P_CROLL, P_CX, P_CY, P_EX, P_EY, P_FRR, P_
                      P_LR, P_M, P_MS, P_MU, P_MUNSPRUNG, P_PDRIVE, P_PDX2, P_PDY2, P_PKY2, P_RATIO,
                      P_RBX1, P_RBX2, P_RBY1, P_RBY2, P_RHO, P_RW, P_SHAREF, P_SIGX, P_TAULOAD,
                      P_TBRAKE, P_TDRIVE, P_TF, P_TR)
-from .road import bank_under_vehicle, road_curvature, road_grade
+from .road import road_at
 from .tyres import fast_sin, fast_sincos, tyre_core
 
 # state indices
@@ -133,7 +133,11 @@ Q_OFZ = Q_ODKA + 4
 Q_OFXW = Q_OFZ + 4
 Q_OFYW = Q_OFXW + 4
 Q_OTANA = Q_OFYW + 4
-NQ = Q_OTANA + 4
+# scalars of the last evaluation that only the auxiliary outputs need (written by every
+# plant_core call, read by _fill_aux): bank, grade, curvature, specific forces, gravity
+# along y, roll sine and cosine
+(Q_APHIB, Q_AGRADE, Q_AKAP, Q_AFX, Q_AFY, Q_AFZ, Q_AGY, Q_ASPHI, Q_ACPHI) = range(Q_OTANA + 4, Q_OTANA + 13)
+NQ = Q_OTANA + 13
 
 # ---- per-step scalars (step_inputs(u, q, c)): the inputs are held over an RK4 step ---------
 (C_DELTA, C_THROTTLE, NC) = range(3)
@@ -148,9 +152,12 @@ def _sin_cos_small(a):
     return s, math.sqrt(1.0 - s * s)
 
 
-@njit(cache=True, fastmath=True, error_model="numpy")
-def prepare(p):
-    """Derived constants ``q`` (``Q_*`` indices) from the packed parameters ``p`` (once per run)."""
+def prepare(p) -> np.ndarray:
+    """Derived constants ``q`` (``Q_*`` indices, length ``NQ``) from the packed parameters ``p`` (once per run).
+
+    Plain Python (about 50 us, once per run): nothing to compile.
+    """
+    p = [float(v) for v in np.asarray(p, dtype=np.float64)]
     q = np.zeros(NQ)
     m = p[P_M]
     lf = p[P_LF]
@@ -234,13 +241,16 @@ def step_inputs(u, q, c):
         q[Q_TB + i] = tb * q[Q_BRAKE + i]
 
 
-@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
-def plant_core(x, road, q, c, dx, aux, want_aux):
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy", no_cpython_wrapper=True,
+      no_cfunc_wrapper=True)
+def plant_core(x, road, q, c, dx):
     """The plant's right-hand side on derived constants ``q`` and per-step constants ``c``.
 
-    Writes dx/dt into ``dx`` and, if ``want_aux`` (a compile-time literal in the
-    callers), the outputs into ``aux``. No allocation, no calls with arrays
-    (inlined into its callers: no reference counting in the integration loop).
+    Writes dx/dt into ``dx``, and into ``q``'s per-evaluation slots (``Q_O*``,
+    ``Q_A*``) what :func:`_fill_aux` needs for the auxiliary outputs. No
+    allocation, no calls with arrays (inlined into its callers: no reference
+    counting in the integration loop). One compiled version serves the
+    integration loop and the outputs (no specialisation per caller).
     """
     m = q[Q_M]
     g = q[Q_G]
@@ -255,9 +265,7 @@ def plant_core(x, road, q, c, dx, aux, want_aux):
     dphi = x[X_DPHI]
 
     # ---- road and gravity --------------------------------------------------
-    kap = road_curvature(road, s)
-    grade = road_grade(road, s)
-    phib = bank_under_vehicle(road, s, n, q[Q_HALF_TRACK])
+    kap, grade, phib = road_at(road, s, n, q[Q_HALF_TRACK])
     sb, cb = _sin_cos_small(phib)
     sg, cg = _sin_cos_small(grade)
     spsi, cpsi = fast_sincos(psi)
@@ -321,7 +329,7 @@ def plant_core(x, road, q, c, dx, aux, want_aux):
         vxw = vxc * cw + vyc * sw
         vyw = vyc * cw - vxc * sw
         avx = abs(vxw)
-        tana = -vyw / max(avx, _VX_FLOOR)
+        tana = -vyw / (_VX_FLOOR if _VX_FLOOR > avx else avx)
         kappa = q[Q_KA + i]
         fxw, fyw = tyre_core(tana, kappa, fz, mu, q[Q_KY0 + i], q[Q_INVFZ0 + i], kynorm, q[Q_INVFZPK + i],
                              cy, ey, pdy2, kx, cx, ex, pdx2, rby1sq, rby2, rbx1sq, rbx2)
@@ -333,7 +341,7 @@ def plant_core(x, road, q, c, dx, aux, want_aux):
         # wheel spin and transient slip
         om = q[Q_OM + i]
         sgn = om / (abs(om) + 0.5)
-        torque = t_drive * q[Q_DRIVE + i] - q[Q_TB + i] * sgn - frr_rw * max(fz, 0.0) * sgn - rw * fxw
+        torque = t_drive * q[Q_DRIVE + i] - q[Q_TB + i] * sgn - frr_rw * (0.0 if 0.0 > fz else fz) * sgn - rw * fxw
         q[Q_ODOM + i] = torque * inv_iw
         q[Q_ODKA + i] = ((rw * om - vxw) - avx * kappa) * inv_sigx
         q[Q_OFZ + i] = fz
@@ -346,11 +354,6 @@ def plant_core(x, road, q, c, dx, aux, want_aux):
     for i in range(4):
         dx[X_OMEGA + i] = q[Q_ODOM + i]
         dx[X_KAPPA + i] = q[Q_ODKA + i]
-        if want_aux:
-            aux[A_FZW + i] = q[Q_OFZ + i]
-            aux[A_FXW + i] = q[Q_OFXW + i]
-            aux[A_FYW + i] = q[Q_OFYW + i]
-            aux[A_TANA + i] = q[Q_OTANA + i]
 
     f_aero = q[Q_AERO] * vx * abs(vx)
 
@@ -378,54 +381,78 @@ def plant_core(x, road, q, c, dx, aux, want_aux):
     dx[X_FXL] = (fx_spec - fxl) * q[Q_INV_TAU]
     dx[X_FYL] = (fy_spec - fyl) * q[Q_INV_TAU]
 
-    if want_aux:
-        aux[A_PHIB] = phib
-        aux[A_GRADE] = grade
-        aux[A_KAPPA] = kap
-        aux[A_FX] = fx_spec
-        aux[A_FY] = fy_spec
-        aux[A_FZ] = fz_spec
-        aux[A_AY] = (dvy + vx * r - gy) * cphi + fz_spec * sphi - q[Q_HSENS] * ddphi
-        aux[A_AX] = fx_spec
-        aux[A_DVY] = dvy
-        aux[A_DDPHI] = ddphi
-        aux[A_DELTA] = c[C_DELTA]
+    q[Q_APHIB] = phib
+    q[Q_AGRADE] = grade
+    q[Q_AKAP] = kap
+    q[Q_AFX] = fx_spec
+    q[Q_AFY] = fy_spec
+    q[Q_AFZ] = fz_spec
+    q[Q_AGY] = gy
+    q[Q_ASPHI] = sphi
+    q[Q_ACPHI] = cphi
 
 
-@njit(cache=True, fastmath=True, error_model="numpy")
-def plant_eval(x, u, road, p, dx, aux, want_aux):
-    """Evaluate the plant: write dx/dt into ``dx`` and, if ``want_aux``, outputs into ``aux``.
+@njit(cache=True, fastmath=True, error_model="numpy", no_cpython_wrapper=True, no_cfunc_wrapper=True)
+def _fill_aux(x, q, c, dx, aux):
+    """Auxiliary outputs (``A_*``) of the last :func:`plant_core` evaluation (its ``x``, ``q``, ``c``, ``dx``)."""
+    vx = x[X_VX]
+    r = x[X_R]
+    dvy = dx[X_VY]
+    ddphi = dx[X_DPHI]
+    fz_spec = q[Q_AFZ]
+    aux[A_PHIB] = q[Q_APHIB]
+    aux[A_GRADE] = q[Q_AGRADE]
+    aux[A_KAPPA] = q[Q_AKAP]
+    aux[A_FX] = q[Q_AFX]
+    aux[A_FY] = q[Q_AFY]
+    aux[A_FZ] = fz_spec
+    aux[A_AY] = (dvy + vx * r - q[Q_AGY]) * q[Q_ACPHI] + fz_spec * q[Q_ASPHI] - q[Q_HSENS] * ddphi
+    aux[A_AX] = q[Q_AFX]
+    aux[A_DVY] = dvy
+    aux[A_DDPHI] = ddphi
+    aux[A_DELTA] = c[C_DELTA]
+    for i in range(4):
+        aux[A_FZW + i] = q[Q_OFZ + i]
+        aux[A_FXW + i] = q[Q_OFXW + i]
+        aux[A_FYW + i] = q[Q_OFYW + i]
+        aux[A_TANA + i] = q[Q_OTANA + i]
+
+
+@njit(cache=True, fastmath=True, error_model="numpy", no_cfunc_wrapper=True)
+def plant_eval_prepared(x, u, road, q, dx, aux):
+    """:func:`plant_eval` on :func:`prepare`'s constants ``q``: dx/dt into ``dx``, the outputs into ``aux``."""
+    c = np.empty(NC)
+    step_inputs(u, q, c)
+    plant_core(x, road, q, c, dx)
+    _fill_aux(x, q, c, dx, aux)
+
+
+def plant_eval(x, u, road, p, dx, aux, want_aux=True) -> None:
+    """Evaluate the plant: write dx/dt into ``dx`` and the outputs into ``aux`` (always; ``want_aux`` is kept
+    for compatibility).
 
     ``x`` (NX,), ``u`` (NU,), ``road`` from :meth:`Road.pack`, ``p`` from
     :meth:`PlantParams.pack`. Convenience entry (derives the constants on every
     call); the integration loop uses :func:`prepare`, :func:`step_inputs` and
     :func:`plant_core` directly.
     """
-    q = prepare(p)
-    c = np.empty(NC)
-    step_inputs(u, q, c)
-    if want_aux:
-        plant_core(x, road, q, c, dx, aux, True)
-    else:
-        plant_core(x, road, q, c, dx, aux, False)
+    f64 = np.float64
+    plant_eval_prepared(np.ascontiguousarray(x, dtype=f64), np.ascontiguousarray(u, dtype=f64),
+                        np.ascontiguousarray(road, dtype=f64), prepare(p), dx, aux)
 
 
-@njit(cache=True, fastmath=True, error_model="numpy")
-def f(x, u, road, params):
-    """Pure right-hand side ``dx/dt = f(x, u, road, params)`` (allocates the result).
+def f(x, u, road, params) -> np.ndarray:
+    """Pure right-hand side ``dx/dt = f(x, u, road, params)`` (allocates the result; units of the states per second).
 
     See the module docstring for the states, inputs and equations.
     """
     dx = np.empty(NX)
-    aux = np.empty(NAUX)
-    plant_eval(x, u, road, params, dx, aux, False)
+    plant_eval(x, u, road, params, dx, np.empty(NAUX))
     return dx
 
 
-@njit(cache=True, fastmath=True, error_model="numpy")
-def outputs(x, u, road, params):
-    """Auxiliary outputs (``A_*`` indices) at one state: loads, forces, specific forces, dvy/dt."""
-    dx = np.empty(NX)
+def outputs(x, u, road, params) -> np.ndarray:
+    """Auxiliary outputs (``A_*`` indices) at one state: loads, forces, specific forces, dvy/dt (SI)."""
     aux = np.empty(NAUX)
-    plant_eval(x, u, road, params, dx, aux, True)
+    plant_eval(x, u, road, params, np.empty(NX), aux)
     return aux

@@ -251,28 +251,28 @@ def interp1(a, off, n, x):
 @njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def road_curvature(road, s):
     """Reference-line curvature (1/m) at ``s``."""
-    return interp1(road, int(road[1]), int(road[2]), _wrap(road, s))
+    return interp1(road, np.int64(road[1]), np.int64(road[2]), _wrap(road, s))
 
 
 @njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def road_grade(road, s):
     """Grade (rad) at ``s``."""
-    return interp1(road, int(road[8]), int(road[9]), _wrap(road, s))
+    return interp1(road, np.int64(road[8]), np.int64(road[9]), _wrap(road, s))
 
 
 @njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def road_bank_factor(road, s):
     """Bank factor (-) at ``s``."""
-    return interp1(road, int(road[3]), int(road[4]), _wrap(road, s))
+    return interp1(road, np.int64(road[3]), np.int64(road[4]), _wrap(road, s))
 
 
 @njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def _profile_integral(road, n):
     """int_{n_0}^{n} bank_profile(n') dn' (rad m), n_0 the first profile knot."""
-    off = int(road[5])
-    m = int(road[6])
+    off = np.int64(road[5])
+    m = np.int64(road[6])
     pb = off + m
-    cum = int(road[7])
+    cum = np.int64(road[7])
     if n <= road[off] or m == 1:
         return road[pb] * (n - road[off])
     if n >= road[off + m - 1]:
@@ -288,10 +288,25 @@ def _profile_integral(road, n):
 @njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
 def bank_under_vehicle(road, s, n, half_track):
     """Secant bank (rad): bank factor at ``s`` times the mean profile over ``n +- half_track``."""
-    if int(road[6]) == 1:
-        return road_bank_factor(road, s) * road[int(road[5]) + 1]
+    return road_at(road, s, n, half_track)[2]
+
+
+@njit(cache=True, forceinline=True, fastmath=True, error_model="numpy", no_cpython_wrapper=True,
+      no_cfunc_wrapper=True)
+def road_at(road, s, n, half_track):
+    """``(curvature (1/m), grade (rad), secant bank (rad))`` at ``(s, n)``: what the plant reads.
+
+    :func:`road_curvature`, :func:`road_grade` and :func:`bank_under_vehicle` in
+    one call that wraps ``s`` once (the plant's evaluation calls only this).
+    """
+    sw = _wrap(road, s)
+    kap = interp1(road, np.int64(road[1]), np.int64(road[2]), sw)
+    grade = interp1(road, np.int64(road[8]), np.int64(road[9]), sw)
+    factor = interp1(road, np.int64(road[3]), np.int64(road[4]), sw)
+    if np.int64(road[6]) == 1:
+        return kap, grade, factor * road[np.int64(road[5]) + 1]
     mean = (_profile_integral(road, n + half_track) - _profile_integral(road, n - half_track)) / (2.0 * half_track)
-    return road_bank_factor(road, s) * mean
+    return kap, grade, factor * mean
 
 
 @njit(cache=True)
@@ -312,9 +327,9 @@ def _seg_int(f, b0, slope, a, b):
 @njit(cache=True)
 def contact_height(road, s, n):
     """Surface height ``z`` and horizontal coordinate ``h`` (m) at ``(s, n)``, relative to the first profile knot."""
-    f = road_bank_factor(road, s)
-    off = int(road[5])
-    m = int(road[6])
+    f = interp1(road, np.int64(road[3]), np.int64(road[4]), _wrap(road, s))      # road_bank_factor
+    off = np.int64(road[5])
+    m = np.int64(road[6])
     pb = off + m
     if n <= road[off] or m == 1:
         if n >= road[off]:
@@ -358,6 +373,8 @@ def truth_bank(road, s, n, psi, lf, lr, tf, tr):
         zl, hl = contact_height(road, sl, nl)
         zr, hr = contact_height(road, sr, nr)
         # horizontal distance between the contacts (across and along the road)
-        dist = math.sqrt((hl - hr) ** 2 + (sl - sr) ** 2)
+        dh = hl - hr
+        ds = sl - sr
+        dist = math.sqrt(dh * dh + ds * ds)
         tot += math.atan2(zl - zr, dist)
     return 0.5 * tot

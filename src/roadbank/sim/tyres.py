@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 _HALF_PI = 0.5 * math.pi
@@ -37,7 +38,7 @@ def fast_atan(x):
     """
     a = abs(x)
     inv = a > 1.0
-    z = min(a, 1.0) / max(a, 1.0)
+    z = (1.0 if 1.0 < a else a) / (1.0 if 1.0 > a else a)   # min(a, 1) / max(a, 1)
     u = z * z
     # q(u) by Estrin's scheme (shorter dependency chain than Horner)
     u2 = u * u
@@ -65,9 +66,20 @@ _PIO2_LO = 6.077100506506192e-11  # (Cody-Waite: k * _PIO2_HI is exact for |k| <
 _TWO_OVER_PI = 2.0 / math.pi
 
 
-@njit(cache=True, fastmath=True, error_model="numpy")
-def _sincos_reduced(r, q):
-    """(sin, cos) of ``r + q pi/2`` for |r| <= pi/4: Taylor polynomials (Estrin) and the quadrant."""
+# fastmath without reassociation, set explicitly (else inherited from fastmath callers): the
+# two-part reduction must not be folded into k * (hi + lo); FMA contraction keeps it exact
+@njit(cache=True, forceinline=True, fastmath={"nnan", "ninf", "nsz", "arcp", "contract", "afn"}, error_model="numpy")
+def fast_sincos(a):
+    """``(sin a, cos a)`` for any |a| < 1e5 rad, error < 1e-15 (no libm call).
+
+    Reduction to ``r = a - k pi/2`` in [-pi/4, pi/4] (two-part pi/2), Taylor
+    series of sin to r^17 and cos to r^18 there (truncation < 3e-18), then the
+    quadrant ``k mod 4``.
+    """
+    k = math.floor(a * _TWO_OVER_PI + 0.5)
+    r = (a - k * _PIO2_HI) - k * _PIO2_LO
+    q = np.int64(k) & 3
+    # (sin, cos) of r in [-pi/4, pi/4]: Taylor polynomials by Estrin's scheme, then the quadrant
     u = r * r
     u2 = u * u
     u4 = u2 * u2
@@ -84,21 +96,6 @@ def _sincos_reduced(r, q):
     if q == 2:
         return -s, -c
     return -c, s
-
-
-# fastmath without reassociation, set explicitly (else inherited from fastmath callers): the
-# two-part reduction must not be folded into k * (hi + lo); FMA contraction keeps it exact
-@njit(cache=True, fastmath={"nnan", "ninf", "nsz", "arcp", "contract", "afn"}, error_model="numpy")
-def fast_sincos(a):
-    """``(sin a, cos a)`` for any |a| < 1e5 rad, error < 1e-15 (no libm call).
-
-    Reduction to ``r = a - k pi/2`` in [-pi/4, pi/4] (two-part pi/2), Taylor
-    series of sin to r^17 and cos to r^18 there (truncation < 3e-18), then the
-    quadrant ``k mod 4``.
-    """
-    k = math.floor(a * _TWO_OVER_PI + 0.5)
-    r = (a - k * _PIO2_HI) - k * _PIO2_LO
-    return _sincos_reduced(r, int(k) & 3)
 
 
 @njit(cache=True, forceinline=True, fastmath=True, error_model="numpy")
