@@ -123,6 +123,30 @@ def test_tune_cli_writes_a_vehicle_file_that_reproduces_its_scores(tmp_path, mon
         assert s.median_rms == pytest.approx(car.scores[name]["validation_median_rms_deg"], rel=1e-9)
     assert car.scores["pif-modified"]["validation_objective_deg"] < \
         car.scores["pif-modified"]["table4_validation_objective_deg"]
+    # the PIF's table is relative to the car's sensor: no R (reproduced above at the sensor's
+    # rate); at a 10 Hz log R is the sensor's at 10 Hz and th is lowered where it must be
+    table = car.tuning["pif-modified"]
+    assert "R" not in table and {"Q", "th"} <= set(table)
+    at10 = car.make("pif-modified", log_rate=10.0)
+    assert at10.R[0, 0] == pytest.approx(car.sensors.r_noise_density(10.0), rel=1e-12)
+    assert at10.Q == table["Q"] and 0.0 <= at10.th <= table["th"]
+
+
+@pytest.mark.parametrize("name", ["pif-modified", "pif-rate"])
+def test_a_given_th_with_the_sensor_R_is_halved_until_solvable_like_the_default(name):
+    """A tuned th that has no stabilising solution with the sensor's R at a 10 Hz log (R ten
+    times the 100 Hz density) is halved until it has one, as the default's own th is; an
+    explicit R keeps an explicit th strict."""
+    from roadbank.estimators.pif import DEFAULT_TUNING, RATE_TUNING, with_sensor_R
+    from roadbank.estimators.synthesis import NoStabilisingSolution
+    th = (DEFAULT_TUNING if name == "pif-modified" else RATE_TUNING)["th"]
+    with pytest.raises(NoStabilisingSolution):
+        E.make(name, P, R=10 * R_ESP, th=th)
+    est = E.make(name, P, **with_sensor_R(name, {"th": th}, 10 * R_ESP))
+    assert 0.0 < est.th < th and est.R[0, 0] == 10 * R_ESP
+    assert any(th / est.th == 2.0**k for k in range(1, 11))         # halvings of the given th
+    E.make(name, P, R=10 * R_ESP, th=est.th)                       # the result is solvable as given
+    assert E.make(name, P, **with_sensor_R(name, {"th": th}, R_ESP)).th == th   # solvable: unchanged
 
 
 def test_tune_cli_rejects_untunable_estimators(tmp_path):

@@ -82,9 +82,14 @@ SENSOR_R_ESTIMATORS = ("pif-modified", "pif-rate", "pif-adaptive", "pif-rate-ada
 def with_sensor_R(name: str, options: dict, R: float) -> dict:
     """``make(name, ...)`` options with ``R`` = the sensor's noise density ``R`` ((rad/s)^2 s)
     when ``name`` is a default-tuned PIF (:data:`SENSOR_R_ESTIMATORS`) given no ``R``;
-    otherwise ``options`` unchanged."""
+    otherwise ``options`` unchanged.
+
+    A ``th`` given with it (a ``[tuning]`` table from ``roadbank tune``, which writes ``Q`` and
+    ``th`` relative to the sensor and no ``R``) adapts like the default's: at a log rate whose
+    ``R`` leaves no stabilising solution it is halved until there is one (``adapt_th``).
+    """
     if name in SENSOR_R_ESTIMATORS and "R" not in options and options.get("tuning", "default") == "default":
-        return {**options, "R": R}
+        return {"adapt_th": True, **options, "R": R} if "th" in options else {**options, "R": R}
     return options
 
 
@@ -132,6 +137,11 @@ class PIF(ScheduledObserver):
         ``[R_AY_ORIGINAL, R]`` there.
     P0 : sequence of 3 floats, optional
         Diagonal of the initial Riccati matrix (``riccati`` variant).
+    adapt_th : bool, optional
+        Halve ``th`` until the Riccati equation has a stabilising solution at every grid
+        speed (down to ``th/1000``, then 0: the Kalman filter), instead of raising. Default:
+        only for the default tuning's own ``th``; :func:`with_sensor_R` sets it for a given
+        ``th`` whose ``R`` comes from the sensor at a log's rate.
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator`.
 
@@ -151,7 +161,7 @@ class PIF(ScheduledObserver):
     steady_kernel = "lpv"
 
     def __init__(self, params=None, *, model="modified", variant="steady", tuning=None, Q=None,
-                 R=None, S=None, th=None, P0=None, **kw):
+                 R=None, S=None, th=None, P0=None, adapt_th=None, **kw):
         if variant not in ("steady", "riccati"):
             raise ValueError(f"variant must be 'steady' or 'riccati', got {variant!r}")
         tuning = tuning or ("default" if model == "modified" else "paper")
@@ -160,7 +170,7 @@ class PIF(ScheduledObserver):
         preset = self.tunings[tuning]
         if "roll" in preset:
             kw.setdefault("roll", preset["roll"])
-        auto_th = tuning == "default" and th is None
+        auto_th = (tuning == "default" and th is None) if adapt_th is None else bool(adapt_th)
         Q, R, S, th, P0 = (preset[k] if v is None else v
                            for k, v in (("Q", Q), ("R", R), ("S", S), ("th", th), ("P0", P0)))
         self.model = model
@@ -175,16 +185,17 @@ class PIF(ScheduledObserver):
             raise ValueError("PIF: R and S must be > 0 and Q >= 0")
         self.Q, self.R, self.S, self.th = float(Q), np.diag(Rv), float(S), float(th)
         self.P0 = np.diag(np.asarray(P0, dtype=float))
+        th_floor = self.th / 1000.0
         while True:
             try:
                 super().__init__(params, **kw)
                 return
             except NoStabilisingSolution:
-                # the default th adapts to the car: halve it until the Riccati equation is
-                # solvable at every speed (th = 0, the Kalman filter, always is)
+                # the default th adapts to the car and the sensor: halve it until the Riccati
+                # equation is solvable at every speed (th = 0, the Kalman filter, always is)
                 if not auto_th or self.th == 0.0:
                     raise
-                self.th = self.th / 2.0 if self.th > preset["th"] / 1000.0 else 0.0
+                self.th = self.th / 2.0 if self.th > th_floor else 0.0
 
     def riccati_solution(self, vx: float) -> np.ndarray:
         """Stabilising solution ``P`` of the algebraic Riccati equation (eq 44) at ``vx`` (m/s)."""

@@ -28,7 +28,7 @@ class TuningOutcome:
     Attributes
     ----------
     options : dict
-        Estimator -> tuned keyword options.
+        Estimator -> tuned keyword options, as written to the vehicle file (:func:`written_options`).
     scores : dict
         Estimator -> flat scores (``train_*``, ``validation_*``, ``before_validation_*`` in deg,
         ``evaluations``, ``budget``, ``seed``, ``seconds``) as written to ``[scores.<name>]``.
@@ -43,6 +43,17 @@ class TuningOutcome:
     scores: dict = field(default_factory=dict)
     validation: dict = field(default_factory=dict)
     seconds: float = 0.0
+
+
+def written_options(name: str, options: dict) -> dict:
+    """The tuned ``options`` as written to ``[tuning.<name>]``: without ``R`` for the PIFs whose
+    ``R`` is the car's yaw-rate sensor (:data:`roadbank.estimators.pif.SENSOR_R_ESTIMATORS`; the
+    search holds it at the sensor's noise density, and :meth:`roadbank.vehicle.Vehicle.make`
+    supplies it again at each log's sample rate), the others unchanged."""
+    from ..estimators.pif import SENSOR_R_ESTIMATORS
+    if name in SENSOR_R_ESTIMATORS:
+        return {k: v for k, v in options.items() if k != "R"}
+    return dict(options)
 
 
 def tune_car(params=None, plant=None, sensors=None, *, names=TUNABLE, budget: int = DEFAULT_BUDGET,
@@ -114,7 +125,7 @@ def tune_car(params=None, plant=None, sensors=None, *, names=TUNABLE, budget: in
     for name, res in results.items():
         tuned = score_set(estimators.make(name, params, **res.options), valid)
         before = score_set(estimators.make(name, params, **current.get(name, {})), valid)
-        out.options[name] = res.options
+        out.options[name] = written_options(name, res.options)
         out.validation[name] = tuned
         out.scores[name] = {**res.train.as_dict("train_"), **tuned.as_dict("validation_"),
                             **{k: v for k, v in before.as_dict("before_validation_").items()
