@@ -229,3 +229,21 @@ def test_pif_rate_has_zero_steady_state_error_on_a_constant_bank(fc, fr):
     signals, w = linear_plant_run(P.replace(Cf=fc * P.Cf, Cr=fr * P.Cr))
     est_w = E.make("pif-rate").run(signals).w
     assert np.abs(est_w[-200:] - w).max() < 1e-4
+
+
+@pytest.mark.parametrize("name", ["pif-modified", "pif-rate", "pif-adaptive", "pif-rate-adaptive"])
+def test_search_space_starts_at_the_estimators_default(name):
+    """The optimiser's start maps back to the default options (so a tuning that finds nothing
+    better keeps the default), and every coordinate moves its own option."""
+    from roadbank.tuning import search_space
+    space = search_space(name)
+    x0 = space.start()
+    default, started = E.make(name, P, v_max=30.0), E.make(name, P, v_max=30.0, **space.options(x0))
+    for key in ("Q", "th", "Q_rate", "mu", "tau"):
+        if hasattr(default, key):
+            assert getattr(started, key) == pytest.approx(getattr(default, key), rel=1e-9), key
+    for i in range(len(x0)):
+        x = x0.copy()
+        x[i] += 0.1
+        moved = {k for k, v in space.options(x).items() if v != space.options(x0)[k]}
+        assert len(moved) == 1, (space.labels[i], moved)

@@ -31,6 +31,13 @@ from ..estimators.pif import (ADAPTIVE_TUNING, DEFAULT_TUNING, R_ESP, RATE_ADAPT
 _PIF_FAMILY = ("pif-modified", "pif-rate", "pif-adaptive", "pif-rate-adaptive")
 _DEFAULTS = {"pif-modified": DEFAULT_TUNING, "pif-rate": RATE_TUNING, "pif-adaptive": ADAPTIVE_TUNING,
              "pif-rate-adaptive": RATE_ADAPTIVE_TUNING}
+#: coordinates of the PIF variants after ``log10(Q/R), log10(th R)``: label -> (option, option
+#: at coordinate ``x`` for the sensor's ``R``, coordinate of option value ``v``)
+_PIF_EXTRA = {
+    "log10(Q_rate/R)": ("Q_rate", lambda x, R: R * 10.0 ** x, lambda v, R: np.log10(v / R)),
+    "mu": ("mu", lambda x, R: x, lambda v, R: v),
+    "log10(tau/s)": ("tau", lambda x, R: 10.0 ** x, lambda v, R: np.log10(v)),
+}
 
 
 @dataclass(frozen=True)
@@ -60,13 +67,9 @@ class SearchSpace:
         if self.name in _PIF_FAMILY:
             R = f["R"]
             out = {"Q": R * 10.0 ** x[0], "R": R, "S": 1.0, "th": 10.0 ** x[1] / R}
-            extra = dict(zip(self.labels[2:], x[2:]))
-            if "log10(Q_rate/R)" in extra:
-                out["Q_rate"] = R * 10.0 ** extra["log10(Q_rate/R)"]
-            if "mu" in extra:
-                out["mu"] = extra["mu"]
-            if "log10(tau/s)" in extra:
-                out["tau"] = 10.0 ** extra["log10(tau/s)"]
+            for label, v in zip(self.labels[2:], x[2:]):
+                option, to_option, _ = _PIF_EXTRA[label]
+                out[option] = to_option(v, R)
             return out
         if self.name == "kalman":
             return {"q": [10.0 ** v for v in x], "R": list(f["R"])}
@@ -84,8 +87,9 @@ class SearchSpace:
         if self.name in _PIF_FAMILY:
             d = _DEFAULTS[self.name]
             x = [np.log10(d["Q"] / R_ESP), np.log10(d["th"] * R_ESP)]       # Q/R and th R as tuned
-            x += [{"log10(Q_rate/R)": np.log10(d.get("Q_rate", 1.0) / R_ESP), "mu": d.get("mu"),
-                   "log10(tau/s)": np.log10(d.get("tau", 1.0))}[label] for label in self.labels[2:]]
+            for label in self.labels[2:]:
+                option, _, to_x = _PIF_EXTRA[label]
+                x.append(to_x(d[option], R_ESP))
         elif self.name == "kalman":
             x = list(np.log10(kalman.DEFAULT_Q))
         elif self.name == "pio-modified":
