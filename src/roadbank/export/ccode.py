@@ -1,8 +1,9 @@
 """C99 source of an exported estimator: header, implementation, interface README.
 
 The generated step function is the ``lpv`` kernel of
-:mod:`roadbank.estimators.kernels` written out in C, operation for operation
-and in the same order where rounding depends on it: linear interpolation of the
+:mod:`roadbank.estimators.kernels` written out in C, step by step (the compiled
+kernel orders some sums differently, e.g. its fixed-rate batch loop, so the two
+agree to rounding: tests/test_export_c.py, 1e-9 rad in float64): linear interpolation of the
 table rows on the speed grid (clamped at both ends), the trapezoidal (Tustin)
 substeps of at most ``max_substep`` with the inputs interpolated linearly over
 the step, the three-state observer through the adjugate of ``I - h/2 F`` and
