@@ -271,7 +271,7 @@ class _BankRateState:
     state_names = ("vy", "r", "w", "w_rate")
 
     def _set_rate_noise(self, Q_rate) -> None:
-        self.Q_rate = float(RATE_TUNING["Q_rate"] if Q_rate is None else Q_rate)
+        self.Q_rate = float(self.options_default["Q_rate"] if Q_rate is None else Q_rate)
         if not self.Q_rate >= 0:
             raise ValueError(f"{self.label}: Q_rate must be >= 0, got {Q_rate}")
 
@@ -314,6 +314,8 @@ class PIFRate(_BankRateState, PIF):
 
     label = "pif-rate"
     tunings = RATE_TUNINGS
+    #: defaults of the options beyond the weights
+    options_default = RATE_TUNING
 
     def __init__(self, params=None, *, tuning=None, Q_rate=None, **kw):
         if "model" in kw or "variant" in kw:
@@ -386,12 +388,14 @@ class PIFAdaptive(PIF):
 
     label = "pif-adaptive"
     tunings = ADAPTIVE_TUNINGS
+    #: defaults of the schedule's options (mu, tau, tf)
+    options_default = ADAPTIVE_TUNING
     steady_kernel = "adaptive"
 
     def __init__(self, params=None, *, tuning=None, mu=None, tau=None, tf=None, **kw):
         if "model" in kw or "variant" in kw:
             raise ValueError(f"{self.label}: model and variant are fixed (modified, steady)")
-        d = ADAPTIVE_TUNING
+        d = self.options_default
         self.mu, self.tau, self.tf = (float(d[k] if v is None else v)
                                       for k, v in (("mu", mu), ("tau", tau), ("tf", tf)))
         if not (self.mu > 0 and self.tau > 0 and self.tf > 0) or np.isnan(self.tau + self.tf):
@@ -451,9 +455,8 @@ class PIFRateAdaptive(_BankRateState, PIFAdaptive):
 
     label = "pif-rate-adaptive"
     tunings = RATE_ADAPTIVE_TUNINGS
+    options_default = RATE_ADAPTIVE_TUNING
 
-    def __init__(self, params=None, *, tuning=None, Q_rate=None, mu=None, tau=None, tf=None, **kw):
-        d = RATE_ADAPTIVE_TUNING
-        self._set_rate_noise(d["Q_rate"] if Q_rate is None else Q_rate)
-        super().__init__(params, tuning=tuning, mu=d["mu"] if mu is None else mu,
-                         tau=d["tau"] if tau is None else tau, tf=d["tf"] if tf is None else tf, **kw)
+    def __init__(self, params=None, *, Q_rate=None, **kw):
+        self._set_rate_noise(Q_rate)
+        super().__init__(params, **kw)
