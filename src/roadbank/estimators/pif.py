@@ -111,12 +111,17 @@ def _scaled_p0(R: float) -> tuple:
     return tuple(k * p for p in TABLE4["P0"])
 
 
+def _sensor_tuning(tuned: dict) -> dict:
+    """The ``"default"`` named tuning from ``tuned`` weights (``Q``, ``th``, ``roll``, found with
+    R = R_ESP, S = 1): ``R`` of the ESP yaw-rate sensor and Table 4's ``P0`` scaled to it."""
+    return dict(Q=tuned["Q"], R=R_ESP, S=1.0, th=tuned["th"], P0=_scaled_p0(R_ESP), roll=tuned["roll"])
+
+
 #: named tunings (``tuning=`` of :class:`PIF`)
 TUNINGS = {
     "paper": dict(TABLE4),
     "paper-deg": dict(TABLE4, R=R_TABLE4_DEG_UNITS),
-    "default": dict(Q=DEFAULT_TUNING["Q"], R=R_ESP, S=1.0, th=DEFAULT_TUNING["th"], P0=_scaled_p0(R_ESP),
-                    roll=DEFAULT_TUNING["roll"]),
+    "default": _sensor_tuning(DEFAULT_TUNING),
 }
 
 
@@ -257,8 +262,7 @@ class PIF(ScheduledObserver):
 RATE_TUNING = dict(Q=R_ESP * 10**2.88025985, Q_rate=R_ESP * 10**3.97104448, th=10**-2.10630825 / R_ESP,
                    roll="dynamic")
 #: named tunings of :class:`PIFRate`
-RATE_TUNINGS = {"default": dict(Q=RATE_TUNING["Q"], R=R_ESP, S=1.0, th=RATE_TUNING["th"],
-                                P0=_scaled_p0(R_ESP), roll=RATE_TUNING["roll"])}
+RATE_TUNINGS = {"default": _sensor_tuning(RATE_TUNING)}
 
 
 class _BankRateState:
@@ -337,8 +341,7 @@ ADAPTIVE_V_STEP = 1.0
 ADAPTIVE_TUNING = dict(Q=DEFAULT_TUNING["Q"], th=DEFAULT_TUNING["th"], mu=0.9, tau=0.5, tf=0.1,
                        roll=DEFAULT_TUNING["roll"])
 #: named tunings of :class:`PIFAdaptive`
-ADAPTIVE_TUNINGS = {"default": dict(Q=ADAPTIVE_TUNING["Q"], R=R_ESP, S=1.0, th=ADAPTIVE_TUNING["th"],
-                                    P0=_scaled_p0(R_ESP), roll=ADAPTIVE_TUNING["roll"])}
+ADAPTIVE_TUNINGS = {"default": _sensor_tuning(ADAPTIVE_TUNING)}
 
 
 def secant_stiffness_ratio(usage):
@@ -429,8 +432,7 @@ RATE_ADAPTIVE_TUNING = dict(Q=RATE_TUNING["Q"], Q_rate=RATE_TUNING["Q_rate"], th
                             mu=ADAPTIVE_TUNING["mu"], tau=ADAPTIVE_TUNING["tau"], tf=ADAPTIVE_TUNING["tf"],
                             roll=RATE_TUNING["roll"])
 #: named tunings of :class:`PIFRateAdaptive`
-RATE_ADAPTIVE_TUNINGS = {"default": dict(Q=RATE_ADAPTIVE_TUNING["Q"], R=R_ESP, S=1.0, th=RATE_ADAPTIVE_TUNING["th"],
-                                         P0=_scaled_p0(R_ESP), roll=RATE_ADAPTIVE_TUNING["roll"])}
+RATE_ADAPTIVE_TUNINGS = {"default": _sensor_tuning(RATE_ADAPTIVE_TUNING)}
 
 
 class PIFRateAdaptive(_BankRateState, PIFAdaptive):
