@@ -19,7 +19,7 @@ from click.testing import CliRunner
 from roadbank.cli import main
 from roadbank.params import VehicleParams
 from roadbank.signals import sample_rate
-from roadbank.vehicle import SensorSpec, load_vehicle, make_estimator
+from roadbank.vehicle import SensorSpec, load_vehicle, log_conditions, make_estimator
 
 KITTI = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "kitti-oxts"
 DRIVE = KITTI / "2011_09_26_drive_0070"
@@ -98,7 +98,9 @@ def test_roadbank_estimate_on_a_50_hz_csv_uses_the_sensor_at_50_hz(tmp_path, veh
     signals = load_log(log).signals
     np.testing.assert_allclose(got["t"], t)
     car = load_vehicle(vehicle)
-    at50 = car.make("pif-modified", log_rate=50.0).run(signals).theta
+    cond = log_conditions(signals)                              # 50 Hz and the log's ay noise
+    assert cond["log_rate"] == pytest.approx(50.0)
+    at50 = car.make("pif-modified", **cond).run(signals).theta
     at100 = car.make("pif-modified").run(signals).theta           # designed for the 100 Hz ESP sensor
     np.testing.assert_allclose(got["pif-modified.theta"], at50, rtol=0, atol=1e-12)
     assert np.max(np.abs(at50 - at100)) > 1e-4                     # the rate matters: this test can fail
@@ -139,9 +141,12 @@ def test_validate_kitti_also_scores_the_default_pif_designed_for_100_hz():
     assert set(res.sensitivity["R_nominal"]) == {"pif-modified"}     # only the sensor-R estimators
     ref, sc = res.run.raw_reference, res.run.scored
     signals = load_log(DRIVE).signals
-    for key, rate in ((None, sample_rate(signals.t)), ("R_nominal", None)):
-        th = make_estimator("pif-modified", SEDAN, log_rate=rate).run(signals).theta
+    cond = log_conditions(signals)
+    assert cond["log_rate"] == pytest.approx(10.0, rel=0.02) and cond["log_ay_noise"] > 0.05
+    for key, opts in ((None, cond), ("sheet_rate", {"log_rate": cond["log_rate"]}), ("R_nominal", {})):
+        th = make_estimator("pif-modified", SEDAN, **opts).run(signals).theta
         got = res.scores["pif-modified"] if key is None else res.sensitivity[key]["pif-modified"]
         assert got.rms_raw_deg == pytest.approx(math.degrees(np.sqrt(np.mean((th[sc] - ref[sc]) ** 2))), rel=1e-9)
-    assert res.sensitivity["R_nominal"]["pif-modified"].rms_raw_deg != pytest.approx(
-        res.scores["pif-modified"].rms_raw_deg, abs=0.01)
+    rms = [res.scores["pif-modified"].rms_raw_deg] + [res.sensitivity[k]["pif-modified"].rms_raw_deg
+                                                      for k in ("sheet_rate", "R_nominal")]
+    assert rms[0] != pytest.approx(rms[1], abs=0.01) and rms[1] != pytest.approx(rms[2], abs=0.01)

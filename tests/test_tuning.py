@@ -74,7 +74,8 @@ def test_infeasible_weights_score_as_infeasible(sets):
 def test_fixing_R_loses_nothing_the_filter_depends_on_Q_over_R_and_th_R():
     a = E.make("pif-modified", tuning="paper")
     k = 1e-4
-    b = E.make("pif-modified", Q=k * TABLE4["Q"], R=k * TABLE4["R"], th=TABLE4["th"] / k, S=1.0)
+    b = E.make("pif-modified", Q=k * TABLE4["Q"], R=k * TABLE4["R"], th=TABLE4["th"] / k, S=1.0,
+               Q_ay=0.0)                                       # Table 4 has no ay input noise
     for vx in (6.0, 22.0, 60.0):
         assert np.allclose(a.observer(vx)[0], b.observer(vx)[0], rtol=1e-6, atol=1e-9)
 
@@ -137,16 +138,16 @@ def test_a_given_th_with_the_sensor_R_is_halved_until_solvable_like_the_default(
     """A tuned th that has no stabilising solution with the sensor's R at a 10 Hz log (R ten
     times the 100 Hz density) is halved until it has one, as the default's own th is; an
     explicit R keeps an explicit th strict."""
-    from roadbank.estimators.pif import DEFAULT_TUNING, RATE_TUNING, with_sensor_R
+    from roadbank.estimators.pif import DEFAULT_TUNING, RATE_TUNING, with_sensor_noise
     from roadbank.estimators.synthesis import NoStabilisingSolution
     th = (DEFAULT_TUNING if name == "pif-modified" else RATE_TUNING)["th"]
     with pytest.raises(NoStabilisingSolution):
         E.make(name, P, R=10 * R_ESP, th=th)
-    est = E.make(name, P, **with_sensor_R(name, {"th": th}, 10 * R_ESP))
+    est = E.make(name, P, **with_sensor_noise(name, {"th": th}, 10 * R_ESP))
     assert 0.0 < est.th < th and est.R[0, 0] == 10 * R_ESP
     assert any(th / est.th == 2.0**k for k in range(1, 11))         # halvings of the given th
     E.make(name, P, R=10 * R_ESP, th=est.th)                       # the result is solvable as given
-    assert E.make(name, P, **with_sensor_R(name, {"th": th}, R_ESP)).th == th   # solvable: unchanged
+    assert E.make(name, P, **with_sensor_noise(name, {"th": th}, R_ESP)).th == th   # solvable: unchanged
 
 
 def test_tune_cli_rejects_untunable_estimators(tmp_path):

@@ -118,10 +118,12 @@ def kitti_default():
 
 
 @needs_kitti
-def test_default_pif_beats_the_kinematic_estimate_on_every_kitti_drive(kitti_default):
-    # issue 14's target, on validation data (never used for tuning); theta vs the INS roll, unsmoothed
+def test_default_pif_meets_the_kitti_target_on_every_drive(kitti_default):
+    # issue 14's target, on validation data (never used for tuning); theta vs the INS roll,
+    # unsmoothed: <= 0.5 deg and below the kinematic estimate
     assert len(kitti_default.drives) == 2
     for d in kitti_default.drives:
+        assert d.scores["pif-modified"].rms_raw_deg <= 0.5, d.label
         assert d.scores["pif-modified"].rms_raw_deg < d.scores["kinematic"].rms_raw_deg, d.label
 
 

@@ -108,6 +108,28 @@ def sample_rate(t) -> float:
     return 1.0 / float(np.median(dt)) if dt.size else float("nan")
 
 
+#: fewest sample triples :func:`white_noise_std` measures from
+MIN_NOISE_TRIPLES = 100
+
+
+def white_noise_std(x, valid=None) -> float:
+    """Standard deviation (unit of ``x``) of the white noise on a sampled channel ``x``.
+
+    From its second differences ``d_k = x[k+1] - 2 x[k] + x[k-1]``: for ``x = s + n`` with
+    ``n`` white of standard deviation ``sigma`` and ``s`` close to linear over three samples,
+    ``var(d) = 6 sigma^2``. Whatever of the signal itself is not linear over three samples
+    counts as noise, so this is an upper bound. Only triples of finite samples that are all
+    ``valid`` (bool array, default all) count; NaN with fewer than :data:`MIN_NOISE_TRIPLES`.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    ok = np.isfinite(x) if valid is None else np.isfinite(x) & np.asarray(valid, dtype=bool)
+    ok3 = ok[2:] & ok[1:-1] & ok[:-2]
+    if ok3.sum() < MIN_NOISE_TRIPLES:
+        return float("nan")
+    d = (x[2:] - 2.0 * x[1:-1] + x[:-2])[ok3]
+    return float(np.sqrt(np.mean(d * d) / 6.0))
+
+
 def road_wheel_angle(steering_wheel_angle, params: VehicleParams | None = None) -> np.ndarray:
     """Front road-wheel angle (rad) from the steering-wheel angle (rad) by the steering ratio."""
     p = params or VehicleParams()

@@ -297,6 +297,12 @@ class SensorSpec:
         """Lateral-acceleration measurement variance ``ay_noise^2 + ay_resolution^2/12`` ((m/s^2)^2)."""
         return self.ay_noise ** 2 + self.ay_resolution ** 2 / 12.0
 
+    def ay_noise_density(self, rate: float | None = None) -> float:
+        """Lateral-acceleration noise density ``Q_ay`` ((m/s^2)^2 s) of this sensor sampled at
+        ``rate`` (Hz): ``ay_variance / rate``, as :meth:`r_noise_density`."""
+        rate = rate if rate is not None and math.isfinite(rate) and rate > 0 else self.rate
+        return self.ay_variance / rate
+
     @property
     def dt(self) -> float:
         """Sample period 1/rate (s)."""
@@ -338,15 +344,22 @@ class SensorSpec:
 # estimators for a car's sensors at a log's rate
 
 def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: SensorSpec | None = None,
-                   log_rate: float | None = None, **options):
+                   log_rate: float | None = None, log_ay_noise: float | None = None, **options):
     """``estimators.make(name, params, **options)`` for a log sampled at ``log_rate`` by ``sensors``.
 
-    The one rule for the sensor-derived weight: a default-tuned PIF given no ``R``
-    (:func:`roadbank.estimators.pif.with_sensor_R`) gets the noise density of the yaw-rate
-    sensor's noise and resolution at the rate of the log it will run on
-    (:meth:`SensorSpec.r_noise_density`). ``roadbank estimate``/``map`` (:mod:`roadbank.fleet`,
-    :mod:`roadbank.mapping`), :meth:`Vehicle.make` and the real-data validation all build
-    their estimators here.
+    The one rule for the sensor-derived weights of a default-tuned PIF
+    (:func:`roadbank.estimators.pif.with_sensor_noise`):
+
+    * ``R``, the yaw-rate noise density: the yaw-rate sensor's noise and resolution at
+      the rate of the log it will run on (:meth:`SensorSpec.r_noise_density`);
+    * ``Q_ay``, the noise density of the ``ay`` input: the accelerometer's at that rate
+      (:meth:`SensorSpec.ay_noise_density`), or the white noise measured on the log's own
+      ``ay`` (``log_ay_noise``, :func:`log_conditions`) where that is larger — vibration
+      of the body or the mount that no data sheet knows (a phone IMU, a 10 Hz INS that
+      samples without an anti-alias filter).
+
+    ``roadbank estimate``/``map`` (:mod:`roadbank.fleet`, :mod:`roadbank.mapping`),
+    :meth:`Vehicle.make` and the real-data validation all build their estimators here.
 
     Parameters
     ----------
@@ -359,17 +372,42 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     log_rate : float, optional
         Sample rate (Hz) of the log (:func:`roadbank.signals.sample_rate` of its time
         base). Default (or NaN): ``sensors.rate``.
+    log_ay_noise : float, optional
+        White-noise standard deviation (m/s^2) of the log's ``ay``
+        (:func:`roadbank.signals.white_noise_std`); None or NaN: not measured.
     **options
-        The estimator's keyword options; an explicit ``R`` or ``tuning`` keeps the sensor
-        out of it.
+        The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
+        sensor out of that weight.
     """
     from . import estimators
-    from .estimators.pif import with_sensor_R
+    from .estimators.pif import with_sensor_noise
 
     sensors = sensors if sensors is not None else SensorSpec()
     if sensors.r_variance > 0:
-        options = with_sensor_R(name, options, sensors.r_noise_density(log_rate))
+        rate = log_rate if log_rate is not None and math.isfinite(log_rate) and log_rate > 0 else sensors.rate
+        Q_ay = sensors.ay_noise_density(rate)
+        if log_ay_noise is not None and math.isfinite(log_ay_noise):
+            Q_ay = max(Q_ay, log_ay_noise ** 2 / rate)
+        options = with_sensor_noise(name, options, sensors.r_noise_density(rate), Q_ay)
     return estimators.make(name, params, **options)
+
+
+def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
+    """What a log tells :func:`make_estimator` about its sensors: ``{"log_rate": Hz,
+    "log_ay_noise": m/s^2}`` — the sample rate of its time base
+    (:func:`roadbank.signals.sample_rate`) and the white noise of its ``ay`` on the samples
+    at ``vx >= v_min`` (m/s) (:func:`roadbank.signals.white_noise_std`; NaN when too few).
+    """
+    import numpy as np
+
+    from .signals import sample_rate, white_noise_std
+
+    vx = np.asarray(signals.vx, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        moving = vx >= v_min
+    noise = white_noise_std(signals.ay, moving)
+    # two significant digits: logs of one car and road share a design (the design cache)
+    return {"log_rate": sample_rate(signals.t), "log_ay_noise": float(f"{noise:.2g}")}
 
 
 #: ``[identified.<quantity>]`` sensor offsets (measured minus true) -> the Signals channel they
@@ -505,16 +543,18 @@ class Vehicle:
         }
 
     # ---- use --------------------------------------------------------------------------------
-    def make(self, estimator_name: str, *, log_rate: float | None = None, **overrides):
+    def make(self, estimator_name: str, *, log_rate: float | None = None, log_ay_noise: float | None = None,
+             **overrides):
         """Build an estimator for this car: its params, sensors and ``[tuning.<name>]`` options.
 
         :func:`make_estimator` ``(name, self.params, sensors=self.sensors, log_rate=log_rate,
-        **{**self.tuning.get(name, {}), **overrides})``: a default-tuned PIF without an ``R``
-        gets the noise density of this car's yaw-rate sensor at ``log_rate`` (Hz; default
-        the sensor's ``rate``).
+        log_ay_noise=log_ay_noise, **{**self.tuning.get(name, {}), **overrides})``: a
+        default-tuned PIF without an ``R`` gets the noise densities of this car's sensors at
+        ``log_rate`` (Hz; default the sensor's ``rate``), ``Q_ay`` at least the log's own
+        ``ay`` noise ``log_ay_noise`` (m/s^2).
         """
         return make_estimator(estimator_name, self.params, sensors=self.sensors, log_rate=log_rate,
-                              **{**self.tuning.get(estimator_name, {}), **overrides})
+                              log_ay_noise=log_ay_noise, **{**self.tuning.get(estimator_name, {}), **overrides})
 
     @property
     def sensor_offsets(self) -> dict[str, float]:

@@ -47,6 +47,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..params import G
 from . import layout
 from .base import ScheduledObserver, augmented_design_model, equilibrium_map
 from .synthesis import NoStabilisingSolution, game_are
@@ -66,7 +67,8 @@ def yaw_rate_noise_density(noise_std: float, resolution: float, rate: float) -> 
     ``(noise_std^2 + resolution^2 / 12) / rate``: white noise of standard deviation
     ``noise_std`` (rad/s) plus uniform quantisation error of step ``resolution`` (rad/s),
     sampled at ``rate`` (Hz); a sampled white sequence of variance ``v`` acts on a
-    continuous filter like white noise of spectral density ``v / rate``.
+    continuous filter like white noise of spectral density ``v / rate``. The same formula
+    in m/s^2 gives the density ``Q_ay`` ((m/s^2)^2 s) of the lateral accelerometer.
     """
     if not (noise_std >= 0 and resolution >= 0 and rate > 0) or noise_std + resolution == 0:
         raise ValueError("yaw_rate_noise_density: need noise_std, resolution >= 0 (not both 0) "
@@ -79,22 +81,31 @@ def yaw_rate_noise_density(noise_std: float, resolution: float, rate: float) -> 
 SENSOR_R_ESTIMATORS = ("pif-modified", "pif-rate", "pif-adaptive", "pif-rate-adaptive")
 
 
-def with_sensor_R(name: str, options: dict, R: float) -> dict:
-    """``make(name, ...)`` options with ``R`` = the sensor's noise density ``R`` ((rad/s)^2 s)
-    when ``name`` is a default-tuned PIF (:data:`SENSOR_R_ESTIMATORS`) given no ``R``;
-    otherwise ``options`` unchanged.
+def with_sensor_noise(name: str, options: dict, R: float, Q_ay: float | None = None) -> dict:
+    """``make(name, ...)`` options with the sensors' noise densities: ``R`` ((rad/s)^2 s, yaw
+    rate) and ``Q_ay`` ((m/s^2)^2 s, lateral acceleration; None: the estimator's default)
+    when ``name`` is a default-tuned PIF (:data:`SENSOR_R_ESTIMATORS`); otherwise
+    ``options`` unchanged. An ``R`` or ``Q_ay`` in ``options`` is kept.
 
-    A ``th`` given with it (a ``[tuning]`` table from ``roadbank tune``, which writes ``Q`` and
+    A ``th`` given with them (a ``[tuning]`` table from ``roadbank tune``, which writes ``Q`` and
     ``th`` relative to the sensor and no ``R``) adapts like the default's: at a log rate whose
     ``R`` leaves no stabilising solution it is halved until there is one (``adapt_th``).
     """
-    if name in SENSOR_R_ESTIMATORS and "R" not in options and options.get("tuning", "default") == "default":
-        return {"adapt_th": True, **options, "R": R} if "th" in options else {**options, "R": R}
-    return options
+    if name not in SENSOR_R_ESTIMATORS or options.get("tuning", "default") != "default":
+        return options
+    sensor = {"R": R} if Q_ay is None else {"R": R, "Q_ay": Q_ay}
+    if "R" in options:
+        sensor.pop("R")
+    elif "th" in options:
+        sensor["adapt_th"] = True
+    return {**sensor, **options}
 
 
 #: R of the paper's ESP yaw-rate sensor (0.1 deg/s noise, 0.3 deg/s resolution, 100 Hz)
 R_ESP = yaw_rate_noise_density(np.deg2rad(0.1), np.deg2rad(0.3), 100.0)
+#: Q_ay of the paper's ESP lateral accelerometer (0.03 m/s^2 noise, 0.005 g resolution, 100 Hz):
+#: the noise density of the filter's ay input ((m/s^2)^2 s), same formula as R
+Q_AY_ESP = yaw_rate_noise_density(0.03, 0.005 * G, 100.0)
 
 #: Q (1/s), th (-) and the roll model found by ``roadbank tune`` (seed 0, budget 240) for the
 #: default car and sensors with R = R_ESP, S = 1 (docs/estimators.md: the run and its scores).
@@ -113,8 +124,10 @@ def _scaled_p0(R: float) -> tuple:
 
 def _sensor_tuning(tuned: dict) -> dict:
     """The ``"default"`` named tuning from ``tuned`` weights (``Q``, ``th``, ``roll``, found with
-    R = R_ESP, S = 1): ``R`` of the ESP yaw-rate sensor and Table 4's ``P0`` scaled to it."""
-    return dict(Q=tuned["Q"], R=R_ESP, S=1.0, th=tuned["th"], P0=_scaled_p0(R_ESP), roll=tuned["roll"])
+    R = R_ESP, S = 1): ``R`` of the ESP yaw-rate sensor, ``Q_ay`` of its accelerometer and
+    Table 4's ``P0`` scaled to ``R``."""
+    return dict(Q=tuned["Q"], R=R_ESP, S=1.0, th=tuned["th"], P0=_scaled_p0(R_ESP), roll=tuned["roll"],
+                Q_ay=Q_AY_ESP)
 
 
 #: named tunings (``tuning=`` of :class:`PIF`)
@@ -140,12 +153,16 @@ class PIF(ScheduledObserver):
         Weights overriding the preset: Q (1/s), R ((rad/s)^2 s), S (-), th (-); ``R``
         may be a 2-vector for the original model (``[R_ay, R_r]``), a scalar R means
         ``[R_AY_ORIGINAL, R]`` there.
+    Q_ay : float, optional
+        Noise density of the lateral-acceleration input ((m/s^2)^2 s; modified model): process
+        noise ``Q_ay b b^T`` on the states the ``ay`` input drives (``b``, its column of ``B``).
+        The default tuning: the ESP accelerometer's :data:`Q_AY_ESP`; Table 4: 0 (as published).
     P0 : sequence of 3 floats, optional
         Diagonal of the initial Riccati matrix (``riccati`` variant).
     adapt_th : bool, optional
         Halve ``th`` until the Riccati equation has a stabilising solution at every grid
         speed (down to ``th/1000``, then 0: the Kalman filter), instead of raising. Default:
-        only for the default tuning's own ``th``; :func:`with_sensor_R` sets it for a given
+        only for the default tuning's own ``th``; :func:`with_sensor_noise` sets it for a given
         ``th`` whose ``R`` comes from the sensor at a log's rate.
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator`.
@@ -166,7 +183,7 @@ class PIF(ScheduledObserver):
     steady_kernel = "lpv"
 
     def __init__(self, params=None, *, model="modified", variant="steady", tuning=None, Q=None,
-                 R=None, S=None, th=None, P0=None, adapt_th=None, **kw):
+                 R=None, S=None, th=None, P0=None, adapt_th=None, Q_ay=None, **kw):
         if variant not in ("steady", "riccati"):
             raise ValueError(f"variant must be 'steady' or 'riccati', got {variant!r}")
         tuning = tuning or ("default" if model == "modified" else "paper")
@@ -186,9 +203,11 @@ class PIF(ScheduledObserver):
         Rv = np.atleast_1d(np.asarray(R, dtype=float))
         if model == "original" and Rv.size == 1:
             Rv = np.array([R_AY_ORIGINAL, Rv[0]])
-        if np.any(Rv <= 0) or Q < 0 or S <= 0:
-            raise ValueError("PIF: R and S must be > 0 and Q >= 0")
+        Q_ay = float(preset.get("Q_ay", 0.0) if Q_ay is None else Q_ay)
+        if np.any(Rv <= 0) or Q < 0 or S <= 0 or not Q_ay >= 0:
+            raise ValueError("PIF: R and S must be > 0 and Q, Q_ay >= 0")
         self.Q, self.R, self.S, self.th = float(Q), np.diag(Rv), float(S), float(th)
+        self.Q_ay = Q_ay
         self.P0 = np.diag(np.asarray(P0, dtype=float))
         th_floor = self.th / 1000.0
         while True:
@@ -218,9 +237,16 @@ class PIF(ScheduledObserver):
         """Process-noise density ``W`` of the Riccati equation (``Q Ew Ew^T``: noise on ``w`` only)."""
         return self.Q * Ew @ Ew.T
 
+    def process_density(self, model) -> np.ndarray:
+        """``W`` of the Riccati equation for the design ``model`` ``(A, B, C, Dy, Lw, Ew)``:
+        :meth:`process_noise` plus ``Q_ay b b^T``, ``b`` the column of ``B`` of the ``ay`` input."""
+        A, B, C, Dy, Lw, Ew = model
+        b = B[:, 1]
+        return self.process_noise(Ew) + self.Q_ay * np.outer(b, b)
+
     def _riccati(self, model, vx: float) -> np.ndarray:
         A, B, C, Dy, Lw, Ew = model
-        return game_are(A, C, Lw, self.process_noise(Ew), self.R, np.atleast_2d(self.S), self.th,
+        return game_are(A, C, Lw, self.process_density(model), self.R, np.atleast_2d(self.S), self.th,
                         where=f"at vx={vx:.2f} m/s ({self.name})")
 
     def _observer(self, model, vx: float):
@@ -244,7 +270,7 @@ class PIF(ScheduledObserver):
             A, B, C, Dy, Lw, Ew = model
             rows.append(np.concatenate([A.ravel(), B.ravel(), C.ravel(), Dy.ravel(),
                                         equilibrium_map(F, G).ravel()]))
-        extra = np.concatenate([np.linalg.inv(self.R).ravel(), self.process_noise(Ew).ravel(),
+        extra = np.concatenate([np.linalg.inv(self.R).ravel(), self.process_density(model).ravel(),
                                 (self.th * self.S * Lw.T @ Lw).ravel()])
         return np.ascontiguousarray(np.array(rows)), A.shape[0], extra
 

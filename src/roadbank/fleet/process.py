@@ -153,8 +153,7 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
     from ..io import LogError
     from ..io.stream import CHUNK_ROWS, stream_log
     from ..io.writers import TableWriter, estimate_table
-    from ..signals import sample_rate
-    from ..vehicle import make_estimator
+    from ..vehicle import log_conditions, make_estimator
 
     t_start = time.perf_counter()
     names = list(estimators)
@@ -171,10 +170,10 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
         writer = TableWriter(output, metadata=metadata)
         for k, chunk in enumerate(stream_log(path, channels=channels, format=format, params=params,
                                              chunk_rows=chunk_rows or CHUNK_ROWS)):
-            if k == 0:  # designed for the log's own rate (chunks continue the first one's time base)
-                rate = sample_rate(chunk.signals.t)
-                ests = [vehicle.make(n, log_rate=rate) if vehicle is not None
-                        else make_estimator(n, params, log_rate=rate) for n in names]
+            if k == 0:  # designed for the log's own rate and ay noise (measured on the first chunk)
+                cond = log_conditions(chunk.signals)
+                ests = [vehicle.make(n, **cond) if vehicle is not None
+                        else make_estimator(n, params, **cond) for n in names]
             warns += chunk.warnings
             signals = chunk.signals if vehicle is None else vehicle.correct(chunk.signals)
             results = [e.run(signals, reset=(k == 0)) for e in ests]

@@ -61,20 +61,20 @@ def map_logs(logs, estimator: str = "pif-modified", *, channels=None, format: st
     """
     from ..io import LogError
     from ..io.stream import CHUNK_ROWS, stream_log
-    from ..signals import sample_rate
-    from ..vehicle import make_estimator
+    from ..vehicle import log_conditions, make_estimator
 
     if vehicle is not None:
         params = vehicle.params
-    # designed per log, for its sample rate (as roadbank estimate: roadbank.vehicle.make_estimator)
+    # designed per log, for its sample rate and ay noise (as roadbank estimate:
+    # roadbank.vehicle.make_estimator)
     designs = {}
 
-    def design(t):
-        rate = sample_rate(t)
-        key = round(rate, 6) if np.isfinite(rate) else None
+    def design(signals):
+        cond = log_conditions(signals)
+        key = tuple(round(v, 6) if np.isfinite(v) else None for v in cond.values())
         if key not in designs:
-            designs[key] = (vehicle.make(estimator, log_rate=rate) if vehicle is not None
-                            else make_estimator(estimator, params, log_rate=rate))
+            designs[key] = (vehicle.make(estimator, **cond) if vehicle is not None
+                            else make_estimator(estimator, params, **cond))
         return designs[key]
     bmap = BankMap(LocalProjection(*origin), cell_m, sectors) if origin is not None else None
     done: list[MappedLog] = []
@@ -87,7 +87,7 @@ def map_logs(logs, estimator: str = "pif-modified", *, channels=None, format: st
                     raise LogError(f"{path}: no GNSS position (map 'latitude' and 'longitude' in the channel "
                                    "map, or use a format that has one: comma2k19, kitti-oxts, ROS NavSatFix)")
                 if k == 0:
-                    est = design(chunk.signals.t)
+                    est = design(chunk.signals)
                 signals = chunk.signals if vehicle is None else vehicle.correct(chunk.signals)
                 out = est.run(signals, reset=(k == 0))
                 lat, lon = chunk.extra["lat_deg"], chunk.extra["lon_deg"]

@@ -46,13 +46,13 @@ class TuningOutcome:
 
 
 def written_options(name: str, options: dict) -> dict:
-    """The tuned ``options`` as written to ``[tuning.<name>]``: without ``R`` for the PIFs whose
-    ``R`` is the car's yaw-rate sensor (:data:`roadbank.estimators.pif.SENSOR_R_ESTIMATORS`; the
-    search holds it at the sensor's noise density, and :meth:`roadbank.vehicle.Vehicle.make`
-    supplies it again at each log's sample rate), the others unchanged."""
+    """The tuned ``options`` as written to ``[tuning.<name>]``: without ``R`` and ``Q_ay`` for the
+    PIFs whose noise densities are the car's sensors' (:data:`roadbank.estimators.pif.SENSOR_R_ESTIMATORS`;
+    the search holds them at the sensors' densities, and :meth:`roadbank.vehicle.Vehicle.make`
+    supplies them again for each log), the others unchanged."""
     from ..estimators.pif import SENSOR_R_ESTIMATORS
     if name in SENSOR_R_ESTIMATORS:
-        return {k: v for k, v in options.items() if k != "R"}
+        return {k: v for k, v in options.items() if k not in ("R", "Q_ay")}
     return dict(options)
 
 

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..estimators import dfc, kalman, pio
-from ..estimators.pif import (ADAPTIVE_TUNING, DEFAULT_TUNING, R_ESP, RATE_ADAPTIVE_TUNING, RATE_TUNING,
+from ..estimators.pif import (ADAPTIVE_TUNING, DEFAULT_TUNING, Q_AY_ESP, R_ESP, RATE_ADAPTIVE_TUNING, RATE_TUNING,
                               yaw_rate_noise_density)
 
 _PIF_FAMILY = ("pif-modified", "pif-rate", "pif-adaptive", "pif-rate-adaptive")
@@ -112,18 +112,20 @@ def search_space(name: str, sensors=None) -> SearchSpace:
     """The :class:`SearchSpace` of ``name`` for a car with ``sensors``
     (:class:`roadbank.sim.SensorConfig`; default the paper's ESP sensors)."""
     if name in _PIF_FAMILY:
-        R = R_ESP if sensors is None else yaw_rate_noise_density(
-            sensors.yaw_rate.noise_std, sensors.yaw_rate.resolution, sensors.rate)
+        # the sensors' noise densities, held fixed (the weights are searched relative to R)
+        fixed = {"R": R_ESP, "Q_ay": Q_AY_ESP} if sensors is None else {
+            "R": yaw_rate_noise_density(sensors.yaw_rate.noise_std, sensors.yaw_rate.resolution, sensors.rate),
+            "Q_ay": yaw_rate_noise_density(sensors.ay.noise_std, sensors.ay.resolution, sensors.rate)}
         if name == "pif-modified":
-            return SearchSpace(name, ("log10(Q/R)", "log10(th R)"), ((1.0, 7.0), (-7.0, -1.5)), {"R": R})
+            return SearchSpace(name, ("log10(Q/R)", "log10(th R)"), ((1.0, 7.0), (-7.0, -1.5)), fixed)
         if name == "pif-adaptive":
             return SearchSpace(name, ("log10(Q/R)", "log10(th R)", "mu"), ((1.0, 7.0), (-7.0, -1.5), (0.8, 2.0)),
-                               {"R": R})
+                               fixed)
         rate = (("log10(Q/R)", "log10(th R)", "log10(Q_rate/R)"), ((1.0, 7.0), (-7.0, -1.5), (-2.0, 8.0)))
         if name == "pif-rate-adaptive":
             return SearchSpace(name, rate[0] + ("mu", "log10(tau/s)"), rate[1] + ((0.8, 2.0), (-1.5, 0.5)),
-                               {"R": R})
-        return SearchSpace(name, *rate, {"R": R})
+                               fixed)
+        return SearchSpace(name, *rate, fixed)
     if name == "kalman":
         return SearchSpace(name, ("log10 q_vy", "log10 q_r", "log10 q_w"),
                            ((-2.0, 3.0), (-4.0, 1.0), (-5.0, 0.0)), {"R": tuple(kalman.DEFAULT_R)})

@@ -74,8 +74,7 @@ def jitter_study(scenario: str = "bank-lane-change", names=("kinematic", "pio-mo
     from .. import estimators
     from ..estimators.base import Estimator
     from ..estimators.pif import SENSOR_R_ESTIMATORS
-    from ..signals import sample_rate
-    from ..vehicle import make_estimator
+    from ..vehicle import log_conditions, make_estimator
     from ..sim.scenarios import SCENARIOS, run
     from ..sim.sensors import SensorConfig
 
@@ -96,7 +95,7 @@ def jitter_study(scenario: str = "bank-lane-change", names=("kinematic", "pio-mo
             ok = m & est.valid
             out[key][name] = rms(est, ok)
             if key == "10" and name in SENSOR_R_ESTIMATORS:
-                at_rate = make_estimator(name, log_rate=sample_rate(sub.t)).run(sub)
+                at_rate = make_estimator(name, **log_conditions(sub)).run(sub)
                 log_rate[name] = rms(at_rate, m & at_rate.valid)
             if key == "10":
                 diff[name] = {}

@@ -96,8 +96,9 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
         Default :data:`KITTI_SCORING`.
     sensitivity : bool
         Also score with the paper's SUV parameters (``VehicleParams()``, ``sensitivity["suv"]``)
-        and the default-R PIFs designed for the sensor's nominal rate instead of the drive's
-        (``sensitivity["R_nominal"]``).
+        and the sensor-weighted PIFs designed from the data sheet alone: for the drive's rate
+        without the ``ay`` noise measured on it (``sensitivity["sheet_rate"]``), and for the
+        sensor's nominal rate (``sensitivity["R_nominal"]``, what ``estimators.make`` builds).
     tuning : mapping, optional
         ``{estimator: {option: value}}`` for the main scores (a vehicle file's ``[tuning]``).
     sensors : roadbank.vehicle.SensorSpec, optional
@@ -115,16 +116,20 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     sens = {}
     if sensitivity:
         sens["suv"] = run_and_score(log.signals, log.reference_roll, names, VehicleParams(), scoring).scores
-        # the default PIFs designed for the sensor's nominal rate (100 Hz) instead of the drive's
+        # the sensor-weighted PIFs designed from the data sheet alone: at the drive's rate, and at
+        # the sensor's nominal rate (100 Hz)
         from ..estimators.pif import SENSOR_R_ESTIMATORS
+        from ..signals import sample_rate
         from ..vehicle import SensorSpec
 
+        spec = sensors or SensorSpec()
         at_rate = [n for n in names if n in SENSOR_R_ESTIMATORS and "R" not in (tuning or {}).get(n, {})]
-        if at_rate:
-            R_nominal = (sensors or SensorSpec()).r_noise_density()
-            sens["R_nominal"] = run_and_score(log.signals, log.reference_roll, at_rate, params, scoring,
-                                              per_estimator={n: {**(tuning or {}).get(n, {}), "R": R_nominal}
-                                                             for n in at_rate}).scores
+        for key, rate in (("sheet_rate", sample_rate(log.signals.t)), ("R_nominal", None)):
+            if at_rate:
+                sheet = {"R": spec.r_noise_density(rate), "Q_ay": spec.ay_noise_density(rate)}
+                sens[key] = run_and_score(log.signals, log.reference_roll, at_rate, params, scoring,
+                                          per_estimator={n: {**(tuning or {}).get(n, {}), **sheet}
+                                                         for n in at_rate}).scores
     t = log.signals.t
     first = np.flatnonzero(run.scored)
     settings = {"tau": scoring.tau, "warmup_s": scoring.warmup_s, "fit_fraction": scoring.fit_fraction,

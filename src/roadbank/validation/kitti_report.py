@@ -149,14 +149,17 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
         L.append(md_table(["drive"] + [f"{n} sedan / SUV" for n in names], body, align="l" + "r" * len(names)))
         L.append("")
     if any("R_nominal" in d.sensitivity for d in v.drives):
-        L.append("Raw theta RMS (deg) of the default PIFs designed for the drive's rate (`R` = the ESP "
-                 "yaw-rate sensor's variance / 10 Hz, the default above) and for the sensor's nominal 100 Hz "
-                 "(`R` ten times smaller, a faster filter; see the 10 Hz section for the same comparison on "
-                 "the simulator):\n")
+        L.append("Raw theta RMS (deg) of the sensor-weighted PIFs designed as above (the ESP sensors' "
+                 "noise densities at the drive's 10 Hz, and the `ay` input's at least the white noise "
+                 "measured on the drive's own `ay`: `roadbank.vehicle.log_conditions`), from the data sheet "
+                 "alone at 10 Hz (no measured `ay` noise), and from the data sheet at the sensor's nominal "
+                 "100 Hz (`R`, `Q_ay` ten times smaller, a faster filter; see the 10 Hz section for the "
+                 "same comparison on the simulator):\n")
         names = [n for n in v.drives[0].sensitivity.get("R_nominal", {})]
-        body = [[d.label] + [f"{_f(d.scores[n].rms_raw_deg)} / {_f(d.sensitivity['R_nominal'][n].rms_raw_deg)}"
+        body = [[d.label] + [f"{_f(d.scores[n].rms_raw_deg)} / {_f(d.sensitivity['sheet_rate'][n].rms_raw_deg)}"
+                             f" / {_f(d.sensitivity['R_nominal'][n].rms_raw_deg)}"
                              for n in names] for d in v.drives if "R_nominal" in d.sensitivity]
-        L.append(md_table(["drive"] + [f"{n} R for 10 Hz / 100 Hz" for n in names], body,
+        L.append(md_table(["drive"] + [f"{n} as run / sheet 10 Hz / sheet 100 Hz" for n in names], body,
                           align="l" + "r" * len(names)))
         L.append("")
     L.append(f"{h}# Pooled over the drives\n")

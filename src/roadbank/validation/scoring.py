@@ -256,17 +256,16 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     density ``R`` is the sensor's noise and resolution at the log's own rate (median
     sample interval), unless ``R`` or another tuning is given (see :func:`log_rate_R`).
     """
-    from ..signals import sample_rate
-    from ..vehicle import make_estimator
+    from ..vehicle import log_conditions, make_estimator
 
     per_estimator = per_estimator or {}
     t = signals.t
     ref = hold_invalid(ref)
     fit, scored = masks(t, signals.vx, scoring)
     scores, smooth, raw, flags = {}, {}, {}, {}
-    rate = sample_rate(t)
+    cond = log_conditions(signals)
     for name in names:
-        est = make_estimator(name, params, sensors=sensors, log_rate=rate,
+        est = make_estimator(name, params, sensors=sensors, **cond,
                              **{**tuning, **per_estimator.get(name, {})}).run(signals)
         th, pb = hold_invalid(est.theta), hold_invalid(est.phi_b)
         sc = score(t, th, pb, est.valid, ref, fit, scored, scoring)

@@ -1,0 +1,110 @@
+"""The lateral accelerometer's noise in the PIF design (``Q_ay``) and measured on the log.
+
+Truth: the white-noise variance of a synthetic channel (second differences of a known
+noise on a smooth signal), the Kalman filter from scipy's continuous algebraic Riccati
+equation (the H-infinity design at th = 0 with the same process noise), the density
+formula from the data sheet numbers, and the simulator's true bank angle.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.linalg import solve_continuous_are
+
+from roadbank import estimators as E
+from roadbank.estimators.pif import Q_AY_ESP, R_ESP
+from roadbank.evaluation.compare import usable_samples
+from roadbank.evaluation.metrics import error_metrics
+from roadbank.signals import white_noise_std
+from roadbank.vehicle import SensorSpec, log_conditions, make_estimator
+
+
+@pytest.mark.parametrize("sigma", [0.02, 0.2])
+def test_white_noise_std_of_noise_on_a_smooth_signal(sigma):
+    rng = np.random.default_rng(1)
+    t = np.arange(60_000) * 0.01
+    smooth = 3.0 * np.sin(2 * np.pi * 0.5 * t) + 0.01 * t          # manoeuvre-like, 0.5 Hz
+    x = smooth + rng.normal(0.0, sigma, t.size)
+    # the signal's own curvature over three samples adds (2 pi 0.5)^2 * 3 * dt^2 / sqrt(6) at most
+    assert white_noise_std(x) == pytest.approx(sigma, rel=0.03, abs=2e-4)
+    # flagged samples (here: spikes) are left out; too few triples give NaN
+    spiky = x.copy()
+    spiky[::97] += 50.0
+    valid = np.ones(t.size, bool)
+    valid[::97] = False
+    assert white_noise_std(spiky, valid) == pytest.approx(sigma, rel=0.03, abs=2e-4)
+    assert math.isnan(white_noise_std(x[:50]))
+    assert math.isnan(white_noise_std(x, np.zeros(t.size, bool)))
+
+
+@pytest.mark.parametrize("name", ["pif-modified", "pif-rate"])
+def test_q_ay_is_process_noise_on_the_ay_input_as_in_the_kalman_filter(name):
+    # th = 0 turns the H-infinity design into the Kalman filter: P solves the CARE with
+    # W = (bank noise) + Q_ay b b^T, b = the ay column of B
+    est = E.make(name, th=0.0, Q_ay=40 * Q_AY_ESP, v_max=30.0)
+    for vx in (8.0, 25.0):
+        A, B, C, Dy, Lw, Ew = est.design_model(vx)
+        b = B[:, 1]
+        W = est.process_noise(Ew) + 40 * Q_AY_ESP * np.outer(b, b)
+        P = solve_continuous_are(A.T, C.T, W, est.R)
+        np.testing.assert_allclose(est.riccati_solution(vx), P, rtol=1e-6, atol=1e-12 * np.abs(P).max())
+    # Table 4 stays as published (no ay noise), the default carries the ESP accelerometer's
+    assert E.make("pif-modified", tuning="paper").Q_ay == 0.0
+    assert E.make(name).Q_ay == pytest.approx((0.03**2 + (0.005 * 9.81) ** 2 / 12) / 100.0, rel=1e-12)
+    with pytest.raises(ValueError, match="Q_ay"):
+        E.make(name, Q_ay=-1.0)
+
+
+def test_make_estimator_takes_the_larger_of_the_data_sheet_and_the_log_noise():
+    car = SensorSpec(ay_noise=0.05, ay_resolution=0.01)
+    sheet10 = (0.05**2 + 0.01**2 / 12) / 10.0
+    assert make_estimator("pif-modified", sensors=car, log_rate=10.0, v_max=30.0).Q_ay == pytest.approx(sheet10)
+    quiet = make_estimator("pif-modified", sensors=car, log_rate=10.0, log_ay_noise=0.01, v_max=30.0)
+    assert quiet.Q_ay == pytest.approx(sheet10)                    # the data sheet is the floor
+    loud = make_estimator("pif-modified", sensors=car, log_rate=10.0, log_ay_noise=0.3, v_max=30.0)
+    assert loud.Q_ay == pytest.approx(0.3**2 / 10.0) and loud.R[0, 0] == pytest.approx(car.r_noise_density(10.0))
+    nan = make_estimator("pif-modified", sensors=car, log_rate=10.0, log_ay_noise=float("nan"), v_max=30.0)
+    assert nan.Q_ay == pytest.approx(sheet10)
+    # explicit weights and other tunings keep the log out
+    assert make_estimator("pif-modified", log_ay_noise=0.3, Q_ay=0.0, v_max=30.0).Q_ay == 0.0
+    assert make_estimator("pif-modified", log_ay_noise=0.3, tuning="paper", v_max=30.0).Q_ay == 0.0
+    assert make_estimator("kalman", log_ay_noise=0.3).name == "kalman"
+
+
+@pytest.fixture(scope="module")
+def banked_runs():
+    """Constant-bank road and the test track's banked lane, each with the ESP accelerometer
+    and with a vibrating one (0.3 m/s^2 white noise)."""
+    from roadbank.sim.scenarios import SCENARIOS, run
+
+    return {(sc, label): run(SCENARIOS[sc], sensors=SensorSpec(ay_noise=noise).to_sim(), seed=2)
+            for sc in ("const-bank", "track-lane1") for label, noise in (("esp", 0.03), ("vibrating", 0.3))}
+
+
+def _rms(sim, est):
+    s = sim.signals
+    e = est.run(s)
+    return error_metrics(s.t, e.phi_b, sim.truth.phi_b, usable_samples(s, est.v_min), settle=2.0).rms_deg
+
+
+@pytest.mark.parametrize("scenario", ["const-bank", "track-lane1"])
+def test_the_logs_measured_ay_noise_helps_where_the_accelerometer_vibrates(banked_runs, scenario):
+    # (abrupt bank steps are the exception: on the bank lane change the smoother filter lags
+    # more than it gains, docs/estimators.md)
+    noisy = banked_runs[scenario, "vibrating"]
+    cond = log_conditions(noisy.signals)
+    assert cond["log_rate"] == pytest.approx(100.0) and cond["log_ay_noise"] == pytest.approx(0.3, rel=0.1)
+    measured = make_estimator("pif-modified", **cond)
+    sheet = make_estimator("pif-modified", log_rate=cond["log_rate"])
+    assert measured.Q_ay > 50 * sheet.Q_ay
+    assert _rms(noisy, measured) < 0.8 * _rms(noisy, sheet)
+    # on the ESP sensors the log tells nothing new: the same error within 0.01 deg
+    clean = banked_runs[scenario, "esp"]
+    cond = log_conditions(clean.signals)
+    assert cond["log_ay_noise"] == pytest.approx(math.sqrt(SensorSpec().ay_variance), rel=0.2)
+    assert _rms(clean, make_estimator("pif-modified", **cond)) == pytest.approx(
+        _rms(clean, E.make("pif-modified")), abs=0.01)
+    assert E.make("pif-modified").R[0, 0] == R_ESP
