@@ -124,12 +124,11 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
 
         spec = sensors or SensorSpec()
         at_rate = [n for n in names if n in SENSOR_R_ESTIMATORS and "R" not in (tuning or {}).get(n, {})]
-        for key, rate in (("sheet_rate", sample_rate(log.signals.t)), ("R_nominal", None)):
-            if at_rate:
-                sheet = {"R": spec.r_noise_density(rate), "Q_ay": spec.ay_noise_density(rate)}
-                sens[key] = run_and_score(log.signals, log.reference_roll, at_rate, params, scoring,
-                                          per_estimator={n: {**(tuning or {}).get(n, {}), **sheet}
-                                                         for n in at_rate}).scores
+        for key, rate in (("sheet_rate", sample_rate(log.signals.t)), ("R_nominal", None)) if at_rate else ():
+            sheet = {"R": spec.r_noise_density(rate), "Q_ay": spec.ay_noise_density(rate)}
+            sens[key] = run_and_score(log.signals, log.reference_roll, at_rate, params, scoring,
+                                      per_estimator={n: {**(tuning or {}).get(n, {}), **sheet}
+                                                     for n in at_rate}).scores
     t = log.signals.t
     first = np.flatnonzero(run.scored)
     settings = {"tau": scoring.tau, "warmup_s": scoring.warmup_s, "fit_fraction": scoring.fit_fraction,
