@@ -9,6 +9,7 @@ code for ``run()`` and ``step()``, so streaming and batch give identical numbers
 from __future__ import annotations
 
 import math
+import sys
 from typing import NamedTuple
 
 import numpy as np
@@ -125,6 +126,7 @@ class Estimator:
         self._run_fn = getattr(K, f"{self.kernel}_run")
         self._step_fn = getattr(K, f"{self.kernel}_step")
         self._work = np.zeros(L.work_size(self._nstate))
+        self._out_block = None      # memory of the last run()'s outputs (_outputs)
         self.fixed_dt = None
         self._tab = self._tab_cont
         self._cfg = self._build_cfg(None)
@@ -367,12 +369,7 @@ class Estimator:
         if reset:
             self.reset()
         n = len(signals)
-        w = np.empty(n)
-        theta = np.empty(n)
-        phib = np.empty(n)
-        phi = np.empty(n)
-        valid = np.empty(n, dtype=np.bool_)
-        xs = np.empty((n, max(self._nstate, 2)))
+        w, theta, phib, phi, valid, xs = self._outputs(n)
         k = self._first_interval(signals.t) if self._auto_rate and self.fixed_dt is None else n
         for a, b in ((0, k), (k, n)):
             if a == k and k < n:
@@ -383,7 +380,29 @@ class Estimator:
                              phib[a:b], phi[a:b], valid[a:b], xs[a:b])
         states = {name: xs[:, i] for i, name in enumerate(self.state_names)}
         states["phi"] = phi
-        return Estimate(self.name, signals.t.copy(), w, theta, phib, valid, states)
+        return Estimate(self.name, signals.t, w, theta, phib, valid, states)
+
+    def _outputs(self, n: int):
+        """Output arrays of :meth:`run` for ``n`` samples: ``w, theta, phi_b, phi, valid, xs``.
+
+        All are views of one block. The estimator keeps the block of its last
+        :meth:`run` and hands it out again once nothing else refers to it (every
+        array of that run's :class:`~roadbank.signals.Estimate` dropped): a loop over
+        logs then writes into memory it already has, instead of paying the page faults
+        of fresh memory (about as much as the estimation itself). Arrays the caller
+        still holds are never reused.
+        """
+        ns = max(self._nstate, 2)
+        nf = (4 + ns) * n                     # float64: w, theta, phi_b, phi, then xs (n, ns)
+        need = 8 * nf + n                     # + valid (bool)
+        blk = self._out_block
+        # references: self._out_block, the local blk and getrefcount's argument: nobody else
+        if blk is None or blk.shape[0] < need or blk.shape[0] > 2 * need + 4096 or sys.getrefcount(blk) > 3:
+            blk = np.empty(need, dtype=np.uint8)
+            self._out_block = blk
+        f = blk[:8 * nf].view(np.float64)
+        return (f[:n], f[n:2 * n], f[2 * n:3 * n], f[3 * n:4 * n], blk[8 * nf:need].view(np.bool_),
+                f[4 * n:].reshape(n, ns))
 
     def transition_matrix(self, vx: float, dt: float) -> np.ndarray:
         """Per-sample map of the observer state with zero inputs, measured on the compiled kernel.
