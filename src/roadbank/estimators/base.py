@@ -289,8 +289,10 @@ class Estimator:
         d = self.discrete_tables(dt)
         g, n = d["Phi"].shape[0], self._nstate
         self.fixed_dt = dt
-        self._tab = np.ascontiguousarray(np.hstack([self._tab_cont, d["Phi"].reshape(g, n * n),
-                                                    d["Gam0"].reshape(g, -1), d["Gam1"].reshape(g, -1)]))
+        parts = [self._tab_cont, d["Phi"].reshape(g, n * n), d["Gam0"].reshape(g, -1), d["Gam1"].reshape(g, -1)]
+        if n == 3:
+            parts.append(batch3_rows(d))
+        self._tab = np.ascontiguousarray(np.hstack(parts))
         self._cfg = self._build_cfg((d["Phi_r"], d["Gam0_r"], d["Gam1_r"]))
 
     def _rate_from_interval(self, h: float) -> None:
@@ -426,6 +428,25 @@ class Estimator:
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r} v_min={self.v_min} roll={self.roll!r}>"
+
+
+def batch3_rows(d: dict) -> np.ndarray:
+    """The batch loop's block (:func:`roadbank.estimators.layout.batch3_block`) of every grid row,
+    from :meth:`Estimator.discrete_tables` ``d`` of a three-state observer: (g, 88)."""
+    g = d["Phi"].shape[0]
+    M = np.zeros((g, 9, 4))
+    for q in range(L.NETA):
+        M[:, 2 * q, :3] = d["Gam0"][:, :, q]
+        M[:, 2 * q + 1, :3] = d["Gam1"][:, :, q]
+    for j in range(3):
+        M[:, 6 + j, :3] = d["Phi"][:, :, j]
+    W = np.zeros((g, 8))
+    W[:, 0:3] = d["D"]
+    W[:, 4:7] = d["H"]
+    B = np.hstack([M.reshape(g, 36), W])
+    dB = np.zeros_like(B)
+    dB[:-1] = B[1:] - B[:-1]          # the same subtraction as the kernels' tab[i + 1] - tab[i]
+    return np.hstack([B, dB])
 
 
 def equilibrium_map(F: np.ndarray, G: np.ndarray) -> np.ndarray:
