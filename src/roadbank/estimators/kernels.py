@@ -89,6 +89,7 @@ from .layout import (C_AREF, C_DTFIX, C_DTOL, C_DV, C_G, C_GAP, C_N, C_NG, C_NR,
 _B3 = batch3_block()
 _B3_M, _B3_W, _B3_DM = _B3.M, _B3.W, _B3.dM
 _B3_DELTA = _B3.dM - _B3.M           # from an entry of M or W to its difference to the next row
+_BLOCK = 256                         # samples per block of the batch loop (recursion, then _angles)
 
 # asin(x) = x + x^3 (c_1 + c_2 x^2 + ... + c_12 x^22) + R for |x| <= ASIN_POLY_MAX, the Taylor
 # coefficients c_k = (2k)! / (4^k (k!)^2 (2k+1)) (exact fractions, rounded once);
@@ -266,12 +267,50 @@ def asin_fast(x):
     """
     if not abs(x) <= ASIN_POLY_MAX:
         return math.asin(x)
+    return _asin_poly(x)
+
+
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+def _asin_poly(x):
+    """The polynomial of :func:`asin_fast` (its value for ``|x| <= ASIN_POLY_MAX``)."""
     u = x * x
     u2 = u * u
     u4 = u2 * u2
     p = (((_AS1 + _AS2 * u) + (_AS3 + _AS4 * u) * u2) + ((_AS5 + _AS6 * u) + (_AS7 + _AS8 * u) * u2) * u4
          + ((_AS9 + _AS10 * u) + (_AS11 + _AS12 * u) * u2) * (u4 * u4))
     return x + x * u * p
+
+
+@njit(cache=True, _nrt=False, error_model="numpy", no_cpython_wrapper=True, no_cfunc_wrapper=True)
+def _angles(out_w, out_phi, out_theta, out_phib, out_valid, wmax, k0, k1):
+    """``theta = asin_fast(clip(w, -1, 1))``, ``phi_b = theta - phi`` and ``valid = |w| <= wmax``
+    for the samples ``k0 <= k < k1`` of the batch arrays, as :func:`_finish` computes them.
+
+    A loop without branches over samples already computed, so that it runs on SIMD
+    registers (several samples at once): the polynomial everywhere, then libm's ``asin``
+    again for the few samples beyond its range.
+    """
+    nbig = 0
+    for k in range(k0, k1):
+        ku = np.uint64(k)
+        w = out_w[ku]
+        wc = w if w > -1.0 else -1.0
+        wc = wc if wc < 1.0 else 1.0
+        th = _asin_poly(wc)
+        out_theta[ku] = th
+        out_phib[ku] = th - out_phi[ku]
+        out_valid[ku] = abs(w) <= wmax
+        nbig += 0 if abs(wc) <= ASIN_POLY_MAX else 1
+    if nbig > 0:
+        for k in range(k0, k1):
+            ku = np.uint64(k)
+            w = out_w[ku]
+            wc = w if w > -1.0 else -1.0
+            wc = wc if wc < 1.0 else 1.0
+            if not abs(wc) <= ASIN_POLY_MAX:
+                th = math.asin(wc)
+                out_theta[ku] = th
+                out_phib[ku] = th - out_phi[ku]
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
@@ -578,85 +617,84 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
     ay0 = mem[M_AY]
     tlast = mem[M_TLAST]
     w = mem[M_W]
-    theta = mem[M_THETA]
     phi = mem[M_PHI]
     k = k0
-    while k < N:
-        ku = np.uint64(k)           # an unsigned index: no negative-index wraparound code
-        tk = t[ku]
-        vk = vx[ku]
-        dk = d[ku]
-        ak = ay[ku]
-        rk = r[ku]
-        # _sample_valid, then _begin's restart and fixed-interval tests
-        if not (math.isfinite(tk) and math.isfinite(vk)) or vk < vmin:
-            break
-        if (use_d and not math.isfinite(dk)) or (use_ay and not math.isfinite(ak)) \
-                or (use_r and not math.isfinite(rk)):
-            break
-        if tk <= tlast:
-            break
-        dt = tk - tlast
-        if dt > gap or not abs(dt - h) <= htol:
-            break
-        tlast = tk
-        u0 = dk if use_d else 0.0
-        u1 = ak if use_ay else 0.0
-        u2 = rk if use_r else 0.0
-        # _grid
-        s = (vk - v0) * inv_dv
-        if last == 0 or s <= 0.0:
-            i = 0
-            a = 0.0
-        elif s >= last:
-            i = last - 1
-            a = 1.0
-        else:
-            i = np.int64(s)
-            a = s - i
-        # fixed rate, as lpv_step's loops: xi = Phi xi + Gam0 eta- + Gam1 eta, one state row per lane
-        ri = tab[np.uint64(i)]
-        x0, x1, x2, _ = _map4(ri, np.int64(_B3_M), np.int64(_B3_DELTA), a, p0, u0, p1, u1, p2, u2, x0, x1, x2)
-        # w = D eta + H xi, in lpv_step's order (D and H at vx)
-        d0, d1, d2, _ = _interp4(ri, np.int64(_B3_W), np.int64(_B3_DELTA), a)
-        h0, h1, h2, _ = _interp4(ri, np.int64(_B3_W + 4), np.int64(_B3_DELTA), a)
-        w = 0.0
-        w += d0 * u0
-        w += d1 * u1
-        w += d2 * u2
-        w += h0 * x0
-        w += h1 * x1
-        w += h2 * x2
-        p0 = u0
-        p1 = u1
-        p2 = u2
-        # _finish, fixed: roll model and output
-        if nr == 2:
-            s0 = rA0 * ay0 + rB0 * ak
-            s0 += rP00 * z0
-            s0 += rP01 * z1
-            s1 = rA1 * ay0 + rB1 * ak
-            s1 += rP10 * z0
-            s1 += rP11 * z1
-            z0 = s0
-            z1 = s1
-        ay0 = ak
-        phi = rD * ak
-        if nr == 2:
-            phi += rH0 * z0
-            phi += rH1 * z1
-        wc = w if w > -1.0 else -1.0
-        wc = wc if wc < 1.0 else 1.0
-        theta = asin_fast(wc)
-        out_w[ku] = w
-        out_theta[ku] = theta
-        out_phib[ku] = theta - phi
-        out_phi[ku] = phi
-        out_valid[ku] = abs(w) <= wmax
-        out_x[ku, 0] = x0
-        out_x[ku, 1] = x1
-        out_x[ku, 2] = x2
-        k += 1
+    kend = k0
+    while k == kend and k < N:
+        # blocks of samples: the recursion, then the angles of the block (_angles)
+        kb = k
+        kend = k + _BLOCK if N - k > _BLOCK else N
+        while k < kend:
+            ku = np.uint64(k)           # an unsigned index: no negative-index wraparound code
+            tk = t[ku]
+            vk = vx[ku]
+            dk = d[ku]
+            ak = ay[ku]
+            rk = r[ku]
+            # _sample_valid, then _begin's restart and fixed-interval tests
+            if not (math.isfinite(tk) and math.isfinite(vk)) or vk < vmin:
+                break
+            if (use_d and not math.isfinite(dk)) or (use_ay and not math.isfinite(ak)) \
+                    or (use_r and not math.isfinite(rk)):
+                break
+            if tk <= tlast:
+                break
+            dt = tk - tlast
+            if dt > gap or not abs(dt - h) <= htol:
+                break
+            tlast = tk
+            u0 = dk if use_d else 0.0
+            u1 = ak if use_ay else 0.0
+            u2 = rk if use_r else 0.0
+            # _grid
+            s = (vk - v0) * inv_dv
+            if last == 0 or s <= 0.0:
+                i = 0
+                a = 0.0
+            elif s >= last:
+                i = last - 1
+                a = 1.0
+            else:
+                i = np.int64(s)
+                a = s - i
+            # fixed rate, as lpv_step's loops: xi = Phi xi + Gam0 eta- + Gam1 eta, one state row per lane
+            ri = tab[np.uint64(i)]
+            x0, x1, x2, _ = _map4(ri, np.int64(_B3_M), np.int64(_B3_DELTA), a, p0, u0, p1, u1, p2, u2, x0, x1, x2)
+            # w = D eta + H xi, in lpv_step's order (D and H at vx)
+            d0, d1, d2, _ = _interp4(ri, np.int64(_B3_W), np.int64(_B3_DELTA), a)
+            h0, h1, h2, _ = _interp4(ri, np.int64(_B3_W + 4), np.int64(_B3_DELTA), a)
+            w = 0.0
+            w += d0 * u0
+            w += d1 * u1
+            w += d2 * u2
+            w += h0 * x0
+            w += h1 * x1
+            w += h2 * x2
+            p0 = u0
+            p1 = u1
+            p2 = u2
+            # _finish, fixed: roll model and output
+            if nr == 2:
+                s0 = rA0 * ay0 + rB0 * ak
+                s0 += rP00 * z0
+                s0 += rP01 * z1
+                s1 = rA1 * ay0 + rB1 * ak
+                s1 += rP10 * z0
+                s1 += rP11 * z1
+                z0 = s0
+                z1 = s1
+            ay0 = ak
+            phi = rD * ak
+            if nr == 2:
+                phi += rH0 * z0
+                phi += rH1 * z1
+            out_w[ku] = w
+            out_phi[ku] = phi
+            out_x[ku, 0] = x0
+            out_x[ku, 1] = x1
+            out_x[ku, 2] = x2
+            k += 1
+        _angles(out_w, out_phi, out_theta, out_phib, out_valid, wmax, kb, k)
     if k > k0:
         mem[M_TLAST] = tlast
         mem[M_X] = x0
@@ -670,9 +708,9 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
         mem[M_ETA + 2] = p2
         mem[M_AY] = ay0
         mem[M_W] = w
-        mem[M_THETA] = theta
+        mem[M_THETA] = out_theta[np.uint64(k - 1)]
         mem[M_PHI] = phi
-        mem[M_PHIB] = theta - phi
+        mem[M_PHIB] = out_phib[np.uint64(k - 1)]
     return k
 
 
