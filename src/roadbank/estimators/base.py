@@ -126,7 +126,7 @@ class Estimator:
         self._run_fn = getattr(K, f"{self.kernel}_run")
         self._step_fn = getattr(K, f"{self.kernel}_step")
         self._work = np.zeros(L.work_size(self._nstate))
-        self._out_block = None      # memory of the last run()'s outputs (_outputs)
+        self._out_arrays = None     # the last run()'s output arrays, reused when dropped (_outputs)
         self.fixed_dt = None
         self._tab = self._tab_cont
         self._cfg = self._build_cfg(None)
@@ -387,24 +387,26 @@ class Estimator:
     def _outputs(self, n: int):
         """Output arrays of :meth:`run` for ``n`` samples: ``w, theta, phi_b, phi, valid, xs``.
 
-        All are views of one block. The estimator keeps the block of its last
-        :meth:`run` and hands it out again once nothing else refers to it (every
-        array of that run's :class:`~roadbank.signals.Estimate` dropped): a loop over
-        logs then writes into memory it already has, instead of paying the page faults
-        of fresh memory (about as much as the estimation itself). Arrays the caller
-        still holds are never reused.
+        The estimator keeps the arrays of its last :meth:`run` and hands them out again
+        once nothing else refers to them (every array of that run's
+        :class:`~roadbank.signals.Estimate` dropped, views included): a loop over logs
+        then writes into memory it already has, instead of paying the page faults of
+        fresh memory (about as much as the estimation itself). Arrays the caller still
+        holds are never reused. Separate arrays, not views of one block: numpy asks
+        the kernel for huge pages for allocations of 4 MiB and more, and first writes
+        to those cost far more here than to ordinary pages.
         """
         ns = max(self._nstate, 2)
-        nf = (4 + ns) * n                     # float64: w, theta, phi_b, phi, then xs (n, ns)
-        need = 8 * nf + n                     # + valid (bool)
-        blk = self._out_block
-        # references: self._out_block, the local blk and getrefcount's argument: nobody else
-        if blk is None or blk.shape[0] < need or blk.shape[0] > 2 * need + 4096 or sys.getrefcount(blk) > 3:
-            blk = np.empty(need, dtype=np.uint8)
-            self._out_block = blk
-        f = blk[:8 * nf].view(np.float64)
-        return (f[:n], f[n:2 * n], f[2 * n:3 * n], f[3 * n:4 * n], blk[8 * nf:need].view(np.bool_),
-                f[4 * n:].reshape(n, ns))
+        old = self._out_arrays
+        # each array referenced by the tuple only (as _UNSHARED_REFS calibrates): nothing of the
+        # caller's (a held view counts through its base)
+        if (old is not None and old[0].shape[0] == n and old[5].shape[1] == ns
+                and all(c == _UNSHARED_REFS for c in _refcounts(old))):
+            return old
+        out = (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n, dtype=np.bool_),
+               np.empty((n, ns)))
+        self._out_arrays = out
+        return out
 
     def transition_matrix(self, vx: float, dt: float) -> np.ndarray:
         """Per-sample map of the observer state with zero inputs, measured on the compiled kernel.
@@ -428,6 +430,15 @@ class Estimator:
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r} v_min={self.v_min} roll={self.roll!r}>"
+
+
+def _refcounts(arrays) -> list[int]:
+    """``sys.getrefcount`` of each element of the tuple ``arrays`` (as counted from here)."""
+    return [sys.getrefcount(a) for a in arrays]
+
+
+#: what :func:`_refcounts` reports for an element that nothing but its tuple refers to
+_UNSHARED_REFS = _refcounts((np.empty(1),))[0]
 
 
 def batch3_rows(d: dict) -> np.ndarray:
