@@ -40,7 +40,9 @@ relative; what an ECU runs). Per sample, with the previous inputs ``eta-``::
 each grid speed for inputs varying linearly between samples (first-order hold,
 :meth:`Estimator.discrete_tables`), so this path is exact for a frozen speed.
 In a batch, consecutive samples on this path of a three-state observer run in
-:func:`_lpv3_fixed_run` (constants read once, the state in registers; the same
+:func:`_lpv3_fixed_run` (constants read once, the state in registers, the three
+state rows in the lanes of one SIMD register, :func:`_map4`; theta, phi_b and
+valid per block of samples in a SIMD loop, :func:`_angles`; per sample the same
 operations in the same order as :func:`lpv_step`, so ``run()`` and ``step()``
 agree bit for bit). ``asin`` is :func:`asin_fast` (a polynomial within 2 ulp up
 to 17 deg, libm beyond) on every path.
