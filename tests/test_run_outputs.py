@@ -9,7 +9,7 @@ import pytest
 from roadbank import Signals, estimators
 
 
-def _log(seed, n=500):
+def _log(seed, n):
     rng = np.random.default_rng(seed)
     t = np.arange(n) * 0.01
     vx = 20.0 + rng.normal(size=n).cumsum() * 0.01
@@ -18,29 +18,34 @@ def _log(seed, n=500):
     return Signals(t, vx, ay, r, 0.05 * r)
 
 
-@pytest.mark.parametrize("name", ["pif-modified", "dfc"])
-def test_held_results_and_views_never_change(name):
+# 140000 samples: arrays above base._POPULATE_MIN_BYTES (memory-mapped), 500: plain numpy arrays
+@pytest.mark.parametrize("name, n", [("pif-modified", 500), ("dfc", 500), ("pif-modified", 140_000)])
+def test_held_results_and_views_never_change(name, n):
     est = estimators.make(name)
-    a, b = _log(1), _log(2)
+    a, b = _log(1, n), _log(2, n)
     first = est.run(a)
     snapshot = {k: getattr(first, k).copy() for k in ("w", "theta", "phi_b", "valid")}
-    view_only = est.run(a).states["phi"]          # the Estimate is dropped, one view of it is kept
-    view_copy = view_only.copy()
+    second = est.run(a)
+    kept_views = [second.states[k] for k in second.states] + [second.w[::3], second.phi_b[1:][::2]]
+    view_copies = [v.copy() for v in kept_views]
+    del second                                     # only views of the second result are kept
     for _ in range(3):
         est.run(b)                                 # results dropped at once: their memory may be reused
     for k, v in snapshot.items():
         np.testing.assert_array_equal(getattr(first, k), v)
-    np.testing.assert_array_equal(view_only, view_copy)
+    for v, c in zip(kept_views, view_copies):
+        np.testing.assert_array_equal(v, c)
 
 
 def test_reused_memory_gives_the_same_numbers_as_a_fresh_estimator():
-    a, b = _log(3), _log(4, n=300)
+    a, b = _log(3, 140_000), _log(4, n=300)
     est = estimators.make("pif-modified")
     for sig in (a, a, b, a):                       # same length (reuse) and another length (new arrays)
         got = est.run(sig)
         ref = estimators.make("pif-modified").run(sig)
         for k in ("w", "theta", "phi_b", "valid"):
             np.testing.assert_array_equal(getattr(got, k), getattr(ref, k))
+            assert getattr(got, k).flags.writeable
         for k in ref.states:
             np.testing.assert_array_equal(got.states[k], ref.states[k])
         assert got.t is sig.t and not got.t.flags.writeable
