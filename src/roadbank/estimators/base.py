@@ -366,6 +366,14 @@ class Estimator:
 
         With ``sample_rate="auto"`` the first positive interval sets the rate,
         exactly as in :meth:`step`.
+
+        Returns
+        -------
+        Estimate
+            ``t`` is ``signals.t`` itself (read-only, not copied); the other arrays are
+            the caller's. Their memory may be that of an earlier result of this
+            estimator whose arrays (and views of them) were all dropped; arrays still
+            referenced are never written again.
         """
         if not isinstance(signals, Signals):
             raise TypeError("run() expects a roadbank.Signals")
