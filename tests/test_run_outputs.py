@@ -51,3 +51,21 @@ def test_reused_memory_gives_the_same_numbers_as_a_fresh_estimator():
         assert got.t is sig.t and not got.t.flags.writeable
         del got, ref
         gc.collect()
+
+
+def test_batch_angles_beyond_the_polynomial_equal_step():
+    """Samples with |w| beyond asin_fast's polynomial (banks over 17.5 deg) take libm's asin in the
+    batch loop's angle pass as in step(): run() and step() agree bit for bit on both sides of it."""
+    from roadbank.estimators.kernels import ASIN_POLY_MAX
+    n = 1200
+    t = np.arange(n) * 0.01
+    bank = np.deg2rad(np.where((np.arange(n) // 300) % 2 == 1, 25.0, 5.0))   # steps across the range
+    vx = np.full(n, 20.0)
+    ay = 9.81 * np.sin(bank)
+    sig = Signals(t, vx, ay, np.zeros(n), np.zeros(n))
+    batch = estimators.make("pif-modified").run(sig)
+    assert np.any(np.abs(batch.w) > ASIN_POLY_MAX) and np.any(np.abs(batch.w) < ASIN_POLY_MAX)
+    est = estimators.make("pif-modified")
+    out = [est.step(t[k], vx[k], ay[k], 0.0, 0.0) for k in range(n)]
+    for field in ("w", "theta", "phi_b", "valid"):
+        assert np.array_equal(getattr(batch, field), [getattr(o, field) for o in out]), field
