@@ -9,6 +9,8 @@ code for ``run()`` and ``step()``, so streaming and batch give identical numbers
 from __future__ import annotations
 
 import math
+import mmap
+import sys
 from typing import NamedTuple
 
 import numpy as np
@@ -125,6 +127,7 @@ class Estimator:
         self._run_fn = getattr(K, f"{self.kernel}_run")
         self._step_fn = getattr(K, f"{self.kernel}_step")
         self._work = np.zeros(L.work_size(self._nstate))
+        self._out_arrays = None     # the last run()'s output arrays, reused when dropped (_outputs)
         self.fixed_dt = None
         self._tab = self._tab_cont
         self._cfg = self._build_cfg(None)
@@ -287,8 +290,10 @@ class Estimator:
         d = self.discrete_tables(dt)
         g, n = d["Phi"].shape[0], self._nstate
         self.fixed_dt = dt
-        self._tab = np.ascontiguousarray(np.hstack([self._tab_cont, d["Phi"].reshape(g, n * n),
-                                                    d["Gam0"].reshape(g, -1), d["Gam1"].reshape(g, -1)]))
+        parts = [self._tab_cont, d["Phi"].reshape(g, n * n), d["Gam0"].reshape(g, -1), d["Gam1"].reshape(g, -1)]
+        if n == 3:
+            parts.append(batch3_rows(d))
+        self._tab = np.ascontiguousarray(np.hstack(parts))
         self._cfg = self._build_cfg((d["Phi_r"], d["Gam0_r"], d["Gam1_r"]))
 
     def _rate_from_interval(self, h: float) -> None:
@@ -361,18 +366,21 @@ class Estimator:
 
         With ``sample_rate="auto"`` the first positive interval sets the rate,
         exactly as in :meth:`step`.
+
+        Returns
+        -------
+        Estimate
+            ``t`` is ``signals.t`` itself (read-only, not copied); the other arrays are
+            the caller's. Their memory may be that of an earlier result of this
+            estimator whose arrays (and views of them) were all dropped; arrays still
+            referenced are never written again.
         """
         if not isinstance(signals, Signals):
             raise TypeError("run() expects a roadbank.Signals")
         if reset:
             self.reset()
         n = len(signals)
-        w = np.empty(n)
-        theta = np.empty(n)
-        phib = np.empty(n)
-        phi = np.empty(n)
-        valid = np.empty(n, dtype=np.bool_)
-        xs = np.empty((n, max(self._nstate, 2)))
+        w, theta, phib, phi, valid, xs = self._outputs(n)
         k = self._first_interval(signals.t) if self._auto_rate and self.fixed_dt is None else n
         for a, b in ((0, k), (k, n)):
             if a == k and k < n:
@@ -383,7 +391,30 @@ class Estimator:
                              phib[a:b], phi[a:b], valid[a:b], xs[a:b])
         states = {name: xs[:, i] for i, name in enumerate(self.state_names)}
         states["phi"] = phi
-        return Estimate(self.name, signals.t.copy(), w, theta, phib, valid, states)
+        return Estimate(self.name, signals.t, w, theta, phib, valid, states)
+
+    def _outputs(self, n: int):
+        """Output arrays of :meth:`run` for ``n`` samples: ``w, theta, phi_b, phi, valid, xs``.
+
+        The estimator keeps the arrays of its last :meth:`run` and hands them out again
+        once nothing else refers to them (every array of that run's
+        :class:`~roadbank.signals.Estimate` dropped, views included): a loop over logs
+        then writes into memory it already has, instead of paying the page faults of
+        fresh memory (about as much as the estimation itself). Arrays the caller still
+        holds are never reused. New arrays come from :func:`_new_array`.
+        """
+        ns = max(self._nstate, 2)
+        old = self._out_arrays
+        # each array referenced by the tuple only (as _UNSHARED_REFS calibrates): nothing of the
+        # caller's (a held view counts through its base)
+        if (old is not None and old[0].shape[0] == n and old[5].shape[1] == ns
+                and all(c == _UNSHARED_REFS for c in _refcounts(old))):
+            return old
+        f8 = np.float64
+        out = (_new_array((n,), f8), _new_array((n,), f8), _new_array((n,), f8), _new_array((n,), f8),
+               _new_array((n,), np.bool_), _new_array((n, ns), f8))
+        self._out_arrays = out
+        return out
 
     def transition_matrix(self, vx: float, dt: float) -> np.ndarray:
         """Per-sample map of the observer state with zero inputs, measured on the compiled kernel.
@@ -407,6 +438,62 @@ class Estimator:
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r} v_min={self.v_min} roll={self.roll!r}>"
+
+
+#: arrays from this size on are allocated with their pages mapped at once (:func:`_new_array`)
+_POPULATE_MIN_BYTES = 1 << 20
+
+
+def _new_array(shape: tuple, dtype) -> np.ndarray:
+    """An uninitialised array; from ``_POPULATE_MIN_BYTES`` on, backed by an anonymous memory map
+    whose pages the kernel maps in one call (``MAP_POPULATE``, Linux).
+
+    Written for the first time, fresh memory costs one page fault per 4 KiB page, which on
+    virtual machines costs more than the estimation itself (about 1 ns per byte measured on
+    the benchmark machine, a third of that populated at once). Elsewhere, for small arrays
+    or when the map fails (e.g. too many maps), plain ``np.empty``. Also separate arrays
+    rather than one block: numpy asks for huge pages from 4 MiB on, and their first writes
+    cost more still there.
+    """
+    dt = np.dtype(dtype)
+    nbytes = int(np.prod(shape)) * dt.itemsize
+    populate = getattr(mmap, "MAP_POPULATE", None)
+    anonymous = getattr(mmap, "MAP_ANONYMOUS", None)
+    if populate is None or anonymous is None or nbytes < _POPULATE_MIN_BYTES:
+        return np.empty(shape, dtype=dt)
+    try:
+        mm = mmap.mmap(-1, nbytes, flags=mmap.MAP_PRIVATE | anonymous | populate)
+    except (OSError, ValueError):
+        return np.empty(shape, dtype=dt)
+    return np.ndarray(shape, dtype=dt, buffer=mm)    # views of it have it as their base
+
+
+def _refcounts(arrays) -> list[int]:
+    """``sys.getrefcount`` of each element of the tuple ``arrays`` (as counted from here)."""
+    return [sys.getrefcount(a) for a in arrays]
+
+
+#: what :func:`_refcounts` reports for an element that nothing but its tuple refers to
+_UNSHARED_REFS = _refcounts((np.empty(1),))[0]
+
+
+def batch3_rows(d: dict) -> np.ndarray:
+    """The batch loop's block (:func:`roadbank.estimators.layout.batch3_block`) of every grid row,
+    from :meth:`Estimator.discrete_tables` ``d`` of a three-state observer: (g, 88)."""
+    g = d["Phi"].shape[0]
+    M = np.zeros((g, 9, 4))
+    for q in range(L.NETA):
+        M[:, 2 * q, :3] = d["Gam0"][:, :, q]
+        M[:, 2 * q + 1, :3] = d["Gam1"][:, :, q]
+    for j in range(3):
+        M[:, 6 + j, :3] = d["Phi"][:, :, j]
+    W = np.zeros((g, 8))
+    W[:, 0:3] = d["D"]
+    W[:, 4:7] = d["H"]
+    B = np.hstack([M.reshape(g, 36), W])
+    dB = np.zeros_like(B)
+    dB[:-1] = B[1:] - B[:-1]          # the same subtraction as the kernels' tab[i + 1] - tab[i]
+    return np.hstack([B, dB])
 
 
 def equilibrium_map(F: np.ndarray, G: np.ndarray) -> np.ndarray:

@@ -40,7 +40,9 @@ relative; what an ECU runs). Per sample, with the previous inputs ``eta-``::
 each grid speed for inputs varying linearly between samples (first-order hold,
 :meth:`Estimator.discrete_tables`), so this path is exact for a frozen speed.
 In a batch, consecutive samples on this path of a three-state observer run in
-:func:`_lpv3_fixed_run` (constants read once, the state in registers; the same
+:func:`_lpv3_fixed_run` (constants read once, the state in registers, the three
+state rows in the lanes of one SIMD register, :func:`_map4`; theta, phi_b and
+valid per block of samples in a SIMD loop, :func:`_angles`; per sample the same
 operations in the same order as :func:`lpv_step`, so ``run()`` and ``step()``
 agree bit for bit). ``asin`` is :func:`asin_fast` (a polynomial within 2 ulp up
 to 17 deg, libm beyond) on every path.
@@ -77,15 +79,19 @@ import math
 from fractions import Fraction
 
 import numpy as np
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
 
 from .layout import (C_AREF, C_DTFIX, C_DTOL, C_DV, C_G, C_GAP, C_N, C_NG, C_NR, C_OFAM, C_P, C_ROLL,  # noqa: F401
                      C_SUB, C_TAU, C_USE, C_V0, C_VMIN, C_WMAX, M_AY, M_ETA, M_GATED, M_INIT, M_PHI, M_PHIB,
-                     M_THETA, M_TLAST, M_W, M_X, NETA, lpv_row)
+                     M_THETA, M_TLAST, M_W, M_X, NETA, batch3_block)
 
-#: offsets in a three-state lpv row (layout.lpv_row(3)) used by the batch loop
-_ROW3 = lpv_row(3)
-_R3_H, _R3_D, _R3_PHI, _R3_GAM0 = _ROW3.H, _ROW3.D, _ROW3.Phi, _ROW3.Gam0
+#: offsets of the batch loop's block in a three-state lpv row (layout.batch3_block)
+_B3 = batch3_block()
+_B3_M, _B3_W, _B3_DM = _B3.M, _B3.W, _B3.dM
+_B3_DELTA = _B3.dM - _B3.M           # from an entry of M or W to its difference to the next row
+_BLOCK = 256                         # samples per block of the batch loop (recursion, then _angles)
 
 # asin(x) = x + x^3 (c_1 + c_2 x^2 + ... + c_12 x^22) + R for |x| <= ASIN_POLY_MAX, the Taylor
 # coefficients c_k = (2k)! / (4^k (k!)^2 (2k+1)) (exact fractions, rounded once);
@@ -93,6 +99,70 @@ _R3_H, _R3_D, _R3_PHI, _R3_GAM0 = _ROW3.H, _ROW3.D, _ROW3.Phi, _ROW3.Gam0
 ASIN_POLY_MAX = 0.3
 (_AS1, _AS2, _AS3, _AS4, _AS5, _AS6, _AS7, _AS8, _AS9, _AS10, _AS11, _AS12) = (
     float(Fraction(math.factorial(2 * k), 4 ** k * math.factorial(k) ** 2 * (2 * k + 1))) for k in range(1, 13))
+
+
+# ---------------------------------------------------------------------------------
+# four lanes at once (the batch loop's three state rows): numba leaves straight-line code
+# scalar (its LLVM pipeline runs no SLP vectoriser), so these two write the vector code
+# themselves; per lane the same IEEE operations in the same order as the scalar code
+# ---------------------------------------------------------------------------------
+
+_V4 = ir.VectorType(ir.DoubleType(), 4)
+_LANES = [ir.Constant(ir.IntType(32), k) for k in range(4)]
+
+
+def _splat(builder, x):
+    v = builder.insert_element(ir.Constant(_V4, ir.Undefined), x, _LANES[0])
+    return builder.shuffle_vector(v, v, ir.Constant(ir.VectorType(ir.IntType(32), 4), [0, 0, 0, 0]))
+
+
+def _load4(builder, data, off):
+    p = builder.bitcast(builder.gep(data, [off]), _V4.as_pointer())
+    return builder.load(p, align=8, typ=_V4)
+
+
+def _column(builder, data, o, delta, a):
+    """``row[o + l] + a * row[o + delta + l]`` for the four lanes ``l``."""
+    return builder.fadd(_load4(builder, data, o), builder.fmul(a, _load4(builder, data, builder.add(o, delta))))
+
+
+def _lanes(context, builder, sig, v):
+    return context.make_tuple(builder, sig.return_type, [builder.extract_element(v, k) for k in _LANES])
+
+
+@intrinsic
+def _interp4(typingctx, row, o, delta, a):
+    """``(row[o + l] + a * row[o + delta + l] for l in 0..3)``: four schedule entries at ``vx``."""
+    sig = types.UniTuple(types.float64, 4)(row, o, delta, a)
+
+    def codegen(context, builder, signature, args):
+        data = context.make_array(signature.args[0])(context, builder, args[0]).data
+        return _lanes(context, builder, signature, _column(builder, data, args[1], args[2], _splat(builder, args[3])))
+    return sig, codegen
+
+
+@intrinsic
+def _map4(typingctx, row, o, delta, a, y0, y1, y2, y3, y4, y5, y6, y7, y8):
+    """Four lanes of ``s = 0; s += (c0 y0 + c1 y1); s += (c2 y2 + c3 y3); s += (c4 y4 + c5 y5);
+    s += c6 y6; s += c7 y7; s += c8 y8`` with column ``c_k`` = :func:`_interp4` at ``o + 4 k``."""
+    sig = types.UniTuple(types.float64, 4)(row, o, delta, a, y0, y1, y2, y3, y4, y5, y6, y7, y8)
+
+    def codegen(context, builder, signature, args):
+        data = context.make_array(signature.args[0])(context, builder, args[0]).data
+        o, delta = args[1], args[2]
+        av = _splat(builder, args[3])
+        four = ir.Constant(o.type, 4)
+
+        def term(k):
+            col = _column(builder, data, builder.add(o, builder.mul(four, ir.Constant(o.type, k))), delta, av)
+            return builder.fmul(col, _splat(builder, args[4 + k]))
+        s = _splat(builder, ir.Constant(ir.DoubleType(), 0.0))
+        for k in (0, 2, 4):
+            s = builder.fadd(s, builder.fadd(term(k), term(k + 1)))
+        for k in (6, 7, 8):
+            s = builder.fadd(s, term(k))
+        return _lanes(context, builder, signature, s)
+    return sig, codegen
 
 
 # ---------------------------------------------------------------------------------
@@ -199,12 +269,50 @@ def asin_fast(x):
     """
     if not abs(x) <= ASIN_POLY_MAX:
         return math.asin(x)
+    return _asin_poly(x)
+
+
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+def _asin_poly(x):
+    """The polynomial of :func:`asin_fast` (its value for ``|x| <= ASIN_POLY_MAX``)."""
     u = x * x
     u2 = u * u
     u4 = u2 * u2
     p = (((_AS1 + _AS2 * u) + (_AS3 + _AS4 * u) * u2) + ((_AS5 + _AS6 * u) + (_AS7 + _AS8 * u) * u2) * u4
          + ((_AS9 + _AS10 * u) + (_AS11 + _AS12 * u) * u2) * (u4 * u4))
     return x + x * u * p
+
+
+@njit(cache=True, _nrt=False, error_model="numpy", no_cpython_wrapper=True, no_cfunc_wrapper=True)
+def _angles(out_w, out_phi, out_theta, out_phib, out_valid, wmax, k0, k1):
+    """``theta = asin_fast(clip(w, -1, 1))``, ``phi_b = theta - phi`` and ``valid = |w| <= wmax``
+    for the samples ``k0 <= k < k1`` of the batch arrays, as :func:`_finish` computes them.
+
+    A loop without branches over samples already computed, so that it runs on SIMD
+    registers (several samples at once): the polynomial everywhere, then libm's ``asin``
+    again for the few samples beyond its range.
+    """
+    nbig = 0
+    for k in range(k0, k1):
+        ku = np.uint64(k)
+        w = out_w[ku]
+        wc = w if w > -1.0 else -1.0
+        wc = wc if wc < 1.0 else 1.0
+        th = _asin_poly(wc)
+        out_theta[ku] = th
+        out_phib[ku] = th - out_phi[ku]
+        out_valid[ku] = abs(w) <= wmax
+        nbig += 0 if abs(wc) <= ASIN_POLY_MAX else 1
+    if nbig > 0:
+        for k in range(k0, k1):
+            ku = np.uint64(k)
+            w = out_w[ku]
+            wc = w if w > -1.0 else -1.0
+            wc = wc if wc < 1.0 else 1.0
+            if not abs(wc) <= ASIN_POLY_MAX:
+                th = math.asin(wc)
+                out_theta[ku] = th
+                out_phib[ku] = th - out_phi[ku]
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
@@ -356,26 +464,6 @@ def _interp(tab, i, a, lo, hi, row):
 
 
 @njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
-def _row3(ri, rj, a, kp, kg, x0, x1, x2, p0, p1, p2, u0, u1, u2):
-    """Row of the fixed-rate map of a three-state observer: ``Phi[p] xi + Gam0[p] eta- + Gam1[p] eta``.
-
-    ``Phi[p]`` at ``kp``, ``Gam0[p]`` at ``kg`` and ``Gam1[p]`` at ``kg + 9`` of the
-    grid rows ``ri``, ``rj``, every entry interpolated with weight ``a``. The same
-    operations in the same order as the generic fixed-rate loops of :func:`lpv_step`
-    (inputs first, the state last: one sample's state reaches the next through three
-    multiply-adds), so that :func:`_lpv3_fixed_run` and ``lpv_step`` agree bit for bit.
-    """
-    s = 0.0
-    s += (ri[kg] + a * (rj[kg] - ri[kg])) * p0 + (ri[kg + 9] + a * (rj[kg + 9] - ri[kg + 9])) * u0
-    s += (ri[kg + 1] + a * (rj[kg + 1] - ri[kg + 1])) * p1 + (ri[kg + 10] + a * (rj[kg + 10] - ri[kg + 10])) * u1
-    s += (ri[kg + 2] + a * (rj[kg + 2] - ri[kg + 2])) * p2 + (ri[kg + 11] + a * (rj[kg + 11] - ri[kg + 11])) * u2
-    s += (ri[kp] + a * (rj[kp] - ri[kp])) * x0
-    s += (ri[kp + 1] + a * (rj[kp + 1] - ri[kp + 1])) * x1
-    s += (ri[kp + 2] + a * (rj[kp + 2] - ri[kp + 2])) * x2
-    return s
-
-
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
 def _restart_state(mem, work, oJ, n, eta):
     """``xi = J eta`` (the observer's equilibrium) with ``J`` (n x 3) at ``work[oJ:]``.
 
@@ -482,12 +570,15 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
     same order, as :func:`lpv_step` on that path (so ``run()`` and ``step()`` agree
     bit for bit), with what is constant over a log read once: the flags, the
     grid, the roll model, and the state kept in registers between samples
-    (written back to ``mem`` on return). The estimator must be initialised
-    (``mem[M_INIT] > 0``), ``n == 3``, ``nr`` 0 or 2, ``cfg[C_DTFIX] > 0``.
+    (written back to ``mem`` on return). The matrices come from the rows' batch
+    block (:func:`roadbank.estimators.layout.batch3_block`): each column of
+    ``[Gam0 | Gam1 | Phi]`` as four lanes, interpolated as ``M + a dM`` (the same
+    numbers as ``M[i] + a (M[i+1] - M[i])``), so that each state row's sum, in
+    ``lpv_step``'s order, runs in one lane of a SIMD register (:func:`_map4`). The estimator must be initialised
+    (``mem[M_INIT] > 0``), ``n == 3``, ``nr`` 0 or 2, ``cfg[C_DTFIX] > 0``, and ``tab``
+    must have the batch block.
     """
     N = t.shape[0]
-    kphi = np.int64(_R3_PHI)        # int64, not literals: one compiled _row3
-    kgam = np.int64(_R3_GAM0)
     nr = np.int64(cfg[C_NR])
     h = cfg[C_DTFIX]
     htol = cfg[C_DTOL] * h
@@ -500,7 +591,6 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
     v0 = cfg[C_V0]
     inv_dv = 1.0 / cfg[C_DV]
     last = np.int64(cfg[C_NG]) - 1
-    i1max = tab.shape[0] - 1
     # roll block (layout.roll_block(nr)); zeros when there is no roll model
     oD = C_ROLL + nr * nr + 2 * nr
     rD = cfg[oD]
@@ -529,89 +619,84 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
     ay0 = mem[M_AY]
     tlast = mem[M_TLAST]
     w = mem[M_W]
-    theta = mem[M_THETA]
     phi = mem[M_PHI]
     k = k0
-    while k < N:
-        ku = np.uint64(k)           # an unsigned index: no negative-index wraparound code
-        tk = t[ku]
-        vk = vx[ku]
-        dk = d[ku]
-        ak = ay[ku]
-        rk = r[ku]
-        # _sample_valid, then _begin's restart and fixed-interval tests
-        if not (math.isfinite(tk) and math.isfinite(vk)) or vk < vmin:
-            break
-        if (use_d and not math.isfinite(dk)) or (use_ay and not math.isfinite(ak)) \
-                or (use_r and not math.isfinite(rk)):
-            break
-        if tk <= tlast:
-            break
-        dt = tk - tlast
-        if dt > gap or not abs(dt - h) <= htol:
-            break
-        tlast = tk
-        u0 = dk if use_d else 0.0
-        u1 = ak if use_ay else 0.0
-        u2 = rk if use_r else 0.0
-        # _grid
-        s = (vk - v0) * inv_dv
-        if last == 0 or s <= 0.0:
-            i = 0
-            a = 0.0
-        elif s >= last:
-            i = last - 1
-            a = 1.0
-        else:
-            i = np.int64(s)
-            a = s - i
-        i1 = i + 1 if i + 1 < i1max else i1max
-        # fixed rate, as lpv_step's loops: xi = Phi xi + Gam0 eta- + Gam1 eta
-        ri = tab[np.uint64(i)]
-        rj = tab[np.uint64(i1)]
-        y0 = _row3(ri, rj, a, kphi, kgam, x0, x1, x2, p0, p1, p2, u0, u1, u2)
-        y1 = _row3(ri, rj, a, kphi + 3, kgam + 3, x0, x1, x2, p0, p1, p2, u0, u1, u2)
-        x2 = _row3(ri, rj, a, kphi + 6, kgam + 6, x0, x1, x2, p0, p1, p2, u0, u1, u2)
-        x0 = y0
-        x1 = y1
-        # w = D eta + H xi, in lpv_step's order
-        w = 0.0
-        w += (ri[_R3_D] + a * (rj[_R3_D] - ri[_R3_D])) * u0
-        w += (ri[_R3_D + 1] + a * (rj[_R3_D + 1] - ri[_R3_D + 1])) * u1
-        w += (ri[_R3_D + 2] + a * (rj[_R3_D + 2] - ri[_R3_D + 2])) * u2
-        w += (ri[_R3_H] + a * (rj[_R3_H] - ri[_R3_H])) * x0
-        w += (ri[_R3_H + 1] + a * (rj[_R3_H + 1] - ri[_R3_H + 1])) * x1
-        w += (ri[_R3_H + 2] + a * (rj[_R3_H + 2] - ri[_R3_H + 2])) * x2
-        p0 = u0
-        p1 = u1
-        p2 = u2
-        # _finish, fixed: roll model and output
-        if nr == 2:
-            s0 = rA0 * ay0 + rB0 * ak
-            s0 += rP00 * z0
-            s0 += rP01 * z1
-            s1 = rA1 * ay0 + rB1 * ak
-            s1 += rP10 * z0
-            s1 += rP11 * z1
-            z0 = s0
-            z1 = s1
-        ay0 = ak
-        phi = rD * ak
-        if nr == 2:
-            phi += rH0 * z0
-            phi += rH1 * z1
-        wc = w if w > -1.0 else -1.0
-        wc = wc if wc < 1.0 else 1.0
-        theta = asin_fast(wc)
-        out_w[ku] = w
-        out_theta[ku] = theta
-        out_phib[ku] = theta - phi
-        out_phi[ku] = phi
-        out_valid[ku] = abs(w) <= wmax
-        out_x[ku, 0] = x0
-        out_x[ku, 1] = x1
-        out_x[ku, 2] = x2
-        k += 1
+    kend = k0
+    while k == kend and k < N:
+        # blocks of samples: the recursion, then the angles of the block (_angles)
+        kb = k
+        kend = k + _BLOCK if N - k > _BLOCK else N
+        while k < kend:
+            ku = np.uint64(k)           # an unsigned index: no negative-index wraparound code
+            tk = t[ku]
+            vk = vx[ku]
+            dk = d[ku]
+            ak = ay[ku]
+            rk = r[ku]
+            # _sample_valid, then _begin's restart and fixed-interval tests
+            if not (math.isfinite(tk) and math.isfinite(vk)) or vk < vmin:
+                break
+            if (use_d and not math.isfinite(dk)) or (use_ay and not math.isfinite(ak)) \
+                    or (use_r and not math.isfinite(rk)):
+                break
+            if tk <= tlast:
+                break
+            dt = tk - tlast
+            if dt > gap or not abs(dt - h) <= htol:
+                break
+            tlast = tk
+            u0 = dk if use_d else 0.0
+            u1 = ak if use_ay else 0.0
+            u2 = rk if use_r else 0.0
+            # _grid
+            s = (vk - v0) * inv_dv
+            if last == 0 or s <= 0.0:
+                i = 0
+                a = 0.0
+            elif s >= last:
+                i = last - 1
+                a = 1.0
+            else:
+                i = np.int64(s)
+                a = s - i
+            # fixed rate, as lpv_step's loops: xi = Phi xi + Gam0 eta- + Gam1 eta, one state row per lane
+            ri = tab[np.uint64(i)]
+            x0, x1, x2, _ = _map4(ri, np.int64(_B3_M), np.int64(_B3_DELTA), a, p0, u0, p1, u1, p2, u2, x0, x1, x2)
+            # w = D eta + H xi, in lpv_step's order (D and H at vx)
+            d0, d1, d2, _ = _interp4(ri, np.int64(_B3_W), np.int64(_B3_DELTA), a)
+            h0, h1, h2, _ = _interp4(ri, np.int64(_B3_W + 4), np.int64(_B3_DELTA), a)
+            w = 0.0
+            w += d0 * u0
+            w += d1 * u1
+            w += d2 * u2
+            w += h0 * x0
+            w += h1 * x1
+            w += h2 * x2
+            p0 = u0
+            p1 = u1
+            p2 = u2
+            # _finish, fixed: roll model and output
+            if nr == 2:
+                s0 = rA0 * ay0 + rB0 * ak
+                s0 += rP00 * z0
+                s0 += rP01 * z1
+                s1 = rA1 * ay0 + rB1 * ak
+                s1 += rP10 * z0
+                s1 += rP11 * z1
+                z0 = s0
+                z1 = s1
+            ay0 = ak
+            phi = rD * ak
+            if nr == 2:
+                phi += rH0 * z0
+                phi += rH1 * z1
+            out_w[ku] = w
+            out_phi[ku] = phi
+            out_x[ku, 0] = x0
+            out_x[ku, 1] = x1
+            out_x[ku, 2] = x2
+            k += 1
+        _angles(out_w, out_phi, out_theta, out_phib, out_valid, wmax, kb, k)
     if k > k0:
         mem[M_TLAST] = tlast
         mem[M_X] = x0
@@ -625,9 +710,9 @@ def _lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, 
         mem[M_ETA + 2] = p2
         mem[M_AY] = ay0
         mem[M_W] = w
-        mem[M_THETA] = theta
+        mem[M_THETA] = out_theta[np.uint64(k - 1)]
         mem[M_PHI] = phi
-        mem[M_PHIB] = theta - phi
+        mem[M_PHIB] = out_phib[np.uint64(k - 1)]
     return k
 
 

@@ -159,6 +159,32 @@ def lpv_row(n: int) -> LpvRow:
     return LpvRow(0, G, H, D, J, cont, cont, Gam0, Gam1, Gam1 + n * NETA)
 
 
+class Batch3Block(NamedTuple):
+    """Offsets, within a three-state ``lpv`` row after :func:`lpv_row` ``.end``, of the fixed-rate
+    map arranged for the batch loop (:func:`roadbank.estimators.kernels._lpv3_fixed_run`).
+
+    ``M`` (9 x 4): the columns of ``[Gam0 | Gam1 | Phi]`` in the order the loop sums them,
+    ``Gam0[:, 0], Gam1[:, 0], Gam0[:, 1], Gam1[:, 1], Gam0[:, 2], Gam1[:, 2], Phi[:, 0],
+    Phi[:, 1], Phi[:, 2]``, each as four lanes (the three state rows, then 0), so that one
+    column times one input updates all three states at once (SIMD). ``W`` (8): ``D[0:3], 0,
+    H[0:3], 0``. ``dM``, ``dW``: the next grid row's ``M``, ``W`` minus this row's (0 in the
+    last row), so that the loop interpolates each entry as ``M + a dM``, the same number
+    as ``M[i] + a (M[i+1] - M[i])``.
+    """
+
+    M: int
+    W: int
+    dM: int
+    dW: int
+    end: int
+
+
+def batch3_block() -> Batch3Block:
+    """:class:`Batch3Block` of a three-state row (starts at ``lpv_row(3).end``)."""
+    o = lpv_row(3).end
+    return Batch3Block(o, o + 36, o + 44, o + 80, o + 88)
+
+
 def roll_states(n: int) -> int:
     """Offset in ``mem`` of the roll states (after the ``n`` observer states)."""
     return M_X + n
