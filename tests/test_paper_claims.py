@@ -81,3 +81,20 @@ def test_outputs_written(study, tmp_path):
     assert t.num_rows == len(study.rows)
     for key in ("s-curve-cf-robustness", "track-lane-change-cf-robustness", "const-bank"):
         assert all(p.exists() for p in written["figures"][key])
+
+
+def test_accuracy_aims_say_which_estimators_meet_both_aims_in_each_cell(study):
+    rms, mx = {}, {}
+    for r in study.rows:
+        if r["reference"] == "bank" and r["metric"] in ("rms_deg", "max_deg"):
+            (rms if r["metric"] == "rms_deg" else mx)[r["scenario"], r["condition"], r["estimator"]] = r["value"]
+    aims = claims.accuracy_aims(study.rows)
+    assert len(aims["cells"]) == len(study.cells)
+    for c in aims["cells"]:
+        want = sorted(n for (s, cond, n), v in rms.items()
+                      if (s, cond) == (c["scenario"], c["condition"]) and v <= 0.5 and mx[s, cond, n] <= 1.5)
+        assert c["meeting"] == want
+        assert (aims["estimator"] in c["meeting"]) == (c["rms_ok"] and c["max_ok"])
+    from roadbank.report.document import _aims_block
+    text = "\n".join(_aims_block(study.rows, None))
+    assert "estimators meeting both" in text and "No estimator of this study meets both aims in" in text
