@@ -128,10 +128,12 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
         As for :func:`roadbank.io.load_log`.
     vehicle : roadbank.vehicle.Vehicle, optional
         Builds the estimators (its parameters, sensors and tuning) and supplies ``params``.
-        The estimators are built on the first chunk, for the log's sample rate
-        (:func:`roadbank.vehicle.make_estimator` with ``log_rate``): a default-tuned PIF's
-        ``R`` is the car's yaw-rate sensor (without ``vehicle``: the paper's ESP sensor)
-        at the rate the log is sampled at (10 Hz KITTI frames, a 50 Hz CSV, ...). Its
+        The estimators are built on the first chunk, for the log's sample rate and ``ay``
+        noise (:func:`roadbank.vehicle.make_estimator` with
+        :func:`~roadbank.vehicle.log_conditions`): a default-tuned PIF's ``R`` is the car's
+        yaw-rate sensor (without ``vehicle``: the paper's ESP sensor) at the rate the log is
+        sampled at (10 Hz KITTI frames, a 50 Hz CSV, ...), its ``Q_ay`` the accelerometer's
+        or the white noise measured on the chunk's ``ay``, whichever is larger. Its
         identified sensor offsets (``[identified]`` yaw-rate, ay and steering offsets) are
         subtracted from every chunk first (:meth:`roadbank.vehicle.Vehicle.correct`).
     chunk_rows : int, optional
