@@ -96,7 +96,9 @@ def _kitti_figures(v, out_dir: Path, stem: str) -> dict:
               help="Write the markdown report (KITTI section; .html: a self-contained page) here and one "
                    "PNG per drive next to it.")
 @_ESTIMATORS
-@click.option("--no-sensitivity", is_flag=True, help="Skip the runs with the paper's SUV parameters.")
+@click.option("--no-sensitivity", is_flag=True,
+              help="Skip the sensitivity runs (the paper's SUV parameters; the PIFs designed from the data "
+                   "sheet alone).")
 @_VEHICLE
 def kitti(paths, as_json, output, names, no_sensitivity, vehicle):
     """Score every estimator against the INS roll of KITTI raw drives.
