@@ -68,8 +68,11 @@ def test_make_estimator_takes_the_larger_of_the_data_sheet_and_the_log_noise():
     assert loud.Q_ay == pytest.approx(0.3**2 / 10.0) and loud.R[0, 0] == pytest.approx(car.r_noise_density(10.0))
     nan = make_estimator("pif-modified", sensors=car, log_rate=10.0, log_ay_noise=float("nan"), v_max=30.0)
     assert nan.Q_ay == pytest.approx(sheet10)
-    # explicit weights and other tunings keep the log out
+    # explicit weights and other tunings keep the log out; an explicit R is the caller's own
+    # weights, so its explicit th stays strict and the log's noise cannot make it unsolvable
     assert make_estimator("pif-modified", log_ay_noise=0.3, Q_ay=0.0, v_max=30.0).Q_ay == 0.0
+    own = make_estimator("pif-modified", log_ay_noise=3.0, log_rate=10.0, R=R_ESP, v_max=30.0)
+    assert own.Q_ay == Q_AY_ESP and own.R[0, 0] == R_ESP
     assert make_estimator("pif-modified", log_ay_noise=0.3, tuning="paper", v_max=30.0).Q_ay == 0.0
     assert make_estimator("kalman", log_ay_noise=0.3).name == "kalman"
 

@@ -84,19 +84,18 @@ SENSOR_R_ESTIMATORS = ("pif-modified", "pif-rate", "pif-adaptive", "pif-rate-ada
 def with_sensor_noise(name: str, options: dict, R: float, Q_ay: float | None = None) -> dict:
     """``make(name, ...)`` options with the sensors' noise densities: ``R`` ((rad/s)^2 s, yaw
     rate) and ``Q_ay`` ((m/s^2)^2 s, lateral acceleration; None: the estimator's default)
-    when ``name`` is a default-tuned PIF (:data:`SENSOR_R_ESTIMATORS`); otherwise
-    ``options`` unchanged. An ``R`` or ``Q_ay`` in ``options`` is kept.
+    when ``name`` is a default-tuned PIF (:data:`SENSOR_R_ESTIMATORS`) given no ``R``;
+    otherwise ``options`` unchanged (an explicit ``R`` means the caller's own weights, whose
+    ``Q_ay`` is then as given or the tuning's). A ``Q_ay`` in ``options`` is kept.
 
     A ``th`` given with them (a ``[tuning]`` table from ``roadbank tune``, which writes ``Q`` and
     ``th`` relative to the sensor and no ``R``) adapts like the default's: at a log rate whose
     ``R`` leaves no stabilising solution it is halved until there is one (``adapt_th``).
     """
-    if name not in SENSOR_R_ESTIMATORS or options.get("tuning", "default") != "default":
+    if name not in SENSOR_R_ESTIMATORS or options.get("tuning", "default") != "default" or "R" in options:
         return options
     sensor = {"R": R} if Q_ay is None else {"R": R, "Q_ay": Q_ay}
-    if "R" in options:
-        sensor.pop("R")
-    elif "th" in options:
+    if "th" in options:
         sensor["adapt_th"] = True
     return {**sensor, **options}
 
