@@ -38,6 +38,15 @@ def test_white_noise_std_of_noise_on_a_smooth_signal(sigma):
     assert white_noise_std(spiky, valid) == pytest.approx(sigma, rel=0.03, abs=2e-4)
     assert math.isnan(white_noise_std(x[:50]))
     assert math.isnan(white_noise_std(x, np.zeros(t.size, bool)))
+    # a smooth signal quantised without noise (a CAN channel) has no white noise to find
+    q = 0.005 * 9.81
+    assert white_noise_std(np.round(smooth / q) * q) < 0.1 * q
+
+
+def test_a_log_without_measurable_noise_keeps_the_data_sheet():
+    sheet = make_estimator("pif-modified", log_rate=50.0, v_max=30.0).Q_ay
+    for noise in (0.0, float("nan"), None):
+        assert make_estimator("pif-modified", log_rate=50.0, log_ay_noise=noise, v_max=30.0).Q_ay == sheet
 
 
 @pytest.mark.parametrize("name", ["pif-modified", "pif-rate"])
