@@ -280,6 +280,10 @@ class SensorSpec:
         """Yaw-rate measurement variance, noise + uniform quantisation: ``r_noise^2 + r_resolution^2/12`` ((rad/s)^2)."""
         return self.r_noise ** 2 + self.r_resolution ** 2 / 12.0
 
+    def rate_for(self, rate: float | None = None) -> float:
+        """``rate`` (Hz) when it is a positive finite number, else the sensor's own ``rate``."""
+        return rate if rate is not None and math.isfinite(rate) and rate > 0 else self.rate
+
     def r_noise_density(self, rate: float | None = None) -> float:
         """Yaw-rate noise density ``R`` ((rad/s)^2 s) of this sensor sampled at ``rate`` (Hz).
 
@@ -289,8 +293,7 @@ class SensorSpec:
         """
         from .estimators.pif import yaw_rate_noise_density
 
-        rate = rate if rate is not None and math.isfinite(rate) and rate > 0 else self.rate
-        return yaw_rate_noise_density(self.r_noise, self.r_resolution, rate)
+        return yaw_rate_noise_density(self.r_noise, self.r_resolution, self.rate_for(rate))
 
     @property
     def ay_variance(self) -> float:
@@ -300,8 +303,7 @@ class SensorSpec:
     def ay_noise_density(self, rate: float | None = None) -> float:
         """Lateral-acceleration noise density ``Q_ay`` ((m/s^2)^2 s) of this sensor sampled at
         ``rate`` (Hz): ``ay_variance / rate``, as :meth:`r_noise_density`."""
-        rate = rate if rate is not None and math.isfinite(rate) and rate > 0 else self.rate
-        return self.ay_variance / rate
+        return self.ay_variance / self.rate_for(rate)
 
     @property
     def dt(self) -> float:
@@ -384,7 +386,7 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
 
     sensors = sensors if sensors is not None else SensorSpec()
     if sensors.r_variance > 0:
-        rate = log_rate if log_rate is not None and math.isfinite(log_rate) and log_rate > 0 else sensors.rate
+        rate = sensors.rate_for(log_rate)
         Q_ay = sensors.ay_noise_density(rate)
         if log_ay_noise is not None and math.isfinite(log_ay_noise):
             Q_ay = max(Q_ay, log_ay_noise ** 2 / rate)
