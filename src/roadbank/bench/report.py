@@ -208,9 +208,9 @@ def obstacles(res: dict) -> list[str]:
                    "time). What would still help: shipping the caches (ahead-of-time compilation), or "
                    "one compiled step for both step() and run() (costs step() latency).")
     if t["plant_realtime_factor"] is False:
-        out.append("- **Plant** (owned by the simulator): RK4 at 1 kHz means 4 plant evaluations "
-                   "(18 states, 4 Magic-Formula tyres with combined slip) per simulated ms; 2000x "
-                   "real time leaves 0.5 us per RK4 step. The step is set by the stiff "
+        out.append("- **Plant** (owned by the simulator): RK4 at 2 ms means 4 plant evaluations "
+                   "(18 states, 4 Magic-Formula tyres with combined slip) per 2 simulated ms; 2000x "
+                   "real time leaves 1 us per RK4 step. The step is set by the stiff "
                    "wheel-spin/slip dynamics; options: a larger step with a semi-implicit "
                    "wheel-spin update, or an adaptive step.")
     if t["plant_vs_commonroad"] is False:

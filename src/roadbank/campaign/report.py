@@ -136,6 +136,11 @@ SUMMARY_BEST = {c: "min" for c in ("rms_median", "rms_p95", "rms_max", "max_medi
                                    "fail_rate")}
 
 
+def _step_text(sim_dt) -> str:
+    """The plant step of a campaign's settings, in words (None: the simulator's default)."""
+    return "the simulator's default (2 ms at 100 Hz sensors)" if sim_dt is None else f"{sim_dt * 1e3:g} ms"
+
+
 def write_report(outdir, df, settings: dict, throughput: dict | None = None) -> Path:
     """Write summary.csv, failure_cells.csv, errors.csv, boxplot.png, report.md and report.html into
     ``outdir``; returns the path of report.md.
@@ -164,7 +169,7 @@ def write_report(outdir, df, settings: dict, throughput: dict | None = None) -> 
              f"Seed {settings.get('seed')}; scenarios {', '.join(sorted(runs['scenario'].unique()))}; "
              f"scenario duration x {opts.get('duration_scale', 1.0):g}"
              + (" (manoeuvres truncated)" if opts.get("duration_scale", 1.0) < 1 else " (full paper durations)")
-             + f"; plant integration step {opts.get('sim_dt', 1e-3) * 1e3:g} ms; "
+             + f"; plant integration step {_step_text(opts.get('sim_dt'))}; "
              f"scores after {opts.get('settle', 2.0):g} s. Perturbations: see roadbank.campaign.sampling.", "",
              f"Failure of an estimator in a run: non-finite output, bank RMS error > {FAIL_RMS_DEG:g} deg, "
              "or an error raised.", ""]

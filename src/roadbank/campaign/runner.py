@@ -49,8 +49,9 @@ class RunOptions:
         below 1 shortens the manoeuvres (truncates them) and is stated in the report.
     pre_roll : float or None
         Settling time simulated before t = 0 (s); None keeps the scenario's 5 s.
-    sim_dt : float
-        Integration step of the plant (s); 1e-3 is the simulator's default.
+    sim_dt : float or None
+        Integration step of the plant (s); None is the simulator's default
+        (:func:`roadbank.sim.scenarios.default_step`: 2 ms at 100 Hz sensors).
     settle : float
         Seconds at the start excluded from the scores.
     vehicle : roadbank.vehicle.Vehicle or None
@@ -61,7 +62,7 @@ class RunOptions:
     names: tuple = ()
     duration_scale: float = 1.0
     pre_roll: float | None = None
-    sim_dt: float = 1e-3
+    sim_dt: float | None = None
     settle: float = 2.0
     vehicle: object = None
 
@@ -70,7 +71,7 @@ class RunOptions:
     def __post_init__(self) -> None:
         if not (0 < self.duration_scale <= 1.0):
             raise ValueError("duration_scale must be in (0, 1]")
-        if not (0 < self.sim_dt <= 0.01):
+        if self.sim_dt is not None and not (0 < self.sim_dt <= 0.01):
             raise ValueError("sim_dt must be in (0, 0.01] s")
         if self.pre_roll is not None and not self.pre_roll >= 0:
             raise ValueError("pre_roll must be >= 0")

@@ -30,8 +30,8 @@ from .options import vehicle_option
               help="Runs per Dask task.")
 @click.option("--duration-scale", type=click.FloatRange(0.0, 1.0, min_open=True), default=1.0,
               show_default=True, help="Factor on the scenario durations (<1 truncates the manoeuvres).")
-@click.option("--sim-dt", type=click.FloatRange(0.0, 0.01, min_open=True), default=1e-3, show_default=True,
-              help="Plant integration step (s).")
+@click.option("--sim-dt", type=click.FloatRange(0.0, 0.01, min_open=True), default=None,
+              help="Plant integration step (s) [default: the simulator's, 2 ms at 100 Hz sensors].")
 @click.option("--estimators", default="", help="Comma-separated estimator names (default: all).")
 @vehicle_option("Runs perturb this car (plant and sensors); the estimators are designed for it "
                 "(parameters and [tuning] tables).")

@@ -1,8 +1,11 @@
 """Fixed-step integration of plant + driver, entirely in compiled code.
 
-Classic RK4 on the plant states with the driver's inputs held constant over a
-step (the driver is a discrete controller at the integration rate, 1 kHz by
-default). Python only allocates the result arrays.
+Classic RK4 on the plant states with the driver's inputs held constant between
+driver updates: the driver is a discrete controller with its own sample time
+(every ``drv_every`` integration steps, 2 ms by default, see
+:func:`roadbank.sim.scenarios.driver_every`), so the integration step can be
+refined without changing the simulated system, and RK4 keeps its fourth order
+between updates. Python only allocates the result arrays.
 
 Performance layout (see docs/simulator.md, "Speed"): the plant is inlined once
 into a loop over the four RK4 stages (one copy of the code, no calls; the
@@ -54,8 +57,11 @@ _A1, _A2, _A3 = 0.5, 0.5, 1.0
 
 
 @njit(cache=True, fastmath=True, error_model="numpy")
-def simulate_core(x, d, t0, n_steps, dt, road, drv, q, X, U, u, c, k, tmp, dx, aux):
+def simulate_core(x, d, t0, n_steps, dt, drv_every, road, drv, q, X, U, u, c, k, tmp, dx, aux):
     """Integrate ``n_steps`` steps in place from state ``x`` (driver state ``d``) at time ``t0``.
+
+    The driver runs before every ``drv_every``-th step, with sample time
+    ``drv_every * dt``; its inputs are held in between.
 
     Fills ``X`` (n_steps+1, NX) with the states and ``U`` (n_steps+1, NU) with
     the inputs applied from each state. ``q`` is :func:`~roadbank.sim.plant.prepare`'s
@@ -77,14 +83,15 @@ def simulate_core(x, d, t0, n_steps, dt, road, drv, q, X, U, u, c, k, tmp, dx, a
     tmp = _borrow(tmp)
     dx = _borrow(dx)
     aux = _borrow(aux)
+    dt_drv = drv_every * dt
     for n in range(n_steps):
-        t = t0 + n * dt
-        driver_step(t, x, d, drv, road, u, dt)
+        if n % drv_every == 0:
+            driver_step(t0 + n * dt, x, d, drv, road, u, dt_drv)
+            step_inputs(u, q, c)
         for i in range(NX):
             X[n, i] = x[i]
         for i in range(NU):
             U[n, i] = u[i]
-        step_inputs(u, q, c)
         # RK4 with the plant inlined once in a loop over the four stages (k is (4, NX))
         for i in range(NX):
             tmp[i] = x[i]
@@ -97,21 +104,25 @@ def simulate_core(x, d, t0, n_steps, dt, road, drv, q, X, U, u, c, k, tmp, dx, a
         w = dt / 6.0
         for i in range(NX):
             x[i] += w * (k[0, i] + 2.0 * (k[1, i] + k[2, i]) + k[3, i])
-    driver_step(t0 + n_steps * dt, x, d, drv, road, u, dt)
+    if n_steps % drv_every == 0:
+        driver_step(t0 + n_steps * dt, x, d, drv, road, u, dt_drv)
     for i in range(NX):
         X[n_steps, i] = x[i]
     for i in range(NU):
         U[n_steps, i] = u[i]
 
 
-def simulate(x0, d0, t0: float, duration: float, dt: float, road_packed, drv_packed, p):
-    """Allocate and integrate; returns ``(t, X, U, d_final)`` at the integration rate."""
+def simulate(x0, d0, t0: float, duration: float, dt: float, road_packed, drv_packed, p, drv_every: int = 1):
+    """Allocate and integrate; returns ``(t, X, U, d_final)`` at the integration rate.
+
+    ``t0``, ``duration`` and ``dt`` in s; the driver runs every ``drv_every`` steps.
+    """
     n_steps = int(round(duration / dt))
     X = np.empty((n_steps + 1, NX))
     U = np.empty((n_steps + 1, NU))
     x = np.array(x0, dtype=np.float64)
     d = np.array(d0, dtype=np.float64)
-    simulate_core(x, d, float(t0), n_steps, float(dt), np.ascontiguousarray(road_packed, dtype=np.float64),
+    simulate_core(x, d, float(t0), n_steps, float(dt), int(drv_every), np.ascontiguousarray(road_packed, dtype=np.float64),
                   np.ascontiguousarray(drv_packed, dtype=np.float64), prepare(p),
                   X, U, np.zeros(NU), np.zeros(NC), np.zeros((4, NX)), np.zeros(NX), np.zeros(NX), np.zeros(NAUX))
     t = t0 + dt * np.arange(n_steps + 1)

@@ -29,7 +29,21 @@ from .plant import (A_AX, A_AY, A_DVY, A_FXW, A_FYW, A_FZW, A_PHIB, NX, X_FXL, X
 from .road import Road, flat_road, straight_road, test_track, track_curve_start, truth_bank, two_lane_road
 from .sensors import SensorConfig, measure
 
-DT_DEFAULT = 1e-3  #: integration step (s): RK4 at 1 kHz
+DT_DEFAULT = 2e-3  #: longest integration step (s): RK4 at 500 Hz (see :func:`default_step`)
+DRIVER_DT = 2e-3  #: the driver's sample time (s); it is a discrete controller, independent of the step
+
+
+def default_step(sensors: SensorConfig) -> float:
+    """Integration step (s) for a sensor rate: the longest step <= :data:`DT_DEFAULT` that divides
+    the sensor period, so every sample falls on the integration grid (2 ms at 100 Hz, 1 ms at 1 kHz).
+    """
+    period = 1.0 / sensors.rate
+    return period / math.ceil(period / DT_DEFAULT - 1e-9)
+
+
+def driver_every(dt: float) -> int:
+    """Integration steps (of ``dt`` s) per driver update: the multiple closest to :data:`DRIVER_DT`, >= 1."""
+    return max(1, int(round(DRIVER_DT / dt)))
 
 
 @dataclass(frozen=True)
@@ -185,7 +199,7 @@ class SimResult:
     """Result of a run: sensor ``signals`` (a :class:`roadbank.Signals`) and ``truth``.
 
     ``steering_wheel_angle`` is the measured steering-wheel angle (rad) the
-    signals' ``delta_f`` was derived from. ``raw`` holds the 1 kHz states and
+    signals' ``delta_f`` was derived from. ``raw`` holds the states at the integration step and
     inputs after the pre-roll (``t``, ``X`` (n, 18), ``U`` (n, 3)).
     """
 
@@ -266,7 +280,7 @@ def trim_state(road: Road, plant: PlantParams, driver: Driver, s: float, n: floa
 
 # ---- running --------------------------------------------------------------------------------
 
-def _integrate(scenario: Scenario, plant: PlantParams, dt: float):
+def _integrate(scenario: Scenario, plant: PlantParams, dt: float = DT_DEFAULT):
     road_p = scenario.road.pack()
     drv_p = scenario.driver.pack(plant)
     p = plant.pack()
@@ -274,12 +288,12 @@ def _integrate(scenario: Scenario, plant: PlantParams, dt: float):
     s_pre = scenario.start_s - v0 * scenario.pre_roll if scenario.driver.closed_loop else scenario.start_s
     x0, d0 = trim_state(scenario.road, plant, scenario.driver, s_pre, scenario.start_n)
     t, X, U, _ = simulate(x0, d0, -scenario.pre_roll, scenario.pre_roll + scenario.duration, dt,
-                          road_p, drv_p, p)
+                          road_p, drv_p, p, driver_every(dt))
     return t, X, U, road_p, p
 
 
 def run(scenario: Scenario, plant: PlantParams | None = None, sensors: SensorConfig | None = None,
-        seed: int = 0, condition: Condition | str | None = None, dt: float = DT_DEFAULT) -> SimResult:
+        seed: int = 0, condition: Condition | str | None = None, dt: float | None = None) -> SimResult:
     """Simulate ``scenario`` and sample the sensors.
 
     Parameters
@@ -291,8 +305,11 @@ def run(scenario: Scenario, plant: PlantParams | None = None, sensors: SensorCon
         Seed of the sensor noise/dropouts (the plant is deterministic).
     condition : Condition or name, optional
         Applied on top of ``plant`` and ``sensors``.
-    dt : float
-        Integration step (s), default 1e-3 (RK4 at 1 kHz).
+    dt : float, optional
+        Integration step (s) of the RK4 plant; default :func:`default_step` of the
+        sensors (2 ms at 100 Hz). The driver keeps its own sample time
+        (:data:`DRIVER_DT`, held to a multiple of ``dt``), so a finer step refines
+        the same simulated system.
     """
     plant = plant or PlantParams()
     sensors = sensors or SensorConfig()
@@ -304,6 +321,8 @@ def run(scenario: Scenario, plant: PlantParams | None = None, sensors: SensorCon
             condition = CONDITIONS[condition]
         plant, sensors = condition.apply(plant, sensors)
         cond_name = condition.name
+    if dt is None:
+        dt = default_step(sensors)
     if not (0 < dt <= 0.01):
         raise ValueError("dt must be in (0, 0.01] s")
     t, X, U, road_p, p = _integrate(scenario, plant, dt)
@@ -354,7 +373,7 @@ def run_scenario(name: str, condition: str = "nominal", seed: int = 0, plant: Pl
 
 
 def measure_realtime_factor(repeats: int = 5, dt: float = DT_DEFAULT) -> float:
-    """Simulated seconds per wall-clock second of the 25 s S-curve at 1 kHz (RK4).
+    """Simulated seconds per wall-clock second of the 25 s S-curve (RK4, step ``dt`` s).
 
     Times the compiled integration (plant + driver + RK4, including the 5 s
     pre-roll, which is counted as simulated time) after a warm-up run that

@@ -1,6 +1,6 @@
 """ESP sensor cluster: yaw rate, lateral acceleration, wheel-speed vx, steering-wheel angle.
 
-Each channel is sampled from the 1 kHz truth at ``rate`` (100 Hz default),
+Each channel is sampled from the integrated truth at ``rate`` (100 Hz default),
 delayed by ``latency`` (rounded to the integration step), and corrupted in this
 order: misalignment (ay only) -> scale error -> bias -> white Gaussian noise ->
 range clipping -> quantisation to the resolution. Whole samples (CAN frames) can
