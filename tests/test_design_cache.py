@@ -174,3 +174,29 @@ def test_user_subclass_is_keyed_on_its_source_file(disk, tmp_path, monkeypatch):
     base._DESIGN_CACHE.clear()
     Interactive(**GRID)
     assert len(_entries(disk)) == 2
+
+
+def test_an_unsolvable_design_is_remembered_so_the_th_retry_costs_nothing_next_time(disk, monkeypatch):
+    """pif-rate-adaptive's default th has no stabilising solution for the paper SUV, so it is
+    halved; the failed attempt costs as many AREs as a design and is remembered (memo and disk)."""
+    from roadbank.estimators import pif
+    calls = []
+    real = pif.game_are
+
+    def counted(*a, **k):
+        calls.append(1)
+        return real(*a, **k)
+    monkeypatch.setattr(pif, "game_are", counted)
+    first = E.make("pif-rate-adaptive")          # the full grid: the th fails at high speed
+    assert first.th < pif.RATE_ADAPTIVE_TUNING["th"]          # the retry happened
+    assert len(calls) > 0 and len(_entries(disk)) == 2        # the failure and the solution
+    for clear_memo in (False, True):                          # same process; a new process
+        if clear_memo:
+            base._DESIGN_CACHE.clear()
+        calls.clear()
+        again = E.make("pif-rate-adaptive")
+        assert calls == [] and again.th == first.th
+        assert np.array_equal(again._tab_cont, first._tab_cont)
+    with pytest.raises(pif.NoStabilisingSolution):            # an explicit th is not retried,
+        E.make("pif-rate-adaptive", th=pif.RATE_ADAPTIVE_TUNING["th"])   # and the memo says so
+    assert calls == []

@@ -22,6 +22,7 @@ from ..signals import Estimate, Signals
 from . import kernels as K
 from . import layout as L
 from .discretise import foh
+from .synthesis import NoStabilisingSolution
 
 #: Default speed grid of the gain schedules (m/s): v_min .. V_GRID_MAX.
 V_GRID_MAX = 100.0
@@ -152,10 +153,15 @@ class Estimator:
         key = self._design_key()
         hit = _DESIGN_CACHE.get(key)
         if hit is None:
-            hit = self._disk_design()
+            try:
+                hit = self._disk_design()
+            except NoStabilisingSolution as exc:    # remembered too: a retry with a smaller th follows
+                hit = exc
             if len(_DESIGN_CACHE) > 256:
                 _DESIGN_CACHE.clear()
             _DESIGN_CACHE[key] = hit
+        if isinstance(hit, NoStabilisingSolution):
+            raise NoStabilisingSolution(str(hit))
         return hit
 
     def _disk_design(self):
@@ -170,9 +176,16 @@ class Estimator:
                                sorted(((k, v) for k, v in vars(self).items()
                                        if not k.startswith("_") and k not in _NOT_DESIGN), key=lambda kv: kv[0])))
         z = cache.load("design", key)
+        if z is not None and "unsolvable" in z:
+            raise NoStabilisingSolution(str(z["unsolvable"]))
         if z is not None and {"tab", "nstate", "extra"} <= z.keys():
             return z["tab"], int(z["nstate"]), z["extra"]
-        tab, nstate, extra = hit = self._design()
+        try:
+            tab, nstate, extra = hit = self._design()
+        except NoStabilisingSolution as exc:
+            # as expensive as a solution (up to one ARE per grid point), and as deterministic
+            cache.store("design", key, {"unsolvable": np.array(str(exc))})
+            raise
         if (isinstance(tab, np.ndarray) and tab.dtype == np.float64 and isinstance(extra, np.ndarray)
                 and extra.dtype == np.float64 and isinstance(nstate, (int, np.integer))):
             cache.store("design", key, {"tab": tab, "nstate": np.int64(nstate), "extra": extra})
