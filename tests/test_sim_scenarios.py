@@ -202,6 +202,7 @@ def test_default_step_puts_every_sensor_sample_on_the_grid():
         dt = default_step(SensorConfig(rate=rate))
         assert dt == pytest.approx(step) and dt <= 0.002
         assert (1 / rate / dt) == pytest.approx(round(1 / rate / dt))
+    assert default_step(SensorConfig(latency=0.015)) == pytest.approx(0.01 / 6)     # 9 steps of delay
     assert driver_every(0.00025) * 0.00025 == pytest.approx(DRIVER_DT) and driver_every(0.004) == 1
     fast = run(SCENARIOS["const-bank"], sensors=SensorConfig(rate=1000.0))
     assert np.allclose(np.diff(fast.signals.t), 0.001)

@@ -34,11 +34,18 @@ DRIVER_DT = 2e-3  #: the driver's sample time (s); it is a discrete controller, 
 
 
 def default_step(sensors: SensorConfig) -> float:
-    """Integration step (s) for a sensor rate: the longest step <= :data:`DT_DEFAULT` that divides
-    the sensor period, so every sample falls on the integration grid (2 ms at 100 Hz, 1 ms at 1 kHz).
+    """Integration step (s) for the sensors: the longest step <= :data:`DT_DEFAULT` that divides
+    the sensor period and the latency, so every sample and its delay fall on the integration grid
+    (2 ms at 100 Hz, 1 ms at 1 kHz, 5/3 ms at 100 Hz with a 15 ms latency). Where no step down to
+    0.1 ms divides both, the step divides the period and the latency is rounded to it.
     """
     period = 1.0 / sensors.rate
-    return period / math.ceil(period / DT_DEFAULT - 1e-9)
+    first = math.ceil(period / DT_DEFAULT - 1e-9)
+    for k in range(first, max(first, math.ceil(period / 1e-4)) + 1):
+        h = period / k
+        if abs(sensors.latency / h - round(sensors.latency / h)) < 1e-6:
+            return h
+    return period / first
 
 
 def driver_every(dt: float) -> int:
