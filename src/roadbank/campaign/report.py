@@ -138,7 +138,10 @@ SUMMARY_BEST = {c: "min" for c in ("rms_median", "rms_p95", "rms_max", "max_medi
 
 def _step_text(sim_dt) -> str:
     """The plant step of a campaign's settings, in words (None: the simulator's default)."""
-    return "the simulator's default (2 ms at 100 Hz sensors)" if sim_dt is None else f"{sim_dt * 1e3:g} ms"
+    from ..sim.scenarios import DT_DEFAULT
+
+    return (f"the simulator's default ({DT_DEFAULT * 1e3:g} ms at 100 Hz sensors)" if sim_dt is None
+            else f"{sim_dt * 1e3:g} ms")
 
 
 def write_report(outdir, df, settings: dict, throughput: dict | None = None) -> Path:

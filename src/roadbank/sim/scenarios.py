@@ -287,7 +287,7 @@ def trim_state(road: Road, plant: PlantParams, driver: Driver, s: float, n: floa
 
 # ---- running --------------------------------------------------------------------------------
 
-def _integrate(scenario: Scenario, plant: PlantParams, dt: float = DT_DEFAULT):
+def _integrate(scenario: Scenario, plant: PlantParams, dt: float):
     road_p = scenario.road.pack()
     drv_p = scenario.driver.pack(plant)
     p = plant.pack()
