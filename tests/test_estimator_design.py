@@ -83,6 +83,6 @@ def test_unknown_name_and_bad_tuning():
         E.make("pif")
     with pytest.raises(ValueError, match="bad tuning"):
         E.make("kinematic", Q=3)
-    assert len(E.NAMES) == 11 and set(E.NAMES) == {
+    assert len(E.NAMES) == 12 and set(E.NAMES) == {
         "kinematic", "dfc", "uio", "pio-original", "pio-modified", "pif-modified", "pif-original", "kalman",
-        "pif-rate", "pif-adaptive", "pif-rate-adaptive"}
+        "pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-smoother"}

@@ -4,7 +4,7 @@
 >>> est = estimators.make("pif-modified")
 >>> estimate = est.run(signals)           # doctest: +SKIP
 
-``NAMES`` lists the estimators (the paper's, the Kalman peer, ``pif-rate``, ``pif-adaptive`` and ``pif-rate-adaptive``); ``make(name, params, **tuning)`` builds one.
+``NAMES`` lists the estimators (the paper's, the Kalman peer, ``pif-rate``, ``pif-adaptive``, ``pif-rate-adaptive`` and the offline ``pif-smoother``); ``make(name, params, **tuning)`` builds one.
 Each has ``run(signals) -> Estimate``, ``step(t, vx, ay, r, delta_f)`` and ``reset()``.
 """
 
@@ -19,6 +19,7 @@ from .kalman import Kalman
 from .kinematic import Kinematic
 from .pif import PIF, PIFAdaptive, PIFRate, PIFRateAdaptive
 from .pio import PIO
+from .smoother import PIFSmoother
 from .synthesis import NoStabilisingSolution
 from .uio import UIO
 
@@ -34,10 +35,14 @@ _FACTORIES = {
     "pif-rate": PIFRate,
     "pif-adaptive": PIFAdaptive,
     "pif-rate-adaptive": PIFRateAdaptive,
+    "pif-smoother": PIFSmoother,
 }
 
 #: names of all estimators, in the order the reports list them
 NAMES = tuple(_FACTORIES)
+#: estimators whose ``run()`` also uses the samples after each instant (post-processing, not
+#: for an ECU); their ``step()`` is causal (see :mod:`roadbank.estimators.smoother`)
+OFFLINE = tuple(n for n, f in _FACTORIES.items() if getattr(f, "offline", False))
 
 
 def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
@@ -56,5 +61,5 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
         raise ValueError(f"{name}: bad tuning option ({exc})") from None
 
 
-__all__ = ["NAMES", "make", "Estimator", "StepResult", "NoStabilisingSolution",
-           "Kinematic", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "Kalman"]
+__all__ = ["NAMES", "OFFLINE", "make", "Estimator", "StepResult", "NoStabilisingSolution",
+           "Kinematic", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFSmoother", "Kalman"]

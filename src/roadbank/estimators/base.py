@@ -168,13 +168,9 @@ class Estimator:
         """``_design()`` through the on-disk cache, keyed on the class, the exact values of
         every design setting and the speed grid."""
         from .. import cache
-        cls = type(self)
-        stamp = cache.code_stamp(cls)       # a subclass outside roadbank: its file's identity
-        if stamp is None:
+        key = self._disk_key()
+        if key is None:
             return self._design()
-        key = cache.canonical((f"{cls.__module__}.{cls.__qualname__}", stamp, self.vgrid,
-                               sorted(((k, v) for k, v in vars(self).items()
-                                       if not k.startswith("_") and k not in _NOT_DESIGN), key=lambda kv: kv[0])))
         z = cache.load("design", key)
         if z is not None and "unsolvable" in z:
             raise NoStabilisingSolution(str(z["unsolvable"]))
@@ -190,6 +186,19 @@ class Estimator:
                 and extra.dtype == np.float64 and isinstance(nstate, (int, np.integer))):
             cache.store("design", key, {"tab": tab, "nstate": np.int64(nstate), "extra": extra})
         return hit
+
+    def _disk_key(self) -> str | None:
+        """Key of this estimator's design in the on-disk cache (:mod:`roadbank.cache`): the class,
+        the exact values of every design setting and the speed grid; None for a class whose
+        source has no identity (then nothing is cached on disk)."""
+        from .. import cache
+        cls = type(self)
+        stamp = cache.code_stamp(cls)       # a subclass outside roadbank: its file's identity
+        if stamp is None:
+            return None
+        return cache.canonical((f"{cls.__module__}.{cls.__qualname__}", stamp, self.vgrid,
+                                sorted(((k, v) for k, v in vars(self).items()
+                                        if not k.startswith("_") and k not in _NOT_DESIGN), key=lambda kv: kv[0])))
 
     def _design_key(self) -> tuple:
         """The estimator type and every public setting made so far (parameters and tuning)."""

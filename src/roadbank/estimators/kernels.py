@@ -1062,3 +1062,87 @@ def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
     riccati_run(mem, cfg, tab, work, inp[0:1], inp[1:2], inp[2:3], inp[3:4], inp[4:5], out[0], out[1], out[2],
                 out[3], valid, np.empty((1, max(n, 2))))
     return float(out[0, 0]), float(out[1, 0]), float(out[2, 0]), bool(valid[0])
+
+
+# ---------------------------------------------------------------------------------
+# smoother: the backward pass of the offline PIF (roadbank.estimators.smoother)
+# ---------------------------------------------------------------------------------
+
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
+def smooth_backward(tab, v0, dv, n, max_sub, t, vx, ay, xf, a, b, out, work):
+    r"""Backward pass of the smoother over the samples ``a .. b-1`` (one segment of a log).
+
+    Integrates :math:`\dot x_s = A x_s + b\,a_y + M (x_s - \hat x)` from ``t[b-1]`` back to
+    ``t[a]``, starting at ``x_s = \hat x`` (``xf``, the forward filter's states, shape (N, n)),
+    i.e. in reversed time :math:`\tau` the stable system :math:`x_s' = S x_s + M \hat x - b\,a_y`
+    with ``S = -(A + M)``. ``tab`` rows (one per grid speed ``v0 + i dv``): ``S`` (n x n),
+    ``M`` (n x n), ``b`` (n). Trapezoidal rule in substeps of at most ``max_sub`` seconds,
+    ``vx``, ``ay`` and ``xf`` interpolated linearly across each sample interval, the matrices at
+    the substep's mid speed. Writes ``out[a:b]``; ``work`` holds at least ``3 n^2 + 4 n`` floats.
+    """
+    nn = n * n
+    oS, oM, ob = np.int64(0), nn, 2 * nn          # the interpolated row
+    oA = 2 * nn + n                                # I - h/2 S, then the right-hand side
+    orhs = oA + nn
+    ng = tab.shape[0]
+    for p in range(n):
+        out[b - 1, p] = xf[b - 1, p]
+    for k in range(b - 2, a - 1, -1):
+        h = t[k + 1] - t[k]
+        m = np.int64(math.ceil(h / max_sub)) if h > max_sub else np.int64(1)
+        hs = h / m
+        for j in range(m):
+            s0 = 1.0 - j / m                      # fractions of the interval from t[k]
+            s1 = 1.0 - (j + 1) / m
+            sm = 0.5 * (s0 + s1)
+            v = vx[k] + sm * (vx[k + 1] - vx[k])
+            x = (v - v0) / dv
+            i = np.int64(math.floor(x)) if x > 0.0 else np.int64(0)
+            if i > ng - 2:
+                i = ng - 2 if ng > 1 else np.int64(0)
+            fa = x - i
+            fa = 0.0 if fa < 0.0 else (1.0 if fa > 1.0 else fa)
+            i1 = i + 1 if i + 1 < ng else i
+            for q in range(2 * nn + n):
+                work[q] = tab[i, q] + fa * (tab[i1, q] - tab[i, q])
+            ay0 = ay[k] + s0 * (ay[k + 1] - ay[k])
+            ay1 = ay[k] + s1 * (ay[k + 1] - ay[k])
+            for p in range(n):
+                acc = out[k + 1, p] if j == 0 else work[orhs + n + p]
+                work[orhs + 2 * n + p] = acc          # z (the state at s0)
+            for p in range(n):
+                r = work[orhs + 2 * n + p] - 0.5 * hs * work[ob + p] * (ay0 + ay1)
+                for q in range(n):
+                    sz = work[oS + p * n + q]
+                    r += 0.5 * hs * sz * work[orhs + 2 * n + q]
+                    x0 = xf[k, q] + s0 * (xf[k + 1, q] - xf[k, q])
+                    x1 = xf[k, q] + s1 * (xf[k + 1, q] - xf[k, q])
+                    r += 0.5 * hs * work[oM + p * n + q] * (x0 + x1)
+                    work[oA + p * n + q] = (1.0 if p == q else 0.0) - 0.5 * hs * sz
+                work[orhs + p] = r
+            # Gaussian elimination with partial pivoting: (I - h/2 S) z = rhs -> work[orhs + n:]
+            for c in range(n):
+                piv = c
+                for p in range(c + 1, n):
+                    if abs(work[oA + p * n + c]) > abs(work[oA + piv * n + c]):
+                        piv = p
+                if piv != c:
+                    for q in range(n):
+                        tmp = work[oA + c * n + q]
+                        work[oA + c * n + q] = work[oA + piv * n + q]
+                        work[oA + piv * n + q] = tmp
+                    tmp = work[orhs + c]
+                    work[orhs + c] = work[orhs + piv]
+                    work[orhs + piv] = tmp
+                for p in range(c + 1, n):
+                    f = work[oA + p * n + c] / work[oA + c * n + c]
+                    for q in range(c, n):
+                        work[oA + p * n + q] -= f * work[oA + c * n + q]
+                    work[orhs + p] -= f * work[orhs + c]
+            for p in range(n - 1, -1, -1):
+                acc = work[orhs + p]
+                for q in range(p + 1, n):
+                    acc -= work[oA + p * n + q] * work[orhs + n + q]
+                work[orhs + n + p] = acc / work[oA + p * n + p]
+        for p in range(n):
+            out[k, p] = work[orhs + n + p]

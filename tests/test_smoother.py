@@ -1,0 +1,122 @@
+"""pif-smoother: the backward pass against scipy, its stability, and what it buys on the
+simulator's truth and on real drives (validation data nobody tuned for)."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.interpolate import interp1d
+from scipy.linalg import solve_continuous_are
+
+from roadbank import Signals, VehicleParams
+from roadbank import estimators as E
+from roadbank.evaluation.compare import usable_samples
+from roadbank.evaluation.metrics import error_metrics
+
+from conftest import linear_plant_run
+
+DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+
+
+def _noisy_constant_speed_log(vx=20.0, seed=0):
+    s, _ = linear_plant_run(VehicleParams(), vx=vx, bank_deg=4.0, delta=0.02, t_step=3.0, T=10.0)
+    rng = np.random.default_rng(seed)
+    n = len(s)
+    return Signals(s.t, s.vx, s.ay + 0.03 * rng.normal(size=n), s.r + np.deg2rad(0.1) * rng.normal(size=n),
+                   s.delta_f)
+
+
+def test_backward_pass_matches_scipy_on_the_kalman_smoother_ode():
+    """th = 0 (the Kalman-Bucy filter): the smoothed states equal an independent integration of
+    x_s' = A x_s + b ay + W P^-1 (x_s - x_f), x_s(T) = x_f(T), with P from scipy's ARE and
+    scipy's ODE solver (the filter's own states x_f as the forcing, inputs linear between samples)."""
+    vx = 20.0
+    s = _noisy_constant_speed_log(vx)
+    sm = E.make("pif-smoother", th=0.0, roll="none")
+    est = sm.run(s)
+    xf = np.column_stack([s_ for s_ in (E.make("pif-modified", th=0.0, roll="none").run(s).states[k]
+                                        for k in ("vy", "r", "w"))])
+    A, B, C, _, _, _ = sm.design_model(vx)
+    W = sm.process_density(sm.design_model(vx))
+    P = solve_continuous_are(A.T, C.T, W, sm.R)
+    Mx = W @ np.linalg.inv(P)
+    b = B[:, 1]
+    xfi = interp1d(s.t, xf, axis=0)
+    ayi = interp1d(s.t, s.ay)
+    sol = solve_ivp(lambda t, x: A @ x + b * ayi(t) + Mx @ (x - xfi(t)), (s.t[-1], s.t[0]), xf[-1],
+                    t_eval=s.t[::-1], rtol=1e-10, atol=1e-12, method="Radau", max_step=0.01)
+    ref = sol.y[:, ::-1].T
+    assert np.max(np.abs(np.rad2deg(est.states["w"] - ref[:, 2]))) < 2e-3
+    assert np.max(np.abs(est.states["vy"] - ref[:, 0])) < 1e-3
+    # and the smoothing is not negligible here: the filter lags the bank step
+    assert np.max(np.abs(np.rad2deg(est.states["w"] - xf[:, 2]))) > 0.2
+
+
+def test_backward_system_is_stable_in_reversed_time_at_every_grid_speed():
+    """A + W P^-1 = -P (A - P Gamma)^T P^-1 for the stabilising solution: S = -(A + W P^-1) is
+    Hurwitz (eigenvalues of the filter's game closed loop), for the default tuning's th > 0."""
+    sm = E.make("pif-smoother")
+    assert sm.th > 0
+    for v in sm.vgrid[::20]:
+        S, _, _ = sm.smoother_matrices(float(v))
+        assert np.max(np.linalg.eigvals(S).real) < 0, v
+
+
+def test_segments_are_smoothed_separately_and_invalid_samples_held():
+    """A gap longer than max_gap splits the log: each part is smoothed as if alone. A short
+    dropout (NaN) ends a segment too; its samples are flagged and hold the last smoothed output."""
+    a, b = _noisy_constant_speed_log(seed=1), _noisy_constant_speed_log(seed=2)
+    b = Signals(b.t + a.t[-1] + 5.0, b.vx, b.ay, b.r, b.delta_f)
+    both = Signals(*(np.concatenate([getattr(a, k), getattr(b, k)]) for k in ("t", "vx", "ay", "r", "delta_f")))
+    est = E.make("pif-smoother")
+    whole = est.run(both)
+    np.testing.assert_array_equal(whole.w[:len(a)], est.run(a).w)
+    np.testing.assert_array_equal(whole.w[len(a):], est.run(b).w)
+    ay = a.ay.copy()
+    ay[400:403] = np.nan
+    e = est.run(Signals(a.t, a.vx, ay, a.r, a.delta_f))
+    assert not e.valid[400:403].any() and e.valid[403:].all()
+    assert np.all(e.w[400:403] == e.w[399])
+
+
+@pytest.mark.parametrize("scenario,condition", [("bank-lane-change", "nominal"), ("bank-lane-change", "low-mu"),
+                                                ("track-lane-change", "nominal")])
+def test_smoother_meets_the_accuracy_aims_where_no_causal_estimator_does(scenario, condition):
+    """Cells where no estimator of the study meets RMS <= 0.5 and max <= 1.5 deg (docs/results.md):
+    the lag of a causal filter behind the abrupt bank changes is the limit, not the information
+    in the signals. Against the simulator's true bank."""
+    from roadbank.sim.scenarios import run_scenario
+    sim = run_scenario(scenario, condition, seed=0)
+    s = sim.signals
+    out = {}
+    for name in ("pif-modified", "pif-smoother"):
+        est = E.make(name)
+        m = error_metrics(s.t, est.run(s).phi_b, sim.truth.phi_b, usable_samples(s, est.v_min), settle=2.0)
+        out[name] = (m.rms_deg, m.max_deg)
+    assert out["pif-smoother"][0] <= 0.5 and out["pif-smoother"][1] <= 1.5, out
+    assert out["pif-modified"][1] > 1.5, out                 # the filter does not
+    assert out["pif-smoother"][0] < 0.6 * out["pif-modified"][0], out
+
+
+@pytest.mark.skipif(not (DATA / "kitti-oxts").is_dir(), reason="../shared/data/kitti-oxts not present")
+def test_smoother_halves_the_filter_error_on_kitti():
+    """KITTI (validation data: no weight chosen from it): raw theta RMS against the INS roll."""
+    from roadbank.validation.kitti import validate_kitti_drive
+    names = ["kinematic", "pif-modified", "pif-smoother"]
+    for drive in ("2011_09_26_drive_0070", "2011_10_03_drive_0047"):
+        v = validate_kitti_drive(DATA / "kitti-oxts" / drive, names=names, sensitivity=False)
+        rms = {n: v.scores[n].rms_raw_deg for n in names}
+        assert rms["pif-smoother"] < 0.75 * rms["pif-modified"] < rms["kinematic"], (drive, rms)
+        assert rms["pif-smoother"] < 0.3, (drive, rms)
+
+
+@pytest.mark.skipif(not (DATA / "comma2k19-example").is_dir(), reason="../shared/data/comma2k19-example not present")
+def test_smoother_on_comma2k19_reaches_the_correlation_target_without_lag():
+    from roadbank.validation.comma2k19 import validate_comma2k19
+    names = ["kinematic", "pif-modified", "pif-smoother"]
+    c = validate_comma2k19(DATA / "comma2k19-example", names=names, sensitivity=False)
+    sc = c.scores
+    assert sc["pif-smoother"].r >= 0.93 and sc["pif-smoother"].rms_deg <= 0.11
+    assert sc["pif-smoother"].r > max(sc["pif-modified"].r, sc["kinematic"].r)
+    assert abs(sc["pif-smoother"].best_lag_s) <= 0.05          # the filter: +0.21 s
