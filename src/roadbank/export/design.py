@@ -153,12 +153,16 @@ def c_identifier(name: str) -> str:
 
 
 def check_exportable(est) -> None:
-    """Raise :class:`NotExportable` (saying why) unless ``est`` runs on the ``lpv`` kernel."""
+    """Raise :class:`NotExportable` (saying why) unless ``est`` is causal and runs on the ``lpv`` kernel."""
     from ..estimators.base import Estimator
 
     if not isinstance(est, Estimator):
         raise TypeError(f"expected a roadbank Estimator, got {type(est).__name__}")
     kernel = getattr(est, "kernel", None)
+    if getattr(est, "offline", False):
+        raise NotExportable(f"{est.name}: not exportable: an offline estimator (its run() smooths with the "
+                            "samples after each instant); an ECU runs its forward filter: export "
+                            "pif-modified with the same weights")
     if kernel != "lpv":
         why = _NOT_LPV_REASON.get(kernel, f"its runtime is the {kernel!r} kernel, not a "
                                           "speed-scheduled linear observer")

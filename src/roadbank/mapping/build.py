@@ -30,7 +30,7 @@ def _origin(lat, lon) -> LocalProjection | None:
     return LocalProjection(round(float(lat[ok][0]), 2), round(float(lon[ok][0]), 2))
 
 
-def map_logs(logs, estimator: str = "pif-modified", *, channels=None, format: str | None = None, params=None,
+def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: str | None = None, params=None,
              vehicle=None, cell_m: float = 10.0, sectors: int = 4, origin: tuple | None = None,
              chunk_rows: int | None = None, on_log=None) -> tuple[BankMap | None, list[MappedLog]]:
     """Build a bank map from logs that carry GNSS positions.
@@ -42,7 +42,9 @@ def map_logs(logs, estimator: str = "pif-modified", *, channels=None, format: st
         ``lat_deg`` / ``lon_deg``: a channel map with ``latitude`` / ``longitude`` roles
         (CSV, Parquet, MDF4, CAN, ROS ``NavSatFix``), comma2k19 (ECEF pose), KITTI oxts.
     estimator : str
-        Estimator whose valid ``phi_b`` is mapped.
+        Estimator whose valid ``phi_b`` is mapped; default the offline ``pif-smoother`` (a map is
+        made after the drives, so the samples after each instant may be used; each streamed
+        chunk is smoothed on its own).
     channels, format, params, vehicle
         As for :func:`roadbank.fleet.estimate_log`.
     cell_m, sectors

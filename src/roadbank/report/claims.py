@@ -103,9 +103,12 @@ def accuracy_aims(rows, rms_aim=0.5, max_aim=1.5, best_margin=0.1, name=None) ->
 
     ``name`` defaults to ``pif-default`` (roadbank's default tuning) when the rows have
     it, else ``pif-modified``; the result says which under ``"estimator"``. Each cell also
-    says which estimators meet both aims there (``"meeting"``, any estimator of the rows), so
-    that a reader sees where the aim has been reached at all.
+    says which causal estimators meet both aims there (``"meeting"``) and which offline ones
+    (``"offline_meeting"``, :data:`roadbank.estimators.OFFLINE`), so that a reader sees where
+    the aim has been reached at all. "Best" is the best *causal* estimator's RMS: an offline
+    estimator uses later samples, which no real-time estimator has.
     """
+    from ..estimators import OFFLINE
     rms, mx = lookup(rows, "bank", "rms_deg"), lookup(rows, "bank", "max_deg")
     if name is None:
         name = "pif-default" if any(n == "pif-default" for (_, _, n) in rms) else "pif-modified"
@@ -113,12 +116,15 @@ def accuracy_aims(rows, rms_aim=0.5, max_aim=1.5, best_margin=0.1, name=None) ->
     per_cell, n_best = [], 0
     for s, c in cells:
         pif_r, pif_m = _get(rms, s, c, name), _get(mx, s, c, name)
-        best = min(v for (s2, c2, _), v in rms.items() if (s2, c2) == (s, c) and np.isfinite(v))
+        best = min(v for (s2, c2, n), v in rms.items()
+                   if (s2, c2) == (s, c) and n not in OFFLINE and np.isfinite(v))
         near = bool(pif_r <= best + best_margin)
         n_best += near
         meeting = sorted(n for (s2, c2, n), v in rms.items()
                          if (s2, c2) == (s, c) and v <= rms_aim and _get(mx, s, c, n) <= max_aim)
         per_cell.append({"scenario": s, "condition": c, "rms_deg": pif_r, "max_deg": pif_m,
                          "rms_ok": bool(pif_r <= rms_aim), "max_ok": bool(pif_m <= max_aim),
-                         "best_deg": best, "near_best": near, "meeting": meeting})
+                         "best_deg": best, "near_best": near,
+                         "meeting": [n for n in meeting if n not in OFFLINE],
+                         "offline_meeting": [n for n in meeting if n in OFFLINE]})
     return {"cells": per_cell, "near_best_fraction": n_best / max(len(cells), 1), "estimator": name}
