@@ -13,7 +13,9 @@ compiles:
   fixed-rate paths;
 * ``dfc`` — dynamic filter compensation;
 * ``riccati`` — the PIF with the Riccati ODE;
-* ``adaptive`` — ``pif-adaptive``, scheduled on speed and excitation (general path only).
+* ``adaptive`` — ``pif-adaptive``, scheduled on speed and excitation (general path only);
+* ``smooth`` — the backward pass of the offline ``pif-smoother`` (its forward ``lpv`` pass is
+  compiled before the timing).
 
 Each probe prints one JSON line; the compile time is measured as the wall
 time of the first calls minus the wall time of the same calls repeated
@@ -83,6 +85,16 @@ s = Signals(np.arange(n) * 0.01, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0
 e = estimators.make("pif-adaptive", v_max=30.0)     # small design: scipy, not compilation
 def work():
     e.run(s); e.reset(); e.step(0.0, 20.0, 0.5, 0.01, 0.002); e.step(0.01, 20.0, 0.5, 0.01, 0.002)
+""",
+    "smooth": """
+import numpy as np
+from roadbank import Signals, estimators
+n = 60
+s = Signals(np.arange(n) * 0.01, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
+e = estimators.make("pif-smoother", v_max=30.0)     # small design: scipy, not compilation
+estimators.make("pif-modified", v_max=30.0).run(s)  # the forward (lpv) kernel: its own family
+def work():
+    e.run(s)
 """,
 }
 
