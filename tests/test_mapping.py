@@ -138,6 +138,37 @@ def test_simulated_drive_recovers_the_tracks_bank_per_cell(tmp_path):
     assert banks.min() < 1.0 and banks.max() > 28.0           # the map spans the flat straight and lane 3
 
 
+def test_default_map_estimator_is_the_smoother_and_removes_the_lane_change_lag(tmp_path):
+    """bank-lane-change (flat and 14 deg lanes): mapped with the default estimator (the offline
+    pif-smoother) against the simulator's truth per cell, and with the causal default PIF."""
+    from roadbank import estimators
+    from roadbank.io.channels import read_channel_map
+    from roadbank.mapping.simulated import run_positions
+    from roadbank.sim import SCENARIOS, run_scenario
+
+    res = run_scenario("bank-lane-change", seed=1)
+    proj = LocalProjection(48.0, 11.0)
+    lat, lon = run_positions(res, SCENARIOS["bank-lane-change"].road, proj)
+    pq.write_table(pa.table(dict(res.table(), lat=lat, lon=lon)), tmp_path / "drive.parquet")
+    (tmp_path / "m.toml").write_text(MAP_TOML)
+    errs = {}
+    for name in (None, "pif-modified"):
+        kw = {} if name is None else {"estimator": name}
+        bmap, recs = map_logs([tmp_path / "drive.parquet"], channels=read_channel_map(tmp_path / "m.toml"),
+                              origin=(48.0, 11.0), **kw)
+        assert recs[0].status == "ok"
+        got = bmap.table()
+        truth = BankMap(proj)
+        truth.add(lat, lon, res.truth.phi_b, estimators.make(name or "pif-smoother").run(res.signals).valid)
+        want = truth.table()
+        np.testing.assert_array_equal(got["count"], want["count"])
+        full = np.asarray(got["count"]) >= 20
+        errs[name] = np.asarray(got["bank_mean_deg"])[full] - want["bank_mean_deg"][full]
+    rms = {k: float(np.sqrt(np.mean(e ** 2))) for k, e in errs.items()}
+    assert rms[None] < 0.2 and np.max(np.abs(errs[None])) < 0.5, rms
+    assert rms[None] < 0.5 * rms["pif-modified"], rms
+
+
 @pytest.mark.skipif(not COMMA.is_dir(), reason="comma2k19 example segment not available")
 def test_comma2k19_map_against_pose_roll():
     from roadbank.io import load_log
