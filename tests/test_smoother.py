@@ -65,7 +65,8 @@ def test_backward_system_is_stable_in_reversed_time_at_every_grid_speed():
 
 def test_segments_are_smoothed_separately_and_invalid_samples_held():
     """A gap longer than max_gap splits the log: each part is smoothed as if alone. A short
-    dropout (NaN) ends a segment too; its samples are flagged and hold the last smoothed output."""
+    dropout (NaN) is stepped over as the forward pass does: its samples are flagged and hold the
+    last smoothed output, and the samples around it are smoothed as if it were a longer interval."""
     a, b = _noisy_constant_speed_log(seed=1), _noisy_constant_speed_log(seed=2)
     b = Signals(b.t + a.t[-1] + 5.0, b.vx, b.ay, b.r, b.delta_f)
     both = Signals(*(np.concatenate([getattr(a, k), getattr(b, k)]) for k in ("t", "vx", "ay", "r", "delta_f")))
@@ -78,6 +79,10 @@ def test_segments_are_smoothed_separately_and_invalid_samples_held():
     e = est.run(Signals(a.t, a.vx, ay, a.r, a.delta_f))
     assert not e.valid[400:403].any() and e.valid[403:].all()
     assert np.all(e.w[400:403] == e.w[399])
+    keep = np.ones(len(a), bool)
+    keep[400:403] = False
+    without = est.run(Signals(*(getattr(a, k)[keep] for k in ("t", "vx", "ay", "r", "delta_f"))))
+    np.testing.assert_array_equal(e.w[keep], without.w)
 
 
 @pytest.mark.parametrize("scenario,condition", [("bank-lane-change", "nominal"), ("bank-lane-change", "low-mu"),

@@ -26,8 +26,9 @@ Interface: :meth:`PIFSmoother.run` returns the smoothed estimate of the whole lo
 :meth:`~roadbank.estimators.base.Estimator.step` is the forward filter's, which *is* the
 smoothed estimate of the newest sample given the samples so far (no later sample exists yet).
 So ``run()`` differs from a sequence of ``step()`` calls everywhere but at the last sample, and
-logs processed in chunks (``run(reset=False)``) are smoothed within each chunk only. Segments
-end at invalid samples (outputs held, flagged not valid) and gaps longer than ``max_gap``. The
+logs processed in chunks (``run(reset=False)``) are smoothed within each chunk only. The backward
+pass steps over invalid samples as the forward pass does (their outputs held, flagged not valid)
+and starts again where the forward pass restarted, after a gap longer than ``max_gap``. The
 body roll is the forward pass's (the roll model follows ``ay`` causally, as the body does).
 Not for an ECU: no C export.
 """
@@ -114,16 +115,20 @@ class PIFSmoother(PIF):
         xs = xf.copy()
         valid = fwd.valid.copy()
         idx = np.flatnonzero(valid)
-        if idx.size:
-            t = signals.t
-            cut = np.flatnonzero((np.diff(idx) > 1) | (np.diff(t[idx]) > self.max_gap)) + 1
+        if idx.size > 1:
+            # the valid samples, as the forward pass saw them: it steps over invalid ones and
+            # restarts after a gap longer than max_gap
+            t, vx, ay, xv = signals.t[idx], signals.vx[idx], signals.ay[idx], xf[idx]
+            xo = xv.copy()
+            cut = np.flatnonzero(np.diff(t) > self.max_gap) + 1
             work = np.zeros(3 * ns * ns + 4 * ns)
             g = self.vgrid
-            for seg in np.split(idx, cut):
-                if seg.size > 1:
+            for a, b in zip(np.r_[0, cut], np.r_[cut, idx.size]):
+                if b - a > 1:
                     K.smooth_backward(self._smooth_tab, float(g[0]), float(g[1] - g[0]), np.int64(ns),
-                                      min(self.max_substep, BACKWARD_SUBSTEP), t, signals.vx, signals.ay, xf, np.int64(seg[0]),
-                                      np.int64(seg[-1] + 1), xs, work)
+                                      min(self.max_substep, BACKWARD_SUBSTEP), t, vx, ay, xv, np.int64(a),
+                                      np.int64(b), xo, work)
+            xs[idx] = xo
         # invalid samples hold the last smoothed output (the forward pass holds its own there)
         last = np.maximum.accumulate(np.where(valid, np.arange(n), -1))
         held = last >= 0

@@ -148,7 +148,9 @@ def markdown(rows: list[dict], scenario: str, command: str) -> str:  # noqa: C90
         f"`{scenario}` scenario (nominal, seed 0, 100 Hz). Every fault acts on the window starting at "
         f"t = {T0:g} s, {LENGTH:g} s long (dropouts: the gap length); the signals are clean again "
         "after it. Faults are in `roadbank.faults.inject.FAULTS`; logs with repeated or decreasing "
-        "time stamps (which `Signals` refuses) are fed through streaming `step()`.", "",
+        "time stamps (which `Signals` refuses) are fed through streaming `step()` (for the offline "
+        "`pif-smoother` that is its causal forward filter, so on those two logs it is the filter "
+        "that is compared with the smoothed clean run).", "",
         "Each cell: **flagged % / max err / max dev / recovery**:", "",
         "- *flagged %*: samples of the fault window flagged `valid=False` (outputs held);",
         f"- *max err*: max |phi_b - true bank| (deg) over the valid samples after {SETTLE:g} s — what "
