@@ -1,7 +1,7 @@
 r"""Compiled per-sample recursions of all estimators (numba, ``cache=True``).
 
 This is the only module with compiled estimator code; Python prepares the
-arrays, whose layout :mod:`roadbank.estimators.layout` defines. Three families
+arrays, whose layout :mod:`roadbank.estimators.layout` defines. The families
 share the same sample handling:
 
 * ``lpv``  — linear observers with a speed-scheduled table (kinematic, UIO,
@@ -13,8 +13,10 @@ share the same sample handling:
   (``pif-adaptive``): the ``lpv`` recursion with the matrices interpolated
   bilinearly in ``(vx, e)``, ``e`` a peak follower of the low-passed ``|ay|``; general
   (trapezoidal) path only, no fixed-rate tables.
+* ``smooth`` — the backward pass of the offline ``pif-smoother`` (:func:`smooth_backward`),
+  run over a whole log after its forward ``lpv`` pass; no per-sample ``step()``.
 
-Sample handling (all families): a sample is *valid* when the time is finite
+Sample handling (every per-sample family): a sample is *valid* when the time is finite
 and later than the last valid sample, ``vx`` is finite and ``>= v_min`` and
 every input channel the estimator uses is finite. Invalid samples leave the
 state untouched and repeat the last outputs. After a gap longer than
