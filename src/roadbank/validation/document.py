@@ -112,21 +112,25 @@ def real_data_markdown(comma=None, kitti=None, jitter=(), figures=None, command:
     rows = []
 
     def row(data, label, sc):
-        k, p = sc.get("kinematic"), sc.get("pif-modified")
+        k, p, o = sc.get("kinematic"), sc.get("pif-modified"), sc.get("pif-smoother")
         f = kitti_report._f
         if k is None or p is None:
             return
         rows.append([data, label, f"{f(k.rms_raw_deg)} / {f(k.rms_deg)}", f"{f(p.rms_raw_deg)} / {f(p.rms_deg)}",
-                     f"{f(p.r_raw)} / {f(p.r)}"])
+                     f"{f(p.r_raw)} / {f(p.r)}",
+                     "n/a" if o is None else f"{f(o.rms_raw_deg)} / {f(o.rms_deg)}; r {f(o.r_raw)} / {f(o.r)}"])
     if comma is not None:
         row("comma2k19", "example segment (offset fitted)", comma.scores)
     if kitti is not None:
         for d in kitti.drives:
             row("KITTI", d.label, d.scores)
     L.append(md_table(["data", "log", "kinematic rms raw / smoothed (deg)",
-                       "default pif-modified rms raw / smoothed (deg)", "pif-modified r raw / smoothed"],
-                      rows, align="llrrr"))
+                       "default pif-modified rms raw / smoothed (deg)", "pif-modified r raw / smoothed",
+                       "offline pif-smoother rms raw / smoothed (deg); r raw / smoothed"],
+                      rows, align="llrrrr"))
     L.append("")
+    L.append("The offline `pif-smoother` (docs/estimators.md, last section) uses the samples after each "
+             "instant too: for logs processed after the drive, not a real-time estimate.\n")
     if comma is not None:
         L.append("## comma2k19 (phone IMU, CAN, GNSS/INS/vision pose)\n")
         body = report.markdown(comma, figure=figures.get("comma2k19"), command=command)
