@@ -87,7 +87,7 @@ from numba.extending import intrinsic
 
 from .layout import (C_AREF, C_DTFIX, C_DTOL, C_DV, C_G, C_GAP, C_N, C_NG, C_NR, C_OFAM, C_P, C_ROLL,  # noqa: F401
                      C_SUB, C_TAU, C_USE, C_V0, C_VMIN, C_WMAX, M_AY, M_ETA, M_GATED, M_INIT, M_PHI, M_PHIB,
-                     M_THETA, M_TLAST, M_W, M_X, NETA, batch3_block)
+                     M_THETA, M_TLAST, M_W, M_X, NETA, DT_REL_TOL, batch3_block)
 
 #: offsets of the batch loop's block in a three-state lpv row (layout.batch3_block)
 _B3 = batch3_block()
@@ -1071,26 +1071,58 @@ def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
 # ---------------------------------------------------------------------------------
 
 @njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
-def smooth_backward(tab, v0, dv, n, max_sub, t, vx, ay, xf, a, b, out, work):
+def smooth_backward(tab, ftab, hfix, v0, dv, n, max_sub, t, vx, ay, xf, a, b, out, work):
     r"""Backward pass of the smoother over the samples ``a .. b-1`` (one segment of a log).
 
     Integrates :math:`\dot x_s = A x_s + b\,a_y + M (x_s - \hat x)` from ``t[b-1]`` back to
     ``t[a]``, starting at ``x_s = \hat x`` (``xf``, the forward filter's states, shape (N, n)),
     i.e. in reversed time :math:`\tau` the stable system :math:`x_s' = S x_s + M \hat x - b\,a_y`
-    with ``S = -(A + M)``. ``tab`` rows (one per grid speed ``v0 + i dv``): ``S`` (n x n),
-    ``M`` (n x n), ``b`` (n). Trapezoidal rule in substeps of at most ``max_sub`` seconds,
-    ``vx``, ``ay`` and ``xf`` interpolated linearly across each sample interval, the matrices at
-    the substep's mid speed. Writes ``out[a:b]``; ``work`` holds at least ``3 n^2 + 4 n`` floats.
+    with ``S = -(A + M)``; ``vx``, ``ay`` and ``xf`` linear across each sample interval, the
+    matrices at the interval's (substep's) mid speed, interpolated between grid speeds
+    ``v0 + i dv``. ``tab`` rows: ``S`` (n x n), ``M`` (n x n), ``b`` (n).
+
+    An interval of ``hfix`` seconds (relative tolerance ``DT_REL_TOL``; ``hfix = 0``: none) takes
+    the exact step for a frozen speed, ``ftab`` rows ``Phi`` (n x n), ``Gam0``, ``Gam1`` (n x
+    (n + 1)): :math:`z_k = \Phi z_{k+1} + \Gamma_0 e_{k+1} + \Gamma_1 e_k`,
+    :math:`e = [\hat x, a_y]` (first-order hold, :func:`roadbank.estimators.discretise.foh`).
+    Any other interval: the trapezoidal rule in substeps of at most ``max_sub`` seconds. Writes
+    ``out[a:b]``; ``work`` holds at least ``3 n^2 + 4 n`` floats.
     """
     nn = n * n
     oS, oM, ob = np.int64(0), nn, 2 * nn          # the interpolated row
     oA = 2 * nn + n                                # I - h/2 S, then the right-hand side
     orhs = oA + nn
     ng = tab.shape[0]
+    ne = n + 1                                     # fixed-rate inputs e = [xf, ay]
+    oG0 = nn
+    oG1 = nn + n * ne
     for p in range(n):
         out[b - 1, p] = xf[b - 1, p]
     for k in range(b - 2, a - 1, -1):
         h = t[k + 1] - t[k]
+        if hfix > 0.0 and abs(h - hfix) <= DT_REL_TOL * hfix:
+            x = (0.5 * (vx[k] + vx[k + 1]) - v0) / dv
+            i = np.int64(math.floor(x)) if x > 0.0 else np.int64(0)
+            if i > ng - 2:
+                i = ng - 2 if ng > 1 else np.int64(0)
+            fa = x - i
+            fa = 0.0 if fa < 0.0 else (1.0 if fa > 1.0 else fa)
+            i1 = i + 1 if i + 1 < ng else i
+            for p in range(n):
+                acc = 0.0
+                for q in range(n):
+                    c = ftab[i, p * n + q] + fa * (ftab[i1, p * n + q] - ftab[i, p * n + q])
+                    acc += c * out[k + 1, q]
+                for q in range(ne):
+                    e0 = xf[k + 1, q] if q < n else ay[k + 1]
+                    e1 = xf[k, q] if q < n else ay[k]
+                    c0 = ftab[i, oG0 + p * ne + q] + fa * (ftab[i1, oG0 + p * ne + q] - ftab[i, oG0 + p * ne + q])
+                    c1 = ftab[i, oG1 + p * ne + q] + fa * (ftab[i1, oG1 + p * ne + q] - ftab[i, oG1 + p * ne + q])
+                    acc += c0 * e0 + c1 * e1
+                work[orhs + n + p] = acc
+            for p in range(n):
+                out[k, p] = work[orhs + n + p]
+            continue
         m = np.int64(math.ceil(h / max_sub)) if h > max_sub else np.int64(1)
         hs = h / m
         for j in range(m):

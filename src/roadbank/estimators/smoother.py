@@ -19,8 +19,11 @@ Kalman (RTS) smoother of the design model. For the stabilising solution,
 :math:`A + W P^{-1} = -P (A - P\Gamma)^T P^{-1}` with
 :math:`\Gamma = C^T R^{-1} C - \theta L_w^T S L_w` (right-multiply eq 44 by :math:`P^{-1}`), so
 the backward system is stable in reversed time for any ``th`` the filter accepts. It is run by
-:func:`roadbank.estimators.kernels.smooth_backward` (trapezoidal rule in substeps of at most
-``min(max_substep, BACKWARD_SUBSTEP)``, inputs interpolated linearly, matrices scheduled on speed like the filter's).
+:func:`roadbank.estimators.kernels.smooth_backward`: inputs linear between samples, matrices
+scheduled on speed like the filter's; the log's common sample interval (at least half of the
+intervals) by the exact step for a frozen speed (:func:`~roadbank.estimators.discretise.foh`),
+any other interval by the trapezoidal rule in substeps of at most
+``min(max_substep, BACKWARD_SUBSTEP)``.
 
 Interface: :meth:`PIFSmoother.run` returns the smoothed estimate of the whole log given;
 :meth:`~roadbank.estimators.base.Estimator.step` is the forward filter's, which *is* the
@@ -39,6 +42,8 @@ import numpy as np
 
 from ..signals import Estimate, Signals
 from . import kernels as K
+from .discretise import foh
+from .layout import DT_REL_TOL
 from .pif import PIF
 
 _TABLES: dict = {}
@@ -104,39 +109,79 @@ class PIFSmoother(PIF):
             if key is not None:
                 cache.store("smoother", key, {"tab": tab})
         _TABLES[mem_key] = tab
+        self._mem_key = mem_key
         return tab
+
+    def _fixed_table(self, h: float) -> np.ndarray:
+        """Rows ``[Phi, Gam0, Gam1]`` per grid speed of the backward pass over ``h`` seconds
+        (exact for a frozen speed, inputs ``[x_f, ay]`` linear between samples; memoised)."""
+        key = (self._mem_key, h)
+        ftab = _TABLES.get(key)
+        if ftab is None:
+            n = self._nstate
+            rows = []
+            for row in self._smooth_tab:
+                S, M, b = row[:n * n].reshape(n, n), row[n * n:2 * n * n].reshape(n, n), row[2 * n * n:]
+                Phi, G0, G1 = foh(S, np.hstack([M, -b[:, None]]), h)
+                rows.append(np.concatenate([Phi.ravel(), G0.ravel(), G1.ravel()]))
+            ftab = _TABLES[key] = np.ascontiguousarray(np.array(rows))
+        return ftab
 
     def run(self, signals: Signals, *, reset: bool = True) -> Estimate:
         """Smoothed estimate over the whole log (see module docstring); arguments as
         :meth:`~roadbank.estimators.base.Estimator.run`. Units: ``w`` (-), angles (rad)."""
         fwd = super().run(signals, reset=reset)
         n, ns = len(signals), self._nstate
-        xf = np.column_stack([fwd.states[name] for name in self.state_names])
-        xs = xf.copy()
+        xs = np.empty((n, ns))
+        for i, name in enumerate(self.state_names):
+            xs[:, i] = fwd.states[name]
         valid = fwd.valid.copy()
-        idx = np.flatnonzero(valid)
-        if idx.size > 1:
+        every = bool(valid.all())
+        idx = None if every else np.flatnonzero(valid)
+        if (n if every else idx.size) > 1:
             # the valid samples, as the forward pass saw them: it steps over invalid ones and
             # restarts after a gap longer than max_gap
-            t, vx, ay, xv = signals.t[idx], signals.vx[idx], signals.ay[idx], xf[idx]
-            xo = xv.copy()
-            cut = np.flatnonzero(np.diff(t) > self.max_gap) + 1
+            sel = (lambda a: a) if every else (lambda a: a[idx])
+            t, vx, ay, xv = sel(signals.t), sel(signals.vx), sel(signals.ay), sel(xs)
+            xo = xv.copy()                           # the pass reads xv[k + 1] after writing xo[k + 1]
+            dt = np.diff(t)
+            cut = np.flatnonzero(dt > self.max_gap) + 1
+            hfix = self.fixed_dt or _common_interval(dt)     # the forward pass's fixed rate, if any
+            ftab = self._fixed_table(hfix) if hfix > 0 else np.zeros((1, 1))
             work = np.zeros(3 * ns * ns + 4 * ns)
             g = self.vgrid
-            for a, b in zip(np.r_[0, cut], np.r_[cut, idx.size]):
+            for a, b in zip(np.r_[0, cut], np.r_[cut, len(t)]):
                 if b - a > 1:
-                    K.smooth_backward(self._smooth_tab, float(g[0]), float(g[1] - g[0]), np.int64(ns),
+                    K.smooth_backward(self._smooth_tab, ftab, hfix, float(g[0]), float(g[1] - g[0]), np.int64(ns),
                                       min(self.max_substep, BACKWARD_SUBSTEP), t, vx, ay, xv, np.int64(a),
                                       np.int64(b), xo, work)
-            xs[idx] = xo
-        # invalid samples hold the last smoothed output (the forward pass holds its own there)
-        last = np.maximum.accumulate(np.where(valid, np.arange(n), -1))
-        held = last >= 0
-        xs[held] = xs[last[held]]
+            if every:
+                xs = xo
+            else:
+                xs[idx] = xo
+        if not every:
+            # invalid samples hold the last smoothed output (the forward pass holds its own there)
+            last = np.maximum.accumulate(np.where(valid, np.arange(n), -1))
+            held = last >= 0
+            xs[held] = xs[last[held]]
         w = xs[:, 2].copy()
         theta = np.arcsin(np.clip(w, -1.0, 1.0))
         phi = fwd.states["phi"].copy()
         valid &= np.abs(w) <= np.sin(self.max_angle)
-        states = {name: xs[:, i].copy() for i, name in enumerate(self.state_names)}
+        states = {name: xs[:, i] for i, name in enumerate(self.state_names)}
         states["phi"] = phi
         return Estimate(self.name, fwd.t, w, theta, theta - phi, valid, states)
+
+
+def _common_interval(dt: np.ndarray) -> float:
+    """The sample interval (s) shared by at least half of the intervals ``dt`` (relative tolerance
+    ``DT_REL_TOL``; that of a whole rate in Hz when it is one, as the forward pass rounds it),
+    which the backward pass takes exactly; 0 if there is none (then every interval takes the
+    trapezoidal substeps). Used when the forward pass has no fixed rate of its own."""
+    if dt.size == 0:
+        return 0.0
+    h = float(np.median(dt))
+    if not h > 0 or np.count_nonzero(np.abs(dt - h) <= DT_REL_TOL * h) * 2 < dt.size:
+        return 0.0
+    rate = 1.0 / h
+    return 1.0 / round(rate) if abs(rate - round(rate)) <= 1e-9 * rate else h    # k * h in floating point
