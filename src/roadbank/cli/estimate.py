@@ -76,7 +76,7 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     roadbank estimate drive.parquet -e pif-smoother -o smoothed.csv
 
     -e pif-smoother is for post-processing: it also uses the samples after each
-    instant (no lag; each streamed chunk is smoothed on its own; docs/estimators.md).
+    instant (no lag; a streamed log is smoothed as a whole; docs/estimators.md).
 
     LOGS are files, log directories (comma2k19 segment, ROS 2 bag, KITTI drive),
     directories of logs or glob patterns. Parquet and MDF4 logs are streamed in

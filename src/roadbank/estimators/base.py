@@ -375,7 +375,7 @@ class Estimator:
                                                       float(t), float(vx), float(delta_f), float(ay),
                                                       float(r)))
 
-    def run(self, signals: Signals, *, reset: bool = True) -> Estimate:
+    def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
         """Estimate over a whole log.
 
         Parameters
@@ -385,6 +385,10 @@ class Estimator:
         reset : bool, default True
             Start from scratch. ``reset=False`` continues from the current state,
             so a log processed in consecutive chunks equals one run.
+        lookahead : Signals, optional
+            The samples that follow ``signals`` (a streamed log's next chunk). A causal
+            estimator ignores them; an offline one (:data:`roadbank.estimators.OFFLINE`) uses
+            them as later samples without advancing its state.
 
         With ``sample_rate="auto"`` the first positive interval sets the rate,
         exactly as in :meth:`step`.

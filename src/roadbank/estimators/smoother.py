@@ -28,8 +28,10 @@ any other interval by the trapezoidal rule in substeps of at most
 Interface: :meth:`PIFSmoother.run` returns the smoothed estimate of the whole log given;
 :meth:`~roadbank.estimators.base.Estimator.step` is the forward filter's, which *is* the
 smoothed estimate of the newest sample given the samples so far (no later sample exists yet).
-So ``run()`` differs from a sequence of ``step()`` calls everywhere but at the last sample, and
-logs processed in chunks (``run(reset=False)``) are smoothed within each chunk only. The backward
+So ``run()`` differs from a sequence of ``step()`` calls everywhere but at the last sample. A log
+processed in chunks (``run(reset=False)``) is smoothed as a whole when each chunk comes with the
+next one as ``lookahead`` (covering :attr:`PIFSmoother.lookahead_s` or reaching the log's end;
+``roadbank estimate`` and ``roadbank map`` do so), else within each chunk only. The backward
 pass steps over invalid samples as the forward pass does (their outputs held, flagged not valid)
 and starts again where the forward pass restarted, after a gap longer than ``max_gap``. The
 body roll is the forward pass's (the roll model follows ``ay`` causally, as the body does).
@@ -78,6 +80,7 @@ class PIFSmoother(PIF):
             raise ValueError(f"{self.label}: model and variant are fixed (modified, steady)")
         super().__init__(params, model="modified", variant="steady", tuning=tuning, **kw)
         self._smooth_tab = self._smoother_table()
+        self._lookahead = None
 
     def smoother_matrices(self, vx: float):
         """``(S, M, b)`` of the backward pass at ``vx`` (m/s): ``S = -(A + M)`` (1/s),
@@ -127,22 +130,69 @@ class PIFSmoother(PIF):
             ftab = _TABLES[key] = np.ascontiguousarray(np.array(rows))
         return ftab
 
-    def run(self, signals: Signals, *, reset: bool = True) -> Estimate:
-        """Smoothed estimate over the whole log (see module docstring); arguments as
-        :meth:`~roadbank.estimators.base.Estimator.run`. Units: ``w`` (-), angles (rad)."""
+    @property
+    def lookahead_s(self) -> float:
+        """Samples after a log's end (s) that make :meth:`run` agree with smoothing the whole:
+        25 time constants of the backward pass's slowest mode over the speed grid (about 5 s for
+        the default car), after which their influence is below 1e-10."""
+        if self._lookahead is None:
+            n = self._nstate
+            slowest = min(-np.max(np.linalg.eigvals(row[:n * n].reshape(n, n)).real) for row in self._smooth_tab)
+            self._lookahead = 25.0 / slowest
+        return self._lookahead
+
+    def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
+        """Smoothed estimate over the log ``signals`` (see module docstring); ``reset`` as
+        :meth:`~roadbank.estimators.base.Estimator.run`. Units: ``w`` (-), angles (rad).
+
+        ``lookahead``: the samples that follow ``signals`` (e.g. the next chunk of a streamed log),
+        of which the first :attr:`lookahead_s` seconds are used as the later samples of the
+        backward pass and then forgotten: the forward state stays that at the end of
+        ``signals``, so consecutive chunks, each with the next one as ``lookahead``, give what
+        one run over the whole log gives (to about 1e-10 rad) when each lookahead covers
+        :attr:`lookahead_s` or reaches the log's end.
+        """
+        n = len(signals)
         fwd = super().run(signals, reset=reset)
-        n, ns = len(signals), self._nstate
-        xs = np.empty((n, ns))
+        parts = [(signals, fwd)]
+        if lookahead is not None and len(lookahead) and n:
+            ref = signals.t[np.isfinite(signals.t)]
+            end = (ref[-1] if ref.size else -np.inf) + self.lookahead_s
+            m = np.flatnonzero(lookahead.t > end)
+            ahead = lookahead[:m[0] + 1] if m.size else lookahead
+            saved = (self._mem.copy(), self._det_t, self.fixed_dt)
+            parts.append((ahead, super().run(ahead, reset=False)))
+            self._mem[:], self._det_t = saved[0], saved[1]
+            if self.fixed_dt != saved[2]:
+                self.set_sample_rate(None if saved[2] is None else 1.0 / saved[2])
+        xs, valid = self._backward(parts)
+        xs, valid = xs[:n], valid[:n]
+        w = xs[:, 2].copy()
+        theta = np.arcsin(np.clip(w, -1.0, 1.0))
+        phi = fwd.states["phi"].copy()
+        valid &= np.abs(w) <= np.sin(self.max_angle)
+        states = {name: xs[:, i] for i, name in enumerate(self.state_names)}
+        states["phi"] = phi
+        return Estimate(self.name, fwd.t, w, theta, theta - phi, valid, states)
+
+    def _backward(self, parts):
+        """Smoothed states ``(N, n)`` and the forward validity of the consecutive ``(signals,
+        forward Estimate)`` ``parts``; invalid samples hold the last smoothed state."""
+        ns = self._nstate
+        cat = (lambda f: f(parts[0])) if len(parts) == 1 else (lambda f: np.concatenate([f(p) for p in parts]))
+        t, vx, ay = (cat(lambda p, c=c: getattr(p[0], c)) for c in ("t", "vx", "ay"))
+        valid = cat(lambda p: p[1].valid).copy()
+        xs = np.empty((len(t), ns))
         for i, name in enumerate(self.state_names):
-            xs[:, i] = fwd.states[name]
-        valid = fwd.valid.copy()
+            xs[:, i] = cat(lambda p: p[1].states[name])
         every = bool(valid.all())
         idx = None if every else np.flatnonzero(valid)
-        if (n if every else idx.size) > 1:
+        if (len(t) if every else idx.size) > 1:
             # the valid samples, as the forward pass saw them: it steps over invalid ones and
             # restarts after a gap longer than max_gap
-            sel = (lambda a: a) if every else (lambda a: a[idx])
-            t, vx, ay, xv = sel(signals.t), sel(signals.vx), sel(signals.ay), sel(xs)
+            if not every:
+                t, vx, ay = t[idx], vx[idx], ay[idx]
+            xv = xs if every else xs[idx]
             xo = xv.copy()                           # the pass reads xv[k + 1] after writing xo[k + 1]
             dt = np.diff(t)
             cut = np.flatnonzero(dt > self.max_gap) + 1
@@ -160,17 +210,10 @@ class PIFSmoother(PIF):
             else:
                 xs[idx] = xo
         if not every:
-            # invalid samples hold the last smoothed output (the forward pass holds its own there)
-            last = np.maximum.accumulate(np.where(valid, np.arange(n), -1))
+            last = np.maximum.accumulate(np.where(valid, np.arange(len(valid)), -1))
             held = last >= 0
             xs[held] = xs[last[held]]
-        w = xs[:, 2].copy()
-        theta = np.arcsin(np.clip(w, -1.0, 1.0))
-        phi = fwd.states["phi"].copy()
-        valid &= np.abs(w) <= np.sin(self.max_angle)
-        states = {name: xs[:, i] for i, name in enumerate(self.state_names)}
-        states["phi"] = phi
-        return Estimate(self.name, fwd.t, w, theta, theta - phi, valid, states)
+        return xs, valid
 
 
 def _common_interval(dt: np.ndarray) -> float:

@@ -152,8 +152,9 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
         Never raises for a bad log: ``status = "error"`` and ``error`` say why,
         and no partial output file is left behind.
     """
+    from ..estimators import OFFLINE
     from ..io import LogError
-    from ..io.stream import CHUNK_ROWS, stream_log
+    from ..io.stream import CHUNK_ROWS, stream_log, with_next
     from ..io.writers import TableWriter, estimate_table
     from ..vehicle import log_conditions, make_estimator
 
@@ -170,15 +171,19 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
         ests = []
         kept = {"t": [], "est": [[] for _ in names], "roll": [], "truth": {}}
         writer = TableWriter(output, metadata=metadata)
-        for k, chunk in enumerate(stream_log(path, channels=channels, format=format, params=params,
-                                             chunk_rows=chunk_rows or CHUNK_ROWS)):
+        correct = (lambda s: s) if vehicle is None else vehicle.correct
+        offline = any(n in OFFLINE for n in names)
+        # an offline estimator smooths each chunk with the next one as lookahead (two chunks in memory)
+        chunks = stream_log(path, channels=channels, format=format, params=params, chunk_rows=chunk_rows or CHUNK_ROWS)
+        for k, (chunk, nxt) in enumerate(with_next(chunks) if offline else ((c, None) for c in chunks)):
             if k == 0:  # designed for the log's own rate and ay noise (measured on the first chunk)
                 cond = log_conditions(chunk.signals)
                 ests = [vehicle.make(n, **cond) if vehicle is not None
                         else make_estimator(n, params, **cond) for n in names]
             warns += chunk.warnings
-            signals = chunk.signals if vehicle is None else vehicle.correct(chunk.signals)
-            results = [e.run(signals, reset=(k == 0)) for e in ests]
+            signals = correct(chunk.signals)
+            ahead = None if nxt is None else correct(nxt.signals)
+            results = [e.run(signals, reset=(k == 0), lookahead=ahead) for e in ests]
             writer.write(estimate_table(chunk.signals.t, results, chunk.reference_roll))
             stats.add(results[0])
             summary.chunks += 1

@@ -23,7 +23,7 @@ only when the table clock is used.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -473,3 +473,18 @@ def _stream_mdf4(p, cmap, params, chunk_rows):
             raise LogError(f"{p}: fewer than 2 samples on the common time base")
     finally:
         src.close()
+
+
+def with_next(chunks: Iterable[Log]) -> Iterator[tuple[Log, Log | None]]:
+    """Each chunk of ``chunks`` with the one after it (None after the last): what an offline
+    estimator takes as ``lookahead`` (:meth:`roadbank.estimators.Estimator.run`). Holds two
+    chunks in memory."""
+    it = iter(chunks)
+    cur = next(it, None)
+    if cur is None:
+        return
+    for nxt in it:
+        yield cur, nxt
+        cur = nxt
+    yield cur, None
+

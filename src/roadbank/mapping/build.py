@@ -44,7 +44,7 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
     estimator : str
         Estimator whose valid ``phi_b`` is mapped; default the offline ``pif-smoother`` (a map is
         made after the drives, so the samples after each instant may be used; each streamed
-        chunk is smoothed on its own).
+        chunk is smoothed with the next one as lookahead, as one run over the log).
     channels, format, params, vehicle
         As for :func:`roadbank.fleet.estimate_log`.
     cell_m, sectors
@@ -61,8 +61,9 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
         None if no log gave a position. A bad log is reported in its MappedLog
         and never stops the others.
     """
+    from ..estimators import OFFLINE
     from ..io import LogError
-    from ..io.stream import CHUNK_ROWS, stream_log
+    from ..io.stream import CHUNK_ROWS, stream_log, with_next
     from ..vehicle import log_conditions, make_estimator
 
     if vehicle is not None:
@@ -78,20 +79,24 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
             designs[key] = (vehicle.make(estimator, **cond) if vehicle is not None
                             else make_estimator(estimator, params, **cond))
         return designs[key]
+    correct = (lambda s: s) if vehicle is None else vehicle.correct
     bmap = BankMap(LocalProjection(*origin), cell_m, sectors) if origin is not None else None
     done: list[MappedLog] = []
     for k_log, path in enumerate(logs):
         rec = MappedLog(str(path))
         try:
-            for k, chunk in enumerate(stream_log(path, channels=channels, format=format, params=params,
-                                                 chunk_rows=chunk_rows or CHUNK_ROWS)):
+            chunks = stream_log(path, channels=channels, format=format, params=params,
+                                chunk_rows=chunk_rows or CHUNK_ROWS)
+            # an offline estimator smooths each chunk with the next one as lookahead
+            for k, (chunk, nxt) in enumerate(with_next(chunks) if estimator in OFFLINE
+                                             else ((c, None) for c in chunks)):
                 if "lat_deg" not in chunk.extra or "lon_deg" not in chunk.extra:
                     raise LogError(f"{path}: no GNSS position (map 'latitude' and 'longitude' in the channel "
                                    "map, or use a format that has one: comma2k19, kitti-oxts, ROS NavSatFix)")
                 if k == 0:
                     est = design(chunk.signals)
-                signals = chunk.signals if vehicle is None else vehicle.correct(chunk.signals)
-                out = est.run(signals, reset=(k == 0))
+                signals = correct(chunk.signals)
+                out = est.run(signals, reset=(k == 0), lookahead=None if nxt is None else correct(nxt.signals))
                 lat, lon = chunk.extra["lat_deg"], chunk.extra["lon_deg"]
                 if bmap is None:
                     proj = _origin(lat, lon)
