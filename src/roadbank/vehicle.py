@@ -550,13 +550,19 @@ class Vehicle:
         """Build an estimator for this car: its params, sensors and ``[tuning.<name>]`` options.
 
         :func:`make_estimator` ``(name, self.params, sensors=self.sensors, log_rate=log_rate,
-        log_ay_noise=log_ay_noise, **{**self.tuning.get(name, {}), **overrides})``: a
-        default-tuned PIF without an ``R`` gets the noise densities of this car's sensors at
-        ``log_rate`` (Hz; default the sensor's ``rate``), ``Q_ay`` at least the log's own
-        ``ay`` noise ``log_ay_noise`` (m/s^2).
+        log_ay_noise=log_ay_noise, **{**tuning, **overrides})``, ``tuning`` the car's
+        ``[tuning.<name>]`` table, or for an estimator that runs another's filter
+        (:data:`roadbank.estimators.TUNED_AS`: ``pif-smoother`` runs ``pif-modified``) without a
+        table of its own, that one's: a default-tuned PIF without an ``R`` gets the noise
+        densities of this car's sensors at ``log_rate`` (Hz; default the sensor's ``rate``),
+        ``Q_ay`` at least the log's own ``ay`` noise ``log_ay_noise`` (m/s^2).
         """
+        from .estimators import TUNED_AS
+        tuning = self.tuning.get(estimator_name)
+        if tuning is None:
+            tuning = self.tuning.get(TUNED_AS.get(estimator_name), {})
         return make_estimator(estimator_name, self.params, sensors=self.sensors, log_rate=log_rate,
-                              log_ay_noise=log_ay_noise, **{**self.tuning.get(estimator_name, {}), **overrides})
+                              log_ay_noise=log_ay_noise, **{**tuning, **overrides})
 
     @property
     def sensor_offsets(self) -> dict[str, float]:

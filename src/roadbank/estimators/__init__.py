@@ -43,6 +43,9 @@ NAMES = tuple(_FACTORIES)
 #: estimators whose ``run()`` also uses the samples after each instant (post-processing, not
 #: for an ECU); their ``step()`` is causal (see :mod:`roadbank.estimators.smoother`)
 OFFLINE = tuple(n for n, f in _FACTORIES.items() if getattr(f, "offline", False))
+#: estimators that run another's filter with its weights: a vehicle file's ``[tuning.<that one>]``
+#: table applies to them when they have no table of their own
+TUNED_AS = {"pif-smoother": "pif-modified"}
 
 
 def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
@@ -61,5 +64,5 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
         raise ValueError(f"{name}: bad tuning option ({exc})") from None
 
 
-__all__ = ["NAMES", "OFFLINE", "make", "Estimator", "StepResult", "NoStabilisingSolution",
+__all__ = ["NAMES", "OFFLINE", "TUNED_AS", "make", "Estimator", "StepResult", "NoStabilisingSolution",
            "Kinematic", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFSmoother", "Kalman"]
