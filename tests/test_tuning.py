@@ -153,6 +153,8 @@ def test_a_given_th_with_the_sensor_R_is_halved_until_solvable_like_the_default(
 def test_tune_cli_rejects_untunable_estimators(tmp_path):
     r = CliRunner().invoke(main, ["tune", "-o", str(tmp_path / "x.toml"), "--estimators", "uio"])
     assert r.exit_code == 2 and "cannot tune uio" in r.output
+    r = CliRunner().invoke(main, ["tune", "-o", str(tmp_path / "x.toml"), "--estimators", "pif-smoother"])
+    assert r.exit_code == 2 and "pif-smoother runs pif-modified with that one's weights" in r.output
 
 
 def test_default_th_adapts_to_the_car_explicit_th_raises(monkeypatch):

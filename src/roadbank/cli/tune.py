@@ -44,7 +44,9 @@ def tune(vehicle, out, budget, seed, names, jobs, scheduler, train_drives, valid
     chosen = tuple(n.strip() for n in names.split(",") if n.strip()) or TUNABLE
     bad = [n for n in chosen if n not in TUNABLE + ON_REQUEST]
     if bad:
-        raise click.BadParameter(f"cannot tune {', '.join(bad)} (tunable: {', '.join(TUNABLE + ON_REQUEST)})",
+        from ..estimators import TUNED_AS
+        hint = "".join(f"; {n} runs {TUNED_AS[n]} with that one's weights" for n in bad if n in TUNED_AS)
+        raise click.BadParameter(f"cannot tune {', '.join(bad)} (tunable: {', '.join(TUNABLE + ON_REQUEST)}){hint}",
                                  param_hint="--estimators")
     budget = budget or pipeline.DEFAULT_BUDGET
     t0 = time.perf_counter()

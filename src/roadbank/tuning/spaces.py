@@ -134,4 +134,8 @@ def search_space(name: str, sensors=None) -> SearchSpace:
                            ((-1.5, 1.5), (0.05, 3.0), (0.05, 3.0)), {})
     if name == "dfc":
         return SearchSpace(name, ("log10 a_ref",), ((-0.5, 1.7),), {})
+    from ..estimators import TUNED_AS
+    if name in TUNED_AS:
+        raise ValueError(f"{name!r} is not tuned on its own: it runs {TUNED_AS[name]} with that one's weights "
+                         f"(a vehicle file's [tuning.{TUNED_AS[name]}] table); tune {TUNED_AS[name]}")
     raise ValueError(f"{name!r} is not tunable; tunable: {', '.join(TUNABLE + ON_REQUEST)}")
