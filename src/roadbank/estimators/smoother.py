@@ -112,13 +112,13 @@ class PIFSmoother(PIF):
             if key is not None:
                 cache.store("smoother", key, {"tab": tab})
         _TABLES[mem_key] = tab
-        self._mem_key = mem_key
+        self._table_key = mem_key
         return tab
 
     def _fixed_table(self, h: float) -> np.ndarray:
         """Rows ``[Phi, Gam0, Gam1]`` per grid speed of the backward pass over ``h`` seconds
         (exact for a frozen speed, inputs ``[x_f, ay]`` linear between samples; memoised)."""
-        key = (self._mem_key, h)
+        key = (self._table_key, h)
         ftab = _TABLES.get(key)
         if ftab is None:
             n = self._nstate
@@ -160,11 +160,11 @@ class PIFSmoother(PIF):
             end = (ref[-1] if ref.size else -np.inf) + self.lookahead_s
             m = np.flatnonzero(lookahead.t > end)
             ahead = lookahead[:m[0] + 1] if m.size else lookahead
-            saved = (self._mem.copy(), self._det_t, self.fixed_dt)
+            # the forward pass over the lookahead must leave no trace: state, rate detector, tables
+            saved = (self._mem.copy(), self._det_t, self.fixed_dt, self._tab, self._cfg)
             parts.append((ahead, super().run(ahead, reset=False)))
-            self._mem[:], self._det_t = saved[0], saved[1]
-            if self.fixed_dt != saved[2]:
-                self.set_sample_rate(None if saved[2] is None else 1.0 / saved[2])
+            self._mem[:] = saved[0]
+            self._det_t, self.fixed_dt, self._tab, self._cfg = saved[1:]
         xs, valid = self._backward(parts)
         xs, valid = xs[:n], valid[:n]
         w = xs[:, 2].copy()
