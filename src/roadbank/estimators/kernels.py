@@ -1070,6 +1070,20 @@ def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
 # smoother: the backward pass of the offline PIF (roadbank.estimators.smoother)
 # ---------------------------------------------------------------------------------
 
+@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cpython_wrapper=True, no_cfunc_wrapper=True)
+def _grid_point(v, v0, dv, ng):
+    """Rows ``i``, ``i1`` and weight ``fa`` of speed ``v`` (m/s) on the grid ``v0 + j dv``
+    (``ng`` points), clamped at both ends: the schedule at ``v`` is ``(1 - fa) row i + fa row i1``."""
+    x = (v - v0) / dv
+    i = np.int64(math.floor(x)) if x > 0.0 else np.int64(0)
+    if i > ng - 2:
+        i = ng - 2 if ng > 1 else np.int64(0)
+    fa = x - i
+    fa = 0.0 if fa < 0.0 else (1.0 if fa > 1.0 else fa)
+    i1 = i + 1 if i + 1 < ng else i
+    return i, i1, fa
+
+
 @njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
 def smooth_backward(tab, ftab, hfix, v0, dv, n, max_sub, t, vx, ay, xf, a, b, out, work):
     r"""Backward pass of the smoother over the samples ``a .. b-1`` (one segment of a log).
@@ -1101,13 +1115,7 @@ def smooth_backward(tab, ftab, hfix, v0, dv, n, max_sub, t, vx, ay, xf, a, b, ou
     for k in range(b - 2, a - 1, -1):
         h = t[k + 1] - t[k]
         if hfix > 0.0 and abs(h - hfix) <= DT_REL_TOL * hfix:
-            x = (0.5 * (vx[k] + vx[k + 1]) - v0) / dv
-            i = np.int64(math.floor(x)) if x > 0.0 else np.int64(0)
-            if i > ng - 2:
-                i = ng - 2 if ng > 1 else np.int64(0)
-            fa = x - i
-            fa = 0.0 if fa < 0.0 else (1.0 if fa > 1.0 else fa)
-            i1 = i + 1 if i + 1 < ng else i
+            i, i1, fa = _grid_point(0.5 * (vx[k] + vx[k + 1]), v0, dv, ng)
             for p in range(n):
                 acc = 0.0
                 for q in range(n):
@@ -1129,14 +1137,7 @@ def smooth_backward(tab, ftab, hfix, v0, dv, n, max_sub, t, vx, ay, xf, a, b, ou
             s0 = 1.0 - j / m                      # fractions of the interval from t[k]
             s1 = 1.0 - (j + 1) / m
             sm = 0.5 * (s0 + s1)
-            v = vx[k] + sm * (vx[k + 1] - vx[k])
-            x = (v - v0) / dv
-            i = np.int64(math.floor(x)) if x > 0.0 else np.int64(0)
-            if i > ng - 2:
-                i = ng - 2 if ng > 1 else np.int64(0)
-            fa = x - i
-            fa = 0.0 if fa < 0.0 else (1.0 if fa > 1.0 else fa)
-            i1 = i + 1 if i + 1 < ng else i
+            i, i1, fa = _grid_point(vx[k] + sm * (vx[k + 1] - vx[k]), v0, dv, ng)
             for q in range(2 * nn + n):
                 work[q] = tab[i, q] + fa * (tab[i1, q] - tab[i, q])
             ay0 = ay[k] + s0 * (ay[k + 1] - ay[k])
