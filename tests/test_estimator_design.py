@@ -86,3 +86,10 @@ def test_unknown_name_and_bad_tuning():
     assert len(E.NAMES) == 12 and set(E.NAMES) == {
         "kinematic", "dfc", "uio", "pio-original", "pio-modified", "pif-modified", "pif-original", "kalman",
         "pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-smoother"}
+
+
+@pytest.mark.parametrize("name", ["pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-smoother"])
+def test_variants_on_the_modified_model_refuse_another_model_or_variant(name):
+    for option in ({"model": "original"}, {"variant": "riccati"}):
+        with pytest.raises(ValueError, match=f"{name}: model and variant are fixed"):
+            E.make(name, **option)

@@ -51,6 +51,13 @@ class StepResult(NamedTuple):
 _new_result = tuple.__new__
 
 
+def rate_of_interval(h: float) -> float:
+    """Sample rate (Hz) of the interval ``h`` (s): ``1/h``, rounded to a whole number of Hz when it
+    is one to 1e-9 relative (time stamps ``k * h`` in floating point)."""
+    rate = 1.0 / h
+    return float(round(rate)) if abs(rate - round(rate)) <= 1e-9 * rate else rate
+
+
 def speed_grid(v_min: float, v_max: float = V_GRID_MAX, step: float = V_GRID_STEP) -> np.ndarray:
     """Uniform speed grid (m/s) of the gain schedules, from ``v_min`` to at least ``v_max``."""
     n = int(np.ceil((v_max - v_min) / step)) + 1
@@ -319,10 +326,7 @@ class Estimator:
         self._cfg = self._build_cfg((d["Phi_r"], d["Gam0_r"], d["Gam1_r"]))
 
     def _rate_from_interval(self, h: float) -> None:
-        rate = 1.0 / h
-        if abs(rate - round(rate)) <= 1e-9 * rate:    # time stamps k * h in floating point
-            rate = float(round(rate))
-        self.set_sample_rate(rate)
+        self.set_sample_rate(rate_of_interval(h))
 
     def _observe_time(self, t: float) -> None:
         """Automatic rate (``sample_rate="auto"``), one sample: the first positive interval

@@ -282,6 +282,14 @@ class PIF(ScheduledObserver):
             mem[o:o + 9] = self.P0.ravel()
 
 
+def modified_steady(label: str, kw: dict) -> dict:
+    """``kw`` with ``model="modified"``, ``variant="steady"``: the options of a PIF variant that
+    exists on that model and variant only (``label`` names it in the error when ``kw`` sets either)."""
+    if "model" in kw or "variant" in kw:
+        raise ValueError(f"{label}: model and variant are fixed (modified, steady)")
+    return {**kw, "model": "modified", "variant": "steady"}
+
+
 #: tuning of :class:`PIFRate`: differential evolution on ``roadbank tune``'s training set (seed 0,
 #: 48 drives; docs/estimators.md), R = R_ESP, S = 1
 RATE_TUNING = dict(Q=R_ESP * 10**2.88025985, Q_rate=R_ESP * 10**3.97104448, th=10**-2.10630825 / R_ESP,
@@ -347,10 +355,8 @@ class PIFRate(_BankRateState, PIF):
     options_default = RATE_TUNING
 
     def __init__(self, params=None, *, tuning=None, Q_rate=None, **kw):
-        if "model" in kw or "variant" in kw:
-            raise ValueError("pif-rate: model and variant are fixed (modified, steady)")
         self._set_rate_noise(Q_rate)
-        super().__init__(params, model="modified", variant="steady", tuning=tuning, **kw)
+        super().__init__(params, **modified_steady(self.label, kw), tuning=tuning)
 
 
 #: excitation grid of :class:`PIFAdaptive` (m/s^2 of low-passed ``|ay|``): 0 to 10 m/s^2 in steps of
@@ -421,8 +427,7 @@ class PIFAdaptive(PIF):
     steady_kernel = "adaptive"
 
     def __init__(self, params=None, *, tuning=None, mu=None, tau=None, tf=None, **kw):
-        if "model" in kw or "variant" in kw:
-            raise ValueError(f"{self.label}: model and variant are fixed (modified, steady)")
+        kw = modified_steady(self.label, kw)
         d = self.options_default
         self.mu, self.tau, self.tf = (float(d[k] if v is None else v)
                                       for k, v in (("mu", mu), ("tau", tau), ("tf", tf)))
@@ -430,7 +435,7 @@ class PIFAdaptive(PIF):
             raise ValueError(f"{self.label}: need mu, tau, tf > 0; got {self.mu}, {self.tau}, {self.tf}")
         self.egrid = EXCITATION_GRID
         kw.setdefault("v_step", ADAPTIVE_V_STEP)
-        super().__init__(params, model="modified", variant="steady", tuning=tuning, **kw)
+        super().__init__(params, tuning=tuning, **kw)
 
     def rear_stiffness(self, e: float) -> float:
         """Rear axle cornering stiffness (N/rad) of the design at excitation ``e`` (m/s^2)."""

@@ -44,9 +44,10 @@ import numpy as np
 
 from ..signals import Estimate, Signals
 from . import kernels as K
+from .base import rate_of_interval
 from .discretise import foh
 from .layout import DT_REL_TOL
-from .pif import PIF
+from .pif import PIF, modified_steady
 
 _TABLES: dict = {}
 #: longest substep of the backward pass (s): its fastest modes mirror the filter's (up to about
@@ -76,9 +77,7 @@ class PIFSmoother(PIF):
     offline = True
 
     def __init__(self, params=None, *, tuning=None, **kw):
-        if "model" in kw or "variant" in kw:
-            raise ValueError(f"{self.label}: model and variant are fixed (modified, steady)")
-        super().__init__(params, model="modified", variant="steady", tuning=tuning, **kw)
+        super().__init__(params, **modified_steady(self.label, kw), tuning=tuning)
         self._smooth_tab = self._smoother_table()
         self._lookahead = None
 
@@ -226,5 +225,4 @@ def _common_interval(dt: np.ndarray) -> float:
     h = float(np.median(dt))
     if not h > 0 or np.count_nonzero(np.abs(dt - h) <= DT_REL_TOL * h) * 2 < dt.size:
         return 0.0
-    rate = 1.0 / h
-    return 1.0 / round(rate) if abs(rate - round(rate)) <= 1e-9 * rate else h    # k * h in floating point
+    return 1.0 / rate_of_interval(h)

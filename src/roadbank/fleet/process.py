@@ -175,7 +175,7 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
         offline = any(n in OFFLINE for n in names)
         # an offline estimator smooths each chunk with the next one as lookahead (two chunks in memory)
         chunks = stream_log(path, channels=channels, format=format, params=params, chunk_rows=chunk_rows or CHUNK_ROWS)
-        for k, (chunk, nxt) in enumerate(with_next(chunks) if offline else ((c, None) for c in chunks)):
+        for k, (chunk, nxt) in enumerate(with_next(chunks, offline)):
             if k == 0:  # designed for the log's own rate and ay noise (measured on the first chunk)
                 cond = log_conditions(chunk.signals)
                 ests = [vehicle.make(n, **cond) if vehicle is not None

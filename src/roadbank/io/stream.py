@@ -475,10 +475,13 @@ def _stream_mdf4(p, cmap, params, chunk_rows):
         src.close()
 
 
-def with_next(chunks: Iterable[Log]) -> Iterator[tuple[Log, Log | None]]:
+def with_next(chunks: Iterable[Log], enabled: bool = True) -> Iterator[tuple[Log, Log | None]]:
     """Each chunk of ``chunks`` with the one after it (None after the last): what an offline
     estimator takes as ``lookahead`` (:meth:`roadbank.estimators.Estimator.run`). Holds two
-    chunks in memory."""
+    chunks in memory; ``enabled=False``: no read-ahead, every next chunk None."""
+    if not enabled:
+        yield from ((c, None) for c in chunks)
+        return
     it = iter(chunks)
     cur = next(it, None)
     if cur is None:

@@ -88,8 +88,7 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
             chunks = stream_log(path, channels=channels, format=format, params=params,
                                 chunk_rows=chunk_rows or CHUNK_ROWS)
             # an offline estimator smooths each chunk with the next one as lookahead
-            for k, (chunk, nxt) in enumerate(with_next(chunks) if estimator in OFFLINE
-                                             else ((c, None) for c in chunks)):
+            for k, (chunk, nxt) in enumerate(with_next(chunks, estimator in OFFLINE)):
                 if "lat_deg" not in chunk.extra or "lon_deg" not in chunk.extra:
                     raise LogError(f"{path}: no GNSS position (map 'latitude' and 'longitude' in the channel "
                                    "map, or use a format that has one: comma2k19, kitti-oxts, ROS NavSatFix)")
