@@ -115,3 +115,45 @@ def test_an_offset_in_the_wrong_unit_is_a_clear_error(tmp_path, drive):
         Vehicle.from_toml(bad).sensor_offsets
     res = CliRunner().invoke(main, ["estimate", str(log), "--vehicle", str(bad), "-o", str(tmp_path / "o.csv")])
     assert res.exit_code == 2 and "yaw_rate_offset" in res.output and "Traceback" not in res.output
+
+
+@pytest.mark.parametrize("vx", [10.0, 22.2, 39.0])
+def test_a_yaw_rate_bias_is_unobservable_on_the_modified_model(vx):
+    """Why offsets must be identified before estimating: the design model of the default PIF,
+    augmented with a constant yaw-rate bias ``b`` (``r_meas = r + b``), loses one observable
+    direction (python-control's observability matrix), and along it the bank moves by
+    ``vx b / g``: at the track's 39 m/s a bias of 0.3 deg/s is 1.2 deg of bank that no
+    estimator reading ``ay``, ``r`` and ``vx`` can tell from road bank."""
+    import control as ct
+    from scipy.linalg import null_space
+
+    from roadbank import estimators
+
+    est = estimators.make("pif-modified")
+    A, _, C, *_ = est.design_model(vx)
+    n = A.shape[0]
+    Aa = np.zeros((n + 1, n + 1))
+    Aa[:n, :n] = A
+    Ca = np.hstack([C, [[1.0]]])
+    O = ct.obsv(Aa, Ca)
+    assert np.linalg.matrix_rank(O) == n
+    z = null_space(O)[:, 0]
+    g = est.params.g
+    assert z[est.state_names.index("w")] / z[n] == pytest.approx(vx / g, rel=1e-9)
+    assert z[est.state_names.index("r")] / z[n] == pytest.approx(-1.0, rel=1e-9)
+
+
+def test_the_default_pif_reads_a_yaw_rate_bias_as_a_bank_of_vx_b_over_g():
+    """The filter's behaviour along that direction: a steady turn, then the same turn with a
+    yaw-rate bias ``b``; the steady bank estimate moves by ``-vx b / g`` (sin of the bank)."""
+    from roadbank import estimators
+
+    n, vx, b = 3000, 30.0, math.radians(0.3)
+    t = np.arange(n) * 0.01
+    ay, r = 3.0, 0.08
+    base = Signals(t, np.full(n, vx), np.full(n, ay), np.full(n, r), np.full(n, 0.02))
+    biased = replace(base, r=base.r + b)
+    est = estimators.make("pif-modified")
+    w0 = est.run(base).w[-1]
+    w1 = est.run(biased).w[-1]
+    assert w1 - w0 == pytest.approx(-vx * b / est.params.g, rel=1e-3)
