@@ -83,9 +83,9 @@ def test_unknown_name_and_bad_tuning():
         E.make("pif")
     with pytest.raises(ValueError, match="bad tuning"):
         E.make("kinematic", Q=3)
-    assert len(E.NAMES) == 12 and set(E.NAMES) == {
+    assert len(E.NAMES) == 13 and set(E.NAMES) == {
         "kinematic", "dfc", "uio", "pio-original", "pio-modified", "pif-modified", "pif-original", "kalman",
-        "pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-smoother"}
+        "pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-gated", "pif-smoother"}
 
 
 @pytest.mark.parametrize("name", ["pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-smoother"])

@@ -21,11 +21,12 @@ from scipy.integrate import solve_ivp
 
 from roadbank import Signals, VehicleParams
 from roadbank import estimators as E
+from roadbank.estimators.base import FIXED_RATE_KERNELS
 from roadbank.estimators.discretise import foh
 from roadbank.estimators.pif import TABLE4
 
 SEGMENT = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "comma2k19-example"
-LPV = [n for n in E.NAMES if E.make(n).kernel == "lpv"]
+LPV = [n for n in E.NAMES if E.make(n).kernel in FIXED_RATE_KERNELS]
 TOL_DEG = 0.01
 
 

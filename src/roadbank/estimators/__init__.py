@@ -4,7 +4,7 @@
 >>> est = estimators.make("pif-modified")
 >>> estimate = est.run(signals)           # doctest: +SKIP
 
-``NAMES`` lists the estimators (the paper's, the Kalman peer, ``pif-rate``, ``pif-adaptive``, ``pif-rate-adaptive`` and the offline ``pif-smoother``); ``make(name, params, **tuning)`` builds one.
+``NAMES`` lists the estimators (the paper's, the Kalman peer, ``pif-rate``, ``pif-adaptive``, ``pif-rate-adaptive``, ``pif-gated`` and the offline ``pif-smoother``); ``make(name, params, **tuning)`` builds one.
 Each has ``run(signals) -> Estimate``, ``step(t, vx, ay, r, delta_f)`` and ``reset()``.
 """
 
@@ -15,6 +15,7 @@ from functools import partial
 from ..params import VehicleParams
 from .base import Estimator, StepResult
 from .dfc import DFC
+from .gated import PIFGated
 from .kalman import Kalman
 from .kinematic import Kinematic
 from .pif import PIF, PIFAdaptive, PIFRate, PIFRateAdaptive
@@ -35,6 +36,7 @@ _FACTORIES = {
     "pif-rate": PIFRate,
     "pif-adaptive": PIFAdaptive,
     "pif-rate-adaptive": PIFRateAdaptive,
+    "pif-gated": PIFGated,
     "pif-smoother": PIFSmoother,
 }
 
@@ -43,9 +45,9 @@ NAMES = tuple(_FACTORIES)
 #: estimators whose ``run()`` also uses the samples after each instant (post-processing, not
 #: for an ECU); their ``step()`` is causal (see :mod:`roadbank.estimators.smoother`)
 OFFLINE = tuple(n for n, f in _FACTORIES.items() if getattr(f, "offline", False))
-#: estimators that run another's filter with its weights: a vehicle file's ``[tuning.<that one>]``
-#: table applies to them when they have no table of their own
-TUNED_AS = {"pif-smoother": "pif-modified"}
+#: estimators that run another's filter with its weights (``pif-gated``: as its slow filter): a
+#: vehicle file's ``[tuning.<that one>]`` table applies to them when they have no table of their own
+TUNED_AS = {"pif-smoother": "pif-modified", "pif-gated": "pif-modified"}
 
 
 def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
@@ -65,4 +67,5 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
 
 
 __all__ = ["NAMES", "OFFLINE", "TUNED_AS", "make", "Estimator", "StepResult", "NoStabilisingSolution",
-           "Kinematic", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFSmoother", "Kalman"]
+           "Kinematic", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
+           "Kalman"]

@@ -30,6 +30,8 @@ V_GRID_STEP = 0.25
 
 _DESIGN_CACHE: dict = {}
 #: settings that do not change the tables (vgrid follows v_min; the rest only enter cfg or the kernel)
+#: kernel families with the fixed-rate path (``lpv`` rows; ``gated`` steps them through ``lpv_step``)
+FIXED_RATE_KERNELS = ("lpv", "gated")
 _NOT_DESIGN = ("vgrid", "fixed_dt", "max_substep", "max_gap", "max_angle", "roll")
 _DISCRETE_CACHE: dict = {}
 
@@ -97,7 +99,7 @@ class Estimator:
         the gains of ``v_max`` are held. A coarse, short grid designs faster
         (``roadbank tune`` searches on one).
 
-    Subclasses set ``name``, ``kernel`` ("lpv", "dfc" or "riccati"), the channel
+    Subclasses set ``name``, ``kernel`` ("lpv", "adaptive", "gated", "dfc" or "riccati"), the channel
     usage and build ``self._tab`` / ``self._cfg_extra`` in ``_design()``.
     """
 
@@ -139,7 +141,7 @@ class Estimator:
         self.fixed_dt = None
         self._tab = self._tab_cont
         self._cfg = self._build_cfg(None)
-        self._auto_rate = sample_rate == "auto" and self.kernel == "lpv"
+        self._auto_rate = sample_rate == "auto" and self.kernel in FIXED_RATE_KERNELS
         if sample_rate is not None and sample_rate != "auto":
             self.set_sample_rate(sample_rate)
         self.reset()
@@ -264,7 +266,7 @@ class Estimator:
             ``H_r``, ``J_r`` (nr,); ``D_r`` (); ``uses`` (3,) 0/1 flags; ``dt`` (s).
             The ``lpv`` family only (ScheduledObserver).
         """
-        if self.kernel != "lpv":
+        if self.kernel not in FIXED_RATE_KERNELS:
             raise ValueError(f"{self.name}: fixed-rate tables exist for the scheduled linear observers only "
                              f"(this estimator runs the {self.kernel!r} kernel)")
         dt = float(dt)
@@ -308,7 +310,7 @@ class Estimator:
         reset the state. Only the ``lpv`` family has a fixed-rate path; for the
         others this records nothing.
         """
-        if rate is None or self.kernel != "lpv":
+        if rate is None or self.kernel not in FIXED_RATE_KERNELS:
             self.fixed_dt = None
             self._tab = self._tab_cont
             self._cfg = self._build_cfg(None)

@@ -828,6 +828,73 @@ def adaptive_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phi
 
 
 # ---------------------------------------------------------------------------------
+# two observers, the output switched on the yaw acceleration
+# ---------------------------------------------------------------------------------
+
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
+def gated_step(mem, cfg, tab, work, t, vx, d, ay, r):
+    r"""One sample of two stacked observers whose outputs are blended by a gate; returns
+    ``(w, theta, phi_b, valid)``.
+
+    The states of both observers form one block-diagonal ``lpv`` observer (the table and the
+    fixed-rate path of :func:`lpv_step`, whose output ``H xi + D eta`` is the first observer's
+    ``w_s``); the second's is ``w_f = H_f xi`` (``H_f`` constant, at ``cfg[C_OFAM]``,
+    :func:`roadbank.estimators.layout.gated_block`). The gate ``g`` in [0, 1] follows the
+    yaw acceleration: the yaw rate through a first-order low-pass (time constant ``tf``),
+    :math:`r_f \mathrel{+}= (1 - e^{-\Delta t/t_f})(r - r_f)`, its rate of change times the
+    speed, :math:`j = v_x |\Delta r_f| / \Delta t` (m/s^3, the yaw part of the lateral jerk),
+    the ramp :math:`g_k = \min(1, \max(0, (j - j_{on}) / j_{span}))` and a peak follower that
+    rises at once and falls back with the release time constant ``tau``:
+    :math:`g \leftarrow g_k` if :math:`g_k > g`, else :math:`g \mathrel{+}= (1 -
+    e^{-\Delta t/\tau})(g_k - g)`. At a (re)start ``r_f = r``, ``g = 0``. Output
+    :math:`w = w_s + g (w_f - w_s)`, :math:`\theta = \arcsin w`, :math:`\phi_b = \theta - \phi`.
+    ``r_f`` and ``g`` in ``mem`` after the roll states (:func:`~roadbank.estimators.layout.gate_state`).
+    """
+    if not _sample_valid(mem, cfg, t, vx, d, ay, r):
+        return mem[M_W], mem[M_THETA], mem[M_PHIB], False
+    restart = mem[M_INIT] == 0.0 or (t - mem[M_TLAST]) > cfg[C_GAP]
+    dt = t - mem[M_TLAST]
+    lpv_step(mem, cfg, tab, work, t, vx, d, ay, r)
+    n = np.int64(cfg[C_N])
+    o = np.int64(cfg[C_OFAM])              # layout.gated_block: H_f (n), TF, TAU, ON, SPAN
+    og = M_X + n + np.int64(cfg[C_NR])     # layout.gate_state: r_f, g
+    if restart:
+        rf = r
+        g = 0.0
+    else:
+        rf0 = mem[og]
+        rf = rf0 + (1.0 - math.exp(-dt / cfg[o + n])) * (r - rf0)
+        gk = (vx * abs(rf - rf0) / dt - cfg[o + n + 2]) / cfg[o + n + 3]
+        gk = gk if gk > 0.0 else 0.0
+        gk = gk if gk < 1.0 else 1.0
+        g = mem[og + 1]
+        g = gk if gk > g else g + (1.0 - math.exp(-dt / cfg[o + n + 1])) * (gk - g)
+    mem[og] = rf
+    mem[og + 1] = g
+    wf = 0.0
+    for p in range(n):
+        wf += cfg[o + p] * mem[M_X + p]
+    w = mem[M_W] + g * (wf - mem[M_W])
+    wc = w if w > -1.0 else -1.0
+    wc = wc if wc < 1.0 else 1.0
+    theta = asin_fast(wc)
+    mem[M_W] = w
+    mem[M_THETA] = theta
+    mem[M_PHIB] = theta - mem[M_PHI]
+    return w, theta, mem[M_PHIB], abs(w) <= cfg[C_WMAX]
+
+
+@njit(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
+def gated_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
+              out_x):
+    """Batch version of :func:`gated_step` (same arithmetic, sample by sample)."""
+    n = np.int64(cfg[C_N])
+    for k in range(t.shape[0]):
+        ok = gated_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
+        _store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
+
+
+# ---------------------------------------------------------------------------------
 # DFC
 # ---------------------------------------------------------------------------------
 

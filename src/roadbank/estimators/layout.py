@@ -16,7 +16,8 @@ sample:
     M_ETA     previous inputs ``eta = [delta_f, ay, r]`` (3)
     M_X       observer states (n), then :func:`roll_states` (nr), then
               :func:`riccati_p` (n*n, Riccati variant only) or
-              :func:`excitation_state` (2, ``adaptive`` family only)
+              :func:`excitation_state` (2, ``adaptive`` family only) or
+              :func:`gate_state` (2, ``gated`` family only)
     ========  ===========================================================
 
 ``cfg`` — constants of one estimator (built once per design)
@@ -30,7 +31,8 @@ sample:
     discrete ``Phi, Gam0, Gam1`` of the fixed-rate path when a sample rate is
     set); ``adaptive`` (two-dimensional schedule, speed x excitation): the
     continuous part of :func:`lpv_row`, row ``iv * ne + ie`` for speed point
-    ``iv`` and excitation point ``ie`` (:func:`adaptive_block`); ``dfc`` rows: ``Haw0, Hrw0, Hau0, Hru0``; ``riccati`` rows:
+    ``iv`` and excitation point ``ie`` (:func:`adaptive_block`); ``gated``: :func:`lpv_row` of the
+    two observers' block-diagonal stack (gate constants: :func:`gated_block`); ``dfc`` rows: ``Haw0, Hrw0, Hau0, Hru0``; ``riccati`` rows:
     ``A, B, C, Dy, J``. Matrices are stored row-major.
 
 ``work`` — scratch of the general path (:func:`work_size`).
@@ -218,6 +220,32 @@ def adaptive_block(nr: int) -> AdaptiveBlock:
 def excitation_state(n: int, nr: int) -> int:
     """Offset in ``mem`` of the ``adaptive`` family's excitation (m/s^2), followed by the
     low-passed ``|ay|`` (m/s^2); where a Riccati P would be."""
+    return M_X + n + nr
+
+
+class GatedBlock(NamedTuple):
+    """Offsets in ``cfg`` of the ``gated`` family's constants: the second observer's output row
+    ``HF`` (n, over the stacked states), the yaw-rate low-pass time constant ``TF`` (s), the gate's
+    release time constant ``TAU`` (s), the yaw jerk ``ON`` (m/s^3) where it starts to open and the
+    ``SPAN`` (m/s^3) over which it opens fully."""
+
+    HF: int
+    TF: int
+    TAU: int
+    ON: int
+    SPAN: int
+    end: int
+
+
+def gated_block(n: int, nr: int) -> GatedBlock:
+    """:class:`GatedBlock` after the roll block of ``nr`` states (at ``cfg[C_OFAM]``)."""
+    o = roll_block(nr).end
+    return GatedBlock(o, o + n, o + n + 1, o + n + 2, o + n + 3, o + n + 4)
+
+
+def gate_state(n: int, nr: int) -> int:
+    """Offset in ``mem`` of the ``gated`` family's low-passed yaw rate (rad/s), followed by the
+    gate (-); where a Riccati P would be."""
     return M_X + n + nr
 
 

@@ -1,0 +1,152 @@
+r"""``pif-gated`` — the default PIF, switched to a fast bank-rate PIF while the yaw accelerates.
+
+A causal estimator beyond the paper. A PIF must trade lag behind bank changes against the
+noise it passes: the default ``pif-modified`` is quiet and lags a bank that changes within a
+second (lane changes onto a banked lane, the crease between two lanes), a fast filter with the
+bank rate as a state follows them and passes more noise. Roads put bank changes where the
+curvature changes (superelevation runoff along a transition curve, lane changes), i.e. where
+the yaw rate changes; on a straight or a steady curve the bank changes slowly. So both filters
+run, and the output moves to the fast one while the yaw part of the lateral jerk
+:math:`v_x |\dot r|` is large:
+
+.. math::
+    w = w_s + g\,(w_f - w_s), \qquad \theta = \arcsin w, \qquad \phi_b = \theta - \phi
+
+* slow: :class:`~roadbank.estimators.pif.PIF` on the modified model with the default weights
+  (or a vehicle file's ``[tuning.pif-modified]``), states ``[vy, r, w]``;
+* fast: :class:`~roadbank.estimators.pif.PIFRate` (``[vy, r, w, w_rate]``) with ten times the
+  bank-rate noise of ``pif-rate``'s default and ``th = 0`` (its Kalman form);
+* the gate ``g`` (:func:`roadbank.estimators.kernels.gated_step`): the yaw rate low-passed
+  (0.05 s), its rate of change times the speed, a ramp from 2 to 6 m/s^3 and a peak follower
+  that releases in 0.5 s.
+
+The fast weights and the gate were chosen together on ``roadbank tune``'s training set (seed 0,
+48 drives; docs/estimators.md), not on the paper cells or the validation set. Both filters
+share the sensors' ``R`` and ``Q_ay`` and one roll model; their states are stacked into one
+block-diagonal observer on the speed schedule (``gated`` kernel: the ``lpv`` step, fixed-rate
+path included, plus the gate), so ``run`` equals ``step`` and a chunked ``run`` equals one run.
+With the gate held shut it is ``pif-modified``, held open the fast filter (tested). Not
+exportable to C yet.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import layout
+from .base import ScheduledObserver
+from .pif import PIF, RATE_TUNING, PIFRate
+
+#: the fast filter's weights and the gate (chosen on the training set, see module docstring):
+#: ``fast_Q`` (1/s), ``fast_Q_rate`` (1/s^3), ``fast_th`` (-), ``gate_tf``, ``gate_release`` (s),
+#: ``gate_on``, ``gate_span`` (m/s^3)
+GATED_TUNING = dict(fast_Q=float(RATE_TUNING["Q"]), fast_Q_rate=10.0 * float(RATE_TUNING["Q_rate"]), fast_th=0.0,
+                    gate_tf=0.05, gate_release=0.5, gate_on=2.0, gate_span=4.0)
+
+#: options of :class:`~roadbank.estimators.base.Estimator` that both filters share
+_COMMON = ("v_min", "max_substep", "max_gap", "max_angle", "v_step", "v_max", "roll")
+
+
+class PIFGated(ScheduledObserver):
+    """``pif-gated``: the default PIF and a fast bank-rate PIF, blended on the yaw acceleration.
+
+    Parameters
+    ----------
+    params : VehicleParams
+    tuning, Q, R, S, th, Q_ay, adapt_th : optional
+        The slow filter's, as :class:`~roadbank.estimators.pif.PIF` (modified model);
+        ``R`` ((rad/s)^2 s), ``S`` and ``Q_ay`` ((m/s^2)^2 s) are the fast filter's too.
+    fast_Q, fast_Q_rate, fast_th : float, optional
+        The fast filter's ``Q`` (1/s), ``Q_rate`` (1/s^3) and ``th`` (-)
+        (:class:`~roadbank.estimators.pif.PIFRate`); defaults :data:`GATED_TUNING`.
+    gate_tf, gate_release : float, optional
+        Time constants (s) of the yaw rate's low-pass and of the gate's release.
+    gate_on, gate_span : float, optional
+        The gate opens from ``v_x |r'|`` = ``gate_on`` (m/s^3) and is fully open ``gate_span``
+        (m/s^3) above.
+    **kw
+        Common options of :class:`~roadbank.estimators.base.Estimator` (both filters).
+    """
+
+    name = "pif-gated"
+    kernel = "gated"
+    uses = (False, True, True)
+    state_names = ("vy", "r", "w", "vy_fast", "r_fast", "w_fast", "w_rate_fast")
+
+    def __init__(self, params=None, *, tuning=None, Q=None, R=None, S=None, th=None, Q_ay=None, adapt_th=None,
+                 fast_Q=None, fast_Q_rate=None, fast_th=None, gate_tf=None, gate_release=None, gate_on=None,
+                 gate_span=None, **kw):
+        d = GATED_TUNING
+        opt = {k: float(d[k] if v is None else v) for k, v in (
+            ("fast_Q", fast_Q), ("fast_Q_rate", fast_Q_rate), ("fast_th", fast_th), ("gate_tf", gate_tf),
+            ("gate_release", gate_release), ("gate_on", gate_on), ("gate_span", gate_span))}
+        if not (opt["gate_tf"] > 0 and opt["gate_release"] > 0 and opt["gate_span"] > 0
+                and np.isfinite(opt["gate_on"])):
+            raise ValueError(f"{self.name}: need gate_tf, gate_release, gate_span > 0 and a finite gate_on; got "
+                             f"{opt['gate_tf']}, {opt['gate_release']}, {opt['gate_span']}, {opt['gate_on']}")
+        common = {k: kw[k] for k in _COMMON if k in kw}
+        self._slow = PIF(params, model="modified", tuning=tuning, Q=Q, R=R, S=S, th=th, Q_ay=Q_ay,
+                         adapt_th=adapt_th, sample_rate=None, **common)
+        common.setdefault("roll", self._slow.roll)      # one roll model: the slow filter's tuning chose it
+        kw["roll"] = common["roll"]
+        self._fast = PIFRate(params, R=R, S=S, Q_ay=Q_ay, Q=opt["fast_Q"], Q_rate=opt["fast_Q_rate"],
+                             th=opt["fast_th"], sample_rate=None, **common)
+        for k, v in opt.items():
+            setattr(self, k, v)
+        # the designs behind the stacked table (public: they key the design caches)
+        self.slow_design = repr(self._slow._design_key())
+        self.fast_design = repr(self._fast._design_key())
+        super().__init__(params, **kw)
+
+    @property
+    def slow(self) -> PIF:
+        """The slow filter (``pif-modified``)."""
+        return self._slow
+
+    @property
+    def fast(self) -> PIFRate:
+        """The fast filter (a ``pif-rate``)."""
+        return self._fast
+
+    def observer(self, vx: float):
+        """``(F, G, H, D)`` of the stacked observer at ``vx`` (m/s): block-diagonal ``F``, stacked
+        ``G``; ``H``, ``D`` give the slow filter's ``w`` (the fast one's is :meth:`fast_output`)."""
+        return _stack(self._slow.observer(vx), self._fast.observer(vx))
+
+    def fast_output(self) -> np.ndarray:
+        """``H_f`` (n,): the fast filter's ``w`` from the stacked states (constant)."""
+        ns = len(self._slow.state_names)
+        h = np.zeros(len(self.state_names))
+        h[ns:] = np.ravel(self._fast.observer(self.vgrid[0])[2])
+        return h
+
+    def _design(self):
+        # the two filters' tables row by row (no Riccati equation solved again)
+        rows = []
+        parts = [(e._tab_cont, e._nstate) for e in (self._slow, self._fast)]
+        for k in range(len(self.vgrid)):
+            mats = []
+            for tab, n in parts:
+                row = layout.lpv_row(n)
+                r = tab[k]
+                mats.append((r[row.F:row.G].reshape(n, n), r[row.G:row.H].reshape(n, layout.NETA),
+                             r[row.H:row.D].reshape(1, n), r[row.D:row.J].reshape(1, layout.NETA),
+                             r[row.J:row.cont].reshape(n, layout.NETA)))
+            F, G, H, D = _stack(mats[0][:4], mats[1][:4])
+            J = np.vstack([mats[0][4], mats[1][4]])
+            rows.append(np.concatenate([F.ravel(), G.ravel(), H.ravel(), D.ravel(), J.ravel()]))
+        extra = np.concatenate([self.fast_output(), [self.gate_tf, self.gate_release, self.gate_on, self.gate_span]])
+        return np.ascontiguousarray(np.array(rows)), len(self.state_names), extra
+
+
+def _stack(slow, fast):
+    """Block-diagonal ``F``, stacked ``G``, the slow filter's ``H`` (zero on the fast states) and ``D``."""
+    Fs, Gs, Hs, Ds = slow
+    Ff, Gf, _, _ = fast
+    ns, nf = Fs.shape[0], Ff.shape[0]
+    F = np.zeros((ns + nf, ns + nf))
+    F[:ns, :ns] = Fs
+    F[ns:, ns:] = Ff
+    H = np.zeros((1, ns + nf))
+    H[0, :ns] = np.ravel(Hs)
+    return F, np.vstack([Gs, Gf]), H, np.atleast_2d(Ds)
