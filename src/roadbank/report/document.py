@@ -41,7 +41,8 @@ def _md_blocks(study, figs, *, with_figures: bool, fig_prefix: str = "") -> list
             md_table(["claim", "holds", "evidence"],
                      [[c.text, "yes" if c.holds else Markdown("**no**"), c.detail] for c in all_claims(rows)])]
     present = {r["estimator"] for r in rows}
-    for name in [n for n in ("pif-default", "pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-smoother")
+    for name in [n for n in ("pif-default", "pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-gated",
+                                 "pif-smoother")
                  if n in present] or [None]:
         out += _aims_block(rows, name)
     for ref, metric, title in TABLES:

@@ -12,6 +12,7 @@ LABELS = {
     "pif-rate": "PIF + bank rate (ours)",
     "pif-adaptive": "PIF + friction-usage schedule (ours)",
     "pif-rate-adaptive": "PIF + bank rate + friction schedule (ours)",
+    "pif-gated": "PIF switched to a fast bank-rate PIF on yaw acceleration (ours)",
     "pif-smoother": "PIF smoother, offline (ours)",
     "kinematic": "Kinematic",
 }
