@@ -30,7 +30,7 @@ def make(name, **kw):
 
 #: estimators built once (designs are cached by the estimators module too)
 BUILT = {name: make(name) for name in E.NAMES}
-EXPORTABLE = [n for n, est in BUILT.items() if est.kernel == "lpv" and n not in E.OFFLINE]
+EXPORTABLE = [n for n, est in BUILT.items() if est.kernel in ("lpv", "gated") and n not in E.OFFLINE]
 NOT_EXPORTABLE = [n for n in E.NAMES if n not in EXPORTABLE]
 
 TOL64 = 1e-9                     # rad

@@ -25,8 +25,8 @@ The fast weights and the gate were chosen together on ``roadbank tune``'s traini
 share the sensors' ``R`` and ``Q_ay`` and one roll model; their states are stacked into one
 block-diagonal observer on the speed schedule (``gated`` kernel: the ``lpv`` step, fixed-rate
 path included, plus the gate), so ``run`` equals ``step`` and a chunked ``run`` equals one run.
-With the gate held shut it is ``pif-modified``, held open the fast filter (tested). Not
-exportable to C yet.
+With the gate held shut it is ``pif-modified``, held open the fast filter (tested). The C
+export (:mod:`roadbank.export`) writes the stacked observer and the gate.
 """
 
 from __future__ import annotations

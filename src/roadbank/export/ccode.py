@@ -102,7 +102,7 @@ typedef struct {
     double t_last;           /* s, time of the last valid sample (${p}_step) */
     ${real} since_valid;     /* s, time since the last valid sample (${p}_step_dt) */
     ${real} eta[3];          /* inputs of the last valid sample: delta_f, ay, r (masked) */
-${x_member}${z_member}    ${real} ay_last;         /* m/s^2, ay of the last valid sample (roll model) */
+${x_member}${z_member}${gate_member}    ${real} ay_last;         /* m/s^2, ay of the last valid sample (roll model) */
     ${real} w;               /* held outputs of the last valid sample */
     ${real} theta;
     ${real} phi_b;
@@ -195,7 +195,7 @@ ${roll_tables}
 static const real_t RB_TAB[RB_NG][RB_NK] = {
 ${table}
 };
-${discrete_tables}
+${discrete_tables}${gate_consts}
 static real_t rb_lerp(const real_t *t0, const real_t *t1, real_t a, int k)
 {
     return t0[k] + a * (t1[k] - t0[k]);
@@ -252,7 +252,7 @@ static int rb_update(state_t *st, int restart, int fixed, real_t dt, real_t vx, 
     u[0] = RB_USES[0] ? d : 0.0_R;
     u[1] = RB_USES[1] ? ay : 0.0_R;
     u[2] = RB_USES[2] ? r : 0.0_R;
-${observer_call}    return rb_finish(st, w, ay, dt, restart, fixed);
+${observer_call}${gate_call}    return rb_finish(st, w, ay, dt, restart, fixed);
 }
 
 static int rb_output(const state_t *st, int ok, output_t *out)
@@ -276,7 +276,7 @@ void ${p}_init(state_t *s)
     for (k = 0; k < 3; ++k) {
         s->eta[k] = 0.0_R;
     }
-${init_x}${init_z}    s->ay_last = 0.0_R;
+${init_x}${init_z}${init_gate}    s->ay_last = 0.0_R;
     s->w = 0.0_R;
     s->theta = 0.0_R;
     s->phi_b = 0.0_R;
@@ -724,6 +724,42 @@ def _roll_parts(d: ExportDesign, float32: bool) -> dict:
     return {"roll_tables": tables, "finish_roll": finish, "finish_phi": phi, "init_z": init}
 
 
+def _gate_parts(d: ExportDesign, float32: bool) -> dict:
+    """The gate of a ``pif-gated`` module (:func:`roadbank.estimators.kernels.gated_step`, same
+    operations in the same order), or nothing."""
+    if d.gate is None:
+        return {"gate_consts": "", "gate_call": "", "init_gate": ""}
+    g = d.gate
+    lit = lambda x: real_literal(x, float32)  # noqa: E731
+    consts = (f"#define RB_EXP {'expf' if float32 else 'exp'}\n"
+              "/* gate between the two observers (the second's w = RB_GATE_HF . x): yaw rate low-pass (s),\n"
+              " * release (s), yaw jerk vx |r'| where it starts to open and over which it opens (m/s^3) */\n"
+              f"static const real_t RB_GATE_HF[RB_N] = {{{_array(g['HF'], float32, 8, '')}}};\n"
+              f"#define RB_GATE_TF ({lit(g['tf'])})\n#define RB_GATE_TAU ({lit(g['tau'])})\n"
+              f"#define RB_GATE_ON ({lit(g['on'])})\n#define RB_GATE_SPAN ({lit(g['span'])})\n")
+    call = ("    if (restart) {\n"
+            "        st->rf = r;\n"
+            "        st->g = 0.0_R;\n"
+            "    } else {\n"
+            "        const real_t rf0 = st->rf;\n"
+            "        real_t gk;\n"
+            "        st->rf = rf0 + (1.0_R - RB_EXP(-dt / RB_GATE_TF)) * (r - rf0);\n"
+            "        gk = (vx * RB_FABS(st->rf - rf0) / dt - RB_GATE_ON) / RB_GATE_SPAN;\n"
+            "        gk = gk > 0.0_R ? gk : 0.0_R;\n"
+            "        gk = gk < 1.0_R ? gk : 1.0_R;\n"
+            "        st->g = gk > st->g ? gk : st->g + (1.0_R - RB_EXP(-dt / RB_GATE_TAU)) * (gk - st->g);\n"
+            "    }\n"
+            "    {\n"
+            "        real_t wf = 0.0_R;\n"
+            "        int p;\n"
+            "        for (p = 0; p < RB_N; ++p) {\n"
+            "            wf += RB_GATE_HF[p] * st->x[p];\n"
+            "        }\n"
+            "        w = w + st->g * (wf - w);\n"
+            "    }\n")
+    return {"gate_consts": consts, "gate_call": call, "init_gate": "    s->rf = 0.0_R;\n    s->g = 0.0_R;\n"}
+
+
 def _provenance(d: ExportDesign) -> str:
     lines = [f"Estimator: {d.provenance.get('estimator', d.name)}"]
     settings = d.provenance.get("settings", {})
@@ -778,7 +814,10 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
         x_member=(f"    {names['real']} x[{d.n}];         /* observer state{state_list} */\n"
                   if d.n else ""),
         z_member=(f"    {names['real']} z[{d.nr}];         /* roll model state: phi (rad), phi' (rad/s) */\n"
-                  if d.nr else ""))
+                  if d.nr else ""),
+        gate_member=(f"    {names['real']} rf;              /* rad/s, low-passed yaw rate (gate) */\n"
+                     f"    {names['real']} g;               /* -, gate: 0 first observer, 1 second */\n"
+                     if d.gate else ""))
     helpers_needed = nt > 0
     source = _SOURCE.substitute(
         common, provenance=_provenance(d), sub_lit=f"{d.max_substep:g}",
@@ -796,7 +835,7 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
         observer_fn=_observer_tustin(d) + _discrete_parts(d, float32)["observer_fixed_fn"],
         init_x=("    for (k = 0; k < RB_N; ++k) {\n        s->x[k] = 0.0_R;\n    }\n" if d.n else ""),
         **{k: v for k, v in _discrete_parts(d, float32).items() if k != "observer_fixed_fn"},
-        **_roll_parts(d, float32))
+        **_roll_parts(d, float32), **_gate_parts(d, float32))
     p = names["p"]
     return {f"{p}.h": _fix_literals(header, float32),
             f"{p}.c": _fix_literals(source, float32),

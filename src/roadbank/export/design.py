@@ -90,6 +90,9 @@ class ExportDesign:
     discrete: dict | None = None
     #: relative tolerance on the interval for the fixed-rate tables
     dt_tol: float = 0.0
+    #: ``pif-gated``: the second observer's output row ``HF`` (n,) and the gate's ``tf``, ``tau`` (s),
+    #: ``on``, ``span`` (m/s^3) (:func:`roadbank.estimators.kernels.gated_step`); None for one observer
+    gate: dict | None = None
 
     @property
     def ng(self) -> int:
@@ -125,7 +128,7 @@ class ExportDesign:
         (x86-64, ARM EABI): int flag, double time, then reals."""
         r = 4 if float32 else 8
         fields = [(4, 4), (8, 8), (r, r), (3 * r, r)] + ([(self.n * r, r)] if self.n else []) \
-            + ([(self.nr * r, r)] if self.nr else []) + [(r, r)] * 5
+            + ([(self.nr * r, r)] if self.nr else []) + [(r, r)] * (5 + (2 if self.gate else 0))
         size = 0
         for nbytes, align in fields:
             size = -(-size // align) * align + nbytes
@@ -139,7 +142,9 @@ class ExportDesign:
                             self.max_gap, self.wmax], float), np.array(self.uses, float),
                   *([] if self.discrete is None else
                     [np.asarray(self.discrete[k], float) for k in ("Phi", "Gam0", "Gam1", "Phi_r", "Gam0_r",
-                                                                   "Gam1_r", "dt")])):
+                                                                   "Gam1_r", "dt")]),
+                  *([] if self.gate is None else
+                    [np.asarray(self.gate[k], float) for k in ("HF", "tf", "tau", "on", "span")])):
             h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
         return h.hexdigest()[:16]
 
@@ -153,7 +158,8 @@ def c_identifier(name: str) -> str:
 
 
 def check_exportable(est) -> None:
-    """Raise :class:`NotExportable` (saying why) unless ``est`` is causal and runs on the ``lpv`` kernel."""
+    """Raise :class:`NotExportable` (saying why) unless ``est`` is causal and runs on the ``lpv`` kernel
+    (or the ``gated`` one: that kernel's observer plus a gate on its output)."""
     from ..estimators.base import Estimator
 
     if not isinstance(est, Estimator):
@@ -163,7 +169,7 @@ def check_exportable(est) -> None:
         raise NotExportable(f"{est.name}: not exportable: an offline estimator (its run() smooths with the "
                             "samples after each instant); an ECU runs its forward filter: export "
                             "pif-modified with the same weights")
-    if kernel != "lpv":
+    if kernel not in ("lpv", "gated"):
         why = _NOT_LPV_REASON.get(kernel, f"its runtime is the {kernel!r} kernel, not a "
                                           "speed-scheduled linear observer")
         raise NotExportable(f"{est.name}: not exportable: {why}")
@@ -244,4 +250,16 @@ def export_design(est, rate: float, module_name: str | None = None, *,
         max_substep=float(est.max_substep), max_gap=float(est.max_gap),
         max_angle=float(est.max_angle), wmax=float(np.sin(est.max_angle)), rate=float(rate),
         state_names=tuple(getattr(est, "state_names", ())), provenance=provenance,
-        discrete=disc, dt_tol=dt_tol)
+        discrete=disc, dt_tol=dt_tol, gate=_gate(est, n, nr))
+
+
+def _gate(est, n: int, nr: int) -> dict | None:
+    """The ``gated`` kernel's constants as its ``cfg`` holds them (None for another kernel)."""
+    if est.kernel != "gated":
+        return None
+    from ..estimators import layout
+
+    b = layout.gated_block(n, nr)
+    cfg = est._cfg
+    return {"HF": np.array(cfg[b.HF:b.TF], float), "tf": float(cfg[b.TF]), "tau": float(cfg[b.TAU]),
+            "on": float(cfg[b.ON]), "span": float(cfg[b.SPAN])}

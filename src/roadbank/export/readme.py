@@ -87,6 +87,18 @@ scheduled on speed: `xi' = F(vx) xi + G(vx) eta`, `w = H(vx) xi + D(vx) eta`,
 `eta = [delta_f, ay, r]`, tabulated every {d.dv:g} m/s from {d.v0:g} m/s ({d.ng} speeds; clamped
 beyond), interpolated linearly and discretised per sample by the trapezoidal rule. Roll
 separation: {'dynamic second-order roll model' if d.nr else 'static roll gain ' + f'{d.roll_D:.6g} rad per m/s^2'}.
-Estimator: `{d.provenance.get('estimator', d.name)}`. See roadbank's docs/embedded.md
+{_gate_text(d)}Estimator: `{d.provenance.get('estimator', d.name)}`. See roadbank's docs/embedded.md
 for how the tables are designed and how to regenerate them for another car.
 """
+
+
+def _gate_text(d: ExportDesign) -> str:
+    """The ``pif-gated`` paragraph of the design section (empty for one observer)."""
+    if d.gate is None:
+        return ""
+    g = d.gate
+    return (f"Two filters in one observer (block-diagonal): `w` above is the first one's; the output is\n"
+            f"`w + g (w_f - w)`, `w_f` the second filter's (`RB_GATE_HF . xi`), with the gate `g` in [0, 1]\n"
+            f"following the yaw part of the lateral jerk, `vx |r_f'|` (yaw rate low-passed with\n"
+            f"{g['tf']:g} s): 0 below {g['on']:g} m/s^3, 1 above {g['on'] + g['span']:g} m/s^3, rising at once and\n"
+            f"falling back with a {g['tau']:g} s release (state members `rf`, `g`).\n")
