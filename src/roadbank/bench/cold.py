@@ -14,6 +14,8 @@ compiles:
 * ``dfc`` — dynamic filter compensation;
 * ``riccati`` — the PIF with the Riccati ODE;
 * ``adaptive`` — ``pif-adaptive``, scheduled on speed and excitation (general path only);
+* ``gated`` — ``pif-gated``: the ``lpv`` step of its stacked observer plus the gate, batch and
+  streaming, general and fixed-rate paths;
 * ``smooth`` — the backward pass of the offline ``pif-smoother`` (its forward ``lpv`` pass is
   compiled before the timing).
 
@@ -85,6 +87,19 @@ s = Signals(np.arange(n) * 0.01, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0
 e = estimators.make("pif-adaptive", v_max=30.0)     # small design: scipy, not compilation
 def work():
     e.run(s); e.reset(); e.step(0.0, 20.0, 0.5, 0.01, 0.002); e.step(0.01, 20.0, 0.5, 0.01, 0.002)
+""",
+    "gated": """
+import numpy as np
+from roadbank import Signals, estimators
+n = 60
+t = np.arange(n) * 0.01
+t_irr = t.copy(); t_irr[30:] += 0.003
+s = Signals(t, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
+s2 = Signals(t_irr, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
+e = estimators.make("pif-gated", v_max=30.0)     # small design: scipy, not compilation
+e.set_sample_rate(100.0)
+def work():
+    e.run(s); e.run(s2); e.reset(); e.step(0.0, 20.0, 0.5, 0.01, 0.002); e.step(0.01, 20.0, 0.5, 0.01, 0.002)
 """,
     "smooth": """
 import numpy as np

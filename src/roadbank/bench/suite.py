@@ -490,7 +490,8 @@ est.reset(); est.step(0.0, 20.0, 0.0, 0.0, 0.0)
 t5 = time.perf_counter()
 est.step(0.01, 20.0, 0.0, 0.0, 0.0)
 t6 = time.perf_counter()
-loaded = sorted(k for k in (f"{f}_{s}" for f in ("lpv", "dfc", "riccati", "adaptive") for s in ("run", "step"))
+loaded = sorted(k for k in (f"{f}_{s}" for f in ("lpv", "dfc", "riccati", "adaptive", "gated")
+                for s in ("run", "step"))
                 if getattr(getattr(K, k), "signatures", None))   # riccati_step is Python (runs riccati_run)
 print(json.dumps({"import_s": t1 - t0, "design_s": t2 - t1, "first_run_s": t3 - t2,
                   "second_run_s": t4 - t3, "first_step_s": t5 - t4, "second_step_s": t6 - t5,
