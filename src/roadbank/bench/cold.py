@@ -35,6 +35,17 @@ import subprocess
 import sys
 import tempfile
 
+#: a regular and an irregular 0.6 s log, ``s`` and ``s2``: the fixed-rate and the general path
+_TWO_LOGS = """
+import numpy as np
+from roadbank import Signals, estimators
+n = 60
+t = np.arange(n) * 0.01
+t_irr = t.copy(); t_irr[30:] += 0.003
+s = Signals(t, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
+s2 = Signals(t_irr, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
+"""
+
 #: probe code per family: ``work()`` is called twice (first: compile, second: run only)
 FAMILY_PROBES = {
     "plant": """
@@ -44,14 +55,7 @@ sc = dataclasses.replace(SCENARIOS["s-curve"], duration=0.5, pre_roll=0.1)
 def work():
     run(sc)
 """,
-    "lpv": """
-import numpy as np
-from roadbank import Signals, estimators
-n = 60
-t = np.arange(n) * 0.01
-t_irr = t.copy(); t_irr[30:] += 0.003
-s = Signals(t, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
-s2 = Signals(t_irr, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
+    "lpv": _TWO_LOGS + """
 ests = [estimators.make("pif-modified"), estimators.make("pio-modified")]
 for e in ests:
     e.set_sample_rate(100.0)     # the fixed-rate tables (scipy, not compilation) outside the timing
@@ -88,14 +92,7 @@ e = estimators.make("pif-adaptive", v_max=30.0)     # small design: scipy, not c
 def work():
     e.run(s); e.reset(); e.step(0.0, 20.0, 0.5, 0.01, 0.002); e.step(0.01, 20.0, 0.5, 0.01, 0.002)
 """,
-    "gated": """
-import numpy as np
-from roadbank import Signals, estimators
-n = 60
-t = np.arange(n) * 0.01
-t_irr = t.copy(); t_irr[30:] += 0.003
-s = Signals(t, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
-s2 = Signals(t_irr, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
+    "gated": _TWO_LOGS + """
 e = estimators.make("pif-gated", v_max=30.0)     # small design: scipy, not compilation
 e.set_sample_rate(100.0)
 def work():
