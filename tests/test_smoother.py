@@ -109,22 +109,24 @@ def test_chunks_with_the_next_one_as_lookahead_equal_one_run():
     assert np.max(np.abs(alone - whole.w)) > 1e-3
 
 
-def test_roadbank_estimate_streams_the_smoother_as_one_run(tmp_path):
-    """`roadbank estimate` on a Parquet log read in 500-row chunks (5 s) gives the smoother's
-    whole-log result, and the filter's, both to rounding."""
+@pytest.mark.parametrize("rows", ["500", "60"])
+def test_roadbank_estimate_streams_the_smoother_as_one_run(tmp_path, rows):
+    """`roadbank estimate` on a Parquet log read in 500-row (5 s) or 60-row (0.6 s, far shorter than
+    the smoother's lookahead of about 5 s: several chunks are read ahead) chunks gives the
+    smoother's whole-log result, and the filter's, both to rounding."""
     import pandas as pd
     from click.testing import CliRunner
     from roadbank.cli import main
     log = tmp_path / "tlc.parquet"
     assert CliRunner().invoke(main, ["simulate", "track-lane-change", "-o", str(log)]).exit_code == 0
     out = {}
-    for rows in ("500", "1000000"):
-        r = CliRunner().invoke(main, ["estimate", str(log), "-e", "pif-modified,pif-smoother", "--chunk-rows", rows,
-                                      "-o", str(tmp_path / f"out{rows}.parquet")])
+    for n in (rows, "1000000"):
+        r = CliRunner().invoke(main, ["estimate", str(log), "-e", "pif-modified,pif-smoother", "--chunk-rows", n,
+                                      "-o", str(tmp_path / f"out{n}.parquet")])
         assert r.exit_code == 0, r.output
-        out[rows] = pd.read_parquet(tmp_path / f"out{rows}.parquet")
+        out[n] = pd.read_parquet(tmp_path / f"out{n}.parquet")
     for col in ("pif-smoother.theta", "pif-modified.theta"):
-        assert np.max(np.abs(out["500"][col] - out["1000000"][col])) < 1e-10, col
+        assert np.max(np.abs(out[rows][col] - out["1000000"][col])) < 1e-10, col
 
 
 @pytest.mark.parametrize("scenario,condition", [("bank-lane-change", "nominal"), ("bank-lane-change", "low-mu"),

@@ -154,7 +154,7 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
     """
     from ..estimators import OFFLINE
     from ..io import LogError
-    from ..io.stream import CHUNK_ROWS, stream_log, with_next
+    from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
     from ..io.writers import TableWriter, estimate_table
     from ..vehicle import log_conditions, make_estimator
 
@@ -172,17 +172,21 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
         kept = {"t": [], "est": [[] for _ in names], "roll": [], "truth": {}}
         writer = TableWriter(output, metadata=metadata)
         correct = (lambda s: s) if vehicle is None else vehicle.correct
-        offline = any(n in OFFLINE for n in names)
-        # an offline estimator smooths each chunk with the next one as lookahead (two chunks in memory)
-        chunks = stream_log(path, channels=channels, format=format, params=params, chunk_rows=chunk_rows or CHUNK_ROWS)
-        for k, (chunk, nxt) in enumerate(with_next(chunks, offline)):
+        # an offline estimator smooths each chunk with the chunks after it as lookahead (as many as
+        # cover its lookahead_s: what makes the chunked result that of one run)
+        chunks = ReadAhead(stream_log(path, channels=channels, format=format, params=params,
+                                      chunk_rows=chunk_rows or CHUNK_ROWS))
+        span = None
+        for k, chunk in enumerate(chunks):
             if k == 0:  # designed for the log's own rate and ay noise (measured on the first chunk)
                 cond = log_conditions(chunk.signals)
                 ests = [vehicle.make(n, **cond) if vehicle is not None
                         else make_estimator(n, params, **cond) for n in names]
+                span = max((e.lookahead_s for e, n in zip(ests, names) if n in OFFLINE), default=None)
             warns += chunk.warnings
             signals = correct(chunk.signals)
-            ahead = None if nxt is None else correct(nxt.signals)
+            nxt = None if span is None else chunks.following(span)
+            ahead = None if nxt is None else correct(nxt)
             results = [e.run(signals, reset=(k == 0), lookahead=ahead) for e in ests]
             writer.write(estimate_table(chunk.signals.t, results, chunk.reference_roll))
             stats.add(results[0])

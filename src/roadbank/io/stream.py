@@ -23,13 +23,14 @@ only when the table clock is used.
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 import numpy as np
 
 from ..params import VehicleParams
-from ..signals import Signals
+from ..signals import CHANNELS, Signals
 from . import readers
 from .channels import ChannelMap, check_plausible, default_channel_map, read_channel_map
 from .consistency import check_consistency
@@ -475,19 +476,35 @@ def _stream_mdf4(p, cmap, params, chunk_rows):
         src.close()
 
 
-def with_next(chunks: Iterable[Log], enabled: bool = True) -> Iterator[tuple[Log, Log | None]]:
-    """Each chunk of ``chunks`` with the one after it (None after the last): what an offline
-    estimator takes as ``lookahead`` (:meth:`roadbank.estimators.Estimator.run`). Holds two
-    chunks in memory; ``enabled=False``: no read-ahead, every next chunk None."""
-    if not enabled:
-        yield from ((c, None) for c in chunks)
-        return
-    it = iter(chunks)
-    cur = next(it, None)
-    if cur is None:
-        return
-    for nxt in it:
-        yield cur, nxt
-        cur = nxt
-    yield cur, None
+class ReadAhead:
+    """The chunks of a streamed log (iterate over it), with the signals of the chunks after the
+    current one on demand: what an offline estimator takes as ``lookahead``
+    (:meth:`roadbank.estimators.Estimator.run`). Holds the current chunk and the ones asked for."""
+
+    def __init__(self, chunks: Iterable[Log]):
+        self._it = iter(chunks)
+        self._ahead: deque[Log] = deque()
+        self._end = -np.inf
+
+    def __iter__(self) -> "ReadAhead":
+        return self
+
+    def __next__(self) -> Log:
+        chunk = self._ahead.popleft() if self._ahead else next(self._it)
+        self._end = float(chunk.signals.t[-1])
+        return chunk
+
+    def following(self, seconds: float) -> Signals | None:
+        """Signals of the chunks after the current one, as many as reach ``seconds`` (s) past its
+        last sample (all that remain when fewer do); None at the log's end."""
+        while not self._ahead or self._ahead[-1].signals.t[-1] < self._end + seconds:
+            nxt = next(self._it, None)
+            if nxt is None:
+                break
+            self._ahead.append(nxt)
+        if not self._ahead:
+            return None
+        if len(self._ahead) == 1:
+            return self._ahead[0].signals
+        return Signals(*(np.concatenate([getattr(c.signals, ch) for c in self._ahead]) for ch in CHANNELS))
 

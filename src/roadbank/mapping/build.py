@@ -63,7 +63,7 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
     """
     from ..estimators import OFFLINE
     from ..io import LogError
-    from ..io.stream import CHUNK_ROWS, stream_log, with_next
+    from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
     from ..vehicle import log_conditions, make_estimator
 
     if vehicle is not None:
@@ -85,17 +85,18 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
     for k_log, path in enumerate(logs):
         rec = MappedLog(str(path))
         try:
-            chunks = stream_log(path, channels=channels, format=format, params=params,
-                                chunk_rows=chunk_rows or CHUNK_ROWS)
-            # an offline estimator smooths each chunk with the next one as lookahead
-            for k, (chunk, nxt) in enumerate(with_next(chunks, estimator in OFFLINE)):
+            chunks = ReadAhead(stream_log(path, channels=channels, format=format, params=params,
+                                          chunk_rows=chunk_rows or CHUNK_ROWS))
+            # an offline estimator smooths each chunk with the chunks after it as lookahead
+            for k, chunk in enumerate(chunks):
                 if "lat_deg" not in chunk.extra or "lon_deg" not in chunk.extra:
                     raise LogError(f"{path}: no GNSS position (map 'latitude' and 'longitude' in the channel "
                                    "map, or use a format that has one: comma2k19, kitti-oxts, ROS NavSatFix)")
                 if k == 0:
                     est = design(chunk.signals)
                 signals = correct(chunk.signals)
-                out = est.run(signals, reset=(k == 0), lookahead=None if nxt is None else correct(nxt.signals))
+                nxt = chunks.following(est.lookahead_s) if estimator in OFFLINE else None
+                out = est.run(signals, reset=(k == 0), lookahead=None if nxt is None else correct(nxt))
                 lat, lon = chunk.extra["lat_deg"], chunk.extra["lon_deg"]
                 if bmap is None:
                     proj = _origin(lat, lon)
