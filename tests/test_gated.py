@@ -116,6 +116,7 @@ def test_a_vehicle_files_pif_modified_table_tunes_the_slow_filter(tmp_path):
     own.to_toml(tmp_path / "car.toml")
     est = load_vehicle(tmp_path / "car.toml").make("pif-gated")
     assert (est.slow.Q, est.fast.Q_rate, est.gate_on) == (1e-4, 1e-3, 3.0)
+    assert est.slow.th == 1e4              # pif-modified's table still applies under the gated one's keys
 
 
 def test_bad_gate_settings_are_refused():

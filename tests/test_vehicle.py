@@ -99,13 +99,14 @@ def test_make_uses_the_vehicle_params_and_tuning():
     assert not np.array_equal(a.theta, estimators.make("dfc", v.params).run(_signals()).theta)
 
 
-def test_smoother_takes_the_filters_tuning_table_unless_it_has_its_own():
-    """pif-smoother runs pif-modified forward: a car tuned for pif-modified smooths with those weights."""
+def test_smoother_takes_the_filters_tuning_table_under_its_own():
+    """pif-smoother runs pif-modified forward: a car tuned for pif-modified smooths with those weights;
+    a table of its own overrides the keys it has."""
     v = load_vehicle("sedan").with_tuning("pif-modified", {"Q": 4e-4, "th": 1e4})
     est = v.make("pif-smoother")
     assert (est.Q, est.th) == (4e-4, 1e4) and est.params == v.params
     own = v.with_tuning("pif-smoother", {"Q": 1e-4})
-    assert own.make("pif-smoother").Q == 1e-4
+    assert (own.make("pif-smoother").Q, own.make("pif-smoother").th) == (1e-4, 1e4)
 
 
 def _signals():

@@ -551,16 +551,15 @@ class Vehicle:
 
         :func:`make_estimator` ``(name, self.params, sensors=self.sensors, log_rate=log_rate,
         log_ay_noise=log_ay_noise, **{**tuning, **overrides})``, ``tuning`` the car's
-        ``[tuning.<name>]`` table, or for an estimator that runs another's filter
-        (:data:`roadbank.estimators.TUNED_AS`: ``pif-smoother`` runs ``pif-modified``) without a
-        table of its own, that one's: a default-tuned PIF without an ``R`` gets the noise
+        ``[tuning.<name>]`` table; for an estimator that runs another's filter
+        (:data:`roadbank.estimators.TUNED_AS`: ``pif-smoother`` and ``pif-gated`` run
+        ``pif-modified``) that one's table with its own table's keys over it: a default-tuned
+        PIF without an ``R`` gets the noise
         densities of this car's sensors at ``log_rate`` (Hz; default the sensor's ``rate``),
         ``Q_ay`` at least the log's own ``ay`` noise ``log_ay_noise`` (m/s^2).
         """
         from .estimators import TUNED_AS
-        tuning = self.tuning.get(estimator_name)
-        if tuning is None:
-            tuning = self.tuning.get(TUNED_AS.get(estimator_name), {})
+        tuning = {**self.tuning.get(TUNED_AS.get(estimator_name), {}), **self.tuning.get(estimator_name, {})}
         return make_estimator(estimator_name, self.params, sensors=self.sensors, log_rate=log_rate,
                               log_ay_noise=log_ay_noise, **{**tuning, **overrides})
 

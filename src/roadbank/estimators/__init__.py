@@ -46,7 +46,7 @@ NAMES = tuple(_FACTORIES)
 #: for an ECU); their ``step()`` is causal (see :mod:`roadbank.estimators.smoother`)
 OFFLINE = tuple(n for n, f in _FACTORIES.items() if getattr(f, "offline", False))
 #: estimators that run another's filter with its weights (``pif-gated``: as its slow filter): a
-#: vehicle file's ``[tuning.<that one>]`` table applies to them when they have no table of their own
+#: vehicle file's ``[tuning.<that one>]`` table applies to them too, under their own table's keys
 TUNED_AS = {"pif-smoother": "pif-modified", "pif-gated": "pif-modified"}
 
 
