@@ -29,9 +29,9 @@ V_GRID_MAX = 100.0
 V_GRID_STEP = 0.25
 
 _DESIGN_CACHE: dict = {}
-#: settings that do not change the tables (vgrid follows v_min; the rest only enter cfg or the kernel)
 #: kernel families with the fixed-rate path (``lpv`` rows; ``gated`` steps them through ``lpv_step``)
 FIXED_RATE_KERNELS = ("lpv", "gated")
+#: settings that do not change the tables (vgrid follows v_min; the rest only enter cfg or the kernel)
 _NOT_DESIGN = ("vgrid", "fixed_dt", "max_substep", "max_gap", "max_angle", "roll")
 _DISCRETE_CACHE: dict = {}
 
@@ -264,7 +264,7 @@ class Estimator:
             ``vgrid`` (g,) m/s; ``Phi`` (g, n, n); ``Gam0``, ``Gam1``, ``J`` (g, n, 3);
             ``H`` (g, n); ``D`` (g, 3); ``Phi_r`` (nr, nr); ``Gam0_r``, ``Gam1_r``,
             ``H_r``, ``J_r`` (nr,); ``D_r`` (); ``uses`` (3,) 0/1 flags; ``dt`` (s).
-            The ``lpv`` family only (ScheduledObserver).
+            The scheduled linear observers only (:data:`FIXED_RATE_KERNELS`).
         """
         if self.kernel not in FIXED_RATE_KERNELS:
             raise ValueError(f"{self.name}: fixed-rate tables exist for the scheduled linear observers only "
@@ -307,7 +307,7 @@ class Estimator:
         """Use the fixed-rate path for samples ``1/rate`` seconds apart (Hz); ``None`` switches it off.
 
         Builds (or takes from the cache) :meth:`discrete_tables`. Does not
-        reset the state. Only the ``lpv`` family has a fixed-rate path; for the
+        reset the state. Only the :data:`FIXED_RATE_KERNELS` have a fixed-rate path; for the
         others this records nothing.
         """
         if rate is None or self.kernel not in FIXED_RATE_KERNELS:
