@@ -91,11 +91,12 @@ class PIFGated(ScheduledObserver):
         kw["roll"] = common["roll"]
         self._fast = PIFRate(params, R=R, S=S, Q_ay=Q_ay, Q=opt["fast_Q"], Q_rate=opt["fast_Q_rate"],
                              th=opt["fast_th"], sample_rate=None, **common)
+        # every setting behind the stacked table is public (it keys the design caches): the slow
+        # filter's weights as designed (th may have been halved to be solvable), the fast one's, the gate
+        self.Q, self.th, self.R, self.S, self.Q_ay = (self._slow.Q, self._slow.th, self._slow.R, self._slow.S,
+                                                      self._slow.Q_ay)
         for k, v in opt.items():
             setattr(self, k, v)
-        # the designs behind the stacked table (public: they key the design caches)
-        self.slow_design = repr(self._slow._design_key())
-        self.fast_design = repr(self._fast._design_key())
         super().__init__(params, **kw)
 
     @property
