@@ -234,7 +234,7 @@ def test_pif_rate_has_zero_steady_state_error_on_a_constant_bank(fc, fr):
     assert np.abs(est_w[-200:] - w).max() < 1e-4
 
 
-@pytest.mark.parametrize("name", ["pif-modified", "pif-rate", "pif-adaptive", "pif-rate-adaptive"])
+@pytest.mark.parametrize("name", ["pif-modified", "pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-gated"])
 def test_search_space_starts_at_the_estimators_default(name):
     """The optimiser's start maps back to the default options (so a tuning that finds nothing
     better keeps the default), and every coordinate moves its own option."""
@@ -242,7 +242,7 @@ def test_search_space_starts_at_the_estimators_default(name):
     space = search_space(name)
     x0 = space.start()
     default, started = E.make(name, P, v_max=30.0), E.make(name, P, v_max=30.0, **space.options(x0))
-    for key in ("Q", "th", "Q_rate", "mu", "tau"):
+    for key in ("Q", "th", "Q_rate", "mu", "tau", "fast_Q_rate", "gate_on", "gate_span"):
         if hasattr(default, key):
             assert getattr(started, key) == pytest.approx(getattr(default, key), rel=1e-9), key
     for i in range(len(x0)):

@@ -28,7 +28,7 @@ from .options import vehicle_option
               help="Seed of the drive sets and the optimiser (same seed, same result).")
 @click.option("--estimators", "names", default="", help="Comma-separated estimators to tune "
               "(default: pif-modified, pif-rate, kalman, pio-modified, dfc; also pif-adaptive, "
-              "pif-rate-adaptive).")
+              "pif-rate-adaptive, pif-gated).")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=2, show_default=True,
               help="Local worker processes (ignored with --scheduler).")
 @click.option("--scheduler", default=None, metavar="ADDRESS",

@@ -13,6 +13,10 @@ point of the estimator's current default (the optimiser's start).
   rear-stiffness schedule (not in :data:`TUNABLE`: tuned on request, ``names=``).
 * ``pif-rate-adaptive``: as ``pif-rate`` plus ``mu`` and ``log10(tau / s)``, the release time
   constant of the excitation's peak follower (on request).
+* ``pif-gated``: as ``pif-modified`` (its slow filter) plus ``log10(fast_Q_rate/R)``, the fast
+  filter's bank-rate noise, the yaw jerk ``gate_on`` (m/s^3) where the gate starts to open and
+  ``log10(gate_span / (m/s^3))`` (on request; the fast filter's ``Q`` and ``th`` and the gate's time
+  constants stay at :data:`roadbank.estimators.gated.GATED_TUNING`).
 * ``kalman``: ``R`` stays at its default; ``x = log10`` of the three process-noise densities.
 * ``pio-modified``: poles ``-10^a (1, 1 + b, (1 + b)(1 + c))``, ``x = (a, b, c)``.
 * ``dfc``: ``x = log10(a_ref / (m/s^2))``.
@@ -25,18 +29,22 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..estimators import dfc, kalman, pio
+from ..estimators.gated import GATED_TUNING
 from ..estimators.pif import (ADAPTIVE_TUNING, DEFAULT_TUNING, Q_AY_ESP, R_ESP, RATE_ADAPTIVE_TUNING, RATE_TUNING,
                               yaw_rate_noise_density)
 
-_PIF_FAMILY = ("pif-modified", "pif-rate", "pif-adaptive", "pif-rate-adaptive")
+_PIF_FAMILY = ("pif-modified", "pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-gated")
 _DEFAULTS = {"pif-modified": DEFAULT_TUNING, "pif-rate": RATE_TUNING, "pif-adaptive": ADAPTIVE_TUNING,
-             "pif-rate-adaptive": RATE_ADAPTIVE_TUNING}
+             "pif-rate-adaptive": RATE_ADAPTIVE_TUNING, "pif-gated": {**DEFAULT_TUNING, **GATED_TUNING}}
 #: coordinates of the PIF variants after ``log10(Q/R), log10(th R)``: label -> (option, option
 #: at coordinate ``x`` for the sensor's ``R``, coordinate of option value ``v``)
 _PIF_EXTRA = {
     "log10(Q_rate/R)": ("Q_rate", lambda x, R: R * 10.0 ** x, lambda v, R: np.log10(v / R)),
     "mu": ("mu", lambda x, R: x, lambda v, R: v),
     "log10(tau/s)": ("tau", lambda x, R: 10.0 ** x, lambda v, R: np.log10(v)),
+    "log10(fast_Q_rate/R)": ("fast_Q_rate", lambda x, R: R * 10.0 ** x, lambda v, R: np.log10(v / R)),
+    "gate_on": ("gate_on", lambda x, R: x, lambda v, R: v),
+    "log10(gate_span)": ("gate_span", lambda x, R: 10.0 ** x, lambda v, R: np.log10(v)),
 }
 
 
@@ -104,8 +112,9 @@ class SearchSpace:
 #: estimators ``roadbank tune`` tunes, in order
 TUNABLE = ("pif-modified", "pif-rate", "kalman", "pio-modified", "dfc")
 #: further estimators ``roadbank tune --estimators`` accepts (not tuned by default: each design
-#: solves a Riccati equation per speed *and* excitation point, about 5x the time of pif-modified)
-ON_REQUEST = ("pif-adaptive", "pif-rate-adaptive")
+#: solves a Riccati equation per speed *and* excitation point, about 5x the time of pif-modified;
+#: pif-gated designs two filters and runs a 7-state observer)
+ON_REQUEST = ("pif-adaptive", "pif-rate-adaptive", "pif-gated")
 
 
 def search_space(name: str, sensors=None) -> SearchSpace:
@@ -118,6 +127,10 @@ def search_space(name: str, sensors=None) -> SearchSpace:
             "Q_ay": yaw_rate_noise_density(sensors.ay.noise_std, sensors.ay.resolution, sensors.rate)}
         if name == "pif-modified":
             return SearchSpace(name, ("log10(Q/R)", "log10(th R)"), ((1.0, 7.0), (-7.0, -1.5)), fixed)
+        if name == "pif-gated":
+            return SearchSpace(name, ("log10(Q/R)", "log10(th R)", "log10(fast_Q_rate/R)", "gate_on",
+                                      "log10(gate_span)"),
+                               ((1.0, 7.0), (-7.0, -1.5), (-2.0, 8.0), (0.0, 10.0), (-0.5, 1.5)), fixed)
         if name == "pif-adaptive":
             return SearchSpace(name, ("log10(Q/R)", "log10(th R)", "mu"), ((1.0, 7.0), (-7.0, -1.5), (0.8, 2.0)),
                                fixed)
