@@ -118,7 +118,7 @@ class PIFGated(ScheduledObserver):
         """``H_f`` (n,): the fast filter's ``w`` from the stacked states (constant)."""
         ns = len(self._slow.state_names)
         h = np.zeros(len(self.state_names))
-        h[ns:] = np.ravel(self._fast.observer(self.vgrid[0])[2])
+        h[ns:] = np.ravel(self._fast.design_model(self.vgrid[0])[4])     # L_w: w is a state
         return h
 
     def _design(self):
