@@ -214,9 +214,11 @@ def test_ctypes_step_by_step_and_reset(scenarios, built_modules):
 
 
 def test_sanitizers_on_a_driver_linking_several_modules(scenarios, tmp_path):
-    """-fsanitize=address,undefined: four modules in one program (prefixed symbols), t and dt entry points."""
+    """-fsanitize=address,undefined: five modules in one program (prefixed symbols), t and dt entry
+    points; pif-gated for its gate code."""
     variants = {"pif": (make("pif-modified", roll="dynamic"), False),
                 "uio": (BUILT["uio"], False), "kin": (BUILT["kinematic"], False),
+                "gated": (BUILT["pif-gated"], False),
                 "pif32": (make("pif-modified", roll="dynamic"), True)}
     sources = {}
     for key, (est, f32) in variants.items():
