@@ -507,4 +507,3 @@ class ReadAhead:
         if len(self._ahead) == 1:
             return self._ahead[0].signals
         return Signals(*(np.concatenate([getattr(c.signals, ch) for c in self._ahead]) for ch in CHANNELS))
-

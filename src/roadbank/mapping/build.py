@@ -44,7 +44,7 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
     estimator : str
         Estimator whose valid ``phi_b`` is mapped; default the offline ``pif-smoother`` (a map is
         made after the drives, so the samples after each instant may be used; each streamed
-        chunk is smoothed with the next one as lookahead, as one run over the log).
+        chunk is smoothed with the chunks after it as lookahead, as one run over the log).
     channels, format, params, vehicle
         As for :func:`roadbank.fleet.estimate_log`.
     cell_m, sectors
