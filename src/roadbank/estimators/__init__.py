@@ -18,6 +18,7 @@ from .dfc import DFC
 from .gated import PIFGated
 from .kalman import Kalman
 from .kinematic import Kinematic
+from .lowpass import KinematicFeedForward, KinematicLowPass
 from .pif import PIF, PIFAdaptive, PIFRate, PIFRateAdaptive
 from .pio import PIO
 from .smoother import PIFSmoother
@@ -26,6 +27,8 @@ from .uio import UIO
 
 _FACTORIES = {
     "kinematic": Kinematic,
+    "kinematic-lp": KinematicLowPass,
+    "kinematic-ff": KinematicFeedForward,
     "dfc": DFC,
     "uio": UIO,
     "pio-original": partial(PIO, model="original"),
@@ -67,5 +70,5 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
 
 
 __all__ = ["NAMES", "OFFLINE", "TUNED_AS", "make", "Estimator", "StepResult", "NoStabilisingSolution",
-           "Kinematic", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
+           "Kinematic", "KinematicLowPass", "KinematicFeedForward", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
            "Kalman"]
