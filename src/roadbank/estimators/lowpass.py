@@ -21,8 +21,12 @@ acceleration):
 
 Both are linear, scheduled on speed (``lpv`` kernel: fixed-rate tables, ``step()``, the C
 export); they read ``ay``, ``r`` and ``vx`` only. :math:`f_c` and :math:`\kappa` were chosen
-on the training drives of the shared KITTI data only (:func:`roadbank.tuning.real.choose_lowpass`,
-docs/estimators.md): they describe roads and passenger cars, not one car's tyres.
+by a written rule on training data only — the KITTI training drives and ``roadbank tune``'s
+simulated training drives of the four shipped cars, built without the car
+(:func:`roadbank.tuning.real.choose_lowpass`, docs/estimators.md): they describe roads and
+passenger cars, not one car's tyres. In a steady turn the feed-forward cancels
+(:math:`\hat w` = the low-passed kinematic estimate); it acts only while :math:`v_x r` changes,
+as a lead :math:`\kappa\, \tau s/(\tau s + 1)\, a`.
 """
 
 from __future__ import annotations
@@ -31,11 +35,11 @@ import numpy as np
 
 from .base import ScheduledObserver
 
-#: ``kinematic-lp``'s cut-off (Hz): lowest median raw RMS on the KITTI training drives with kappa = 0
-LP_CUTOFF_HZ = 0.4
-#: ``kinematic-ff``'s cut-off (Hz) and centripetal gain (-): lowest median raw RMS on the KITTI training drives
-FF_CUTOFF_HZ = 0.35
-FF_KAPPA = 0.25
+#: ``kinematic-lp``'s cut-off (Hz): the rule of :mod:`roadbank.tuning.real` with kappa = 0
+LP_CUTOFF_HZ = 0.5
+#: ``kinematic-ff``'s cut-off (Hz) and centripetal gain (-): the rule of :mod:`roadbank.tuning.real`
+FF_CUTOFF_HZ = 0.6
+FF_KAPPA = 0.2
 
 
 class KinematicLowPass(ScheduledObserver):
