@@ -64,11 +64,37 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
     except KeyError:
         raise ValueError(f"unknown estimator {name!r}; choose one of {', '.join(NAMES)}") from None
     try:
-        return factory(params, **tuning)
+        est = factory(params, **tuning)
     except TypeError as exc:
         raise ValueError(f"{name}: bad tuning option ({exc})") from None
+    from .pif import SENSOR_R_ESTIMATORS
+
+    if name in SENSOR_R_ESTIMATORS and "R" not in tuning and tuning.get("tuning", "default") == "default":
+        est.sheet_rate = SHEET_RATE_HZ      # designed for the data sheet's sensor at its own rate
+    return est
 
 
-__all__ = ["NAMES", "OFFLINE", "TUNED_AS", "make", "Estimator", "StepResult", "NoStabilisingSolution",
+#: sample rate (Hz) of the data sheet's sensors that ``make`` designs the sensor-weighted PIFs for
+SHEET_RATE_HZ = 100.0
+
+
+def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=None, **tuning) -> Estimator:
+    """Build the estimator ``name`` for the log ``signals`` as ``roadbank estimate`` does.
+
+    A default-tuned PIF is designed for the log's sample rate and the road noise measured on
+    its ``ay`` and yaw rate (:func:`roadbank.vehicle.log_conditions`); the car is ``vehicle``
+    (a :class:`roadbank.vehicle.Vehicle`: its parameters, sensors and tuning tables) or
+    ``params`` with the data sheet's sensors. The other estimators are :func:`make`'s.
+    ``for_log(name, s).run(s)`` is what the command line writes for the log ``s``.
+    """
+    from ..vehicle import log_conditions, make_estimator
+
+    cond = log_conditions(signals)
+    if vehicle is not None:
+        return vehicle.make(name, **cond, **tuning)
+    return make_estimator(name, params, **cond, **tuning)
+
+
+__all__ = ["NAMES", "OFFLINE", "TUNED_AS", "make", "for_log", "Estimator", "StepResult", "NoStabilisingSolution",
            "Kinematic", "KinematicLowPass", "KinematicFeedForward", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
            "Kalman"]
