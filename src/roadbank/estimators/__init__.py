@@ -48,6 +48,10 @@ NAMES = tuple(_FACTORIES)
 #: estimators whose ``run()`` also uses the samples after each instant (post-processing, not
 #: for an ECU); their ``step()`` is causal (see :mod:`roadbank.estimators.smoother`)
 OFFLINE = tuple(n for n, f in _FACTORIES.items() if getattr(f, "offline", False))
+#: the estimator of every command and of :func:`for_log` when none is named: the best by a rule
+#: written before measuring, on training data only (real KITTI training drives and simulated
+#: drives of cars that are not described; docs/estimators.md, :mod:`roadbank.tuning.real`)
+DEFAULT = "kinematic-ff"
 #: estimators that run another's filter with its weights (``pif-gated``: as its slow filter): a
 #: vehicle file's ``[tuning.<that one>]`` table applies to them too, under their own table's keys
 TUNED_AS = {"pif-smoother": "pif-modified", "pif-gated": "pif-modified"}
@@ -95,6 +99,6 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
     return make_estimator(name, params, **cond, **tuning)
 
 
-__all__ = ["NAMES", "OFFLINE", "TUNED_AS", "make", "for_log", "Estimator", "StepResult", "NoStabilisingSolution",
+__all__ = ["NAMES", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "for_log", "Estimator", "StepResult", "NoStabilisingSolution",
            "Kinematic", "KinematicLowPass", "KinematicFeedForward", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
            "Kalman"]
