@@ -18,6 +18,7 @@ from .dfc import DFC
 from .gated import PIFGated
 from .kalman import Kalman
 from .kinematic import Kinematic
+from .offsets import OffsetSettings, OnlineOffsets, with_online_offsets
 from .pif import PIF, PIFAdaptive, PIFRate, PIFRateAdaptive
 from .pio import PIO
 from .smoother import PIFSmoother
@@ -68,4 +69,4 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
 
 __all__ = ["NAMES", "OFFLINE", "TUNED_AS", "make", "Estimator", "StepResult", "NoStabilisingSolution",
            "Kinematic", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
-           "Kalman"]
+           "Kalman", "with_online_offsets", "OnlineOffsets", "OffsetSettings"]
