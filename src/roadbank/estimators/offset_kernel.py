@@ -17,11 +17,14 @@ import numpy as np
 from numba import njit
 
 # ---- cfg: settings -----------------------------------------------------------------------
-(C_VSTOP, C_TSTOP, C_TAUSTOP, C_NSTOP, C_RSTOP, C_VSTR, C_AYSTR, C_DSTR, C_RSTR, C_RDOT, C_DDOT,
- C_TSTR, C_TAUSTR, C_NSTR, C_L, C_KUS, C_TAUF, C_RMAX, C_DMAX, C_AYOFF, C_GAP, N_CFG) = range(22)
+(C_VSTOP, C_TSTOP, C_TAUSTOP, C_NSTOP, C_RSTOP, C_TRAIL, C_VSTR, C_AYSTR, C_DSTR, C_RSTR, C_RDOT,
+ C_DDOT, C_TSTR, C_TAUSTR, C_NSTR, C_L, C_KUS, C_TAUF, C_RMAX, C_DMAX, C_AYOFF, C_GAP, N_CFG) = range(23)
 # ---- mem: state --------------------------------------------------------------------------
+# committed yaw-rate offset and evidence; the running stop: r dt summed, its evidence, the
+# snapshots A (newest) and B (at least C_TRAIL old) of those sums, A's time, the offset and
+# evidence committed before the stop
 (M_BR, M_BD, M_ESTOP, M_ESTRR, M_ESTRD, M_TSTOP, M_TSTR, M_TLAST, M_INIT, M_RF, M_DF, M_AF,
- M_FINIT, N_MEM) = range(14)
+ M_FINIT, M_SSUM, M_SE, M_ASUM, M_AE, M_AT, M_BSUM, M_BE, M_BR0, N_MEM) = range(22)
 # ---- out: one sample ---------------------------------------------------------------------
 (O_R, O_AY, O_D, O_BR, O_BD, O_RLEARNT, O_DLEARNT, N_OUT) = range(8)
 
@@ -33,6 +36,32 @@ def _clamp(x, lim):
     if x < -lim:
         return -lim
     return x
+
+
+@njit(cache=True)
+def _combine(b0, e0, ssum, se, cfg):
+    """Offset from the committed one ``b0`` (evidence ``e0``, weighing at most ``C_TAUSTOP`` s)
+    and a stop's sum of ``r dt`` over ``se`` seconds."""
+    w0 = min(e0, cfg[C_TAUSTOP])
+    if w0 + se <= 0.0:
+        return b0
+    return _clamp((w0 * b0 + ssum) / (w0 + se), cfg[C_RMAX])
+
+
+@njit(cache=True)
+def _end_stop(mem, cfg):
+    """The car drives off (or a gap): commit the stop's samples up to snapshot B, those at least
+    ``C_TRAIL`` s before its end (a creeping drive-off turns already), and forget the stop."""
+    if mem[M_SE] > 0.0:
+        mem[M_BR] = _combine(mem[M_BR0], mem[M_ESTOP], mem[M_BSUM], mem[M_BE], cfg)
+        mem[M_ESTOP] += mem[M_BE]
+    mem[M_TSTOP] = 0.0
+    mem[M_SSUM] = 0.0
+    mem[M_SE] = 0.0
+    mem[M_ASUM] = 0.0
+    mem[M_AE] = 0.0
+    mem[M_BSUM] = 0.0
+    mem[M_BE] = 0.0
 
 
 @njit(cache=True)
@@ -49,7 +78,7 @@ def offsets_step(mem, cfg, t, vx, ay, r, d, out):
             dt = t - mem[M_TLAST]
         if dt > cfg[C_GAP]:                      # a gap: no standstill or straight runs across it
             dt = 0.0
-            mem[M_TSTOP] = 0.0
+            _end_stop(mem, cfg)
             mem[M_TSTR] = 0.0
             mem[M_FINIT] = 0.0
         mem[M_TLAST] = t
@@ -63,11 +92,21 @@ def offsets_step(mem, cfg, t, vx, ay, r, d, out):
         if abs(vx) < cfg[C_VSTOP]:
             mem[M_TSTOP] += dt
             if dt > 0.0 and mem[M_TSTOP] > cfg[C_TSTOP] and abs(r - mem[M_BR]) < cfg[C_RSTOP]:
-                e = mem[M_ESTOP] + dt
-                mem[M_ESTOP] = e
-                mem[M_BR] = _clamp(mem[M_BR] + dt / min(e, cfg[C_TAUSTOP]) * (r - mem[M_BR]), cfg[C_RMAX])
-        else:
-            mem[M_TSTOP] = 0.0
+                if mem[M_SE] == 0.0:                 # the stop's first taught sample
+                    mem[M_BR0] = mem[M_BR]
+                    mem[M_AT] = t
+                mem[M_SSUM] += r * dt
+                mem[M_SE] += dt
+                if t - mem[M_AT] >= cfg[C_TRAIL]:
+                    mem[M_BSUM] = mem[M_ASUM]
+                    mem[M_BE] = mem[M_AE]
+                    mem[M_ASUM] = mem[M_SSUM]
+                    mem[M_AE] = mem[M_SE]
+                    mem[M_AT] = t
+                # provisional, while the car stands: every sample of the stop so far
+                mem[M_BR] = _combine(mem[M_BR0], mem[M_ESTOP], mem[M_SSUM], mem[M_SE], cfg)
+        elif mem[M_TSTOP] > 0.0:
+            _end_stop(mem, cfg)
     # ---- straight driving: the yaw rate must agree with the steering angle ----------------
     if ok_t and fin_v and fin_r and fin_a and fin_d:
         if mem[M_FINIT] == 0.0:                  # the first sample (after a gap) starts the filters
@@ -116,7 +155,7 @@ def offsets_step(mem, cfg, t, vx, ay, r, d, out):
     out[O_D] = d - mem[M_BD]
     out[O_BR] = mem[M_BR]
     out[O_BD] = mem[M_BD]
-    out[O_RLEARNT] = 1.0 if (mem[M_ESTOP] >= cfg[C_NSTOP] or mem[M_ESTRR] >= cfg[C_NSTR]) else 0.0
+    out[O_RLEARNT] = 1.0 if (mem[M_ESTOP] + mem[M_BE] >= cfg[C_NSTOP] or mem[M_ESTRR] >= cfg[C_NSTR]) else 0.0
     out[O_DLEARNT] = 1.0 if mem[M_ESTRD] >= cfg[C_NSTR] else 0.0
 
 

@@ -5,11 +5,14 @@ run at constant speed it reads as a bank of :math:`v_x b_r / g`. Two situations 
 
 Standstill
     With :math:`|v_x| <` ``v_stop`` for longer than ``stop_settle`` the car does not turn, so
-    the measured yaw rate *is* its offset. :math:`b_r` is the running mean of ``r`` over the
-    standstill evidence (each sample weighs ``dt / min(E, tau_stop)``, ``E`` the evidence so
-    far: a plain mean at first, then a first-order filter of time constant ``tau_stop``).
-    Samples with :math:`|r - b_r| \ge` ``stop_r_max`` (a car on a turntable or ferry) teach
-    nothing.
+    the measured yaw rate *is* its offset. :math:`b_r` is the mean of ``r`` over the
+    standstill evidence, the evidence before the current stop weighing at most ``tau_stop``
+    seconds (a plain mean at first, then close to a first-order filter of that time
+    constant). The speed threshold is low (0.2 m/s) and the end of every stop teaches
+    nothing (``stop_trail``; the stop's sums are kept in two snapshots, and the one at least
+    ``stop_trail`` s old is committed when the car drives off): a car creeping off a stop
+    in a tight turn yaws before its speed says it moves. Samples with
+    :math:`|r - b_r| \ge` ``stop_r_max`` (a turntable, a ferry) teach nothing.
 Straight driving
     With a steering angle, while the car drives straight and steadily (``vx >= v_straight``;
     low-passed :math:`|a_y|`, :math:`|\delta_f - b_\delta|` and :math:`|r - b_r|` below
@@ -77,6 +80,9 @@ class OffsetSettings:
         Standstill evidence (s) after which the yaw-rate offset is flagged learnt.
     stop_r_max : float
         Largest ``|r - b_r|`` (rad/s) at standstill that teaches.
+    stop_trail : float
+        The last ``stop_trail`` to ``2 stop_trail`` s of a standstill teach nothing (s): a car
+        that creeps off turns before its speed reaches ``v_stop``.
     v_straight : float
         Lowest speed of straight-driving evidence (m/s).
     straight_ay, straight_delta, straight_r : float
@@ -100,11 +106,12 @@ class OffsetSettings:
         A gap between samples longer than this (s) restarts the standstill and straight timers.
     """
 
-    v_stop: float = 0.5
+    v_stop: float = 0.2
     stop_settle: float = 1.0
     tau_stop: float = 5.0
-    min_standstill: float = 1.0
+    min_standstill: float = 0.8
     stop_r_max: float = math.radians(3.0)
+    stop_trail: float = 0.5
     v_straight: float = 5.0
     straight_ay: float = 0.3
     straight_delta: float = math.radians(0.5)
@@ -133,7 +140,7 @@ class OffsetSettings:
         """The kernel's settings array (:mod:`.offset_kernel` ``C_*``) for the car ``params``."""
         c = np.zeros(K.N_CFG)
         c[K.C_VSTOP], c[K.C_TSTOP], c[K.C_TAUSTOP] = self.v_stop, self.stop_settle, self.tau_stop
-        c[K.C_NSTOP], c[K.C_RSTOP] = self.min_standstill, self.stop_r_max
+        c[K.C_NSTOP], c[K.C_RSTOP], c[K.C_TRAIL] = self.min_standstill, self.stop_r_max, self.stop_trail
         c[K.C_VSTR], c[K.C_AYSTR], c[K.C_DSTR] = self.v_straight, self.straight_ay, self.straight_delta
         c[K.C_RSTR], c[K.C_RDOT], c[K.C_DDOT] = self.straight_r, self.straight_r_dot, self.straight_delta_dot
         c[K.C_TSTR], c[K.C_TAUSTR], c[K.C_NSTR] = self.straight_settle, self.tau_straight, self.min_straight
