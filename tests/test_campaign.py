@@ -74,6 +74,9 @@ def test_runs_start_at_standstill_and_the_estimators_learn_the_yaw_rate_offset_t
         assert learn[name]["rms_deg"] < 0.6 * still[name]["rms_deg"], (name, learn[name], still[name])
     with pytest.raises(ValueError, match="standstill"):
         RunOptions(standstill=-1.0)
+    assert {"standstill", "offsets"} <= RunOptions().as_dict().keys()
+    # without either, the settings are those stored before standstill starts: such campaigns resume
+    assert not {"standstill", "offsets"} & RunOptions(standstill=0.0, offsets=False).as_dict().keys()
 
 
 @pytest.fixture(scope="module")

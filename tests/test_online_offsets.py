@@ -240,3 +240,15 @@ def test_the_c_export_learns_the_offsets_as_step_does(tmp_path, float32):
     np.testing.assert_array_equal(out[:, 5:7], py[:, 5:7])
     np.testing.assert_allclose(out[:, 0:2], py[:, 0:2], rtol=0, atol=1e-9)
     np.testing.assert_allclose(out[:, 3:5], py[:, 3:5], rtol=0, atol=1e-12)   # measured: equal
+
+
+def test_cli_export_with_online_offsets(tmp_path):
+    from click.testing import CliRunner
+
+    from roadbank.cli import main
+
+    res = CliRunner().invoke(main, ["export", "c", "-e", "kinematic", "--online-offsets", "-o", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    assert "roadbank_kinematic_step_learning" in (tmp_path / "roadbank_kinematic.h").read_text()
+    res = CliRunner().invoke(main, ["export", "c", "-e", "kinematic", "-o", str(tmp_path / "plain")])
+    assert "offsets" not in (tmp_path / "plain" / "roadbank_kinematic.h").read_text()

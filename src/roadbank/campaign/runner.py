@@ -101,6 +101,8 @@ class RunOptions:
     def as_dict(self) -> dict:
         d = dataclasses.asdict(dataclasses.replace(self, vehicle=None))
         del d["vehicle"]  # absent for the paper SUV: campaigns stored before vehicles resume
+        if not self.standstill and not self.offsets:   # as campaigns stored before standstill starts
+            del d["standstill"], d["offsets"]
         if self.vehicle is not None:
             d["vehicle"] = self.vehicle.dumps()
         d["names"] = list(self.estimator_names())
