@@ -57,6 +57,28 @@ def test_run_is_deterministic_and_scored_against_the_plant_truth():
     assert kin["error"] == "" and np.isfinite(kin["rms_deg"]) and kin["rms_deg"] < kin["max_deg"] + 1e-12
 
 
+def test_runs_start_at_standstill_and_the_estimators_learn_the_yaw_rate_offset_there():
+    """The standstill does not change the drive (the same scores without learning), and learning
+    the offset there removes the bank error the drawn yaw-rate offset causes."""
+    spec = RunSpec(**{**draw(3, 0).as_dict(), "r_bias_dps": 0.3, "ay_bias": 0.0})  # a track lane at 143 km/h
+    names = ("kinematic", "pif-modified")
+    opt = dict(names=names, duration_scale=0.5)
+    bare = {r["estimator"]: r for r in run_one(spec, RunOptions(**opt, standstill=0.0, offsets=False))}
+    still = {r["estimator"]: r for r in run_one(spec, RunOptions(**opt, offsets=False))}
+    learn = {r["estimator"]: r for r in run_one(spec, RunOptions(**opt))}
+    for name in names:
+        assert still[name]["rms_deg"] == bare[name]["rms_deg"] and still[name]["min_vx"] == bare[name]["min_vx"]
+        assert still[name]["standstill_s"] == 3.0 and math.isnan(still[name]["r_offset_err_dps"])
+        assert learn[name]["offsets"] and abs(learn[name]["r_offset_err_dps"]) < 0.03
+        assert learn[name]["r_offset_learnt_s"] < 3.0
+        assert learn[name]["rms_deg"] < 0.6 * still[name]["rms_deg"], (name, learn[name], still[name])
+    with pytest.raises(ValueError, match="standstill"):
+        RunOptions(standstill=-1.0)
+    assert {"standstill", "offsets"} <= RunOptions().as_dict().keys()
+    # without either, the settings are those stored before standstill starts: such campaigns resume
+    assert not {"standstill", "offsets"} & RunOptions(standstill=0.0, offsets=False).as_dict().keys()
+
+
 @pytest.fixture(scope="module")
 def cluster():
     from distributed import LocalCluster

@@ -173,7 +173,11 @@ def write_report(outdir, df, settings: dict, throughput: dict | None = None) -> 
              f"scenario duration x {opts.get('duration_scale', 1.0):g}"
              + (" (manoeuvres truncated)" if opts.get("duration_scale", 1.0) < 1 else " (full paper durations)")
              + f"; plant integration step {_step_text(opts.get('sim_dt'))}; "
-             f"scores after {opts.get('settle', 2.0):g} s. Perturbations: see roadbank.campaign.sampling.", "",
+             f"scores after {opts.get('settle', 2.0):g} s"
+             + (f" of driving; each run starts with {opts['standstill']:g} s of standstill"
+                if opts.get("standstill") else "")
+             + ("; sensor offsets learnt online" if opts.get("offsets") else "; no online offset learning")
+             + ". Perturbations: see roadbank.campaign.sampling.", "",
              f"Failure of an estimator in a run: non-finite output, bank RMS error > {FAIL_RMS_DEG:g} deg, "
              "or an error raised.", ""]
     pif = summ[summ["estimator"] == "pif-modified"]

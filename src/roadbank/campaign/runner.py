@@ -12,6 +12,15 @@ a bank RMS error above 2 deg, or an error raised. ``failed`` is that flag.
 
 Estimators are built once per process (:func:`estimators_for`) and reused with
 ``run(reset=True)``: they all keep the design parameters, only the plant varies.
+
+Runs start with ``RunOptions.standstill`` seconds (default 3 s) of the car at rest
+(:func:`roadbank.sim.standstill.with_standstill`), as real drives do, and the estimators
+learn their sensor offsets online (``RunOptions.offsets``,
+:func:`roadbank.estimators.with_online_offsets`). Scores start ``settle`` seconds after the
+standstill; ``min_vx`` and ``duration_s`` are those of the drive after it. The columns
+``standstill_s``, ``offsets``, ``r_offset_err_dps`` (learnt minus true yaw-rate offset at
+the end of the run, deg/s; NaN without learning) and ``r_offset_learnt_s`` (seconds from
+the start until the yaw-rate offset is flagged learnt; NaN if never) say what was done.
 """
 
 from __future__ import annotations
@@ -33,7 +42,7 @@ FAIL_RMS_DEG = 2.0
 #: row columns besides the RunSpec fields
 SCORE_COLUMNS = ("estimator", "rms_deg", "max_deg", "bias_deg", "steady_deg", "theta_rms_deg",
                  "valid_frac", "nonfinite", "failed", "max_beta_deg", "min_vx", "sim_s", "est_s",
-                 "duration_s", "error")
+                 "duration_s", "error", "standstill_s", "offsets", "r_offset_err_dps", "r_offset_learnt_s")
 
 
 @dataclass(frozen=True)
@@ -57,6 +66,10 @@ class RunOptions:
     vehicle : roadbank.vehicle.Vehicle or None
         The car: perturbed plant and sensors around it, estimators designed for it (its
         parameters and ``[tuning]`` tables). None: the paper's SUV.
+    standstill : float
+        Seconds of standstill before each run (s; 0: none).
+    offsets : bool
+        Run every estimator behind the online offset learner.
     """
 
     names: tuple = ()
@@ -65,6 +78,8 @@ class RunOptions:
     sim_dt: float | None = None
     settle: float = 2.0
     vehicle: object = None
+    standstill: float = 3.0
+    offsets: bool = True
 
     __hash__ = None  # a Vehicle holds dicts
 
@@ -75,6 +90,8 @@ class RunOptions:
             raise ValueError("sim_dt must be in (0, 0.01] s")
         if self.pre_roll is not None and not self.pre_roll >= 0:
             raise ValueError("pre_roll must be >= 0")
+        if not (math.isfinite(self.standstill) and self.standstill >= 0):
+            raise ValueError("standstill must be >= 0 s")
 
     def estimator_names(self) -> tuple:
         from .. import estimators as E
@@ -84,6 +101,8 @@ class RunOptions:
     def as_dict(self) -> dict:
         d = dataclasses.asdict(dataclasses.replace(self, vehicle=None))
         del d["vehicle"]  # absent for the paper SUV: campaigns stored before vehicles resume
+        if not self.standstill and not self.offsets:   # as campaigns stored before standstill starts
+            del d["standstill"], d["offsets"]
         if self.vehicle is not None:
             d["vehicle"] = self.vehicle.dumps()
         d["names"] = list(self.estimator_names())
@@ -93,19 +112,21 @@ class RunOptions:
 _ESTIMATORS: dict = {}
 
 
-def estimators_for(names, vehicle=None) -> dict:
+def estimators_for(names, vehicle=None, offsets: bool = False) -> dict:
     """Estimators ``name -> Estimator`` with the design parameters, built once per process.
 
     ``vehicle`` (a :class:`roadbank.vehicle.Vehicle`): designed for it (``vehicle.make(name)``).
+    ``offsets``: each behind the online offset learner (:func:`roadbank.estimators.with_online_offsets`).
     """
     from .. import estimators as E
 
     out = {}
     car = None if vehicle is None else vehicle.dumps()
     for name in names:
-        key = (name, car)
+        key = (name, car, bool(offsets))
         if key not in _ESTIMATORS:
-            _ESTIMATORS[key] = E.make(name) if vehicle is None else vehicle.make(name)
+            est = E.make(name) if vehicle is None else vehicle.make(name)
+            _ESTIMATORS[key] = E.with_online_offsets(est) if offsets else est
         out[name] = _ESTIMATORS[key]
     return out
 
@@ -133,30 +154,38 @@ def run_one(spec: RunSpec, options: RunOptions = RunOptions()) -> list[dict]:
     for a failing run (see the module docstring)."""
     from ..evaluation import error_metrics
     from ..sim import run as sim_run
+    from ..sim.standstill import with_standstill
 
     names = options.estimator_names()
     base = spec.as_dict()
     t0 = time.perf_counter()
+    setup = {"offsets": bool(options.offsets)}
     try:
         plant, sensors = spec.plant_and_sensors(options.vehicle)
-        sim = sim_run(_scenario(spec, options), plant, sensors, seed=spec.noise_seed, dt=options.sim_dt)
+        scenario = _scenario(spec, options)
+        sim = sim_run(scenario, plant, sensors, seed=spec.noise_seed, dt=options.sim_dt)
+        n_drive = len(sim.signals)
+        sim = with_standstill(sim, scenario, options.standstill)
     except Exception as exc:  # a failing run is data, not a crash
         err = f"simulation: {_error_text(exc)}"
-        return [_row(base, name, error=err, sim_s=time.perf_counter() - t0) for name in names]
+        return [_row(base, name, error=err, sim_s=time.perf_counter() - t0, **setup) for name in names]
     sim_s = time.perf_counter() - t0
     tr, sig = sim.truth, sim.signals
+    k0 = len(sig) - n_drive                         # first sample of the drive
+    still = float(sig.t[k0] - sig.t[0])
     with np.errstate(all="ignore"):
         beta = np.degrees(np.abs(np.arctan2(tr.vy, np.abs(tr.vx))))
-    extra = {"max_beta_deg": float(np.nanmax(beta)), "min_vx": float(np.nanmin(tr.vx)),
-             "duration_s": float(sig.t[-1] - sig.t[0]), "sim_s": sim_s}
+    extra = {"max_beta_deg": float(np.nanmax(beta[k0:])), "min_vx": float(np.nanmin(tr.vx[k0:])),
+             "duration_s": float(sig.t[-1] - sig.t[k0]), "sim_s": sim_s, "standstill_s": still, **setup}
+    true_r_offset = sensors.yaw_rate.bias
     rows = []
-    for name, est in estimators_for(names, options.vehicle).items():
+    for name, est in estimators_for(names, options.vehicle, options.offsets).items():
         t1 = time.perf_counter()
         try:
             e = est.run(sig)
             nonfinite = not (np.all(np.isfinite(e.phi_b)) and np.all(np.isfinite(e.theta)))
-            m = error_metrics(sig.t, e.phi_b, tr.phi_b, e.valid, settle=options.settle)
-            mt = error_metrics(sig.t, e.theta, tr.theta, e.valid, settle=options.settle)
+            m = error_metrics(sig.t, e.phi_b, tr.phi_b, e.valid, settle=options.settle + still)
+            mt = error_metrics(sig.t, e.theta, tr.theta, e.valid, settle=options.settle + still)
         except Exception as exc:
             rows.append(_row(base, name, error=f"estimator: {_error_text(exc)}",
                              est_s=time.perf_counter() - t1, **extra))
@@ -164,9 +193,18 @@ def run_one(spec: RunSpec, options: RunOptions = RunOptions()) -> list[dict]:
         failed = bool(nonfinite or not (m.rms_deg <= FAIL_RMS_DEG))
         rows.append(_row(base, name, rms_deg=m.rms_deg, max_deg=m.max_deg, bias_deg=m.bias_deg,
                          steady_deg=m.steady_deg, theta_rms_deg=mt.rms_deg,
-                         valid_frac=float(np.mean(e.valid)), nonfinite=nonfinite, failed=failed,
-                         est_s=time.perf_counter() - t1, **extra))
+                         valid_frac=float(np.mean(e.valid[k0:])), nonfinite=nonfinite, failed=failed,
+                         est_s=time.perf_counter() - t1, **extra, **_offset_scores(e, true_r_offset)))
     return rows
+
+
+def _offset_scores(e, true_r_offset: float) -> dict:
+    """``r_offset_err_dps`` (deg/s) and ``r_offset_learnt_s`` (s) of an estimate with learnt offsets."""
+    if "r_offset" not in e.states or not len(e.t):
+        return {}
+    learnt = np.flatnonzero(e.states["r_offset_learnt"] > 0)
+    return {"r_offset_err_dps": math.degrees(float(e.states["r_offset"][-1]) - true_r_offset),
+            "r_offset_learnt_s": float(e.t[learnt[0]] - e.t[0]) if learnt.size else math.nan}
 
 
 def _row(base: dict, name: str, **values) -> dict:
@@ -175,7 +213,8 @@ def _row(base: dict, name: str, **values) -> dict:
     row.update({"estimator": name, "rms_deg": nan, "max_deg": nan, "bias_deg": nan, "steady_deg": nan,
                 "theta_rms_deg": nan, "valid_frac": nan, "nonfinite": False, "failed": True,
                 "max_beta_deg": nan, "min_vx": nan, "sim_s": nan, "est_s": nan, "duration_s": nan,
-                "error": ""})
+                "error": "", "standstill_s": nan, "offsets": False, "r_offset_err_dps": nan,
+                "r_offset_learnt_s": nan})
     row.update(values)
     return row
 
@@ -189,7 +228,7 @@ def warm_up(options: RunOptions = RunOptions()) -> float:
     t0 = time.perf_counter()
     sc = dataclasses.replace(SCENARIOS["const-bank"], duration=0.5, pre_roll=0.1)
     sim = sim_run(sc, dt=options.sim_dt)
-    for est in estimators_for(options.estimator_names(), options.vehicle).values():
+    for est in estimators_for(options.estimator_names(), options.vehicle, options.offsets).values():
         est.run(sim.signals)
     return time.perf_counter() - t0
 

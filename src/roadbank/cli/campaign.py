@@ -33,10 +33,14 @@ from .options import vehicle_option
 @click.option("--sim-dt", type=click.FloatRange(0.0, 0.01, min_open=True), default=None,
               help="Plant integration step (s) [default: the simulator's, 2 ms at 100 Hz sensors].")
 @click.option("--estimators", default="", help="Comma-separated estimator names (default: all).")
+@click.option("--standstill", type=click.FloatRange(min=0.0), default=3.0, show_default=True,
+              help="Seconds of standstill before each run (s).")
+@click.option("--offsets/--no-offsets", default=True, show_default=True,
+              help="Estimators learn the yaw-rate and steering offsets online.")
 @vehicle_option("Runs perturb this car (plant and sensors); the estimators are designed for it "
                 "(parameters and [tuning] tables).")
 def campaign(runs, outdir, scheduler, workers, resume, seed, batch_size, duration_scale, sim_dt, estimators,
-             vehicle):
+             standstill, offsets, vehicle):
     """Run a Monte-Carlo campaign and write its report into OUTDIR."""
     from ..campaign import store
     from ..campaign.runner import RunOptions
@@ -51,7 +55,8 @@ def campaign(runs, outdir, scheduler, workers, resume, seed, batch_size, duratio
     from ..vehicle import load_vehicle
 
     # the paper SUV stays None: its campaigns resume those stored before vehicle files
-    options = RunOptions(names=names, duration_scale=duration_scale, sim_dt=sim_dt,
+    options = RunOptions(names=names, duration_scale=duration_scale, sim_dt=sim_dt, standstill=standstill,
+                         offsets=offsets,
                          vehicle=None if vehicle == load_vehicle(None) else vehicle)
     from ..campaign.execute import DaskMissing, run_campaign, settings_of
 

@@ -41,11 +41,14 @@ def export():
 @click.option("--name", "module_name", default=None,
               help="Module name: files roadbank_<name>.h/.c, symbols roadbank_<name>_* (default: the "
                    "estimator's name). Two tunings of one estimator in one program need two names.")
+@click.option("--online-offsets", "online_offsets", is_flag=True,
+              help="Add the online sensor-offset learner (<prefix>_step_learning: yaw-rate offset at "
+                   "standstill, steering offset on straights).")
 @click.option("--output", "-o", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Output directory (created if missing).")
 def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: str | None,
                  v_step: float | None, v_max: float | None, module_name: str | None, fixed_rate: bool | None,
-                 output: Path):
+                 online_offsets: bool, output: Path):
     """Write roadbank_<estimator>.h/.c (C99, no malloc, tables in flash) and its README."""
     from .. import estimators
     from ..export import NotExportable, export_c
@@ -70,6 +73,8 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
         est = vehicle.make(name, **overrides)
     except (ValueError, TypeError, NoStabilisingSolution) as exc:
         raise click.ClickException(f"{name}: cannot design for vehicle {vehicle.name!r}: {exc}") from None
+    if online_offsets:
+        est = estimators.with_online_offsets(est)
     try:
         res = export_c(est, output, rate=rate, float32=float32, module_name=module_name, discrete=fixed_rate)
     except NotExportable as exc:

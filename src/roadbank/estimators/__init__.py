@@ -19,6 +19,7 @@ from .gated import PIFGated
 from .kalman import Kalman
 from .kinematic import Kinematic
 from .lowpass import KinematicFeedForward, KinematicLowPass
+from .offsets import OffsetSettings, OnlineOffsets, with_online_offsets
 from .pif import PIF, PIFAdaptive, PIFRate, PIFRateAdaptive
 from .pio import PIO
 from .smoother import PIFSmoother
@@ -101,4 +102,4 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
 
 __all__ = ["NAMES", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "for_log", "Estimator", "StepResult", "NoStabilisingSolution",
            "Kinematic", "KinematicLowPass", "KinematicFeedForward", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
-           "Kalman"]
+           "Kalman", "with_online_offsets", "OnlineOffsets", "OffsetSettings"]

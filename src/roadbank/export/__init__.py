@@ -53,7 +53,10 @@ def export_c(est, out_dir, *, rate: float, float32: bool = False, module_name: s
     Parameters
     ----------
     est : Estimator
-        A designed estimator on the ``lpv`` kernel (its tables are exported as they are).
+        A designed estimator on the ``lpv`` kernel (its tables are exported as they are), or
+        one behind the online offset learner (:func:`roadbank.estimators.with_online_offsets`):
+        the module then also has ``<prefix>_offsets_*`` and ``<prefix>_step_learning``
+        (:mod:`.offsets_c`).
     out_dir : path
         Output directory (created if missing).
     rate : float
@@ -72,8 +75,17 @@ def export_c(est, out_dir, *, rate: float, float32: bool = False, module_name: s
     NotExportable
         When the estimator's runtime is not a scheduled linear observer.
     """
+    from ..estimators.offsets import OnlineOffsets
+
+    learner = None
+    if isinstance(est, OnlineOffsets):       # the estimator behind the online offset learner
+        learner, est = est._ocfg, est.inner
     design = export_design(est, rate, module_name, discrete=discrete)
     files = generate(design, float32=float32)
+    if learner is not None:
+        from .offsets_c import add_offsets
+
+        files = add_offsets(files, f"roadbank_{design.ident}", learner, float32)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = {}
