@@ -29,9 +29,9 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
                 continue
             if n == "all":
                 names.extend(estimators.NAMES)
-            elif n not in estimators.NAMES:
+            elif n not in estimators.NAMES + estimators.PRESETS:
                 raise click.BadParameter(f"unknown estimator '{n}' (choose from "
-                                         f"{', '.join(estimators.NAMES)} or 'all')",
+                                         f"{', '.join(estimators.NAMES + estimators.PRESETS)} or 'all')",
                                          param_hint="--estimators")
             else:
                 names.append(n)
