@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 import time
 from pathlib import Path
 
@@ -82,13 +83,12 @@ def reproduce(outdir, scenarios, names, jobs, seed, docs_results, vehicle):
     except OSError as exc:
         raise click.ClickException(f"cannot create output folder {outdir}: {exc}") from None
 
-    err = click.get_text_stream("stderr")
     cold = cold_families(names)
     if cold:
         click.echo(f"compiling the kernels once (about {compile_estimate_s(cold):.0f} s on an idle core; later runs load "
-                   f"them from the cache): {', '.join(cold)}", file=err)
+                   f"them from the cache): {', '.join(cold)}", err=True)
     with click.progressbar(length=len(cells), label=f"{len(cells)} cells x {len(names)} estimators",
-                           show_eta=False, item_show_func=lambda s: s, file=err) as bar:
+                           show_eta=False, item_show_func=lambda s: s, file=sys.stderr) as bar:
         study = run_study(scenarios, names, jobs=jobs, seed=seed, progress=_CellProgress(bar, len(cells)),
                           vehicle=vehicle)
     written = write_outputs(study, outdir, docs_results=docs_results, jobs=jobs,

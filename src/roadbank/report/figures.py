@@ -95,8 +95,8 @@ def scenario_figure(scenario: str, cells: dict, path: Path, names=FIGURE_SET) ->
         ax.set_ylim(min(lo, 0) - 10, max(hi, 0) + 10)
         ax.set_ylabel("Estimated bank (deg)")
         ax.set_title(f"{scenario}: {CONDITION_LABELS.get(cond, cond)}")
-        _legend_outside(ax)
         ax.grid(alpha=0.3)
+    _legend_outside(axes[1])          # the same lines in every condition's panel: one legend
     axes[-1].set_xlabel("Time (s)")
     return _save(fig, path)
 
