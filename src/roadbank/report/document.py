@@ -73,7 +73,9 @@ def _md_blocks(study, figs, *, with_figures: bool, fig_prefix: str = "", command
 
 def _aims_block(rows, names) -> list[str]:
     """The accuracy aims for the PIF columns ``names`` (None: the claims' default), one table:
-    per cell, each column's RMS / max, the best causal RMS and who meets both aims."""
+    per cell, each column's RMS / max, the best causal RMS and who meets both aims. ``names`` may
+    also be one name or None."""
+    names = [names] if names is None or isinstance(names, str) else list(names)
     aims = [accuracy_aims(rows, name=n) for n in names]
     cells = aims[0]["cells"]
     nobody = [c for c in cells if not c["meeting"]]
