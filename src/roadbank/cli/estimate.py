@@ -45,7 +45,9 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
 @click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default=None,
               help="Input format. Default: from the file suffix or the directory layout (docs/io.md).")
 @click.option("--estimators", "-e", "est_names", multiple=True, default=("pif-modified",),
-              show_default=True, help="Estimators, comma-separated or repeated; 'all' for every one.")
+              show_default=True, help="Estimators, comma-separated or repeated; 'all' for every one. "
+                                      "pif-modified is roadbank's default tuning; pif-paper the same "
+                                      "filter with the paper's Table 4 weights.")
 @click.option("-o", "--output", required=True, type=click.Path(path_type=Path),
               help="Output .csv/.parquet for one log; a directory for several (or a path ending in '/').")
 @click.option("--output-format", type=click.Choice(["csv", "parquet"]), default="parquet", show_default=True,
