@@ -133,6 +133,40 @@ def white_noise_std(x, valid=None) -> float:
     return float(1.4826 * np.median(np.abs(d - np.median(d))) / np.sqrt(6.0))
 
 
+#: upper edge (Hz) of the band of the vehicle's own lateral dynamics: what a channel carries
+#: above it on a real road is vibration, not manoeuvre (:func:`road_noise_std`)
+DYNAMICS_BAND_HZ = 1.0
+
+
+def road_noise_std(x, t, valid=None, band_hz: float = DYNAMICS_BAND_HZ) -> float:
+    """Standard deviation (unit of ``x``) of the noise a channel carries on a real road.
+
+    The noise model of real roads: what the sampled channel ``x`` (on time stamps ``t``, s)
+    carries above the vehicle's dynamics band ``band_hz`` (Hz) is road and body vibration
+    (aliased into a slow log) and sensor noise, and it is taken as white over the whole band
+    ``0 .. rate/2``: its power above ``band_hz`` (second-order Butterworth high-pass, run forward
+    and backward so it adds no lag) divided by the share ``1 - 2 band_hz / rate`` of the band
+    that lies above ``band_hz``. Unlike :func:`white_noise_std` (second differences, robust
+    scale) it counts the heavy tails and the coloured part of the vibration, which pass a
+    filter designed for white noise. Only finite samples that are ``valid`` (bool array,
+    default all) count; NaN with fewer than :data:`MIN_NOISE_TRIPLES` of them. Where the log is
+    too slow for the band (``rate <= 4 band_hz``) it falls back to :func:`white_noise_std`.
+    """
+    from scipy.signal import butter, sosfiltfilt
+
+    x = np.asarray(x, dtype=np.float64)
+    ok = np.isfinite(x) if valid is None else np.isfinite(x) & np.asarray(valid, dtype=bool)
+    rate = sample_rate(t)
+    if ok.sum() < MIN_NOISE_TRIPLES or not np.isfinite(rate):
+        return float("nan")
+    if rate <= 4.0 * band_hz:
+        return white_noise_std(x, valid)
+    sos = butter(2, band_hz / (rate / 2.0), "highpass", output="sos")
+    fill = np.where(np.isfinite(x), x, np.nanmedian(x[ok]))
+    h = sosfiltfilt(sos, fill - np.median(fill[ok]))
+    return float(np.sqrt(np.mean(h[ok] ** 2) / (1.0 - 2.0 * band_hz / rate)))
+
+
 def road_wheel_angle(steering_wheel_angle, params: VehicleParams | None = None) -> np.ndarray:
     """Front road-wheel angle (rad) from the steering-wheel angle (rad) by the steering ratio."""
     p = params or VehicleParams()

@@ -346,7 +346,8 @@ class SensorSpec:
 # estimators for a car's sensors at a log's rate
 
 def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: SensorSpec | None = None,
-                   log_rate: float | None = None, log_ay_noise: float | None = None, **options):
+                   log_rate: float | None = None, log_ay_noise: float | None = None,
+                   log_r_noise: float | None = None, **options):
     """``estimators.make(name, params, **options)`` for a log sampled at ``log_rate`` by ``sensors``.
 
     The one rule for the sensor-derived weights of a default-tuned PIF
@@ -355,10 +356,12 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     * ``R``, the yaw-rate noise density: the yaw-rate sensor's noise and resolution at
       the rate of the log it will run on (:meth:`SensorSpec.r_noise_density`);
     * ``Q_ay``, the noise density of the ``ay`` input: the accelerometer's at that rate
-      (:meth:`SensorSpec.ay_noise_density`), or the white noise measured on the log's own
+      (:meth:`SensorSpec.ay_noise_density`), or the road noise measured on the log's own
       ``ay`` (``log_ay_noise``, :func:`log_conditions`) where that is larger — vibration
-      of the body or the mount that no data sheet knows (a phone IMU, a 10 Hz INS that
-      samples without an anti-alias filter).
+      of the road, the body or the mount that no data sheet knows (a phone IMU, a 10 Hz INS
+      that samples without an anti-alias filter);
+    * likewise ``R`` from the road noise of the log's yaw rate (``log_r_noise``) where that is
+      larger than the sensor's.
 
     ``roadbank estimate``/``map`` (:mod:`roadbank.fleet`, :mod:`roadbank.mapping`),
     :meth:`Vehicle.make` and the real-data validation all build their estimators here.
@@ -374,9 +377,9 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     log_rate : float, optional
         Sample rate (Hz) of the log (:func:`roadbank.signals.sample_rate` of its time
         base). Default (or NaN): ``sensors.rate``.
-    log_ay_noise : float, optional
-        White-noise standard deviation (m/s^2) of the log's ``ay``
-        (:func:`roadbank.signals.white_noise_std`); None or NaN: not measured.
+    log_ay_noise, log_r_noise : float, optional
+        Road-noise standard deviation of the log's ``ay`` (m/s^2) and yaw rate (rad/s)
+        (:func:`roadbank.signals.road_noise_std`); None or NaN: not measured.
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight.
@@ -387,29 +390,35 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     sensors = sensors if sensors is not None else SensorSpec()
     if sensors.r_variance > 0:
         rate = sensors.rate_for(log_rate)
-        Q_ay = sensors.ay_noise_density(rate)
+        Q_ay, R = sensors.ay_noise_density(rate), sensors.r_noise_density(rate)
         if log_ay_noise is not None and math.isfinite(log_ay_noise):
             Q_ay = max(Q_ay, log_ay_noise ** 2 / rate)
-        options = with_sensor_noise(name, options, sensors.r_noise_density(rate), Q_ay)
+        if log_r_noise is not None and math.isfinite(log_r_noise):
+            R = max(R, log_r_noise ** 2 / rate)
+        options = with_sensor_noise(name, options, R, Q_ay)
     return estimators.make(name, params, **options)
 
 
 def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     """What a log tells :func:`make_estimator` about its sensors: ``{"log_rate": Hz,
-    "log_ay_noise": m/s^2}`` — the sample rate of its time base
-    (:func:`roadbank.signals.sample_rate`) and the white noise of its ``ay`` on the samples
-    at ``vx >= v_min`` (m/s) (:func:`roadbank.signals.white_noise_std`; NaN when too few).
+    "log_ay_noise": m/s^2, "log_r_noise": rad/s}`` — the sample rate of its time base
+    (:func:`roadbank.signals.sample_rate`) and the road noise of its ``ay`` and yaw rate on the
+    samples at ``vx >= v_min`` (m/s): what they carry above the vehicle's dynamics band, taken
+    as white (:func:`roadbank.signals.road_noise_std`, the noise model of real roads; NaN when
+    too few samples).
     """
     import numpy as np
 
-    from .signals import sample_rate, white_noise_std
+    from .signals import road_noise_std, sample_rate
 
     vx = np.asarray(signals.vx, dtype=np.float64)
     with np.errstate(invalid="ignore"):
         moving = vx >= v_min
-    noise = white_noise_std(signals.ay, moving)
+    ay_noise = road_noise_std(signals.ay, signals.t, moving)
+    r_noise = road_noise_std(signals.r, signals.t, moving)
     # two significant digits: logs of one car and road share a design (the design cache)
-    return {"log_rate": sample_rate(signals.t), "log_ay_noise": float(f"{noise:.2g}")}
+    return {"log_rate": sample_rate(signals.t), "log_ay_noise": float(f"{ay_noise:.2g}"),
+            "log_r_noise": float(f"{r_noise:.2g}")}
 
 
 #: ``[identified.<quantity>]`` sensor offsets (measured minus true) -> the Signals channel they
@@ -546,7 +555,7 @@ class Vehicle:
 
     # ---- use --------------------------------------------------------------------------------
     def make(self, estimator_name: str, *, log_rate: float | None = None, log_ay_noise: float | None = None,
-             **overrides):
+             log_r_noise: float | None = None, **overrides):
         """Build an estimator for this car: its params, sensors and ``[tuning.<name>]`` options.
 
         :func:`make_estimator` ``(name, self.params, sensors=self.sensors, log_rate=log_rate,
@@ -556,12 +565,13 @@ class Vehicle:
         ``pif-modified``) that one's table with its own table's keys over it: a default-tuned
         PIF without an ``R`` gets the noise
         densities of this car's sensors at ``log_rate`` (Hz; default the sensor's ``rate``),
-        ``Q_ay`` at least the log's own ``ay`` noise ``log_ay_noise`` (m/s^2).
+        ``Q_ay`` at least the log's own ``ay`` road noise ``log_ay_noise`` (m/s^2), ``R`` at least
+        its yaw rate's ``log_r_noise`` (rad/s).
         """
         from .estimators import TUNED_AS
         tuning = {**self.tuning.get(TUNED_AS.get(estimator_name), {}), **self.tuning.get(estimator_name, {})}
         return make_estimator(estimator_name, self.params, sensors=self.sensors, log_rate=log_rate,
-                              log_ay_noise=log_ay_noise, **{**tuning, **overrides})
+                              log_ay_noise=log_ay_noise, log_r_noise=log_r_noise, **{**tuning, **overrides})
 
     @property
     def sensor_offsets(self) -> dict[str, float]:

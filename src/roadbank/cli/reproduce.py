@@ -105,6 +105,6 @@ def reproduce(outdir, scenarios, names, jobs, seed, docs_results, vehicle):
     paper = [n for n in show if tuning_of(n) == "Table 4"]
     if paper:
         click.echo(f"{', '.join(paper)}: the paper's Table 4 weights; the others: roadbank's default tuning "
-                   "(as `roadbank estimate -e NAME`)")
+                   "(the filters of `roadbank estimate -e NAME`)")
     click.echo(f"\nReport: {written['report'][0]}  Tables: {written['tables'][0]}  "
                f"(total {total_s:.1f} s)")

@@ -20,6 +20,7 @@ from .dfc import DFC
 from .gated import PIFGated
 from .kalman import Kalman
 from .kinematic import Kinematic
+from .lowpass import KinematicFeedForward, KinematicLowPass
 from .pif import PIF, PIFAdaptive, PIFRate, PIFRateAdaptive
 from .pio import PIO
 from .smoother import PIFSmoother
@@ -28,6 +29,8 @@ from .uio import UIO
 
 _FACTORIES = {
     "kinematic": Kinematic,
+    "kinematic-lp": KinematicLowPass,
+    "kinematic-ff": KinematicFeedForward,
     "dfc": DFC,
     "uio": UIO,
     "pio-original": partial(PIO, model="original"),
@@ -53,6 +56,10 @@ NAMES = tuple(n for n in _FACTORIES if n not in PRESETS)
 #: estimators whose ``run()`` also uses the samples after each instant (post-processing, not
 #: for an ECU); their ``step()`` is causal (see :mod:`roadbank.estimators.smoother`)
 OFFLINE = tuple(n for n, f in _FACTORIES.items() if getattr(f, "offline", False))
+#: the estimator of every command and of :func:`for_log` when none is named: the best by a rule
+#: written before measuring, on training data only (real KITTI training drives and simulated
+#: drives of cars that are not described; docs/estimators.md, :mod:`roadbank.tuning.real`)
+DEFAULT = "kinematic-ff"
 #: estimators that run another's filter with its weights (``pif-gated``: as its slow filter): a
 #: vehicle file's ``[tuning.<that one>]`` table applies to them too, under their own table's keys
 TUNED_AS = {"pif-smoother": "pif-modified", "pif-gated": "pif-modified"}
@@ -74,9 +81,34 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
         raise ValueError(f"{name}: bad tuning option ({exc})") from None
     if name in PRESETS:
         est.name = name            # its outputs' columns say which tuning made them
+    from .pif import SENSOR_R_ESTIMATORS
+
+    if name in SENSOR_R_ESTIMATORS and "R" not in tuning and tuning.get("tuning", "default") == "default":
+        est.sheet_rate = SHEET_RATE_HZ      # designed for the data sheet's sensor at its own rate
     return est
 
 
-__all__ = ["NAMES", "PRESETS", "OFFLINE", "TUNED_AS", "make", "Estimator", "StepResult", "NoStabilisingSolution",
-           "Kinematic", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
+#: sample rate (Hz) of the data sheet's sensors that ``make`` designs the sensor-weighted PIFs for
+SHEET_RATE_HZ = 100.0
+
+
+def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=None, **tuning) -> Estimator:
+    """Build the estimator ``name`` for the log ``signals`` as ``roadbank estimate`` does.
+
+    A default-tuned PIF is designed for the log's sample rate and the road noise measured on
+    its ``ay`` and yaw rate (:func:`roadbank.vehicle.log_conditions`); the car is ``vehicle``
+    (a :class:`roadbank.vehicle.Vehicle`: its parameters, sensors and tuning tables) or
+    ``params`` with the data sheet's sensors. The other estimators are :func:`make`'s.
+    ``for_log(name, s).run(s)`` is what the command line writes for the log ``s``.
+    """
+    from ..vehicle import log_conditions, make_estimator
+
+    cond = log_conditions(signals)
+    if vehicle is not None:
+        return vehicle.make(name, **cond, **tuning)
+    return make_estimator(name, params, **cond, **tuning)
+
+
+__all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "for_log", "Estimator", "StepResult", "NoStabilisingSolution",
+           "Kinematic", "KinematicLowPass", "KinematicFeedForward", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
            "Kalman"]

@@ -146,6 +146,25 @@ class Estimator:
             self.set_sample_rate(sample_rate)
         self.reset()
 
+    #: rate (Hz) of the data-sheet sensor whose noise set this estimator's weights (set by
+    #: :func:`roadbank.estimators.make` for the sensor-weighted PIFs); None: weights given
+    sheet_rate: float | None = None
+
+    def _check_log_rate(self, t) -> None:
+        """Warn (once) when a log's rate is far from :attr:`sheet_rate`: the weights then do not
+        describe its sensors (:func:`roadbank.estimators.for_log` designs for the log)."""
+        from ..signals import sample_rate
+
+        rate = sample_rate(t)
+        if np.isfinite(rate) and abs(rate / self.sheet_rate - 1.0) > 0.25:
+            import warnings
+
+            warnings.warn(f"{self.name}: its weights are the data sheet's {self.sheet_rate:.0f} Hz sensor's, "
+                          f"this log is sampled at {rate:.3g} Hz; roadbank.estimators.for_log({self.name!r}, "
+                          "signals) designs for the log's rate and road noise, as `roadbank estimate` does",
+                          RuntimeWarning, stacklevel=3)
+            self.sheet_rate = None
+
     # -- to implement ------------------------------------------------------
     def _design(self):  # pragma: no cover - abstract
         """Return (table (ngrid, k), number of observer states, extra cfg floats)."""
@@ -409,6 +428,8 @@ class Estimator:
         """
         if not isinstance(signals, Signals):
             raise TypeError("run() expects a roadbank.Signals")
+        if self.sheet_rate is not None:
+            self._check_log_rate(signals.t)
         if reset:
             self.reset()
         n = len(signals)

@@ -382,7 +382,7 @@ static void rb_lu_solve(const real_t *M, const int *piv, real_t *b, int n)
     int j;
     for (k = 0; k < n && k < RB_NT; ++k) {
         int p = piv[k];
-        if (p != k) {
+        if (p != k && p > k && p < n && p < RB_NT) {   /* rb_lu writes p in [k, n) */
             real_t tmp = b[k];
             b[k] = b[p];
             b[p] = tmp;

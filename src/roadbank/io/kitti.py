@@ -14,6 +14,7 @@ z up, so no sign changes):
 1   lon    longitude (deg)                                              ``Log.extra``
 3   roll   roll angle (rad), positive = left side up (bank + body roll)  reference roll
 8   vf     forward speed parallel to the ground (m/s)                   ``vx``
+9   vl     leftward speed parallel to the ground (m/s)                  ``Log.extra`` (INS check)
 12  ay     specific force along the vehicle's left axis (m/s^2)         ``ay``
 19  wz     angular rate about the vehicle's up axis (rad/s)             ``r``
 ==  =====  ==========================================================  ================
@@ -52,7 +53,7 @@ from .errors import LogError
 #: fields per oxts frame (dataformat.txt)
 N_FIELDS = 30
 #: 0-based column of each channel
-COLUMNS = {"lat": 0, "lon": 1, "roll": 3, "vf": 8, "ay": 12, "wz": 19}
+COLUMNS = {"lat": 0, "lon": 1, "roll": 3, "vf": 8, "vl": 9, "ay": 12, "wz": 19}
 
 _STAMP = re.compile(r"^(\d{4}-\d{2}-\d{2}) (\d{2}:\d{2}:\d{2})(?:\.(\d{1,9}))?$")
 _FRAME = re.compile(r"^(\d+)\.txt$")
@@ -204,4 +205,5 @@ def load_kitti_oxts(path):
             "dropped_frames": str(dropped), "frames": str(len(keep))}
     return Log(signals=sig, reference_roll=X[:, c["roll"]].copy(), source=oxts, format="kitti-oxts",
                metadata=meta, warnings=warns,
-               extra={"lat_deg": X[:, c["lat"]].copy(), "lon_deg": X[:, c["lon"]].copy()})
+               extra={"lat_deg": X[:, c["lat"]].copy(), "lon_deg": X[:, c["lon"]].copy(),
+                      "vl_mps": X[:, c["vl"]].copy()})

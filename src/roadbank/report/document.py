@@ -45,7 +45,8 @@ def _md_blocks(study, figs, *, with_figures: bool, fig_prefix: str = "", command
              "Plant: roadbank's nonlinear vehicle simulator (`roadbank.sim`), ESP sensors at 100 Hz, seed 0. "
              "Estimators are always designed with Table 1 (Cf_ss); conditions change the plant and sensors. "
              "Metrics are computed on valid samples after the first 2 s. Each column is the estimator of "
-             "that name as `roadbank estimate -e name` runs it: `pif-paper` is the modified-model PIF "
+             "that name, `estimators.make(name)`, the filter and tuning `roadbank estimate -e name` runs: "
+             "`pif-paper` is the modified-model PIF "
              "with the paper's Table 4 weights (SI reading), with which the paper's claims are checked; "
              "`pif-modified` is the same filter with roadbank's default tuning (docs/estimators.md).", "",
              tuning_legend(names), ""]

@@ -16,6 +16,8 @@ LABELS = {
     "pif-gated": "PIF switched to a fast bank-rate PIF on yaw acceleration (ours)",
     "pif-smoother": "PIF smoother, offline (ours)",
     "kinematic": "Kinematic",
+    "kinematic-lp": "Kinematic, low-passed (ours)",
+    "kinematic-ff": "Kinematic, low-passed + centripetal feed-forward (ours)",
 }
 
 #: the estimators whose weights are the paper's Table 4 (SI reading); every other name runs
@@ -52,5 +54,6 @@ def tuning_legend(names) -> str:
     text = "Tuning: "
     if paper:
         text += ", ".join(f"`{n}`" for n in paper) + ": the paper's Table 4 weights (SI reading); "
-    return text + (f"{default}: roadbank's default tuning (`estimators.make(name)`, the same as "
-                   "`roadbank estimate -e name`).")
+    return text + (f"{default}: roadbank's default tuning (`estimators.make(name)`: the filter and tuning "
+                   "`roadbank estimate -e name` runs, which also sets the default-tuned PIFs' noise "
+                   "weights from the log).")

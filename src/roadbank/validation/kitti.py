@@ -30,19 +30,49 @@ import numpy as np
 from ..params import G, VehicleParams
 from .comma2k19 import SEDAN, ValidationResult
 from .scoring import Scoring, hold_invalid, lowpass_t, pooled, run_and_score
+from .splits import split_of
 
 #: KITTI scoring: no offset fitted (reference and inputs come from one INS frame).
 KITTI_SCORING = Scoring(fit_fraction=0.0)
+#: largest credible RMS (m/s) of the INS's leftward ground speed while driving (vx >= 5 m/s): a
+#: car's sideslip velocity is a few tenths of a m/s in ordinary driving (the 16 shared drives:
+#: 0.02-0.11 m/s); an INS that reports more has lost its heading or its alignment, and its roll
+#: is no reference
+MAX_INS_LATERAL_SPEED = 1.0
+
+
+def ins_doubt(log, v_gate: float = 5.0) -> str | None:
+    """Why the drive's INS is not a credible reference, or None (see :data:`MAX_INS_LATERAL_SPEED`)."""
+    vl = log.extra.get("vl_mps")
+    if vl is None:
+        return None
+    moving = np.isfinite(vl) & (log.signals.vx >= v_gate)
+    if moving.sum() < 10:
+        return None
+    rms = float(np.sqrt(np.mean(vl[moving] ** 2)))
+    if rms > MAX_INS_LATERAL_SPEED:
+        return (f"INS leftward speed {rms:.1f} m/s RMS while driving (a car's sideslip is a few tenths; "
+                f"above {MAX_INS_LATERAL_SPEED:g} m/s the INS roll is not credible)")
+    return None
 
 
 @dataclass
 class KittiValidation:
-    """Per-drive results, the pooled scores and the drives that could not be read."""
+    """Per-drive results, the pooled scores and the drives that could not be read.
+
+    ``pooled`` is over the credible drives; ``by_split`` gives, for each of ``"training"``,
+    ``"validation"`` and ``"unseen"`` (:mod:`roadbank.validation.splits`) present, the drive
+    labels, the pooled scores and each estimator's median raw RMS (deg) over its drives;
+    ``flagged`` lists ``(drive, reason)`` for the drives whose INS is not credible
+    (:func:`ins_doubt`), scored but kept out of every pooled and median score.
+    """
 
     drives: list[ValidationResult]
     pooled: dict
     errors: list[str] = field(default_factory=list)
     settings: dict = field(default_factory=dict)
+    by_split: dict = field(default_factory=dict)
+    flagged: list = field(default_factory=list)
 
 
 def kinematic_residual(signals, ref, mask, taus) -> dict:
@@ -90,12 +120,13 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     names : sequence of str, optional
         Estimators (default: all of :data:`roadbank.estimators.NAMES`).
     params : VehicleParams, optional
-        Default :data:`~roadbank.validation.SEDAN` (KITTI's car, a VW Passat B6,
-        is a mid-size car of the same 2.7 m wheelbase class).
+        The car; default the rule for a car that is not described (the paper's SUV,
+        :class:`~roadbank.params.VehicleParams`, as every command uses).
     scoring : Scoring
         Default :data:`KITTI_SCORING`.
     sensitivity : bool
-        Also score with the paper's SUV parameters (``VehicleParams()``, ``sensitivity["suv"]``)
+        Also score with a mid-size sedan's parameters (:data:`~roadbank.validation.SEDAN`,
+        ``sensitivity["sedan"]``; KITTI's car is a VW Passat B6)
         and the sensor-weighted PIFs designed from the data sheet alone: for the drive's rate
         without the ``ay`` noise measured on it (``sensitivity["sheet_rate"]``), and for the
         sensor's nominal rate (``sensitivity["R_nominal"]``, what ``estimators.make`` builds).
@@ -108,14 +139,14 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     from .. import estimators
     from ..io.kitti import load_kitti_oxts
 
-    params = params or SEDAN
+    params = params or VehicleParams()
     names = list(names or estimators.NAMES)
     log = load_kitti_oxts(path)
     run = run_and_score(log.signals, log.reference_roll, names, params, scoring, per_estimator=tuning,
                         sensors=sensors)
     sens = {}
     if sensitivity:
-        sens["suv"] = run_and_score(log.signals, log.reference_roll, names, VehicleParams(), scoring).scores
+        sens["sedan"] = run_and_score(log.signals, log.reference_roll, names, SEDAN, scoring).scores
         # the sensor-weighted PIFs designed from the data sheet alone: at the drive's rate, and at
         # the sensor's nominal rate (100 Hz)
         from ..estimators.pif import SENSOR_R_ESTIMATORS
@@ -133,9 +164,12 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     first = np.flatnonzero(run.scored)
     settings = {"tau": scoring.tau, "warmup_s": scoring.warmup_s, "fit_fraction": scoring.fit_fraction,
                 "v_gate": scoring.v_gate, "dt": float(np.median(np.diff(t))), "path": str(path)}
+    data = drive_data(log, run, scoring)
+    data["split"] = split_of(log.metadata["drive"])
+    data["ins_doubt"] = ins_doubt(log, scoring.v_gate)
     return ValidationResult(scores=run.scores, params=params, t=t, reference=run.reference,
                             estimates=run.estimates, split_time=float(t[first[0]]) if len(first) else float(t[0]),
-                            data=drive_data(log, run, scoring), sensitivity=sens, settings=settings, run=run,
+                            data=data, sensitivity=sens, settings=settings, run=run,
                             label=log.metadata["drive"], dataset="kitti", valid=run.valid)
 
 
@@ -172,6 +206,21 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
             drives.append(validate_kitti_drive(p, names, params, scoring, sensitivity, tuning, sensors))
         except (LogError, OSError) as exc:
             errors.append(str(exc))
-    return KittiValidation(drives=drives, pooled=pooled([d.run for d in drives], names), errors=errors,
+    credible = [d for d in drives if not d.data.get("ins_doubt")]
+    by_split = {}
+    for split in ("training", "validation", "unseen"):
+        ds = [d for d in credible if d.data["split"] == split]
+        if ds:
+            by_split[split] = {"drives": [d.label for d in ds], "pooled": pooled([d.run for d in ds], names),
+                               "median_rms_raw_deg": {n: _median([d.scores[n].rms_raw_deg for d in ds])
+                                                      for n in names}}
+    return KittiValidation(drives=drives, pooled=pooled([d.run for d in credible], names), errors=errors,
                            settings={"tau": scoring.tau, "warmup_s": scoring.warmup_s,
-                                     "v_gate": scoring.v_gate, "fit_fraction": scoring.fit_fraction})
+                                     "v_gate": scoring.v_gate, "fit_fraction": scoring.fit_fraction},
+                           by_split=by_split, flagged=[(d.label, d.data["ins_doubt"]) for d in drives
+                                                       if d.data.get("ins_doubt")])
+
+
+def _median(values) -> float:
+    v = [x for x in values if np.isfinite(x)]
+    return float(np.median(v)) if v else float("nan")

@@ -1,0 +1,101 @@
+"""Choices made on training data: the cut-off and feed-forward gain of ``kinematic-lp`` / ``kinematic-ff``.
+
+The rule: for each candidate ``(cutoff, kappa)`` of a fixed grid,
+
+* **real roads**: run the estimator on every KITTI *training* drive
+  (:data:`roadbank.validation.splits.KITTI_TRAINING`) and take the raw RMS error (deg) of
+  ``theta`` against the INS roll on the scored samples (:data:`roadbank.validation.kitti.KITTI_SCORING`:
+  vx >= 5 m/s, 5 s after each start, no offset); median over the drives;
+* **simulated drives, car not described**: ``roadbank tune``'s *training* drive set
+  (:func:`roadbank.tuning.drive_set`, seed 0, :data:`SIM_DRIVES` drives) for each shipped car
+  (:data:`SIM_CARS`), the estimator built without the car (default parameters); bank RMS error
+  (deg) per drive as ``roadbank tune`` scores it; the median per car, then the median over the cars.
+
+The objective is the sum of the two medians (deg): real roads and simulated manoeuvres of cars
+nobody described weigh the same. The chosen candidate has the lowest objective, ties within
+:data:`TIE_DEG` going to the smaller ``kappa`` and then the smaller cut-off (the simpler,
+smoother filter). ``kinematic-lp`` is the best with ``kappa = 0``, ``kinematic-ff`` the best over
+the whole grid. Neither the KITTI validation drives nor ``roadbank tune``'s validation set take part.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: candidate cut-offs (Hz) and feed-forward gains (-)
+CUTOFFS_HZ = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.8)
+KAPPAS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4)
+#: objectives closer than this (deg) count as equal
+TIE_DEG = 0.002
+#: the shipped cars of the simulated part, and the number of training drives per car
+SIM_CARS = ("suv-paper", "sedan", "compact", "van")
+SIM_DRIVES = 24
+
+
+@dataclass(frozen=True)
+class LowpassChoice:
+    """Result of :func:`choose_lowpass`: the chosen ``(cutoff Hz, kappa)`` pairs and every objective (deg)."""
+
+    lp: tuple[float, float]
+    ff: tuple[float, float]
+    objective: dict
+
+
+def _pick(cands: dict) -> tuple[float, float]:
+    best = min(cands.values())
+    ok = [k for k, v in cands.items() if v <= best + TIE_DEG]
+    return min(ok, key=lambda fk: (fk[1], fk[0]))
+
+
+def training_logs(data_dir):
+    """``(signals, reference roll rad, scored mask)`` of each KITTI training drive found under ``data_dir``."""
+    from pathlib import Path
+
+    from ..io.kitti import load_kitti_oxts
+    from ..validation.kitti import KITTI_SCORING
+    from ..validation.scoring import masks
+    from ..validation.splits import KITTI_TRAINING
+
+    out = []
+    for name in KITTI_TRAINING:
+        found = [p for p in Path(data_dir).glob(f"*/{name}") if p.is_dir()]
+        if not found:
+            continue
+        log = load_kitti_oxts(found[0])
+        out.append((log.signals, log.reference_roll, masks(log.signals.t, log.signals.vx, KITTI_SCORING)[1]))
+    return out
+
+
+def simulated_sets(cars=SIM_CARS, n=SIM_DRIVES):
+    """``roadbank tune``'s training drives (seed 0) of each car in ``cars`` (shipped vehicle names)."""
+    from ..vehicle import load_vehicle
+    from .manoeuvres import drive_set
+
+    return [drive_set("train", n, 0, load_vehicle(car).params) for car in cars]
+
+
+def objective(est, logs, sim_sets) -> float:
+    """The rule's objective (deg) of the estimator ``est`` (module docstring)."""
+    from .objective import score_set
+
+    errs = [float(np.degrees(np.sqrt(np.mean((est.run(s).theta[m] - ref[m]) ** 2)))) for s, ref, m in logs]
+    sim = [score_set(est, drives).median_rms for drives in sim_sets]
+    return float(np.median(errs)) + (float(np.median(sim)) if sim_sets else 0.0)
+
+
+def choose_lowpass(logs, sim_sets, cutoffs=CUTOFFS_HZ, kappas=KAPPAS) -> LowpassChoice:
+    """Apply the module's rule to ``logs`` (from :func:`training_logs`) and ``sim_sets``
+    (from :func:`simulated_sets`).
+
+    Returns the chosen ``(cutoff Hz, kappa)`` of ``kinematic-lp`` (kappa 0) and of ``kinematic-ff``.
+    """
+    from ..estimators.lowpass import KinematicLowPass
+
+    if not logs:
+        raise ValueError("choose_lowpass: no training drives")
+    obj = {(fc, k): objective(KinematicLowPass(cutoff=fc, kappa=k), logs, sim_sets)
+           for fc in cutoffs for k in kappas}
+    lp = _pick({fk: v for fk, v in obj.items() if fk[1] == 0.0})
+    return LowpassChoice(lp=lp, ff=_pick(obj), objective=obj)
