@@ -29,9 +29,9 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
                 continue
             if n == "all":
                 names.extend(estimators.NAMES)
-            elif n not in estimators.NAMES:
+            elif n not in estimators.NAMES + estimators.PRESETS:
                 raise click.BadParameter(f"unknown estimator '{n}' (choose from "
-                                         f"{', '.join(estimators.NAMES)} or 'all')",
+                                         f"{', '.join(estimators.NAMES + estimators.PRESETS)} or 'all')",
                                          param_hint="--estimators")
             else:
                 names.append(n)
@@ -45,7 +45,9 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
 @click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default=None,
               help="Input format. Default: from the file suffix or the directory layout (docs/io.md).")
 @click.option("--estimators", "-e", "est_names", multiple=True, default=("pif-modified",),
-              show_default=True, help="Estimators, comma-separated or repeated; 'all' for every one.")
+              show_default=True, help="Estimators, comma-separated or repeated; 'all' for every one. "
+                                      "pif-modified is roadbank's default tuning; pif-paper the same "
+                                      "filter with the paper's Table 4 weights.")
 @click.option("-o", "--output", required=True, type=click.Path(path_type=Path),
               help="Output .csv/.parquet for one log; a directory for several (or a path ending in '/').")
 @click.option("--output-format", type=click.Choice(["csv", "parquet"]), default="parquet", show_default=True,

@@ -54,12 +54,13 @@ def write_result(result, path: Path, vehicle: str | None = None) -> None:
               help="Output file, .parquet or .csv.")
 @vehicle_option("The simulated car (plant: its parameters and [plant] table; sensors: its [sensors]).")
 def simulate(scenario: str, condition: str, seed: int, output: Path, vehicle) -> None:
-    """Simulate SCENARIO (const-bank, bank-lane-change, s-curve, track-lane1,
-    track-lane-change) and write the sensor signals and the truth."""
-    from ..sim.scenarios import CONDITIONS, SCENARIOS
+    """Simulate SCENARIO (the paper's const-bank, bank-lane-change, s-curve, track-lane1,
+    track-lane-change; or identification-drive, the test-track drive `roadbank identify`
+    needs, docs/identification.md) and write the sensor signals and the truth."""
+    from ..sim.scenarios import CONDITIONS, DRIVES, SCENARIOS
 
-    if scenario not in SCENARIOS:
-        raise click.BadParameter(f"unknown scenario '{scenario}' (choose from {', '.join(SCENARIOS)})",
+    if scenario not in SCENARIOS and scenario not in DRIVES:
+        raise click.BadParameter(f"unknown scenario '{scenario}' (choose from {', '.join((*SCENARIOS, *DRIVES))})",
                                  param_hint="SCENARIO")
     if condition not in CONDITIONS:
         raise click.BadParameter(f"unknown condition '{condition}' (choose from {', '.join(CONDITIONS)})",

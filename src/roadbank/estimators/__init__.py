@@ -5,6 +5,8 @@
 >>> estimate = est.run(signals)           # doctest: +SKIP
 
 ``NAMES`` lists the estimators (the paper's, the Kalman peer, ``pif-rate``, ``pif-adaptive``, ``pif-rate-adaptive``, ``pif-gated`` and the offline ``pif-smoother``); ``make(name, params, **tuning)`` builds one.
+``PRESETS`` are further names ``make`` accepts: ``pif-paper`` is ``pif-modified`` with the paper's
+Table 4 weights (``pif-modified`` itself is roadbank's default tuning).
 Each has ``run(signals) -> Estimate``, ``step(t, vx, ay, r, delta_f)`` and ``reset()``.
 """
 
@@ -42,10 +44,16 @@ _FACTORIES = {
     "pif-rate-adaptive": PIFRateAdaptive,
     "pif-gated": PIFGated,
     "pif-smoother": PIFSmoother,
+    "pif-paper": partial(PIF, model="modified", tuning="paper"),
 }
 
+#: further names :func:`make` accepts: an estimator of :data:`NAMES` with a named tuning
+#: (``pif-paper``: ``pif-modified`` with the paper's Table 4 weights, SI reading). Not in
+#: :data:`NAMES`: the same filter as one there, so the suites that try every estimator
+#: (and ``-e all``) would only run it twice.
+PRESETS = ("pif-paper",)
 #: names of all estimators, in the order the reports list them
-NAMES = tuple(_FACTORIES)
+NAMES = tuple(n for n in _FACTORIES if n not in PRESETS)
 #: estimators whose ``run()`` also uses the samples after each instant (post-processing, not
 #: for an ECU); their ``step()`` is causal (see :mod:`roadbank.estimators.smoother`)
 OFFLINE = tuple(n for n, f in _FACTORIES.items() if getattr(f, "offline", False))
@@ -59,7 +67,7 @@ TUNED_AS = {"pif-smoother": "pif-modified", "pif-gated": "pif-modified"}
 
 
 def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
-    """Build the estimator ``name`` (one of :data:`NAMES`) for ``params``.
+    """Build the estimator ``name`` (one of :data:`NAMES` or :data:`PRESETS`) for ``params``.
 
     ``tuning`` are the estimator's keyword options (see each class) plus the
     common ones ``v_min`` (m/s), ``roll``, ``max_substep`` (s), ``max_gap`` (s).
@@ -67,11 +75,13 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
     try:
         factory = _FACTORIES[name]
     except KeyError:
-        raise ValueError(f"unknown estimator {name!r}; choose one of {', '.join(NAMES)}") from None
+        raise ValueError(f"unknown estimator {name!r}; choose one of {', '.join(NAMES + PRESETS)}") from None
     try:
         est = factory(params, **tuning)
     except TypeError as exc:
         raise ValueError(f"{name}: bad tuning option ({exc})") from None
+    if name in PRESETS:
+        est.name = name            # its outputs' columns say which tuning made them
     from .pif import SENSOR_R_ESTIMATORS
 
     if name in SENSOR_R_ESTIMATORS and "R" not in tuning and tuning.get("tuning", "default") == "default":
@@ -100,6 +110,6 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
     return make_estimator(name, params, **cond, **tuning)
 
 
-__all__ = ["NAMES", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "for_log", "Estimator", "StepResult", "NoStabilisingSolution",
+__all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "for_log", "Estimator", "StepResult", "NoStabilisingSolution",
            "Kinematic", "KinematicLowPass", "KinematicFeedForward", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
            "Kalman", "with_online_offsets", "OnlineOffsets", "OffsetSettings"]

@@ -18,6 +18,17 @@ import numpy as np  # noqa: E402
 from .labels import CONDITION_LABELS, PAPER_SET, label  # noqa: E402
 
 ROBUSTNESS_CONDITIONS = ("cf50", "nominal", "cf150")
+#: the estimators a scenario figure draws by default (those the study has): the paper's
+#: methods, the Kalman peer, roadbank's default PIF, the variants the tables favour and the
+#: estimator the commands run when none is named
+FIGURE_SET = PAPER_SET + ("pif-rate", "pif-gated", "pif-smoother", "kinematic-ff")
+#: the reference line: black, drawn over the estimates so that a noisy estimate cannot hide it
+REFERENCE_STYLE = {"color": "k", "lw": 1.6, "alpha": 0.85, "zorder": 10}
+
+
+def _legend_outside(ax) -> None:
+    """The axis legend to the right of the axes, one entry per line: it never covers a curve."""
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, frameon=False)
 
 
 DPI = 110
@@ -57,8 +68,9 @@ def _save(fig, path: Path) -> list[Path]:
     return out
 
 
-def scenario_figure(scenario: str, cells: dict, path: Path, names=PAPER_SET) -> list[Path]:
-    """Driver inputs (first condition) and one panel per condition with each method's bank estimate.
+def scenario_figure(scenario: str, cells: dict, path: Path, names=FIGURE_SET) -> list[Path]:
+    """Driver inputs (first condition) and one panel per condition with the bank estimate (deg)
+    of each estimator of ``names`` that the cells have, the reference drawn over them.
 
     ``cells`` maps condition -> :class:`roadbank.report.reproduce.CellResult`.
     """
@@ -72,43 +84,46 @@ def scenario_figure(scenario: str, cells: dict, path: Path, names=PAPER_SET) -> 
     ax.plot(t, 100 * first.inputs["throttle"], label="Throttle (%)")
     ax.set_ylabel("Driver inputs (deg, km/h, %)")
     ax.set_title(f"{scenario}: driver inputs ({conds[0]})")
-    ax.legend(fontsize=7, loc="best")
+    _legend_outside(ax)
     ax.grid(alpha=0.3)
     for ax, cond in zip(axes[1:], conds):
         cell = cells[cond]
-        ax.plot(cell.t, np.rad2deg(cell.reference), "k", lw=2, label="Reference")
         for name in names:
             if name in cell.phi_b:
-                ax.plot(cell.t, np.rad2deg(cell.phi_b[name]), lw=1, label=f"{label(name)} Method")
+                ax.plot(cell.t, np.rad2deg(cell.phi_b[name]), lw=1, label=label(name) if label(name) == name else f"{label(name)} ({name})")
+        ax.plot(cell.t, np.rad2deg(cell.reference), label="Reference (true bank)", **REFERENCE_STYLE)
         lo, hi = np.nanpercentile(np.rad2deg(cell.reference), [0, 100])
         ax.set_ylim(min(lo, 0) - 10, max(hi, 0) + 10)
         ax.set_ylabel("Estimated bank (deg)")
         ax.set_title(f"{scenario}: {CONDITION_LABELS.get(cond, cond)}")
-        ax.legend(fontsize=7, ncol=3, loc="best")
         ax.grid(alpha=0.3)
+    _legend_outside(axes[1])          # the same lines in every condition's panel: one legend
     axes[-1].set_xlabel("Time (s)")
     return _save(fig, path)
 
 
 def robustness_figure(scenario: str, cells: dict, path: Path) -> list[Path] | None:
-    """PIF on the modified vs the original model at 50/100/150 % plant Cf (paper Fig 4d-e, 7c-d)."""
+    """The PIF on the modified (``pif-paper``) vs the original model, both with Table 4, at
+    50/100/150 % plant Cf (paper Fig 4d-e, 7c-d); None when the cells have neither."""
     conds = [c for c in ROBUSTNESS_CONDITIONS if c in cells]
-    if len(conds) < 2:
+    pifs = [n for n in ("pif-paper", "pif-original") if any(n in cells[c].phi_b for c in conds)]
+    if len(conds) < 2 or not pifs:
         return None
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.6), sharey=True)
+    fig, axes = plt.subplots(1, len(pifs), figsize=(5.5 * len(pifs) + 1.5, 3.6), sharey=True, squeeze=False)
+    axes = axes[0]
     ref = cells[conds[0]]
-    for ax, name in zip(axes, ("pif-modified", "pif-original")):
-        ax.plot(ref.t, np.rad2deg(ref.reference), "k", lw=2, label="Reference")
+    for ax, name in zip(axes, pifs):
         for cond in conds:
             cell = cells[cond]
             if name in cell.phi_b:
                 pct = {"cf50": "50% Cf", "nominal": "100% Cf", "cf150": "150% Cf"}[cond]
                 ax.plot(cell.t, np.rad2deg(cell.phi_b[name]), lw=1, label=pct)
+        ax.plot(ref.t, np.rad2deg(ref.reference), label="Reference", **REFERENCE_STYLE)
         lo, hi = np.nanpercentile(np.rad2deg(ref.reference), [0, 100])
         ax.set_ylim(min(lo, 0) - 15, max(hi, 0) + 15)
         ax.set_title(f"{scenario}: {label(name)}")
         ax.set_xlabel("Time (s)")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
+    _legend_outside(axes[-1])
     axes[0].set_ylabel("Estimated bank (deg)")
     return _save(fig, path)

@@ -14,6 +14,8 @@ import mimetypes
 from pathlib import Path
 from urllib.parse import unquote, urlparse
 
+from .markdown import Slugger
+
 __all__ = ["md_to_html", "write_document", "STYLE"]
 
 STYLE = """
@@ -48,6 +50,11 @@ def _local(src: str) -> bool:
     return not u.scheme and not u.netloc and not src.startswith("#")
 
 
+def _plain(inline) -> str:
+    """The text a heading shows (its inline token's text and code spans, markup dropped)."""
+    return "".join(c.content for c in (inline.children or []) if c.type in ("text", "code_inline"))
+
+
 def md_to_html(markdown: str, title: str | None = None, *, base_dir=None, embed: bool = True) -> str:
     """Render report markdown as one HTML page.
 
@@ -62,6 +69,9 @@ def md_to_html(markdown: str, title: str | None = None, *, base_dir=None, embed:
         Folder that relative image paths are resolved against (default: the current one).
     embed : bool
         Embed local images as base64 data URIs (default) instead of linking them.
+
+    Every heading gets an ``id`` (:class:`roadbank.report.markdown.Slugger`: GitHub's
+    anchors), so ``[text](#anchor)`` links of a contents list work in the page.
 
     Raises
     ------
@@ -88,6 +98,10 @@ def md_to_html(markdown: str, title: str | None = None, *, base_dir=None, embed:
     md.add_render_rule("table_open", lambda self, tokens, idx, options, env: '<div class="table">\n<table>\n')
     md.add_render_rule("table_close", lambda self, tokens, idx, options, env: "</table>\n</div>\n")
     tokens = md.parse(markdown)
+    slug = Slugger()
+    for i, tok in enumerate(tokens):          # heading ids: the anchors of a contents list
+        if tok.type == "heading_open":
+            tok.attrSet("id", slug(_plain(tokens[i + 1])))
     if title is None:
         title = next((tokens[i + 1].content for i, t in enumerate(tokens) if t.type == "heading_open"),
                      "roadbank report")

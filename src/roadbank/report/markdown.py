@@ -18,7 +18,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["Markdown", "escape", "md_table", "BEST"]
+__all__ = ["Markdown", "escape", "md_table", "BEST", "Slugger", "contents"]
 
 
 class Markdown(str):
@@ -186,3 +186,40 @@ def _parses(s: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+# what a heading's anchor drops: everything but letters, digits, '_', '-' and spaces (as GitHub)
+_NOT_SLUG = re.compile(r"[^\w\- ]")
+
+
+class Slugger:
+    """Anchors of a document's headings, as GitHub makes them: the heading's text in lower
+    case, punctuation dropped, spaces as ``-``; a repeated one gets ``-1``, ``-2`` ...
+
+    >>> s = Slugger()
+    >>> s("Bank angle RMS error (deg), after 2 s"), s("Figures"), s("Figures")
+    ('bank-angle-rms-error-deg-after-2-s', 'figures', 'figures-1')
+    """
+
+    def __init__(self):
+        self.seen: dict[str, int] = {}
+
+    def __call__(self, text: str) -> str:
+        base = _NOT_SLUG.sub("", str(text).strip().lower()).replace(" ", "-")
+        n = self.seen.get(base, 0)
+        self.seen[base] = n + 1
+        return base if n == 0 else f"{base}-{n}"
+
+
+def contents(headings) -> list[str]:
+    """A linked table of contents: markdown list lines for ``(level, text)`` headings (plain
+    text, as shown), level 2 at the left; anchors by :class:`Slugger` over ``headings`` in order,
+    so they match :func:`roadbank.report.html.md_to_html`'s ids and GitHub's when ``headings``
+    are all the document's headings."""
+    slug = Slugger()
+    out = []
+    for level, text in headings:
+        anchor = slug(text)
+        if level >= 2:
+            out.append("  " * (level - 2) + f"- [{escape(text)}](#{anchor})")
+    return out

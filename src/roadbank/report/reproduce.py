@@ -60,14 +60,13 @@ def plan(scenarios=None) -> list[tuple[str, str]]:
     return [(s, c) for s in names for c in CONDITIONS_BY_SCENARIO[s]]
 
 
-#: The study checks the paper's claims with the paper's methods as published: the PIFs
-#: with Table 4 (SI reading); every other estimator with its default.
-STUDY_TUNING = {"pif-modified": {"tuning": "paper"}, "pif-original": {"tuning": "paper"}}
-#: Further columns of the study: label -> (estimator, options). ``pif-default`` is
-#: ``estimators.make("pif-modified")``, roadbank's default tuning (docs/estimators.md).
-EXTRA_COLUMNS = {"pif-default": ("pif-modified", {})}
-#: every column of a full study, in report order
-COLUMNS = estimators.NAMES + tuple(EXTRA_COLUMNS)
+#: every column of a full study, in report order: the estimators, with ``pif-paper`` (the
+#: modified-model PIF with the paper's Table 4, with which the paper's claims are checked)
+#: before ``pif-modified`` (roadbank's default tuning). Each column is ``estimators.make(name)``,
+#: the filter and tuning ``roadbank estimate -e name`` runs (which also sets the default-tuned
+#: PIFs' noise weights from the log: :func:`roadbank.estimators.for_log`).
+COLUMNS = tuple(n for name in estimators.NAMES
+                for n in (("pif-paper", name) if name == "pif-modified" else (name,)))
 
 
 def check_estimators(names) -> None:
@@ -78,27 +77,15 @@ def check_estimators(names) -> None:
 
 
 def _evaluate_columns(sim, names, settle: float, vehicle=None):
-    """:func:`evaluate` for study columns: estimators with :data:`STUDY_TUNING`, then the
-    :data:`EXTRA_COLUMNS` relabelled; rows and estimates in the order of ``names``.
+    """:func:`evaluate` for the study columns ``names``, each ``estimators.make(name)``.
 
     With a ``vehicle`` (:class:`roadbank.vehicle.Vehicle`) every estimator is designed for
-    its parameters; its ``[tuning]`` tables apply to every column except the published
-    PIFs, which keep :data:`STUDY_TUNING` (Table 4) -- so ``pif-default`` is the car's tuned PIF.
+    its parameters and its ``[tuning.<name>]`` table applies to the column of that name
+    (``pif-paper`` has none: it is Table 4 as published).
     """
     params = vehicle.params if vehicle is not None else None
     car_tuning = dict(vehicle.tuning) if vehicle is not None else {}
-    ev = evaluate(sim, [n for n in names if n not in EXTRA_COLUMNS], params, settle=settle,
-                  tuning={**car_tuning, **STUDY_TUNING})
-    for lab in (n for n in names if n in EXTRA_COLUMNS):
-        base, options = EXTRA_COLUMNS[lab]
-        extra = evaluate(sim, [base], params, settle=settle,
-                         tuning={base: {**car_tuning.get(base, {}), **options}})
-        ev.estimates[lab] = extra.estimates[base]
-        ev.rows += [{**r, "estimator": lab} for r in extra.rows]
-    order = {n: i for i, n in enumerate(names)}
-    ev.rows.sort(key=lambda r: order[r["estimator"]])
-    ev.estimates = {n: ev.estimates[n] for n in names}
-    return ev
+    return evaluate(sim, list(names), params, settle=settle, tuning=car_tuning)
 
 
 def run_cell(scenario: str, condition: str, names=COLUMNS, seed: int = 0,
@@ -163,27 +150,33 @@ def _collect(study: Study, res: CellResult, progress) -> None:
         progress(res)
 
 
-def _figure_tasks(by_sc: dict, figdir: Path) -> list[tuple]:
-    """``(key, kind, scenario, cells, path)`` of every figure, the most work (lines) first."""
+def _figure_tasks(by_sc: dict, figdir: Path, names=None) -> list[tuple]:
+    """``(key, kind, scenario, cells, path, names)`` of every figure, the most work (lines) first."""
     from .figures import ROBUSTNESS_CONDITIONS
     tasks = []
     for sc, cells in by_sc.items():
-        tasks.append((sc, "scenario", sc, cells, figdir / sc))
+        tasks.append((sc, "scenario", sc, cells, figdir / sc, names))
         rob = {c: cells[c] for c in ROBUSTNESS_CONDITIONS if c in cells}
         if len(rob) >= 2:
-            tasks.append((f"{sc}-cf-robustness", "robustness", sc, rob, figdir / f"{sc}-cf-robustness"))
+            tasks.append((f"{sc}-cf-robustness", "robustness", sc, rob, figdir / f"{sc}-cf-robustness", None))
     return sorted(tasks, key=lambda t: -sum(len(c.t) * (1 + len(c.phi_b)) for c in t[3].values()))
 
 
-def _draw(kind: str, sc: str, cells: dict, path: Path):
-    from .figures import robustness_figure, scenario_figure
-    return (scenario_figure if kind == "scenario" else robustness_figure)(sc, cells, path)
+def _draw(kind: str, sc: str, cells: dict, path: Path, names=None):
+    from .figures import FIGURE_SET, robustness_figure, scenario_figure
+    if kind == "robustness":
+        return robustness_figure(sc, cells, path)
+    return scenario_figure(sc, cells, path, names=FIGURE_SET if names is None else names)
 
 
 def write_outputs(study: Study, outdir: Path, *, docs_results: Path | None = None,
-                  jobs: int | None = 1) -> dict:
+                  jobs: int | None = 1, figure_names=None, started: float | None = None) -> dict:
     """Write tables, figures (scenarios in ``jobs`` processes) and the report into ``outdir``.
 
+    ``figure_names`` are the estimators the scenario figures draw (default
+    :data:`roadbank.report.figures.FIGURE_SET`, those the study has); ``started`` the
+    ``time.perf_counter()`` at the start of the command, for the wall time the report states
+    (default: the cells' time only).
     Returns the written paths by kind: ``tables``, ``figures`` (name -> paths), ``report``.
     """
     from .document import write_report
@@ -192,7 +185,7 @@ def write_outputs(study: Study, outdir: Path, *, docs_results: Path | None = Non
     figdir = outdir / "figures"
     figdir.mkdir(parents=True, exist_ok=True)
     by_sc = study.by_scenario()
-    tasks = _figure_tasks(by_sc, figdir)
+    tasks = _figure_tasks(by_sc, figdir, None if figure_names is None else tuple(figure_names))
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(tasks)))
     drawn: dict = {}
     if jobs == 1:
@@ -208,5 +201,6 @@ def write_outputs(study: Study, outdir: Path, *, docs_results: Path | None = Non
     order = [k for sc in by_sc for k in (sc, f"{sc}-cf-robustness")]
     figs = {k: drawn[k] for k in order if drawn.get(k)}
     written["figures"] = figs
-    written["report"] = write_report(study, outdir, figs, docs_results=docs_results)
+    wall = None if started is None else time.perf_counter() - started
+    written["report"] = write_report(study, outdir, figs, docs_results=docs_results, command_s=wall)
     return written

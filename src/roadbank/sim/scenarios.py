@@ -164,6 +164,19 @@ def _build_scenarios() -> dict[str, Scenario]:
 
 SCENARIOS: dict[str, Scenario] = _build_scenarios()
 
+#: further drives that :func:`run_scenario` and ``roadbank simulate`` know (not the paper's
+#: study): ``identification-drive``, the test-track procedure ``roadbank identify`` needs
+#: (:func:`roadbank.identification.simdrive.identification_drive`)
+DRIVES = ("identification-drive",)
+
+
+def drive_scenario(name: str) -> Scenario:
+    """The :class:`Scenario` of one of :data:`DRIVES` (built on each call)."""
+    if name == "identification-drive":
+        from ..identification.simdrive import identification_drive
+        return identification_drive()
+    raise ValueError(f"unknown drive {name!r}; known: {', '.join(DRIVES)}")
+
 
 @dataclass
 class Truth:
@@ -368,15 +381,17 @@ def run(scenario: Scenario, plant: PlantParams | None = None, sensors: SensorCon
 
 def run_scenario(name: str, condition: str = "nominal", seed: int = 0, plant: PlantParams | None = None,
                  sensors: SensorConfig | None = None) -> SimResult:
-    """Run one of the paper's scenarios (:data:`SCENARIOS`) under a condition (:data:`CONDITIONS`).
+    """Run one of the paper's scenarios (:data:`SCENARIOS`) or of the :data:`DRIVES` under a
+    condition (:data:`CONDITIONS`).
 
     ``plant`` and ``sensors`` (optional) are the base the condition is applied to.
     """
-    if name not in SCENARIOS:
-        raise ValueError(f"unknown scenario {name!r}; known: {', '.join(SCENARIOS)}")
+    if name not in SCENARIOS and name not in DRIVES:
+        raise ValueError(f"unknown scenario {name!r}; known: {', '.join((*SCENARIOS, *DRIVES))}")
     if condition not in CONDITIONS:
         raise ValueError(f"unknown condition {condition!r}; known: {', '.join(CONDITIONS)}")
-    return run(SCENARIOS[name], plant=plant, sensors=sensors, seed=seed, condition=condition)
+    sc = SCENARIOS[name] if name in SCENARIOS else drive_scenario(name)
+    return run(sc, plant=plant, sensors=sensors, seed=seed, condition=condition)
 
 
 def measure_realtime_factor(repeats: int = 5, dt: float = DT_DEFAULT) -> float:
