@@ -97,8 +97,12 @@ class _SummaryFile:
     def __init__(self, outdir: Path, resume: bool):
         self.path = outdir / SUMMARY
         new = not (resume and self.path.exists())
+        columns = list(SUMMARY_COLUMNS)
+        if not new:         # appending: the existing file's columns (one written before a column was added)
+            with open(self.path, newline="") as fh:
+                columns = next(csv.reader(fh), None) or columns
         self.fh = open(self.path, "w" if new else "a", newline="")
-        self.w = csv.DictWriter(self.fh, fieldnames=list(SUMMARY_COLUMNS))
+        self.w = csv.DictWriter(self.fh, fieldnames=columns, extrasaction="ignore")
         if new:
             self.w.writeheader()
             self.fh.flush()

@@ -93,7 +93,7 @@ def repair_stamps(source, column: str, t: np.ndarray, label: str = "time", after
     where = f"{row_label} {rownums[first] if rownums is not None else first}"
     n_flag = int(rep.flagged.sum())
     return rep, [f"{source}: channel '{label}' (column '{column}'): time stamps repaired: "
-                 f"{describe(rep.counts)} (first at {where}); {n_flag} sample(s) flagged not valid"]
+                 f"{describe(rep.counts)} (first at {where}), {n_flag} sample(s) flagged not valid"]
 
 
 def repair_counts(rep: TimeRepair) -> dict:
