@@ -147,7 +147,10 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
         if res.skipped:
             click.echo(f"{len(res.skipped)} log(s) already finished (--resume), skipped", err=True)
         click.echo(f"summary: {Path(output) / 'summary.csv'}", err=True)
-    click.echo(json.dumps(summary_json(summaries, names), indent=1) if as_json else summary_table(summaries, names))
+    if as_json:
+        click.echo(json.dumps(summary_json(summaries, names), indent=1))
+    elif batch or summaries[0].status == "ok":
+        click.echo(summary_table(summaries, names))
     for s in summaries:
         for w in filter(None, s.warnings.split("; ")):
             click.echo(f"warning: {w}", err=True)

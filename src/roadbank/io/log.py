@@ -101,6 +101,16 @@ def repair_counts(rep: TimeRepair) -> dict:
     return dict(rep.counts, flagged=int(rep.flagged.sum()))
 
 
+def missing_column(p, role: str, column: str | None, names,
+                   what: str = "column not found in the file") -> LogError:
+    """The error for a required channel whose column is not in the file, with the way out: a
+    channel map (``--channels map.toml``) that ``roadbank channels`` writes for the file's columns."""
+    return channel_error(p, role, column, f"{what} (it has: "
+                         f"{', '.join(names) or 'nothing'}); for a log with other column names give a "
+                         f"channel map with --channels map.toml (`roadbank channels {Path(p).name} -o map.toml` "
+                         "writes one for these columns)")
+
+
 def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
     """Roles to read: speed, lateral_acceleration, yaw_rate, [the steering role], [reference_roll].
 
@@ -116,12 +126,10 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
     for role in roles:
         col = cmap.channels[role].column
         if col not in have:
-            raise channel_error(p, role, col, f"column not found in the file "
-                                f"(it has: {', '.join(names) or 'nothing'})")
+            raise missing_column(p, role, col, names)
     if not present:
         cols = " or ".join(f"'{cmap.channels[r].column}'" for r in steer_roles)
-        raise LogError(f"{p}: channel 'steering' missing: no column {cols} in the file "
-                       f"(it has: {', '.join(names) or 'nothing'})")
+        raise missing_column(p, "steering", None, names, f"missing: no column {cols} in the file")
     if present[0] is not None:
         roles.append(present[0])
     if "reference_roll" in cmap.channels:
@@ -206,8 +214,7 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
             raise LogError(f"{cmap.source}: channel map has no 'time' channel (required for {fmt})")
         tspec = cmap.channels["time"]
         if tspec.column not in have:
-            raise channel_error(p, "time", tspec.column, f"column not found in the file "
-                                f"(it has: {', '.join(raw.names) or 'nothing'})")
+            raise missing_column(p, "time", tspec.column, raw.names)
         t = cmap.to_si_iso("time", raw.data[tspec.column])
         rep, w = repair_stamps(p, tspec.column, t, rownums=raw.rownums, row_label=raw.row_label)
         warns += w

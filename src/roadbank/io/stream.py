@@ -35,8 +35,8 @@ from . import readers
 from .channels import ChannelMap, check_plausible, default_channel_map, read_channel_map
 from .consistency import check_consistency
 from .errors import LogError, channel_error
-from .log import (FLAGGED_ROLES, GNSS_MAX_GAP_S, Log, gnss_extra, gnss_roles, load_log, repair_counts,
-                  repair_stamps, road_wheel_angle, select_roles)
+from .log import (FLAGGED_ROLES, GNSS_MAX_GAP_S, Log, gnss_extra, gnss_roles, load_log, missing_column,
+                  repair_counts, repair_stamps, road_wheel_angle, select_roles)
 from .resample import clean_series, interpolate
 from .timebase import GAP_PERIODS, add_counts
 
@@ -420,8 +420,7 @@ def _stream_table(p, cmap, params, chunk_rows):
     gnss = gnss_roles(cmap)
     for r in gnss + ["time"]:
         if cmap.channels[r].column not in have:
-            raise channel_error(p, r, cmap.channels[r].column, f"column not found in the file "
-                                f"(it has: {', '.join(names) or 'nothing'})")
+            raise missing_column(p, r, cmap.channels[r].column, names)
     wanted = {cmap.channels[r].column: r for r in ["time"] + roles + gnss}
     truth_cols = [c for c in names if cmap.truth_prefix and c.startswith(cmap.truth_prefix) and c not in wanted]
     tcol = cmap.channels["time"].column
