@@ -70,7 +70,7 @@ def test_long_clean_log_is_fast_path():
 # ------------------------------------------------------------------ a damaged simulated log
 
 #: rows damaged, and what the repair must do (rows of the original table)
-DUP, SWAP, HIGH, LOW, GAP = 103, 407, 700, 999, 900
+DUP, SWAP, SWAP2, HIGH, LOW, GAP = 103, 407, 249, 700, 999, 900
 
 
 @pytest.fixture(scope="module")
@@ -85,14 +85,15 @@ def damaged(tmp_path_factory):
     t = bad["t"]
     t[DUP] = t[DUP - 1]                              # a duplicated stamp: row DUP dropped, DUP-1 flagged
     t[SWAP], t[SWAP + 1] = t[SWAP + 1], t[SWAP]      # swapped stamps: rows reordered, both flagged
+    t[SWAP2], t[SWAP2 + 1] = t[SWAP2 + 1], t[SWAP2]  # the same across a chunk boundary (249 | 250)
     t[499] = t[499] + 7.0                            # isolated high stamp at a chunk's end: dropped
     t[HIGH] = t[HIGH] + 3.0                          # isolated high stamp inside a chunk
     t[LOW] = t[LOW] - 4.0                            # isolated low stamp at a chunk's end
     t[1000] = np.nan                                 # a missing stamp starting a chunk
     t[GAP:] += 2.0                                   # the logger paused 2 s: a gap, kept
     dropped = [DUP, 499, HIGH, LOW, 1000]
-    flagged = [DUP - 1, SWAP, SWAP + 1, 500, HIGH + 1, 1001]     # 1001: after the low stamp and the missing one
-    counts = {"missing": 1, "duplicate": 1, "swapped": 1, "out_of_order": 3, "gaps": 1, "flagged": len(flagged)}
+    flagged = [DUP - 1, SWAP2, SWAP2 + 1, SWAP, SWAP + 1, 500, HIGH + 1, 1001]  # 1001: after the low and missing
+    counts = {"missing": 1, "duplicate": 1, "swapped": 2, "out_of_order": 3, "gaps": 1, "flagged": len(flagged)}
     d = tmp_path_factory.mktemp("damaged")
     write_table(d / "bad.csv", bad)
     write_table(d / "bad.parquet", bad)
@@ -103,8 +104,9 @@ def _expected(tab, bad, dropped, flagged):
     """The repaired log by hand: rows in time order (the swapped pair back in place), dropped rows
     gone, the flagged rows NaN; times as the (damaged) file gives them."""
     order = [i for i in range(len(tab["t"])) if i not in dropped]
-    i = order.index(SWAP)
-    order[i], order[i + 1] = SWAP + 1, SWAP
+    for sw in (SWAP, SWAP2):
+        i = order.index(sw)
+        order[i], order[i + 1] = sw + 1, sw
     out = {"t": bad["t"][order]}
     for k in ("vx", "ay", "r", "delta_f"):
         v = tab[k].copy()
@@ -183,7 +185,7 @@ def test_cli_estimate_repairs_flags_and_counts(damaged, tmp_path):
     res = CliRunner().invoke(main, ["estimate", str(d / "bad.csv"), "-e", "kinematic", "-o", str(out)])
     assert res.exit_code == 0, res.output
     assert "time stamps repaired in bad.csv: 1 missing stamp dropped, 1 duplicate stamp dropped, " \
-           "1 swapped pair reordered, 3 out-of-order stamps dropped, 1 gap kept; 6 sample(s) flagged not valid" \
+           "2 swapped pairs reordered, 3 out-of-order stamps dropped, 1 gap kept; 8 sample(s) flagged not valid" \
            in res.output, res.output
     got = np.genfromtxt(out, delimiter=",", names=True)
     exp = _expected(tab, bad, dropped, flagged)

@@ -38,7 +38,7 @@ from .errors import LogError, channel_error
 from .log import (FLAGGED_ROLES, GNSS_MAX_GAP_S, Log, gnss_extra, gnss_roles, load_log, missing_column,
                   repair_counts, repair_stamps, road_wheel_angle, select_roles)
 from .resample import clean_series, interpolate
-from .timebase import GAP_PERIODS, add_counts
+from .timebase import add_counts
 
 #: default rows per chunk (records per channel group for MDF4): 20 000 samples = 3.3 min at 100 Hz
 #: (memory vs per-chunk overhead: each 10 000 rows cost about 3.5 MiB of peak memory, docs/io.md)
@@ -102,7 +102,8 @@ class ChunkRepair:
 
 def _odd_tail(t: np.ndarray, rep) -> bool:
     """True if the last :data:`HOLD_ROWS` stamps of a chunk were repaired or end in an odd step
-    (backwards, repeated, or a jump): they wait for the next chunk (a clean chunk is passed whole)."""
+    (backwards, repeated, or longer than 1.5 median steps): they wait for the next chunk (a clean
+    chunk is passed whole)."""
     n = len(t)
     if n == 0:
         return False
@@ -111,7 +112,8 @@ def _odd_tail(t: np.ndarray, rep) -> bool:
         return True
     d = np.diff(t[-HOLD_ROWS - 8:])
     d = d[np.isfinite(d)]
-    return bool(len(d) and (d[-1] <= 0 or d[-1] > GAP_PERIODS * float(np.median(d))))
+    # 1.5 periods: the later stamp of a pair swapped across the boundary makes a double step
+    return bool(len(d) and (d[-1] <= 0 or d[-1] > 1.5 * float(np.median(d))))
 
 
 def _final_empty(chunks, columns):
