@@ -60,7 +60,7 @@ def test_glob_with_a_readme_skips_it(tmp_path):
     args = sorted(str(p) for p in d.iterdir())            # what the shell makes of logs/*
     res = CliRunner().invoke(main, ["estimate", *args, "-e", "kinematic", "-o", str(tmp_path / "out")])
     assert res.exit_code == 0, res.output
-    assert f"skipped {d / 'README.md'} (not a log: unknown suffix '.md' (use --format))" in res.output
+    assert f"skipped {d / 'README.md'} (not a log of a known format: suffix '.md')" in res.output
     res = CliRunner().invoke(main, ["estimate", *args, "--format", "csv", "-e", "kinematic",
                                     "-o", str(tmp_path / "out2")])
     assert res.exit_code == 0, res.output

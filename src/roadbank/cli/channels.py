@@ -7,7 +7,6 @@ from pathlib import Path
 
 import click
 
-from ..io.readers import FORMATS
 
 
 def read_columns(path: Path, fmt: str):

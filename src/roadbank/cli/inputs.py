@@ -32,7 +32,7 @@ def not_a_log(path: Path, fmt: str | None) -> str | None:
     except LogError:
         detected = None
     if fmt is None:
-        return None if detected else f"not a log: unknown suffix '{path.suffix}' (use --format)"
+        return None if detected else f"not a log of a known format: suffix '{path.suffix}'"
     if suffix in NOT_LOG_SUFFIXES or (detected in _OWN_SUFFIX and detected != fmt
                                       and {detected, fmt} not in ({"mdf4", "mdf4-can"}, {"mcap", "rosbag2"})):
         return f"not a {fmt} log"
