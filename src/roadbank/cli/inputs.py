@@ -78,6 +78,7 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
             click.echo(f"skipped {p} ({why})", err=True)
     if not kept:
         what = "no logs found" if not paths else "no logs left to read"
-        click.echo(f"error: {what} in {', '.join(map(str, logs))}", err=True)
+        hint = " (--format reads a log whose suffix is not its format's)" if paths and fmt is None else ""
+        click.echo(f"error: {what} in {', '.join(map(str, logs))}{hint}", err=True)
         sys.exit(1)
     return cmap, kept
