@@ -85,3 +85,9 @@ def test_straight_drive_says_it_is_unsure(drive):
     g = {x.role: x for x in guess_channels(list(data), data)}
     assert g["speed"].unit == "km/h"                # 80 m/s is no car: km/h (range only)
     assert g["yaw_rate"].confidence == "low" and "sign not checked" in g["yaw_rate"].reason
+
+
+@pytest.mark.parametrize("name, role", [("Yaw", "yaw_rate"), ("yaw_angle", "yaw_rate"), ("gear", "speed"),
+                                        ("GyroY", "lateral_acceleration"), ("VehSpd", "time")])
+def test_names_that_are_not_the_channel(name, role):
+    assert name_match(role, name)[0] == 0          # a heading is no yaw rate, a pitch rate no ay

@@ -29,12 +29,12 @@ from .units import FACTORS
 
 #: role -> name spellings (normalised: lower case, letters and digits only)
 NAMES = {
-    "time": ("t", "time", "timestamp", "times", "ts", "timest", "zeit", "timesec", "times", "stamp", "logtime"),
+    "time": ("t", "time", "timestamp", "times", "ts", "timest", "zeit", "timesec", "stamp", "logtime"),
     "speed": ("vx", "v", "speed", "vehspd", "vehiclespeed", "velocity", "vel", "spd", "vspeed", "vehspeed",
               "speedx", "velx", "vlgt", "groundspeed", "vehiclevelocity"),
     "lateral_acceleration": ("ay", "accy", "latacc", "lataccel", "lateralacceleration", "lateralaccel",
-                             "accely", "ay1", "alat", "aylat", "accelerationy", "latg", "gy"),
-    "yaw_rate": ("r", "yawrate", "yawrt", "wz", "gyroz", "omegaz", "yawvel", "yaw", "yawvelocity", "psidot",
+                             "accely", "ay1", "alat", "aylat", "accelerationy", "latg"),
+    "yaw_rate": ("r", "yawrate", "yawrt", "wz", "gyroz", "omegaz", "yawvel", "yawvelocity", "psidot",
                  "angularvelocityz", "rz"),
     "steering_wheel_angle": ("swa", "steerangle", "steeringangle", "steeringwheelangle", "steer", "swangle",
                              "strwhlang", "steeringwheel", "stwangle", "steerwheelangle", "handwheelangle"),
