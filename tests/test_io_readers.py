@@ -306,12 +306,24 @@ def test_steering_in_deg_declared_rad(tmp_path):
         load_log(p)
 
 
-def test_time_backwards(tmp_path):
+def test_time_backwards_once_is_repaired(tmp_path):
+    # one stamp back in time (an isolated bad stamp): the sample is dropped, the next one flagged
     cols = _sim_columns(20)
     cols["t"][10] = cols["t"][8]          # data row index 10 = file line 12 (header is line 1)
     p = _write_csv(tmp_path / "tb.csv", cols)
-    with pytest.raises(LogError, match=r"channel 'time' \(column 't'\): time goes backwards at line 12 "
-                       r"\(0\.09 -> 0\.08\)"):
+    log = load_log(p)
+    assert len(log) == 19 and 0.10 not in np.round(log.signals.t, 9)
+    assert log.time_repairs["out_of_order"] == 1 and log.time_repairs["flagged"] == 1
+    assert np.isnan(log.signals.r[10]) and np.isfinite(log.signals.r[9])     # the sample after it
+    assert any("time stamps repaired: 1 out-of-order stamp dropped (first at line 12)" in w
+               for w in log.warnings), log.warnings
+
+
+def test_time_running_backwards_is_refused(tmp_path):
+    cols = _sim_columns(20)
+    cols["t"] = cols["t"][::-1].copy()    # no increasing time base at all
+    p = _write_csv(tmp_path / "tb.csv", cols)
+    with pytest.raises(LogError, match=r"tb\.csv: channel 'time' \(column 't'\): no increasing time base"):
         load_log(p)
 
 

@@ -38,6 +38,7 @@ COMMANDS = {
     "export": "export:export",
     "identify": "identify:identify",
     "tune": "tune:tune",
+    "channels": "channels:channels",
 }
 
 

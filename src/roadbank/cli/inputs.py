@@ -3,14 +3,60 @@
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
 import click
 
+#: suffixes of files that are never logs (documentation, pictures, configuration): skipped when a
+#: glob or a folder brings them in, even with --format
+NOT_LOG_SUFFIXES = {".md", ".rst", ".pdf", ".png", ".jpg", ".jpeg", ".gif", ".svg", ".html", ".htm", ".json",
+                    ".yaml", ".yml", ".toml", ".dbc", ".py", ".sh", ".zip", ".gz", ".tar", ".xml", ".ini",
+                    ".cfg", ".doc", ".docx", ".xlsx"}
+#: formats whose suffix belongs to them alone: a file of one of these is not a log of another format
+_OWN_SUFFIX = ("parquet", "mdf4", "blf", "asc", "trc", "rosbag1", "mcap")
 
-def channel_map_and_logs(channels, logs):
+
+def not_a_log(path: Path, fmt: str | None) -> str | None:
+    """Why ``path`` is not a log to read with ``fmt`` (None: the format from its suffix), or None if it may be.
+
+    Only files are judged; directories and missing paths are left to the readers (their errors
+    name the problem).
+    """
+    from ..io import LogError, detect_format
+
+    if not path.is_file():
+        return None
+    suffix = path.suffix.lower()
+    try:
+        detected = detect_format(path)
+    except LogError:
+        detected = None
+    if fmt is None:
+        return None if detected else f"not a log of a known format: suffix '{path.suffix}'"
+    if suffix in NOT_LOG_SUFFIXES or (detected in _OWN_SUFFIX and detected != fmt
+                                      and {detected, fmt} not in ({"mdf4", "mdf4-can"}, {"mcap", "rosbag2"})):
+        return f"not a {fmt} log"
+    return None
+
+
+def expand_kitti(paths: list[Path]) -> list[Path]:
+    """Each path, with a folder holding several KITTI raw drives replaced by its drives (as
+    ``roadbank validate kitti`` takes them)."""
+    from ..io.kitti import find_oxts_dirs
+
+    out = []
+    for p in paths:
+        found = find_oxts_dirs(p) if p.is_dir() else []
+        out += [d.parent if d.name == "oxts" else d for d in found] if len(found) > 1 else [p]
+    return sorted(dict.fromkeys(out))
+
+
+def channel_map_and_logs(channels, logs, fmt: str | None = None):
     """``(ChannelMap or None, [Path])`` from ``--channels`` and the LOGS arguments (files, directories, globs).
 
-    A bad channel map or no log found is a one-line error (exit code 1), never a traceback.
+    A folder of KITTI drives gives its drives. Files that are not logs of ``fmt`` (or of a format
+    known from their suffix) -- a README.md a glob picked up -- are skipped, each with a one-line
+    message. A bad channel map or no log found is a one-line error (exit code 1), never a traceback.
     """
     from ..fleet import expand_logs
     from ..io import LogError, read_channel_map
@@ -22,8 +68,17 @@ def channel_map_and_logs(channels, logs):
         except LogError as exc:
             click.echo(f"error: {exc}", err=True)
             sys.exit(1)
-    paths = expand_logs(logs)
-    if not paths:
-        click.echo(f"error: no logs found in {', '.join(map(str, logs))}", err=True)
+    paths = expand_kitti(expand_logs(logs))
+    kept = []
+    for p in paths:
+        why = not_a_log(p, fmt)
+        if why is None:
+            kept.append(p)
+        else:
+            click.echo(f"skipped {p} ({why})", err=True)
+    if not kept:
+        what = "no logs found" if not paths else "no logs left to read"
+        hint = " (--format reads a log whose suffix is not its format's)" if paths and fmt is None else ""
+        click.echo(f"error: {what} in {', '.join(map(str, logs))}{hint}", err=True)
         sys.exit(1)
-    return cmap, paths
+    return cmap, kept

@@ -63,7 +63,7 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
                                  param_hint="--estimator")
     if output.suffix.lower() not in (".parquet", ".pq"):
         raise click.BadParameter("the map table must end in .parquet", param_hint="-o")
-    cmap, paths = channel_map_and_logs(channels, logs)
+    cmap, paths = channel_map_and_logs(channels, logs, fmt)
     try:
         with click.progressbar(length=len(paths), label=f"mapping ({estimator})", file=sys.stderr) as bar:
             bmap, recs = map_logs(paths, estimator, channels=cmap, format=fmt, vehicle=vehicle, cell_m=cell_m,

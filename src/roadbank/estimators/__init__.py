@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from functools import partial
 
+from ..defaults import ESTIMATOR
 from ..params import VehicleParams
 from .base import Estimator, StepResult
 from .dfc import DFC
@@ -60,7 +61,7 @@ OFFLINE = tuple(n for n, f in _FACTORIES.items() if getattr(f, "offline", False)
 #: the estimator of every command and of :func:`for_log` when none is named: the best by a rule
 #: written before measuring, on training data only (real KITTI training drives and simulated
 #: drives of cars that are not described; docs/estimators.md, :mod:`roadbank.tuning.real`)
-DEFAULT = "kinematic-ff"
+DEFAULT = ESTIMATOR
 #: estimators that run another's filter with its weights (``pif-gated``: as its slow filter): a
 #: vehicle file's ``[tuning.<that one>]`` table applies to them too, under their own table's keys
 TUNED_AS = {"pif-smoother": "pif-modified", "pif-gated": "pif-modified"}

@@ -8,9 +8,12 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..defaults import ESTIMATOR as DEFAULT
+
 #: columns of the summary table, in order (see LogSummary)
 SUMMARY_COLUMNS = ("log", "status", "error", "output", "estimator", "samples", "duration_s", "valid_share",
-                   "bank_mean_deg", "bank_min_deg", "bank_max_deg", "chunks", "seconds", "warnings")
+                   "bank_mean_deg", "bank_min_deg", "bank_max_deg", "chunks", "seconds", "warnings",
+                   "time_repairs")
 
 
 @dataclass
@@ -43,6 +46,12 @@ class LogSummary:
         Wall time to read, estimate and write (s).
     warnings : str
         Reader warnings, "; "-separated.
+    time_repairs : dict kind -> int
+        What the time-stamp repair did to the log (:attr:`roadbank.io.Log.time_repairs`, summed
+        over its chunks); in the summary table as ``kind=n`` pairs, "; "-separated (the non-zero ones).
+    estimators : dict name -> dict
+        ``valid_share``, ``bank_mean_deg``, ``bank_min_deg``, ``bank_max_deg`` of every estimator
+        asked for (the columns above are those of the first one).
     """
 
     log: str
@@ -59,12 +68,15 @@ class LogSummary:
     chunks: int = 0
     seconds: float = 0.0
     warnings: str = ""
+    time_repairs: dict = field(default_factory=dict)
+    estimators: dict = field(default_factory=dict)
     kept: object = field(default=None, repr=False, compare=False)
 
     def row(self) -> dict:
         """The summary-table row (every column of :data:`SUMMARY_COLUMNS`)."""
         d = asdict(self)
         d.pop("kept")
+        d["time_repairs"] = "; ".join(f"{k}={v}" for k, v in self.time_repairs.items() if v)
         return {k: d[k] for k in SUMMARY_COLUMNS}
 
 
@@ -92,11 +104,17 @@ class _BankStats:
     def fill(self, s: LogSummary) -> None:
         s.samples = self.n
         s.duration_s = float(self.t1 - self.t0) if self.n else math.nan
-        s.valid_share = self.nvalid / self.n if self.n else math.nan
+        for k, v in self.stats().items():
+            setattr(s, k, v)
+
+    def stats(self) -> dict:
+        """``valid_share`` and ``bank_mean_deg``, ``bank_min_deg``, ``bank_max_deg`` (NaN without a valid sample)."""
+        out = {"valid_share": self.nvalid / self.n if self.n else math.nan,
+               "bank_mean_deg": math.nan, "bank_min_deg": math.nan, "bank_max_deg": math.nan}
         if self.nvalid:
-            s.bank_mean_deg = math.degrees(self.sum / self.nvalid)
-            s.bank_min_deg = math.degrees(self.min)
-            s.bank_max_deg = math.degrees(self.max)
+            out.update(bank_mean_deg=math.degrees(self.sum / self.nvalid), bank_min_deg=math.degrees(self.min),
+                       bank_max_deg=math.degrees(self.max))
+        return out
 
 
 def concat_estimates(parts: list):
@@ -110,7 +128,7 @@ def concat_estimates(parts: list):
                     np.concatenate([p.valid for p in parts]), states)
 
 
-def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, format: str | None = None,
+def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: str | None = None,
                  params=None, vehicle=None, chunk_rows: int | None = None, metadata: dict | None = None,
                  keep: bool = False, plot=None) -> LogSummary:
     """Estimate the bank on one log, streamed in chunks, and write the result table incrementally.
@@ -155,6 +173,7 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
     from ..estimators import OFFLINE
     from ..io import LogError
     from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
+    from ..io.timebase import add_counts
     from ..io.writers import TableWriter, estimate_table
     from ..vehicle import log_conditions, make_estimator
 
@@ -166,7 +185,7 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
         if vehicle is not None:
             params = vehicle.params
         keep = keep or plot is not None
-        stats = _BankStats()
+        stats = [_BankStats() for _ in names]
         warns: list[str] = []
         ests = []
         kept = {"t": [], "est": [[] for _ in names], "roll": [], "truth": {}}
@@ -184,12 +203,14 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
                         else make_estimator(n, params, **cond) for n in names]
                 span = max((e.lookahead_s for e, n in zip(ests, names) if n in OFFLINE), default=None)
             warns += chunk.warnings
+            summary.time_repairs = add_counts(summary.time_repairs, chunk.time_repairs)
             signals = correct(chunk.signals)
             nxt = None if span is None else chunks.following(span)
             ahead = None if nxt is None else correct(nxt)
             results = [e.run(signals, reset=(k == 0), lookahead=ahead) for e in ests]
             writer.write(estimate_table(chunk.signals.t, results, chunk.reference_roll))
-            stats.add(results[0])
+            for st, r in zip(stats, results):
+                st.add(r)
             summary.chunks += 1
             if keep:
                 kept["t"].append(chunk.signals.t)
@@ -200,7 +221,9 @@ def estimate_log(path, output, estimators=("pif-modified",), *, channels=None, f
                 for c, v in chunk.truth.items():
                     kept["truth"].setdefault(c, []).append(v)
         summary.output = str(writer.close())
-        stats.fill(summary)
+        if stats:
+            stats[0].fill(summary)
+        summary.estimators = {n: st.stats() for n, st in zip(names, stats)}
         summary.warnings = "; ".join(warns)
         if keep:
             summary.kept = (np.concatenate(kept["t"]), [concat_estimates(x) for x in kept["est"]],

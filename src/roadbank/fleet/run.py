@@ -21,6 +21,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..defaults import ESTIMATOR as DEFAULT
 from .process import SUMMARY_COLUMNS, LogSummary, estimate_log
 
 SUMMARY = "summary.csv"
@@ -97,8 +98,12 @@ class _SummaryFile:
     def __init__(self, outdir: Path, resume: bool):
         self.path = outdir / SUMMARY
         new = not (resume and self.path.exists())
+        columns = list(SUMMARY_COLUMNS)
+        if not new:         # appending: the existing file's columns (one written before a column was added)
+            with open(self.path, newline="") as fh:
+                columns = next(csv.reader(fh), None) or columns
         self.fh = open(self.path, "w" if new else "a", newline="")
-        self.w = csv.DictWriter(self.fh, fieldnames=list(SUMMARY_COLUMNS))
+        self.w = csv.DictWriter(self.fh, fieldnames=columns, extrasaction="ignore")
         if new:
             self.w.writeheader()
             self.fh.flush()
@@ -159,7 +164,7 @@ def _warm(names, params, vehicle=None):
     return True
 
 
-def run_fleet(logs, outdir, estimators=("pif-modified",), *, channels=None, format: str | None = None,
+def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str | None = None,
               params=None, vehicle=None, output_format: str = "parquet", workers: int = 1,
               scheduler: str | None = None, resume: bool = False, chunk_rows: int | None = None,
               metadata: dict | None = None, plot_dir=None, on_result=None,

@@ -1,9 +1,9 @@
 """Cross-channel unit check: lateral acceleration, speed and yaw rate must agree.
 
-Physics: ``ay = dvy/dt + vx r + g sin(theta)`` (SPEC eq 2). On any drivable
-road ``|g sin(theta)|`` stays below ``g sin(35 deg)`` (bank + roll) and
-``|dvy/dt|`` is small on average, so over the turning part of a log the median
-of ``|ay - vx r|`` is well under :data:`LIMIT` (0.8 g). A speed logged in km/h
+Physics: ``ay = dvy/dt + vx r + g sin(theta)`` (what a lateral accelerometer measures on a
+road tilted by ``theta``, bank plus roll). On any drivable road ``|g sin(theta)|``
+stays below ``g sin(35 deg)`` (bank + roll) and ``|dvy/dt|`` is small on average, so
+over the turning part of a log the median of ``|ay - vx r|`` is well under :data:`LIMIT` (0.8 g). A speed logged in km/h
 but declared m/s, a yaw rate in deg/s declared rad/s, or an inverted sign
 convention breaks this by far as soon as the car turns — even when each channel
 alone looks plausible (60 km/h read as 60 m/s passes the per-channel check).

@@ -14,6 +14,7 @@ from .channels import ChannelMap, check_plausible, default_channel_map, read_cha
 from .consistency import check_consistency
 from .errors import LogError, channel_error
 from .resample import common_time_base, resample
+from .timebase import TimeRepair, UnrepairableTime, add_counts, describe, repair_time
 
 
 @dataclass
@@ -41,6 +42,11 @@ class Log:
     extra : dict name -> array
         Further channels on ``signals.t``, unit in the name (kitti-oxts: ``lat_deg``,
         ``lon_deg`` for maps).
+    time_repairs : dict kind -> int
+        What the time-stamp repair did (:mod:`roadbank.io.timebase`): samples dropped as
+        ``missing``, ``duplicate`` or ``out_of_order`` stamps, ``swapped`` pairs reordered,
+        ``gaps`` kept, and ``flagged``: samples whose values were set to NaN (the estimators
+        flag them not valid). Summed over the channels of a format with per-channel clocks.
     """
 
     signals: Signals
@@ -52,26 +58,57 @@ class Log:
     warnings: list = field(default_factory=list)
     channel_map: ChannelMap | None = None
     extra: dict = field(default_factory=dict)
+    time_repairs: dict = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.signals)
 
 
-def _check_time(source, column: str, t: np.ndarray, raw, label: str = "time") -> None:
-    """Time stamps must be finite and non-decreasing (duplicates are dropped later)."""
-    def where(i: int) -> str:
-        if raw is not None and raw.rownums is not None:
-            return f"{raw.row_label} {raw.rownums[i]}"
-        return f"sample {i}"
-    bad = np.flatnonzero(~np.isfinite(t))
-    if len(bad):
-        raise channel_error(source, label, column, f"missing or non-finite time at {where(int(bad[0]))}")
-    d = np.diff(t)
-    back = np.flatnonzero(d < 0)
-    if len(back):
-        i = int(back[0]) + 1
-        raise channel_error(source, label, column,
-                            f"time goes backwards at {where(i)} ({float(t[i - 1])!r} -> {float(t[i])!r})")
+#: the signal roles whose values are set to NaN on a sample flagged by the time-stamp repair
+FLAGGED_ROLES = ("speed", "lateral_acceleration", "yaw_rate", "road_wheel_angle", "steering_wheel_angle")
+
+
+def repair_stamps(source, column: str, t: np.ndarray, label: str = "time", after: float | None = None,
+                  rownums=None, row_label: str = "sample") -> tuple[TimeRepair, list[str]]:
+    """:func:`~roadbank.io.timebase.repair_time` of one channel's stamps ``t`` (s), with its message.
+
+    Returns the repair and a warning naming the file, the channel, what was repaired and the first
+    line / row / sample it touched (an empty list when nothing was). ``rownums`` number the samples
+    in messages (default: 0, 1, ...). Raises :class:`LogError` when the stamps cannot be repaired.
+    """
+    try:
+        rep = repair_time(t, after=after)
+    except UnrepairableTime as exc:
+        where = ""
+        if after is not None and len(t):         # a streamed chunk: say where it is
+            lo, hi = (rownums[0], rownums[len(t) - 1]) if rownums is not None else (0, len(t) - 1)
+            where = f" ({row_label}s {lo}-{hi})"
+        raise channel_error(source, label, column, f"{exc}{where}") from None
+    if not rep.changed:
+        return rep, []
+    touched = np.ones(len(t), dtype=bool)
+    touched[rep.keep] = False
+    touched[rep.keep[rep.flagged]] = True
+    first = int(np.flatnonzero(touched)[0])
+    where = f"{row_label} {rownums[first] if rownums is not None else first}"
+    n_flag = int(rep.flagged.sum())
+    return rep, [f"{source}: channel '{label}' (column '{column}'): time stamps repaired: "
+                 f"{describe(rep.counts)} (first at {where}), {n_flag} sample(s) flagged not valid"]
+
+
+def repair_counts(rep: TimeRepair) -> dict:
+    """The repair's counts (kind -> int) with ``flagged``: the samples flagged not valid."""
+    return dict(rep.counts, flagged=int(rep.flagged.sum()))
+
+
+def missing_column(p, role: str, column: str | None, names,
+                   what: str = "column not found in the file") -> LogError:
+    """The error for a required channel whose column is not in the file, with the way out: a
+    channel map (``--channels map.toml``) that ``roadbank channels`` writes for the file's columns."""
+    return channel_error(p, role, column, f"{what} (it has: "
+                         f"{', '.join(names) or 'nothing'}); for a log with other column names give a "
+                         f"channel map with --channels map.toml (`roadbank channels {Path(p).name} -o map.toml` "
+                         "writes one for these columns)")
 
 
 def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
@@ -89,12 +126,10 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
     for role in roles:
         col = cmap.channels[role].column
         if col not in have:
-            raise channel_error(p, role, col, f"column not found in the file "
-                                f"(it has: {', '.join(names) or 'nothing'})")
+            raise missing_column(p, role, col, names)
     if not present:
         cols = " or ".join(f"'{cmap.channels[r].column}'" for r in steer_roles)
-        raise LogError(f"{p}: channel 'steering' missing: no column {cols} in the file "
-                       f"(it has: {', '.join(names) or 'nothing'})")
+        raise missing_column(p, "steering", None, names, f"missing: no column {cols} in the file")
     if present[0] is not None:
         roles.append(present[0])
     if "reference_roll" in cmap.channels:
@@ -179,18 +214,33 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
             raise LogError(f"{cmap.source}: channel map has no 'time' channel (required for {fmt})")
         tspec = cmap.channels["time"]
         if tspec.column not in have:
-            raise channel_error(p, "time", tspec.column, f"column not found in the file "
-                                f"(it has: {', '.join(raw.names) or 'nothing'})")
+            raise missing_column(p, "time", tspec.column, raw.names)
         t = cmap.to_si_iso("time", raw.data[tspec.column])
-        _check_time(p, tspec.column, t, raw)
+        rep, w = repair_stamps(p, tspec.column, t, rownums=raw.rownums, row_label=raw.row_label)
+        warns += w
+        repairs = repair_counts(rep)
+        if rep.changed:       # every column follows the repaired clock; flagged rows become NaN
+            raw.data = {c: a[rep.keep] for c, a in raw.data.items()}
+            for role in FLAGGED_ROLES:
+                if role in cmap.channels and cmap.channels[role].column in raw.data:
+                    raw.data[cmap.channels[role].column][rep.flagged] = np.nan
+            t = t[rep.keep]
         check_plausible(p, "time", tspec.column, tspec.unit, None, t)
         shared = t
+    else:
+        repairs = {}
     for role in roles:
         spec = cmap.channels[role]
         v = cmap.to_si_iso(role, raw.data[spec.column])
         if timed:
             tr = raw.times[spec.column]
-            _check_time(p, spec.column, tr, None, label=role)
+            rep, w = repair_stamps(p, spec.column, tr, label=role)
+            warns += w
+            repairs = add_counts(repairs, repair_counts(rep))
+            if rep.changed:
+                tr, v = tr[rep.keep], v[rep.keep]
+                if role in FLAGGED_ROLES:
+                    v[rep.flagged] = np.nan
         else:
             tr = shared
         if not np.any(np.isfinite(v)):
@@ -221,7 +271,7 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
                 truth[c] = arr if t_base is shared else np.interp(t_base, shared, arr)
     return Log(signals=sig, reference_roll=values.get("reference_roll"), source=p, format=fmt,
                metadata=dict(raw.metadata), truth=truth, warnings=warns, channel_map=cmap,
-               extra=_gnss(p, cmap, raw, shared, t_base))
+               extra=_gnss(p, cmap, raw, shared, t_base), time_repairs=repairs)
 
 
 #: GNSS fixes come at 1-20 Hz: a gap up to this long (s) is interpolated across
@@ -272,5 +322,11 @@ def _gnss(p, cmap: ChannelMap, raw, shared, t_base) -> dict:
             raise channel_error(p, role, spec.column, f"column not found in the file "
                                 f"(it has: {', '.join(raw.names) or 'nothing'})")
         v = cmap.to_si_iso(role, raw.data[spec.column])
-        vals[role] = interpolate(raw.times.get(spec.column, shared), v, t_base, GNSS_MAX_GAP_S)
+        tr = raw.times.get(spec.column)
+        if tr is None:
+            tr = shared
+        else:                 # a position channel with its own clock: the same repair, not counted
+            rep, _ = repair_stamps(p, spec.column, tr, label=role)
+            tr, v = tr[rep.keep], v[rep.keep]
+        vals[role] = interpolate(tr, v, t_base, GNSS_MAX_GAP_S)
     return gnss_extra(p, cmap, vals) if vals else {}

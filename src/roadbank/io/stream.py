@@ -35,14 +35,95 @@ from . import readers
 from .channels import ChannelMap, check_plausible, default_channel_map, read_channel_map
 from .consistency import check_consistency
 from .errors import LogError, channel_error
-from .log import (GNSS_MAX_GAP_S, Log, _check_time, gnss_extra, gnss_roles, load_log, road_wheel_angle,
-                  select_roles)
+from .log import (FLAGGED_ROLES, GNSS_MAX_GAP_S, Log, gnss_extra, gnss_roles, load_log, missing_column,
+                  repair_counts, repair_stamps, road_wheel_angle, select_roles)
 from .resample import clean_series, interpolate
+from .timebase import add_counts
 
 #: default rows per chunk (records per channel group for MDF4): 20 000 samples = 3.3 min at 100 Hz
 #: (memory vs per-chunk overhead: each 10 000 rows cost about 3.5 MiB of peak memory, docs/io.md)
 CHUNK_ROWS = 20_000
 STREAMED = ("parquet", "mdf4")
+#: rows at the end of each streamed chunk held back for the next one, so that a bad time stamp at a
+#: chunk's end is repaired knowing the stamps after it, as in the whole file
+HOLD_ROWS = 4
+
+
+class ChunkRepair:
+    """The time-stamp repair of :func:`~roadbank.io.timebase.repair_time` on a streamed channel.
+
+    Each chunk is repaired after the last good stamp of the chunks before it, with the last
+    :data:`HOLD_ROWS` rows held back and repaired with the next chunk. :meth:`feed` takes the stamps
+    (s) and the arrays that go with them (same length) and returns them repaired; ``counts``
+    adds up what was done (kind -> int, ``flagged`` too); ``warning`` is the message of the first
+    chunk that needed a repair (given once).
+    """
+
+    def __init__(self, source, column: str, label: str, row_label: str = "row"):
+        self.source, self.column, self.label, self.row_label = source, column, label, row_label
+        self.after = None
+        self.held = None         # (row0, t, {name: array}) rows waiting for the next chunk
+        self.counts: dict = {}
+        self.warned = False
+
+    def feed(self, t: np.ndarray, cols: dict, row0: int, last: bool):
+        """``(t, cols, flagged, warnings)`` of the rows that are final; ``last`` for the final chunk."""
+        if self.held is not None:
+            h0, ht, hc = self.held
+            t = np.concatenate([ht, t])
+            cols = {c: np.concatenate([hc[c], a]) for c, a in cols.items()}
+            row0 = h0
+            self.held = None
+        n = len(t)
+        rep, warns = repair_stamps(self.source, self.column, t, label=self.label, after=self.after,
+                                   rownums=range(row0, row0 + n), row_label=self.row_label)
+        if not last and _odd_tail(t, rep):
+            cut = max(n - HOLD_ROWS, 0)
+            late = np.flatnonzero(rep.keep >= cut)
+            c0 = min(cut, int(rep.keep[late[0]:].min())) if len(late) else cut
+            rep = rep.head(c0, t, self.after)
+            if c0 < n:
+                self.held = (row0 + c0, t[c0:], {c: a[c0:] for c, a in cols.items()})
+        self.counts = add_counts(self.counts, repair_counts(rep))
+        if rep.changed and not self.warned:
+            self.warned = True
+        else:
+            warns = []
+        keep = rep.keep
+        if len(keep):
+            self.after = float(t[keep[-1]])
+        return t[keep], {c: a[keep] for c, a in cols.items()}, rep.flagged, warns
+
+    @property
+    def holding(self) -> bool:
+        """Rows are held back (a final :meth:`feed` with ``last=True`` releases them)."""
+        return self.held is not None
+
+
+def _odd_tail(t: np.ndarray, rep) -> bool:
+    """True if the last :data:`HOLD_ROWS` stamps of a chunk were repaired or end in an odd step
+    (backwards, repeated, or longer than 1.5 median steps): they wait for the next chunk (a clean
+    chunk is passed whole)."""
+    n = len(t)
+    if n == 0:
+        return False
+    tail = n - HOLD_ROWS
+    if np.any(rep.kind[max(tail, 0):] != 0) or np.any(rep.keep[rep.flagged] >= tail):
+        return True
+    d = np.diff(t[-HOLD_ROWS - 8:])
+    d = d[np.isfinite(d)]
+    # 1.5 periods: the later stamp of a pair swapped across the boundary makes a double step
+    return bool(len(d) and (d[-1] <= 0 or d[-1] > 1.5 * float(np.median(d))))
+
+
+def _final_empty(chunks, columns):
+    """``(row0, cols, False)`` for each ``(row0, cols)`` table chunk, then an empty final one
+    ``(rows, {column: []}, True)`` that releases the rows :class:`ChunkRepair` held back."""
+    end = 0
+    for row0, cols in chunks:
+        end = row0 + len(next(iter(cols.values()))) if cols else row0
+        yield row0, cols, False
+    yield end, {c: np.zeros(0) for c in columns}, True
 
 
 class StreamResampler:
@@ -341,25 +422,28 @@ def _stream_table(p, cmap, params, chunk_rows):
     gnss = gnss_roles(cmap)
     for r in gnss + ["time"]:
         if cmap.channels[r].column not in have:
-            raise channel_error(p, r, cmap.channels[r].column, f"column not found in the file "
-                                f"(it has: {', '.join(names) or 'nothing'})")
+            raise missing_column(p, r, cmap.channels[r].column, names)
     wanted = {cmap.channels[r].column: r for r in ["time"] + roles + gnss}
     truth_cols = [c for c in names if cmap.truth_prefix and c.startswith(cmap.truth_prefix) and c not in wanted]
     tcol = cmap.channels["time"].column
     labels = {c: f"channel '{r}' (column '{c}')" for c, r in wanted.items()}
     rs = None            # StreamResampler, or False when the table clock is used
-    t_prev = None
     pending: list[str] = []      # warnings, given with the first chunk yielded
     finite = dict.fromkeys(roles, False)
     n_out = 0
-    for row0, cols in _parquet_chunks(p, list(wanted) + truth_cols, labels, chunk_rows):
-        t = cmap.to_si_iso("time", cols[tcol])
+    fix = ChunkRepair(p, tcol, "time", "row")
+    flag_cols = [cmap.channels[r].column for r in roles if r in FLAGGED_ROLES]
+    for row0, cols, last in _final_empty(_parquet_chunks(p, list(wanted) + truth_cols, labels, chunk_rows),
+                                         list(wanted) + truth_cols):
+        t, cols, flagged, w = fix.feed(cmap.to_si_iso("time", cols[tcol]), cols, row0, last)
+        if not len(t):
+            continue
+        later = []
+        (pending if n_out == 0 else later).extend(w)
+        for c in flag_cols:
+            cols[c][flagged] = np.nan
         if rs is None:
             check_plausible(p, "time", tcol, cmap.channels["time"].unit, None, t)
-        back = t_prev is not None
-        raw = readers.RawTable(names, {}, row_label="row", rownums=range(row0 - back, row0 + len(t)))
-        _check_time(p, tcol, np.concatenate([[t_prev], t]) if back else t, raw)
-        t_prev = t[-1]
         vals = {r: _convert(p, cmap, r, cols[cmap.channels[r].column], t, rs is None, pending)
                 for r in roles + gnss}
         for r in roles:
@@ -384,11 +468,14 @@ def _stream_table(p, cmap, params, chunk_rows):
             except LogError as exc:
                 raise LogError(f"{p}: {exc}") from None
         if out is not None and len(out["t"]):
-            log = _chunk_log(p, "parquet", cmap, params, roles, out, meta, [] if n_out else pending, truth)
+            log = _chunk_log(p, "parquet", cmap, params, roles, out, meta, later if n_out else pending, truth)
+            log.time_repairs, fix.counts = fix.counts, {}
             if n_out == 0:
                 log.warnings += check_consistency(log.signals, p, {r: cmap.channels[r].column for r in roles[:3]})
             n_out += 1
             yield log
+        else:
+            pending += later
     for r in roles:
         if not finite[r]:
             raise channel_error(p, r, cmap.channels[r].column, "no finite values")
@@ -401,7 +488,9 @@ def _stream_table(p, cmap, params, chunk_rows):
             raise LogError(f"{p}: {exc}") from None
         if out is not None and len(out["t"]):
             n_out += 1
-            yield _chunk_log(p, "parquet", cmap, params, roles, out, meta, [] if n_out > 1 else pending)
+            log = _chunk_log(p, "parquet", cmap, params, roles, out, meta, [] if n_out > 1 else pending)
+            log.time_repairs, fix.counts = fix.counts, {}
+            yield log
     if n_out == 0:
         raise LogError(f"{p}: fewer than 2 samples on the common time base")
 
@@ -417,6 +506,16 @@ def _same_rate(t, vals, roles) -> bool:
         if not len(d) or abs(float(np.median(d)) - base) > 0.01 * base:
             return False
     return True
+
+
+def _add_repaired(rs, r, t, raw_v, flagged, p, cmap, first, warns) -> None:
+    """One MDF4 channel window, its stamps repaired, into the resampler (flagged samples as gaps)."""
+    if not len(t):
+        return
+    v = _convert(p, cmap, r, raw_v, t, first, warns)
+    if r in FLAGGED_ROLES:
+        v[flagged] = np.nan
+    rs.add(r, t, v)
 
 
 def _stream_mdf4(p, cmap, params, chunk_rows):
@@ -435,6 +534,8 @@ def _stream_mdf4(p, cmap, params, chunk_rows):
         tb = "uniform" if cmap.time_base == "auto" else cmap.time_base
         rs = StreamResampler(roles, {r: GNSS_MAX_GAP_S for r in gnss}, tb, cmap.rate_hz, cmap.max_gap_s)
         last_t = {r: None for r in names}
+        fixes = {r: ChunkRepair(p, cmap.channels[r].column, r, "sample") for r in names}
+        row = dict.fromkeys(names, 0)
         first = True
         pending: list[str] = []
         meta = {}
@@ -452,19 +553,28 @@ def _stream_mdf4(p, cmap, params, chunk_rows):
             if got is None:
                 if last_t[r] is None and r in roles:
                     raise channel_error(p, r, spec.column, "no samples")
+                if fixes[r].holding:
+                    t, v, flagged, w = fixes[r].feed(np.zeros(0), {"v": np.zeros(0)}, row[r], True)
+                    pending += w
+                    _add_repaired(rs, r, t, v["v"], flagged, p, cmap, first, pending)
                 rs.finish(r)
             else:
                 t, raw_v = got
-                _check_time(p, spec.column, t if last_t[r] is None else np.concatenate([[last_t[r]], t]),
-                            None, label=r)
-                rs.add(r, t, _convert(p, cmap, r, raw_v, t, first, pending))
-                last_t[r] = t[-1]
+                t, v, flagged, w = fixes[r].feed(t, {"v": np.asarray(raw_v, dtype=np.float64)}, row[r], False)
+                row[r] += len(raw_v)
+                pending += w
+                _add_repaired(rs, r, t, v["v"], flagged, p, cmap, first, pending)
+                last_t[r] = got[0][-1]
             try:
                 out = rs.emit()
             except LogError as exc:
                 raise LogError(f"{p}: {exc}") from None
             if out is not None and len(out["t"]):
                 log = _chunk_log(p, "mdf4", cmap, params, roles, out, meta, pending if first else [])
+                log.time_repairs = {}
+                for k in roles:
+                    log.time_repairs = add_counts(log.time_repairs, fixes[k].counts)
+                    fixes[k].counts = {}
                 if first:
                     log.warnings += check_consistency(log.signals, p, {k: cmap.channels[k].column
                                                                        for k in roles[:3]})

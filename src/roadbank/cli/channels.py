@@ -1,0 +1,94 @@
+"""``roadbank channels``: write a channel-map skeleton for a foreign log, guessed from its columns."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import click
+
+
+
+def read_columns(path: Path, fmt: str):
+    """``(names, data, times)`` of every numeric column of a CSV, Parquet or MDF4 log (as stored).
+
+    Columns that are not numbers (a gear as text, a comment) are left out. LogError for a file
+    that cannot be read.
+    """
+    from ..io import LogError, readers
+
+    if fmt not in readers.READERS:
+        raise LogError(f"{path}: guessing a channel map works on CSV, Parquet and MDF4 logs, not {fmt}")
+    reader = readers.READERS[fmt]
+    names = reader(path, {}).names
+    try:
+        raw = reader(path, {n: n for n in names})
+        data = raw.data
+    except LogError:                          # a non-numeric column: read the others one by one
+        data, raw = {}, None
+        for n in names:
+            try:
+                got = reader(path, {n: n})
+            except LogError:
+                continue
+            data.update(got.data)
+            raw = got
+    times = dict(raw.times) if raw is not None else {}
+    return names, data, times
+
+
+@click.command()
+@click.argument("log", type=click.Path(exists=True, path_type=Path))
+@click.option("-o", "--output", required=True, type=click.Path(path_type=Path),
+              help="The channel map to write (.toml), for `roadbank estimate LOG --channels map.toml`.")
+@click.option("--format", "fmt", type=click.Choice(["csv", "parquet", "mdf4"]), default=None,
+              help="Input format. Default: from the file suffix.")
+def channels(log, output, fmt):
+    """Guess which column of LOG is time, speed, ay, yaw rate and steering, in which unit and sign,
+    and write a channel map for it.
+
+    \b
+    roadbank channels drive.csv -o map.toml
+    roadbank estimate drive.csv --channels map.toml -o drive_bank.csv
+
+    The guesses come from the column names (VehSpd, speed, v; YawRate, wz; LatAcc, ay;
+    SteerAngle, SWA; timestamp, time ...) and from the data: plausible ranges (km/h or
+    m/s, deg/s or rad/s, g or m/s^2), ay = vx r in turns (units and the yaw rate's sign)
+    and the steering angle against the kinematic angle (road wheel or steering wheel,
+    deg or rad, sign). Each line of the map says how sure the guess is; ay is taken as
+    positive to the left (ISO 8855). Check the map before using it. Exit code 1 if a
+    required channel was not found (the map is written, with that channel to fill in).
+    """
+    from ..io import LogError, load_log, read_channel_map
+    from ..io.guess import channel_map_toml, guess_channels
+    from ..io.readers import detect_format
+
+    try:
+        fmt = fmt or detect_format(log)
+        if fmt not in ("csv", "parquet", "mdf4"):
+            raise LogError(f"{log}: guessing a channel map works on CSV, Parquet and MDF4 logs, not {fmt}")
+        names, data, times = read_columns(log, fmt)
+    except LogError as exc:
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(1)
+    guesses = guess_channels(names, data, times if fmt == "mdf4" else None)
+    output.parent.mkdir(parents=True, exist_ok=True)
+    output.write_text(channel_map_toml(guesses, log.name))
+    width = max(len(g.role) for g in guesses)
+    for g in guesses:
+        if g.column is None:
+            click.echo(f"{g.role:<{width}}  not found ({g.reason})")
+        else:
+            sign = ", inverted" if g.invert else ""
+            click.echo(f"{g.role:<{width}}  <- {g.column!r} in {g.unit}{sign}   {g.confidence}: {g.reason}")
+    click.echo(f"wrote {output}", err=True)
+    if any(g.column is None for g in guesses):
+        click.echo(f"error: not every required channel was found: fill in {output} by hand", err=True)
+        sys.exit(1)
+    try:
+        got = load_log(log, channels=read_channel_map(output), format=fmt)
+    except LogError as exc:
+        click.echo(f"warning: the map does not read the log yet: {exc}", err=True)
+        sys.exit(1)
+    click.echo(f"the map reads {log.name}: {len(got)} samples, {got.signals.t[-1] - got.signals.t[0]:.1f} s; "
+               f"next: roadbank estimate {log} --channels {output} -o OUT", err=True)

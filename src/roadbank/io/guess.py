@@ -1,0 +1,352 @@
+"""Guess a channel map for a foreign log: which column is which signal, its unit and its sign.
+
+Evidence, per channel:
+
+* **names** -- common spellings (``VehSpd``, ``speed``, ``v``; ``YawRate``, ``wz``, ``gyro_z``;
+  ``LatAcc``, ``ay``; ``SteerAngle``, ``SWA``; ``timestamp``, ``time`` ...) and unit hints in
+  them (``_kmh``, ``_degps``, ``_ms``);
+* **ranges** -- a sample period of 1-100 ms in s, ms, us or ns; speeds above 70 are not m/s;
+  |ay| above 1.5 is not g; |yaw rate| above 2 is not rad/s; steering angles above 2 pi are deg;
+* **physics** -- in turns ``ay = vx r`` (steady cornering), which fixes the speed, ay and yaw-rate
+  units together and the yaw rate's sign relative to ``ay``; and the steering angle against the
+  kinematic road-wheel angle ``L r / vx`` (L = 2.7 m), which tells a road-wheel from a
+  steering-wheel angle, its unit and its sign.
+
+Each guess says how sure it is: ``high`` (name and data agree), ``medium`` (one of them, the
+other silent) or ``low`` (data only, or a conflict). ``ay`` is taken as ISO 8855 (positive to the
+left): no single log can tell a mirrored car from a mirrored sensor.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from .units import FACTORS
+
+#: role -> name spellings (normalised: lower case, letters and digits only)
+NAMES = {
+    "time": ("t", "time", "timestamp", "times", "ts", "timest", "zeit", "timesec", "stamp", "logtime"),
+    "speed": ("vx", "v", "speed", "vehspd", "vehiclespeed", "velocity", "vel", "spd", "vspeed", "vehspeed",
+              "speedx", "velx", "vlgt", "groundspeed", "vehiclevelocity"),
+    "lateral_acceleration": ("ay", "accy", "latacc", "lataccel", "lateralacceleration", "lateralaccel",
+                             "accely", "ay1", "alat", "aylat", "accelerationy", "latg"),
+    "yaw_rate": ("r", "yawrate", "yawrt", "wz", "gyroz", "omegaz", "yawvel", "yawvelocity", "psidot",
+                 "angularvelocityz", "rz"),
+    "steering_wheel_angle": ("swa", "steerangle", "steeringangle", "steeringwheelangle", "steer", "swangle",
+                             "strwhlang", "steeringwheel", "stwangle", "steerwheelangle", "handwheelangle"),
+    "road_wheel_angle": ("deltaf", "delta", "roadwheelangle", "wheelangle", "rwa", "frontwheelangle"),
+}
+#: unit hints found in a column name (after the role's spelling) -> unit
+UNIT_HINTS = {"kmh": "km/h", "kph": "km/h", "mph": "mph", "mps": "m/s", "ms2": "m/s^2", "mss": "m/s^2",
+              "degps": "deg/s", "degs": "deg/s", "dps": "deg/s", "rads": "rad/s", "radps": "rad/s",
+              "deg": "deg", "rad": "rad", "ms": "ms", "us": "us", "ns": "ns", "sec": "s", "g": "g"}
+#: wheelbase (m) for the kinematic steering check (any car: 2.4-3.2 m)
+WHEELBASE_M = 2.7
+#: the gain of ay on vx r may be this far from 1 (a banked curve lowers ay) and still fix the units:
+#: the unit choices differ by 3.6 (km/h), 9.81 (g) and 57.3 (deg/s)
+PHYSICS_TOL = 4.0
+#: yaw rate (rad/s) and speed (m/s) above which a sample counts as in a turn
+TURN_R, TURN_V = 0.03, 5.0
+
+
+def _norm(name: str) -> str:
+    return re.sub(r"[^a-z0-9]", "", name.lower())
+
+
+def _tokens(name: str) -> list[str]:
+    """``"VehSpd_kmh"`` -> ``["veh", "spd", "kmh"]`` (camel case and separators split)."""
+    parts = re.sub(r"([a-z0-9])([A-Z])", r"\1 \2", name)
+    return [p for p in re.split(r"[^A-Za-z0-9]+", parts.lower()) if p]
+
+
+@dataclass
+class Guess:
+    """One guessed channel.
+
+    Attributes
+    ----------
+    role : str
+        Channel-map role (``time``, ``speed``, ...).
+    column : str or None
+        The column; None if none was found.
+    unit : str
+        Its unit.
+    invert : bool
+        Its sign is opposite to ISO 8855 (``invert = true`` in the map).
+    confidence : str
+        "high", "medium" or "low".
+    reason : str
+        What the guess rests on, in words.
+    """
+
+    role: str
+    column: str | None
+    unit: str = ""
+    invert: bool = False
+    confidence: str = "low"
+    reason: str = ""
+
+
+def name_match(role: str, name: str) -> tuple[int, str | None]:
+    """(score, unit hint) of column ``name`` for ``role``: 2 = a known spelling, 1 = one with a
+    unit or other suffix (``VehSpd_kmh``, ``yaw_rate_dps``), 0 = no match."""
+    n = _norm(name)
+    spellings = NAMES[role]
+    if n in spellings:
+        return 2, None
+    for s in sorted(spellings, key=len, reverse=True):
+        if len(s) >= 2 and n.startswith(s):
+            rest = n[len(s):]
+            if rest in UNIT_HINTS:
+                return 2, UNIT_HINTS[rest]
+            if len(s) >= 4:
+                return 1, None
+    toks = _tokens(name)
+    if len(toks) > 1 and _norm("".join(toks[:-1])) in spellings and toks[-1] in UNIT_HINTS:
+        return 2, UNIT_HINTS[toks[-1]]
+    return 0, None
+
+
+def _finite(v: np.ndarray) -> np.ndarray:
+    return v[np.isfinite(v)]
+
+
+def _time_unit(t: np.ndarray, hint: str | None) -> tuple[str | None, str, bool]:
+    """(unit, why, name and data agree) of a time column from its median sample period (an ESP log: 1-200 ms)."""
+    d = np.diff(_finite(t))
+    d = d[d > 0]
+    if len(d) == 0:
+        return None, "not increasing", False
+    dt = float(np.median(d))
+    fits = [u for u, f in FACTORS["time"].items() if 5e-4 <= dt * f <= 0.2]
+    if hint in fits:
+        return hint, f"unit in the name and sample period agree ({dt:g} {hint})", True
+    if fits:
+        return fits[0], f"sample period {dt:g} {fits[0]}", False
+    return None, f"median step {dt:g}: no plausible unit", False
+
+
+def _is_increasing(v: np.ndarray) -> bool:
+    f = _finite(v)
+    return len(f) > 2 and float(np.mean(np.diff(f) > 0)) > 0.9
+
+
+#: candidate units (and SI factors) per role, for the physics checks
+_CAND = {"speed": FACTORS["speed"], "lateral_acceleration": {"m/s^2": 1.0, "g": FACTORS["acceleration"]["g"]},
+         "yaw_rate": FACTORS["angular_rate"]}
+
+
+def _range_units(role: str, v: np.ndarray) -> list[str]:
+    """Units in which the values of ``role`` are plausible for a road car."""
+    a = np.abs(_finite(v))
+    if len(a) == 0 or not a.max() > 0:
+        return []                      # nothing to judge a unit by
+    mx, p99 = float(a.max()), float(np.percentile(a, 99))
+    if role == "speed":
+        return [u for u in ("m/s", "km/h", "mph") if mx * FACTORS["speed"][u] <= 70.0 and u != "kph"]
+    if role == "lateral_acceleration":
+        return [u for u in ("m/s^2", "g") if p99 * _CAND[role][u] <= 15.0 and (u != "g" or p99 > 0.005)]
+    if role == "yaw_rate":
+        return [u for u in ("rad/s", "deg/s") if p99 * FACTORS["angular_rate"][u] <= 1.5
+                and (u != "deg/s" or p99 > 0.05)]
+    return []
+
+
+def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | None = None) -> list[Guess]:
+    """Guess the roadbank channels of a log with columns ``names`` and numeric ``data`` (column -> array).
+
+    Parameters
+    ----------
+    names : list of str
+        Every column of the file.
+    data : dict column -> float array
+        The numeric columns (as stored), all of one length on one clock, unless ``times``.
+    times : dict column -> array (s), optional
+        Per-channel time stamps (MDF4): no ``time`` role is guessed then, and the physics checks
+        interpolate onto the yaw rate's stamps.
+
+    Returns
+    -------
+    list of Guess
+        time (unless ``times``), speed, lateral_acceleration, yaw_rate and one steering role.
+    """
+    numeric = [c for c in names if c in data and np.isfinite(data[c]).any()]
+    used: set[str] = set()
+    out: dict[str, Guess] = {}
+
+    def pick(role, pool, extra=None):
+        best = max(((name_match(role, c), c) for c in pool if c not in used), key=lambda x: x[0][0],
+                   default=((0, None), None))
+        (score, hint), col = best
+        if score == 0:
+            col = extra([c for c in pool if c not in used]) if extra is not None else None
+        if col is not None:
+            used.add(col)
+        return col, score, hint
+
+    hints = {}
+    scores = {}
+    if not times:
+        col, score, hint = pick("time", numeric, lambda pool: next((c for c in pool if _is_increasing(data[c])),
+                                                                   None))
+        if col is None:
+            out["time"] = Guess("time", None, reason="no column named like a time and none increasing")
+        else:
+            unit, why, agree = _time_unit(data[col], hint)
+            conf = "high" if score and unit else "low"
+            out["time"] = Guess("time", col, unit or "s", False, conf,
+                                why if agree else (("name and " if score else "increasing; ") + why
+                                                   + (" agree" if score and unit else "")))
+    for role in ("speed", "lateral_acceleration", "yaw_rate"):
+        col, scores[role], hints[role] = pick(role, numeric)
+        out[role] = Guess(role, col)
+    swcol, sws, swh = pick("steering_wheel_angle", numeric)
+    rwcol, rws, rwh = pick("road_wheel_angle", numeric) if swcol is None else (None, 0, None)
+    steer_col, steer_named = (swcol, "steering_wheel_angle") if swcol else (rwcol, "road_wheel_angle")
+    steer_hint = swh if swcol else rwh
+
+    def series(col):
+        if col is None:
+            return None
+        if not times:
+            return data[col]
+        base = times.get(out["yaw_rate"].column) if out["yaw_rate"].column else None
+        return data[col] if base is None else np.interp(base, times[col], data[col])
+
+    v, a, r = (series(out[k].column) for k in ("speed", "lateral_acceleration", "yaw_rate"))
+    _units_from_physics(out, v, a, r, hints, scores)
+    out_steer = _steering(steer_col, steer_named, steer_hint, series(steer_col), v, r, out)
+    roles = (["time"] if "time" in out else []) + ["speed", "lateral_acceleration", "yaw_rate"]
+    return [out[k] for k in roles] + [out_steer]
+
+
+def _units_from_physics(out, v, a, r, hints, scores) -> None:
+    """Units of speed, ay and yaw rate (ranges, name hints, ``ay = vx r`` in turns) and the yaw rate's sign."""
+    cand, blind = {}, set()
+    for role, x in (("speed", v), ("lateral_acceleration", a), ("yaw_rate", r)):
+        g = out[role]
+        if x is None:
+            g.reason = "no column named like it"
+            continue
+        units = _range_units(role, x)
+        if not units:
+            blind.add(role)
+            units = list(_CAND[role])[:1]
+        if role == "speed" and hints.get(role) != "mph" and len(units) > 1:
+            units = [u for u in units if u != "mph"]        # rare in vehicle logs: only when the name says so
+        cand[role] = units
+    combos = []
+    if v is not None and a is not None and r is not None:
+        ok = np.isfinite(v) & np.isfinite(a) & np.isfinite(r)
+        for uv in cand["speed"]:
+            for ua in cand["lateral_acceleration"]:
+                for ur in cand["yaw_rate"]:
+                    vs, as_, rs = v[ok] * _CAND["speed"][uv], a[ok] * _CAND["lateral_acceleration"][ua], \
+                        r[ok] * _CAND["yaw_rate"][ur]
+                    turn = (np.abs(rs) > TURN_R) & (vs > TURN_V)
+                    if turn.sum() < 20:
+                        continue
+                    pred = vs[turn] * rs[turn]
+                    # least-squares gain of ay on vx r: 1 in the right units (its sign: the yaw rate's)
+                    gain = float(np.dot(as_[turn], pred) / max(float(np.dot(pred, pred)), 1e-300))
+                    corr = float(np.corrcoef(as_[turn], pred)[0, 1]) if np.std(pred) > 0 else 0.0
+                    ratio = abs(gain)
+                    combos.append((abs(math.log(max(ratio, 1e-9))), uv, ua, ur, ratio, corr))
+    best = min(combos, default=None)
+    for role, x in (("speed", v), ("lateral_acceleration", a), ("yaw_rate", r)):
+        g = out[role]
+        if x is None:
+            continue
+        hint = hints.get(role)
+        units = cand[role]
+        named = scores.get(role, 0) > 0
+        if best is not None and abs(best[0]) < math.log(PHYSICS_TOL):
+            unit = best[1 + ("speed", "lateral_acceleration", "yaw_rate").index(role)]
+            phys = f"ay = vx r in turns (gain {best[4]:.2f})"
+            agree = hint is None or hint == unit
+            close = abs(best[0]) < math.log(1.5)
+            g.unit = unit
+            g.confidence = "high" if named and agree and close else ("medium" if agree else "low")
+            g.reason = (("name, " if named else "") + ("unit in the name, " if hint == unit else "")
+                        + f"range and {phys} agree" if agree else f"{phys} says {unit}, the name says {hint}")
+        else:
+            unit = hint if hint in units else units[0]
+            g.unit = unit
+            single = len(units) == 1 and role not in blind
+            g.confidence = "medium" if named and (single or hint == unit) else "low"
+            if role in blind:
+                g.reason = ("name" if named else "no name match") + f"; no values to judge the unit by: {unit} assumed"
+                continue
+            g.reason = (("name" if named else "no name match") + (", unit in the name" if hint == unit else "")
+                        + (", range only fits " + unit if single else f", range fits {' or '.join(units)}")
+                        + ("" if combos else "; too few turns to check ay = vx r"))
+    if best is not None and abs(best[5]) > 0.5:
+        g = out["yaw_rate"]
+        if best[5] < 0:
+            g.invert = True
+            g.reason += f"; sign opposite to ay / vx in turns (correlation {best[5]:.2f}): inverted"
+        else:
+            g.reason += f"; sign agrees with ay / vx in turns (correlation {best[5]:.2f})"
+    else:
+        out["yaw_rate"].reason += "; sign not checked (no clear turn): ISO assumed"
+
+
+def _steering(col, named_role, hint, x, v, r, out) -> Guess:
+    """Road-wheel or steering-wheel angle, its unit and sign, against the kinematic ``L r / vx``."""
+    if col is None:
+        return Guess("steering_wheel_angle", None, reason="no column named like a steering angle")
+    a = np.abs(_finite(x))
+    ok = v is not None and r is not None and out["speed"].unit and out["yaw_rate"].unit
+    if ok:
+        vs = v * FACTORS["speed"][out["speed"].unit]
+        rs = r * FACTORS["angular_rate"][out["yaw_rate"].unit] * (-1.0 if out["yaw_rate"].invert else 1.0)
+        turn = np.isfinite(x) & np.isfinite(vs) & np.isfinite(rs) & (np.abs(rs) > TURN_R) & (vs > TURN_V)
+        ok = turn.sum() >= 20
+    if ok:
+        kin = WHEELBASE_M * rs[turn] / vs[turn]
+        ratio = float(np.median(np.abs(x[turn])) / max(np.median(np.abs(kin)), 1e-9))
+        corr = float(np.corrcoef(x[turn], kin)[0, 1]) if np.std(x[turn]) > 0 else 0.0
+        cands = {("road_wheel_angle", "rad"): 1.0, ("road_wheel_angle", "deg"): 180 / math.pi,
+                 ("steering_wheel_angle", "rad"): 16.0, ("steering_wheel_angle", "deg"): 16.0 * 180 / math.pi}
+        dist = {k: abs(math.log(max(ratio, 1e-9) / f)) for k, f in cands.items()}
+        by_size = min(dist, key=dist.get)
+        # the name tells road wheel from steering wheel (understeer can make a road-wheel angle several
+        # times the kinematic one); the size then tells deg from rad (a factor 57)
+        role, unit = min((k for k in dist if k[0] == named_role), key=dist.get)
+        fits_name = by_size == (role, unit) and hint in (None, unit)
+        sure = abs(corr) > 0.5
+        g = Guess(role, col, unit, sure and corr < 0, "high" if fits_name and sure else "medium",
+                  f"{'name and ' if fits_name else ''}size against the kinematic angle L r / vx "
+                  f"(x{ratio:.1f}) agree" if fits_name else
+                  f"name says {role.replace('_', ' ')}, size against the kinematic angle L r / vx (x{ratio:.1f}) "
+                  f"fits {unit} best for it ({by_size[0].replace('_', ' ')} in {by_size[1]} overall)")
+        g.reason += ("; sign not checked (no clear turn): ISO assumed" if not sure else
+                     f"; sign opposite to the yaw rate's (correlation {corr:.2f}): inverted" if corr < 0
+                     else f"; sign agrees with the yaw rate (correlation {corr:.2f})")
+        return g
+    unit = hint or ("deg" if len(a) and float(a.max()) > 2 * math.pi else "rad")
+    return Guess(named_role, col, unit, False, "low", "name and range only (too few turns to check)")
+
+
+def channel_map_toml(guesses: list[Guess], source: str) -> str:
+    """The guessed channel map as TOML text (loads with :func:`roadbank.io.read_channel_map`), one
+    comment per channel saying how sure the guess is; channels not found are left as comments."""
+    lines = [f"# channel map guessed by `roadbank channels` from {source}",
+             "# check every line: the confidence and the evidence are in the comments", "",
+             'convention = "ISO"', "", "[channels]"]
+    for g in guesses:
+        if g.column is None:
+            lines.append(f'# {g.role} = {{ column = "?", unit = "?" }}   # not found: {g.reason}')
+            continue
+        inv = ", invert = true" if g.invert else ""
+        lines.append(f"# {g.confidence}: {g.reason}")
+        lines.append(f"{g.role} = {{ column = {_toml_str(g.column)}, unit = \"{g.unit}\"{inv} }}")
+    return "\n".join(lines) + "\n"
+
+
+def _toml_str(s: str) -> str:
+    return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'

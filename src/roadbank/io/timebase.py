@@ -1,0 +1,272 @@
+"""Repairing a logger's time stamps: one pure rule used by every reader (whole file and streamed).
+
+Loggers write duplicated, swapped and jumping time stamps. :func:`repair_time` keeps every sample
+it can place on a strictly increasing time base and says what it did:
+
+* a **missing** stamp (NaN / inf) -- the sample is dropped;
+* a **duplicate** stamp (equal to the one before) -- the later sample is dropped, the first kept;
+* a **swapped** pair (two neighbours in the wrong order, each in order with the samples around
+  them) -- the two samples are put back in time order;
+* an **out-of-order** stamp (an isolated bad stamp, or the samples of a short backwards jump) --
+  the fewest samples that leave an increasing time base are dropped (the longest increasing run
+  of stamps is kept);
+* a forward jump (a **gap** longer than :data:`GAP_PERIODS` sample periods) -- kept as it is (the
+  estimators re-initialise after a long gap); only counted.
+
+Samples next to a repair (a reordered pair, the first sample of a duplicate, the sample after a
+dropped one) are *flagged*: the readers set their values to NaN, so the estimators hold their
+output there and flag it not valid. A time base that cannot be repaired -- fewer than two
+distinct stamps, or more than half of the stamps dropped -- raises :class:`UnrepairableTime`.
+"""
+
+from __future__ import annotations
+
+from bisect import bisect_left
+from dataclasses import dataclass
+
+import numpy as np
+
+#: a forward step longer than this many median sample periods is counted as a gap
+GAP_PERIODS = 5.0
+#: repair kinds, in the order they are reported
+KINDS = ("missing", "duplicate", "swapped", "out_of_order", "gaps")
+
+
+class UnrepairableTime(ValueError):
+    """The stamps hold no increasing time base (the message says why, without file or channel)."""
+
+
+#: per-sample codes of :attr:`TimeRepair.kind`
+KEPT, MISSING, DUPLICATE, OUT_OF_ORDER, SWAPPED = 0, 1, 2, 3, 4
+_DROP_KINDS = {MISSING: "missing", DUPLICATE: "duplicate", OUT_OF_ORDER: "out_of_order"}
+
+
+@dataclass(frozen=True)
+class TimeRepair:
+    """What :func:`repair_time` did to one series of time stamps.
+
+    Attributes
+    ----------
+    keep : int array
+        Indices of the input samples to use, in time order (their stamps strictly increase).
+    flagged : bool array, len(keep)
+        Kept samples next to a repair, whose values are not to be trusted.
+    kind : int8 array, one per input sample
+        :data:`KEPT`, :data:`SWAPPED` (kept, reordered) or why it was dropped (:data:`MISSING`,
+        :data:`DUPLICATE`, :data:`OUT_OF_ORDER`).
+    gaps : int
+        Forward jumps longer than :data:`GAP_PERIODS` median periods among the kept stamps (kept).
+    """
+
+    keep: np.ndarray
+    flagged: np.ndarray
+    kind: np.ndarray
+    gaps: int = 0
+
+    @property
+    def counts(self) -> dict:
+        """kind -> int for every kind of :data:`KINDS`: ``missing``, ``duplicate``, ``out_of_order``:
+        samples dropped; ``swapped``: pairs reordered; ``gaps``: forward jumps kept."""
+        c = np.bincount(self.kind, minlength=5)
+        return {"missing": int(c[MISSING]), "duplicate": int(c[DUPLICATE]), "swapped": int(c[SWAPPED]) // 2,
+                "out_of_order": int(c[OUT_OF_ORDER]), "gaps": int(self.gaps)}
+
+    @property
+    def changed(self) -> bool:
+        """True if a sample was dropped, reordered or flagged (gaps alone change nothing)."""
+        return bool(np.any(self.kind != KEPT) or self.flagged.any())
+
+    def head(self, n: int, t, after: float | None = None) -> "TimeRepair":
+        """The repair of the first ``n`` input samples only (a streamed chunk without the rows held
+        back for the next one): kept samples with an index below ``n``, their gaps recounted on
+        ``t`` (the stamps repaired) after ``after``."""
+        sel = self.keep < n
+        keep = self.keep[sel]
+        return TimeRepair(keep, self.flagged[sel], self.kind[:n], count_gaps(np.asarray(t)[keep], after))
+
+
+def count_gaps(tk: np.ndarray, after: float | None = None) -> int:
+    """Forward steps of the increasing stamps ``tk`` (s) longer than :data:`GAP_PERIODS` median steps
+    (the step from ``after``, when given, included)."""
+    if after is not None:
+        tk = np.concatenate(([after], tk))
+    if len(tk) < 3:
+        return 0
+    d = np.diff(tk)
+    return int(np.count_nonzero(d > GAP_PERIODS * float(np.median(d))))
+
+
+def _lis(values: np.ndarray) -> np.ndarray:
+    """Positions of one longest strictly increasing subsequence of ``values`` (O(n log n))."""
+    tails: list[float] = []     # smallest tail value of an increasing run of each length
+    tail_pos: list[int] = []
+    prev = np.full(len(values), -1, dtype=np.int64)
+    for i, v in enumerate(values.tolist()):
+        k = bisect_left(tails, v)
+        if k == len(tails):
+            tails.append(v)
+            tail_pos.append(i)
+        else:
+            tails[k] = v
+            tail_pos[k] = i
+        prev[i] = tail_pos[k - 1] if k else -1
+    out = []
+    i = tail_pos[-1] if tail_pos else -1
+    while i >= 0:
+        out.append(i)
+        i = int(prev[i])
+    return np.asarray(out[::-1], dtype=np.int64)
+
+
+def _swap_pairs(t: np.ndarray) -> np.ndarray:
+    """Positions i whose pair (i, i+1) is swapped: t[i] > t[i+1], both in order once exchanged."""
+    c = np.flatnonzero(t[1:] < t[:-1])
+    prev_ok = np.ones(len(c), dtype=bool)
+    inner = c > 0
+    prev_ok[inner] = t[c[inner] - 1] < t[c[inner] + 1]
+    next_ok = np.ones(len(c), dtype=bool)
+    inner = c + 2 < len(t)
+    next_ok[inner] = t[c[inner]] < t[c[inner] + 2]
+    return c[prev_ok & next_ok]
+
+
+def _isolated(t: np.ndarray) -> np.ndarray:
+    """Positions of isolated bad stamps: out of order with a neighbour, while the neighbours on
+    either side are in order with each other (a stamp too high or too low on its own)."""
+    n = len(t)
+    bad = np.zeros(n, dtype=bool)
+    if n < 3:
+        return np.flatnonzero(bad)
+    mid = np.arange(1, n - 1)
+    around = t[mid - 1] < t[mid + 1]
+    bad[mid] = around & ((t[mid] >= t[mid + 1]) | (t[mid] <= t[mid - 1]))
+    # the first and last stamps have one neighbour: out of order with it and not explained by
+    # that neighbour being the bad one
+    bad[0] = t[0] >= t[1] and not bad[1]
+    bad[n - 1] = t[n - 1] <= t[n - 2] and not bad[n - 2]
+    return np.flatnonzero(bad)
+
+
+def repair_time(t, after: float | None = None) -> TimeRepair:
+    """The samples of ``t`` that make a strictly increasing time base, and what was repaired.
+
+    Parameters
+    ----------
+    t : array (s)
+        Time stamps in file order.
+    after : float (s), optional
+        The last good stamp before ``t`` (a streamed log's previous chunk): samples not later than
+        it are dropped as out of order (or as a duplicate when equal to it).
+
+    Returns
+    -------
+    TimeRepair
+        ``keep`` indexes ``t``; ``t[keep]`` strictly increases.
+
+    Raises
+    ------
+    UnrepairableTime
+        Fewer than two distinct stamps (without ``after``), or more than half the stamps dropped.
+    """
+    t = np.asarray(t, dtype=np.float64)
+    n = len(t)
+    kind = np.zeros(n, dtype=np.int8)
+    follows_drop = np.zeros(n, dtype=bool)     # (original index) the sample after a dropped one
+    flag = np.zeros(n, dtype=bool)
+    finite = np.isfinite(t)
+    idx = np.flatnonzero(finite)
+    kind[~finite] = MISSING
+    if not finite.all():
+        follows_drop[np.flatnonzero(~finite[:-1] & finite[1:]) + 1] = True
+
+    def drop(pos_mask: np.ndarray, code: int, flag_next: bool = True) -> None:
+        nonlocal idx
+        if not pos_mask.any():
+            return
+        kind[idx[pos_mask]] = code
+        if flag_next:
+            follower = np.flatnonzero(pos_mask) + 1
+            follows_drop[idx[follower[follower < len(idx)]]] = True
+        idx = idx[~pos_mask]
+
+    if after is not None and len(idx):
+        drop(t[idx] == after, DUPLICATE, flag_next=False)
+        drop(t[idx] < after, OUT_OF_ORDER)
+    if len(idx) > 1 and not np.all(np.diff(t[idx]) > 0):
+        # 1. swapped neighbours: exchange them
+        sw = _swap_pairs(t[idx])
+        if len(sw):
+            a, b = idx[sw].copy(), idx[sw + 1].copy()
+            idx[sw], idx[sw + 1] = b, a
+            kind[a] = kind[b] = SWAPPED
+            flag[a] = flag[b] = True
+        # 2. repeated stamps: the first kept
+        tt = t[idx]
+        dup = np.concatenate(([False], tt[1:] == tt[:-1]))
+        if dup.any():
+            flag[idx[np.flatnonzero(dup) - 1]] = True
+            drop(dup, DUPLICATE, flag_next=False)
+        # 3. isolated bad stamps (too high or too low on their own)
+        iso = _isolated(t[idx])
+        if len(iso):
+            m = np.zeros(len(idx), dtype=bool)
+            m[iso] = True
+            drop(m, OUT_OF_ORDER)
+        # 4. what is left out of order (backwards jumps): keep the longest increasing run
+        tt = t[idx]
+        if len(tt) > 1 and not np.all(np.diff(tt) > 0):
+            drop(~_in_longest_run(tt), OUT_OF_ORDER)
+    lost = int(np.count_nonzero((kind != KEPT) & (kind != SWAPPED)))
+    if n >= 2 and after is None and len(idx) < 2:
+        fin = t[finite]
+        what = (f"all {n} stamps equal ({float(fin[0])!r})" if len(fin) == n and np.all(fin == fin[0])
+                else f"only {len(idx)} of {n} stamps in increasing order")
+        raise UnrepairableTime(f"no increasing time base: {what}")
+    if n and lost > n / 2:
+        raise UnrepairableTime(f"no increasing time base: {lost} of {n} stamps missing, repeated or "
+                               "out of order")
+    return TimeRepair(keep=idx, flagged=flag[idx] | follows_drop[idx], kind=kind,
+                      gaps=count_gaps(t[idx], after))
+
+
+def _in_longest_run(t: np.ndarray) -> np.ndarray:
+    """Mask of one longest strictly increasing subsequence of ``t``.
+
+    Only the disordered stretches are searched: a stamp above every stamp before it and below
+    every stamp after it belongs to some longest run, and splits the problem.
+    """
+    pre = np.concatenate(([-np.inf], np.maximum.accumulate(t)[:-1]))
+    suf = np.concatenate((np.minimum.accumulate(t[::-1])[::-1][1:], [np.inf]))
+    safe = (t > pre) & (t < suf)
+    keep = safe.copy()
+    bad = np.flatnonzero(~safe)
+    if len(bad):
+        # runs of consecutive unsafe positions
+        breaks = np.flatnonzero(np.diff(bad) > 1)
+        starts = np.concatenate(([bad[0]], bad[breaks + 1]))
+        ends = np.concatenate((bad[breaks], [bad[-1]])) + 1
+        for s, e in zip(starts.tolist(), ends.tolist()):
+            keep[s + _lis(t[s:e])] = True
+    return keep
+
+
+def describe(counts: dict) -> str:
+    """``counts`` in words, e.g. ``"2 duplicate stamps dropped, 1 swapped pair reordered"`` ('' if none)."""
+    text = {"missing": ("missing stamp", "dropped"), "duplicate": ("duplicate stamp", "dropped"),
+            "swapped": ("swapped pair", "reordered"), "out_of_order": ("out-of-order stamp", "dropped"),
+            "gaps": ("gap", "kept")}
+    parts = []
+    for k in KINDS:
+        v = int(counts.get(k, 0))
+        if v:
+            noun, verb = text[k]
+            parts.append(f"{v} {noun}{'s' if v != 1 else ''} {verb}")
+    return ", ".join(parts)
+
+
+def add_counts(total: dict, more: dict) -> dict:
+    """``total`` with ``more`` added kind by kind (both dicts kind -> int)."""
+    out = dict(total)
+    for k, v in more.items():
+        out[k] = out.get(k, 0) + int(v)
+    return out

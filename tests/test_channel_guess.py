@@ -1,0 +1,93 @@
+"""``roadbank channels``: a channel map guessed for a foreign log.
+
+Truth: a simulated log whose columns are renamed, rescaled to other units and sign-flipped copies
+of roadbank's own; the guessed map must read it back into the original signals.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from roadbank.cli import main
+from roadbank.io import LogError, load_log, read_channel_map
+from roadbank.io.guess import guess_channels, name_match
+from roadbank.io.writers import write_table
+
+SIG = ("t", "vx", "ay", "r", "delta_f")
+
+
+@pytest.fixture(scope="module")
+def drive():
+    from roadbank.sim import run_scenario
+    return run_scenario("s-curve", seed=2).table()
+
+
+def _foreign(tab, steer="swa"):
+    """The log as another logger writes it: ms, km/h, g, deg/s with the opposite sign, and the
+    steering-wheel angle in deg (ratio 16, roadbank's default) or the road-wheel angle in deg."""
+    out = {"timestamp": tab["t"] * 1000.0, "VehSpd": tab["vx"] * 3.6, "LatAcc": tab["ay"] / 9.81,
+           "YawRate": -np.degrees(tab["r"]), "gear": np.full(len(tab["t"]), 4.0)}
+    if steer == "swa":
+        out["SWA"] = np.degrees(tab["delta_f"]) * 16.0
+    else:
+        out["wheel_angle"] = -np.degrees(tab["delta_f"])      # road wheel, FRD sign
+    return out
+
+
+@pytest.mark.parametrize("name, role, hint", [("VehSpd", "speed", None), ("speed_kmh", "speed", "km/h"),
+                                              ("YawRate", "yaw_rate", None), ("yaw_rate_dps", "yaw_rate", "deg/s"),
+                                              ("wz", "yaw_rate", None), ("LatAcc", "lateral_acceleration", None),
+                                              ("SteerAngle", "steering_wheel_angle", None),
+                                              ("timestamp", "time", None), ("time_ms", "time", "ms")])
+def test_name_spellings(name, role, hint):
+    assert name_match(role, name) == (2, hint)
+    assert name_match("speed" if role != "speed" else "yaw_rate", name)[0] == 0
+
+
+@pytest.mark.parametrize("steer", ["swa", "road-wheel"])
+def test_guessed_map_reads_the_original_signals(tmp_path, drive, steer):
+    orig = tmp_path / "orig.csv"
+    write_table(orig, {k: drive[k] for k in SIG})
+    foreign = tmp_path / "foreign.csv"
+    write_table(foreign, _foreign(drive, steer))
+    with pytest.raises(LogError, match=r"channel 'speed' \(column 'vx'\): column not found .*--channels map\.toml "
+                                       r".*roadbank channels foreign\.csv -o map\.toml"):
+        load_log(foreign)
+    m = tmp_path / "map.toml"
+    res = CliRunner().invoke(main, ["channels", str(foreign), "-o", str(m)])
+    assert res.exit_code == 0, res.output
+    assert "'VehSpd' in km/h" in res.output and "'YawRate' in deg/s, inverted   high:" in res.output, res.output
+    cmap = read_channel_map(m)                                        # the existing loader
+    assert cmap.channels["lateral_acceleration"].unit == "g"
+    got, want = load_log(foreign, channels=cmap), load_log(orig)
+    for k in SIG:
+        np.testing.assert_allclose(getattr(got.signals, k), getattr(want.signals, k), rtol=1e-9, atol=1e-12,
+                                   err_msg=k)
+
+
+def test_missing_channel_left_to_fill_in(tmp_path, drive):
+    f = tmp_path / "f.csv"
+    cols = _foreign(drive)
+    del cols["YawRate"]
+    write_table(f, cols)
+    res = CliRunner().invoke(main, ["channels", str(f), "-o", str(tmp_path / "m.toml")])
+    assert res.exit_code == 1 and "yaw_rate" in res.output and "not found" in res.output
+    assert "# yaw_rate = " in (tmp_path / "m.toml").read_text()
+    assert "Traceback" not in res.output
+
+
+def test_straight_drive_says_it_is_unsure(drive):
+    n = 1000
+    data = {"speed": np.full(n, 80.0), "ay": np.zeros(n), "gyro_z": np.zeros(n), "t": np.arange(n) * 0.01,
+            "swa": np.zeros(n)}
+    g = {x.role: x for x in guess_channels(list(data), data)}
+    assert g["speed"].unit == "km/h"                # 80 m/s is no car: km/h (range only)
+    assert g["yaw_rate"].confidence == "low" and "sign not checked" in g["yaw_rate"].reason
+
+
+@pytest.mark.parametrize("name, role", [("Yaw", "yaw_rate"), ("yaw_angle", "yaw_rate"), ("gear", "speed"),
+                                        ("GyroY", "lateral_acceleration"), ("VehSpd", "time")])
+def test_names_that_are_not_the_channel(name, role):
+    assert name_match(role, name)[0] == 0          # a heading is no yaw rate, a pitch rate no ay
