@@ -12,7 +12,6 @@ from ..report.html import write_document
 from .options import vehicle_option
 
 _VEHICLE = vehicle_option("The estimators are designed for this car: its parameters and [tuning] tables.",
-                          default_help="roadbank.validation.SEDAN (a mid-size sedan, docs/real-data.md)",
                           none_if_absent=True)
 
 
