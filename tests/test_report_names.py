@@ -84,7 +84,8 @@ def test_estimate_accepts_pif_paper_and_names_its_columns(tmp_path):
     res = CliRunner().invoke(main, ["simulate", "const-bank", "-c", "low-mu", "-o", str(log)])
     assert res.exit_code == 0, res.output
     out = tmp_path / "bank.parquet"
-    res = CliRunner().invoke(main, ["estimate", str(log), "-e", "pif-paper,pif-modified", "-o", str(out)])
+    res = CliRunner().invoke(main, ["estimate", str(log), "-e", "pif-paper,pif-modified", "--vehicle", "suv-paper",
+                                    "-o", str(out)])          # the simulated car, described
     assert res.exit_code == 0, res.output
     table = pq.read_table(out)
     assert {"pif-paper.phi_b", "pif-modified.phi_b"} <= set(table.column_names)
