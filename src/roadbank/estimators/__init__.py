@@ -1,4 +1,4 @@
-"""Bank-angle estimators behind one interface (SPEC 4).
+"""Bank-angle estimators behind one interface (docs/estimators.md).
 
 >>> from roadbank import estimators
 >>> est = estimators.make("pif-modified")

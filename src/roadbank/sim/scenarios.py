@@ -112,7 +112,7 @@ CONDITIONS: dict[str, Condition] = {
     "cf150": Condition("cf150", cornering_scale_front=1.5, description="plant Cf = 1.5 Cf_ss"),
 }
 
-#: Conditions the paper runs per scenario (SPEC section 6); run_scenario accepts any.
+#: Conditions the paper runs per scenario (docs/simulator.md); run_scenario accepts any.
 CONDITIONS_BY_SCENARIO: dict[str, tuple[str, ...]] = {
     "const-bank": ("nominal", "low-mu", "misaligned", "cf120"),
     "bank-lane-change": ("nominal", "low-mu", "misaligned", "cf120"),

@@ -11,8 +11,8 @@ tau = 2/3 s, r and RMS of ``theta``, smoothed and raw). Specific to KITTI:
   vehicle-aligned frame, so there is no mounting offset between them; every
   scored sample counts, and a constant bias of an estimator shows in its RMS;
 * the INS signals carry no vibration worth the name (an RT3003's filtered
-  outputs), so the raw (unsmoothed) scores are meaningful here; the targets of
-  issue 14 are judged on the raw RMS, and the smoothed scores are reported too;
+  outputs), so the raw (unsmoothed) scores are meaningful here; the accuracy
+  targets on real data are judged on the raw RMS, and the smoothed scores are reported too;
 * no steering angle: the estimators that read it (dfc, uio, pio-original,
   pif-original, kalman) flag every sample not valid and get no score.
 
