@@ -264,7 +264,7 @@ def test_generated_object_has_no_heap_no_mutable_globals_no_recursion(tmp_path):
             graph.setdefault(a, set()).add(b)
         state = {}
 
-        def visit(f):
+        def visit(f, state=state, graph=graph):
             state[f] = 1
             for g in graph.get(f, ()):
                 assert state.get(g) != 1, f"recursion through {f} -> {g}"

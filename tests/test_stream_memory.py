@@ -105,7 +105,8 @@ def test_roadbank_command_puts_arrow_on_the_c_allocator_unless_told_otherwise(es
 def test_deferred_module_loads_on_first_call_and_is_the_real_one_afterwards(tmp_path):
     # the mechanism of roadbank.io.mdfimport without sympy: 'user' takes two names from 'heavy'
     # in a try (as asammdf takes lambdify/symbols from sympy); 'heavy' records that it was imported
-    (tmp_path / "heavy.py").write_text("import builtins\nbuiltins.HEAVY_LOADS = getattr(builtins, 'HEAVY_LOADS', 0) + 1\n"
+    (tmp_path / "heavy.py").write_text("import builtins\n"
+                                       "builtins.HEAVY_LOADS = getattr(builtins, 'HEAVY_LOADS', 0) + 1\n"
                                        "def double(x):\n    return 2 * x\n"
                                        "def name():\n    return __name__\nCONST = 7\n")
     (tmp_path / "user.py").write_text("try:\n    from heavy import double, name\nexcept ImportError:\n"

@@ -36,7 +36,7 @@ def test_validate_json_and_report(tmp_path):
     assert res.exit_code == 0, res.output
     data = json.loads(res.stdout)
     assert set(data) == set(estimators.NAMES)
-    for name, v in data.items():
+    for v in data.values():
         assert set(v) == {"r", "rms_deg", "offset_deg"}
         assert -1 <= v["r"] <= 1 and v["rms_deg"] >= 0 and np.isfinite(v["offset_deg"])
     # the README's rough first look: the kinematic estimate correlates clearly (about 0.55+)

@@ -111,7 +111,7 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
         try:
             vehicle = vehicle.with_params(steering_ratio=steering_ratio)
         except ValueError as exc:
-            raise click.BadParameter(str(exc), param_hint="--steering-ratio")
+            raise click.BadParameter(str(exc), param_hint="--steering-ratio") from None
     if workers < 1:
         raise click.BadParameter("must be >= 1", param_hint="--workers")
     as_dir = output.endswith(("/", "\\"))
@@ -126,7 +126,7 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     try:
         offsets = vehicle.sensor_offsets
     except ValueError as exc:
-        raise click.BadParameter(str(exc), param_hint="--vehicle")
+        raise click.BadParameter(str(exc), param_hint="--vehicle") from None
     if offsets:
         click.echo("removing the sensor offsets identified in the vehicle file from every log: "
                    + ", ".join(_OFFSET_TEXT[c](v) for c, v in offsets.items()), err=True)

@@ -12,20 +12,19 @@ transient.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..params import G, VehicleParams
+from ..params import VehicleParams
 from ..signals import Signals
 from .driver import D_LATINT, D_SWA, D_VINT, ND, Driver
 from .integrate import outputs_at, simulate
 from .params import PlantParams
-from .plant import (A_AX, A_AY, A_DVY, A_FXW, A_FYW, A_FZW, A_PHIB, NX, X_FXL, X_FYL, X_KAPPA,
-                    X_N, X_OMEGA, X_PHI, X_PSI, X_R, X_S, X_VX, X_VY)
+from .plant import (A_AX, A_AY, A_DVY, A_FXW, A_FYW, A_FZW, NX, X_FXL, X_FYL, X_N, X_OMEGA, X_PHI, X_PSI, X_R,
+                    X_S, X_VX, X_VY)
 from .road import Road, flat_road, straight_road, test_track, track_curve_start, truth_bank, two_lane_road
 from .sensors import SensorConfig, measure
 

@@ -17,7 +17,8 @@ def find_datasets(root) -> dict:
 
     root = Path(root)
     found = {"comma2k19": [], "kitti": []}
-    for d in [root] + sorted(p for p in root.glob("*") if p.is_dir()) + sorted(p for p in root.glob("*/*") if p.is_dir()):
+    subdirs = sorted(p for p in root.glob("*") if p.is_dir()) + sorted(p for p in root.glob("*/*") if p.is_dir())
+    for d in [root] + subdirs:
         if (d / "processed_log").is_dir():
             found["comma2k19"].append(d)
         elif d.name != "oxts" and len(find_oxts_dirs(d)) == 1 and (d / "oxts").is_dir():

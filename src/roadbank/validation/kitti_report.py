@@ -204,7 +204,7 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
     L.append("\nBest of each score column in bold (smallest RMS, largest r).\n")
     L += limits_lines(v, h)
     L.append(f"{h}# Method (KITTI)\n")
-    L.append(f"- Reader: `roadbank.io.load_log(drive)` (format `kitti-oxts`, detected from the folder): "
+    L.append("- Reader: `roadbank.io.load_log(drive)` (format `kitti-oxts`, detected from the folder): "
              "columns 8 `vf` -> vx, 12 `ay` -> ay, 19 `wz` -> r, 3 `roll` -> reference, 0/1 lat/lon kept "
              "(`Log.extra`); already ISO 8855, no sign change; `delta_f` NaN. The frames keep their own "
              "time stamps (no resampling): the estimators integrate each step with trapezoidal substeps "
