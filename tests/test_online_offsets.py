@@ -132,6 +132,7 @@ def test_bad_settings_are_refused():
 KITTI = sorted(p for d in ("kitti-oxts", "kitti-oxts-extra") for p in (DATA / d).glob("2011_*"))
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not KITTI, reason="../shared/data/kitti-oxts* not present")
 def test_on_the_kitti_drives_the_learnt_yaw_offset_is_small_and_the_bank_no_worse():
     """The INS is calibrated: where a drive stands still long enough to learn, the learnt yaw

@@ -64,6 +64,7 @@ def _bank_rms_deg(path, truth):
     return out
 
 
+@pytest.mark.slow
 def test_estimate_with_the_identified_file_removes_the_offsets(drive):
     case, log, truth, car_path, d = drive
     car = Vehicle.from_toml(car_path)

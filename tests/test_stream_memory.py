@@ -80,6 +80,7 @@ def estimated(tmp_path_factory):
     return d, seen
 
 
+@pytest.mark.slow
 def test_streamed_estimate_loads_no_plotting_dask_or_pandas(estimated):
     d, seen = estimated
     parquet_mods = seen[str(d / "a.parquet")]
@@ -95,6 +96,7 @@ def test_streamed_estimate_loads_no_plotting_dask_or_pandas(estimated):
         assert tab.num_rows > 0.99 * N and "pif-modified.phi_b" in tab.column_names
 
 
+@pytest.mark.slow
 def test_roadbank_command_puts_arrow_on_the_c_allocator_unless_told_otherwise(estimated):
     assert estimated[1]["pool"] == "system"
     code = ("import json, os, roadbank.cli; "
@@ -129,6 +131,7 @@ print(json.dumps(res))
                           "name": "heavy", "real": True, "loads": 1}
 
 
+@pytest.mark.slow
 def test_mdf4_formula_loads_sympy_on_demand_and_converts(tmp_path):
     # 'Abs(X)' is an algebraic conversion numexpr cannot parse: asammdf evaluates it with sympy
     # (optional for asammdf and not among roadbank's dependencies: where it is missing asammdf

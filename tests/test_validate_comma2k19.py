@@ -28,6 +28,7 @@ def test_lowpass_is_first_order_with_unit_gain():
     assert y[10 + k] == pytest.approx(1 - np.exp(-1), abs=0.01)
 
 
+@pytest.mark.slow
 @needs_data
 def test_validate_json_and_report(tmp_path):
     out = tmp_path / "real-data.md"
