@@ -253,3 +253,28 @@ def test_cli_export_with_online_offsets(tmp_path):
     assert "roadbank_kinematic_step_learning" in (tmp_path / "roadbank_kinematic.h").read_text()
     res = CliRunner().invoke(main, ["export", "c", "-e", "kinematic", "-o", str(tmp_path / "plain")])
     assert "offsets" not in (tmp_path / "plain" / "roadbank_kinematic.h").read_text()
+
+
+def test_roadbank_estimate_learns_the_offset_by_default(tmp_path):
+    import pandas as pd
+    from click.testing import CliRunner
+
+    from roadbank.cli import main
+    from roadbank.io.writers import write_table
+
+    sc = SCENARIOS["const-bank"]
+    sim = with_standstill(run(sc, sensors=_sensors(), seed=3), sc, STILL)
+    sg = sim.signals
+    log = tmp_path / "drive.parquet"
+    write_table(log, {"t": sg.t, "vx": sg.vx, "ay": sg.ay, "r": sg.r, "delta_f": sg.delta_f}, {})
+    rms = {}
+    for label, extra in (("default", []), ("off", ["--no-online-offsets"])):
+        out = tmp_path / f"{label}.csv"
+        res = CliRunner().invoke(main, ["estimate", str(log), "-o", str(out), *extra])
+        assert res.exit_code == 0, res.output
+        got = pd.read_csv(out)
+        keep = ((got["t"] > STILL + 2.0) & got["kinematic-ff.valid"].astype(bool)).to_numpy()
+        rms[label] = math.degrees(float(np.sqrt(np.mean((got["kinematic-ff.phi_b"].to_numpy()[keep]
+                                                         - sim.truth.phi_b[keep]) ** 2))))
+    # 0.5 deg/s at 20 m/s reads as 1 deg of bank until it is learnt at the standstill
+    assert rms["default"] < 0.5 * rms["off"], rms

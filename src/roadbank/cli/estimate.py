@@ -64,6 +64,9 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
               help="Steering-wheel / road-wheel ratio when the log has a steering-wheel angle "
                    "(default: the channel map's, else VehicleParams' 16).")
 @vehicle_option("Every estimator is designed for this car: its parameters and its [tuning] tables.")
+@click.option("--online-offsets/--no-online-offsets", default=True, show_default=True,
+              help="Learn the yaw-rate offset at standstill (and with a steering angle on straights, then the "
+                   "steering offset) while the log runs, and remove it before the estimators.")
 @click.option("--workers", type=int, default=1, show_default=True,
               help="Logs in parallel on a Dask LocalCluster of N single-threaded processes (1: in this process).")
 @click.option("--scheduler", default=None, metavar="ADDR",
@@ -76,7 +79,7 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
               help="Print the summary as one JSON object on stdout (per log: status, duration, time-stamp "
                    "repairs, and valid share and bank mean/min/max of every estimator) instead of the table.")
 def estimate(logs, channels, fmt, est_names, output, output_format, plot, steering_ratio, vehicle,
-             workers, scheduler, resume, chunk_rows, as_json):
+             online_offsets, workers, scheduler, resume, chunk_rows, as_json):
     """Estimate the road bank angle on recorded LOGS and write t, theta, phi_b, valid per estimator.
 
     \b
@@ -134,7 +137,8 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
             "steering_ratio": str(cmap.steering_ratio if cmap and cmap.steering_ratio else params.steering_ratio)}
     if not batch:
         s = estimate_log(paths[0], output, names, channels=cmap, format=fmt, vehicle=vehicle,
-                         chunk_rows=chunk_rows, metadata=dict(meta, source=str(paths[0])), plot=plot)
+                         chunk_rows=chunk_rows, metadata=dict(meta, source=str(paths[0])), plot=plot,
+                         online_offsets=online_offsets)
         summaries = [s]
     else:
         with click.progressbar(length=len(paths), label=f"estimating ({', '.join(names)})", file=sys.stderr,
@@ -144,7 +148,8 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
             try:
                 res = run_fleet(paths, output, names, channels=cmap, format=fmt, vehicle=vehicle,
                                 output_format=output_format, workers=workers, scheduler=scheduler, resume=resume,
-                                chunk_rows=chunk_rows, metadata=meta, plot_dir=plot, on_result=progress)
+                                chunk_rows=chunk_rows, metadata=meta, plot_dir=plot, on_result=progress,
+                                online_offsets=online_offsets)
             except (ConnectionError, RuntimeError) as exc:
                 click.echo(f"\nerror: {exc}", err=True)
                 sys.exit(1)

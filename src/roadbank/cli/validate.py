@@ -11,13 +11,8 @@ import click
 from ..report.html import write_document
 from .options import vehicle_option
 
-_DESIGN_CAR = "The estimators are designed for this car: its parameters and [tuning] tables."
-_VEHICLE_COMMA = vehicle_option(_DESIGN_CAR, none_if_absent=True,
-                                default_help="a mid-size sedan like the data set's cars (its parameters "
-                                             "are in the report, docs/real-data.md)")
-_VEHICLE_KITTI = vehicle_option(_DESIGN_CAR, none_if_absent=True,
-                                default_help="the paper's SUV (suv-paper), and a mid-size sedan as a "
-                                             "sensitivity run")
+_VEHICLE = vehicle_option("The estimators are designed for this car: its parameters and [tuning] tables.",
+                          none_if_absent=True)
 
 
 def _car(vehicle) -> dict:
@@ -55,7 +50,7 @@ _ESTIMATORS = click.option("--estimators", "-e", "names", default="all", show_de
                    "and a PNG next to it.")
 @_ESTIMATORS
 @click.option("--no-sensitivity", is_flag=True, help="Skip the SUV-parameter and PIF-Q sensitivity runs.")
-@_VEHICLE_COMMA
+@_VEHICLE
 def comma2k19(path, as_json, output, names, no_sensitivity, vehicle):
     """Score every estimator against the pose-derived roll of a comma2k19 segment at PATH."""
     from ..io import LogError
@@ -104,7 +99,7 @@ def _kitti_figures(v, out_dir: Path, stem: str) -> dict:
 @click.option("--no-sensitivity", is_flag=True,
               help="Skip the sensitivity runs (the paper's SUV parameters; the PIFs designed from the data "
                    "sheet alone).")
-@_VEHICLE_KITTI
+@_VEHICLE
 def kitti(paths, as_json, output, names, no_sensitivity, vehicle):
     """Score every estimator against the INS roll of KITTI raw drives.
 

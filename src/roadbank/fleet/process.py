@@ -130,7 +130,7 @@ def concat_estimates(parts: list):
 
 def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: str | None = None,
                  params=None, vehicle=None, chunk_rows: int | None = None, metadata: dict | None = None,
-                 keep: bool = False, plot=None) -> LogSummary:
+                 keep: bool = False, plot=None, online_offsets: bool = True) -> LogSummary:
     """Estimate the bank on one log, streamed in chunks, and write the result table incrementally.
 
     Parameters
@@ -163,6 +163,9 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
         (memory then grows with the log).
     plot : path-like, optional
         Draw theta / phi_b against time into this PNG (keeps the whole series).
+    online_offsets : bool
+        Learn the yaw-rate and steering offsets while the log runs (at standstill, on straights:
+        :func:`roadbank.estimators.with_online_offsets`) and remove them before every estimator.
 
     Returns
     -------
@@ -170,7 +173,7 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
         Never raises for a bad log: ``status = "error"`` and ``error`` say why,
         and no partial output file is left behind.
     """
-    from ..estimators import OFFLINE
+    from ..estimators import OFFLINE, with_online_offsets
     from ..io import LogError
     from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
     from ..io.timebase import add_counts
@@ -201,6 +204,8 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
                 cond = log_conditions(chunk.signals)
                 ests = [vehicle.make(n, **cond) if vehicle is not None
                         else make_estimator(n, params, **cond) for n in names]
+                if online_offsets:
+                    ests = [with_online_offsets(e, params) for e in ests]
                 span = max((e.lookahead_s for e, n in zip(ests, names) if n in OFFLINE), default=None)
             warns += chunk.warnings
             summary.time_repairs = add_counts(summary.time_repairs, chunk.time_repairs)

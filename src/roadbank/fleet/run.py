@@ -168,7 +168,7 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
               params=None, vehicle=None, output_format: str = "parquet", workers: int = 1,
               scheduler: str | None = None, resume: bool = False, chunk_rows: int | None = None,
               metadata: dict | None = None, plot_dir=None, on_result=None,
-              connect_timeout: float = 20.0) -> FleetResult:
+              connect_timeout: float = 20.0, online_offsets: bool = True) -> FleetResult:
     """Estimate the bank on many logs, writing each result and a summary row as soon as a log finishes.
 
     Parameters
@@ -223,7 +223,8 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
     jobs = [(p, outdir / names[p], dict(metadata or {}, source=str(p)),
              None if plot_dir is None else Path(plot_dir) / (names[p].split(".bank.")[0] + ".png"))
             for p in todo]
-    kw = dict(channels=channels, format=format, params=params, vehicle=vehicle, chunk_rows=chunk_rows)
+    kw = dict(channels=channels, format=format, params=params, vehicle=vehicle, chunk_rows=chunk_rows,
+              online_offsets=online_offsets)
 
     def finish(s: LogSummary):
         summary.add(s)

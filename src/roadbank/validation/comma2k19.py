@@ -71,13 +71,14 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     names : sequence of str, optional
         Estimators (default: all of :data:`roadbank.estimators.NAMES`).
     params : VehicleParams, optional
-        Default :data:`SEDAN`.
+        The car; default the rule for a car that is not described (the paper's SUV,
+        :class:`~roadbank.params.VehicleParams`, as every command uses).
     tau : float
         Smoothing time constant (s) applied to the reference and all estimates.
     warmup_s, fit_fraction : float
         Warm-up dropped (s); fraction of the rest used to fit the offset.
     sensitivity : bool
-        Also score with the paper's default SUV parameters and a PIF Q sweep.
+        Also score with a mid-size sedan's parameters (:data:`SEDAN`) and a PIF Q sweep.
     tuning : mapping, optional
         ``{estimator: {option: value}}`` for the main scores (a vehicle file's ``[tuning]``).
     sensors : roadbank.vehicle.SensorSpec, optional
@@ -87,7 +88,7 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     from .. import estimators
     from ..io.comma2k19 import load_comma2k19
 
-    params = params or SEDAN
+    params = params or VehicleParams()
     names = list(names or estimators.NAMES)
     scoring = Scoring(tau=tau, warmup_s=warmup_s, fit_fraction=fit_fraction)
     log = load_comma2k19(path, params=params)
@@ -156,12 +157,12 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     }
     sens = {}
     if sensitivity:
-        suv = VehicleParams()
-        log_suv = load_comma2k19(path, params=suv)
-        sens["suv"] = {}
+        other = SEDAN
+        log_other = load_comma2k19(path, params=other)
+        sens["sedan"] = {}
         for name in names:
-            est = estimators.make(name, params=suv).run(log_suv.signals)
-            sens["suv"][name] = score(t, hold_invalid(est.theta), hold_invalid(est.phi_b), est.valid,
+            est = estimators.for_log(name, log_other.signals, other).run(log_other.signals)
+            sens["sedan"][name] = score(t, hold_invalid(est.theta), hold_invalid(est.phi_b), est.valid,
                                       ref, m_fit, m_sc, scoring)
         if "pif-modified" in names:
             sens["pif_Q"] = {}

@@ -79,15 +79,13 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
     L.append("3. Reference roll: local down (WGS-84 ellipsoid normal at the ECEF position) in the camera "
              "frame, `g = R^T down`, `roll = atan2(g[1], g[2])` (20 Hz, linearly interpolated to 100 Hz). "
              f"Range {d['ref_range_deg'][0]:.2f} to {d['ref_range_deg'][1]:.2f} deg.")
-    L.append(f"4. Vehicle parameters: the car is not identified in the data; comma2k19 cars are mostly "
-             f"Toyota/Lexus/Honda sedans, so a plausible compact/mid-size sedan is used "
-             f"(`roadbank.validation.SEDAN`): m = {p.m:.0f} kg, Iz = {p.Iz:.0f} kg m^2, Lf = {p.Lf} m, "
-             f"Lr = {p.Lr} m, Cf = {p.Cf:.0f} N/rad, Cr = {p.Cr:.0f} N/rad, steering ratio "
-             f"{p.steering_ratio} (Prius/Corolla/Civic/Camry are 13.5-16), roll stiffness "
-             f"{p.k_roll:.0f} N m/rad (about "
-             f"{math.degrees(p.ms * p.h_roll / (p.k_roll - p.ms * p.g * p.h_roll)):.2f} deg per m/s^2). "
-             "The paper's SUV defaults are scored too (below). Estimator tuning: the library defaults "
-             "(docs/estimators.md); nothing is tuned on this segment.")
+    L.append(f"4. Vehicle parameters: the car is not identified in the data, so the rule for a car nobody "
+             f"described applies, as in `roadbank estimate`: the paper's SUV (`VehicleParams()`): m = "
+             f"{p.m:.0f} kg, Iz = {p.Iz:.0f} kg m^2, Lf = {p.Lf} m, Lr = {p.Lr} m, Cf = {p.Cf:.0f} N/rad, "
+             f"Cr = {p.Cr:.0f} N/rad, steering ratio {p.steering_ratio}. comma2k19 cars are mostly "
+             "Toyota/Lexus/Honda sedans; a plausible mid-size sedan (`roadbank.validation.SEDAN`, steering "
+             "ratio 15) is scored too (below). Estimator tuning: the library defaults (docs/estimators.md); "
+             "nothing is tuned on this segment.")
     L.append(f"5. Scoring: first {st['warmup_s']:.0f} s dropped (warm-up); the reference and every "
              f"estimate smoothed with the same zero-phase first-order low-pass, time constant "
              f"{st['tau']:.3f} s (the paper's reference filter, run forward and backward so it adds no "
@@ -96,11 +94,11 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
              f"{res.split_time - res.t[0]:.1f} s), r and RMS on the remaining "
              f"{1 - st['fit_fraction']:.0%}. Samples flagged not valid hold the last value "
              f"(valid fraction at least {min(sc.valid_fraction for sc in res.scores.values()):.2f}).\n")
-    if "suv" in res.sensitivity:
+    if "sedan" in res.sensitivity:
         L.append("## Sensitivity\n")
-        L.append("Paper SUV parameters (`VehicleParams()` defaults, steering ratio 16) instead of the sedan:\n")
+        L.append("A mid-size sedan's parameters (`roadbank.validation.SEDAN`) instead of the paper's SUV:\n")
         L.append(md_table(["estimator", "r", "rms_deg", "offset_deg"],
-                          [[name, sc.r, sc.rms_deg, sc.offset_deg] for name, sc in res.sensitivity["suv"].items()],
+                          [[name, sc.r, sc.rms_deg, sc.offset_deg] for name, sc in res.sensitivity["sedan"].items()],
                           digits=3, best=_BEST, best_in="column"))
         L.append("")
     if "pif_Q" in res.sensitivity:
