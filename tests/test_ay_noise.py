@@ -121,3 +121,43 @@ def test_the_logs_measured_ay_noise_helps_where_the_accelerometer_vibrates(banke
     assert _rms(clean, make_estimator("pif-modified", **cond)) == pytest.approx(
         _rms(clean, E.make("pif-modified")), abs=0.01)
     assert E.make("pif-modified").R[0, 0] == R_ESP
+
+
+def test_road_noise_reads_coloured_vibration_that_second_differences_miss():
+    from scipy.signal import butter, sosfiltfilt
+
+    from roadbank.signals import road_noise_std
+
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 600.0, 0.01)
+    smooth = 2.0 * np.sin(2 * np.pi * 0.1 * t) + np.sin(2 * np.pi * 0.4 * t)      # manoeuvres, m/s^2
+    white = 0.05 * rng.standard_normal(t.size)
+    assert road_noise_std(smooth + white, t) == pytest.approx(0.05, rel=0.03)
+    # body vibration at 3-6 Hz (scipy's band-pass, independent of roadbank's filter), 0.2 m/s^2
+    vib = sosfiltfilt(butter(4, [3.0, 6.0], "bandpass", fs=100.0, output="sos"), rng.standard_normal(t.size))
+    vib *= 0.2 / vib.std()
+    x = smooth + vib
+    # all of its power lies above the 1 Hz band: read as white noise of about that variance
+    assert road_noise_std(x, t) == pytest.approx(0.2, rel=0.05)
+    assert white_noise_std(x) < 0.05                   # the second-difference rule sees a fifth of it
+    # only the valid samples count; too few -> NaN
+    valid = t > 300.0
+    assert road_noise_std(np.where(valid, x, 50.0 * rng.standard_normal(t.size)), t, valid) == pytest.approx(
+        0.2, rel=0.1)
+    assert math.isnan(road_noise_std(x[:50], t[:50]))
+
+
+def test_on_the_kitti_drives_the_road_reads_more_than_the_white_rule():
+    from pathlib import Path
+
+    from roadbank.io.kitti import load_kitti_oxts
+    from roadbank.signals import road_noise_std
+
+    drive = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "kitti-oxts" / "2011_09_26_drive_0070"
+    if not drive.is_dir():
+        pytest.skip("../shared/data/kitti-oxts is not here")
+    s = load_kitti_oxts(drive).signals
+    moving = s.vx >= 5.0
+    road, white = road_noise_std(s.ay, s.t, moving), white_noise_std(s.ay, moving)
+    assert 1.2 * white < road < 3.0 * white
+    assert log_conditions(s)["log_ay_noise"] == pytest.approx(road, rel=0.01)

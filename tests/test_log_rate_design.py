@@ -63,6 +63,13 @@ def test_a_cars_sensor_at_the_log_rate_and_explicit_weights_win():
     assert SensorSpec().r_noise_density(10.0) == pytest.approx(_density(0.1, 0.3, 10.0), rel=1e-12)
 
 
+def _car(vehicle):
+    """The car a command designs for: the named one, or the one for a car nobody described."""
+    from roadbank.vehicle import Vehicle, undescribed_params
+
+    return load_vehicle(vehicle) if vehicle else Vehicle(params=undescribed_params())
+
+
 def _write_csv(path, t, cols):
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
@@ -96,7 +103,7 @@ def test_roadbank_estimate_on_a_50_hz_csv_uses_the_sensor_at_50_hz(tmp_path, veh
     got = _read_csv(out)
     signals = load_log(log).signals
     np.testing.assert_allclose(got["t"], t)
-    car = load_vehicle(vehicle)
+    car = _car(vehicle)
     cond = log_conditions(signals)                              # 50 Hz and the log's ay noise
     assert cond["log_rate"] == pytest.approx(50.0)
     at50 = car.make("pif-modified", **cond).run(signals).theta
@@ -115,7 +122,7 @@ def test_roadbank_estimate_on_a_kitti_drive_gives_the_theta_validate_kitti_score
     res = CliRunner().invoke(main, args)
     assert res.exit_code == 0, res.output
     got = _read_csv(out)
-    car = load_vehicle(vehicle)
+    car = _car(vehicle)
     run = validate_kitti_drive(DRIVE, names=["pif-modified"], params=car.params, tuning=dict(car.tuning),
                                sensors=car.sensors, sensitivity=False).run
     valid = run.valid["pif-modified"]
@@ -134,8 +141,9 @@ def test_roadbank_estimate_on_a_kitti_drive_gives_the_theta_validate_kitti_score
 def test_validate_kitti_also_scores_the_default_pif_designed_for_100_hz():
     from roadbank.io import load_log
     from roadbank.validation.kitti import validate_kitti_drive
+    from roadbank.vehicle import undescribed_params
 
-    # no car given: the rule for a car nobody described (the paper's SUV), as in roadbank estimate
+    # no car given: the rule for a car nobody described, as in roadbank estimate
     res = validate_kitti_drive(DRIVE, names=["kinematic", "pif-modified"])
     assert set(res.sensitivity["R_nominal"]) == {"pif-modified"}     # only the sensor-R estimators
     ref, sc = res.run.raw_reference, res.run.scored
@@ -143,7 +151,7 @@ def test_validate_kitti_also_scores_the_default_pif_designed_for_100_hz():
     cond = log_conditions(signals)
     assert cond["log_rate"] == pytest.approx(10.0, rel=0.02) and cond["log_ay_noise"] > 0.05
     for key, opts in ((None, cond), ("sheet_rate", {"log_rate": cond["log_rate"]}), ("R_nominal", {})):
-        th = make_estimator("pif-modified", None, **opts).run(signals).theta
+        th = make_estimator("pif-modified", undescribed_params(), **opts).run(signals).theta
         got = res.scores["pif-modified"] if key is None else res.sensitivity[key]["pif-modified"]
         assert got.rms_raw_deg == pytest.approx(math.degrees(np.sqrt(np.mean((th[sc] - ref[sc]) ** 2))), rel=1e-9)
     rms = [res.scores["pif-modified"].rms_raw_deg] + [res.sensitivity[k]["pif-modified"].rms_raw_deg

@@ -145,6 +145,7 @@ def test_default_map_estimator_is_the_smoother_and_removes_the_lane_change_lag(t
     from roadbank.io.channels import read_channel_map
     from roadbank.mapping.simulated import run_positions
     from roadbank.sim import SCENARIOS, run_scenario
+    from roadbank.vehicle import load_vehicle
 
     res = run_scenario("bank-lane-change", seed=1)
     proj = LocalProjection(48.0, 11.0)
@@ -152,10 +153,11 @@ def test_default_map_estimator_is_the_smoother_and_removes_the_lane_change_lag(t
     pq.write_table(pa.table(dict(res.table(), lat=lat, lon=lon)), tmp_path / "drive.parquet")
     (tmp_path / "m.toml").write_text(MAP_TOML)
     errs = {}
+    suv = load_vehicle("suv-paper")                  # the simulated car, described
     for name in (None, "pif-modified"):
         kw = {} if name is None else {"estimator": name}
         bmap, recs = map_logs([tmp_path / "drive.parquet"], channels=read_channel_map(tmp_path / "m.toml"),
-                              origin=(48.0, 11.0), **kw)
+                              origin=(48.0, 11.0), vehicle=suv, **kw)
         assert recs[0].status == "ok"
         got = bmap.table()
         truth = BankMap(proj)
@@ -203,7 +205,8 @@ def test_log_without_position_reported_others_mapped(tmp_path):
     assert "nogps.parquet" in r.output and "lat" in r.output       # names the file and the missing column
     tab = pq.read_table(tmp_path / "out" / "map.parquet").to_pydict()
     from roadbank import Signals, estimators
-    est = estimators.make("kinematic").run(Signals(t, cols["vx"], cols["ay"], cols["r"], cols["delta_f"]))
+    sig = Signals(t, cols["vx"], cols["ay"], cols["r"], cols["delta_f"])
+    est = estimators.for_log("kinematic", sig).run(sig)        # no car given: the undescribed car's roll
     np.testing.assert_allclose(tab["bank_mean_deg"], np.degrees(est.phi_b[est.valid].mean()), atol=1e-9)
     assert sum(tab["count"]) == est.valid[25:-25].sum()        # all of the good log, but the course's ends
 

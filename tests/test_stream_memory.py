@@ -93,7 +93,7 @@ def test_streamed_estimate_loads_no_plotting_dask_or_pandas(estimated):
         assert unused not in mdf_mods, unused
     for name in ("a", "b"):                              # and estimated: a complete table each
         tab = pq.read_table(d / f"{name}.out.parquet")
-        assert tab.num_rows > 0.99 * N and "pif-modified.phi_b" in tab.column_names
+        assert tab.num_rows > 0.99 * N and "kinematic-ff.phi_b" in tab.column_names      # the default estimator
 
 
 @pytest.mark.slow

@@ -138,22 +138,29 @@ def white_noise_std(x, valid=None) -> float:
 DYNAMICS_BAND_HZ = 1.0
 
 
+#: shortest run of valid samples (in periods of the dynamics band) that :func:`road_noise_std` reads
+ROAD_NOISE_MIN_PERIODS = 4.0
+
+
 def road_noise_std(x, t, valid=None, band_hz: float = DYNAMICS_BAND_HZ) -> float:
     """Standard deviation (unit of ``x``) of the noise a channel carries on a real road.
 
     The noise model of real roads: what the sampled channel ``x`` (on time stamps ``t``, s)
     carries above the vehicle's dynamics band ``band_hz`` (Hz) is road and body vibration
     (aliased into a slow log) and sensor noise, and it is taken as white over the whole band
-    ``0 .. rate/2``: its power above ``band_hz`` (second-order Butterworth high-pass, run forward
-    and backward so it adds no lag) divided by the share ``1 - 2 band_hz / rate`` of the band
-    that lies above ``band_hz``. Unlike :func:`white_noise_std` (second differences, robust
-    scale) it counts the heavy tails and the coloured part of the vibration, which pass a
-    filter designed for white noise. Only finite samples that are ``valid`` (bool array,
-    default all) count; NaN with fewer than :data:`MIN_NOISE_TRIPLES` of them. Where the log is
-    too slow for the band (``rate <= 4 band_hz``) it falls back to :func:`white_noise_std`.
+    ``0 .. rate/2``. Each run of consecutive valid samples (at least
+    :data:`ROAD_NOISE_MIN_PERIODS` periods of the band long) is detrended, tapered with a Hann
+    window and high-passed without phase in the frequency domain (samples in order, at the
+    log's median rate) with the gain ``G(f) = (f/band)^8 / (1 + (f/band)^8)`` (an eighth-order
+    Butterworth magnitude: a fourth-order one run forward and backward). The windowed mean
+    square of the result over all runs, divided by the share of white noise that ``G`` passes
+    (the mean of ``G^2`` over the band), is the noise variance (a Welch-type estimate). Unlike
+    :func:`white_noise_std` (second differences, robust scale) it counts the heavy tails and the
+    coloured part of the vibration, which pass a filter designed for white noise. Only finite
+    samples that are ``valid`` (bool array, default all) count; NaN with fewer than
+    :data:`MIN_NOISE_TRIPLES` of them in such runs. Where the log is too slow for the band
+    (``rate <= 4 band_hz``) it falls back to :func:`white_noise_std`.
     """
-    from scipy.signal import butter, sosfiltfilt
-
     x = np.asarray(x, dtype=np.float64)
     ok = np.isfinite(x) if valid is None else np.isfinite(x) & np.asarray(valid, dtype=bool)
     rate = sample_rate(t)
@@ -161,10 +168,23 @@ def road_noise_std(x, t, valid=None, band_hz: float = DYNAMICS_BAND_HZ) -> float
         return float("nan")
     if rate <= 4.0 * band_hz:
         return white_noise_std(x, valid)
-    sos = butter(2, band_hz / (rate / 2.0), "highpass", output="sos")
-    fill = np.where(np.isfinite(x), x, np.nanmedian(x[ok]))
-    h = sosfiltfilt(sos, fill - np.median(fill[ok]))
-    return float(np.sqrt(np.mean(h[ok] ** 2) / (1.0 - 2.0 * band_hz / rate)))
+    edges = np.flatnonzero(np.diff(np.r_[0, ok.astype(np.int8), 0]))
+    shortest = max(MIN_NOISE_TRIPLES, int(np.ceil(ROAD_NOISE_MIN_PERIODS * rate / band_hz)))
+    power = weight = 0.0
+    for a, b in zip(edges[0::2], edges[1::2]):
+        n = b - a
+        if n < shortest:
+            continue
+        k = np.arange(n)
+        y = x[a:b] - np.polyval(np.polyfit(k, x[a:b], 1), k)
+        w = np.hanning(n)
+        f = np.fft.rfftfreq(n, d=1.0 / rate)
+        q = (f / band_hz) ** 8
+        gain = q / (1.0 + q)
+        h = np.fft.irfft(np.fft.rfft(y * w) * gain, n)
+        power += float(np.sum(h ** 2)) / float(np.mean(gain ** 2))
+        weight += float(np.sum(w ** 2))
+    return float(np.sqrt(power / weight)) if weight > 0 else float("nan")
 
 
 def road_wheel_angle(steering_wheel_angle, params: VehicleParams | None = None) -> np.ndarray:

@@ -400,18 +400,33 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     return estimators.make(name, params, **options)
 
 
+def undescribed_params() -> VehicleParams:
+    """The car parameters for a log whose car is not described (:data:`roadbank.defaults.VEHICLE`)."""
+    from .defaults import VEHICLE
+
+    return load_vehicle(VEHICLE).params
+
+
+#: seconds at the start of a log on which :func:`log_conditions` measures it (s)
+DESIGN_SPAN_S = 60.0
+
+
 def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     """What a log tells :func:`make_estimator` about its sensors: ``{"log_rate": Hz,
     "log_ay_noise": m/s^2, "log_r_noise": rad/s}`` — the sample rate of its time base
     (:func:`roadbank.signals.sample_rate`) and the road noise of its ``ay`` and yaw rate on the
     samples at ``vx >= v_min`` (m/s): what they carry above the vehicle's dynamics band, taken
     as white (:func:`roadbank.signals.road_noise_std`, the noise model of real roads; NaN when
-    too few samples).
+    too few samples). Measured on the first :data:`DESIGN_SPAN_S` of the log (all of a shorter
+    one), so that a streamed log gets the same design whatever its chunk size.
     """
     import numpy as np
 
     from .signals import road_noise_std, sample_rate
 
+    n = int(np.searchsorted(signals.t, signals.t[0] + DESIGN_SPAN_S, side="right"))
+    if n < len(signals):
+        signals = signals[:n]
     vx = np.asarray(signals.vx, dtype=np.float64)
     with np.errstate(invalid="ignore"):
         moving = vx >= v_min

@@ -63,7 +63,10 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
 @click.option("--steering-ratio", type=float, default=None,
               help="Steering-wheel / road-wheel ratio when the log has a steering-wheel angle "
                    "(default: the channel map's, else VehicleParams' 16).")
-@vehicle_option("Every estimator is designed for this car: its parameters and its [tuning] tables.")
+@vehicle_option("Every estimator is designed for this car: its parameters and its [tuning] tables.",
+                default_help="a car nobody described: the default estimator needs no car data, the "
+                             "model-based ones are designed for the shipped sedan's parameters (README)",
+                none_if_absent=True)
 @click.option("--online-offsets/--no-online-offsets", default=True, show_default=True,
               help="Learn the yaw-rate offset at standstill (and with a steering angle on straights, then the "
                    "steering offset) while the log runs, and remove it before the estimators.")
@@ -109,12 +112,17 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     """
     from ..fleet import estimate_log, run_fleet
 
+    from ..vehicle import undescribed_params
+
     names = _parse_estimators(est_names)
+    params = vehicle.params if vehicle is not None else undescribed_params()
     if steering_ratio is not None:
         try:
-            vehicle = vehicle.with_params(steering_ratio=steering_ratio)
+            params = params.replace(steering_ratio=steering_ratio)
         except ValueError as exc:
             raise click.BadParameter(str(exc), param_hint="--steering-ratio") from None
+        if vehicle is not None:
+            vehicle = vehicle.with_params(steering_ratio=steering_ratio)
     if workers < 1:
         raise click.BadParameter("must be >= 1", param_hint="--workers")
     as_dir = output.endswith(("/", "\\"))
@@ -125,9 +133,8 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     if not batch and output.suffix.lower() not in (".csv", ".parquet", ".pq"):
         raise click.BadParameter("for one log, -o must end in .csv or .parquet (or be a directory)",
                                  param_hint="-o")
-    params = vehicle.params
     try:
-        offsets = vehicle.sensor_offsets
+        offsets = vehicle.sensor_offsets if vehicle is not None else {}
     except ValueError as exc:
         raise click.BadParameter(str(exc), param_hint="--vehicle") from None
     if offsets:
@@ -136,7 +143,7 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     meta = {"estimators": ",".join(names),
             "steering_ratio": str(cmap.steering_ratio if cmap and cmap.steering_ratio else params.steering_ratio)}
     if not batch:
-        s = estimate_log(paths[0], output, names, channels=cmap, format=fmt, vehicle=vehicle,
+        s = estimate_log(paths[0], output, names, channels=cmap, format=fmt, vehicle=vehicle, params=params,
                          chunk_rows=chunk_rows, metadata=dict(meta, source=str(paths[0])), plot=plot,
                          online_offsets=online_offsets)
         summaries = [s]
@@ -146,7 +153,7 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
             def progress(s):
                 bar.update(1, s)
             try:
-                res = run_fleet(paths, output, names, channels=cmap, format=fmt, vehicle=vehicle,
+                res = run_fleet(paths, output, names, channels=cmap, format=fmt, vehicle=vehicle, params=params,
                                 output_format=output_format, workers=workers, scheduler=scheduler, resume=resume,
                                 chunk_rows=chunk_rows, metadata=meta, plot_dir=plot, on_result=progress,
                                 online_offsets=online_offsets)

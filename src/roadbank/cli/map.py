@@ -41,7 +41,9 @@ def _origin(ctx, param, value):
 @click.option("--origin", callback=_origin, default=None, metavar="LAT,LON",
               help="Origin of the map's plane (deg); default: the first fix rounded to 0.01 deg.")
 @click.option("--chunk-rows", type=int, default=None, help="Rows per streamed chunk (default 20000).")
-@vehicle_option("The estimator is designed for this car.")
+@vehicle_option("The estimator is designed for this car.",
+                default_help="a car nobody described: the shipped sedan's parameters (README)",
+                none_if_absent=True)
 def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, sectors, origin, chunk_rows, vehicle):
     """Map the road bank: attach each valid bank estimate of LOGS to its GNSS position and aggregate per cell.
 

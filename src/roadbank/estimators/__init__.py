@@ -102,15 +102,16 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
     A default-tuned PIF is designed for the log's sample rate and the road noise measured on
     its ``ay`` and yaw rate (:func:`roadbank.vehicle.log_conditions`); the car is ``vehicle``
     (a :class:`roadbank.vehicle.Vehicle`: its parameters, sensors and tuning tables) or
-    ``params`` with the data sheet's sensors. The other estimators are :func:`make`'s.
+    ``params`` with the data sheet's sensors; neither: the car for a log whose car is not
+    described (:func:`roadbank.vehicle.undescribed_params`), as the command line uses.
     ``for_log(name, s).run(s)`` is what the command line writes for the log ``s``.
     """
-    from ..vehicle import log_conditions, make_estimator
+    from ..vehicle import log_conditions, make_estimator, undescribed_params
 
     cond = log_conditions(signals)
     if vehicle is not None:
         return vehicle.make(name, **cond, **tuning)
-    return make_estimator(name, params, **cond, **tuning)
+    return make_estimator(name, params or undescribed_params(), **cond, **tuning)
 
 
 __all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "for_log", "Estimator", "StepResult",

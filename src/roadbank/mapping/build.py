@@ -64,10 +64,11 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
     from ..estimators import OFFLINE
     from ..io import LogError
     from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
-    from ..vehicle import log_conditions, make_estimator
+    from ..vehicle import log_conditions, make_estimator, undescribed_params
 
     if vehicle is not None:
         params = vehicle.params
+    car = params if params is not None else undescribed_params()   # a car nobody described
     # designed per log, for its sample rate and ay noise (as roadbank estimate:
     # roadbank.vehicle.make_estimator)
     designs = {}
@@ -77,7 +78,7 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
         key = tuple(round(v, 6) if np.isfinite(v) else None for v in cond.values())
         if key not in designs:
             designs[key] = (vehicle.make(estimator, **cond) if vehicle is not None
-                            else make_estimator(estimator, params, **cond))
+                            else make_estimator(estimator, car, **cond))
         return designs[key]
     correct = (lambda s: s) if vehicle is None else vehicle.correct
     bmap = BankMap(LocalProjection(*origin), cell_m, sectors) if origin is not None else None

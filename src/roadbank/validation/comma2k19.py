@@ -71,14 +71,14 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     names : sequence of str, optional
         Estimators (default: all of :data:`roadbank.estimators.NAMES`).
     params : VehicleParams, optional
-        The car; default the rule for a car that is not described (the paper's SUV,
-        :class:`~roadbank.params.VehicleParams`, as every command uses).
+        The car; default the rule for a car that is not described
+        (:func:`roadbank.vehicle.undescribed_params`, as every command uses).
     tau : float
         Smoothing time constant (s) applied to the reference and all estimates.
     warmup_s, fit_fraction : float
         Warm-up dropped (s); fraction of the rest used to fit the offset.
     sensitivity : bool
-        Also score with a mid-size sedan's parameters (:data:`SEDAN`) and a PIF Q sweep.
+        Also score with the paper's SUV parameters and a PIF Q sweep.
     tuning : mapping, optional
         ``{estimator: {option: value}}`` for the main scores (a vehicle file's ``[tuning]``).
     sensors : roadbank.vehicle.SensorSpec, optional
@@ -86,9 +86,10 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
         default PIFs' ``R`` is their noise density at the log's rate.
     """
     from .. import estimators
+    from ..vehicle import undescribed_params
     from ..io.comma2k19 import load_comma2k19
 
-    params = params or VehicleParams()
+    params = params or undescribed_params()
     names = list(names or estimators.NAMES)
     scoring = Scoring(tau=tau, warmup_s=warmup_s, fit_fraction=fit_fraction)
     log = load_comma2k19(path, params=params)
@@ -157,12 +158,12 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     }
     sens = {}
     if sensitivity:
-        other = SEDAN
+        other = VehicleParams()
         log_other = load_comma2k19(path, params=other)
-        sens["sedan"] = {}
+        sens["suv"] = {}
         for name in names:
             est = estimators.for_log(name, log_other.signals, other).run(log_other.signals)
-            sens["sedan"][name] = score(t, hold_invalid(est.theta), hold_invalid(est.phi_b), est.valid,
+            sens["suv"][name] = score(t, hold_invalid(est.theta), hold_invalid(est.phi_b), est.valid,
                                       ref, m_fit, m_sc, scoring)
         if "pif-modified" in names:
             sens["pif_Q"] = {}

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ..params import G, VehicleParams
-from .comma2k19 import SEDAN, ValidationResult
+from .comma2k19 import ValidationResult
 from .scoring import Scoring, hold_invalid, lowpass_t, pooled, run_and_score
 from .splits import split_of
 
@@ -122,13 +122,12 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     names : sequence of str, optional
         Estimators (default: all of :data:`roadbank.estimators.NAMES`).
     params : VehicleParams, optional
-        The car; default the rule for a car that is not described (the paper's SUV,
-        :class:`~roadbank.params.VehicleParams`, as every command uses).
+        The car; default the rule for a car that is not described
+        (:func:`roadbank.vehicle.undescribed_params`, as every command uses).
     scoring : Scoring
         Default :data:`KITTI_SCORING`.
     sensitivity : bool
-        Also score with a mid-size sedan's parameters (:data:`~roadbank.validation.SEDAN`,
-        ``sensitivity["sedan"]``; KITTI's car is a VW Passat B6)
+        Also score with the paper's SUV parameters (``VehicleParams()``, ``sensitivity["suv"]``)
         and the sensor-weighted PIFs designed from the data sheet alone: for the drive's rate
         without the ``ay`` noise measured on it (``sensitivity["sheet_rate"]``), and for the
         sensor's nominal rate (``sensitivity["R_nominal"]``, what ``estimators.make`` builds).
@@ -139,16 +138,17 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
         noise density at the drive's rate (:func:`roadbank.vehicle.make_estimator`).
     """
     from .. import estimators
+    from ..vehicle import undescribed_params
     from ..io.kitti import load_kitti_oxts
 
-    params = params or VehicleParams()
+    params = params or undescribed_params()
     names = list(names or estimators.NAMES)
     log = load_kitti_oxts(path)
     run = run_and_score(log.signals, log.reference_roll, names, params, scoring, per_estimator=tuning,
                         sensors=sensors)
     sens = {}
     if sensitivity:
-        sens["sedan"] = run_and_score(log.signals, log.reference_roll, names, SEDAN, scoring).scores
+        sens["suv"] = run_and_score(log.signals, log.reference_roll, names, VehicleParams(), scoring).scores
         # the sensor-weighted PIFs designed from the data sheet alone: at the drive's rate, and at
         # the sensor's nominal rate (100 Hz)
         from ..estimators.pif import SENSOR_R_ESTIMATORS

@@ -169,17 +169,17 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
         _table(L, d.scores.items())
         if figures and d.label in figures:
             L.append(f"![{d.label}: theta vs INS roll]({figures[d.label]})\n")
-    if any("sedan" in d.sensitivity for d in v.drives):
+    if any("suv" in d.sensitivity for d in v.drives):
         L.append(f"{h}# Sensitivity to the vehicle data\n")
-        L.append("Raw theta RMS (deg) as run (no vehicle file: the paper's SUV) and with a mid-size sedan's data "
-                 "(`roadbank.validation.SEDAN`; KITTI's car is a VW Passat B6):\n")
+        L.append("Raw theta RMS (deg) as run (no vehicle file: the car for a log whose car is not described, "
+                 "the shipped `sedan`; KITTI's car is a VW Passat B6) and with the paper's SUV (`VehicleParams()`):\n")
         names = [n for n, s in v.drives[0].scores.items() if s.valid_fraction > 0]
         body = []
         for d in v.drives:
-            suv = d.sensitivity.get("sedan", {})
+            suv = d.sensitivity.get("suv", {})
             body.append([d.label] + [f"{_f(d.scores[n].rms_raw_deg)} / {_f(suv[n].rms_raw_deg) if n in suv else 'n/a'}"
                                      for n in names])
-        L.append(md_table(["drive"] + [f"{n} SUV / sedan" for n in names], body, align="l" + "r" * len(names)))
+        L.append(md_table(["drive"] + [f"{n} sedan / SUV" for n in names], body, align="l" + "r" * len(names)))
         L.append("")
     if any("R_nominal" in d.sensitivity for d in v.drives):
         L.append("Raw theta RMS (deg) of the sensor-weighted PIFs designed as above (the ESP sensors' "
@@ -224,7 +224,8 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
              "primary score on comma2k19 only because the phone IMU's vibration hides the bank there.")
     L.append("- Estimators that read the steering angle (dfc, uio, pio-original, pif-original, kalman) have "
              "no valid sample on KITTI and are listed as n/a. Vehicle data: none given, so the rule for a car "
-             "that is not described (the paper's SUV, as `roadbank estimate` uses); the kinematic estimates "
-             "do not use vehicle data, the modified-model observers only weakly (sensitivity table above).")
+             "that is not described (the shipped `sedan`'s parameters, as `roadbank estimate` uses); "
+             "the kinematic estimates do not use vehicle data, the modified-model observers only weakly "
+             "(sensitivity table above).")
     L.append("- These drives are validation data: no estimator weight or setting was chosen from them.\n")
     return "\n".join(L) + "\n"

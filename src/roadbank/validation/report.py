@@ -80,11 +80,10 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
              "frame, `g = R^T down`, `roll = atan2(g[1], g[2])` (20 Hz, linearly interpolated to 100 Hz). "
              f"Range {d['ref_range_deg'][0]:.2f} to {d['ref_range_deg'][1]:.2f} deg.")
     L.append(f"4. Vehicle parameters: the car is not identified in the data, so the rule for a car nobody "
-             f"described applies, as in `roadbank estimate`: the paper's SUV (`VehicleParams()`): m = "
-             f"{p.m:.0f} kg, Iz = {p.Iz:.0f} kg m^2, Lf = {p.Lf} m, Lr = {p.Lr} m, Cf = {p.Cf:.0f} N/rad, "
-             f"Cr = {p.Cr:.0f} N/rad, steering ratio {p.steering_ratio}. comma2k19 cars are mostly "
-             "Toyota/Lexus/Honda sedans; a plausible mid-size sedan (`roadbank.validation.SEDAN`, steering "
-             "ratio 15) is scored too (below). Estimator tuning: the library defaults (docs/estimators.md); "
+             f"described applies, as in `roadbank estimate`: the shipped `sedan`'s parameters "
+             f"(`roadbank.vehicle.undescribed_params()`): m = {p.m:.0f} kg, Iz = {p.Iz:.0f} kg m^2, Lf = {p.Lf} m, "
+             f"Lr = {p.Lr} m, Cf = {p.Cf:.0f} N/rad, Cr = {p.Cr:.0f} N/rad, steering ratio {p.steering_ratio}. "
+             "The paper's SUV is scored too (below). Estimator tuning: the library defaults (docs/estimators.md); "
              "nothing is tuned on this segment.")
     L.append(f"5. Scoring: first {st['warmup_s']:.0f} s dropped (warm-up); the reference and every "
              f"estimate smoothed with the same zero-phase first-order low-pass, time constant "
@@ -94,11 +93,11 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
              f"{res.split_time - res.t[0]:.1f} s), r and RMS on the remaining "
              f"{1 - st['fit_fraction']:.0%}. Samples flagged not valid hold the last value "
              f"(valid fraction at least {min(sc.valid_fraction for sc in res.scores.values()):.2f}).\n")
-    if "sedan" in res.sensitivity:
+    if "suv" in res.sensitivity:
         L.append("## Sensitivity\n")
-        L.append("A mid-size sedan's parameters (`roadbank.validation.SEDAN`) instead of the paper's SUV:\n")
+        L.append("The paper's SUV parameters (`VehicleParams()`) instead of the sedan:\n")
         L.append(md_table(["estimator", "r", "rms_deg", "offset_deg"],
-                          [[name, sc.r, sc.rms_deg, sc.offset_deg] for name, sc in res.sensitivity["sedan"].items()],
+                          [[name, sc.r, sc.rms_deg, sc.offset_deg] for name, sc in res.sensitivity["suv"].items()],
                           digits=3, best=_BEST, best_in="column"))
         L.append("")
     if "pif_Q" in res.sensitivity:
