@@ -12,6 +12,7 @@ from ..report.html import write_document
 from .options import vehicle_option
 
 _VEHICLE = vehicle_option("The estimators are designed for this car: its parameters and [tuning] tables.",
+                          default_help="a car nobody described: the shipped sedan's parameters (README)",
                           none_if_absent=True)
 
 
