@@ -102,6 +102,7 @@ def _rms(sim, est):
     return error_metrics(s.t, e.phi_b, sim.truth.phi_b, usable_samples(s, est.v_min), settle=2.0).rms_deg
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scenario", ["const-bank", "track-lane1"])
 def test_the_logs_measured_ay_noise_helps_where_the_accelerometer_vibrates(banked_runs, scenario):
     # (abrupt bank steps are the exception: on the bank lane change the smoother filter lags

@@ -24,6 +24,7 @@ def _positive_or_explained(res, key):
         assert isinstance(v, (int, float)) and math.isfinite(v) and v > 0, (key, v)
 
 
+@pytest.mark.slow
 def test_bench_cli_tiny_json_and_markdown(tmp_path):
     out = tmp_path / "bench.md"
     result = CliRunner().invoke(main, ["bench", "--tiny", "--json", "-o", str(out)])
@@ -41,6 +42,7 @@ def test_bench_cli_tiny_json_and_markdown(tmp_path):
     assert "roadbank bench" in text and "| what | value | peer | ratio | target | met? |" in text
 
 
+@pytest.mark.slow
 def test_suite_reports_every_estimator_and_rejects_no_numbers():
     res = run_suite("tiny")
     names = [e["name"] for e in res["estimators"]]
@@ -65,6 +67,7 @@ def no_extra_sections():
     suite.SECTIONS[:] = saved
 
 
+@pytest.mark.slow
 def test_extra_sections_are_run_reported_and_isolated(no_extra_sections):
     register_section(Section("c_step", "C step cost", lambda cfg: {"ns": 12.5, "size": cfg["size"]},
                              lambda out: [f"C step: {out['ns']} ns"]))
@@ -77,12 +80,14 @@ def test_extra_sections_are_run_reported_and_isolated(no_extra_sections):
     assert "## C step cost" in text and "C step: 12.5 ns" in text and "## A failing section" in text
 
 
+@pytest.mark.slow
 def test_cold_compile_probe_of_one_family_in_a_fresh_process():
     out = probe_family("dfc")
     assert out["cold_compile_s"] > 0 and out["cpu_first_s"] > 0, out
     assert out["again_s"] < out["first_s"]      # the second call runs compiled code
 
 
+@pytest.mark.slow
 def test_builtin_sections_c_step_and_long_log_on_a_tiny_run():
     from roadbank.bench.sections import C_ESTIMATORS, c_step, c_step_markdown, long_log
 

@@ -48,6 +48,7 @@ def test_failing_run_becomes_rows_with_its_error_not_an_exception():
     assert all(math.isnan(r["rms_deg"]) for r in rows)
 
 
+@pytest.mark.slow
 def test_run_is_deterministic_and_scored_against_the_plant_truth():
     spec = draw(0, 3)
     r1, r2 = run_one(spec, TINY), run_one(spec, TINY)
@@ -57,6 +58,7 @@ def test_run_is_deterministic_and_scored_against_the_plant_truth():
     assert kin["error"] == "" and np.isfinite(kin["rms_deg"]) and kin["rms_deg"] < kin["max_deg"] + 1e-12
 
 
+@pytest.mark.slow
 def test_runs_start_at_standstill_and_the_estimators_learn_the_yaw_rate_offset_there():
     """The standstill does not change the drive (the same scores without learning), and learning
     the offset there removes the bank error the drawn yaw-rate offset causes."""
@@ -92,6 +94,7 @@ class Interrupt(KeyboardInterrupt):
     pass
 
 
+@pytest.mark.slow
 def test_tiny_campaign_interrupted_and_resumed_loses_and_duplicates_nothing(tmp_path, cluster):
     from roadbank.campaign.execute import run_campaign
 
@@ -154,6 +157,7 @@ def test_tiny_campaign_interrupted_and_resumed_loses_and_duplicates_nothing(tmp_
     assert "1 run(s)" in text                     # the broken run is listed
 
 
+@pytest.mark.slow
 def test_cli_campaign_on_a_scheduler_and_bad_input(tmp_path, cluster):
     from click.testing import CliRunner
 
@@ -174,6 +178,7 @@ def test_cli_campaign_on_a_scheduler_and_bad_input(tmp_path, cluster):
     assert res.exit_code == 1 and "--resume" in res.output and "Traceback" not in res.output
 
 
+@pytest.mark.slow
 def test_unreachable_scheduler_is_a_clear_error(tmp_path):
     from roadbank.campaign.execute import run_campaign
 
@@ -181,6 +186,7 @@ def test_unreachable_scheduler_is_a_clear_error(tmp_path):
         run_campaign(tmp_path / "y", 1, scheduler="tcp://127.0.0.1:1", connect_timeout=1.0)
 
 
+@pytest.mark.slow
 def test_missing_dask_gives_an_install_hint(tmp_path, monkeypatch):
     from roadbank.campaign.execute import DaskMissing, run_campaign
 

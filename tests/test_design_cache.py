@@ -176,6 +176,7 @@ def test_user_subclass_is_keyed_on_its_source_file(disk, tmp_path, monkeypatch):
     assert len(_entries(disk)) == 2
 
 
+@pytest.mark.slow
 def test_an_unsolvable_design_is_remembered_so_the_th_retry_costs_nothing_next_time(disk, monkeypatch):
     """pif-rate-adaptive's default th has no stabilising solution for the paper SUV, so it is
     halved; the failed attempt costs as many AREs as a design and is remembered (memo and disk)."""

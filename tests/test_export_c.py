@@ -128,6 +128,7 @@ def test_float64_equals_step_on_every_scenario_and_a_hard_log(name, scenarios, b
     assert_same(python_steps(est, cols), mod.run(*cols, use_dt=True), TOL64, TOL64, f"{name} step_dt")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", EXPORTABLE)
 def test_float32_within_a_thousandth_of_a_degree(name, scenarios, built_modules):
     mod = built_modules(name, float32=True)
@@ -147,6 +148,7 @@ def test_float32_within_a_thousandth_of_a_degree(name, scenarios, built_modules)
 @pytest.mark.parametrize("name,roll,grid", [("pif-modified", "dynamic", {}), ("uio", "dynamic", {}),
                                             ("kinematic", "none", {}), ("kalman", "dynamic", {}),
                                             ("pio-modified", "static", {"v_step": 1.0, "v_max": 60.0})])
+@pytest.mark.slow
 def test_roll_models_grids_and_the_general_observer_path(name, roll, grid, scenarios, built_modules):
     """Static, dynamic and no roll; the four-state (LU) path; a coarse, short speed grid."""
     est = make(name, roll=roll, **grid)
@@ -157,6 +159,7 @@ def test_roll_models_grids_and_the_general_observer_path(name, roll, grid, scena
         assert_same(python_steps(est, cols), mod.run(*cols), TOL64, TOL64, f"{name} roll={roll} {scen}")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("car", ["suv-paper", "van"])
 def test_what_export_c_gives_by_default_for_a_car(car, scenarios, built_modules):
     """What `roadbank export c --vehicle CAR` exports: the car's default pif-modified as roadbank runs
@@ -172,6 +175,7 @@ def test_what_export_c_gives_by_default_for_a_car(car, scenarios, built_modules)
                         TOL32_BANK if f32 else TOL64, f"{car} pif-modified {'f32' if f32 else 'f64'} {scen}")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name,roll", [("pif-modified", "dynamic"), ("uio", "static"), ("kinematic", "dynamic")])
 def test_fixed_rate_tables_follow_the_kernels_fixed_rate_path(name, roll, scenarios, tmp_path):
     """``discrete=True`` adds the kernels' fixed-rate tables (Estimator.discrete_tables): the module
@@ -213,6 +217,7 @@ def test_ctypes_step_by_step_and_reset(scenarios, built_modules):
     assert again == first
 
 
+@pytest.mark.slow
 def test_sanitizers_on_a_driver_linking_several_modules(scenarios, tmp_path):
     """-fsanitize=address,undefined: five modules in one program (prefixed symbols), t and dt entry
     points; pif-gated for its gate code."""
@@ -264,7 +269,7 @@ def test_generated_object_has_no_heap_no_mutable_globals_no_recursion(tmp_path):
             graph.setdefault(a, set()).add(b)
         state = {}
 
-        def visit(f):
+        def visit(f, state=state, graph=graph):
             state[f] = 1
             for g in graph.get(f, ()):
                 assert state.get(g) != 1, f"recursion through {f} -> {g}"

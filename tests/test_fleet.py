@@ -89,6 +89,7 @@ def _check_outputs(outdir, paths, bad):
     return by_log
 
 
+@pytest.mark.slow
 def test_200_logs_one_bad_never_stops_others_and_resume(fleet, tmp_path):
     d, bad = fleet
     paths = expand_logs([d])
@@ -120,6 +121,7 @@ def test_200_logs_one_bad_never_stops_others_and_resume(fleet, tmp_path):
     assert not list(out.glob("*.partial"))
 
 
+@pytest.mark.slow
 def test_cli_dask_scheduler_glob(fleet, tmp_path):
     """On a running Dask scheduler (in-process, 2 worker threads, so the suite pays no process start-up;
     ``--workers N`` starts a LocalCluster of processes the same way, timed in docs/io.md)."""
@@ -143,6 +145,7 @@ def test_cli_dask_scheduler_glob(fleet, tmp_path):
     assert f"{len(paths) - len([p for p in paths if p in bad])} log(s) already finished" in again.output
 
 
+@pytest.mark.slow
 def test_long_log_benchmark_measures_the_child_alone(tmp_path):
     # the benchmark's peak RSS is the fresh process's own, not the (large) parent's inherited through fork
     import numpy as np

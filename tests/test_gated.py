@@ -95,6 +95,7 @@ def test_on_the_bank_lane_change_it_meets_the_aims_the_default_pif_misses(lane_c
     assert out["gated"][0] <= out["fast"][0] < out["slow"][0], out   # 0.31, 0.34, 0.56
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not (DATA / "kitti-oxts").is_dir(), reason="../shared/data/kitti-oxts not present")
 def test_on_kitti_it_keeps_the_default_filters_noise_level():
     """KITTI (validation data): on real roads the gate is mostly shut, so the raw theta RMS against

@@ -349,7 +349,7 @@ def test_unknown_suffix(tmp_path):
 
 
 def test_mdf4_reader(tmp_path):
-    asammdf = pytest.importorskip("asammdf", reason="optional extra 'mdf' (asammdf) not installed")
+    pytest.importorskip("asammdf", reason="optional extra 'mdf' (asammdf) not installed")
     from asammdf import MDF, Signal
 
     t_fast = np.arange(0, 2.0, 0.005)

@@ -17,7 +17,6 @@ import pytest
 from click.testing import CliRunner
 
 from roadbank.cli import main
-from roadbank.params import VehicleParams
 from roadbank.signals import sample_rate
 from roadbank.vehicle import SensorSpec, load_vehicle, log_conditions, make_estimator
 

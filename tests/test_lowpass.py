@@ -78,6 +78,7 @@ needs_kitti = pytest.mark.skipif(not (DATA_DIR / "kitti-oxts-extra").is_dir(),
                                  reason="the shared KITTI drives (../shared/data/kitti-oxts*) are not here")
 
 
+@pytest.mark.slow
 @needs_kitti
 def test_shipped_constants_are_where_the_rule_has_its_minimum():
     # the whole grid takes minutes (docs/estimators.md); here: the shipped point against its grid

@@ -12,8 +12,8 @@ SPEEDS = [1.0, 5.0, 22.2, 40.0, 70.0]
 @pytest.mark.parametrize("vx", SPEEDS)
 def test_original_model_entries(vx):
     A, B, E, C, D = original_model(P, vx)
-    m, Iz, Lf, Lr, Cf, Cr = 1687, 3401, 1.15, 1.47, 115000, 396820
-    # hand-derived entries (SPEC 3.1) with the numbers substituted
+    # hand-derived entries (docs/models.md, original model) with the numbers of paper Table 1
+    # substituted: m, Iz, Lf, Lr, Cf, Cr = 1687, 3401, 1.15, 1.47, 115000, 396820
     assert A[0, 0] == pytest.approx(-(115000 + 396820) / (1687 * vx))
     assert A[0, 1] == pytest.approx(-vx - (1.15 * 115000 - 1.47 * 396820) / (1687 * vx))
     assert A[1, 0] == pytest.approx(-(132250 - 583325.4) / (3401 * vx))
@@ -60,7 +60,7 @@ def test_steady_state_gains_match_eq15_closed_forms():
         assert h.Hau0 == pytest.approx(vx * h.Hru0)                  # no bank: ay = vx r
         assert h.Hru0 == pytest.approx(vx / (L + kus * vx**2))      # classic yaw-rate gain
     h = steady_state_gains(P, 22.2)
-    assert (h.Haw0, 22.2 * h.Hrw0) == pytest.approx((4.4647, -5.3453), abs=1e-4)   # SPEC's check
+    assert (h.Haw0, 22.2 * h.Hrw0) == pytest.approx((4.4647, -5.3453), abs=1e-4)   # Table 1 at 22.2 m/s
 
 
 @pytest.mark.parametrize("vx", np.linspace(1.0, 70.0, 24))
@@ -77,7 +77,7 @@ def test_unobservable_pair_detected():
 
 def test_roll_gain_in_suv_range():
     k = np.rad2deg(steady_roll_gain(P))
-    assert 0.5 <= k <= 1.0          # SPEC 5: about 0.5-1 deg per m/s^2
+    assert 0.5 <= k <= 1.0          # an SUV's roll gain: about 0.5-1 deg per m/s^2
 
 
 def test_models_reject_zero_speed():

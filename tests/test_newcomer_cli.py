@@ -68,6 +68,7 @@ def test_glob_with_a_readme_skips_it(tmp_path):
     assert "2 log(s) written, 0 failed" in res.output
 
 
+@pytest.mark.slow
 def test_all_estimators_summarised(tmp_path):
     from roadbank import estimators
     log = _log(tmp_path / "one.csv", n=800)

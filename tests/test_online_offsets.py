@@ -132,6 +132,7 @@ def test_bad_settings_are_refused():
 KITTI = sorted(p for d in ("kitti-oxts", "kitti-oxts-extra") for p in (DATA / d).glob("2011_*"))
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not KITTI, reason="../shared/data/kitti-oxts* not present")
 def test_on_the_kitti_drives_the_learnt_yaw_offset_is_small_and_the_bank_no_worse():
     """The INS is calibrated: where a drive stands still long enough to learn, the learnt yaw
@@ -243,7 +244,6 @@ def test_the_c_export_learns_the_offsets_as_step_does(tmp_path, float32):
 
 
 def test_cli_export_with_online_offsets(tmp_path):
-    import pandas as pd
     from click.testing import CliRunner
 
     from roadbank.cli import main

@@ -75,6 +75,7 @@ def test_claim2_bank_lane_change_with_R_in_deg_units():
     assert c.holds, c.detail
 
 
+@pytest.mark.slow
 def test_outputs_written(study, tmp_path):
     written = write_outputs(study, tmp_path, docs_results=tmp_path / "docs" / "results.md")
     for p in written["tables"] + written["report"]:

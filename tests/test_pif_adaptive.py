@@ -145,7 +145,7 @@ def test_tyre_limit_s_curve_error_smaller_than_the_speed_only_pif(name, factor):
         sim = run(SCENARIOS["s-curve"], seed=seed)
         late = sim.signals.t > 2.0
 
-        def worst(n):
+        def worst(n, sim=sim, late=late):
             e = E.make(n, P, v_max=30.0).run(sim.signals)
             return np.rad2deg(np.abs(e.phi_b - sim.truth.phi_b)[late]).max()
 

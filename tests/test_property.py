@@ -11,6 +11,7 @@ on the plant, see below).
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
@@ -52,6 +53,7 @@ def _finite(e):
     return all(np.all(np.isfinite(a)) for a in (e.w, e.theta, e.phi_b))
 
 
+@pytest.mark.slow
 @settings(SET, max_examples=8)
 @given(p=vehicle_params(), s=signals())
 def test_cheap_estimators_finite_for_random_parameters_and_inputs(p, s):
@@ -61,6 +63,7 @@ def test_cheap_estimators_finite_for_random_parameters_and_inputs(p, s):
         assert not e.valid[~(np.isfinite(s.vx) & (s.vx >= 5.0))].any()
 
 
+@pytest.mark.slow
 @settings(SET, max_examples=40)
 @given(s=signals())
 def test_all_estimators_finite_for_random_inputs(s):

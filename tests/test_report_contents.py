@@ -33,6 +33,7 @@ def _html(path):
     return html5lib.parse(path.read_text(), treebuilder="etree", namespaceHTMLElements=True)
 
 
+@pytest.mark.slow
 def test_contents_list_links_to_every_section(reproduced):
     doc = _html(reproduced / "report.html")
     ids = {el.get("id") for el in doc.iter() if el.get("id")}
@@ -49,6 +50,7 @@ def test_contents_list_links_to_every_section(reproduced):
     assert "- [Accuracy aims](#accuracy-aims)" in md and "(#figures)" not in md
 
 
+@pytest.mark.slow
 def test_one_accuracy_aims_table_for_every_pif_column(reproduced):
     md = (reproduced / "report.md").read_text()
     assert md.count("## Accuracy aims") == 1

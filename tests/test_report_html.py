@@ -235,6 +235,7 @@ def test_campaign_report_html(tmp_path):
 needs_segment = pytest.mark.skipif(not SEGMENT.is_dir(), reason=f"comma2k19 example segment absent at {SEGMENT}")
 
 
+@pytest.mark.slow
 @needs_segment
 def test_validate_comma2k19_html_report(tmp_path):
     out = tmp_path / "real-data.html"
@@ -321,6 +322,7 @@ def test_estimate_figure_without_reference_has_no_error_panel():
     plt.close("all")
 
 
+@pytest.mark.slow
 def test_estimate_plot_gets_the_logs_truth_and_reference(tmp_path, monkeypatch):
     """``roadbank estimate --plot`` hands the simulated log's truth columns to the figure."""
     import pandas as pd
@@ -352,6 +354,7 @@ def test_generated_docs_tables_are_consistent(doc):
     assert check_md(doc.read_text(), str(doc)), f"{doc}: no table"
 
 
+@pytest.mark.slow
 def test_bench_report_html_and_markdown(tmp_path):
     from roadbank.bench import markdown as bench_markdown, run_suite
     from roadbank.report.html import write_document

@@ -9,6 +9,7 @@ import sys
 import textwrap
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 
 from roadbank.cli import main
@@ -41,10 +42,12 @@ def test_warm_kernels_say_nothing(tmp_path, monkeypatch):
     assert "compiling" not in res.output
 
 
+@pytest.mark.slow
 def test_cold_cache_detected_in_a_fresh_process(tmp_path):
     """An empty numba cache is cold; after one run it is not, in this process nor in the next."""
     code = textwrap.dedent("""
         import numpy as np
+import pytest
         from roadbank import Signals, estimators
         from roadbank.report.coldstart import cold_families, is_cold
         print(cold_families(["dfc"], simulate=False))

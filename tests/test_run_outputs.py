@@ -37,6 +37,7 @@ def test_held_results_and_views_never_change(name, n):
         np.testing.assert_array_equal(v, c)
 
 
+@pytest.mark.slow
 def test_reused_memory_gives_the_same_numbers_as_a_fresh_estimator():
     a, b = _log(3, 140_000), _log(4, n=300)
     est = estimators.make("pif-modified")

@@ -64,6 +64,7 @@ def _bank_rms_deg(path, truth):
     return out
 
 
+@pytest.mark.slow
 def test_estimate_with_the_identified_file_removes_the_offsets(drive):
     case, log, truth, car_path, d = drive
     car = Vehicle.from_toml(car_path)
@@ -117,7 +118,7 @@ def test_an_offset_in_the_wrong_unit_is_a_clear_error(tmp_path, drive):
     bad = tmp_path / "bad.toml"
     bad.write_text(text.replace('unit = "rad/s"', 'unit = "deg/s"'))
     with pytest.raises(VehicleFileError, match=r"bad\.toml: \[identified\.yaw_rate_offset\] unit .*rad/s"):
-        Vehicle.from_toml(bad).sensor_offsets
+        _ = Vehicle.from_toml(bad).sensor_offsets
     res = CliRunner().invoke(main, ["estimate", str(log), "--vehicle", str(bad), "-o", str(tmp_path / "o.csv")])
     assert res.exit_code == 2 and "yaw_rate_offset" in res.output and "Traceback" not in res.output
 

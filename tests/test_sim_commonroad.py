@@ -93,6 +93,7 @@ def _both(models, v0, delta, T=6.0, t0=0.5, t1=0.7):
     return ts, ours, crd
 
 
+@pytest.mark.slow
 def test_steady_state_circle_agrees_with_commonroad(models):
     ts, ours, cr = _both(models, 15.0, 0.05)
     k = ts > 5.0
@@ -107,6 +108,7 @@ def test_steady_state_circle_agrees_with_commonroad(models):
     assert 1.2 < ratio < 1.55
 
 
+@pytest.mark.slow
 def test_step_steer_agrees_with_commonroad(models):
     ts, ours, cr = _both(models, 20.0, 0.02)
     k = ts > 5.0

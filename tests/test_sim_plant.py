@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 
 from roadbank import G, VehicleParams
-from roadbank.sim import (Driver, PlantParams, Scenario, SensorConfig, TyreParams, flat_road, run, straight_road,
-                          two_lane_road)
+from roadbank.sim import Driver, PlantParams, Scenario, SensorConfig, flat_road, run, straight_road, two_lane_road
 from roadbank.sim.plant import NX, X_OMEGA, X_VX, f, outputs, A_FYW
 from roadbank.sim.road import truth_bank
 from roadbank.sim.tyres import fast_atan, fast_sin, fast_sincos, tyre_forces

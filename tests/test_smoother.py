@@ -28,6 +28,7 @@ def _noisy_constant_speed_log(vx=20.0, seed=0, jitter=0.0):
                    s.delta_f)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("jitter", [0.0, 0.002])
 def test_backward_pass_matches_scipy_on_the_kalman_smoother_ode(jitter):
     """th = 0 (the Kalman-Bucy filter): the smoothed states equal an independent integration of
@@ -109,6 +110,7 @@ def test_chunks_with_the_next_one_as_lookahead_equal_one_run():
     assert np.max(np.abs(alone - whole.w)) > 1e-3
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rows", ["500", "60"])
 def test_roadbank_estimate_streams_the_smoother_as_one_run(tmp_path, rows):
     """`roadbank estimate` on a Parquet log read in 500-row (5 s) or 60-row (0.6 s, far shorter than
@@ -148,6 +150,7 @@ def test_smoother_meets_the_accuracy_aims_where_no_causal_estimator_does(scenari
     assert out["pif-smoother"][0] < 0.6 * out["pif-modified"][0], out
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not (DATA / "kitti-oxts").is_dir(), reason="../shared/data/kitti-oxts not present")
 def test_smoother_halves_the_filter_error_on_kitti():
     """KITTI (validation data: no weight chosen from it): raw theta RMS against the INS roll."""
@@ -160,6 +163,7 @@ def test_smoother_halves_the_filter_error_on_kitti():
         assert rms["pif-smoother"] < 0.3, (drive, rms)
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not (DATA / "comma2k19-example").is_dir(), reason="../shared/data/comma2k19-example not present")
 def test_smoother_on_comma2k19_reaches_the_correlation_target_without_lag():
     from roadbank.validation.comma2k19 import validate_comma2k19

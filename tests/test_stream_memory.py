@@ -80,6 +80,7 @@ def estimated(tmp_path_factory):
     return d, seen
 
 
+@pytest.mark.slow
 def test_streamed_estimate_loads_no_plotting_dask_or_pandas(estimated):
     d, seen = estimated
     parquet_mods = seen[str(d / "a.parquet")]
@@ -95,6 +96,7 @@ def test_streamed_estimate_loads_no_plotting_dask_or_pandas(estimated):
         assert tab.num_rows > 0.99 * N and "kinematic-ff.phi_b" in tab.column_names      # the default estimator
 
 
+@pytest.mark.slow
 def test_roadbank_command_puts_arrow_on_the_c_allocator_unless_told_otherwise(estimated):
     assert estimated[1]["pool"] == "system"
     code = ("import json, os, roadbank.cli; "
@@ -105,7 +107,8 @@ def test_roadbank_command_puts_arrow_on_the_c_allocator_unless_told_otherwise(es
 def test_deferred_module_loads_on_first_call_and_is_the_real_one_afterwards(tmp_path):
     # the mechanism of roadbank.io.mdfimport without sympy: 'user' takes two names from 'heavy'
     # in a try (as asammdf takes lambdify/symbols from sympy); 'heavy' records that it was imported
-    (tmp_path / "heavy.py").write_text("import builtins\nbuiltins.HEAVY_LOADS = getattr(builtins, 'HEAVY_LOADS', 0) + 1\n"
+    (tmp_path / "heavy.py").write_text("import builtins\n"
+                                       "builtins.HEAVY_LOADS = getattr(builtins, 'HEAVY_LOADS', 0) + 1\n"
                                        "def double(x):\n    return 2 * x\n"
                                        "def name():\n    return __name__\nCONST = 7\n")
     (tmp_path / "user.py").write_text("try:\n    from heavy import double, name\nexcept ImportError:\n"
@@ -128,6 +131,7 @@ print(json.dumps(res))
                           "name": "heavy", "real": True, "loads": 1}
 
 
+@pytest.mark.slow
 def test_mdf4_formula_loads_sympy_on_demand_and_converts(tmp_path):
     # 'Abs(X)' is an algebraic conversion numexpr cannot parse: asammdf evaluates it with sympy
     # (optional for asammdf and not among roadbank's dependencies: where it is missing asammdf

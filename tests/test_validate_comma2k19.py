@@ -28,6 +28,7 @@ def test_lowpass_is_first_order_with_unit_gain():
     assert y[10 + k] == pytest.approx(1 - np.exp(-1), abs=0.01)
 
 
+@pytest.mark.slow
 @needs_data
 def test_validate_json_and_report(tmp_path):
     out = tmp_path / "real-data.md"
@@ -36,7 +37,7 @@ def test_validate_json_and_report(tmp_path):
     assert res.exit_code == 0, res.output
     data = json.loads(res.stdout)
     assert set(data) == set(estimators.NAMES)
-    for name, v in data.items():
+    for v in data.values():
         assert set(v) == {"r", "rms_deg", "offset_deg"}
         assert -1 <= v["r"] <= 1 and v["rms_deg"] >= 0 and np.isfinite(v["offset_deg"])
     # the README's rough first look: the kinematic estimate correlates clearly (about 0.55+)

@@ -74,6 +74,7 @@ def kitti_cli(tmp_path_factory):
     return res, out
 
 
+@pytest.mark.slow
 @needs_kitti
 def test_validate_kitti_json_report_and_figures(kitti_cli):
     res, out = kitti_cli
@@ -159,6 +160,7 @@ def test_validate_kitti_nothing_readable(tmp_path):
 
 
 # ---------------------------------------------------------------- 10 Hz with jitter
+@pytest.mark.slow
 def test_10hz_jitter_against_100hz_on_the_truth():
     r = jitter_study("bank-lane-change", names=("kinematic", "pio-modified", "pif-modified"))
     assert r.steps.min() >= 0.06 - 1e-9 and r.steps.max() <= 0.14 + 1e-9
@@ -187,6 +189,7 @@ def test_find_datasets_layouts(tmp_path):
     assert find_datasets(tmp_path / "kitti")["kitti"] == found["kitti"]
 
 
+@pytest.mark.slow
 @needs_kitti
 def test_validate_all_writes_one_report(tmp_path):
     data = tmp_path / "data"
@@ -210,6 +213,7 @@ EXTRA = DATA / "kitti-oxts-extra"
 needs_all_drives = pytest.mark.skipif(not EXTRA.is_dir(), reason="../shared/data/kitti-oxts-extra is not here")
 
 
+@pytest.mark.slow
 @needs_all_drives
 def test_the_default_wins_on_the_validation_drives():
     # the targets on the 8 validation drives (never used to choose): the default's median raw RMS the

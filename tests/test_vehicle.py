@@ -81,13 +81,15 @@ def test_copies_and_make_merge_tuning(rich_vehicle):
     ("pif-rate-adaptive", {"Q": 4e-5, "Q_rate": 5e-4, "mu": 1.1, "tau": 0.4}),
     ("pif-adaptive", {"Q": 2e-4, "mu": 1.1, "tf": 0.2}),
 ])
+@pytest.mark.slow
 def test_tuning_tables_accept_every_option_of_the_estimator(tmp_path, name, options):
     """What ``roadbank tune`` writes for each PIF variant (options of the class and of its bases,
     mixins included) is a valid [tuning] table, and the file round-trips into the estimator."""
     v = load_vehicle("suv-paper").with_tuning(name, options)
     v.to_toml(tmp_path / "car.toml")
     est = load_vehicle(tmp_path / "car.toml").make(name)
-    assert all(getattr(est, k) == val for k, val in options.items() if k != "roll") and est.roll == options.get("roll", est.roll)
+    assert all(getattr(est, k) == val for k, val in options.items() if k != "roll")
+    assert est.roll == options.get("roll", est.roll)
 
 
 def test_make_uses_the_vehicle_params_and_tuning():
@@ -99,6 +101,7 @@ def test_make_uses_the_vehicle_params_and_tuning():
     assert not np.array_equal(a.theta, estimators.make("dfc", v.params).run(_signals()).theta)
 
 
+@pytest.mark.slow
 def test_smoother_takes_the_filters_tuning_table_under_its_own():
     """pif-smoother runs pif-modified forward: a car tuned for pif-modified smooths with those weights;
     a table of its own overrides the keys it has."""
@@ -427,6 +430,7 @@ def test_dataclass_fields_are_all_in_the_file_format():
     assert [f.name for f in dataclasses.fields(SensorSpec)] == list(SENSOR_FIELDS)
 
 
+@pytest.mark.slow
 def test_reproduce_cell_with_a_vehicle():
     """--vehicle on reproduce: the car is plant and design; its [tuning.<name>] table drives the
     column of that name, so pif-modified is the car's tuned PIF; pif-paper stays Table 4."""

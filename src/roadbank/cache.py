@@ -103,7 +103,8 @@ def canonical(obj) -> str:
     if isinstance(obj, (list, tuple)):
         return type(obj).__name__ + "(" + ",".join(canonical(v) for v in obj) + ")"
     if isinstance(obj, dict):
-        return "{" + ",".join(f"{canonical(k)}:{canonical(v)}" for k, v in sorted(obj.items(), key=lambda kv: repr(kv[0]))) + "}"
+        items = sorted(obj.items(), key=lambda kv: repr(kv[0]))
+        return "{" + ",".join(f"{canonical(k)}:{canonical(v)}" for k, v in items) + "}"
     if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
         return (type(obj).__qualname__ + "(" + ",".join(f"{f.name}={canonical(getattr(obj, f.name))}"
                                                          for f in dataclasses.fields(obj)) + ")")

@@ -12,8 +12,8 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-#: Standard gravity used throughout roadbank (m/s^2). The spec's numerical
-#: checks (Haw0 = 4.4647 at 22.2 m/s) use 9.81.
+#: Standard gravity used throughout roadbank (m/s^2). The DFC gain checks in
+#: tests/test_models.py (Haw0 = 4.4647 at 22.2 m/s) use 9.81.
 G = 9.81
 
 

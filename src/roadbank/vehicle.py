@@ -277,7 +277,8 @@ class SensorSpec:
 
     @property
     def r_variance(self) -> float:
-        """Yaw-rate measurement variance, noise + uniform quantisation: ``r_noise^2 + r_resolution^2/12`` ((rad/s)^2)."""
+        """Yaw-rate measurement variance, noise + uniform quantisation: ``r_noise^2 + r_resolution^2/12``
+        ((rad/s)^2)."""
         return self.r_noise ** 2 + self.r_resolution ** 2 / 12.0
 
     def rate_for(self, rate: float | None = None) -> float:
@@ -873,7 +874,7 @@ def _from_document(doc: dict, source: str, default_name: str) -> Vehicle:
         if table not in TABLES:
             raise VehicleFileError(f"{source}: [{table}]: {_unknown(table, TABLES, 'table')}")
     meta = doc.get("meta", {})
-    for key, value in meta.items():
+    for key in meta:
         if key not in META_KEYS:
             raise VehicleFileError(f"{source}: [meta] {key}: {_unknown(key, META_KEYS, 'key')}")
     for key in ("name", "description"):

@@ -126,7 +126,8 @@ def dask_session(scheduler: str | None, workers: int, connect_timeout: float = 2
 
 def settings_of(runs: int, seed: int, options: RunOptions) -> dict:
     """The campaign settings recorded in ``campaign.json`` (``runs`` may grow on resume)."""
-    return {"runs": int(runs), "seed": int(seed), "options": options.as_dict(), "sampler": "roadbank.campaign.sampling.draw/1"}
+    return {"runs": int(runs), "seed": int(seed), "options": options.as_dict(),
+            "sampler": "roadbank.campaign.sampling.draw/1"}
 
 
 def _batches(ids: list[int], size: int) -> list[list[int]]:

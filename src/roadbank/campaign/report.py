@@ -32,7 +32,7 @@ CELL_BINS = {
     "mass_scale": [0.8, 1.0, 1.2],
 }
 
-#: the accuracy goal of the issue: 95th-percentile bank RMS of the PIF (deg)
+#: roadbank's accuracy goal for a campaign: 95th-percentile bank RMS of the PIF (deg)
 PIF_GOAL_P95_DEG = 1.0
 
 

@@ -21,9 +21,9 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 os.environ.setdefault("ARROW_DEFAULT_MEMORY_POOL", "system")
 
 import importlib  # noqa: E402
-import importlib.util
+import importlib.util  # noqa: E402
 
-import click
+import click  # noqa: E402
 
 #: sub-command name -> "module:function" inside roadbank.cli
 COMMANDS = {

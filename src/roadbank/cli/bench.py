@@ -18,7 +18,7 @@ import click
 @click.option("--tiny", is_flag=True, help="A 10 s log, for tests: checks the runner, not the speed.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object with all results on stdout.")
 def bench(output, quick, tiny, as_json):
-    """Benchmark the estimators, the plant, cold start and reproduce against peers (issues 5, 11)."""
+    """Benchmark the estimators, the plant, cold start and reproduce against peers and speed targets."""
     size = "tiny" if tiny else "quick" if quick else "full"
     # The kernels are single-threaded; the designs call LAPACK on 3x3..6x6 matrices
     # where BLAS worker threads only spin (badly so on shared cores). Only effective

@@ -69,7 +69,7 @@ def campaign(runs, outdir, scheduler, workers, resume, seed, batch_size, duratio
     except KeyboardInterrupt:
         done = len(store.stored_run_ids(outdir)) if outdir.exists() else 0
         click.echo(f"\ninterrupted: {done} run(s) stored in {outdir}; continue with --resume", err=True)
-        raise SystemExit(130)
+        raise SystemExit(130) from None
     except (DaskMissing, store.StoreError, ConnectionError, ValueError, OSError) as exc:
         raise click.ClickException(str(exc)) from None
     click.echo("", err=True)

@@ -120,7 +120,7 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
         try:
             params = params.replace(steering_ratio=steering_ratio)
         except ValueError as exc:
-            raise click.BadParameter(str(exc), param_hint="--steering-ratio")
+            raise click.BadParameter(str(exc), param_hint="--steering-ratio") from None
         if vehicle is not None:
             vehicle = vehicle.with_params(steering_ratio=steering_ratio)
     if workers < 1:
@@ -136,7 +136,7 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     try:
         offsets = vehicle.sensor_offsets if vehicle is not None else {}
     except ValueError as exc:
-        raise click.BadParameter(str(exc), param_hint="--vehicle")
+        raise click.BadParameter(str(exc), param_hint="--vehicle") from None
     if offsets:
         click.echo("removing the sensor offsets identified in the vehicle file from every log: "
                    + ", ".join(_OFFSET_TEXT[c](v) for c, v in offsets.items()), err=True)

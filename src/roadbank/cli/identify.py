@@ -66,7 +66,7 @@ def result_json(result, failed) -> dict:
                    "[identified] table.")
 @click.option("--straight-bank", type=float, default=0.0, show_default=True,
               help="Assumed mean bank (deg, left side up) of the straights driven; the ay offset is relative "
-                   "to it (a 2 %% crown draining to the right is 1.15).")
+                   "to it (a 2 % crown draining to the right is 1.15).")
 @click.option("--ay-max", type=float, default=4.0, show_default=True,
               help="Linear range (m/s^2): samples with larger |ay| are left out of the stiffness regression.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON on stdout.")

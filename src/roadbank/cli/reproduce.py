@@ -85,8 +85,8 @@ def reproduce(outdir, scenarios, names, jobs, seed, docs_results, vehicle):
 
     cold = cold_families(names)
     if cold:
-        click.echo(f"compiling the kernels once (about {compile_estimate_s(cold):.0f} s on an idle core; later runs load "
-                   f"them from the cache): {', '.join(cold)}", err=True)
+        click.echo(f"compiling the kernels once (about {compile_estimate_s(cold):.0f} s on an idle core; "
+                   f"later runs load them from the cache): {', '.join(cold)}", err=True)
     with click.progressbar(length=len(cells), label=f"{len(cells)} cells x {len(names)} estimators",
                            show_eta=False, item_show_func=lambda s: s, file=sys.stderr) as bar:
         study = run_study(scenarios, names, jobs=jobs, seed=seed, progress=_CellProgress(bar, len(cells)),

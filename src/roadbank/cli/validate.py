@@ -12,6 +12,7 @@ from ..report.html import write_document
 from .options import vehicle_option
 
 _VEHICLE = vehicle_option("The estimators are designed for this car: its parameters and [tuning] tables.",
+                          default_help="a car nobody described: the shipped sedan's parameters (README)",
                           none_if_absent=True)
 
 
@@ -73,7 +74,8 @@ def comma2k19(path, as_json, output, names, no_sensitivity, vehicle):
         click.echo(json.dumps(to_json(res), indent=2))
     elif output is None:
         for name, v in to_json(res).items():
-            click.echo(f"{name:14s} r = {v['r']:.3f}  rms = {v['rms_deg']:.3f} deg  offset = {v['offset_deg']:+.3f} deg")
+            click.echo(f"{name:14s} r = {v['r']:.3f}  rms = {v['rms_deg']:.3f} deg  "
+                       f"offset = {v['offset_deg']:+.3f} deg")
 
 
 def _kitti_figures(v, out_dir: Path, stem: str) -> dict:

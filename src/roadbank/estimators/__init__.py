@@ -1,10 +1,12 @@
-"""Bank-angle estimators behind one interface (SPEC 4).
+"""Bank-angle estimators behind one interface (docs/estimators.md).
 
 >>> from roadbank import estimators
 >>> est = estimators.make("pif-modified")
 >>> estimate = est.run(signals)           # doctest: +SKIP
 
-``NAMES`` lists the estimators (the paper's, the Kalman peer, ``pif-rate``, ``pif-adaptive``, ``pif-rate-adaptive``, ``pif-gated`` and the offline ``pif-smoother``); ``make(name, params, **tuning)`` builds one.
+``NAMES`` lists the estimators (the paper's, the Kalman peer, ``pif-rate``, ``pif-adaptive``,
+``pif-rate-adaptive``, ``pif-gated`` and the offline ``pif-smoother``); ``make(name, params, **tuning)``
+builds one.
 ``PRESETS`` are further names ``make`` accepts: ``pif-paper`` is ``pif-modified`` with the paper's
 Table 4 weights (``pif-modified`` itself is roadbank's default tuning).
 Each has ``run(signals) -> Estimate``, ``step(t, vx, ay, r, delta_f)`` and ``reset()``.
@@ -112,6 +114,7 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
     return make_estimator(name, params or undescribed_params(), **cond, **tuning)
 
 
-__all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "for_log", "Estimator", "StepResult", "NoStabilisingSolution",
-           "Kinematic", "KinematicLowPass", "KinematicFeedForward", "DFC", "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
+__all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "for_log", "Estimator", "StepResult",
+           "NoStabilisingSolution", "Kinematic", "KinematicLowPass", "KinematicFeedForward", "DFC", "UIO", "PIO",
+           "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
            "Kalman", "with_online_offsets", "OnlineOffsets", "OffsetSettings"]

@@ -10,7 +10,7 @@ the car is near steady state. With the original model's steady-state gains
 
 is zero in steady state when the model is right and approximates
 :math:`\dot v_y` in transients (m/s^2). Update law (our reading of the
-garbled eq 10, as the spec gives it):
+garbled eq 10, the one consistent with its eq 14, docs/estimators.md):
 
 .. math::
     w_{dfc} = w_v \max(0, 1 - |DFC|/a_{ref})

@@ -1,6 +1,6 @@
 r"""Kalman baseline: a Kalman-Bucy filter on the original bicycle model
 augmented with ``w`` as a random walk — the standard approach of the
-literature and of production stacks, a peer to beat (SPEC 4.8).
+literature and of production stacks, a peer to beat, not the paper's method.
 
 States ``[vy, r, w]``, input ``delta_f``, outputs ``[ay, r]``. Process noise
 spectral densities ``q = (q_vy, q_r, q_w)`` cover model error on the two

@@ -32,8 +32,8 @@ sample:
     set); ``adaptive`` (two-dimensional schedule, speed x excitation): the
     continuous part of :func:`lpv_row`, row ``iv * ne + ie`` for speed point
     ``iv`` and excitation point ``ie`` (:func:`adaptive_block`); ``gated``: :func:`lpv_row` of the
-    two observers' block-diagonal stack (gate constants: :func:`gated_block`); ``dfc`` rows: ``Haw0, Hrw0, Hau0, Hru0``; ``riccati`` rows:
-    ``A, B, C, Dy, J``. Matrices are stored row-major.
+    two observers' block-diagonal stack (gate constants: :func:`gated_block`); ``dfc`` rows:
+    ``Haw0, Hrw0, Hau0, Hru0``; ``riccati`` rows: ``A, B, C, Dy, J``. Matrices are stored row-major.
 
 ``work`` — scratch of the general path (:func:`work_size`).
 

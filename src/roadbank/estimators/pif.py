@@ -1,7 +1,7 @@
 r"""PIF — the proportional-integral H-infinity filter (paper eq 33-44, Table 4).
 
 The filter runs on a model augmented with ``w = sin(theta)`` as a state
-(SPEC 3.3):
+(docs/models.md, augmented model):
 
 .. math::
     \dot{\hat x}_w = A_w \hat x_w + B_w u + P C_w^T R^{-1}(y - C_w \hat x_w - D u),\qquad

@@ -183,7 +183,7 @@ class PIFSmoother(PIF):
         valid = cat(lambda p: p[1].valid).copy()
         xs = np.empty((len(t), ns))
         for i, name in enumerate(self.state_names):
-            xs[:, i] = cat(lambda p: p[1].states[name])
+            xs[:, i] = cat(lambda p, name=name: p[1].states[name])
         every = bool(valid.all())
         idx = None if every else np.flatnonzero(valid)
         if (len(t) if every else idx.size) > 1:

@@ -1,6 +1,6 @@
 """Run estimators on a simulated log and score them against the plant's truth.
 
-References (SPEC 6): ``bank`` — estimated ``phi_b`` against the plant's
+References: ``bank`` — estimated ``phi_b`` against the plant's
 contact-height bank; ``theta`` — raw observer ``theta`` against the plant's
 ``theta = phi_b + phi``; ``theta_ref`` — raw ``theta`` against the paper's
 test-track reference (eq 45) computed from the sensors' ``ay, vx, r`` and the

@@ -1,4 +1,4 @@
-"""Error metrics of an estimate against a reference angle (SPEC 6, issue: reproduce).
+"""Error metrics of an estimate against a reference angle, as the reports tabulate them.
 
 All inputs are radians and seconds; :func:`error_metrics` returns degrees and
 seconds, the units of the reports.

@@ -1,4 +1,4 @@
-r"""Reference angles for evaluation (SPEC 6, paper eq 45).
+r"""Reference angles for evaluation (the paper's eq 45).
 
 In simulation the reference is the plant's truth (road bank ``phi_b`` from the
 contact-point heights, or ``theta = phi_b + phi``). On a vehicle test the paper

@@ -168,7 +168,8 @@ int main(int argc, char **argv)
     }}
 {dispatch}
     if (status == 0 && (f = fopen(argv[3], "wb")) != NULL) {{
-        if (fwrite(out, sizeof *out, (size_t)n * 4, f) != (size_t)n * 4 || fwrite(valid, 1, (size_t)n, f) != (size_t)n) {{
+        if (fwrite(out, sizeof *out, (size_t)n * 4, f) != (size_t)n * 4
+                || fwrite(valid, 1, (size_t)n, f) != (size_t)n) {{
             status = 3;
         }}
         fclose(f);

@@ -27,8 +27,8 @@ _NOT_LPV_REASON = {
     "riccati": "this PIF variant integrates the time-varying Riccati equation (paper eq 43) at "
                "every sample, a 6x6 Hamiltonian solve per substep, not a gain schedule; export the "
                "steady-state variant (variant='steady', the default), which is what an ECU runs",
-    "adaptive": "pif-adaptive and pif-rate-adaptive schedule their gains on the friction usage (a filtered |ay|) as well as "
-                "speed: a two-dimensional table and an excitation filter the generated C (speed-only "
+    "adaptive": "pif-adaptive and pif-rate-adaptive schedule their gains on the friction usage (a filtered |ay|) "
+                "as well as speed: a two-dimensional table and an excitation filter the generated C (speed-only "
                 "schedule) does not have; export pif-modified or pif-rate instead",
 }
 

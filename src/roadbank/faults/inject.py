@@ -164,7 +164,7 @@ def _extreme_steer(s, t0, t1, rng):
     return _set(s, "delta_f", t0, t1, 0.7)
 
 
-#: the faults of the robustness study (issue 7), by name
+#: the faults of the robustness study (``roadbank robustness``, docs/robustness.md), by name
 FAULTS: dict[str, Fault] = {f.name: f for f in (
     Fault("nan-samples", "NaN in ay or r on 10 % of the samples", _nan_samples),
     Fault("inf-samples", "+inf yaw rate (and -inf steering) on 10 % of the samples", _inf_samples),

@@ -1,6 +1,6 @@
 r"""Understeer gradient, axle cornering stiffnesses and steering offset from one linear regression.
 
-Linear bicycle model (SPEC 3.1), tyre forces :math:`F_{yf} = C_f\alpha_f`,
+Linear bicycle model (docs/models.md, original model), tyre forces :math:`F_{yf} = C_f\alpha_f`,
 :math:`F_{yr} = C_r\alpha_r`. The two axle forces follow from the measured
 motion, without the unknown lateral velocity:
 

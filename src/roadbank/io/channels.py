@@ -62,7 +62,7 @@ absent) and the ``true_*`` truth columns, which are carried along as
 from __future__ import annotations
 
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np

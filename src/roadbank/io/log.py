@@ -115,8 +115,8 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
     """Roles to read: speed, lateral_acceleration, yaw_rate, [the steering role], [reference_roll].
 
     The steering role is the road-wheel angle if its column exists, else the
-    steering-wheel angle (none if the map has no steering channel: ROS maps). ``have`` are the columns present; ``names`` all the
-    file's columns (for messages). LogError for a missing column.
+    steering-wheel angle (none if the map has no steering channel: ROS maps). ``have`` are the columns
+    present; ``names`` all the file's columns (for messages). LogError for a missing column.
     """
     steer_roles = [r for r in ("road_wheel_angle", "steering_wheel_angle") if r in cmap.channels]
     present = [r for r in steer_roles if cmap.channels[r].column in have]

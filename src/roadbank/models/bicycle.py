@@ -1,4 +1,4 @@
-"""Linear bicycle models of the lateral/yaw dynamics (SPEC section 3).
+"""Linear bicycle models of the lateral/yaw dynamics (docs/models.md).
 
 All functions take a :class:`~roadbank.params.VehicleParams` and the
 longitudinal speed ``vx`` (m/s, > 0) and return numpy arrays; states are

@@ -1,4 +1,5 @@
-r"""Body roll models used to split the observers' angle into bank and roll (SPEC 5).
+r"""Body roll models used to split the observers' angle into bank and roll
+(docs/estimators.md, Roll separation).
 
 The observers estimate :math:`\theta = \phi_b + \phi`. The body roll relative
 to the road is driven by the lateral specific force the accelerometer measures:

@@ -1,4 +1,11 @@
-"""The paper's qualitative claims (SPEC 7) and the issue's accuracy aims, checked on a study's metrics.
+"""The paper's qualitative claims and roadbank's accuracy aims, checked on a study's metrics.
+
+The paper claims, from its simulations: (1) the PIF and the PIO have no steady-state bank
+error, the DFC and the UIO have one, and theirs grows with the front cornering-stiffness
+error; (2) on low-friction roads, with a misaligned accelerometer and with a stiffness error,
+the modified-model PIF stays the best; (3) in an S-curve on a flat road the PIF is the best,
+and on the modified model it is robust to a front stiffness of 50 % and 150 % while the PIF on
+the original model is not; (4) the same ordering holds on the test-track runs.
 
 Each check returns a :class:`Claim` with the numbers it used, so the report can
 show why it holds or not; the test suite asserts them.
@@ -101,7 +108,8 @@ def all_claims(rows) -> list[Claim]:
 
 
 def accuracy_aims(rows, rms_aim=0.5, max_aim=1.5, best_margin=0.1, name=None) -> dict:
-    """The issue's aims for a PIF column, per cell and overall.
+    """roadbank's accuracy aims for a PIF column, per cell and overall: bank RMS at most ``rms_aim``
+    and max error at most ``max_aim`` (deg), RMS within ``best_margin`` deg of the best causal one.
 
     ``name`` defaults to ``pif-modified`` (roadbank's default tuning) when the rows have
     it, else ``pif-paper`` (Table 4); the result says which under ``"estimator"``. Each cell also

@@ -90,7 +90,8 @@ def scenario_figure(scenario: str, cells: dict, path: Path, names=FIGURE_SET) ->
         cell = cells[cond]
         for name in names:
             if name in cell.phi_b:
-                ax.plot(cell.t, np.rad2deg(cell.phi_b[name]), lw=1, label=label(name) if label(name) == name else f"{label(name)} ({name})")
+                text = label(name) if label(name) == name else f"{label(name)} ({name})"
+                ax.plot(cell.t, np.rad2deg(cell.phi_b[name]), lw=1, label=text)
         ax.plot(cell.t, np.rad2deg(cell.reference), label="Reference (true bank)", **REFERENCE_STYLE)
         lo, hi = np.nanpercentile(np.rad2deg(cell.reference), [0, 100])
         ax.set_ylim(min(lo, 0) - 10, max(hi, 0) + 10)

@@ -51,7 +51,8 @@ class Study:
 
 
 def plan(scenarios=None) -> list[tuple[str, str]]:
-    """The (scenario, condition) cells of SPEC 6's table, optionally restricted to ``scenarios``."""
+    """The paper's (scenario, condition) cells (docs/simulator.md, Scenarios and conditions),
+    optionally restricted to ``scenarios``."""
     from ..sim import CONDITIONS_BY_SCENARIO
     names = list(CONDITIONS_BY_SCENARIO) if not scenarios else list(scenarios)
     unknown = [s for s in names if s not in CONDITIONS_BY_SCENARIO]

@@ -122,7 +122,8 @@ def simulate(x0, d0, t0: float, duration: float, dt: float, road_packed, drv_pac
     U = np.empty((n_steps + 1, NU))
     x = np.array(x0, dtype=np.float64)
     d = np.array(d0, dtype=np.float64)
-    simulate_core(x, d, float(t0), n_steps, float(dt), int(drv_every), np.ascontiguousarray(road_packed, dtype=np.float64),
+    simulate_core(x, d, float(t0), n_steps, float(dt), int(drv_every),
+                  np.ascontiguousarray(road_packed, dtype=np.float64),
                   np.ascontiguousarray(drv_packed, dtype=np.float64), prepare(p),
                   X, U, np.zeros(NU), np.zeros(NC), np.zeros((4, NX)), np.zeros(NX), np.zeros(NX), np.zeros(NAUX))
     t = t0 + dt * np.arange(n_steps + 1)

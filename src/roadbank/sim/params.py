@@ -204,7 +204,8 @@ class PlantParams:
         p[P_PDY2], p[P_PDX2], p[P_KX] = t.pdy2, t.pdx2, t.kx_per_fz
         p[P_RBY1], p[P_RBY2], p[P_RBX1], p[P_RBX2] = t.rby1, t.rby2, t.rbx1, t.rbx2
         p[P_SIGX], p[P_FRR] = t.sigma_x, t.rolling_resistance
-        p[P_MU], p[P_TDRIVE], p[P_PDRIVE], p[P_TBRAKE] = self.mu, self.drive_torque_max, self.drive_power_max, self.brake_torque_max
+        p[P_MU], p[P_TDRIVE] = self.mu, self.drive_torque_max
+        p[P_PDRIVE], p[P_TBRAKE] = self.drive_power_max, self.brake_torque_max
         p[P_BRAKEF], p[P_CDA], p[P_RHO] = self.brake_front_share, self.CdA, self.air_density
         p[P_HSENS], p[P_TAULOAD] = self.accel_height, self.load_transfer_lag
         p[P_MUNSPRUNG] = v.m - v.ms

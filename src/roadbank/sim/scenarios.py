@@ -12,20 +12,19 @@ transient.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..params import G, VehicleParams
+from ..params import VehicleParams
 from ..signals import Signals
 from .driver import D_LATINT, D_SWA, D_VINT, ND, Driver
 from .integrate import outputs_at, simulate
 from .params import PlantParams
-from .plant import (A_AX, A_AY, A_DVY, A_FXW, A_FYW, A_FZW, A_PHIB, NX, X_FXL, X_FYL, X_KAPPA,
-                    X_N, X_OMEGA, X_PHI, X_PSI, X_R, X_S, X_VX, X_VY)
+from .plant import (A_AX, A_AY, A_DVY, A_FXW, A_FYW, A_FZW, NX, X_FXL, X_FYL, X_N, X_OMEGA, X_PHI, X_PSI, X_R,
+                    X_S, X_VX, X_VY)
 from .road import Road, flat_road, straight_road, test_track, track_curve_start, truth_bank, two_lane_road
 from .sensors import SensorConfig, measure
 
@@ -112,7 +111,7 @@ CONDITIONS: dict[str, Condition] = {
     "cf150": Condition("cf150", cornering_scale_front=1.5, description="plant Cf = 1.5 Cf_ss"),
 }
 
-#: Conditions the paper runs per scenario (SPEC section 6); run_scenario accepts any.
+#: Conditions the paper runs per scenario (docs/simulator.md); run_scenario accepts any.
 CONDITIONS_BY_SCENARIO: dict[str, tuple[str, ...]] = {
     "const-bank": ("nominal", "low-mu", "misaligned", "cf120"),
     "bank-lane-change": ("nominal", "low-mu", "misaligned", "cf120"),

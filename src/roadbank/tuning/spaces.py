@@ -91,7 +91,6 @@ class SearchSpace:
 
     def start(self) -> np.ndarray:
         """The point of the estimator's current default (clipped into the box)."""
-        f = self.fixed
         if self.name in _PIF_FAMILY:
             d = _DEFAULTS[self.name]
             x = [np.log10(d["Q"] / R_ESP), np.log10(d["th"] * R_ESP)]       # Q/R and th R as tuned

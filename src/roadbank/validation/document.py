@@ -17,7 +17,8 @@ def find_datasets(root) -> dict:
 
     root = Path(root)
     found = {"comma2k19": [], "kitti": []}
-    for d in [root] + sorted(p for p in root.glob("*") if p.is_dir()) + sorted(p for p in root.glob("*/*") if p.is_dir()):
+    subdirs = sorted(p for p in root.glob("*") if p.is_dir()) + sorted(p for p in root.glob("*/*") if p.is_dir())
+    for d in [root] + subdirs:
         if (d / "processed_log").is_dir():
             found["comma2k19"].append(d)
         elif d.name != "oxts" and len(find_oxts_dirs(d)) == 1 and (d / "oxts").is_dir():
@@ -46,7 +47,7 @@ def jitter_markdown(results, level: int = 2) -> str:
              "(`vx`, `ay`, `r`) interpolated linearly across the step and the gain schedule looked up at the "
              "interpolated speed of each substep (exact at the 0.25 m/s grid points, linear between). "
              "There is no fixed-rate assumption anywhere in today's general path; a fixed-rate fast path "
-             "(issue 11) must fall back to it when the steps are not uniform, and this study goes through "
+             "must fall back to it when the steps are not uniform, and this study goes through "
              "`Estimator.run`, so it checks whichever path is used.\n")
     L.append("Check: one simulated run per scenario (ESP sensors sampled at 1 kHz, seed 0) read at 100 Hz "
              f"(every 10th sample) and at jittered instants (steps uniform in 0.06-0.14 s, here "

@@ -11,8 +11,8 @@ tau = 2/3 s, r and RMS of ``theta``, smoothed and raw). Specific to KITTI:
   vehicle-aligned frame, so there is no mounting offset between them; every
   scored sample counts, and a constant bias of an estimator shows in its RMS;
 * the INS signals carry no vibration worth the name (an RT3003's filtered
-  outputs), so the raw (unsmoothed) scores are meaningful here; the targets of
-  issue 14 are judged on the raw RMS, and the smoothed scores are reported too;
+  outputs), so the raw (unsmoothed) scores are meaningful here; the accuracy
+  targets on real data are judged on the raw RMS, and the smoothed scores are reported too;
 * no steering angle: the estimators that read it (dfc, uio, pio-original,
   pif-original, kalman) flag every sample not valid and get no score.
 
@@ -76,7 +76,8 @@ class KittiValidation:
 
 
 def kinematic_residual(signals, ref, mask, taus) -> dict:
-    """RMS (deg) over ``mask`` of kinematic theta minus ``ref`` (rad), after a zero-phase low-pass of each tau (s; 0 = none)."""
+    """RMS (deg) over ``mask`` of kinematic theta minus ``ref`` (rad), after a zero-phase low-pass of each
+    tau (s; 0 = none)."""
     kin = np.arcsin(np.clip((signals.ay - signals.vx * signals.r) / G, -1.0, 1.0))
     e = hold_invalid(kin - ref)
     out = {}
@@ -102,7 +103,8 @@ def drive_data(log, run, scoring: Scoring) -> dict:
             "scored_s": float(np.sum(np.r_[dt, dt[-1]][run.scored])),
             "ref_std_deg_scored": float(np.std(ref[run.scored])) if run.scored.any() else float("nan"),
             # sample-to-sample noise of ay (white part: std of the difference / sqrt 2), m/s^2
-            "ay_noise_std": float(np.std(np.diff(s.ay[run.scored])) / np.sqrt(2)) if run.scored.sum() > 2 else float("nan"),
+            "ay_noise_std": (float(np.std(np.diff(s.ay[run.scored])) / np.sqrt(2)) if run.scored.sum() > 2
+                             else float("nan")),
             # kinematic residual (deg RMS over the scored samples) after low-passes of growing tau (s)
             "kin_residual_deg": kinematic_residual(s, log.reference_roll, run.scored, (0.0, 0.1, 0.3, 1.0)),
             "lat_lon": (log.extra.get("lat_deg"), log.extra.get("lon_deg"))}

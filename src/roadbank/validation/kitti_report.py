@@ -204,7 +204,7 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
     L.append("\nBest of each score column in bold (smallest RMS, largest r).\n")
     L += limits_lines(v, h)
     L.append(f"{h}# Method (KITTI)\n")
-    L.append(f"- Reader: `roadbank.io.load_log(drive)` (format `kitti-oxts`, detected from the folder): "
+    L.append("- Reader: `roadbank.io.load_log(drive)` (format `kitti-oxts`, detected from the folder): "
              "columns 8 `vf` -> vx, 12 `ay` -> ay, 19 `wz` -> r, 3 `roll` -> reference, 0/1 lat/lon kept "
              "(`Log.extra`); already ISO 8855, no sign change; `delta_f` NaN. The frames keep their own "
              "time stamps (no resampling): the estimators integrate each step with trapezoidal substeps "
@@ -224,7 +224,8 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
              "primary score on comma2k19 only because the phone IMU's vibration hides the bank there.")
     L.append("- Estimators that read the steering angle (dfc, uio, pio-original, pif-original, kalman) have "
              "no valid sample on KITTI and are listed as n/a. Vehicle data: none given, so the rule for a car "
-             "that is not described (the shipped `sedan`'s parameters, as `roadbank estimate` uses); the kinematic estimates "
-             "do not use vehicle data, the modified-model observers only weakly (sensitivity table above).")
+             "that is not described (the shipped `sedan`'s parameters, as `roadbank estimate` uses); "
+             "the kinematic estimates do not use vehicle data, the modified-model observers only weakly "
+             "(sensitivity table above).")
     L.append("- These drives are validation data: no estimator weight or setting was chosen from them.\n")
     return "\n".join(L) + "\n"

@@ -3,9 +3,6 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
-
-import numpy as np
 
 from ..report.markdown import md_table
 from .comma2k19 import ValidationResult
@@ -72,7 +69,7 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
     if figure:
         L.append(f"![estimates vs reference]({figure})\n")
     L.append("## Method\n")
-    L.append(f"1. Reader: `roadbank.io.load_log(segment)` -> 100 Hz uniform grid over the overlap of all "
+    L.append("1. Reader: `roadbank.io.load_log(segment)` -> 100 Hz uniform grid over the overlap of all "
              "channels, linear interpolation, no extrapolation. `ay = -accel[:,1]`, `r = -gyro[:,2]` "
              "(IMU forward-right-down -> ISO), `vx` = CAN speed, steering-wheel angle = CAN "
              "`steering_angle` (deg).")

@@ -171,7 +171,9 @@ def score(t, theta, phi_b, valid, ref, fit, scored, scoring: Scoring, max_lag_s:
     if not scored.any() or vf == 0.0 or not np.all(np.isfinite(theta[both])):
         nan = float("nan")
         return Score(nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, vf)
-    f = lambda x: lowpass_t(x, t, scoring.tau)
+    def f(x):
+        return lowpass_t(x, t, scoring.tau)
+
     rs, xs, ps = f(ref), f(theta), f(phi_b)
     fitted = fit.any()
     off = float(np.mean(rs[fit] - xs[fit])) if fitted else 0.0
