@@ -76,7 +76,7 @@ class Estimator:
     v_min : float, default 5.0
         Minimum speed (m/s); below it the outputs are held and flagged not valid.
     roll : {"static", "dynamic", "none"}, default "static"
-        Roll model used to separate the body roll from ``theta`` (SPEC 5).
+        Roll model used to separate the body roll from ``theta`` (docs/estimators.md, Roll separation).
     max_substep : float, default 0.02
         Longest integration substep (s) of the discretisation.
     max_gap : float, default 1.0

@@ -128,7 +128,7 @@ def concat_estimates(parts: list):
                     np.concatenate([p.valid for p in parts]), states)
 
 
-def _leading(signals, chunks) -> "Signals":
+def _leading(signals, chunks):
     """The first :data:`roadbank.vehicle.DESIGN_SPAN_S` of a streamed log, on which its designs are
     measured: the first chunk's ``signals`` and as many of the following chunks
     (:class:`roadbank.io.stream.ReadAhead`) as reach that span (the same design for any chunk size)."""
