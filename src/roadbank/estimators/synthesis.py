@@ -1,13 +1,39 @@
 r"""Gain synthesis for the observers: game-type Riccati (H-infinity / Kalman) and pole placement.
 
 All functions are pure numpy/scipy and work on one frozen speed; the
-estimators call them on every point of their speed grid.
+estimators call them on every point of their speed grid (the steady-state PIFs and the
+Kalman filter solve their whole grid at once instead, :mod:`roadbank.estimators.grid_design`).
+:func:`reference_solvers` makes every design take scipy's solvers point by point, as before
+the faster paths: what they are compared with.
 """
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 from scipy.linalg import solve_continuous_are
+
+_REFERENCE = False
+
+
+@contextlib.contextmanager
+def reference_solvers():
+    """Inside the ``with`` block, designs use scipy's solvers point by point: the Riccati
+    equation per grid speed (no whole-grid design) and ``place_poles`` for every pole
+    placement. For comparisons and the benchmark; the design caches still answer for designs
+    already made (clear them, or use ``ROADBANK_CACHE_DIR=off``, to compare)."""
+    global _REFERENCE
+    old, _REFERENCE = _REFERENCE, True
+    try:
+        yield
+    finally:
+        _REFERENCE = old
+
+
+def using_reference_solvers() -> bool:
+    """True inside :func:`reference_solvers`."""
+    return _REFERENCE
 
 
 class NoStabilisingSolution(ValueError):
@@ -70,9 +96,50 @@ def game_are(A: np.ndarray, C: np.ndarray, Lw: np.ndarray, W: np.ndarray, R: np.
 
 
 def place_observer(A: np.ndarray, C: np.ndarray, poles) -> np.ndarray:
-    """Observer gain ``K`` with ``eig(A - K C) = poles`` (scipy ``place_poles`` on the dual)."""
+    """Observer gain ``K`` with ``eig(A - K C) = poles`` (1/s).
+
+    One output (``C`` a single row): the gain is unique, Ackermann's formula
+    (:func:`ackermann_observer`, a few small matrix products). Several outputs: scipy
+    ``place_poles`` on the dual (the gain is not unique; scipy's choice), as for one output
+    inside :func:`reference_solvers`.
+    """
+    C = np.atleast_2d(C)
+    if C.shape[0] == 1 and not _REFERENCE:
+        K = ackermann_observer(A, C, poles)
+        if K is not None:
+            return K
     # imported here: scipy.signal pulls in scipy.stats (~1.3 s, ~20 MB) for every user of
     # roadbank.estimators, while only the pole-placement designs need it
     from scipy.signal import place_poles
 
     return place_poles(A.T, C.T, np.asarray(poles)).gain_matrix.T
+
+
+def ackermann_observer(A: np.ndarray, C: np.ndarray, poles) -> np.ndarray | None:
+    r"""Gain ``K`` (n, 1) with ``eig(A - K C) = poles`` for one output ``C`` (1, n) (Ackermann):
+
+    .. math::
+        K = \varphi(A)\, \mathcal{O}^{-1} e_n,\qquad
+        \varphi(s) = \prod_i (s - p_i),\quad \mathcal{O} = [C; C A; \dots; C A^{n-1}]
+
+    ``poles`` (1/s) must be closed under conjugation. None when ``(A, C)`` is numerically not
+    observable (condition number of :math:`\mathcal{O}` above 1e10) or the poles are not
+    ``n`` values closed under conjugation: then the caller takes scipy's ``place_poles``.
+    """
+    n = A.shape[0]
+    p = np.asarray(poles, dtype=complex).ravel()
+    coef = np.poly(p)
+    if p.size != n or np.abs(coef.imag).max() > 1e-9 * np.abs(coef).max():
+        return None
+    rows = [np.atleast_2d(C)]
+    for _ in range(n - 1):
+        rows.append(rows[-1] @ A)
+    O = np.vstack(rows)
+    if not np.linalg.cond(O) < 1e10:
+        return None
+    phi = np.zeros_like(A, dtype=float)
+    for c in coef.real:                    # Horner: phi = (..((A + c1) A + c2) A ..) + cn
+        phi = phi @ A + c * np.eye(n)
+    e = np.zeros((n, 1))
+    e[-1, 0] = 1.0
+    return phi @ np.linalg.solve(O, e)
