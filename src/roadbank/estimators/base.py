@@ -294,8 +294,9 @@ class Estimator:
                "uses": np.array([float(u) for u in self.uses])}
         if using_reference_solvers():      # the per-point loop that the one batched call replaced
             disc = [foh(F[k], G[k], dt) for k in range(g)]
-            out["Phi"], out["Gam0"], out["Gam1"] = (np.array([d[i] for d in disc]).reshape(g, n, -1)
-                                                    for i in range(3))
+            out["Phi"] = np.array([d[0] for d in disc]).reshape(g, n, n)
+            out["Gam0"] = np.array([d[1] for d in disc]).reshape(g, n, L.NETA)
+            out["Gam1"] = np.array([d[2] for d in disc]).reshape(g, n, L.NETA)
         else:
             out["Phi"], out["Gam0"], out["Gam1"] = foh_grid(F, G, dt)
         Fr, Gr, Hr, Dr = self._roll
