@@ -14,7 +14,8 @@ point and nothing to compile):
 
 1. starts on a coarse subgrid (every :data:`COARSE_STRIDE`-th speed, and the last): the stable
    invariant subspace of the Hamiltonian ``[[A^T, -Gamma], [-W, -A]]`` from its matrix sign
-   function (Newton's iteration ``Z <- (c Z + (c Z)^{-1}) / 2`` with determinant scaling ``c``),
+   function (Newton's iteration ``Z <- (c Z + (c Z)^{-1}) / 2`` with determinant scaling ``c``,
+   to :data:`SIGN_TOL`),
    with ``P`` scaled so that ``W`` and ``Gamma`` weigh alike;
 2. Newton's method on the Riccati equation (Kleinman's iteration written for an indefinite
    ``Gamma``): ``P_{j+1}`` solves the Lyapunov equation
@@ -23,7 +24,9 @@ point and nothing to compile):
    converges quadratically, until the update is below :data:`NEWTON_TOL` relative: first on the
    coarse points, then on the others, each started from the coarse solutions on either side
    interpolated linearly (the solutions are smooth in speed; two to four iterations);
-3. the checks, with numpy's eigenvalue routines as in the scipy path.
+3. the checks: ``P`` positive definite (Cholesky), a closed loop ``M`` Hurwitz when the solution
+   of ``M X + X M^T + I = 0`` is positive definite (Lyapunov's theorem; cheaper than the
+   eigenvalues of the scipy path on a stack, the same decision).
 
 A point that does not converge or fails a check is reported, not raised: the caller solves it
 again with scipy, which either finds the solution or raises the error that names the speed.
@@ -44,7 +47,10 @@ COARSE_STRIDE = 4
 NEWTON_TOL = 1e-9
 #: Newton iterations before a point counts as not converged
 NEWTON_MAX_ITER = 8
-#: sign-function iterations (typically 8-15 to 1e-10)
+#: the sign iteration stops at a change of at most this relative (1-norms): a start for Newton,
+#: which converges quadratically from there
+SIGN_TOL = 1e-6
+#: sign-function iterations before a point counts as not converged (typically 6-12)
 SIGN_MAX_ITER = 60
 
 
@@ -97,7 +103,7 @@ def sign_start(A: np.ndarray, Gam: np.ndarray, W: np.ndarray) -> tuple[np.ndarra
             Zn = 0.5 * (c * Zl + Zi / c)
             change = np.abs(Zn - Zl).sum(axis=(1, 2))
             Z[live] = Zn
-            conv = change <= 1e-10 * np.abs(Zn).sum(axis=(1, 2))
+            conv = change <= SIGN_TOL * np.abs(Zn).sum(axis=(1, 2))
             done[live[conv & ~bad]] = True
             Z[live[bad]] = np.nan           # singular: no start (stays not done)
             done[live[bad]] = False
@@ -169,14 +175,34 @@ def newton(A: np.ndarray, Gam: np.ndarray, W: np.ndarray, P0: np.ndarray) -> tup
     return P, done & ~failed
 
 
+def _positive_definite(X: np.ndarray) -> np.ndarray:
+    """Each symmetric matrix of a stack (g, n, n) positive definite (g,): Cholesky of the whole
+    stack, the smallest eigenvalue where that fails for some."""
+    try:
+        np.linalg.cholesky(X)
+        return np.ones(X.shape[0], dtype=bool)
+    except np.linalg.LinAlgError:
+        return np.linalg.eigvalsh(X)[:, 0] > 0
+
+
+def _hurwitz(M: np.ndarray) -> np.ndarray:
+    """Every eigenvalue of each matrix of a stack in the open left half-plane (g,): the solution
+    of ``M X + X M^T + I = 0`` exists and is positive definite (Lyapunov)."""
+    g, n, _ = M.shape
+    X, ok = _lyapunov(M, np.broadcast_to(np.eye(n), (g, n, n)))
+    ok &= np.all(np.isfinite(X), axis=(1, 2))
+    ok[ok] = _positive_definite(X[ok])
+    return ok
+
+
 def accepted(A: np.ndarray, Gam0: np.ndarray, Gam: np.ndarray, P: np.ndarray) -> np.ndarray:
     """The scipy path's checks per point (g,): ``P`` positive definite, the filter ``A - P Gam0``
     and the game closed loop ``A - P Gam`` Hurwitz."""
     ok = np.all(np.isfinite(P), axis=(1, 2))
     Ps = np.where(ok[:, None, None], P, np.eye(P.shape[1]))
-    ok &= np.linalg.eigvalsh(Ps)[:, 0] > 0
+    ok &= _positive_definite(Ps)
     for G in (Gam0, Gam):
-        ok &= np.linalg.eigvals(A - Ps @ G).real.max(axis=1) < 0
+        ok &= _hurwitz(A - Ps @ G)
     return ok
 
 
