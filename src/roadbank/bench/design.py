@@ -46,6 +46,7 @@ def _clear_memos(models: bool = True) -> None:
     grid_design._NOISE.clear()
     if models:
         grid_design._MODELS.clear()
+        base._augmented_design_model.cache_clear()
 
 
 def _time_design(name: str, noise: float, grid: dict, *, models: bool = True) -> tuple[float, float]:

@@ -8,6 +8,7 @@ code for ``run()`` and ``step()``, so streaming and batch give identical numbers
 
 from __future__ import annotations
 
+import functools
 import math
 import mmap
 import sys
@@ -581,8 +582,15 @@ def embed_inputs(cols: dict[int, np.ndarray], n_rows: int) -> np.ndarray:
 def augmented_design_model(params, vx: float, model: str):
     """``(A, B, C, Dy, Lw, Ew)`` of the augmented model with inputs embedded in ``eta = [delta_f, ay, r]``.
 
-    The innovation is ``Dy eta - C x`` (measured outputs minus model outputs).
+    The innovation is ``Dy eta - C x`` (measured outputs minus model outputs). ``vx`` in m/s.
+    Memoised (the estimators of one car design on the same speeds; each caller gets its own
+    copies of the arrays).
     """
+    return tuple(a.copy() for a in _augmented_design_model(params, float(vx), model))
+
+
+@functools.lru_cache(maxsize=4096)
+def _augmented_design_model(params, vx: float, model: str):
     if model == "modified":
         A, Bm, Ew, C, _ = augment(modified_model(params, vx))
         B = embed_inputs({1: Bm}, 3)
