@@ -3,9 +3,9 @@
 The estimators define their observer one frozen speed at a time (``observer(vx)``: the design
 model, the Riccati equation, the gain). Solved point by point with scipy that costs 0.3-2 s per
 design. :func:`speed_design` and :func:`adaptive_design` build the same table for the
-steady-state PIFs (``pif-modified``,
-``pif-original``, ``pif-rate``, ``pif-adaptive``, ``pif-rate-adaptive``, the filters of
-``pif-gated`` and the forward pass of ``pif-smoother``) and the Kalman peer in one pass: the
+steady-state PIFs (``pif-modified``, ``pif-original``, ``pif-rate``, ``pif-adaptive``,
+``pif-rate-adaptive``, the filters of ``pif-gated`` and the forward pass of ``pif-smoother``)
+and the Kalman peer in one pass: the
 design models point by point (the estimators' own), then every Riccati equation of the grid at
 once (:func:`roadbank.estimators.are_grid.solve_grid`), the gains, observers and equilibrium
 maps as stacked numpy operations. A grid point the grid solver does not accept is designed by
@@ -91,8 +91,14 @@ def _grid_models(key: tuple, build) -> tuple:
 
 def _grid_noise(est, models: tuple) -> np.ndarray:
     """``est.process_density`` of every model (g, n, n), memoised on every setting but ``th``
-    (the retries of a halved ``th`` compute none again)."""
-    key = tuple(sorted((k, repr(v)) for k, v in vars(est).items() if not k.startswith("_") and k not in ("th", "vgrid")))
+    (PIF's own noise model does not use it: the retries of a halved ``th`` compute none again)."""
+    from .pif import PIF, PIFRate
+
+    cls = type(est)
+    own = cls.process_density is PIF.process_density and cls.process_noise in (PIF.process_noise,
+                                                                               PIFRate.process_noise)
+    skip = ("th", "vgrid") if own else ("vgrid",)       # a subclass's own noise may use th
+    key = (cls, tuple(sorted((k, repr(v)) for k, v in vars(est).items() if not k.startswith("_") and k not in skip)))
     hit = _NOISE.get(key)
     if hit is None or hit[0] is not models:
         _NOISE.clear()
