@@ -201,3 +201,19 @@ def test_bank_estimates_equal_on_the_shared_kitti_drives():
         for name in ("pif-modified", "pif-rate", "pif-gated"):
             a, b = _theta_pair(name, s)
             assert np.nanmax(np.abs(a - b)) < np.deg2rad(0.01)
+
+
+def test_design_bench_section_measures_every_causal_estimator_both_ways():
+    """The benchmark's design section (no timing asserted: benchmarks are not tests)."""
+    from roadbank.bench import SECTIONS
+    from roadbank.bench.design import design_markdown, design_speed
+    assert "design" in [s.name for s in SECTIONS]
+    out = design_speed({"size": "tiny"})
+    assert {r["name"] for r in out["rows"]} == set(E.NAMES) - set(E.OFFLINE)     # every causal one
+    for r in out["rows"]:
+        for key in ("cold", "new_noise", "cached", "scipy"):
+            assert r[f"{key}_ms"] > 0 and r[f"{key}_cpu_ms"] >= 0
+        assert r["scipy_over_cold"] == pytest.approx(r["scipy_ms"] / r["cold_ms"])
+    text = "\n".join(design_markdown(out))
+    assert "`pif-adaptive`" in text and "scipy / cold" in text
+    assert not using_reference_solvers()

@@ -31,9 +31,11 @@ import time
 from ..report.markdown import Markdown, md_table
 from .suite import Section
 
-#: the causal estimators timed (the offline pif-smoother designs as pif-modified plus its backward table)
-DESIGN_ESTIMATORS = ("pif-modified", "pif-original", "pif-rate", "pif-gated", "pif-adaptive", "pif-rate-adaptive",
-                     "kalman", "pio-modified", "pio-original", "uio", "dfc", "kinematic")
+def design_estimators() -> tuple[str, ...]:
+    """The estimators timed: every causal one (the offline ``pif-smoother`` designs as
+    ``pif-modified`` plus its backward table)."""
+    from ..estimators import NAMES, OFFLINE
+    return tuple(n for n in NAMES if n not in OFFLINE)
 #: target of a cold design (ms, one core)
 DESIGN_TARGET_MS = 50.0
 RATE_HZ = 100.0
@@ -85,7 +87,7 @@ def design_speed(cfg: dict) -> dict:
     rows = []
     old = _with_cache_dir("off")
     try:
-        for i, name in enumerate(DESIGN_ESTIMATORS):
+        for i, name in enumerate(design_estimators()):
             noise = iter(0.05 + 0.0137 * (k + 1) + 0.001 * i for k in range(4 * repeats + 4))
             _time_design(name, next(noise), grid)                       # imports, first calls
             cold = [_time_design(name, next(noise), grid) for _ in range(repeats)]
