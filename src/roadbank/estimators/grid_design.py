@@ -102,8 +102,22 @@ def _grid_noise(est, models: tuple) -> np.ndarray:
     hit = _NOISE.get(key)
     if hit is None or hit[0] is not models:
         _NOISE.clear()
-        hit = _NOISE[key] = (models, np.array([est.process_density(m) for m in models[1]]))
+        hit = _NOISE[key] = (models, _stacked_noise(est, models) if own else
+                             np.array([est.process_density(m) for m in models[1]]))
     return hit[1]
+
+
+def _stacked_noise(est, models: tuple) -> np.ndarray:
+    """:meth:`PIF.process_density <roadbank.estimators.pif.PIF.process_density>` of every model at
+    once: ``process_noise(Ew)`` (one call per distinct ``Ew``; the augmented models share one) plus
+    ``Q_ay b b^T``, ``b`` the ``ay`` column of each ``B``."""
+    listed = models[1]
+    Ew = np.array([m[5] for m in listed])
+    first = Ew[0]
+    if not np.array_equal(Ew, np.broadcast_to(first, Ew.shape)):
+        return np.array([est.process_density(m) for m in listed])
+    b = models[0][1][:, :, 1]
+    return est.process_noise(first) + est.Q_ay * (b[:, :, None] * b[:, None, :])
 
 
 def _pif_speed(est):
