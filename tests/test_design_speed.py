@@ -10,8 +10,12 @@ from scipy.signal import place_poles
 
 from roadbank import estimators as E
 from roadbank.estimators import are_grid, base, grid_design
-from roadbank.estimators.synthesis import (NoStabilisingSolution, ackermann_observer, reference_solvers,
-                                           using_reference_solvers)
+from roadbank.estimators.synthesis import (
+    NoStabilisingSolution,
+    ackermann_observer,
+    reference_solvers,
+    using_reference_solvers,
+)
 from roadbank.vehicle import load_vehicle, log_conditions, make_estimator
 
 CARS = ("suv-paper", "sedan", "compact", "van")
@@ -159,13 +163,13 @@ def test_grid_solver_rejects_a_problem_without_stabilising_solution():
     # unobservable unstable mode: no stabilising solution at all
     A = np.array([[[1.0, 0.0], [0.0, -1.0]]] * 3)
     Gam = np.array([[[0.0, 0.0], [0.0, 1.0]]] * 3)
-    P, ok = are_grid.solve_grid(A, Gam, Gam, np.broadcast_to(np.eye(2), (3, 2, 2)).copy())
+    _, ok = are_grid.solve_grid(A, Gam, Gam, np.broadcast_to(np.eye(2), (3, 2, 2)).copy())
     assert not ok.any()
 
 
 @pytest.mark.parametrize("vx", [5.0, 20.0, 60.0, 100.0])
 def test_ackermann_gain_against_place_poles(vx):
-    A, B, C, Dy, Lw, Ew = base.augmented_design_model(load_vehicle("van").params, vx, "modified")
+    A, _, C, *_ = base.augmented_design_model(load_vehicle("van").params, vx, "modified")
     for poles in ((-2.0, -4.0, -6.0), (-1.0, -3.0 + 2.0j, -3.0 - 2.0j)):
         K = ackermann_observer(A, C, poles)
         ref = place_poles(A.T, C.T, np.asarray(poles)).gain_matrix.T

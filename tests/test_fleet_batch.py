@@ -11,7 +11,13 @@ import pyarrow.parquet as pq
 import pytest
 
 from roadbank.fleet import run as fleet_run
-from roadbank.fleet.run import BATCH_BYTES, BATCH_MAX_LOGS, batches, read_summary, run_fleet
+from roadbank.fleet.run import (
+    BATCH_BYTES,
+    BATCH_MAX_LOGS,
+    batches,
+    read_summary,
+    run_fleet,
+)
 
 EST = ("pif-modified",)
 
@@ -51,7 +57,7 @@ def test_batches_group_consecutive_logs_by_size_and_count(tmp_path):
     assert max(len(g) for g in groups) <= math.ceil(len(paths) / 4)       # several tasks per worker
     many = [small[0]] * (40 * BATCH_MAX_LOGS)
     assert max(len(g) for g in batches(many, workers=1)) == BATCH_MAX_LOGS
-    assert batches(paths, workers=2, size=5) == [list(range(0, 5)), list(range(5, 10)), [10, 11]]
+    assert batches(paths, workers=2, size=5) == [list(range(5)), list(range(5, 10)), [10, 11]]
     with pytest.raises(ValueError, match="batch size"):
         batches(paths, workers=1, size=0)
 
@@ -77,7 +83,7 @@ def test_batched_dask_run_equals_one_log_per_task_and_in_process(tmp_path, clust
         res = run_fleet(paths, tmp_path / label, EST, **kw)
         assert len(res.summaries) == len(paths) and len(res.failed) == 2
         runs[label] = _tables(tmp_path / label)
-    rows0, tabs0 = runs["inproc"]
+    _, tabs0 = runs["inproc"]
     for label, (rows, tabs) in runs.items():
         assert set(rows) == {str(p) for p in paths}
         for i in (4, 9):

@@ -31,6 +31,7 @@ import time
 from ..report.markdown import Markdown, md_table
 from .suite import Section
 
+
 def design_estimators() -> tuple[str, ...]:
     """The estimators timed: every causal one (the offline ``pif-smoother`` designs as
     ``pif-modified`` plus its backward table)."""
@@ -122,14 +123,14 @@ def design_markdown(out: dict) -> list[str]:
              f"{r['scipy_ms']:.0f} ({r['scipy_cpu_ms']:.0f})", f"{r['scipy_over_cold']:.0f}x",
              Markdown("yes" if r["met"] else "**no**")] for r in out["rows"]]
     grid = "the default speed grids" if out["grid"] == "default" else f"a short grid {out['grid']}"
-    return [md_table(["estimator", "cold, ms wall (CPU)", "new noise, same car", "cached (disk)",
-                      "scipy per point, ms (CPU)", "scipy / cold", f"cold CPU <= {out['target_ms']:.0f} ms?"],
-                     rows, align="lrrrrrl"),
-            "", f"One design = `make_estimator` for a {out['rate_hz']:.0f} Hz log with its own `ay` noise plus "
+    note = (f"One design = `make_estimator` for a {out['rate_hz']:.0f} Hz log with its own `ay` noise plus "
             f"the fixed-rate tables, on the default car and {grid}; medians of {out['repeats']} repeats "
             f"(scipy: {out['scipy_repeats']}), each with a new noise level. Cold: no design cache, memos emptied; new noise: the "
             "car's design models kept; scipy: the per-point path (`synthesis.reference_solvers`) in the "
-            "same run. CPU time of the process in parentheses (the machine may be shared)."]
+            "same run. CPU time of the process in parentheses (the machine may be shared).")
+    headers = ["estimator", "cold, ms wall (CPU)", "new noise, same car", "cached (disk)",
+               "scipy per point, ms (CPU)", "scipy / cold", f"cold CPU <= {out['target_ms']:.0f} ms?"]
+    return [md_table(headers, rows, align="lrrrrrl"), "", note]
 
 
 SECTION = Section("design", "Estimator design (ms per design)", design_speed, design_markdown)

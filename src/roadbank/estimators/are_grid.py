@@ -118,7 +118,7 @@ def sign_start(A: np.ndarray, Gam: np.ndarray, W: np.ndarray) -> tuple[np.ndarra
     return np.where(ok[:, None, None], P, 0.0), ok
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _lyapunov_map(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For symmetric ``X`` (n, n) and its ``m = n (n + 1) / 2`` entries on and above the diagonal
     (``X[iu, ju]``): ``T`` (n^2, m^2) with ``vec(M) @ T`` the (m, m) matrix of
@@ -153,7 +153,7 @@ def newton(A: np.ndarray, Gam: np.ndarray, W: np.ndarray, P0: np.ndarray) -> tup
 
     Returns ``P`` and ``ok`` (g,): converged to :data:`NEWTON_TOL` with a finite result.
     """
-    g, n, _ = A.shape
+    g = A.shape[0]
     P = P0.copy()
     done = np.zeros(g, dtype=bool)
     failed = np.zeros(g, dtype=bool)

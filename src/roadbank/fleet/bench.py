@@ -195,7 +195,7 @@ def fleet_speedup(n_logs: int = 200, seconds: float = 600.0, workers=(1, 2), est
                 p.write_bytes(b"PAR1 truncated")
             else:
                 write_long_log(p, hours=seconds / 3600.0, chunk_s=seconds, ay_noise=0.05 + 0.001 * i, seed=i)
-        samples += 0 if bad else int(round(seconds * 100.0))
+        samples += 0 if bad else round(seconds * 100.0)
         paths.append(p)
     rows = []
     old = os.environ.get("ROADBANK_CACHE_DIR")
