@@ -221,3 +221,28 @@ def test_design_bench_section_measures_every_causal_estimator_both_ways():
     text = "\n".join(design_markdown(out))
     assert "`pif-adaptive`" in text and "scipy / cold" in text
     assert not using_reference_solvers()
+
+
+def test_the_smoother_and_riccati_solution_take_the_grid_solutions(monkeypatch):
+    """game_are answers an equation a grid design just solved from that grid (the smoother's
+    backward table asks for every speed): no scipy solve, and the same numbers as scipy's."""
+    from roadbank.estimators import smoother, synthesis
+    monkeypatch.setattr(smoother, "_TABLES", {})
+    monkeypatch.setattr(synthesis, "_GRIDS", [])
+    fast = E.make("pif-smoother")
+    calls = []
+    real = synthesis.solve_continuous_are
+    monkeypatch.setattr(synthesis, "solve_continuous_are", lambda *a, **k: calls.append(1) or real(*a, **k))
+    P = fast.riccati_solution(30.0)                   # on the grid: recalled
+    assert calls == []
+    A, _, C, _, Lw, _ = fast.design_model(30.0)
+    X = _scipy_game_are(A, C, Lw, fast.process_density(fast.design_model(30.0)), fast.R, fast.th)
+    assert np.abs(P - X).max() <= 1e-9 * np.abs(X).max()
+    fast.riccati_solution(30.1)                       # between grid speeds: solved
+    assert calls == [1]
+    base._DESIGN_CACHE.clear()
+    smoother._TABLES.clear()
+    with reference_solvers():
+        ref = E.make("pif-smoother")
+    d = np.abs(fast._smooth_tab - ref._smooth_tab)
+    assert np.all(d <= 1e-9 * np.abs(ref._smooth_tab).max(axis=1, keepdims=True))

@@ -190,6 +190,7 @@ def observer_rows(models, W, R, S, th, fallback, n_inner: int = 1) -> np.ndarray
     Gam0 = Ct @ Rinv @ C
     Gam = Gam0 - th * (np.swapaxes(Lw, 1, 2) @ S @ Lw)
     P, ok = solve_grid(A, Gam0, Gam, W, n_inner)
+    synthesis.remember_grid(A, C, Lw, W, R, S, th, P, ok)
     K = P @ Ct @ Rinv
     F = A - K @ C
     G = B + K @ Dy
