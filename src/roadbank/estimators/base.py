@@ -8,6 +8,7 @@ code for ``run()`` and ``step()``, so streaming and batch give identical numbers
 
 from __future__ import annotations
 
+import functools
 import math
 import mmap
 import sys
@@ -21,8 +22,8 @@ from ..params import VehicleParams
 from ..signals import Estimate, Signals
 from . import kernels as K
 from . import layout as L
-from .discretise import foh
-from .synthesis import NoStabilisingSolution
+from .discretise import foh, foh_grid
+from .synthesis import NoStabilisingSolution, using_reference_solvers
 
 #: Default speed grid of the gain schedules (m/s): v_min .. V_GRID_MAX.
 V_GRID_MAX = 100.0
@@ -311,10 +312,13 @@ class Estimator:
                "H": tab[:, row.H:row.D].copy(), "D": tab[:, row.D:row.J].copy(),
                "J": tab[:, row.J:row.cont].reshape(g, n, L.NETA).copy(),
                "uses": np.array([float(u) for u in self.uses])}
-        disc = [foh(F[k], G[k], dt) for k in range(g)]
-        out["Phi"] = np.array([d[0] for d in disc]).reshape(g, n, n)
-        out["Gam0"] = np.array([d[1] for d in disc]).reshape(g, n, L.NETA)
-        out["Gam1"] = np.array([d[2] for d in disc]).reshape(g, n, L.NETA)
+        if using_reference_solvers():      # the per-point loop that the one batched call replaced
+            disc = [foh(F[k], G[k], dt) for k in range(g)]
+            out["Phi"] = np.array([d[0] for d in disc]).reshape(g, n, n)
+            out["Gam0"] = np.array([d[1] for d in disc]).reshape(g, n, L.NETA)
+            out["Gam1"] = np.array([d[2] for d in disc]).reshape(g, n, L.NETA)
+        else:
+            out["Phi"], out["Gam0"], out["Gam1"] = foh_grid(F, G, dt)
         Fr, Gr, Hr, Dr = self._roll
         Phi_r, G0r, G1r = foh(Fr, Gr, dt)
         out.update(Phi_r=Phi_r, Gam0_r=G0r.ravel(), Gam1_r=G1r.ravel(), H_r=np.ravel(Hr).copy(),
@@ -569,6 +573,11 @@ class ScheduledObserver(Estimator):
         raise NotImplementedError
 
     def _design(self):
+        # the Riccati-designed observers: every grid speed at once (same table, milliseconds)
+        from .grid_design import speed_design
+        fast = speed_design(self)
+        if fast is not None:
+            return fast
         rows = []
         n = None
         for v in self.vgrid:
@@ -594,8 +603,15 @@ def embed_inputs(cols: dict[int, np.ndarray], n_rows: int) -> np.ndarray:
 def augmented_design_model(params, vx: float, model: str):
     """``(A, B, C, Dy, Lw, Ew)`` of the augmented model with inputs embedded in ``eta = [delta_f, ay, r]``.
 
-    The innovation is ``Dy eta - C x`` (measured outputs minus model outputs).
+    The innovation is ``Dy eta - C x`` (measured outputs minus model outputs). ``vx`` in m/s.
+    Memoised (the estimators of one car design on the same speeds; each caller gets its own
+    copies of the arrays).
     """
+    return tuple(a.copy() for a in _augmented_design_model(params, float(vx), model))
+
+
+@functools.lru_cache(maxsize=4096)
+def _augmented_design_model(params, vx: float, model: str):
     if model == "modified":
         A, Bm, Ew, C, _ = augment(modified_model(params, vx))
         B = embed_inputs({1: Bm}, 3)

@@ -446,6 +446,9 @@ class PIFAdaptive(PIF):
         return self._observer(self._model_at(replace(self.params, Cr=self.rear_stiffness(e)), vx), vx)
 
     def _design(self):
+        from .grid_design import adaptive_design        # the whole grid at once (the same table)
+        if (fast := adaptive_design(self)) is not None:
+            return fast
         rows = []
         for v in self.vgrid:
             for e in self.egrid:

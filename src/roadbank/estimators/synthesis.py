@@ -1,13 +1,39 @@
 r"""Gain synthesis for the observers: game-type Riccati (H-infinity / Kalman) and pole placement.
 
 All functions are pure numpy/scipy and work on one frozen speed; the
-estimators call them on every point of their speed grid.
+estimators call them on every point of their speed grid (the steady-state PIFs and the
+Kalman filter solve their whole grid at once instead, :mod:`roadbank.estimators.grid_design`).
+:func:`reference_solvers` makes every design take scipy's solvers point by point, as before
+the faster paths: what they are compared with.
 """
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 from scipy.linalg import solve_continuous_are
+
+_REFERENCE = False
+
+
+@contextlib.contextmanager
+def reference_solvers():
+    """Inside the ``with`` block, designs use scipy's solvers point by point: the Riccati
+    equation per grid speed (no whole-grid design) and ``place_poles`` for every pole
+    placement. For comparisons and the benchmark; the design caches still answer for designs
+    already made (clear them, or use ``ROADBANK_CACHE_DIR=off``, to compare)."""
+    global _REFERENCE
+    old, _REFERENCE = _REFERENCE, True
+    try:
+        yield
+    finally:
+        _REFERENCE = old
+
+
+def using_reference_solvers() -> bool:
+    """True inside :func:`reference_solvers`."""
+    return _REFERENCE
 
 
 class NoStabilisingSolution(ValueError):
@@ -31,7 +57,16 @@ def game_are(A: np.ndarray, C: np.ndarray, Lw: np.ndarray, W: np.ndarray, R: np.
         if no solution exists, or it is not positive definite, or the filter
         ``A - P C^T R^{-1} C`` or the game closed loop is not Hurwitz. ``where``
         (e.g. ``"vx=12.0 m/s"``) is added to the message.
+
+    An equation that a whole-grid design solved and accepted moments ago (the same ``A``,
+    ``C``, ``L_w``, ``W``, ``R``, ``S``, ``th``; :func:`remember_grid`) is answered from it, as
+    when the offline smoother asks for the forward filter's solutions speed by speed; not
+    inside :func:`reference_solvers`.
     """
+    if not _REFERENCE:
+        P = _recall(A, C, Lw, W, R, S, th)
+        if P is not None:
+            return P
     R = np.atleast_2d(R).astype(float)
     S = np.atleast_2d(S).astype(float)
     if th < 0:
@@ -69,10 +104,81 @@ def game_are(A: np.ndarray, C: np.ndarray, Lw: np.ndarray, W: np.ndarray, R: np.
     return P
 
 
+#: the whole-grid solutions kept for :func:`game_are` (newest last; :func:`remember_grid`)
+_GRIDS: list = []
+_GRIDS_KEPT = 4
+
+
+def remember_grid(A, C, Lw, W, R, S, th, P, ok) -> None:
+    """Keep the accepted stabilising solutions ``P[ok]`` of a grid of filter Riccati equations
+    (stacks ``A``, ``C``, ``Lw``, ``W``, ``P`` (g, ., .); ``R``, ``S``, ``th`` common) for
+    :func:`game_are`; the last few grids are kept."""
+    _GRIDS.append((A, C, Lw, W, np.atleast_2d(np.asarray(R, dtype=float)), np.atleast_2d(np.asarray(S, dtype=float)),
+                   float(th), P, ok))
+    del _GRIDS[:-_GRIDS_KEPT]
+
+
+def _recall(A, C, Lw, W, R, S, th):
+    """The kept solution of exactly this equation (inputs equal to 1e-14 relative), or None."""
+    R = np.atleast_2d(np.asarray(R, dtype=float))
+    S = np.atleast_2d(np.asarray(S, dtype=float))
+    for gA, gC, gL, gW, gR, gS, gth, gP, gok in reversed(_GRIDS):
+        if gth != float(th) or gA.shape[1:] != np.shape(A) or gR.shape != R.shape or gC.shape[1:] != np.shape(C) \
+                or not (np.array_equal(gR, R) and np.array_equal(gS, S)):
+            continue
+        hit = np.flatnonzero(gok & (np.abs(gA - A) <= 1e-14 * np.abs(A).max()).all(axis=(1, 2)))
+        for k in hit:
+            if (np.allclose(gW[k], W, rtol=1e-14, atol=0.0) and np.array_equal(gC[k], C)
+                    and np.array_equal(gL[k], Lw)):
+                return gP[k].copy()
+    return None
+
+
 def place_observer(A: np.ndarray, C: np.ndarray, poles) -> np.ndarray:
-    """Observer gain ``K`` with ``eig(A - K C) = poles`` (scipy ``place_poles`` on the dual)."""
+    """Observer gain ``K`` with ``eig(A - K C) = poles`` (1/s).
+
+    One output (``C`` a single row): the gain is unique, Ackermann's formula
+    (:func:`ackermann_observer`, a few small matrix products). Several outputs: scipy
+    ``place_poles`` on the dual (the gain is not unique; scipy's choice), as for one output
+    inside :func:`reference_solvers`.
+    """
+    C = np.atleast_2d(C)
+    if C.shape[0] == 1 and not _REFERENCE:
+        K = ackermann_observer(A, C, poles)
+        if K is not None:
+            return K
     # imported here: scipy.signal pulls in scipy.stats (~1.3 s, ~20 MB) for every user of
     # roadbank.estimators, while only the pole-placement designs need it
     from scipy.signal import place_poles
 
     return place_poles(A.T, C.T, np.asarray(poles)).gain_matrix.T
+
+
+def ackermann_observer(A: np.ndarray, C: np.ndarray, poles) -> np.ndarray | None:
+    r"""Gain ``K`` (n, 1) with ``eig(A - K C) = poles`` for one output ``C`` (1, n) (Ackermann):
+
+    .. math::
+        K = \varphi(A)\, \mathcal{O}^{-1} e_n,\qquad
+        \varphi(s) = \prod_i (s - p_i),\quad \mathcal{O} = [C; C A; \dots; C A^{n-1}]
+
+    ``poles`` (1/s) must be closed under conjugation. None when ``(A, C)`` is numerically not
+    observable (condition number of :math:`\mathcal{O}` above 1e10) or the poles are not
+    ``n`` values closed under conjugation: then the caller takes scipy's ``place_poles``.
+    """
+    n = A.shape[0]
+    p = np.asarray(poles, dtype=complex).ravel()
+    coef = np.poly(p)
+    if p.size != n or np.abs(coef.imag).max() > 1e-9 * np.abs(coef).max():
+        return None
+    rows = [np.atleast_2d(C)]
+    for _ in range(n - 1):
+        rows.append(rows[-1] @ A)
+    O = np.vstack(rows)
+    if not np.linalg.cond(O) < 1e10:
+        return None
+    phi = np.zeros_like(A, dtype=float)
+    for c in coef.real:                    # Horner: phi = (..((A + c1) A + c2) A ..) + cn
+        phi = phi @ A + c * np.eye(n)
+    e = np.zeros((n, 1))
+    e[-1, 0] = 1.0
+    return phi @ np.linalg.solve(O, e)

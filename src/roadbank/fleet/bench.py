@@ -35,11 +35,14 @@ def _base_drive(scenario: str = "track-lane-change", seed: int = 0) -> dict[str,
     return {"vx": s.vx, "ay": s.ay, "r": s.r, "delta_f": s.delta_f}
 
 
-def write_long_log(path, hours: float = 24.0, rate_hz: float = 100.0, chunk_s: float = 1800.0) -> int:
+def write_long_log(path, hours: float = 24.0, rate_hz: float = 100.0, chunk_s: float = 1800.0,
+                   ay_noise: float = 0.0, seed: int = 0) -> int:
     """Write a ``hours``-long log at ``rate_hz`` to ``path`` (.parquet or .mf4); returns the sample count.
 
     Columns / channels ``t`` (s), ``vx`` (m/s), ``ay`` (m/s^2), ``r`` (rad/s), ``delta_f`` (rad):
-    roadbank's default channel map.
+    roadbank's default channel map. ``ay_noise`` (m/s^2): white noise of that standard deviation
+    added to ``ay`` (random generator ``seed``), so that logs measure distinct noise levels and
+    each gets its own design.
     """
     p = Path(path)
     base = _base_drive()
@@ -48,9 +51,14 @@ def write_long_log(path, hours: float = 24.0, rate_hz: float = 100.0, chunk_s: f
     step = int(chunk_s * rate_hz)
     p.parent.mkdir(parents=True, exist_ok=True)
 
+    rng = np.random.default_rng(seed)
+
     def chunk(k0):
         k = np.arange(k0, min(k0 + step, total))
-        return {"t": k / rate_hz, **{c: v[k % nb] for c, v in base.items()}}
+        c = {"t": k / rate_hz, **{c: v[k % nb] for c, v in base.items()}}
+        if ay_noise > 0:
+            c["ay"] = c["ay"] + ay_noise * rng.standard_normal(k.size)
+        return c
 
     if p.suffix.lower() == ".parquet":
         import pyarrow as pa
@@ -164,32 +172,50 @@ def measure(mode: str, log, out, estimator: str = "pif-modified", chunk_rows: in
 
 
 def fleet_speedup(n_logs: int = 200, seconds: float = 600.0, workers=(1, 2), estimator: str = "pif-modified",
-                  bad_every: int = 20, workdir=None) -> list[dict]:
+                  bad_every: int = 20, workdir=None, batch: int | None = None) -> list[dict]:
     """Wall time of ``run_fleet`` on ``n_logs`` logs of ``seconds`` (100 Hz, every ``bad_every``-th corrupt).
 
-    Each worker count runs in a fresh output directory; Dask start-up (cluster + warm-up) is
-    reported apart from the processing wall time.
+    Log ``i`` carries white ``ay`` noise of ``0.05 + 0.001 i`` m/s^2 (each log its own design, as
+    on a real fleet). Each worker count runs in a fresh output directory with the design cache off
+    (``ROADBANK_CACHE_DIR=off``, so every design is made); Dask start-up (cluster + warm-up) is
+    reported apart from the processing wall time. ``batch``: logs per Dask task (None: automatic).
+    End to end = read + design + filter + write, in ``samples_per_s``.
     """
     from .run import run_fleet
     work = Path(workdir or tempfile.mkdtemp(prefix="roadbank-fleet-"))
     logs = work / "logs"
     logs.mkdir(parents=True, exist_ok=True)
     paths = []
+    samples = 0
     for i in range(n_logs):
         p = logs / f"log{i:04d}.parquet"
+        bad = bool(bad_every) and i % bad_every == bad_every - 1
         if not p.exists():
-            if bad_every and i % bad_every == bad_every - 1:
+            if bad:
                 p.write_bytes(b"PAR1 truncated")
             else:
-                write_long_log(p, hours=seconds / 3600.0, chunk_s=seconds)
+                write_long_log(p, hours=seconds / 3600.0, chunk_s=seconds, ay_noise=0.05 + 0.001 * i, seed=i)
+        samples += 0 if bad else round(seconds * 100.0)
         paths.append(p)
     rows = []
-    for w in workers:
-        t0 = time.perf_counter()
-        res = run_fleet(paths, work / f"out{w}", [estimator], workers=w)
-        total = time.perf_counter() - t0
-        rows.append({"workers": w, "logs": n_logs, "failed": len(res.failed), "wall_s": res.wall_s,
-                     "startup_s": res.startup_s, "total_s": total, "logs_per_s": n_logs / res.wall_s})
+    old = os.environ.get("ROADBANK_CACHE_DIR")
+    os.environ["ROADBANK_CACHE_DIR"] = "off"
+    try:
+        for w in workers:
+            t0 = time.perf_counter()
+            res = run_fleet(paths, work / f"out{w}-{batch or 'auto'}", [estimator], workers=w, batch=batch)
+            total = time.perf_counter() - t0
+            rows.append({"workers": w, "logs": n_logs, "failed": len(res.failed), "wall_s": res.wall_s,
+                         "startup_s": res.startup_s, "total_s": total, "logs_per_s": n_logs / res.wall_s,
+                         "samples_per_s": samples / res.wall_s, "batch": batch or "auto"})
+    finally:
+        if old is None:
+            os.environ.pop("ROADBANK_CACHE_DIR", None)
+        else:
+            os.environ["ROADBANK_CACHE_DIR"] = old
+    base = rows[0]["wall_s"]
+    for r in rows:
+        r["speedup"] = base / r["wall_s"]
     return rows
 
 
@@ -203,12 +229,14 @@ def main(argv=None) -> int:
     ap.add_argument("--estimator", default="pif-modified")
     ap.add_argument("--chunk-rows", type=int, default=None, help="default: roadbank.io.stream.CHUNK_ROWS")
     ap.add_argument("--fleet", type=int, default=0, help="also time N small logs with 1 and 2 workers")
+    ap.add_argument("--fleet-seconds", type=float, default=600.0, help="length of each fleet log (s)")
+    ap.add_argument("--batch", type=int, default=None, help="logs per Dask task (default: automatic)")
     ap.add_argument("--workdir", default=None)
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
     work = Path(a.workdir or tempfile.mkdtemp(prefix="roadbank-bench-"))
     results = {}
-    for fmt in a.formats.split(","):
+    for fmt in filter(None, a.formats.split(",")):
         results[f"baseline-{fmt}"] = measure(f"baseline-{fmt}", "-", "-", a.estimator)
         suf = {"parquet": ".parquet", "mdf4": ".mf4"}[fmt]
         log = work / f"long-{a.hours:g}h{suf}"
@@ -227,15 +255,18 @@ def main(argv=None) -> int:
             results[f"{fmt}-stream-{a.peer_hours:g}h"] = measure("stream", peer, work / f"out2-{fmt}.parquet",
                                                                  a.estimator, a.chunk_rows)
     if a.fleet:
-        results["fleet"] = fleet_speedup(a.fleet, estimator=a.estimator, workdir=work / "fleet")
+        results["fleet"] = fleet_speedup(a.fleet, a.fleet_seconds, estimator=a.estimator, workdir=work / "fleet",
+                                         batch=a.batch)
     if a.json:
         print(json.dumps(results, indent=1))
     else:
         for k, r in results.items():
             if k == "fleet":
                 for row in r:
-                    print(f"fleet {row['workers']} worker(s): {row['logs']} logs in {row['wall_s']:.1f} s "
-                          f"({row['logs_per_s']:.1f} logs/s), {row['failed']} failed")
+                    print(f"fleet {row['workers']} worker(s), batch {row['batch']}: {row['logs']} logs in "
+                          f"{row['wall_s']:.1f} s ({row['logs_per_s']:.1f} logs/s, "
+                          f"{row['samples_per_s'] / 1e6:.2f} M samples/s end to end, {row['speedup']:.2f}x), "
+                          f"{row['failed']} failed; start-up {row['startup_s']:.1f} s")
                 continue
             print(f"{k:>22}: peak RSS {r['peak_rss_mb']:.0f} MiB, {r['samples']} samples in {r['run_s']:.2f} s "
                   f"= {r['samples_per_s'] / 1e6:.2f} M samples/s ({r['samples_per_cpu_s'] / 1e6:.2f} M per CPU s; "

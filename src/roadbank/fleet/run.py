@@ -25,6 +25,12 @@ from ..defaults import ESTIMATOR as DEFAULT
 from .process import SUMMARY_COLUMNS, LogSummary, estimate_log
 
 SUMMARY = "summary.csv"
+#: input a batch of logs aims at (bytes of log files): one Dask task of about half a second
+BATCH_BYTES = 32 * 2**20
+#: the most logs in one batch
+BATCH_MAX_LOGS = 64
+#: batches per worker at least (where there are enough logs), so that the workers end together
+BATCHES_PER_WORKER = 4
 #: suffixes of log files picked up when a directory is given
 LOG_SUFFIXES = {".csv", ".parquet", ".pq", ".mf4", ".mdf", ".blf", ".asc", ".trc", ".log", ".bag", ".mcap"}
 
@@ -66,6 +72,49 @@ def expand_logs(args) -> list[Path]:
         else:
             out.append(p)
     return sorted(dict.fromkeys(out))
+
+
+def _input_bytes(p: Path) -> int:
+    """Size of a log on disk (bytes); a log directory counts as a whole batch."""
+    try:
+        return p.stat().st_size if p.is_file() else BATCH_BYTES
+    except OSError:
+        return 0
+
+
+def batches(paths: list, workers: int, size: int | None = None) -> list[list[int]]:
+    """Indices of ``paths`` in consecutive groups, one Dask task each.
+
+    ``size``: that many logs per group. None: groups of about :data:`BATCH_BYTES` of input, at
+    most :data:`BATCH_MAX_LOGS` logs and at most ``len(paths) / (BATCHES_PER_WORKER * workers)``
+    (so that every worker gets several tasks and they finish together); a log of
+    ``BATCH_BYTES`` or more is a group of its own.
+    """
+    n = len(paths)
+    if size is not None:
+        if size < 1:
+            raise ValueError(f"batch size must be >= 1, got {size}")
+        return [list(range(i, min(i + size, n))) for i in range(0, n, size)]
+    cap = max(1, min(BATCH_MAX_LOGS, math.ceil(n / (BATCHES_PER_WORKER * max(1, workers)))))
+    out: list[list[int]] = []
+    cur: list[int] = []
+    used = 0
+    for i, p in enumerate(paths):
+        b = _input_bytes(Path(p))
+        if cur and (used + b > BATCH_BYTES or len(cur) >= cap):
+            out.append(cur)
+            cur, used = [], 0
+        cur.append(i)
+        used += b
+    if cur:
+        out.append(cur)
+    return out
+
+
+def _estimate_batch(jobs, estimators, kw) -> list[LogSummary]:
+    """:func:`estimate_log` on each job ``(path, output, metadata, plot)`` in turn, in one worker
+    (its estimator designs and compiled kernels serve them all); a bad log costs only its own row."""
+    return [estimate_log(p, out, estimators, metadata=meta, plot=png, **kw) for p, out, meta, png in jobs]
 
 
 def output_names(paths: list[Path], suffix: str) -> dict[Path, str]:
@@ -168,7 +217,8 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
               params=None, vehicle=None, output_format: str = "parquet", workers: int = 1,
               scheduler: str | None = None, resume: bool = False, chunk_rows: int | None = None,
               metadata: dict | None = None, plot_dir=None, on_result=None,
-              connect_timeout: float = 20.0, online_offsets: bool = True) -> FleetResult:
+              connect_timeout: float = 20.0, online_offsets: bool = True,
+              batch: int | None = None) -> FleetResult:
     """Estimate the bank on many logs, writing each result and a summary row as soon as a log finishes.
 
     Parameters
@@ -198,7 +248,11 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
     plot_dir : path-like, optional
         One PNG of theta / phi_b per log, ``<stem>.png``.
     on_result : callable(LogSummary), optional
-        Called in the client as each log finishes.
+        Called in the client as each log finishes (on Dask: as each batch of logs finishes).
+    batch : int, optional
+        Logs per Dask task (default: automatic, :func:`batches`): short logs are processed many
+        to a task, so the scheduling cost per task is paid once per batch. A worker that dies
+        (memory, signal) fails its whole batch; a bad log fails only itself.
 
     Returns
     -------
@@ -238,14 +292,14 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
             for p, out, meta, png in jobs:
                 finish(estimate_log(p, out, estimators, metadata=meta, plot=png, **kw))
         elif jobs:
-            _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result)
+            _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result, batch)
     finally:
         summary.close()
         result.wall_s = time.perf_counter() - t0 - result.startup_s
     return result
 
 
-def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result):
+def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result, batch=None):
     from ..campaign.execute import _distributed, dask_session
 
     dd = _distributed()
@@ -254,13 +308,16 @@ def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish,
         result.workers = sum(client.nthreads().values())
         client.run(_warm, list(estimators), kw["params"], kw["vehicle"])
         result.startup_s = time.perf_counter() - t0
-        for p, out, meta, png in jobs:
-            fut = client.submit(estimate_log, p, out, list(estimators), metadata=meta, plot=png, pure=False, **kw)
-            futures[fut] = p
+        for idx in batches([j[0] for j in jobs], result.workers, batch):
+            group = [jobs[i] for i in idx]
+            fut = client.submit(_estimate_batch, group, list(estimators), kw, pure=False)
+            futures[fut] = group
         for fut in dd.as_completed(list(futures)):
-            p = futures.pop(fut)
+            group = futures.pop(fut)
             try:
-                s = fut.result()
-            except Exception as exc:     # the worker died (memory, signal): this log only
-                s = LogSummary(log=str(p), status="error", error=f"worker failed: {type(exc).__name__}: {exc}")
-            finish(s)
+                summaries = fut.result()
+            except Exception as exc:     # the worker died (memory, signal): this batch only
+                summaries = [LogSummary(log=str(p), status="error",
+                                        error=f"worker failed: {type(exc).__name__}: {exc}") for p, *_ in group]
+            for s in summaries:
+                finish(s)

@@ -1,0 +1,203 @@
+"""Whole-grid designs of the Riccati-designed observers: every grid point of the schedule at once.
+
+The estimators define their observer one frozen speed at a time (``observer(vx)``: the design
+model, the Riccati equation, the gain). Solved point by point with scipy that costs 0.3-2 s per
+design. :func:`speed_design` and :func:`adaptive_design` build the same table for the
+steady-state PIFs (``pif-modified``, ``pif-original``, ``pif-rate``, ``pif-adaptive``,
+``pif-rate-adaptive``, the filters of ``pif-gated`` and the forward pass of ``pif-smoother``)
+and the Kalman peer in one pass: the
+design models point by point (the estimators' own), then every Riccati equation of the grid at
+once (:func:`roadbank.estimators.are_grid.solve_grid`), the gains, observers and equilibrium
+maps as stacked numpy operations. A grid point the grid solver does not accept is designed by
+the estimator's own per-point path (scipy), which finds the solution or raises the error that
+names the speed, exactly as before. Any other estimator, and a subclass that redefines how its
+observer is built, is designed by its own loop.
+
+:func:`roadbank.estimators.synthesis.reference_solvers` switches the whole-grid path off (the
+comparisons and the benchmark).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from . import synthesis
+from .are_grid import solve_grid
+from .base import augmented_design_model
+
+
+def speed_design(est):
+    """The table of :meth:`ScheduledObserver._design <roadbank.estimators.base.ScheduledObserver._design>`
+    (the rows of ``est.observer(v)`` over the speed grid) for a steady-state PIF or the Kalman
+    filter, whole grid at once: ``(table (g, k), number of observer states, extra cfg floats)``;
+    None for any other estimator, a subclass that builds its observer its own way, and inside
+    :func:`~roadbank.estimators.synthesis.reference_solvers`."""
+    from .kalman import Kalman
+    from .pif import PIF
+
+    if synthesis.using_reference_solvers():
+        return None
+    cls = type(est)
+    if isinstance(est, PIF) and _pif_core(est) and cls.observer is PIF.observer:
+        return _pif_speed(est)
+    if isinstance(est, Kalman) and cls.observer is Kalman.observer:
+        return _kalman(est)
+    return None
+
+
+def adaptive_design(est):
+    """The table of :meth:`PIFAdaptive._design <roadbank.estimators.pif.PIFAdaptive._design>`
+    (speed x excitation grid) whole grid at once; None as for :func:`speed_design`."""
+    from .pif import PIFAdaptive
+
+    if synthesis.using_reference_solvers():
+        return None
+    cls = type(est)
+    if isinstance(est, PIFAdaptive) and _pif_core(est) and cls.observer_at is PIFAdaptive.observer_at:
+        return _pif_adaptive(est)
+    return None
+
+
+def _pif_core(est) -> bool:
+    """``est`` builds its steady-state observer as :class:`~roadbank.estimators.pif.PIF` does."""
+    from .pif import PIF
+
+    cls = type(est)
+    return (est.variant == "steady" and cls._observer is PIF._observer and cls._riccati is PIF._riccati
+            and cls.design_model is PIF.design_model)
+
+
+#: design models of recent grids (:func:`_grid_models`)
+_MODELS: dict = {}
+#: the process-noise densities of the last grid designed (:func:`_grid_noise`)
+_NOISE: dict = {}
+
+
+def _grid_models(key: tuple, build) -> tuple:
+    """``build()``, the design models of every grid point, stacked (``A, B, C, Dy, Lw``, each
+    (g, ., .)) and memoised on what they depend on (``key``: the car, the model and the grid; no
+    weight enters them): a new noise level, or the retries of a default ``th`` halved until it is
+    solvable, build no model again."""
+    hit = _MODELS.get(key)
+    if hit is None:
+        models = build()
+        if len(_MODELS) >= 16:
+            _MODELS.clear()
+        hit = _MODELS[key] = (tuple(np.array([m[i] for m in models]) for i in range(5)), models)
+    return hit
+
+
+def _grid_noise(est, models: tuple) -> np.ndarray:
+    """``est.process_density`` of every model (g, n, n), memoised on every setting but ``th``
+    (PIF's own noise model does not use it: the retries of a halved ``th`` compute none again)."""
+    from .pif import PIF, PIFRate
+
+    cls = type(est)
+    own = cls.process_density is PIF.process_density and cls.process_noise in (PIF.process_noise,
+                                                                               PIFRate.process_noise)
+    skip = ("th", "vgrid") if own else ("vgrid",)       # a subclass's own noise may use th
+    key = (cls, tuple(sorted((k, repr(v)) for k, v in vars(est).items() if not k.startswith("_") and k not in skip)))
+    hit = _NOISE.get(key)
+    if hit is None or hit[0] is not models:
+        _NOISE.clear()
+        hit = _NOISE[key] = (models, _stacked_noise(est, models) if own else
+                             np.array([est.process_density(m) for m in models[1]]))
+    return hit[1]
+
+
+def _stacked_noise(est, models: tuple) -> np.ndarray:
+    """:meth:`PIF.process_density <roadbank.estimators.pif.PIF.process_density>` of every model at
+    once: ``process_noise(Ew)`` (one call per distinct ``Ew``; the augmented models share one) plus
+    ``Q_ay b b^T``, ``b`` the ``ay`` column of each ``B``."""
+    listed = models[1]
+    Ew = np.array([m[5] for m in listed])
+    first = Ew[0]
+    if not np.array_equal(Ew, np.broadcast_to(first, Ew.shape)):
+        return np.array([est.process_density(m) for m in listed])
+    b = models[0][1][:, :, 1]
+    return est.process_noise(first) + est.Q_ay * (b[:, :, None] * b[:, None, :])
+
+
+def _pif_speed(est):
+    speeds = [float(v) for v in est.vgrid]
+    key = (type(est)._model_at, repr(est.params), est.model, est.vgrid.tobytes())
+    models = _grid_models(key, lambda: [est.design_model(v) for v in speeds])
+    tab = observer_rows(models[0], _grid_noise(est, models), est.R, est.S, est.th,
+                        lambda k: est.observer(speeds[k]))
+    return tab, models[0][0].shape[1], np.zeros(0)
+
+
+def _pif_adaptive(est):
+    # the points of PIFAdaptive._design, speed outer, excitation inner
+    points = [(float(v), e) for v in est.vgrid for e in est.egrid]
+
+    def build():
+        cars = [replace(est.params, Cr=est.rear_stiffness(e)) for e in est.egrid]
+        return [est._model_at(car, v) for v, _ in points[::len(cars)] for car in cars]
+    key = (type(est)._model_at, repr(est.params), est.model, est.vgrid.tobytes(), tuple(est.egrid), est.mu,
+           type(est).rear_stiffness)
+    models = _grid_models(key, build)
+    tab = observer_rows(models[0], _grid_noise(est, models), est.R, est.S, est.th,
+                        lambda k: est.observer_at(*points[k]), n_inner=len(est.egrid))
+    eg = est.egrid
+    extra = [eg[0], (eg[1] - eg[0]) if len(eg) > 1 else 1.0, float(len(eg)), est.tau, est.tf]
+    return tab, len(est.state_names), np.array(extra)
+
+
+def _kalman(est):
+    # Kalman.observer: the augmented original model, W = diag(q), R, no game term
+    speeds = [float(v) for v in est.vgrid]
+    key = ("original", repr(est.params), est.vgrid.tobytes())
+    models = _grid_models(key, lambda: [augmented_design_model(est.params, v, "original") for v in speeds])
+    W = np.broadcast_to(np.diag(est.q), (len(speeds), 3, 3))
+    tab = observer_rows(models[0], W, est.Rm, 1.0, 0.0, lambda k: est.observer(speeds[k]))
+    return tab, models[0][0].shape[1], np.zeros(0)
+
+
+def observer_rows(models, W, R, S, th, fallback, n_inner: int = 1) -> np.ndarray:
+    """``lpv`` table rows ``[F, G, H, D, J]`` of the steady-state filters of a grid.
+
+    Parameters
+    ----------
+    models : tuple of arrays ``(A, B, C, Dy, Lw)``
+        The design model of each grid point stacked, (g, n, n), (g, n, 3), (g, p, n), (g, p, 3),
+        (g, 1, n) (:func:`~roadbank.estimators.base.augmented_design_model`).
+    W : (g, n, n) array
+        Process-noise density of each point (units of the state rates squared times s).
+    R : (p, p) array, S : float or (1, 1) array, th : float
+        Measurement-noise density, disturbance weight and H-infinity level (as
+        :func:`~roadbank.estimators.synthesis.game_are`).
+    fallback : callable
+        ``fallback(k) -> (F, G, H, D)``: the per-point design of point ``k``, for the points the
+        grid solver does not accept (it raises where no stabilising solution exists).
+    n_inner : int
+        Points per speed (outer-major order), see :func:`~roadbank.estimators.are_grid.solve_grid`.
+
+    Returns
+    -------
+    (g, k) array
+        ``F = A - K C``, ``G = B + K Dy``, ``H = Lw``, ``D = 0``, ``J = -F^{-1} G``, with
+        ``K = P C^T R^{-1}``, flattened row by row.
+    """
+    A, B, C, Dy, Lw = models
+    g = A.shape[0]
+    R = np.atleast_2d(np.asarray(R, dtype=float))
+    Rinv = np.linalg.inv(R)
+    S = np.atleast_2d(np.asarray(S, dtype=float))
+    Ct = np.swapaxes(C, 1, 2)
+    Gam0 = Ct @ Rinv @ C
+    Gam = Gam0 - th * (np.swapaxes(Lw, 1, 2) @ S @ Lw)
+    P, ok = solve_grid(A, Gam0, Gam, W, n_inner)
+    synthesis.remember_grid(A, C, Lw, W, R, S, th, P, ok)
+    K = P @ Ct @ Rinv
+    F = A - K @ C
+    G = B + K @ Dy
+    H = Lw.copy()
+    D = np.zeros((g, 1, B.shape[2]))
+    for k in np.flatnonzero(~ok):       # in grid order: the first unsolvable point raises
+        F[k], G[k], H[k], D[k] = fallback(int(k))
+    J = -np.linalg.solve(F, G)
+    return np.ascontiguousarray(np.hstack([F.reshape(g, -1), G.reshape(g, -1), H.reshape(g, -1),
+                                           D.reshape(g, -1), J.reshape(g, -1)]))
