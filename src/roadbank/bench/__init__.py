@@ -5,8 +5,8 @@
 >>> print(markdown(res, "python"))    # doctest: +SKIP
 
 Built-in extra sections: the estimator designs (:mod:`roadbank.bench.design`), the exported C
-step and long logs (:mod:`roadbank.bench.sections`). Extend it with :func:`register_section` (a :class:`Section` with a ``run`` and
-an optional ``markdown`` function): the section runs after the built-in ones,
+step and long logs (:mod:`roadbank.bench.sections`). Extend it with :func:`register_section`
+(a :class:`Section` with a ``run`` and an optional ``markdown`` function): the section runs after the built-in ones,
 its results land in ``res[name]`` and in the report.
 """
 
