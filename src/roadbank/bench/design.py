@@ -127,7 +127,8 @@ def design_markdown(out: dict) -> list[str]:
             f"the fixed-rate tables, on the default car and {grid}; medians of {out['repeats']} repeats "
             f"(scipy: {out['scipy_repeats']}), each with a new noise level. Cold: no design cache, memos "
             "emptied; new noise: the car's design models kept; scipy: the per-point path "
-            "(`synthesis.reference_solvers`) in the same run. CPU time of the process in parentheses (the machine may be shared).")
+            "(`synthesis.reference_solvers`) in the same run. CPU time of the process in parentheses "
+            "(the machine may be shared).")
     headers = ["estimator", "cold, ms wall (CPU)", "new noise, same car", "cached (disk)",
                "scipy per point, ms (CPU)", "scipy / cold", f"cold CPU <= {out['target_ms']:.0f} ms?"]
     return [md_table(headers, rows, align="lrrrrrl"), "", note]
