@@ -83,7 +83,7 @@ needs_kitti = pytest.mark.skipif(not (DATA_DIR / "kitti-oxts-extra").is_dir(),
 def test_shipped_constants_are_where_the_rule_has_its_minimum():
     # the whole grid takes minutes (docs/estimators.md); here: the shipped point against its grid
     # neighbours, which the rule would have taken had they scored lower
-    from roadbank.tuning.real import CUTOFFS_HZ, KAPPAS, objective, simulated_sets, training_logs
+    from roadbank.tuning.real import CUTOFFS_HZ, KAPPAS, fixed, objective, simulated_sets, training_logs
 
     logs, sims = training_logs(DATA_DIR), simulated_sets()
     assert len(logs) == 8
@@ -92,12 +92,12 @@ def test_shipped_constants_are_where_the_rule_has_its_minimum():
         i = values.index(v)
         return [values[j] for j in (i - 1, i + 1) if 0 <= j < len(values)]
 
-    at = objective(KinematicLowPass(cutoff=FF_CUTOFF_HZ, kappa=FF_KAPPA), logs, sims)
+    at = objective(fixed(KinematicLowPass(cutoff=FF_CUTOFF_HZ, kappa=FF_KAPPA)), logs, sims)
     for fc, k in [(f, FF_KAPPA) for f in around(CUTOFFS_HZ, FF_CUTOFF_HZ)] + \
                  [(FF_CUTOFF_HZ, k) for k in around(KAPPAS, FF_KAPPA)]:
-        assert objective(KinematicLowPass(cutoff=fc, kappa=k), logs, sims) > at, (fc, k)
-    lp = objective(KinematicLowPass(cutoff=LP_CUTOFF_HZ, kappa=0.0), logs, sims)
+        assert objective(fixed(KinematicLowPass(cutoff=fc, kappa=k)), logs, sims) > at, (fc, k)
+    lp = objective(fixed(KinematicLowPass(cutoff=LP_CUTOFF_HZ, kappa=0.0)), logs, sims)
     for fc in around(CUTOFFS_HZ, LP_CUTOFF_HZ):
-        assert objective(KinematicLowPass(cutoff=fc, kappa=0.0), logs, sims) > lp, fc
+        assert objective(fixed(KinematicLowPass(cutoff=fc, kappa=0.0)), logs, sims) > lp, fc
     # the feed-forward earns its place: the rule prefers it to the plain low-pass
     assert at < lp

@@ -20,7 +20,7 @@ from ..defaults import ESTIMATOR
 from ..params import VehicleParams
 from .base import Estimator, StepResult
 from .dfc import DFC
-from .gated import PIFGated
+from .gated import KinematicPIF, PIFGated
 from .kalman import Kalman
 from .kinematic import Kinematic
 from .lowpass import KinematicFeedForward, KinematicLowPass
@@ -35,6 +35,7 @@ _FACTORIES = {
     "kinematic": Kinematic,
     "kinematic-lp": KinematicLowPass,
     "kinematic-ff": KinematicFeedForward,
+    "kinematic-pif": KinematicPIF,
     "dfc": DFC,
     "uio": UIO,
     "pio-original": partial(PIO, model="original"),
@@ -66,7 +67,7 @@ OFFLINE = tuple(n for n, f in _FACTORIES.items() if getattr(f, "offline", False)
 DEFAULT = ESTIMATOR
 #: estimators that run another's filter with its weights (``pif-gated``: as its slow filter): a
 #: vehicle file's ``[tuning.<that one>]`` table applies to them too, under their own table's keys
-TUNED_AS = {"pif-smoother": "pif-modified", "pif-gated": "pif-modified"}
+TUNED_AS = {"pif-smoother": "pif-modified", "pif-gated": "pif-modified", "kinematic-pif": "pif-modified"}
 
 
 def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
@@ -115,6 +116,6 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
 
 
 __all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "for_log", "Estimator", "StepResult",
-           "NoStabilisingSolution", "Kinematic", "KinematicLowPass", "KinematicFeedForward", "DFC", "UIO", "PIO",
+           "NoStabilisingSolution", "Kinematic", "KinematicLowPass", "KinematicFeedForward", "KinematicPIF", "DFC", "UIO", "PIO",
            "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
            "Kalman", "with_online_offsets", "OnlineOffsets", "OffsetSettings"]

@@ -35,6 +35,7 @@ import numpy as np
 
 from . import layout
 from .base import ScheduledObserver
+from .lowpass import KinematicFeedForward
 from .pif import PIF, RATE_TUNING, PIFRate
 
 #: the fast filter's weights and the gate (chosen on the training set, see module docstring):
@@ -47,66 +48,23 @@ GATED_TUNING = dict(fast_Q=float(RATE_TUNING["Q"]), fast_Q_rate=10.0 * float(RAT
 _COMMON = ("v_min", "max_substep", "max_gap", "max_angle", "v_step", "v_max", "roll")
 
 
-class PIFGated(ScheduledObserver):
-    """``pif-gated``: the default PIF and a fast bank-rate PIF, blended on the yaw acceleration.
+class _GatedPair(ScheduledObserver):
+    """Two scheduled linear observers stacked into one, their outputs blended by the yaw-acceleration
+    gate (``gated`` kernel). Subclasses build ``self._slow`` (any :class:`ScheduledObserver`) and
+    ``self._fast`` (a :class:`~roadbank.estimators.pif.PIF`, whose ``w`` is a state) and set the
+    gate's ``gate_tf``, ``gate_release``, ``gate_on``, ``gate_span`` before ``super().__init__``."""
 
-    Parameters
-    ----------
-    params : VehicleParams
-    tuning, Q, R, S, th, Q_ay, adapt_th : optional
-        The slow filter's, as :class:`~roadbank.estimators.pif.PIF` (modified model);
-        ``R`` ((rad/s)^2 s), ``S`` and ``Q_ay`` ((m/s^2)^2 s) are the fast filter's too.
-    fast_Q, fast_Q_rate, fast_th : float, optional
-        The fast filter's ``Q`` (1/s), ``Q_rate`` (1/s^3) and ``th`` (-)
-        (:class:`~roadbank.estimators.pif.PIFRate`); defaults :data:`GATED_TUNING`.
-    gate_tf, gate_release : float, optional
-        Time constants (s) of the yaw rate's low-pass and of the gate's release.
-    gate_on, gate_span : float, optional
-        The gate opens from ``v_x |r'|`` = ``gate_on`` (m/s^3) and is fully open ``gate_span``
-        (m/s^3) above.
-    **kw
-        Common options of :class:`~roadbank.estimators.base.Estimator` (both filters).
-    """
-
-    name = "pif-gated"
     kernel = "gated"
     uses = (False, True, True)
-    state_names = ("vy", "r", "w", "vy_fast", "r_fast", "w_fast", "w_rate_fast")
-
-    def __init__(self, params=None, *, tuning=None, Q=None, R=None, S=None, th=None, Q_ay=None, adapt_th=None,
-                 fast_Q=None, fast_Q_rate=None, fast_th=None, gate_tf=None, gate_release=None, gate_on=None,
-                 gate_span=None, **kw):
-        d = GATED_TUNING
-        opt = {k: float(d[k] if v is None else v) for k, v in (
-            ("fast_Q", fast_Q), ("fast_Q_rate", fast_Q_rate), ("fast_th", fast_th), ("gate_tf", gate_tf),
-            ("gate_release", gate_release), ("gate_on", gate_on), ("gate_span", gate_span))}
-        if not (opt["gate_tf"] > 0 and opt["gate_release"] > 0 and opt["gate_span"] > 0
-                and np.isfinite(opt["gate_on"])):
-            raise ValueError(f"{self.name}: need gate_tf, gate_release, gate_span > 0 and a finite gate_on; got "
-                             f"{opt['gate_tf']}, {opt['gate_release']}, {opt['gate_span']}, {opt['gate_on']}")
-        common = {k: kw[k] for k in _COMMON if k in kw}
-        self._slow = PIF(params, model="modified", tuning=tuning, Q=Q, R=R, S=S, th=th, Q_ay=Q_ay,
-                         adapt_th=adapt_th, sample_rate=None, **common)
-        common.setdefault("roll", self._slow.roll)      # one roll model: the slow filter's tuning chose it
-        kw["roll"] = common["roll"]
-        self._fast = PIFRate(params, R=R, S=S, Q_ay=Q_ay, Q=opt["fast_Q"], Q_rate=opt["fast_Q_rate"],
-                             th=opt["fast_th"], sample_rate=None, **common)
-        # every setting behind the stacked table is public (it keys the design caches): the slow
-        # filter's weights as designed (th may have been halved to be solvable), the fast one's, the gate
-        self.Q, self.th, self.R, self.S, self.Q_ay = (self._slow.Q, self._slow.th, self._slow.R, self._slow.S,
-                                                      self._slow.Q_ay)
-        for k, v in opt.items():
-            setattr(self, k, v)
-        super().__init__(params, **kw)
 
     @property
-    def slow(self) -> PIF:
-        """The slow filter (``pif-modified``)."""
+    def slow(self) -> ScheduledObserver:
+        """The filter the output follows while the gate is shut."""
         return self._slow
 
     @property
-    def fast(self) -> PIFRate:
-        """The fast filter (a ``pif-rate``)."""
+    def fast(self) -> PIF:
+        """The PIF the output moves to while the gate is open."""
         return self._fast
 
     def observer(self, vx: float):
@@ -116,7 +74,7 @@ class PIFGated(ScheduledObserver):
 
     def fast_output(self) -> np.ndarray:
         """``H_f`` (n,): the fast filter's ``w`` from the stacked states (constant)."""
-        ns = len(self._slow.state_names)
+        ns = self._slow._nstate
         h = np.zeros(len(self.state_names))
         h[ns:] = np.ravel(self._fast.design_model(self.vgrid[0])[4])     # L_w: w is a state
         return h
@@ -138,6 +96,119 @@ class PIFGated(ScheduledObserver):
             rows.append(np.concatenate([F.ravel(), G.ravel(), H.ravel(), D.ravel(), J.ravel()]))
         extra = np.concatenate([self.fast_output(), [self.gate_tf, self.gate_release, self.gate_on, self.gate_span]])
         return np.ascontiguousarray(np.array(rows)), len(self.state_names), extra
+
+
+
+class PIFGated(_GatedPair):
+    """``pif-gated``: the default PIF and a fast bank-rate PIF, blended on the yaw acceleration.
+
+    Parameters
+    ----------
+    params : VehicleParams
+    tuning, Q, R, S, th, Q_ay, adapt_th : optional
+        The slow filter's, as :class:`~roadbank.estimators.pif.PIF` (modified model);
+        ``R`` ((rad/s)^2 s), ``S`` and ``Q_ay`` ((m/s^2)^2 s) are the fast filter's too.
+    fast_Q, fast_Q_rate, fast_th : float, optional
+        The fast filter's ``Q`` (1/s), ``Q_rate`` (1/s^3) and ``th`` (-)
+        (:class:`~roadbank.estimators.pif.PIFRate`); defaults :data:`GATED_TUNING`.
+    gate_tf, gate_release : float, optional
+        Time constants (s) of the yaw rate's low-pass and of the gate's release.
+    gate_on, gate_span : float, optional
+        The gate opens from ``v_x |r'|`` = ``gate_on`` (m/s^3) and is fully open ``gate_span``
+        (m/s^3) above.
+    **kw
+        Common options of :class:`~roadbank.estimators.base.Estimator` (both filters).
+    """
+
+    name = "pif-gated"
+    state_names = ("vy", "r", "w", "vy_fast", "r_fast", "w_fast", "w_rate_fast")
+
+    def __init__(self, params=None, *, tuning=None, Q=None, R=None, S=None, th=None, Q_ay=None, adapt_th=None,
+                 fast_Q=None, fast_Q_rate=None, fast_th=None, gate_tf=None, gate_release=None, gate_on=None,
+                 gate_span=None, **kw):
+        d = GATED_TUNING
+        opt = {k: float(d[k] if v is None else v) for k, v in (
+            ("fast_Q", fast_Q), ("fast_Q_rate", fast_Q_rate), ("fast_th", fast_th), ("gate_tf", gate_tf),
+            ("gate_release", gate_release), ("gate_on", gate_on), ("gate_span", gate_span))}
+        _check_gate(self.name, opt)
+        common = {k: kw[k] for k in _COMMON if k in kw}
+        self._slow = PIF(params, model="modified", tuning=tuning, Q=Q, R=R, S=S, th=th, Q_ay=Q_ay,
+                         adapt_th=adapt_th, sample_rate=None, **common)
+        common.setdefault("roll", self._slow.roll)      # one roll model: the slow filter's tuning chose it
+        kw["roll"] = common["roll"]
+        self._fast = PIFRate(params, R=R, S=S, Q_ay=Q_ay, Q=opt["fast_Q"], Q_rate=opt["fast_Q_rate"],
+                             th=opt["fast_th"], sample_rate=None, **common)
+        # every setting behind the stacked table is public (it keys the design caches): the slow
+        # filter's weights as designed (th may have been halved to be solvable), the fast one's, the gate
+        self.Q, self.th, self.R, self.S, self.Q_ay = (self._slow.Q, self._slow.th, self._slow.R, self._slow.S,
+                                                      self._slow.Q_ay)
+        for k, v in opt.items():
+            setattr(self, k, v)
+        super().__init__(params, **kw)
+
+
+
+def _check_gate(label: str, opt: dict) -> None:
+    if not (opt["gate_tf"] > 0 and opt["gate_release"] > 0 and opt["gate_span"] > 0
+            and np.isfinite(opt["gate_on"])):
+        raise ValueError(f"{label}: need gate_tf, gate_release, gate_span > 0 and a finite gate_on; got "
+                         f"{opt['gate_tf']}, {opt['gate_release']}, {opt['gate_span']}, {opt['gate_on']}")
+
+
+#: the gate of :class:`KinematicPIF` (chosen by the rule of :mod:`roadbank.tuning.real`):
+#: ``gate_tf``, ``gate_release`` (s), ``gate_on``, ``gate_span`` (m/s^3)
+KINEMATIC_PIF_GATE = dict(gate_tf=0.05, gate_release=2.0, gate_on=2.0, gate_span=4.0)
+
+
+class KinematicPIF(_GatedPair):
+    r"""``kinematic-pif``: ``kinematic-ff`` on real roads, the default PIF while the yaw accelerates.
+
+    In ordinary driving the sideslip acceleration that the kinematic estimate neglects is tiny and
+    a model of the car's tyres (which nobody may have described) only adds error: the output is
+    :class:`~roadbank.estimators.lowpass.KinematicFeedForward`. In a hard transient (a lane change,
+    an S-curve near the limit) the sideslip acceleration :math:`\dot v_y` is large exactly while the
+    yaw rate changes fast, and the PIF on the modified model (default weights, :class:`PIF`), which
+    estimates it, is right: the output moves to it with the gate of ``pif-gated`` on the yaw part
+    of the lateral jerk :math:`v_x |\dot r|` (:func:`roadbank.estimators.kernels.gated_step`):
+    :math:`w = w_{ff} + g (w_{PIF} - w_{ff})`. The gate's settings were chosen by the rule of
+    :mod:`roadbank.tuning.real` on training data (:data:`KINEMATIC_PIF_GATE`). Stacked states
+    ``[w_lp, vy, r, w]``; ``run`` equals ``step``; C export as ``pif-gated``.
+
+    Parameters
+    ----------
+    params : VehicleParams
+    cutoff, kappa : float, optional
+        The low-pass's cut-off (Hz) and centripetal gain (-), as ``kinematic-ff``.
+    tuning, Q, R, S, th, Q_ay, adapt_th : optional
+        The PIF's, as :class:`~roadbank.estimators.pif.PIF` (modified model; a vehicle file's
+        ``[tuning.pif-modified]`` applies).
+    gate_tf, gate_release, gate_on, gate_span : float, optional
+        As :class:`PIFGated`; defaults :data:`KINEMATIC_PIF_GATE`.
+    **kw
+        Common options of :class:`~roadbank.estimators.base.Estimator` (both filters).
+    """
+
+    name = "kinematic-pif"
+    state_names = ("w_lp", "vy", "r", "w")
+
+    def __init__(self, params=None, *, cutoff=None, kappa=None, tuning=None, Q=None, R=None, S=None, th=None,
+                 Q_ay=None, adapt_th=None, gate_tf=None, gate_release=None, gate_on=None, gate_span=None, **kw):
+        d = KINEMATIC_PIF_GATE
+        opt = {k: float(d[k] if v is None else v) for k, v in (
+            ("gate_tf", gate_tf), ("gate_release", gate_release), ("gate_on", gate_on), ("gate_span", gate_span))}
+        _check_gate(self.name, opt)
+        common = {k: kw[k] for k in _COMMON if k in kw}
+        self._fast = PIF(params, model="modified", tuning=tuning, Q=Q, R=R, S=S, th=th, Q_ay=Q_ay,
+                         adapt_th=adapt_th, sample_rate=None, **common)
+        common.setdefault("roll", self._fast.roll)
+        kw["roll"] = common["roll"]
+        self._slow = KinematicFeedForward(params, cutoff=cutoff, kappa=kappa, sample_rate=None, **common)
+        self.cutoff, self.kappa = self._slow.cutoff, self._slow.kappa
+        self.Q, self.th, self.R, self.S, self.Q_ay = (self._fast.Q, self._fast.th, self._fast.R, self._fast.S,
+                                                      self._fast.Q_ay)
+        for k, v in opt.items():
+            setattr(self, k, v)
+        super().__init__(params, **kw)
 
 
 def _stack(slow, fast):

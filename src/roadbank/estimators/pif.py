@@ -78,7 +78,8 @@ def yaw_rate_noise_density(noise_std: float, resolution: float, rate: float) -> 
 
 #: estimators whose default ``R`` is the yaw-rate sensor's noise density (set by the caller
 #: that knows the sensor: :meth:`roadbank.vehicle.Vehicle.make`, the real-data validation)
-SENSOR_R_ESTIMATORS = ("pif-modified", "pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-gated", "pif-smoother")
+SENSOR_R_ESTIMATORS = ("pif-modified", "pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-gated", "pif-smoother",
+                       "kinematic-pif")
 
 
 def with_sensor_noise(name: str, options: dict, R: float, Q_ay: float | None = None) -> dict:

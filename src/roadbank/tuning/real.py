@@ -76,13 +76,34 @@ def simulated_sets(cars=SIM_CARS, n=SIM_DRIVES):
     return [drive_set("train", n, 0, load_vehicle(car).params) for car in cars]
 
 
-def objective(est, logs, sim_sets) -> float:
-    """The rule's objective (deg) of the estimator ``est`` (module docstring)."""
-    from .objective import score_set
+def objective(build, logs, sim_sets) -> float:
+    """The rule's objective (deg) of the estimator that ``build(signals)`` makes for each log
+    (module docstring): a fixed estimator, or one designed for each log
+    (:func:`roadbank.estimators.for_log`, as the command line builds it)."""
+    from .objective import drive_errors
 
-    errs = [float(np.degrees(np.sqrt(np.mean((est.run(s).theta[m] - ref[m]) ** 2)))) for s, ref, m in logs]
-    sim = [score_set(est, drives).median_rms for drives in sim_sets]
+    errs = [float(np.degrees(np.sqrt(np.mean((build(s).run(s).theta[m] - ref[m]) ** 2)))) for s, ref, m in logs]
+    sim = [float(np.median([drive_errors(build(d.signals), [d])[0][0] for d in drives])) for drives in sim_sets]
     return float(np.median(errs)) + (float(np.median(sim)) if sim_sets else 0.0)
+
+
+def fixed(est):
+    """``build`` for :func:`objective` of one estimator that needs no design per log."""
+    return lambda signals: est
+
+
+def for_log(name: str, **options):
+    """``build`` for :func:`objective`: ``name`` designed for each log as the command line does
+    (no car given: :func:`roadbank.vehicle.undescribed_params`)."""
+    import warnings
+
+    from .. import estimators
+
+    def build(signals):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return estimators.for_log(name, signals, **options)
+    return build
 
 
 def choose_lowpass(logs, sim_sets, cutoffs=CUTOFFS_HZ, kappas=KAPPAS) -> LowpassChoice:
@@ -95,7 +116,7 @@ def choose_lowpass(logs, sim_sets, cutoffs=CUTOFFS_HZ, kappas=KAPPAS) -> Lowpass
 
     if not logs:
         raise ValueError("choose_lowpass: no training drives")
-    obj = {(fc, k): objective(KinematicLowPass(cutoff=fc, kappa=k), logs, sim_sets)
+    obj = {(fc, k): objective(fixed(KinematicLowPass(cutoff=fc, kappa=k)), logs, sim_sets)
            for fc in cutoffs for k in kappas}
     lp = _pick({fk: v for fk, v in obj.items() if fk[1] == 0.0})
     return LowpassChoice(lp=lp, ff=_pick(obj), objective=obj)
