@@ -1,0 +1,80 @@
+"""kinematic-pif: its limits are kinematic-ff and the default PIF, its gate is pif-gated's formula, and
+it keeps kinematic-ff's error on real roads while it follows the hard simulated transients."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from roadbank import Signals
+from roadbank import estimators as E
+from roadbank.estimators.gated import KINEMATIC_PIF_GATE
+
+from test_gated import _gate_reference  # the gate written out in plain Python
+
+DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+
+
+@pytest.fixture(scope="module")
+def lane_change():
+    from roadbank.sim.scenarios import run_scenario
+    return run_scenario("track-lane-change", "nominal", seed=0)
+
+
+@pytest.mark.parametrize("rate", ["auto", None])
+def test_gate_shut_is_kinematic_ff_and_gate_open_is_the_default_pif(lane_change, rate):
+    s = lane_change.signals
+    shut = E.make("kinematic-pif", gate_on=1e9, sample_rate=rate).run(s)
+    opened = E.make("kinematic-pif", gate_on=-1e9, sample_rate=rate).run(s)
+    ff = E.make("kinematic-ff", roll=shut_roll(), sample_rate=rate).run(s)
+    pif = E.make("pif-modified", sample_rate=rate).run(s)
+    for a, b in ((shut, ff), (opened, pif)):
+        np.testing.assert_allclose(a.w, b.w, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(a.phi_b, b.phi_b, rtol=0, atol=1e-12)
+        np.testing.assert_array_equal(a.valid, b.valid)
+    np.testing.assert_allclose(shut.states["w_lp"], ff.states["w_lp"], rtol=0, atol=1e-12)
+    for k in ("vy", "r", "w"):
+        np.testing.assert_allclose(opened.states[k], pif.states[k], rtol=0, atol=1e-12)
+
+
+def shut_roll():
+    """The one roll model of the pair: the PIF's default tuning chose it."""
+    return E.make("pif-modified").roll
+
+
+def test_the_output_blends_by_the_documented_gate():
+    n = 1500
+    t = np.arange(n) * 0.01
+    vx = np.full(n, 25.0)
+    r = np.where(t > 3.0, 0.1, 0.0) + 0.05 * np.sin(2 * np.pi * 0.8 * t) * (t > 8.0) * (t < 11.0)
+    s = Signals(t, vx, vx * r + 0.3, r, np.zeros(n))
+    gated = E.make("kinematic-pif").run(s)
+    slow = E.make("kinematic-ff", roll=shut_roll()).run(s)
+    fast = E.make("pif-modified").run(s)
+    d = fast.w - slow.w
+    use = np.abs(d) > 1e-6
+    g = _gate_reference(t, vx, r, KINEMATIC_PIF_GATE["gate_tf"], KINEMATIC_PIF_GATE["gate_release"],
+                        KINEMATIC_PIF_GATE["gate_on"], KINEMATIC_PIF_GATE["gate_span"])
+    assert use.sum() > 500 and 0.99 < g.max() and (g == 0).sum() > 300
+    np.testing.assert_allclose(((gated.w - slow.w) / np.where(use, d, 1.0))[use], g[use], atol=1e-8)
+
+
+def test_bad_gate_settings_are_refused():
+    with pytest.raises(ValueError, match="kinematic-pif: need gate_tf"):
+        E.make("kinematic-pif", gate_span=0.0)
+
+
+@pytest.mark.skipif(not (DATA / "kitti-oxts").is_dir(), reason="../shared/data/kitti-oxts not present")
+def test_on_real_roads_it_stays_with_kinematic_ff():
+    """On the two shared drives (ordinary driving) the gate rarely opens: within 5 % of kinematic-ff."""
+    from roadbank.io.kitti import load_kitti_oxts
+    from roadbank.validation.kitti import KITTI_SCORING
+    from roadbank.validation.scoring import masks
+
+    for drive in ("2011_09_26_drive_0070", "2011_10_03_drive_0047"):
+        log = load_kitti_oxts(DATA / "kitti-oxts" / drive)
+        s, ref = log.signals, log.reference_roll
+        m = masks(s.t, s.vx, KITTI_SCORING)[1]
+        rms = {n: float(np.degrees(np.sqrt(np.mean((E.for_log(n, s).run(s).theta[m] - ref[m]) ** 2))))
+               for n in ("kinematic-ff", "kinematic-pif", "pif-modified")}
+        assert rms["kinematic-pif"] <= 1.05 * rms["kinematic-ff"] < rms["pif-modified"], (drive, rms)
