@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import sys
 from pathlib import Path
 
@@ -10,6 +11,7 @@ import click
 from ..io.readers import FORMATS
 from .inputs import channel_map_and_logs
 from .options import vehicle_option
+from .parallel import pool_options, start_pool
 
 
 def _origin(ctx, param, value):
@@ -44,7 +46,9 @@ def _origin(ctx, param, value):
 @vehicle_option("The estimator is designed for this car.",
                 default_help="a car nobody described: the shipped sedan's parameters (README)",
                 none_if_absent=True)
-def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, sectors, origin, chunk_rows, vehicle):
+@pool_options("Logs", "The logs' cells are merged in the order of the logs: the same map as in one process.")
+def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, sectors, origin, chunk_rows, vehicle,
+                workers, scheduler):
     """Map the road bank: attach each valid bank estimate of LOGS to its GNSS position and aggregate per cell.
 
     \b
@@ -67,10 +71,13 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
         raise click.BadParameter("the map table must end in .parquet", param_hint="-o")
     cmap, paths = channel_map_and_logs(channels, logs, fmt)
     try:
-        with click.progressbar(length=len(paths), label=f"mapping ({estimator})", file=sys.stderr) as bar:
+        with contextlib.ExitStack() as stack:
+            pool = start_pool(stack, workers, scheduler)
+            bar = stack.enter_context(click.progressbar(length=len(paths), label=f"mapping ({estimator})",
+                                                        file=sys.stderr))
             bmap, recs = map_logs(paths, estimator, channels=cmap, format=fmt, vehicle=vehicle, cell_m=cell_m,
                                   sectors=sectors, origin=origin, chunk_rows=chunk_rows,
-                                  on_log=lambda r: bar.update(1))
+                                  on_log=lambda r: bar.update(1), pool=pool)
     except ValueError as exc:
         raise click.BadParameter(str(exc)) from None
     failed = [r for r in recs if r.status != "ok"]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -10,6 +11,7 @@ import click
 
 from ..report.html import write_document
 from .options import vehicle_option
+from .parallel import pool_options, start_pool
 
 _VEHICLE = vehicle_option("The estimators are designed for this car: its parameters and [tuning] tables.",
                           default_help="a car nobody described: the shipped sedan's parameters (README)",
@@ -38,6 +40,22 @@ def _names(names: str) -> list[str]:
     return sel
 
 
+def _comma2k19_outcome(path, **kwargs):
+    """``(ValidationResult, None)`` of one comma2k19 segment, or ``(None, reason)`` (one pool task)."""
+    from ..validation import validate_comma2k19
+
+    try:
+        return validate_comma2k19(path, **kwargs), None
+    except (ValueError, OSError) as exc:       # LogError is a ValueError
+        return None, str(exc)
+
+
+def _outcome(pool, task, what) -> tuple:
+    """``(value, reason)`` of a task whose value is itself ``(value, reason)``."""
+    value, failure = pool.outcome(task)
+    return value if failure is None else (None, f"{what}: {failure}")
+
+
 _ESTIMATORS = click.option("--estimators", "-e", "names", default="all", show_default=True,
                            help="Comma-separated estimator names or 'all'.")
 
@@ -52,16 +70,19 @@ _ESTIMATORS = click.option("--estimators", "-e", "names", default="all", show_de
 @_ESTIMATORS
 @click.option("--no-sensitivity", is_flag=True, help="Skip the SUV-parameter and PIF-Q sensitivity runs.")
 @_VEHICLE
-def comma2k19(path, as_json, output, names, no_sensitivity, vehicle):
+@pool_options("Tasks", "The segment is one task: more workers do not make it faster; `validate all` runs "
+                       "it next to the KITTI drives.")
+def comma2k19(path, as_json, output, names, no_sensitivity, vehicle, workers, scheduler):
     """Score every estimator against the pose-derived roll of a comma2k19 segment at PATH."""
-    from ..io import LogError
-    from ..validation import markdown, plot, to_json, validate_comma2k19
+    from ..validation import markdown, plot, to_json
 
     sel = _names(names)
-    try:
-        res = validate_comma2k19(path, names=sel, sensitivity=not no_sensitivity, **_car(vehicle))
-    except (LogError, ValueError, OSError) as exc:
-        click.echo(f"error: {exc}", err=True)
+    with contextlib.ExitStack() as stack:
+        pool = start_pool(stack, workers, scheduler)
+        task = pool.submit(_comma2k19_outcome, path, names=sel, sensitivity=not no_sensitivity, **_car(vehicle))
+        res, error = _outcome(pool, task, path)
+    if error is not None:
+        click.echo(f"error: {error}", err=True)
         sys.exit(1)
     if output is not None:
         fig = output.with_suffix(".png")
@@ -101,17 +122,21 @@ def _kitti_figures(v, out_dir: Path, stem: str) -> dict:
               help="Skip the sensitivity runs (the paper's SUV parameters; the PIFs designed from the data "
                    "sheet alone).")
 @_VEHICLE
-def kitti(paths, as_json, output, names, no_sensitivity, vehicle):
+@pool_options("Drives")
+def kitti(paths, as_json, output, names, no_sensitivity, vehicle, workers, scheduler):
     """Score every estimator against the INS roll of KITTI raw drives.
 
     PATHS: drive folders (holding oxts/), oxts folders, or folders holding drive folders.
     A drive that cannot be read is reported and the others are still scored (exit code 1 then).
+    With --workers or --scheduler each drive is one task; the report is the same as in one process.
     """
     from ..validation.kitti import validate_kitti
     from ..validation.kitti_report import markdown, to_json
 
     sel = _names(names)
-    v = validate_kitti(paths, names=sel, sensitivity=not no_sensitivity, **_car(vehicle))
+    with contextlib.ExitStack() as stack:
+        pool = start_pool(stack, workers, scheduler)
+        v = validate_kitti(paths, names=sel, sensitivity=not no_sensitivity, pool=pool, **_car(vehicle))
     for e in v.errors:
         click.echo(f"error: {e}", err=True)
     if not v.drives:
@@ -146,12 +171,13 @@ def kitti(paths, as_json, output, names, no_sensitivity, vehicle):
               help="The combined report (e.g. docs/real-data.md; .html: a self-contained page); figures "
                    "are written next to it.")
 @click.option("--no-jitter", is_flag=True, help="Skip the 10 Hz-with-jitter simulation study.")
-def all_(data_dir, output, no_jitter):
+@pool_options("Tasks", "One task each: the comma2k19 segment, every KITTI drive, every jitter scenario.")
+def all_(data_dir, output, no_jitter, workers, scheduler):
     """One report over every real data set under DATA_DIR (comma2k19 segments, KITTI drives).
 
     Regenerate docs/real-data.md with: roadbank validate all ../shared/data -o docs/real-data.md
     """
-    from ..validation import plot, validate_comma2k19
+    from ..validation import plot
     from ..validation.document import find_datasets, real_data_markdown
     from ..validation.jitter import jitter_study
     from ..validation.kitti import validate_kitti
@@ -162,23 +188,36 @@ def all_(data_dir, output, no_jitter):
         sys.exit(1)
     output.parent.mkdir(parents=True, exist_ok=True)
     figs, comma, kv, failed = {}, None, None, False
-    if found["comma2k19"]:
-        seg = found["comma2k19"][0]
-        try:
-            comma = validate_comma2k19(seg)
+    scenarios = () if no_jitter else ("bank-lane-change", "s-curve", "track-lane-change")
+    with contextlib.ExitStack() as stack:
+        pool = start_pool(stack, workers, scheduler)
+        # submitted first, so that on workers they run while the drives do
+        comma_task = pool.submit(_comma2k19_outcome, found["comma2k19"][0]) if found["comma2k19"] else None
+        jitter_tasks = [pool.submit(jitter_study, sc) for sc in scenarios]
+        kv = validate_kitti(found["kitti"], pool=pool) if found["kitti"] else None
+        if comma_task is not None:
+            comma, error = _outcome(pool, comma_task, found["comma2k19"][0])
+        jit = []
+        for sc, task in zip(scenarios, jitter_tasks):
+            value, failure = pool.outcome(task)
+            if failure is not None:
+                click.echo(f"error: jitter study {sc}: {failure}", err=True)
+                failed = True
+            else:
+                jit.append(value)
+    if comma_task is not None:
+        if error is not None:
+            click.echo(f"error: {error}", err=True)
+            failed = True
+        else:
             f = output.with_suffix(".png")
             plot(comma, f)
             figs["comma2k19"] = f.name
-        except (ValueError, OSError) as exc:
-            click.echo(f"error: {exc}", err=True)
-            failed = True
-    if found["kitti"]:
-        kv = validate_kitti(found["kitti"])
+    if kv is not None:
         for e in kv.errors:
             click.echo(f"error: {e}", err=True)
         failed |= bool(kv.errors)
         figs.update(_kitti_figures(kv, output.parent, output.stem))
-    jit = [] if no_jitter else [jitter_study(sc) for sc in ("bank-lane-change", "s-curve", "track-lane-change")]
     cmd = f"roadbank validate all {data_dir} -o {output}"
     write_document(output, real_data_markdown(comma, kv, jit, figs, command=cmd))
     click.echo(f"wrote {output} and {len(figs)} figure(s)", err=True)

@@ -300,24 +300,18 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
 
 
 def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result, batch=None):
-    from ..campaign.execute import _distributed, dask_session
+    from .cluster import open_pool
 
-    dd = _distributed()
-    t0 = time.perf_counter()
-    with dask_session(scheduler, int(workers), connect_timeout) as (client, futures):
-        result.workers = sum(client.nthreads().values())
-        client.run(_warm, list(estimators), kw["params"], kw["vehicle"])
-        result.startup_s = time.perf_counter() - t0
+    warm = (_warm, list(estimators), kw["params"], kw["vehicle"])
+    with open_pool(workers, scheduler, connect_timeout, warm=warm) as pool:
+        result.workers, result.startup_s = pool.workers, pool.startup_s
+        groups = {}
         for idx in batches([j[0] for j in jobs], result.workers, batch):
             group = [jobs[i] for i in idx]
-            fut = client.submit(_estimate_batch, group, list(estimators), kw, pure=False)
-            futures[fut] = group
-        for fut in dd.as_completed(list(futures)):
-            group = futures.pop(fut)
-            try:
-                summaries = fut.result()
-            except Exception as exc:     # the worker died (memory, signal): this batch only
-                summaries = [LogSummary(log=str(p), status="error",
-                                        error=f"worker failed: {type(exc).__name__}: {exc}") for p, *_ in group]
+            groups[pool.submit(_estimate_batch, group, list(estimators), kw)] = group
+        for task in pool.as_completed(groups):
+            summaries, failure = pool.outcome(task)
+            if failure is not None:     # the worker died (memory, signal): this batch only
+                summaries = [LogSummary(log=str(p), status="error", error=failure) for p, *_ in groups[task]]
             for s in summaries:
                 finish(s)

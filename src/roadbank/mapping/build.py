@@ -30,9 +30,145 @@ def _origin(lat, lon) -> LocalProjection | None:
     return LocalProjection(round(float(lat[ok][0]), 2), round(float(lon[ok][0]), 2))
 
 
+@dataclass(frozen=True)
+class MapSettings:
+    """How every log of a map is read, estimated and gridded (see :func:`map_logs`)."""
+
+    estimator: str = "pif-smoother"
+    channels: object = None
+    format: str | None = None
+    params: object = None
+    vehicle: object = None
+    cell_m: float = 10.0
+    sectors: int = 4
+    chunk_rows: int | None = None
+
+
+def _design(settings: MapSettings, signals, designs: dict):
+    """The estimator for a log (its sample rate and ay noise, :func:`roadbank.vehicle.make_estimator`),
+    memoised in ``designs`` by those conditions."""
+    from ..vehicle import log_conditions, make_estimator, undescribed_params
+
+    cond = log_conditions(signals)
+    key = tuple(round(v, 6) if np.isfinite(v) else None for v in cond.values())
+    if key not in designs:
+        v = settings.vehicle
+        car = v.params if v is not None else (settings.params if settings.params is not None
+                                              else undescribed_params())   # a car nobody described
+        designs[key] = v.make(settings.estimator, **cond) if v is not None else make_estimator(
+            settings.estimator, car, **cond)
+    return designs[key]
+
+
+def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection | None = None,
+                designs: dict | None = None) -> tuple[MappedLog, BankMap | None, LocalProjection | None]:
+    """One log's part of a map.
+
+    Parameters
+    ----------
+    path : path-like
+    log_id : hashable
+        Counts the distinct logs per cell (:meth:`BankMap.add`).
+    settings : MapSettings
+    projection : LocalProjection, optional
+        The map's plane; None: the one of this log's first fix (rounded to 0.01 deg).
+    designs : dict, optional
+        Estimator designs shared between the logs of one process.
+
+    Returns
+    -------
+    (MappedLog, BankMap or None, LocalProjection or None)
+        The log's record; its cells (None if it failed or had no fix while ``projection`` was
+        None); the projection of its first fix (None if it reached none), whatever ``projection``.
+    """
+    from ..estimators import OFFLINE
+    from ..io import LogError
+    from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
+
+    designs = {} if designs is None else designs
+    s = settings
+    correct = (lambda x: x) if s.vehicle is None else s.vehicle.correct
+    params = s.vehicle.params if s.vehicle is not None else s.params
+    rec, first, part = MappedLog(str(path)), None, None
+    try:
+        chunks = ReadAhead(stream_log(path, channels=s.channels, format=s.format, params=params,
+                                      chunk_rows=s.chunk_rows or CHUNK_ROWS))
+        # an offline estimator smooths each chunk with the chunks after it as lookahead
+        for k, chunk in enumerate(chunks):
+            if "lat_deg" not in chunk.extra or "lon_deg" not in chunk.extra:
+                raise LogError(f"{path}: no GNSS position (map 'latitude' and 'longitude' in the channel "
+                               "map, or use a format that has one: comma2k19, kitti-oxts, ROS NavSatFix)")
+            lat, lon = chunk.extra["lat_deg"], chunk.extra["lon_deg"]
+            first = first or _origin(lat, lon)
+            if part is None and (projection or first) is not None:
+                part = BankMap(projection or first, s.cell_m, s.sectors)
+            if k == 0:
+                est = _design(s, chunk.signals, designs)
+            nxt = chunks.following(est.lookahead_s) if s.estimator in OFFLINE else None
+            out = est.run(correct(chunk.signals), reset=(k == 0), lookahead=None if nxt is None else correct(nxt))
+            rec.samples += len(out.t)
+            if part is not None:
+                rec.mapped += part.add(lat, lon, out.phi_b, out.valid, log_id=log_id)
+    except (LogError, ValueError, OSError) as exc:
+        rec.status, rec.error = "error", str(exc)
+    except Exception as exc:  # never a traceback for one bad file
+        rec.status, rec.error = "error", f"{type(exc).__name__}: {exc}"
+    if rec.status != "ok":
+        part, rec.mapped = None, 0
+    return rec, part, first
+
+
+def _map_batch(jobs, settings: MapSettings, projection) -> list[tuple]:
+    """:func:`map_one_log` on each ``(log_id, path)`` of ``jobs`` in turn (one pool task; the
+    designs are shared between them)."""
+    designs: dict = {}
+    return [map_one_log(path, k, settings, projection, designs) for k, path in jobs]
+
+
+def _first_fix(paths, settings: MapSettings) -> LocalProjection | None:
+    """The default origin: the projection of the first fix of the first log (in order) that reaches
+    one, reading each log only up to it (a log that fails before it is passed over)."""
+    from ..io.stream import CHUNK_ROWS, stream_log
+
+    params = settings.vehicle.params if settings.vehicle is not None else settings.params
+    for path in paths:
+        chunks = stream_log(path, channels=settings.channels, format=settings.format, params=params,
+                            chunk_rows=settings.chunk_rows or CHUNK_ROWS)
+        try:
+            for chunk in chunks:
+                if "lat_deg" not in chunk.extra or "lon_deg" not in chunk.extra:
+                    break
+                proj = _origin(chunk.extra["lat_deg"], chunk.extra["lon_deg"])
+                if proj is not None:
+                    return proj
+        except Exception:   # the log is reported when it is mapped
+            pass
+        finally:
+            chunks.close()
+    return None
+
+
+def _parts_on_pool(pool, paths, settings, projection, on_log=None) -> list[tuple]:
+    """:func:`map_one_log` of every log on ``pool`` in batches, in the order of ``paths``."""
+    from ..fleet.run import batches
+
+    groups = [[(k, paths[k]) for k in idx] for idx in batches(paths, pool.workers)]
+    tasks = {pool.submit(_map_batch, g, settings, projection): g for g in groups}
+    done = {}
+    for task in pool.as_completed(tasks):
+        parts, failure = pool.outcome(task)
+        if failure is not None:      # the worker died (memory, signal): this batch only
+            parts = [(MappedLog(str(p), "error", failure), None, None) for _, p in tasks[task]]
+        for (k, _), part in zip(tasks[task], parts):
+            done[k] = part
+            if on_log is not None:
+                on_log(part[0])
+    return [done[k] for k in range(len(paths))]
+
+
 def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: str | None = None, params=None,
              vehicle=None, cell_m: float = 10.0, sectors: int = 4, origin: tuple | None = None,
-             chunk_rows: int | None = None, on_log=None) -> tuple[BankMap | None, list[MappedLog]]:
+             chunk_rows: int | None = None, on_log=None, pool=None) -> tuple[BankMap | None, list[MappedLog]]:
     """Build a bank map from logs that carry GNSS positions.
 
     Parameters
@@ -50,70 +186,57 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
     cell_m, sectors
         The grid (see :class:`BankMap`).
     origin : (lat_deg, lon_deg), optional
-        Origin of the map's plane; default the first fix, rounded to 0.01 deg.
+        Origin of the map's plane; default the first fix of the first log that has one, rounded
+        to 0.01 deg.
     chunk_rows : int, optional
         Streaming chunk size.
     on_log : callable(MappedLog), optional
+        Called as each log finishes (on Dask workers: as each batch of logs finishes).
+    pool : optional
+        Where the logs are mapped (:func:`roadbank.fleet.cluster.open_pool`; default one after
+        another in this process). On workers each log is mapped on its own and the logs' cells
+        are merged in the order of ``logs`` (:meth:`BankMap.merge`), so the map is the same as
+        in one process.
 
     Returns
     -------
     (BankMap or None, list of MappedLog)
-        None if no log gave a position. A bad log is reported in its MappedLog
-        and never stops the others.
+        None if no log gave a position. A bad log is reported in its MappedLog, adds nothing to
+        the map and never stops the others.
     """
-    from ..estimators import OFFLINE
-    from ..io import LogError
-    from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
-    from ..vehicle import log_conditions, make_estimator, undescribed_params
+    from ..fleet.cluster import InProcess
 
-    if vehicle is not None:
-        params = vehicle.params
-    car = params if params is not None else undescribed_params()   # a car nobody described
-    # designed per log, for its sample rate and ay noise (as roadbank estimate:
-    # roadbank.vehicle.make_estimator)
-    designs = {}
-
-    def design(signals):
-        cond = log_conditions(signals)
-        key = tuple(round(v, 6) if np.isfinite(v) else None for v in cond.values())
-        if key not in designs:
-            designs[key] = (vehicle.make(estimator, **cond) if vehicle is not None
-                            else make_estimator(estimator, car, **cond))
-        return designs[key]
-    correct = (lambda s: s) if vehicle is None else vehicle.correct
-    bmap = BankMap(LocalProjection(*origin), cell_m, sectors) if origin is not None else None
-    done: list[MappedLog] = []
-    for k_log, path in enumerate(logs):
-        rec = MappedLog(str(path))
-        try:
-            chunks = ReadAhead(stream_log(path, channels=channels, format=format, params=params,
-                                          chunk_rows=chunk_rows or CHUNK_ROWS))
-            # an offline estimator smooths each chunk with the chunks after it as lookahead
-            for k, chunk in enumerate(chunks):
-                if "lat_deg" not in chunk.extra or "lon_deg" not in chunk.extra:
-                    raise LogError(f"{path}: no GNSS position (map 'latitude' and 'longitude' in the channel "
-                                   "map, or use a format that has one: comma2k19, kitti-oxts, ROS NavSatFix)")
-                if k == 0:
-                    est = design(chunk.signals)
-                signals = correct(chunk.signals)
-                nxt = chunks.following(est.lookahead_s) if estimator in OFFLINE else None
-                out = est.run(signals, reset=(k == 0), lookahead=None if nxt is None else correct(nxt))
-                lat, lon = chunk.extra["lat_deg"], chunk.extra["lon_deg"]
-                if bmap is None:
-                    proj = _origin(lat, lon)
-                    if proj is not None:
-                        bmap = BankMap(proj, cell_m, sectors)
-                rec.samples += len(out.t)
-                if bmap is not None:
-                    rec.mapped += bmap.add(lat, lon, out.phi_b, out.valid, log_id=k_log)
-        except (LogError, ValueError, OSError) as exc:
-            rec.status, rec.error = "error", str(exc)
-        except Exception as exc:  # never a traceback for one bad file
-            rec.status, rec.error = "error", f"{type(exc).__name__}: {exc}"
-        done.append(rec)
-        if on_log is not None:
-            on_log(rec)
-    return bmap, done
+    settings = MapSettings(estimator, channels, format, params, vehicle, cell_m, sectors, chunk_rows)
+    paths = list(logs)
+    fixed = LocalProjection(*origin) if origin is not None else None
+    bmap = BankMap(fixed, cell_m, sectors) if fixed is not None else None
+    records: list[MappedLog] = []
+    if pool is None or isinstance(pool, InProcess):
+        designs: dict = {}
+        for k, path in enumerate(paths):
+            rec, part, first = map_one_log(path, k, settings, None if bmap is None else bmap.projection, designs)
+            if bmap is None and first is not None:
+                bmap = BankMap(first, cell_m, sectors)
+            if part is not None:
+                bmap.merge(part)
+            records.append(rec)
+            if on_log is not None:
+                on_log(rec)
+        return bmap, records
+    guess = fixed or _first_fix(paths, settings)
+    parts = _parts_on_pool(pool, paths, settings, guess, on_log)
+    if fixed is None:
+        # the origin is the first fix the logs reach in order (as in one process); a guess that
+        # missed it (a log that failed before mapping it) is corrected by mapping again
+        origin_found = next((first for _, _, first in parts if first is not None), None)
+        if origin_found is not None and origin_found != guess:
+            parts = _parts_on_pool(pool, paths, settings, origin_found)
+        bmap = BankMap(origin_found, cell_m, sectors) if origin_found is not None else None
+    for rec, part, _ in parts:
+        if part is not None:
+            bmap.merge(part)
+        records.append(rec)
+    return bmap, records
 
 
 def write_outputs(bmap: BankMap, output, geojson=None, png=None, metadata: dict | None = None) -> list[Path]:

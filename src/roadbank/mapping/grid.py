@@ -8,7 +8,10 @@ split into ``sectors`` heading sectors (course over ground, sector 0 centred on
 north, clockwise), and a row of the map is one (cell, sector). Per row: the
 number of valid samples, the number of logs, the mean, sample standard
 deviation, minimum and maximum of the bank (deg). Samples are weighted
-equally (a slow pass contributes more samples than a fast one).
+equally (a slow pass contributes more samples than a fast one). The statistics are running
+sums, so maps of separate logs on one grid merge into the map of all of them
+(:meth:`BankMap.merge`, equal up to the rounding of the sums): how ``roadbank map --workers``
+combines the logs mapped on the workers.
 """
 
 from __future__ import annotations
@@ -111,6 +114,40 @@ class BankMap:
                 st[4] = max(st[4], hi[j])
                 self._logs[key].add(log_id)
         return int(ok.sum())
+
+    def merge(self, other: "BankMap") -> "BankMap":
+        """Add the samples of another map on the same grid (projection, cell, sectors), as if they
+        had been added here: counts and sums add, minimum and maximum combine, the logs of a cell
+        are the union of both maps' log ids (so the ids must name the same logs in both).
+
+        Returns
+        -------
+        BankMap
+            This map (``other`` is not changed).
+
+        Raises
+        ------
+        ValueError
+            The grids differ.
+        """
+        if (other.projection, float(other.cell_m), other.sectors) != (self.projection, float(self.cell_m),
+                                                                      self.sectors):
+            raise ValueError(f"cannot merge a map of origin {other.projection}, cell {other.cell_m:g} m, "
+                             f"{other.sectors} sector(s) into one of origin {self.projection}, cell "
+                             f"{self.cell_m:g} m, {self.sectors} sector(s)")
+        for key, st in other._stats.items():
+            mine = self._stats.get(key)
+            if mine is None:
+                self._stats[key] = list(st)
+                self._logs[key] = set(other._logs[key])
+            else:
+                mine[0] += st[0]
+                mine[1] += st[1]
+                mine[2] += st[2]
+                mine[3] = min(mine[3], st[3])
+                mine[4] = max(mine[4], st[4])
+                self._logs[key] |= other._logs[key]
+        return self
 
     def __len__(self) -> int:
         return len(self._stats)

@@ -186,9 +186,20 @@ def expand_drives(paths) -> list[Path]:
     return out
 
 
+def _drive_outcome(path, names, params, scoring, sensitivity, tuning, sensors):
+    """``(ValidationResult, None)`` of one drive, or ``(None, reason)`` when it cannot be read: one
+    task of :func:`validate_kitti` (in this process or on a worker)."""
+    from ..io import LogError
+
+    try:
+        return validate_kitti_drive(path, names, params, scoring, sensitivity, tuning, sensors), None
+    except (LogError, OSError) as exc:
+        return None, str(exc)
+
+
 def validate_kitti(paths, names=None, params: VehicleParams | None = None,
                    scoring: Scoring = KITTI_SCORING, sensitivity: bool = True,
-                   tuning=None, sensors=None) -> KittiValidation:
+                   tuning=None, sensors=None, pool=None) -> KittiValidation:
     """Validate any number of KITTI drives; a drive that cannot be read is reported, the others go on.
 
     Parameters
@@ -197,17 +208,28 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
         Drive folders, oxts folders, or folders holding drive folders.
     names, params, scoring, sensitivity, tuning, sensors
         As :func:`validate_kitti_drive`.
+    pool : optional
+        Where the drives run, one task each (:func:`roadbank.fleet.cluster.open_pool`; default:
+        one after another in this process). The results are taken in the order of the drives,
+        so the validation is the same on any number of workers; a drive whose worker failed is
+        reported with the reason.
     """
     from .. import estimators
-    from ..io import LogError
+    from ..fleet.cluster import InProcess
 
     names = list(names or estimators.NAMES)
+    pool = pool or InProcess()
     drives, errors = [], []
-    for p in expand_drives(paths):
-        try:
-            drives.append(validate_kitti_drive(p, names, params, scoring, sensitivity, tuning, sensors))
-        except (LogError, OSError) as exc:
-            errors.append(str(exc))
+    expanded = expand_drives(paths)
+    tasks = [pool.submit(_drive_outcome, p, names, params, scoring, sensitivity, tuning, sensors)
+             for p in expanded]
+    for p, task in zip(expanded, tasks):
+        value, failure = pool.outcome(task)
+        res, error = value if failure is None else (None, f"{p}: {failure}")
+        if error is not None:
+            errors.append(error)
+        else:
+            drives.append(res)
     credible = [d for d in drives if not d.data.get("ins_doubt")]
     by_split = {}
     for split in ("training", "validation", "unseen"):

@@ -1,0 +1,117 @@
+"""Where the per-log work runs: in this process, or on Dask workers.
+
+``with open_pool(workers, scheduler) as pool`` gives one object for both:
+
+* ``workers <= 1`` and no ``scheduler``: :class:`InProcess` -- each task runs in this process
+  when its result is asked for (in the order asked), exactly as a plain loop would;
+* otherwise :class:`OnDask` -- a Dask LocalCluster of ``workers`` single-threaded processes
+  (:func:`roadbank.campaign.execute.open_client`), or the running scheduler at ``scheduler``.
+
+``pool.submit(fn, *args, **kwargs)`` returns a task; ``pool.as_completed(tasks)`` yields them as they finish
+(in process: in order); ``pool.outcome(task)`` is ``(value, None)`` or, when the task could not
+finish on its worker (the worker died, or the task raised), ``(None, "worker failed: ...")`` --
+the caller reports that against the task's logs and the others go on. In process, an exception
+of the task is raised as it would be in a loop. ``fn`` and its arguments must be picklable for
+Dask (module-level functions, dataclasses).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+
+
+def worker_failure(exc: BaseException) -> str:
+    """The one-line reason given for every log of a task that failed on its worker."""
+    return f"worker failed: {type(exc).__name__}: {exc}"
+
+
+class _Thunk:
+    """A task of :class:`InProcess`: run once, when its outcome is first asked for."""
+
+    __slots__ = ("fn", "args", "kwargs", "done", "value")
+
+    def __init__(self, fn, args, kwargs):
+        self.fn, self.args, self.kwargs, self.done, self.value = fn, args, kwargs, False, None
+
+    def result(self):
+        if not self.done:
+            self.value = self.fn(*self.args, **self.kwargs)
+            self.done, self.fn, self.args, self.kwargs = True, None, None, None
+        return self.value
+
+
+class InProcess:
+    """Tasks run in this process, one after another (see the module doc)."""
+
+    workers = 1
+    startup_s = 0.0
+
+    def submit(self, fn, *args, **kwargs) -> _Thunk:
+        return _Thunk(fn, args, kwargs)
+
+    def as_completed(self, tasks):
+        yield from tasks
+
+    def outcome(self, task: _Thunk):
+        return task.result(), None
+
+
+class OnDask:
+    """Tasks on a Dask client (see the module doc); ``pending`` holds the futures not yet
+    collected, cancelled if the caller's block raises."""
+
+    def __init__(self, client, pending: dict, startup_s: float):
+        self.client, self.pending, self.startup_s = client, pending, startup_s
+        self.workers = sum(client.nthreads().values())
+
+    def submit(self, fn, *args, **kwargs):
+        fut = self.client.submit(fn, *args, pure=False, **kwargs)
+        self.pending[fut] = None
+        return fut
+
+    def as_completed(self, tasks):
+        from distributed import as_completed
+        yield from as_completed(list(tasks))
+
+    def outcome(self, fut):
+        self.pending.pop(fut, None)
+        try:
+            return fut.result(), None
+        except Exception as exc:    # the worker died (memory, signal) or the task raised
+            return None, worker_failure(exc)
+
+
+@contextlib.contextmanager
+def open_pool(workers: int = 1, scheduler: str | None = None, connect_timeout: float = 20.0, warm=None):
+    """``with open_pool(...) as pool``: :class:`InProcess` or :class:`OnDask` (module doc).
+
+    Parameters
+    ----------
+    workers : int
+        1: in this process. More: a Dask LocalCluster of that many single-threaded processes.
+    scheduler : str, optional
+        Address of a running Dask scheduler (``tcp://host:8786``); overrides ``workers``.
+    connect_timeout : float
+        Seconds to wait for the scheduler.
+    warm : tuple, optional
+        ``(fn, *args)`` run once on every Dask worker before the first task (designs, compiled
+        kernels, readers); its time counts in ``pool.startup_s`` (s).
+
+    Raises
+    ------
+    roadbank.campaign.execute.DaskMissing
+        Without dask.distributed (a RuntimeError).
+    ConnectionError
+        The scheduler is unreachable.
+    """
+    if scheduler is None and int(workers) <= 1:
+        yield InProcess()
+        return
+    from ..campaign.execute import dask_session
+
+    t0 = time.perf_counter()
+    with dask_session(scheduler, int(workers), connect_timeout) as (client, pending):
+        if warm is not None:
+            client.run(*warm)
+        yield OnDask(client, pending, time.perf_counter() - t0)
