@@ -16,6 +16,7 @@ Run ``python -m roadbank.fleet.bench [--hours 24] [--formats parquet,mdf4] [--pe
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import subprocess
@@ -29,6 +30,7 @@ import numpy as np
 COLUMNS = ("t", "vx", "ay", "r", "delta_f")
 
 
+@functools.lru_cache(maxsize=4)
 def _base_drive(scenario: str = "track-lane-change", seed: int = 0) -> dict[str, np.ndarray]:
     from ..sim import run_scenario
     s = run_scenario(scenario, seed=seed).signals
@@ -171,43 +173,76 @@ def measure(mode: str, log, out, estimator: str = "pif-modified", chunk_rows: in
     return res
 
 
-def fleet_speedup(n_logs: int = 200, seconds: float = 600.0, workers=(1, 2), estimator: str = "pif-modified",
-                  bad_every: int = 20, workdir=None, batch: int | None = None) -> list[dict]:
-    """Wall time of ``run_fleet`` on ``n_logs`` logs of ``seconds`` (100 Hz, every ``bad_every``-th corrupt).
+#: fleet log formats -> file suffix
+FLEET_SUFFIXES = {"parquet": ".parquet", "csv": ".csv", "mdf4": ".mf4"}
 
-    Log ``i`` carries white ``ay`` noise of ``0.05 + 0.001 i`` m/s^2 (each log its own design, as
-    on a real fleet). Each worker count runs in a fresh output directory with the design cache off
-    (``ROADBANK_CACHE_DIR=off``, so every design is made); Dask start-up (cluster + warm-up) is
-    reported apart from the processing wall time. ``batch``: logs per Dask task (None: automatic).
-    End to end = read + design + filter + write, in ``samples_per_s``.
-    """
-    from .run import run_fleet
-    work = Path(workdir or tempfile.mkdtemp(prefix="roadbank-fleet-"))
-    logs = work / "logs"
+
+def write_fleet_log(path, seconds: float, ay_noise: float = 0.0, seed: int = 0) -> int:
+    """One short 100 Hz fleet log of ``seconds`` as .parquet, .mf4 (:func:`write_long_log`, one
+    chunk) or .csv (the same samples: a header line of the column names, one row per sample);
+    returns the sample count."""
+    p = Path(path)
+    if p.suffix.lower() != ".csv":
+        return write_long_log(p, hours=seconds / 3600.0, chunk_s=seconds, ay_noise=ay_noise, seed=seed)
+    import pyarrow as pa
+    import pyarrow.csv as pacsv
+
+    base = _base_drive()
+    k = np.arange(int(round(seconds * 100.0)))
+    cols = {"t": k / 100.0, **{c: v[k % len(base["vx"])] for c, v in base.items()}}
+    if ay_noise > 0:        # as write_long_log draws it for a log of one chunk
+        cols["ay"] = cols["ay"] + ay_noise * np.random.default_rng(seed).standard_normal(k.size)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    pacsv.write_csv(pa.table(cols), p)
+    return k.size
+
+
+def fleet_logs(workdir, n_logs: int, seconds: float, fmt: str = "parquet", bad_every: int = 20) -> tuple[list, int]:
+    """``n_logs`` logs of ``seconds`` in ``workdir/logs-<fmt>`` (written if missing), every
+    ``bad_every``-th corrupt (0: none); log ``i`` carries white ``ay`` noise of ``0.05 + 0.001 i``
+    m/s^2 (each log its own design, as on a real fleet). Returns (paths, samples in the good logs)."""
+    logs = Path(workdir) / f"logs-{fmt}"
     logs.mkdir(parents=True, exist_ok=True)
     paths = []
     samples = 0
     for i in range(n_logs):
-        p = logs / f"log{i:04d}.parquet"
+        p = logs / f"log{i:04d}{FLEET_SUFFIXES[fmt]}"
         bad = bool(bad_every) and i % bad_every == bad_every - 1
         if not p.exists():
             if bad:
-                p.write_bytes(b"PAR1 truncated")
+                p.write_bytes(b"PAR1 truncated" if fmt == "parquet" else b"t,vx\n0,not a number\n")
             else:
-                write_long_log(p, hours=seconds / 3600.0, chunk_s=seconds, ay_noise=0.05 + 0.001 * i, seed=i)
+                write_fleet_log(p, seconds, ay_noise=0.05 + 0.001 * i, seed=i)
         samples += 0 if bad else round(seconds * 100.0)
         paths.append(p)
+    return paths, samples
+
+
+def fleet_speedup(n_logs: int = 200, seconds: float = 600.0, workers=(1, 2), estimator: str = "pif-modified",
+                  bad_every: int = 20, workdir=None, batch: int | None = None, fmt: str = "parquet") -> list[dict]:
+    """Wall time of ``run_fleet`` on ``n_logs`` logs of ``seconds`` (100 Hz, every ``bad_every``-th corrupt).
+
+    The logs are :func:`fleet_logs` in format ``fmt`` ("parquet", "csv", "mdf4"). Each worker
+    count runs in a fresh output directory with the design cache off (``ROADBANK_CACHE_DIR=off``,
+    so every design is made); Dask start-up (cluster + warm-up) is reported apart from the
+    processing wall time. ``batch``: logs per Dask task (None: automatic). End to end = read +
+    design + filter + write, in ``samples_per_s`` (start-up excluded) and ``total_s`` (s, included).
+    """
+    from .run import run_fleet
+    work = Path(workdir or tempfile.mkdtemp(prefix="roadbank-fleet-"))
+    paths, samples = fleet_logs(work, n_logs, seconds, fmt, bad_every)
     rows = []
     old = os.environ.get("ROADBANK_CACHE_DIR")
     os.environ["ROADBANK_CACHE_DIR"] = "off"
     try:
         for w in workers:
             t0 = time.perf_counter()
-            res = run_fleet(paths, work / f"out{w}-{batch or 'auto'}", [estimator], workers=w, batch=batch)
+            res = run_fleet(paths, work / f"out-{fmt}-{w}-{batch or 'auto'}", [estimator], workers=w, batch=batch)
             total = time.perf_counter() - t0
             rows.append({"workers": w, "logs": n_logs, "failed": len(res.failed), "wall_s": res.wall_s,
                          "startup_s": res.startup_s, "total_s": total, "logs_per_s": n_logs / res.wall_s,
-                         "samples_per_s": samples / res.wall_s, "batch": batch or "auto"})
+                         "samples_per_s": samples / res.wall_s, "batch": batch or "auto", "format": fmt,
+                         "samples": samples})
     finally:
         if old is None:
             os.environ.pop("ROADBANK_CACHE_DIR", None)
