@@ -198,18 +198,21 @@ class FleetResult:
 
 
 def _warm(names, params, vehicle=None):
-    """Build the estimators once on a worker and run them on a few samples (designs and compiled kernels)."""
+    """Estimate a small generated Parquet log once on a worker, as every log will be (designs for
+    the car, compiled kernels, the reader, the time-base checks and the writer: what a first log
+    would otherwise pay inside the timed run)."""
+    import tempfile
+
     import numpy as np
+    import pyarrow as pa
+    import pyarrow.parquet as pq
 
-    from .. import estimators as E
-    from ..signals import Signals
-    n = 10
-    sig = Signals(np.arange(n) * 0.01, np.full(n, 20.0), np.zeros(n), np.zeros(n), np.zeros(n))
-    for name in names:
-        (vehicle.make(name) if vehicle is not None else E.make(name, params=params)).run(sig)
-    import pyarrow.parquet  # noqa: F401  (the readers and writers every log needs)
-
-    from ..io import stream, writers  # noqa: F401
+    n = 300
+    t = np.arange(n) * 0.01
+    cols = {"t": t, "vx": np.full(n, 20.0), "ay": 0.05 * np.sin(7.0 * t), "r": np.zeros(n), "delta_f": np.zeros(n)}
+    with tempfile.TemporaryDirectory(prefix="roadbank-warm-") as tmp:
+        pq.write_table(pa.table(cols), f"{tmp}/warm.parquet")
+        estimate_log(f"{tmp}/warm.parquet", f"{tmp}/warm.bank.parquet", names, params=params, vehicle=vehicle)
     return True
 
 
