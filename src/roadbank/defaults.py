@@ -17,6 +17,6 @@
 """
 
 #: name of the default estimator
-ESTIMATOR = "kinematic-ff"
+ESTIMATOR = "kinematic-pif"
 #: shipped vehicle whose parameters stand for a car nobody described
 VEHICLE = "sedan"
