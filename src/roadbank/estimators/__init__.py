@@ -116,6 +116,6 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
 
 
 __all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "for_log", "Estimator", "StepResult",
-           "NoStabilisingSolution", "Kinematic", "KinematicLowPass", "KinematicFeedForward", "KinematicPIF", "DFC", "UIO", "PIO",
-           "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
+           "NoStabilisingSolution", "Kinematic", "KinematicLowPass", "KinematicFeedForward", "KinematicPIF", "DFC",
+           "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
            "Kalman", "with_online_offsets", "OnlineOffsets", "OffsetSettings"]
