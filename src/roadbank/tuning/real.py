@@ -89,7 +89,7 @@ def simulated_sets(cars=SIM_CARS, n=SIM_DRIVES):
 def objective(build, logs, sim_sets) -> float:
     """The rule's objective (deg) of the estimator that ``build(signals)`` makes for each log
     (module docstring): a fixed estimator, or one designed for each log
-    (:func:`roadbank.estimators.for_log`, as the command line builds it)."""
+    (:func:`roadbank.vehicle.for_log`, as the command line builds it)."""
     from .objective import drive_errors
 
     errs = [float(np.degrees(np.sqrt(np.mean((build(s).run(s).theta[m] - ref[m]) ** 2)))) for s, ref, m in logs]
@@ -102,17 +102,17 @@ def fixed(est):
     return lambda signals: est
 
 
-def for_log(name: str, **options):
+def per_log(name: str, **options):
     """``build`` for :func:`objective`: ``name`` designed for each log as the command line does
     (no car given: :func:`roadbank.vehicle.undescribed_params`)."""
     import warnings
 
-    from .. import estimators
+    from .. import vehicle
 
     def build(signals):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
-            return estimators.for_log(name, signals, **options)
+            return vehicle.for_log(name, signals, **options)
     return build
 
 

@@ -149,7 +149,7 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
              "specific force `ay` and yaw rate `wz`. No steering angle. Licence CC BY-NC-SA 3.0 (Geiger, "
              "Lenz, Stiller, Urtasun, IJRR 2013): the data stay outside the repository.\n")
     L.append("Estimators: each designed for the drive as `roadbank estimate` designs it "
-             "(`roadbank.estimators.for_log`): the sensor-weighted PIFs' noise densities follow the log's "
+             "(`roadbank.vehicle.for_log`): the sensor-weighted PIFs' noise densities follow the log's "
              "sample rate and the road noise measured on its own `ay` and yaw rate (the noise model of real "
              "roads, `roadbank.signals.road_noise_std`; docs/estimators.md); no vehicle file, so the car "
              "for a log whose car is not described. Choices were made on the training drives only.\n")
