@@ -84,8 +84,8 @@ def test_unknown_name_and_bad_tuning():
     with pytest.raises(ValueError, match="bad tuning"):
         E.make("kinematic", Q=3)
     assert len(E.NAMES) == 16 and set(E.NAMES) == {
-        "kinematic", "kinematic-lp", "kinematic-ff", "kinematic-pif", "dfc", "uio", "pio-original", "pio-modified", "pif-modified",
-        "pif-original", "kalman",
+        "kinematic", "kinematic-lp", "kinematic-ff", "kinematic-pif", "dfc", "uio", "pio-original", "pio-modified",
+        "pif-modified", "pif-original", "kalman",
         "pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-gated", "pif-smoother"}
 
 

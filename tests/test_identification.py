@@ -16,7 +16,7 @@ from roadbank.cli import main
 from roadbank.identification import IdentifySettings, identify
 from roadbank.identification.check import SimCase, simulate_case
 from roadbank.identification.quantisation import mean_bias_bound
-from roadbank.identification.simdrive import DriveSpec
+from roadbank.sim.drives import DriveSpec
 from roadbank.io import Log
 from roadbank.io.writers import write_table
 from roadbank.sim import Driver, Scenario, run, straight_road

@@ -9,6 +9,7 @@ import pytest
 from roadbank import Signals
 from roadbank import estimators as E
 from roadbank.estimators.gated import KINEMATIC_PIF_GATE
+from roadbank.vehicle import for_log
 
 from test_gated import _gate_reference  # the gate written out in plain Python
 
@@ -75,6 +76,30 @@ def test_on_real_roads_it_stays_with_kinematic_ff():
         log = load_kitti_oxts(DATA / "kitti-oxts" / drive)
         s, ref = log.signals, log.reference_roll
         m = masks(s.t, s.vx, KITTI_SCORING)[1]
-        rms = {n: float(np.degrees(np.sqrt(np.mean((E.for_log(n, s).run(s).theta[m] - ref[m]) ** 2))))
+        rms = {n: float(np.degrees(np.sqrt(np.mean((for_log(n, s).run(s).theta[m] - ref[m]) ** 2))))
                for n in ("kinematic-ff", "kinematic-pif", "pif-modified")}
         assert rms["kinematic-pif"] <= 1.05 * rms["kinematic-ff"] < rms["pif-modified"], (drive, rms)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not (DATA / "kitti-oxts-extra").is_dir(), reason="../shared/data/kitti-oxts-extra not present")
+def test_the_shipped_gate_and_the_default_are_what_the_rule_picks():
+    """Real roads first, simulated drives break ties (roadbank.tuning.real.choose_by_roads): the shipped
+    gate against its grid neighbours and kinematic-ff (the gate held shut). The whole grid is in
+    docs/estimators.md."""
+    from roadbank.defaults import ESTIMATOR
+    from roadbank.tuning.real import GATE_GRID, choose_by_roads, per_log, simulated_sets, training_logs
+
+    logs, sims = training_logs(DATA), simulated_sets()
+    g = dict(KINEMATIC_PIF_GATE)
+    builds = {"kinematic-ff": per_log("kinematic-ff"), "shipped": per_log("kinematic-pif")}
+    for key in ("gate_on", "gate_span", "gate_release"):
+        values = GATE_GRID[key]
+        i = values.index(g[key])
+        for j in (i - 1, i + 1):
+            if 0 <= j < len(values):
+                builds[(key, values[j])] = per_log("kinematic-pif", **{key: values[j]})
+    chosen, real, sim = choose_by_roads(builds, logs, sims)
+    assert chosen == "shipped", (real, sim)
+    assert ESTIMATOR == "kinematic-pif"
+    assert sim["shipped"] < sim["kinematic-ff"] - 0.03         # what the gate buys on simulated manoeuvres

@@ -204,9 +204,10 @@ def test_log_without_position_reported_others_mapped(tmp_path):
     assert r.exit_code == 1 and "Traceback" not in r.output
     assert "nogps.parquet" in r.output and "lat" in r.output       # names the file and the missing column
     tab = pq.read_table(tmp_path / "out" / "map.parquet").to_pydict()
-    from roadbank import Signals, estimators
+    from roadbank import Signals
+    from roadbank.vehicle import for_log
     sig = Signals(t, cols["vx"], cols["ay"], cols["r"], cols["delta_f"])
-    est = estimators.for_log("kinematic", sig).run(sig)        # no car given: the undescribed car's roll
+    est = for_log("kinematic", sig).run(sig)        # no car given: the undescribed car's roll
     np.testing.assert_allclose(tab["bank_mean_deg"], np.degrees(est.phi_b[est.valid].mean()), atol=1e-9)
     assert sum(tab["count"]) == est.valid[25:-25].sum()        # all of the good log, but the course's ends
 

@@ -259,6 +259,8 @@ def test_roadbank_estimate_learns_the_offset_by_default(tmp_path):
     import pandas as pd
     from click.testing import CliRunner
 
+    from roadbank.defaults import ESTIMATOR
+
     from roadbank.cli import main
     from roadbank.io.writers import write_table
 
@@ -273,8 +275,8 @@ def test_roadbank_estimate_learns_the_offset_by_default(tmp_path):
         res = CliRunner().invoke(main, ["estimate", str(log), "-o", str(out), *extra])
         assert res.exit_code == 0, res.output
         got = pd.read_csv(out)
-        keep = ((got["t"] > STILL + 2.0) & got["kinematic-ff.valid"].astype(bool)).to_numpy()
-        rms[label] = math.degrees(float(np.sqrt(np.mean((got["kinematic-ff.phi_b"].to_numpy()[keep]
+        keep = ((got["t"] > STILL + 2.0) & got[f"{ESTIMATOR}.valid"].astype(bool)).to_numpy()
+        rms[label] = math.degrees(float(np.sqrt(np.mean((got[f"{ESTIMATOR}.phi_b"].to_numpy()[keep]
                                                          - sim.truth.phi_b[keep]) ** 2))))
     # 0.5 deg/s at 20 m/s reads as 1 deg of bank until it is learnt at the standstill
     assert rms["default"] < 0.5 * rms["off"], rms

@@ -47,7 +47,6 @@ def test_cold_cache_detected_in_a_fresh_process(tmp_path):
     """An empty numba cache is cold; after one run it is not, in this process nor in the next."""
     code = textwrap.dedent("""
         import numpy as np
-import pytest
         from roadbank import Signals, estimators
         from roadbank.report.coldstart import cold_families, is_cold
         print(cold_families(["dfc"], simulate=False))

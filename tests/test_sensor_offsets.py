@@ -18,7 +18,7 @@ from click.testing import CliRunner
 from roadbank import Signals
 from roadbank.cli import main
 from roadbank.identification.check import SimCase
-from roadbank.identification.simdrive import DriveSpec, mixed_drive
+from roadbank.sim.drives import DriveSpec, mixed_drive
 from roadbank.io.writers import write_table
 from roadbank.sim import PlantParams, run
 from roadbank.vehicle import Vehicle, VehicleFileError

@@ -18,6 +18,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
+from roadbank.defaults import ESTIMATOR
 from roadbank.io import LogError, load_log
 from roadbank.io.stream import stream_log
 
@@ -93,7 +94,7 @@ def test_streamed_estimate_loads_no_plotting_dask_or_pandas(estimated):
         assert unused not in mdf_mods, unused
     for name in ("a", "b"):                              # and estimated: a complete table each
         tab = pq.read_table(d / f"{name}.out.parquet")
-        assert tab.num_rows > 0.99 * N and "kinematic-ff.phi_b" in tab.column_names      # the default estimator
+        assert tab.num_rows > 0.99 * N and f"{ESTIMATOR}.phi_b" in tab.column_names      # the default estimator
 
 
 @pytest.mark.slow

@@ -1,14 +1,14 @@
 """What roadbank assumes when the user says nothing (no import cost: plain constants).
 
 * :data:`ESTIMATOR` — the estimator of every command (``estimate``, ``map`` streams, the fleet) and
-  of :func:`roadbank.estimators.for_log` when none is named: ``kinematic-ff``, the best by a rule
+  of :func:`roadbank.vehicle.for_log` when none is named: ``kinematic-ff``, the best by a rule
   written before measuring, on training data only (the KITTI training drives and simulated drives
   of cars that are not described; docs/estimators.md, :mod:`roadbank.tuning.real`). It uses no tyre
   data, so it does not rest on one car.
 * :data:`VEHICLE` — a log whose car is not described: the estimators that need a car model are
   designed for the parameters of this shipped car (with the data sheet's ESP sensors) in every
   command that reads logs (``estimate``, ``map``, ``validate``) and in
-  :func:`roadbank.estimators.for_log`: :func:`roadbank.vehicle.undescribed_params`. Chosen by a
+  :func:`roadbank.vehicle.for_log`: :func:`roadbank.vehicle.undescribed_params`. Chosen by a
   rule on training data: of the four shipped cars, the design car with the lowest objective of
   the default-tuned PIF (median raw error on the KITTI training drives + median over the four
   plant cars of the simulated training drives; docs/estimators.md). ``--vehicle`` / a
@@ -17,6 +17,6 @@
 """
 
 #: name of the default estimator
-ESTIMATOR = "kinematic-ff"
+ESTIMATOR = "kinematic-pif"
 #: shipped vehicle whose parameters stand for a car nobody described
 VEHICLE = "sedan"

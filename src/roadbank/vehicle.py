@@ -437,6 +437,22 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
             "log_r_noise": float(f"{r_noise:.2g}")}
 
 
+def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=None, **tuning):
+    """Build the estimator ``name`` for the log ``signals`` as ``roadbank estimate`` does.
+
+    A default-tuned PIF is designed for the log's sample rate and the road noise measured on
+    its ``ay`` and yaw rate (:func:`roadbank.vehicle.log_conditions`); the car is ``vehicle``
+    (a :class:`roadbank.vehicle.Vehicle`: its parameters, sensors and tuning tables) or
+    ``params`` with the data sheet's sensors; neither: the car for a log whose car is not
+    described (:func:`roadbank.vehicle.undescribed_params`), as the command line uses.
+    ``for_log(name, s).run(s)`` is what the command line writes for the log ``s``.
+    """
+    cond = log_conditions(signals)
+    if vehicle is not None:
+        return vehicle.make(name, **cond, **tuning)
+    return make_estimator(name, params or undescribed_params(), **cond, **tuning)
+
+
 #: ``[identified.<quantity>]`` sensor offsets (measured minus true) -> the Signals channel they
 #: are removed from by :meth:`Vehicle.correct`, and their unit (what ``roadbank identify`` writes)
 OFFSET_CHANNELS = {"yaw_rate_offset": ("r", "rad/s"), "ay_offset": ("ay", "m/s^2"),

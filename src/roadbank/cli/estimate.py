@@ -48,10 +48,10 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
               help="Input format. Default: from the file suffix or the directory layout (docs/io.md).")
 @click.option("--estimators", "-e", "est_names", multiple=True, default=(DEFAULT,),
               show_default=True, help="Estimators, comma-separated or repeated; 'all' for every one. "
-                                      "Default kinematic-ff: the one that won on real roads of cars "
-                                      "nobody described (README). pif-modified is roadbank's default "
-                                      "tuning of the paper's filter; pif-paper the same filter with the "
-                                      "paper's Table 4 weights.")
+                                      "Default kinematic-pif: the filtered kinematic estimate on real "
+                                      "roads, the paper's PIF while the yaw rate changes fast (README). "
+                                      "pif-modified is roadbank's default tuning of the paper's filter; "
+                                      "pif-paper the same filter with the paper's Table 4 weights.")
 @click.option("-o", "--output", required=True, type=click.Path(),
               help="Output .csv/.parquet for one log; a directory for several, or for one log a path ending "
                    "in '/' (created if missing).")

@@ -61,7 +61,7 @@ NAMES = tuple(n for n in _FACTORIES if n not in PRESETS)
 #: estimators whose ``run()`` also uses the samples after each instant (post-processing, not
 #: for an ECU); their ``step()`` is causal (see :mod:`roadbank.estimators.smoother`)
 OFFLINE = tuple(n for n, f in _FACTORIES.items() if getattr(f, "offline", False))
-#: the estimator of every command and of :func:`for_log` when none is named: the best by a rule
+#: the estimator of every command and of :func:`roadbank.vehicle.for_log` when none is named: the best by a rule
 #: written before measuring, on training data only (real KITTI training drives and simulated
 #: drives of cars that are not described; docs/estimators.md, :mod:`roadbank.tuning.real`)
 DEFAULT = ESTIMATOR
@@ -97,25 +97,7 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
 SHEET_RATE_HZ = 100.0
 
 
-def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=None, **tuning) -> Estimator:
-    """Build the estimator ``name`` for the log ``signals`` as ``roadbank estimate`` does.
-
-    A default-tuned PIF is designed for the log's sample rate and the road noise measured on
-    its ``ay`` and yaw rate (:func:`roadbank.vehicle.log_conditions`); the car is ``vehicle``
-    (a :class:`roadbank.vehicle.Vehicle`: its parameters, sensors and tuning tables) or
-    ``params`` with the data sheet's sensors; neither: the car for a log whose car is not
-    described (:func:`roadbank.vehicle.undescribed_params`), as the command line uses.
-    ``for_log(name, s).run(s)`` is what the command line writes for the log ``s``.
-    """
-    from ..vehicle import log_conditions, make_estimator, undescribed_params
-
-    cond = log_conditions(signals)
-    if vehicle is not None:
-        return vehicle.make(name, **cond, **tuning)
-    return make_estimator(name, params or undescribed_params(), **cond, **tuning)
-
-
-__all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "for_log", "Estimator", "StepResult",
-           "NoStabilisingSolution", "Kinematic", "KinematicLowPass", "KinematicFeedForward", "KinematicPIF", "DFC", "UIO", "PIO",
-           "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
+__all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "Estimator", "StepResult",
+           "NoStabilisingSolution", "Kinematic", "KinematicLowPass", "KinematicFeedForward", "KinematicPIF", "DFC",
+           "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
            "Kalman", "with_online_offsets", "OnlineOffsets", "OffsetSettings"]

@@ -153,7 +153,7 @@ class Estimator:
 
     def _check_log_rate(self, t) -> None:
         """Warn (once) when a log's rate is far from :attr:`sheet_rate`: the weights then do not
-        describe its sensors (:func:`roadbank.estimators.for_log` designs for the log)."""
+        describe its sensors (:func:`roadbank.vehicle.for_log` designs for the log)."""
         from ..signals import sample_rate
 
         rate = sample_rate(t)
@@ -161,7 +161,7 @@ class Estimator:
             import warnings
 
             warnings.warn(f"{self.name}: its weights are the data sheet's {self.sheet_rate:.0f} Hz sensor's, "
-                          f"this log is sampled at {rate:.3g} Hz; roadbank.estimators.for_log({self.name!r}, "
+                          f"this log is sampled at {rate:.3g} Hz; roadbank.vehicle.for_log({self.name!r}, "
                           "signals) designs for the log's rate and road noise, as `roadbank estimate` does",
                           RuntimeWarning, stacklevel=3)
             self.sheet_rate = None

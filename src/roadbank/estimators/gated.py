@@ -157,7 +157,7 @@ def _check_gate(label: str, opt: dict) -> None:
 
 #: the gate of :class:`KinematicPIF` (chosen by the rule of :mod:`roadbank.tuning.real`):
 #: ``gate_tf``, ``gate_release`` (s), ``gate_on``, ``gate_span`` (m/s^3)
-KINEMATIC_PIF_GATE = dict(gate_tf=0.05, gate_release=2.0, gate_on=2.0, gate_span=4.0)
+KINEMATIC_PIF_GATE = dict(gate_tf=0.05, gate_release=8.0, gate_on=4.0, gate_span=1.0)
 
 
 class KinematicPIF(_GatedPair):

@@ -1,6 +1,6 @@
 """Check the identification on simulated drives whose parameters and sensor offsets are known.
 
-:func:`simulate_case` drives a :func:`.simdrive.mixed_drive` with a plant whose
+:func:`simulate_case` drives a :func:`roadbank.sim.drives.mixed_drive` with a plant whose
 tyres differ from the base vehicle (``Cf``, ``Cr`` scaled) and with sensor
 offsets injected; :func:`check_case` identifies the car from that log (with
 the *base* vehicle, as a user would) and compares every quantity with the truth.
@@ -19,7 +19,7 @@ from ..params import VehicleParams
 from ..sim import PlantParams, SensorConfig, run
 from .identify import identify
 from .settings import IdentifySettings
-from .simdrive import DriveSpec, mixed_drive
+from ..sim.drives import DriveSpec, mixed_drive
 
 
 @dataclass(frozen=True)

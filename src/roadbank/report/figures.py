@@ -15,13 +15,14 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from ..defaults import ESTIMATOR as DEFAULT_ESTIMATOR  # noqa: E402
 from .labels import CONDITION_LABELS, PAPER_SET, label  # noqa: E402
 
 ROBUSTNESS_CONDITIONS = ("cf50", "nominal", "cf150")
 #: the estimators a scenario figure draws by default (those the study has): the paper's
 #: methods, the Kalman peer, roadbank's default PIF, the variants the tables favour and the
 #: estimator the commands run when none is named
-FIGURE_SET = PAPER_SET + ("pif-rate", "pif-gated", "pif-smoother", "kinematic-ff")
+FIGURE_SET = PAPER_SET + ("pif-rate", "pif-gated", "pif-smoother", DEFAULT_ESTIMATOR)
 #: the reference line: black, drawn over the estimates so that a noisy estimate cannot hide it
 REFERENCE_STYLE = {"color": "k", "lw": 1.6, "alpha": 0.85, "zorder": 10}
 

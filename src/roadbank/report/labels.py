@@ -18,6 +18,7 @@ LABELS = {
     "kinematic": "Kinematic",
     "kinematic-lp": "Kinematic, low-passed (ours)",
     "kinematic-ff": "Kinematic, low-passed + centripetal feed-forward (ours)",
+    "kinematic-pif": "Kinematic-ff, switched to the PIF on yaw acceleration (ours; the default)",
 }
 
 #: the estimators whose weights are the paper's Table 4 (SI reading); every other name runs

@@ -65,7 +65,7 @@ def plan(scenarios=None) -> list[tuple[str, str]]:
 #: modified-model PIF with the paper's Table 4, with which the paper's claims are checked)
 #: before ``pif-modified`` (roadbank's default tuning). Each column is ``estimators.make(name)``,
 #: the filter and tuning ``roadbank estimate -e name`` runs (which also sets the default-tuned
-#: PIFs' noise weights from the log: :func:`roadbank.estimators.for_log`).
+#: PIFs' noise weights from the log: :func:`roadbank.vehicle.for_log`).
 COLUMNS = tuple(n for name in estimators.NAMES
                 for n in (("pif-paper", name) if name == "pif-modified" else (name,)))
 

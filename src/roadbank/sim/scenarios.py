@@ -165,14 +165,14 @@ SCENARIOS: dict[str, Scenario] = _build_scenarios()
 
 #: further drives that :func:`run_scenario` and ``roadbank simulate`` know (not the paper's
 #: study): ``identification-drive``, the test-track procedure ``roadbank identify`` needs
-#: (:func:`roadbank.identification.simdrive.identification_drive`)
+#: (:func:`roadbank.sim.drives.identification_drive`)
 DRIVES = ("identification-drive",)
 
 
 def drive_scenario(name: str) -> Scenario:
     """The :class:`Scenario` of one of :data:`DRIVES` (built on each call)."""
     if name == "identification-drive":
-        from ..identification.simdrive import identification_drive
+        from .drives import identification_drive
         return identification_drive()
     raise ValueError(f"unknown drive {name!r}; known: {', '.join(DRIVES)}")
 

@@ -16,6 +16,13 @@ nobody described weigh the same. The chosen candidate has the lowest objective, 
 :data:`TIE_DEG` going to the smaller ``kappa`` and then the smaller cut-off (the simpler,
 smoother filter). ``kinematic-lp`` is the best with ``kappa = 0``, ``kinematic-ff`` the best over
 the whole grid. Neither the KITTI validation drives nor ``roadbank tune``'s validation set take part.
+
+**The default estimator and the gate of** ``kinematic-pif`` follow the priority of real roads: where
+real roads and simulated drives pull apart, the error on real drives is what a user gets. So the
+candidates (the causal estimators, and ``kinematic-pif`` over the gate grid :data:`GATE_GRID`) are
+ranked by the real-road median alone; among those within :data:`TIE_DEG` of the best, the lowest
+simulated median wins (:func:`choose_by_roads`). The low-pass constants above keep the sum: a
+standalone low-pass must not lose to the raw kinematic estimate on simulated cars.
 """
 
 from __future__ import annotations
@@ -29,6 +36,9 @@ CUTOFFS_HZ = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.8)
 KAPPAS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4)
 #: objectives closer than this (deg) count as equal
 TIE_DEG = 0.002
+#: gate candidates of ``kinematic-pif``: ``gate_on`` (m/s^3), ``gate_span`` (m/s^3), ``gate_release`` (s)
+GATE_GRID = {"gate_on": (1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0), "gate_span": (1.0, 2.0, 4.0, 8.0),
+             "gate_release": (1.0, 2.0, 4.0, 8.0)}
 #: the shipped cars of the simulated part, and the number of training drives per car
 SIM_CARS = ("suv-paper", "sedan", "compact", "van")
 SIM_DRIVES = 24
@@ -79,12 +89,12 @@ def simulated_sets(cars=SIM_CARS, n=SIM_DRIVES):
 def objective(build, logs, sim_sets) -> float:
     """The rule's objective (deg) of the estimator that ``build(signals)`` makes for each log
     (module docstring): a fixed estimator, or one designed for each log
-    (:func:`roadbank.estimators.for_log`, as the command line builds it)."""
+    (:func:`roadbank.vehicle.for_log`, as the command line builds it)."""
     from .objective import drive_errors
 
     errs = [float(np.degrees(np.sqrt(np.mean((build(s).run(s).theta[m] - ref[m]) ** 2)))) for s, ref, m in logs]
     sim = [float(np.median([drive_errors(build(d.signals), [d])[0][0] for d in drives])) for drives in sim_sets]
-    return float(np.median(errs)) + (float(np.median(sim)) if sim_sets else 0.0)
+    return (float(np.median(errs)) if errs else 0.0) + (float(np.median(sim)) if sim else 0.0)
 
 
 def fixed(est):
@@ -92,17 +102,17 @@ def fixed(est):
     return lambda signals: est
 
 
-def for_log(name: str, **options):
+def per_log(name: str, **options):
     """``build`` for :func:`objective`: ``name`` designed for each log as the command line does
     (no car given: :func:`roadbank.vehicle.undescribed_params`)."""
     import warnings
 
-    from .. import estimators
+    from .. import vehicle
 
     def build(signals):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
-            return estimators.for_log(name, signals, **options)
+            return vehicle.for_log(name, signals, **options)
     return build
 
 
@@ -120,3 +130,14 @@ def choose_lowpass(logs, sim_sets, cutoffs=CUTOFFS_HZ, kappas=KAPPAS) -> Lowpass
            for fc in cutoffs for k in kappas}
     lp = _pick({fk: v for fk, v in obj.items() if fk[1] == 0.0})
     return LowpassChoice(lp=lp, ff=_pick(obj), objective=obj)
+
+
+def choose_by_roads(builds: dict, logs, sim_sets) -> tuple:
+    """The real-roads-first rule (module docstring) over ``builds`` (``{key: build}``, see
+    :func:`objective`). Returns ``(chosen key, {key: real median}, {key: simulated median})``; the
+    simulated median is computed for the candidates within :data:`TIE_DEG` of the best real one only."""
+    real = {k: objective(b, logs, []) for k, b in builds.items()}
+    best = min(real.values())
+    tied = [k for k, v in real.items() if v <= best + TIE_DEG]
+    sim = {k: objective(builds[k], [], sim_sets) for k in tied}
+    return min(tied, key=lambda k: (sim[k], real[k])), real, sim

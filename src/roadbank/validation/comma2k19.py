@@ -86,7 +86,7 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
         default PIFs' ``R`` is their noise density at the log's rate.
     """
     from .. import estimators
-    from ..vehicle import undescribed_params
+    from ..vehicle import for_log, undescribed_params
     from ..io.comma2k19 import load_comma2k19
 
     params = params or undescribed_params()
@@ -162,7 +162,7 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
         log_other = load_comma2k19(path, params=other)
         sens["suv"] = {}
         for name in names:
-            est = estimators.for_log(name, log_other.signals, other).run(log_other.signals)
+            est = for_log(name, log_other.signals, other).run(log_other.signals)
             sens["suv"][name] = score(t, hold_invalid(est.theta), hold_invalid(est.phi_b), est.valid,
                                       ref, m_fit, m_sc, scoring)
         if "pif-modified" in names:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..defaults import ESTIMATOR as DEFAULT
 from ..report.markdown import md_table
 from . import kitti_report, report
 
@@ -112,23 +113,25 @@ def real_data_markdown(comma=None, kitti=None, jitter=(), figures=None, command:
     L.append("## Summary\n")
     rows = []
 
-    def row(data, label, sc):
-        k, p, o = sc.get("kinematic"), sc.get("pif-modified"), sc.get("pif-smoother")
+    def row(data, label, sc, split=""):
+        k, d, p, o = (sc.get(n) for n in ("kinematic", DEFAULT, "pif-modified", "pif-smoother"))
         f = kitti_report._f
-        if k is None or p is None:
+        if k is None or d is None:
             return
-        rows.append([data, label, f"{f(k.rms_raw_deg)} / {f(k.rms_deg)}", f"{f(p.rms_raw_deg)} / {f(p.rms_deg)}",
-                     f"{f(p.r_raw)} / {f(p.r)}",
+        rows.append([data, label + (f" ({split})" if split else ""), f"{f(k.rms_raw_deg)} / {f(k.rms_deg)}",
+                     f"{f(d.rms_raw_deg)} / {f(d.rms_deg)}", f"{f(d.r_raw)} / {f(d.r)}",
+                     "n/a" if p is None else f"{f(p.rms_raw_deg)} / {f(p.rms_deg)}",
                      "n/a" if o is None else f"{f(o.rms_raw_deg)} / {f(o.rms_deg)}; r {f(o.r_raw)} / {f(o.r)}"])
     if comma is not None:
         row("comma2k19", "example segment (offset fitted)", comma.scores)
     if kitti is not None:
         for d in kitti.drives:
-            row("KITTI", d.label, d.scores)
+            row("KITTI", d.label, d.scores, d.data.get("split", ""))
     L.append(md_table(["data", "log", "kinematic rms raw / smoothed (deg)",
-                       "default pif-modified rms raw / smoothed (deg)", "pif-modified r raw / smoothed",
+                       f"default {DEFAULT} rms raw / smoothed (deg)", f"{DEFAULT} r raw / smoothed",
+                       "pif-modified rms raw / smoothed (deg)",
                        "offline pif-smoother rms raw / smoothed (deg); r raw / smoothed"],
-                      rows, align="llrrrr"))
+                      rows, align="llrrrrr"))
     L.append("")
     L.append("The offline `pif-smoother` (docs/estimators.md, last section) uses the samples after each "
              "instant too: for logs processed after the drive, not a real-time estimate.\n")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from ..defaults import ESTIMATOR as DEFAULT
 from ..report.markdown import md_table
 from .kitti import KittiValidation
 
@@ -39,7 +40,7 @@ def to_json(v: KittiValidation) -> dict:
             "flagged": [{"drive": d, "reason": why} for d, why in v.flagged]}
 
 
-def plot_drive(res, path, show=("kinematic", "pio-modified", "pif-modified")) -> None:
+def plot_drive(res, path, show=("kinematic", "pif-modified", DEFAULT)) -> None:
     """Raw theta of some estimators and the INS roll (deg), and their error, against time from the
     drive start (s); unscored spans grey, spans an estimator flagged not valid red."""
     from ..report.timeseries import reference_figure, save_figure
@@ -147,10 +148,11 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
              "INS roll (bank + body roll, ISO, left side up); inputs = the INS forward speed `vf`, lateral "
              "specific force `ay` and yaw rate `wz`. No steering angle. Licence CC BY-NC-SA 3.0 (Geiger, "
              "Lenz, Stiller, Urtasun, IJRR 2013): the data stay outside the repository.\n")
-    L.append("Estimators: the library defaults; the default PIFs' yaw-rate noise density R follows the log's "
-             "sample rate (`roadbank.vehicle.make_estimator`: the ESP sensor's variance / rate, as "
-             "`roadbank estimate` designs them; docs/estimators.md), i.e. ten times the 100 Hz value at "
-             "KITTI's 10 Hz. Nothing is tuned on these drives.\n")
+    L.append("Estimators: each designed for the drive as `roadbank estimate` designs it "
+             "(`roadbank.vehicle.for_log`): the sensor-weighted PIFs' noise densities follow the log's "
+             "sample rate and the road noise measured on its own `ay` and yaw rate (the noise model of real "
+             "roads, `roadbank.signals.road_noise_std`; docs/estimators.md); no vehicle file, so the car "
+             "for a log whose car is not described. Choices were made on the training drives only.\n")
     L.append(md_table(["drive", "duration (s)", "frames (dropped)", "step (s)", "speed (m/s)", "roll (deg)",
                        "max yaw rate (rad/s)", "scored (s)"],
                       [[d.label, d.data["duration_s"], f"{d.data['frames']} ({d.data['dropped_frames']})",

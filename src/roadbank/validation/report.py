@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from ..defaults import ESTIMATOR as DEFAULT
 from ..report.markdown import md_table
 from .comma2k19 import ValidationResult
 
@@ -18,7 +19,7 @@ def to_json(res: ValidationResult) -> dict:
             for name, sc in res.scores.items()}
 
 
-def plot(res: ValidationResult, path, show=("kinematic", "pif-modified", "kalman", "dfc")) -> None:
+def plot(res: ValidationResult, path, show=("kinematic", "pif-modified", "dfc", DEFAULT)) -> None:
     """Smoothed estimates (theta + offset) against the pose roll and their error (deg) vs time (s):
     warm-up shaded grey, spans an estimator flagged not valid red, the offset-fit / scored split dotted."""
     from ..report.timeseries import reference_figure, save_figure

@@ -14,7 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..sim import Driver, Road, Scenario
+from .driver import Driver
+from .road import Road
+from .scenarios import Scenario
 
 LANE_WIDTH = 3.5  #: lateral offset of a lane change (m)
 
