@@ -7,12 +7,14 @@
 * otherwise :class:`OnDask` -- a Dask LocalCluster of ``workers`` single-threaded processes
   (:func:`roadbank.campaign.execute.open_client`), or the running scheduler at ``scheduler``.
 
-``pool.submit(fn, *args, **kwargs)`` returns a task; ``pool.as_completed(tasks)`` yields them as they finish
-(in process: in order); ``pool.outcome(task)`` is ``(value, None)`` or, when the task could not
-finish on its worker (the worker died, or the task raised), ``(None, "worker failed: ...")`` --
-the caller reports that against the task's logs and the others go on. In process, an exception
-of the task is raised as it would be in a loop. ``fn`` and its arguments must be picklable for
-Dask (module-level functions, dataclasses).
+``pool.submit(fn, *args, **kwargs)`` returns a task; ``pool.as_completed(tasks)`` yields them as
+they finish (in process: in order); ``pool.batches(paths)`` groups logs into tasks;
+``pool.outcome(task)`` is ``(value, None)`` or, when the task could not finish on its worker (the
+worker died, or the task raised), ``(None, "worker failed: ...")`` -- the caller reports that
+against the task's logs and the others go on. In process, an exception of the task is raised as
+it would be in a loop. ``fn`` and its arguments must be picklable for Dask (module-level
+functions, dataclasses). The layers below (validation, mapping) take a pool as an argument and
+use only these methods (and ``in_process``), never importing this module.
 """
 
 from __future__ import annotations
@@ -46,6 +48,11 @@ class InProcess:
 
     workers = 1
     startup_s = 0.0
+    in_process = True
+
+    def batches(self, paths) -> list[list[int]]:
+        """All of ``paths`` (indices) in one group: in process nothing is gained by cutting."""
+        return [list(range(len(paths)))] if len(paths) else []
 
     def submit(self, fn, *args, **kwargs) -> _Thunk:
         return _Thunk(fn, args, kwargs)
@@ -61,9 +68,16 @@ class OnDask:
     """Tasks on a Dask client (see the module doc); ``pending`` holds the futures not yet
     collected, cancelled if the caller's block raises."""
 
+    in_process = False
+
     def __init__(self, client, pending: dict, startup_s: float):
         self.client, self.pending, self.startup_s = client, pending, startup_s
         self.workers = sum(client.nthreads().values())
+
+    def batches(self, paths) -> list[list[int]]:
+        """Indices of ``paths`` in consecutive groups, one task each (:func:`roadbank.fleet.run.batches`)."""
+        from .run import batches
+        return batches(paths, self.workers)
 
     def submit(self, fn, *args, **kwargs):
         fut = self.client.submit(fn, *args, pure=False, **kwargs)

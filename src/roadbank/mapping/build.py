@@ -150,9 +150,7 @@ def _first_fix(paths, settings: MapSettings) -> LocalProjection | None:
 
 def _parts_on_pool(pool, paths, settings, projection, on_log=None) -> list[tuple]:
     """:func:`map_one_log` of every log on ``pool`` in batches, in the order of ``paths``."""
-    from ..fleet.run import batches
-
-    groups = [[(k, paths[k]) for k in idx] for idx in batches(paths, pool.workers)]
+    groups = [[(k, paths[k]) for k in idx] for idx in pool.batches(paths)]
     tasks = {pool.submit(_map_batch, g, settings, projection): g for g in groups}
     done = {}
     for task in pool.as_completed(tasks):
@@ -193,8 +191,8 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
     on_log : callable(MappedLog), optional
         Called as each log finishes (on Dask workers: as each batch of logs finishes).
     pool : optional
-        Where the logs are mapped (:func:`roadbank.fleet.cluster.open_pool`; default one after
-        another in this process). On workers each log is mapped on its own and the logs' cells
+        Where the logs are mapped (a pool of :func:`roadbank.fleet.cluster.open_pool`; default
+        one after another in this process). On workers each log is mapped on its own and the logs' cells
         are merged in the order of ``logs`` (:meth:`BankMap.merge`), so the map is the same as
         in one process.
 
@@ -204,14 +202,12 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
         None if no log gave a position. A bad log is reported in its MappedLog, adds nothing to
         the map and never stops the others.
     """
-    from ..fleet.cluster import InProcess
-
     settings = MapSettings(estimator, channels, format, params, vehicle, cell_m, sectors, chunk_rows)
     paths = list(logs)
     fixed = LocalProjection(*origin) if origin is not None else None
     bmap = BankMap(fixed, cell_m, sectors) if fixed is not None else None
     records: list[MappedLog] = []
-    if pool is None or isinstance(pool, InProcess):
+    if pool is None or pool.in_process:
         designs: dict = {}
         for k, path in enumerate(paths):
             rec, part, first = map_one_log(path, k, settings, None if bmap is None else bmap.projection, designs)

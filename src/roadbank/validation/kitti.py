@@ -197,6 +197,12 @@ def _drive_outcome(path, names, params, scoring, sensitivity, tuning, sensors):
         return None, str(exc)
 
 
+def _collected(pool, path, task):
+    """:func:`_drive_outcome` of a drive's pool task; a task that failed on its worker gives the reason."""
+    value, failure = pool.outcome(task)
+    return value if failure is None else (None, f"{path}: {failure}")
+
+
 def validate_kitti(paths, names=None, params: VehicleParams | None = None,
                    scoring: Scoring = KITTI_SCORING, sensitivity: bool = True,
                    tuning=None, sensors=None, pool=None) -> KittiValidation:
@@ -209,23 +215,23 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
     names, params, scoring, sensitivity, tuning, sensors
         As :func:`validate_kitti_drive`.
     pool : optional
-        Where the drives run, one task each (:func:`roadbank.fleet.cluster.open_pool`; default:
-        one after another in this process). The results are taken in the order of the drives,
+        Where the drives run, one task each (a pool of :func:`roadbank.fleet.cluster.open_pool`;
+        default: one after another in this process). The results are taken in the order of the drives,
         so the validation is the same on any number of workers; a drive whose worker failed is
         reported with the reason.
     """
     from .. import estimators
-    from ..fleet.cluster import InProcess
 
     names = list(names or estimators.NAMES)
-    pool = pool or InProcess()
     drives, errors = [], []
     expanded = expand_drives(paths)
-    tasks = [pool.submit(_drive_outcome, p, names, params, scoring, sensitivity, tuning, sensors)
-             for p in expanded]
-    for p, task in zip(expanded, tasks):
-        value, failure = pool.outcome(task)
-        res, error = value if failure is None else (None, f"{p}: {failure}")
+    args = (names, params, scoring, sensitivity, tuning, sensors)
+    if pool is None:
+        outcomes = (_drive_outcome(p, *args) for p in expanded)
+    else:
+        tasks = [pool.submit(_drive_outcome, p, *args) for p in expanded]
+        outcomes = (_collected(pool, p, task) for p, task in zip(expanded, tasks))
+    for res, error in outcomes:
         if error is not None:
             errors.append(error)
         else:
