@@ -155,8 +155,9 @@ def _parts_on_pool(pool, paths, settings, projection, on_log=None) -> list[tuple
     done = {}
     for task in pool.as_completed(tasks):
         parts, failure = pool.outcome(task)
-        if failure is not None:      # the worker died (memory, signal): this batch only
-            parts = [(MappedLog(str(p), "error", failure), None, None) for _, p in tasks[task]]
+        if failure is not None:      # the worker died (memory, signal): this batch only; where its
+            # logs would have put the origin is not known, so they leave the one guessed
+            parts = [(MappedLog(str(p), "error", failure), None, projection) for _, p in tasks[task]]
         for (k, _), part in zip(tasks[task], parts):
             done[k] = part
             if on_log is not None:
