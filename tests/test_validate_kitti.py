@@ -201,7 +201,7 @@ def test_validate_all_writes_one_report(tmp_path):
     assert res.exit_code == 0, res.output
     text = out.read_text()
     assert text.startswith("# Real-data validation") and "## Summary" in text
-    assert f"| KITTI | {drive.name} |" in text and "## KITTI raw drives" in text
+    assert f"| KITTI | {drive.name} (validation) |" in text and "## KITTI raw drives" in text
     assert (out.parent / f"real-data-kitti-{drive.name}.png").exists()
     empty = tmp_path / "empty"
     empty.mkdir()
