@@ -25,7 +25,7 @@ SPEEDUP_TARGET = 1.8
 #: per suite size: logs, seconds per log, formats, worker counts
 FLEET_SIZES = {
     "full": dict(logs=200, seconds=600.0, formats=("parquet", "csv", "mdf4"), workers=(1, 2)),
-    "quick": dict(logs=100, seconds=120.0, formats=("parquet", "csv"), workers=(1, 2)),
+    "quick": dict(logs=60, seconds=120.0, formats=("parquet", "csv"), workers=(1, 2)),
     "tiny": dict(logs=4, seconds=10.0, formats=("parquet", "csv"), workers=(1,)),
 }
 
