@@ -38,21 +38,7 @@ FORBIDDEN_HELP = FORBIDDEN + [
 
 #: lines in files that another change owns and rewrites (relative path -> stripped line
 #: texts). Tolerated only as these exact lines; any other hit in these files still fails.
-PENDING = {
-    "bench/report.py": {
-        '"## Headline and targets (issues 5 and 11)", ""]',
-        '"the time goes (issue 11, second pass; ns per step of the S-curve, each variant "',
-        '"of issue 11) took 12.5 s: 8.1 s writing the outputs, of which 6.7 s matplotlib drawing "',
-    },
-    "bench/sections.py": {
-        "#: long-log targets of issue 12: peak RSS (MiB) and end-to-end throughput (samples/s)",
-    },
-    "bench/suite.py": {
-        '"""The performance benchmark suite behind ``roadbank bench`` (issues 5 and 11).',
-        "#: targets of issues 5 and 11: key -> (comparison, threshold, text)",
-        'return {"reproduce_s": None, "reason": "roadbank reproduce is not available yet (issue 4)"}',
-    },
-}
+PENDING: dict[str, set[str]] = {}
 
 _TEXT_TOKENS = {tokenize.STRING, tokenize.COMMENT}
 if hasattr(tokenize, "FSTRING_MIDDLE"):  # Python 3.12+: f-string text is its own token

@@ -23,7 +23,7 @@ from .suite import Section, synthetic_log, time_batch
 
 #: estimators timed as C, and whether a float32 build is timed too
 C_ESTIMATORS = (("pif-modified", True), ("kalman", False), ("pio-modified", False))
-#: long-log targets of issue 12: peak RSS (MiB) and end-to-end throughput (samples/s)
+#: long-log targets: peak RSS (MiB) and end-to-end throughput (samples/s)
 LONG_LOG_TARGETS = {"peak_rss_mb": 300.0, "samples_per_s": 1e6}
 
 

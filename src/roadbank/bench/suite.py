@@ -1,4 +1,4 @@
-"""The performance benchmark suite behind ``roadbank bench`` (issues 5 and 11).
+"""The performance benchmark suite behind ``roadbank bench``: throughput, latency and cold start against peers.
 
 Measures, in one run on one machine, and writes a table with medians and ratios:
 
@@ -39,7 +39,7 @@ from typing import Callable
 
 from .cold import FAMILY_PROBES, cold_compile
 
-#: targets of issues 5 and 11: key -> (comparison, threshold, text)
+#: the speed targets: key -> (comparison, threshold, text)
 TARGETS = {
     "pif_ns_per_sample": ("<=", 50.0, "<= 50 ns/sample/core"),
     "pif_vs_filterpy": (">=", 1000.0, ">= 1000x filterpy"),
@@ -450,7 +450,7 @@ def reproduce_bench(timeout: float = 900.0, warm_runs: int = 2) -> dict:
     """
     import importlib.util
     if importlib.util.find_spec("roadbank.cli.reproduce") is None:
-        return {"reproduce_s": None, "reason": "roadbank reproduce is not available yet (issue 4)"}
+        return {"reproduce_s": None, "reason": "roadbank reproduce is not available in this installation"}
     walls = []
     with tempfile.TemporaryDirectory() as tmp, tempfile.TemporaryDirectory() as cache:
         # the first run as after `pip install`: an empty numba cache (its own directory)
