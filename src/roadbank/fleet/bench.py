@@ -150,7 +150,8 @@ def measure(mode: str, log, out, estimator: str = "pif-modified", chunk_rows: in
     dict
         ``peak_rss_mb`` (MiB, the child's peak resident set: VmHWM on Linux, else ru_maxrss),
         ``samples``, ``run_s`` (s, read + estimate + write), ``samples_per_s``, ``run_cpu_s`` (s of CPU
-        in the run: on a shared machine wall time also counts waiting for a core), ``samples_per_cpu_s``, ``import_s``, ``design_s``, ``chunks``.
+        in the run: on a shared machine wall time also counts waiting for a core), ``samples_per_cpu_s``,
+        ``import_s``, ``design_s``, ``chunks``.
     """
     from ..io.stream import CHUNK_ROWS
     chunk_rows = chunk_rows or CHUNK_ROWS
