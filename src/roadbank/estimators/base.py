@@ -572,10 +572,14 @@ class ScheduledObserver(Estimator):
     def observer(self, vx: float):  # pragma: no cover - abstract
         raise NotImplementedError
 
+    def _grid_design(self):
+        """The table of :meth:`_design` computed for the whole grid at once, or None (then the
+        grid speeds are designed one by one). The Riccati-designed observers provide it
+        (:mod:`roadbank.estimators.grid_design`: the same table, in milliseconds)."""
+        return None
+
     def _design(self):
-        # the Riccati-designed observers: every grid speed at once (same table, milliseconds)
-        from .grid_design import speed_design
-        fast = speed_design(self)
+        fast = self._grid_design()
         if fast is not None:
             return fast
         rows = []

@@ -2,7 +2,7 @@
 
 The estimators define their observer one frozen speed at a time (``observer(vx)``: the design
 model, the Riccati equation, the gain). Solved point by point with scipy that costs 0.3-2 s per
-design. :func:`speed_design` and :func:`adaptive_design` build the same table for the
+design. :func:`pif_speed`, :func:`pif_adaptive` and :func:`kalman_speed` build the same table for the
 steady-state PIFs (``pif-modified``, ``pif-original``, ``pif-rate``, ``pif-adaptive``,
 ``pif-rate-adaptive``, the filters of ``pif-gated`` and the forward pass of ``pif-smoother``)
 and the Kalman peer in one pass: the
@@ -10,8 +10,9 @@ design models point by point (the estimators' own), then every Riccati equation 
 once (:func:`roadbank.estimators.are_grid.solve_grid`), the gains, observers and equilibrium
 maps as stacked numpy operations. A grid point the grid solver does not accept is designed by
 the estimator's own per-point path (scipy), which finds the solution or raises the error that
-names the speed, exactly as before. Any other estimator, and a subclass that redefines how its
-observer is built, is designed by its own loop.
+names the speed, exactly as before. Each estimator decides whether its observer is built the way
+these functions assume (``_grid_design``), so this module imports none of them; any other
+estimator, and a subclass that redefines how its observer is built, is designed by its own loop.
 
 :func:`roadbank.estimators.synthesis.reference_solvers` switches the whole-grid path off (the
 comparisons and the benchmark).
@@ -26,47 +27,6 @@ import numpy as np
 from . import synthesis
 from .are_grid import solve_grid
 from .base import augmented_design_model
-
-
-def speed_design(est):
-    """The table of :meth:`ScheduledObserver._design <roadbank.estimators.base.ScheduledObserver._design>`
-    (the rows of ``est.observer(v)`` over the speed grid) for a steady-state PIF or the Kalman
-    filter, whole grid at once: ``(table (g, k), number of observer states, extra cfg floats)``;
-    None for any other estimator, a subclass that builds its observer its own way, and inside
-    :func:`~roadbank.estimators.synthesis.reference_solvers`."""
-    from .kalman import Kalman
-    from .pif import PIF
-
-    if synthesis.using_reference_solvers():
-        return None
-    cls = type(est)
-    if isinstance(est, PIF) and _pif_core(est) and cls.observer is PIF.observer:
-        return _pif_speed(est)
-    if isinstance(est, Kalman) and cls.observer is Kalman.observer:
-        return _kalman(est)
-    return None
-
-
-def adaptive_design(est):
-    """The table of :meth:`PIFAdaptive._design <roadbank.estimators.pif.PIFAdaptive._design>`
-    (speed x excitation grid) whole grid at once; None as for :func:`speed_design`."""
-    from .pif import PIFAdaptive
-
-    if synthesis.using_reference_solvers():
-        return None
-    cls = type(est)
-    if isinstance(est, PIFAdaptive) and _pif_core(est) and cls.observer_at is PIFAdaptive.observer_at:
-        return _pif_adaptive(est)
-    return None
-
-
-def _pif_core(est) -> bool:
-    """``est`` builds its steady-state observer as :class:`~roadbank.estimators.pif.PIF` does."""
-    from .pif import PIF
-
-    cls = type(est)
-    return (est.variant == "steady" and cls._observer is PIF._observer and cls._riccati is PIF._riccati
-            and cls.design_model is PIF.design_model)
 
 
 #: design models of recent grids (:func:`_grid_models`)
@@ -89,14 +49,11 @@ def _grid_models(key: tuple, build) -> tuple:
     return hit
 
 
-def _grid_noise(est, models: tuple) -> np.ndarray:
-    """``est.process_density`` of every model (g, n, n), memoised on every setting but ``th``
-    (PIF's own noise model does not use it: the retries of a halved ``th`` compute none again)."""
-    from .pif import PIF, PIFRate
-
+def _grid_noise(est, models: tuple, own: bool) -> np.ndarray:
+    """``est.process_density`` of every model (g, n, n), memoised on every setting but ``th`` where
+    ``own`` (the noise model is PIF's own, which does not use ``th``: the retries of a halved ``th``
+    compute none again)."""
     cls = type(est)
-    own = cls.process_density is PIF.process_density and cls.process_noise in (PIF.process_noise,
-                                                                               PIFRate.process_noise)
     skip = ("th", "vgrid") if own else ("vgrid",)       # a subclass's own noise may use th
     key = (cls, tuple(sorted((k, repr(v)) for k, v in vars(est).items() if not k.startswith("_") and k not in skip)))
     hit = _NOISE.get(key)
@@ -120,17 +77,26 @@ def _stacked_noise(est, models: tuple) -> np.ndarray:
     return est.process_noise(first) + est.Q_ay * (b[:, :, None] * b[:, None, :])
 
 
-def _pif_speed(est):
+def pif_speed(est, own_noise: bool):
+    """The ``lpv`` table ``(rows, number of states, extra)`` of a steady-state PIF over its speed grid
+    at once (``est`` builds its observer as :class:`~roadbank.estimators.pif.PIF` does; ``own_noise``:
+    its process noise is PIF's own); None inside
+    :func:`~roadbank.estimators.synthesis.reference_solvers`."""
+    if synthesis.using_reference_solvers():
+        return None
     speeds = [float(v) for v in est.vgrid]
     key = (type(est)._model_at, repr(est.params), est.model, est.vgrid.tobytes())
     models = _grid_models(key, lambda: [est.design_model(v) for v in speeds])
-    tab = observer_rows(models[0], _grid_noise(est, models), est.R, est.S, est.th,
+    tab = observer_rows(models[0], _grid_noise(est, models, own_noise), est.R, est.S, est.th,
                         lambda k: est.observer(speeds[k]))
     return tab, models[0][0].shape[1], np.zeros(0)
 
 
-def _pif_adaptive(est):
-    # the points of PIFAdaptive._design, speed outer, excitation inner
+def pif_adaptive(est, own_noise: bool):
+    """The table of :meth:`PIFAdaptive._design <roadbank.estimators.pif.PIFAdaptive._design>` (speed x
+    excitation grid, speed outer) at once; None inside :func:`~roadbank.estimators.synthesis.reference_solvers`."""
+    if synthesis.using_reference_solvers():
+        return None
     points = [(float(v), e) for v in est.vgrid for e in est.egrid]
 
     def build():
@@ -139,15 +105,18 @@ def _pif_adaptive(est):
     key = (type(est)._model_at, repr(est.params), est.model, est.vgrid.tobytes(), tuple(est.egrid), est.mu,
            type(est).rear_stiffness)
     models = _grid_models(key, build)
-    tab = observer_rows(models[0], _grid_noise(est, models), est.R, est.S, est.th,
+    tab = observer_rows(models[0], _grid_noise(est, models, own_noise), est.R, est.S, est.th,
                         lambda k: est.observer_at(*points[k]), n_inner=len(est.egrid))
     eg = est.egrid
     extra = [eg[0], (eg[1] - eg[0]) if len(eg) > 1 else 1.0, float(len(eg)), est.tau, est.tf]
     return tab, len(est.state_names), np.array(extra)
 
 
-def _kalman(est):
-    # Kalman.observer: the augmented original model, W = diag(q), R, no game term
+def kalman_speed(est):
+    """The table of the Kalman peer (augmented original model, ``W = diag(q)``, ``R``, no game term)
+    over its speed grid at once; None inside :func:`~roadbank.estimators.synthesis.reference_solvers`."""
+    if synthesis.using_reference_solvers():
+        return None
     speeds = [float(v) for v in est.vgrid]
     key = ("original", repr(est.params), est.vgrid.tobytes())
     models = _grid_models(key, lambda: [augmented_design_model(est.params, v, "original") for v in speeds])

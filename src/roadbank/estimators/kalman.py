@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import grid_design
 from .base import ScheduledObserver, augmented_design_model
 from .synthesis import game_are
 
@@ -48,6 +49,10 @@ class Kalman(ScheduledObserver):
         if self.q.shape != (3,) or np.any(self.q < 0) or np.any(np.diag(self.Rm) <= 0):
             raise ValueError("kalman: q must be 3 values >= 0 and R 2 values > 0")
         super().__init__(params, **kw)
+
+    def _grid_design(self):
+        """The whole grid at once where the observer is this class's own."""
+        return grid_design.kalman_speed(self) if type(self).observer is Kalman.observer else None
 
     def observer(self, vx: float):
         A, B, C, Dy, Lw, _ = augmented_design_model(self.params, vx, "original")

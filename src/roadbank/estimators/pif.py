@@ -48,7 +48,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..params import G
-from . import layout
+from . import grid_design, layout
 from .base import ScheduledObserver, augmented_design_model, equilibrium_map
 from .synthesis import NoStabilisingSolution, game_are
 
@@ -258,6 +258,23 @@ class PIF(ScheduledObserver):
         """``(F, G, H, D)`` of the steady-state filter at ``vx`` (see ScheduledObserver)."""
         return self._observer(self.design_model(vx), vx)
 
+    def _builds_as_pif(self) -> bool:
+        """The steady-state observer is built as this class builds it (the whole-grid design applies)."""
+        cls = type(self)
+        return (self.variant == "steady" and cls._observer is PIF._observer and cls._riccati is PIF._riccati
+                and cls.design_model is PIF.design_model)
+
+    def _own_noise(self) -> bool:
+        """The process noise is PIF's own (or the bank-rate state's): it does not use ``th``."""
+        cls = type(self)
+        return cls.process_density is PIF.process_density and cls.process_noise in (PIF.process_noise,
+                                                                                    PIFRate.process_noise)
+
+    def _grid_design(self):
+        if self._builds_as_pif() and type(self).observer is PIF.observer:
+            return grid_design.pif_speed(self, self._own_noise())
+        return None
+
     def _design(self):
         if self.variant == "steady":
             return super()._design()
@@ -447,9 +464,10 @@ class PIFAdaptive(PIF):
         return self._observer(self._model_at(replace(self.params, Cr=self.rear_stiffness(e)), vx), vx)
 
     def _design(self):
-        from .grid_design import adaptive_design        # the whole grid at once (the same table)
-        if (fast := adaptive_design(self)) is not None:
-            return fast
+        if self._builds_as_pif() and type(self).observer_at is PIFAdaptive.observer_at:
+            fast = grid_design.pif_adaptive(self, self._own_noise())     # the whole grid at once
+            if fast is not None:
+                return fast
         rows = []
         for v in self.vgrid:
             for e in self.egrid:

@@ -20,7 +20,53 @@ use only these methods (and ``in_process``), never importing this module.
 from __future__ import annotations
 
 import contextlib
+import math
 import time
+from pathlib import Path
+
+#: input a batch of logs aims at (bytes of log files): one Dask task of about half a second
+BATCH_BYTES = 32 * 2**20
+#: the most logs in one batch
+BATCH_MAX_LOGS = 64
+#: batches per worker at least (where there are enough logs), so that the workers end together
+BATCHES_PER_WORKER = 4
+
+
+def _input_bytes(p: Path) -> int:
+    """Size of a log on disk (bytes); a log directory counts as a whole batch."""
+    try:
+        return p.stat().st_size if p.is_file() else BATCH_BYTES
+    except OSError:
+        return 0
+
+
+def batches(paths: list, workers: int, size: int | None = None) -> list[list[int]]:
+    """Indices of ``paths`` in consecutive groups, one Dask task each.
+
+    ``size``: that many logs per group. None: groups of about :data:`BATCH_BYTES` of input, at
+    most :data:`BATCH_MAX_LOGS` logs and at most ``len(paths) / (BATCHES_PER_WORKER * workers)``
+    (so that every worker gets several tasks and they finish together); a log of
+    ``BATCH_BYTES`` or more is a group of its own.
+    """
+    n = len(paths)
+    if size is not None:
+        if size < 1:
+            raise ValueError(f"batch size must be >= 1, got {size}")
+        return [list(range(i, min(i + size, n))) for i in range(0, n, size)]
+    cap = max(1, min(BATCH_MAX_LOGS, math.ceil(n / (BATCHES_PER_WORKER * max(1, workers)))))
+    out: list[list[int]] = []
+    cur: list[int] = []
+    used = 0
+    for i, p in enumerate(paths):
+        b = _input_bytes(Path(p))
+        if cur and (used + b > BATCH_BYTES or len(cur) >= cap):
+            out.append(cur)
+            cur, used = [], 0
+        cur.append(i)
+        used += b
+    if cur:
+        out.append(cur)
+    return out
 
 
 def worker_failure(exc: BaseException) -> str:
@@ -75,8 +121,7 @@ class OnDask:
         self.workers = sum(client.nthreads().values())
 
     def batches(self, paths) -> list[list[int]]:
-        """Indices of ``paths`` in consecutive groups, one task each (:func:`roadbank.fleet.run.batches`)."""
-        from .run import batches
+        """Indices of ``paths`` in consecutive groups, one task each (:func:`batches`)."""
         return batches(paths, self.workers)
 
     def submit(self, fn, *args, **kwargs):

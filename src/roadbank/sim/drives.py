@@ -16,7 +16,7 @@ import numpy as np
 
 from .driver import Driver
 from .road import Road
-from .scenarios import Scenario
+from .scenario import Scenario
 
 LANE_WIDTH = 3.5  #: lateral offset of a lane change (m)
 

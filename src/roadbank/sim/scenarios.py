@@ -26,6 +26,7 @@ from .params import PlantParams
 from .plant import (A_AX, A_AY, A_DVY, A_FXW, A_FYW, A_FZW, NX, X_FXL, X_FYL, X_N, X_OMEGA, X_PHI, X_PSI, X_R,
                     X_S, X_VX, X_VY)
 from .road import Road, flat_road, straight_road, test_track, track_curve_start, truth_bank, two_lane_road
+from .scenario import Scenario
 from .sensors import SensorConfig, measure
 
 DT_DEFAULT = 2e-3  #: longest integration step (s): RK4 at 500 Hz (see :func:`default_step`)
@@ -50,40 +51,6 @@ def default_step(sensors: SensorConfig) -> float:
 def driver_every(dt: float) -> int:
     """Integration steps (of ``dt`` s) per driver update: the multiple closest to :data:`DRIVER_DT`, >= 1."""
     return max(1, int(round(DRIVER_DT / dt)))
-
-
-@dataclass(frozen=True)
-class Scenario:
-    """A manoeuvre: road, driver, duration and start position.
-
-    Parameters
-    ----------
-    name : str
-    road : Road
-    driver : Driver
-    duration : float
-        Simulated time after the pre-roll (s).
-    start_s, start_n : float
-        Path distance and lateral offset (m) of the CG at t = 0.
-    pre_roll : float
-        Settling time simulated before t = 0 and discarded (s).
-    description : str
-    """
-
-    name: str
-    road: Road
-    driver: Driver
-    duration: float
-    start_s: float = 0.0
-    start_n: float = 0.0
-    pre_roll: float = 5.0
-    description: str = ""
-
-    def __post_init__(self) -> None:
-        if not self.duration > 0:
-            raise ValueError("Scenario.duration must be > 0")
-        if not self.pre_roll >= 0:
-            raise ValueError("Scenario.pre_roll must be >= 0")
 
 
 @dataclass(frozen=True)
