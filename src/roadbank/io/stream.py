@@ -35,10 +35,12 @@ from . import readers
 from .channels import ChannelMap, check_plausible, default_channel_map, read_channel_map
 from .consistency import check_consistency
 from .errors import LogError, channel_error
-from .log import (FLAGGED_ROLES, GNSS_MAX_GAP_S, Log, gnss_extra, gnss_roles, load_log, missing_column,
-                  repair_counts, repair_stamps, road_wheel_angle, select_roles)
+from .files import open_mdf
+from .log import (FLAGGED_ROLES, GNSS_MAX_GAP_S, gnss_extra, gnss_roles, load_log, missing_column, repair_counts,
+                  repair_stamps, road_wheel_angle, select_roles)
 from .resample import clean_series, interpolate
 from .timebase import add_counts
+from .types import Log
 
 #: default rows per chunk (records per channel group for MDF4): 20 000 samples = 3.3 min at 100 Hz
 #: (memory vs per-chunk overhead: each 10 000 rows cost about 3.5 MiB of peak memory, docs/io.md)
@@ -290,7 +292,7 @@ class _Mdf4Channels:
         self.p = p
         self.fh = open(p, "rb")
         try:
-            self.mdf = readers.open_mdf(p, self.fh)
+            self.mdf = open_mdf(p, self.fh)
         except LogError:
             self.fh.close()
             raise
