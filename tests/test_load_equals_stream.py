@@ -26,9 +26,10 @@ COMMA = DATA / "comma2k19-example"
 CHUNKS = (61, 1000)
 
 
-def assert_stream_equals_load(path, chunk_rows, channels=None, format=None, more=()):
+def assert_stream_equals_load(path, chunk_rows, channels=None, format=None, more=(), counts=True):
     """The chunks of ``stream_log`` put end to end equal ``load_log`` (to 1e-12, NaN where NaN) on every
-    signal channel and on ``more``: names of ``reference_roll`` / ``extra[...]`` entries to compare too."""
+    signal channel and on ``more``: names of ``reference_roll`` / ``extra[...]`` entries to compare too;
+    with ``counts``, the chunks' time-stamp repair counts add up to the whole file's."""
     whole = load_log(path, channels=channels, format=format)
     chunks = list(stream_log(path, channels=channels, format=format, chunk_rows=chunk_rows))
     assert chunks, path
@@ -41,6 +42,11 @@ def assert_stream_equals_load(path, chunk_rows, channels=None, format=None, more
         part = (lambda c: c.reference_roll) if name == "reference_roll" else (lambda c, n=name: c.extra[n])
         np.testing.assert_allclose(np.concatenate([part(c) for c in chunks]), part(whole), rtol=0, atol=1e-12,
                                    equal_nan=True, err_msg=name)
+    total: dict = {}
+    for c in chunks:
+        for kind, v in c.time_repairs.items():
+            total[kind] = total.get(kind, 0) + v
+    assert not counts or {k: v for k, v in total.items() if v} == {k: v for k, v in whole.time_repairs.items() if v}
     return whole, chunks
 
 
@@ -181,8 +187,10 @@ CASES = [(seed, mixed, damaged, tb) for seed, (mixed, damaged, tb) in enumerate(
                          ids=[f"{s}-{'mixed' if m else 'one-rate'}-{'damaged' if d else 'clean'}-{tb}"
                               for s, m, d, tb in CASES])
 @pytest.mark.parametrize("suffix", [".parquet", ".csv"])
-def test_written_table(tmp_path, suffix, seed, mixed, damaged, tb, chunk):
+def test_written_table(request, tmp_path, suffix, seed, mixed, damaged, tb, chunk):
     from roadbank.io.writers import write_table
+    if (suffix, seed, chunk) == (".parquet", 1, 61):     # a first chunk of jittery stamps with a few NaN
+        request.applymarker(pytest.mark.xfail(strict=True, reason=AUTO_FIRST_CHUNK))
     rng = np.random.default_rng(1000 + seed)
     cols = _table(seed, mixed)
     if damaged:
@@ -196,6 +204,46 @@ def test_written_table(tmp_path, suffix, seed, mixed, damaged, tb, chunk):
         assert whole.time_repairs.get("duplicate", 0) > 0 and whole.time_repairs.get("flagged", 0) > 0
     if suffix == ".parquet" and chunk < len(cols["t"]) // 2:
         assert len(chunks) > 1
+
+
+#: the known difference (see test_auto_time_base_is_decided_on_the_first_chunk)
+AUTO_FIRST_CHUNK = ("stream_log decides time_base='auto' on the first chunk, load_log on the whole file: "
+                    "a first chunk whose channels' median steps differ by over 1 % (jitter, a few invalid "
+                    "samples) is resampled onto the uniform grid, the whole file keeps the table clock")
+
+
+@pytest.mark.xfail(strict=True, reason=AUTO_FIRST_CHUNK)
+def test_auto_time_base_is_decided_on_the_first_chunk(tmp_path):
+    """One clock, 50 Hz with jitter; the speed sensor gives every 3rd sample only during the first second."""
+    from roadbank.io.writers import write_table
+    rng = np.random.default_rng(7)
+    n = 2000
+    t = np.arange(n) / 50.0 + rng.uniform(-0.002, 0.002, n)
+    vx = 15.0 + np.sin(0.1 * t)
+    vx[:60][np.arange(60) % 3 != 0] = np.nan
+    cols = {"t": t, "vx": vx, "ay": 0.5 * np.sin(0.4 * t), "r": 0.03 * np.sin(0.4 * t), "delta_f": 0.01 * np.sin(t)}
+    p = tmp_path / "log.parquet"
+    write_table(p, cols)
+    whole = load_log(p)
+    np.testing.assert_array_equal(whole.signals.t, t)                     # the whole file: the table clock
+    assert_stream_equals_load(p, 200)
+
+
+def test_sample_after_a_dropped_stamp_stays_flagged_across_the_held_rows(tmp_path):
+    """An isolated early stamp on the row just before the rows a chunk holds back for the next one: the
+    sample after it is flagged not valid (NaN) by the whole file's repair, and so in the stream."""
+    from roadbank.io.stream import HOLD_ROWS
+    from roadbank.io.writers import write_table
+    n, chunk = 400, 61
+    t = np.arange(n) / 100.0
+    row = chunk - HOLD_ROWS - 1
+    t[row] -= 0.3
+    cols = {"t": t, "vx": 15.0 + np.sin(t), "ay": 0.5 * np.sin(t), "r": 0.03 * np.cos(t), "delta_f": 0.01 * t}
+    p = tmp_path / "log.parquet"
+    write_table(p, cols)
+    whole, chunks = assert_stream_equals_load(p, chunk)
+    assert np.isnan(whole.signals.vx[row]) and whole.time_repairs["flagged"] == 1   # the row after the dropped one
+    assert len(chunks) > 1
 
 
 MDF_MAP = MAP                # (the time channel is not used for MDF4: each channel has its own clock)
@@ -228,5 +276,28 @@ def test_written_mdf4(tmp_path, seed, chunk):
     mdf.save(p)
     tb = ["auto", "uniform", "lateral_acceleration"][seed % 3]
     (tmp_path / "m.toml").write_text(MDF_MAP.format(tb=tb, rate=float(rng.choice([25.0, 100.0])), gap=0.5))
-    whole, chunks = assert_stream_equals_load(p, chunk, channels=tmp_path / "m.toml", more=("reference_roll",))
+    # (repair counts: see test_mdf4_repairs_after_the_common_span_are_counted)
+    whole, chunks = assert_stream_equals_load(p, chunk, channels=tmp_path / "m.toml", more=("reference_roll",),
+                                              counts=False)
     assert whole.time_repairs.get("flagged", 0) > 0
+
+
+@pytest.mark.xfail(strict=True, reason="stream_log (MDF4) adds a channel's repair counts to the next chunk it "
+                   "yields: repairs on samples after the last grid time (a channel running past the others) "
+                   "are never reported; load_log counts them")
+def test_mdf4_repairs_after_the_common_span_are_counted(tmp_path):
+    pytest.importorskip("asammdf")
+    from asammdf import MDF, Signal
+    t = np.arange(1000) / 100.0
+    ts = np.arange(1200) / 100.0          # the speed channel runs 2 s longer than the others
+    ts[1150] = ts[1149]                   # a duplicate stamp in that last part
+    mdf = MDF(version="4.10")
+    mdf.append([Signal(0.5 * np.sin(t), t, name="ay"), Signal(0.03 * np.cos(t), t, name="r"),
+                Signal(0.01 * t, t, name="delta_f"), Signal(0.0 * t, t, name="roll")])
+    mdf.append([Signal(15.0 + np.sin(ts), ts, name="vx")])
+    p = tmp_path / "log.mf4"
+    mdf.save(p)
+    (tmp_path / "m.toml").write_text(MDF_MAP.format(tb="uniform", rate=100.0, gap=0.5))
+    whole = load_log(p, channels=tmp_path / "m.toml")
+    assert whole.time_repairs["duplicate"] == 1
+    assert_stream_equals_load(p, 100, channels=tmp_path / "m.toml")
