@@ -25,10 +25,9 @@ from pathlib import Path
 import numpy as np
 
 from .errors import LogError
-from .readers import RawTable, _existing_nonempty, open_mdf
-
-#: format name -> how it is recognised (suffix)
-CAN_FORMATS = {"blf": ".blf", "asc": ".asc", "trc": ".trc", "candump": ".log", "mdf4-can": ".mf4"}
+from .files import existing_nonempty, open_mdf
+from .formats import CAN_FORMATS
+from .types import RawTable
 
 
 def _need(module: str, path, extra: str = "can"):
@@ -85,7 +84,7 @@ def read_frames(path, fmt: str) -> Frames:
     LogError
         Missing, empty, truncated or corrupt file; missing optional dependency.
     """
-    p = _existing_nonempty(path)
+    p = existing_nonempty(path)
     if fmt == "mdf4-can":
         return _read_mdf4_frames(p)
     can = _need("can", p)

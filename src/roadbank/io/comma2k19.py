@@ -37,6 +37,7 @@ from ..params import VehicleParams
 from ..signals import Signals
 from .errors import LogError
 from .resample import common_time_base, interpolate, resample
+from .types import Log
 
 # WGS-84
 _A = 6378137.0
@@ -125,8 +126,6 @@ def load_comma2k19(path, params: VehicleParams | None = None, rate_hz: float = 1
     rate_hz : float
         Rate of the common uniform time base (default 100 Hz).
     """
-    from .log import Log
-
     p = Path(path)
     if not p.is_dir():
         raise LogError(f"{p}: not a comma2k19 segment directory")

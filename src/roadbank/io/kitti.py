@@ -49,6 +49,7 @@ import numpy as np
 from ..signals import Signals
 from .consistency import check_consistency
 from .errors import LogError
+from .types import Log
 
 #: fields per oxts frame (dataformat.txt)
 N_FIELDS = 30
@@ -160,8 +161,6 @@ def load_kitti_oxts(path):
     LogError
         Not a KITTI drive, several drives, or malformed files (see the module docstring).
     """
-    from .log import Log
-
     p = Path(path)
     found = find_oxts_dirs(p)
     if not found:

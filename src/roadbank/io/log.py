@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -13,55 +12,10 @@ from . import readers
 from .channels import ChannelMap, check_plausible, default_channel_map, read_channel_map
 from .consistency import check_consistency
 from .errors import LogError, channel_error
+from .formats import CAN_FORMATS, FORMATS, ROS_FORMATS
 from .resample import common_time_base, resample
 from .timebase import TimeRepair, UnrepairableTime, add_counts, describe, repair_time
-
-
-@dataclass
-class Log:
-    """One driving log, ready for the estimators.
-
-    Attributes
-    ----------
-    signals : Signals
-        ``t`` (s), ``vx`` (m/s), ``ay`` (m/s^2), ``r`` (rad/s), ``delta_f`` (rad), ISO 8855.
-    reference_roll : array or None
-        Reference roll angle (rad, ISO: left side up) on ``signals.t``, if the log has one.
-    source : Path
-        The file (or segment directory) read.
-    format : str
-        "csv", "parquet", "mdf4" or "comma2k19".
-    metadata : dict
-        File metadata (e.g. the scenario/condition/seed of a ``roadbank simulate`` Parquet file).
-    truth : dict name -> array
-        Truth columns (``true_*`` of simulated logs), SI, on ``signals.t``.
-    warnings : list of str
-        Suspicious but usable things found while reading (e.g. a unit that looks odd).
-    channel_map : ChannelMap or None
-        The map used (None for comma2k19 and kitti-oxts, whose layouts are fixed).
-    extra : dict name -> array
-        Further channels on ``signals.t``, unit in the name (kitti-oxts: ``lat_deg``,
-        ``lon_deg`` for maps).
-    time_repairs : dict kind -> int
-        What the time-stamp repair did (:mod:`roadbank.io.timebase`): samples dropped as
-        ``missing``, ``duplicate`` or ``out_of_order`` stamps, ``swapped`` pairs reordered,
-        ``gaps`` kept, and ``flagged``: samples whose values were set to NaN (the estimators
-        flag them not valid). Summed over the channels of a format with per-channel clocks.
-    """
-
-    signals: Signals
-    reference_roll: np.ndarray | None = None
-    source: Path = Path()
-    format: str = ""
-    metadata: dict = field(default_factory=dict)
-    truth: dict = field(default_factory=dict)
-    warnings: list = field(default_factory=list)
-    channel_map: ChannelMap | None = None
-    extra: dict = field(default_factory=dict)
-    time_repairs: dict = field(default_factory=dict)
-
-    def __len__(self) -> int:
-        return len(self.signals)
+from .types import Log
 
 
 #: the signal roles whose values are set to NaN on a sample flagged by the time-stamp repair
@@ -177,8 +131,8 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     """
     p = Path(path)
     fmt = (format or readers.detect_format(p)).lower()
-    if fmt not in readers.FORMATS:
-        raise LogError(f"{p}: unknown format '{fmt}' (known: {', '.join(readers.FORMATS)})")
+    if fmt not in FORMATS:
+        raise LogError(f"{p}: unknown format '{fmt}' (known: {', '.join(FORMATS)})")
     if fmt == "comma2k19":
         from .comma2k19 import load_comma2k19
         return load_comma2k19(p, params=params)
@@ -195,15 +149,15 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     warns: list[str] = []
     if fmt == "mdf4" and cmap.dbc is not None:
         fmt = "mdf4-can"                  # an MDF4 file with a DBC: bus logging
-    if fmt in readers.CAN_FORMATS:
+    if fmt in CAN_FORMATS:
         from .can import read_can
         raw, warns = read_can(p, cmap, fmt)
-    elif fmt in readers.ROS_FORMATS:
+    elif fmt in ROS_FORMATS:
         from .ros import read_ros
         raw, warns = read_ros(p, cmap, fmt)
     else:
         raw = readers.READERS[fmt](p, wanted, cmap.truth_prefix)
-    timed = fmt == "mdf4" or fmt in readers.CAN_FORMATS or fmt in readers.ROS_FORMATS
+    timed = fmt == "mdf4" or fmt in CAN_FORMATS or fmt in ROS_FORMATS
     have = set(raw.data)
     roles = select_roles(p, cmap, have, raw.names)
 

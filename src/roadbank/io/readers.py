@@ -10,53 +10,20 @@ from __future__ import annotations
 
 import csv
 import math
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from .errors import LogError
+from .files import existing_nonempty, open_mdf
+from .formats import CAN_FORMATS as CAN_FORMATS
+from .formats import FORMATS, SUFFIXES
+from .formats import ROS_FORMATS as ROS_FORMATS
+from .kitti import find_oxts_dirs
+from .types import RawTable
 
 #: strings read as a missing sample (NaN) rather than an error
 MISSING = {"", "nan", "na", "n/a", "null", "none", "-nan", "+nan"}
-
-#: raw CAN logs decoded with a DBC (roadbank.io.can) and ROS bags / MCAP (roadbank.io.ros)
-CAN_FORMATS = ("blf", "asc", "trc", "candump", "mdf4-can")
-ROS_FORMATS = ("rosbag1", "rosbag2", "mcap")
-FORMATS = ("csv", "parquet", "mdf4", "comma2k19", "kitti-oxts") + CAN_FORMATS + ROS_FORMATS
-_SUFFIX = {".csv": "csv", ".txt": "csv", ".tsv": "csv", ".parquet": "parquet", ".pq": "parquet",
-           ".mf4": "mdf4", ".mdf": "mdf4", ".mf3": "mdf4", ".blf": "blf", ".asc": "asc", ".trc": "trc",
-           ".log": "candump", ".bag": "rosbag1", ".mcap": "mcap", ".db3": "rosbag2"}
-
-
-@dataclass
-class RawTable:
-    """Columns read from one file.
-
-    Attributes
-    ----------
-    names : list of str
-        Every column / channel name the file has.
-    data : dict name -> float64 array
-        The requested columns that exist, in stored units.
-    times : dict name -> float64 array
-        Per-channel time stamps (s) for formats where each channel has its own
-        clock (MDF4); empty for tables with a time column.
-    metadata : dict
-        File-level key/value metadata (Parquet schema metadata, MDF header comment).
-    row_label : str
-        How rows are counted in messages ("line" for CSV, "row" otherwise).
-    rownums : sequence of int or None
-        Row number (in that counting) of each data row, for messages (CSV:
-        file line numbers, the header being line 1). None for MDF4.
-    """
-
-    names: list[str]
-    data: dict[str, np.ndarray]
-    times: dict[str, np.ndarray] = field(default_factory=dict)
-    metadata: dict[str, str] = field(default_factory=dict)
-    row_label: str = "row"
-    rownums: object = None
 
 
 def detect_format(path) -> str:
@@ -67,12 +34,11 @@ def detect_format(path) -> str:
             return "comma2k19"
         if (p / "metadata.yaml").is_file():
             return "rosbag2"
-        from .kitti import find_oxts_dirs
         if find_oxts_dirs(p):
             return "kitti-oxts"
         raise LogError(f"{p}: a directory, but neither a comma2k19 segment (no processed_log/) "
                        "nor a KITTI raw drive (no oxts/timestamps.txt)")
-    fmt = _SUFFIX.get(p.suffix.lower())
+    fmt = SUFFIXES.get(p.suffix.lower())
     if fmt == "mcap" and (p.parent / "metadata.yaml").is_file():
         fmt = "rosbag2"
     if fmt is None:
@@ -103,16 +69,6 @@ def _parse_floats(path, col: str, label: str, values, row_label: str, rownums) -
                 raise LogError(f"{path}: {label}: non-numeric value {s!r} at {row_label} "
                                f"{rownums[i]}") from None
     return out
-
-
-def _existing_nonempty(path) -> Path:
-    """``Path(path)``, or a :class:`LogError` if the file is missing or empty."""
-    p = Path(path)
-    if not p.exists():
-        raise LogError(f"{p}: file not found")
-    if p.stat().st_size == 0:
-        raise LogError(f"{p}: file is empty")
-    return p
 
 
 def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTable:
@@ -173,7 +129,7 @@ def read_parquet(path, wanted: dict[str, str], prefix: str | None = None) -> Raw
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    p = _existing_nonempty(path)
+    p = existing_nonempty(path)
     try:
         pf = pq.ParquetFile(p)
         schema = pf.schema_arrow
@@ -229,28 +185,13 @@ def arrow_column_floats(p, c: str, label: str, col, row0: int = 0) -> np.ndarray
     raise LogError(f"{p}: {label}: unsupported column type {t} (need numbers)")
 
 
-def open_mdf(p: Path, source=None):
-    """An asammdf ``MDF`` of file ``p`` (or of the open file object ``source``); LogError if it cannot be opened."""
-    from .mdfimport import import_asammdf
-
-    try:
-        MDF = import_asammdf().MDF
-    except ImportError:
-        raise LogError(f"{p}: reading MDF4 needs the optional dependency asammdf "
-                       "(pip install 'roadbank[mdf]')") from None
-    try:
-        return MDF(str(p) if source is None else source)
-    except Exception as exc:  # asammdf raises many types for corrupt files
-        raise LogError(f"{p}: not a readable MDF file (truncated or corrupt?): {exc}") from None
-
-
 def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTable:
     """Read channels of an ASAM MDF4 file (needs the optional ``asammdf``: ``pip install roadbank[mdf]``).
 
     Each MDF channel carries its own time stamps (its master channel, s); the
     channel map's ``time`` entry is not used for MDF4.
     """
-    p = _existing_nonempty(path)
+    p = existing_nonempty(path)
     mdf = open_mdf(p)
     try:
         names = [n for n in mdf.channels_db if n not in ("time", "t")] if hasattr(mdf, "channels_db") else []

@@ -28,9 +28,8 @@ from pathlib import Path
 import numpy as np
 
 from .errors import LogError
-from .readers import RawTable
-
-ROS_FORMATS = ("rosbag1", "rosbag2", "mcap")
+from .formats import ROS_FORMATS as ROS_FORMATS  # the formats read_ros takes
+from .types import RawTable
 
 
 def _stamp(msg) -> float | None:

@@ -35,10 +35,12 @@ from . import readers
 from .channels import ChannelMap, check_plausible, default_channel_map, read_channel_map
 from .consistency import check_consistency
 from .errors import LogError, channel_error
-from .log import (FLAGGED_ROLES, GNSS_MAX_GAP_S, Log, gnss_extra, gnss_roles, load_log, missing_column,
-                  repair_counts, repair_stamps, road_wheel_angle, select_roles)
+from .files import open_mdf
+from .log import (FLAGGED_ROLES, GNSS_MAX_GAP_S, gnss_extra, gnss_roles, load_log, missing_column, repair_counts,
+                  repair_stamps, road_wheel_angle, select_roles)
 from .resample import clean_series, interpolate
-from .timebase import add_counts
+from .timebase import MISSING, OUT_OF_ORDER, add_counts
+from .types import Log
 
 #: default rows per chunk (records per channel group for MDF4): 20 000 samples = 3.3 min at 100 Hz
 #: (memory vs per-chunk overhead: each 10 000 rows cost about 3.5 MiB of peak memory, docs/io.md)
@@ -63,6 +65,7 @@ class ChunkRepair:
         self.source, self.column, self.label, self.row_label = source, column, label, row_label
         self.after = None
         self.held = None         # (row0, t, {name: array}) rows waiting for the next chunk
+        self.carry = False       # the row before the held ones was dropped: flag the first one kept
         self.counts: dict = {}
         self.warned = False
 
@@ -77,10 +80,14 @@ class ChunkRepair:
         n = len(t)
         rep, warns = repair_stamps(self.source, self.column, t, label=self.label, after=self.after,
                                    rownums=range(row0, row0 + n), row_label=self.row_label)
+        if self.carry and len(rep.keep):     # as the whole file's repair: the sample after a dropped one
+            rep.flagged[0] = True
+        self.carry = False
         if not last and _odd_tail(t, rep):
             cut = max(n - HOLD_ROWS, 0)
             late = np.flatnonzero(rep.keep >= cut)
             c0 = min(cut, int(rep.keep[late[0]:].min())) if len(late) else cut
+            self.carry = bool(0 < c0 < n and rep.kind[c0 - 1] in (MISSING, OUT_OF_ORDER))
             rep = rep.head(c0, t, self.after)
             if c0 < n:
                 self.held = (row0 + c0, t[c0:], {c: a[c0:] for c, a in cols.items()})
@@ -290,7 +297,7 @@ class _Mdf4Channels:
         self.p = p
         self.fh = open(p, "rb")
         try:
-            self.mdf = readers.open_mdf(p, self.fh)
+            self.mdf = open_mdf(p, self.fh)
         except LogError:
             self.fh.close()
             raise

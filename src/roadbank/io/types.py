@@ -1,0 +1,89 @@
+"""The types the log readers share: :class:`RawTable` (the raw columns a format yields) and
+:class:`Log` (a log read into SI / ISO 8855 signals)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..signals import Signals
+from .channels import ChannelMap
+
+
+@dataclass
+class RawTable:
+    """Columns read from one file.
+
+    Attributes
+    ----------
+    names : list of str
+        Every column / channel name the file has.
+    data : dict name -> float64 array
+        The requested columns that exist, in stored units.
+    times : dict name -> float64 array
+        Per-channel time stamps (s) for formats where each channel has its own
+        clock (MDF4); empty for tables with a time column.
+    metadata : dict
+        File-level key/value metadata (Parquet schema metadata, MDF header comment).
+    row_label : str
+        How rows are counted in messages ("line" for CSV, "row" otherwise).
+    rownums : sequence of int or None
+        Row number (in that counting) of each data row, for messages (CSV:
+        file line numbers, the header being line 1). None for MDF4.
+    """
+
+    names: list[str]
+    data: dict[str, np.ndarray]
+    times: dict[str, np.ndarray] = field(default_factory=dict)
+    metadata: dict[str, str] = field(default_factory=dict)
+    row_label: str = "row"
+    rownums: object = None
+
+
+@dataclass
+class Log:
+    """One driving log, ready for the estimators.
+
+    Attributes
+    ----------
+    signals : Signals
+        ``t`` (s), ``vx`` (m/s), ``ay`` (m/s^2), ``r`` (rad/s), ``delta_f`` (rad), ISO 8855.
+    reference_roll : array or None
+        Reference roll angle (rad, ISO: left side up) on ``signals.t``, if the log has one.
+    source : Path
+        The file (or segment directory) read.
+    format : str
+        "csv", "parquet", "mdf4" or "comma2k19".
+    metadata : dict
+        File metadata (e.g. the scenario/condition/seed of a ``roadbank simulate`` Parquet file).
+    truth : dict name -> array
+        Truth columns (``true_*`` of simulated logs), SI, on ``signals.t``.
+    warnings : list of str
+        Suspicious but usable things found while reading (e.g. a unit that looks odd).
+    channel_map : ChannelMap or None
+        The map used (None for comma2k19 and kitti-oxts, whose layouts are fixed).
+    extra : dict name -> array
+        Further channels on ``signals.t``, unit in the name (kitti-oxts: ``lat_deg``,
+        ``lon_deg`` for maps).
+    time_repairs : dict kind -> int
+        What the time-stamp repair did (:mod:`roadbank.io.timebase`): samples dropped as
+        ``missing``, ``duplicate`` or ``out_of_order`` stamps, ``swapped`` pairs reordered,
+        ``gaps`` kept, and ``flagged``: samples whose values were set to NaN (the estimators
+        flag them not valid). Summed over the channels of a format with per-channel clocks.
+    """
+
+    signals: Signals
+    reference_roll: np.ndarray | None = None
+    source: Path = Path()
+    format: str = ""
+    metadata: dict = field(default_factory=dict)
+    truth: dict = field(default_factory=dict)
+    warnings: list = field(default_factory=list)
+    channel_map: ChannelMap | None = None
+    extra: dict = field(default_factory=dict)
+    time_repairs: dict = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.signals)

@@ -1,0 +1,303 @@
+"""``load_log`` is the concatenation of ``stream_log``: for every format both read, the signals of the
+whole-file read equal the chunks' signals put end to end (every channel, NaN where NaN), at two chunk
+sizes, on the shipped real drives and on files written here from seeded random draws (rates, jitter,
+gaps, missing values, damaged time stamps that the time-stamp repair fixes).
+
+Truth is the whole-file path, itself tested against hand-made files in test_io_readers.py and
+test_timestamps.py; the streamed path must reproduce it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from roadbank.io import load_log
+from roadbank.io.stream import stream_log
+
+SIG = ("t", "vx", "ay", "r", "delta_f")
+DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+KITTI = sorted((DATA / "kitti-oxts").glob("*/oxts")) if (DATA / "kitti-oxts").is_dir() else []
+COMMA = DATA / "comma2k19-example"
+CHUNKS = (61, 1000)
+
+
+def assert_stream_equals_load(path, chunk_rows, channels=None, format=None, more=(), counts=True):
+    """The chunks of ``stream_log`` put end to end equal ``load_log`` (to 1e-12, NaN where NaN) on every
+    signal channel and on ``more``: names of ``reference_roll`` / ``extra[...]`` entries to compare too;
+    with ``counts``, the chunks' time-stamp repair counts add up to the whole file's."""
+    whole = load_log(path, channels=channels, format=format)
+    chunks = list(stream_log(path, channels=channels, format=format, chunk_rows=chunk_rows))
+    assert chunks, path
+    for k in SIG:
+        got = np.concatenate([getattr(c.signals, k) for c in chunks])
+        want = getattr(whole.signals, k)
+        assert got.shape == want.shape, (k, got.shape, want.shape)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12, equal_nan=True, err_msg=k)
+    for name in more:
+        part = (lambda c: c.reference_roll) if name == "reference_roll" else (lambda c, n=name: c.extra[n])
+        np.testing.assert_allclose(np.concatenate([part(c) for c in chunks]), part(whole), rtol=0, atol=1e-12,
+                                   equal_nan=True, err_msg=name)
+    total: dict = {}
+    for c in chunks:
+        for kind, v in c.time_repairs.items():
+            total[kind] = total.get(kind, 0) + v
+    assert not counts or {k: v for k, v in total.items() if v} == {k: v for k, v in whole.time_repairs.items() if v}
+    return whole, chunks
+
+
+# ------------------------------------------------------------------ the shipped real drives
+
+needs_kitti = pytest.mark.skipif(not KITTI, reason=f"KITTI oxts drives absent at {DATA / 'kitti-oxts'}")
+
+
+@needs_kitti
+@pytest.mark.parametrize("chunk", CHUNKS)
+@pytest.mark.parametrize("drive", KITTI, ids=lambda d: d.parent.name)
+def test_kitti_drive(drive, chunk):
+    assert_stream_equals_load(drive.parent, chunk, more=("reference_roll", "lat_deg", "lon_deg"))
+
+
+@pytest.mark.skipif(not COMMA.is_dir(), reason=f"comma2k19 example segment absent at {COMMA}")
+@pytest.mark.parametrize("chunk", CHUNKS)
+def test_comma2k19_segment(chunk):
+    assert_stream_equals_load(COMMA, chunk, more=("reference_roll", "lat_deg", "lon_deg"))
+
+
+REAL_MAP = """
+[channels]
+time = { column = "t", unit = "s" }
+speed = { column = "vf", unit = "m/s" }
+lateral_acceleration = { column = "ay", unit = "m/s^2" }
+yaw_rate = { column = "wz", unit = "rad/s" }
+road_wheel_angle = { column = "delta", unit = "rad" }
+reference_roll = { column = "roll", unit = "rad" }
+latitude = { column = "lat", unit = "deg" }
+longitude = { column = "lon", unit = "deg" }
+"""
+
+
+def _kitti_columns(drive):
+    """The real drive's samples as roadbank-readable columns (its own, irregular, clock); the steering
+    angle, which KITTI does not log, a smooth made-up one."""
+    log = load_log(drive.parent)
+    s = log.signals
+    return {"t": s.t, "vf": s.vx, "ay": s.ay, "wz": s.r, "delta": 0.02 * np.sin(0.3 * s.t),
+            "roll": log.reference_roll, "lat": log.extra["lat_deg"], "lon": log.extra["lon_deg"]}
+
+
+@needs_kitti
+@pytest.mark.parametrize("chunk", (37, 250))
+def test_kitti_values_as_parquet(tmp_path, chunk):
+    cols = _kitti_columns(KITTI[0])
+    p = tmp_path / "kitti.parquet"
+    pq.write_table(pa.table(cols), p)
+    (tmp_path / "m.toml").write_text(REAL_MAP)
+    whole, chunks = assert_stream_equals_load(p, chunk, channels=tmp_path / "m.toml",
+                                              more=("reference_roll", "lat_deg", "lon_deg"))
+    assert len(chunks) > 1
+    np.testing.assert_array_equal(whole.signals.t, cols["t"])          # the table clock is kept
+
+
+@needs_kitti
+@pytest.mark.parametrize("chunk", (37, 250))
+def test_kitti_values_as_mdf4(tmp_path, chunk):
+    pytest.importorskip("asammdf")
+    from asammdf import MDF, Signal
+    cols = _kitti_columns(KITTI[-1])
+    t = cols.pop("t")
+    mdf = MDF(version="4.10")
+    mdf.append([Signal(cols[c], t, name=c) for c in ("ay", "wz", "roll")])
+    mdf.append([Signal(cols[c], t, name=c) for c in ("vf", "delta", "lat", "lon")])
+    p = tmp_path / "kitti.mf4"
+    mdf.save(p)
+    (tmp_path / "m.toml").write_text(REAL_MAP)
+    _, chunks = assert_stream_equals_load(p, chunk, channels=tmp_path / "m.toml",
+                                          more=("reference_roll", "lat_deg", "lon_deg"))
+    assert len(chunks) > 1
+
+
+# ------------------------------------------------------------------ written files, seeded draws
+
+def _damage(t, rng, n_each, missing=True):
+    """Damage a clock as loggers do (duplicates, swapped pairs, isolated late / early stamps, missing
+    stamps unless ``missing=False``) at random rows, and a pause; the time-stamp repair can undo all of it."""
+    t = t.copy()
+    n = len(t)
+    rows = rng.choice(np.arange(10, n - 10, 7), size=5 * n_each, replace=False).reshape(5, n_each)  # 7 apart
+    t[rows[0]] = t[rows[0] - 1]                               # duplicated stamps
+    for i in rows[1]:
+        t[i], t[i + 1] = t[i + 1], t[i]                       # swapped pairs
+    t[rows[2]] += 5.0                                         # isolated late stamps
+    t[rows[3]] -= 4.0                                         # isolated early stamps
+    if missing:
+        t[rows[4]] = np.nan                                   # missing stamps
+    t[n // 2:] += 1.5                                         # the logger paused: a gap, kept
+    return t
+
+
+def _table(seed, mixed):
+    """Columns t, vx, ay, r, delta_f, reference roll and truth: one clock (``mixed=False``) or channels
+    at their own rates on the union of their stamps, NaN between (``mixed=True``)."""
+    rng = np.random.default_rng(seed)
+    rate = float(rng.choice([20.0, 50.0, 100.0, 200.0]))
+    n = int(rng.integers(600, 2500))
+    t = 3.0 + np.arange(n) / rate + rng.uniform(-0.1, 0.1, n) / rate
+    t.sort()
+    wave = {"vx": 15.0 + 3 * np.sin(0.1 * t), "ay": 0.8 * np.sin(0.4 * t) + 0.02 * rng.standard_normal(n),
+            "r": 0.05 * np.sin(0.4 * t + 0.2), "delta_f": 0.01 * np.sin(0.4 * t - 0.1),
+            "roll": 0.03 * np.sin(0.05 * t), "true_phi_b": 0.02 * np.cos(0.05 * t)}
+    cols = {"t": t}
+    for k, v in wave.items():
+        v = v.copy()
+        if mixed and k in ("vx", "delta_f"):     # slower channels: every 2nd / 5th row only
+            v[np.arange(n) % (2 if k == "vx" else 5) != 0] = np.nan
+        v[rng.random(n) < 0.01] = np.nan         # scattered missing values
+        cols[k] = v
+    return cols
+
+
+MAP = """
+[resample]
+time_base = "{tb}"
+rate_hz = {rate}
+max_gap_s = {gap}
+
+[channels]
+time = {{ column = "t", unit = "s" }}
+speed = {{ column = "vx", unit = "m/s" }}
+lateral_acceleration = {{ column = "ay", unit = "m/s^2" }}
+yaw_rate = {{ column = "r", unit = "rad/s" }}
+road_wheel_angle = {{ column = "delta_f", unit = "rad" }}
+reference_roll = {{ column = "roll", unit = "rad" }}
+"""
+
+CASES = [(seed, mixed, damaged, tb) for seed, (mixed, damaged, tb) in enumerate(
+    [(False, False, "auto"), (False, True, "auto"), (True, False, "auto"), (True, True, "auto"),
+     (False, True, "uniform"), (True, True, "uniform"), (False, True, "lateral_acceleration"),
+     (True, True, "lateral_acceleration"), (False, True, "auto"), (True, True, "uniform")])]
+
+
+@pytest.mark.parametrize("chunk", CHUNKS)
+@pytest.mark.parametrize("seed,mixed,damaged,tb", CASES,
+                         ids=[f"{s}-{'mixed' if m else 'one-rate'}-{'damaged' if d else 'clean'}-{tb}"
+                              for s, m, d, tb in CASES])
+@pytest.mark.parametrize("suffix", [".parquet", ".csv"])
+def test_written_table(request, tmp_path, suffix, seed, mixed, damaged, tb, chunk):
+    from roadbank.io.writers import write_table
+    if (suffix, seed, chunk) == (".parquet", 1, 61):     # a first chunk of jittery stamps with a few NaN
+        request.applymarker(pytest.mark.xfail(strict=True, reason=AUTO_FIRST_CHUNK))
+    rng = np.random.default_rng(1000 + seed)
+    cols = _table(seed, mixed)
+    if damaged:
+        cols["t"] = _damage(cols["t"], rng, 3)
+    p = tmp_path / f"log{suffix}"
+    write_table(p, cols)
+    (tmp_path / "m.toml").write_text(MAP.format(tb=tb, rate=float(rng.choice([25.0, 100.0])),
+                                                gap=float(rng.choice([0.2, 0.5]))))
+    whole, chunks = assert_stream_equals_load(p, chunk, channels=tmp_path / "m.toml", more=("reference_roll",))
+    if damaged:
+        assert whole.time_repairs.get("duplicate", 0) > 0 and whole.time_repairs.get("flagged", 0) > 0
+    if suffix == ".parquet" and chunk < len(cols["t"]) // 2:
+        assert len(chunks) > 1
+
+
+#: the known difference (see test_auto_time_base_is_decided_on_the_first_chunk)
+AUTO_FIRST_CHUNK = ("stream_log decides time_base='auto' on the first chunk, load_log on the whole file: "
+                    "a first chunk whose channels' median steps differ by over 1 % (jitter, a few invalid "
+                    "samples) is resampled onto the uniform grid, the whole file keeps the table clock")
+
+
+@pytest.mark.xfail(strict=True, reason=AUTO_FIRST_CHUNK)
+def test_auto_time_base_is_decided_on_the_first_chunk(tmp_path):
+    """One clock, 50 Hz with jitter; the speed sensor gives every 3rd sample only during the first second."""
+    from roadbank.io.writers import write_table
+    rng = np.random.default_rng(7)
+    n = 2000
+    t = np.arange(n) / 50.0 + rng.uniform(-0.002, 0.002, n)
+    vx = 15.0 + np.sin(0.1 * t)
+    vx[:60][np.arange(60) % 3 != 0] = np.nan
+    cols = {"t": t, "vx": vx, "ay": 0.5 * np.sin(0.4 * t), "r": 0.03 * np.sin(0.4 * t), "delta_f": 0.01 * np.sin(t)}
+    p = tmp_path / "log.parquet"
+    write_table(p, cols)
+    whole = load_log(p)
+    np.testing.assert_array_equal(whole.signals.t, t)                     # the whole file: the table clock
+    assert_stream_equals_load(p, 200)
+
+
+def test_sample_after_a_dropped_stamp_stays_flagged_across_the_held_rows(tmp_path):
+    """An isolated early stamp on the row just before the rows a chunk holds back for the next one: the
+    sample after it is flagged not valid (NaN) by the whole file's repair, and so in the stream."""
+    from roadbank.io.stream import HOLD_ROWS
+    from roadbank.io.writers import write_table
+    n, chunk = 400, 61
+    t = np.arange(n) / 100.0
+    row = chunk - HOLD_ROWS - 1
+    t[row] -= 0.3
+    cols = {"t": t, "vx": 15.0 + np.sin(t), "ay": 0.5 * np.sin(t), "r": 0.03 * np.cos(t), "delta_f": 0.01 * t}
+    p = tmp_path / "log.parquet"
+    write_table(p, cols)
+    whole, chunks = assert_stream_equals_load(p, chunk)
+    assert np.isnan(whole.signals.vx[row]) and whole.time_repairs["flagged"] == 1   # the row after the dropped one
+    assert len(chunks) > 1
+
+
+MDF_MAP = MAP                # (the time channel is not used for MDF4: each channel has its own clock)
+
+
+@pytest.mark.parametrize("chunk", CHUNKS)
+@pytest.mark.parametrize("seed", range(6))
+def test_written_mdf4(tmp_path, seed, chunk):
+    """MDF4, every channel group on its own clock (rates, offsets, jitter), one clock damaged."""
+    pytest.importorskip("asammdf")
+    from asammdf import MDF, Signal
+    rng = np.random.default_rng(seed)
+    dur = float(rng.uniform(8.0, 30.0))
+    groups = {}
+    for names in (("ay", "r"), ("vx",), ("delta_f", "roll")):
+        rate = float(rng.choice([10.0, 20.0, 50.0, 100.0, 200.0]))
+        n = int(dur * rate)
+        t = float(rng.uniform(0.0, 0.3)) + np.arange(n) / rate + rng.uniform(-0.05, 0.05, n) / rate
+        t.sort()
+        groups[names] = t
+    damaged = list(groups)[seed % 3]
+    # (no missing stamps: asammdf rewrites a master channel holding NaN when the group is appended)
+    groups[damaged] = _damage(groups[damaged], rng, 2, missing=False)
+    mdf = MDF(version="4.10")
+    for names, t in groups.items():
+        sig = {"ay": 0.8 * np.sin(0.4 * t), "r": 0.05 * np.sin(0.4 * t + 0.2), "vx": 15.0 + 3 * np.sin(0.1 * t),
+               "delta_f": 0.01 * np.sin(0.4 * t - 0.1), "roll": 0.03 * np.sin(0.05 * t)}
+        mdf.append([Signal(sig[c], t, name=c) for c in names])
+    p = tmp_path / "log.mf4"
+    mdf.save(p)
+    tb = ["auto", "uniform", "lateral_acceleration"][seed % 3]
+    (tmp_path / "m.toml").write_text(MDF_MAP.format(tb=tb, rate=float(rng.choice([25.0, 100.0])), gap=0.5))
+    # (repair counts: see test_mdf4_repairs_after_the_common_span_are_counted)
+    whole, chunks = assert_stream_equals_load(p, chunk, channels=tmp_path / "m.toml", more=("reference_roll",),
+                                              counts=False)
+    assert whole.time_repairs.get("flagged", 0) > 0
+
+
+@pytest.mark.xfail(strict=True, reason="stream_log (MDF4) adds a channel's repair counts to the next chunk it "
+                   "yields: repairs on samples after the last grid time (a channel running past the others) "
+                   "are never reported; load_log counts them")
+def test_mdf4_repairs_after_the_common_span_are_counted(tmp_path):
+    pytest.importorskip("asammdf")
+    from asammdf import MDF, Signal
+    t = np.arange(1000) / 100.0
+    ts = np.arange(1200) / 100.0          # the speed channel runs 2 s longer than the others
+    ts[1150] = ts[1149]                   # a duplicate stamp in that last part
+    mdf = MDF(version="4.10")
+    mdf.append([Signal(0.5 * np.sin(t), t, name="ay"), Signal(0.03 * np.cos(t), t, name="r"),
+                Signal(0.01 * t, t, name="delta_f"), Signal(0.0 * t, t, name="roll")])
+    mdf.append([Signal(15.0 + np.sin(ts), ts, name="vx")])
+    p = tmp_path / "log.mf4"
+    mdf.save(p)
+    (tmp_path / "m.toml").write_text(MDF_MAP.format(tb="uniform", rate=100.0, gap=0.5))
+    whole = load_log(p, channels=tmp_path / "m.toml")
+    assert whole.time_repairs["duplicate"] == 1
+    assert_stream_equals_load(p, 100, channels=tmp_path / "m.toml")
