@@ -147,16 +147,7 @@ def test_a_scheduler_that_cannot_be_reached_is_one_line(tmp_path, monkeypatch):
 
 # ---------------------------------------------------------------- map
 PROJ = LocalProjection(48.0, 11.0)
-MAP_TOML = """
-[channels]
-time = { column = "t", unit = "s" }
-speed = { column = "vx", unit = "m/s" }
-lateral_acceleration = { column = "ay", unit = "m/s^2" }
-yaw_rate = { column = "r", unit = "rad/s" }
-road_wheel_angle = { column = "delta_f", unit = "rad" }
-latitude = { column = "lat", unit = "deg" }
-longitude = { column = "lon", unit = "deg" }
-"""
+from test_mapping import MAP_TOML  # noqa: E402  (the map tests' channel map)
 
 
 def _map_logs(tmp_path, n=6, origin=PROJ):
