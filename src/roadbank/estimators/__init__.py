@@ -4,9 +4,11 @@
 >>> est = estimators.make("pif-modified")
 >>> estimate = est.run(signals)           # doctest: +SKIP
 
-``NAMES`` lists the estimators (the paper's, the Kalman peer, ``pif-rate``, ``pif-adaptive``,
-``pif-rate-adaptive``, ``pif-gated`` and the offline ``pif-smoother``); ``make(name, params, **tuning)``
-builds one.
+``NAMES`` lists the estimators (the paper's, the Kalman peer, the low-passed kinematic estimates
+``kinematic-lp`` and ``kinematic-ff``, ``kinematic-pif`` (the default of every command,
+:data:`DEFAULT`), ``pif-rate``, ``pif-adaptive``, ``pif-rate-adaptive``, ``pif-gated`` and the offline
+``pif-smoother``); ``make(name, params, **tuning)`` builds one, :func:`roadbank.vehicle.for_log`
+builds one for a log as the command line does.
 ``PRESETS`` are further names ``make`` accepts: ``pif-paper`` is ``pif-modified`` with the paper's
 Table 4 weights (``pif-modified`` itself is roadbank's default tuning).
 Each has ``run(signals) -> Estimate``, ``step(t, vx, ay, r, delta_f)`` and ``reset()``.

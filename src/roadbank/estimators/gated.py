@@ -1,4 +1,7 @@
-r"""``pif-gated`` — the default PIF, switched to a fast bank-rate PIF while the yaw accelerates.
+r"""Two filters blended by the yaw acceleration: ``pif-gated`` and ``kinematic-pif`` (:class:`KinematicPIF`,
+the default of every command: ``kinematic-ff`` on real roads, the default PIF in hard transients).
+
+``pif-gated`` — the default PIF, switched to a fast bank-rate PIF while the yaw accelerates.
 
 A causal estimator beyond the paper. A PIF must trade lag behind bank changes against the
 noise it passes: the default ``pif-modified`` is quiet and lags a bank that changes within a
