@@ -1,10 +1,11 @@
 """What roadbank assumes when the user says nothing (no import cost: plain constants).
 
 * :data:`ESTIMATOR` — the estimator of every command (``estimate``, ``map`` streams, the fleet) and
-  of :func:`roadbank.vehicle.for_log` when none is named: ``kinematic-ff``, the best by a rule
-  written before measuring, on training data only (the KITTI training drives and simulated drives
-  of cars that are not described; docs/estimators.md, :mod:`roadbank.tuning.real`). It uses no tyre
-  data, so it does not rest on one car.
+  of :func:`roadbank.vehicle.for_log` when none is named: ``kinematic-pif`` (``kinematic-ff``,
+  handed to the default PIF while the yaw rate changes fast), chosen on training data only by
+  the real-roads-first rule of :mod:`roadbank.tuning.real` (the KITTI training drives first, the
+  simulated drives of cars that are not described to break ties; docs/estimators.md). Its
+  low-pass uses no tyre data.
 * :data:`VEHICLE` — a log whose car is not described: the estimators that need a car model are
   designed for the parameters of this shipped car (with the data sheet's ESP sensors) in every
   command that reads logs (``estimate``, ``map``, ``validate``) and in
