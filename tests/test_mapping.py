@@ -246,3 +246,24 @@ def test_ecef_position_channels(tmp_path):
     with pytest.raises(LogError, match=r"ecef\.parquet: channel 'ecef_x' \(column 'X'\): median distance .* "
                                        r"not an ECEF position"):
         load_log(tmp_path / "ecef.parquet", channels=tmp_path / "bad.toml")
+
+
+def test_designs_are_measured_on_the_same_span_whatever_the_chunk_size(tmp_path):
+    """roadbank estimate and map design a log's estimator on the conditions of its first 60 s
+    (ReadAhead.leading): the same for a log streamed in small chunks as in one chunk."""
+    from roadbank.io.stream import ReadAhead, stream_log
+    from roadbank.sim import run_scenario
+    from roadbank.vehicle import DESIGN_SPAN_S, log_conditions
+
+    res = run_scenario("track-lane1", seed=2)
+    pq.write_table(pa.table(res.table()), tmp_path / "drive.parquet")
+    conds = []
+    for rows in (200, 1_000_000):
+        chunks = ReadAhead(stream_log(tmp_path / "drive.parquet", chunk_rows=rows))
+        first = next(chunks)
+        span = chunks.leading(first.signals, DESIGN_SPAN_S)
+        assert span.t[-1] - span.t[0] >= min(DESIGN_SPAN_S, res.signals.t[-1] - res.signals.t[0]) - 0.011
+        conds.append(log_conditions(span))
+        if rows < len(res.signals):                 # the chunks read ahead are still handed out
+            assert len(next(chunks).signals) == rows
+    assert conds[0] == conds[1]

@@ -97,6 +97,14 @@ class Signals:
         return cls(t, vx, ay, r, road_wheel_angle(steering_wheel_angle, params))
 
 
+def concat_signals(parts) -> "Signals":
+    """The :class:`Signals` of consecutive pieces of one log, one after the other (every channel)."""
+    parts = list(parts)
+    if len(parts) == 1:
+        return parts[0]
+    return Signals(*(np.concatenate([getattr(p, c) for p in parts]) for c in CHANNELS))
+
+
 def sample_rate(t) -> float:
     """Sample rate (Hz) of a time base ``t`` (s): 1 / its median positive finite interval.
 

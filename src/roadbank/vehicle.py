@@ -39,6 +39,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import inspect
+import functools
 import math
 import re
 import tomllib
@@ -400,8 +401,10 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     return estimators.make(name, params, **options)
 
 
+@functools.lru_cache(maxsize=1)
 def undescribed_params() -> VehicleParams:
-    """The car parameters for a log whose car is not described (:data:`roadbank.defaults.VEHICLE`)."""
+    """The car parameters for a log whose car is not described (:data:`roadbank.defaults.VEHICLE`;
+    read once, the parameters are immutable)."""
     from .defaults import VEHICLE
 
     return load_vehicle(VEHICLE).params
@@ -437,20 +440,27 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
             "log_r_noise": float(f"{r_noise:.2g}")}
 
 
+def for_conditions(name: str, cond: dict, params: VehicleParams | None = None, *, vehicle=None, **tuning):
+    """Build the estimator ``name`` for a log's conditions ``cond`` (:func:`log_conditions`).
+
+    The car is ``vehicle`` (a :class:`Vehicle`: its parameters, sensors and tuning tables) or
+    ``params`` with the data sheet's sensors; neither: the car for a log whose car is not
+    described (:func:`undescribed_params`). What ``roadbank estimate``, ``map`` and
+    :func:`for_log` build.
+    """
+    if vehicle is not None:
+        return vehicle.make(name, **cond, **tuning)
+    return make_estimator(name, params if params is not None else undescribed_params(), **cond, **tuning)
+
+
 def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=None, **tuning):
     """Build the estimator ``name`` for the log ``signals`` as ``roadbank estimate`` does.
 
     A default-tuned PIF is designed for the log's sample rate and the road noise measured on
-    its ``ay`` and yaw rate (:func:`roadbank.vehicle.log_conditions`); the car is ``vehicle``
-    (a :class:`roadbank.vehicle.Vehicle`: its parameters, sensors and tuning tables) or
-    ``params`` with the data sheet's sensors; neither: the car for a log whose car is not
-    described (:func:`roadbank.vehicle.undescribed_params`), as the command line uses.
+    its ``ay`` and yaw rate (:func:`log_conditions`); the car as :func:`for_conditions`.
     ``for_log(name, s).run(s)`` is what the command line writes for the log ``s``.
     """
-    cond = log_conditions(signals)
-    if vehicle is not None:
-        return vehicle.make(name, **cond, **tuning)
-    return make_estimator(name, params or undescribed_params(), **cond, **tuning)
+    return for_conditions(name, log_conditions(signals), params, vehicle=vehicle, **tuning)
 
 
 #: ``[identified.<quantity>]`` sensor offsets (measured minus true) -> the Signals channel they

@@ -27,7 +27,7 @@ from .kalman import Kalman
 from .kinematic import Kinematic
 from .lowpass import KinematicFeedForward, KinematicLowPass
 from .offsets import OffsetSettings, OnlineOffsets, with_online_offsets
-from .pif import PIF, PIFAdaptive, PIFRate, PIFRateAdaptive
+from .pif import PIF, SENSOR_R_ESTIMATORS, PIFAdaptive, PIFRate, PIFRateAdaptive
 from .pio import PIO
 from .smoother import PIFSmoother
 from .synthesis import NoStabilisingSolution
@@ -72,6 +72,10 @@ DEFAULT = ESTIMATOR
 TUNED_AS = {"pif-smoother": "pif-modified", "pif-gated": "pif-modified", "kinematic-pif": "pif-modified"}
 
 
+#: sample rate (Hz) of the data sheet's sensors that ``make`` designs the sensor-weighted PIFs for
+SHEET_RATE_HZ = 100.0
+
+
 def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
     """Build the estimator ``name`` (one of :data:`NAMES` or :data:`PRESETS`) for ``params``.
 
@@ -88,15 +92,9 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
         raise ValueError(f"{name}: bad tuning option ({exc})") from None
     if name in PRESETS:
         est.name = name            # its outputs' columns say which tuning made them
-    from .pif import SENSOR_R_ESTIMATORS
-
     if name in SENSOR_R_ESTIMATORS and "R" not in tuning and tuning.get("tuning", "default") == "default":
         est.sheet_rate = SHEET_RATE_HZ      # designed for the data sheet's sensor at its own rate
     return est
-
-
-#: sample rate (Hz) of the data sheet's sensors that ``make`` designs the sensor-weighted PIFs for
-SHEET_RATE_HZ = 100.0
 
 
 __all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "Estimator", "StepResult",

@@ -12,6 +12,7 @@ import functools
 import math
 import mmap
 import sys
+import warnings
 from typing import NamedTuple
 
 import numpy as np
@@ -19,7 +20,7 @@ import numpy as np
 from ..models.bicycle import augment, disturbance_output, modified_model, original_model
 from ..models.roll import roll_state_space
 from ..params import VehicleParams
-from ..signals import Estimate, Signals
+from ..signals import Estimate, Signals, sample_rate
 from . import kernels as K
 from . import layout as L
 from .discretise import foh, foh_grid
@@ -154,12 +155,8 @@ class Estimator:
     def _check_log_rate(self, t) -> None:
         """Warn (once) when a log's rate is far from :attr:`sheet_rate`: the weights then do not
         describe its sensors (:func:`roadbank.vehicle.for_log` designs for the log)."""
-        from ..signals import sample_rate
-
         rate = sample_rate(t)
         if np.isfinite(rate) and abs(rate / self.sheet_rate - 1.0) > 0.25:
-            import warnings
-
             warnings.warn(f"{self.name}: its weights are the data sheet's {self.sheet_rate:.0f} Hz sensor's, "
                           f"this log is sampled at {rate:.3g} Hz; roadbank.vehicle.for_log({self.name!r}, "
                           "signals) designs for the log's rate and road noise, as `roadbank estimate` does",

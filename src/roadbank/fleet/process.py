@@ -128,23 +128,6 @@ def concat_estimates(parts: list):
                     np.concatenate([p.valid for p in parts]), states)
 
 
-def _leading(signals, chunks):
-    """The first :data:`roadbank.vehicle.DESIGN_SPAN_S` of a streamed log, on which its designs are
-    measured: the first chunk's ``signals`` and as many of the following chunks
-    (:class:`roadbank.io.stream.ReadAhead`) as reach that span (the same design for any chunk size)."""
-    from ..signals import Signals
-    from ..vehicle import DESIGN_SPAN_S
-
-    span = DESIGN_SPAN_S - float(signals.t[-1] - signals.t[0])
-    nxt = chunks.following(span) if span > 0 else None
-    if nxt is None:
-        whole = signals
-    else:
-        whole = Signals(*(np.concatenate([getattr(signals, c), getattr(nxt, c)])
-                          for c in ("t", "vx", "ay", "r", "delta_f")))
-    return whole
-
-
 def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: str | None = None,
                  params=None, vehicle=None, chunk_rows: int | None = None, metadata: dict | None = None,
                  keep: bool = False, plot=None, online_offsets: bool = True) -> LogSummary:
@@ -195,7 +178,7 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
     from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
     from ..io.timebase import add_counts
     from ..io.writers import TableWriter, estimate_table
-    from ..vehicle import log_conditions, make_estimator, undescribed_params
+    from ..vehicle import DESIGN_SPAN_S, for_conditions, log_conditions, undescribed_params
 
     t_start = time.perf_counter()
     names = list(estimators)
@@ -218,10 +201,9 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
         span = None
         for k, chunk in enumerate(chunks):
             if k == 0:  # designed for the log's own rate and road noise, measured on its first DESIGN_SPAN_S
-                cond = log_conditions(_leading(chunk.signals, chunks))
+                cond = log_conditions(chunks.leading(chunk.signals, DESIGN_SPAN_S))
                 car = params if params is not None else undescribed_params()
-                ests = [vehicle.make(n, **cond) if vehicle is not None
-                        else make_estimator(n, car, **cond) for n in names]
+                ests = [for_conditions(n, cond, car, vehicle=vehicle) for n in names]
                 if online_offsets:      # causal ones: a smoother's later samples would see later offsets
                     ests = [e if n in OFFLINE else with_online_offsets(e, car) for e, n in zip(ests, names)]
                 span = max((e.lookahead_s for e, n in zip(ests, names) if n in OFFLINE), default=None)

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..params import VehicleParams
-from ..signals import CHANNELS, Signals
+from ..signals import Signals, concat_signals
 from . import readers
 from .channels import ChannelMap, check_plausible, default_channel_map, read_channel_map
 from .consistency import check_consistency
@@ -611,6 +611,13 @@ class ReadAhead:
         self._end = float(chunk.signals.t[-1])
         return chunk
 
+    def leading(self, current: Signals, seconds: float) -> Signals:
+        """``current`` (the current chunk's signals) and the chunks after it, as many as reach
+        ``seconds`` (s) past its first sample: the same span of the log whatever the chunk size."""
+        rest = seconds - float(current.t[-1] - current.t[0])
+        nxt = self.following(rest) if rest > 0 else None
+        return current if nxt is None else concat_signals([current, nxt])
+
     def following(self, seconds: float) -> Signals | None:
         """Signals of the chunks after the current one, as many as reach ``seconds`` (s) past its
         last sample (all that remain when fewer do); None at the log's end."""
@@ -621,6 +628,4 @@ class ReadAhead:
             self._ahead.append(nxt)
         if not self._ahead:
             return None
-        if len(self._ahead) == 1:
-            return self._ahead[0].signals
-        return Signals(*(np.concatenate([getattr(c.signals, ch) for c in self._ahead]) for ch in CHANNELS))
+        return concat_signals(c.signals for c in self._ahead)

@@ -45,18 +45,14 @@ class MapSettings:
 
 
 def _design(settings: MapSettings, signals, designs: dict):
-    """The estimator for a log (its sample rate and ay noise, :func:`roadbank.vehicle.make_estimator`),
+    """The estimator for a log (its sample rate and road noise, :func:`roadbank.vehicle.for_conditions`),
     memoised in ``designs`` by those conditions."""
-    from ..vehicle import log_conditions, make_estimator, undescribed_params
+    from ..vehicle import for_conditions, log_conditions
 
     cond = log_conditions(signals)
     key = tuple(round(v, 6) if np.isfinite(v) else None for v in cond.values())
     if key not in designs:
-        v = settings.vehicle
-        car = v.params if v is not None else (settings.params if settings.params is not None
-                                              else undescribed_params())   # a car nobody described
-        designs[key] = v.make(settings.estimator, **cond) if v is not None else make_estimator(
-            settings.estimator, car, **cond)
+        designs[key] = for_conditions(settings.estimator, cond, settings.params, vehicle=settings.vehicle)
     return designs[key]
 
 
@@ -84,6 +80,7 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
     from ..estimators import OFFLINE
     from ..io import LogError
     from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
+    from ..vehicle import DESIGN_SPAN_S
 
     designs = {} if designs is None else designs
     s = settings
@@ -102,8 +99,8 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
             first = first or _origin(lat, lon)
             if part is None and (projection or first) is not None:
                 part = BankMap(projection or first, s.cell_m, s.sectors)
-            if k == 0:
-                est = _design(s, chunk.signals, designs)
+            if k == 0:      # designed on the log's first DESIGN_SPAN_S, as roadbank estimate does
+                est = _design(s, chunks.leading(chunk.signals, DESIGN_SPAN_S), designs)
             nxt = chunks.following(est.lookahead_s) if s.estimator in OFFLINE else None
             out = est.run(correct(chunk.signals), reset=(k == 0), lookahead=None if nxt is None else correct(nxt))
             rec.samples += len(out.t)

@@ -86,8 +86,8 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
         default PIFs' ``R`` is their noise density at the log's rate.
     """
     from .. import estimators
-    from ..vehicle import for_log, undescribed_params
     from ..io.comma2k19 import load_comma2k19
+    from ..vehicle import for_log, undescribed_params
 
     params = params or undescribed_params()
     names = list(names or estimators.NAMES)
