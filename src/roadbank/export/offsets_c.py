@@ -119,12 +119,9 @@ static real_t rbo_combine(real_t b0, real_t e0, real_t ssum, real_t se)
     return rbo_clamp((w0 * b0 + ssum) / (w0 + se), RBO_RMAX);
 }
 
-static void rbo_end_stop(offsets_t *o)
+/* The current stop's time and evidence sums, cleared (at its end, and at the start). */
+static void rbo_clear_stop(offsets_t *o)
 {
-    if (o->s_e > 0.0_R) {
-        o->b_r = rbo_combine(o->b_r0, o->e_stop, o->b_sum, o->b_e);
-        o->e_stop += o->b_e;
-    }
     o->t_stop = 0.0_R;
     o->s_sum = 0.0_R;
     o->s_e = 0.0_R;
@@ -132,6 +129,15 @@ static void rbo_end_stop(offsets_t *o)
     o->a_e = 0.0_R;
     o->b_sum = 0.0_R;
     o->b_e = 0.0_R;
+}
+
+static void rbo_end_stop(offsets_t *o)
+{
+    if (o->s_e > 0.0_R) {
+        o->b_r = rbo_combine(o->b_r0, o->e_stop, o->b_sum, o->b_e);
+        o->e_stop += o->b_e;
+    }
+    rbo_clear_stop(o);
 }
 
 void ${p}_offsets_init(offsets_t *o)
@@ -145,18 +151,12 @@ void ${p}_offsets_init(offsets_t *o)
     o->e_stop = 0.0_R;
     o->e_str_r = 0.0_R;
     o->e_str_d = 0.0_R;
-    o->t_stop = 0.0_R;
     o->t_str = 0.0_R;
     o->rf = 0.0_R;
     o->df = 0.0_R;
     o->af = 0.0_R;
-    o->s_sum = 0.0_R;
-    o->s_e = 0.0_R;
-    o->a_sum = 0.0_R;
-    o->a_e = 0.0_R;
-    o->b_sum = 0.0_R;
-    o->b_e = 0.0_R;
     o->b_r0 = 0.0_R;
+    rbo_clear_stop(o);
 }
 
 void ${p}_offsets_step(offsets_t *o, double t, real_t vx, real_t ay, real_t r, real_t d, offsets_output_t *out)
