@@ -8,7 +8,7 @@ import pytest
 
 from roadbank import Signals
 from roadbank import estimators as E
-from roadbank.estimators.gated import KINEMATIC_PIF_GATE
+from roadbank.estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
 from roadbank.vehicle import for_log
 
 from test_gated import _gate_reference  # the gate written out in plain Python
@@ -27,7 +27,7 @@ def test_gate_shut_is_kinematic_ff_and_gate_open_is_the_default_pif(lane_change,
     s = lane_change.signals
     shut = E.make("kinematic-pif", gate_on=1e9, sample_rate=rate).run(s)
     opened = E.make("kinematic-pif", gate_on=-1e9, sample_rate=rate).run(s)
-    ff = E.make("kinematic-ff", roll=shut_roll(), sample_rate=rate).run(s)
+    ff = slow_filter(sample_rate=rate).run(s)
     pif = E.make("pif-modified", sample_rate=rate).run(s)
     for a, b in ((shut, ff), (opened, pif)):
         np.testing.assert_allclose(a.w, b.w, rtol=0, atol=1e-12)
@@ -43,6 +43,13 @@ def shut_roll():
     return E.make("pif-modified").roll
 
 
+def slow_filter(**kw):
+    """kinematic-ff with the pair's roll model, kappa and the low-pass scheduled on the PIF's noise."""
+    pif = E.make("pif-modified")
+    return E.make("kinematic-ff", roll=pif.roll, kappa=KINEMATIC_PIF_KAPPA, bank_rate=KINEMATIC_PIF_BANK_RATE,
+                  Q_ay=pif.Q_ay, R=pif.R[0, 0], **kw)
+
+
 def test_the_output_blends_by_the_documented_gate():
     n = 1500
     t = np.arange(n) * 0.01
@@ -50,7 +57,7 @@ def test_the_output_blends_by_the_documented_gate():
     r = np.where(t > 3.0, 0.1, 0.0) + 0.05 * np.sin(2 * np.pi * 0.8 * t) * (t > 8.0) * (t < 11.0)
     s = Signals(t, vx, vx * r + 0.3, r, np.zeros(n))
     gated = E.make("kinematic-pif").run(s)
-    slow = E.make("kinematic-ff", roll=shut_roll()).run(s)
+    slow = slow_filter().run(s)
     fast = E.make("pif-modified").run(s)
     d = fast.w - slow.w
     use = np.abs(d) > 1e-6
@@ -102,4 +109,31 @@ def test_the_shipped_gate_and_the_default_are_what_the_rule_picks():
     chosen, real, sim = choose_by_roads(builds, logs, sims)
     assert chosen == "shipped", (real, sim)
     assert ESTIMATOR == "kinematic-pif"
-    assert sim["shipped"] < sim["kinematic-ff"] - 0.03         # what the gate buys on simulated manoeuvres
+    # what the gate buys on simulated manoeuvres: the same pair with the gate held shut
+    from roadbank.tuning.real import objective
+    assert sim["shipped"] < objective(per_log("kinematic-pif", gate_on=1e9), [], sims) - 0.03
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not (DATA / "kitti-oxts-extra").is_dir(), reason="../shared/data/kitti-oxts-extra not present")
+def test_the_shipped_bank_rate_and_kappa_are_what_the_rule_picks():
+    """The first stage of the rule (roadbank.tuning.real.kinematic_pif_candidates): the shipped road
+    bank rate and kappa against their grid neighbours, and the fixed low-pass of kinematic-ff's
+    constants, which the noise-scheduled one must beat on real training roads and simulated drives."""
+    from roadbank.tuning.real import BANK_RATES_DEG, KAPPAS, choose_by_roads, objective, per_log, simulated_sets
+    from roadbank.tuning.real import training_logs
+
+    logs, sims = training_logs(DATA), simulated_sets()
+    b, k = float(np.degrees(KINEMATIC_PIF_BANK_RATE)), KINEMATIC_PIF_KAPPA
+    builds = {"shipped": per_log("kinematic-pif")}
+    for grid, key in ((BANK_RATES_DEG, "b"), (KAPPAS, "k")):
+        i = grid.index(b if key == "b" else k)
+        for j in (i - 1, i + 1):
+            if 0 <= j < len(grid):
+                bb, kk = (grid[j], k) if key == "b" else (b, grid[j])
+                builds[(bb, kk)] = per_log("kinematic-pif", bank_rate=float(np.radians(bb)), kappa=kk)
+    chosen, real, sim = choose_by_roads(builds, logs, sims)
+    assert chosen == "shipped", (real, sim)
+    fixed = per_log("kinematic-pif", cutoff=0.6, kappa=0.2)
+    assert real["shipped"] < objective(fixed, logs, []) - 0.02
+    assert objective(per_log("kinematic-pif"), [], sims) < objective(fixed, [], sims) - 0.02

@@ -101,3 +101,68 @@ def test_shipped_constants_are_where_the_rule_has_its_minimum():
         assert objective(fixed(KinematicLowPass(cutoff=fc, kappa=0.0)), logs, sims) > lp, fc
     # the feed-forward earns its place: the rule prefers it to the plain low-pass
     assert at < lp
+
+
+def test_the_noise_scheduled_cutoff_is_where_lag_and_noise_weigh_least():
+    """cutoff_for_noise against the error measured by running the filter: a bank that changes at a
+    constant rate (a triangle wave, slope +-omega) seen through white noise of known density. The
+    measured RMS error over a fine grid of fixed cut-offs is least within 12 % of the formula's, and
+    there it is the analytic sqrt(q pi fc + omega^2 tau^2) within 5 %."""
+    from roadbank.estimators.lowpass import cutoff_for_noise
+
+    fs, omega, sigma = 100.0, np.radians(1.0), 0.05          # Hz, rad/s, m/s^2
+    t = np.arange(0.0, 400.0, 1.0 / fs)
+    period = 20.0
+    phase = (t % period) / period
+    theta = omega * period / 2 * np.where(phase < 0.5, phase, 1.0 - phase) * 2 - omega * period / 4
+    rng = np.random.default_rng(11)
+    ay = G * np.sin(theta) + sigma * rng.standard_normal(t.size)
+    s = Signals(t, np.full_like(t, 20.0), ay, np.zeros_like(t), np.full_like(t, np.nan))
+    q = sigma ** 2 / fs / G ** 2                                   # rad^2 s
+    fc_rule = cutoff_for_noise(q, omega)
+    grid = fc_rule * np.exp(np.linspace(np.log(0.4), np.log(2.5), 41))
+    keep = t > 10.0
+
+    def rms(fc):
+        e = KinematicLowPass(cutoff=fc).run(s).w - np.sin(theta)
+        return float(np.sqrt(np.mean(e[keep] ** 2)))
+
+    errs = np.array([rms(fc) for fc in grid])
+    assert grid[np.argmin(errs)] == pytest.approx(fc_rule, rel=0.12)
+    tau = 1.0 / (2 * np.pi * fc_rule)
+    assert rms(fc_rule) == pytest.approx(np.sqrt(q * np.pi * fc_rule + (omega * tau) ** 2), rel=0.05)
+    # bounds, and no noise at all: the fastest filter
+    assert cutoff_for_noise(1e-30, omega) == 5.0 and cutoff_for_noise(1.0, omega) == 0.05
+    assert cutoff_for_noise(0.0, omega) == 5.0
+
+
+def test_the_scheduled_cutoff_follows_the_speed_and_equals_a_fixed_filter_at_one_speed():
+    from roadbank.estimators.lowpass import cutoff_for_noise
+
+    q_ay, r, b = 4e-3, 1e-6, np.radians(0.6)
+    est = estimators.make("kinematic-ff", bank_rate=b, Q_ay=q_ay, R=r)
+    for vx in (5.0, 20.0, 40.0):
+        fc = cutoff_for_noise((q_ay + vx ** 2 * r) / G ** 2, b)
+        assert est.cutoff_at(vx) == pytest.approx(fc, rel=1e-12)
+        assert est.observer(vx)[0][0, 0] == pytest.approx(-2 * np.pi * fc, rel=1e-12)
+    assert est.cutoff_at(40.0) < est.cutoff_at(5.0)                # the yaw rate's noise grows with speed
+    s = _drive(vx=20.0)
+    fixed = estimators.make("kinematic-ff", cutoff=est.cutoff_at(20.0)).run(s)
+    np.testing.assert_allclose(est.run(s).w, fixed.w, rtol=0, atol=1e-6)
+    with pytest.raises(ValueError, match="bank_rate"):
+        estimators.make("kinematic-ff", bank_rate=-1.0, Q_ay=q_ay)
+
+
+@pytest.mark.skipif(not (DATA_DIR / "kitti-oxts").is_dir(), reason="../shared/data/kitti-oxts not present")
+def test_the_default_low_pass_is_slow_on_a_shaken_10hz_log_and_fast_on_a_quiet_100hz_one():
+    """The command line's kinematic-pif (vehicle.for_log) reads the log's own noise."""
+    from roadbank.io.kitti import load_kitti_oxts
+    from roadbank.vehicle import for_log
+
+    kitti = load_kitti_oxts(DATA_DIR / "kitti-oxts" / "2011_09_26_drive_0070").signals
+    t = np.arange(0.0, 60.0, 0.01)
+    r = 0.1 * np.sin(2 * np.pi * 0.2 * t)                         # manoeuvres below the 1 Hz band
+    vx = np.full_like(t, 20.0)
+    quiet = Signals(t, vx, vx * r + 0.03 * np.random.default_rng(2).standard_normal(t.size), r, np.zeros_like(t))
+    slow, fast = for_log("kinematic-pif", kitti).slow, for_log("kinematic-pif", quiet).slow
+    assert slow.cutoff_at(20.0) < 0.8 < 1.5 < fast.cutoff_at(20.0)

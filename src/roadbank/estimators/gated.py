@@ -161,6 +161,11 @@ def _check_gate(label: str, opt: dict) -> None:
 #: the gate of :class:`KinematicPIF` (chosen by the rule of :mod:`roadbank.tuning.real`):
 #: ``gate_tf``, ``gate_release`` (s), ``gate_on``, ``gate_span`` (m/s^3)
 KINEMATIC_PIF_GATE = dict(gate_tf=0.05, gate_release=8.0, gate_on=4.0, gate_span=1.0)
+#: root-mean-square bank rate of roads (rad/s) that schedules :class:`KinematicPIF`'s low-pass on the
+#: log's noise (:func:`roadbank.estimators.lowpass.cutoff_for_noise`; the rule of :mod:`roadbank.tuning.real`)
+KINEMATIC_PIF_BANK_RATE = float(np.radians(0.6))
+#: :class:`KinematicPIF`'s centripetal feed-forward gain (-; the same rule)
+KINEMATIC_PIF_KAPPA = 0.3
 
 
 class KinematicPIF(_GatedPair):
@@ -181,7 +186,12 @@ class KinematicPIF(_GatedPair):
     ----------
     params : VehicleParams
     cutoff, kappa : float, optional
-        The low-pass's cut-off (Hz) and centripetal gain (-), as ``kinematic-ff``.
+        The low-pass's cut-off (Hz) and centripetal gain (-, default :data:`KINEMATIC_PIF_KAPPA`),
+        as ``kinematic-ff``. Without a
+        ``cutoff`` it is scheduled on the noise of the kinematic estimate that the PIF's ``Q_ay``
+        and ``R`` (the log's, when built for a log) give, with the road prior ``bank_rate``.
+    bank_rate : float, optional
+        Root-mean-square bank rate of roads (rad/s); default :data:`KINEMATIC_PIF_BANK_RATE`.
     tuning, Q, R, S, th, Q_ay, adapt_th : optional
         The PIF's, as :class:`~roadbank.estimators.pif.PIF` (modified model; a vehicle file's
         ``[tuning.pif-modified]`` applies).
@@ -194,8 +204,9 @@ class KinematicPIF(_GatedPair):
     name = "kinematic-pif"
     state_names = ("w_lp", "vy", "r", "w")
 
-    def __init__(self, params=None, *, cutoff=None, kappa=None, tuning=None, Q=None, R=None, S=None, th=None,
-                 Q_ay=None, adapt_th=None, gate_tf=None, gate_release=None, gate_on=None, gate_span=None, **kw):
+    def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, tuning=None, Q=None, R=None, S=None,
+                 th=None, Q_ay=None, adapt_th=None, gate_tf=None, gate_release=None, gate_on=None, gate_span=None,
+                 **kw):
         d = KINEMATIC_PIF_GATE
         opt = {k: float(d[k] if v is None else v) for k, v in (
             ("gate_tf", gate_tf), ("gate_release", gate_release), ("gate_on", gate_on), ("gate_span", gate_span))}
@@ -205,8 +216,12 @@ class KinematicPIF(_GatedPair):
                          adapt_th=adapt_th, sample_rate=None, **common)
         common.setdefault("roll", self._fast.roll)
         kw["roll"] = common["roll"]
-        self._slow = KinematicFeedForward(params, cutoff=cutoff, kappa=kappa, sample_rate=None, **common)
-        self.cutoff, self.kappa = self._slow.cutoff, self._slow.kappa
+        noise = {} if cutoff is not None else dict(
+            bank_rate=KINEMATIC_PIF_BANK_RATE if bank_rate is None else bank_rate, Q_ay=self._fast.Q_ay,
+            R=float(self._fast.R[-1, -1]))
+        self._slow = KinematicFeedForward(params, cutoff=cutoff, kappa=KINEMATIC_PIF_KAPPA if kappa is None else kappa,
+                                          sample_rate=None, **noise, **common)
+        self.cutoff, self.kappa, self.bank_rate = self._slow.cutoff, self._slow.kappa, self._slow.bank_rate
         self.Q, self.th, self.R, self.S, self.Q_ay = (self._fast.Q, self._fast.th, self._fast.R, self._fast.S,
                                                       self._fast.Q_ay)
         for k, v in opt.items():

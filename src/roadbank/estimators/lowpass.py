@@ -40,6 +40,30 @@ LP_CUTOFF_HZ = 0.5
 #: ``kinematic-ff``'s cut-off (Hz) and centripetal gain (-): the rule of :mod:`roadbank.tuning.real`
 FF_CUTOFF_HZ = 0.6
 FF_KAPPA = 0.2
+#: bounds (Hz) of a cut-off scheduled on the noise (:func:`cutoff_for_noise`)
+CUTOFF_MIN_HZ, CUTOFF_MAX_HZ = 0.05, 5.0
+
+
+def cutoff_for_noise(noise_density: float, bank_rate: float) -> float:
+    r"""Cut-off (Hz) of the first-order low-pass that best trades noise against lag.
+
+    The input is the bank signal plus white noise of two-sided density :math:`q`
+    (``noise_density``, rad^2 s: a sampled white sequence of variance :math:`v` at rate
+    :math:`f_s` has :math:`q = v / f_s`); the bank changes at a root-mean-square rate
+    :math:`\omega_b` (``bank_rate``, rad/s). The low-pass passes the noise variance
+    :math:`q \pi f_c` and lags by :math:`\tau = 1/(2\pi f_c)`, an error of variance
+    :math:`\omega_b^2 \tau^2`. Their sum is least at
+
+    .. math::
+        f_c = \left(\frac{\omega_b^2}{2 \pi^3 q}\right)^{1/3},
+
+    clipped to [:data:`CUTOFF_MIN_HZ`, :data:`CUTOFF_MAX_HZ`]. A quiet 100 Hz sensor then gets
+    a fast filter and a 10 Hz log shaken by the road a slow one, from the same road prior.
+    """
+    if not (noise_density > 0 and np.isfinite(noise_density)):
+        return CUTOFF_MAX_HZ
+    fc = (bank_rate ** 2 / (2.0 * np.pi ** 3 * noise_density)) ** (1.0 / 3.0)
+    return float(np.clip(fc, CUTOFF_MIN_HZ, CUTOFF_MAX_HZ))
 
 
 class KinematicLowPass(ScheduledObserver):
@@ -53,6 +77,13 @@ class KinematicLowPass(ScheduledObserver):
         Cut-off frequency ``f_c`` of the first-order low-pass (Hz, > 0).
     kappa : float, optional
         Centripetal feed-forward gain (-: ``w`` per g of ``vx r``); 0 gives ``kinematic-lp``.
+    bank_rate : float, optional
+        With it and no ``cutoff``, the cut-off is scheduled on speed from the noise of the
+        kinematic estimate, :math:`(Q_{ay} + v_x^2 R)/g^2`, and this root-mean-square bank rate
+        of roads (rad/s) by :func:`cutoff_for_noise`.
+    Q_ay, R : float, optional
+        Noise densities of ``ay`` ((m/s^2)^2 s) and of the yaw rate ((rad/s)^2 s) for the
+        scheduled cut-off (default 0: only the other counts).
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator`.
     """
@@ -62,19 +93,32 @@ class KinematicLowPass(ScheduledObserver):
     label = "kinematic-lp"
     defaults = dict(cutoff=LP_CUTOFF_HZ, kappa=0.0)
 
-    def __init__(self, params=None, *, cutoff=None, kappa=None, **kw):
-        self.cutoff = float(self.defaults["cutoff"] if cutoff is None else cutoff)
+    def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, Q_ay=None, R=None, **kw):
+        scheduled = cutoff is None and bank_rate is not None
+        self.cutoff = None if scheduled else float(self.defaults["cutoff"] if cutoff is None else cutoff)
         self.kappa = float(self.defaults["kappa"] if kappa is None else kappa)
-        if not (np.isfinite(self.cutoff) and self.cutoff > 0):
+        self.bank_rate = float(bank_rate) if scheduled else None
+        self.Q_ay = float(Q_ay or 0.0) if scheduled else None
+        self.R = float(R or 0.0) if scheduled else None
+        if not scheduled and not (np.isfinite(self.cutoff) and self.cutoff > 0):
             raise ValueError(f"{self.label}: cutoff must be > 0 Hz, got {cutoff}")
+        if scheduled and not (self.bank_rate > 0 and np.isfinite(self.bank_rate) and self.Q_ay >= 0
+                              and self.R >= 0 and np.isfinite(self.Q_ay + self.R)):
+            raise ValueError(f"{self.label}: need bank_rate > 0 and Q_ay, R >= 0, got {bank_rate}, {Q_ay}, {R}")
         if not np.isfinite(self.kappa):
             raise ValueError(f"{self.label}: kappa must be finite, got {kappa}")
         self.name = self.label
         super().__init__(params, **kw)
 
+    def cutoff_at(self, vx: float) -> float:
+        """The low-pass's cut-off (Hz) at ``vx`` (m/s): fixed, or scheduled on the noise."""
+        if self.cutoff is not None:
+            return self.cutoff
+        return cutoff_for_noise((self.Q_ay + vx * vx * self.R) / self.params.g ** 2, self.bank_rate)
+
     def observer(self, vx: float):
         """``(F, G, H, D)`` at ``vx`` (m/s); inputs ``[delta_f, ay, r]``."""
-        g, wc, k = self.params.g, 2.0 * np.pi * self.cutoff, self.kappa
+        g, wc, k = self.params.g, 2.0 * np.pi * self.cutoff_at(vx), self.kappa
         F = np.array([[-wc]])
         G = np.array([[0.0, wc / g, -wc * (1.0 + k) * vx / g]])
         return F, G, np.array([[1.0]]), np.array([[0.0, 0.0, k * vx / g]])

@@ -23,6 +23,13 @@ candidates (the causal estimators, and ``kinematic-pif`` over the gate grid :dat
 ranked by the real-road median alone; among those within :data:`TIE_DEG` of the best, the lowest
 simulated median wins (:func:`choose_by_roads`). The low-pass constants above keep the sum: a
 standalone low-pass must not lose to the raw kinematic estimate on simulated cars.
+
+``kinematic-pif``'s low-pass is scheduled on the log's noise
+(:func:`roadbank.estimators.lowpass.cutoff_for_noise`), with a root-mean-square bank rate of roads
+as its one prior. Its constants are chosen by the same real-roads-first rule in two stages, each
+over a fixed grid: first the bank rate (:data:`BANK_RATES_DEG`) and ``kappa`` (:data:`KAPPAS`)
+with the gate held at its value, then the gate (:data:`GATE_GRID`) at the chosen pair
+(:func:`kinematic_pif_candidates`).
 """
 
 from __future__ import annotations
@@ -39,6 +46,8 @@ TIE_DEG = 0.002
 #: gate candidates of ``kinematic-pif``: ``gate_on`` (m/s^3), ``gate_span`` (m/s^3), ``gate_release`` (s)
 GATE_GRID = {"gate_on": (1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0), "gate_span": (1.0, 2.0, 4.0, 8.0),
              "gate_release": (1.0, 2.0, 4.0, 8.0)}
+#: candidate root-mean-square bank rates of roads (deg/s) for ``kinematic-pif``'s scheduled low-pass
+BANK_RATES_DEG = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 1.0)
 #: the shipped cars of the simulated part, and the number of training drives per car
 SIM_CARS = ("suv-paper", "sedan", "compact", "van")
 SIM_DRIVES = 24
@@ -141,3 +150,20 @@ def choose_by_roads(builds: dict, logs, sim_sets) -> tuple:
     tied = [k for k, v in real.items() if v <= best + TIE_DEG]
     sim = {k: objective(builds[k], [], sim_sets) for k in tied}
     return min(tied, key=lambda k: (sim[k], real[k])), real, sim
+
+
+def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kappa: float | None = None) -> dict:
+    """``{key: build}`` of ``kinematic-pif`` candidates for :func:`choose_by_roads` (module docstring).
+
+    ``stage`` 1: every ``(bank rate deg/s, kappa)`` of :data:`BANK_RATES_DEG` x :data:`KAPPAS`, the
+    gate as shipped; ``stage`` 2: every ``(gate_on, gate_span, gate_release)`` of :data:`GATE_GRID`
+    at ``bank_rate_deg`` and ``kappa`` (the first stage's choice).
+    """
+    if stage == 1:
+        return {(b, k): per_log("kinematic-pif", bank_rate=float(np.radians(b)), kappa=k)
+                for b in BANK_RATES_DEG for k in KAPPAS}
+    if stage != 2 or bank_rate_deg is None or kappa is None:
+        raise ValueError("kinematic_pif_candidates: stage 1, or stage 2 with the first stage's bank rate and kappa")
+    return {(on, sp, rel): per_log("kinematic-pif", bank_rate=float(np.radians(bank_rate_deg)), kappa=kappa,
+                                   gate_on=on, gate_span=sp, gate_release=rel)
+            for on in GATE_GRID["gate_on"] for sp in GATE_GRID["gate_span"] for rel in GATE_GRID["gate_release"]}
