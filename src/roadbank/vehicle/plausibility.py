@@ -137,7 +137,7 @@ def check_free_table(source: str, table: str, sub: str, values) -> None:
 
 def estimator_options(name: str) -> set[str] | None:
     """Keyword options ``estimators.make(name, ...)`` accepts (None: cannot tell, accept any)."""
-    from . import estimators
+    from .. import estimators
 
     factory = getattr(estimators, "_FACTORIES", {}).get(name)
     if factory is None:
@@ -163,7 +163,7 @@ def estimator_options(name: str) -> set[str] | None:
 
 
 def check_tuning(source: str, name: str, options) -> None:
-    from . import estimators
+    from .. import estimators
 
     if name not in estimators.NAMES:
         raise VehicleFileError(f"{source}: [tuning.{name}]: {unknown_key(name, estimators.NAMES, 'estimator')}")
