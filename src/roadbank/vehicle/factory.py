@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 
+from .. import defaults
 from ..params import VehicleParams
 from .conditions import log_conditions, make_estimator
 from .file import load_vehicle
@@ -15,9 +16,7 @@ __all__ = ["undescribed_params", "for_conditions", "for_log"]
 def undescribed_params() -> VehicleParams:
     """The car parameters for a log whose car is not described (:data:`roadbank.defaults.VEHICLE`;
     read once, the parameters are immutable)."""
-    from ..defaults import VEHICLE
-
-    return load_vehicle(VEHICLE).params
+    return load_vehicle(defaults.VEHICLE).params
 
 
 def for_conditions(name: str, cond: dict, params: VehicleParams | None = None, *, vehicle=None, **tuning):

@@ -178,11 +178,11 @@ class Vehicle:
         log_ay_noise=log_ay_noise, **{**tuning, **overrides})``, ``tuning`` the car's
         ``[tuning.<name>]`` table; for an estimator that runs another's filter
         (:data:`roadbank.estimators.TUNED_AS`: ``pif-smoother`` and ``pif-gated`` run
-        ``pif-modified``) that one's table with its own table's keys over it: a default-tuned
-        PIF without an ``R`` gets the noise
-        densities of this car's sensors at ``log_rate`` (Hz; default the sensor's ``rate``),
-        ``Q_ay`` at least the log's own ``ay`` road noise ``log_ay_noise`` (m/s^2), ``R`` at least
-        its yaw rate's ``log_r_noise`` (rad/s).
+        ``pif-modified``) that one's table with its own table's keys over it. A default-tuned
+        PIF without an ``R`` gets the noise densities of this car's sensors at the log's
+        conditions: its rate ``log_rate`` (Hz; default the sensor's ``rate``) and the road noise
+        of its ``ay`` (``log_ay_noise``, m/s^2) and yaw rate (``log_r_noise``, rad/s), by
+        :func:`~roadbank.vehicle.conditions.noise_densities`.
         """
         from ..estimators import TUNED_AS
         tuning = {**self.tuning.get(TUNED_AS.get(estimator_name), {}), **self.tuning.get(estimator_name, {})}

@@ -19,6 +19,8 @@ from ..units import SI_UNIT, parse_quantity
 from .errors import VehicleFileError
 from .tomltext import fmt_value, is_scalar, toml_type
 
+__all__ = ["PLAUSIBLE", "WHEELBASE_RANGE", "SENSOR_FIELDS", "PLANT_FIELDS", "checked_value", "check_document",
+           "check_tuning", "check_free_table", "estimator_options", "unknown_key"]
 
 #: [vehicle] keys: dimension and plausible range for a road vehicle (passenger car to light
 #: van, SI). Outside the range is an error: it catches unit mistakes (mass in tonnes, Cf in
@@ -85,6 +87,7 @@ PLANT_FIELDS: dict[str, tuple[str, tuple[float, float] | None]] = {
 
 
 def unknown_key(key: str, known, what: str) -> str:
+    """The message for an unknown ``key`` among ``known``, with the close match when there is one."""
     close = difflib.get_close_matches(key, list(known), n=1, cutoff=0.6)
     if not close:
         close = [k for k in known if k.lower() == key.lower()][:1]
@@ -93,8 +96,9 @@ def unknown_key(key: str, known, what: str) -> str:
 
 
 def checked_value(source: str, table: str, key: str, raw, dimension: str,
-              rng: tuple[float, float] | None) -> float:
-    """One numeric value of a file: number or "value unit" string -> SI float, range-checked."""
+                  rng: tuple[float, float] | None) -> float:
+    """One numeric value of a file: number or "value unit" string -> SI float (the SI unit of
+    ``dimension``), range-checked against ``rng`` (SI; None: finite only)."""
     where = f"{source}: [{table}] {key} = {fmt_value(raw)}"
     if isinstance(raw, bool) or not isinstance(raw, (int, float, str)):
         raise VehicleFileError(f"{where}: expected a number or a \"value unit\" string, "
@@ -163,6 +167,7 @@ def estimator_options(name: str) -> set[str] | None:
 
 
 def check_tuning(source: str, name: str, options) -> None:
+    """A ``[tuning.<name>]`` table: a known estimator, TOML values, options its ``make`` accepts."""
     from .. import estimators
 
     if name not in estimators.NAMES:

@@ -5,11 +5,14 @@ from __future__ import annotations
 import re
 from collections.abc import Mapping
 
+__all__ = ["toml_string", "toml_key", "toml_value", "toml_type", "is_scalar", "fmt_value", "fmt_options"]
+
 _BARE_KEY = re.compile(r"^[A-Za-z0-9_-]+$")
 _ESCAPES = {'"': '\\"', "\\": "\\\\", "\b": "\\b", "\t": "\\t", "\n": "\\n", "\f": "\\f", "\r": "\\r"}
 
 
 def toml_string(s: str) -> str:
+    """A TOML basic string (quoted, with escapes)."""
     out = []
     for ch in s:
         if ch in _ESCAPES:
@@ -22,10 +25,12 @@ def toml_string(s: str) -> str:
 
 
 def toml_key(k: str) -> str:
+    """A TOML key: bare where it may be, else quoted."""
     return k if _BARE_KEY.match(k) else toml_string(k)
 
 
 def toml_value(v) -> str:
+    """A TOML value (boolean, integer, float by its exact ``repr``, string, array); TypeError for others."""
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, int):
@@ -43,6 +48,7 @@ def toml_value(v) -> str:
 
 
 def toml_type(v) -> str:
+    """What a value read from TOML is, for messages ("a table", "a string", ...)."""
     if isinstance(v, bool):
         return "a boolean"
     if isinstance(v, dict):
@@ -57,6 +63,7 @@ def toml_type(v) -> str:
 
 
 def is_scalar(v) -> bool:
+    """Whether ``v`` is a TOML scalar (boolean, number, string)."""
     return isinstance(v, (bool, int, float, str))
 
 
@@ -69,4 +76,5 @@ def fmt_value(value) -> str:
 
 
 def fmt_options(options: Mapping) -> str:
+    """A table of options as an inline TOML table (for messages)."""
     return "{" + ", ".join(f"{k} = {fmt_value(v)}" for k, v in options.items()) + "}"
