@@ -127,6 +127,19 @@ def test_the_log_readers_use_the_one_road_wheel_angle():
     assert users, "no io module takes road_wheel_angle from roadbank.signals"
 
 
+def test_a_channel_maps_steering_ratio_must_be_a_finite_number(tmp_path):
+    """The map's ratio reaches :func:`roadbank.signals.road_wheel_angle` through a car's parameters:
+    an infinite one is the map's error, not a road-wheel angle of 0."""
+    from roadbank.io import LogError, read_channel_map
+
+    p = tmp_path / "m.toml"
+    p.write_text('steering_ratio = inf\n[channels]\ntime = { column = "t", unit = "s" }\n'
+                 'speed = { column = "vx", unit = "m/s" }\nlateral_acceleration = { column = "ay", unit = "m/s^2" }\n'
+                 'yaw_rate = { column = "r", unit = "rad/s" }\nsteering_wheel_angle = { column = "swa", unit = "deg" }\n')
+    with pytest.raises(LogError, match=r"m\.toml: steering_ratio must be a finite number > 0, got inf"):
+        read_channel_map(p)
+
+
 def test_the_simulators_channel_error_model_has_its_own_name():
     from roadbank.io import ChannelSpec as MapEntry
     from roadbank.sim import ChannelErrorModel, ChannelSpec
