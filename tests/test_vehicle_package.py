@@ -134,8 +134,10 @@ def test_a_channel_maps_steering_ratio_must_be_a_finite_number(tmp_path):
 
     p = tmp_path / "m.toml"
     p.write_text('steering_ratio = inf\n[channels]\ntime = { column = "t", unit = "s" }\n'
-                 'speed = { column = "vx", unit = "m/s" }\nlateral_acceleration = { column = "ay", unit = "m/s^2" }\n'
-                 'yaw_rate = { column = "r", unit = "rad/s" }\nsteering_wheel_angle = { column = "swa", unit = "deg" }\n')
+                 'speed = { column = "vx", unit = "m/s" }\n'
+                 'lateral_acceleration = { column = "ay", unit = "m/s^2" }\n'
+                 'yaw_rate = { column = "r", unit = "rad/s" }\n'
+                 'steering_wheel_angle = { column = "swa", unit = "deg" }\n')
     with pytest.raises(LogError, match=r"m\.toml: steering_ratio must be a finite number > 0, got inf"):
         read_channel_map(p)
 
