@@ -13,8 +13,8 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "roadbank"
 
 #: lowest first; a unit may import from any unit of a lower layer
 LAYERS = (
-    {"__version__"},                                     # the root package's version string
-    {"params", "defaults", "cache", "vehicles"},
+    {"__version__", "constants"},                        # the root package's version string; physical constants
+    {"params", "units", "defaults", "cache", "vehicles"},
     {"signals", "models"},
     {"io", "estimators", "sim"},
     {"vehicle", "evaluation", "identification", "export"},

@@ -13,12 +13,12 @@ process (BLAS threads) before numpy loads.
 
 import importlib
 
-_EXPORTS = {"G": "params", "VehicleParams": "params", "Signals": "signals", "Estimate": "signals",
+_EXPORTS = {"G": "constants", "VehicleParams": "params", "Signals": "signals", "Estimate": "signals",
             "road_wheel_angle": "signals"}
 #: public submodules, imported when first used as an attribute of the package
-SUBMODULES = ("bench", "cache", "campaign", "estimators", "evaluation", "export", "faults", "fleet",
+SUBMODULES = ("bench", "cache", "campaign", "constants", "estimators", "evaluation", "export", "faults", "fleet",
               "identification", "io", "mapping", "models", "params", "report", "signals", "sim", "tuning",
-              "validation", "vehicle")
+              "units", "validation", "vehicle")
 
 __all__ = list(_EXPORTS) + list(SUBMODULES)
 __version__ = "0.1.0"

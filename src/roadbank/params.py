@@ -12,9 +12,9 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-#: Standard gravity used throughout roadbank (m/s^2). The DFC gain checks in
-#: tests/test_models.py (Haw0 = 4.4647 at 22.2 m/s) use 9.81.
-G = 9.81
+from .constants import G
+
+__all__ = ["G", "VehicleParams"]
 
 
 @dataclass(frozen=True)
@@ -59,7 +59,7 @@ class VehicleParams:
         Spin inertia of one wheel with its share of the driveline (kg m^2).
         Default 1.2.
     g : float
-        Gravity (m/s^2), 9.81.
+        Gravity (m/s^2), :data:`roadbank.constants.G` (9.81).
     """
 
     m: float = 1687.0

@@ -133,6 +133,7 @@ def synthetic_log(duration: float, rate: float = RATE_HZ, seed: int = 0):
     """
     import numpy as np
 
+    from ..constants import G
     from ..signals import Signals
 
     n = int(round(duration * rate)) + 1
@@ -142,7 +143,7 @@ def synthetic_log(duration: float, rate: float = RATE_HZ, seed: int = 0):
     ay_true = 3.0 * np.sin(2 * np.pi * t / 17.0) * np.sin(2 * np.pi * t / 97.0)
     r = ay_true / vx + 0.002 * rng.normal(size=n)
     bank = 0.05 * np.sin(2 * np.pi * t / 300.0)
-    ay = ay_true + 9.81 * np.sin(bank) + 0.05 * rng.normal(size=n)
+    ay = ay_true + G * np.sin(bank) + 0.05 * rng.normal(size=n)
     delta_f = 2.62 * ay_true / vx**2 + 1e-4 * rng.normal(size=n)
     return Signals(t, vx, ay, r, delta_f)
 

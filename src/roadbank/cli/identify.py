@@ -9,13 +9,14 @@ from pathlib import Path
 
 import click
 
+from ..constants import G
 from .options import vehicle_option
 
 #: display unit per quantity: (label, factor from SI)
 _DISPLAY = {
     "Cf": ("kN/rad", 1e-3),
     "Cr": ("kN/rad", 1e-3),
-    "Kus": ("deg/g", math.degrees(9.81)),
+    "Kus": ("deg/g", math.degrees(G)),
     "steering_offset": ("deg road wheel", math.degrees(1.0)),
     "yaw_rate_offset": ("deg/s", math.degrees(1.0)),
     "ay_offset": ("m/s^2", 1.0),

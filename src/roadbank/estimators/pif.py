@@ -47,7 +47,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..params import G
+from ..constants import G
 from . import grid_design, layout
 from .base import ScheduledObserver, augmented_design_model, equilibrium_map
 from .synthesis import NoStabilisingSolution, game_are
@@ -58,7 +58,7 @@ TABLE4 = dict(Q=0.1, R=0.0035, S=1.0, th=1.0, P0=(0.0, 0.0, 0.5))
 #: alternative interpretation of the paper's units (see docs/estimators.md); not the default.
 R_TABLE4_DEG_UNITS = 0.0035 * (np.pi / 180.0) ** 2
 #: weight of the lateral-acceleration output of the original-model PIF (see module doc)
-R_AY_ORIGINAL = 0.0035 * (0.005 * 9.81 / np.deg2rad(0.3)) ** 2
+R_AY_ORIGINAL = 0.0035 * (0.005 * G / np.deg2rad(0.3)) ** 2
 
 
 def yaw_rate_noise_density(noise_std: float, resolution: float, rate: float) -> float:

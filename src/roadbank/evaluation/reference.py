@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..params import G
+from ..constants import G
 
 #: time constant (s) of the paper's reference / DFC low-pass filter
 TAU_REFERENCE = 2.0 / 3.0

@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..constants import G
 from .build import CompilerError, build_driver, compile_c
 from .ccode import generate
 from .design import ExportDesign, NotExportable, check_exportable, export_design
@@ -105,7 +106,7 @@ def synthetic_drive(rate: float = 100.0, duration: float = 60.0) -> tuple:
     vx = 25.0 + 10.0 * np.sin(2 * np.pi * t / 40.0)
     delta = 0.02 * np.sin(2 * np.pi * 0.3 * t)
     r = vx * delta / 2.8
-    ay = vx * r + 9.81 * np.sin(np.deg2rad(5.0)) * np.sin(2 * np.pi * t / 25.0)
+    ay = vx * r + G * np.sin(np.deg2rad(5.0)) * np.sin(2 * np.pi * t / 25.0)
     return t, vx, ay, r, delta
 
 

@@ -208,8 +208,8 @@ class ChannelMap:
             raise LogError(f"{src}: resample.rate_hz must be > 0, got {self.rate_hz}")
         if not self.max_gap_s > 0:
             raise LogError(f"{src}: resample.max_gap_s must be > 0, got {self.max_gap_s}")
-        if self.steering_ratio is not None and not self.steering_ratio > 0:
-            raise LogError(f"{src}: steering_ratio must be > 0, got {self.steering_ratio}")
+        if self.steering_ratio is not None and not (self.steering_ratio > 0 and np.isfinite(self.steering_ratio)):
+            raise LogError(f"{src}: steering_ratio must be a finite number > 0, got {self.steering_ratio}")
 
     def sign(self, role: str) -> float:
         """Sign factor taking a stored value of ``role`` to ISO 8855."""

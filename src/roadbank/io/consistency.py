@@ -19,9 +19,9 @@ import math
 
 import numpy as np
 
+from ..constants import G
 from .errors import LogError
 
-G = 9.81
 LIMIT = 0.8 * G          #: median |ay - vx r| above this (m/s^2) is physically impossible
 FIXED = 0.45 * G         #: ... and below this after a correction means the correction is right
 TURN = 3.0               #: samples with |vx r| above this (m/s^2) are "turning"

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..params import VehicleParams
-from ..signals import Signals
+from ..signals import Signals, road_wheel_angle
 from . import readers
 from .channels import ChannelMap, check_plausible, default_channel_map, read_channel_map
 from .consistency import check_consistency
@@ -95,13 +95,15 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
     return roles
 
 
-def road_wheel_angle(cmap: ChannelMap, params: VehicleParams, roles: list[str], values: dict) -> np.ndarray:
-    """``delta_f`` (rad): the road-wheel angle, or the steering-wheel angle over the steering ratio,
-    or NaN when the map has no steering channel (ROS robots; the modified-model estimators do not read it)."""
+def steering_delta_f(cmap: ChannelMap, params: VehicleParams, roles: list[str], values: dict) -> np.ndarray:
+    """``delta_f`` (rad): the road-wheel angle, or the steering-wheel angle over the steering ratio
+    (the map's, else the car's; :func:`roadbank.signals.road_wheel_angle`), or NaN when the map has
+    no steering channel (ROS robots; the modified-model estimators do not read it)."""
     if "road_wheel_angle" in roles:
         return values["road_wheel_angle"]
     if "steering_wheel_angle" in roles:
-        return values["steering_wheel_angle"] / (cmap.steering_ratio or params.steering_ratio)
+        car = params.replace(steering_ratio=cmap.steering_ratio) if cmap.steering_ratio else params
+        return road_wheel_angle(values["steering_wheel_angle"], car)
     return np.full(len(values["speed"]), np.nan)
 
 
@@ -210,7 +212,7 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
     if len(t_base) < 2:
         raise LogError(f"{p}: fewer than 2 samples on the common time base")
 
-    delta = road_wheel_angle(cmap, params, roles, values)
+    delta = steering_delta_f(cmap, params, roles, values)
     try:
         sig = Signals(t_base, values["speed"], values["lateral_acceleration"], values["yaw_rate"], delta)
     except ValueError as exc:

@@ -37,7 +37,7 @@ from .consistency import check_consistency
 from .errors import LogError, channel_error
 from .files import open_mdf
 from .log import (FLAGGED_ROLES, GNSS_MAX_GAP_S, gnss_extra, gnss_roles, load_log, missing_column, repair_counts,
-                  repair_stamps, road_wheel_angle, select_roles)
+                  repair_stamps, select_roles, steering_delta_f)
 from .resample import clean_series, interpolate
 from .timebase import MISSING, OUT_OF_ORDER, add_counts
 from .types import Log
@@ -398,7 +398,7 @@ def stream_log(path, channels: ChannelMap | str | Path | None = None, format: st
 
 
 def _chunk_log(p, fmt, cmap, params, roles, vals, meta, warns, truth=None) -> Log:
-    delta = road_wheel_angle(cmap, params, roles, vals)
+    delta = steering_delta_f(cmap, params, roles, vals)
     try:
         sig = Signals(vals["t"], vals["speed"], vals["lateral_acceleration"], vals["yaw_rate"], delta)
     except ValueError as exc:

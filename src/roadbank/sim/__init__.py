@@ -18,9 +18,13 @@ from .params import PlantParams, TyreParams
 from .road import Road, flat_road, straight_road, test_track, two_lane_road
 from .scenarios import (CONDITIONS, CONDITIONS_BY_SCENARIO, SCENARIOS, Condition, Scenario, SimResult, Truth,
                         measure_realtime_factor, run, run_scenario, trim_state)
-from .sensors import ChannelSpec, SensorConfig
+from .sensors import ChannelErrorModel, SensorConfig
 
-__all__ = ["CONDITIONS", "CONDITIONS_BY_SCENARIO", "SCENARIOS", "ChannelSpec", "Condition", "Driver",
+#: the former name of :class:`ChannelErrorModel`, kept for code that imports it
+ChannelSpec = ChannelErrorModel
+
+__all__ = ["CONDITIONS", "CONDITIONS_BY_SCENARIO", "SCENARIOS", "ChannelErrorModel", "ChannelSpec", "Condition",
+           "Driver",
            "PlantParams", "Road", "Scenario", "SensorConfig", "SimResult", "Truth", "TyreParams",
            "flat_road", "measure_realtime_factor", "run", "run_scenario", "straight_road", "test_track",
            "trim_state", "two_lane_road"]

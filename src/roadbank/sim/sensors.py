@@ -26,11 +26,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..params import G
+from ..constants import G
 
 
 @dataclass(frozen=True)
-class ChannelSpec:
+class ChannelErrorModel:
     """Error model of one sensor channel (SI units of the channel).
 
     noise_std : white-noise standard deviation; bias : constant offset;
@@ -46,7 +46,7 @@ class ChannelSpec:
 
     def __post_init__(self) -> None:
         if self.noise_std < 0 or self.resolution < 0 or not self.range > 0:
-            raise ValueError("ChannelSpec: noise_std, resolution must be >= 0 and range > 0")
+            raise ValueError("ChannelErrorModel: noise_std, resolution must be >= 0 and range > 0")
 
     def apply(self, x: np.ndarray, noise: np.ndarray) -> np.ndarray:
         y = x * (1.0 + self.scale_error) + self.bias + self.noise_std * noise
@@ -64,12 +64,12 @@ class SensorConfig:
     rate: float = 100.0
     latency: float = 0.0
     dropout_prob: float = 0.0
-    yaw_rate: ChannelSpec = field(default_factory=lambda: ChannelSpec(
+    yaw_rate: ChannelErrorModel = field(default_factory=lambda: ChannelErrorModel(
         noise_std=math.radians(0.1), resolution=math.radians(0.3), range=math.radians(100.0)))
-    ay: ChannelSpec = field(default_factory=lambda: ChannelSpec(
+    ay: ChannelErrorModel = field(default_factory=lambda: ChannelErrorModel(
         noise_std=0.03, resolution=0.005 * G, range=1.8 * G))
-    speed: ChannelSpec = field(default_factory=lambda: ChannelSpec(noise_std=0.02, resolution=0.01))
-    steering: ChannelSpec = field(default_factory=lambda: ChannelSpec(
+    speed: ChannelErrorModel = field(default_factory=lambda: ChannelErrorModel(noise_std=0.02, resolution=0.01))
+    steering: ChannelErrorModel = field(default_factory=lambda: ChannelErrorModel(
         resolution=math.radians(0.1), range=math.radians(780.0)))
     ay_misalignment: float = 0.0
     ay_cross_axis: bool = False
@@ -88,7 +88,7 @@ class SensorConfig:
     @classmethod
     def ideal(cls, rate: float = 100.0) -> "SensorConfig":
         """Perfect sensors (no noise, quantisation, range or misalignment)."""
-        c = ChannelSpec()
+        c = ChannelErrorModel()
         return cls(rate=rate, yaw_rate=c, ay=c, speed=c, steering=c)
 
 

@@ -27,7 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..params import G, VehicleParams
+from ..constants import G
+from ..params import VehicleParams
 from .comma2k19 import ValidationResult
 from .scoring import Scoring, hold_invalid, lowpass_t, pooled, run_and_score
 from .splits import split_of

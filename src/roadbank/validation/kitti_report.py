@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from ..constants import G
 from ..defaults import ESTIMATOR as DEFAULT
 from ..report.markdown import md_table
 from .kitti import KittiValidation
@@ -123,7 +124,7 @@ def limits_lines(v: KittiValidation, h: str) -> list[str]:
             continue
         k = x["kin_residual_deg"]
         L.append(f"- {d.label}: the 10 Hz `ay` samples carry {x['ay_noise_std']:.3f} m/s^2 of sample-to-sample "
-                 f"noise (std of the difference / sqrt 2), i.e. {math.degrees(x['ay_noise_std'] / 9.81):.2f} deg "
+                 f"noise (std of the difference / sqrt 2), i.e. {math.degrees(x['ay_noise_std'] / G):.2f} deg "
                  f"of bank; the kinematic estimate's raw error is {_f(k.get(0.0))} deg RMS, and the same residual "
                  f"low-passed (zero-phase) is {_f(k.get(0.1))} / {_f(k.get(0.3))} / {_f(k.get(1.0))} deg with "
                  "tau = 0.1 / 0.3 / 1 s.")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+from ..constants import G
 from ..defaults import ESTIMATOR as DEFAULT
 from ..report.markdown import md_table
 from .comma2k19 import ValidationResult
@@ -122,7 +123,7 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
              f"times the bank signal; even its 1 s average varies by {d['ay_1s_mean_std']:.3f} m/s^2. "
              f"Resolution: accelerometer {d['accel_quantum']:.4f} m/s^2, gyro {d['gyro_quantum']:.5f} rad/s, "
              f"steering {d['steer_quantum_deg']:.1f} deg; the accelerometer step is "
-             f"{math.degrees(d['accel_quantum'] / 9.81):.3f} deg of bank, not the limit. The unsmoothed "
+             f"{math.degrees(d['accel_quantum'] / G):.3f} deg of bank, not the limit. The unsmoothed "
              "correlations (column `r raw`) are therefore low for every estimator: the limit is "
              "vibration noise, and every useful comparison needs smoothing.")
     L.append(f"- The cornering term `vx r` varies by {d['vx_r_std']:.3f} m/s^2 (std), larger than the bank "
@@ -143,7 +144,7 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
              f"{d['signal_ay_equiv_std']:.3f} m/s^2 bank signal, so a 10 % error in the assumed steering "
              "ratio or cornering stiffness already moves them by a third of the bank variation; one "
              "0.1 deg step of the CAN steering angle is "
-             f"{d['steer_step_ay']:.3f} m/s^2 (= {math.degrees(d['steer_step_ay'] / 9.81):.2f} deg of "
+             f"{d['steer_step_ay']:.3f} m/s^2 (= {math.degrees(d['steer_step_ay'] / G):.2f} deg of "
              f"bank) at the median speed {d['v_median']:.1f} m/s. An unknown steering offset, ratio "
              "and cornering stiffness therefore bias these estimators by amounts comparable to the whole "
              "bank variation; the modified-model estimators (pio-modified, pif-modified) do not use the "

@@ -1,0 +1,13 @@
+"""Physical constants roadbank uses, each defined once (SI).
+
+Every module that needs gravity imports :data:`G` from here (or its re-export
+``roadbank.G`` / :data:`roadbank.params.G`), so a change of the value reaches the
+models, the estimators, the simulator, the unit ``g`` of the log and vehicle-file
+readers and the plausibility checks alike.
+"""
+
+from __future__ import annotations
+
+#: Standard gravity used throughout roadbank (m/s^2). The DFC gain checks in
+#: tests/test_models.py (Haw0 = 4.4647 at 22.2 m/s) use 9.81.
+G = 9.81

@@ -1,0 +1,125 @@
+"""What a log tells the estimator design about its sensors, and the one rule that turns it into weights.
+
+:func:`log_conditions` measures a log's sample rate and the road noise of its ``ay`` and yaw rate;
+:func:`noise_densities` turns a car's sensors and those conditions into the noise densities of a
+sensor-weighted PIF; :func:`make_estimator` builds an estimator with them. Which estimators take
+the sensors' weights, and how explicit options override them, is
+:func:`roadbank.estimators.pif.with_sensor_noise`.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..params import VehicleParams
+from .sensors import SensorSpec
+
+__all__ = ["DESIGN_SPAN_S", "log_conditions", "noise_densities", "make_estimator"]
+
+
+#: seconds at the start of a log on which :func:`log_conditions` measures it (s)
+DESIGN_SPAN_S = 60.0
+
+
+def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
+    """What a log tells :func:`make_estimator` about its sensors: ``{"log_rate": Hz,
+    "log_ay_noise": m/s^2, "log_r_noise": rad/s}`` — the sample rate of its time base
+    (:func:`roadbank.signals.sample_rate`) and the road noise of its ``ay`` and yaw rate on the
+    samples at ``vx >= v_min`` (m/s): what they carry above the vehicle's dynamics band, taken
+    as white (:func:`roadbank.signals.road_noise_std`, the noise model of real roads; NaN when
+    too few samples). Measured on the first :data:`DESIGN_SPAN_S` of the log (all of a shorter
+    one), so that a streamed log gets the same design whatever its chunk size.
+    """
+    import numpy as np
+
+    from ..signals import road_noise_std, sample_rate
+
+    n = int(np.searchsorted(signals.t, signals.t[0] + DESIGN_SPAN_S, side="right"))
+    if n < len(signals):
+        signals = signals[:n]
+    vx = np.asarray(signals.vx, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        moving = vx >= v_min
+    ay_noise = road_noise_std(signals.ay, signals.t, moving)
+    r_noise = road_noise_std(signals.r, signals.t, moving)
+    # two significant digits: logs of one car and road share a design (the design cache)
+    return {"log_rate": sample_rate(signals.t), "log_ay_noise": float(f"{ay_noise:.2g}"),
+            "log_r_noise": float(f"{r_noise:.2g}")}
+
+
+def noise_densities(sensors: SensorSpec, log_rate: float | None = None, log_ay_noise: float | None = None,
+                    log_r_noise: float | None = None) -> tuple[float, float]:
+    """The noise densities ``(R, Q_ay)`` of a sensor-weighted PIF for a log: the one rule.
+
+    * ``R`` ((rad/s)^2 s), the yaw-rate noise density: the yaw-rate sensor's noise and
+      resolution at the rate of the log it will run on (:meth:`SensorSpec.r_noise_density`);
+    * ``Q_ay`` ((m/s^2)^2 s), the noise density of the ``ay`` input: the accelerometer's at that
+      rate (:meth:`SensorSpec.ay_noise_density`), or the road noise measured on the log's own
+      ``ay`` (``log_ay_noise``, :func:`log_conditions`) where that is larger — vibration of the
+      road, the body or the mount that no data sheet knows (a phone IMU, a 10 Hz INS that
+      samples without an anti-alias filter);
+    * likewise ``R`` from the road noise of the log's yaw rate (``log_r_noise``) where that is
+      larger than the sensor's.
+
+    Parameters
+    ----------
+    sensors : SensorSpec
+        The car's sensor cluster; its yaw-rate noise or resolution must not both be 0.
+    log_rate : float, optional
+        Sample rate of the log (Hz); None or not a positive finite number: ``sensors.rate``.
+    log_ay_noise, log_r_noise : float, optional
+        Road-noise standard deviation of the log's ``ay`` (m/s^2) and yaw rate (rad/s); None
+        or NaN: not measured.
+
+    Returns
+    -------
+    tuple of float
+        ``(R, Q_ay)``.
+    """
+    rate = sensors.rate_for(log_rate)
+    Q_ay, R = sensors.ay_noise_density(rate), sensors.r_noise_density(rate)
+    if log_ay_noise is not None and math.isfinite(log_ay_noise):
+        Q_ay = max(Q_ay, log_ay_noise ** 2 / rate)
+    if log_r_noise is not None and math.isfinite(log_r_noise):
+        R = max(R, log_r_noise ** 2 / rate)
+    return R, Q_ay
+
+
+def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: SensorSpec | None = None,
+                   log_rate: float | None = None, log_ay_noise: float | None = None,
+                   log_r_noise: float | None = None, **options):
+    """``estimators.make(name, params, **options)`` for a log sampled at ``log_rate`` by ``sensors``.
+
+    A default-tuned PIF (:func:`roadbank.estimators.pif.with_sensor_noise`) gets the weights
+    :func:`noise_densities` of ``sensors`` at the log's conditions; a sensor without yaw-rate
+    noise or resolution leaves the estimator's own weights.
+
+    ``roadbank estimate``/``map`` (:mod:`roadbank.fleet`, :mod:`roadbank.mapping`),
+    :meth:`Vehicle.make` and the real-data validation all build their estimators here.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`roadbank.estimators.NAMES`.
+    params : VehicleParams, optional
+        The car (default the paper's SUV).
+    sensors : SensorSpec, optional
+        Its sensor cluster (default the paper's ESP sensors).
+    log_rate : float, optional
+        Sample rate (Hz) of the log (:func:`roadbank.signals.sample_rate` of its time
+        base). Default (or NaN): ``sensors.rate``.
+    log_ay_noise, log_r_noise : float, optional
+        Road-noise standard deviation of the log's ``ay`` (m/s^2) and yaw rate (rad/s)
+        (:func:`roadbank.signals.road_noise_std`); None or NaN: not measured.
+    **options
+        The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
+        sensor out of that weight.
+    """
+    from .. import estimators
+    from ..estimators.pif import with_sensor_noise
+
+    sensors = sensors if sensors is not None else SensorSpec()
+    if sensors.r_variance > 0:
+        R, Q_ay = noise_densities(sensors, log_rate, log_ay_noise, log_r_noise)
+        options = with_sensor_noise(name, options, R, Q_ay)
+    return estimators.make(name, params, **options)

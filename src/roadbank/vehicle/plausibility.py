@@ -1,0 +1,203 @@
+"""What a vehicle's values must be: the keys of each table, their dimension and plausible range.
+
+:func:`check_document` checks a document of SI values (read from a file or built from a
+:class:`~roadbank.vehicle.Vehicle`): every number finite and within the range of a road vehicle
+(passenger car to light van; it catches unit mistakes), the wheelbase, the ``[plant]`` keys, the
+``[tuning]`` tables against the options each estimator accepts and the free-form ``[scores]`` /
+``[identified]`` tables. Every problem raises :class:`~roadbank.vehicle.VehicleFileError` naming
+the source and the key.
+"""
+
+from __future__ import annotations
+
+import difflib
+import inspect
+import math
+
+from ..constants import G
+from ..units import SI_UNIT, parse_quantity
+from .errors import VehicleFileError
+from .tomltext import fmt_value, is_scalar, toml_type
+
+__all__ = ["PLAUSIBLE", "WHEELBASE_RANGE", "SENSOR_FIELDS", "PLANT_FIELDS", "checked_value", "check_document",
+           "check_tuning", "check_free_table", "estimator_options", "unknown_key"]
+
+#: [vehicle] keys: dimension and plausible range for a road vehicle (passenger car to light
+#: van, SI). Outside the range is an error: it catches unit mistakes (mass in tonnes, Cf in
+#: N/deg, heights in mm, ...). ``None`` = only VehicleParams' own checks.
+PLAUSIBLE: dict[str, tuple[str, tuple[float, float] | None]] = {
+    "m": ("mass", (500.0, 5000.0)),
+    "Iz": ("inertia", (200.0, 20_000.0)),
+    "Lf": ("length", (0.5, 3.0)),
+    "Lr": ("length", (0.5, 3.0)),
+    "Cf": ("cornering stiffness", (10e3, 1.5e6)),
+    "Cr": ("cornering stiffness", (10e3, 1.5e6)),
+    "steering_ratio": ("dimensionless", (5.0, 30.0)),
+    "h_cg": ("length", (0.2, 1.6)),
+    "h_roll": ("length", (0.0, 1.6)),
+    "ms": ("mass", (400.0, 5000.0)),
+    "Ixx": ("inertia", (50.0, 6000.0)),
+    "k_roll": ("roll stiffness", (5e3, 1e6)),
+    "c_roll": ("roll damping", (0.0, 1e5)),
+    "roll_stiffness_front_share": ("dimensionless", (0.0, 1.0)),
+    "track_f": ("length", (1.0, 2.5)),
+    "track_r": ("length", (1.0, 2.5)),
+    "wheel_radius": ("length", (0.2, 0.6)),
+    "wheel_inertia": ("inertia", (0.1, 20.0)),
+    "g": ("acceleration", (9.7, 9.9)),
+}
+#: plausible wheelbase Lf + Lr (m)
+WHEELBASE_RANGE = (1.8, 4.5)
+
+#: [sensors] keys: dimension, plausible range (SI)
+SENSOR_FIELDS: dict[str, tuple[str, tuple[float, float] | None]] = {
+    "rate": ("frequency", (10.0, 2000.0)),
+    "latency": ("time", (0.0, 0.5)),
+    "dropout_prob": ("dimensionless", (0.0, 0.5)),
+    "ay_noise": ("acceleration", (0.0, 2.0)),
+    "ay_resolution": ("acceleration", (0.0, 0.5)),
+    "ay_range": ("acceleration", (0.5 * G, 20.0 * G)),
+    "ay_bias": ("acceleration", (-2.0, 2.0)),
+    "ay_misalignment": ("angle", (-math.radians(45.0), math.radians(45.0))),
+    "r_noise": ("angular rate", (0.0, 0.1)),
+    "r_resolution": ("angular rate", (0.0, 0.05)),
+    "r_range": ("angular rate", (0.5, 10.0)),
+    "r_bias": ("angular rate", (-0.1, 0.1)),
+    "speed_noise": ("speed", (0.0, 2.0)),
+    "speed_resolution": ("speed", (0.0, 1.0)),
+    "steering_noise": ("angle", (0.0, 0.1)),
+    "steering_resolution": ("angle", (0.0, 0.1)),
+    "steering_range": ("angle", (math.radians(90.0), math.radians(1800.0))),
+}
+
+#: [plant] keys (simulator only, :class:`roadbank.sim.PlantParams`): dimension, plausible range
+PLANT_FIELDS: dict[str, tuple[str, tuple[float, float] | None]] = {
+    "mu": ("dimensionless", (0.05, 1.5)),
+    "cornering_scale_front": ("dimensionless", (0.1, 5.0)),
+    "cornering_scale_rear": ("dimensionless", (0.1, 5.0)),
+    "drive_torque_max": ("torque", (100.0, 20_000.0)),
+    "drive_power_max": ("power", (10e3, 1e6)),
+    "brake_torque_max": ("torque", (500.0, 50_000.0)),
+    "brake_front_share": ("dimensionless", (0.0, 1.0)),
+    "CdA": ("area", (0.0, 10.0)),
+    "air_density": ("density", (0.0, 2.0)),
+    "accel_height": ("length", (-1.0, 1.5)),
+    "load_transfer_lag": ("time", (1e-3, 1.0)),
+}
+
+
+def unknown_key(key: str, known, what: str) -> str:
+    """The message for an unknown ``key`` among ``known``, with the close match when there is one."""
+    close = difflib.get_close_matches(key, list(known), n=1, cutoff=0.6)
+    if not close:
+        close = [k for k in known if k.lower() == key.lower()][:1]
+    hint = f"; did you mean '{close[0]}'?" if close else ""
+    return f"unknown {what}{hint} (known: {', '.join(known)})"
+
+
+def checked_value(source: str, table: str, key: str, raw, dimension: str,
+                  rng: tuple[float, float] | None) -> float:
+    """One numeric value of a file: number or "value unit" string -> SI float (the SI unit of
+    ``dimension``), range-checked against ``rng`` (SI; None: finite only)."""
+    where = f"{source}: [{table}] {key} = {fmt_value(raw)}"
+    if isinstance(raw, bool) or not isinstance(raw, (int, float, str)):
+        raise VehicleFileError(f"{where}: expected a number or a \"value unit\" string, "
+                               f"got {toml_type(raw)}")
+    if isinstance(raw, str):
+        try:
+            value = parse_quantity(raw, dimension)
+        except ValueError as exc:
+            raise VehicleFileError(f"{where}: {exc}") from None
+    else:
+        value = float(raw)
+    if not math.isfinite(value):
+        raise VehicleFileError(f"{where}: must be finite")
+    unit = SI_UNIT[dimension]
+    shown = "" if unit == "-" else f" {unit}"
+    if rng is not None and rng[0] > 0 and value <= 0:
+        raise VehicleFileError(f"{where}: must be > 0{shown}")
+    if rng is not None and rng[0] == 0 and value < 0:
+        raise VehicleFileError(f"{where}: must be >= 0{shown}")
+    if rng is not None and not rng[0] <= value <= rng[1]:
+        si = "" if isinstance(raw, (int, float)) and not isinstance(raw, bool) else f" (= {value:.6g}{shown})"
+        raise VehicleFileError(f"{where}{si}: outside the plausible range {rng[0]:g} .. {rng[1]:g}{shown} "
+                               f"for a road vehicle (unit mistake?)")
+    return value
+
+
+def check_free_table(source: str, table: str, sub: str, values) -> None:
+    """scores/identified/tuning entries: TOML scalars or (nested) arrays of scalars."""
+    if not isinstance(values, dict):
+        raise VehicleFileError(f"{source}: [{table}.{sub}] must be a table, got {toml_type(values)}")
+
+    def ok(v):
+        return is_scalar(v) or (isinstance(v, (list, tuple)) and all(ok(x) for x in v))
+
+    for k, v in values.items():
+        if not ok(v):
+            raise VehicleFileError(f"{source}: [{table}.{sub}] {k}: expected a number, string, boolean "
+                                   f"or array of them, got {toml_type(v)}")
+
+
+def estimator_options(name: str) -> set[str] | None:
+    """Keyword options ``estimators.make(name, ...)`` accepts (None: cannot tell, accept any)."""
+    from .. import estimators
+
+    factory = getattr(estimators, "_FACTORIES", {}).get(name)
+    if factory is None:
+        return None
+    fixed = set(getattr(factory, "keywords", None) or ())
+    cls = getattr(factory, "func", factory)
+    names: set[str] = set()
+    for klass in (inspect.getmro(cls) if inspect.isclass(cls) else (cls,)):
+        init = vars(klass).get("__init__") if inspect.isclass(klass) else klass
+        if init is None:            # a mixin without its own __init__: look further up
+            continue
+        if init is object.__init__:
+            break
+        try:
+            sig = inspect.signature(init)
+        except (TypeError, ValueError):
+            return None
+        names |= {p.name for p in sig.parameters.values()
+                  if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and p.name not in ("self", "params")}
+        if not any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values()):
+            break
+    return names - fixed
+
+
+def check_tuning(source: str, name: str, options) -> None:
+    """A ``[tuning.<name>]`` table: a known estimator, TOML values, options its ``make`` accepts."""
+    from .. import estimators
+
+    if name not in estimators.NAMES:
+        raise VehicleFileError(f"{source}: [tuning.{name}]: {unknown_key(name, estimators.NAMES, 'estimator')}")
+    check_free_table(source, "tuning", name, options)
+    known = estimator_options(name)
+    if known is not None:
+        for key in options:
+            if key not in known:
+                raise VehicleFileError(f"{source}: [tuning.{name}] {key}: "
+                                       f"{unknown_key(key, sorted(known), f'option of {name}')}")
+
+
+def check_document(doc: dict, source: str) -> None:
+    """Plausibility and cross-field checks on a document of SI values (from a file or a Vehicle)."""
+    veh = doc["vehicle"]
+    for key, (dim, rng) in PLAUSIBLE.items():
+        checked_value(source, "vehicle", key, veh[key], dim, rng)
+    L = veh["Lf"] + veh["Lr"]
+    if not WHEELBASE_RANGE[0] <= L <= WHEELBASE_RANGE[1]:
+        raise VehicleFileError(f"{source}: [vehicle] Lf + Lr = {L:.6g} m: wheelbase outside the plausible "
+                               f"range {WHEELBASE_RANGE[0]:g} .. {WHEELBASE_RANGE[1]:g} m")
+    for key, (dim, rng) in SENSOR_FIELDS.items():
+        checked_value(source, "sensors", key, doc["sensors"][key], dim, rng)
+    for key, value in doc["plant"].items():
+        if key not in PLANT_FIELDS:
+            raise VehicleFileError(f"{source}: [plant] {key}: {unknown_key(key, PLANT_FIELDS, 'key')}")
+        checked_value(source, "plant", key, value, *PLANT_FIELDS[key])
+    for name, options in doc["tuning"].items():
+        check_tuning(source, name, options)
+    for table in ("scores", "identified"):
+        for sub, values in doc[table].items():
+            check_free_table(source, table, sub, values)
