@@ -52,7 +52,8 @@ class DFC(Estimator):
         super().__init__(params, **kw)
 
     def _design(self):
-        tab = np.array([steady_state_gains(self.params, float(v)) for v in self.vgrid])
+        d = self.design          # a_ref and tau enter the kernel's cfg only, not the tables
+        tab = np.array([steady_state_gains(d.params, float(v)) for v in d.vgrid])
         return np.ascontiguousarray(tab), 2, np.zeros(0)
 
     def _fill_cfg_head(self, head):

@@ -18,5 +18,5 @@ class Kinematic(ScheduledObserver):
     uses = (False, True, True)
 
     def observer(self, vx: float):
-        g = self.params.g
+        g = self.design.params.g
         return np.zeros((0, 0)), np.zeros((0, 3)), np.zeros((1, 0)), np.array([[0.0, 1.0 / g, -vx / g]])

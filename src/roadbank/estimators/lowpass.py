@@ -31,15 +31,26 @@ as a lead :math:`\kappa\, \tau s/(\tau s + 1)\, a`.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from .base import ScheduledObserver
+from .base import DesignInputs, ScheduledObserver
 
 #: ``kinematic-lp``'s cut-off (Hz): the rule of :mod:`roadbank.tuning.real` with kappa = 0
 LP_CUTOFF_HZ = 0.5
 #: ``kinematic-ff``'s cut-off (Hz) and centripetal gain (-): the rule of :mod:`roadbank.tuning.real`
 FF_CUTOFF_HZ = 0.6
 FF_KAPPA = 0.2
+
+
+@dataclass(frozen=True)
+class LowPassDesign(DesignInputs):
+    """Design inputs of :class:`KinematicLowPass`: the cut-off ``cutoff`` (Hz) and the centripetal
+    feed-forward gain ``kappa`` (-)."""
+
+    cutoff: float
+    kappa: float
 
 
 class KinematicLowPass(ScheduledObserver):
@@ -61,6 +72,7 @@ class KinematicLowPass(ScheduledObserver):
     state_names = ("w_lp",)
     label = "kinematic-lp"
     defaults = dict(cutoff=LP_CUTOFF_HZ, kappa=0.0)
+    design_type = LowPassDesign
 
     def __init__(self, params=None, *, cutoff=None, kappa=None, **kw):
         self.cutoff = float(self.defaults["cutoff"] if cutoff is None else cutoff)
@@ -72,9 +84,13 @@ class KinematicLowPass(ScheduledObserver):
         self.name = self.label
         super().__init__(params, **kw)
 
+    def _design_fields(self) -> dict:
+        return dict(cutoff=self.cutoff, kappa=self.kappa)
+
     def observer(self, vx: float):
         """``(F, G, H, D)`` at ``vx`` (m/s); inputs ``[delta_f, ay, r]``."""
-        g, wc, k = self.params.g, 2.0 * np.pi * self.cutoff, self.kappa
+        d = self.design
+        g, wc, k = d.params.g, 2.0 * np.pi * d.cutoff, d.kappa
         F = np.array([[-wc]])
         G = np.array([[0.0, wc / g, -wc * (1.0 + k) * vx / g]])
         return F, G, np.array([[1.0]]), np.array([[0.0, 0.0, k * vx / g]])
