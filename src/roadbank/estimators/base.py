@@ -587,18 +587,24 @@ class ScheduledObserver(Estimator):
         fast = self._grid_design()
         if fast is not None:
             return fast
-        rows = []
-        n = None
-        for v in self.design.vgrid:
-            F, G, H, D = self.observer(float(v))
-            n = F.shape[0]
-            J = equilibrium_map(F, G)
-            rows.append(np.concatenate([F.ravel(), G.ravel(), np.ravel(H), np.ravel(D), J.ravel()]))
-        return np.ascontiguousarray(np.array(rows)), n, np.zeros(0)
+        return scheduled_tables(self.observer, self.design.vgrid)
 
     def error_dynamics(self, vx: float) -> np.ndarray:
         """Continuous-time matrix ``F(vx)`` (1/s) governing the estimation error."""
         return self.observer(vx)[0]
+
+
+def scheduled_tables(observer, vgrid: np.ndarray) -> Tables:
+    """The ``lpv`` :class:`Tables` of a speed-scheduled observer: rows ``[F, G, H, D, J]`` of
+    ``observer(vx) -> (F, G, H, D)`` at each speed of ``vgrid`` (m/s), ``J`` its equilibrium map."""
+    rows = []
+    n = None
+    for v in vgrid:
+        F, G, H, D = observer(float(v))
+        n = F.shape[0]
+        J = equilibrium_map(F, G)
+        rows.append(np.concatenate([F.ravel(), G.ravel(), np.ravel(H), np.ravel(D), J.ravel()]))
+    return Tables(np.ascontiguousarray(np.array(rows)), n, np.zeros(0))
 
 
 def embed_inputs(cols: dict[int, np.ndarray], n_rows: int) -> np.ndarray:

@@ -37,6 +37,16 @@ class KalmanDesign(DesignInputs):
     R: tuple
 
 
+def kalman_observer(d: KalmanDesign, vx: float):
+    """``(F, G, H, D)`` of the steady-state Kalman filter at ``vx`` (m/s)."""
+    Rm = np.diag(np.asarray(d.R, dtype=float))
+    A, B, C, Dy, Lw, _ = augmented_design_model(d.params, vx, "original")
+    P = game_are(A, C, Lw, np.diag(np.asarray(d.q, dtype=float)), Rm, np.eye(1), 0.0,
+                 where=f"at vx={vx:.2f} m/s (kalman)")
+    Kg = P @ C.T @ np.linalg.inv(Rm)
+    return A - Kg @ C, B + Kg @ Dy, Lw, np.zeros((1, 3))
+
+
 class Kalman(ScheduledObserver):
     """Steady-state Kalman filter on the augmented original model.
 
@@ -70,10 +80,5 @@ class Kalman(ScheduledObserver):
         return grid_design.kalman_speed(self) if type(self).observer is Kalman.observer else None
 
     def observer(self, vx: float):
-        d = self.design
-        Rm = np.diag(np.asarray(d.R, dtype=float))
-        A, B, C, Dy, Lw, _ = augmented_design_model(d.params, vx, "original")
-        P = game_are(A, C, Lw, np.diag(np.asarray(d.q, dtype=float)), Rm, np.eye(1), 0.0,
-                     where=f"at vx={vx:.2f} m/s (kalman)")
-        Kg = P @ C.T @ np.linalg.inv(Rm)
-        return A - Kg @ C, B + Kg @ Dy, Lw, np.zeros((1, 3))
+        """``(F, G, H, D)`` at ``vx`` (m/s) (:func:`kalman_observer`)."""
+        return kalman_observer(self.design, vx)

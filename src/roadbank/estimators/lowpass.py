@@ -53,6 +53,14 @@ class LowPassDesign(DesignInputs):
     kappa: float
 
 
+def lowpass_observer(d: LowPassDesign, vx: float):
+    """``(F, G, H, D)`` of the low-passed kinematic estimate at ``vx`` (m/s); inputs ``[delta_f, ay, r]``."""
+    g, wc, k = d.params.g, 2.0 * np.pi * d.cutoff, d.kappa
+    F = np.array([[-wc]])
+    G = np.array([[0.0, wc / g, -wc * (1.0 + k) * vx / g]])
+    return F, G, np.array([[1.0]]), np.array([[0.0, 0.0, k * vx / g]])
+
+
 class KinematicLowPass(ScheduledObserver):
     """The kinematic estimate low-passed, optionally with the centripetal feed-forward (module docstring).
 
@@ -88,12 +96,8 @@ class KinematicLowPass(ScheduledObserver):
         return dict(cutoff=self.cutoff, kappa=self.kappa)
 
     def observer(self, vx: float):
-        """``(F, G, H, D)`` at ``vx`` (m/s); inputs ``[delta_f, ay, r]``."""
-        d = self.design
-        g, wc, k = d.params.g, 2.0 * np.pi * d.cutoff, d.kappa
-        F = np.array([[-wc]])
-        G = np.array([[0.0, wc / g, -wc * (1.0 + k) * vx / g]])
-        return F, G, np.array([[1.0]]), np.array([[0.0, 0.0, k * vx / g]])
+        """``(F, G, H, D)`` at ``vx`` (m/s); inputs ``[delta_f, ay, r]`` (:func:`lowpass_observer`)."""
+        return lowpass_observer(self.design, vx)
 
 
 class KinematicFeedForward(KinematicLowPass):

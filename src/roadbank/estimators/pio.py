@@ -50,6 +50,13 @@ class PIODesign(DesignInputs):
     poles: tuple
 
 
+def pio_gain(d: PIODesign, model, vx: float) -> np.ndarray:
+    """Observer gain ``[K1; K2]`` at ``vx`` (m/s) for the augmented design ``model``."""
+    if d.gains == "table3":
+        return table3_gain(d.params, vx)
+    return place_observer(model[0], model[2], d.poles)
+
+
 class PIO(ScheduledObserver):
     """Proportional-integral observer on the original or the modified model.
 
@@ -88,10 +95,7 @@ class PIO(ScheduledObserver):
         return self._gain(augmented_design_model(self.design.params, vx, self.design.model), vx)
 
     def _gain(self, model, vx: float) -> np.ndarray:
-        d = self.design
-        if d.gains == "table3":
-            return table3_gain(d.params, vx)
-        return place_observer(model[0], model[2], d.poles)
+        return pio_gain(self.design, model, vx)
 
     def observer(self, vx: float):
         model = augmented_design_model(self.design.params, vx, self.design.model)

@@ -62,6 +62,23 @@ class UIODesign(DesignInputs):
     tau: float
 
 
+def uio_observer(d: UIODesign, vx: float):
+    """``(F, G, H, D)`` of the UIO with its output-derivative filters at ``vx`` (m/s)."""
+    A, B, Eo, C, D = original_model(d.params, vx)
+    E, N, L, Gu, pinv = uio_matrices(d.params, vx, d.M, d.Q)
+    Sy = embed_inputs({0: -D[:, 0], 1: [1.0, 0.0], 2: [0.0, 1.0]}, 2)   # y = y_o - D delta
+    Ed = embed_inputs({0: [1.0]}, 1)                                    # delta selector
+    tau = d.tau
+    F = np.zeros((4, 4))
+    F[:2, :2] = N
+    F[2:, 2:] = -np.eye(2) / tau
+    G = np.vstack([L @ Sy + Gu @ Ed, Sy / tau])
+    CA = C @ A
+    H = np.hstack([-pinv @ CA, -pinv / tau])
+    Dw = pinv @ (Sy / tau + CA @ E @ Sy - C @ B @ Ed)
+    return F, G, H, Dw
+
+
 class UIO(ScheduledObserver):
     """Unknown input observer. States ``[z1, z2, q1, q2]``: ``z`` of the observer
     and ``q`` of the output-derivative filters.
@@ -89,17 +106,5 @@ class UIO(ScheduledObserver):
         return dict(M=frozen_array(self.M), Q=frozen_array(self.Q), tau=self.tau)
 
     def observer(self, vx: float):
-        d = self.design
-        A, B, Eo, C, D = original_model(d.params, vx)
-        E, N, L, Gu, pinv = uio_matrices(d.params, vx, d.M, d.Q)
-        Sy = embed_inputs({0: -D[:, 0], 1: [1.0, 0.0], 2: [0.0, 1.0]}, 2)   # y = y_o - D delta
-        Ed = embed_inputs({0: [1.0]}, 1)                                    # delta selector
-        tau = d.tau
-        F = np.zeros((4, 4))
-        F[:2, :2] = N
-        F[2:, 2:] = -np.eye(2) / tau
-        G = np.vstack([L @ Sy + Gu @ Ed, Sy / tau])
-        CA = C @ A
-        H = np.hstack([-pinv @ CA, -pinv / tau])
-        Dw = pinv @ (Sy / tau + CA @ E @ Sy - C @ B @ Ed)
-        return F, G, H, Dw
+        """``(F, G, H, D)`` at ``vx`` (m/s) (:func:`uio_observer`)."""
+        return uio_observer(self.design, vx)
