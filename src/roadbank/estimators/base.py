@@ -263,7 +263,7 @@ class Estimator:
         """``_design()`` through the on-disk cache, keyed on the class and the exact design inputs."""
         key = self._disk_key()
         if key is None:
-            return self._design()
+            return Tables(*self._design())
         z = cache.load("design", key)
         if z is not None and "unsolvable" in z:
             raise NoStabilisingSolution(str(z["unsolvable"]))
