@@ -105,15 +105,29 @@ def concat_signals(parts) -> "Signals":
     return Signals(*(np.concatenate([getattr(p, c) for p in parts]) for c in CHANNELS))
 
 
-def sample_rate(t) -> float:
-    """Sample rate (Hz) of a time base ``t`` (s): 1 / its median positive finite interval.
+def interval_rate(dt) -> float:
+    """Sample rate (Hz) of the sample intervals ``dt`` (s): the one rule of roadbank.
 
-    NaN when ``t`` has no such interval (fewer than two distinct samples). Jittered
-    logs (KITTI's 0.06-0.14 s frames) get their typical rate (10 Hz).
+    1 / the median positive finite interval, rounded to a whole number of Hz when it is one to
+    1e-9 relative (time stamps ``k * h`` in floating point carry such an error). NaN when ``dt``
+    holds no such interval. Jittered logs (KITTI's 0.06-0.14 s frames) get their typical rate
+    (10 Hz); a single interval gives its own rate, which is what the estimators' fixed-rate
+    path uses (it must choose causally, at the first interval it sees).
     """
-    dt = np.diff(np.asarray(t, dtype=np.float64))
+    dt = np.asarray(dt, dtype=np.float64).ravel()
     dt = dt[np.isfinite(dt) & (dt > 0)]
-    return 1.0 / float(np.median(dt)) if dt.size else float("nan")
+    if not dt.size:
+        return float("nan")
+    rate = 1.0 / float(np.median(dt))
+    return float(round(rate)) if abs(rate - round(rate)) <= 1e-9 * rate else rate
+
+
+def sample_rate(t) -> float:
+    """Sample rate (Hz) of a time base ``t`` (s): :func:`interval_rate` of its intervals.
+
+    NaN when ``t`` has no positive finite interval (fewer than two distinct samples).
+    """
+    return interval_rate(np.diff(np.asarray(t, dtype=np.float64)))
 
 
 #: fewest sample triples :func:`white_noise_std` measures from

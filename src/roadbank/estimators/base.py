@@ -1,28 +1,31 @@
 """The shared estimator interface: batch ``run()``, streaming ``step()``, ``reset()``.
 
-Every estimator of roadbank is an :class:`Estimator`. Subclasses only design
-their tables (Python, once per parameter set); the per-sample recursion runs in
-one of the compiled kernels of :mod:`roadbank.estimators.kernels`, the same
-code for ``run()`` and ``step()``, so streaming and batch give identical numbers.
+Every estimator of roadbank is an :class:`Estimator`. A design is a value: the inputs of an
+estimator's tables are a frozen dataclass (:class:`DesignInputs` and one subclass per estimator
+family, its fields the whole cache key), from which ``_design()`` builds the tables (Python,
+once per value: memoised in the process and on disk). The per-sample recursion runs the tables
+in one of the compiled kernels of :mod:`roadbank.estimators.kernels`, the same code for
+``run()`` and ``step()``, so streaming and batch give identical numbers.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
-import mmap
-import sys
 import warnings
 from typing import NamedTuple
 
 import numpy as np
 
+from .. import cache
 from ..models.bicycle import augment, disturbance_output, modified_model, original_model
 from ..models.roll import roll_state_space
 from ..params import VehicleParams
-from ..signals import Estimate, Signals, sample_rate
+from ..signals import Estimate, Signals, interval_rate, sample_rate
 from . import kernels as K
 from . import layout as L
+from ._buffers import OutputBuffers
 from .discretise import foh, foh_grid
 from .synthesis import NoStabilisingSolution, using_reference_solvers
 
@@ -30,12 +33,55 @@ from .synthesis import NoStabilisingSolution, using_reference_solvers
 V_GRID_MAX = 100.0
 V_GRID_STEP = 0.25
 
+#: designed tables by design key (:meth:`Estimator._design_key`), or the NoStabilisingSolution raised
 _DESIGN_CACHE: dict = {}
 #: kernel families with the fixed-rate path (``lpv`` rows; ``gated`` steps them through ``lpv_step``)
 FIXED_RATE_KERNELS = ("lpv", "gated")
-#: settings that do not change the tables (vgrid follows v_min; the rest only enter cfg or the kernel)
-_NOT_DESIGN = ("vgrid", "fixed_dt", "max_substep", "max_gap", "max_angle", "roll")
 _DISCRETE_CACHE: dict = {}
+
+
+@dataclasses.dataclass(frozen=True)
+class DesignInputs:
+    """What an estimator's tables are built from: the car and the speed grid of the gain schedules.
+
+    Every estimator family extends it with its own design settings (weights, gains, time
+    constants). Its fields are the whole key of the design caches: two estimators of one class
+    with equal design inputs share one design, and nothing else about an estimator (the roll
+    model, ``max_angle``, settings that only enter its kernel) changes the tables.
+
+    Parameters
+    ----------
+    params : VehicleParams
+        The estimator's model of the car (SI).
+    v_min, v_step, v_max : float
+        Start, spacing and end (m/s) of the speed grid (:func:`speed_grid`).
+    """
+
+    params: VehicleParams
+    v_min: float
+    v_step: float
+    v_max: float
+
+    @property
+    def vgrid(self) -> np.ndarray:
+        """The speed grid (m/s): :func:`speed_grid` of ``v_min``, ``v_max``, ``v_step``."""
+        return speed_grid(self.v_min, self.v_max, self.v_step)
+
+
+def frozen_array(a) -> tuple:
+    """``a`` (array-like of floats, any shape) as nested tuples of floats: a design-input field
+    that compares and hashes by value (units those of ``a``)."""
+    a = np.asarray(a, dtype=float)
+    return float(a) if a.ndim == 0 else tuple(frozen_array(x) for x in a)
+
+
+class Tables(NamedTuple):
+    """What a design builds: ``tab`` (grid points, k) float64, ``nstate`` the number of observer
+    states, ``extra`` the estimator's further cfg floats (layout: :mod:`roadbank.estimators.layout`)."""
+
+    tab: np.ndarray
+    nstate: int
+    extra: np.ndarray
 
 
 class StepResult(NamedTuple):
@@ -53,13 +99,6 @@ class StepResult(NamedTuple):
 
 
 _new_result = tuple.__new__
-
-
-def rate_of_interval(h: float) -> float:
-    """Sample rate (Hz) of the interval ``h`` (s): ``1/h``, rounded to a whole number of Hz when it
-    is one to 1e-9 relative (time stamps ``k * h`` in floating point)."""
-    rate = 1.0 / h
-    return float(round(rate)) if abs(rate - round(rate)) <= 1e-9 * rate else rate
 
 
 def speed_grid(v_min: float, v_max: float = V_GRID_MAX, step: float = V_GRID_STEP) -> np.ndarray:
@@ -93,16 +132,20 @@ class Estimator:
         :data:`~roadbank.estimators.layout.DT_REL_TOL`) are processed with the
         exact discrete-time tables of :meth:`discrete_tables`, all others with
         the general trapezoidal path. ``"auto"``: the first positive interval
-        between time stamps after a reset sets the rate (same rule in
-        :meth:`run` and :meth:`step`, so both give identical numbers), kept
-        until :meth:`set_sample_rate` changes it. ``None``: general path only.
+        between time stamps after a reset sets the rate, by the rule of
+        :func:`roadbank.signals.interval_rate` (same rule in :meth:`run` and
+        :meth:`step`, so both give identical numbers), kept until
+        :meth:`set_sample_rate` changes it. ``None``: general path only.
     v_step, v_max : float, default 0.25, 100 m/s
         Spacing and end of the speed grid of the gain schedules; above ``v_max``
         the gains of ``v_max`` are held. A coarse, short grid designs faster
         (``roadbank tune`` searches on one).
 
-    Subclasses set ``name``, ``kernel`` ("lpv", "adaptive", "gated", "dfc" or "riccati"), the channel
-    usage and build ``self._tab`` / ``self._cfg_extra`` in ``_design()``.
+    Subclasses set ``name``, ``kernel`` ("lpv", "adaptive", "gated", "dfc" or "riccati") and the
+    channel usage, name their design inputs (:attr:`design_type`, a frozen dataclass extending
+    :class:`DesignInputs`, filled by :meth:`_design_fields` from the settings they validated
+    before calling ``Estimator.__init__``) and build the :class:`Tables` of :attr:`design` in
+    ``_design()``. Only the design inputs key the design caches.
     """
 
     name = "base"
@@ -111,6 +154,8 @@ class Estimator:
     uses = (True, True, True)
     #: names of the observer states reported in Estimate.states
     state_names: tuple[str, ...] = ()
+    #: the frozen dataclass of this estimator's design inputs (:attr:`design`)
+    design_type: type = DesignInputs
 
     def __init__(self, params: VehicleParams | None = None, *, v_min: float = 5.0,
                  roll: str = "static", max_substep: float = 0.02, max_gap: float = 1.0,
@@ -135,11 +180,13 @@ class Estimator:
         self.max_angle = float(max_angle)
         self._roll = roll_state_space(self.params, roll)
         self.vgrid = speed_grid(self.v_min, self.v_max, self.v_step)
-        self._tab_cont, self._nstate, self._extra = self._cached_design()
+        self._inputs = self.design_type(params=self.params, v_min=self.v_min, v_step=self.v_step,
+                                        v_max=self.v_max, **self._design_fields())
+        self._tab_cont, self._nstate, self._extra = self._designed()
         self._run_fn = getattr(K, f"{self.kernel}_run")
         self._step_fn = getattr(K, f"{self.kernel}_step")
         self._work = np.zeros(L.work_size(self._nstate))
-        self._out_arrays = None     # the last run()'s output arrays, reused when dropped (_outputs)
+        self._buffers = OutputBuffers()     # the last run()'s output arrays, reused when dropped
         self.fixed_dt = None
         self._tab = self._tab_cont
         self._cfg = self._build_cfg(None)
@@ -163,19 +210,41 @@ class Estimator:
                           RuntimeWarning, stacklevel=3)
             self.sheet_rate = None
 
+    @property
+    def design(self) -> DesignInputs:
+        """This estimator's design inputs (a frozen :attr:`design_type`): what its tables are built from."""
+        return self._inputs
+
     # -- to implement ------------------------------------------------------
+    def _design_fields(self) -> dict:
+        """The fields of :attr:`design_type` beyond those of :class:`DesignInputs`, from the
+        settings the subclass validated before ``Estimator.__init__`` (none here)."""
+        return {}
+
     def _design(self):  # pragma: no cover - abstract
-        """Return (table (ngrid, k), number of observer states, extra cfg floats)."""
+        """The :class:`Tables` ``(tab, nstate, extra)`` of :attr:`design` (a function of it alone)."""
         raise NotImplementedError
 
     def _initial_memory(self, mem: np.ndarray) -> None:
         """Hook to set estimator-specific initial memory (e.g. Riccati P0)."""
 
+    def _designed(self):
+        """The tables of :attr:`design` (:meth:`_tables_of`); a subclass may choose another design
+        value first (a PIF halves a default ``th`` that has no stabilising solution)."""
+        return self._tables_of(self._inputs)
+
+    def _tables_of(self, inputs: DesignInputs):
+        """The :class:`Tables` of the design value ``inputs``, which becomes :attr:`design`.
+
+        ``_design()`` memoised on the estimator class and the design inputs: building the same
+        estimator again costs nothing. Also kept on disk (:mod:`roadbank.cache`), so a new
+        process reads the tables instead of solving one ARE per grid speed again. A design
+        without a stabilising solution is remembered too and raises again."""
+        self._inputs = inputs
+        return self._cached_design()
+
     def _cached_design(self):
-        """``_design()`` memoised on the estimator type and every setting made so far
-        (parameters and tuning): building the same estimator again costs nothing.
-        Also kept on disk (:mod:`roadbank.cache`), so a new process reads the tables
-        instead of solving one ARE per grid speed again."""
+        """``_design()`` of :attr:`design` through the memo and the on-disk cache (:meth:`_tables_of`)."""
         key = self._design_key()
         hit = _DESIGN_CACHE.get(key)
         if hit is None:
@@ -191,19 +260,17 @@ class Estimator:
         return hit
 
     def _disk_design(self):
-        """``_design()`` through the on-disk cache, keyed on the class, the exact values of
-        every design setting and the speed grid."""
-        from .. import cache
+        """``_design()`` through the on-disk cache, keyed on the class and the exact design inputs."""
         key = self._disk_key()
         if key is None:
-            return self._design()
+            return Tables(*self._design())
         z = cache.load("design", key)
         if z is not None and "unsolvable" in z:
             raise NoStabilisingSolution(str(z["unsolvable"]))
         if z is not None and {"tab", "nstate", "extra"} <= z.keys():
-            return z["tab"], int(z["nstate"]), z["extra"]
+            return Tables(z["tab"], int(z["nstate"]), z["extra"])
         try:
-            tab, nstate, extra = hit = self._design()
+            tab, nstate, extra = hit = Tables(*self._design())
         except NoStabilisingSolution as exc:
             # as expensive as a solution (up to one ARE per grid point), and as deterministic
             cache.store("design", key, {"unsolvable": np.array(str(exc))})
@@ -214,23 +281,18 @@ class Estimator:
         return hit
 
     def _disk_key(self) -> str | None:
-        """Key of this estimator's design in the on-disk cache (:mod:`roadbank.cache`): the class,
-        the exact values of every design setting and the speed grid; None for a class whose
+        """Key of this estimator's design in the on-disk cache (:mod:`roadbank.cache`): the class
+        and the exact values of the design inputs (:attr:`design`); None for a class whose
         source has no identity (then nothing is cached on disk)."""
-        from .. import cache
         cls = type(self)
         stamp = cache.code_stamp(cls)       # a subclass outside roadbank: its file's identity
         if stamp is None:
             return None
-        return cache.canonical((f"{cls.__module__}.{cls.__qualname__}", stamp, self.vgrid,
-                                sorted(((k, v) for k, v in vars(self).items()
-                                        if not k.startswith("_") and k not in _NOT_DESIGN), key=lambda kv: kv[0])))
+        return cache.canonical((f"{cls.__module__}.{cls.__qualname__}", stamp, self._inputs))
 
     def _design_key(self) -> tuple:
-        """The estimator type and every public setting made so far (parameters and tuning)."""
-        return (type(self).__name__,
-                tuple(sorted((k, repr(v)) for k, v in vars(self).items()
-                             if not k.startswith("_") and k not in _NOT_DESIGN)))
+        """Key of this estimator's design in the process: the class and the exact design inputs."""
+        return (type(self), cache.canonical(self._inputs))
 
     # -- configuration -----------------------------------------------------
     def _build_cfg(self, roll_discrete) -> np.ndarray:
@@ -347,16 +409,13 @@ class Estimator:
         self._tab = np.ascontiguousarray(np.hstack(parts))
         self._cfg = self._build_cfg((d["Phi_r"], d["Gam0_r"], d["Gam1_r"]))
 
-    def _rate_from_interval(self, h: float) -> None:
-        self.set_sample_rate(rate_of_interval(h))
-
     def _observe_time(self, t: float) -> None:
         """Automatic rate (``sample_rate="auto"``), one sample: the first positive interval
-        between finite time stamps sets the rate."""
+        between finite time stamps sets the rate (:func:`roadbank.signals.interval_rate` of it)."""
         if not math.isfinite(t):
             return
         if t > self._det_t:                     # False while _det_t is NaN
-            self._rate_from_interval(t - self._det_t)
+            self.set_sample_rate(interval_rate(t - self._det_t))
         self._det_t = t
 
     def _first_interval(self, t: np.ndarray) -> int:
@@ -450,25 +509,11 @@ class Estimator:
     def _outputs(self, n: int):
         """Output arrays of :meth:`run` for ``n`` samples: ``w, theta, phi_b, phi, valid, xs``.
 
-        The estimator keeps the arrays of its last :meth:`run` and hands them out again
-        once nothing else refers to them (every array of that run's
-        :class:`~roadbank.signals.Estimate` dropped, views included): a loop over logs
-        then writes into memory it already has, instead of paying the page faults of
-        fresh memory (about as much as the estimation itself). Arrays the caller still
-        holds are never reused. New arrays come from :func:`_new_array`.
+        Those of the last :meth:`run` once nothing else refers to them (every array of that
+        run's :class:`~roadbank.signals.Estimate` dropped, views included), else new ones
+        (:class:`~roadbank.estimators._buffers.OutputBuffers`).
         """
-        ns = max(self._nstate, 2)
-        old = self._out_arrays
-        # each array referenced by the tuple only (as _UNSHARED_REFS calibrates): nothing of the
-        # caller's (a held view counts through its base)
-        if (old is not None and old[0].shape[0] == n and old[5].shape[1] == ns
-                and all(c == _UNSHARED_REFS for c in _refcounts(old))):
-            return old
-        f8 = np.float64
-        out = (_new_array((n,), f8), _new_array((n,), f8), _new_array((n,), f8), _new_array((n,), f8),
-               _new_array((n,), np.bool_), _new_array((n, ns), f8))
-        self._out_arrays = out
-        return out
+        return self._buffers.take(n, max(self._nstate, 2))
 
     def transition_matrix(self, vx: float, dt: float) -> np.ndarray:
         """Per-sample map of the observer state with zero inputs, measured on the compiled kernel.
@@ -492,43 +537,6 @@ class Estimator:
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r} v_min={self.v_min} roll={self.roll!r}>"
-
-
-#: arrays from this size on are allocated with their pages mapped at once (:func:`_new_array`)
-_POPULATE_MIN_BYTES = 1 << 20
-
-
-def _new_array(shape: tuple, dtype) -> np.ndarray:
-    """An uninitialised array; from ``_POPULATE_MIN_BYTES`` on, backed by an anonymous memory map
-    whose pages the kernel maps in one call (``MAP_POPULATE``, Linux).
-
-    Written for the first time, fresh memory costs one page fault per 4 KiB page, which on
-    virtual machines costs more than the estimation itself (about 1 ns per byte measured on
-    the benchmark machine, a third of that populated at once). Elsewhere, for small arrays
-    or when the map fails (e.g. too many maps), plain ``np.empty``. Also separate arrays
-    rather than one block: numpy asks for huge pages from 4 MiB on, and their first writes
-    cost more still there.
-    """
-    dt = np.dtype(dtype)
-    nbytes = int(np.prod(shape)) * dt.itemsize
-    populate = getattr(mmap, "MAP_POPULATE", None)
-    anonymous = getattr(mmap, "MAP_ANONYMOUS", None)
-    if populate is None or anonymous is None or nbytes < _POPULATE_MIN_BYTES:
-        return np.empty(shape, dtype=dt)
-    try:
-        mm = mmap.mmap(-1, nbytes, flags=mmap.MAP_PRIVATE | anonymous | populate)
-    except (OSError, ValueError):
-        return np.empty(shape, dtype=dt)
-    return np.ndarray(shape, dtype=dt, buffer=mm)    # views of it have it as their base
-
-
-def _refcounts(arrays) -> list[int]:
-    """``sys.getrefcount`` of each element of the tuple ``arrays`` (as counted from here)."""
-    return [sys.getrefcount(a) for a in arrays]
-
-
-#: what :func:`_refcounts` reports for an element that nothing but its tuple refers to
-_UNSHARED_REFS = _refcounts((np.empty(1),))[0]
 
 
 def batch3_rows(d: dict) -> np.ndarray:
@@ -579,18 +587,24 @@ class ScheduledObserver(Estimator):
         fast = self._grid_design()
         if fast is not None:
             return fast
-        rows = []
-        n = None
-        for v in self.vgrid:
-            F, G, H, D = self.observer(float(v))
-            n = F.shape[0]
-            J = equilibrium_map(F, G)
-            rows.append(np.concatenate([F.ravel(), G.ravel(), np.ravel(H), np.ravel(D), J.ravel()]))
-        return np.ascontiguousarray(np.array(rows)), n, np.zeros(0)
+        return scheduled_tables(self.observer, self.design.vgrid)
 
     def error_dynamics(self, vx: float) -> np.ndarray:
         """Continuous-time matrix ``F(vx)`` (1/s) governing the estimation error."""
         return self.observer(vx)[0]
+
+
+def scheduled_tables(observer, vgrid: np.ndarray) -> Tables:
+    """The ``lpv`` :class:`Tables` of a speed-scheduled observer: rows ``[F, G, H, D, J]`` of
+    ``observer(vx) -> (F, G, H, D)`` at each speed of ``vgrid`` (m/s), ``J`` its equilibrium map."""
+    rows = []
+    n = None
+    for v in vgrid:
+        F, G, H, D = observer(float(v))
+        n = F.shape[0]
+        J = equilibrium_map(F, G)
+        rows.append(np.concatenate([F.ravel(), G.ravel(), np.ravel(H), np.ravel(D), J.ravel()]))
+    return Tables(np.ascontiguousarray(np.array(rows)), n, np.zeros(0))
 
 
 def embed_inputs(cols: dict[int, np.ndarray], n_rows: int) -> np.ndarray:

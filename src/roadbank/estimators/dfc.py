@@ -31,10 +31,17 @@ import numpy as np
 
 from ..models.bicycle import steady_state_gains
 from . import layout as L
-from .base import Estimator
+from .base import DesignInputs, Estimator, Tables
 
 A_REF = 4.0
 TAU_LPF = 2.0 / 3.0
+
+
+def dfc_tables(d: DesignInputs) -> Tables:
+    """The ``dfc`` kernel's :class:`~roadbank.estimators.base.Tables`: the original model's
+    steady-state gains at each grid speed (``a_ref`` and the low-pass enter the kernel's cfg only)."""
+    tab = np.array([steady_state_gains(d.params, float(v)) for v in d.vgrid])
+    return Tables(np.ascontiguousarray(tab), 2, np.zeros(0))
 
 
 class DFC(Estimator):
@@ -52,8 +59,7 @@ class DFC(Estimator):
         super().__init__(params, **kw)
 
     def _design(self):
-        tab = np.array([steady_state_gains(self.params, float(v)) for v in self.vgrid])
-        return np.ascontiguousarray(tab), 2, np.zeros(0)
+        return dfc_tables(self.design)
 
     def _fill_cfg_head(self, head):
         head[L.C_AREF] = self.a_ref

@@ -34,10 +34,12 @@ export (:mod:`roadbank.export`) writes the stacked observer and the gate.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from . import layout
-from .base import ScheduledObserver
+from .base import DesignInputs, ScheduledObserver
 from .lowpass import KinematicFeedForward
 from .pif import PIF, RATE_TUNING, PIFRate
 
@@ -51,14 +53,33 @@ GATED_TUNING = dict(fast_Q=float(RATE_TUNING["Q"]), fast_Q_rate=10.0 * float(RAT
 _COMMON = ("v_min", "max_substep", "max_gap", "max_angle", "v_step", "v_max", "roll")
 
 
+@dataclass(frozen=True)
+class GatedDesign(DesignInputs):
+    """Design inputs of a gated pair: the two filters' design inputs (``slow``, ``fast``) and the
+    gate's ``gate_tf``, ``gate_release`` (s), ``gate_on``, ``gate_span`` (m/s^3)."""
+
+    slow: DesignInputs
+    fast: DesignInputs
+    gate_tf: float
+    gate_release: float
+    gate_on: float
+    gate_span: float
+
+
 class _GatedPair(ScheduledObserver):
     """Two scheduled linear observers stacked into one, their outputs blended by the yaw-acceleration
     gate (``gated`` kernel). Subclasses build ``self._slow`` (any :class:`ScheduledObserver`) and
     ``self._fast`` (a :class:`~roadbank.estimators.pif.PIF`, whose ``w`` is a state) and set the
-    gate's ``gate_tf``, ``gate_release``, ``gate_on``, ``gate_span`` before ``super().__init__``."""
+    gate's ``gate_tf``, ``gate_release``, ``gate_on``, ``gate_span`` before ``super().__init__``;
+    the two filters' designs and the gate are its design inputs (:class:`GatedDesign`)."""
 
     kernel = "gated"
     uses = (False, True, True)
+    design_type = GatedDesign
+
+    def _design_fields(self) -> dict:
+        return dict(slow=self._slow.design, fast=self._fast.design, gate_tf=self.gate_tf,
+                    gate_release=self.gate_release, gate_on=self.gate_on, gate_span=self.gate_span)
 
     @property
     def slow(self) -> ScheduledObserver:
@@ -79,14 +100,16 @@ class _GatedPair(ScheduledObserver):
         """``H_f`` (n,): the fast filter's ``w`` from the stacked states (constant)."""
         ns = self._slow._nstate
         h = np.zeros(len(self.state_names))
-        h[ns:] = np.ravel(self._fast.design_model(self.vgrid[0])[4])     # L_w: w is a state
+        h[ns:] = np.ravel(self._fast.design_model(self.design.vgrid[0])[4])     # L_w: w is a state
         return h
 
     def _design(self):
-        # the two filters' tables row by row (no Riccati equation solved again)
+        # the two filters' tables (designed from design.slow and design.fast) row by row: no
+        # Riccati equation solved again
+        d = self.design
         rows = []
         parts = [(e._tab_cont, e._nstate) for e in (self._slow, self._fast)]
-        for k in range(len(self.vgrid)):
+        for k in range(len(d.vgrid)):
             mats = []
             for tab, n in parts:
                 row = layout.lpv_row(n)
@@ -97,7 +120,7 @@ class _GatedPair(ScheduledObserver):
             F, G, H, D = _stack(mats[0][:4], mats[1][:4])
             J = np.vstack([mats[0][4], mats[1][4]])
             rows.append(np.concatenate([F.ravel(), G.ravel(), H.ravel(), D.ravel(), J.ravel()]))
-        extra = np.concatenate([self.fast_output(), [self.gate_tf, self.gate_release, self.gate_on, self.gate_span]])
+        extra = np.concatenate([self.fast_output(), [d.gate_tf, d.gate_release, d.gate_on, d.gate_span]])
         return np.ascontiguousarray(np.array(rows)), len(self.state_names), extra
 
 

@@ -24,6 +24,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from .. import cache
 from . import synthesis
 from .are_grid import solve_grid
 from .base import augmented_design_model
@@ -50,12 +51,11 @@ def _grid_models(key: tuple, build) -> tuple:
 
 
 def _grid_noise(est, models: tuple, own: bool) -> np.ndarray:
-    """``est.process_density`` of every model (g, n, n), memoised on every setting but ``th`` where
-    ``own`` (the noise model is PIF's own, which does not use ``th``: the retries of a halved ``th``
-    compute none again)."""
-    cls = type(est)
-    skip = ("th", "vgrid") if own else ("vgrid",)       # a subclass's own noise may use th
-    key = (cls, tuple(sorted((k, repr(v)) for k, v in vars(est).items() if not k.startswith("_") and k not in skip)))
+    """``est.process_density`` of every model (g, n, n), memoised on the estimator class and its
+    design inputs but ``th`` where ``own`` (the noise model is PIF's own, which does not use ``th``:
+    the retries of a halved ``th`` compute none again)."""
+    d = est.design
+    key = (type(est), cache.canonical(replace(d, th=0.0) if own else d))   # a subclass's own noise may use th
     hit = _NOISE.get(key)
     if hit is None or hit[0] is not models:
         _NOISE.clear()
@@ -74,20 +74,22 @@ def _stacked_noise(est, models: tuple) -> np.ndarray:
     if not np.array_equal(Ew, np.broadcast_to(first, Ew.shape)):
         return np.array([est.process_density(m) for m in listed])
     b = models[0][1][:, :, 1]
-    return est.process_noise(first) + est.Q_ay * (b[:, :, None] * b[:, None, :])
+    return est.process_noise(first) + est.design.Q_ay * (b[:, :, None] * b[:, None, :])
 
 
 def pif_speed(est, own_noise: bool):
-    """The ``lpv`` table ``(rows, number of states, extra)`` of a steady-state PIF over its speed grid
-    at once (``est`` builds its observer as :class:`~roadbank.estimators.pif.PIF` does; ``own_noise``:
-    its process noise is PIF's own); None inside
-    :func:`~roadbank.estimators.synthesis.reference_solvers`."""
+    """The ``lpv`` table ``(rows, number of states, extra)`` of a steady-state PIF's design inputs
+    (``est.design``) over its speed grid at once (``est`` builds its observer as
+    :class:`~roadbank.estimators.pif.PIF` does; ``own_noise``: its process noise is PIF's own);
+    None inside :func:`~roadbank.estimators.synthesis.reference_solvers`."""
     if synthesis.using_reference_solvers():
         return None
-    speeds = [float(v) for v in est.vgrid]
-    key = (type(est)._model_at, repr(est.params), est.model, est.vgrid.tobytes())
+    d = est.design
+    vgrid = d.vgrid
+    speeds = [float(v) for v in vgrid]
+    key = (type(est)._model_at, repr(d.params), d.model, vgrid.tobytes())
     models = _grid_models(key, lambda: [est.design_model(v) for v in speeds])
-    tab = observer_rows(models[0], _grid_noise(est, models, own_noise), est.R, est.S, est.th,
+    tab = observer_rows(models[0], _grid_noise(est, models, own_noise), d.R_matrix, d.S, d.th,
                         lambda k: est.observer(speeds[k]))
     return tab, models[0][0].shape[1], np.zeros(0)
 
@@ -97,18 +99,20 @@ def pif_adaptive(est, own_noise: bool):
     excitation grid, speed outer) at once; None inside :func:`~roadbank.estimators.synthesis.reference_solvers`."""
     if synthesis.using_reference_solvers():
         return None
-    points = [(float(v), e) for v in est.vgrid for e in est.egrid]
+    d = est.design
+    vgrid = d.vgrid
+    points = [(float(v), e) for v in vgrid for e in d.egrid]
 
     def build():
-        cars = [replace(est.params, Cr=est.rear_stiffness(e)) for e in est.egrid]
+        cars = [replace(d.params, Cr=est.rear_stiffness(e)) for e in d.egrid]
         return [est._model_at(car, v) for v, _ in points[::len(cars)] for car in cars]
-    key = (type(est)._model_at, repr(est.params), est.model, est.vgrid.tobytes(), tuple(est.egrid), est.mu,
+    key = (type(est)._model_at, repr(d.params), d.model, vgrid.tobytes(), tuple(d.egrid), d.mu,
            type(est).rear_stiffness)
     models = _grid_models(key, build)
-    tab = observer_rows(models[0], _grid_noise(est, models, own_noise), est.R, est.S, est.th,
-                        lambda k: est.observer_at(*points[k]), n_inner=len(est.egrid))
-    eg = est.egrid
-    extra = [eg[0], (eg[1] - eg[0]) if len(eg) > 1 else 1.0, float(len(eg)), est.tau, est.tf]
+    tab = observer_rows(models[0], _grid_noise(est, models, own_noise), d.R_matrix, d.S, d.th,
+                        lambda k: est.observer_at(*points[k]), n_inner=len(d.egrid))
+    eg = d.egrid
+    extra = [eg[0], (eg[1] - eg[0]) if len(eg) > 1 else 1.0, float(len(eg)), d.tau, d.tf]
     return tab, len(est.state_names), np.array(extra)
 
 
@@ -117,11 +121,14 @@ def kalman_speed(est):
     over its speed grid at once; None inside :func:`~roadbank.estimators.synthesis.reference_solvers`."""
     if synthesis.using_reference_solvers():
         return None
-    speeds = [float(v) for v in est.vgrid]
-    key = ("original", repr(est.params), est.vgrid.tobytes())
-    models = _grid_models(key, lambda: [augmented_design_model(est.params, v, "original") for v in speeds])
-    W = np.broadcast_to(np.diag(est.q), (len(speeds), 3, 3))
-    tab = observer_rows(models[0], W, est.Rm, 1.0, 0.0, lambda k: est.observer(speeds[k]))
+    d = est.design
+    vgrid = d.vgrid
+    speeds = [float(v) for v in vgrid]
+    key = ("original", repr(d.params), vgrid.tobytes())
+    models = _grid_models(key, lambda: [augmented_design_model(d.params, v, "original") for v in speeds])
+    W = np.broadcast_to(np.diag(np.asarray(d.q, dtype=float)), (len(speeds), 3, 3))
+    tab = observer_rows(models[0], W, np.diag(np.asarray(d.R, dtype=float)), 1.0, 0.0,
+                        lambda k: est.observer(speeds[k]))
     return tab, models[0][0].shape[1], np.zeros(0)
 
 

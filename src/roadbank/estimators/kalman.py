@@ -18,12 +18,33 @@ from __future__ import annotations
 
 import numpy as np
 
+from dataclasses import dataclass
+
 from . import grid_design
-from .base import ScheduledObserver, augmented_design_model
+from .base import DesignInputs, ScheduledObserver, augmented_design_model, frozen_array
 from .synthesis import game_are
 
 DEFAULT_Q = (4.0**2, 0.4**2, 0.3**2)
 DEFAULT_R = (0.1**2, 0.005**2)
+
+
+@dataclass(frozen=True)
+class KalmanDesign(DesignInputs):
+    """Design inputs of :class:`Kalman`: the process-noise densities ``q`` and the diagonal ``R`` of
+    the measurement-noise densities (units as :class:`Kalman`'s parameters)."""
+
+    q: tuple
+    R: tuple
+
+
+def kalman_observer(d: KalmanDesign, vx: float):
+    """``(F, G, H, D)`` of the steady-state Kalman filter at ``vx`` (m/s)."""
+    Rm = np.diag(np.asarray(d.R, dtype=float))
+    A, B, C, Dy, Lw, _ = augmented_design_model(d.params, vx, "original")
+    P = game_are(A, C, Lw, np.diag(np.asarray(d.q, dtype=float)), Rm, np.eye(1), 0.0,
+                 where=f"at vx={vx:.2f} m/s (kalman)")
+    Kg = P @ C.T @ np.linalg.inv(Rm)
+    return A - Kg @ C, B + Kg @ Dy, Lw, np.zeros((1, 3))
 
 
 class Kalman(ScheduledObserver):
@@ -42,6 +63,7 @@ class Kalman(ScheduledObserver):
     name = "kalman"
     uses = (True, True, True)
     state_names = ("vy", "r", "w")
+    design_type = KalmanDesign
 
     def __init__(self, params=None, *, q=DEFAULT_Q, R=DEFAULT_R, **kw):
         self.q = np.asarray(q, float)
@@ -50,13 +72,13 @@ class Kalman(ScheduledObserver):
             raise ValueError("kalman: q must be 3 values >= 0 and R 2 values > 0")
         super().__init__(params, **kw)
 
+    def _design_fields(self) -> dict:
+        return dict(q=frozen_array(self.q), R=frozen_array(np.diag(self.Rm)))
+
     def _grid_design(self):
         """The whole grid at once where the observer is this class's own."""
         return grid_design.kalman_speed(self) if type(self).observer is Kalman.observer else None
 
     def observer(self, vx: float):
-        A, B, C, Dy, Lw, _ = augmented_design_model(self.params, vx, "original")
-        P = game_are(A, C, Lw, np.diag(self.q), self.Rm, np.eye(1), 0.0,
-                     where=f"at vx={vx:.2f} m/s (kalman)")
-        Kg = P @ C.T @ np.linalg.inv(self.Rm)
-        return A - Kg @ C, B + Kg @ Dy, Lw, np.zeros((1, 3))
+        """``(F, G, H, D)`` at ``vx`` (m/s) (:func:`kalman_observer`)."""
+        return kalman_observer(self.design, vx)

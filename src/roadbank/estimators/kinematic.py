@@ -8,7 +8,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import ScheduledObserver
+from .base import DesignInputs, ScheduledObserver
+
+
+def kinematic_observer(d: DesignInputs, vx: float):
+    """``(F, G, H, D)`` of the kinematic estimate at ``vx`` (m/s): no state, ``D = [0, 1/g, -vx/g]``."""
+    g = d.params.g
+    return np.zeros((0, 0)), np.zeros((0, 3)), np.zeros((1, 0)), np.array([[0.0, 1.0 / g, -vx / g]])
 
 
 class Kinematic(ScheduledObserver):
@@ -18,5 +24,4 @@ class Kinematic(ScheduledObserver):
     uses = (False, True, True)
 
     def observer(self, vx: float):
-        g = self.params.g
-        return np.zeros((0, 0)), np.zeros((0, 3)), np.zeros((1, 0)), np.array([[0.0, 1.0 / g, -vx / g]])
+        return kinematic_observer(self.design, vx)

@@ -31,9 +31,11 @@ as a lead :math:`\kappa\, \tau s/(\tau s + 1)\, a`.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from .base import ScheduledObserver
+from .base import DesignInputs, ScheduledObserver
 
 #: ``kinematic-lp``'s cut-off (Hz): the rule of :mod:`roadbank.tuning.real` with kappa = 0
 LP_CUTOFF_HZ = 0.5
@@ -66,6 +68,35 @@ def cutoff_for_noise(noise_density: float, bank_rate: float) -> float:
     return float(np.clip(fc, CUTOFF_MIN_HZ, CUTOFF_MAX_HZ))
 
 
+@dataclass(frozen=True)
+class LowPassDesign(DesignInputs):
+    """Design inputs of :class:`KinematicLowPass`: the cut-off ``cutoff`` (Hz; None: scheduled on the
+    noise), the centripetal feed-forward gain ``kappa`` (-), and for a scheduled cut-off the bank rate
+    of roads ``bank_rate`` (rad/s) and the noise densities ``Q_ay`` ((m/s^2)^2 s) and ``R`` ((rad/s)^2 s)."""
+
+    cutoff: float | None
+    kappa: float
+    bank_rate: float | None = None
+    Q_ay: float | None = None
+    R: float | None = None
+
+
+def lowpass_cutoff(d: LowPassDesign, vx: float) -> float:
+    """The cut-off (Hz) at ``vx`` (m/s): ``d.cutoff``, or :func:`cutoff_for_noise` of the kinematic
+    estimate's noise density :math:`(Q_{ay} + v_x^2 R)/g^2` and ``d.bank_rate``."""
+    if d.cutoff is not None:
+        return d.cutoff
+    return cutoff_for_noise((d.Q_ay + vx * vx * d.R) / d.params.g ** 2, d.bank_rate)
+
+
+def lowpass_observer(d: LowPassDesign, vx: float):
+    """``(F, G, H, D)`` of the low-passed kinematic estimate at ``vx`` (m/s); inputs ``[delta_f, ay, r]``."""
+    g, wc, k = d.params.g, 2.0 * np.pi * lowpass_cutoff(d, vx), d.kappa
+    F = np.array([[-wc]])
+    G = np.array([[0.0, wc / g, -wc * (1.0 + k) * vx / g]])
+    return F, G, np.array([[1.0]]), np.array([[0.0, 0.0, k * vx / g]])
+
+
 class KinematicLowPass(ScheduledObserver):
     """The kinematic estimate low-passed, optionally with the centripetal feed-forward (module docstring).
 
@@ -92,6 +123,7 @@ class KinematicLowPass(ScheduledObserver):
     state_names = ("w_lp",)
     label = "kinematic-lp"
     defaults = dict(cutoff=LP_CUTOFF_HZ, kappa=0.0)
+    design_type = LowPassDesign
 
     def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, Q_ay=None, R=None, **kw):
         scheduled = cutoff is None and bank_rate is not None
@@ -110,18 +142,16 @@ class KinematicLowPass(ScheduledObserver):
         self.name = self.label
         super().__init__(params, **kw)
 
+    def _design_fields(self) -> dict:
+        return dict(cutoff=self.cutoff, kappa=self.kappa, bank_rate=self.bank_rate, Q_ay=self.Q_ay, R=self.R)
+
     def cutoff_at(self, vx: float) -> float:
-        """The low-pass's cut-off (Hz) at ``vx`` (m/s): fixed, or scheduled on the noise."""
-        if self.cutoff is not None:
-            return self.cutoff
-        return cutoff_for_noise((self.Q_ay + vx * vx * self.R) / self.params.g ** 2, self.bank_rate)
+        """The low-pass's cut-off (Hz) at ``vx`` (m/s): fixed, or scheduled on the noise (:func:`lowpass_cutoff`)."""
+        return lowpass_cutoff(self.design, vx)
 
     def observer(self, vx: float):
-        """``(F, G, H, D)`` at ``vx`` (m/s); inputs ``[delta_f, ay, r]``."""
-        g, wc, k = self.params.g, 2.0 * np.pi * self.cutoff_at(vx), self.kappa
-        F = np.array([[-wc]])
-        G = np.array([[0.0, wc / g, -wc * (1.0 + k) * vx / g]])
-        return F, G, np.array([[1.0]]), np.array([[0.0, 0.0, k * vx / g]])
+        """``(F, G, H, D)`` at ``vx`` (m/s); inputs ``[delta_f, ay, r]`` (:func:`lowpass_observer`)."""
+        return lowpass_observer(self.design, vx)
 
 
 class KinematicFeedForward(KinematicLowPass):

@@ -43,13 +43,13 @@ resolutions ((0.005 g)/(0.3 deg/s))^2 (interpretation).
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..constants import G
 from . import grid_design, layout
-from .base import ScheduledObserver, augmented_design_model, equilibrium_map
+from .base import DesignInputs, ScheduledObserver, augmented_design_model, equilibrium_map, frozen_array
 from .synthesis import NoStabilisingSolution, game_are
 
 #: paper Table 4
@@ -138,6 +138,44 @@ TUNINGS = {
 }
 
 
+@dataclass(frozen=True)
+class PIFDesign(DesignInputs):
+    """Design inputs of a :class:`PIF`: the model (``"modified"``, ``"original"``), the variant
+    (``"steady"``, ``"riccati"``) and the weights ``Q`` (1/s), ``R`` (the diagonal, (m/s^2)^2 s and
+    (rad/s)^2 s), ``S`` (-), ``th`` (-), ``Q_ay`` ((m/s^2)^2 s) the tables are built with."""
+
+    model: str
+    variant: str
+    Q: float
+    R: tuple
+    S: float
+    th: float
+    Q_ay: float
+
+    @property
+    def R_matrix(self) -> np.ndarray:
+        """``R`` as the diagonal matrix of the Riccati equation."""
+        return np.diag(np.asarray(self.R, dtype=float))
+
+
+def solvable_th(design: PIFDesign, tables_of):
+    """``tables_of(d)`` of the first design ``d`` with a stabilising solution, from ``design`` on
+    with ``th`` halved each time (below ``th/1000``: 0, the Kalman filter, always solvable).
+
+    A default ``th`` adapts so to the car and the sensor. ``tables_of`` raises
+    :class:`NoStabilisingSolution` for a design without one; the last such error is raised when
+    even ``th = 0`` has none.
+    """
+    floor = design.th / 1000.0
+    while True:
+        try:
+            return tables_of(design)
+        except NoStabilisingSolution:
+            if design.th == 0.0:
+                raise
+            design = replace(design, th=design.th / 2.0 if design.th > floor else 0.0)
+
+
 class PIF(ScheduledObserver):
     """Proportional-integral H-infinity filter (see module docstring).
 
@@ -181,6 +219,7 @@ class PIF(ScheduledObserver):
     tunings = TUNINGS
     #: kernel family of the steady-state variant
     steady_kernel = "lpv"
+    design_type = PIFDesign
 
     def __init__(self, params=None, *, model="modified", variant="steady", tuning=None, Q=None,
                  R=None, S=None, th=None, P0=None, adapt_th=None, Q_ay=None, **kw):
@@ -209,17 +248,20 @@ class PIF(ScheduledObserver):
         self.Q, self.R, self.S, self.th = float(Q), np.diag(Rv), float(S), float(th)
         self.Q_ay = Q_ay
         self.P0 = np.diag(np.asarray(P0, dtype=float))
-        th_floor = self.th / 1000.0
-        while True:
-            try:
-                super().__init__(params, **kw)
-                return
-            except NoStabilisingSolution:
-                # the default th adapts to the car and the sensor: halve it until the Riccati
-                # equation is solvable at every speed (th = 0, the Kalman filter, always is)
-                if not auto_th or self.th == 0.0:
-                    raise
-                self.th = self.th / 2.0 if self.th > th_floor else 0.0
+        self._adapt_th = auto_th
+        super().__init__(params, **kw)
+        self.th = self.design.th            # as designed: a default th may have been halved
+
+    def _design_fields(self) -> dict:
+        return dict(model=self.model, variant=self.variant, Q=self.Q, R=frozen_array(np.diag(self.R)), S=self.S,
+                    th=self.th, Q_ay=self.Q_ay)
+
+    def _designed(self):
+        if not self._adapt_th:
+            return super()._designed()
+        # the default th adapts to the car and the sensor: halved until the Riccati equation is
+        # solvable at every speed
+        return solvable_th(self.design, self._tables_of)
 
     def riccati_solution(self, vx: float) -> np.ndarray:
         """Stabilising solution ``P`` of the algebraic Riccati equation (eq 44) at ``vx`` (m/s)."""
@@ -227,31 +269,32 @@ class PIF(ScheduledObserver):
 
     def design_model(self, vx: float):
         """``(A, B, C, Dy, Lw, Ew)`` of the filter's design model at ``vx`` (m/s)."""
-        return self._model_at(self.params, vx)
+        return self._model_at(self.design.params, vx)
 
     def _model_at(self, params, vx: float):
         """The design model for the car ``params`` at ``vx`` (m/s)."""
-        return augmented_design_model(params, vx, self.model)
+        return augmented_design_model(params, vx, self.design.model)
 
     def process_noise(self, Ew: np.ndarray) -> np.ndarray:
         """Process-noise density ``W`` of the Riccati equation (``Q Ew Ew^T``: noise on ``w`` only)."""
-        return self.Q * Ew @ Ew.T
+        return self.design.Q * Ew @ Ew.T
 
     def process_density(self, model) -> np.ndarray:
         """``W`` of the Riccati equation for the design ``model`` ``(A, B, C, Dy, Lw, Ew)``:
         :meth:`process_noise` plus ``Q_ay b b^T``, ``b`` the column of ``B`` of the ``ay`` input."""
         A, B, C, Dy, Lw, Ew = model
         b = B[:, 1]
-        return self.process_noise(Ew) + self.Q_ay * np.outer(b, b)
+        return self.process_noise(Ew) + self.design.Q_ay * np.outer(b, b)
 
     def _riccati(self, model, vx: float) -> np.ndarray:
         A, B, C, Dy, Lw, Ew = model
-        return game_are(A, C, Lw, self.process_density(model), self.R, np.atleast_2d(self.S), self.th,
+        d = self.design
+        return game_are(A, C, Lw, self.process_density(model), d.R_matrix, np.atleast_2d(d.S), d.th,
                         where=f"at vx={vx:.2f} m/s ({self.name})")
 
     def _observer(self, model, vx: float):
         A, B, C, Dy, Lw, _ = model
-        Kg = self._riccati(model, vx) @ C.T @ np.linalg.inv(self.R)
+        Kg = self._riccati(model, vx) @ C.T @ np.linalg.inv(self.design.R_matrix)
         return A - Kg @ C, B + Kg @ Dy, Lw, np.zeros((1, 3))
 
     def observer(self, vx: float):
@@ -261,7 +304,7 @@ class PIF(ScheduledObserver):
     def _builds_as_pif(self) -> bool:
         """The steady-state observer is built as this class builds it (the whole-grid design applies)."""
         cls = type(self)
-        return (self.variant == "steady" and cls._observer is PIF._observer and cls._riccati is PIF._riccati
+        return (self.design.variant == "steady" and cls._observer is PIF._observer and cls._riccati is PIF._riccati
                 and cls.design_model is PIF.design_model)
 
     def _own_noise(self) -> bool:
@@ -276,19 +319,20 @@ class PIF(ScheduledObserver):
         return None
 
     def _design(self):
-        if self.variant == "steady":
+        d = self.design
+        if d.variant == "steady":
             return super()._design()
         # Riccati ODE: the kernel needs the model; J (start at the equilibrium of
         # the steady-state filter) also checks that the ARE is solvable everywhere.
         rows = []
-        for v in self.vgrid:
+        for v in d.vgrid:
             model = self.design_model(float(v))
             F, G, _, _ = self._observer(model, float(v))
             A, B, C, Dy, Lw, Ew = model
             rows.append(np.concatenate([A.ravel(), B.ravel(), C.ravel(), Dy.ravel(),
                                         equilibrium_map(F, G).ravel()]))
-        extra = np.concatenate([np.linalg.inv(self.R).ravel(), self.process_density(model).ravel(),
-                                (self.th * self.S * Lw.T @ Lw).ravel()])
+        extra = np.concatenate([np.linalg.inv(d.R_matrix).ravel(), self.process_density(model).ravel(),
+                                (d.th * d.S * Lw.T @ Lw).ravel()])
         return np.ascontiguousarray(np.array(rows)), A.shape[0], extra
 
     def _fill_cfg_head(self, head):
@@ -316,6 +360,13 @@ RATE_TUNING = dict(Q=R_ESP * 10**2.88025985, Q_rate=R_ESP * 10**3.97104448, th=1
 RATE_TUNINGS = {"default": _sensor_tuning(RATE_TUNING)}
 
 
+@dataclass(frozen=True)
+class BankRateDesign(PIFDesign):
+    """Design inputs of :class:`PIFRate`: those of :class:`PIFDesign` and ``Q_rate`` (1/s^3)."""
+
+    Q_rate: float
+
+
 class _BankRateState:
     """The bank *rate* as a fourth filter state (mixin of :class:`PIFRate`, :class:`PIFRateAdaptive`).
 
@@ -329,6 +380,9 @@ class _BankRateState:
         self.Q_rate = float(self.options_default["Q_rate"] if Q_rate is None else Q_rate)
         if not self.Q_rate >= 0:
             raise ValueError(f"{self.label}: Q_rate must be >= 0, got {Q_rate}")
+
+    def _design_fields(self) -> dict:
+        return {**super()._design_fields(), "Q_rate": self.Q_rate}
 
     def _model_at(self, params, vx: float):
         """The augmented modified model for ``params`` at ``vx`` (m/s) with ``w_rate`` appended (``w' = w_rate``)."""
@@ -344,7 +398,8 @@ class _BankRateState:
 
     def process_noise(self, Ew: np.ndarray) -> np.ndarray:
         """``Ew diag(Q, Q_rate) Ew^T``: noise on ``w`` and on ``w_rate``."""
-        return Ew @ np.diag([self.Q, self.Q_rate]) @ Ew.T
+        d = self.design
+        return Ew @ np.diag([d.Q, d.Q_rate]) @ Ew.T
 
 
 class PIFRate(_BankRateState, PIF):
@@ -368,6 +423,7 @@ class PIFRate(_BankRateState, PIF):
     """
 
     label = "pif-rate"
+    design_type = BankRateDesign
     tunings = RATE_TUNINGS
     #: defaults of the options beyond the weights
     options_default = RATE_TUNING
@@ -407,6 +463,18 @@ def secant_stiffness_ratio(usage):
     return 1.0 - sigma + sigma**2 / 3.0
 
 
+@dataclass(frozen=True)
+class AdaptiveDesign(PIFDesign):
+    """Design inputs of :class:`PIFAdaptive`: those of :class:`PIFDesign`, the design friction
+    coefficient ``mu`` (-), the time constants ``tau``, ``tf`` (s) and the excitation grid
+    ``egrid`` (m/s^2)."""
+
+    mu: float
+    tau: float
+    tf: float
+    egrid: tuple
+
+
 class PIFAdaptive(PIF):
     r"""``pif-adaptive`` (beyond the paper): the steady-state PIF on the modified model with the
     rear cornering stiffness scheduled on the friction usage as well as speed.
@@ -443,6 +511,7 @@ class PIFAdaptive(PIF):
     #: defaults of the schedule's options (mu, tau, tf)
     options_default = ADAPTIVE_TUNING
     steady_kernel = "adaptive"
+    design_type = AdaptiveDesign
 
     def __init__(self, params=None, *, tuning=None, mu=None, tau=None, tf=None, **kw):
         kw = modified_steady(self.label, kw)
@@ -455,27 +524,33 @@ class PIFAdaptive(PIF):
         kw.setdefault("v_step", ADAPTIVE_V_STEP)
         super().__init__(params, tuning=tuning, **kw)
 
+    def _design_fields(self) -> dict:
+        return {**super()._design_fields(), "mu": self.mu, "tau": self.tau, "tf": self.tf,
+                "egrid": tuple(self.egrid)}
+
     def rear_stiffness(self, e: float) -> float:
         """Rear axle cornering stiffness (N/rad) of the design at excitation ``e`` (m/s^2)."""
-        return self.params.Cr * float(secant_stiffness_ratio(e / (self.mu * self.params.g)))
+        d = self.design
+        return d.params.Cr * float(secant_stiffness_ratio(e / (d.mu * d.params.g)))
 
     def observer_at(self, vx: float, e: float):
         """``(F, G, H, D)`` of the steady-state filter at speed ``vx`` (m/s) and excitation ``e`` (m/s^2)."""
-        return self._observer(self._model_at(replace(self.params, Cr=self.rear_stiffness(e)), vx), vx)
+        return self._observer(self._model_at(replace(self.design.params, Cr=self.rear_stiffness(e)), vx), vx)
 
     def _design(self):
         if self._builds_as_pif() and type(self).observer_at is PIFAdaptive.observer_at:
             fast = grid_design.pif_adaptive(self, self._own_noise())     # the whole grid at once
             if fast is not None:
                 return fast
+        d = self.design
         rows = []
-        for v in self.vgrid:
-            for e in self.egrid:
+        for v in d.vgrid:
+            for e in d.egrid:
                 F, G, H, D = self.observer_at(float(v), e)
                 rows.append(np.concatenate([F.ravel(), G.ravel(), np.ravel(H), np.ravel(D),
                                             equilibrium_map(F, G).ravel()]))
-        eg = self.egrid
-        extra = [eg[0], (eg[1] - eg[0]) if len(eg) > 1 else 1.0, float(len(eg)), self.tau, self.tf]
+        eg = d.egrid
+        extra = [eg[0], (eg[1] - eg[0]) if len(eg) > 1 else 1.0, float(len(eg)), d.tau, d.tf]
         return np.ascontiguousarray(np.array(rows)), len(self.state_names), np.array(extra)
 
 
@@ -485,6 +560,13 @@ RATE_ADAPTIVE_TUNING = dict(Q=RATE_TUNING["Q"], Q_rate=RATE_TUNING["Q_rate"], th
                             roll=RATE_TUNING["roll"])
 #: named tunings of :class:`PIFRateAdaptive`
 RATE_ADAPTIVE_TUNINGS = {"default": _sensor_tuning(RATE_ADAPTIVE_TUNING)}
+
+
+@dataclass(frozen=True)
+class RateAdaptiveDesign(AdaptiveDesign):
+    """Design inputs of :class:`PIFRateAdaptive`: those of :class:`AdaptiveDesign` and ``Q_rate`` (1/s^3)."""
+
+    Q_rate: float
 
 
 class PIFRateAdaptive(_BankRateState, PIFAdaptive):
@@ -508,6 +590,7 @@ class PIFRateAdaptive(_BankRateState, PIFAdaptive):
     """
 
     label = "pif-rate-adaptive"
+    design_type = RateAdaptiveDesign
     tunings = RATE_ADAPTIVE_TUNINGS
     options_default = RATE_ADAPTIVE_TUNING
 

@@ -23,9 +23,11 @@ i.e. a Luenberger observer on the augmented model with gain ``[K1; K2]``.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from .base import ScheduledObserver, augmented_design_model
+from .base import DesignInputs, ScheduledObserver, augmented_design_model
 from .synthesis import place_observer
 
 DEFAULT_POLES_MODIFIED = (-2.0, -4.0, -6.0)
@@ -37,6 +39,22 @@ def table3_gain(params, vx: float) -> np.ndarray:
     p = params
     k22 = (p.Cf * p.Lf**2 + p.Cr * p.Lr**2) / (2.0 * p.Iz * vx)
     return np.array([[1.0, vx**2], [0.0, k22], [0.0, -2.0]])
+
+
+@dataclass(frozen=True)
+class PIODesign(DesignInputs):
+    """Design inputs of :class:`PIO`: the model, the gains (``"table3"``, ``"placed"``) and the poles (1/s)."""
+
+    model: str
+    gains: str
+    poles: tuple
+
+
+def pio_gain(d: PIODesign, model, vx: float) -> np.ndarray:
+    """Observer gain ``[K1; K2]`` at ``vx`` (m/s) for the augmented design ``model``."""
+    if d.gains == "table3":
+        return table3_gain(d.params, vx)
+    return place_observer(model[0], model[2], d.poles)
 
 
 class PIO(ScheduledObserver):
@@ -52,6 +70,7 @@ class PIO(ScheduledObserver):
     """
 
     state_names = ("vy", "r", "w")
+    design_type = PIODesign
 
     def __init__(self, params=None, *, model="original", gains=None, poles=None, **kw):
         if model not in ("original", "modified"):
@@ -68,17 +87,18 @@ class PIO(ScheduledObserver):
         self.uses = (model == "original", True, True)
         super().__init__(params, **kw)
 
+    def _design_fields(self) -> dict:
+        return dict(model=self.model, gains=self.gains, poles=self.poles)
+
     def gain(self, vx: float) -> np.ndarray:
         """Observer gain ``[K1; K2]`` at ``vx`` (m/s)."""
-        return self._gain(augmented_design_model(self.params, vx, self.model), vx)
+        return self._gain(augmented_design_model(self.design.params, vx, self.design.model), vx)
 
     def _gain(self, model, vx: float) -> np.ndarray:
-        if self.gains == "table3":
-            return table3_gain(self.params, vx)
-        return place_observer(model[0], model[2], self.poles)
+        return pio_gain(self.design, model, vx)
 
     def observer(self, vx: float):
-        model = augmented_design_model(self.params, vx, self.model)
+        model = augmented_design_model(self.design.params, vx, self.design.model)
         A, B, C, Dy, Lw, _ = model
         Kg = self._gain(model, vx)
         return A - Kg @ C, B + Kg @ Dy, Lw, np.zeros((1, 3))

@@ -42,9 +42,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..signals import Estimate, Signals
+from .. import cache
+from ..signals import Estimate, Signals, interval_rate
 from . import kernels as K
-from .base import rate_of_interval
 from .discretise import foh
 from .layout import DT_REL_TOL
 from .pif import PIF, modified_steady
@@ -98,7 +98,6 @@ class PIFSmoother(PIF):
 
     def _smoother_table(self) -> np.ndarray:
         """Rows ``[S, M, b]`` per grid speed, memoised and kept on disk like the design."""
-        from .. import cache
         key = self._disk_key()
         mem_key = key or self._design_key()
         tab = _TABLES.get(mem_key)
@@ -225,4 +224,4 @@ def _common_interval(dt: np.ndarray) -> float:
     h = float(np.median(dt))
     if not h > 0 or np.count_nonzero(np.abs(dt - h) <= DT_REL_TOL * h) * 2 < dt.size:
         return 0.0
-    return 1.0 / rate_of_interval(h)
+    return 1.0 / interval_rate(h)

@@ -27,10 +27,12 @@ observer is designed for frozen speed (the ``-dE/dt y`` term is neglected).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from ..models.bicycle import original_model
-from .base import ScheduledObserver, embed_inputs
+from .base import DesignInputs, ScheduledObserver, embed_inputs, frozen_array
 
 M_UIO = ((-10.0, 10.0), (10.0, 10.0))
 Q_UIO = ((1.0, 1.0), (1.0, 1.0))
@@ -50,6 +52,33 @@ def uio_matrices(params, vx: float, M=M_UIO, Q=Q_UIO):
     return E, N, M - N @ E, IEC @ B, pinv
 
 
+@dataclass(frozen=True)
+class UIODesign(DesignInputs):
+    """Design inputs of :class:`UIO`: the design matrices ``M``, ``Q`` (2 x 2, as nested tuples) and
+    the derivative filter's time constant ``tau`` (s)."""
+
+    M: tuple
+    Q: tuple
+    tau: float
+
+
+def uio_observer(d: UIODesign, vx: float):
+    """``(F, G, H, D)`` of the UIO with its output-derivative filters at ``vx`` (m/s)."""
+    A, B, Eo, C, D = original_model(d.params, vx)
+    E, N, L, Gu, pinv = uio_matrices(d.params, vx, d.M, d.Q)
+    Sy = embed_inputs({0: -D[:, 0], 1: [1.0, 0.0], 2: [0.0, 1.0]}, 2)   # y = y_o - D delta
+    Ed = embed_inputs({0: [1.0]}, 1)                                    # delta selector
+    tau = d.tau
+    F = np.zeros((4, 4))
+    F[:2, :2] = N
+    F[2:, 2:] = -np.eye(2) / tau
+    G = np.vstack([L @ Sy + Gu @ Ed, Sy / tau])
+    CA = C @ A
+    H = np.hstack([-pinv @ CA, -pinv / tau])
+    Dw = pinv @ (Sy / tau + CA @ E @ Sy - C @ B @ Ed)
+    return F, G, H, Dw
+
+
 class UIO(ScheduledObserver):
     """Unknown input observer. States ``[z1, z2, q1, q2]``: ``z`` of the observer
     and ``q`` of the output-derivative filters.
@@ -65,6 +94,7 @@ class UIO(ScheduledObserver):
     name = "uio"
     uses = (True, True, True)
     state_names = ("z1", "z2", "q_ay", "q_r")
+    design_type = UIODesign
 
     def __init__(self, params=None, *, M=M_UIO, Q=Q_UIO, tau=TAU_UIO, **kw):
         if not tau > 0:
@@ -72,17 +102,9 @@ class UIO(ScheduledObserver):
         self.M, self.Q, self.tau = np.asarray(M, float), np.asarray(Q, float), float(tau)
         super().__init__(params, **kw)
 
+    def _design_fields(self) -> dict:
+        return dict(M=frozen_array(self.M), Q=frozen_array(self.Q), tau=self.tau)
+
     def observer(self, vx: float):
-        A, B, Eo, C, D = original_model(self.params, vx)
-        E, N, L, Gu, pinv = uio_matrices(self.params, vx, self.M, self.Q)
-        Sy = embed_inputs({0: -D[:, 0], 1: [1.0, 0.0], 2: [0.0, 1.0]}, 2)   # y = y_o - D delta
-        Ed = embed_inputs({0: [1.0]}, 1)                                    # delta selector
-        tau = self.tau
-        F = np.zeros((4, 4))
-        F[:2, :2] = N
-        F[2:, 2:] = -np.eye(2) / tau
-        G = np.vstack([L @ Sy + Gu @ Ed, Sy / tau])
-        CA = C @ A
-        H = np.hstack([-pinv @ CA, -pinv / tau])
-        Dw = pinv @ (Sy / tau + CA @ E @ Sy - C @ B @ Ed)
-        return F, G, H, Dw
+        """``(F, G, H, D)`` at ``vx`` (m/s) (:func:`uio_observer`)."""
+        return uio_observer(self.design, vx)
