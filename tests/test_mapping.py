@@ -267,3 +267,45 @@ def test_designs_are_measured_on_the_same_span_whatever_the_chunk_size(tmp_path)
         if rows < len(res.signals):                 # the chunks read ahead are still handed out
             assert len(next(chunks).signals) == rows
     assert conds[0] == conds[1]
+
+
+@pytest.mark.parametrize("sizes", [[1000], [7, 13, 200, 1, 30, 749], [26] * 38 + [12], [50, 0, 950]])
+def test_course_stream_equals_the_course_of_the_whole_track(sizes):
+    from roadbank.mapping.geo import CourseStream, course
+
+    rng = np.random.default_rng(4)
+    e = np.cumsum(rng.normal(0.2, 0.3, 1000))
+    n = np.cumsum(rng.normal(0.1, 0.3, 1000))
+    idx = np.arange(1000)
+    stream, got, got_idx = CourseStream(), [], []
+    for a, b in zip(np.cumsum([0] + sizes[:-1]), np.cumsum(sizes)):
+        crs, (i,) = stream.push(e[a:b], n[a:b], idx[a:b])
+        got.append(crs)
+        got_idx.append(i)
+    crs, (i,) = stream.finish()
+    got, got_idx = np.concatenate(got + [crs]), np.concatenate(got_idx + [i])
+    np.testing.assert_array_equal(got_idx, idx)                   # every sample once, in order
+    np.testing.assert_array_equal(got, course(e, n))              # NaN where the whole track has NaN
+
+
+def test_a_log_streamed_in_small_chunks_maps_as_in_one_chunk(tmp_path):
+    """The course needs samples either side of each one: chunk ends must not lose samples or cells."""
+    from roadbank.mapping.simulated import run_positions
+    from roadbank.sim import SCENARIOS, run_scenario
+
+    res = run_scenario("track-lane1", seed=2)
+    proj = LocalProjection(48.0, 11.0)
+    lat, lon = run_positions(res, SCENARIOS["track-lane1"].road, proj)
+    pq.write_table(pa.table(dict(res.table(), lat=lat, lon=lon)), tmp_path / "drive.parquet")
+    (tmp_path / "m.toml").write_text(MAP_TOML)
+    maps = {}
+    for rows in (200, 1_000_000):
+        bmap, recs = map_logs([tmp_path / "drive.parquet"], "kinematic", channels=tmp_path / "m.toml",
+                              origin=(48.0, 11.0), chunk_rows=rows)
+        assert recs[0].status == "ok", recs[0].error
+        maps[rows] = (bmap.table(), recs[0].mapped)
+    (small, n_small), (whole, n_whole) = maps[200], maps[1_000_000]
+    assert n_small == n_whole > 1000
+    for key in ("ix", "iy", "sector", "count"):
+        np.testing.assert_array_equal(small[key], whole[key])
+    np.testing.assert_allclose(small["bank_mean_deg"], whole["bank_mean_deg"], rtol=0, atol=1e-12)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .geo import LocalProjection
+from .geo import CourseStream, LocalProjection
 from .grid import BankMap
 
 
@@ -87,6 +87,11 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
     correct = (lambda x: x) if s.vehicle is None else s.vehicle.correct
     params = s.vehicle.params if s.vehicle is not None else s.params
     rec, first, part = MappedLog(str(path)), None, None
+    track = CourseStream()       # the course of each sample over the whole log, not its chunk
+
+    def add(crs, arrays):
+        if part is not None and len(crs):
+            rec.mapped += part.add(*arrays, log_id=log_id, course_rad=crs)
     try:
         chunks = ReadAhead(stream_log(path, channels=s.channels, format=s.format, params=params,
                                       chunk_rows=s.chunk_rows or CHUNK_ROWS))
@@ -105,7 +110,8 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
             out = est.run(correct(chunk.signals), reset=(k == 0), lookahead=None if nxt is None else correct(nxt))
             rec.samples += len(out.t)
             if part is not None:
-                rec.mapped += part.add(lat, lon, out.phi_b, out.valid, log_id=log_id)
+                add(*track.push(*part.projection.to_en(lat, lon), lat, lon, out.phi_b, out.valid))
+        add(*track.finish())
     except (LogError, ValueError, OSError) as exc:
         rec.status, rec.error = "error", str(exc)
     except Exception as exc:  # never a traceback for one bad file

@@ -69,3 +69,38 @@ def course(east: np.ndarray, north: np.ndarray, half_window: int = 25, min_move:
     c[np.hypot(de, dn) < min_move] = np.nan
     out[k:len(e) - k] = c
     return out
+
+
+class CourseStream:
+    """:func:`course` over a track that arrives in chunks, equal to :func:`course` over the whole.
+
+    The course at a sample needs ``half_window`` samples either side, so each chunk's last
+    ``half_window`` samples are held back until the next chunk (or :meth:`finish`) brings them.
+    :meth:`push` takes a chunk's positions (m) and the per-sample arrays that go with them and
+    returns the samples now complete, with their course (rad): ``(course, arrays)``.
+    """
+
+    def __init__(self, half_window: int = 25, min_move: float = 0.5):
+        self.k, self.min_move = int(half_window), float(min_move)
+        self._buf: list[np.ndarray] | None = None     # east, north, then the carried arrays
+        self._ctx = 0                                  # leading samples already handed out (context)
+
+    def push(self, east, north, *arrays) -> tuple[np.ndarray, list[np.ndarray]]:
+        """Add a chunk; return ``(course rad, [arrays...])`` of the samples whose course is now known."""
+        new = [np.asarray(a) for a in (east, north, *arrays)]
+        self._buf = new if self._buf is None else [np.concatenate([b, a]) for b, a in zip(self._buf, new)]
+        return self._hand_out(max(self._ctx, len(self._buf[0]) - self.k))
+
+    def finish(self) -> tuple[np.ndarray, list[np.ndarray]]:
+        """The samples still held back (the track's end: no course within ``half_window`` of it)."""
+        if self._buf is None:
+            return np.empty(0), []
+        return self._hand_out(len(self._buf[0]))
+
+    def _hand_out(self, end: int):
+        b = self._buf
+        crs = course(b[0], b[1], self.k, self.min_move)[self._ctx:end]
+        out = [a[self._ctx:end] for a in b[2:]]
+        keep = max(0, end - self.k)
+        self._buf, self._ctx = [a[keep:] for a in b], end - keep
+        return crs, out

@@ -57,7 +57,7 @@ class BankMap:
             raise ValueError(f"sectors must be >= 1, got {self.sectors}")
         self.sectors = int(self.sectors)
 
-    def add(self, lat_deg, lon_deg, phi_b, valid, log_id=0) -> int:
+    def add(self, lat_deg, lon_deg, phi_b, valid, log_id=0, course_rad=None) -> int:
         """Add one stretch of consecutive samples of one log.
 
         Parameters
@@ -70,6 +70,11 @@ class BankMap:
             The estimator's validity flag; invalid samples are not mapped.
         log_id : hashable
             Counts the distinct logs per cell.
+        course_rad : array, optional
+            Course over ground of each sample (rad, clockwise from north; NaN: unknown); default
+            :func:`~roadbank.mapping.geo.course` of this stretch (a stretch cut out of a longer
+            track then has no course near its ends: :class:`~roadbank.mapping.geo.CourseStream`
+            gives a streamed track the course of the whole).
 
         Returns
         -------
@@ -78,7 +83,7 @@ class BankMap:
         """
         lat, lon = np.asarray(lat_deg, float), np.asarray(lon_deg, float)
         e, n = self.projection.to_en(lat, lon)
-        crs = course(e, n)
+        crs = course(e, n) if course_rad is None else np.asarray(course_rad, float)
         pb = np.asarray(phi_b, float)
         ok = np.asarray(valid, bool) & np.isfinite(e) & np.isfinite(n) & np.isfinite(pb)
         if self.sectors > 1:
