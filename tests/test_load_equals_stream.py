@@ -276,15 +276,10 @@ def test_written_mdf4(tmp_path, seed, chunk):
     mdf.save(p)
     tb = ["auto", "uniform", "lateral_acceleration"][seed % 3]
     (tmp_path / "m.toml").write_text(MDF_MAP.format(tb=tb, rate=float(rng.choice([25.0, 100.0])), gap=0.5))
-    # (repair counts: see test_mdf4_repairs_after_the_common_span_are_counted)
-    whole, chunks = assert_stream_equals_load(p, chunk, channels=tmp_path / "m.toml", more=("reference_roll",),
-                                              counts=False)
+    whole, chunks = assert_stream_equals_load(p, chunk, channels=tmp_path / "m.toml", more=("reference_roll",))
     assert whole.time_repairs.get("flagged", 0) > 0
 
 
-@pytest.mark.xfail(strict=True, reason="stream_log (MDF4) adds a channel's repair counts to the next chunk it "
-                   "yields: repairs on samples after the last grid time (a channel running past the others) "
-                   "are never reported; load_log counts them")
 def test_mdf4_repairs_after_the_common_span_are_counted(tmp_path):
     pytest.importorskip("asammdf")
     from asammdf import MDF, Signal
