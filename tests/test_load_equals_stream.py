@@ -187,10 +187,8 @@ CASES = [(seed, mixed, damaged, tb) for seed, (mixed, damaged, tb) in enumerate(
                          ids=[f"{s}-{'mixed' if m else 'one-rate'}-{'damaged' if d else 'clean'}-{tb}"
                               for s, m, d, tb in CASES])
 @pytest.mark.parametrize("suffix", [".parquet", ".csv"])
-def test_written_table(request, tmp_path, suffix, seed, mixed, damaged, tb, chunk):
+def test_written_table(tmp_path, suffix, seed, mixed, damaged, tb, chunk):
     from roadbank.io.writers import write_table
-    if (suffix, seed, chunk) == (".parquet", 1, 61):     # a first chunk of jittery stamps with a few NaN
-        request.applymarker(pytest.mark.xfail(strict=True, reason=AUTO_FIRST_CHUNK))
     rng = np.random.default_rng(1000 + seed)
     cols = _table(seed, mixed)
     if damaged:
@@ -206,15 +204,9 @@ def test_written_table(request, tmp_path, suffix, seed, mixed, damaged, tb, chun
         assert len(chunks) > 1
 
 
-#: the known difference (see test_auto_time_base_is_decided_on_the_first_chunk)
-AUTO_FIRST_CHUNK = ("stream_log decides time_base='auto' on the first chunk, load_log on the whole file: "
-                    "a first chunk whose channels' median steps differ by over 1 % (jitter, a few invalid "
-                    "samples) is resampled onto the uniform grid, the whole file keeps the table clock")
-
-
-@pytest.mark.xfail(strict=True, reason=AUTO_FIRST_CHUNK)
-def test_auto_time_base_is_decided_on_the_first_chunk(tmp_path):
-    """One clock, 50 Hz with jitter; the speed sensor gives every 3rd sample only during the first second."""
+def test_auto_time_base_is_decided_on_the_whole_log(tmp_path):
+    """One clock, 50 Hz with jitter; the speed sensor gives every 3rd sample only during the first second:
+    the first chunk alone would be resampled onto the uniform grid, the whole log keeps the table clock."""
     from roadbank.io.writers import write_table
     rng = np.random.default_rng(7)
     n = 2000

@@ -33,6 +33,7 @@ from .consistency import check_consistency
 from .errors import LogError, channel_error
 from .repair import FLAGGED_ROLES, ChunkRepair
 from .resample import StreamResampler, clean_series
+from .survey import auto_uses_clock
 from .timebase import add_counts
 from .types import Log
 
@@ -239,30 +240,25 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     prefix = cmap.truth_prefix
     truth_cols = [c for c in names if prefix and c.startswith(prefix) and c not in wanted]
     tb = _time_base(p, cmap, roles)
-    fix = ChunkRepair(p, tspec.column, "time", src.row_label)
-    flag_cols = [cmap.channels[r].column for r in FLAGGED_ROLES if r in cmap.channels]
+    if tb == "auto" and not src.whole:    # decided on the whole log, as when it is read in one chunk
+        used = {cmap.channels[r].column: r for r in ["time"] + roles}     # (a pass reads these only)
+        tb = "clock" if auto_uses_clock(lambda: ((t, vals) for _, t, _, vals, _, _ in
+                                                 _table_rows(src, cmap, roles, used, None)), roles) else "uniform"
     logs = _Logs(p, fmt, cmap, params, roles, gnss, truth_cols, src.metadata)
     logs.warnings += src.warnings
     finite = dict.fromkeys(roles, False)
     rs = None
-    for chunk in src.chunks(wanted, prefix):
-        t, cols, flagged, w = fix.feed(cmap.to_si_iso("time", chunk.data[tspec.column]), chunk.data,
-                                       chunk.rownums, chunk.last)
+    for last, t, cols, vals, w, fix in _table_rows(src, cmap, roles, wanted, prefix):
         logs.warnings += w
-        for c in flag_cols:          # every column follows the repaired clock; flagged rows become NaN
-            if c in cols:
-                cols[c][flagged] = np.nan
         first = rs is None and len(t) > 0
         if first:
             check_plausible(p, "time", tspec.column, tspec.unit, None, t)
-        vals = {}
         for r in roles:
             spec = cmap.channels[r]
-            vals[r] = v = cmap.to_si_iso(r, cols[spec.column])
-            finite[r] = finite[r] or bool(np.isfinite(v).any())
-            if chunk.last and not finite[r]:
+            finite[r] = finite[r] or bool(np.isfinite(vals[r]).any())
+            if last and not finite[r]:
                 raise channel_error(p, r, spec.column, "no finite values")
-            w = check_plausible(p, r, spec.column, spec.unit, t, v)
+            w = check_plausible(p, r, spec.column, spec.unit, t, vals[r])
             if first:
                 logs.warnings += w
         if first:
@@ -270,7 +266,7 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
             rs = StreamResampler(roles, dict.fromkeys(gnss, GNSS_MAX_GAP_S), base, cmap.rate_hz, cmap.max_gap_s,
                                  raw=truth_cols)
         if rs is None:
-            if chunk.last:
+            if last:
                 raise LogError(f"{p}: fewer than 2 samples on the common time base")
             continue
         rs.add_clock(t)
@@ -280,11 +276,28 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
             rs.add(r, t, cmap.to_si_iso(r, cols[cmap.channels[r].column]))
         for c in truth_cols:
             rs.add(c, t, cols[c])
-        if chunk.last:
+        if last:
             for k in rs.done:
                 rs.finish(k)
         yield from logs.add(_emit(p, rs), fix.take_counts())
-    yield from logs.finish(fix.take_counts())
+    yield from logs.finish({})
+
+
+def _table_rows(src, cmap, roles, wanted, prefix):
+    """The table's chunks with the clock repaired: ``(last, t, columns, role values, warnings, repair)``
+    per chunk; ``t`` (s) and the role values (SI, ISO 8855, NaN where flagged by the repair) row for
+    row, the columns as stored."""
+    tspec = cmap.channels["time"]
+    fix = ChunkRepair(src.path, tspec.column, "time", src.row_label)
+    flag_cols = [cmap.channels[r].column for r in FLAGGED_ROLES if r in cmap.channels]
+    for chunk in src.chunks(wanted, prefix):
+        t, cols, flagged, w = fix.feed(cmap.to_si_iso("time", chunk.data[tspec.column]), chunk.data,
+                                       chunk.rownums, chunk.last)
+        for c in flag_cols:          # every column follows the repaired clock; flagged rows become NaN
+            if c in cols:
+                cols[c][flagged] = np.nan
+        vals = {r: cmap.to_si_iso(r, cols[cmap.channels[r].column]) for r in roles}
+        yield chunk.last, t, cols, vals, w, fix
 
 
 def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:

@@ -67,6 +67,7 @@ class WholeSource:
         self.row_label = table.row_label
         self.warnings = list(warnings)
         self.shared_clock = shared_clock
+        self.whole = True
 
     def close(self) -> None:
         """Nothing to close: the file was read when the source was opened."""
@@ -87,6 +88,7 @@ class ParquetBatches:
 
     shared_clock = True
     row_label = "row"
+    whole = False
 
     def __init__(self, path: Path, chunk_rows: int):
         import pyarrow as pa
@@ -146,6 +148,7 @@ class Mdf4Windows:
 
     shared_clock = False
     row_label = "sample"
+    whole = False
 
     def __init__(self, path: Path, chunk_rows: int):
         self.path, self.warnings = path, []
