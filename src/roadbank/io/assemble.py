@@ -331,7 +331,8 @@ def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
             ends = c in chunk.done
             if c in chunk.data:
                 n = len(chunk.data[c])
-                t, got, flagged, w = fix.feed(chunk.times[c], {"v": chunk.data[c]}, range(rows[r], rows[r] + n), ends)
+                t, got, flagged, w = fix.feed(chunk.times[c], {"v": chunk.data[c]},
+                                           np.arange(rows[r], rows[r] + n), ends)
                 rows[r] += n
             elif ends and fix.holding:
                 t, got, flagged, w = fix.feed(np.zeros(0), {"v": np.zeros(0)}, [], True)

@@ -77,7 +77,9 @@ class WholeSource:
         tab = self.table
         if self.shared_clock:
             n = len(next(iter(tab.data.values()))) if tab.data else 0
-            rows = np.arange(n) if tab.rownums is None else np.asarray(list(tab.rownums), dtype=np.int64)
+            rows = tab.rownums
+            if rows is None or isinstance(rows, range):
+                rows = np.arange(n) if rows is None else np.arange(rows.start, rows.stop, rows.step)
             yield RawChunk(dict(tab.data), rownums=rows, last=True)
         else:
             yield RawChunk(dict(tab.data), times=dict(tab.times), done=tuple(tab.data))
