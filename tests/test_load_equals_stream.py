@@ -28,7 +28,7 @@ CHUNKS = (61, 1000)
 
 def assert_stream_equals_load(path, chunk_rows, channels=None, format=None, more=(), counts=True):
     """The chunks of ``stream_log`` put end to end equal ``load_log`` (to 1e-12, NaN where NaN) on every
-    signal channel and on ``more``: names of ``reference_roll`` / ``extra[...]`` entries to compare too;
+    signal channel, every truth column and on ``more``: names of ``reference_roll`` / ``extra[...]`` entries to compare too;
     with ``counts``, the chunks' time-stamp repair counts add up to the whole file's."""
     whole = load_log(path, channels=channels, format=format)
     chunks = list(stream_log(path, channels=channels, format=format, chunk_rows=chunk_rows))
@@ -42,6 +42,10 @@ def assert_stream_equals_load(path, chunk_rows, channels=None, format=None, more
         part = (lambda c: c.reference_roll) if name == "reference_roll" else (lambda c, n=name: c.extra[n])
         np.testing.assert_allclose(np.concatenate([part(c) for c in chunks]), part(whole), rtol=0, atol=1e-12,
                                    equal_nan=True, err_msg=name)
+    for name in whole.truth:                 # truth columns too, on the table clock or resampled
+        assert all(name in c.truth for c in chunks), name
+        np.testing.assert_allclose(np.concatenate([c.truth[name] for c in chunks]), whole.truth[name], rtol=0,
+                                   atol=1e-12, equal_nan=True, err_msg=name)
     total: dict = {}
     for c in chunks:
         for kind, v in c.time_repairs.items():
