@@ -292,3 +292,33 @@ def test_mdf4_repairs_after_the_common_span_are_counted(tmp_path):
     whole = load_log(p, channels=tmp_path / "m.toml")
     assert whole.time_repairs["duplicate"] == 1
     assert_stream_equals_load(p, 100, channels=tmp_path / "m.toml")
+
+
+@pytest.mark.parametrize("bad", [False, True])
+def test_mdf4_text_channel_is_read_alike_whole_and_streamed(tmp_path, bad):
+    """An MDF4 channel stored as text: its numbers read the same whole and streamed, and a sample
+    that is no number is the same error (naming the channel and the sample) either way."""
+    pytest.importorskip("asammdf")
+    from asammdf import MDF, Signal
+
+    from roadbank.io import LogError
+    t = np.arange(500) / 100.0
+    vx = [f"{15.0 + np.sin(x):.6f}".encode() for x in t]
+    if bad:
+        vx[321] = b"n/a?"
+    mdf = MDF(version="4.10")
+    mdf.append([Signal(0.5 * np.sin(t), t, name="ay"), Signal(0.03 * np.cos(t), t, name="r"),
+                Signal(0.01 * t, t, name="delta_f")])
+    mdf.append([Signal(np.array(vx), t, name="vx", encoding="utf-8")])
+    p = tmp_path / "text.mf4"
+    mdf.save(p)
+    if not bad:
+        whole, _ = assert_stream_equals_load(p, 100)
+        np.testing.assert_allclose(whole.signals.vx[:3], 15.0 + np.sin(whole.signals.t[:3]), atol=1e-6)
+        return
+    with pytest.raises(LogError) as whole:
+        load_log(p)
+    with pytest.raises(LogError) as streamed:
+        list(stream_log(p, chunk_rows=100))
+    assert str(whole.value) == str(streamed.value)
+    assert "'speed'" in str(whole.value) and "sample 321" in str(whole.value)

@@ -204,12 +204,7 @@ def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTab
                     sig = mdf.get(c)
                 except Exception as exc:
                     raise LogError(f"{p}: {column_label(wanted, c)}: cannot read ({exc})") from None
-                s = np.asarray(sig.samples)
-                if s.dtype.kind not in "fiub":
-                    s = _parse_floats(p, c, column_label(wanted, c),
-                                      [x.decode() if isinstance(x, bytes) else x for x in s],
-                                      "sample", range(len(s)))
-                data[c] = np.asarray(s, dtype=np.float64)
+                data[c] = mdf_floats(p, c, column_label(wanted, c), sig.samples)
                 times[c] = np.asarray(sig.timestamps, dtype=np.float64)
                 if len(data[c]) == 0:
                     raise LogError(f"{p}: {column_label(wanted, c)}: no samples")
@@ -220,6 +215,16 @@ def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTab
     finally:
         mdf.close()
     return RawTable(names, data, times=times, metadata=meta, row_label="sample", rownums=None)
+
+
+def mdf_floats(p, c: str, label: str, samples, row0: int = 0) -> np.ndarray:
+    """One MDF channel's samples -> float64; text samples parsed as numbers (LogError naming the
+    sample, counted from ``row0``, for one that is not)."""
+    s = np.asarray(samples)
+    if s.dtype.kind not in "fiub":
+        s = _parse_floats(p, c, label, [x.decode() if isinstance(x, bytes) else x for x in s],
+                          "sample", range(row0, row0 + len(s)))
+    return np.asarray(s, dtype=np.float64)
 
 
 READERS = {"csv": read_csv, "parquet": read_parquet, "mdf4": read_mdf4}

@@ -200,10 +200,8 @@ class Mdf4Windows:
         self.offset[group] = start + self.chunk
         got = None
         for k, sig in zip(keys, sigs):
-            s = np.asarray(sig.samples)
-            if s.dtype.kind not in "fiub":
-                raise LogError(f"{self.path}: {self.wanted[k][2]}: not numeric ({s.dtype})")
-            tv = np.asarray(sig.timestamps, dtype=np.float64), np.asarray(s, dtype=np.float64)
+            tv = (np.asarray(sig.timestamps, dtype=np.float64),
+                  readers.mdf_floats(self.path, k, self.wanted[k][2], sig.samples, start))
             if k == name:
                 got = tv
             else:
