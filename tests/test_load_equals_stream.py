@@ -28,8 +28,8 @@ CHUNKS = (61, 1000)
 
 def assert_stream_equals_load(path, chunk_rows, channels=None, format=None, more=(), counts=True):
     """The chunks of ``stream_log`` put end to end equal ``load_log`` (to 1e-12, NaN where NaN) on every
-    signal channel, every truth column and on ``more``: names of ``reference_roll`` / ``extra[...]`` entries to compare too;
-    with ``counts``, the chunks' time-stamp repair counts add up to the whole file's."""
+    signal channel, every truth column and on ``more``: names of ``reference_roll`` / ``extra[...]``
+    entries to compare too; with ``counts``, the chunks' time-stamp repair counts add up to the whole file's."""
     whole = load_log(path, channels=channels, format=format)
     chunks = list(stream_log(path, channels=channels, format=format, chunk_rows=chunk_rows))
     assert chunks, path
