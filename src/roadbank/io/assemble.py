@@ -218,6 +218,10 @@ def assemble(src, cmap: ChannelMap, params: VehicleParams, fmt: str) -> Iterator
     p = src.path
     roles = select_roles(p, cmap, set(src.names), src.names)
     gnss = gnss_roles(cmap)
+    for r in gnss:
+        if cmap.channels[r].column not in src.names:
+            raise channel_error(p, r, cmap.channels[r].column, f"column not found in the file "
+                                f"(it has: {', '.join(src.names) or 'nothing'})")
     if src.shared_clock:
         yield from _tables(src, cmap, params, fmt, roles, gnss)
     else:
@@ -232,10 +236,6 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     tspec = cmap.channels["time"]
     if tspec.column not in names:
         raise missing_column(p, "time", tspec.column, names)
-    for r in gnss:
-        if cmap.channels[r].column not in names:
-            raise channel_error(p, r, cmap.channels[r].column, f"column not found in the file "
-                                f"(it has: {', '.join(names) or 'nothing'})")
     wanted = {spec.column: role for role, spec in cmap.channels.items()}
     prefix = cmap.truth_prefix
     truth_cols = [c for c in names if prefix and c.startswith(prefix) and c not in wanted]
@@ -302,11 +302,7 @@ def _table_rows(src, cmap, roles, wanted, prefix):
 
 def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     """Channels that each carry their own clock (MDF4, raw CAN, ROS)."""
-    p, names = src.path, src.names
-    for r in gnss:
-        if cmap.channels[r].column not in names:
-            raise channel_error(p, r, cmap.channels[r].column, f"column not found in the file "
-                                f"(it has: {', '.join(names) or 'nothing'})")
+    p = src.path
     tb = _time_base(p, cmap, roles)
     rs = StreamResampler(roles, dict.fromkeys(gnss, GNSS_MAX_GAP_S), "uniform" if tb == "auto" else tb,
                          cmap.rate_hz, cmap.max_gap_s)

@@ -273,15 +273,17 @@ class StreamResampler:
             if len(grid) == 0:
                 return None
             self.t_next = np.nextafter(grid[-1], np.inf)
-        out = {"t": grid}
-        for k in self.t:
-            if self._as_is(k):
-                out[k] = np.interp(grid, self.t[k], self.v[k])
-            else:
-                out[k] = interpolate(self.t[k], self.v[k], grid, self.aux.get(k, self.max_gap))
-            # keep the last sample at or before the next grid time (it brackets it) and everything after
-            i = max(int(np.searchsorted(self.t[k], grid[-1], side="right")) - 1, 0)
-            self.t[k], self.v[k] = self.t[k][i:], self.v[k][i:]
+        return {"t": grid, **{k: self._on(k, grid) for k in self.t}}
+
+    def _on(self, k: str, grid: np.ndarray) -> np.ndarray:
+        """Channel ``k`` interpolated onto ``grid``; its buffer then keeps the last sample at or before
+        the grid's last time (it brackets the next one) and everything after."""
+        if self._as_is(k):
+            out = np.interp(grid, self.t[k], self.v[k])
+        else:
+            out = interpolate(self.t[k], self.v[k], grid, self.aux.get(k, self.max_gap))
+        i = max(int(np.searchsorted(self.t[k], grid[-1], side="right")) - 1, 0)
+        self.t[k], self.v[k] = self.t[k][i:], self.v[k][i:]
         return out
 
     def _emit_clock(self) -> dict[str, np.ndarray] | None:
@@ -298,10 +300,8 @@ class StreamResampler:
         grid, self.clock = self.clock[:n], self.clock[n:]
         out = {"t": grid}
         for k in self.t:
-            if self._as_is(k):
+            if self._as_is(k):          # the clock's own rows
                 out[k], self.t[k], self.v[k] = self.v[k][:n], self.t[k][n:], self.v[k][n:]
             else:
-                out[k] = interpolate(self.t[k], self.v[k], grid, self.aux.get(k, self.max_gap))
-                i = max(int(np.searchsorted(self.t[k], grid[-1], side="right")) - 1, 0)
-                self.t[k], self.v[k] = self.t[k][i:], self.v[k][i:]
+                out[k] = self._on(k, grid)
         return out

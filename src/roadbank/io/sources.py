@@ -149,7 +149,6 @@ class Mdf4Windows:
     """
 
     shared_clock = False
-    row_label = "sample"
     whole = False
 
     def __init__(self, path: Path, chunk_rows: int):
