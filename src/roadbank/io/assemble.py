@@ -14,8 +14,10 @@ Every channel-map format (CSV, Parquet, MDF4, raw CAN, ROS) comes here from its 
    consistency check (:func:`~roadbank.io.consistency.check_consistency`) and the repair counts.
 
 A log read whole is one chunk and gives one :class:`Log`; streamed, the same steps give its
-consecutive chunks. Decisions that look at the whole log (``time_base = "auto"``, plausibility,
-the consistency check) are taken on the first chunk of rows the source gives.
+consecutive chunks, which put end to end equal the whole log. ``time_base = "auto"`` is decided on
+the whole log (for a table read in chunks, by a first pass over it: :mod:`roadbank.io.survey`).
+Unit plausibility is checked on every chunk (its warnings come from the first), the time column's
+sample period and the consistency check on the first chunk: on a log read whole, the whole log.
 """
 
 from __future__ import annotations
