@@ -204,3 +204,16 @@ def test_map_without_dbc(logs, tmp_path):
     m = _map(tmp_path, MAP.format(ratio=16).replace('dbc = "car.dbc"', ""))
     with pytest.raises(LogError, match=r"bad\.toml: .*CAN signals.*no dbc"):
         load_log(files["blf"], channels=m)
+
+
+@pytest.mark.parametrize("fmt", list(FORMATS))
+def test_stream_is_the_whole_log(fmt, logs):
+    """A raw CAN log streamed is one chunk equal to ``load_log`` (the same source and assembler)."""
+    from roadbank.io.stream import stream_log
+    d, files = logs
+    whole = load_log(files[fmt], channels=d / "car.toml")
+    chunks = list(stream_log(files[fmt], channels=d / "car.toml", chunk_rows=50))
+    assert len(chunks) == 1
+    for k in ("t", "vx", "ay", "r", "delta_f"):
+        np.testing.assert_array_equal(getattr(chunks[0].signals, k), getattr(whole.signals, k), err_msg=k)
+    assert chunks[0].warnings == whole.warnings and chunks[0].time_repairs == whole.time_repairs

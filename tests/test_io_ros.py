@@ -218,3 +218,17 @@ def test_robot_without_steering_topic(bags, tmp_path):
     assert np.all(np.isnan(log.signals.delta_f))
     est = estimators.make("kinematic").run(log.signals)
     assert est.valid[log.signals.vx >= 5.0].all()
+
+
+@pytest.mark.parametrize("kind", ["rosbag1", "mcap"])
+def test_stream_is_the_whole_log(kind, bags):
+    """A bag streamed is one chunk equal to ``load_log`` (the same source and assembler), position too."""
+    from roadbank.io.stream import stream_log
+    d, files = bags
+    cmap = d / ("ros1.toml" if kind == "rosbag1" else "ros2.toml")
+    whole = load_log(files[kind], channels=cmap)
+    chunks = list(stream_log(files[kind], channels=cmap, chunk_rows=50))
+    assert len(chunks) == 1
+    for k in ("t", "vx", "ay", "r", "delta_f"):
+        np.testing.assert_array_equal(getattr(chunks[0].signals, k), getattr(whole.signals, k), err_msg=k)
+    np.testing.assert_array_equal(chunks[0].extra["lat_deg"], whole.extra["lat_deg"])

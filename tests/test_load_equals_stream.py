@@ -28,8 +28,8 @@ CHUNKS = (61, 1000)
 
 def assert_stream_equals_load(path, chunk_rows, channels=None, format=None, more=(), counts=True):
     """The chunks of ``stream_log`` put end to end equal ``load_log`` (to 1e-12, NaN where NaN) on every
-    signal channel and on ``more``: names of ``reference_roll`` / ``extra[...]`` entries to compare too;
-    with ``counts``, the chunks' time-stamp repair counts add up to the whole file's."""
+    signal channel, every truth column and on ``more``: names of ``reference_roll`` / ``extra[...]``
+    entries to compare too; with ``counts``, the chunks' time-stamp repair counts add up to the whole file's."""
     whole = load_log(path, channels=channels, format=format)
     chunks = list(stream_log(path, channels=channels, format=format, chunk_rows=chunk_rows))
     assert chunks, path
@@ -42,6 +42,10 @@ def assert_stream_equals_load(path, chunk_rows, channels=None, format=None, more
         part = (lambda c: c.reference_roll) if name == "reference_roll" else (lambda c, n=name: c.extra[n])
         np.testing.assert_allclose(np.concatenate([part(c) for c in chunks]), part(whole), rtol=0, atol=1e-12,
                                    equal_nan=True, err_msg=name)
+    for name in whole.truth:                 # truth columns too, on the table clock or resampled
+        assert all(name in c.truth for c in chunks), name
+        np.testing.assert_allclose(np.concatenate([c.truth[name] for c in chunks]), whole.truth[name], rtol=0,
+                                   atol=1e-12, equal_nan=True, err_msg=name)
     total: dict = {}
     for c in chunks:
         for kind, v in c.time_repairs.items():
@@ -187,10 +191,8 @@ CASES = [(seed, mixed, damaged, tb) for seed, (mixed, damaged, tb) in enumerate(
                          ids=[f"{s}-{'mixed' if m else 'one-rate'}-{'damaged' if d else 'clean'}-{tb}"
                               for s, m, d, tb in CASES])
 @pytest.mark.parametrize("suffix", [".parquet", ".csv"])
-def test_written_table(request, tmp_path, suffix, seed, mixed, damaged, tb, chunk):
+def test_written_table(tmp_path, suffix, seed, mixed, damaged, tb, chunk):
     from roadbank.io.writers import write_table
-    if (suffix, seed, chunk) == (".parquet", 1, 61):     # a first chunk of jittery stamps with a few NaN
-        request.applymarker(pytest.mark.xfail(strict=True, reason=AUTO_FIRST_CHUNK))
     rng = np.random.default_rng(1000 + seed)
     cols = _table(seed, mixed)
     if damaged:
@@ -206,15 +208,9 @@ def test_written_table(request, tmp_path, suffix, seed, mixed, damaged, tb, chun
         assert len(chunks) > 1
 
 
-#: the known difference (see test_auto_time_base_is_decided_on_the_first_chunk)
-AUTO_FIRST_CHUNK = ("stream_log decides time_base='auto' on the first chunk, load_log on the whole file: "
-                    "a first chunk whose channels' median steps differ by over 1 % (jitter, a few invalid "
-                    "samples) is resampled onto the uniform grid, the whole file keeps the table clock")
-
-
-@pytest.mark.xfail(strict=True, reason=AUTO_FIRST_CHUNK)
-def test_auto_time_base_is_decided_on_the_first_chunk(tmp_path):
-    """One clock, 50 Hz with jitter; the speed sensor gives every 3rd sample only during the first second."""
+def test_auto_time_base_is_decided_on_the_whole_log(tmp_path):
+    """One clock, 50 Hz with jitter; the speed sensor gives every 3rd sample only during the first second:
+    the first chunk alone would be resampled onto the uniform grid, the whole log keeps the table clock."""
     from roadbank.io.writers import write_table
     rng = np.random.default_rng(7)
     n = 2000
@@ -276,15 +272,10 @@ def test_written_mdf4(tmp_path, seed, chunk):
     mdf.save(p)
     tb = ["auto", "uniform", "lateral_acceleration"][seed % 3]
     (tmp_path / "m.toml").write_text(MDF_MAP.format(tb=tb, rate=float(rng.choice([25.0, 100.0])), gap=0.5))
-    # (repair counts: see test_mdf4_repairs_after_the_common_span_are_counted)
-    whole, chunks = assert_stream_equals_load(p, chunk, channels=tmp_path / "m.toml", more=("reference_roll",),
-                                              counts=False)
+    whole, chunks = assert_stream_equals_load(p, chunk, channels=tmp_path / "m.toml", more=("reference_roll",))
     assert whole.time_repairs.get("flagged", 0) > 0
 
 
-@pytest.mark.xfail(strict=True, reason="stream_log (MDF4) adds a channel's repair counts to the next chunk it "
-                   "yields: repairs on samples after the last grid time (a channel running past the others) "
-                   "are never reported; load_log counts them")
 def test_mdf4_repairs_after_the_common_span_are_counted(tmp_path):
     pytest.importorskip("asammdf")
     from asammdf import MDF, Signal
@@ -301,3 +292,33 @@ def test_mdf4_repairs_after_the_common_span_are_counted(tmp_path):
     whole = load_log(p, channels=tmp_path / "m.toml")
     assert whole.time_repairs["duplicate"] == 1
     assert_stream_equals_load(p, 100, channels=tmp_path / "m.toml")
+
+
+@pytest.mark.parametrize("bad", [False, True])
+def test_mdf4_text_channel_is_read_alike_whole_and_streamed(tmp_path, bad):
+    """An MDF4 channel stored as text: its numbers read the same whole and streamed, and a sample
+    that is no number is the same error (naming the channel and the sample) either way."""
+    pytest.importorskip("asammdf")
+    from asammdf import MDF, Signal
+
+    from roadbank.io import LogError
+    t = np.arange(500) / 100.0
+    vx = [f"{15.0 + np.sin(x):.6f}".encode() for x in t]
+    if bad:
+        vx[321] = b"n/a?"
+    mdf = MDF(version="4.10")
+    mdf.append([Signal(0.5 * np.sin(t), t, name="ay"), Signal(0.03 * np.cos(t), t, name="r"),
+                Signal(0.01 * t, t, name="delta_f")])
+    mdf.append([Signal(np.array(vx), t, name="vx", encoding="utf-8")])
+    p = tmp_path / "text.mf4"
+    mdf.save(p)
+    if not bad:
+        whole, _ = assert_stream_equals_load(p, 100)
+        np.testing.assert_allclose(whole.signals.vx[:3], 15.0 + np.sin(whole.signals.t[:3]), atol=1e-6)
+        return
+    with pytest.raises(LogError) as whole:
+        load_log(p)
+    with pytest.raises(LogError) as streamed:
+        list(stream_log(p, chunk_rows=100))
+    assert str(whole.value) == str(streamed.value)
+    assert "'speed'" in str(whole.value) and "sample 321" in str(whole.value)

@@ -47,7 +47,9 @@ def detect_format(path) -> str:
     return fmt
 
 
-def _label(labels: dict[str, str], col: str) -> str:
+def column_label(labels: dict[str, str], col: str) -> str:
+    """How messages name column ``col``: ``channel 'role' (column 'col')``, or ``column 'col'``
+    when ``labels`` (column -> role) gives it no other role name."""
     role = labels.get(col)
     return f"channel '{role}' (column '{col}')" if role and role != col else f"column '{col}'"
 
@@ -120,7 +122,7 @@ def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTabl
     data = {}
     for c in cols:
         j = header.index(c)
-        data[c] = _parse_floats(p, c, _label(wanted, c), [row[j] for _, row in rows], "line", linenos)
+        data[c] = _parse_floats(p, c, column_label(wanted, c), [row[j] for _, row in rows], "line", linenos)
     return RawTable(header, data, row_label="line", rownums=linenos)
 
 
@@ -140,7 +142,7 @@ def read_parquet(path, wanted: dict[str, str], prefix: str | None = None) -> Raw
         raise LogError(f"{p}: not a readable Parquet file (truncated or corrupt?): {exc}") from None
     if table.num_rows == 0:
         raise LogError(f"{p}: no data rows")
-    data = {c: arrow_column_floats(p, c, _label(wanted, c), table.column(c)) for c in cols}
+    data = {c: arrow_column_floats(p, c, column_label(wanted, c), table.column(c)) for c in cols}
     return RawTable(names, data, metadata=parquet_metadata(schema), row_label="row",
                     rownums=range(table.num_rows))
 
@@ -201,16 +203,11 @@ def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTab
                 try:
                     sig = mdf.get(c)
                 except Exception as exc:
-                    raise LogError(f"{p}: {_label(wanted, c)}: cannot read ({exc})") from None
-                s = np.asarray(sig.samples)
-                if s.dtype.kind not in "fiub":
-                    s = _parse_floats(p, c, _label(wanted, c),
-                                      [x.decode() if isinstance(x, bytes) else x for x in s],
-                                      "sample", range(len(s)))
-                data[c] = np.asarray(s, dtype=np.float64)
+                    raise LogError(f"{p}: {column_label(wanted, c)}: cannot read ({exc})") from None
+                data[c] = mdf_floats(p, c, column_label(wanted, c), sig.samples)
                 times[c] = np.asarray(sig.timestamps, dtype=np.float64)
                 if len(data[c]) == 0:
-                    raise LogError(f"{p}: {_label(wanted, c)}: no samples")
+                    raise LogError(f"{p}: {column_label(wanted, c)}: no samples")
         meta = {}
         comment = getattr(getattr(mdf, "header", None), "comment", None)
         if comment:
@@ -218,6 +215,16 @@ def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTab
     finally:
         mdf.close()
     return RawTable(names, data, times=times, metadata=meta, row_label="sample", rownums=None)
+
+
+def mdf_floats(p, c: str, label: str, samples, row0: int = 0) -> np.ndarray:
+    """One MDF channel's samples -> float64; text samples parsed as numbers (LogError naming the
+    sample, counted from ``row0``, for one that is not)."""
+    s = np.asarray(samples)
+    if s.dtype.kind not in "fiub":
+        s = _parse_floats(p, c, label, [x.decode() if isinstance(x, bytes) else x for x in s],
+                          "sample", range(row0, row0 + len(s)))
+    return np.asarray(s, dtype=np.float64)
 
 
 READERS = {"csv": read_csv, "parquet": read_parquet, "mdf4": read_mdf4}

@@ -134,3 +134,174 @@ def resample(series: dict[str, tuple[np.ndarray, np.ndarray]], t_base: np.ndarra
     if shared_clock is not None and t_base is shared_clock:
         return {k: np.asarray(v, dtype=np.float64) for k, (_, v) in series.items()}
     return {k: interpolate(t, v, t_base, max_gap_s) for k, (t, v) in series.items()}
+
+
+class StreamResampler:
+    """:func:`common_time_base` + :func:`resample` chunk by chunk: the same time base and values
+    whether a log comes in one chunk or in many.
+
+    Parameters
+    ----------
+    roles : list of str
+        Channels that define the time base's span (their overlap), interpolated with ``max_gap_s``.
+    aux : dict name -> max gap (s)
+        Channels interpolated onto the base with their own gap limit that do not limit its span (GNSS).
+    time_base : "uniform", a role name, or "clock"
+        "clock": the table's own clock (:meth:`add_clock`) is the base; the roles and the ``raw``
+        channels are taken on it as they are (NaN stays NaN).
+    rate_hz, max_gap_s : float
+        As in the channel map.
+    raw : list of str
+        Channels on the table clock interpolated with :func:`numpy.interp` (no gap rule, NaN
+        spreads to its neighbours): the truth columns of simulated logs.
+
+    Feed chunks with :meth:`add` (any channel, any span, time-ordered per channel), mark exhausted
+    channels with :meth:`finish`, collect output with :meth:`emit` (dict name -> array on ``"t"``).
+    Memory: each channel keeps only the samples after the last emitted base time (plus one before it).
+    """
+
+    def __init__(self, roles, aux=None, time_base="uniform", rate_hz=100.0, max_gap_s=0.5, raw=()):
+        self.roles = list(roles)
+        self.aux = dict(aux or {})
+        self.raw = list(raw)
+        self.time_base = time_base
+        self.rate = float(rate_hz)
+        self.max_gap = float(max_gap_s)
+        names = self.roles + list(self.aux) + self.raw
+        self.t = {k: np.zeros(0) for k in names}
+        self.v = {k: np.zeros(0) for k in names}
+        self.first = {k: None for k in names}
+        self.last = {k: None for k in names}
+        self.done = {k: False for k in names}
+        self.clock = np.zeros(0)   # "clock": table times not emitted yet
+        self.t0 = None       # grid start: latest first valid sample of the span roles
+        self.k_next = 0      # next uniform grid index
+        self.t_next = -np.inf   # role time base: next time not emitted yet
+
+    def _as_is(self, name: str) -> bool:
+        """Taken on the base as it is (the table clock), not interpolated."""
+        return name in self.raw or (self.time_base == "clock" and name in self.roles)
+
+    def add_clock(self, t: np.ndarray) -> None:
+        """The table clock's next times (s), for ``time_base="clock"``."""
+        self.clock = np.concatenate([self.clock, np.asarray(t, dtype=np.float64)])
+
+    def add(self, name: str, t: np.ndarray, v: np.ndarray) -> None:
+        if self._as_is(name):       # kept whole, row for row with the clock
+            t, v = np.asarray(t, dtype=np.float64), np.asarray(v, dtype=np.float64)
+            ok = np.isfinite(v)
+            if ok.any():
+                if self.first[name] is None:
+                    self.first[name] = t[ok][0]
+                self.last[name] = t[ok][-1]
+            self.t[name] = np.concatenate([self.t[name], t])
+            self.v[name] = np.concatenate([self.v[name], v])
+            return
+        t, v = clean_series(t, v)
+        if len(t) and self.last[name] is not None:
+            keep = t > self.last[name]          # duplicates across the chunk boundary: first kept
+            t, v = t[keep], v[keep]
+        if len(t) == 0:
+            return
+        if self.first[name] is None:
+            self.first[name] = t[0]
+        self.last[name] = t[-1]
+        self.t[name] = np.concatenate([self.t[name], t])
+        self.v[name] = np.concatenate([self.v[name], v])
+
+    def finish(self, name: str) -> None:
+        self.done[name] = True
+
+    def buffered(self) -> int:
+        """Samples held in the buffers (for memory checks)."""
+        return sum(len(x) for x in self.t.values()) + len(self.clock)
+
+    def _ready_until(self):
+        """Latest time every channel has data for (inf if all are finished, None if one has none yet)."""
+        lim = np.inf
+        for k in self.t:
+            if self._as_is(k):
+                continue
+            if self.done[k]:
+                if k in self.roles and self.last[k] is not None:
+                    lim = min(lim, self.last[k])      # a finished channel ends the overlap
+                continue
+            if self.last[k] is None:
+                return None
+            lim = min(lim, self.last[k])
+        return lim
+
+    def _check_overlap(self) -> float:
+        """End of the overlap of the roles (s), once every role is finished; LogError as :func:`overlap`."""
+        for k in self.roles:
+            if self.first[k] is None:
+                raise LogError(f"channel '{k}': no valid (finite) samples")
+        t0 = max(self.first[k] for k in self.roles)
+        t1 = min(self.last[k] for k in self.roles)
+        if not t1 > t0:
+            late = max(self.roles, key=lambda k: self.first[k])
+            early = min(self.roles, key=lambda k: self.last[k])
+            raise LogError(f"channels do not overlap in time: '{late}' starts at {self.first[late]:.3f} s "
+                           f"but '{early}' ends at {self.last[early]:.3f} s")
+        return t1
+
+    def emit(self) -> dict[str, np.ndarray] | None:
+        """Base samples that no later chunk can change; None if there are none yet."""
+        if self.time_base == "clock":
+            return self._emit_clock()
+        for k in self.roles:
+            if self.first[k] is None:
+                if self.done[k]:
+                    raise LogError(f"channel '{k}': no valid (finite) samples")
+                return None
+        if self.t0 is None:
+            self.t0 = max(self.first[k] for k in self.roles)
+        ready = self._ready_until()
+        if ready is None:
+            return None
+        if all(self.done[k] for k in self.roles):
+            ready = min(ready, self._check_overlap())
+        if self.time_base == "uniform":
+            k_end = int(np.floor((ready - self.t0) * self.rate + 1e-9)) + 1 if np.isfinite(ready) else self.k_next
+            if k_end <= self.k_next:
+                return None
+            grid = self.t0 + np.arange(self.k_next, k_end) / self.rate
+            self.k_next = k_end
+        else:
+            tb = self.t[self.time_base]
+            grid = tb[(tb >= max(self.t0, self.t_next)) & (tb <= ready)]
+            if len(grid) == 0:
+                return None
+            self.t_next = np.nextafter(grid[-1], np.inf)
+        return {"t": grid, **{k: self._on(k, grid) for k in self.t}}
+
+    def _on(self, k: str, grid: np.ndarray) -> np.ndarray:
+        """Channel ``k`` interpolated onto ``grid``; its buffer then keeps the last sample at or before
+        the grid's last time (it brackets the next one) and everything after."""
+        if self._as_is(k):
+            out = np.interp(grid, self.t[k], self.v[k])
+        else:
+            out = interpolate(self.t[k], self.v[k], grid, self.aux.get(k, self.max_gap))
+        i = max(int(np.searchsorted(self.t[k], grid[-1], side="right")) - 1, 0)
+        self.t[k], self.v[k] = self.t[k][i:], self.v[k][i:]
+        return out
+
+    def _emit_clock(self) -> dict[str, np.ndarray] | None:
+        """``time_base="clock"``: the clock's rows up to where every interpolated channel has data."""
+        ready = self._ready_until()
+        if all(self.done.values()):
+            self._check_overlap()
+            ready = np.inf
+        if ready is None or not len(self.clock):
+            return None
+        n = int(np.searchsorted(self.clock, ready, side="right"))
+        if n == 0:
+            return None
+        grid, self.clock = self.clock[:n], self.clock[n:]
+        out = {"t": grid}
+        for k in self.t:
+            if self._as_is(k):          # the clock's own rows
+                out[k], self.t[k], self.v[k] = self.v[k][:n], self.t[k][n:], self.v[k][n:]
+            else:
+                out[k] = self._on(k, grid)
+        return out
