@@ -143,15 +143,10 @@ def test_default_map_estimator_is_the_smoother_and_removes_the_lane_change_lag(t
     pif-smoother) against the simulator's truth per cell, and with the causal default PIF."""
     from roadbank import estimators
     from roadbank.io.channels import read_channel_map
-    from roadbank.mapping.simulated import run_positions
-    from roadbank.sim import SCENARIOS, run_scenario
     from roadbank.vehicle import load_vehicle
 
-    res = run_scenario("bank-lane-change", seed=1)
+    res, lat, lon = _drive_with_positions(tmp_path, "bank-lane-change", seed=1)
     proj = LocalProjection(48.0, 11.0)
-    lat, lon = run_positions(res, SCENARIOS["bank-lane-change"].road, proj)
-    pq.write_table(pa.table(dict(res.table(), lat=lat, lon=lon)), tmp_path / "drive.parquet")
-    (tmp_path / "m.toml").write_text(MAP_TOML)
     errs = {}
     suv = load_vehicle("suv-paper")                  # the simulated car, described
     for name in (None, "pif-modified"):
@@ -290,14 +285,7 @@ def test_course_stream_equals_the_course_of_the_whole_track(sizes):
 
 def test_a_log_streamed_in_small_chunks_maps_as_in_one_chunk(tmp_path):
     """The course needs samples either side of each one: chunk ends must not lose samples or cells."""
-    from roadbank.mapping.simulated import run_positions
-    from roadbank.sim import SCENARIOS, run_scenario
-
-    res = run_scenario("track-lane1", seed=2)
-    proj = LocalProjection(48.0, 11.0)
-    lat, lon = run_positions(res, SCENARIOS["track-lane1"].road, proj)
-    pq.write_table(pa.table(dict(res.table(), lat=lat, lon=lon)), tmp_path / "drive.parquet")
-    (tmp_path / "m.toml").write_text(MAP_TOML)
+    _drive_with_positions(tmp_path, "track-lane1", seed=2)
     maps = {}
     for rows in (200, 1_000_000):
         bmap, recs = map_logs([tmp_path / "drive.parquet"], "kinematic", channels=tmp_path / "m.toml",
@@ -309,3 +297,16 @@ def test_a_log_streamed_in_small_chunks_maps_as_in_one_chunk(tmp_path):
     for key in ("ix", "iy", "sector", "count"):
         np.testing.assert_array_equal(small[key], whole[key])
     np.testing.assert_allclose(small["bank_mean_deg"], whole["bank_mean_deg"], rtol=0, atol=1e-12)
+
+
+def _drive_with_positions(tmp_path, scenario: str, seed: int):
+    """A simulated drive with positions on its road (origin 48, 11) as ``drive.parquet`` and the channel
+    map ``m.toml`` in ``tmp_path``; returns the scenario's result and the positions (deg)."""
+    from roadbank.mapping.simulated import run_positions
+    from roadbank.sim import SCENARIOS, run_scenario
+
+    res = run_scenario(scenario, seed=seed)
+    lat, lon = run_positions(res, SCENARIOS[scenario].road, LocalProjection(48.0, 11.0))
+    pq.write_table(pa.table(dict(res.table(), lat=lat, lon=lon)), tmp_path / "drive.parquet")
+    (tmp_path / "m.toml").write_text(MAP_TOML)
+    return res, lat, lon
