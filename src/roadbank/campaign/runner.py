@@ -30,10 +30,14 @@ import math
 import time
 import traceback
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from .sampling import RunSpec
+
+if TYPE_CHECKING:
+    from ..vehicle import Vehicle
 
 #: an estimator "fails" a run when its bank RMS error exceeds this (deg) ...
 FAIL_RMS_DEG = 2.0
@@ -77,11 +81,11 @@ class RunOptions:
     pre_roll: float | None = None
     sim_dt: float | None = None
     settle: float = 2.0
-    vehicle: object = None
+    vehicle: Vehicle | None = None
     standstill: float = 3.0
     offsets: bool = True
 
-    __hash__ = None  # a Vehicle holds dicts
+    __hash__ = None  # type: ignore[assignment]  # a Vehicle holds dicts: not hashable
 
     def __post_init__(self) -> None:
         if not (0 < self.duration_scale <= 1.0):
@@ -135,7 +139,7 @@ def _scenario(spec: RunSpec, options: RunOptions):
     from ..sim import SCENARIOS
 
     sc = SCENARIOS[spec.scenario]
-    changes = {}
+    changes: dict[str, Any] = {}
     if options.duration_scale != 1.0:
         changes["duration"] = sc.duration * options.duration_scale
     if options.pre_roll is not None:

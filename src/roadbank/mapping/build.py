@@ -4,11 +4,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .geo import CourseStream, LocalProjection
 from .grid import BankMap
+
+if TYPE_CHECKING:
+    from ..io.channels import ChannelMap
+    from ..params import VehicleParams
+    from ..vehicle import Vehicle
 
 
 @dataclass
@@ -35,10 +41,10 @@ class MapSettings:
     """How every log of a map is read, estimated and gridded (see :func:`map_logs`)."""
 
     estimator: str = "pif-smoother"
-    channels: object = None
+    channels: ChannelMap | str | Path | None = None
     format: str | None = None
-    params: object = None
-    vehicle: object = None
+    params: VehicleParams | None = None
+    vehicle: Vehicle | None = None
     cell_m: float = 10.0
     sectors: int = 4
     chunk_rows: int | None = None
@@ -102,8 +108,9 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
                                "map, or use a format that has one: comma2k19, kitti-oxts, ROS NavSatFix)")
             lat, lon = chunk.extra["lat_deg"], chunk.extra["lon_deg"]
             first = first or _origin(lat, lon)
-            if part is None and (projection or first) is not None:
-                part = BankMap(projection or first, s.cell_m, s.sectors)
+            plane = projection or first
+            if part is None and plane is not None:
+                part = BankMap(plane, s.cell_m, s.sectors)
             if k == 0:      # designed on the log's first DESIGN_SPAN_S, as roadbank estimate does
                 est = _design(s, chunks.leading(chunk.signals, DESIGN_SPAN_S), designs)
             nxt = chunks.following(est.lookahead_s) if s.estimator in OFFLINE else None
@@ -147,7 +154,7 @@ def _first_fix(paths, settings: MapSettings) -> LocalProjection | None:
         except Exception:   # the log is reported when it is mapped
             pass
         finally:
-            chunks.close()
+            chunks.close()  # type: ignore[attr-defined]  # stream_log returns a generator
     return None
 
 
@@ -217,8 +224,8 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
             rec, part, first = map_one_log(path, k, settings, None if bmap is None else bmap.projection, designs)
             if bmap is None and first is not None:
                 bmap = BankMap(first, cell_m, sectors)
-            if part is not None:
-                bmap.merge(part)
+            if part is not None:    # a part has a projection: then so has the map
+                bmap.merge(part)  # type: ignore[union-attr]
             records.append(rec)
             if on_log is not None:
                 on_log(rec)
@@ -233,8 +240,8 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
             parts = _parts_on_pool(pool, paths, settings, origin_found)
         bmap = BankMap(origin_found, cell_m, sectors) if origin_found is not None else None
     for rec, part, _ in parts:
-        if part is not None:
-            bmap.merge(part)
+        if part is not None:    # a part has a projection: then so has the map
+            bmap.merge(part)  # type: ignore[union-attr]
         records.append(rec)
     return bmap, records
 

@@ -12,6 +12,7 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -189,6 +190,7 @@ def write_outputs(study: Study, outdir: Path, *, docs_results: Path | None = Non
     tasks = _figure_tasks(by_sc, figdir, None if figure_names is None else tuple(figure_names))
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(tasks)))
     drawn: dict = {}
+    written: dict[str, Any]
     if jobs == 1:
         written = {"tables": write_tables(study.rows, outdir)}
         for key, *args in tasks:

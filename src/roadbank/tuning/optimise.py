@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..params import VehicleParams
 from .objective import SetScores, drive_errors, objective_value, score_set
 from .spaces import SearchSpace
 
@@ -51,7 +52,7 @@ class Objective:
     under ``key``; picklable (holds the key, not the drives)."""
 
     space: SearchSpace
-    params: object
+    params: VehicleParams | None
     key: str
     grid: tuple = ()
 
@@ -228,4 +229,6 @@ def tune_estimator(space: SearchSpace, params, key: str, *, budget: int, seed: i
         n_evals[0] += 1
         if best is None or scores.objective < best[1].objective:
             best = (options, scores)
-    return TuneResult(space.name, best[0], x, best[1], start_value, n_evals[0], time.perf_counter() - t0)
+    # ROLL_CHOICES is not empty: best is set
+    return TuneResult(space.name, best[0], x, best[1], start_value,  # type: ignore[index]
+                      n_evals[0], time.perf_counter() - t0)

@@ -116,7 +116,7 @@ def tune_car(params=None, plant=None, sensors=None, *, names=TUNABLE, budget: in
     mapper = DaskMapper(scheduler, step) if scheduler else LocalMapper(jobs, step)
     with mapper:
         if scheduler:
-            mapper.share(key, train)
+            mapper.share(key, train)  # type: ignore[union-attr]  # a scheduler: a DaskMapper
         for name in names:
             results[name] = tune_estimator(search_space(name, sensors), params, key, budget=budget,
                                            seed=seed, mapper=mapper)

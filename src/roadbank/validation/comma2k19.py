@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -156,7 +157,7 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
         "kin_tau_sweep": tau_sweep,
         "yaw_steer_corr": pearson_r(np.nan_to_num(s.delta_f), np.nan_to_num(s.r)),
     }
-    sens = {}
+    sens: dict[str, Any] = {}
     if sensitivity:
         other = VehicleParams()
         log_other = load_comma2k19(path, params=other)

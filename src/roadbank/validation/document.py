@@ -17,7 +17,7 @@ def find_datasets(root) -> dict:
     from ..io.kitti import find_oxts_dirs
 
     root = Path(root)
-    found = {"comma2k19": [], "kitti": []}
+    found: dict[str, list[Path]] = {"comma2k19": [], "kitti": []}
     subdirs = sorted(p for p in root.glob("*") if p.is_dir()) + sorted(p for p in root.glob("*/*") if p.is_dir())
     for d in [root] + subdirs:
         if (d / "processed_log").is_dir():

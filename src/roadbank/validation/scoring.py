@@ -309,7 +309,7 @@ def pooled(runs, names) -> dict[str, dict[str, float]]:
             out[name] = {"r": float("nan"), "rms_deg": float("nan"), "r_raw": float("nan"),
                          "rms_raw_deg": float("nan"), "n": 0}
             continue
-        xs, rs, xr, rr = (np.concatenate(v) for v in (xs, rs, xr, rr))
-        out[name] = {"r": pearson_r(xs, rs), "rms_deg": _rms_deg(xs - rs), "r_raw": pearson_r(xr, rr),
-                     "rms_raw_deg": _rms_deg(xr - rr), "n": int(len(xs))}
+        x, ref, x_raw, ref_raw = (np.concatenate(v) for v in (xs, rs, xr, rr))
+        out[name] = {"r": pearson_r(x, ref), "rms_deg": _rms_deg(x - ref), "r_raw": pearson_r(x_raw, ref_raw),
+                     "rms_raw_deg": _rms_deg(x_raw - ref_raw), "n": int(len(x))}
     return out

@@ -103,7 +103,7 @@ class Vehicle:
     plant: Mapping[str, float] = field(default_factory=dict)
     source: str = field(default="", compare=False, repr=False)
 
-    __hash__ = None  # holds dicts
+    __hash__ = None  # type: ignore[assignment]  # holds dicts: not hashable
 
     def __post_init__(self) -> None:
         if not isinstance(self.params, VehicleParams):
@@ -185,7 +185,9 @@ class Vehicle:
         :func:`~roadbank.vehicle.conditions.noise_densities`.
         """
         from ..estimators import TUNED_AS
-        tuning = {**self.tuning.get(TUNED_AS.get(estimator_name), {}), **self.tuning.get(estimator_name, {})}
+        # an estimator tuned as itself looks up None: no table
+        tuning = {**self.tuning.get(TUNED_AS.get(estimator_name), {}),  # type: ignore[arg-type]
+                  **self.tuning.get(estimator_name, {})}
         return make_estimator(estimator_name, self.params, sensors=self.sensors, log_rate=log_rate,
                               log_ay_noise=log_ay_noise, log_r_noise=log_r_noise, **{**tuning, **overrides})
 
