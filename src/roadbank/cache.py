@@ -27,6 +27,9 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+import scipy
+
+from . import __version__
 
 #: the most entries kept per kind; older ones (by modification time) are removed
 MAX_ENTRIES = 512
@@ -55,9 +58,6 @@ def source_fingerprint() -> str:
     path, size and modification time (computed once per process)."""
     global _FINGERPRINT
     if _FINGERPRINT is None:
-        import scipy
-
-        from . import __version__
         h = hashlib.sha256(f"{__version__}|{np.__version__}|{scipy.__version__}".encode())
         root = Path(__file__).resolve().parent
         for p in sorted(root.rglob("*.py")):

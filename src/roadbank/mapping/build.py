@@ -4,17 +4,17 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..estimators import OFFLINE
+from ..io import LogError
+from ..io.channels import ChannelMap
+from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
+from ..params import VehicleParams
+from ..vehicle import DESIGN_SPAN_S, Vehicle, for_conditions, log_conditions
 from .geo import CourseStream, LocalProjection
 from .grid import BankMap
-
-if TYPE_CHECKING:
-    from ..io.channels import ChannelMap
-    from ..params import VehicleParams
-    from ..vehicle import Vehicle
 
 
 @dataclass
@@ -53,8 +53,6 @@ class MapSettings:
 def _design(settings: MapSettings, signals, designs: dict):
     """The estimator for a log (its sample rate and road noise, :func:`roadbank.vehicle.for_conditions`),
     memoised in ``designs`` by those conditions."""
-    from ..vehicle import for_conditions, log_conditions
-
     cond = log_conditions(signals)
     key = tuple(round(v, 6) if np.isfinite(v) else None for v in cond.values())
     if key not in designs:
@@ -83,11 +81,6 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
         The log's record; its cells (None if it failed or had no fix while ``projection`` was
         None); the projection of its first fix (None if it reached none), whatever ``projection``.
     """
-    from ..estimators import OFFLINE
-    from ..io import LogError
-    from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
-    from ..vehicle import DESIGN_SPAN_S
-
     designs = {} if designs is None else designs
     s = settings
     correct = (lambda x: x) if s.vehicle is None else s.vehicle.correct
@@ -138,8 +131,6 @@ def _map_batch(jobs, settings: MapSettings, projection) -> list[tuple]:
 def _first_fix(paths, settings: MapSettings) -> LocalProjection | None:
     """The default origin: the projection of the first fix of the first log (in order) that reaches
     one, reading each log only up to it (a log that fails before it is passed over)."""
-    from ..io.stream import CHUNK_ROWS, stream_log
-
     params = settings.vehicle.params if settings.vehicle is not None else settings.params
     for path in paths:
         chunks = stream_log(path, channels=settings.channels, format=settings.format, params=params,

@@ -17,7 +17,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import estimators
+from ..estimators.base import Estimator
+from ..estimators.pif import SENSOR_R_ESTIMATORS
 from ..signals import Signals
+from ..sim.scenarios import SCENARIOS, run
+from ..sim.sensors import SensorConfig
+from ..vehicle import log_conditions, make_estimator
 
 
 @dataclass
@@ -73,13 +79,6 @@ def jitter_study(scenario: str = "bank-lane-change", names=("kinematic", "pio-mo
     dt_range : (float, float)
         Shortest and longest 10 Hz step (s).
     """
-    from .. import estimators
-    from ..estimators.base import Estimator
-    from ..estimators.pif import SENSOR_R_ESTIMATORS
-    from ..vehicle import log_conditions, make_estimator
-    from ..sim.scenarios import SCENARIOS, run
-    from ..sim.sensors import SensorConfig
-
     sim = run(SCENARIOS[scenario], sensors=SensorConfig(rate=1000.0), seed=seed, condition="nominal")
     s, truth = sim.signals, sim.truth.theta
     runs = {"100": np.arange(0, len(s.t), 10), "10": jittered_indices(len(s.t), 1e-3, dt_range, seed)}

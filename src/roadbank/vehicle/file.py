@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..params import VehicleParams
+from ..signals import CHANNELS, Signals
 from .conditions import make_estimator
 from .errors import VehicleFileError
 from .plausibility import (PLANT_FIELDS, PLAUSIBLE, SENSOR_FIELDS, check_document, check_free_table, check_tuning,
@@ -240,7 +241,6 @@ class Vehicle:
         offsets = self.sensor_offsets
         if not offsets:
             return signals
-        from ..signals import CHANNELS, Signals
 
         return Signals(*(getattr(signals, c) - offsets[c] if c in offsets else getattr(signals, c)
                          for c in CHANNELS))
