@@ -17,6 +17,9 @@ from ..params import VehicleParams
 from ..signals import road_noise_std, sample_rate
 from .sensors import SensorSpec
 
+# roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
+# them: loading a car (load_vehicle, --vehicle) loads neither
+
 __all__ = ["DESIGN_SPAN_S", "log_conditions", "noise_densities", "make_estimator"]
 
 

@@ -28,6 +28,9 @@ from .plausibility import (PLANT_FIELDS, PLAUSIBLE, SENSOR_FIELDS, check_documen
 from .sensors import SensorSpec
 from .tomltext import fmt_options, fmt_value, is_scalar, toml_key, toml_type, toml_value
 
+# roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
+# them: loading a car (load_vehicle, --vehicle) loads neither
+
 __all__ = ["Vehicle", "load_vehicle", "builtin_names", "BUILTINS", "DEFAULT_VEHICLE", "OFFSET_CHANNELS"]
 
 
