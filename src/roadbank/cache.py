@@ -27,6 +27,9 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+import scipy
+
+from . import __version__
 
 #: the most entries kept per kind; older ones (by modification time) are removed
 MAX_ENTRIES = 512
@@ -55,9 +58,6 @@ def source_fingerprint() -> str:
     path, size and modification time (computed once per process)."""
     global _FINGERPRINT
     if _FINGERPRINT is None:
-        import scipy
-
-        from . import __version__
         h = hashlib.sha256(f"{__version__}|{np.__version__}|{scipy.__version__}".encode())
         root = Path(__file__).resolve().parent
         for p in sorted(root.rglob("*.py")):
@@ -80,6 +80,8 @@ def code_stamp(cls: type) -> str | None:
         if mod.__name__.split(".")[0] in ("roadbank", "builtins"):
             continue
         path = getattr(mod, "__file__", None)
+        if path is None:
+            return None
         try:
             st = os.stat(path)
         except (TypeError, OSError):
@@ -145,7 +147,8 @@ def store(kind: str, key: str, arrays: dict[str, np.ndarray]) -> Path | None:
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=path.parent)
         with os.fdopen(fd, "wb") as f:
-            np.savez(f, __key__=np.array(text), **arrays)
+            # numpy's hints take ** for its own keyword options, not the arrays' names
+            np.savez(f, __key__=np.array(text), **arrays)  # type: ignore[arg-type]
         os.replace(tmp, path)
         tmp = None
         _prune(path.parent)

@@ -22,6 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..report.html import write_document
+from ..report.markdown import md_table
+from ..sim.scenarios import DT_DEFAULT
 from .runner import FAIL_RMS_DEG
 
 #: bins of the parameter cells (edges)
@@ -124,8 +127,6 @@ def box_plot(df, path: Path) -> None:
 
 def _md_table(frame, best=None, best_in: str = "row") -> str:
     """A data frame as a markdown table (:func:`roadbank.report.markdown.md_table`; floats to 2 decimals)."""
-    from ..report.markdown import md_table
-
     rows = [[v.item() if isinstance(v, np.generic) else v for v in r]
             for r in frame.itertuples(index=False, name=None)]
     return md_table([str(c) for c in frame.columns], rows, best=best, best_in=best_in)
@@ -138,8 +139,6 @@ SUMMARY_BEST = {c: "min" for c in ("rms_median", "rms_p95", "rms_max", "max_medi
 
 def _step_text(sim_dt) -> str:
     """The plant step of a campaign's settings, in words (None: the simulator's default)."""
-    from ..sim.scenarios import DT_DEFAULT
-
     return (f"the simulator's default ({DT_DEFAULT * 1e3:g} ms at 100 Hz sensors)" if sim_dt is None
             else f"{sim_dt * 1e3:g} ms")
 
@@ -205,7 +204,6 @@ def write_report(outdir, df, settings: dict, throughput: dict | None = None) -> 
                   f"{throughput['startup_s']:.1f} s cluster start-up and warm-up. Mean per-run cost in "
                   f"the workers: simulation {runs['sim_s'].mean() * 1e3:.1f} ms, all estimators "
                   f"{df.groupby('run_id')['est_s'].sum().mean() * 1e3:.1f} ms.", ""]
-    from ..report.html import write_document
 
     text = "\n".join(lines)
     write_document(out / "report.html", text, f"roadbank campaign: {n} runs")

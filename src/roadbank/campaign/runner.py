@@ -30,10 +30,19 @@ import math
 import time
 import traceback
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .. import estimators as E
+from ..evaluation import error_metrics
+from ..sim import SCENARIOS
+from ..sim import run as sim_run
+from ..sim.standstill import with_standstill
 from .sampling import RunSpec
+
+if TYPE_CHECKING:
+    from ..vehicle import Vehicle
 
 #: an estimator "fails" a run when its bank RMS error exceeds this (deg) ...
 FAIL_RMS_DEG = 2.0
@@ -77,11 +86,11 @@ class RunOptions:
     pre_roll: float | None = None
     sim_dt: float | None = None
     settle: float = 2.0
-    vehicle: object = None
+    vehicle: Vehicle | None = None
     standstill: float = 3.0
     offsets: bool = True
 
-    __hash__ = None  # a Vehicle holds dicts
+    __hash__ = None  # type: ignore[assignment]  # a Vehicle holds dicts: not hashable
 
     def __post_init__(self) -> None:
         if not (0 < self.duration_scale <= 1.0):
@@ -94,8 +103,6 @@ class RunOptions:
             raise ValueError("standstill must be >= 0 s")
 
     def estimator_names(self) -> tuple:
-        from .. import estimators as E
-
         return tuple(self.names) or E.NAMES
 
     def as_dict(self) -> dict:
@@ -118,8 +125,6 @@ def estimators_for(names, vehicle=None, offsets: bool = False) -> dict:
     ``vehicle`` (a :class:`roadbank.vehicle.Vehicle`): designed for it (``vehicle.make(name)``).
     ``offsets``: each behind the online offset learner (:func:`roadbank.estimators.with_online_offsets`).
     """
-    from .. import estimators as E
-
     out = {}
     car = None if vehicle is None else vehicle.dumps()
     for name in names:
@@ -132,10 +137,8 @@ def estimators_for(names, vehicle=None, offsets: bool = False) -> dict:
 
 
 def _scenario(spec: RunSpec, options: RunOptions):
-    from ..sim import SCENARIOS
-
     sc = SCENARIOS[spec.scenario]
-    changes = {}
+    changes: dict[str, Any] = {}
     if options.duration_scale != 1.0:
         changes["duration"] = sc.duration * options.duration_scale
     if options.pre_roll is not None:
@@ -152,10 +155,6 @@ def _error_text(exc: BaseException) -> str:
 def run_one(spec: RunSpec, options: RunOptions = RunOptions()) -> list[dict]:
     """Simulate ``spec``, run and score every estimator; one row per estimator. Never raises
     for a failing run (see the module docstring)."""
-    from ..evaluation import error_metrics
-    from ..sim import run as sim_run
-    from ..sim.standstill import with_standstill
-
     names = options.estimator_names()
     base = spec.as_dict()
     t0 = time.perf_counter()
@@ -222,9 +221,6 @@ def _row(base: dict, name: str, **values) -> dict:
 def warm_up(options: RunOptions = RunOptions()) -> float:
     """Build the estimators and run a 0.5 s simulation in this process, so the numba
     kernels are loaded (or compiled) before a campaign is timed. Returns seconds spent."""
-    from ..sim import SCENARIOS
-    from ..sim import run as sim_run
-
     t0 = time.perf_counter()
     sc = dataclasses.replace(SCENARIOS["const-bank"], duration=0.5, pre_roll=0.1)
     sim = sim_run(sc, dt=options.sim_dt)

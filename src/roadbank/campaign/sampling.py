@@ -40,6 +40,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..sim import PlantParams, SensorConfig
+
 #: the paper's scenarios, in the order the run ids cycle through them
 SCENARIO_ORDER = ("const-bank", "bank-lane-change", "s-curve", "track-lane1", "track-lane-change")
 
@@ -113,8 +115,6 @@ class RunSpec:
         ``vehicle`` (a :class:`roadbank.vehicle.Vehicle`, default the paper's SUV) is the car
         perturbed: its plant (``Vehicle.to_plant()``) and sensors (``SensorSpec.to_sim()``).
         """
-        from ..sim import PlantParams, SensorConfig
-
         base = PlantParams() if vehicle is None else vehicle.to_plant()
         s = SensorConfig() if vehicle is None else vehicle.sensors.to_sim()
         v = base.vehicle

@@ -20,6 +20,8 @@ import uuid
 from pathlib import Path
 
 import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
 
 PARTS = "parts"
 SETTINGS = "campaign.json"
@@ -41,9 +43,6 @@ def part_files(outdir) -> list[Path]:
 
 def write_part(outdir, rows: list[dict], label: str) -> Path | None:
     """Write ``rows`` (dicts with the same keys) as one new part; atomic rename. None if no rows."""
-    import pyarrow as pa
-    import pyarrow.parquet as pq
-
     if not rows:
         return None
     d = parts_dir(outdir)
@@ -58,8 +57,6 @@ def write_part(outdir, rows: list[dict], label: str) -> Path | None:
 
 def stored_run_ids(outdir) -> set[int]:
     """Run ids that already have rows in ``outdir``."""
-    import pyarrow.parquet as pq
-
     ids: set[int] = set()
     for f in part_files(outdir):
         try:
@@ -73,7 +70,6 @@ def stored_run_ids(outdir) -> set[int]:
 def load(outdir):
     """All result rows of ``outdir`` as a pandas DataFrame, de-duplicated by (run_id, estimator)."""
     import pandas as pd
-    import pyarrow.parquet as pq
 
     files = part_files(outdir)
     if not files:

@@ -16,6 +16,7 @@ Each has ``run(signals) -> Estimate``, ``step(t, vx, ay, r, delta_f)`` and ``res
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import partial
 
 from ..defaults import ESTIMATOR
@@ -33,7 +34,7 @@ from .smoother import PIFSmoother
 from .synthesis import NoStabilisingSolution
 from .uio import UIO
 
-_FACTORIES = {
+_FACTORIES: dict[str, Callable[..., Estimator]] = {
     "kinematic": Kinematic,
     "kinematic-lp": KinematicLowPass,
     "kinematic-ff": KinematicFeedForward,

@@ -54,7 +54,7 @@ class OutputBuffers:
     """The output arrays ``w, theta, phi_b, phi, valid, xs`` of the last :meth:`take`, kept for reuse."""
 
     def __init__(self) -> None:
-        self._last = None
+        self._last: tuple[np.ndarray, ...] | None = None
 
     def take(self, n: int, ns: int) -> tuple:
         """Output arrays for ``n`` samples and ``ns`` states: float64 ``(n,)`` x 4, bool ``(n,)``,

@@ -14,9 +14,10 @@ import dataclasses
 import functools
 import math
 import warnings
-from typing import NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from .. import cache
 from ..models.bicycle import augment, disturbance_output, modified_model, original_model
@@ -68,7 +69,7 @@ class DesignInputs:
         return speed_grid(self.v_min, self.v_max, self.v_step)
 
 
-def frozen_array(a) -> tuple:
+def frozen_array(a: npt.ArrayLike) -> Any:
     """``a`` (array-like of floats, any shape) as nested tuples of floats: a design-input field
     that compares and hashes by value (units those of ``a``)."""
     a = np.asarray(a, dtype=float)
@@ -155,7 +156,7 @@ class Estimator:
     #: names of the observer states reported in Estimate.states
     state_names: tuple[str, ...] = ()
     #: the frozen dataclass of this estimator's design inputs (:attr:`design`)
-    design_type: type = DesignInputs
+    design_type: type[DesignInputs] = DesignInputs
 
     def __init__(self, params: VehicleParams | None = None, *, v_min: float = 5.0,
                  roll: str = "static", max_substep: float = 0.02, max_gap: float = 1.0,
@@ -187,23 +188,26 @@ class Estimator:
         self._step_fn = getattr(K, f"{self.kernel}_step")
         self._work = np.zeros(L.work_size(self._nstate))
         self._buffers = OutputBuffers()     # the last run()'s output arrays, reused when dropped
-        self.fixed_dt = None
+        self.fixed_dt: float | None = None
         self._tab = self._tab_cont
         self._cfg = self._build_cfg(None)
         self._auto_rate = sample_rate == "auto" and self.kernel in FIXED_RATE_KERNELS
         if sample_rate is not None and sample_rate != "auto":
-            self.set_sample_rate(sample_rate)
+            self.set_sample_rate(cast(float, sample_rate))  # any other string fails there
         self.reset()
 
     #: rate (Hz) of the data-sheet sensor whose noise set this estimator's weights (set by
     #: :func:`roadbank.estimators.make` for the sensor-weighted PIFs); None: weights given
     sheet_rate: float | None = None
+    #: last finite time stamp (s) seen by the automatic rate detector (NaN: none since reset)
+    _det_t: float
 
     def _check_log_rate(self, t) -> None:
         """Warn (once) when a log's rate is far from :attr:`sheet_rate`: the weights then do not
         describe its sensors (:func:`roadbank.vehicle.for_log` designs for the log)."""
         rate = sample_rate(t)
-        if np.isfinite(rate) and abs(rate / self.sheet_rate - 1.0) > 0.25:
+        # sheet_rate is set: the caller checks
+        if np.isfinite(rate) and abs(rate / self.sheet_rate - 1.0) > 0.25:  # type: ignore[operator]
             warnings.warn(f"{self.name}: its weights are the data sheet's {self.sheet_rate:.0f} Hz sensor's, "
                           f"this log is sampled at {rate:.3g} Hz; roadbank.vehicle.for_log({self.name!r}, "
                           "signals) designs for the log's rate and road noise, as `roadbank estimate` does",
@@ -604,10 +608,10 @@ def scheduled_tables(observer, vgrid: np.ndarray) -> Tables:
         n = F.shape[0]
         J = equilibrium_map(F, G)
         rows.append(np.concatenate([F.ravel(), G.ravel(), np.ravel(H), np.ravel(D), J.ravel()]))
-    return Tables(np.ascontiguousarray(np.array(rows)), n, np.zeros(0))
+    return Tables(np.ascontiguousarray(np.array(rows)), n, np.zeros(0))  # type: ignore[arg-type]  # vgrid is not empty
 
 
-def embed_inputs(cols: dict[int, np.ndarray], n_rows: int) -> np.ndarray:
+def embed_inputs(cols: dict[int, npt.ArrayLike], n_rows: int) -> np.ndarray:
     """Matrix with columns placed at eta positions {0: delta_f, 1: ay, 2: r}."""
     M = np.zeros((n_rows, L.NETA))
     for j, c in cols.items():

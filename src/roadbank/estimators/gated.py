@@ -35,6 +35,7 @@ export (:mod:`roadbank.export`) writes the stacked observer and the gate.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -76,6 +77,16 @@ class _GatedPair(ScheduledObserver):
     kernel = "gated"
     uses = (False, True, True)
     design_type = GatedDesign
+    # set by the subclass before ``super().__init__``
+    _slow: ScheduledObserver
+    _fast: PIF
+    gate_tf: float
+    gate_release: float
+    gate_on: float
+    gate_span: float
+    if TYPE_CHECKING:
+        @property
+        def design(self) -> GatedDesign: ...     # an instance of design_type
 
     def _design_fields(self) -> dict:
         return dict(slow=self._slow.design, fast=self._fast.design, gate_tf=self.gate_tf,

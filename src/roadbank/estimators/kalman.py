@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from . import grid_design
 from .base import DesignInputs, ScheduledObserver, augmented_design_model, frozen_array
@@ -64,6 +65,9 @@ class Kalman(ScheduledObserver):
     uses = (True, True, True)
     state_names = ("vy", "r", "w")
     design_type = KalmanDesign
+    if TYPE_CHECKING:
+        @property
+        def design(self) -> KalmanDesign: ...     # an instance of design_type
 
     def __init__(self, params=None, *, q=DEFAULT_Q, R=DEFAULT_R, **kw):
         self.q = np.asarray(q, float)

@@ -32,6 +32,7 @@ as a lead :math:`\kappa\, \tau s/(\tau s + 1)\, a`.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -86,7 +87,8 @@ def lowpass_cutoff(d: LowPassDesign, vx: float) -> float:
     estimate's noise density :math:`(Q_{ay} + v_x^2 R)/g^2` and ``d.bank_rate``."""
     if d.cutoff is not None:
         return d.cutoff
-    return cutoff_for_noise((d.Q_ay + vx * vx * d.R) / d.params.g ** 2, d.bank_rate)
+    # a design without a cut-off has the bank rate and both noise densities
+    return cutoff_for_noise((d.Q_ay + vx * vx * d.R) / d.params.g ** 2, d.bank_rate)  # type: ignore[operator, arg-type]
 
 
 def lowpass_observer(d: LowPassDesign, vx: float):
@@ -124,6 +126,9 @@ class KinematicLowPass(ScheduledObserver):
     label = "kinematic-lp"
     defaults = dict(cutoff=LP_CUTOFF_HZ, kappa=0.0)
     design_type = LowPassDesign
+    if TYPE_CHECKING:
+        @property
+        def design(self) -> LowPassDesign: ...     # an instance of design_type
 
     def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, Q_ay=None, R=None, **kw):
         scheduled = cutoff is None and bank_rate is not None

@@ -44,6 +44,7 @@ resolutions ((0.005 g)/(0.3 deg/s))^2 (interpretation).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -53,7 +54,7 @@ from .base import DesignInputs, ScheduledObserver, augmented_design_model, equil
 from .synthesis import NoStabilisingSolution, game_are
 
 #: paper Table 4
-TABLE4 = dict(Q=0.1, R=0.0035, S=1.0, th=1.0, P0=(0.0, 0.0, 0.5))
+TABLE4: dict[str, Any] = dict(Q=0.1, R=0.0035, S=1.0, th=1.0, P0=(0.0, 0.0, 0.5))
 #: Table 4's R read in the ESP sensor's own unit, (deg/s)^2, converted to (rad/s)^2: an
 #: alternative interpretation of the paper's units (see docs/estimators.md); not the default.
 R_TABLE4_DEG_UNITS = 0.0035 * (np.pi / 180.0) ** 2
@@ -113,7 +114,7 @@ Q_AY_ESP = yaw_rate_noise_density(0.03, 0.005 * G, 100.0)
 #: the tuned th: any th in [0, th_tuned] scores within 0.1 % on the training set, and the tuned
 #: value sits at the edge of solvability (no stabilising solution near 98 m/s for the shipped
 #: compact, sedan and van).
-DEFAULT_TUNING = dict(Q=1.9512492264850162e-04, th=0.25 * 1.7309294384267123e05, roll="dynamic")
+DEFAULT_TUNING: dict[str, Any] = dict(Q=1.9512492264850162e-04, th=0.25 * 1.7309294384267123e05, roll="dynamic")
 
 
 def _scaled_p0(R: float) -> tuple:
@@ -213,13 +214,16 @@ class PIF(ScheduledObserver):
     """
 
     uses = (False, True, True)
-    state_names = ("vy", "r", "w")
+    state_names: tuple[str, ...] = ("vy", "r", "w")
     #: estimator name (None: ``pif-<model>``) and named tunings, for subclasses
-    label = None
+    label: str | None = None
     tunings = TUNINGS
     #: kernel family of the steady-state variant
     steady_kernel = "lpv"
-    design_type = PIFDesign
+    design_type: type[PIFDesign] = PIFDesign
+    if TYPE_CHECKING:
+        @property
+        def design(self) -> PIFDesign: ...     # an instance of design_type
 
     def __init__(self, params=None, *, model="modified", variant="steady", tuning=None, Q=None,
                  R=None, S=None, th=None, P0=None, adapt_th=None, Q_ay=None, **kw):
@@ -354,7 +358,7 @@ def modified_steady(label: str, kw: dict) -> dict:
 
 #: tuning of :class:`PIFRate`: differential evolution on ``roadbank tune``'s training set (seed 0,
 #: 48 drives; docs/estimators.md), R = R_ESP, S = 1
-RATE_TUNING = dict(Q=R_ESP * 10**2.88025985, Q_rate=R_ESP * 10**3.97104448, th=10**-2.10630825 / R_ESP,
+RATE_TUNING: dict[str, Any] = dict(Q=R_ESP * 10**2.88025985, Q_rate=R_ESP * 10**3.97104448, th=10**-2.10630825 / R_ESP,
                    roll="dynamic")
 #: named tunings of :class:`PIFRate`
 RATE_TUNINGS = {"default": _sensor_tuning(RATE_TUNING)}
@@ -374,7 +378,13 @@ class _BankRateState:
     densities ``Q`` (1/s) on ``w`` and ``Q_rate`` (1/s^3) on ``w_rate``.
     """
 
-    state_names = ("vy", "r", "w", "w_rate")
+    state_names: tuple[str, ...] = ("vy", "r", "w", "w_rate")
+    # of the PIF this mixes into
+    label: str
+    options_default: dict[str, Any]
+    if TYPE_CHECKING:
+        @property
+        def design(self) -> BankRateDesign | RateAdaptiveDesign: ...
 
     def _set_rate_noise(self, Q_rate) -> None:
         self.Q_rate = float(self.options_default["Q_rate"] if Q_rate is None else Q_rate)
@@ -382,7 +392,8 @@ class _BankRateState:
             raise ValueError(f"{self.label}: Q_rate must be >= 0, got {Q_rate}")
 
     def _design_fields(self) -> dict:
-        return {**super()._design_fields(), "Q_rate": self.Q_rate}
+        # super() is the PIF after this mixin in the subclass's MRO
+        return {**super()._design_fields(), "Q_rate": self.Q_rate}  # type: ignore[misc]
 
     def _model_at(self, params, vx: float):
         """The augmented modified model for ``params`` at ``vx`` (m/s) with ``w_rate`` appended (``w' = w_rate``)."""
@@ -424,6 +435,9 @@ class PIFRate(_BankRateState, PIF):
 
     label = "pif-rate"
     design_type = BankRateDesign
+    if TYPE_CHECKING:
+        @property
+        def design(self) -> BankRateDesign: ...
     tunings = RATE_TUNINGS
     #: defaults of the options beyond the weights
     options_default = RATE_TUNING
@@ -443,7 +457,7 @@ ADAPTIVE_V_STEP = 1.0
 #: the schedule it is that filter); mu from a scan on ``roadbank tune``'s training set (seed 0, 48 drives;
 #: optimum 0.85-0.9, the upper end for margin: a smaller mu overestimates the usage and costs more,
 #: docs/estimators.md); tau and tf chosen, not tuned
-ADAPTIVE_TUNING = dict(Q=DEFAULT_TUNING["Q"], th=DEFAULT_TUNING["th"], mu=0.9, tau=0.5, tf=0.1,
+ADAPTIVE_TUNING: dict[str, Any] = dict(Q=DEFAULT_TUNING["Q"], th=DEFAULT_TUNING["th"], mu=0.9, tau=0.5, tf=0.1,
                        roll=DEFAULT_TUNING["roll"])
 #: named tunings of :class:`PIFAdaptive`
 ADAPTIVE_TUNINGS = {"default": _sensor_tuning(ADAPTIVE_TUNING)}
@@ -511,7 +525,10 @@ class PIFAdaptive(PIF):
     #: defaults of the schedule's options (mu, tau, tf)
     options_default = ADAPTIVE_TUNING
     steady_kernel = "adaptive"
-    design_type = AdaptiveDesign
+    design_type: type[AdaptiveDesign] = AdaptiveDesign
+    if TYPE_CHECKING:
+        @property
+        def design(self) -> AdaptiveDesign: ...
 
     def __init__(self, params=None, *, tuning=None, mu=None, tau=None, tf=None, **kw):
         kw = modified_steady(self.label, kw)
@@ -555,7 +572,7 @@ class PIFAdaptive(PIF):
 
 
 #: tuning of :class:`PIFRateAdaptive`: ``pif-rate``'s weights and ``pif-adaptive``'s schedule
-RATE_ADAPTIVE_TUNING = dict(Q=RATE_TUNING["Q"], Q_rate=RATE_TUNING["Q_rate"], th=RATE_TUNING["th"],
+RATE_ADAPTIVE_TUNING: dict[str, Any] = dict(Q=RATE_TUNING["Q"], Q_rate=RATE_TUNING["Q_rate"], th=RATE_TUNING["th"],
                             mu=ADAPTIVE_TUNING["mu"], tau=ADAPTIVE_TUNING["tau"], tf=ADAPTIVE_TUNING["tf"],
                             roll=RATE_TUNING["roll"])
 #: named tunings of :class:`PIFRateAdaptive`
@@ -591,6 +608,9 @@ class PIFRateAdaptive(_BankRateState, PIFAdaptive):
 
     label = "pif-rate-adaptive"
     design_type = RateAdaptiveDesign
+    if TYPE_CHECKING:
+        @property
+        def design(self) -> RateAdaptiveDesign: ...
     tunings = RATE_ADAPTIVE_TUNINGS
     options_default = RATE_ADAPTIVE_TUNING
 

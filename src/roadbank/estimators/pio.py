@@ -24,6 +24,7 @@ i.e. a Luenberger observer on the augmented model with gain ``[K1; K2]``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -71,6 +72,9 @@ class PIO(ScheduledObserver):
 
     state_names = ("vy", "r", "w")
     design_type = PIODesign
+    if TYPE_CHECKING:
+        @property
+        def design(self) -> PIODesign: ...     # an instance of design_type
 
     def __init__(self, params=None, *, model="original", gains=None, poles=None, **kw):
         if model not in ("original", "modified"):

@@ -28,6 +28,7 @@ observer is designed for frozen speed (the ``-dE/dt y`` term is neglected).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -95,6 +96,9 @@ class UIO(ScheduledObserver):
     uses = (True, True, True)
     state_names = ("z1", "z2", "q_ay", "q_r")
     design_type = UIODesign
+    if TYPE_CHECKING:
+        @property
+        def design(self) -> UIODesign: ...     # an instance of design_type
 
     def __init__(self, params=None, *, M=M_UIO, Q=Q_UIO, tau=TAU_UIO, **kw):
         if not tau > 0:

@@ -21,7 +21,7 @@ def chop(mask: np.ndarray, block_len: int, min_len: int) -> list[tuple[int, int]
     Stretches shorter than ``min_len`` are dropped; a stretch is split into
     ``round(len / block_len)`` (at least one) blocks of equal length.
     """
-    out = []
+    out: list[tuple[int, int]] = []
     for a, b in runs(mask, min_len):
         k = max(1, int(round((b - a) / block_len)))
         edges = np.linspace(a, b, k + 1).round().astype(int)

@@ -84,22 +84,23 @@ def identify(logs, params: VehicleParams | None = None, settings: IdentifySettin
             segs.append(seg)
     base_roll = steady_roll_gain(p)
     per_log, q_r, q_a = straight_offsets(segs, s, p.g, base_roll)
-    pooled = Offsets(q_r.value, q_a.value) if q_r.ok and q_a.ok else Offsets(0.0, 0.0)
+    # below, a quantity that is ``ok`` has a float value and std
+    pooled = Offsets(q_r.value, q_a.value) if q_r.ok and q_a.ok else Offsets(0.0, 0.0)  # type: ignore[arg-type]
     offs = [o if o is not None else pooled for o in per_log]
     quantities = {"yaw_rate_offset": q_r, "ay_offset": q_a}
     roll_gain, roll_std = base_roll, s.roll_gain_rel_std * base_roll
     if any(pc.roll is not None for seg in segs for pc in seg.pieces):
         q = identify_roll_gain(segs, offs, s)
         quantities["roll_gain"] = q
-        if q.ok and q.value > 0:
-            roll_gain, roll_std = q.value, q.std
+        if q.ok and q.value > 0:  # type: ignore[operator]
+            roll_gain, roll_std = q.value, q.std  # type: ignore[assignment]
     offsets_std = (q_r.std, q_a.std) if q_r.ok and q_a.ok else None
-    fit = identify_stiffness(segs, offs, p, roll_gain, s, offsets_std, roll_std)
+    fit = identify_stiffness(segs, offs, p, roll_gain, s, offsets_std, roll_std)  # type: ignore[arg-type]
     if "yaw_rate_offset" in fit:  # no straights: the regression's estimate or both reasons
         fit["yaw_rate_offset"] = _merge_refusal(q_r, fit["yaw_rate_offset"])
     quantities.update(fit)
     quantities = {k: quantities[k] for k in ORDER if k in quantities}
     out_p = p
     if quantities["Cf"].ok and quantities["Cr"].ok:
-        out_p = p.replace(Cf=quantities["Cf"].value, Cr=quantities["Cr"].value)
+        out_p = p.replace(Cf=quantities["Cf"].value, Cr=quantities["Cr"].value)  # type: ignore[arg-type]
     return IdentificationResult(quantities, reports, out_p)

@@ -77,7 +77,8 @@ def straight_offsets(segs: list[Segmented], s: IdentifySettings, g: float, roll_
         quantisation bias bound in quadrature), or refusals.
     """
     bank_term = g * np.sin(s.straight_bank) * (1.0 + g * roll_gain)
-    per_log, all_rows, used = [], [], 0.0
+    per_log: list[Offsets | None] = []
+    all_rows, used = [], 0.0
     for seg in segs:
         rows = _block_sums(seg, s)
         if rows[:, 0].sum() / seg.fs >= s.min_straight:
@@ -121,12 +122,12 @@ def straight_steering_offset(segs: list[Segmented], kus: float, s: IdentifySetti
     that term. Used when the logs have no cornering to run the regression of
     :mod:`.stiffness`; ``kus`` (rad s^2/m) is then the base vehicle's.
     """
-    rows = []
+    blocks = []
     for seg in segs:
         for p in seg.pieces:
             for a, b in chop(p.straight, int(round(s.block * seg.fs)), 1):
-                rows.append((b - a, p.delta[a:b].sum()))
-    rows = np.array(rows, dtype=float).reshape(-1, 2)
+                blocks.append((b - a, p.delta[a:b].sum()))
+    rows = np.array(blocks, dtype=float).reshape(-1, 2)
     secs = sum(seg.seconds["straight"] for seg in segs)
     if len(rows) < 2 or secs < s.min_straight:
         return refused("steering_offset", "rad",

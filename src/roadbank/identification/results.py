@@ -44,7 +44,9 @@ class Quantity:
         """``{"value", "std", "unit", "note"}`` for a vehicle file's ``[identified]`` table."""
         if not self.ok:
             raise ValueError(f"{self.name} was not identified: {self.refused}")
-        return {"value": float(self.value), "std": float(self.std), "unit": self.unit, "note": self.note}
+        # ok: value and std are floats
+        return {"value": float(self.value), "std": float(self.std),  # type: ignore[arg-type]
+                "unit": self.unit, "note": self.note}
 
 
 def refused(name: str, unit: str, reason: str) -> Quantity:

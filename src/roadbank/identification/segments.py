@@ -32,9 +32,10 @@ class Piece:
     r_f: np.ndarray
     rdot_f: np.ndarray
     vxdot_f: np.ndarray
-    straight: np.ndarray = field(default=None)
-    corner: np.ndarray = field(default=None)
-    regress: np.ndarray = field(default=None)
+    # the masks: set by :func:`segment` before any use
+    straight: np.ndarray = field(default=None)  # type: ignore[arg-type]
+    corner: np.ndarray = field(default=None)  # type: ignore[arg-type]
+    regress: np.ndarray = field(default=None)  # type: ignore[arg-type]
 
 
 @dataclass

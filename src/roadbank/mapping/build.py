@@ -7,6 +7,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..estimators import OFFLINE
+from ..io import LogError
+from ..io.channels import ChannelMap
+from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
+from ..params import VehicleParams
+from ..vehicle import DESIGN_SPAN_S, Vehicle, for_conditions, log_conditions
 from .geo import CourseStream, LocalProjection
 from .grid import BankMap
 
@@ -35,10 +41,10 @@ class MapSettings:
     """How every log of a map is read, estimated and gridded (see :func:`map_logs`)."""
 
     estimator: str = "pif-smoother"
-    channels: object = None
+    channels: ChannelMap | str | Path | None = None
     format: str | None = None
-    params: object = None
-    vehicle: object = None
+    params: VehicleParams | None = None
+    vehicle: Vehicle | None = None
     cell_m: float = 10.0
     sectors: int = 4
     chunk_rows: int | None = None
@@ -47,8 +53,6 @@ class MapSettings:
 def _design(settings: MapSettings, signals, designs: dict):
     """The estimator for a log (its sample rate and road noise, :func:`roadbank.vehicle.for_conditions`),
     memoised in ``designs`` by those conditions."""
-    from ..vehicle import for_conditions, log_conditions
-
     cond = log_conditions(signals)
     key = tuple(round(v, 6) if np.isfinite(v) else None for v in cond.values())
     if key not in designs:
@@ -77,11 +81,6 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
         The log's record; its cells (None if it failed or had no fix while ``projection`` was
         None); the projection of its first fix (None if it reached none), whatever ``projection``.
     """
-    from ..estimators import OFFLINE
-    from ..io import LogError
-    from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
-    from ..vehicle import DESIGN_SPAN_S
-
     designs = {} if designs is None else designs
     s = settings
     correct = (lambda x: x) if s.vehicle is None else s.vehicle.correct
@@ -102,8 +101,9 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
                                "map, or use a format that has one: comma2k19, kitti-oxts, ROS NavSatFix)")
             lat, lon = chunk.extra["lat_deg"], chunk.extra["lon_deg"]
             first = first or _origin(lat, lon)
-            if part is None and (projection or first) is not None:
-                part = BankMap(projection or first, s.cell_m, s.sectors)
+            plane = projection or first
+            if part is None and plane is not None:
+                part = BankMap(plane, s.cell_m, s.sectors)
             if k == 0:      # designed on the log's first DESIGN_SPAN_S, as roadbank estimate does
                 est = _design(s, chunks.leading(chunk.signals, DESIGN_SPAN_S), designs)
             nxt = chunks.following(est.lookahead_s) if s.estimator in OFFLINE else None
@@ -131,8 +131,6 @@ def _map_batch(jobs, settings: MapSettings, projection) -> list[tuple]:
 def _first_fix(paths, settings: MapSettings) -> LocalProjection | None:
     """The default origin: the projection of the first fix of the first log (in order) that reaches
     one, reading each log only up to it (a log that fails before it is passed over)."""
-    from ..io.stream import CHUNK_ROWS, stream_log
-
     params = settings.vehicle.params if settings.vehicle is not None else settings.params
     for path in paths:
         chunks = stream_log(path, channels=settings.channels, format=settings.format, params=params,
@@ -147,7 +145,7 @@ def _first_fix(paths, settings: MapSettings) -> LocalProjection | None:
         except Exception:   # the log is reported when it is mapped
             pass
         finally:
-            chunks.close()
+            chunks.close()  # type: ignore[attr-defined]  # stream_log returns a generator
     return None
 
 
@@ -217,8 +215,8 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
             rec, part, first = map_one_log(path, k, settings, None if bmap is None else bmap.projection, designs)
             if bmap is None and first is not None:
                 bmap = BankMap(first, cell_m, sectors)
-            if part is not None:
-                bmap.merge(part)
+            if part is not None:    # a part has a projection: then so has the map
+                bmap.merge(part)  # type: ignore[union-attr]
             records.append(rec)
             if on_log is not None:
                 on_log(rec)
@@ -233,8 +231,8 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
             parts = _parts_on_pool(pool, paths, settings, origin_found)
         bmap = BankMap(origin_found, cell_m, sectors) if origin_found is not None else None
     for rec, part, _ in parts:
-        if part is not None:
-            bmap.merge(part)
+        if part is not None:    # a part has a projection: then so has the map
+            bmap.merge(part)  # type: ignore[union-attr]
         records.append(rec)
     return bmap, records
 

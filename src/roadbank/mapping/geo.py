@@ -89,16 +89,16 @@ class CourseStream:
         """Add a chunk; return ``(course rad, [arrays...])`` of the samples whose course is now known."""
         new = [np.asarray(a) for a in (east, north, *arrays)]
         self._buf = new if self._buf is None else [np.concatenate([b, a]) for b, a in zip(self._buf, new)]
-        return self._hand_out(max(self._ctx, len(self._buf[0]) - self.k))
+        return self._hand_out(self._buf, max(self._ctx, len(self._buf[0]) - self.k))
 
     def finish(self) -> tuple[np.ndarray, list[np.ndarray]]:
         """The samples still held back (the track's end: no course within ``half_window`` of it)."""
         if self._buf is None:
             return np.empty(0), []
-        return self._hand_out(len(self._buf[0]))
+        return self._hand_out(self._buf, len(self._buf[0]))
 
-    def _hand_out(self, end: int):
-        b = self._buf
+    def _hand_out(self, b: list[np.ndarray], end: int) -> tuple[np.ndarray, list[np.ndarray]]:
+        """The samples of the buffer ``b`` up to ``end`` with their course; keeps the context after them."""
         crs = course(b[0], b[1], self.k, self.min_move)[self._ctx:end]
         out = [a[self._ctx:end] for a in b[2:]]
         keep = max(0, end - self.k)

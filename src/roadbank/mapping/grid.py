@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io.writers import write_table
 from .geo import LocalProjection, course
 
 #: columns of the map table, in order
@@ -181,7 +182,6 @@ class BankMap:
 
     def write_parquet(self, path, extra_metadata: dict | None = None) -> Path:
         """The table with :meth:`metadata` (plus ``extra_metadata``) in the schema."""
-        from ..io.writers import write_table
         return write_table(path, self.table(), dict(self.metadata(), **(extra_metadata or {})), format="parquet")
 
     def write_geojson(self, path) -> Path:

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..estimators import OFFLINE
 from .tables import lookup
 
 
@@ -118,7 +119,6 @@ def accuracy_aims(rows, rms_aim=0.5, max_aim=1.5, best_margin=0.1, name=None) ->
     the aim has been reached at all. "Best" is the best *causal* estimator's RMS: an offline
     estimator uses later samples, which no real-time estimator has.
     """
-    from ..estimators import OFFLINE
     rms, mx = lookup(rows, "bank", "rms_deg"), lookup(rows, "bank", "max_deg")
     if name is None:
         name = "pif-modified" if any(n == "pif-modified" for (_, _, n) in rms) else "pif-paper"

@@ -78,7 +78,7 @@ def md_to_html(markdown: str, title: str | None = None, *, base_dir=None, embed:
     FileNotFoundError
         If a local image the markdown references does not exist (naming it).
     """
-    from markdown_it import MarkdownIt
+    from markdown_it import MarkdownIt      # deferred: `roadbank validate --help` imports this module
 
     base = Path(base_dir) if base_dir is not None else Path.cwd()
     md = MarkdownIt("commonmark", {"html": False, "typographer": False}).enable("table")

@@ -145,6 +145,7 @@ def md_table(header: Sequence, rows: Sequence[Sequence], *, digits: int | Sequen
     numeric = [all(_is_number(r[j]) or r[j] is None for r in rows) and any(_is_number(r[j]) for r in rows)
                for j in range(ncol)]
     if best is not None:
+        cols: Sequence[int]
         if best_columns is not None:
             cols = [col(c) for c in best_columns]
         else:        # a mapping may name columns this table does not have
@@ -154,8 +155,8 @@ def md_table(header: Sequence, rows: Sequence[Sequence], *, digits: int | Sequen
             groups = [([(i, j) for j in cols], best) for i in range(len(rows))]
         else:
             groups = [([(i, j) for i in range(len(rows))], rule_of.get(j, best)) for j in cols]
-        for cells, rule in groups:
-            _mark_best(rows, text, cells, BEST[rule])
+        for cells, rule in groups:    # a rule: best's own, or the mapping's for a column it names
+            _mark_best(rows, text, cells, BEST[rule])  # type: ignore[index]
     if align is None:
         align = ["r" if numeric[j] else "l" for j in range(ncol)]
     align = list(align)

@@ -12,11 +12,15 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from .. import estimators
 from ..evaluation import evaluate
+from ..sim import CONDITIONS_BY_SCENARIO, run_scenario
+from .document import write_report
+from .tables import write_tables
 
 
 @dataclass
@@ -53,7 +57,6 @@ class Study:
 def plan(scenarios=None) -> list[tuple[str, str]]:
     """The paper's (scenario, condition) cells (docs/simulator.md, Scenarios and conditions),
     optionally restricted to ``scenarios``."""
-    from ..sim import CONDITIONS_BY_SCENARIO
     names = list(CONDITIONS_BY_SCENARIO) if not scenarios else list(scenarios)
     unknown = [s for s in names if s not in CONDITIONS_BY_SCENARIO]
     if unknown:
@@ -96,7 +99,6 @@ def run_cell(scenario: str, condition: str, names=COLUMNS, seed: int = 0,
     ``vehicle`` (a :class:`roadbank.vehicle.Vehicle`, default the paper's SUV) is both the
     simulated car (plant and sensors) and the one the estimators are designed for.
     """
-    from ..sim import run_scenario
     t0 = time.perf_counter()
     if vehicle is None:
         sim = run_scenario(scenario, condition, seed=seed)
@@ -180,8 +182,6 @@ def write_outputs(study: Study, outdir: Path, *, docs_results: Path | None = Non
     (default: the cells' time only).
     Returns the written paths by kind: ``tables``, ``figures`` (name -> paths), ``report``.
     """
-    from .document import write_report
-    from .tables import write_tables
     outdir = Path(outdir)
     figdir = outdir / "figures"
     figdir.mkdir(parents=True, exist_ok=True)
@@ -189,6 +189,7 @@ def write_outputs(study: Study, outdir: Path, *, docs_results: Path | None = Non
     tasks = _figure_tasks(by_sc, figdir, None if figure_names is None else tuple(figure_names))
     jobs = max(1, min(jobs or os.cpu_count() or 1, len(tasks)))
     drawn: dict = {}
+    written: dict[str, Any]
     if jobs == 1:
         written = {"tables": write_tables(study.rows, outdir)}
         for key, *args in tasks:

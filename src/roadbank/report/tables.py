@@ -9,6 +9,9 @@ import pyarrow as pa
 import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 
+from .labels import label
+from .markdown import md_table
+
 COLUMNS = ("scenario", "condition", "estimator", "reference", "metric", "value")
 
 
@@ -44,8 +47,6 @@ def markdown_table(rows: list[dict], reference: str, metric: str, *, digits: int
                    highlight_best: bool = True) -> str:
     """Markdown table of one reference and metric: one line per cell, one column per
     estimator; the best (smallest magnitude) value of each line in bold."""
-    from .labels import label
-    from .markdown import md_table
     values = lookup(rows, reference, metric)
     cells, names = cell_order(rows)
     body = [[sc, cond] + [values.get((sc, cond, n), np.nan) for n in names] for sc, cond in cells]

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -70,9 +71,10 @@ class Driver:
         gives the initial speed.
     """
 
-    speed: object = 22.2
-    steering: object = None
-    path: object = None
+    # given as documented above, held as knot arrays ``(x, y)`` after ``__post_init__``
+    speed: Any = 22.2
+    steering: Any = None
+    path: Any = None
     kp_speed: float = 1.5
     ki_speed: float = 0.5
     preview_time: float = 1.0

@@ -21,6 +21,7 @@ import numpy as np
 from ..params import VehicleParams
 from ..signals import Signals
 from .driver import D_LATINT, D_SWA, D_VINT, ND, Driver
+from .drives import identification_drive
 from .integrate import outputs_at, simulate
 from .params import PlantParams
 from .plant import (A_AX, A_AY, A_DVY, A_FXW, A_FYW, A_FZW, NX, X_FXL, X_FYL, X_N, X_OMEGA, X_PHI, X_PSI, X_R,
@@ -139,7 +140,6 @@ DRIVES = ("identification-drive",)
 def drive_scenario(name: str) -> Scenario:
     """The :class:`Scenario` of one of :data:`DRIVES` (built on each call)."""
     if name == "identification-drive":
-        from .drives import identification_drive
         return identification_drive()
     raise ValueError(f"unknown drive {name!r}; known: {', '.join(DRIVES)}")
 

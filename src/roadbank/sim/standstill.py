@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Any
 
 import numpy as np
 
@@ -89,7 +90,7 @@ def with_standstill(result: SimResult, scenario: Scenario, seconds: float) -> Si
              "dvy_dt": 0.0, "r": 0.0, "ay_true": rest["ay"], "ax_true": rest["ax"], "vx": 0.0,
              "steering_wheel_angle": rest["swa"], "throttle": 0.0, "brake": 1.0, "s": float(tr.s[0]),
              "n": float(tr.n[0]), "psi": float(tr.psi[0])}
-    changes = {"t": t}
+    changes: dict[str, Any] = {"t": t}
     for name, value in first.items():
         changes[name] = np.concatenate([np.full(n, value), getattr(tr, name)])
     for name in ("Fz", "Fx", "Fy"):

@@ -42,7 +42,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..params import VehicleParams
 from ..signals import Signals
+from ..sim import Driver, PlantParams, Scenario, SensorConfig, flat_road, run, straight_road
+from ..sim.road import Road, two_lane_road
 
 #: road families of each set (disjoint by construction)
 TRAIN_ROADS = ("bank-step", "superelevated-curve", "lane-change", "tyre-limit")
@@ -98,8 +101,6 @@ def _kmh(v):
 # ---- roads and drivers ----------------------------------------------------------------------
 
 def _bank_step(rng):
-    from ..sim import Driver, Scenario
-    from ..sim.road import two_lane_road
     v = _kmh(_uniform(rng, 50.0, 120.0))
     bank = _sign(rng) * math.atan(_uniform(rng, 0.04, 0.25))
     road = two_lane_road(bank_left=bank, bank_right=0.0, transition=_uniform(rng, 0.3, 2.0))
@@ -113,13 +114,11 @@ def _bank_step(rng):
 
 
 def _curve_road(kappas, banks, s_knots, name):
-    from ..sim.road import Road
     return Road(curvature=(s_knots, kappas), bank_profile=((0.0,), (1.0,)), bank_factor=(s_knots, banks),
                 lanes={"lane": 0.0}, name=name)
 
 
 def _superelevated_curve(rng):
-    from ..sim import Driver, Scenario
     v = _kmh(_uniform(rng, 60.0, 130.0))
     ay = _uniform(rng, 1.0, 4.0)                     # lateral acceleration in the curve
     kap = _sign(rng) * ay / v**2
@@ -132,7 +131,6 @@ def _superelevated_curve(rng):
 
 
 def _lane_change(rng):
-    from ..sim import Driver, Scenario, flat_road
     v = _kmh(_uniform(rng, 50.0, 110.0))
     w = _uniform(rng, 3.0, 4.0)
     s1, length, hold = v * _uniform(rng, 2.0, 5.0), v * _uniform(rng, 1.2, 3.0), v * _uniform(rng, 1.0, 4.0)
@@ -156,15 +154,12 @@ def _limit_steering(rng, params, v, mu):
 
 
 def _tyre_limit(rng, params, mu):
-    from ..sim import Driver, Scenario, flat_road
     v = _kmh(_uniform(rng, 40.0, 80.0))
     return Scenario("tyre-limit", flat_road(), Driver(speed=v, steering=_limit_steering(rng, params, v, mu)),
                     DURATION, pre_roll=PRE_ROLL)
 
 
 def _banked_lane_weave(rng):
-    from ..sim import Driver, Scenario
-    from ..sim.road import two_lane_road
     v = _kmh(_uniform(rng, 50.0, 110.0))
     left, right = math.atan(_uniform(rng, -0.06, 0.20)), math.atan(_uniform(rng, -0.06, 0.06))
     road = two_lane_road(bank_left=left, bank_right=right, transition=_uniform(rng, 0.3, 2.0))
@@ -183,7 +178,6 @@ def _banked_lane_weave(rng):
 
 
 def _hairpin(rng):
-    from ..sim import Driver, Scenario
     v = _kmh(_uniform(rng, 25.0, 50.0))
     radius = _uniform(rng, 25.0, 60.0)
     kap = _sign(rng) / radius
@@ -196,7 +190,6 @@ def _hairpin(rng):
 
 
 def _reverse_curves(rng):
-    from ..sim import Driver, Scenario
     v = _kmh(_uniform(rng, 70.0, 130.0))
     kap = _sign(rng) * _uniform(rng, 1.0, 3.5) / v**2
     bank = -math.copysign(math.atan(_uniform(rng, 0.03, 0.10)), kap)
@@ -209,7 +202,6 @@ def _reverse_curves(rng):
 
 
 def _tyre_limit_banked(rng, params, mu):
-    from ..sim import Driver, Scenario, straight_road
     v = _kmh(_uniform(rng, 40.0, 80.0))
     road = straight_road(_sign(rng) * math.atan(_uniform(rng, 0.03, 0.10)), name="banked-straight")
     return Scenario("tyre-limit-banked", road, Driver(speed=v, steering=_limit_steering(rng, params, v, mu)),
@@ -264,7 +256,6 @@ def draw_drive(kind: str, index: int, seed: int, params, plant, sensors) -> Driv
     sensors : roadbank.sim.SensorConfig
         The car's sensors.
     """
-    from ..sim import run
     if kind not in SET_ID:
         raise ValueError(f"kind must be 'train' or 'validation', got {kind!r}")
     rng = np.random.default_rng([int(seed), SET_ID[kind], int(index)])
@@ -286,8 +277,6 @@ def drive_set(kind: str, n: int, seed: int = 0, params=None, plant=None, sensors
     ``params`` (default: the paper's SUV), ``plant`` (default ``PlantParams(vehicle=params)``),
     ``sensors`` (default ``SensorConfig()``, the paper's ESP sensors) describe the car.
     """
-    from ..params import VehicleParams
-    from ..sim import PlantParams, SensorConfig
     params = params or VehicleParams()
     plant = plant or PlantParams(vehicle=params)
     sensors = sensors or SensorConfig()

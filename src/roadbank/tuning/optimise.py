@@ -21,11 +21,16 @@ halfway back towards the (feasible) start until it is feasible.
 from __future__ import annotations
 
 import math
+import multiprocessing
 import time
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import differential_evolution
 
+from .. import estimators
+from ..campaign.execute import open_client
+from ..params import VehicleParams
 from .objective import SetScores, drive_errors, objective_value, score_set
 from .spaces import SearchSpace
 
@@ -51,12 +56,11 @@ class Objective:
     under ``key``; picklable (holds the key, not the drives)."""
 
     space: SearchSpace
-    params: object
+    params: VehicleParams | None
     key: str
     grid: tuple = ()
 
     def __call__(self, x) -> float:
-        from .. import estimators
         try:
             est = estimators.make(self.space.name, self.params, **self.space.options(x), **dict(self.grid))
         except (estimators.NoStabilisingSolution, ValueError, np.linalg.LinAlgError):
@@ -77,7 +81,6 @@ class LocalMapper:
 
     def __enter__(self):
         if self.jobs > 1:
-            import multiprocessing
             self._pool = multiprocessing.get_context("fork").Pool(self.jobs)
         return self
 
@@ -100,9 +103,7 @@ class DaskMapper:
     every worker once."""
 
     def __init__(self, address: str, progress=None, timeout: float = 20.0):
-        from ..campaign.execute import open_client   # DaskMissing / ConnectionError with a clear message
-
-        self.client, _ = open_client(address, 1, timeout)
+        self.client, _ = open_client(address, 1, timeout)   # DaskMissing / ConnectionError with a clear message
         self.progress = progress
 
     def share(self, key: str, drives) -> None:
@@ -154,7 +155,6 @@ class TuneResult:
 def _feasible_design(space: SearchSpace, params, x, x0, tries: int = 12):
     """``x`` if its full-grid design exists, else ``x`` moved halfway back towards ``x0``
     (repeatedly) until the full grid has a stabilising solution everywhere."""
-    from .. import estimators
     for _ in range(tries):
         try:
             estimators.make(space.name, params, **space.options(x))
@@ -199,8 +199,6 @@ def tune_estimator(space: SearchSpace, params, key: str, *, budget: int, seed: i
         Starting point (default ``space.start()``, the current default); a member of the
         first population, and the result if nothing better is found.
     """
-    from scipy.optimize import differential_evolution
-
     t0 = time.perf_counter()
     objective = Objective(space, params, key, (("v_step", SEARCH_V_STEP),))
     x0 = space.start() if x0 is None else np.clip(np.asarray(x0, float), *np.array(space.bounds).T)
@@ -220,7 +218,6 @@ def tune_estimator(space: SearchSpace, params, key: str, *, budget: int, seed: i
     x = _feasible_design(space, params, x, x0)
     # the roll model that separates body roll from theta (a choice, not a weight): keep the
     # better one on the training set
-    from .. import estimators
     best = None
     for roll in ROLL_CHOICES:
         options = {**space.options(x), "roll": roll}
@@ -228,4 +225,6 @@ def tune_estimator(space: SearchSpace, params, key: str, *, budget: int, seed: i
         n_evals[0] += 1
         if best is None or scores.objective < best[1].objective:
             best = (options, scores)
-    return TuneResult(space.name, best[0], x, best[1], start_value, n_evals[0], time.perf_counter() - t0)
+    # ROLL_CHOICES is not empty: best is set
+    return TuneResult(space.name, best[0], x, best[1], start_value,  # type: ignore[index]
+                      n_evals[0], time.perf_counter() - t0)

@@ -9,6 +9,10 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
+from .. import estimators
+from ..estimators.pif import SENSOR_R_ESTIMATORS
+from ..params import VehicleParams
+from ..sim import PlantParams, SensorConfig
 from .manoeuvres import drive_set
 from .objective import score_set
 from .optimise import DaskMapper, LocalMapper, register_drives, tune_estimator
@@ -50,7 +54,6 @@ def written_options(name: str, options: dict) -> dict:
     PIFs whose noise densities are the car's sensors' (:data:`roadbank.estimators.pif.SENSOR_R_ESTIMATORS`;
     the search holds them at the sensors' densities, and :meth:`roadbank.vehicle.Vehicle.make`
     supplies them again for each log), the others unchanged."""
-    from ..estimators.pif import SENSOR_R_ESTIMATORS
     if name in SENSOR_R_ESTIMATORS:
         return {k: v for k, v in options.items() if k not in ("R", "Q_ay")}
     return dict(options)
@@ -87,10 +90,6 @@ def tune_car(params=None, plant=None, sensors=None, *, names=TUNABLE, budget: in
     compare : estimators scored on validation with their defaults, for the comparison.
     progress : callable ``(stage: str, done: int, total: int)``, optional
     """
-    from .. import estimators
-    from ..params import VehicleParams
-    from ..sim import PlantParams, SensorConfig
-
     t0 = time.perf_counter()
     params = params or VehicleParams()
     plant = plant or PlantParams(vehicle=params)
@@ -116,7 +115,7 @@ def tune_car(params=None, plant=None, sensors=None, *, names=TUNABLE, budget: in
     mapper = DaskMapper(scheduler, step) if scheduler else LocalMapper(jobs, step)
     with mapper:
         if scheduler:
-            mapper.share(key, train)
+            mapper.share(key, train)  # type: ignore[union-attr]  # a scheduler: a DaskMapper
         for name in names:
             results[name] = tune_estimator(search_space(name, sensors), params, key, budget=budget,
                                            seed=seed, mapper=mapper)

@@ -34,9 +34,21 @@ with the gate held at its value, then the gate (:data:`GATE_GRID`) at the chosen
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
+
+from .. import vehicle
+from ..estimators.lowpass import KinematicLowPass
+from ..io.kitti import load_kitti_oxts
+from ..validation.kitti import KITTI_SCORING
+from ..validation.scoring import masks
+from ..validation.splits import KITTI_TRAINING
+from ..vehicle import load_vehicle
+from .manoeuvres import drive_set
+from .objective import drive_errors
 
 #: candidate cut-offs (Hz) and feed-forward gains (-)
 CUTOFFS_HZ = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.8)
@@ -70,13 +82,6 @@ def _pick(cands: dict) -> tuple[float, float]:
 
 def training_logs(data_dir):
     """``(signals, reference roll rad, scored mask)`` of each KITTI training drive found under ``data_dir``."""
-    from pathlib import Path
-
-    from ..io.kitti import load_kitti_oxts
-    from ..validation.kitti import KITTI_SCORING
-    from ..validation.scoring import masks
-    from ..validation.splits import KITTI_TRAINING
-
     out = []
     for name in KITTI_TRAINING:
         found = [p for p in Path(data_dir).glob(f"*/{name}") if p.is_dir()]
@@ -89,9 +94,6 @@ def training_logs(data_dir):
 
 def simulated_sets(cars=SIM_CARS, n=SIM_DRIVES):
     """``roadbank tune``'s training drives (seed 0) of each car in ``cars`` (shipped vehicle names)."""
-    from ..vehicle import load_vehicle
-    from .manoeuvres import drive_set
-
     return [drive_set("train", n, 0, load_vehicle(car).params) for car in cars]
 
 
@@ -99,8 +101,6 @@ def objective(build, logs, sim_sets) -> float:
     """The rule's objective (deg) of the estimator that ``build(signals)`` makes for each log
     (module docstring): a fixed estimator, or one designed for each log
     (:func:`roadbank.vehicle.for_log`, as the command line builds it)."""
-    from .objective import drive_errors
-
     errs = [float(np.degrees(np.sqrt(np.mean((build(s).run(s).theta[m] - ref[m]) ** 2)))) for s, ref, m in logs]
     sim = [float(np.median([drive_errors(build(d.signals), [d])[0][0] for d in drives])) for drives in sim_sets]
     return (float(np.median(errs)) if errs else 0.0) + (float(np.median(sim)) if sim else 0.0)
@@ -114,10 +114,6 @@ def fixed(est):
 def per_log(name: str, **options):
     """``build`` for :func:`objective`: ``name`` designed for each log as the command line does
     (no car given: :func:`roadbank.vehicle.undescribed_params`)."""
-    import warnings
-
-    from .. import vehicle
-
     def build(signals):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
@@ -131,8 +127,6 @@ def choose_lowpass(logs, sim_sets, cutoffs=CUTOFFS_HZ, kappas=KAPPAS) -> Lowpass
 
     Returns the chosen ``(cutoff Hz, kappa)`` of ``kinematic-lp`` (kappa 0) and of ``kinematic-ff``.
     """
-    from ..estimators.lowpass import KinematicLowPass
-
     if not logs:
         raise ValueError("choose_lowpass: no training drives")
     obj = {(fc, k): objective(fixed(KinematicLowPass(cutoff=fc, kappa=k)), logs, sim_sets)

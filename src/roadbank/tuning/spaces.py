@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..estimators import dfc, kalman, pio
+from ..estimators import TUNED_AS, dfc, kalman, pio
 from ..estimators.gated import GATED_TUNING
 from ..estimators.pif import (ADAPTIVE_TUNING, DEFAULT_TUNING, Q_AY_ESP, R_ESP, RATE_ADAPTIVE_TUNING, RATE_TUNING,
                               yaw_rate_noise_density)
@@ -146,7 +146,6 @@ def search_space(name: str, sensors=None) -> SearchSpace:
                            ((-1.5, 1.5), (0.05, 3.0), (0.05, 3.0)), {})
     if name == "dfc":
         return SearchSpace(name, ("log10 a_ref",), ((-0.5, 1.7),), {})
-    from ..estimators import TUNED_AS
     if name in TUNED_AS:
         raise ValueError(f"{name!r} is not tuned on its own: it runs {TUNED_AS[name]} with that one's weights "
                          f"(a vehicle file's [tuning.{TUNED_AS[name]}] table); tune {TUNED_AS[name]}")

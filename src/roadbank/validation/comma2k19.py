@@ -19,10 +19,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from .. import estimators
+from ..io.comma2k19 import load_comma2k19
 from ..params import VehicleParams
+from ..vehicle import for_log, undescribed_params
 from .scoring import Score, Scored, Scoring, hold_invalid, lowpass, pearson_r, run_and_score, score
 
 __all__ = ["SEDAN", "ValidationResult", "validate_comma2k19", "lowpass"]
@@ -85,10 +89,6 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
         The car's sensors (a vehicle file's ``[sensors]``; default the paper's ESP): the
         default PIFs' ``R`` is their noise density at the log's rate.
     """
-    from .. import estimators
-    from ..io.comma2k19 import load_comma2k19
-    from ..vehicle import for_log, undescribed_params
-
     params = params or undescribed_params()
     names = list(names or estimators.NAMES)
     scoring = Scoring(tau=tau, warmup_s=warmup_s, fit_fraction=fit_fraction)
@@ -156,7 +156,7 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
         "kin_tau_sweep": tau_sweep,
         "yaw_steer_corr": pearson_r(np.nan_to_num(s.delta_f), np.nan_to_num(s.r)),
     }
-    sens = {}
+    sens: dict[str, Any] = {}
     if sensitivity:
         other = VehicleParams()
         log_other = load_comma2k19(path, params=other)

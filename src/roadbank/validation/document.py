@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..defaults import ESTIMATOR as DEFAULT
+from ..io.kitti import find_oxts_dirs
 from ..report.markdown import md_table
 from . import kitti_report, report
 
@@ -14,10 +15,8 @@ def find_datasets(root) -> dict:
 
     Returns ``{"comma2k19": [paths], "kitti": [paths]}``, each sorted.
     """
-    from ..io.kitti import find_oxts_dirs
-
     root = Path(root)
-    found = {"comma2k19": [], "kitti": []}
+    found: dict[str, list[Path]] = {"comma2k19": [], "kitti": []}
     subdirs = sorted(p for p in root.glob("*") if p.is_dir()) + sorted(p for p in root.glob("*/*") if p.is_dir())
     for d in [root] + subdirs:
         if (d / "processed_log").is_dir():

@@ -17,7 +17,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import estimators
+from ..estimators.base import Estimator
+from ..estimators.pif import SENSOR_R_ESTIMATORS
 from ..signals import Signals
+from ..sim.scenarios import SCENARIOS, run
+from ..sim.sensors import SensorConfig
+from ..vehicle import log_conditions, make_estimator
 
 
 @dataclass
@@ -73,18 +79,12 @@ def jitter_study(scenario: str = "bank-lane-change", names=("kinematic", "pio-mo
     dt_range : (float, float)
         Shortest and longest 10 Hz step (s).
     """
-    from .. import estimators
-    from ..estimators.base import Estimator
-    from ..estimators.pif import SENSOR_R_ESTIMATORS
-    from ..vehicle import log_conditions, make_estimator
-    from ..sim.scenarios import SCENARIOS, run
-    from ..sim.sensors import SensorConfig
-
     sim = run(SCENARIOS[scenario], sensors=SensorConfig(rate=1000.0), seed=seed, condition="nominal")
     s, truth = sim.signals, sim.truth.theta
     runs = {"100": np.arange(0, len(s.t), 10), "10": jittered_indices(len(s.t), 1e-3, dt_range, seed)}
-    out = {"100": {}, "10": {}}
-    diff, log_rate = {}, {}
+    out: dict[str, dict[str, float]] = {"100": {}, "10": {}}
+    diff: dict[str, dict[str, float]] = {}
+    log_rate: dict[str, float] = {}
 
     def rms(est, ok):
         return float(np.degrees(np.sqrt(np.mean((est.theta[ok] - truth[idx][ok]) ** 2))))
@@ -99,7 +99,8 @@ def jitter_study(scenario: str = "bank-lane-change", names=("kinematic", "pio-mo
             ok = m & est.valid
             out[key][name] = rms(est, ok)
             if key == "10" and name in SENSOR_R_ESTIMATORS:
-                at_rate = make_estimator(name, **log_conditions(sub)).run(sub)
+                # the conditions are make_estimator's log_* keywords
+                at_rate = make_estimator(name, **log_conditions(sub)).run(sub)  # type: ignore[arg-type]
                 log_rate[name] = rms(at_rate, m & at_rate.valid)
             if key == "10":
                 diff[name] = {}
@@ -110,6 +111,6 @@ def jitter_study(scenario: str = "bank-lane-change", names=("kinematic", "pio-mo
                     both = ok & other.valid
                     diff[name][label] = float(np.degrees(np.max(np.abs(other.theta[both] - est.theta[both]))))
     steps = np.diff(s.t[runs["10"]])
-    sub_max = Estimator.__init__.__kwdefaults__["max_substep"]
+    sub_max = Estimator.__init__.__kwdefaults__["max_substep"]  # type: ignore[index]  # it has keyword defaults
     n_sub = (int(np.ceil(steps.min() / sub_max - 1e-9)), int(np.ceil(steps.max() / sub_max - 1e-9)))
     return JitterResult(scenario, out["100"], out["10"], steps, n_sub, diff, log_rate)

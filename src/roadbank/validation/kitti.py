@@ -27,8 +27,14 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import estimators
 from ..constants import G
+from ..estimators.pif import SENSOR_R_ESTIMATORS
+from ..io import LogError
+from ..io.kitti import find_oxts_dirs, load_kitti_oxts
 from ..params import VehicleParams
+from ..signals import sample_rate
+from ..vehicle import SensorSpec, undescribed_params
 from .comma2k19 import ValidationResult
 from .scoring import Scoring, hold_invalid, lowpass_t, pooled, run_and_score
 from .splits import split_of
@@ -138,10 +144,6 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
         The car's sensors (a vehicle file's ``[sensors]``): the default PIFs' ``R`` is their
         noise density at the drive's rate (:func:`roadbank.vehicle.make_estimator`).
     """
-    from .. import estimators
-    from ..vehicle import undescribed_params
-    from ..io.kitti import load_kitti_oxts
-
     params = params or undescribed_params()
     names = list(names or estimators.NAMES)
     log = load_kitti_oxts(path)
@@ -152,9 +154,6 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
         sens["suv"] = run_and_score(log.signals, log.reference_roll, names, VehicleParams(), scoring).scores
         # the sensor-weighted PIFs designed from the data sheet alone: at the drive's rate, and at
         # the sensor's nominal rate (100 Hz)
-        from ..estimators.pif import SENSOR_R_ESTIMATORS
-        from ..signals import sample_rate
-        from ..vehicle import SensorSpec
 
         spec = sensors or SensorSpec()
         at_rate = [n for n in names if n in SENSOR_R_ESTIMATORS and "R" not in (tuning or {}).get(n, {})]
@@ -178,8 +177,6 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
 
 def expand_drives(paths) -> list[Path]:
     """Each path as given, or every drive under it (a folder holding drive folders)."""
-    from ..io.kitti import find_oxts_dirs
-
     out = []
     for p in map(Path, paths):
         found = find_oxts_dirs(p)
@@ -190,8 +187,6 @@ def expand_drives(paths) -> list[Path]:
 def _drive_outcome(path, names, params, scoring, sensitivity, tuning, sensors):
     """``(ValidationResult, None)`` of one drive, or ``(None, reason)`` when it cannot be read: one
     task of :func:`validate_kitti` (in this process or on a worker)."""
-    from ..io import LogError
-
     try:
         return validate_kitti_drive(path, names, params, scoring, sensitivity, tuning, sensors), None
     except (LogError, OSError) as exc:
@@ -221,8 +216,6 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
         so the validation is the same on any number of workers; a drive whose worker failed is
         reported with the reason.
     """
-    from .. import estimators
-
     names = list(names or estimators.NAMES)
     drives, errors = [], []
     expanded = expand_drives(paths)

@@ -6,7 +6,9 @@ import math
 
 from ..constants import G
 from ..defaults import ESTIMATOR as DEFAULT
+from ..estimators import OFFLINE
 from ..report.markdown import md_table
+from ..report.timeseries import reference_figure, save_figure
 from .kitti import KittiValidation
 
 #: the best value of each score column: smallest RMS, largest correlation
@@ -44,8 +46,6 @@ def to_json(v: KittiValidation) -> dict:
 def plot_drive(res, path, show=("kinematic", "pif-modified", DEFAULT)) -> None:
     """Raw theta of some estimators and the INS roll (deg), and their error, against time from the
     drive start (s); unscored spans grey, spans an estimator flagged not valid red."""
-    from ..report.timeseries import reference_figure, save_figure
-
     run = res.run
     names = [n for n in show if n in run.raw_estimates and res.scores[n].valid_fraction > 0]
     fig = reference_figure(res.t, run.raw_reference, {f"{n} theta": run.raw_estimates[n] for n in names},
@@ -74,8 +74,6 @@ def _table(L, rows):
 def split_rows(v: KittiValidation, split: str) -> list[list]:
     """Per estimator on one split's credible drives: median and pooled raw RMS (deg), pooled raw r,
     and the share of drives where it is below the raw kinematic estimate."""
-    from ..estimators import OFFLINE
-
     part = v.by_split[split]
     drives = [d for d in v.drives if d.label in part["drives"]]
     rows = []
@@ -92,8 +90,6 @@ def split_rows(v: KittiValidation, split: str) -> list[list]:
 
 def split_lines(v: KittiValidation, h: str) -> list[str]:
     """The training / validation section: one table per split, the flagged drives."""
-    from ..estimators import DEFAULT
-
     L = [f"{h}# Training and validation drives\n",
          f"Raw theta RMS (deg) against the INS roll at vx >= 5 m/s; the default estimator is `{DEFAULT}`. "
          "Choices were made on the training drives only (docs/estimators.md); the validation drives are "

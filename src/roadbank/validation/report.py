@@ -7,6 +7,7 @@ import math
 from ..constants import G
 from ..defaults import ESTIMATOR as DEFAULT
 from ..report.markdown import md_table
+from ..report.timeseries import reference_figure, save_figure
 from .comma2k19 import ValidationResult
 
 #: the best value of each score column: largest correlation, smallest error
@@ -23,8 +24,6 @@ def to_json(res: ValidationResult) -> dict:
 def plot(res: ValidationResult, path, show=("kinematic", "pif-modified", "dfc", DEFAULT)) -> None:
     """Smoothed estimates (theta + offset) against the pose roll and their error (deg) vs time (s):
     warm-up shaded grey, spans an estimator flagged not valid red, the offset-fit / scored split dotted."""
-    from ..report.timeseries import reference_figure, save_figure
-
     names = [n for n in show if n in res.estimates]
     valid = res.run.valid if res.run is not None else {}
     fig = reference_figure(res.t, res.reference, {f"{n} theta + offset": res.estimates[n] for n in names},

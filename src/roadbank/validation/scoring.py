@@ -30,6 +30,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.signal import filtfilt, lfilter
 
+from ..signals import sample_rate
+from ..vehicle import SensorSpec, log_conditions, make_estimator
+
 
 @dataclass(frozen=True)
 class Scoring:
@@ -223,9 +226,6 @@ def log_rate_R(t, sensors=None) -> float:
     :meth:`~roadbank.vehicle.SensorSpec.r_noise_density`. At 100 Hz this is the default
     PIF's ``R``; a 10 Hz log (KITTI) gets ten times that.
     """
-    from ..signals import sample_rate
-    from ..vehicle import SensorSpec
-
     return (sensors or SensorSpec()).r_noise_density(sample_rate(t))
 
 
@@ -258,8 +258,6 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     density ``R`` is the sensor's noise and resolution at the log's own rate (median
     sample interval), unless ``R`` or another tuning is given (see :func:`log_rate_R`).
     """
-    from ..vehicle import log_conditions, make_estimator
-
     per_estimator = per_estimator or {}
     t = signals.t
     ref = hold_invalid(ref)
@@ -309,7 +307,7 @@ def pooled(runs, names) -> dict[str, dict[str, float]]:
             out[name] = {"r": float("nan"), "rms_deg": float("nan"), "r_raw": float("nan"),
                          "rms_raw_deg": float("nan"), "n": 0}
             continue
-        xs, rs, xr, rr = (np.concatenate(v) for v in (xs, rs, xr, rr))
-        out[name] = {"r": pearson_r(xs, rs), "rms_deg": _rms_deg(xs - rs), "r_raw": pearson_r(xr, rr),
-                     "rms_raw_deg": _rms_deg(xr - rr), "n": int(len(xs))}
+        x, ref, x_raw, ref_raw = (np.concatenate(v) for v in (xs, rs, xr, rr))
+        out[name] = {"r": pearson_r(x, ref), "rms_deg": _rms_deg(x - ref), "r_raw": pearson_r(x_raw, ref_raw),
+                     "rms_raw_deg": _rms_deg(x_raw - ref_raw), "n": int(len(x))}
     return out

@@ -11,8 +11,14 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ..params import VehicleParams
+from ..signals import road_noise_std, sample_rate
 from .sensors import SensorSpec
+
+# roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
+# them: loading a car (load_vehicle, --vehicle) loads neither
 
 __all__ = ["DESIGN_SPAN_S", "log_conditions", "noise_densities", "make_estimator"]
 
@@ -30,10 +36,6 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     too few samples). Measured on the first :data:`DESIGN_SPAN_S` of the log (all of a shorter
     one), so that a streamed log gets the same design whatever its chunk size.
     """
-    import numpy as np
-
-    from ..signals import road_noise_std, sample_rate
-
     n = int(np.searchsorted(signals.t, signals.t[0] + DESIGN_SPAN_S, side="right"))
     if n < len(signals):
         signals = signals[:n]

@@ -20,12 +20,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..params import VehicleParams
+from ..signals import CHANNELS, Signals
 from .conditions import make_estimator
 from .errors import VehicleFileError
 from .plausibility import (PLANT_FIELDS, PLAUSIBLE, SENSOR_FIELDS, check_document, check_free_table, check_tuning,
                            checked_value, unknown_key)
 from .sensors import SensorSpec
 from .tomltext import fmt_options, fmt_value, is_scalar, toml_key, toml_type, toml_value
+
+# roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
+# them: loading a car (load_vehicle, --vehicle) loads neither
 
 __all__ = ["Vehicle", "load_vehicle", "builtin_names", "BUILTINS", "DEFAULT_VEHICLE", "OFFSET_CHANNELS"]
 
@@ -103,7 +107,7 @@ class Vehicle:
     plant: Mapping[str, float] = field(default_factory=dict)
     source: str = field(default="", compare=False, repr=False)
 
-    __hash__ = None  # holds dicts
+    __hash__ = None  # type: ignore[assignment]  # holds dicts: not hashable
 
     def __post_init__(self) -> None:
         if not isinstance(self.params, VehicleParams):
@@ -185,7 +189,9 @@ class Vehicle:
         :func:`~roadbank.vehicle.conditions.noise_densities`.
         """
         from ..estimators import TUNED_AS
-        tuning = {**self.tuning.get(TUNED_AS.get(estimator_name), {}), **self.tuning.get(estimator_name, {})}
+        # an estimator tuned as itself looks up None: no table
+        tuning = {**self.tuning.get(TUNED_AS.get(estimator_name), {}),  # type: ignore[arg-type]
+                  **self.tuning.get(estimator_name, {})}
         return make_estimator(estimator_name, self.params, sensors=self.sensors, log_rate=log_rate,
                               log_ay_noise=log_ay_noise, log_r_noise=log_r_noise, **{**tuning, **overrides})
 
@@ -238,7 +244,6 @@ class Vehicle:
         offsets = self.sensor_offsets
         if not offsets:
             return signals
-        from ..signals import CHANNELS, Signals
 
         return Signals(*(getattr(signals, c) - offsets[c] if c in offsets else getattr(signals, c)
                          for c in CHANNELS))

@@ -19,6 +19,9 @@ from ..units import SI_UNIT, parse_quantity
 from .errors import VehicleFileError
 from .tomltext import fmt_value, is_scalar, toml_type
 
+# roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
+# them: loading a car (load_vehicle, --vehicle) loads neither
+
 __all__ = ["PLAUSIBLE", "WHEELBASE_RANGE", "SENSOR_FIELDS", "PLANT_FIELDS", "checked_value", "check_document",
            "check_tuning", "check_free_table", "estimator_options", "unknown_key"]
 

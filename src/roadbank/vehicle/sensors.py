@@ -8,6 +8,9 @@ from dataclasses import dataclass
 
 from ..constants import G
 
+# roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
+# them: loading a car (load_vehicle, --vehicle) loads neither
+
 __all__ = ["SensorSpec"]
 
 
