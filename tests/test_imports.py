@@ -17,7 +17,8 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "roadbank"
 
 #: the modules held to the rule (the others join once their rewrites are done)
 SCOPE = ("signals.py", "params.py", "constants.py", "units.py", "cache.py", "defaults.py", "vehicle", "estimators",
-         "evaluation", "mapping", "report", "sim", "models", "identification", "campaign", "validation", "tuning")
+         "evaluation", "mapping", "report", "sim", "models", "identification", "campaign", "validation", "tuning",
+         "io", "faults")
 NOT_YET = ("estimators/kernels.py", "estimators/layout.py", "estimators/offset_kernel.py")
 
 #: top-level packages whose imports may always be deferred
@@ -38,6 +39,15 @@ DEFERRED = {
     "vehicle/file.py": {"..estimators", "..sim", "..sim.params"},
     "vehicle/plausibility.py": {"..estimators"},
     "vehicle/sensors.py": {"..estimators.pif", "..sim.sensors"},
+    # pyarrow (0.1-0.15 s) loads when a Parquet file is read or written: `import roadbank.io` and the
+    # KITTI, comma2k19 and text readers do without it
+    "io/readers.py": {"pyarrow", "pyarrow.parquet", "pyarrow.compute"},
+    "io/sources.py": {"pyarrow", "pyarrow.parquet", ".can", ".ros"},     # .can, .ros: optional extras
+    "io/writers.py": {"pyarrow", "pyarrow.parquet"},
+    # asammdf (optional) behind its import shim
+    "io/files.py": {".mdfimport"},
+    # the robustness table's simulated drive (numba) only when it is asked for
+    "faults/table.py": {"..sim"},
 }
 
 

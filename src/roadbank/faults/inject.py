@@ -14,6 +14,7 @@ compiled recursion), so every fault reaches the estimator as a real log would.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -51,7 +52,7 @@ class Fault:
 
     name: str
     description: str
-    func: object
+    func: Callable[..., Stream]
 
     def __call__(self, stream: Stream, t0: float, t1: float, seed: int = 0) -> Stream:
         return self.func(stream, float(t0), float(t1), np.random.default_rng(seed))

@@ -61,7 +61,7 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
     present; ``names`` all the file's columns (for messages). LogError for a missing column.
     """
     steer_roles = [r for r in ("road_wheel_angle", "steering_wheel_angle") if r in cmap.channels]
-    present = [r for r in steer_roles if cmap.channels[r].column in have]
+    present: list[str | None] = [r for r in steer_roles if cmap.channels[r].column in have]
     if not steer_roles:      # allowed for ROS maps only (ChannelMap): no steering, delta_f NaN
         present = [None]
     roles = ["speed", "lateral_acceleration", "yaw_rate"]
@@ -182,6 +182,7 @@ class _Logs:
         """The last log, with ``counts`` and the warnings left; LogError if the log is too short."""
         if self.n < 2:
             raise LogError(f"{self.p}: fewer than 2 samples on the common time base")
+        assert self.pending is not None        # two samples or more were assembled
         self.pending.time_repairs = add_counts(self.pending.time_repairs, add_counts(self.counts, counts))
         self.pending.warnings += self.warnings
         yield self.pending

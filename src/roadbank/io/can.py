@@ -94,7 +94,9 @@ def read_frames(path, fmt: str) -> Frames:
         raise LogError(f"{p}: unknown CAN log format '{fmt}' (known: {', '.join(CAN_FORMATS)})")
     if fmt != "blf":
         _check_text_complete(p, fmt)
-    t, ids, data = [], [], []
+    t: list[float] = []
+    ids: list[int] = []
+    data: list[bytes] = []
     try:
         reader = readers[fmt](str(p))
         for m in reader:
@@ -216,7 +218,7 @@ def read_can(path, cmap, fmt: str) -> tuple[RawTable, list[str]]:
     """
     p = Path(path)
     db = load_dbc(cmap)
-    wanted = {}
+    wanted: dict[int, tuple] = {}          # frame id -> (message, [(role, spec), ...])
     for role, spec in cmap.channels.items():
         if role == "time":
             continue

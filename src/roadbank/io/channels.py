@@ -64,6 +64,7 @@ from __future__ import annotations
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
+from typing import cast
 
 import numpy as np
 
@@ -310,7 +311,7 @@ def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
     try:
         return ChannelMap(
             specs,
-            convention=_convention(d.get("convention", "ISO")),
+            convention=cast(str, _convention(d.get("convention", "ISO"))),   # a default is given: never None
             steering_ratio=None if d.get("steering_ratio") is None else float(d["steering_ratio"]),
             time_base=str(rs.get("time_base", "auto")),
             rate_hz=float(rs.get("rate_hz", 100.0)),

@@ -313,10 +313,10 @@ def _steering(col, named_role, hint, x, v, r, out) -> Guess:
         cands = {("road_wheel_angle", "rad"): 1.0, ("road_wheel_angle", "deg"): 180 / math.pi,
                  ("steering_wheel_angle", "rad"): 16.0, ("steering_wheel_angle", "deg"): 16.0 * 180 / math.pi}
         dist = {k: abs(math.log(max(ratio, 1e-9) / f)) for k, f in cands.items()}
-        by_size = min(dist, key=dist.get)
+        by_size = min(dist, key=lambda k: dist[k])
         # the name tells road wheel from steering wheel (understeer can make a road-wheel angle several
         # times the kinematic one); the size then tells deg from rad (a factor 57)
-        role, unit = min((k for k in dist if k[0] == named_role), key=dist.get)
+        role, unit = min((k for k in dist if k[0] == named_role), key=lambda k: dist[k])
         fits_name = by_size == (role, unit) and hint in (None, unit)
         sure = abs(corr) > 0.5
         g = Guess(role, col, unit, sure and corr < 0, "high" if fits_name and sure else "medium",

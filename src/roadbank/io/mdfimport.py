@@ -53,7 +53,7 @@ def _placeholder(module: str, names) -> types.ModuleType:
             raise AttributeError(name)
         return getattr(_real(module, stub), name)
 
-    stub.__getattr__ = __getattr__
+    stub.__getattr__ = __getattr__  # type: ignore[method-assign]  # a module's __getattr__ (PEP 562)
     return stub
 
 

@@ -66,8 +66,9 @@ class ChunkRepair:
 
     def __init__(self, source, column: str, label: str, row_label: str = "row"):
         self.source, self.column, self.label, self.row_label = source, column, label, row_label
-        self.after = None
-        self.held = None         # (rownums, t, {name: array}) rows waiting for the next chunk
+        self.after: float | None = None
+        #: (rownums, t, {name: array}) rows waiting for the next chunk
+        self.held: tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]] | None = None
         self.carry = False       # the row before the held ones was dropped: flag the first one kept
         self.counts: dict = {}
         self.warned = False

@@ -60,8 +60,8 @@ def overlap(series: dict[str, tuple[np.ndarray, np.ndarray]]) -> tuple[float, fl
         starts[name], ends[name] = tc[0], tc[-1]
     t0, t1 = max(starts.values()), min(ends.values())
     if not t1 > t0:
-        late = max(starts, key=starts.get)
-        early = min(ends, key=ends.get)
+        late = max(starts, key=lambda k: starts[k])
+        early = min(ends, key=lambda k: ends[k])
         raise LogError(f"channels do not overlap in time: '{late}' starts at {starts[late]:.3f} s "
                        f"but '{early}' ends at {ends[early]:.3f} s")
     return float(t0), float(t1)

@@ -42,6 +42,7 @@ def _stamp(msg) -> float | None:
         sec, nsec = getattr(st, "secs", 0), getattr(st, "nsecs", 0)
     else:
         nsec = st.nanosec
+    assert sec is not None
     return float(sec) + 1e-9 * float(nsec)
 
 
@@ -106,8 +107,8 @@ def read_ros(path, cmap, fmt: str) -> tuple[RawTable, list[str]]:
             raise LogError(f"{cmap.source}: channel '{role}': a ROS channel needs 'topic' and 'field', "
                            "not 'column'")
         by_topic.setdefault(spec.topic, []).append((role, spec))
-    vals = {spec.column: [] for specs in by_topic.values() for _, spec in specs}
-    stamps = {spec.column: [] for specs in by_topic.values() for _, spec in specs}
+    vals: dict[str, list[float]] = {spec.column: [] for specs in by_topic.values() for _, spec in specs}
+    stamps: dict[str, list[float]] = {spec.column: [] for specs in by_topic.values() for _, spec in specs}
     warns: list[str] = []
     dropped_nofix = 0
     try:
@@ -154,10 +155,10 @@ def read_ros(path, cmap, fmt: str) -> tuple[RawTable, list[str]]:
             if not vals[spec.column]:
                 raise LogError(f"{p}: channel '{role}' (topic '{topic}', field '{spec.msg_field}'): "
                                "no messages on the topic")
-            t = np.asarray(stamps[spec.column])
+            ts = np.asarray(stamps[spec.column])
             v = np.asarray(vals[spec.column])
-            order = np.argsort(t, kind="stable")     # header stamps may arrive slightly out of order
-            data[spec.column], times[spec.column] = v[order], t[order]
+            order = np.argsort(ts, kind="stable")     # header stamps may arrive slightly out of order
+            data[spec.column], times[spec.column] = v[order], ts[order]
     if dropped_nofix:
         warns.append(f"{p}: {dropped_nofix} message(s) with status < 0 (no GNSS fix) skipped")
     return RawTable(sorted(data), data, times=times, metadata={"format": fmt}, row_label="message"), warns

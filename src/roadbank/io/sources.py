@@ -96,7 +96,8 @@ class ParquetBatches:
         import pyarrow as pa
         import pyarrow.parquet as pq
 
-        self.path, self.chunk_rows, self.warnings = path, chunk_rows, []
+        self.path, self.chunk_rows = path, chunk_rows
+        self.warnings: list[str] = []
         try:
             pf = pq.ParquetFile(path)
         except (pa.ArrowException, OSError, ValueError) as exc:
@@ -152,7 +153,8 @@ class Mdf4Windows:
     whole = False
 
     def __init__(self, path: Path, chunk_rows: int):
-        self.path, self.warnings = path, []
+        self.path = path
+        self.warnings: list[str] = []
         self.fh = open(path, "rb")
         try:
             self.mdf = open_mdf(path, self.fh)
@@ -212,11 +214,11 @@ class Mdf4Windows:
         (``prefix`` is not used: truth channels go with tables only)."""
         for c in wanted:
             self._want(c, readers.column_label(wanted, c))
-        last_t = dict.fromkeys(wanted)
+        last_t: dict[str, float | None] = dict.fromkeys(wanted)
         active = list(wanted)
         while active:
             # read the channel that lags most, so no buffer runs far ahead of the others
-            c = min(active, key=lambda k: -np.inf if last_t[k] is None else last_t[k])
+            c = min(active, key=lambda k: -np.inf if (lt := last_t[k]) is None else lt)
             got = self._read(c)
             if got is None:
                 active.remove(c)

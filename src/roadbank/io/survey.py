@@ -139,7 +139,7 @@ def auto_uses_clock(passes: Callable[[], Iterable[tuple[np.ndarray, dict]]], rol
 
 def _one_pass(chunks, clock: ExactMedian, steps: dict) -> Iterator[None]:
     last_t = None
-    last_valid = dict.fromkeys(steps)
+    last_valid: dict[str, float | None] = dict.fromkeys(steps)
     for t, vals in chunks:
         if not len(t):
             continue
@@ -147,8 +147,8 @@ def _one_pass(chunks, clock: ExactMedian, steps: dict) -> Iterator[None]:
         last_t = t[-1]
         for r, m in steps.items():
             tv = t[np.isfinite(vals[r])]
-            if last_valid[r] is not None:
-                tv = np.concatenate(([last_valid[r]], tv))
+            if (lv := last_valid[r]) is not None:
+                tv = np.concatenate(([lv], tv))
             if len(tv):
                 m.add(np.diff(tv))
                 last_valid[r] = tv[-1]

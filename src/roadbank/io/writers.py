@@ -11,6 +11,7 @@ import csv
 import json
 import os
 from pathlib import Path
+from typing import Any, TextIO
 
 import numpy as np
 
@@ -100,9 +101,9 @@ class TableWriter:
         self.tmp = self.path.with_name(self.path.name + ".partial")
         self.rows = 0
         self.chunks = 0
-        self._pq = None
-        self._fh = None
-        self._names = None
+        self._pq: Any = None                     # pyarrow.parquet.ParquetWriter, opened on the first chunk
+        self._fh: TextIO | None = None
+        self._names: list[str] | None = None
 
     def write(self, cols: dict[str, np.ndarray]) -> None:
         """Append one chunk (dict name -> 1-D array, all the same length)."""
