@@ -34,7 +34,7 @@ from ..io import LogError
 from ..io.kitti import find_oxts_dirs, load_kitti_oxts
 from ..params import VehicleParams
 from ..signals import sample_rate
-from ..vehicle import SensorSpec, undescribed_params
+from ..vehicle import SensorSpec, noise_densities, undescribed_params
 from .comma2k19 import ValidationResult
 from .scoring import Scoring, hold_invalid, lowpass_t, pooled, run_and_score
 from .splits import split_of
@@ -158,7 +158,8 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
         spec = sensors or SensorSpec()
         at_rate = [n for n in names if n in SENSOR_R_ESTIMATORS and "R" not in (tuning or {}).get(n, {})]
         for key, rate in (("sheet_rate", sample_rate(log.signals.t)), ("R_nominal", None)) if at_rate else ():
-            sheet = {"R": spec.r_noise_density(rate), "Q_ay": spec.ay_noise_density(rate)}
+            R, Q_ay = noise_densities(spec, rate)          # the data sheet's: no log noise given
+            sheet = {"R": R, "Q_ay": Q_ay}
             sens[key] = run_and_score(log.signals, log.reference_roll, at_rate, params, scoring,
                                       per_estimator={n: {**(tuning or {}).get(n, {}), **sheet}
                                                      for n in at_rate}).scores
