@@ -56,6 +56,10 @@ from typing import NamedTuple
 
 from numba.extending import register_jitable
 
+#: the helpers below are plain Python functions that compiled code can call too; numba inlines
+#: them into the calling kernel (no compiled function of their own: no compile time of their own)
+_compiled = register_jitable(inline="always")
+
 #: number of inputs ``eta = [delta_f, ay, r]``
 NETA = 3
 
@@ -111,7 +115,7 @@ class RollBlock(NamedTuple):
     end: int
 
 
-@register_jitable
+@_compiled
 def roll_block(nr: int) -> RollBlock:
     """:class:`RollBlock` for ``nr`` roll states (sizes nr*nr, nr, nr, 1, nr, nr*nr, nr, nr)."""
     F = C_ROLL
@@ -134,7 +138,7 @@ class RiccatiBlock(NamedTuple):
     end: int
 
 
-@register_jitable
+@_compiled
 def riccati_block(n: int, p: int, nr: int) -> RiccatiBlock:
     """:class:`RiccatiBlock` after the roll block of ``nr`` states."""
     o = roll_block(nr).end
@@ -154,7 +158,7 @@ class RiccatiRow(NamedTuple):
     end: int
 
 
-@register_jitable
+@_compiled
 def riccati_row(n: int, p: int) -> RiccatiRow:
     """:class:`RiccatiRow` for ``n`` states and ``p`` measured outputs."""
     B = n * n
@@ -186,7 +190,7 @@ class RiccatiWork(NamedTuple):
     S: int
 
 
-@register_jitable
+@_compiled
 def riccati_work(n: int, p: int) -> RiccatiWork:
     """:class:`RiccatiWork` for ``n`` states and ``p`` measured outputs."""
     K = riccati_row(n, p).end
@@ -223,7 +227,7 @@ class LpvRow(NamedTuple):
     end: int
 
 
-@register_jitable
+@_compiled
 def lpv_row(n: int) -> LpvRow:
     """:class:`LpvRow` for ``n`` observer states."""
     G = n * n
@@ -256,20 +260,20 @@ class Batch3Block(NamedTuple):
     end: int
 
 
-@register_jitable
+@_compiled
 def batch3_block() -> Batch3Block:
     """:class:`Batch3Block` of a three-state row (starts at ``lpv_row(3).end``)."""
     o = lpv_row(3).end
     return Batch3Block(o, o + 36, o + 44, o + 80, o + 88)
 
 
-@register_jitable
+@_compiled
 def roll_states(n: int) -> int:
     """Offset in ``mem`` of the roll states (after the ``n`` observer states)."""
     return M_X + n
 
 
-@register_jitable
+@_compiled
 def riccati_p(n: int, nr: int) -> int:
     """Offset in ``mem`` of the Riccati matrix ``P`` (n*n, row-major)."""
     return M_X + n + nr
@@ -289,14 +293,14 @@ class AdaptiveBlock(NamedTuple):
     end: int
 
 
-@register_jitable
+@_compiled
 def adaptive_block(nr: int) -> AdaptiveBlock:
     """:class:`AdaptiveBlock` after the roll block of ``nr`` states (at ``cfg[C_OFAM]``)."""
     o = roll_block(nr).end
     return AdaptiveBlock(o, o + 1, o + 2, o + 3, o + 4, o + 5)
 
 
-@register_jitable
+@_compiled
 def excitation_state(n: int, nr: int) -> int:
     """Offset in ``mem`` of the ``adaptive`` family's excitation (m/s^2), followed by the
     low-passed ``|ay|`` (m/s^2); where a Riccati P would be."""
@@ -311,7 +315,7 @@ class AdaptiveState(NamedTuple):
     AF: int
 
 
-@register_jitable
+@_compiled
 def adaptive_state(n: int, nr: int) -> AdaptiveState:
     """:class:`AdaptiveState` (``E`` is :func:`excitation_state`)."""
     o = excitation_state(n, nr)
@@ -332,14 +336,14 @@ class GatedBlock(NamedTuple):
     end: int
 
 
-@register_jitable
+@_compiled
 def gated_block(n: int, nr: int) -> GatedBlock:
     """:class:`GatedBlock` after the roll block of ``nr`` states (at ``cfg[C_OFAM]``)."""
     o = roll_block(nr).end
     return GatedBlock(o, o + n, o + n + 1, o + n + 2, o + n + 3, o + n + 4)
 
 
-@register_jitable
+@_compiled
 def gate_state(n: int, nr: int) -> int:
     """Offset in ``mem`` of the ``gated`` family's low-passed yaw rate (rad/s), followed by the
     gate (-); where a Riccati P would be."""
@@ -353,7 +357,7 @@ class GateState(NamedTuple):
     G: int
 
 
-@register_jitable
+@_compiled
 def gate_states(n: int, nr: int) -> GateState:
     """:class:`GateState` (``RF`` is :func:`gate_state`)."""
     o = gate_state(n, nr)
@@ -379,7 +383,7 @@ class SmoothRow(NamedTuple):
     end: int
 
 
-@register_jitable
+@_compiled
 def smooth_row(n: int) -> SmoothRow:
     """:class:`SmoothRow` for ``n`` states."""
     return SmoothRow(0, n * n, 2 * n * n, 2 * n * n + n)
@@ -396,20 +400,20 @@ class SmoothFixedRow(NamedTuple):
     end: int
 
 
-@register_jitable
+@_compiled
 def smooth_fixed_row(n: int) -> SmoothFixedRow:
     """:class:`SmoothFixedRow` for ``n`` states."""
     ne = n + 1
     return SmoothFixedRow(0, n * n, n * n + n * ne, ne, n * n + 2 * n * ne)
 
 
-@register_jitable
+@_compiled
 def mem_size(n: int, nr: int) -> int:
     """Length of ``mem`` for ``n`` observer and ``nr`` roll states (room for a Riccati ``P``)."""
     return M_X + n + nr + n * n + 2
 
 
-@register_jitable
+@_compiled
 def work_size(n: int) -> int:
     """Length of the scratch array ``work`` for ``n`` observer states (every family)."""
     return 64 + 20 * n * n + 8 * n * NETA + 4 * n

@@ -7,10 +7,10 @@ import math
 import numpy as np
 from numba import njit
 
-from ..layout import C_N, C_NG, C_NR, M_PHIB, M_THETA, M_W, adaptive_block, adaptive_state, lpv_row
+from ..layout import C_N, C_USE, C_NG, C_NR, M_PHIB, M_THETA, M_W, adaptive_block, adaptive_state, lpv_row
 from ._jit import ENTRY
 from .lpv import observer_update
-from .sample import begin, finish, grid, masked_inputs, sample_valid, store
+from .sample import begin, finish, grid, sample_valid, store
 
 
 @njit(**ENTRY)
@@ -37,7 +37,7 @@ def adaptive_step(mem, cfg, tab, work, t, vx, d, ay, r):
     nr = np.int64(cfg[C_NR])
     ab = adaptive_block(nr)
     st = adaptive_state(n, nr)
-    eta = masked_inputs(cfg, d, ay, r)
+    eta = (d if cfg[C_USE] > 0 else 0.0, ay if cfg[C_USE + 1] > 0 else 0.0, r if cfg[C_USE + 2] > 0 else 0.0)
     dt, restart, _ = begin(mem, cfg, t)
     if restart:
         af = abs(ay)

@@ -18,10 +18,10 @@ from numba import njit
 
 from ..layout import (C_DTFIX, C_DTOL, C_DV, C_GAP, C_N, C_NG, C_NR, C_SUB, C_USE, C_V0, C_VMIN, C_WMAX, M_AY,
                       M_ETA, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, NETA, batch3_block, lpv_row,
-                      roll_block, roll_states)
+                      roll_states)
 from ._jit import ENTRY, HELPER, INLINE
 from .linalg import tustin
-from .sample import angles, begin, finish, grid, interp, masked_inputs, roll_fixed2, sample_valid, store
+from .sample import ROLL0, ROLL2, angles, begin, finish, grid, interp, roll_fixed2, sample_valid, store
 from .simd import interp4, map4
 
 #: offsets of the batch loop's block in a three-state lpv row (layout.batch3_block)
@@ -30,7 +30,7 @@ _B3_DELTA = _B3.dM - _B3.M           # from an entry of M or W to its difference
 _BLOCK = 256                         # samples per block of the batch loop (recursion, then angles)
 
 
-@njit(**INLINE)
+@njit(inline="always", **HELPER)
 def observer_update(mem, cfg, work, n, eta, dt, restart, fixed):
     """The observer's state update and output for one used sample; returns ``w``.
 
@@ -72,7 +72,7 @@ def observer_update(mem, cfg, work, n, eta, dt, restart, fixed):
     return w
 
 
-@njit(**INLINE)
+@njit(inline="always", **HELPER)
 def fixed3(ri, a, p0, p1, p2, u0, u1, u2, x0, x1, x2):
     """:func:`observer_update`'s fixed-rate path for three states, from the row's batch block
     (:func:`roadbank.estimators.layout.batch3_block`); returns ``(x0, x1, x2, w)``.
@@ -112,7 +112,7 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     n = np.int64(cfg[C_N])
     i, a = grid(cfg, vx)
     row = lpv_row(n)
-    eta = masked_inputs(cfg, d, ay, r)
+    eta = (d if cfg[C_USE] > 0 else 0.0, ay if cfg[C_USE + 1] > 0 else 0.0, r if cfg[C_USE + 2] > 0 else 0.0)
     dt, restart, fixed = begin(mem, cfg, t)
     if fixed and n == 3:
         x0, x1, x2, w = fixed3(tab[i], a, mem[M_ETA], mem[M_ETA + 1], mem[M_ETA + 2], eta[0], eta[1], eta[2],
@@ -123,14 +123,12 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
         for q in range(NETA):
             mem[M_ETA + q] = eta[q]
     else:
-        # the parts of the row the path reads: H, D and J; H, D, Phi, Gam0 and Gam1; or F, G, H and D
-        if restart:
-            interp(tab, i, a, row.H, row.cont, work)
-        elif fixed:
+        # the parts of the row the path reads: H, D, Phi, Gam0 and Gam1; H, D and J; or F, G, H and D
+        if fixed:
             interp(tab, i, a, row.H, row.J, work)
             interp(tab, i, a, row.Phi, row.end, work)
         else:
-            interp(tab, i, a, row.F, row.J, work)
+            interp(tab, i, a, row.F if not restart else row.H, row.J if not restart else row.cont, work)
         w = observer_update(mem, cfg, work, n, eta, dt, restart, fixed)
     ok = finish(mem, cfg, w, ay, dt, restart, fixed)
     return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
@@ -164,7 +162,7 @@ def lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, o
     inv_dv = 1.0 / cfg[C_DV]
     last = np.int64(cfg[C_NG]) - 1
     # roll model (layout.roll_block); zeros when there is none
-    rb = roll_block(nr)
+    rb = ROLL2 if nr == 2 else ROLL0
     rD = cfg[rb.D]
     rH0 = rH1 = rP00 = rP01 = rP10 = rP11 = rA0 = rA1 = rB0 = rB1 = 0.0
     if nr == 2:

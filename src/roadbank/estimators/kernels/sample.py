@@ -13,6 +13,10 @@ from ..layout import (C_DTFIX, C_DTOL, C_DV, C_GAP, C_N, C_NG, C_NR, C_SUB, C_US
                       M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, roll_block, roll_states)
 from ._jit import HELPER, INLINE
 
+#: the roll block's offsets in ``cfg`` for the two roll models (``nr`` 0: static gain or none; 2: dynamic),
+#: as constants of the compiled code
+ROLL0, ROLL2 = roll_block(0), roll_block(2)
+
 # asin(x) = x + x^3 (c_1 + c_2 x^2 + ... + c_12 x^22) + R for |x| <= ASIN_POLY_MAX, the Taylor
 # coefficients c_k = (2k)! / (4^k (k!)^2 (2k+1)) (exact fractions, rounded once);
 # 0 <= R <= c_13 x^27 / (1 - x^2) <= 4.9e-17 rad at |x| = 0.3 (the series' terms are positive).
@@ -21,7 +25,7 @@ ASIN_POLY_MAX = 0.3
     float(Fraction(math.factorial(2 * k), 4 ** k * math.factorial(k) ** 2 * (2 * k + 1))) for k in range(1, 13))
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cfunc_wrapper=True)
+@njit(**INLINE)
 def asin_fast(x):
     """``asin(x)`` (rad) for ``|x| <= 1``: a polynomial for ``|x| <= ASIN_POLY_MAX`` (0.3, i.e. 17.5 deg), libm beyond.
 
@@ -122,12 +126,6 @@ def sample_valid(mem, cfg, t, vx, d, ay, r):
 
 
 @njit(**INLINE)
-def masked_inputs(cfg, d, ay, r):
-    """``eta = [delta_f, ay, r]`` with the inputs the estimator does not use set to 0."""
-    return (d if cfg[C_USE] > 0 else 0.0, ay if cfg[C_USE + 1] > 0 else 0.0, r if cfg[C_USE + 2] > 0 else 0.0)
-
-
-@njit(**INLINE)
 def begin(mem, cfg, t):
     """Common start of a valid sample: returns ``(dt, restart, fixed)`` and records the time.
 
@@ -142,7 +140,7 @@ def begin(mem, cfg, t):
     return dt, restart, fixed
 
 
-@njit(**INLINE)
+@njit(inline="always", **HELPER)
 def roll_fixed2(p00, p01, p10, p11, a0, a1, b0, b1, z0, z1, ay0, ay):
     """One fixed-rate step of the two-state roll model, ``z+ = Phi z + Gam0 ay- + Gam1 ay``
     (``Phi = [[p00, p01], [p10, p11]]``, ``Gam0 = [a0, a1]``, ``Gam1 = [b0, b1]``), in the order the
@@ -156,7 +154,7 @@ def roll_fixed2(p00, p01, p10, p11, a0, a1, b0, b1, z0, z1, ay0, ay):
     return s0, s1
 
 
-@njit(**INLINE)
+@njit(inline="always", **HELPER)
 def output(mem, cfg, w, phi):
     """Hold the outputs of a used sample: ``w``, ``theta = asin(clip(w, -1, 1))``, ``phi`` and
     ``phi_b = theta - phi``. Returns whether the output is plausible, ``|w| <= sin(max_angle)``."""
@@ -184,7 +182,7 @@ def finish(mem, cfg, w, ay, dt, restart, fixed):
     trapezoidal rule.
     """
     nr = np.int64(cfg[C_NR])
-    rb = roll_block(nr)
+    rb = ROLL2 if nr == 2 else ROLL0
     oz = roll_states(np.int64(cfg[C_N]))
     if restart:
         for i in range(nr):
