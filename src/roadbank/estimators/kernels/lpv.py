@@ -19,7 +19,7 @@ from numba import njit
 from ..layout import (C_DTFIX, C_DTOL, C_DV, C_GAP, C_N, C_NG, C_NR, C_SUB, C_USE, C_V0, C_VMIN, C_WMAX, M_AY,
                       M_ETA, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, NETA, batch3_block, lpv_row,
                       roll_states)
-from ._jit import ENTRY, HELPER, INLINE
+from ._jit import ENTRY, HELPER
 from .linalg import tustin
 from .sample import ROLL0, ROLL2, angles, begin, finish, grid, interp, roll_fixed2, sample_valid, store
 from .simd import interp4, map4
