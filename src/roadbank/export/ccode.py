@@ -1,7 +1,7 @@
 """C99 source of an exported estimator: header, implementation, interface README.
 
 The generated step function is the ``lpv`` kernel of
-:mod:`roadbank.estimators.kernels` written out in C, step by step (the compiled
+:mod:`roadbank.estimators.kernels.lpv` written out in C, step by step (the compiled
 kernel orders some sums differently, e.g. its fixed-rate batch loop, so the two
 agree to rounding: tests/test_export_c.py, 1e-9 rad in float64): linear interpolation of the
 table rows on the speed grid (clamped at both ends), the trapezoidal (Tustin)
@@ -19,7 +19,10 @@ compile-time constant, tables as ``static const`` arrays.
 The observer update of the general path (continuous tables discretised per
 sample) comes from :func:`_observer_tustin`; with the kernels' fixed-rate tables
 (:func:`_discrete_parts`), a sample at the design rate is instead one update with
-the exact discrete-time observer interpolated on the grid, as in the kernels.
+the exact discrete-time observer interpolated on the grid, as in the kernels. The
+tables are the kernels' rows, and every offset into them (``RB_OG`` .. ``RB_OJ``,
+``RB_DGAM0``, ``RB_DGAM1`` and the entries of the three-state update) is written from
+:func:`roadbank.estimators.layout.lpv_row`, the function the kernels index with.
 """
 
 from __future__ import annotations
