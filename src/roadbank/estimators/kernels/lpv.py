@@ -21,7 +21,7 @@ from ..layout import (C_DTFIX, C_DTOL, C_DV, C_GAP, C_N, C_NG, C_NR, C_SUB, C_US
                       roll_states)
 from ._jit import ENTRY, HELPER
 from .linalg import tustin
-from .sample import ROLL0, ROLL2, angles, begin, finish, grid, interp, roll_fixed2, sample_valid, store
+from .sample import ROLL0, ROLL2, angles, begin, finish, grid, interp, roll_fixed2, roll_map, sample_valid, store
 from .simd import interp4, map4
 
 #: offsets of the batch loop's block in a three-state lpv row (layout.batch3_block)
@@ -164,18 +164,9 @@ def lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, o
     # roll model (layout.roll_block); zeros when there is none
     rb = ROLL2 if nr == 2 else ROLL0
     rD = cfg[rb.D]
-    rH0 = rH1 = rP00 = rP01 = rP10 = rP11 = rA0 = rA1 = rB0 = rB1 = 0.0
-    if nr == 2:
-        rH0 = cfg[rb.H]
-        rH1 = cfg[rb.H + 1]
-        rP00 = cfg[rb.Phi]
-        rP01 = cfg[rb.Phi + 1]
-        rP10 = cfg[rb.Phi + 2]
-        rP11 = cfg[rb.Phi + 3]
-        rA0 = cfg[rb.Gam0]
-        rA1 = cfg[rb.Gam0 + 1]
-        rB0 = cfg[rb.Gam1]
-        rB1 = cfg[rb.Gam1 + 1]
+    rH0 = cfg[rb.H] if nr == 2 else 0.0
+    rH1 = cfg[rb.H + 1] if nr == 2 else 0.0
+    rm = roll_map(cfg) if nr == 2 else (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     oz = roll_states(np.int64(3))
     z0 = mem[oz] if nr == 2 else 0.0
     z1 = mem[oz + 1] if nr == 2 else 0.0
@@ -234,7 +225,7 @@ def lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, o
             p2 = u2
             # finish, fixed: roll model and output
             if nr == 2:
-                z0, z1 = roll_fixed2(rP00, rP01, rP10, rP11, rA0, rA1, rB0, rB1, z0, z1, ay0, ak)
+                z0, z1 = roll_fixed2(rm, z0, z1, ay0, ak)
             ay0 = ak
             phi = rD * ak
             if nr == 2:

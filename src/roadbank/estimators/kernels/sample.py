@@ -141,16 +141,24 @@ def begin(mem, cfg, t):
 
 
 @njit(inline="always", **HELPER)
-def roll_fixed2(p00, p01, p10, p11, a0, a1, b0, b1, z0, z1, ay0, ay):
-    """One fixed-rate step of the two-state roll model, ``z+ = Phi z + Gam0 ay- + Gam1 ay``
-    (``Phi = [[p00, p01], [p10, p11]]``, ``Gam0 = [a0, a1]``, ``Gam1 = [b0, b1]``), in the order the
-    step and the batch loop both use."""
-    s0 = a0 * ay0 + b0 * ay
-    s0 += p00 * z0
-    s0 += p01 * z1
-    s1 = a1 * ay0 + b1 * ay
-    s1 += p10 * z0
-    s1 += p11 * z1
+def roll_map(cfg):
+    """The two-state roll model's fixed-rate map from ``cfg`` (:data:`ROLL2`):
+    ``(Phi00, Phi01, Phi10, Phi11, Gam0_0, Gam0_1, Gam1_0, Gam1_1)``."""
+    rb = ROLL2
+    return (cfg[rb.Phi], cfg[rb.Phi + 1], cfg[rb.Phi + 2], cfg[rb.Phi + 3],
+            cfg[rb.Gam0], cfg[rb.Gam0 + 1], cfg[rb.Gam1], cfg[rb.Gam1 + 1])
+
+
+@njit(inline="always", **HELPER)
+def roll_fixed2(m, z0, z1, ay0, ay):
+    """One fixed-rate step of the two-state roll model, ``z+ = Phi z + Gam0 ay- + Gam1 ay``, with
+    ``m`` = :func:`roll_map`, in the order the step and the batch loop both use."""
+    s0 = m[4] * ay0 + m[6] * ay
+    s0 += m[0] * z0
+    s0 += m[1] * z1
+    s1 = m[5] * ay0 + m[7] * ay
+    s1 += m[2] * z0
+    s1 += m[3] * z1
     return s0, s1
 
 
@@ -188,9 +196,7 @@ def finish(mem, cfg, w, ay, dt, restart, fixed):
         for i in range(nr):
             mem[oz + i] = cfg[rb.J + i] * ay
     elif nr == 2 and fixed:
-        mem[oz], mem[oz + 1] = roll_fixed2(cfg[rb.Phi], cfg[rb.Phi + 1], cfg[rb.Phi + 2], cfg[rb.Phi + 3],
-                                           cfg[rb.Gam0], cfg[rb.Gam0 + 1], cfg[rb.Gam1], cfg[rb.Gam1 + 1],
-                                           mem[oz], mem[oz + 1], mem[M_AY], ay)
+        mem[oz], mem[oz + 1] = roll_fixed2(roll_map(cfg), mem[oz], mem[oz + 1], mem[M_AY], ay)
     elif nr == 2:
         # trapezoidal rule, substeps, ay linear in time; (I - hh F)^-1 by its adjugate
         nsub = np.int64(math.ceil(dt / cfg[C_SUB] - 1e-9))
