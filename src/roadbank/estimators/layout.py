@@ -11,20 +11,21 @@ sample:
     M_INIT    1.0 once initialised
     M_TLAST   time of the last valid sample (s)
     M_W ..    held outputs ``w`` (-), ``theta``, ``phi_b``, ``phi`` (rad)
-    M_GATED   DFC: previous gated estimate (-)
+    M_GATED   DFC: previous gated estimate (-); its states: ``M_DFC_X``, ``M_DFC_IND``
     M_AY      previous lateral acceleration, input of the roll model (m/s^2)
     M_ETA     previous inputs ``eta = [delta_f, ay, r]`` (3)
     M_X       observer states (n), then :func:`roll_states` (nr), then
               :func:`riccati_p` (n*n, Riccati variant only) or
-              :func:`excitation_state` (2, ``adaptive`` family only) or
-              :func:`gate_state` (2, ``gated`` family only)
+              :func:`adaptive_state` (2, ``adaptive`` family only) or
+              :func:`gate_states` (2, ``gated`` family only)
     ========  ===========================================================
 
 ``cfg`` — constants of one estimator (built once per design)
     a head of scalars ``C_*``, then the roll model block at :data:`C_ROLL`
     (:func:`roll_block`), then the fixed-rate roll block (:func:`roll_block`
     ``["Phi", "Gam0", "Gam1"]``), then family-specific constants (Riccati:
-    ``R^-1``, ``W``, ``Mneg``; :func:`riccati_block`).
+    ``R^-1``, ``W``, ``Mneg``, :func:`riccati_block`; ``adaptive``: :func:`adaptive_block`;
+    ``gated``: :func:`gated_block`).
 
 ``tab`` — the speed schedule, one row per grid speed ``v0 + k dv``
     ``lpv`` rows: :func:`lpv_row` (continuous ``F, G, H, D, J``, then the
@@ -44,7 +45,7 @@ sample:
 The fixed offsets are plain integers, which numba folds into the compiled code as
 constants; the helpers below compute the variable-size blocks from the state
 dimensions and are the same functions in Python and in compiled code
-(``register_jitable``): the kernels call them (``row = lpv_row(n)``, then
+(``register_jitable``, inlined into each kernel): the kernels call them (``row = lpv_row(n)``, then
 ``work[row.H + p]``), Python builds the arrays with them, and the generated C
 (:mod:`roadbank.export.ccode`) takes its offsets from them, so no offset is
 written down twice. Blocks are stored row-major.
