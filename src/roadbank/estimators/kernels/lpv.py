@@ -97,7 +97,7 @@ def fixed3(ri, a, p0, p1, p2, u0, u1, u2, x0, x1, x2):
     return x0, x1, x2, w
 
 
-@njit(cache=True, _nrt=False, error_model="numpy", forceinline=True, no_cfunc_wrapper=True)
+@njit(**ENTRY)
 def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     """One sample of a scheduled linear observer: returns ``(w, theta, phi_b, valid)``.
 

@@ -62,8 +62,8 @@ def smooth_backward(tab, ftab, hfix, v0, dv, n, max_sub, t, vx, ay, xf, a, b, ou
             for p in range(n):
                 acc = 0.0
                 for q in range(n):
-                    o = fr.Phi + p * n + q
-                    c = ftab[i, o] + fa * (ftab[i1, o] - ftab[i, o])
+                    c = ftab[i, fr.Phi + p * n + q] + fa * (ftab[i1, fr.Phi + p * n + q]
+                                                            - ftab[i, fr.Phi + p * n + q])
                     acc += c * out[k + 1, q]
                 for q in range(ne):
                     e0 = xf[k + 1, q] if q < n else ay[k + 1]
