@@ -71,8 +71,12 @@ rule applied to its linear Hamiltonian form
 
 Compile time (a fresh process with an empty cache compiles each family in a few
 seconds; ``python -m roadbank.bench.cold``): every function is compiled once as a
-normal numba function (no numba-IR inlining, no ``fastmath``; LLVM inlines the
-small helpers marked ``forceinline``) and in one specialisation only: no literal
+normal numba function (no ``fastmath``; LLVM inlines the small helpers marked
+``forceinline``), except the layout's offset functions and the steps shared between
+families or paths (:func:`~.lpv.observer_update`, :func:`~.lpv.fixed3`,
+:func:`~.sample.output`, :func:`~.sample.roll_map`, :func:`~.sample.roll_fixed2`), which
+numba inlines into their callers (``inline="always"``: no compiled function of their own,
+whose optimisation every caller would repeat), and in one specialisation only: no literal
 arguments (``np.int64`` offsets, not ``0``), no ``int()``/``min()``/``max()``
 (each an overload numba compiles per flag set; ``np.int64`` casts and conditional
 expressions instead), helpers without Python or C wrappers
@@ -80,8 +84,10 @@ expressions instead), helpers without Python or C wrappers
 reference-counted in the per-sample loops). Numba links every callee's code into
 each caller and optimises and emits it again there, so the size of what a kernel
 reaches counts as much as the number of functions: the Riccati PIF is one
-function (``riccati_step`` runs ``riccati_run`` on one sample), and the general
-path has no per-dimension special cases.
+function (``riccati_step`` runs ``riccati_run`` on one sample), the general
+path has no per-dimension special cases, and ``lpv_step`` is compiled once and called
+(not inlined) by ``lpv_run`` and ``gated_step``. The kernels' disk cache is checked against
+all of the package's files and the layout at once (:mod:`._jit`).
 
 **Calling convention** (every family): ``<family>_step(mem, cfg, tab, work, t, vx, d, ay, r)``
 returns ``(w, theta, phi_b, valid)``; ``<family>_run(mem, cfg, tab, work, t, vx, d, ay, r,
