@@ -114,6 +114,31 @@ def test_the_issue_list_is_exportable_and_the_others_say_why():
         export_c(riccati, "/nonexistent/never-written", rate=100.0)
 
 
+@pytest.mark.parametrize("name", ["kinematic", "kinematic-lp", "pif-modified", "uio", "pif-gated"])
+def test_the_c_tables_are_read_at_the_kernels_offsets(name):
+    """The generated C indexes its table rows at the offsets of the kernels' layout
+    (``layout.lpv_row``), for every state count and with the fixed-rate tables."""
+    import re
+
+    from roadbank.estimators.layout import lpv_row
+    from roadbank.export.ccode import generate
+
+    est = E.make(name)                             # sample_rate "auto": with the fixed-rate tables
+    d = export_design(est, 100.0)
+    src = next(t for f, t in generate(d).items() if f.endswith(".c"))
+    enum = {k: int(v) for k, v in re.findall(r"\b(RB_O[GHDJ]|RB_NKC|RB_NK|RB_D(?:PHI|GAM0|GAM1))\s*=\s*(\d+)", src)}
+    row = lpv_row(est._nstate)
+    assert enum["RB_NK"] == row.cont == est._tab_cont.shape[1]
+    assert (enum["RB_OG"], enum["RB_OH"], enum["RB_OD"], enum["RB_OJ"], enum["RB_NKC"]) == \
+        (row.G, row.H, row.D, row.J, row.J)
+    if est._nstate:
+        assert (enum["RB_DPHI"], enum["RB_DGAM0"], enum["RB_DGAM1"]) == \
+            (0, row.Gam0 - row.Phi, row.Gam1 - row.Phi)
+    if est._nstate == 3:                           # the update written out entry by entry: J rows and H, D
+        assert f"rb_lerp(t0, t1, a, {row.J + 3} + q)" in src
+        assert f"c[{row.H}] * x0 + c[{row.H + 1}] * x1" in src and f"c[{row.D + 2}] * u[2]" in src
+
+
 @pytest.mark.parametrize("name", EXPORTABLE)
 def test_float64_equals_step_on_every_scenario_and_a_hard_log(name, scenarios, built_modules):
     mod = built_modules(name)

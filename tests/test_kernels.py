@@ -8,6 +8,9 @@ import pytest
 from numba import njit
 
 from roadbank.estimators.kernels import ASIN_POLY_MAX, asin_fast
+from roadbank.estimators.layout import (adaptive_block, adaptive_state, gate_states, gated_block, lpv_row,
+                                        riccati_block, riccati_p, riccati_row, riccati_work, roll_block, roll_states,
+                                        smooth_fixed_row, smooth_row)
 
 
 @njit(cache=False)
@@ -74,3 +77,53 @@ def test_run_equals_step_bit_for_bit(name, roll):
     out = [est.step(s.t[k], s.vx[k], s.ay[k], s.r[k], s.delta_f[k]) for k in range(len(s))]
     for field in ("w", "theta", "phi_b", "valid"):
         assert np.array_equal(getattr(batch, field), [getattr(o, field) for o in out]), field
+
+
+@njit(cache=False)
+def _compiled_offsets(n, p, nr):
+    """The layout helpers as the kernels call them (compiled)."""
+    return (lpv_row(n), roll_block(nr), riccati_block(n, p, nr), riccati_row(n, p), riccati_work(n, p),
+            adaptive_block(nr), gated_block(n, nr), smooth_row(n), smooth_fixed_row(n), roll_states(n),
+            riccati_p(n, nr), adaptive_state(n, nr), gate_states(n, nr))
+
+
+def _python_offsets(n, p, nr):
+    from roadbank.estimators import layout as L
+    return (L.lpv_row(n), L.roll_block(nr), L.riccati_block(n, p, nr), L.riccati_row(n, p), L.riccati_work(n, p),
+            L.adaptive_block(nr), L.gated_block(n, nr), L.smooth_row(n), L.smooth_fixed_row(n), L.roll_states(n),
+            L.riccati_p(n, nr), L.adaptive_state(n, nr), L.gate_states(n, nr))
+
+
+@pytest.mark.parametrize("n, p, nr", [(0, 1, 0), (1, 1, 0), (3, 1, 2), (4, 2, 2), (7, 2, 0)])
+def test_layout_is_one_description_for_python_and_compiled_code(n, p, nr):
+    """The kernels call the layout's offset functions compiled; Python builds the arrays with the same
+    functions: the offsets agree, and the blocks of each array follow one another without overlap."""
+    from roadbank.estimators import layout as L
+    compiled = _compiled_offsets(np.int64(n), np.int64(p), np.int64(nr))
+    python = _python_offsets(n, p, nr)
+    assert [tuple(c) if isinstance(c, tuple) else c for c in compiled] == \
+           [tuple(c) if isinstance(c, tuple) else c for c in python]
+    row = L.lpv_row(n)                                    # F | G | H | D | J | Phi | Gam0 | Gam1
+    sizes = [n * n, n * L.NETA, n, L.NETA, n * L.NETA, n * n, n * L.NETA, n * L.NETA]
+    assert list(np.diff([row.F, row.G, row.H, row.D, row.J, row.Phi, row.Gam0, row.Gam1, row.end])) == sizes
+    rw = L.riccati_work(n, p)
+    assert rw.K == L.riccati_row(n, p).end and rw.S <= L.work_size(n)
+    assert L.gate_state(n, nr) + 2 <= L.mem_size(n, nr) and L.riccati_p(n, nr) + n * n <= L.mem_size(n, nr)
+
+
+def test_kernel_cache_entries_go_stale_with_any_kernel_source(tmp_path):
+    """A kernel holds code of the package's other modules and of the layout: its cache stamp covers
+    every one of those files, so an edit to any of them invalidates the cached machine code."""
+    from roadbank.estimators import kernels as K
+    from roadbank.estimators.kernels import _jit
+    names = {p.name for p in _jit.SOURCES}
+    assert {"sample.py", "lpv.py", "linalg.py", "simd.py", "layout.py"} <= names
+    files = [tmp_path / f"m{k}.py" for k in range(3)]
+    for f in files:
+        f.write_text("x = 1\n")
+    before = _jit.sources_stamp(files)
+    files[1].write_text("x = 2\n")
+    assert _jit.sources_stamp(files) != before
+    loc = K.lpv_run._cache._impl.locator              # numba's cache of the lpv batch kernel
+    assert isinstance(loc, _jit.KernelCacheLocator)
+    assert loc.get_source_stamp()[1] == _jit.sources_stamp(_jit.SOURCES)

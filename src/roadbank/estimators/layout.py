@@ -11,20 +11,21 @@ sample:
     M_INIT    1.0 once initialised
     M_TLAST   time of the last valid sample (s)
     M_W ..    held outputs ``w`` (-), ``theta``, ``phi_b``, ``phi`` (rad)
-    M_GATED   DFC: previous gated estimate (-)
+    M_GATED   DFC: previous gated estimate (-); its states: ``M_DFC_X``, ``M_DFC_IND``
     M_AY      previous lateral acceleration, input of the roll model (m/s^2)
     M_ETA     previous inputs ``eta = [delta_f, ay, r]`` (3)
     M_X       observer states (n), then :func:`roll_states` (nr), then
               :func:`riccati_p` (n*n, Riccati variant only) or
-              :func:`excitation_state` (2, ``adaptive`` family only) or
-              :func:`gate_state` (2, ``gated`` family only)
+              :func:`adaptive_state` (2, ``adaptive`` family only) or
+              :func:`gate_states` (2, ``gated`` family only)
     ========  ===========================================================
 
 ``cfg`` — constants of one estimator (built once per design)
     a head of scalars ``C_*``, then the roll model block at :data:`C_ROLL`
     (:func:`roll_block`), then the fixed-rate roll block (:func:`roll_block`
     ``["Phi", "Gam0", "Gam1"]``), then family-specific constants (Riccati:
-    ``R^-1``, ``W``, ``Mneg``; :func:`riccati_block`).
+    ``R^-1``, ``W``, ``Mneg``, :func:`riccati_block`; ``adaptive``: :func:`adaptive_block`;
+    ``gated``: :func:`gated_block`).
 
 ``tab`` — the speed schedule, one row per grid speed ``v0 + k dv``
     ``lpv`` rows: :func:`lpv_row` (continuous ``F, G, H, D, J``, then the
@@ -33,18 +34,32 @@ sample:
     continuous part of :func:`lpv_row`, row ``iv * ne + ie`` for speed point
     ``iv`` and excitation point ``ie`` (:func:`adaptive_block`); ``gated``: :func:`lpv_row` of the
     two observers' block-diagonal stack (gate constants: :func:`gated_block`); ``dfc`` rows:
-    ``Haw0, Hrw0, Hau0, Hru0``; ``riccati`` rows: ``A, B, C, Dy, J``. Matrices are stored row-major.
+    ``Haw0, Hrw0, Hau0, Hru0`` (``DFC_*``); ``riccati`` rows: :func:`riccati_row`
+    (``A, B, C, Dy, J``); the smoother's rows: :func:`smooth_row` (``S, M, b``)
+    and :func:`smooth_fixed_row` (``Phi, Gam0, Gam1``).
 
-``work`` — scratch of the general path (:func:`work_size`).
+``work`` — scratch (:func:`work_size`): the ``lpv`` and ``adaptive`` kernels interpolate
+    the table row into it at the row's own offsets, scratch after :attr:`LpvRow.end`; the
+    Riccati kernel adds its blocks after the row (:func:`riccati_work`).
 
-All offsets are plain integers, which numba folds into the compiled code as
+The fixed offsets are plain integers, which numba folds into the compiled code as
 constants; the helpers below compute the variable-size blocks from the state
-dimensions, in Python and in compiled code alike.
+dimensions and are the same functions in Python and in compiled code
+(``register_jitable``, inlined into each kernel): the kernels call them (``row = lpv_row(n)``, then
+``work[row.H + p]``), Python builds the arrays with them, and the generated C
+(:mod:`roadbank.export.ccode`) takes its offsets from them, so no offset is
+written down twice. Blocks are stored row-major.
 """
 
 from __future__ import annotations
 
 from typing import NamedTuple
+
+from numba.extending import register_jitable
+
+#: the helpers below are plain Python functions that compiled code can call too; numba inlines
+#: them into the calling kernel (no compiled function of their own: no compile time of their own)
+_compiled = register_jitable(inline="always")
 
 #: number of inputs ``eta = [delta_f, ay, r]``
 NETA = 3
@@ -101,6 +116,7 @@ class RollBlock(NamedTuple):
     end: int
 
 
+@_compiled
 def roll_block(nr: int) -> RollBlock:
     """:class:`RollBlock` for ``nr`` roll states (sizes nr*nr, nr, nr, 1, nr, nr*nr, nr, nr)."""
     F = C_ROLL
@@ -123,10 +139,73 @@ class RiccatiBlock(NamedTuple):
     end: int
 
 
+@_compiled
 def riccati_block(n: int, p: int, nr: int) -> RiccatiBlock:
     """:class:`RiccatiBlock` after the roll block of ``nr`` states."""
     o = roll_block(nr).end
     return RiccatiBlock(o, o + p * p, o + p * p + n * n, o + p * p + 2 * n * n)
+
+
+class RiccatiRow(NamedTuple):
+    """Offsets within one ``riccati`` table row (n states, p measured outputs): ``A`` (n*n),
+    ``B`` (n*3), ``C`` (p*n), ``Dy`` (p*3) with the innovation ``Dy eta - C x``, ``J`` (n*3,
+    the start ``xi = J eta``); ``end`` the row's length."""
+
+    A: int
+    B: int
+    C: int
+    Dy: int
+    J: int
+    end: int
+
+
+@_compiled
+def riccati_row(n: int, p: int) -> RiccatiRow:
+    """:class:`RiccatiRow` for ``n`` states and ``p`` measured outputs."""
+    B = n * n
+    C = B + n * NETA
+    Dy = C + p * n
+    J = Dy + p * NETA
+    return RiccatiRow(0, B, C, Dy, J, J + n * NETA)
+
+
+class RiccatiWork(NamedTuple):
+    """Offsets in ``work`` of the Riccati kernel's blocks after the interpolated row
+    (:func:`riccati_row` ``.end``): the gain ``K`` (n*p), the closed-loop ``F`` (n*n) and ``G``
+    (n*3) (``F`` also receives ``P``), the Hamiltonian ``Hm`` (2n x 2n), its trapezoidal
+    matrix ``Mw`` (2n x 2n) with pivots ``piv`` (2n), ``Z = [X; Y]`` (2n x n), ``X^T`` at ``Xt``
+    (n*n) with pivots ``px`` (n), a column buffer ``col`` (2n + 6), the current inputs ``e``
+    (3) and the scratch ``S`` of the roll step."""
+
+    K: int
+    F: int
+    G: int
+    Hm: int
+    Mw: int
+    piv: int
+    Z: int
+    Xt: int
+    px: int
+    col: int
+    e: int
+    S: int
+
+
+@_compiled
+def riccati_work(n: int, p: int) -> RiccatiWork:
+    """:class:`RiccatiWork` for ``n`` states and ``p`` measured outputs."""
+    K = riccati_row(n, p).end
+    F = K + n * p
+    G = F + n * n
+    Hm = G + n * NETA
+    Mw = Hm + 4 * n * n
+    piv = Mw + 4 * n * n
+    Z = piv + 2 * n
+    Xt = Z + 2 * n * n
+    px = Xt + n * n
+    col = px + n
+    e = col + 2 * n + 2 * NETA
+    return RiccatiWork(K, F, G, Hm, Mw, piv, Z, Xt, px, col, e, e + NETA)
 
 
 class LpvRow(NamedTuple):
@@ -149,6 +228,7 @@ class LpvRow(NamedTuple):
     end: int
 
 
+@_compiled
 def lpv_row(n: int) -> LpvRow:
     """:class:`LpvRow` for ``n`` observer states."""
     G = n * n
@@ -163,7 +243,7 @@ def lpv_row(n: int) -> LpvRow:
 
 class Batch3Block(NamedTuple):
     """Offsets, within a three-state ``lpv`` row after :func:`lpv_row` ``.end``, of the fixed-rate
-    map arranged for the batch loop (:func:`roadbank.estimators.kernels._lpv3_fixed_run`).
+    map arranged for the batch loop (:func:`roadbank.estimators.kernels.lpv.lpv3_fixed_run`).
 
     ``M`` (9 x 4): the columns of ``[Gam0 | Gam1 | Phi]`` in the order the loop sums them,
     ``Gam0[:, 0], Gam1[:, 0], Gam0[:, 1], Gam1[:, 1], Gam0[:, 2], Gam1[:, 2], Phi[:, 0],
@@ -181,17 +261,20 @@ class Batch3Block(NamedTuple):
     end: int
 
 
+@_compiled
 def batch3_block() -> Batch3Block:
     """:class:`Batch3Block` of a three-state row (starts at ``lpv_row(3).end``)."""
     o = lpv_row(3).end
     return Batch3Block(o, o + 36, o + 44, o + 80, o + 88)
 
 
+@_compiled
 def roll_states(n: int) -> int:
     """Offset in ``mem`` of the roll states (after the ``n`` observer states)."""
     return M_X + n
 
 
+@_compiled
 def riccati_p(n: int, nr: int) -> int:
     """Offset in ``mem`` of the Riccati matrix ``P`` (n*n, row-major)."""
     return M_X + n + nr
@@ -211,16 +294,33 @@ class AdaptiveBlock(NamedTuple):
     end: int
 
 
+@_compiled
 def adaptive_block(nr: int) -> AdaptiveBlock:
     """:class:`AdaptiveBlock` after the roll block of ``nr`` states (at ``cfg[C_OFAM]``)."""
     o = roll_block(nr).end
     return AdaptiveBlock(o, o + 1, o + 2, o + 3, o + 4, o + 5)
 
 
+@_compiled
 def excitation_state(n: int, nr: int) -> int:
     """Offset in ``mem`` of the ``adaptive`` family's excitation (m/s^2), followed by the
     low-passed ``|ay|`` (m/s^2); where a Riccati P would be."""
     return M_X + n + nr
+
+
+class AdaptiveState(NamedTuple):
+    """Offsets in ``mem`` of the ``adaptive`` family's excitation ``E`` (m/s^2) and low-passed
+    ``|ay|`` ``AF`` (m/s^2)."""
+
+    E: int
+    AF: int
+
+
+@_compiled
+def adaptive_state(n: int, nr: int) -> AdaptiveState:
+    """:class:`AdaptiveState` (``E`` is :func:`excitation_state`)."""
+    o = excitation_state(n, nr)
+    return AdaptiveState(o, o + 1)
 
 
 class GatedBlock(NamedTuple):
@@ -237,23 +337,84 @@ class GatedBlock(NamedTuple):
     end: int
 
 
+@_compiled
 def gated_block(n: int, nr: int) -> GatedBlock:
     """:class:`GatedBlock` after the roll block of ``nr`` states (at ``cfg[C_OFAM]``)."""
     o = roll_block(nr).end
     return GatedBlock(o, o + n, o + n + 1, o + n + 2, o + n + 3, o + n + 4)
 
 
+@_compiled
 def gate_state(n: int, nr: int) -> int:
     """Offset in ``mem`` of the ``gated`` family's low-passed yaw rate (rad/s), followed by the
     gate (-); where a Riccati P would be."""
     return M_X + n + nr
 
 
+class GateState(NamedTuple):
+    """Offsets in ``mem`` of the ``gated`` family's low-passed yaw rate ``RF`` (rad/s) and gate ``G`` (-)."""
+
+    RF: int
+    G: int
+
+
+@_compiled
+def gate_states(n: int, nr: int) -> GateState:
+    """:class:`GateState` (``RF`` is :func:`gate_state`)."""
+    o = gate_state(n, nr)
+    return GateState(o, o + 1)
+
+
+# --- dfc ------------------------------------------------------------------------
+#: ``dfc`` table row: Haw0, Hrw0, Hau0, Hru0 (the gate's transfer-function gains at the grid speed)
+DFC_HAW, DFC_HRW, DFC_HAU, DFC_HRU = 0, 1, 2, 3
+#: ``dfc`` states in ``mem``: the low-pass output (-), then the DFC indicator (m/s^2)
+M_DFC_X = M_X
+M_DFC_IND = M_X + 1
+
+
+# --- smoother -------------------------------------------------------------------
+
+class SmoothRow(NamedTuple):
+    """Offsets within one row of the smoother's backward-pass table: ``S`` (n*n), ``M`` (n*n), ``b`` (n)."""
+
+    S: int
+    M: int
+    b: int
+    end: int
+
+
+@_compiled
+def smooth_row(n: int) -> SmoothRow:
+    """:class:`SmoothRow` for ``n`` states."""
+    return SmoothRow(0, n * n, 2 * n * n, 2 * n * n + n)
+
+
+class SmoothFixedRow(NamedTuple):
+    """Offsets within one row of the smoother's fixed-rate table, inputs ``e = [x_f, ay]``
+    (``ne = n + 1``): ``Phi`` (n*n), ``Gam0``, ``Gam1`` (n*ne)."""
+
+    Phi: int
+    Gam0: int
+    Gam1: int
+    ne: int
+    end: int
+
+
+@_compiled
+def smooth_fixed_row(n: int) -> SmoothFixedRow:
+    """:class:`SmoothFixedRow` for ``n`` states."""
+    ne = n + 1
+    return SmoothFixedRow(0, n * n, n * n + n * ne, ne, n * n + 2 * n * ne)
+
+
+@_compiled
 def mem_size(n: int, nr: int) -> int:
     """Length of ``mem`` for ``n`` observer and ``nr`` roll states (room for a Riccati ``P``)."""
     return M_X + n + nr + n * n + 2
 
 
+@_compiled
 def work_size(n: int) -> int:
     """Length of the scratch array ``work`` for ``n`` observer states (every family)."""
     return 64 + 20 * n * n + 8 * n * NETA + 4 * n

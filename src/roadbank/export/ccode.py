@@ -1,7 +1,7 @@
 """C99 source of an exported estimator: header, implementation, interface README.
 
 The generated step function is the ``lpv`` kernel of
-:mod:`roadbank.estimators.kernels` written out in C, step by step (the compiled
+:mod:`roadbank.estimators.kernels.lpv` written out in C, step by step (the compiled
 kernel orders some sums differently, e.g. its fixed-rate batch loop, so the two
 agree to rounding: tests/test_export_c.py, 1e-9 rad in float64): linear interpolation of the
 table rows on the speed grid (clamped at both ends), the trapezoidal (Tustin)
@@ -19,7 +19,10 @@ compile-time constant, tables as ``static const`` arrays.
 The observer update of the general path (continuous tables discretised per
 sample) comes from :func:`_observer_tustin`; with the kernels' fixed-rate tables
 (:func:`_discrete_parts`), a sample at the design rate is instead one update with
-the exact discrete-time observer interpolated on the grid, as in the kernels.
+the exact discrete-time observer interpolated on the grid, as in the kernels. The
+tables are the kernels' rows, and every offset into them (``RB_OG`` .. ``RB_OJ``,
+``RB_DGAM0``, ``RB_DGAM1`` and the entries of the three-state update) is written from
+:func:`roadbank.estimators.layout.lpv_row`, the function the kernels index with.
 """
 
 from __future__ import annotations
@@ -29,7 +32,8 @@ from string import Template
 
 import numpy as np
 
-from .design import NETA, ExportDesign
+from ..estimators.layout import NETA, lpv_row
+from .design import ExportDesign
 
 __all__ = ["generate", "real_literal"]
 
@@ -178,6 +182,10 @@ enum {
     RB_NG = ${ng},          /* grid speeds (table rows) */
     RB_NK = ${nk},           /* floats per table row: F | G | H | D | J */
     RB_NKC = ${nkc},          /* F | G | H | D: the part interpolated every sample */
+    RB_OG = ${og},           /* offsets in a row (as the Python kernels' table): G, H, D, J */
+    RB_OH = ${oh},
+    RB_OD = ${od},
+    RB_OJ = ${oj},
     RB_NSUB_MAX = ${nsub_max}      /* most substeps of one sample (dt <= max_gap) */
 };
 
@@ -479,9 +487,9 @@ static real_t rb_observer(state_t *st, const real_t *t0, const real_t *t1, real_
         x1 = 0.0_R;
         x2 = 0.0_R;
         for (q = 0; q < 3; ++q) {
-            x0 += rb_lerp(t0, t1, a, 24 + q) * u[q];
-            x1 += rb_lerp(t0, t1, a, 27 + q) * u[q];
-            x2 += rb_lerp(t0, t1, a, 30 + q) * u[q];
+            x0 += rb_lerp(t0, t1, a, $j0 + q) * u[q];
+            x1 += rb_lerp(t0, t1, a, $j1 + q) * u[q];
+            x2 += rb_lerp(t0, t1, a, $j2 + q) * u[q];
         }
     } else {
         const real_t p0 = st->eta[0];
@@ -489,15 +497,15 @@ static real_t rb_observer(state_t *st, const real_t *t0, const real_t *t1, real_
         const real_t p2 = st->eta[2];
         const int nsub = rb_nsub(dt);
         const real_t hh = nsub == 1 ? 0.5_R * dt : 0.5_R * (dt / (real_t)nsub);
-        const real_t m00 = 1.0_R - hh * c[0];
-        const real_t m01 = -hh * c[1];
-        const real_t m02 = -hh * c[2];
-        const real_t m10 = -hh * c[3];
-        const real_t m11 = 1.0_R - hh * c[4];
-        const real_t m12 = -hh * c[5];
-        const real_t m20 = -hh * c[6];
-        const real_t m21 = -hh * c[7];
-        const real_t m22 = 1.0_R - hh * c[8];
+        const real_t m00 = 1.0_R - hh * c[$f0];
+        const real_t m01 = -hh * c[$f1];
+        const real_t m02 = -hh * c[$f2];
+        const real_t m10 = -hh * c[$f3];
+        const real_t m11 = 1.0_R - hh * c[$f4];
+        const real_t m12 = -hh * c[$f5];
+        const real_t m20 = -hh * c[$f6];
+        const real_t m21 = -hh * c[$f7];
+        const real_t m22 = 1.0_R - hh * c[$f8];
         const real_t c00 = m11 * m22 - m12 * m21;
         const real_t c01 = m02 * m21 - m01 * m22;
         const real_t c02 = m01 * m12 - m02 * m11;
@@ -516,9 +524,12 @@ static real_t rb_observer(state_t *st, const real_t *t0, const real_t *t1, real_
             const real_t v0 = 2.0_R * p0 + s * (u[0] - p0);
             const real_t v1 = 2.0_R * p1 + s * (u[1] - p1);
             const real_t v2 = 2.0_R * p2 + s * (u[2] - p2);
-            const real_t b0 = x0 + hh * (c[0] * x0 + c[1] * x1 + c[2] * x2 + c[9] * v0 + c[10] * v1 + c[11] * v2);
-            const real_t b1 = x1 + hh * (c[3] * x0 + c[4] * x1 + c[5] * x2 + c[12] * v0 + c[13] * v1 + c[14] * v2);
-            const real_t b2 = x2 + hh * (c[6] * x0 + c[7] * x1 + c[8] * x2 + c[15] * v0 + c[16] * v1 + c[17] * v2);
+            const real_t b0 = x0 + hh * (c[$f0] * x0 + c[$f1] * x1 + c[$f2] * x2
+                                         + c[$g0] * v0 + c[$g1] * v1 + c[$g2] * v2);
+            const real_t b1 = x1 + hh * (c[$f3] * x0 + c[$f4] * x1 + c[$f5] * x2
+                                         + c[$g3] * v0 + c[$g4] * v1 + c[$g5] * v2);
+            const real_t b2 = x2 + hh * (c[$f6] * x0 + c[$f7] * x1 + c[$f8] * x2
+                                         + c[$g6] * v0 + c[$g7] * v1 + c[$g8] * v2);
             x0 = (c00 * b0 + c01 * b1 + c02 * b2) * inv;
             x1 = (c10 * b0 + c11 * b1 + c12 * b2) * inv;
             x2 = (c20 * b0 + c21 * b1 + c22 * b2) * inv;
@@ -530,7 +541,7 @@ static real_t rb_observer(state_t *st, const real_t *t0, const real_t *t1, real_
     for (k = 0; k < 3; ++k) {
         st->eta[k] = u[k];
     }
-    return c[18] * x0 + c[19] * x1 + c[20] * x2 + c[21] * u[0] + c[22] * u[1] + c[23] * u[2];
+    return c[$h0] * x0 + c[$h1] * x1 + c[$h2] * x2 + c[$d0] * u[0] + c[$d1] * u[1] + c[$d2] * u[2];
 }
 
 """
@@ -550,18 +561,18 @@ static real_t rb_observer(state_t *st, const real_t *t0, const real_t *t1, real_
         for (p = 0; p < RB_N; ++p) {
             real_t acc = 0.0_R;
             for (q = 0; q < 3; ++q) {
-                acc += rb_lerp(t0, t1, a, RB_NKC + p * 3 + q) * u[q];
+                acc += rb_lerp(t0, t1, a, RB_OJ + p * 3 + q) * u[q];
             }
             st->x[p] = acc;
         }
     } else {
-        rb_tustin(st->x, RB_N, c, c + RB_N * RB_N, 3, st->eta, u, dt);
+        rb_tustin(st->x, RB_N, c, c + RB_OG, 3, st->eta, u, dt);
     }
     for (p = 0; p < RB_N; ++p) {
-        w += c[RB_N * RB_N + 3 * RB_N + p] * st->x[p];
+        w += c[RB_OH + p] * st->x[p];
     }
     for (q = 0; q < 3; ++q) {
-        w += c[RB_N * RB_N + 4 * RB_N + q] * u[q];
+        w += c[RB_OD + q] * u[q];
     }
     for (q = 0; q < 3; ++q) {
         st->eta[q] = u[q];
@@ -581,7 +592,7 @@ static real_t rb_observer(state_t *st, const real_t *t0, const real_t *t1, real_
     (void)dt;
     (void)restart;
     for (q = 0; q < 3; ++q) {
-        w += rb_lerp(t0, t1, a, q) * u[q];
+        w += rb_lerp(t0, t1, a, RB_OD + q) * u[q];
     }
     for (q = 0; q < 3; ++q) {
         st->eta[q] = u[q];
@@ -596,7 +607,17 @@ def _observer_tustin(d: ExportDesign) -> str:
     """The observer update of today's general path (continuous tables, Tustin per sample)."""
     if d.n == 0:
         return _OBSERVER_0
-    return _LERP_ROW + (_OBSERVER3 if d.n == 3 else _OBSERVER_N)
+    if d.n != 3:
+        return _LERP_ROW + _OBSERVER_N
+    row = lpv_row(3)            # the three-state update written out entry by entry, at the layout's offsets
+    idx = {f"j{p}": row.J + NETA * p for p in range(3)}       # J row p; H, D entry i; F, G entry k
+    for i in range(3):
+        idx[f"h{i}"] = row.H + i
+        idx[f"d{i}"] = row.D + i
+    for k in range(9):
+        idx[f"f{k}"] = row.F + k
+        idx[f"g{k}"] = row.G + k
+    return _LERP_ROW + Template(_OBSERVER3).substitute(idx)
 
 
 _OBSERVER_FIXED = """\
@@ -617,19 +638,19 @@ static real_t rb_observer_fixed(state_t *st, const real_t *t0, const real_t *t1,
     for (p = 0; p < RB_N; ++p) {
         real_t acc = 0.0_R;
         for (k = 0; k < RB_N; ++k) {
-            acc += c[p * RB_N + k] * st->x[k];
+            acc += c[RB_DPHI + p * RB_N + k] * st->x[k];
         }
         for (q = 0; q < 3; ++q) {
-            acc += c[RB_N * RB_N + p * 3 + q] * st->eta[q] + c[RB_N * RB_N + 3 * RB_N + p * 3 + q] * u[q];
+            acc += c[RB_DGAM0 + p * 3 + q] * st->eta[q] + c[RB_DGAM1 + p * 3 + q] * u[q];
         }
         y[p] = acc;
     }
     for (p = 0; p < RB_N; ++p) {
         st->x[p] = y[p];
-        w += rb_lerp(t0, t1, a, RB_N * RB_N + 3 * RB_N + p) * y[p];
+        w += rb_lerp(t0, t1, a, RB_OH + p) * y[p];
     }
     for (q = 0; q < 3; ++q) {
-        w += rb_lerp(t0, t1, a, RB_N * RB_N + 4 * RB_N + q) * u[q];
+        w += rb_lerp(t0, t1, a, RB_OD + q) * u[q];
         st->eta[q] = u[q];
     }
     return w;
@@ -658,7 +679,12 @@ def _discrete_parts(d: ExportDesign, float32: bool) -> dict:
                                np.reshape(x["Gam1"], (g, -1))], axis=1)
         body = ",\n".join(f"    /* vx = {d.v0 + k * d.dv:.2f} m/s */\n    {{{_array(rows[k], float32, 4, '     ')}}}"
                           for k in range(g))
-        tables += (f"\nenum {{ RB_NKD = {rows.shape[1]} }};   /* floats per discrete row: Phi | Gam0 | Gam1 */\n\n"
+        row = lpv_row(d.n)          # the discrete part of a kernel row: Phi | Gam0 | Gam1
+        if rows.shape[1] != row.end - row.Phi:
+            raise ValueError(f"{d.name}: fixed-rate rows of {rows.shape[1]} floats, the layout has {row.end - row.Phi}")
+        tables += (f"\nenum {{ RB_NKD = {rows.shape[1]},   /* floats per discrete row: Phi | Gam0 | Gam1 */\n"
+                   f"       RB_DPHI = {row.Phi - row.Phi}, RB_DGAM0 = {row.Gam0 - row.Phi}, "
+                   f"RB_DGAM1 = {row.Gam1 - row.Phi} }};\n\n"
                    f"/* Fixed-rate tables for {1.0 / h:g} Hz (exact first-order-hold discretisation of row k\n"
                    " * of RB_TAB over RB_DT_FIX): Phi (n x n) | Gam0 (n x 3) | Gam1 (n x 3). */\n"
                    f"static const real_t RB_DTAB[RB_NG][RB_NKD] = {{\n{body}\n}};\n")
@@ -798,7 +824,8 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
     lit = lambda x: real_literal(x, float32)  # noqa: E731
     # scratch size of the LU/Tustin helpers: the observer (unless the 3-state path) and the roll model
     nt = max(d.n if d.n not in (0, 3) else 0, d.nr)
-    nkc = d.n * d.n + NETA * d.n + d.n + NETA
+    row = lpv_row(d.n)
+    nkc = row.J                   # F | G | H | D
     rows = []
     for k in range(d.ng):
         body = _array(d.table[k], float32, 4, "     ")
@@ -825,6 +852,7 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
         f" (a sample {1.0 / d.rate:g} s after the last: the exact discrete\n * observer for {d.rate:g} Hz, RB_DTAB)",
         asin="asinf" if float32 else "asin", fabs="fabsf" if float32 else "fabs",
         ceil="ceilf" if float32 else "ceil", ng=d.ng, nk=d.nk, nkc=nkc, nsub_max=d.nsub_max,
+        og=row.G, oh=row.H, od=row.D, oj=row.J,
         v0=lit(d.v0), dv=lit(d.dv), vmin=lit(d.v_min), sub=lit(d.max_substep), gap=lit(d.max_gap),
         wmax=lit(d.wmax), roll_d=lit(d.roll_D), uses=", ".join(str(int(u)) for u in d.uses),
         table=",\n".join(rows),

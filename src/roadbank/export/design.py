@@ -17,8 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-#: inputs of every observer, in table order: eta = [delta_f, ay, r]
-NETA = 3
+from ..estimators.layout import DT_REL_TOL, gated_block, lpv_row
 
 #: why an estimator on another kernel cannot be exported (kernel -> reason)
 _NOT_LPV_REASON = {
@@ -51,7 +50,8 @@ class ExportDesign:
         First speed (m/s) and spacing (m/s) of the schedule's grid.
     table : array (ng, n*n + 3n + n + 3 + 3n)
         One row per grid speed: F (n x n), G (n x 3), H (n), D (3), J (n x 3),
-        row-major; ``xi' = F xi + G eta``, ``w = H xi + D eta``, ``J = -F^-1 G``
+        row-major, at the offsets of :func:`roadbank.estimators.layout.lpv_row` (its continuous
+        part); ``xi' = F xi + G eta``, ``w = H xi + D eta``, ``J = -F^-1 G``
         (the equilibrium used at a (re)start).
     roll_F, roll_G, roll_H, roll_D, roll_J : arrays
         Roll model ``z' = F z + G ay``, ``phi = H z + D ay``, ``J = -F^-1 G``.
@@ -211,7 +211,7 @@ def export_design(est, rate: float, module_name: str | None = None, *,
     # the continuous-time schedule (the kernels' general path), kept apart from the
     # fixed-rate tables the estimator appends for its sample rate
     table = np.array(est._tab_cont, dtype=np.float64, copy=True)
-    nk = n * n + NETA * n + n + NETA + NETA * n
+    nk = lpv_row(n).cont
     if table.ndim != 2 or table.shape[1] != nk:
         raise NotExportable(f"{est.name}: not exportable: its table rows have {table.shape[-1]} "
                             f"entries, the scheduled-observer layout needs {nk} for {n} states")
@@ -224,9 +224,7 @@ def export_design(est, rate: float, module_name: str | None = None, *,
     nr = F.shape[0]
     # the same expressions as Estimator._build_cfg, so the constants are the same bits
     J = -np.linalg.solve(F, G).ravel() if nr else np.zeros(0)
-    from ..estimators import layout
-
-    if est.fixed_dt is not None and abs(est.fixed_dt * rate - 1.0) > layout.DT_REL_TOL:
+    if est.fixed_dt is not None and abs(est.fixed_dt * rate - 1.0) > DT_REL_TOL:
         raise ValueError(f"{est.name}: the estimator runs its fixed-rate path at {1.0 / est.fixed_dt:g} Hz, "
                          f"not at the export rate {rate:g} Hz")
     if discrete is None:    # as in Python: est._auto_rate is the sample_rate="auto" setting
@@ -234,7 +232,7 @@ def export_design(est, rate: float, module_name: str | None = None, *,
     disc, dt_tol = None, 0.0
     if discrete:
         disc = est.discrete_tables(1.0 / rate)
-        dt_tol = float(layout.DT_REL_TOL)
+        dt_tol = float(DT_REL_TOL)
     p = est.params
     provenance = {"estimator": repr(est), "class": type(est).__name__,
                   "settings": {k: v for k, v in vars(est).items()
@@ -257,9 +255,7 @@ def _gate(est, n: int, nr: int) -> dict | None:
     """The ``gated`` kernel's constants as its ``cfg`` holds them (None for another kernel)."""
     if est.kernel != "gated":
         return None
-    from ..estimators import layout
-
-    b = layout.gated_block(n, nr)
+    b = gated_block(n, nr)
     cfg = est._cfg
     return {"HF": np.array(cfg[b.HF:b.TF], float), "tf": float(cfg[b.TF]), "tau": float(cfg[b.TAU]),
             "on": float(cfg[b.ON]), "span": float(cfg[b.SPAN])}
