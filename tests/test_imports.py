@@ -19,7 +19,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "roadbank"
 SCOPE = ("signals.py", "params.py", "constants.py", "units.py", "cache.py", "defaults.py", "vehicle", "estimators",
          "evaluation", "mapping", "report", "sim", "models", "identification", "campaign", "validation", "tuning",
          "io", "faults")
-NOT_YET = ("estimators/kernels.py", "estimators/layout.py", "estimators/offset_kernel.py")
+NOT_YET: tuple[str, ...] = ()
 
 #: top-level packages whose imports may always be deferred
 OPTIONAL = {"asammdf", "can", "cantools", "rosbags", "mcap", "dask", "distributed", "pandas", "sympy", "matplotlib"}

@@ -18,6 +18,8 @@ from __future__ import annotations
 import hashlib
 from pathlib import Path
 
+from numba.core import caching
+
 ENTRY = dict(cache=True, _nrt=False, error_model="numpy", no_cfunc_wrapper=True)
 HELPER = dict(ENTRY, no_cpython_wrapper=True)
 INLINE = dict(HELPER, forceinline=True)
@@ -65,8 +67,6 @@ class KernelCacheLocator:
 
 def _cache_impl():
     """numba's class that picks a cache locator (``CacheImpl``; ``_CacheImpl`` before numba 0.61)."""
-    from numba.core import caching
-
     return getattr(caching, "CacheImpl", None) or getattr(caching, "_CacheImpl", None)
 
 
