@@ -18,7 +18,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "roadbank"
 #: the modules held to the rule (the others join once their rewrites are done)
 SCOPE = ("signals.py", "params.py", "constants.py", "units.py", "cache.py", "defaults.py", "vehicle", "estimators",
          "evaluation", "mapping", "report", "sim", "models", "identification", "campaign", "validation", "tuning",
-         "io", "faults")
+         "io", "faults", "export")
 NOT_YET: tuple[str, ...] = ()
 
 #: top-level packages whose imports may always be deferred

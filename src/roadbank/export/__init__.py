@@ -13,16 +13,19 @@ that kernel) exports; the others raise :class:`NotExportable` saying why.
 
 from __future__ import annotations
 
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..constants import G
+from ..estimators.offsets import OnlineOffsets
 from .build import CompilerError, build_driver, compile_c
 from .ccode import generate
 from .design import ExportDesign, NotExportable, check_exportable, export_design
 from .loader import CModule
+from .offsets_c import add_offsets
 
 __all__ = ["export_c", "ExportResult", "ExportDesign", "NotExportable", "CompilerError", "CModule",
            "check_exportable", "export_design", "generate", "measure_c_step_ns", "build_driver",
@@ -76,16 +79,12 @@ def export_c(est, out_dir, *, rate: float, float32: bool = False, module_name: s
     NotExportable
         When the estimator's runtime is not a scheduled linear observer.
     """
-    from ..estimators.offsets import OnlineOffsets
-
     learner = None
     if isinstance(est, OnlineOffsets):       # the estimator behind the online offset learner
         learner, est = est._ocfg, est.inner
     design = export_design(est, rate, module_name, discrete=discrete)
     files = generate(design, float32=float32)
     if learner is not None:
-        from .offsets_c import add_offsets
-
         files = add_offsets(files, f"roadbank_{design.ident}", learner, float32)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -128,8 +127,6 @@ def measure_c_step_ns(est, signals=None, *, rate: float = 100.0, float32: bool =
     CompilerError
         When no C compiler is available or it fails.
     """
-    import tempfile
-
     if signals is None:
         cols = synthetic_drive(rate)
     else:

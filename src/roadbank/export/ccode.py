@@ -32,8 +32,10 @@ from string import Template
 
 import numpy as np
 
+from .. import __version__
 from ..estimators.layout import NETA, lpv_row
 from .design import ExportDesign
+from .readme import readme
 
 __all__ = ["generate", "real_literal"]
 
@@ -817,9 +819,6 @@ def _short(v) -> str:
 
 def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
     """Generate the module: ``{file name: text}`` for the header, the source and the README."""
-    from .. import __version__
-    from .readme import readme
-
     names = _names(d)
     lit = lambda x: real_literal(x, float32)  # noqa: E731
     # scratch size of the LU/Tustin helpers: the observer (unless the 3-state path) and the roll model

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..estimators.base import Estimator
 from ..estimators.layout import DT_REL_TOL, gated_block, lpv_row
 
 #: why an estimator on another kernel cannot be exported (kernel -> reason)
@@ -160,11 +161,9 @@ def c_identifier(name: str) -> str:
 def check_exportable(est) -> None:
     """Raise :class:`NotExportable` (saying why) unless ``est`` is causal and runs on the ``lpv`` kernel
     (or the ``gated`` one: that kernel's observer plus a gate on its output)."""
-    from ..estimators.base import Estimator
-
     if not isinstance(est, Estimator):
         raise TypeError(f"expected a roadbank Estimator, got {type(est).__name__}")
-    kernel = getattr(est, "kernel", None)
+    kernel = str(getattr(est, "kernel", ""))
     if getattr(est, "offline", False):
         raise NotExportable(f"{est.name}: not exportable: an offline estimator (its run() smooths with the "
                             "samples after each instant); an ECU runs its forward filter: export "

@@ -16,7 +16,7 @@ from string import Template
 import numpy as np
 
 from ..estimators import offset_kernel as K
-from .ccode import real_literal
+from .ccode import _fix_literals, real_literal
 
 _HEADER = Template("""
 /* ---- online sensor offsets (roadbank.estimators.offsets) --------------------------------
@@ -290,8 +290,6 @@ def offsets_parts(prefix: str, cfg: np.ndarray, float32: bool) -> tuple[str, str
 def add_offsets(files: dict[str, str], prefix: str, cfg: np.ndarray, float32: bool) -> dict[str, str]:
     """The generated module ``files`` (:func:`roadbank.export.ccode.generate`) with the learner
     added to its header (before the closing guard) and source (at the end)."""
-    from .ccode import _fix_literals
-
     head, src = offsets_parts(prefix, cfg, float32)
     out = dict(files)
     h = out[f"{prefix}.h"]
