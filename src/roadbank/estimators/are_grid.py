@@ -50,25 +50,36 @@ NEWTON_MAX_ITER = 8
 #: the sign iteration stops at a change of at most this relative (1-norms): a start for Newton,
 #: which converges quadratically from there
 SIGN_TOL = 1e-6
-#: sign-function iterations before a point counts as not converged (typically 6-12)
-SIGN_MAX_ITER = 60
+#: sign-function iterations before a point counts as not converged: the estimators' grids converge
+#: in 4 to 8; points whose Hamiltonian has eigenvalues on the imaginary axis to rounding (no
+#: stabilising solution) take 30 or more, so they are given up on here (the caller's per-point
+#: path decides them)
+SIGN_MAX_ITER = 16
 
 
 def _solve(M: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``X`` with ``M X = B`` for each matrix of a stack, and ``ok`` (g,): ``M`` finite and not
     singular (``X`` is NaN where not)."""
-    finite = np.all(np.isfinite(M), axis=(1, 2)) & np.all(np.isfinite(B), axis=(1, 2))
-    M = np.where(finite[:, None, None], M, np.eye(M.shape[1]))
+    finite = np.isfinite(M).all(axis=(1, 2)) & np.isfinite(B).all(axis=(1, 2))
+    if not finite.all():
+        M = np.where(finite[:, None, None], M, np.eye(M.shape[1]))
+        B = np.where(finite[:, None, None], B, 0.0)
     try:
-        return np.linalg.solve(M, np.where(finite[:, None, None], B, 0.0)), finite
-    except np.linalg.LinAlgError:          # a singular matrix in the stack: one by one
-        X = np.full(B.shape, np.nan)
+        return np.linalg.solve(M, B), finite
+    except np.linalg.LinAlgError:          # a singular matrix in the stack: solve the others
+        pass
+    sign, _ = np.linalg.slogdet(M)          # the same LU: an exactly singular one has sign 0
+    finite &= sign != 0
+    X = np.full(B.shape, np.nan)
+    try:
+        X[finite] = np.linalg.solve(M[finite], B[finite])
+    except np.linalg.LinAlgError:          # not found singular by its determinant: one by one
         for i in np.flatnonzero(finite):
             try:
                 X[i] = np.linalg.solve(M[i], B[i])
             except np.linalg.LinAlgError:
                 finite[i] = False
-        return X, finite
+    return X, finite
 
 
 def _max_abs(X: np.ndarray) -> np.ndarray:
@@ -90,23 +101,35 @@ def sign_start(A: np.ndarray, Gam: np.ndarray, W: np.ndarray) -> tuple[np.ndarra
     Z[:, n:, :n] = -W / s[:, None, None]
     Z[:, n:, n:] = -A
     done = np.zeros(g, dtype=bool)
+    failed = np.zeros(g, dtype=bool)        # singular or not finite: no start, iterated no further
     with np.errstate(all="ignore"):
         for _ in range(SIGN_MAX_ITER):
-            live = np.flatnonzero(~done)
+            live = np.flatnonzero(~done & ~failed)
             if live.size == 0:
                 break
             Zl = Z[live]
             sign, logdet = np.linalg.slogdet(Zl)
             bad = ~(sign != 0) | ~np.isfinite(logdet)
-            c = np.exp(-np.where(bad, 0.0, logdet) / (2 * n))[:, None, None]
-            Zi = np.linalg.inv(np.where(bad[:, None, None], np.eye(2 * n), Zl))
+            if bad.any():
+                failed[live[bad]] = True
+                Z[live[bad]] = np.nan
+                keep = ~bad
+                live, Zl, logdet = live[keep], Zl[keep], logdet[keep]
+                if live.size == 0:
+                    break
+            c = np.exp(-logdet / (2 * n))[:, None, None]
+            try:
+                Zi = np.linalg.inv(Zl)
+            except np.linalg.LinAlgError:   # singular to LAPACK although its determinant is not 0
+                Zi, fin = _solve(Zl, np.broadcast_to(np.eye(2 * n), Zl.shape))
+                failed[live[~fin]] = True
             Zn = 0.5 * (c * Zl + Zi / c)
             change = np.abs(Zn - Zl).sum(axis=(1, 2))
             Z[live] = Zn
             conv = change <= SIGN_TOL * np.abs(Zn).sum(axis=(1, 2))
-            done[live[conv & ~bad]] = True
-            Z[live[bad]] = np.nan           # singular: no start (stays not done)
-            done[live[bad]] = False
+            failed[live[~np.isfinite(change)]] = True
+            done[live[conv]] = True
+        done &= ~failed
         eye = np.eye(n)
         M = np.concatenate([Z[:, :n, n:], Z[:, n:, n:] + eye], axis=1)        # (g, 2n, n)
         N = -np.concatenate([Z[:, :n, :n] + eye, Z[:, n:, :n]], axis=1)
@@ -206,6 +229,71 @@ def accepted(A: np.ndarray, Gam0: np.ndarray, Gam: np.ndarray, P: np.ndarray) ->
     return ok
 
 
+def _refine(A, Gam0, Gam, W, P0, start) -> tuple[np.ndarray, np.ndarray]:
+    """Newton from ``P0`` on the points with a ``start`` (g,) and the checks on those it converged
+    on: ``P`` (g, n, n) and ``ok`` (g,); the points without a start or a converged, accepted
+    solution are not ok (and cost no Newton step or check)."""
+    P = np.zeros_like(A)
+    ok = np.zeros(A.shape[0], dtype=bool)
+    live = np.flatnonzero(start)
+    if live.size:
+        Pl, conv = newton(A[live], Gam[live], W[live], P0[live])
+        live, Pl = live[conv], Pl[conv]
+        if live.size:
+            ok[live] = accepted(A[live], Gam0[live], Gam[live], Pl)
+            P[live] = Pl
+    return P, ok
+
+
+def _coarse_starts(A, Gam, W, n_inner: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`sign_start` of the coarse points (outer-major, ``n_inner`` per outer value): the first
+    outer value's first, and the others only where it has a start at every inner point (else
+    nothing beyond it is solved, see :func:`solve_grid`: a design whose ``th`` has no solution
+    at the lowest speed costs the sign iterations of that speed only)."""
+    P, ok = sign_start(A[:n_inner], Gam[:n_inner], W[:n_inner])
+    if A.shape[0] == n_inner or not ok.all():
+        return (np.concatenate([P, np.zeros_like(A[n_inner:])]),
+                np.concatenate([ok, np.zeros(A.shape[0] - n_inner, dtype=bool)]))
+    Pr, okr = sign_start(A[n_inner:], Gam[n_inner:], W[n_inner:])
+    return np.concatenate([P, Pr]), np.concatenate([ok, okr])
+
+
+def _fine_starts(coarse, fine, n_inner: int, Pc, okc):
+    """Starts of the points at the outer indices ``fine`` (each with its ``n_inner`` points) from
+    the coarse solutions ``Pc`` (``okc``: accepted) at the outer indices ``coarse``.
+
+    Returns ``P0`` (f * n_inner, n, n), ``start`` (which have one) and ``(linear, retry)``: the
+    linear interpolation between the coarse points on either side (the nearer one where the
+    other is missing), which ``P0`` is wherever the cubic one is not available, and the points
+    whose ``P0`` is the cubic one and that have a linear start too.
+    """
+    n = Pc.shape[1]
+    Pc = Pc.reshape(len(coarse), n_inner, n, n)
+    okc = okc.reshape(len(coarse), n_inner)
+    hi = np.searchsorted(coarse, fine)
+    lo = hi - 1
+    a = ((fine - coarse[lo]) / (coarse[hi] - coarse[lo]))[:, None]
+    ok_lo, ok_hi = okc[lo], okc[hi]
+    w_hi = np.where(ok_lo & ok_hi, a, np.where(ok_hi, 1.0, 0.0))[:, :, None, None]
+    lin = ((1.0 - w_hi) * Pc[lo] + w_hi * Pc[hi]).reshape(-1, n, n)
+    lin_ok = (ok_lo | ok_hi).ravel()
+    if len(coarse) < 4:
+        return lin, lin_ok, (lin, lin_ok)
+    first = np.clip(lo - 1, 0, len(coarse) - 4)
+    nodes = first[:, None] + np.arange(4)                       # (f, 4) coarse positions
+    x = coarse[nodes].astype(float)
+    w = np.ones((len(fine), 4))                                 # Lagrange weights at each fine index
+    for j in range(4):
+        for m in range(4):
+            if m != j:
+                w[:, j] *= (fine - x[:, m]) / (x[:, j] - x[:, m])
+    cub_ok = okc[nodes].all(axis=1)                             # (f, n_inner)
+    cub = np.einsum("fj,fjiab->fiab", w, np.where(okc[nodes][..., None, None], Pc[nodes], 0.0))
+    use = cub_ok.ravel()
+    P0 = np.where(use[:, None, None], cub.reshape(-1, n, n), lin)
+    return P0, use | lin_ok, (lin, lin_ok & use)
+
+
 def solve_grid(A: np.ndarray, Gam0: np.ndarray, Gam: np.ndarray, W: np.ndarray,
                n_inner: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """Stabilising solutions at every point of a grid (see the module docstring).
@@ -231,9 +319,7 @@ def solve_grid(A: np.ndarray, Gam0: np.ndarray, Gam: np.ndarray, W: np.ndarray,
     inner = np.arange(n_inner)
     coarse = np.unique(np.r_[np.arange(0, n_outer, COARSE_STRIDE), n_outer - 1])
     idx = (coarse[:, None] * n_inner + inner).ravel()
-    Pc, okc = sign_start(A[idx], Gam[idx], W[idx])
-    Pc, conv = newton(A[idx], Gam[idx], W[idx], Pc)
-    okc &= conv & accepted(A[idx], Gam0[idx], Gam[idx], Pc)
+    Pc, okc = _refine(A[idx], Gam0[idx], Gam[idx], W[idx], *_coarse_starts(A[idx], Gam[idx], W[idx], n_inner))
     # beyond the first coarse speed without a solution nothing is solved here: the caller's
     # per-point path raises at the first point without one (the points after it are not needed)
     bad = coarse[~okc.reshape(len(coarse), n_inner).all(axis=1)]
@@ -242,20 +328,19 @@ def solve_grid(A: np.ndarray, Gam0: np.ndarray, Gam: np.ndarray, W: np.ndarray,
     P = np.zeros_like(A)
     ok = np.zeros(g, dtype=bool)
     P[idx], ok[idx] = Pc, okc
-    # the other points start from the coarse solutions on either side, interpolated linearly
-    # in the outer index (the nearer one where the other is missing), then Newton
+    # the other points start from the coarse solutions around them, interpolated in the outer
+    # index: cubic through the four nearest where all four are solved, else linear between the
+    # two on either side (the nearer one where the other is missing); then Newton. A point
+    # Newton does not take from the cubic start is tried again from the linear one.
     fine = np.setdiff1d(np.arange(min(limit, n_outer)), coarse)
     if fine.size:
-        hi = np.searchsorted(coarse, fine)
-        lo = hi - 1
-        a = ((fine - coarse[lo]) / (coarse[hi] - coarse[lo]))[:, None]
-        i_lo = lo[:, None] * n_inner + inner
-        i_hi = hi[:, None] * n_inner + inner
-        ok_lo, ok_hi = okc[i_lo], okc[i_hi]
-        w_hi = np.where(ok_lo & ok_hi, a, np.where(ok_hi, 1.0, 0.0))[:, :, None, None]
-        P0 = ((1.0 - w_hi) * Pc[i_lo] + w_hi * Pc[i_hi]).reshape(-1, n, n)
         jdx = (fine[:, None] * n_inner + inner).ravel()
-        Pf, okf = newton(A[jdx], Gam[jdx], W[jdx], P0)
-        okf &= (ok_lo | ok_hi).ravel() & accepted(A[jdx], Gam0[jdx], Gam[jdx], Pf)
+        P0, start, lin = _fine_starts(coarse, fine, n_inner, Pc, okc)
+        Pf, okf = _refine(A[jdx], Gam0[jdx], Gam[jdx], W[jdx], P0, start)
+        lin_P0, retry = lin
+        retry &= ~okf
+        if retry.any():
+            k = jdx[retry]
+            Pf[retry], okf[retry] = _refine(A[k], Gam0[k], Gam[k], W[k], lin_P0[retry], np.ones(k.size, dtype=bool))
         P[jdx], ok[jdx] = Pf, okf
     return P, ok

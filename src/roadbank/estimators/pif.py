@@ -336,8 +336,10 @@ class _BankRateState:
         A = np.zeros((4, 4))
         A[:3, :3] = A3
         A[2, 3] = 1.0
-        B = np.vstack([B3, np.zeros((1, B3.shape[1]))])
-        C = np.hstack([C3, np.zeros((C3.shape[0], 1))])
+        B = np.zeros((4, B3.shape[1]))
+        B[:3] = B3
+        C = np.zeros((C3.shape[0], 4))
+        C[:, :3] = C3
         Lw = np.array([[0.0, 0.0, 1.0, 0.0]])
         Ew = np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
         return A, B, C, Dy, Lw, Ew
