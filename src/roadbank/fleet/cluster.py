@@ -12,7 +12,8 @@ they finish (in process: in order); ``pool.batches(paths)`` groups logs into tas
 ``pool.outcome(task)`` is ``(value, None)`` or, when the task could not finish on its worker (the
 worker died, or the task raised), ``(None, "worker failed: ...")`` -- the caller reports that
 against the task's logs and the others go on. In process, an exception of the task is raised as
-it would be in a loop. ``fn`` and its arguments must be picklable for Dask (module-level
+it would be in a loop. On Dask, ``pool.cpu_seconds()`` reads the CPU time each worker has
+used (what the fleet benchmark reports). ``fn`` and its arguments must be picklable for Dask (module-level
 functions, dataclasses). The layers below (validation, mapping) take a pool as an argument and
 use only these methods (and ``in_process``), never importing this module.
 """
@@ -138,6 +139,14 @@ class OnDask:
     def as_completed(self, tasks):
         from distributed import as_completed
         yield from as_completed(list(tasks))
+
+    def cpu_seconds(self) -> dict:
+        """CPU seconds each worker process has used so far (``time.process_time`` there), by
+        worker address; empty if the workers cannot be asked."""
+        try:
+            return self.client.run(time.process_time)
+        except Exception:       # a worker gone, or not answering: no reading
+            return {}
 
     def outcome(self, fut):
         self.pending.pop(fut, None)

@@ -142,6 +142,12 @@ class FleetResult:
         Seconds to start / connect to the Dask cluster and warm its workers up (0 in-process).
     wall_s : float
         Seconds from the first log submitted to the last one finished (start-up excluded).
+    cpu_s : float
+        CPU seconds the workers spent over that time (in-process: this process; on Dask: the
+        sum over the workers, every thread of each); NaN where not measured.
+    client_cpu_s : float
+        CPU seconds of this process over that time on Dask (the client, and the scheduler of a
+        LocalCluster started here); 0 in-process (it is ``cpu_s``).
     """
 
     summaries: list = field(default_factory=list)
@@ -149,6 +155,8 @@ class FleetResult:
     workers: int = 1
     startup_s: float = 0.0
     wall_s: float = 0.0
+    cpu_s: float = math.nan
+    client_cpu_s: float = 0.0
 
     @property
     def failed(self) -> list[LogSummary]:
@@ -250,8 +258,10 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
     t0 = time.perf_counter()
     try:
         if scheduler is None and int(workers) <= 1:
+            c0 = time.process_time()
             for p, out, meta, png in jobs:
                 finish(estimate_log(p, out, estimators, metadata=meta, plot=png, **kw))
+            result.cpu_s = time.process_time() - c0
         elif jobs:
             _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result, batch)
     finally:
@@ -266,6 +276,7 @@ def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish,
     warm = (_warm, list(estimators), kw["params"], kw["vehicle"])
     with open_pool(workers, scheduler, connect_timeout, warm=warm) as pool:
         result.workers, result.startup_s = pool.workers, pool.startup_s
+        cpu0, client0 = pool.cpu_seconds(), time.process_time()
         groups = {}
         for idx in batches([j[0] for j in jobs], result.workers, batch):
             group = [jobs[i] for i in idx]
@@ -276,3 +287,12 @@ def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish,
                 summaries = [LogSummary(log=str(p), status="error", error=failure) for p, *_ in groups[task]]
             for s in summaries:
                 finish(s)
+        result.client_cpu_s = time.process_time() - client0
+        result.cpu_s = _cpu_spent(cpu0, pool.cpu_seconds())
+
+
+def _cpu_spent(before: dict, after: dict) -> float:
+    """CPU seconds between two :meth:`OnDask.cpu_seconds` readings, summed over the workers
+    present in both (NaN if none)."""
+    common = before.keys() & after.keys()
+    return sum(after[w] - before[w] for w in common) if common else math.nan
