@@ -55,6 +55,10 @@ SIGN_TOL = 1e-6
 #: stabilising solution) take 30 or more, so they are given up on here (the caller's per-point
 #: path decides them)
 SIGN_MAX_ITER = 16
+#: ... and a point still changing by more than :data:`SIGN_SLOW_CHANGE` (relative) after this many
+#: iterations is given up on as well: the points that converge are in the quadratic regime by then
+SIGN_SLOW_AFTER = 10
+SIGN_SLOW_CHANGE = 1e-2
 
 
 def _solve(M: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -82,6 +86,11 @@ def _solve(M: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return X, finite
 
 
+def _rows(X: np.ndarray, live: np.ndarray) -> np.ndarray:
+    """``X[live]``, or ``X`` itself when ``live`` is every index of it in order (no copy)."""
+    return X if live.size == X.shape[0] else X[live]
+
+
 def _max_abs(X: np.ndarray) -> np.ndarray:
     """Largest ``|X|`` of each matrix of a stack (..., n, m)."""
     return np.abs(X).max(axis=(-2, -1))
@@ -103,7 +112,7 @@ def sign_start(A: np.ndarray, Gam: np.ndarray, W: np.ndarray) -> tuple[np.ndarra
     done = np.zeros(g, dtype=bool)
     failed = np.zeros(g, dtype=bool)        # singular or not finite: no start, iterated no further
     with np.errstate(all="ignore"):
-        for _ in range(SIGN_MAX_ITER):
+        for it in range(SIGN_MAX_ITER):
             live = np.flatnonzero(~done & ~failed)
             if live.size == 0:
                 break
@@ -124,11 +133,12 @@ def sign_start(A: np.ndarray, Gam: np.ndarray, W: np.ndarray) -> tuple[np.ndarra
                 Zi, fin = _solve(Zl, np.broadcast_to(np.eye(2 * n), Zl.shape))
                 failed[live[~fin]] = True
             Zn = 0.5 * (c * Zl + Zi / c)
-            change = np.abs(Zn - Zl).sum(axis=(1, 2))
+            change = np.abs(Zn - Zl).sum(axis=(1, 2)) / np.abs(Zn).sum(axis=(1, 2))
             Z[live] = Zn
-            conv = change <= SIGN_TOL * np.abs(Zn).sum(axis=(1, 2))
             failed[live[~np.isfinite(change)]] = True
-            done[live[conv]] = True
+            if it + 1 >= SIGN_SLOW_AFTER:
+                failed[live[change > SIGN_SLOW_CHANGE]] = True
+            done[live[change <= SIGN_TOL]] = True
         done &= ~failed
         eye = np.eye(n)
         M = np.concatenate([Z[:, :n, n:], Z[:, n:, n:] + eye], axis=1)        # (g, 2n, n)
@@ -185,14 +195,17 @@ def newton(A: np.ndarray, Gam: np.ndarray, W: np.ndarray, P0: np.ndarray) -> tup
             live = np.flatnonzero(~done & ~failed)
             if live.size == 0:
                 break
-            Pl, Gl = P[live], Gam[live]
-            PG = Pl @ Gl
-            Q = W[live] + PG @ Pl
-            Pn, finite = _lyapunov(A[live] - PG, 0.5 * (Q + np.swapaxes(Q, 1, 2)))
+            Pl = _rows(P, live)
+            PG = Pl @ _rows(Gam, live)
+            Q = _rows(W, live) + PG @ Pl
+            Pn, finite = _lyapunov(_rows(A, live) - PG, 0.5 * (Q + np.swapaxes(Q, 1, 2)))
             step = _max_abs(Pn - Pl)
             size = _max_abs(Pn)
             good = finite & np.isfinite(size)
-            P[live] = Pn
+            if live.size == g:
+                P = Pn
+            else:
+                P[live] = Pn
             failed[live[~good]] = True
             done[live[good & (step <= NEWTON_TOL * size)]] = True
     return P, done & ~failed
@@ -204,6 +217,15 @@ def _positive_definite(X: np.ndarray) -> np.ndarray:
     try:
         np.linalg.cholesky(X)
         return np.ones(X.shape[0], dtype=bool)
+    except np.linalg.LinAlgError:
+        pass
+    # Sylvester's criterion finds the candidates (every leading minor > 0), Cholesky decides on them
+    ok = np.ones(X.shape[0], dtype=bool)
+    for k in range(1, X.shape[1] + 1):
+        ok &= np.linalg.slogdet(X[:, :k, :k])[0] > 0
+    try:
+        np.linalg.cholesky(X[ok])
+        return ok
     except np.linalg.LinAlgError:
         return np.linalg.eigvalsh(X)[:, 0] > 0
 
@@ -222,7 +244,7 @@ def accepted(A: np.ndarray, Gam0: np.ndarray, Gam: np.ndarray, P: np.ndarray) ->
     """The scipy path's checks per point (g,): ``P`` positive definite, the filter ``A - P Gam0``
     and the game closed loop ``A - P Gam`` Hurwitz."""
     ok = np.all(np.isfinite(P), axis=(1, 2))
-    Ps = np.where(ok[:, None, None], P, np.eye(P.shape[1]))
+    Ps = P if ok.all() else np.where(ok[:, None, None], P, np.eye(P.shape[1]))
     ok &= _positive_definite(Ps)
     for G in (Gam0, Gam):
         ok &= _hurwitz(A - Ps @ G)
@@ -237,25 +259,31 @@ def _refine(A, Gam0, Gam, W, P0, start) -> tuple[np.ndarray, np.ndarray]:
     ok = np.zeros(A.shape[0], dtype=bool)
     live = np.flatnonzero(start)
     if live.size:
-        Pl, conv = newton(A[live], Gam[live], W[live], P0[live])
-        live, Pl = live[conv], Pl[conv]
+        Pl, conv = newton(_rows(A, live), _rows(Gam, live), _rows(W, live), _rows(P0, live))
+        live, Pl = live[conv], _rows(Pl, np.flatnonzero(conv))
         if live.size:
-            ok[live] = accepted(A[live], Gam0[live], Gam[live], Pl)
+            ok[live] = accepted(_rows(A, live), _rows(Gam0, live), _rows(Gam, live), Pl)
             P[live] = Pl
     return P, ok
 
 
 def _coarse_starts(A, Gam, W, n_inner: int) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`sign_start` of the coarse points (outer-major, ``n_inner`` per outer value): the first
-    outer value's first, and the others only where it has a start at every inner point (else
-    nothing beyond it is solved, see :func:`solve_grid`: a design whose ``th`` has no solution
-    at the lowest speed costs the sign iterations of that speed only)."""
+    """:func:`sign_start` of the coarse points (outer-major, ``n_inner`` per outer value), up to
+    the first outer value that lacks a start at some inner point: nothing beyond it is solved
+    (see :func:`solve_grid`), so the points there have none. The first outer value is started
+    on its own: a design whose ``th`` has no solution at the lowest speed costs the sign
+    iterations of that speed only."""
     P, ok = sign_start(A[:n_inner], Gam[:n_inner], W[:n_inner])
-    if A.shape[0] == n_inner or not ok.all():
-        return (np.concatenate([P, np.zeros_like(A[n_inner:])]),
-                np.concatenate([ok, np.zeros(A.shape[0] - n_inner, dtype=bool)]))
-    Pr, okr = sign_start(A[n_inner:], Gam[n_inner:], W[n_inner:])
-    return np.concatenate([P, Pr]), np.concatenate([ok, okr])
+    if A.shape[0] > n_inner and ok.all():
+        Pr, okr = sign_start(A[n_inner:], Gam[n_inner:], W[n_inner:])
+        P, ok = np.concatenate([P, Pr]), np.concatenate([ok, okr])
+    else:
+        P = np.concatenate([P, np.zeros_like(A[n_inner:])])
+        ok = np.concatenate([ok, np.zeros(A.shape[0] - n_inner, dtype=bool)])
+    complete = ok.reshape(-1, n_inner).all(axis=1)
+    if not complete.all():
+        ok[(int(np.argmin(complete)) + 1) * n_inner:] = False
+    return P, ok
 
 
 def _fine_starts(coarse, fine, n_inner: int, Pc, okc):

@@ -49,7 +49,7 @@ import numpy as np
 
 from ..params import G
 from . import grid_design, layout
-from .base import ScheduledObserver, augmented_design_model, equilibrium_map
+from .base import ScheduledObserver, _augmented_design_model, augmented_design_model, equilibrium_map
 from .synthesis import NoStabilisingSolution, game_are
 
 #: paper Table 4
@@ -332,7 +332,7 @@ class _BankRateState:
 
     def _model_at(self, params, vx: float):
         """The augmented modified model for ``params`` at ``vx`` (m/s) with ``w_rate`` appended (``w' = w_rate``)."""
-        A3, B3, C3, Dy, _, _ = augmented_design_model(params, vx, "modified")
+        A3, B3, C3, Dy, _, _ = _augmented_design_model(params, float(vx), "modified")     # (copied below)
         A = np.zeros((4, 4))
         A[:3, :3] = A3
         A[2, 3] = 1.0
@@ -340,9 +340,11 @@ class _BankRateState:
         B[:3] = B3
         C = np.zeros((C3.shape[0], 4))
         C[:, :3] = C3
-        Lw = np.array([[0.0, 0.0, 1.0, 0.0]])
-        Ew = np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
-        return A, B, C, Dy, Lw, Ew
+        Lw = np.zeros((1, 4))
+        Lw[0, 2] = 1.0
+        Ew = np.zeros((4, 2))
+        Ew[2, 0] = Ew[3, 1] = 1.0
+        return A, B, C, Dy.copy(), Lw, Ew
 
     def process_noise(self, Ew: np.ndarray) -> np.ndarray:
         """``Ew diag(Q, Q_rate) Ew^T``: noise on ``w`` and on ``w_rate``."""
