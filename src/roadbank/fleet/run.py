@@ -163,10 +163,35 @@ class FleetResult:
         return [s for s in self.summaries if s.status != "ok"]
 
 
-def _warm(names, params, vehicle=None):
+def _first_of_each_format(paths) -> list[Path]:
+    """The first log of each kind in ``paths`` (by file suffix; a log directory is a kind of its own)."""
+    seen = {}
+    for p in map(Path, paths):
+        seen.setdefault(p.suffix.lower() if not p.is_dir() else "/", p)
+    return list(seen.values())
+
+
+def _read_first_chunk(path, channels=None, format=None, params=None) -> None:
+    """Read the first chunk of ``path`` and drop it (its reader and the reader's libraries loaded,
+    asammdf for MDF4 say); any failure is left to the log's own run to report."""
+    from ..io.stream import stream_log
+    chunks = None
+    try:
+        chunks = stream_log(path, channels=channels, format=format, params=params, chunk_rows=1024)
+        next(iter(chunks), None)
+    except Exception:       # a bad log is reported when it is estimated
+        pass
+    finally:
+        close = getattr(chunks, "close", None)
+        if close is not None:
+            close()
+
+
+def _warm(names, params, vehicle=None, samples=(), channels=None, format=None):
     """Estimate a small generated Parquet log once on a worker, as every log will be (designs for
     the car, compiled kernels, the reader, the time-base checks and the writer: what a first log
-    would otherwise pay inside the timed run)."""
+    would otherwise pay inside the timed run), then read the first chunk of each of ``samples``
+    (a log of each format of the run: :func:`_first_of_each_format`) for their readers."""
     import tempfile
 
     import numpy as np
@@ -179,6 +204,8 @@ def _warm(names, params, vehicle=None):
     with tempfile.TemporaryDirectory(prefix="roadbank-warm-") as tmp:
         pq.write_table(pa.table(cols), f"{tmp}/warm.parquet")
         estimate_log(f"{tmp}/warm.parquet", f"{tmp}/warm.bank.parquet", names, params=params, vehicle=vehicle)
+    for path in samples:
+        _read_first_chunk(path, channels, format, params)
     return True
 
 
@@ -273,7 +300,8 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
 def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result, batch=None):
     from .cluster import open_pool
 
-    warm = (_warm, list(estimators), kw["params"], kw["vehicle"])
+    warm = (_warm, list(estimators), kw["params"], kw["vehicle"], _first_of_each_format(j[0] for j in jobs),
+            kw["channels"], kw["format"])
     with open_pool(workers, scheduler, connect_timeout, warm=warm) as pool:
         result.workers, result.startup_s = pool.workers, pool.startup_s
         cpu0, client0 = pool.cpu_seconds(), time.process_time()
