@@ -71,3 +71,17 @@ def test_fleet_at_scale_on_one_and_two_workers_leaves_nothing_behind(tmp_path, m
            "target_speedup": 1.8, "cores": 2, "scale": sc}
     text = "\n".join(fleet_markdown(out))
     assert "--fleet-logs 3" in text and "| parquet | 2 |" in text and "CPU vs 1 worker" in text
+
+
+def test_the_warm_up_reads_one_log_of_each_format_and_survives_a_bad_one(tmp_path, monkeypatch):
+    from roadbank.fleet import run as fleet_run
+    (tmp_path / "drive").mkdir()
+    paths = [tmp_path / n for n in ("a.csv", "b.CSV", "c.parquet", "drive", "d.parquet")]
+    assert fleet_run._first_of_each_format(paths) == [paths[0], paths[2], paths[3]]
+    _log(tmp_path / "c.parquet", 2000, 0.1)
+    (tmp_path / "a.csv").write_text("t,vx\n0,not a number\n")
+    read = []
+    real = fleet_run._read_first_chunk
+    monkeypatch.setattr(fleet_run, "_read_first_chunk", lambda p, *a: read.append(p) or real(p, *a))
+    assert fleet_run._warm(["pif-modified"], None, None, [tmp_path / "a.csv", tmp_path / "c.parquet"]) is True
+    assert read == [tmp_path / "a.csv", tmp_path / "c.parquet"]
