@@ -32,11 +32,16 @@ BATCH_MAX_LOGS = 64
 #: batches per worker at least (where there are enough logs), so that the workers end together
 #: (the last task of one worker is the others' idle time: an eighth of a share at most)
 BATCHES_PER_WORKER = 8
-#: Dask settings of the workers of a LocalCluster started here: Dask's sampling profiler (the
-#: stack of the running task every 10 ms) and its GIL monitor took a fifth of a worker's CPU
-#: time on short logs (30-33 ms per 10 min log against 25 ms without them, 21 ms in one process)
+#: Dask settings of a LocalCluster started here: Dask's sampling profiler (the stack of the
+#: running task every 10 ms) and its GIL monitor took a fifth of a worker's CPU time on short
+#: logs (30-33 ms per 10 min log against 25 ms without them, 21 ms in one process); the event
+#: loop's timers (its health tick every 20 ms, the memory check every 100 ms, the dashboard's
+#: system monitor every 0.5 s) another 5 % of the workers' and half of the client's
 LOCAL_WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
-                       "distributed.admin.system-monitor.gil.enabled": False}
+                       "distributed.admin.system-monitor.gil.enabled": False,
+                       "distributed.admin.tick.interval": "1s",
+                       "distributed.worker.memory.monitor-interval": "1s",
+                       "distributed.admin.system-monitor.interval": "5s"}
 
 
 def _input_bytes(p: Path) -> int:
