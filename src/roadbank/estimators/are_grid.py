@@ -15,23 +15,27 @@ point and nothing to compile):
 1. starts on a coarse subgrid (every :data:`COARSE_STRIDE`-th speed, and the last): the stable
    invariant subspace of the Hamiltonian ``[[A^T, -Gamma], [-W, -A]]`` from its matrix sign
    function (Newton's iteration ``Z <- (c Z + (c Z)^{-1}) / 2`` with determinant scaling ``c``,
-   to :data:`SIGN_TOL`),
-   with ``P`` scaled so that ``W`` and ``Gamma`` weigh alike;
+   to :data:`SIGN_TOL`; a point still far from converging after :data:`SIGN_SLOW_AFTER`
+   iterations has eigenvalues on the imaginary axis to rounding and is given up on),
+   with ``P`` scaled so that ``W`` and ``Gamma`` weigh alike; the first speed first, alone;
 2. Newton's method on the Riccati equation (Kleinman's iteration written for an indefinite
    ``Gamma``): ``P_{j+1}`` solves the Lyapunov equation
    ``(A - P_j Gamma) P + P (A - P_j Gamma)^T + W + P_j Gamma P_j = 0`` (as a linear system in
    the ``n (n + 1) / 2`` entries of the symmetric ``P``), which
    converges quadratically, until the update is below :data:`NEWTON_TOL` relative: first on the
-   coarse points, then on the others, each started from the coarse solutions on either side
-   interpolated linearly (the solutions are smooth in speed; two to four iterations);
+   coarse points, then on the others, each started from the coarse solutions around it
+   interpolated by a cubic through four of them (linearly between two where not all four are
+   solved; the solutions are smooth in speed: two iterations, mostly);
 3. the checks: ``P`` positive definite (Cholesky), a closed loop ``M`` Hurwitz when the solution
    of ``M X + X M^T + I = 0`` is positive definite (Lyapunov's theorem; cheaper than the
    eigenvalues of the scipy path on a stack, the same decision).
 
 A point that does not converge or fails a check is reported, not raised: the caller solves it
 again with scipy, which either finds the solution or raises the error that names the speed.
-Beyond the first coarse speed without an accepted solution nothing is solved (reported as not
-solved): where no stabilising solution exists the caller's error comes at or before it.
+Beyond the first coarse speed without an accepted solution (or without a start) nothing is
+solved (reported as not solved): where no stabilising solution exists the caller's error comes
+at or before it. So a design whose ``th`` has no solution costs little more than the points up
+to the first speed without one: the ``th`` halvings of the default-tuned PIFs are cheap.
 """
 
 from __future__ import annotations
