@@ -85,3 +85,15 @@ def test_the_warm_up_reads_one_log_of_each_format_and_survives_a_bad_one(tmp_pat
     monkeypatch.setattr(fleet_run, "_read_first_chunk", lambda p, *a: read.append(p) or real(p, *a))
     assert fleet_run._warm(["pif-modified"], None, None, [tmp_path / "a.csv", tmp_path / "c.parquet"]) is True
     assert read == [tmp_path / "a.csv", tmp_path / "c.parquet"]
+
+
+def test_an_unmet_fleet_target_is_explained_with_its_cpu_ratio():
+    from roadbank.bench.report import obstacles
+    from roadbank.bench.suite import TARGETS
+    row = {"workers": 2, "speedup": 1.2, "cpu_ratio": 1.1, "met": False}
+    res = {"targets": {k: True for k in TARGETS}, "estimators": [{"name": "pif-modified"}],
+           "fleet": {"rows": [dict(row, workers=1, met=None), row], "scale": {"rows": [dict(row, speedup=1.5)]}}}
+    text = "\n".join(obstacles(res))
+    assert "**Fleet speed-up**" in text and "1.20x, 1.50x wall" in text and "1.10, 1.10" in text
+    res["fleet"] = {"rows": [dict(row, met=True)]}
+    assert "Fleet" not in "\n".join(obstacles(res))
