@@ -1,8 +1,9 @@
 """Benchmark section ``fleet``: ``roadbank estimate`` on many short logs, end to end, on 1 and 2
 workers, per input format.
 
-Each log is a 100 Hz drive with its own white ``ay`` noise (so each gets its own design, as on
-a real fleet; :func:`roadbank.fleet.bench.fleet_logs`), run through
+Each log is a 100 Hz drive with its own white ``ay`` noise (so the logs need their own designs,
+one per noise level to two significant digits, as on a real fleet;
+:func:`roadbank.fleet.bench.fleet_logs`), run through
 :func:`roadbank.fleet.run_fleet` (the path of ``roadbank estimate DIR -o OUT/ --workers N``) with
 the design cache off: read + design + filter + write of every log, a summary row each.
 1 worker is in this process; 2 workers a Dask LocalCluster of single-threaded processes, whose
@@ -118,7 +119,8 @@ def fleet_markdown(out: dict) -> list[str]:
                "total (s)", "vs 1 worker", f">= {out['target_speedup']:g}x?"]
     loads = sorted({f"{r['load_before']:.1f}" for r in out["rows"]})
     note = (f"{out['logs']} logs of {out['seconds_per_log']:g} s at 100 Hz per format, each with its own `ay` "
-            f"noise (its own design), `{out['estimator']}`, design cache off: read + design + filter + write "
+            f"noise (a design per noise level to two significant digits), `{out['estimator']}`, design cache "
+            "off: read + design + filter + write "
             "of every log (`roadbank.fleet.run_fleet`, as `roadbank estimate DIR -o OUT/ --workers N`). "
             "1 worker: in this process; 2: a Dask LocalCluster of single-threaded processes, start-up "
             "(cluster and warm-up) apart; M samples/s over the processing time. "
