@@ -258,6 +258,16 @@ def obstacles(res: dict) -> list[str]:
             "second. Fixes (in the report/figures code, not the kernels): fewer or cheaper figures "
             "(fewer points per line, no tight bounding boxes), designs shared between worker "
             "processes (or stored on disk).")
+    fleet_rows = [r for r in ((res.get("fleet") or {}).get("rows") or []) + (((res.get("fleet") or {}).get("scale")
+                  or {}).get("rows") or []) if r.get("met") is False]
+    if fleet_rows:
+        speed = ", ".join(f"{r['speedup']:.2f}x" for r in fleet_rows)
+        cpu = ", ".join(f"{r['cpu_ratio']:.2f}" for r in fleet_rows if r.get("cpu_ratio") == r.get("cpu_ratio"))
+        out.append(f"- **Fleet speed-up** (2 workers against 1: {speed} wall; the workers' CPU seconds over one "
+                   f"process's for the same logs: {cpu or 'not measured'}): where the CPU ratio is near 1 "
+                   "the work scales and the wall time says that the second worker had no core of its own "
+                   "(other jobs on a shared machine; load average in the fleet section); 2 / (CPU ratio) is "
+                   "the speed-up two idle cores would give.")
     return out
 
 

@@ -535,8 +535,11 @@ def _ratio(a, b):
     return None if a is None or b is None or b == 0 else a / b
 
 
-def run_suite(size: str = "full", progress=None) -> dict:
+def run_suite(size: str = "full", progress=None, options: dict | None = None) -> dict:
     """Run every benchmark of the given ``size`` ("full", "quick", "tiny") and return the results.
+
+    ``options`` are passed to the extra sections with the size's settings (e.g. ``fleet_logs``:
+    the fleet at scale of :mod:`roadbank.bench.fleet`).
 
     The top-level keys of :data:`TARGETS` are always present; a value is
     ``None`` when the measurement was not possible, with the reason in
@@ -638,7 +641,7 @@ def run_suite(size: str = "full", progress=None) -> dict:
     for sec in SECTIONS:
         say(sec.title)
         try:
-            res[sec.name] = sec.run(dict(cfg, size=size))
+            res[sec.name] = sec.run(dict(cfg, size=size, **(options or {})))
         except Exception as exc:          # one failing extra section never loses the others
             res[sec.name] = {"reason": f"{type(exc).__name__}: {exc}"}
     say("done")

@@ -17,7 +17,10 @@ import click
 @click.option("--quick", is_flag=True, help="Shorter repeats and peers; finishes within 45 s (no reproduce).")
 @click.option("--tiny", is_flag=True, help="A 10 s log, for tests: checks the runner, not the speed.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object with all results on stdout.")
-def bench(output, quick, tiny, as_json):
+@click.option("--fleet-logs", type=click.IntRange(min=0), default=0, show_default=True, metavar="N",
+              help="Also run a fleet at scale: N Parquet logs of 10 min at 100 Hz end to end on 1 and 2 "
+                   "workers (written to a temporary folder, about 1 MB a log; 0: not run).")
+def bench(output, quick, tiny, as_json, fleet_logs):
     """Benchmark the estimators, the plant, cold start and reproduce against peers and speed targets."""
     size = "tiny" if tiny else "quick" if quick else "full"
     # The kernels are single-threaded; the designs call LAPACK on 3x3..6x6 matrices
@@ -32,7 +35,8 @@ def bench(output, quick, tiny, as_json):
     from ..report.html import write_document
     command = "roadbank bench" + "".join(f" {a}" for a in sys.argv[2:]) if sys.argv[1:2] == ["bench"] \
         else "roadbank bench" + (f" -o {output}" if output else "") + (f" --{size}" if size != "full" else "")
-    res = run_suite(size, progress=lambda msg: click.echo(f"[bench] {msg}", err=True))
+    res = run_suite(size, progress=lambda msg: click.echo(f"[bench] {msg}", err=True),
+                    options={"fleet_logs": fleet_logs} if fleet_logs else None)
     if output is not None:
         output.parent.mkdir(parents=True, exist_ok=True)
         write_document(output, markdown(res, shlex.join(shlex.split(command))), "roadbank benchmarks")

@@ -101,16 +101,16 @@ def pif_adaptive(est, own_noise: bool):
         return None
     d = est.design
     vgrid = d.vgrid
-    points = [(float(v), e) for v in vgrid for e in d.egrid]
+    speeds, ne = [float(v) for v in vgrid], len(d.egrid)
 
     def build():
         cars = [replace(d.params, Cr=est.rear_stiffness(e)) for e in d.egrid]
-        return [est._model_at(car, v) for v, _ in points[::len(cars)] for car in cars]
+        return [est._model_at(car, v) for v in speeds for car in cars]
     key = (type(est)._model_at, repr(d.params), d.model, vgrid.tobytes(), tuple(d.egrid), d.mu,
            type(est).rear_stiffness)
     models = _grid_models(key, build)
     tab = observer_rows(models[0], _grid_noise(est, models, own_noise), d.R_matrix, d.S, d.th,
-                        lambda k: est.observer_at(*points[k]), n_inner=len(d.egrid))
+                        lambda k: est.observer_at(speeds[k // ne], d.egrid[k % ne]), n_inner=ne)
     eg = d.egrid
     extra = [eg[0], (eg[1] - eg[0]) if len(eg) > 1 else 1.0, float(len(eg)), d.tau, d.tf]
     return tab, len(est.state_names), np.array(extra)
@@ -167,13 +167,15 @@ def observer_rows(models, W, R, S, th, fallback, n_inner: int = 1) -> np.ndarray
     Gam = Gam0 - th * (np.swapaxes(Lw, 1, 2) @ S @ Lw)
     P, ok = solve_grid(A, Gam0, Gam, W, n_inner)
     synthesis.remember_grid(A, C, Lw, W, R, S, th, P, ok)
+    bad = np.flatnonzero(~ok)
+    own = [fallback(int(k)) for k in bad]       # in grid order: the first unsolvable point raises
     K = P @ Ct @ Rinv
     F = A - K @ C
     G = B + K @ Dy
     H = Lw.copy()
     D = np.zeros((g, 1, B.shape[2]))
-    for k in np.flatnonzero(~ok):       # in grid order: the first unsolvable point raises
-        F[k], G[k], H[k], D[k] = fallback(int(k))
+    for k, rows in zip(bad, own):
+        F[k], G[k], H[k], D[k] = rows
     J = -np.linalg.solve(F, G)
     return np.ascontiguousarray(np.hstack([F.reshape(g, -1), G.reshape(g, -1), H.reshape(g, -1),
                                            D.reshape(g, -1), J.reshape(g, -1)]))

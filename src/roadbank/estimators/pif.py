@@ -50,7 +50,8 @@ import numpy as np
 
 from ..constants import G
 from . import grid_design, layout
-from .base import DesignInputs, ScheduledObserver, augmented_design_model, equilibrium_map, frozen_array
+from .base import (DesignInputs, ScheduledObserver, _augmented_design_model, augmented_design_model,
+                   equilibrium_map, frozen_array)
 from .synthesis import NoStabilisingSolution, game_are
 
 #: paper Table 4
@@ -397,15 +398,19 @@ class _BankRateState:
 
     def _model_at(self, params, vx: float):
         """The augmented modified model for ``params`` at ``vx`` (m/s) with ``w_rate`` appended (``w' = w_rate``)."""
-        A3, B3, C3, Dy, _, _ = augmented_design_model(params, vx, "modified")
+        A3, B3, C3, Dy, _, _ = _augmented_design_model(params, float(vx), "modified")     # (copied below)
         A = np.zeros((4, 4))
         A[:3, :3] = A3
         A[2, 3] = 1.0
-        B = np.vstack([B3, np.zeros((1, B3.shape[1]))])
-        C = np.hstack([C3, np.zeros((C3.shape[0], 1))])
-        Lw = np.array([[0.0, 0.0, 1.0, 0.0]])
-        Ew = np.array([[0.0, 0.0], [0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
-        return A, B, C, Dy, Lw, Ew
+        B = np.zeros((4, B3.shape[1]))
+        B[:3] = B3
+        C = np.zeros((C3.shape[0], 4))
+        C[:, :3] = C3
+        Lw = np.zeros((1, 4))
+        Lw[0, 2] = 1.0
+        Ew = np.zeros((4, 2))
+        Ew[2, 0] = Ew[3, 1] = 1.0
+        return A, B, C, Dy.copy(), Lw, Ew
 
     def process_noise(self, Ew: np.ndarray) -> np.ndarray:
         """``Ew diag(Q, Q_rate) Ew^T``: noise on ``w`` and on ``w_rate``."""

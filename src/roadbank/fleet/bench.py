@@ -19,6 +19,7 @@ from __future__ import annotations
 import functools
 import json
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -220,7 +221,8 @@ def fleet_logs(workdir, n_logs: int, seconds: float, fmt: str = "parquet", bad_e
 
 
 def fleet_speedup(n_logs: int = 200, seconds: float = 600.0, workers=(1, 2), estimator: str = "pif-modified",
-                  bad_every: int = 20, workdir=None, batch: int | None = None, fmt: str = "parquet") -> list[dict]:
+                  bad_every: int = 20, workdir=None, batch: int | None = None, fmt: str = "parquet",
+                  keep_outputs: bool = True) -> list[dict]:
     """Wall time of ``run_fleet`` on ``n_logs`` logs of ``seconds`` (100 Hz, every ``bad_every``-th corrupt).
 
     The logs are :func:`fleet_logs` in format ``fmt`` ("parquet", "csv", "mdf4"). Each worker
@@ -228,6 +230,11 @@ def fleet_speedup(n_logs: int = 200, seconds: float = 600.0, workers=(1, 2), est
     so every design is made); Dask start-up (cluster + warm-up) is reported apart from the
     processing wall time. ``batch``: logs per Dask task (None: automatic). End to end = read +
     design + filter + write, in ``samples_per_s`` (start-up excluded) and ``total_s`` (s, included).
+    ``keep_outputs``: False removes each run's outputs once it is measured (a large fleet's
+    results need not be on disk twice). ``cpu_s``: CPU seconds the workers spent on the processing
+    (:attr:`~roadbank.fleet.FleetResult.cpu_s`), ``cpu_ratio`` that over the first worker count's
+    (how much more CPU the same logs took), ``client_cpu_s`` this process' CPU seconds meanwhile
+    on Dask.
     """
     from .run import run_fleet
     work = Path(workdir or tempfile.mkdtemp(prefix="roadbank-fleet-"))
@@ -238,20 +245,24 @@ def fleet_speedup(n_logs: int = 200, seconds: float = 600.0, workers=(1, 2), est
     try:
         for w in workers:
             t0 = time.perf_counter()
-            res = run_fleet(paths, work / f"out-{fmt}-{w}-{batch or 'auto'}", [estimator], workers=w, batch=batch)
+            out = work / f"out-{fmt}-{w}-{batch or 'auto'}"
+            res = run_fleet(paths, out, [estimator], workers=w, batch=batch)
             total = time.perf_counter() - t0
+            if not keep_outputs:
+                shutil.rmtree(out, ignore_errors=True)
             rows.append({"workers": w, "logs": n_logs, "failed": len(res.failed), "wall_s": res.wall_s,
                          "startup_s": res.startup_s, "total_s": total, "logs_per_s": n_logs / res.wall_s,
                          "samples_per_s": samples / res.wall_s, "batch": batch or "auto", "format": fmt,
-                         "samples": samples})
+                         "samples": samples, "cpu_s": res.cpu_s, "client_cpu_s": res.client_cpu_s})
     finally:
         if old is None:
             os.environ.pop("ROADBANK_CACHE_DIR", None)
         else:
             os.environ["ROADBANK_CACHE_DIR"] = old
-    base = rows[0]["wall_s"]
+    base, base_cpu = rows[0]["wall_s"], rows[0]["cpu_s"]
     for r in rows:
         r["speedup"] = base / r["wall_s"]
+        r["cpu_ratio"] = r["cpu_s"] / base_cpu          # NaN where a reading is missing
     return rows
 
 

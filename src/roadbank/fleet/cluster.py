@@ -12,7 +12,8 @@ they finish (in process: in order); ``pool.batches(paths)`` groups logs into tas
 ``pool.outcome(task)`` is ``(value, None)`` or, when the task could not finish on its worker (the
 worker died, or the task raised), ``(None, "worker failed: ...")`` -- the caller reports that
 against the task's logs and the others go on. In process, an exception of the task is raised as
-it would be in a loop. ``fn`` and its arguments must be picklable for Dask (module-level
+it would be in a loop. On Dask, ``pool.cpu_seconds()`` reads the CPU time each worker has
+used (what the fleet benchmark reports). ``fn`` and its arguments must be picklable for Dask (module-level
 functions, dataclasses). The layers below (validation, mapping) take a pool as an argument and
 use only these methods (and ``in_process``), never importing this module.
 """
@@ -29,7 +30,18 @@ BATCH_BYTES = 32 * 2**20
 #: the most logs in one batch
 BATCH_MAX_LOGS = 64
 #: batches per worker at least (where there are enough logs), so that the workers end together
-BATCHES_PER_WORKER = 4
+#: (the last task of one worker is the others' idle time: an eighth of a share at most)
+BATCHES_PER_WORKER = 8
+#: Dask settings of a LocalCluster started here: Dask's sampling profiler (the stack of the
+#: running task every 10 ms) and its GIL monitor took a fifth of a worker's CPU time on short
+#: logs (30-33 ms per 10 min log against 25 ms without them, 21 ms in one process); the event
+#: loop's timers (its health tick every 20 ms, the memory check every 100 ms, the dashboard's
+#: system monitor every 0.5 s) another 5 % of the workers' and half of the client's
+LOCAL_WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
+                       "distributed.admin.system-monitor.gil.enabled": False,
+                       "distributed.admin.tick.interval": "1s",
+                       "distributed.worker.memory.monitor-interval": "1s",
+                       "distributed.admin.system-monitor.interval": "5s"}
 
 
 def _input_bytes(p: Path) -> int:
@@ -133,12 +145,33 @@ class OnDask:
         from distributed import as_completed
         yield from as_completed(list(tasks))
 
+    def cpu_seconds(self) -> dict:
+        """CPU seconds each worker process has used so far (``time.process_time`` there), by
+        worker address; empty if the workers cannot be asked."""
+        try:
+            return self.client.run(time.process_time)
+        except Exception:       # a worker gone, or not answering: no reading
+            return {}
+
     def outcome(self, fut):
         self.pending.pop(fut, None)
         try:
             return fut.result(), None
         except Exception as exc:    # the worker died (memory, signal) or the task raised
             return None, worker_failure(exc)
+
+
+def _local_worker_config(local: bool):
+    """:data:`LOCAL_WORKER_CONFIG` set while a LocalCluster is started (``local``); nothing for a
+    running scheduler (its workers have their own settings) or without Dask (the session then
+    says it is missing)."""
+    try:
+        import dask
+        import distributed  # noqa: F401  (its defaults first: a setting made before them would
+                            # take every other distributed setting with it when it is undone)
+    except ImportError:
+        return contextlib.nullcontext()
+    return dask.config.set(LOCAL_WORKER_CONFIG) if local else contextlib.nullcontext()
 
 
 @contextlib.contextmanager
@@ -148,7 +181,8 @@ def open_pool(workers: int = 1, scheduler: str | None = None, connect_timeout: f
     Parameters
     ----------
     workers : int
-        1: in this process. More: a Dask LocalCluster of that many single-threaded processes.
+        1: in this process. More: a Dask LocalCluster of that many single-threaded processes
+        (Dask's task profiler off in them, :data:`LOCAL_WORKER_CONFIG`).
     scheduler : str, optional
         Address of a running Dask scheduler (``tcp://host:8786``); overrides ``workers``.
     connect_timeout : float
@@ -170,7 +204,8 @@ def open_pool(workers: int = 1, scheduler: str | None = None, connect_timeout: f
     from ..campaign.execute import dask_session
 
     t0 = time.perf_counter()
-    with dask_session(scheduler, int(workers), connect_timeout) as (client, pending):
+    with _local_worker_config(scheduler is None), \
+            dask_session(scheduler, int(workers), connect_timeout) as (client, pending):
         if warm is not None:
             client.run(*warm)
         yield OnDask(client, pending, time.perf_counter() - t0)

@@ -142,6 +142,12 @@ class FleetResult:
         Seconds to start / connect to the Dask cluster and warm its workers up (0 in-process).
     wall_s : float
         Seconds from the first log submitted to the last one finished (start-up excluded).
+    cpu_s : float
+        CPU seconds the workers spent over that time (in-process: this process; on Dask: the
+        sum over the workers, every thread of each); NaN where not measured.
+    client_cpu_s : float
+        CPU seconds of this process over that time on Dask (the client, and the scheduler of a
+        LocalCluster started here); 0 in-process (it is ``cpu_s``).
     """
 
     summaries: list = field(default_factory=list)
@@ -149,16 +155,43 @@ class FleetResult:
     workers: int = 1
     startup_s: float = 0.0
     wall_s: float = 0.0
+    cpu_s: float = math.nan
+    client_cpu_s: float = 0.0
 
     @property
     def failed(self) -> list[LogSummary]:
         return [s for s in self.summaries if s.status != "ok"]
 
 
-def _warm(names, params, vehicle=None):
+def _first_of_each_format(paths) -> list[Path]:
+    """The first log of each kind in ``paths`` (by file suffix; a log directory is a kind of its own)."""
+    seen = {}
+    for p in map(Path, paths):
+        seen.setdefault(p.suffix.lower() if not p.is_dir() else "/", p)
+    return list(seen.values())
+
+
+def _read_first_chunk(path, channels=None, format=None, params=None) -> None:
+    """Read the first chunk of ``path`` and drop it (its reader and the reader's libraries loaded,
+    asammdf for MDF4 say); any failure is left to the log's own run to report."""
+    from ..io.stream import stream_log
+    chunks = None
+    try:
+        chunks = stream_log(path, channels=channels, format=format, params=params, chunk_rows=1024)
+        next(iter(chunks), None)
+    except Exception:       # a bad log is reported when it is estimated
+        pass
+    finally:
+        close = getattr(chunks, "close", None)
+        if close is not None:
+            close()
+
+
+def _warm(names, params, vehicle=None, samples=(), channels=None, format=None):
     """Estimate a small generated Parquet log once on a worker, as every log will be (designs for
     the car, compiled kernels, the reader, the time-base checks and the writer: what a first log
-    would otherwise pay inside the timed run)."""
+    would otherwise pay inside the timed run), then read the first chunk of each of ``samples``
+    (a log of each format of the run: :func:`_first_of_each_format`) for their readers."""
     import tempfile
 
     import numpy as np
@@ -171,6 +204,8 @@ def _warm(names, params, vehicle=None):
     with tempfile.TemporaryDirectory(prefix="roadbank-warm-") as tmp:
         pq.write_table(pa.table(cols), f"{tmp}/warm.parquet")
         estimate_log(f"{tmp}/warm.parquet", f"{tmp}/warm.bank.parquet", names, params=params, vehicle=vehicle)
+    for path in samples:
+        _read_first_chunk(path, channels, format, params)
     return True
 
 
@@ -250,8 +285,10 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
     t0 = time.perf_counter()
     try:
         if scheduler is None and int(workers) <= 1:
+            c0 = time.process_time()
             for p, out, meta, png in jobs:
                 finish(estimate_log(p, out, estimators, metadata=meta, plot=png, **kw))
+            result.cpu_s = time.process_time() - c0
         elif jobs:
             _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result, batch)
     finally:
@@ -263,9 +300,11 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
 def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result, batch=None):
     from .cluster import open_pool
 
-    warm = (_warm, list(estimators), kw["params"], kw["vehicle"])
+    warm = (_warm, list(estimators), kw["params"], kw["vehicle"], _first_of_each_format(j[0] for j in jobs),
+            kw["channels"], kw["format"])
     with open_pool(workers, scheduler, connect_timeout, warm=warm) as pool:
         result.workers, result.startup_s = pool.workers, pool.startup_s
+        cpu0, client0 = pool.cpu_seconds(), time.process_time()
         groups = {}
         for idx in batches([j[0] for j in jobs], result.workers, batch):
             group = [jobs[i] for i in idx]
@@ -276,3 +315,12 @@ def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish,
                 summaries = [LogSummary(log=str(p), status="error", error=failure) for p, *_ in groups[task]]
             for s in summaries:
                 finish(s)
+        result.client_cpu_s = time.process_time() - client0
+        result.cpu_s = _cpu_spent(cpu0, pool.cpu_seconds())
+
+
+def _cpu_spent(before: dict, after: dict) -> float:
+    """CPU seconds between two :meth:`OnDask.cpu_seconds` readings, summed over the workers
+    present in both (NaN if none)."""
+    common = before.keys() & after.keys()
+    return sum(after[w] - before[w] for w in common) if common else math.nan

@@ -97,10 +97,12 @@ def augment(model: StateSpace) -> StateSpace:
     Aw = np.zeros((n + 1, n + 1))
     Aw[:n, :n] = model.A
     Aw[:n, n:] = model.E
-    Bw = np.vstack([model.B, np.zeros((1, model.B.shape[1]))])
+    Bw = np.zeros((n + 1, model.B.shape[1]))        # (slices, not vstack/hstack: a design builds
+    Bw[:n] = model.B                                 # a thousand of these models)
     Ew = np.zeros((n + 1, 1))
     Ew[n, 0] = 1.0
-    Cw = np.hstack([model.C, np.zeros((model.C.shape[0], 1))])
+    Cw = np.zeros((model.C.shape[0], n + 1))
+    Cw[:, :n] = model.C
     return StateSpace(Aw, Bw, Ew, Cw, model.D.copy())
 
 

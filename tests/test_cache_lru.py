@@ -1,0 +1,79 @@
+"""The on-disk design cache keeps what a run uses: least recently used entries go first, and a
+validation of 16 drives with every estimator fits beside the entries of older code."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from roadbank import cache
+from roadbank.estimators import base
+
+KITTI = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "kitti-oxts"
+
+
+@pytest.fixture
+def disk(tmp_path, monkeypatch):
+    monkeypatch.setenv("ROADBANK_CACHE_DIR", str(tmp_path))
+    monkeypatch.setattr(base, "_DESIGN_CACHE", {})
+    return tmp_path / "design"
+
+
+def _age(path, seconds):
+    os.utime(path, (seconds, seconds))
+
+
+def test_an_entry_read_again_outlives_older_unread_ones(disk, monkeypatch):
+    monkeypatch.setattr(cache, "MAX_ENTRIES", 3)
+    paths = [cache.store("design", f"k{k}", {"a": np.full(2, k)}) for k in range(3)]
+    for k, p in enumerate(paths):
+        _age(p, 1000 + k)                         # written in the order k0, k1, k2
+    assert cache.load("design", "k0")["a"][0] == 0    # k0 is used again: now the most recent
+    cache.store("design", "k3", {"a": np.full(2, 3)})
+    kept = {k for k in range(4) if cache.load("design", f"k{k}") is not None}
+    assert kept == {0, 2, 3}                      # the least recently used (k1) went, not the oldest write
+
+
+def test_a_full_folder_is_pruned_below_its_limit_so_the_next_stores_only_count(disk, monkeypatch):
+    monkeypatch.setattr(cache, "MAX_ENTRIES", 16)
+    for k in range(17):
+        _age(cache.store("design", f"k{k}", {"a": np.zeros(1)}), 1000 + k)
+    left = sorted(disk.glob("*.npz"))
+    assert len(left) == 16 - 16 // 8
+    kept = {k for k in range(17) if cache.load("design", f"k{k}") is not None}
+    assert kept == set(range(17 - len(left), 17))          # the newest ones
+
+
+def _designs_of_one_drive(tmp_path, monkeypatch) -> int:
+    """Entries a validation of one shared KITTI drive stores (every estimator, sensitivity runs)."""
+    from roadbank.validation.kitti import validate_kitti_drive
+    stored = []
+    real = cache.store
+    monkeypatch.setattr(cache, "store", lambda kind, key, arrays: stored.append(kind) or real(kind, key, arrays))
+    monkeypatch.setenv("ROADBANK_CACHE_DIR", str(tmp_path / "count"))
+    monkeypatch.setattr(base, "_DESIGN_CACHE", {})          # every design made (and stored) here
+    validate_kitti_drive(next(KITTI.glob("*/oxts")).parent)
+    monkeypatch.undo()
+    return stored.count("design")
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not any(KITTI.glob("*/oxts")), reason=f"KITTI oxts drives absent at {KITTI}")
+def test_a_16_drive_validation_keeps_every_design_it_stores(tmp_path, monkeypatch):
+    per_drive = _designs_of_one_drive(tmp_path, monkeypatch)
+    assert per_drive > 50                         # every estimator, its th retries, the sensitivity runs
+    monkeypatch.setenv("ROADBANK_CACHE_DIR", str(tmp_path / "cache"))
+    folder = tmp_path / "cache" / "design"
+    folder.mkdir(parents=True)
+    for k in range(cache.MAX_ENTRIES):            # a full cache of an older version's entries
+        p = folder / f"{k:064x}.npz"
+        p.write_bytes(b"stale")
+        _age(p, 1000 + k)
+    keys = [f"drive{d}-design{j}" for d in range(16) for j in range(per_drive)]
+    for key in keys:
+        cache.store("design", key, {"tab": np.zeros(4)})
+    assert all(cache.load("design", key) is not None for key in keys)      # the first drives' too
+    assert len(list(folder.glob("*.npz"))) <= cache.MAX_ENTRIES
