@@ -18,7 +18,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "roadbank"
 #: the modules held to the rule (the others join once their rewrites are done)
 SCOPE = ("signals.py", "params.py", "constants.py", "units.py", "cache.py", "defaults.py", "vehicle", "estimators",
          "evaluation", "mapping", "report", "sim", "models", "identification", "campaign", "validation", "tuning",
-         "io", "faults", "export")
+         "io", "faults", "export", "fleet")
 NOT_YET: tuple[str, ...] = ()
 
 #: top-level packages whose imports may always be deferred
@@ -48,6 +48,13 @@ DEFERRED = {
     "io/files.py": {".mdfimport"},
     # the robustness table's simulated drive (numba) only when it is asked for
     "faults/table.py": {"..sim"},
+    # a Dask session: the campaign's runner (the simulator) loads only when workers are asked for
+    "fleet/cluster.py": {"..campaign.execute"},
+    # a plot of the estimate (matplotlib) only when one is asked for
+    "fleet/process.py": {"..report.timeseries"},
+    # the warm-up log and the benchmark's logs are written with pyarrow; the benchmark's drive is simulated
+    "fleet/run.py": {"pyarrow", "pyarrow.parquet"},
+    "fleet/bench.py": {"..sim", "pyarrow", "pyarrow.parquet", "pyarrow.csv"},
 }
 
 

@@ -16,6 +16,7 @@ Run ``python -m roadbank.fleet.bench [--hours 24] [--formats parquet,mdf4] [--pe
 
 from __future__ import annotations
 
+import argparse
 import functools
 import json
 import os
@@ -25,8 +26,12 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+
+from ..io.stream import CHUNK_ROWS
+from .run import run_fleet
 
 COLUMNS = ("t", "vx", "ay", "r", "delta_f")
 
@@ -71,7 +76,8 @@ def write_long_log(path, hours: float = 24.0, rate_hz: float = 100.0, chunk_s: f
             tab = pa.table(chunk(k0))
             writer = writer or pq.ParquetWriter(p, tab.schema)
             writer.write_table(tab, row_group_size=step)
-        writer.close()
+        if writer is not None:
+            writer.close()
     elif p.suffix.lower() in (".mf4", ".mdf"):
         from asammdf import MDF, Signal
         mdf = MDF(version="4.10")
@@ -154,12 +160,12 @@ def measure(mode: str, log, out, estimator: str = "pif-modified", chunk_rows: in
         in the run: on a shared machine wall time also counts waiting for a core), ``samples_per_cpu_s``,
         ``import_s``, ``design_s``, ``chunks``.
     """
-    from ..io.stream import CHUNK_ROWS
     chunk_rows = chunk_rows or CHUNK_ROWS
     proc = subprocess.Popen([sys.executable, "-c", _CHILD, mode, str(log), str(out), estimator, str(chunk_rows)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=dict(os.environ, OMP_NUM_THREADS="1",
                                                                                       OPENBLAS_NUM_THREADS="1"))
     _, status, usage = os.wait4(proc.pid, 0)
+    assert proc.stdout is not None and proc.stderr is not None        # both are pipes
     out_text = proc.stdout.read().decode()
     err = proc.stderr.read().decode()
     proc.stdout.close()
@@ -236,7 +242,6 @@ def fleet_speedup(n_logs: int = 200, seconds: float = 600.0, workers=(1, 2), est
     (how much more CPU the same logs took), ``client_cpu_s`` this process' CPU seconds meanwhile
     on Dask.
     """
-    from .run import run_fleet
     work = Path(workdir or tempfile.mkdtemp(prefix="roadbank-fleet-"))
     paths, samples = fleet_logs(work, n_logs, seconds, fmt, bad_every)
     rows = []
@@ -267,8 +272,6 @@ def fleet_speedup(n_logs: int = 200, seconds: float = 600.0, workers=(1, 2), est
 
 
 def main(argv=None) -> int:
-    import argparse
-
     ap = argparse.ArgumentParser(prog="python -m roadbank.fleet.bench", description=__doc__.split("\n")[0])
     ap.add_argument("--hours", type=float, default=24.0)
     ap.add_argument("--peer-hours", type=float, default=2.0)
@@ -282,7 +285,7 @@ def main(argv=None) -> int:
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
     work = Path(a.workdir or tempfile.mkdtemp(prefix="roadbank-bench-"))
-    results = {}
+    results: dict[str, Any] = {}
     for fmt in filter(None, a.formats.split(",")):
         results[f"baseline-{fmt}"] = measure(f"baseline-{fmt}", "-", "-", a.estimator)
         suf = {"parquet": ".parquet", "mdf4": ".mf4"}[fmt]

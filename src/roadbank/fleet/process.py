@@ -9,6 +9,13 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ..defaults import ESTIMATOR as DEFAULT
+from ..estimators import OFFLINE, with_online_offsets
+from ..io import LogError
+from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
+from ..io.timebase import add_counts
+from ..io.writers import TableWriter, estimate_table
+from ..signals import Estimate
+from ..vehicle import DESIGN_SPAN_S, for_conditions, log_conditions, undescribed_params
 
 #: columns of the summary table, in order (see LogSummary)
 SUMMARY_COLUMNS = ("log", "status", "error", "output", "estimator", "samples", "duration_s", "valid_share",
@@ -119,8 +126,6 @@ class _BankStats:
 
 def concat_estimates(parts: list):
     """One :class:`~roadbank.signals.Estimate` from consecutive chunk estimates."""
-    from ..signals import Estimate
-
     first = parts[0]
     states = {k: np.concatenate([p.states[k] for p in parts]) for k in first.states}
     return Estimate(first.name, np.concatenate([p.t for p in parts]), np.concatenate([p.w for p in parts]),
@@ -173,13 +178,6 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
         Never raises for a bad log: ``status = "error"`` and ``error`` say why,
         and no partial output file is left behind.
     """
-    from ..estimators import OFFLINE, with_online_offsets
-    from ..io import LogError
-    from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
-    from ..io.timebase import add_counts
-    from ..io.writers import TableWriter, estimate_table
-    from ..vehicle import DESIGN_SPAN_S, for_conditions, log_conditions, undescribed_params
-
     t_start = time.perf_counter()
     names = list(estimators)
     summary = LogSummary(log=str(path), estimator=names[0] if names else "")
@@ -191,7 +189,10 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
         stats = [_BankStats() for _ in names]
         warns: list[str] = []
         ests = []
-        kept = {"t": [], "est": [[] for _ in names], "roll": [], "truth": {}}
+        kept_t: list[np.ndarray] = []
+        kept_est: list[list] = [[] for _ in names]
+        kept_roll: list[np.ndarray] = []
+        kept_truth: dict[str, list[np.ndarray]] = {}
         writer = TableWriter(output, metadata=metadata)
         correct = (lambda s: s) if vehicle is None else vehicle.correct
         # an offline estimator smooths each chunk with the chunks after it as lookahead (as many as
@@ -218,26 +219,27 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
                 st.add(r)
             summary.chunks += 1
             if keep:
-                kept["t"].append(chunk.signals.t)
-                for lst, r in zip(kept["est"], results):
+                kept_t.append(chunk.signals.t)
+                for lst, r in zip(kept_est, results):
                     lst.append(r)
                 if chunk.reference_roll is not None:
-                    kept["roll"].append(chunk.reference_roll)
+                    kept_roll.append(chunk.reference_roll)
                 for c, v in chunk.truth.items():
-                    kept["truth"].setdefault(c, []).append(v)
+                    kept_truth.setdefault(c, []).append(v)
         summary.output = str(writer.close())
         if stats:
             stats[0].fill(summary)
         summary.estimators = {n: st.stats() for n, st in zip(names, stats)}
         summary.warnings = "; ".join(warns)
         if keep:
-            summary.kept = (np.concatenate(kept["t"]), [concat_estimates(x) for x in kept["est"]],
-                            np.concatenate(kept["roll"]) if kept["roll"] else None,
-                            {c: np.concatenate(v) for c, v in kept["truth"].items()})
-        if plot is not None:
-            from ..report.timeseries import plot_estimates
-            t, results, roll, truth = summary.kept
-            plot_estimates(plot, t, results, roll, title=str(path), truth=truth)
+            whole = (np.concatenate(kept_t), [concat_estimates(x) for x in kept_est],
+                     np.concatenate(kept_roll) if kept_roll else None,
+                     {c: np.concatenate(v) for c, v in kept_truth.items()})
+            summary.kept = whole
+            if plot is not None:
+                from ..report.timeseries import plot_estimates
+                t, series, roll, truth = whole
+                plot_estimates(plot, t, series, roll, title=str(path), truth=truth)
     except (LogError, ValueError, OSError) as exc:
         summary.status, summary.error = "error", str(exc)
     except Exception as exc:  # never a traceback for one bad file

@@ -17,12 +17,19 @@ from __future__ import annotations
 import csv
 import glob
 import math
+import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
+
 from ..defaults import ESTIMATOR as DEFAULT
+from ..io import detect_format, read_channel_map
+from ..io.errors import LogError
+from ..io.stream import stream_log
 from .cluster import BATCH_BYTES, BATCH_MAX_LOGS, BATCHES_PER_WORKER, batches  # noqa: F401  (public here too)
+from .cluster import open_pool
 from .process import SUMMARY_COLUMNS, LogSummary, estimate_log
 
 SUMMARY = "summary.csv"
@@ -32,8 +39,6 @@ LOG_SUFFIXES = {".csv", ".parquet", ".pq", ".mf4", ".mdf", ".blf", ".asc", ".trc
 
 def _is_log_dir(p: Path) -> bool:
     """A directory that is itself one log (comma2k19 segment, ROS 2 bag, KITTI drive)."""
-    from ..io import detect_format
-    from ..io.errors import LogError
     try:
         detect_format(p)
         return True
@@ -108,7 +113,7 @@ class _SummaryFile:
         columns = list(SUMMARY_COLUMNS)
         if not new:         # appending: the existing file's columns (one written before a column was added)
             with open(self.path, newline="") as fh:
-                columns = next(csv.reader(fh), None) or columns
+                columns = next(csv.reader(fh), []) or columns
         self.fh = open(self.path, "w" if new else "a", newline="")
         self.w = csv.DictWriter(self.fh, fieldnames=columns, extrasaction="ignore")
         if new:
@@ -165,7 +170,7 @@ class FleetResult:
 
 def _first_of_each_format(paths) -> list[Path]:
     """The first log of each kind in ``paths`` (by file suffix; a log directory is a kind of its own)."""
-    seen = {}
+    seen: dict[str, Path] = {}
     for p in map(Path, paths):
         seen.setdefault(p.suffix.lower() if not p.is_dir() else "/", p)
     return list(seen.values())
@@ -174,7 +179,6 @@ def _first_of_each_format(paths) -> list[Path]:
 def _read_first_chunk(path, channels=None, format=None, params=None) -> None:
     """Read the first chunk of ``path`` and drop it (its reader and the reader's libraries loaded,
     asammdf for MDF4 say); any failure is left to the log's own run to report."""
-    from ..io.stream import stream_log
     chunks = None
     try:
         chunks = stream_log(path, channels=channels, format=format, params=params, chunk_rows=1024)
@@ -192,9 +196,6 @@ def _warm(names, params, vehicle=None, samples=(), channels=None, format=None):
     the car, compiled kernels, the reader, the time-base checks and the writer: what a first log
     would otherwise pay inside the timed run), then read the first chunk of each of ``samples``
     (a log of each format of the run: :func:`_first_of_each_format`) for their readers."""
-    import tempfile
-
-    import numpy as np
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -254,8 +255,6 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
     -------
     FleetResult
     """
-    from ..io import read_channel_map
-
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
     if channels is not None and not hasattr(channels, "channels"):
@@ -298,8 +297,6 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
 
 
 def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish, result, batch=None):
-    from .cluster import open_pool
-
     warm = (_warm, list(estimators), kw["params"], kw["vehicle"], _first_of_each_format(j[0] for j in jobs),
             kw["channels"], kw["format"])
     with open_pool(workers, scheduler, connect_timeout, warm=warm) as pool:
