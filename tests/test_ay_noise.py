@@ -161,3 +161,40 @@ def test_on_the_kitti_drives_the_road_reads_more_than_the_white_rule():
     road, white = road_noise_std(s.ay, s.t, moving), white_noise_std(s.ay, moving)
     assert 1.2 * white < road < 3.0 * white
     assert log_conditions(s)["log_ay_noise"] == pytest.approx(road, rel=0.01)
+
+
+def _standstill_then_driving(idle_s: float, drive_s: float, rate: float = 10.0, sigma: float = 0.2):
+    """A 10 Hz log that stands still ``idle_s`` (s), then drives at 15 m/s with white ``ay`` noise."""
+    from roadbank import Signals
+
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, idle_s + drive_s, 1.0 / rate)
+    driving = t >= idle_s
+    vx = np.where(driving, 15.0, 0.0)
+    ay = np.where(driving, sigma * rng.standard_normal(t.size), 0.01 * rng.standard_normal(t.size))
+    return Signals(t, vx, ay, np.zeros_like(t), np.zeros_like(t))
+
+
+def test_a_log_that_starts_at_a_standstill_is_measured_on_its_first_minute_of_driving():
+    """Ignition on, the car parked for 90 s: the road noise is measured on the minute of driving that
+    follows (the idle alone has too few moving samples: the data sheet would be used), the same
+    streamed in small chunks as whole."""
+    from roadbank.io.stream import ReadAhead
+    from roadbank.io.types import Log
+    from roadbank.vehicle import DESIGN_MAX_S, DESIGN_SPAN_S, design_span, has_design_span
+
+    s = _standstill_then_driving(90.0, 200.0)
+    n = design_span(s)
+    assert s.t[n - 1] == pytest.approx(90.0 + DESIGN_SPAN_S, abs=0.11)
+    cond = log_conditions(s)
+    assert cond["log_ay_noise"] == pytest.approx(0.2, rel=0.15)
+    assert math.isnan(log_conditions(s[: int(60.0 * 10)])["log_ay_noise"])      # the first 60 s: idle only
+    for rows in (37, 200, 5000):
+        chunks = ReadAhead(Log(s[a:a + rows], None) for a in range(0, len(s), rows))
+        first = next(chunks)
+        span = chunks.leading(first.signals, DESIGN_MAX_S, has_design_span)
+        assert log_conditions(span) == cond, rows
+        assert len(span) < len(s) or rows >= len(s)        # it stopped reading once it had the span
+    # a log that never drives is measured on its first DESIGN_MAX_S at most
+    idle = _standstill_then_driving(700.0, 0.0)
+    assert idle.t[design_span(idle) - 1] == pytest.approx(DESIGN_MAX_S, abs=0.11)

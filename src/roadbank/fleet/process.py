@@ -15,7 +15,7 @@ from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..io.timebase import add_counts
 from ..io.writers import TableWriter, estimate_table
 from ..signals import Estimate
-from ..vehicle import DESIGN_SPAN_S, for_conditions, log_conditions, undescribed_params
+from ..vehicle import DESIGN_MAX_S, for_conditions, has_design_span, log_conditions, undescribed_params
 
 #: columns of the summary table, in order (see LogSummary)
 SUMMARY_COLUMNS = ("log", "status", "error", "output", "estimator", "samples", "duration_s", "valid_share",
@@ -201,8 +201,8 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
                                       chunk_rows=chunk_rows or CHUNK_ROWS))
         span = None
         for k, chunk in enumerate(chunks):
-            if k == 0:  # designed for the log's own rate and road noise, measured on its first DESIGN_SPAN_S
-                cond = log_conditions(chunks.leading(chunk.signals, DESIGN_SPAN_S))
+            if k == 0:  # designed for the log's own rate and road noise, measured on its first minute of driving
+                cond = log_conditions(chunks.leading(chunk.signals, DESIGN_MAX_S, has_design_span))
                 car = params if params is not None else undescribed_params()
                 ests = [for_conditions(n, cond, car, vehicle=vehicle) for n in names]
                 if online_offsets:      # causal ones: a smoother's later samples would see later offsets

@@ -17,7 +17,7 @@ has passed a base time, then interpolated with the same gap rule and dropped.
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -121,12 +121,23 @@ class ReadAhead:
         self._end = float(chunk.signals.t[-1])
         return chunk
 
-    def leading(self, current: Signals, seconds: float) -> Signals:
+    def leading(self, current: Signals, seconds: float, enough: Callable[[Signals], bool] | None = None) -> Signals:
         """``current`` (the current chunk's signals) and the chunks after it, as many as reach
-        ``seconds`` (s) past its first sample: the same span of the log whatever the chunk size."""
-        rest = seconds - float(current.t[-1] - current.t[0])
-        nxt = self.following(rest) if rest > 0 else None
-        return current if nxt is None else concat_signals([current, nxt])
+        ``seconds`` (s) past its first sample, or fewer: as soon as ``enough(span)`` is true of the
+        signals gathered so far. A rule that reads only the span's start (its first ``seconds``, or
+        up to where ``enough`` says it has all it needs) sees the same samples whatever the chunk size."""
+        if enough is None:
+            rest = seconds - float(current.t[-1] - current.t[0])
+            nxt = self.following(rest) if rest > 0 else None
+            return current if nxt is None else concat_signals([current, nxt])
+        span = current if not self._ahead else concat_signals([current, *(c.signals for c in self._ahead)])
+        while float(span.t[-1] - span.t[0]) < seconds and not enough(span):
+            chunk = next(self._it, None)
+            if chunk is None:
+                break
+            self._ahead.append(chunk)
+            span = concat_signals([span, chunk.signals])
+        return span
 
     def following(self, seconds: float) -> Signals | None:
         """Signals of the chunks after the current one, as many as reach ``seconds`` (s) past its

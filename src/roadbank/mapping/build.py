@@ -12,7 +12,7 @@ from ..io import LogError
 from ..io.channels import ChannelMap
 from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..params import VehicleParams
-from ..vehicle import DESIGN_SPAN_S, Vehicle, for_conditions, log_conditions
+from ..vehicle import DESIGN_MAX_S, Vehicle, for_conditions, has_design_span, log_conditions
 from .geo import CourseStream, LocalProjection
 from .grid import BankMap
 
@@ -104,8 +104,8 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
             plane = projection or first
             if part is None and plane is not None:
                 part = BankMap(plane, s.cell_m, s.sectors)
-            if k == 0:      # designed on the log's first DESIGN_SPAN_S, as roadbank estimate does
-                est = _design(s, chunks.leading(chunk.signals, DESIGN_SPAN_S), designs)
+            if k == 0:      # designed on the log's first minute of driving, as roadbank estimate does
+                est = _design(s, chunks.leading(chunk.signals, DESIGN_MAX_S, has_design_span), designs)
             nxt = chunks.following(est.lookahead_s) if s.estimator in OFFLINE else None
             out = est.run(correct(chunk.signals), reset=(k == 0), lookahead=None if nxt is None else correct(nxt))
             rec.samples += len(out.t)

@@ -20,11 +20,37 @@ from .sensors import SensorSpec
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
 # them: loading a car (load_vehicle, --vehicle) loads neither
 
-__all__ = ["DESIGN_SPAN_S", "log_conditions", "noise_densities", "make_estimator"]
+__all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "design_span", "has_design_span", "log_conditions", "noise_densities",
+           "make_estimator"]
 
 
-#: seconds at the start of a log on which :func:`log_conditions` measures it (s)
+#: seconds of driving (``vx >= v_min``) at the start of a log on which :func:`log_conditions` measures it (s)
 DESIGN_SPAN_S = 60.0
+#: ... read at most this far into the log (s): a log that stands still longer is measured on what it has
+DESIGN_MAX_S = 600.0
+
+
+def design_span(signals, v_min: float = 5.0) -> int:
+    """Samples of ``signals`` on which :func:`log_conditions` measures the log: up to the sample at
+    which :data:`DESIGN_SPAN_S` seconds of driving (``vx >= v_min``, m/s; each moving sample counts
+    the interval before it) have passed, or :data:`DESIGN_MAX_S` seconds of the log; all of a
+    shorter log. A log that starts at a standstill (ignition on, the car parked) is measured on
+    its first minute of driving, not on the idle."""
+    t = np.asarray(signals.t, dtype=np.float64)
+    if len(t) < 2:
+        return len(t)
+    with np.errstate(invalid="ignore"):
+        moving = np.asarray(signals.vx, dtype=np.float64)[1:] >= v_min
+    driven = np.cumsum(np.where(moving, np.diff(t), 0.0))
+    n = min(int(np.searchsorted(driven, DESIGN_SPAN_S, side="left")) + 2,
+            int(np.searchsorted(t, t[0] + DESIGN_MAX_S, side="right")))
+    return min(n, len(t))
+
+
+def has_design_span(signals, v_min: float = 5.0) -> bool:
+    """Whether ``signals`` (the start of a log) already hold all of :func:`design_span`'s samples, so
+    that reading more of the log would not change :func:`log_conditions`."""
+    return design_span(signals, v_min) < len(signals)
 
 
 def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
@@ -33,10 +59,10 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     (:func:`roadbank.signals.sample_rate`) and the road noise of its ``ay`` and yaw rate on the
     samples at ``vx >= v_min`` (m/s): what they carry above the vehicle's dynamics band, taken
     as white (:func:`roadbank.signals.road_noise_std`, the noise model of real roads; NaN when
-    too few samples). Measured on the first :data:`DESIGN_SPAN_S` of the log (all of a shorter
-    one), so that a streamed log gets the same design whatever its chunk size.
+    too few samples). Measured on the log's first :data:`DESIGN_SPAN_S` of driving
+    (:func:`design_span`), so that a streamed log gets the same design whatever its chunk size.
     """
-    n = int(np.searchsorted(signals.t, signals.t[0] + DESIGN_SPAN_S, side="right"))
+    n = design_span(signals, v_min)
     if n < len(signals):
         signals = signals[:n]
     vx = np.asarray(signals.vx, dtype=np.float64)
