@@ -77,3 +77,19 @@ def test_a_16_drive_validation_keeps_every_design_it_stores(tmp_path, monkeypatc
         cache.store("design", key, {"tab": np.zeros(4)})
     assert all(cache.load("design", key) is not None for key in keys)      # the first drives' too
     assert len(list(folder.glob("*.npz"))) <= cache.MAX_ENTRIES
+
+
+def test_the_in_process_memo_drops_the_least_recently_used(monkeypatch):
+    """Beyond MEMO_SIZE designs the memo forgets the one used longest ago, not all of them."""
+    from roadbank import estimators
+    from roadbank.estimators import base
+
+    monkeypatch.setattr(base, "_DESIGN_CACHE", {})
+    monkeypatch.setattr(base, "MEMO_SIZE", 3)
+    monkeypatch.setenv("ROADBANK_CACHE_DIR", "off")
+    ests = [estimators.make("kinematic-lp", cutoff=fc) for fc in (0.3, 0.4, 0.5)]
+    keys = [e._design_key() for e in ests]
+    assert list(base._DESIGN_CACHE) == keys
+    estimators.make("kinematic-lp", cutoff=0.3)                 # a hit: 0.3 is now the most recent
+    estimators.make("kinematic-lp", cutoff=0.6)                 # a fourth: the least recent (0.4) goes
+    assert keys[1] not in base._DESIGN_CACHE and keys[0] in base._DESIGN_CACHE and len(base._DESIGN_CACHE) == 3

@@ -39,6 +39,23 @@ _DESIGN_CACHE: dict = {}
 #: kernel families with the fixed-rate path (``lpv`` rows; ``gated`` steps them through ``lpv_step``)
 FIXED_RATE_KERNELS = ("lpv", "gated")
 _DISCRETE_CACHE: dict = {}
+#: entries each in-process memo keeps, the least recently used going first
+MEMO_SIZE = 512
+
+
+def _memo_get(memo: dict, key):
+    """``memo[key]`` (None if absent), marked as the most recently used."""
+    hit = memo.pop(key, None)
+    if hit is not None:
+        memo[key] = hit
+    return hit
+
+
+def _memo_put(memo: dict, key, value) -> None:
+    """Store ``value``; beyond :data:`MEMO_SIZE` entries the least recently used one goes."""
+    memo[key] = value
+    while len(memo) > MEMO_SIZE:
+        memo.pop(next(iter(memo)))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -250,15 +267,13 @@ class Estimator:
     def _cached_design(self):
         """``_design()`` of :attr:`design` through the memo and the on-disk cache (:meth:`_tables_of`)."""
         key = self._design_key()
-        hit = _DESIGN_CACHE.get(key)
+        hit = _memo_get(_DESIGN_CACHE, key)
         if hit is None:
             try:
                 hit = self._disk_design()
             except NoStabilisingSolution as exc:    # remembered too: a retry with a smaller th follows
                 hit = exc
-            if len(_DESIGN_CACHE) > 256:
-                _DESIGN_CACHE.clear()
-            _DESIGN_CACHE[key] = hit
+            _memo_put(_DESIGN_CACHE, key, hit)
         if isinstance(hit, NoStabilisingSolution):
             raise NoStabilisingSolution(str(hit))
         return hit
@@ -356,12 +371,10 @@ class Estimator:
         if not (np.isfinite(dt) and dt > 0):
             raise ValueError(f"{self.name}: sample interval must be > 0 s, got {dt}")
         key = (self._design_key(), self.roll, dt)      # the roll model's tables are in there too
-        hit = _DISCRETE_CACHE.get(key)
+        hit = _memo_get(_DISCRETE_CACHE, key)
         if hit is None:
             hit = self._discretise(dt)
-            if len(_DISCRETE_CACHE) > 256:
-                _DISCRETE_CACHE.clear()
-            _DISCRETE_CACHE[key] = hit
+            _memo_put(_DISCRETE_CACHE, key, hit)
         return {k: v.copy() for k, v in hit.items()}
 
     def _discretise(self, dt: float) -> dict[str, np.ndarray]:
