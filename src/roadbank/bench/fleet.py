@@ -6,8 +6,8 @@ one per noise level to two significant digits, as on a real fleet;
 :func:`roadbank.fleet.bench.fleet_logs`), run through
 :func:`roadbank.fleet.run_fleet` (the path of ``roadbank estimate DIR -o OUT/ --workers N``) with
 the design cache off: read + design + filter + write of every log, a summary row each.
-1 worker is in this process; 2 workers a Dask LocalCluster of single-threaded processes, whose
-start-up (cluster and warm-up) is timed apart. The rate is samples of all logs over the
+1 worker is in this process; 2 workers a pool of 2 worker processes on this machine, whose
+start-up (processes and warm-up) is timed apart. The rate is samples of all logs over the
 processing wall time (start-up excluded); the total wall time includes it. The CPU seconds the
 workers spent are reported beside it: on a shared machine the wall-time speed-up also depends
 on what else runs on the cores, the CPU ratio does not.
@@ -122,8 +122,8 @@ def fleet_markdown(out: dict) -> list[str]:
             f"noise (a design per noise level to two significant digits), `{out['estimator']}`, design cache "
             "off: read + design + filter + write "
             "of every log (`roadbank.fleet.run_fleet`, as `roadbank estimate DIR -o OUT/ --workers N`). "
-            "1 worker: in this process; 2: a Dask LocalCluster of single-threaded processes, start-up "
-            "(cluster and warm-up) apart; M samples/s over the processing time. "
+            "1 worker: in this process; 2: a pool of 2 worker processes on this machine, start-up "
+            "(processes and warm-up) apart; M samples/s over the processing time. "
             f"{out['cores']} cores; load average before each format: {', '.join(loads) or '-'} (on a shared "
             "machine the second worker competes with other jobs for the second core).")
     note += (" CPU: seconds the workers spent on the processing (each worker's own CPU time, every "

@@ -71,9 +71,9 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
               help="Learn the yaw-rate offset at standstill (and with a steering angle on straights, then the "
                    "steering offset) while the log runs, and remove it before the estimators.")
 @click.option("--workers", type=int, default=1, show_default=True,
-              help="Logs in parallel on a Dask LocalCluster of N single-threaded processes (1: in this process).")
+              help="Logs in parallel on N worker processes on this machine (1: in this process).")
 @click.option("--scheduler", default=None, metavar="ADDR",
-              help="Run on the Dask scheduler at ADDR (tcp://host:8786) instead of a LocalCluster.")
+              help="Run on the Dask scheduler at ADDR (tcp://host:8786) instead of local worker processes.")
 @click.option("--resume", is_flag=True,
               help="Skip logs the output directory's summary.csv lists as finished (failed ones are retried).")
 @click.option("--chunk-rows", type=int, default=None,

@@ -18,9 +18,9 @@ def pool_options(what: str, note: str = ""):
     ends the help of ``--workers``."""
     def deco(f):
         f = click.option("--scheduler", default=None, metavar="ADDR",
-                         help="Run on the Dask scheduler at ADDR (tcp://host:8786) instead of a LocalCluster.")(f)
+                         help="Run on the Dask scheduler at ADDR (tcp://host:8786) instead of local workers.")(f)
         return click.option("--workers", type=int, default=1, show_default=True, callback=_at_least_one,
-                            help=f"{what} in parallel on a Dask LocalCluster of N single-threaded processes "
+                            help=f"{what} in parallel on N worker processes on this machine "
                                  "(1: in this process)." + (f" {note}" if note else ""))(f)
     return deco
 

@@ -4,8 +4,13 @@
 
 * ``workers <= 1`` and no ``scheduler``: :class:`InProcess` -- each task runs in this process
   when its result is asked for (in the order asked), exactly as a plain loop would;
-* otherwise :class:`OnDask` -- a Dask LocalCluster of ``workers`` single-threaded processes
-  (:func:`roadbank.campaign.execute.open_client`), or the running scheduler at ``scheduler``.
+* ``workers > 1``, no ``scheduler``: :class:`OnProcesses` -- a pool of that many spawned worker
+  processes on this machine (``concurrent.futures``). It costs the workers no CPU beyond the
+  tasks' own: a Dask LocalCluster's workers spent 1.2-1.4x one process's CPU on the same logs
+  (its event loop, heartbeats and comms), the pool about 1.1x (docs/io.md). A worker that dies
+  (memory, a signal) breaks the pool: every task it had not finished is run again, each in a
+  pool of its own, so only the task that kills its worker fails;
+* a ``scheduler``: :class:`OnDask` -- the running Dask scheduler at that address.
 
 ``pool.submit(fn, *args, **kwargs)`` returns a task; ``pool.as_completed(tasks)`` yields them as
 they finish (in process: in order); ``pool.batches(paths)`` groups logs into tasks;
@@ -22,7 +27,11 @@ from __future__ import annotations
 
 import contextlib
 import math
+import multiprocessing
+import os
 import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 #: input a batch of logs aims at (bytes of log files): one Dask task of about half a second
@@ -161,6 +170,93 @@ class OnDask:
             return None, worker_failure(exc)
 
 
+def _warm_worker(warm) -> None:
+    """A pool process's initializer: ``warm`` (``(fn, *args)`` or None) once, its failure left to the
+    tasks (they report it against their logs)."""
+    if warm is not None:
+        try:
+            warm[0](*warm[1:])
+        except Exception:
+            pass
+
+
+def _process_cpu(pid: int) -> float | None:
+    """CPU seconds (user + system) the process ``pid`` has used, from ``/proc`` (None elsewhere)."""
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            fields = fh.read().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+class OnProcesses:
+    """Tasks on a pool of ``workers`` spawned processes on this machine (see the module doc)."""
+
+    in_process = False
+
+    def __init__(self, workers: int, warm=None):
+        self.workers, self._warm = int(workers), warm
+        self._tasks: dict = {}          # future -> (fn, args, kwargs), to run again if the pool breaks
+        t0 = time.perf_counter()
+        self._ex = self._start(self.workers)
+        self.startup_s = time.perf_counter() - t0
+
+    def _start(self, n: int) -> ProcessPoolExecutor:
+        ex = ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("spawn"), initializer=_warm_worker,
+                                 initargs=(self._warm,))
+        # every worker started and warmed up before the first task: each takes a short wait
+        for f in [ex.submit(time.sleep, 0.2) for _ in range(n)]:
+            f.result()
+        return ex
+
+    def batches(self, paths) -> list[list[int]]:
+        """Indices of ``paths`` in consecutive groups, one task each (:func:`batches`)."""
+        return batches(paths, self.workers)
+
+    def submit(self, fn, *args, **kwargs):
+        try:
+            fut = self._ex.submit(fn, *args, **kwargs)
+        except BrokenProcessPool:     # a worker died earlier: a new pool for the tasks from now on
+            self._ex.shutdown(wait=True, cancel_futures=True)
+            self._ex = self._start(self.workers)
+            fut = self._ex.submit(fn, *args, **kwargs)
+        self._tasks[fut] = (fn, args, kwargs)
+        return fut
+
+    def as_completed(self, tasks):
+        yield from as_completed(list(tasks))
+
+    def cpu_seconds(self) -> dict:
+        """CPU seconds each worker process has used so far, by process id (empty where ``/proc`` is not)."""
+        pids = list(getattr(self._ex, "_processes", None) or {})
+        cpu = {pid: _process_cpu(pid) for pid in pids}
+        return {pid: c for pid, c in cpu.items() if c is not None}
+
+    def outcome(self, fut):
+        fn, args, kwargs = self._tasks.pop(fut, (None, (), {}))
+        try:
+            return fut.result(), None
+        except BrokenProcessPool:     # a worker died: this task again, alone, in a pool of its own
+            return self._alone(fn, args, kwargs)
+        except Exception as exc:      # the task raised on its worker
+            return None, worker_failure(exc)
+
+    def _alone(self, fn, args, kwargs):
+        if fn is None:
+            return None, "worker failed: its process died"
+        ex = self._start(1)
+        try:
+            return ex.submit(fn, *args, **kwargs).result(), None
+        except Exception as exc:
+            return None, worker_failure(exc)
+        finally:
+            ex.shutdown(wait=True, cancel_futures=True)
+
+    def close(self) -> None:
+        self._ex.shutdown(wait=True, cancel_futures=True)
+
+
 def _local_worker_config(local: bool):
     """:data:`LOCAL_WORKER_CONFIG` set while a LocalCluster is started (``local``); nothing for a
     running scheduler (its workers have their own settings) or without Dask (the session then
@@ -176,30 +272,36 @@ def _local_worker_config(local: bool):
 
 @contextlib.contextmanager
 def open_pool(workers: int = 1, scheduler: str | None = None, connect_timeout: float = 20.0, warm=None):
-    """``with open_pool(...) as pool``: :class:`InProcess` or :class:`OnDask` (module doc).
+    """``with open_pool(...) as pool``: :class:`InProcess`, :class:`OnProcesses` or :class:`OnDask` (module doc).
 
     Parameters
     ----------
     workers : int
-        1: in this process. More: a Dask LocalCluster of that many single-threaded processes
-        (Dask's task profiler off in them, :data:`LOCAL_WORKER_CONFIG`).
+        1: in this process. More: a pool of that many worker processes on this machine.
     scheduler : str, optional
         Address of a running Dask scheduler (``tcp://host:8786``); overrides ``workers``.
     connect_timeout : float
         Seconds to wait for the scheduler.
     warm : tuple, optional
-        ``(fn, *args)`` run once on every Dask worker before the first task (designs, compiled
+        ``(fn, *args)`` run once on every worker before the first task (designs, compiled
         kernels, readers); its time counts in ``pool.startup_s`` (s).
 
     Raises
     ------
     roadbank.campaign.execute.DaskMissing
-        Without dask.distributed (a RuntimeError).
+        With a ``scheduler`` but without dask.distributed (a RuntimeError).
     ConnectionError
         The scheduler is unreachable.
     """
     if scheduler is None and int(workers) <= 1:
         yield InProcess()
+        return
+    if scheduler is None:
+        pool = OnProcesses(int(workers), warm)
+        try:
+            yield pool
+        finally:
+            pool.close()
         return
     from ..campaign.execute import dask_session
 

@@ -151,8 +151,8 @@ class FleetResult:
         CPU seconds the workers spent over that time (in-process: this process; on Dask: the
         sum over the workers, every thread of each); NaN where not measured.
     client_cpu_s : float
-        CPU seconds of this process over that time on Dask (the client, and the scheduler of a
-        LocalCluster started here); 0 in-process (it is ``cpu_s``).
+        CPU seconds of this process over that time on workers (the client); 0 in-process (it is
+        ``cpu_s``).
     """
 
     summaries: list = field(default_factory=list)
@@ -232,8 +232,8 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
         Builds the estimators (see :func:`estimate_log`).
     output_format : {"parquet", "csv"}
     workers : int
-        1: in this process, one log after another. More: a Dask LocalCluster of
-        that many single-threaded worker processes.
+        1: in this process, one log after another. More: that many worker processes on this
+        machine (:class:`roadbank.fleet.cluster.OnProcesses`).
     scheduler : str, optional
         Address of a running Dask scheduler (``tcp://host:8786``); overrides ``workers``.
     resume : bool
