@@ -41,16 +41,6 @@ BATCH_MAX_LOGS = 64
 #: batches per worker at least (where there are enough logs), so that the workers end together
 #: (the last task of one worker is the others' idle time: an eighth of a share at most)
 BATCHES_PER_WORKER = 8
-#: Dask settings of a LocalCluster started here: Dask's sampling profiler (the stack of the
-#: running task every 10 ms) and its GIL monitor took a fifth of a worker's CPU time on short
-#: logs (30-33 ms per 10 min log against 25 ms without them, 21 ms in one process); the event
-#: loop's timers (its health tick every 20 ms, the memory check every 100 ms, the dashboard's
-#: system monitor every 0.5 s) another 5 % of the workers' and half of the client's
-LOCAL_WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
-                       "distributed.admin.system-monitor.gil.enabled": False,
-                       "distributed.admin.tick.interval": "1s",
-                       "distributed.worker.memory.monitor-interval": "1s",
-                       "distributed.admin.system-monitor.interval": "5s"}
 
 
 def _input_bytes(p: Path) -> int:
@@ -257,19 +247,6 @@ class OnProcesses:
         self._ex.shutdown(wait=True, cancel_futures=True)
 
 
-def _local_worker_config(local: bool):
-    """:data:`LOCAL_WORKER_CONFIG` set while a LocalCluster is started (``local``); nothing for a
-    running scheduler (its workers have their own settings) or without Dask (the session then
-    says it is missing)."""
-    try:
-        import dask
-        import distributed  # noqa: F401  (its defaults first: a setting made before them would
-                            # take every other distributed setting with it when it is undone)
-    except ImportError:
-        return contextlib.nullcontext()
-    return dask.config.set(LOCAL_WORKER_CONFIG) if local else contextlib.nullcontext()
-
-
 @contextlib.contextmanager
 def open_pool(workers: int = 1, scheduler: str | None = None, connect_timeout: float = 20.0, warm=None):
     """``with open_pool(...) as pool``: :class:`InProcess`, :class:`OnProcesses` or :class:`OnDask` (module doc).
@@ -306,8 +283,7 @@ def open_pool(workers: int = 1, scheduler: str | None = None, connect_timeout: f
     from ..campaign.execute import dask_session
 
     t0 = time.perf_counter()
-    with _local_worker_config(scheduler is None), \
-            dask_session(scheduler, int(workers), connect_timeout) as (client, pending):
+    with dask_session(scheduler, int(workers), connect_timeout) as (client, pending):
         if warm is not None:
             client.run(*warm)
         yield OnDask(client, pending, time.perf_counter() - t0)
