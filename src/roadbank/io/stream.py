@@ -126,18 +126,18 @@ class ReadAhead:
         ``seconds`` (s) past its first sample, or fewer: as soon as ``enough(span)`` is true of the
         signals gathered so far. A rule that reads only the span's start (its first ``seconds``, or
         up to where ``enough`` says it has all it needs) sees the same samples whatever the chunk size."""
-        if enough is None:
-            rest = seconds - float(current.t[-1] - current.t[0])
-            nxt = self.following(rest) if rest > 0 else None
-            return current if nxt is None else concat_signals([current, nxt])
-        span = current if not self._ahead else concat_signals([current, *(c.signals for c in self._ahead)])
-        while float(span.t[-1] - span.t[0]) < seconds and not enough(span):
+        def span() -> Signals:
+            return current if not self._ahead else concat_signals([current, *(c.signals for c in self._ahead)])
+
+        while True:
+            last = float(self._ahead[-1].signals.t[-1] if self._ahead else current.t[-1])
+            if last - float(current.t[0]) >= seconds or (enough is not None and enough(span())):
+                break
             chunk = next(self._it, None)
             if chunk is None:
                 break
             self._ahead.append(chunk)
-            span = concat_signals([span, chunk.signals])
-        return span
+        return span()
 
     def following(self, seconds: float) -> Signals | None:
         """Signals of the chunks after the current one, as many as reach ``seconds`` (s) past its
