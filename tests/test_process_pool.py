@@ -51,3 +51,44 @@ def test_a_worker_that_dies_costs_only_its_own_task():
         assert {k: v for k, v in got.items() if k != 3} == {k: (k * k, None) for k in range(8) if k != 3}
         # the pool goes on after it
         assert _run(pool, [6, 7]) == {6: (36, None), 7: (49, None)}
+
+
+def say(text: str) -> int:
+    """A task that writes to its worker's standard output without a newline or a flush."""
+    import sys
+    sys.stdout.write(text)
+    return len(text)
+
+
+def test_workers_end_quickly_with_their_output_flushed(tmp_path):
+    # a worker ends by os._exit (no interpreter tear-down): what a task printed must still reach
+    # the stream, and the process must have ended by the time the pool is closed
+    import subprocess
+    import sys
+    script = ("from roadbank.fleet.cluster import OnProcesses\n"
+              "import tests.test_process_pool as t\n"
+              "pool = OnProcesses(2)\n"
+              "procs = list(pool._ex._processes.values())\n"
+              "assert all(pool.outcome(f) == (5, None) for f in [pool.submit(t.say, 'hello') for _ in range(4)])\n"
+              "pool.close()\n"
+              "assert [p.exitcode for p in procs] == [0, 0], [p.exitcode for p in procs]\n")
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, cwd=root, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.count("hello") == 4
+
+
+def test_a_local_pool_cuts_logs_finer_than_dask(tmp_path):
+    # a local task costs about a millisecond to send: a few logs each, so the last one is short
+    from roadbank.fleet.cluster import LOCAL_BATCH_BYTES, LOCAL_BATCHES_PER_WORKER, batches
+    log = tmp_path / "log.parquet"
+    log.write_bytes(b"x" * 2**20)                     # a 10-minute 100 Hz log is about 1 MiB
+    paths = [log] * 1000
+    dask = batches(paths, workers=2)
+    with open_pool(2) as pool:
+        local = pool.batches(paths)
+    for groups in (dask, local):
+        assert [i for g in groups for i in g] == list(range(1000))     # consecutive, each once
+    assert max(map(len, local)) <= LOCAL_BATCH_BYTES // 2**20
+    assert len(local) >= 2 * LOCAL_BATCHES_PER_WORKER
+    assert max(map(len, local)) < max(map(len, dask))

@@ -303,7 +303,8 @@ def _run_dask(jobs, estimators, kw, workers, scheduler, connect_timeout, finish,
         result.workers, result.startup_s = pool.workers, pool.startup_s
         cpu0, client0 = pool.cpu_seconds(), time.process_time()
         groups = {}
-        for idx in batches([j[0] for j in jobs], result.workers, batch):
+        logs = [j[0] for j in jobs]
+        for idx in (pool.batches(logs) if batch is None else batches(logs, result.workers, batch)):
             group = [jobs[i] for i in idx]
             groups[pool.submit(_estimate_batch, group, list(estimators), kw)] = group
         for task in pool.as_completed(groups):
