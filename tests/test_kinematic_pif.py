@@ -99,7 +99,8 @@ def test_the_shipped_gate_and_the_default_are_what_the_rule_picks():
 
     logs, sims = training_logs(DATA), simulated_sets()
     g = dict(KINEMATIC_PIF_GATE)
-    builds = {"kinematic-ff": per_log("kinematic-ff"), "shipped": per_log("kinematic-pif")}
+    # the second stage ran before the third (the gate held open on quiet logs): quiet_ratio=0
+    builds = {"kinematic-ff": per_log("kinematic-ff"), "shipped": per_log("kinematic-pif", quiet_ratio=0.0)}
     for key in ("gate_on", "gate_span", "gate_release"):
         values = GATE_GRID[key]
         i = values.index(g[key])
@@ -125,15 +126,60 @@ def test_the_shipped_bank_rate_and_kappa_are_what_the_rule_picks():
 
     logs, sims = training_logs(DATA), simulated_sets()
     b, k = float(np.degrees(KINEMATIC_PIF_BANK_RATE)), KINEMATIC_PIF_KAPPA
-    builds = {"shipped": per_log("kinematic-pif")}
+    builds = {"shipped": per_log("kinematic-pif", quiet_ratio=0.0)}      # the first stage ran before the third
     for grid, key in ((BANK_RATES_DEG, "b"), (KAPPAS, "k")):
         i = grid.index(b if key == "b" else k)
         for j in (i - 1, i + 1):
             if 0 <= j < len(grid):
                 bb, kk = (grid[j], k) if key == "b" else (b, grid[j])
-                builds[(bb, kk)] = per_log("kinematic-pif", bank_rate=float(np.radians(bb)), kappa=kk)
+                builds[(bb, kk)] = per_log("kinematic-pif", bank_rate=float(np.radians(bb)), kappa=kk,
+                                           quiet_ratio=0.0)
     chosen, real, sim = choose_by_roads(builds, logs, sims)
     assert chosen == "shipped", (real, sim)
-    fixed = per_log("kinematic-pif", cutoff=0.6, kappa=0.2)
+    fixed = per_log("kinematic-pif", cutoff=0.6, kappa=0.2, quiet_ratio=0.0)
     assert real["shipped"] < objective(fixed, logs, []) - 0.02
-    assert objective(per_log("kinematic-pif"), [], sims) < objective(fixed, [], sims) - 0.02
+    assert objective(per_log("kinematic-pif", quiet_ratio=0.0), [], sims) < objective(fixed, [], sims) - 0.02
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not (DATA / "kitti-oxts-extra").is_dir(), reason="../shared/data/kitti-oxts-extra not present")
+def test_the_shipped_quiet_ratio_is_what_the_rule_picks():
+    """The third stage (kinematic_pif_candidates(3)): the shipped quiet ratio against its grid
+    neighbours, in increasing order (exact ties go to the smaller). Holding the gate open on quiet
+    logs must not touch a real training drive (all are loud) and must gain on the simulated ones."""
+    from roadbank.tuning.real import QUIET_RATIOS, choose_by_roads, per_log, simulated_sets, training_logs
+    from roadbank.vehicle import QUIET_RATIO
+
+    logs, sims = training_logs(DATA), simulated_sets()
+    i = QUIET_RATIOS.index(QUIET_RATIO)
+    cands = [QUIET_RATIOS[j] for j in (0, i - 1, i, i + 1) if 0 <= j < len(QUIET_RATIOS)]
+    builds = {q: per_log("kinematic-pif", quiet_ratio=q) for q in sorted(set(cands))}
+    chosen, real, sim = choose_by_roads(builds, logs, sims)
+    assert chosen == QUIET_RATIO, (real, sim)
+    assert real[QUIET_RATIO] == real[0.0]
+    assert sim[QUIET_RATIO] < sim[0.0] - 0.005
+
+
+def test_a_quiet_log_holds_the_gate_open_and_a_loud_one_does_not(lane_change):
+    """The rule of roadbank.vehicle.is_quiet in every command's factory: on a log whose ay carries
+    the data sheet's noise the output is the PIF's; with the road noise of a real road, the blend."""
+    from roadbank.vehicle import SensorSpec, is_quiet, log_conditions
+
+    s = lane_change.signals
+    sheet = SensorSpec()
+    cond = log_conditions(s)
+    assert is_quiet(sheet, cond["log_rate"], cond["log_ay_noise"])
+    rng = np.random.default_rng(1)
+    loud = Signals(s.t, s.vx, s.ay + 0.15 * rng.standard_normal(len(s.t)), s.r, s.delta_f)
+    lc = log_conditions(loud)
+    assert not is_quiet(sheet, lc["log_rate"], lc["log_ay_noise"])
+    assert not is_quiet(sheet, cond["log_rate"], float("nan")) and not is_quiet(sheet, 100.0, 0.0, ratio=0.0)
+    quiet_est, loud_est = for_log("kinematic-pif", s), for_log("kinematic-pif", loud)
+    assert quiet_est.gate_on == -quiet_est.gate_span and loud_est.gate_on == KINEMATIC_PIF_GATE["gate_on"]
+    got, pif = quiet_est.run(s), for_log("pif-modified", s).run(s)
+    np.testing.assert_allclose(got.w[1:], pif.w[1:], rtol=0, atol=1e-12)
+    # an explicit gate, or quiet_ratio=0, keeps the blend
+    assert for_log("kinematic-pif", s, gate_on=3.0).gate_on == 3.0
+    assert for_log("kinematic-pif", s, quiet_ratio=0.0).gate_on == KINEMATIC_PIF_GATE["gate_on"]
+    with pytest.raises(ValueError, match="gate_on or hold_open"):
+        E.make("kinematic-pif", hold_open=True, gate_on=1.0)

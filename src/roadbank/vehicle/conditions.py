@@ -20,14 +20,19 @@ from .sensors import SensorSpec
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
 # them: loading a car (load_vehicle, --vehicle) loads neither
 
-__all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "design_span", "has_design_span", "log_conditions", "noise_densities",
-           "make_estimator"]
+__all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "design_span", "has_design_span", "log_conditions",
+           "noise_densities", "is_quiet", "make_estimator"]
 
 
 #: seconds of driving (``vx >= v_min``) at the start of a log on which :func:`log_conditions` measures it (s)
 DESIGN_SPAN_S = 60.0
 #: ... read at most this far into the log (s): a log that stands still longer is measured on what it has
 DESIGN_MAX_S = 600.0
+#: a log is quiet (:func:`is_quiet`) when its ``ay`` road-noise density is at most this many times
+#: the accelerometer's data-sheet density (-; chosen by the rule of :mod:`roadbank.tuning.real`)
+QUIET_RATIO = 1.5
+#: the options of ``kinematic-pif`` that set its gate: given one, the caller's gate is kept
+_GATE_OPTIONS = ("gate_on", "gate_span", "gate_tf", "gate_release", "hold_open")
 
 
 def design_span(signals, v_min: float = 5.0) -> int:
@@ -113,6 +118,23 @@ def noise_densities(sensors: SensorSpec, log_rate: float | None = None, log_ay_n
     return R, Q_ay
 
 
+def is_quiet(sensors: SensorSpec, log_rate: float | None = None, log_ay_noise: float | None = None,
+             ratio: float = QUIET_RATIO) -> bool:
+    """Whether a log's ``ay`` is quiet: its road-noise density (``log_ay_noise``, m/s^2, at
+    ``log_rate`` Hz: :func:`log_conditions`) at most ``ratio`` times the accelerometer's
+    data-sheet density at that rate (:meth:`SensorSpec.ay_noise_density`).
+
+    A car's ESP sensor on a smooth road (and every simulated drive: 0.9-6 times) is quiet; a
+    road that shakes the accelerometer, a 10 Hz INS that samples without an anti-alias filter, a
+    phone is not (the KITTI training drives: 15-190 times the paper's ESP accelerometer).
+    Not measured (None or NaN) or ``ratio <= 0``: False.
+    """
+    if log_ay_noise is None or not math.isfinite(log_ay_noise) or not ratio > 0:
+        return False
+    rate = sensors.rate_for(log_rate)
+    return log_ay_noise ** 2 / rate <= ratio * sensors.ay_noise_density(rate)
+
+
 def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: SensorSpec | None = None,
                    log_rate: float | None = None, log_ay_noise: float | None = None,
                    log_r_noise: float | None = None, **options):
@@ -141,12 +163,19 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         (:func:`roadbank.signals.road_noise_std`); None or NaN: not measured.
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
-        sensor out of that weight.
+        sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
+        :data:`QUIET_RATIO`; 0: never): on a quiet log (:func:`is_quiet` with that ratio) its
+        gate is held open (``hold_open=True``: the PIF, with the car's model, throughout),
+        unless the options set the gate themselves.
     """
     from .. import estimators
     from ..estimators.pif import with_sensor_noise
 
     sensors = sensors if sensors is not None else SensorSpec()
+    if name == "kinematic-pif":
+        ratio = float(options.pop("quiet_ratio", QUIET_RATIO))
+        if not any(k in options for k in _GATE_OPTIONS) and is_quiet(sensors, log_rate, log_ay_noise, ratio):
+            options["hold_open"] = True
     if sensors.r_variance > 0:
         R, Q_ay = noise_densities(sensors, log_rate, log_ay_noise, log_r_noise)
         options = with_sensor_noise(name, options, R, Q_ay)
