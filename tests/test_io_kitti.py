@@ -163,3 +163,35 @@ def test_real_drive_matches_its_readme(oxts):
     assert np.corrcoef(log.reference_roll, (s.ay - s.vx * s.r) / 9.81)[0, 1] == pytest.approx(c_roll, abs=0.01)
     assert 48.9 < log.extra["lat_deg"].min() and log.extra["lon_deg"].max() < 8.6   # Karlsruhe
     assert log.warnings == []
+
+
+def test_implausible_values_are_refused_naming_the_frame_channel(tmp_path):
+    """The assembler checks a drive's values in their unit as any log's: a speed column of 800 m/s
+    (column 8 of every frame) is refused, naming the drive, the channel and the oxts column."""
+    drive = write_drive(tmp_path, n=6, stamps=GOOD)
+    for k in range(6):
+        vals = frame_values(k)
+        vals[8] = 800.0 + k
+        (drive / "oxts" / "data" / f"{k:010d}.txt").write_text(" ".join(f"{v:.6f}" for v in vals) + "\n")
+    with pytest.raises(LogError, match=r"oxts: channel 'speed' \(column 'vf \(column 8\)'\): median speed 80"):
+        load_log(drive)
+
+
+def test_streamed_drive_reads_frames_chunk_by_chunk(tmp_path):
+    """Streamed, the frames come ``chunk_rows`` at a time, end to end the whole drive, with the row
+    numbers of the frame files; a bad frame in a later chunk is the whole drive's error, once reached."""
+    from roadbank.io.stream import stream_log
+    drive = write_drive(tmp_path, n=25)
+    (drive / "oxts" / "data" / "0000000007.txt").unlink()
+    whole = load_log(drive)
+    chunks = list(stream_log(drive, chunk_rows=5))
+    assert [len(c) for c in chunks] == [5, 5, 5, 5, 4]
+    np.testing.assert_array_equal(np.concatenate([c.signals.t for c in chunks]), whole.signals.t)
+    np.testing.assert_array_equal(np.concatenate([c.extra["vl_mps"] for c in chunks]), whole.extra["vl_mps"])
+    assert chunks[0].warnings == whole.warnings and whole.metadata["dropped_frames"] == "1"
+    (drive / "oxts" / "data" / "0000000021.txt").write_text("1 2 3\n")
+    got = []
+    with pytest.raises(LogError, match=r"0000000021\.txt: line 1: 3 fields, expected 30"):
+        for c in stream_log(drive, chunk_rows=5):
+            got.append(c)
+    assert sum(len(c) for c in got) <= 15              # the chunks before the bad frame's
