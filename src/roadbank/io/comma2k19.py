@@ -46,7 +46,7 @@ from .assemble import read_whole
 from .channels import ChannelMap, ChannelSpec
 from .errors import LogError
 from .geodesy import ecef_to_latlon, ellipsoid_down_ecef
-from .types import Log, RawChunk
+from .types import RawChunk
 
 __all__ = ["FILES", "SegmentSource", "channel_map", "ecef_to_latlon", "ellipsoid_down_ecef", "load_comma2k19",
            "pose_roll", "quat_to_matrix"]
@@ -185,7 +185,7 @@ class SegmentSource:
 
 
 def load_comma2k19(path, params: VehicleParams | None = None, rate_hz: float = 100.0,
-                   max_gap_s: float = 0.5) -> Log:
+                   max_gap_s: float = 0.5):
     """Read a comma2k19 segment directory into a :class:`~roadbank.io.Log` with ``reference_roll``.
 
     Parameters

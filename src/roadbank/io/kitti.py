@@ -57,7 +57,7 @@ from ..params import VehicleParams
 from .assemble import read_whole
 from .channels import ChannelMap, ChannelSpec
 from .errors import LogError
-from .types import Log, RawChunk
+from .types import RawChunk
 
 #: fields per oxts frame (dataformat.txt)
 N_FIELDS = 30
@@ -244,7 +244,7 @@ class DriveSource:
             yield RawChunk(data, rownums=ks, last=i + step >= n)
 
 
-def load_kitti_oxts(path) -> Log:
+def load_kitti_oxts(path):
     """Read one KITTI raw drive into a :class:`~roadbank.io.Log` with the INS roll as reference.
 
     Parameters
