@@ -47,11 +47,10 @@ Malformed input (decided per kind, see docs/io.md):
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
-
-from collections.abc import Iterator
 
 from ..params import VehicleParams
 from .assemble import read_whole

@@ -33,11 +33,11 @@ import numpy as np
 from ..params import VehicleParams
 from . import readers
 from .channels import ChannelMap
+from .comma2k19 import SegmentSource
 from .errors import LogError
 from .files import open_mdf
 from .formats import CAN_FORMATS, ROS_FORMATS
 from .kitti import DriveSource
-from .comma2k19 import SegmentSource
 from .types import RawChunk, RawTable
 
 
