@@ -10,7 +10,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from roadbank.io import LogError, load_log
-from roadbank.io.comma2k19 import ellipsoid_down_ecef, pose_roll
+from roadbank.io.comma2k19 import ellipsoid_down_ecef, load_comma2k19, pose_roll
 
 SEGMENT = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "comma2k19-example"
 needs_data = pytest.mark.skipif(not SEGMENT.is_dir(), reason=f"comma2k19 example segment absent at {SEGMENT}")
@@ -83,3 +83,60 @@ def test_missing_and_truncated_segment_files(tmp_path):
     (seg / "processed_log/IMU/accelerometer/t").write_bytes(b[:-20])
     with pytest.raises(LogError, match="unreadable"):
         load_log(seg)
+
+
+@needs_data
+def test_real_segment_is_the_documented_mapping_on_the_common_grid():
+    """The segment read through the assembler equals the mapping of the module docstring computed here
+    from the raw arrays with the resampling rules alone (:mod:`roadbank.io.resample`): ``ay = -accel[:, 1]``,
+    ``r = -gyro[:, 2]``, the CAN speed, the steering-wheel angle in rad over the steering ratio, the pose
+    roll and position, all on the uniform 100 Hz grid over their overlap, bit for bit."""
+    from roadbank.io.comma2k19 import ecef_to_latlon
+    from roadbank.io.resample import common_time_base, interpolate, resample
+    from roadbank.params import VehicleParams
+
+    def arr(rel):
+        return np.load(SEGMENT / rel, allow_pickle=False)
+
+    acc, gyr = arr("processed_log/IMU/accelerometer/value"), arr("processed_log/IMU/gyro/value")
+    pos, quat = arr("global_pose/frame_positions"), arr("global_pose/frame_orientations")
+    ft = arr("global_pose/frame_times")
+    series = {"speed": (arr("processed_log/CAN/speed/t"), arr("processed_log/CAN/speed/value").reshape(-1)),
+              "ay": (arr("processed_log/IMU/accelerometer/t"), -acc[:, 1]),
+              "r": (arr("processed_log/IMU/gyro/t"), -gyr[:, 2]),
+              "swa": (arr("processed_log/CAN/steering_angle/t"),
+                      np.radians(arr("processed_log/CAN/steering_angle/value").reshape(-1))),
+              "roll": (ft, pose_roll(pos, quat))}
+    for ratio, rate, gap in ((None, 100.0, 0.5), (12.0, 50.0, 0.2)):
+        params = VehicleParams() if ratio is None else VehicleParams().replace(steering_ratio=ratio)
+        log = load_comma2k19(SEGMENT, params=params, rate_hz=rate, max_gap_s=gap)
+        t = common_time_base(series, "uniform", rate)
+        want = resample(series, t, gap)
+        s = log.signals
+        np.testing.assert_array_equal(s.t, t)
+        for got, key in ((s.vx, "speed"), (s.ay, "ay"), (s.r, "r"), (log.reference_roll, "roll")):
+            np.testing.assert_array_equal(got, want[key], err_msg=key)
+        np.testing.assert_array_equal(s.delta_f, want["swa"] / params.steering_ratio)
+        lat, lon = ecef_to_latlon(pos)
+        np.testing.assert_array_equal(log.extra["lat_deg"], interpolate(ft, np.degrees(lat), t, gap))
+        np.testing.assert_array_equal(log.extra["lon_deg"], interpolate(ft, np.degrees(lon), t, gap))
+        assert log.metadata["steering_ratio"] == str(params.steering_ratio) and log.warnings == []
+
+
+@needs_data
+def test_damaged_stamps_are_repaired_as_in_any_log(tmp_path):
+    """Two gyro samples with their stamps swapped: the time-stamp repair of every format puts them back
+    in order, flags them not valid and says so, naming the file and the channel."""
+    import shutil
+    seg = tmp_path / "seg"
+    shutil.copytree(SEGMENT, seg)
+    f = seg / "processed_log/IMU/gyro/t"
+    t = np.load(f, allow_pickle=False)
+    t[2000], t[2001] = t[2001], t[2000]
+    with open(f, "wb") as fh:
+        np.save(fh, t)
+    log = load_log(seg)
+    assert log.time_repairs["swapped"] == 1 and log.time_repairs["flagged"] == 2
+    assert any("channel 'yaw_rate' (column 'processed_log/IMU/gyro[2]'): time stamps repaired: 1 swapped pair"
+               in w for w in log.warnings)
+    assert len(log) == len(load_log(SEGMENT))

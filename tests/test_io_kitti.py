@@ -16,8 +16,9 @@ needs_data = pytest.mark.skipif(not DRIVES, reason=f"KITTI oxts drives absent at
 
 
 def frame_values(k: int) -> np.ndarray:
-    """30 distinct, recognisable values for frame k (column j holds 100 j + k / 10)."""
-    return 100.0 * np.arange(N_FIELDS) + k / 10.0
+    """30 distinct, recognisable values for frame k (column j holds j / 100 + k / 1000), each plausible
+    in its unit (the reader checks them: 0.08 m/s, 0.12 m/s^2, 0.19 rad/s, a roll of 0.03 rad)."""
+    return 0.01 * np.arange(N_FIELDS) + k / 1000.0
 
 
 def write_drive(root: Path, n: int = 6, stamps=None) -> Path:
@@ -42,17 +43,18 @@ def test_columns_time_and_detection(tmp_path):
         assert log.format == "kitti-oxts" and log.metadata["drive"] == "2011_01_01_drive_0001_sync"
         # 10 Hz from the nanosecond stamps, relative to the first frame
         np.testing.assert_allclose(s.t, 0.1 * np.arange(6), atol=1e-6)
-        k = np.arange(6) / 10.0
-        np.testing.assert_allclose(s.vx, 800 + k)          # column 8 vf
-        np.testing.assert_allclose(s.ay, 1200 + k)         # column 12 ay
-        np.testing.assert_allclose(s.r, 1900 + k)          # column 19 wz
-        np.testing.assert_allclose(log.reference_roll, 300 + k)    # column 3 roll
+        k = np.arange(6) / 1000.0
+        np.testing.assert_allclose(s.vx, 0.08 + k)          # column 8 vf
+        np.testing.assert_allclose(s.ay, 0.12 + k)          # column 12 ay
+        np.testing.assert_allclose(s.r, 0.19 + k)           # column 19 wz
+        np.testing.assert_allclose(log.reference_roll, 0.03 + k)    # column 3 roll
         np.testing.assert_allclose(log.extra["lat_deg"], k)
-        np.testing.assert_allclose(log.extra["lon_deg"], 100 + k)
+        np.testing.assert_allclose(log.extra["lon_deg"], 0.01 + k)
+        np.testing.assert_allclose(log.extra["vl_mps"], 0.09 + k)   # column 9 vl
         assert np.all(np.isnan(s.delta_f))
         assert log.metadata["time_origin"] == "2011-01-01 12:00:00.000000123 UTC"
         assert log.metadata["dropped_frames"] == "0"
-    assert load_log(drive, format="kitti-oxts").signals.vx[0] == 800
+    assert load_log(drive, format="kitti-oxts").signals.vx[0] == 0.08
 
 
 def test_parent_of_two_drives_is_refused_by_load_log_but_found(tmp_path):
@@ -72,7 +74,7 @@ def test_missing_frame_is_dropped_and_counted(tmp_path):
     assert log.metadata["dropped_frames"] == "1" and len(log) == 7
     # the other frames keep their own time stamps: a 0.2 s step where frame 3 was
     np.testing.assert_allclose(np.diff(log.signals.t), [0.1, 0.1, 0.2, 0.1, 0.1, 0.1], atol=1e-6)
-    np.testing.assert_allclose(log.signals.vx, 800 + np.array([0, 1, 2, 4, 5, 6, 7]) / 10.0)
+    np.testing.assert_allclose(log.signals.vx, 0.08 + np.array([0, 1, 2, 4, 5, 6, 7]) / 1000.0)
     assert any("0000000003.txt" in w and "dropped" in w for w in log.warnings)
 
 
@@ -161,3 +163,35 @@ def test_real_drive_matches_its_readme(oxts):
     assert np.corrcoef(log.reference_roll, (s.ay - s.vx * s.r) / 9.81)[0, 1] == pytest.approx(c_roll, abs=0.01)
     assert 48.9 < log.extra["lat_deg"].min() and log.extra["lon_deg"].max() < 8.6   # Karlsruhe
     assert log.warnings == []
+
+
+def test_implausible_values_are_refused_naming_the_frame_channel(tmp_path):
+    """The assembler checks a drive's values in their unit as any log's: a speed column of 800 m/s
+    (column 8 of every frame) is refused, naming the drive, the channel and the oxts column."""
+    drive = write_drive(tmp_path, n=6, stamps=GOOD)
+    for k in range(6):
+        vals = frame_values(k)
+        vals[8] = 800.0 + k
+        (drive / "oxts" / "data" / f"{k:010d}.txt").write_text(" ".join(f"{v:.6f}" for v in vals) + "\n")
+    with pytest.raises(LogError, match=r"oxts: channel 'speed' \(column 'vf \(column 8\)'\): median speed 80"):
+        load_log(drive)
+
+
+def test_streamed_drive_reads_frames_chunk_by_chunk(tmp_path):
+    """Streamed, the frames come ``chunk_rows`` at a time, end to end the whole drive, with the row
+    numbers of the frame files; a bad frame in a later chunk is the whole drive's error, once reached."""
+    from roadbank.io.stream import stream_log
+    drive = write_drive(tmp_path, n=25)
+    (drive / "oxts" / "data" / "0000000007.txt").unlink()
+    whole = load_log(drive)
+    chunks = list(stream_log(drive, chunk_rows=5))
+    assert [len(c) for c in chunks] == [5, 5, 5, 5, 4]
+    np.testing.assert_array_equal(np.concatenate([c.signals.t for c in chunks]), whole.signals.t)
+    np.testing.assert_array_equal(np.concatenate([c.extra["vl_mps"] for c in chunks]), whole.extra["vl_mps"])
+    assert chunks[0].warnings == whole.warnings and whole.metadata["dropped_frames"] == "1"
+    (drive / "oxts" / "data" / "0000000021.txt").write_text("1 2 3\n")
+    got = []
+    with pytest.raises(LogError, match=r"0000000021\.txt: line 1: 3 fields, expected 30"):
+        for c in stream_log(drive, chunk_rows=5):
+            got.append(c)
+    assert sum(len(c) for c in got) <= 15              # the chunks before the bad frame's

@@ -22,6 +22,8 @@ from roadbank.io.stream import stream_log
 SIG = ("t", "vx", "ay", "r", "delta_f")
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 KITTI = sorted((DATA / "kitti-oxts").glob("*/oxts")) if (DATA / "kitti-oxts").is_dir() else []
+#: every shipped drive, the validation drives and the training ones
+DRIVES = sorted(DATA.glob("kitti-oxts*/*/oxts"))
 COMMA = DATA / "comma2k19-example"
 CHUNKS = (61, 1000)
 
@@ -61,15 +63,37 @@ needs_kitti = pytest.mark.skipif(not KITTI, reason=f"KITTI oxts drives absent at
 
 @needs_kitti
 @pytest.mark.parametrize("chunk", CHUNKS)
-@pytest.mark.parametrize("drive", KITTI, ids=lambda d: d.parent.name)
+@pytest.mark.parametrize("drive", DRIVES, ids=lambda d: d.parent.name)
 def test_kitti_drive(drive, chunk):
-    assert_stream_equals_load(drive.parent, chunk, more=("reference_roll", "lat_deg", "lon_deg"))
+    """A drive is streamed in frames (several chunks at 61 frames): the chunks end to end are the
+    whole drive bit for bit (the frames' own clock, nothing interpolated), and the whole drive is
+    what ``load_kitti_oxts`` reads."""
+    from roadbank.io.kitti import load_kitti_oxts
+    whole, chunks = assert_stream_equals_load(drive.parent, chunk,
+                                              more=("reference_roll", "lat_deg", "lon_deg", "vl_mps"))
+    assert len(chunks) == -(-len(whole) // chunk)          # one chunk per chunk_rows frames
+    for k in SIG:
+        np.testing.assert_array_equal(np.concatenate([getattr(c.signals, k) for c in chunks]),
+                                      getattr(whole.signals, k))
+    np.testing.assert_array_equal(np.concatenate([c.reference_roll for c in chunks]), whole.reference_roll)
+    assert [w for c in chunks for w in c.warnings] == whole.warnings
+    direct = load_kitti_oxts(drive)
+    for k in SIG:
+        np.testing.assert_array_equal(getattr(direct.signals, k), getattr(whole.signals, k))
+    assert direct.metadata == whole.metadata and direct.extra.keys() == whole.extra.keys()
 
 
 @pytest.mark.skipif(not COMMA.is_dir(), reason=f"comma2k19 example segment absent at {COMMA}")
 @pytest.mark.parametrize("chunk", CHUNKS)
 def test_comma2k19_segment(chunk):
-    assert_stream_equals_load(COMMA, chunk, more=("reference_roll", "lat_deg", "lon_deg"))
+    """A segment is one chunk whatever ``chunk_rows``, and ``load_comma2k19`` reads the same log."""
+    from roadbank.io.comma2k19 import load_comma2k19
+    whole, chunks = assert_stream_equals_load(COMMA, chunk, more=("reference_roll", "lat_deg", "lon_deg"))
+    assert len(chunks) == 1
+    direct = load_comma2k19(COMMA)
+    for k in SIG:
+        np.testing.assert_array_equal(getattr(direct.signals, k), getattr(whole.signals, k))
+    np.testing.assert_array_equal(direct.reference_roll, whole.reference_roll)
 
 
 REAL_MAP = """
@@ -322,3 +346,99 @@ def test_mdf4_text_channel_is_read_alike_whole_and_streamed(tmp_path, bad):
         list(stream_log(p, chunk_rows=100))
     assert str(whole.value) == str(streamed.value)
     assert "'speed'" in str(whole.value) and "sample 321" in str(whole.value)
+
+
+# ------------------------------------------------------------------ checks decided on the log's start
+
+def test_consistency_is_decided_on_the_turns_after_a_straight(tmp_path):
+    """Speed logged in km/h but declared m/s (54 "m/s" at 15 m/s, plausible on its own): the first 30 s
+    run straight, so the first chunks hold no turning sample and cannot tell; the turns that follow
+    do, whole and streamed alike (streamed, the error comes with the chunk where the turns start)."""
+    from roadbank.io import LogError
+    from roadbank.io.writers import write_table
+    rng = np.random.default_rng(3)
+    n = 6000
+    t = np.arange(n) / 100.0
+    r = np.where(t < 30.0, 0.0, 0.3 + 0.02 * np.sin(t)) + 0.001 * rng.standard_normal(n)
+    v = 15.0 + 0.1 * np.sin(0.1 * t)
+    cols = {"t": t, "vx": 3.6 * v, "ay": v * r + 0.05 * rng.standard_normal(n), "r": r, "delta_f": 0.01 * r}
+    p = tmp_path / "kmh.parquet"
+    write_table(p, cols)
+    with pytest.raises(LogError, match="channel 'speed' .*looks like km/h"):
+        load_log(p)
+    got = []
+    with pytest.raises(LogError, match="channel 'speed' .*looks like km/h"):
+        for c in stream_log(p, chunk_rows=1000):
+            got.append(c)
+    assert sum(len(c) for c in got) <= 3000            # nothing of the turns was given
+
+
+def test_a_consistent_log_streams_as_it_loads_when_the_turns_come_late(tmp_path):
+    """The same drive with the speed in m/s: no error, and the chunks are the whole log."""
+    from roadbank.io.writers import write_table
+    rng = np.random.default_rng(3)
+    n = 6000
+    t = np.arange(n) / 100.0
+    r = np.where(t < 30.0, 0.0, 0.3 + 0.02 * np.sin(t)) + 0.001 * rng.standard_normal(n)
+    v = 15.0 + 0.1 * np.sin(0.1 * t)
+    cols = {"t": t, "vx": v, "ay": v * r + 0.05 * rng.standard_normal(n), "r": r, "delta_f": 0.01 * r}
+    p = tmp_path / "ok.parquet"
+    write_table(p, cols)
+    whole, chunks = assert_stream_equals_load(p, 1000)
+    assert whole.warnings == [] and len(chunks) > 3
+
+
+@pytest.mark.parametrize("chunk", (2, 3, 61))
+def test_time_unit_is_checked_on_small_chunks(tmp_path, chunk):
+    """Time stamps in ms declared s (a 10 s "period"): refused whole and streamed, also when the first
+    chunk holds too few stamps for a median period (two rows)."""
+    from roadbank.io import LogError
+    from roadbank.io.writers import write_table
+    n = 400
+    t = np.arange(n) * 10.0
+    cols = {"t": t, "vx": 15.0 + np.sin(t), "ay": 0.5 * np.sin(t), "r": 0.03 * np.cos(t), "delta_f": 0.01 * np.sin(t)}
+    p = tmp_path / "ms.parquet"
+    write_table(p, cols)
+    with pytest.raises(LogError, match="median sample period 10 s"):
+        load_log(p)
+    with pytest.raises(LogError, match="median sample period 10 s"):
+        list(stream_log(p, chunk_rows=chunk))
+
+
+CLOCK_MAP = MAP.format(tb="clock", rate=100.0, gap=0.5)
+
+
+@pytest.mark.parametrize("chunk", CHUNKS)
+def test_clock_time_base_keeps_the_table_clock(tmp_path, chunk):
+    """``time_base = "clock"``: the table's own stamps whatever the channels' rates (the speed every 3rd
+    row only, which "auto" would resample), values as stored, NaN where NaN."""
+    from roadbank.io.writers import write_table
+    cols = _table(5, mixed=True)
+    vx = cols["vx"].copy()
+    vx[np.arange(len(vx)) % 3 != 0] = np.nan
+    cols["vx"] = vx
+    p = tmp_path / "log.parquet"
+    write_table(p, cols)
+    (tmp_path / "m.toml").write_text(CLOCK_MAP)
+    whole, _ = assert_stream_equals_load(p, chunk, channels=tmp_path / "m.toml", more=("reference_roll",))
+    np.testing.assert_array_equal(whole.signals.t, cols["t"])
+    np.testing.assert_array_equal(whole.signals.vx, cols["vx"])
+    np.testing.assert_array_equal(whole.reference_roll, cols["roll"])
+    (tmp_path / "a.toml").write_text(MAP.format(tb="auto", rate=100.0, gap=0.5))
+    assert len(load_log(p, channels=tmp_path / "a.toml")) != len(cols["t"])     # (auto: resampled)
+
+
+def test_clock_time_base_needs_a_table(tmp_path):
+    pytest.importorskip("asammdf")
+    from asammdf import MDF, Signal
+
+    from roadbank.io import LogError
+    t = np.arange(500) / 100.0
+    mdf = MDF(version="4.10")
+    mdf.append([Signal(0.5 * np.sin(t), t, name="ay"), Signal(0.03 * np.cos(t), t, name="r"),
+                Signal(0.01 * t, t, name="delta_f"), Signal(0.0 * t, t, name="roll"), Signal(15.0 + t, t, name="vx")])
+    p = tmp_path / "log.mf4"
+    mdf.save(p)
+    (tmp_path / "m.toml").write_text(CLOCK_MAP)
+    with pytest.raises(LogError, match=r"log\.mf4: resample\.time_base 'clock' needs a table"):
+        load_log(p, channels=tmp_path / "m.toml")

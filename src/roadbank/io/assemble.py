@@ -1,6 +1,7 @@
 """The assembler: raw channels of a source -> :class:`~roadbank.io.Log` chunks (SI, ISO 8855, one time base).
 
-Every channel-map format (CSV, Parquet, MDF4, raw CAN, ROS) comes here from its source
+Every format (CSV, Parquet, MDF4, raw CAN, ROS, and the fixed layouts of KITTI raw drives and comma2k19
+segments, whose sources bring their own channel map) comes here from its source
 (:mod:`roadbank.io.sources`), whole or in chunks, and goes through the same steps in the same order:
 
 1. **channel selection**: the roles the map names and the file has (:func:`select_roles`);
@@ -10,14 +11,24 @@ Every channel-map format (CSV, Parquet, MDF4, raw CAN, ROS) comes here from its 
 4. **plausibility** of each channel's values in its declared unit
    (:func:`~roadbank.io.channels.check_plausible`);
 5. **resampling** onto one time base (:class:`~roadbank.io.resample.StreamResampler`);
-6. **the log**: :class:`~roadbank.Signals`, reference roll, truth, GNSS position, the cross-channel
-   consistency check (:func:`~roadbank.io.consistency.check_consistency`) and the repair counts.
+6. **the log**: :class:`~roadbank.Signals`, reference roll, truth, GNSS position, the channels a
+   source derives itself (``carried``: KITTI's leftward speed, a data set's position in degrees; into
+   :attr:`Log.extra` as they are), the cross-channel consistency check
+   (:func:`~roadbank.io.consistency.check_consistency`) and the repair counts.
 
 A log read whole is one chunk and gives one :class:`Log`; streamed, the same steps give its
 consecutive chunks, which put end to end equal the whole log. ``time_base = "auto"`` is decided on
 the whole log (for a table read in chunks, by a first pass over it: :mod:`roadbank.io.survey`).
-Unit plausibility is checked on every chunk (its warnings come from the first), the time column's
-sample period and the consistency check on the first chunk: on a log read whole, the whole log.
+
+Which samples each check sees:
+
+* unit plausibility of every channel: every chunk (a chunk whose values are impossible in the declared
+  unit is refused, wherever it is); its warnings (a steering angle above one turn) from the first chunk;
+* the time column's sample period and the cross-channel consistency: the start of the log, the first
+  chunks until the check has enough samples to conclude (:data:`PERIOD_STAMPS` time stamps;
+  :data:`~roadbank.io.consistency.MIN_SAMPLES` turning samples), then decided once. Both look for a
+  wrong unit or sign, which holds for the whole log: a log that starts with a long straight is
+  checked on the turns that follow it. A log read whole is one chunk: the whole log is checked.
 """
 
 from __future__ import annotations
@@ -28,11 +39,11 @@ from pathlib import Path
 import numpy as np
 
 from ..params import VehicleParams
-from ..signals import Signals, road_wheel_angle
+from ..signals import Signals, concat_signals, road_wheel_angle
 from .channels import ChannelMap, check_plausible
-from .comma2k19 import ecef_to_latlon
-from .consistency import check_consistency
+from .consistency import MIN_SAMPLES, check_balance, turning, usable
 from .errors import LogError, channel_error
+from .geodesy import ecef_to_latlon
 from .repair import FLAGGED_ROLES, ChunkRepair
 from .resample import StreamResampler, clean_series
 from .survey import auto_uses_clock
@@ -41,6 +52,8 @@ from .types import Log
 
 #: GNSS fixes come at 1-20 Hz: a gap up to this long (s) is interpolated across
 GNSS_MAX_GAP_S = 2.0
+#: time stamps the sample-period check of a table's time column gathers before it decides
+PERIOD_STAMPS = 100
 
 
 def missing_column(p, role: str, column: str | None, names,
@@ -145,13 +158,15 @@ class _Logs:
     """Resampled output -> :class:`Log` s, given one behind: the last one waits for the repair
     counts and warnings that come after the last base time, and the log's length check."""
 
-    def __init__(self, p, fmt, cmap, params, roles, gnss, truth_cols, metadata):
+    def __init__(self, p, fmt, cmap, params, roles, gnss, truth_cols, metadata, carried=()):
         self.p, self.fmt, self.cmap, self.params = p, fmt, cmap, params
         self.roles, self.gnss, self.truth_cols, self.metadata = roles, gnss, truth_cols, metadata
+        self.carried = list(carried)
         self.warnings: list[str] = []      # for the next log
         self.counts: dict = {}             # repair counts for the next log
         self.pending: Log | None = None
         self.n = 0                         # samples given so far
+        self.balance = _Balance(p, {r: cmap.channels[r].column for r in roles[:3]})
 
     def add(self, out, counts: dict) -> Iterator[Log]:
         """The log of one :meth:`StreamResampler.emit` output (nothing for None), with the repair
@@ -166,13 +181,13 @@ class _Logs:
         except ValueError as exc:
             raise LogError(f"{p}: {exc}") from None
         pos = {r: out[r] for r in self.gnss}
+        extra = gnss_extra(p, cmap, pos) if pos else {}
+        extra.update({c: out[c] for c in self.carried})
         log = Log(signals=sig, reference_roll=out.get("reference_roll"), source=p, format=self.fmt,
                   metadata=dict(self.metadata), truth={c: out[c] for c in self.truth_cols},
-                  warnings=self.warnings, channel_map=cmap, extra=gnss_extra(p, cmap, pos) if pos else {},
-                  time_repairs=self.counts)
+                  warnings=self.warnings, channel_map=cmap, extra=extra, time_repairs=self.counts)
         self.warnings, self.counts = [], {}
-        if self.n == 0:
-            log.warnings += check_consistency(sig, p, {r: cmap.channels[r].column for r in self.roles[:3]})
+        log.warnings += self.balance.add(sig)
         self.n += len(sig)
         if self.pending is not None:
             yield self.pending
@@ -188,10 +203,67 @@ class _Logs:
         yield self.pending
 
 
-def _time_base(p, cmap: ChannelMap, roles) -> str:
-    """The map's time base; LogError for a role name the log does not read."""
+class _Balance:
+    """The cross-channel consistency check on the start of a log: the samples it reads
+    (:func:`~roadbank.io.consistency.usable`), gathered chunk by chunk until
+    :data:`~roadbank.io.consistency.MIN_SAMPLES` of them are turning, then decided once (a log read
+    whole: on the whole log). Holds those samples only."""
+
+    def __init__(self, p, columns: dict):
+        self.p, self.columns = p, columns
+        self.parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
+        self.turning = 0
+        self.decided = False
+
+    def add(self, sig: Signals) -> list[str]:
+        """The check's warnings once it is decided with ``sig`` (SI), [] before and after;
+        LogError as :func:`~roadbank.io.consistency.check_consistency`."""
+        if self.decided:
+            return []
+        vx, ay, r = (np.asarray(a, dtype=np.float64) for a in (sig.vx, sig.ay, sig.r))
+        keep = usable(vx, ay, r)
+        self.parts.append((vx[keep], ay[keep], r[keep]))
+        self.turning += int(turning(vx[keep], ay[keep], r[keep]).sum())
+        if self.turning < MIN_SAMPLES:
+            return []
+        self.decided = True
+        vx, ay, r = (np.concatenate(a) for a in zip(*self.parts))
+        self.parts = []
+        return check_balance(vx, ay, r, self.p, self.columns)
+
+
+class _Period:
+    """The sample-period check of a table's time column on the start of the log: its stamps gathered
+    chunk by chunk until there are :data:`PERIOD_STAMPS` (a log read whole: all of them), then
+    :func:`~roadbank.io.channels.check_plausible` once."""
+
+    def __init__(self, p, spec):
+        self.p, self.spec = p, spec
+        self.parts: list[np.ndarray] = []
+        self.n = 0
+        self.decided = False
+
+    def add(self, t: np.ndarray, last: bool) -> None:
+        """Stamps ``t`` (s) of the next chunk (``last``: the log's final one); LogError for an
+        implausible period."""
+        if self.decided:
+            return
+        self.parts.append(t)
+        self.n += len(t)
+        if self.n >= PERIOD_STAMPS or last:
+            self.decided = True
+            check_plausible(self.p, "time", self.spec.column, self.spec.unit, None, np.concatenate(self.parts))
+            self.parts = []
+
+
+def _time_base(p, cmap: ChannelMap, roles, table: bool = True) -> str:
+    """The map's time base; LogError for a role name the log does not read, or for ``"clock"`` on a log
+    without a table clock."""
     tb = cmap.time_base
-    if tb not in ("auto", "uniform") and tb not in roles:
+    if tb == "clock" and not table:
+        raise LogError(f"{p}: resample.time_base 'clock' needs a table with a time column (CSV, Parquet); "
+                       "here every channel has its own clock")
+    if tb not in ("auto", "uniform", "clock") and tb not in roles:
         raise LogError(f"{p}: resample.time_base '{tb}' is not one of the log's channels ({', '.join(roles)})")
     return tb
 
@@ -249,15 +321,16 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
         used = {cmap.channels[r].column: r for r in ["time"] + roles}     # (a pass reads these only)
         tb = "clock" if auto_uses_clock(lambda: ((t, vals) for _, t, _, vals, _, _ in
                                                  _table_rows(src, cmap, roles, used, None)), roles) else "uniform"
-    logs = _Logs(p, fmt, cmap, params, roles, gnss, truth_cols, src.metadata)
+    carried = dict(src.carried)
+    logs = _Logs(p, fmt, cmap, params, roles, gnss, truth_cols, src.metadata, carried)
     logs.warnings += src.warnings
     finite = dict.fromkeys(roles, False)
+    period = _Period(p, tspec)
     rs = None
     for last, t, cols, vals, w, fix in _table_rows(src, cmap, roles, wanted, prefix):
         logs.warnings += w
         first = rs is None and len(t) > 0
-        if first:
-            check_plausible(p, "time", tspec.column, tspec.unit, None, t)
+        period.add(t, last)
         for r in roles:
             spec = cmap.channels[r]
             finite[r] = finite[r] or bool(np.isfinite(vals[r]).any())
@@ -268,8 +341,10 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
                 logs.warnings += w
         if first:
             base = ("clock" if same_rate(t, vals, roles) else "uniform") if tb == "auto" else tb
-            rs = StreamResampler(roles, dict.fromkeys(gnss, GNSS_MAX_GAP_S), base, cmap.rate_hz, cmap.max_gap_s,
-                                 raw=truth_cols)
+            # carried channels: on the clock as they are; on any other base, interpolated with their gap
+            aux = {**dict.fromkeys(gnss, GNSS_MAX_GAP_S), **({} if base == "clock" else carried)}
+            rs = StreamResampler(roles, aux, base, cmap.rate_hz, cmap.max_gap_s,
+                                 raw=truth_cols + (list(carried) if base == "clock" else []))
         if rs is None:
             if last:
                 raise LogError(f"{p}: fewer than 2 samples on the common time base")
@@ -279,7 +354,7 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
             rs.add(r, t, vals[r])
         for r in gnss:
             rs.add(r, t, cmap.to_si_iso(r, cols[cmap.channels[r].column]))
-        for c in truth_cols:
+        for c in truth_cols + list(carried):
             rs.add(c, t, cols[c])
         if last:
             for k in rs.done:
@@ -308,16 +383,17 @@ def _table_rows(src, cmap, roles, wanted, prefix):
 def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     """Channels that each carry their own clock (MDF4, raw CAN, ROS)."""
     p = src.path
-    tb = _time_base(p, cmap, roles)
-    rs = StreamResampler(roles, dict.fromkeys(gnss, GNSS_MAX_GAP_S), "uniform" if tb == "auto" else tb,
-                         cmap.rate_hz, cmap.max_gap_s)
-    read = roles + gnss
-    col = {r: cmap.channels[r].column for r in read}
+    tb = _time_base(p, cmap, roles, table=False)
+    carried = dict(src.carried)
+    rs = StreamResampler(roles, {**dict.fromkeys(gnss, GNSS_MAX_GAP_S), **carried},
+                         "uniform" if tb == "auto" else tb, cmap.rate_hz, cmap.max_gap_s)
+    read = roles + gnss + list(carried)
+    col = {r: cmap.channels[r].column for r in roles + gnss} | {c: c for c in carried}
     fixes = {r: ChunkRepair(p, col[r], r, "sample") for r in read}
     rows = dict.fromkeys(read, 0)
     finite = dict.fromkeys(roles, False)
     checked = dict.fromkeys(roles, False)
-    logs = _Logs(p, fmt, cmap, params, roles, gnss, [], src.metadata)
+    logs = _Logs(p, fmt, cmap, params, roles, gnss, [], src.metadata, carried)
     logs.warnings += src.warnings
 
     def counts() -> dict:
@@ -340,8 +416,8 @@ def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
             else:
                 t = None
             if t is not None:
-                v = cmap.to_si_iso(r, got["v"])
-                if r in roles:               # (a position channel: repaired, neither flagged nor checked)
+                v = got["v"] if r in carried else cmap.to_si_iso(r, got["v"])
+                if r in roles:               # (a position or carried channel: repaired, neither flagged nor checked)
                     logs.warnings += w
                     if r in FLAGGED_ROLES:
                         v[flagged] = np.nan
@@ -367,3 +443,31 @@ def _emit(p, rs: StreamResampler):
         return rs.emit()
     except LogError as exc:
         raise LogError(f"{p}: {exc}") from None
+
+
+def concat_logs(chunks: list[Log]) -> Log:
+    """Consecutive chunks of one log as one :class:`Log` (the first chunk's metadata and map)."""
+    if len(chunks) == 1:
+        return chunks[0]
+    first = chunks[0]
+
+    def joined(get) -> dict:
+        return {k: np.concatenate([get(c)[k] for c in chunks]) for k in get(first)}
+
+    repairs: dict = {}
+    for c in chunks:
+        repairs = add_counts(repairs, c.time_repairs)
+    roll = None if first.reference_roll is None else np.concatenate([c.reference_roll for c in chunks])
+    return Log(signals=concat_signals([c.signals for c in chunks]), reference_roll=roll, source=first.source,
+               format=first.format, metadata=first.metadata, truth=joined(lambda c: c.truth),
+               warnings=[w for c in chunks for w in c.warnings], channel_map=first.channel_map,
+               extra=joined(lambda c: c.extra), time_repairs=repairs)
+
+
+def read_whole(src, cmap: ChannelMap, params: VehicleParams, fmt: str) -> Log:
+    """The log of source ``src`` in one :class:`Log` (:func:`assemble`, then :func:`concat_logs`); the
+    source is closed after."""
+    try:
+        return concat_logs(list(assemble(src, cmap, params, fmt)))
+    finally:
+        src.close()

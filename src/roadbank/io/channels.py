@@ -8,7 +8,7 @@ A channel map is a small TOML file (read with the standard-library ``tomllib``):
     steering_ratio = 15.0     # optional; steering-wheel / road-wheel angle
 
     [resample]                # optional, see roadbank.io.resample
-    time_base = "auto"        # "auto", "uniform" or a role name, e.g. "lateral_acceleration"
+    time_base = "auto"        # "auto", "uniform", "clock" or a role name, e.g. "lateral_acceleration"
     rate_hz = 100.0           # rate of the uniform grid
     max_gap_s = 0.5           # longer gaps in a channel become NaN, never bridged
 
@@ -92,7 +92,7 @@ CONVENTIONS = ("ISO", "FRD")
 #: other spellings of the body-axis conventions: ROS REP-103 bodies are FLU (= ISO 8855);
 #: NED systems (PX4, aerospace IMUs) give body rates and forces in FRD
 CONVENTION_ALIASES = {"FLU": "ISO", "NED": "FRD"}
-TIME_BASES = ("auto", "uniform")
+TIME_BASES = ("auto", "uniform", "clock")
 
 
 @dataclass(frozen=True)
@@ -146,7 +146,8 @@ class ChannelMap:
     steering_ratio : float or None
         Steering-wheel / road-wheel angle; None -> the vehicle parameters' ratio.
     time_base, rate_hz, max_gap_s
-        Resampling settings, see :func:`roadbank.io.resample.common_time_base`.
+        Resampling settings, see :func:`roadbank.io.resample.common_time_base`; ``"clock"``: a
+        table's own time column as it is, nothing interpolated (tables only).
     truth_prefix : str or None
         Columns starting with it are carried as truth (SI, ISO, no conversion).
     source : str
@@ -158,6 +159,9 @@ class ChannelMap:
         ROS bags / MCAP: time stamp of a message, ``"header"`` (its ``header.stamp``,
         falling back to the log time for messages without a header) or ``"log"``
         (the time the recorder received it).
+    no_steering : bool
+        The log records no steering angle (a fixed layout such as KITTI's, built in code):
+        no steering channel is required and ``delta_f`` is NaN.
     """
 
     channels: dict[str, ChannelSpec]
@@ -170,6 +174,7 @@ class ChannelMap:
     source: str = "<map>"
     dbc: str | None = None
     ros_time: str = "header"
+    no_steering: bool = False
 
     @property
     def timed_channels(self) -> bool:
@@ -190,7 +195,8 @@ class ChannelMap:
             if role not in self.channels:
                 raise LogError(f"{src}: channel map has no '{role}' channel (required)")
         ros = any(s.topic for s in self.channels.values())
-        if not any(r in self.channels for r in STEERING) and not ros:    # robots often have no steering topic
+        # robots often have no steering topic; some data sets record none
+        if not any(r in self.channels for r in STEERING) and not ros and not self.no_steering:
             raise LogError(f"{src}: channel map needs 'road_wheel_angle' or 'steering_wheel_angle'")
         for role, spec in self.channels.items():
             if role not in ROLES:
@@ -203,7 +209,7 @@ class ChannelMap:
                 raise channel_error(src, role, spec.column,
                                     f"convention must be one of {CONVENTIONS}, got '{spec.convention}'")
         if self.time_base not in TIME_BASES and self.time_base not in ROLES:
-            raise LogError(f"{src}: resample.time_base must be 'auto', 'uniform' or a role name, "
+            raise LogError(f"{src}: resample.time_base must be 'auto', 'uniform', 'clock' or a role name, "
                            f"got '{self.time_base}'")
         if not (self.rate_hz > 0 and np.isfinite(self.rate_hz)):
             raise LogError(f"{src}: resample.rate_hz must be > 0, got {self.rate_hz}")

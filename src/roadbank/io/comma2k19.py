@@ -1,4 +1,5 @@
-"""The comma2k19 processed-log layout and its pose-derived reference roll.
+"""The comma2k19 processed-log layout as a source of raw channels (:class:`SegmentSource`) and its
+pose-derived reference roll.
 
 A comma2k19 segment is a directory of NumPy arrays saved without the ``.npy``
 suffix (read with ``allow_pickle=False``)::
@@ -23,26 +24,32 @@ Mapping to roadbank (SI, ISO 8855):
   side up): local down (WGS-84 ellipsoid normal at the ECEF position) expressed
   in the camera frame, ``g = R^T down``, ``roll = atan2(g[1], g[2])``.
 
-All channels go onto one uniform 100 Hz grid over their common time span
-(:mod:`roadbank.io.resample`); the 20 Hz pose roll is linearly interpolated.
+The source is a set of channels, each on its own clock, stored as they are (the
+IMU's forward-right-down axes declared FRD in the layout's channel map,
+:func:`channel_map`), with the pose roll as the ``reference_roll`` channel and the
+pose position in degrees as carried channels. The assembler
+(:mod:`roadbank.io.assemble`) does the rest: units and signs, the time-stamp repair,
+plausibility, one uniform 100 Hz grid over the channels' common time span
+(:mod:`roadbank.io.resample`; the 20 Hz pose roll and position are linearly
+interpolated), the consistency check.
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 
 from ..params import VehicleParams
-from ..signals import Signals
+from .assemble import read_whole
+from .channels import ChannelMap, ChannelSpec
 from .errors import LogError
-from .resample import common_time_base, interpolate, resample
-from .types import Log
+from .geodesy import ecef_to_latlon, ellipsoid_down_ecef
+from .types import RawChunk
 
-# WGS-84
-_A = 6378137.0
-_F = 1.0 / 298.257223563
-_E2 = _F * (2.0 - _F)
+__all__ = ["FILES", "SegmentSource", "channel_map", "ecef_to_latlon", "ellipsoid_down_ecef", "load_comma2k19",
+           "pose_roll", "quat_to_matrix"]
 
 FILES = {
     "accelerometer": "processed_log/IMU/accelerometer",
@@ -60,26 +67,6 @@ def _load(path: Path, rel: str) -> np.ndarray:
         return np.load(f, allow_pickle=False)
     except Exception as exc:  # truncated / not an npy array
         raise LogError(f"{path}: comma2k19 file '{rel}' is unreadable ({exc})") from None
-
-
-def ecef_to_latlon(pos_ecef: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Geodetic WGS-84 latitude and longitude (rad) of ECEF positions (n, 3) in m."""
-    x, y, z = np.asarray(pos_ecef, dtype=np.float64).T
-    lon = np.arctan2(y, x)
-    p = np.hypot(x, y)
-    # Bowring's closed form for the geodetic latitude (sub-mm at the Earth's surface)
-    b = _A * (1.0 - _F)
-    ep2 = (_A ** 2 - b ** 2) / b ** 2
-    th = np.arctan2(z * _A, p * b)
-    lat = np.arctan2(z + ep2 * b * np.sin(th) ** 3, p - _E2 * _A * np.cos(th) ** 3)
-    return lat, lon
-
-
-def ellipsoid_down_ecef(pos_ecef: np.ndarray) -> np.ndarray:
-    """Unit vector along the downward WGS-84 ellipsoid normal at ECEF positions (n, 3), m -> (n, 3)."""
-    lat, lon = ecef_to_latlon(pos_ecef)
-    up = np.stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)], axis=1)
-    return -up
 
 
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:
@@ -112,6 +99,91 @@ def pose_roll(pos_ecef: np.ndarray, quat_wxyz: np.ndarray) -> np.ndarray:
     return np.arctan2(g[:, 1], g[:, 2])
 
 
+#: the channels of a segment: role -> (column, stored unit, axis convention)
+CHANNELS = {
+    "speed": ("processed_log/CAN/speed", "m/s", "ISO"),
+    "lateral_acceleration": ("processed_log/IMU/accelerometer[1]", "m/s^2", "FRD"),
+    "yaw_rate": ("processed_log/IMU/gyro[2]", "rad/s", "FRD"),
+    "steering_wheel_angle": ("processed_log/CAN/steering_angle", "deg", "ISO"),   # left already positive
+    "reference_roll": ("global_pose (roll)", "rad", "ISO"),
+}
+
+
+def channel_map(rate_hz: float = 100.0, max_gap_s: float = 0.5) -> ChannelMap:
+    """The fixed channel map of a comma2k19 segment: stored units and axes, a uniform grid at ``rate_hz``
+    (Hz), gaps longer than ``max_gap_s`` (s) not bridged; the steering ratio is the car's."""
+    ch = {"time": ChannelSpec("time", "t", "s")}      # (each channel has its own clock: not read)
+    for role, (col, unit, conv) in CHANNELS.items():
+        ch[role] = ChannelSpec(role, col, unit, conv)
+    return ChannelMap(ch, time_base="uniform", rate_hz=rate_hz, max_gap_s=max_gap_s,
+                      source="comma2k19 processed-log layout")
+
+
+class SegmentSource:
+    """One comma2k19 segment as a channel source (:mod:`roadbank.io.sources`), read whole: the channels
+    of :data:`CHANNELS` (stored values, each with its own time stamps, s) and the pose position as
+    ``lat_deg`` / ``lon_deg`` (deg, carried into ``Log.extra``). Opening it reads every array (LogError
+    naming the file for one missing, unreadable or of the wrong shape)."""
+
+    shared_clock = False
+    whole = True
+    row_label = "sample"
+
+    def __init__(self, path, params: VehicleParams | None = None, rate_hz: float = 100.0,
+                 max_gap_s: float = 0.5):
+        p = Path(path)
+        if not p.is_dir():
+            raise LogError(f"{p}: not a comma2k19 segment directory")
+        params = params or VehicleParams()
+        arr = {}
+        for key, rel in FILES.items():
+            t = np.asarray(_load(p, rel + "/t"), dtype=np.float64).reshape(-1)
+            v = np.asarray(_load(p, rel + "/value"), dtype=np.float64)
+            if v.ndim == 1:
+                v = v[:, None]
+            if len(t) != len(v) or len(t) == 0:
+                raise LogError(f"{p}: comma2k19 '{rel}': {len(t)} time stamps but {len(v)} values")
+            arr[key] = (t, v)
+        acc_t, acc = arr["accelerometer"]
+        gyr_t, gyr = arr["gyro"]
+        if acc.shape[1] != 3 or gyr.shape[1] != 3:
+            raise LogError(f"{p}: comma2k19 IMU arrays must have 3 columns")
+        ft = np.asarray(_load(p, "global_pose/frame_times"), dtype=np.float64).reshape(-1)
+        pos = np.asarray(_load(p, "global_pose/frame_positions"), dtype=np.float64)
+        quat = np.asarray(_load(p, "global_pose/frame_orientations"), dtype=np.float64)
+        if not (len(ft) == len(pos) == len(quat)) or pos.shape[1:] != (3,) or quat.shape[1:] != (4,):
+            raise LogError(f"{p}: comma2k19 global_pose arrays have inconsistent shapes "
+                           f"{ft.shape}, {pos.shape}, {quat.shape}")
+        lat, lon = ecef_to_latlon(pos)
+        col = {role: c for role, (c, _, _) in CHANNELS.items()}
+        series = {
+            col["speed"]: (arr["speed"][0], arr["speed"][1][:, 0]),
+            col["lateral_acceleration"]: (acc_t, acc[:, 1]),
+            col["yaw_rate"]: (gyr_t, gyr[:, 2]),
+            col["steering_wheel_angle"]: (arr["steering_angle"][0], arr["steering_angle"][1][:, 0]),
+            col["reference_roll"]: (ft, pose_roll(pos, quat)),
+            "lat_deg": (ft, np.degrees(lat)),
+            "lon_deg": (ft, np.degrees(lon)),
+        }
+        self.path = p
+        self.times = {c: t for c, (t, _) in series.items()}
+        self.data = {c: v for c, (_, v) in series.items()}
+        self.names = list(series)
+        self.channel_map = channel_map(rate_hz, max_gap_s)
+        self.carried = {"lat_deg": max_gap_s, "lon_deg": max_gap_s}
+        self.warnings: list[str] = []
+        self.metadata = {"dataset": "comma2k19", "steering_ratio": str(params.steering_ratio),
+                         "time_origin": "boot time (s)"}
+
+    def close(self) -> None:
+        """Nothing to close: the arrays were read when the source was opened."""
+
+    def chunks(self, wanted: dict[str, str] | None = None, prefix: str | None = None) -> Iterator[RawChunk]:
+        """The one chunk: every channel whole, with its time stamps (``wanted`` and ``prefix`` are not
+        used: the layout is fixed)."""
+        yield RawChunk(dict(self.data), times=dict(self.times), done=tuple(self.data))
+
+
 def load_comma2k19(path, params: VehicleParams | None = None, rate_hz: float = 100.0,
                    max_gap_s: float = 0.5):
     """Read a comma2k19 segment directory into a :class:`~roadbank.io.Log` with ``reference_roll``.
@@ -125,52 +197,21 @@ def load_comma2k19(path, params: VehicleParams | None = None, rate_hz: float = 1
         identified in the dataset; choose a ratio, see docs/real-data.md).
     rate_hz : float
         Rate of the common uniform time base (default 100 Hz).
+    max_gap_s : float
+        A gap in a channel longer than this (s) becomes NaN, never bridged.
+
+    Returns
+    -------
+    Log
+        ``signals``: t (s, boot time), vx (m/s), ay (m/s^2), r (rad/s), delta_f (rad) on the grid;
+        ``reference_roll`` (rad, ISO: left side up); ``extra``: ``lat_deg``, ``lon_deg`` (deg).
+
+    Raises
+    ------
+    LogError
+        A file missing, unreadable or of the wrong shape, time stamps that cannot be repaired, or
+        values implausible in their unit.
     """
-    p = Path(path)
-    if not p.is_dir():
-        raise LogError(f"{p}: not a comma2k19 segment directory")
     params = params or VehicleParams()
-    arr = {}
-    for key, rel in FILES.items():
-        t = np.asarray(_load(p, rel + "/t"), dtype=np.float64).reshape(-1)
-        v = np.asarray(_load(p, rel + "/value"), dtype=np.float64)
-        if v.ndim == 1:
-            v = v[:, None]
-        if len(t) != len(v) or len(t) == 0:
-            raise LogError(f"{p}: comma2k19 '{rel}': {len(t)} time stamps but {len(v)} values")
-        arr[key] = (t, v)
-    acc_t, acc = arr["accelerometer"]
-    gyr_t, gyr = arr["gyro"]
-    if acc.shape[1] != 3 or gyr.shape[1] != 3:
-        raise LogError(f"{p}: comma2k19 IMU arrays must have 3 columns")
-    series = {
-        "speed": (arr["speed"][0], arr["speed"][1][:, 0]),
-        "lateral_acceleration": (acc_t, -acc[:, 1]),
-        "yaw_rate": (gyr_t, -gyr[:, 2]),
-        "steering_wheel_angle": (arr["steering_angle"][0], np.radians(arr["steering_angle"][1][:, 0])),
-    }
-    ft = np.asarray(_load(p, "global_pose/frame_times"), dtype=np.float64).reshape(-1)
-    pos = np.asarray(_load(p, "global_pose/frame_positions"), dtype=np.float64)
-    quat = np.asarray(_load(p, "global_pose/frame_orientations"), dtype=np.float64)
-    if not (len(ft) == len(pos) == len(quat)) or pos.shape[1:] != (3,) or quat.shape[1:] != (4,):
-        raise LogError(f"{p}: comma2k19 global_pose arrays have inconsistent shapes "
-                       f"{ft.shape}, {pos.shape}, {quat.shape}")
-    series["reference_roll"] = (ft, pose_roll(pos, quat))
-    lat, lon = ecef_to_latlon(pos)
-    for name, (t, _) in series.items():
-        if np.any(np.diff(t) < 0):
-            raise LogError(f"{p}: comma2k19 channel '{name}': time goes backwards")
-    try:
-        t_base = common_time_base(series, "uniform", rate_hz)
-        vals = resample(series, t_base, max_gap_s)
-    except LogError as exc:
-        raise LogError(f"{p}: {exc}") from None
-    sig = Signals(t_base, vals["speed"], vals["lateral_acceleration"], vals["yaw_rate"],
-                  vals["steering_wheel_angle"] / params.steering_ratio)
-    meta = {"dataset": "comma2k19", "steering_ratio": str(params.steering_ratio),
-            "time_origin": "boot time (s)"}
-    # GNSS position for bank maps (the pose positions, 20 Hz), deg, on the same grid
-    extra = {"lat_deg": interpolate(ft, np.degrees(lat), t_base, max_gap_s),
-             "lon_deg": interpolate(ft, np.degrees(lon), t_base, max_gap_s)}
-    return Log(signals=sig, reference_roll=vals["reference_roll"], source=p, format="comma2k19",
-               metadata=meta, extra=extra)
+    src = SegmentSource(path, params, rate_hz, max_gap_s)
+    return read_whole(src, src.channel_map, params, "comma2k19")

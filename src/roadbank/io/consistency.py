@@ -41,12 +41,26 @@ CANDIDATES = (
 )
 
 
-def _residual(vx, ay, r) -> tuple[float, int]:
+def turning(vx, ay, r) -> np.ndarray:
+    """Mask of the samples the check reads: finite ``ay`` and ``vx r``, ``|vx r| > TURN``, ``vx >= 5`` m/s."""
     with np.errstate(invalid="ignore", over="ignore"):
         vr = vx * r
-        sel = np.isfinite(vr) & np.isfinite(ay) & (np.abs(vr) > TURN) & (vx >= 5.0)
+        return np.isfinite(vr) & np.isfinite(ay) & (np.abs(vr) > TURN) & (vx >= 5.0)
+
+
+def _residual(vx, ay, r) -> tuple[float, int]:
+    sel = turning(vx, ay, r)
     n = int(sel.sum())
-    return (float(np.median(np.abs(ay[sel] - vr[sel]))) if n else 0.0), n
+    return (float(np.median(np.abs(ay[sel] - vx[sel] * r[sel]))) if n else 0.0), n
+
+
+def usable(vx, ay, r) -> np.ndarray:
+    """Mask of the samples that are turning as they are or after one of the corrections of
+    :data:`CANDIDATES`: :func:`check_balance` of these samples alone decides as of all of them."""
+    sel = turning(vx, ay, r)
+    for _, _, fix in CANDIDATES:
+        sel |= turning(*fix(vx, ay, r))
+    return sel
 
 
 def check_consistency(signals, source="signals", columns: dict | None = None) -> list[str]:
@@ -71,7 +85,12 @@ def check_consistency(signals, source="signals", columns: dict | None = None) ->
         When the log is inconsistent and one correction (unit or sign of one
         channel) makes it consistent; the message names that channel.
     """
-    vx, ay, r = (np.asarray(a, float) for a in (signals.vx, signals.ay, signals.r))
+    return check_balance(signals.vx, signals.ay, signals.r, source, columns)
+
+
+def check_balance(vx, ay, r, source="signals", columns: dict | None = None) -> list[str]:
+    """:func:`check_consistency` of the arrays ``vx`` (m/s), ``ay`` (m/s^2), ``r`` (rad/s)."""
+    vx, ay, r = (np.asarray(a, float) for a in (vx, ay, r))
     res, n = _residual(vx, ay, r)
     if n < MIN_SAMPLES or res <= LIMIT:
         return []

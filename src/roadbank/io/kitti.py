@@ -1,4 +1,4 @@
-"""The KITTI raw GNSS/INS ("oxts") layout: one drive -> :class:`~roadbank.io.Log`.
+"""The KITTI raw GNSS/INS ("oxts") layout: one drive as a source of raw channels (:class:`DriveSource`).
 
 A KITTI raw drive holds an ``oxts/`` folder recorded by an OXTS RT3003 GNSS/INS::
 
@@ -23,8 +23,13 @@ There is no steering angle: ``delta_f`` is NaN (the modified-model estimators
 do not read it; the others flag every sample not valid). The frames stay on
 their own, jittered time stamps (about 10 Hz, 0.06-0.14 s apart): the
 estimators take any step (:mod:`roadbank.estimators.base`), so nothing is
-resampled. Time is in seconds from the first frame; its UTC stamp is
-``metadata["time_origin"]``.
+resampled (the layout's channel map has ``time_base = "clock"``). Time is in
+seconds from the first frame; its UTC stamp is ``metadata["time_origin"]``.
+
+The source is a table (one row a frame) with the layout's fixed channel map
+(:func:`channel_map`); the assembler (:mod:`roadbank.io.assemble`) does the
+rest, as for any table: units, plausibility, the time base, the consistency
+check. Streamed, it parses ``chunk_rows`` frame files a chunk.
 
 Malformed input (decided per kind, see docs/io.md):
 
@@ -42,19 +47,28 @@ Malformed input (decided per kind, see docs/io.md):
 from __future__ import annotations
 
 import re
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 
-from ..signals import Signals
-from .consistency import check_consistency
+from ..params import VehicleParams
+from .assemble import read_whole
+from .channels import ChannelMap, ChannelSpec
 from .errors import LogError
-from .types import Log
+from .types import RawChunk
 
 #: fields per oxts frame (dataformat.txt)
 N_FIELDS = 30
 #: 0-based column of each channel
 COLUMNS = {"lat": 0, "lon": 1, "roll": 3, "vf": 8, "vl": 9, "ay": 12, "wz": 19}
+#: the time column of the table a drive makes (seconds from the first frame)
+TIME = "timestamps.txt"
+#: the channels a drive gives (oxts column -> stored unit); their column names: :func:`column`
+ROLES = {"speed": ("vf", "m/s"), "lateral_acceleration": ("ay", "m/s^2"), "yaw_rate": ("wz", "rad/s"),
+         "reference_roll": ("roll", "rad")}
+#: columns carried into ``Log.extra`` as they are (name -> oxts column); on the frames' own clock
+CARRIED = {"lat_deg": "lat", "lon_deg": "lon", "vl_mps": "vl"}
 
 _STAMP = re.compile(r"^(\d{4}-\d{2}-\d{2}) (\d{2}:\d{2}:\d{2})(?:\.(\d{1,9}))?$")
 _FRAME = re.compile(r"^(\d+)\.txt$")
@@ -139,6 +153,96 @@ def parse_frame(path) -> np.ndarray:
     return out
 
 
+def column(name: str) -> str:
+    """The column name of oxts field ``name`` in messages, e.g. ``"vf (column 8)"``."""
+    return f"{name} (column {COLUMNS[name]})"
+
+
+def channel_map() -> ChannelMap:
+    """The fixed channel map of a KITTI drive: SI and ISO 8855 as stored, no steering, the frames' own clock."""
+    ch = {"time": ChannelSpec("time", TIME, "s")}
+    for role, (name, unit) in ROLES.items():
+        ch[role] = ChannelSpec(role, column(name), unit)
+    return ChannelMap(ch, time_base="clock", no_steering=True, source="KITTI raw oxts layout")
+
+
+def find_drive(path) -> Path:
+    """The one ``oxts`` folder at ``path`` (see :func:`find_oxts_dirs`); LogError for none or several."""
+    p = Path(path)
+    found = find_oxts_dirs(p)
+    if not found:
+        raise LogError(f"{p}: not a KITTI raw drive (no oxts/timestamps.txt and oxts/data/)")
+    if len(found) > 1:
+        raise LogError(f"{p}: holds {len(found)} KITTI drives ({', '.join(drive_name(d) for d in found)}); "
+                       "give one drive folder")
+    return found[0]
+
+
+class DriveSource:
+    """One KITTI raw drive as a table source (:mod:`roadbank.io.sources`): a row per frame file, the
+    columns of :data:`ROLES` and :data:`CARRIED` in their stored units, the time column :data:`TIME`
+    (s from the first frame).
+
+    Opening it reads ``timestamps.txt`` and lists ``data/`` (the errors of the module docstring about
+    them, the warning for a missing frame); :meth:`chunks` parses the frame files, ``chunk_rows`` a
+    chunk (None: all in one).
+    """
+
+    shared_clock = True
+    row_label = "frame"
+
+    def __init__(self, path, chunk_rows: int | None = None):
+        oxts = find_drive(path)
+        stamps = parse_timestamps(oxts / "timestamps.txt")
+        frames = {}
+        for f in sorted((oxts / "data").iterdir()):
+            m = _FRAME.match(f.name)
+            if m is None or not f.is_file():
+                continue
+            k = int(m.group(1))
+            if k >= len(stamps):
+                raise LogError(f"{f}: frame {k} has no time stamp ({oxts / 'timestamps.txt'} has "
+                               f"{len(stamps)} lines)")
+            frames[k] = f
+        keep = np.array(sorted(frames), dtype=np.int64)
+        dropped = len(stamps) - len(keep)
+        if len(keep) < 2:
+            raise LogError(f"{oxts / 'data'}: {len(keep)} frame file(s); at least 2 are needed")
+        self.path, self.frames, self.keep = oxts, frames, keep
+        t_abs = stamps[keep]
+        self.t = t_abs - t_abs[0]
+        self.chunk_rows = chunk_rows
+        self.whole = chunk_rows is None
+        self.channel_map = channel_map()
+        self.names = [TIME] + [column(n) for n, _ in ROLES.values()] + list(CARRIED)
+        # (never interpolated: on the frames' clock; the gap would apply on another time base)
+        self.carried = dict.fromkeys(CARRIED, self.channel_map.max_gap_s)
+        self.warnings = []
+        if dropped:
+            missing = sorted(set(range(len(stamps))) - set(keep.tolist()))
+            self.warnings.append(f"{oxts / 'data'}: {dropped} frame file(s) missing from the numbering "
+                                 f"(first: {missing[0]:010d}.txt): dropped, the others keep their time stamps")
+        origin = (oxts / "timestamps.txt").read_text(errors="replace").splitlines()[int(keep[0])].strip()
+        self.metadata = {"dataset": "kitti-raw", "drive": drive_name(oxts), "time_origin": f"{origin} UTC",
+                         "dropped_frames": str(dropped), "frames": str(len(keep))}
+
+    def close(self) -> None:
+        """Nothing to close: each frame file is read and closed in turn."""
+
+    def chunks(self, wanted: dict[str, str] | None = None, prefix: str | None = None) -> Iterator[RawChunk]:
+        """The frames, ``chunk_rows`` a chunk, every column (``wanted`` and ``prefix`` are not used: the
+        layout is fixed); row numbers are the frame numbers."""
+        n = len(self.keep)
+        step = self.chunk_rows or n
+        for i in range(0, n, step):
+            ks = self.keep[i:i + step]
+            X = np.vstack([parse_frame(self.frames[int(k)]) for k in ks])
+            data = {TIME: self.t[i:i + step]}
+            data.update({column(name): X[:, COLUMNS[name]] for name, _ in ROLES.values()})
+            data.update({key: X[:, COLUMNS[name]] for key, name in CARRIED.items()})
+            yield RawChunk(data, rownums=ks, last=i + step >= n)
+
+
 def load_kitti_oxts(path):
     """Read one KITTI raw drive into a :class:`~roadbank.io.Log` with the INS roll as reference.
 
@@ -153,56 +257,14 @@ def load_kitti_oxts(path):
     Log
         ``signals``: t (s from the first frame), vx (m/s), ay (m/s^2), r (rad/s),
         delta_f NaN; ``reference_roll`` (rad, ISO); ``extra``: ``lat_deg``,
-        ``lon_deg``; ``metadata``: dataset, drive, time_origin (UTC),
-        dropped_frames.
+        ``lon_deg`` (deg), ``vl_mps`` (m/s, leftward speed); ``metadata``: dataset,
+        drive, time_origin (UTC), dropped_frames, frames.
 
     Raises
     ------
     LogError
-        Not a KITTI drive, several drives, or malformed files (see the module docstring).
+        Not a KITTI drive, several drives, malformed files (see the module docstring),
+        or values implausible in their unit.
     """
-    p = Path(path)
-    found = find_oxts_dirs(p)
-    if not found:
-        raise LogError(f"{p}: not a KITTI raw drive (no oxts/timestamps.txt and oxts/data/)")
-    if len(found) > 1:
-        raise LogError(f"{p}: holds {len(found)} KITTI drives ({', '.join(drive_name(d) for d in found)}); "
-                       "give one drive folder")
-    oxts = found[0]
-    stamps = parse_timestamps(oxts / "timestamps.txt")
-    frames = {}
-    for f in sorted((oxts / "data").iterdir()):
-        m = _FRAME.match(f.name)
-        if m is None or not f.is_file():
-            continue
-        k = int(m.group(1))
-        if k >= len(stamps):
-            raise LogError(f"{f}: frame {k} has no time stamp ({oxts / 'timestamps.txt'} has "
-                           f"{len(stamps)} lines)")
-        frames[k] = f
-    keep = np.array(sorted(frames), dtype=np.int64)
-    dropped = len(stamps) - len(keep)
-    if len(keep) < 2:
-        raise LogError(f"{oxts / 'data'}: {len(keep)} frame file(s); at least 2 are needed")
-    X = np.vstack([parse_frame(frames[k]) for k in keep])
-    t_abs = stamps[keep]
-    t = t_abs - t_abs[0]
-    c = COLUMNS
-    try:
-        sig = Signals(t, X[:, c["vf"]], X[:, c["ay"]], X[:, c["wz"]], np.full(len(t), np.nan))
-    except ValueError as exc:
-        raise LogError(f"{oxts}: {exc}") from None
-    warns = []
-    if dropped:
-        missing = sorted(set(range(len(stamps))) - set(keep.tolist()))
-        warns.append(f"{oxts / 'data'}: {dropped} frame file(s) missing from the numbering "
-                     f"(first: {missing[0]:010d}.txt): dropped, the others keep their time stamps")
-    warns += check_consistency(sig, oxts, {"speed": "vf (column 8)", "lateral_acceleration": "ay (column 12)",
-                                           "yaw_rate": "wz (column 19)"})
-    origin = (oxts / "timestamps.txt").read_text(errors="replace").splitlines()[int(keep[0])].strip()
-    meta = {"dataset": "kitti-raw", "drive": drive_name(oxts), "time_origin": f"{origin} UTC",
-            "dropped_frames": str(dropped), "frames": str(len(keep))}
-    return Log(signals=sig, reference_roll=X[:, c["roll"]].copy(), source=oxts, format="kitti-oxts",
-               metadata=meta, warnings=warns,
-               extra={"lat_deg": X[:, c["lat"]].copy(), "lon_deg": X[:, c["lon"]].copy(),
-                      "vl_mps": X[:, c["vl"]].copy()})
+    src = DriveSource(path)
+    return read_whole(src, src.channel_map, VehicleParams(), "kitti-oxts")

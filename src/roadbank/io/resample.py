@@ -15,6 +15,9 @@ Rules (also in docs/io.md):
     earliest last sample -- the overlap of all channels.
   - a role name (e.g. ``"lateral_acceleration"``): that channel's own valid
     sample times inside the overlap.
+  - ``"clock"``: a table's own time column as it is, whatever the channels'
+    rates (no interpolation, NaN stays NaN); a log whose channels carry their
+    own clocks has no such column and is refused.
 
 * Values are linearly interpolated onto the base. Nothing is extrapolated:
   the base never leaves the overlap. Where the two valid samples bracketing a

@@ -2,58 +2,43 @@
 
 A source knows a file format, not physics. Opening one reads what the format says about itself
 (the column / channel names, file metadata, warnings of the decoder); :meth:`chunks` then gives
-:class:`RawChunk` s in file order:
+:class:`~roadbank.io.types.RawChunk` s in file order:
 
-* **table sources** (CSV, Parquet): every chunk holds the same columns, row for row with the table's
-  time column; the final chunk has ``last`` set (an empty one after Parquet's record batches);
-* **channel sources** (MDF4, raw CAN, ROS): every channel has its own clock; a chunk holds some
-  channels, each with its stamps, and names in ``done`` the channels that have no more samples.
+* **table sources** (CSV, Parquet, KITTI raw drives): every chunk holds the same columns, row for row
+  with the table's time column; the final chunk has ``last`` set (an empty one after Parquet's
+  record batches);
+* **channel sources** (MDF4, raw CAN, ROS, comma2k19 segments): every channel has its own clock; a
+  chunk holds some channels, each with its stamps, and names in ``done`` the channels that have no
+  more samples.
+
+Every source has ``path``, ``names`` (the columns), ``metadata``, ``warnings``, ``row_label``,
+``shared_clock`` (a table), ``whole`` (read in one chunk) and ``carried``: channels the source derives
+itself (column -> the longest gap, s, interpolated across), which go into :attr:`Log.extra` as they
+are. The data sets with a fixed layout (:mod:`roadbank.io.kitti`, :mod:`roadbank.io.comma2k19`) also
+bring their ``channel_map``: which column is which channel, in which unit and sign convention.
 
 Read whole (``chunk_rows=None``) a source gives one chunk: the whole file (the readers of
 :mod:`roadbank.io.readers`, :mod:`roadbank.io.can`, :mod:`roadbank.io.ros`). Streamed, Parquet is read
-in record batches and MDF4 in windows of records per channel group, so memory stays bounded by
-the chunk size; the other formats are read whole either way.
+in record batches, MDF4 in windows of records per channel group and a KITTI drive in frames, so
+memory stays bounded by the chunk size; the other formats are read whole either way.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from ..params import VehicleParams
 from . import readers
 from .channels import ChannelMap
+from .comma2k19 import SegmentSource
 from .errors import LogError
 from .files import open_mdf
 from .formats import CAN_FORMATS, ROS_FORMATS
-from .types import RawTable
-
-
-@dataclass
-class RawChunk:
-    """Consecutive samples of some channels of one log, in stored units.
-
-    Attributes
-    ----------
-    data : dict column -> float64 array
-        Values as stored.
-    times : dict column -> float64 array
-        Channel sources: each channel's own stamps (s). Empty for tables.
-    rownums : int array or None
-        Tables: the number of each row in messages (CSV: its line; Parquet: its row).
-    done : tuple of str
-        Channel sources: the columns that end with this chunk.
-    last : bool
-        Tables: the final chunk.
-    """
-
-    data: dict
-    times: dict = field(default_factory=dict)
-    rownums: object = None
-    done: tuple = ()
-    last: bool = False
+from .kitti import DriveSource
+from .types import RawChunk, RawTable
 
 
 class WholeSource:
@@ -68,6 +53,7 @@ class WholeSource:
         self.warnings = list(warnings)
         self.shared_clock = shared_clock
         self.whole = True
+        self.carried: dict[str, float] = {}
 
     def close(self) -> None:
         """Nothing to close: the file was read when the source was opened."""
@@ -91,6 +77,7 @@ class ParquetBatches:
     shared_clock = True
     row_label = "row"
     whole = False
+    carried: dict[str, float] = {}
 
     def __init__(self, path: Path, chunk_rows: int):
         import pyarrow as pa
@@ -151,6 +138,7 @@ class Mdf4Windows:
 
     shared_clock = False
     whole = False
+    carried: dict[str, float] = {}
 
     def __init__(self, path: Path, chunk_rows: int):
         self.path = path
@@ -233,6 +221,15 @@ class Mdf4Windows:
             self.mdf.close()
         finally:
             self.fh.close()
+
+
+def open_layout(p: Path, fmt: str, params: VehicleParams, chunk_rows: int | None = None):
+    """The source of a data set with a fixed layout (``fmt``: "kitti-oxts" or "comma2k19"), read whole
+    (``chunk_rows=None``) or streamed (a KITTI drive, ``chunk_rows`` frames a chunk); its
+    ``channel_map`` is the layout's. ``params`` supplies comma2k19's steering ratio."""
+    if fmt == "kitti-oxts":
+        return DriveSource(p, chunk_rows)
+    return SegmentSource(p, params)
 
 
 def open_source(p: Path, fmt: str, cmap: ChannelMap, chunk_rows: int | None = None):

@@ -1,9 +1,10 @@
 """Long logs in bounded memory: :func:`stream_log` yields a log as consecutive chunks.
 
-Parquet files are read in record batches and MDF4 files in windows of ``chunk_rows``
-records per channel group (:mod:`roadbank.io.sources`), so memory stays bounded by the
-chunk size whatever the log's length. Other formats (CSV, raw CAN, ROS bags, comma2k19,
-...) are read whole and yielded as one chunk.
+Parquet files are read in record batches, MDF4 files in windows of ``chunk_rows``
+records per channel group and KITTI drives ``chunk_rows`` frames at a time
+(:mod:`roadbank.io.sources`), so memory stays bounded by the chunk size whatever the log's
+length. Other formats (CSV, raw CAN, ROS bags, comma2k19 segments) are read whole and go
+through the same assembler in one chunk.
 
 Each chunk is a :class:`~roadbank.io.Log` whose signals continue the previous chunk's;
 feeding them to ``Estimator.run(chunk.signals, reset=False)`` gives the same numbers as
@@ -27,61 +28,59 @@ from ..signals import Signals, concat_signals
 from . import readers
 from .assemble import assemble
 from .channels import ChannelMap, default_channel_map, read_channel_map
-from .comma2k19 import load_comma2k19
 from .errors import LogError
-from .formats import FORMATS
-from .kitti import load_kitti_oxts
+from .formats import DATASET_FORMATS, FORMATS
 from .repair import HOLD_ROWS, ChunkRepair  # noqa: F401  (where streaming code looks for them)
 from .resample import StreamResampler  # noqa: F401
-from .sources import open_source
+from .sources import open_layout, open_source
 from .types import Log
 
 #: default rows per chunk (records per channel group for MDF4): 20 000 samples = 3.3 min at 100 Hz
 #: (memory vs per-chunk overhead: each 10 000 rows cost about 3.5 MiB of peak memory, docs/io.md)
 CHUNK_ROWS = 20_000
 #: the formats read in chunks (the others are read whole, one chunk)
-STREAMED = ("parquet", "mdf4")
+STREAMED = ("parquet", "mdf4", "kitti-oxts")
 
 
 def log_chunks(path, channels: ChannelMap | str | Path | None = None, format: str | None = None,
                params: VehicleParams | None = None, chunk_rows: int | None = CHUNK_ROWS) -> Iterator[Log]:
     """The chunks of one log: its source (:func:`~roadbank.io.sources.open_source`) through the
     assembler (:func:`~roadbank.io.assemble.assemble`); ``chunk_rows=None`` reads it in one chunk.
-    Arguments as :func:`stream_log`; comma2k19 segments and KITTI drives (fixed layouts, read by
-    their own readers) are one chunk."""
+    Arguments as :func:`stream_log`; comma2k19 segments and KITTI drives (fixed layouts) bring
+    their own channel map (``channels`` is not used)."""
     p = Path(path)
     fmt = (format or readers.detect_format(p)).lower()
     if fmt not in FORMATS:
         raise LogError(f"{p}: unknown format '{fmt}' (known: {', '.join(FORMATS)})")
-    if fmt == "comma2k19":
-        yield load_comma2k19(p, params=params)
-        return
-    if fmt == "kitti-oxts":
-        yield load_kitti_oxts(p)
-        return
-    if not p.exists():
-        raise LogError(f"{p}: file not found")
-    cmap = channels if isinstance(channels, ChannelMap) else (
-        read_channel_map(channels) if channels is not None else default_channel_map())
-    if fmt == "mdf4" and cmap.dbc is not None:
-        fmt = "mdf4-can"                  # an MDF4 file with a DBC: bus logging
-    src = open_source(p, fmt, cmap, chunk_rows if fmt in STREAMED else None)
+    params = params or VehicleParams()
+    rows = chunk_rows if fmt in STREAMED else None
+    if fmt in DATASET_FORMATS:
+        src = open_layout(p, fmt, params, rows)
+        cmap = src.channel_map
+    else:
+        if not p.exists():
+            raise LogError(f"{p}: file not found")
+        cmap = channels if isinstance(channels, ChannelMap) else (
+            read_channel_map(channels) if channels is not None else default_channel_map())
+        if fmt == "mdf4" and cmap.dbc is not None:
+            fmt = "mdf4-can"                  # an MDF4 file with a DBC: bus logging
+        src = open_source(p, fmt, cmap, rows)
     try:
-        yield from assemble(src, cmap, params or VehicleParams(), fmt)
+        yield from assemble(src, cmap, params, fmt)
     finally:
         src.close()
 
 
 def stream_log(path, channels: ChannelMap | str | Path | None = None, format: str | None = None,
                params: VehicleParams | None = None, chunk_rows: int = CHUNK_ROWS) -> Iterator[Log]:
-    """Read a log as consecutive chunks (bounded memory for Parquet and MDF4).
+    """Read a log as consecutive chunks (bounded memory for Parquet, MDF4 and KITTI drives).
 
     Parameters
     ----------
     path, channels, format, params
         As for :func:`~roadbank.io.load_log`.
     chunk_rows : int
-        Rows per Parquet record batch, samples per MDF4 channel read.
+        Rows per Parquet record batch, samples per MDF4 channel read, frames per KITTI chunk.
 
     Yields
     ------

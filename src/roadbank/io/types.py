@@ -1,4 +1,5 @@
-"""The types the log readers share: :class:`RawTable` (the raw columns a format yields) and
+"""The types the log readers share: :class:`RawTable` (the raw columns a format yields),
+:class:`RawChunk` (consecutive samples of some of them, what a source gives the assembler) and
 :class:`Log` (a log read into SI / ISO 8855 signals)."""
 
 from __future__ import annotations
@@ -43,6 +44,31 @@ class RawTable:
 
 
 @dataclass
+class RawChunk:
+    """Consecutive samples of some channels of one log, in stored units.
+
+    Attributes
+    ----------
+    data : dict column -> float64 array
+        Values as stored.
+    times : dict column -> float64 array
+        Channel sources: each channel's own stamps (s). Empty for tables.
+    rownums : int array or None
+        Tables: the number of each row in messages (CSV: its line; Parquet: its row).
+    done : tuple of str
+        Channel sources: the columns that end with this chunk.
+    last : bool
+        Tables: the final chunk.
+    """
+
+    data: dict
+    times: dict = field(default_factory=dict)
+    rownums: object = None
+    done: tuple = ()
+    last: bool = False
+
+
+@dataclass
 class Log:
     """One driving log, ready for the estimators.
 
@@ -55,7 +81,7 @@ class Log:
     source : Path
         The file (or segment directory) read.
     format : str
-        "csv", "parquet", "mdf4" or "comma2k19".
+        The format read (a name of :data:`roadbank.io.formats.FORMATS`).
     metadata : dict
         File metadata (e.g. the scenario/condition/seed of a ``roadbank simulate`` Parquet file).
     truth : dict name -> array
@@ -63,10 +89,10 @@ class Log:
     warnings : list of str
         Suspicious but usable things found while reading (e.g. a unit that looks odd).
     channel_map : ChannelMap or None
-        The map used (None for comma2k19 and kitti-oxts, whose layouts are fixed).
+        The map used (for comma2k19 and kitti-oxts the fixed map of their layout).
     extra : dict name -> array
-        Further channels on ``signals.t``, unit in the name (kitti-oxts: ``lat_deg``,
-        ``lon_deg`` for maps).
+        Further channels on ``signals.t``, unit in the name (``lat_deg``, ``lon_deg`` for
+        maps; kitti-oxts also ``vl_mps``).
     time_repairs : dict kind -> int
         What the time-stamp repair did (:mod:`roadbank.io.timebase`): samples dropped as
         ``missing``, ``duplicate`` or ``out_of_order`` stamps, ``swapped`` pairs reordered,
