@@ -269,7 +269,16 @@ class PIF(ScheduledObserver):
         return solvable_th(self.design, self._tables_of)
 
     def riccati_solution(self, vx: float) -> np.ndarray:
-        """Stabilising solution ``P`` of the algebraic Riccati equation (eq 44) at ``vx`` (m/s)."""
+        """Stabilising solution ``P`` of the algebraic Riccati equation (eq 44) at ``vx`` (m/s).
+
+        At a speed of the grid of a steady-state filter designed on the whole grid at once, the
+        solution its table was built from (:func:`~roadbank.estimators.grid_design.pif_solution`);
+        elsewhere solved at ``vx``.
+        """
+        if self._grid_design_applies():
+            P = grid_design.pif_solution(self, self._own_noise(), float(vx))
+            if P is not None:
+                return P
         return self._riccati(self.design_model(vx), vx)
 
     def design_model(self, vx: float):
@@ -317,6 +326,10 @@ class PIF(ScheduledObserver):
         cls = type(self)
         return cls.process_density is PIF.process_density and cls.process_noise in (PIF.process_noise,
                                                                                     PIFRate.process_noise)
+
+    def _grid_design_applies(self) -> bool:
+        """The table is designed on the whole grid at once (:func:`~roadbank.estimators.grid_design.pif_speed`)."""
+        return self._builds_as_pif() and type(self).observer is PIF.observer and type(self)._design is PIF._design
 
     def _grid_design(self):
         if self._builds_as_pif() and type(self).observer is PIF.observer:

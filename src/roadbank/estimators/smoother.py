@@ -87,7 +87,7 @@ class PIFSmoother(PIF):
         model = self.design_model(vx)
         A, B = model[0], model[1]
         W = self.process_density(model)
-        P = self._riccati(model, vx)
+        P = self.riccati_solution(vx)        # at a grid speed: the forward filter's own
         ev = np.linalg.eigvalsh(0.5 * (P + P.T))
         if not ev[0] > 1e-12 * ev[-1]:
             raise ValueError(f"{self.label}: the Riccati solution is singular at vx={vx:.2f} m/s (eigenvalues "
