@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..constants import G
+from ..params import ESP_AY_NOISE, ESP_AY_RESOLUTION, ESP_R_NOISE, ESP_R_RESOLUTION, ESP_RATE
 from . import grid_design, layout
 from .base import (DesignInputs, ScheduledObserver, _augmented_design_model, augmented_design_model,
                    equilibrium_map, frozen_array)
@@ -60,7 +60,7 @@ TABLE4: dict[str, Any] = dict(Q=0.1, R=0.0035, S=1.0, th=1.0, P0=(0.0, 0.0, 0.5)
 #: alternative interpretation of the paper's units (see docs/estimators.md); not the default.
 R_TABLE4_DEG_UNITS = 0.0035 * (np.pi / 180.0) ** 2
 #: weight of the lateral-acceleration output of the original-model PIF (see module doc)
-R_AY_ORIGINAL = 0.0035 * (0.005 * G / np.deg2rad(0.3)) ** 2
+R_AY_ORIGINAL = 0.0035 * (ESP_AY_RESOLUTION / np.float64(ESP_R_RESOLUTION)) ** 2
 
 
 def yaw_rate_noise_density(noise_std: float, resolution: float, rate: float) -> float:
@@ -103,11 +103,12 @@ def with_sensor_noise(name: str, options: dict, R: float, Q_ay: float | None = N
     return {**sensor, **options}
 
 
-#: R of the paper's ESP yaw-rate sensor (0.1 deg/s noise, 0.3 deg/s resolution, 100 Hz)
-R_ESP = yaw_rate_noise_density(np.deg2rad(0.1), np.deg2rad(0.3), 100.0)
+#: R of the paper's ESP yaw-rate sensor (0.1 deg/s noise, 0.3 deg/s resolution, 100 Hz; a numpy
+#: float, as the tunings made from it)
+R_ESP = yaw_rate_noise_density(np.float64(ESP_R_NOISE), np.float64(ESP_R_RESOLUTION), ESP_RATE)
 #: Q_ay of the paper's ESP lateral accelerometer (0.03 m/s^2 noise, 0.005 g resolution, 100 Hz):
 #: the noise density of the filter's ay input ((m/s^2)^2 s), same formula as R
-Q_AY_ESP = yaw_rate_noise_density(0.03, 0.005 * G, 100.0)
+Q_AY_ESP = yaw_rate_noise_density(ESP_AY_NOISE, ESP_AY_RESOLUTION, ESP_RATE)
 
 #: Q (1/s), th (-) and the roll model found by ``roadbank tune`` (seed 0, budget 240) for the
 #: default car and sensors with R = R_ESP, S = 1 (docs/estimators.md: the run and its scores).
