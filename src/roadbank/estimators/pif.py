@@ -359,8 +359,9 @@ class PIF(ScheduledObserver):
 
     def _initial_memory(self, mem):
         if self.variant == "riccati":
-            o = layout.riccati_p(3, self._roll[0].shape[0])
-            mem[o:o + 9] = self.P0.ravel()
+            n = self._nstate
+            o = layout.riccati_p(n, self._roll[0].shape[0])
+            mem[o:o + n * n] = self.P0.ravel()          # P, n x n row-major
 
 
 def modified_steady(label: str, kw: dict) -> dict:
