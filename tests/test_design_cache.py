@@ -201,3 +201,55 @@ def test_an_unsolvable_design_is_remembered_so_the_th_retry_costs_nothing_next_t
     with pytest.raises(pif.NoStabilisingSolution):            # an explicit th is not retried,
         E.make("pif-rate-adaptive", th=pif.RATE_ADAPTIVE_TUNING["th"])   # and the memo says so
     assert calls == []
+
+
+#: designs every table of a few estimators in a new process and saves them (``np.savez``): ``argv``
+#: the output file and the estimators' names, in the order they are designed ("riccati":
+#: ``pif-modified`` paper tuning on the Riccati ODE, whose equations the steady filter solves too)
+_DESIGN_SCRIPT = """
+import sys
+import numpy as np
+from roadbank import estimators as E
+KW = {"riccati": ("pif-modified", {"tuning": "paper", "variant": "riccati"}),
+      "steady": ("pif-modified", {"tuning": "paper"})}
+out = {}
+for name in sys.argv[2:]:
+    n, kw = KW.get(name, (name, {}))
+    est = E.make(n, **kw)
+    out[name + ".tab"], out[name + ".extra"] = est._tab_cont, est._extra
+    out[name + ".nstate"] = np.int64(est._nstate)
+    if hasattr(est, "_smooth_tab"):
+        out[name + ".smooth"] = est._smooth_tab
+np.savez(sys.argv[1], **out)
+"""
+
+
+def _designed_in_a_new_process(cache_dir, out, names):
+    import subprocess
+    import sys
+    from pathlib import Path
+    src = str(Path(__file__).resolve().parents[1] / "src")
+    env = {**os.environ, "ROADBANK_CACHE_DIR": str(cache_dir),
+           "PYTHONPATH": os.pathsep.join([src, *filter(None, [os.environ.get("PYTHONPATH")])])}
+    subprocess.run([sys.executable, "-c", _DESIGN_SCRIPT, str(out), *names], env=env, check=True)
+    with np.load(out) as z:
+        return {k: z[k] for k in z.files}
+
+
+@pytest.mark.slow
+def test_a_cached_design_is_bit_identical_to_a_fresh_one_whatever_was_designed_before(tmp_path):
+    """A design depends on its inputs alone: designed after others and read from the disk cache
+    (the smoother's backward table designed again over a forward design read from disk), it
+    equals to the bit the same design made first in a new process without a cache."""
+    names = ["steady", "riccati", "pif-smoother", "kalman", "pif-adaptive", "dfc"]
+    disk = tmp_path / "cache"
+    _designed_in_a_new_process(disk, tmp_path / "a.npz", names)             # fills the cache
+    for entry in (disk / "smoother").glob("*.npz"):
+        entry.unlink()
+    cached = _designed_in_a_new_process(disk, tmp_path / "b.npz", names)
+    fresh = {}
+    for name in ("riccati", "pif-smoother", "pif-adaptive", "kalman", "dfc", "steady"):   # each first
+        fresh.update(_designed_in_a_new_process("off", tmp_path / "c.npz", [name]))
+    assert cached.keys() == fresh.keys() and "pif-smoother.smooth" in fresh
+    for k in fresh:
+        assert cached[k].dtype == fresh[k].dtype and np.array_equal(cached[k], fresh[k]), k

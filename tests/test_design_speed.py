@@ -224,11 +224,11 @@ def test_design_bench_section_measures_every_causal_estimator_both_ways():
 
 
 def test_the_smoother_and_riccati_solution_take_the_grid_solutions(monkeypatch):
-    """game_are answers an equation a grid design just solved from that grid (the smoother's
+    """riccati_solution at a grid speed is the solution the whole-grid design used (the smoother's
     backward table asks for every speed): no scipy solve, and the same numbers as scipy's."""
-    from roadbank.estimators import smoother, synthesis
+    from roadbank.estimators import grid_design, smoother, synthesis
     monkeypatch.setattr(smoother, "_TABLES", {})
-    monkeypatch.setattr(synthesis, "_GRIDS", [])
+    monkeypatch.setattr(grid_design, "_SOLUTIONS", {})
     fast = E.make("pif-smoother")
     calls = []
     real = synthesis.solve_continuous_are

@@ -173,3 +173,17 @@ def test_smoother_on_comma2k19_reaches_the_correlation_target_without_lag():
     assert sc["pif-smoother"].r >= 0.93 and sc["pif-smoother"].rms_deg <= 0.11
     assert sc["pif-smoother"].r > max(sc["pif-modified"].r, sc["kinematic"].r)
     assert abs(sc["pif-smoother"].best_lag_s) <= 0.05          # the filter: +0.21 s
+
+
+def test_the_backward_pass_compiles_once_whole_selected_or_joined():
+    """A whole log, one with invalid samples (the valid ones selected) and a chunk with its
+    lookahead (joined) reach the compiled backward pass with the same argument types: one
+    compilation (each signature costs about a second cold)."""
+    from roadbank.estimators import kernels as K
+    a, b = _noisy_constant_speed_log(seed=3), _noisy_constant_speed_log(seed=4)
+    est = E.make("pif-smoother")
+    est.run(a)
+    slow = Signals(a.t, np.where(np.arange(len(a)) % 97 == 5, 1.0, a.vx), a.ay, a.r, a.delta_f)  # below v_min
+    assert not est.run(slow).valid.all()
+    est.run(a, lookahead=Signals(b.t + a.t[-1] + 0.01, b.vx, b.ay, b.r, b.delta_f))
+    assert len(set(K.smooth_backward.signatures)) == 1, K.smooth_backward.signatures

@@ -84,6 +84,39 @@ def test_every_user_of_gravity_reads_the_one_constant():
     assert parse_quantity("1 g", "acceleration") == G
 
 
+# ---- one set of sensor defaults ---------------------------------------------------------------
+
+def test_the_paper_sensors_are_the_default_of_a_car_and_of_the_simulator():
+    """The paper's ESP cluster: 100 Hz; yaw rate 0.1 deg/s noise, 0.3 deg/s steps, +-100 deg/s;
+    lateral acceleration 0.03 m/s^2 noise, 0.005 g steps, +-1.8 g; speed 0.02 m/s noise, 0.01 m/s
+    steps; steering-wheel angle 0.1 deg steps, +-780 deg."""
+    from roadbank.sim.sensors import SensorConfig
+
+    g, deg = 9.81, math.pi / 180.0
+    car, sim = SensorSpec(), SensorConfig()
+    paper = {"rate": 100.0, "r_noise": 0.1 * deg, "r_resolution": 0.3 * deg, "r_range": 100.0 * deg,
+             "ay_noise": 0.03, "ay_resolution": 0.005 * g, "ay_range": 1.8 * g, "speed_noise": 0.02,
+             "speed_resolution": 0.01, "steering_noise": 0.0, "steering_resolution": 0.1 * deg,
+             "steering_range": 780.0 * deg}
+    for name, value in paper.items():
+        assert getattr(car, name) == pytest.approx(value, rel=1e-15), name
+    assert car.to_sim() == sim
+
+
+def test_the_sensor_defaults_are_written_once():
+    """Neither SensorSpec nor the simulator's SensorConfig writes a default number of its own but 0:
+    both read roadbank.params' ESP_* (where the paper's numbers are)."""
+    offenders = []
+    for rel, cls in (("vehicle/sensors.py", "SensorSpec"), ("sim/sensors.py", "SensorConfig")):
+        tree = ast.parse((SRC / rel).read_text())
+        (node,) = [n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == cls]
+        for field in node.body:
+            if isinstance(field, ast.AnnAssign) and field.value is not None:
+                offenders += [f"{rel}:{c.lineno} {c.value}" for c in ast.walk(field.value)
+                              if isinstance(c, ast.Constant) and isinstance(c.value, float) and c.value != 0.0]
+    assert not offenders, offenders
+
+
 # ---- one units table --------------------------------------------------------------------------
 
 def test_a_channel_maps_units_are_the_vehicle_files_units():

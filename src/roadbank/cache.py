@@ -7,6 +7,11 @@ each file also stores the key text, checked on load. The key always includes
 roadbank's version and a fingerprint of its installed sources (so an edited
 checkout never reads results of older code), numpy's and scipy's versions.
 
+An entry holds the arrays bit for bit (``.npz``: float64 as stored), so a cached result is the
+fresh one exactly when what is cached is a function of its key alone. The estimators' designs
+are: none depends on what the process designed before it (a Riccati solution at a grid speed
+is the one of the design's own whole-grid solution, :func:`roadbank.estimators.grid_design.pif_solution`).
+
 Safe under concurrent processes: a file is written under a temporary name and
 renamed into place (atomic), so a reader sees a complete entry or none.
 Unreadable or damaged entries count as misses and are rewritten; any failure

@@ -14,7 +14,29 @@ from dataclasses import dataclass
 
 from .constants import G
 
-__all__ = ["G", "VehicleParams"]
+__all__ = ["G", "VehicleParams", "ESP_RATE", "ESP_AY_NOISE", "ESP_AY_RESOLUTION", "ESP_AY_RANGE", "ESP_R_NOISE",
+           "ESP_R_RESOLUTION", "ESP_R_RANGE", "ESP_SPEED_NOISE", "ESP_SPEED_RESOLUTION", "ESP_STEERING_NOISE",
+           "ESP_STEERING_RESOLUTION", "ESP_STEERING_RANGE"]
+
+# The paper's ESP sensor cluster (SI), written once: the defaults of a car's sensors
+# (roadbank.vehicle.SensorSpec) and of the simulator's (roadbank.sim.SensorConfig)
+#: sample rate of every channel (Hz)
+ESP_RATE = 100.0
+#: lateral accelerometer: white-noise standard deviation, quantisation step, saturation (m/s^2)
+ESP_AY_NOISE = 0.03
+ESP_AY_RESOLUTION = 0.005 * G
+ESP_AY_RANGE = 1.8 * G
+#: yaw-rate sensor: white-noise standard deviation, quantisation step, saturation (rad/s)
+ESP_R_NOISE = math.radians(0.1)
+ESP_R_RESOLUTION = math.radians(0.3)
+ESP_R_RANGE = math.radians(100.0)
+#: wheel-speed vehicle speed: white-noise standard deviation, quantisation step (m/s)
+ESP_SPEED_NOISE = 0.02
+ESP_SPEED_RESOLUTION = 0.01
+#: steering-wheel angle sensor: white-noise standard deviation, quantisation step, saturation (rad)
+ESP_STEERING_NOISE = 0.0
+ESP_STEERING_RESOLUTION = math.radians(0.1)
+ESP_STEERING_RANGE = math.radians(780.0)
 
 
 @dataclass(frozen=True)

@@ -559,20 +559,22 @@ class Estimator:
 def batch3_rows(d: dict) -> np.ndarray:
     """The batch loop's block (:func:`roadbank.estimators.layout.batch3_block`) of every grid row,
     from :meth:`Estimator.discrete_tables` ``d`` of a three-state observer: (g, 88)."""
+    blk = L.batch3_block()
+    o = blk.M                                   # where the block starts in the row
     g = d["Phi"].shape[0]
-    M = np.zeros((g, 9, 4))
+    M = np.zeros((g, 2 * L.NETA + 3, 4))        # the loop's columns, four lanes each (three states, 0)
     for q in range(L.NETA):
         M[:, 2 * q, :3] = d["Gam0"][:, :, q]
         M[:, 2 * q + 1, :3] = d["Gam1"][:, :, q]
     for j in range(3):
-        M[:, 6 + j, :3] = d["Phi"][:, :, j]
-    W = np.zeros((g, 8))
-    W[:, 0:3] = d["D"]
-    W[:, 4:7] = d["H"]
-    B = np.hstack([M.reshape(g, 36), W])
-    dB = np.zeros_like(B)
-    dB[:-1] = B[1:] - B[:-1]          # the same subtraction as the kernels' tab[i + 1] - tab[i]
-    return np.hstack([B, dB])
+        M[:, 2 * L.NETA + j, :3] = d["Phi"][:, :, j]
+    out = np.zeros((g, blk.end - o))
+    out[:, blk.M - o:blk.W - o] = M.reshape(g, -1)
+    out[:, blk.W - o:blk.W - o + 3] = d["D"]    # W: D, 0, H, 0
+    out[:, blk.W - o + 4:blk.W - o + 7] = d["H"]
+    B = out[:, :blk.dM - o]                     # M and W; then dM and dW
+    out[:-1, blk.dM - o:] = B[1:] - B[:-1]      # the same subtraction as the kernels' tab[i + 1] - tab[i]
+    return out
 
 
 def equilibrium_map(F: np.ndarray, G: np.ndarray) -> np.ndarray:

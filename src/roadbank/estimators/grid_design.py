@@ -16,6 +16,14 @@ estimator, and a subclass that redefines how its observer is built, is designed 
 
 :func:`roadbank.estimators.synthesis.reference_solvers` switches the whole-grid path off (the
 comparisons and the benchmark).
+
+A design is a function of its inputs alone, whatever the process designed before:
+:func:`pif_solution` gives a steady PIF's Riccati solution at a grid speed from the whole-grid
+solution of that PIF's own design (solved again when the design came from a cache), never from
+another design's grid. (A whole-grid solution differs from scipy's per-point one by rounding,
+and each point's depends on the grid: Newton starts from its neighbours' solutions. Answering
+an equation from whichever grid a process had solved last made a design depend on what was
+designed before it, and a disk-cached design differ from a fresh one in the last bits.)
 """
 
 from __future__ import annotations
@@ -34,6 +42,9 @@ from .base import augmented_design_model
 _MODELS: dict = {}
 #: the process-noise densities of the last grid designed (:func:`_grid_noise`)
 _NOISE: dict = {}
+#: the whole-grid Riccati solutions ``(P, ok)`` of recent steady PIF designs, by estimator class
+#: and design inputs (:func:`pif_solution`)
+_SOLUTIONS: dict = {}
 
 
 def _grid_models(key: tuple, build) -> tuple:
@@ -84,14 +95,43 @@ def pif_speed(est, own_noise: bool):
     None inside :func:`~roadbank.estimators.synthesis.reference_solvers`."""
     if synthesis.using_reference_solvers():
         return None
+    models, P, ok = _pif_grid(est, own_noise)
+    speeds = [float(v) for v in est.design.vgrid]
+    tab = observer_rows(models, P, ok, est.design.R_matrix, lambda k: est.observer(speeds[k]))
+    return tab, models[0].shape[1], np.zeros(0)
+
+
+def _pif_grid(est, own_noise: bool) -> tuple:
+    """``(models, P, ok)`` of a steady-state PIF's design over its speed grid: the stacked design
+    models, the whole-grid Riccati solutions and which of them the grid solver accepted (kept
+    for :func:`pif_solution`)."""
     d = est.design
     vgrid = d.vgrid
     speeds = [float(v) for v in vgrid]
     key = (type(est)._model_at, repr(d.params), d.model, vgrid.tobytes())
     models = _grid_models(key, lambda: [est.design_model(v) for v in speeds])
-    tab = observer_rows(models[0], _grid_noise(est, models, own_noise), d.R_matrix, d.S, d.th,
-                        lambda k: est.observer(speeds[k]))
-    return tab, models[0][0].shape[1], np.zeros(0)
+    P, ok = grid_solutions(models[0], _grid_noise(est, models, own_noise), d.R_matrix, d.S, d.th)
+    if len(_SOLUTIONS) >= 4:
+        _SOLUTIONS.clear()
+    _SOLUTIONS[(type(est), cache.canonical(d))] = (P, ok)
+    return models[0], P, ok
+
+
+def pif_solution(est, own_noise: bool, vx: float) -> np.ndarray | None:
+    """The Riccati solution ``P`` of a steady-state PIF's own whole-grid design at the grid speed
+    ``vx`` (m/s), as its table uses it; None where the design does not use one (``vx`` not on the
+    grid, a point the grid solver did not accept, or inside
+    :func:`~roadbank.estimators.synthesis.reference_solvers`): the caller solves that point itself."""
+    if synthesis.using_reference_solvers():
+        return None
+    d = est.design
+    vgrid = d.vgrid
+    k = int(np.searchsorted(vgrid, vx))
+    if k >= len(vgrid) or vgrid[k] != vx:
+        return None
+    hit = _SOLUTIONS.get((type(est), cache.canonical(d)))
+    P, ok = hit if hit is not None else _pif_grid(est, own_noise)[1:]
+    return P[k].copy() if ok[k] else None
 
 
 def pif_adaptive(est, own_noise: bool):
@@ -109,8 +149,8 @@ def pif_adaptive(est, own_noise: bool):
     key = (type(est)._model_at, repr(d.params), d.model, vgrid.tobytes(), tuple(d.egrid), d.mu,
            type(est).rear_stiffness)
     models = _grid_models(key, build)
-    tab = observer_rows(models[0], _grid_noise(est, models, own_noise), d.R_matrix, d.S, d.th,
-                        lambda k: est.observer_at(speeds[k // ne], d.egrid[k % ne]), n_inner=ne)
+    P, ok = grid_solutions(models[0], _grid_noise(est, models, own_noise), d.R_matrix, d.S, d.th, n_inner=ne)
+    tab = observer_rows(models[0], P, ok, d.R_matrix, lambda k: est.observer_at(speeds[k // ne], d.egrid[k % ne]))
     eg = d.egrid
     extra = [eg[0], (eg[1] - eg[0]) if len(eg) > 1 else 1.0, float(len(eg)), d.tau, d.tf]
     return tab, len(est.state_names), np.array(extra)
@@ -127,13 +167,14 @@ def kalman_speed(est):
     key = ("original", repr(d.params), vgrid.tobytes())
     models = _grid_models(key, lambda: [augmented_design_model(d.params, v, "original") for v in speeds])
     W = np.broadcast_to(np.diag(np.asarray(d.q, dtype=float)), (len(speeds), 3, 3))
-    tab = observer_rows(models[0], W, np.diag(np.asarray(d.R, dtype=float)), 1.0, 0.0,
-                        lambda k: est.observer(speeds[k]))
+    R = np.diag(np.asarray(d.R, dtype=float))
+    P, ok = grid_solutions(models[0], W, R, 1.0, 0.0)
+    tab = observer_rows(models[0], P, ok, R, lambda k: est.observer(speeds[k]))
     return tab, models[0][0].shape[1], np.zeros(0)
 
 
-def observer_rows(models, W, R, S, th, fallback, n_inner: int = 1) -> np.ndarray:
-    """``lpv`` table rows ``[F, G, H, D, J]`` of the steady-state filters of a grid.
+def grid_solutions(models, W, R, S, th, n_inner: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """The stabilising Riccati solutions of a grid's steady-state filters.
 
     Parameters
     ----------
@@ -145,11 +186,40 @@ def observer_rows(models, W, R, S, th, fallback, n_inner: int = 1) -> np.ndarray
     R : (p, p) array, S : float or (1, 1) array, th : float
         Measurement-noise density, disturbance weight and H-infinity level (as
         :func:`~roadbank.estimators.synthesis.game_are`).
+    n_inner : int
+        Points per speed (outer-major order), see :func:`~roadbank.estimators.are_grid.solve_grid`.
+
+    Returns
+    -------
+    P : (g, n, n) array
+        The solutions (units of the states squared), where ``ok``.
+    ok : (g,) bool array
+        Accepted by the grid solver; the other points must be designed point by point.
+    """
+    A, B, C, Dy, Lw = models
+    R = np.atleast_2d(np.asarray(R, dtype=float))
+    Rinv = np.linalg.inv(R)
+    S = np.atleast_2d(np.asarray(S, dtype=float))
+    Ct = np.swapaxes(C, 1, 2)
+    Gam0 = Ct @ Rinv @ C
+    Gam = Gam0 - th * (np.swapaxes(Lw, 1, 2) @ S @ Lw)
+    return solve_grid(A, Gam0, Gam, W, n_inner)
+
+
+def observer_rows(models, P, ok, R, fallback) -> np.ndarray:
+    """``lpv`` table rows ``[F, G, H, D, J]`` of the steady-state filters of a grid.
+
+    Parameters
+    ----------
+    models : tuple of arrays ``(A, B, C, Dy, Lw)``
+        The design model of each grid point stacked (as :func:`grid_solutions`).
+    P, ok : (g, n, n) and (g,) arrays
+        The grid's Riccati solutions and which are accepted (:func:`grid_solutions`).
+    R : (p, p) array
+        Measurement-noise density.
     fallback : callable
         ``fallback(k) -> (F, G, H, D)``: the per-point design of point ``k``, for the points the
         grid solver does not accept (it raises where no stabilising solution exists).
-    n_inner : int
-        Points per speed (outer-major order), see :func:`~roadbank.estimators.are_grid.solve_grid`.
 
     Returns
     -------
@@ -159,14 +229,8 @@ def observer_rows(models, W, R, S, th, fallback, n_inner: int = 1) -> np.ndarray
     """
     A, B, C, Dy, Lw = models
     g = A.shape[0]
-    R = np.atleast_2d(np.asarray(R, dtype=float))
-    Rinv = np.linalg.inv(R)
-    S = np.atleast_2d(np.asarray(S, dtype=float))
+    Rinv = np.linalg.inv(np.atleast_2d(np.asarray(R, dtype=float)))
     Ct = np.swapaxes(C, 1, 2)
-    Gam0 = Ct @ Rinv @ C
-    Gam = Gam0 - th * (np.swapaxes(Lw, 1, 2) @ S @ Lw)
-    P, ok = solve_grid(A, Gam0, Gam, W, n_inner)
-    synthesis.remember_grid(A, C, Lw, W, R, S, th, P, ok)
     bad = np.flatnonzero(~ok)
     own = [fallback(int(k)) for k in bad]       # in grid order: the first unsolvable point raises
     K = P @ Ct @ Rinv

@@ -65,8 +65,11 @@ def _end_stop(mem, cfg):
 
 
 @njit(cache=True)
-def offsets_step(mem, cfg, t, vx, ay, r, d, out):
+def offsets_step(mem, cfg, t, vx, d, ay, r, out):
     """Learn from one sample and write its corrected channels into ``out`` (layout ``O_*``).
+
+    The inputs in the kernels' order (:mod:`roadbank.estimators.kernels`, calling convention):
+    t (s), vx (m/s), d (front road-wheel angle, rad), ay (m/s^2), r (rad/s).
 
     ``mem`` is updated in place. A sample whose time is not finite or not after the last
     usable one teaches nothing (the offsets are still applied to it).
@@ -160,10 +163,10 @@ def offsets_step(mem, cfg, t, vx, ay, r, d, out):
 
 
 @njit(cache=True)
-def offsets_run(mem, cfg, t, vx, ay, r, d, out):
+def offsets_run(mem, cfg, t, vx, d, ay, r, out):
     """:func:`offsets_step` over every sample; ``out`` has shape ``(n, N_OUT)``."""
     for k in range(t.shape[0]):
-        offsets_step(mem, cfg, t[k], vx[k], ay[k], r[k], d[k], out[k])
+        offsets_step(mem, cfg, t[k], vx[k], d[k], ay[k], r[k], out[k])
 
 
 def new_memory() -> np.ndarray:

@@ -213,8 +213,8 @@ class OnlineOffsets:
         n = len(signals)
         out = np.empty((n, K.N_OUT))
         f = np.ascontiguousarray
-        K.offsets_run(self._omem, self._ocfg, f(signals.t, float), f(signals.vx, float), f(signals.ay, float),
-                      f(signals.r, float), f(signals.delta_f, float), out)
+        K.offsets_run(self._omem, self._ocfg, f(signals.t, float), f(signals.vx, float), f(signals.delta_f, float),
+                      f(signals.ay, float), f(signals.r, float), out)
         if n:
             self._oout[:] = out[-1]
         return Signals(signals.t, signals.vx, out[:, K.O_AY].copy(), out[:, K.O_R].copy(),
@@ -249,7 +249,7 @@ class OnlineOffsets:
         """One sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), delta_f (rad); the inner
         estimator's result for the corrected sample."""
         o = self._oout
-        K.offsets_step(self._omem, self._ocfg, float(t), float(vx), float(ay), float(r), float(delta_f), o)
+        K.offsets_step(self._omem, self._ocfg, float(t), float(vx), float(delta_f), float(ay), float(r), o)
         return self.inner.step(t, vx, o[K.O_AY], o[K.O_R], o[K.O_D])
 
     def __repr__(self) -> str:

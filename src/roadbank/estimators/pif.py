@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..constants import G
+from ..params import ESP_AY_NOISE, ESP_AY_RESOLUTION, ESP_R_NOISE, ESP_R_RESOLUTION, ESP_RATE
 from . import grid_design, layout
 from .base import (DesignInputs, ScheduledObserver, _augmented_design_model, augmented_design_model,
                    equilibrium_map, frozen_array)
@@ -60,7 +60,7 @@ TABLE4: dict[str, Any] = dict(Q=0.1, R=0.0035, S=1.0, th=1.0, P0=(0.0, 0.0, 0.5)
 #: alternative interpretation of the paper's units (see docs/estimators.md); not the default.
 R_TABLE4_DEG_UNITS = 0.0035 * (np.pi / 180.0) ** 2
 #: weight of the lateral-acceleration output of the original-model PIF (see module doc)
-R_AY_ORIGINAL = 0.0035 * (0.005 * G / np.deg2rad(0.3)) ** 2
+R_AY_ORIGINAL = 0.0035 * (ESP_AY_RESOLUTION / np.float64(ESP_R_RESOLUTION)) ** 2
 
 
 def yaw_rate_noise_density(noise_std: float, resolution: float, rate: float) -> float:
@@ -103,11 +103,12 @@ def with_sensor_noise(name: str, options: dict, R: float, Q_ay: float | None = N
     return {**sensor, **options}
 
 
-#: R of the paper's ESP yaw-rate sensor (0.1 deg/s noise, 0.3 deg/s resolution, 100 Hz)
-R_ESP = yaw_rate_noise_density(np.deg2rad(0.1), np.deg2rad(0.3), 100.0)
+#: R of the paper's ESP yaw-rate sensor (0.1 deg/s noise, 0.3 deg/s resolution, 100 Hz; a numpy
+#: float, as the tunings made from it)
+R_ESP = yaw_rate_noise_density(np.float64(ESP_R_NOISE), np.float64(ESP_R_RESOLUTION), ESP_RATE)
 #: Q_ay of the paper's ESP lateral accelerometer (0.03 m/s^2 noise, 0.005 g resolution, 100 Hz):
 #: the noise density of the filter's ay input ((m/s^2)^2 s), same formula as R
-Q_AY_ESP = yaw_rate_noise_density(0.03, 0.005 * G, 100.0)
+Q_AY_ESP = yaw_rate_noise_density(ESP_AY_NOISE, ESP_AY_RESOLUTION, ESP_RATE)
 
 #: Q (1/s), th (-) and the roll model found by ``roadbank tune`` (seed 0, budget 240) for the
 #: default car and sensors with R = R_ESP, S = 1 (docs/estimators.md: the run and its scores).
@@ -269,7 +270,16 @@ class PIF(ScheduledObserver):
         return solvable_th(self.design, self._tables_of)
 
     def riccati_solution(self, vx: float) -> np.ndarray:
-        """Stabilising solution ``P`` of the algebraic Riccati equation (eq 44) at ``vx`` (m/s)."""
+        """Stabilising solution ``P`` of the algebraic Riccati equation (eq 44) at ``vx`` (m/s).
+
+        At a speed of the grid of a steady-state filter designed on the whole grid at once, the
+        solution its table was built from (:func:`~roadbank.estimators.grid_design.pif_solution`);
+        elsewhere solved at ``vx``.
+        """
+        if self._grid_design_applies():
+            P = grid_design.pif_solution(self, self._own_noise(), float(vx))
+            if P is not None:
+                return P
         return self._riccati(self.design_model(vx), vx)
 
     def design_model(self, vx: float):
@@ -318,6 +328,10 @@ class PIF(ScheduledObserver):
         return cls.process_density is PIF.process_density and cls.process_noise in (PIF.process_noise,
                                                                                     PIFRate.process_noise)
 
+    def _grid_design_applies(self) -> bool:
+        """The table is designed on the whole grid at once (:func:`~roadbank.estimators.grid_design.pif_speed`)."""
+        return self._builds_as_pif() and type(self).observer is PIF.observer and type(self)._design is PIF._design
+
     def _grid_design(self):
         if self._builds_as_pif() and type(self).observer is PIF.observer:
             return grid_design.pif_speed(self, self._own_noise())
@@ -345,8 +359,9 @@ class PIF(ScheduledObserver):
 
     def _initial_memory(self, mem):
         if self.variant == "riccati":
-            o = layout.riccati_p(3, self._roll[0].shape[0])
-            mem[o:o + 9] = self.P0.ravel()
+            n = self._nstate
+            o = layout.riccati_p(n, self._roll[0].shape[0])
+            mem[o:o + n * n] = self.P0.ravel()          # P, n x n row-major
 
 
 def modified_steady(label: str, kw: dict) -> dict:

@@ -87,7 +87,7 @@ class PIFSmoother(PIF):
         model = self.design_model(vx)
         A, B = model[0], model[1]
         W = self.process_density(model)
-        P = self._riccati(model, vx)
+        P = self.riccati_solution(vx)        # at a grid speed: the forward filter's own
         ev = np.linalg.eigvalsh(0.5 * (P + P.T))
         if not ev[0] > 1e-12 * ev[-1]:
             raise ValueError(f"{self.label}: the Riccati solution is singular at vx={vx:.2f} m/s (eigenvalues "
@@ -190,6 +190,9 @@ class PIFSmoother(PIF):
             # restarts after a gap longer than max_gap
             if not every:
                 t, vx, ay = t[idx], vx[idx], ay[idx]
+            # read-only as a log's channels are, whether taken whole, selected or joined: the
+            # compiled pass has one signature (a writable copy would compile it a second time)
+            t, vx, ay = (_read_only(a) for a in (t, vx, ay))
             xv = xs if every else xs[idx]
             xo = xv.copy()                           # the pass reads xv[k + 1] after writing xo[k + 1]
             dt = np.diff(t)
@@ -212,6 +215,13 @@ class PIFSmoother(PIF):
             held = last >= 0
             xs[held] = xs[last[held]]
         return xs, valid
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    """A read-only view of ``a`` (same units)."""
+    v = a.view()
+    v.flags.writeable = False
+    return v
 
 
 def _common_interval(dt: np.ndarray) -> float:

@@ -58,15 +58,7 @@ def game_are(A: np.ndarray, C: np.ndarray, Lw: np.ndarray, W: np.ndarray, R: np.
         ``A - P C^T R^{-1} C`` or the game closed loop is not Hurwitz. ``where``
         (e.g. ``"vx=12.0 m/s"``) is added to the message.
 
-    An equation that a whole-grid design solved and accepted moments ago (the same ``A``,
-    ``C``, ``L_w``, ``W``, ``R``, ``S``, ``th``; :func:`remember_grid`) is answered from it, as
-    when the offline smoother asks for the forward filter's solutions speed by speed; not
-    inside :func:`reference_solvers`.
     """
-    if not _REFERENCE:
-        P = _recall(A, C, Lw, W, R, S, th)
-        if P is not None:
-            return P
     R = np.atleast_2d(R).astype(float)
     S = np.atleast_2d(S).astype(float)
     if th < 0:
@@ -102,36 +94,6 @@ def game_are(A: np.ndarray, C: np.ndarray, Lw: np.ndarray, W: np.ndarray, R: np.
                 f"H-infinity {label} not stable for th={th} {where} (eigenvalue real part "
                 f"{worst:.3g}); lower th.")
     return P
-
-
-#: the whole-grid solutions kept for :func:`game_are` (newest last; :func:`remember_grid`)
-_GRIDS: list = []
-_GRIDS_KEPT = 4
-
-
-def remember_grid(A, C, Lw, W, R, S, th, P, ok) -> None:
-    """Keep the accepted stabilising solutions ``P[ok]`` of a grid of filter Riccati equations
-    (stacks ``A``, ``C``, ``Lw``, ``W``, ``P`` (g, ., .); ``R``, ``S``, ``th`` common) for
-    :func:`game_are`; the last few grids are kept."""
-    _GRIDS.append((A, C, Lw, W, np.atleast_2d(np.asarray(R, dtype=float)), np.atleast_2d(np.asarray(S, dtype=float)),
-                   float(th), P, ok))
-    del _GRIDS[:-_GRIDS_KEPT]
-
-
-def _recall(A, C, Lw, W, R, S, th):
-    """The kept solution of exactly this equation (inputs equal to 1e-14 relative), or None."""
-    R = np.atleast_2d(np.asarray(R, dtype=float))
-    S = np.atleast_2d(np.asarray(S, dtype=float))
-    for gA, gC, gL, gW, gR, gS, gth, gP, gok in reversed(_GRIDS):
-        if gth != float(th) or gA.shape[1:] != np.shape(A) or gR.shape != R.shape or gC.shape[1:] != np.shape(C) \
-                or not (np.array_equal(gR, R) and np.array_equal(gS, S)):
-            continue
-        hit = np.flatnonzero(gok & (np.abs(gA - A) <= 1e-14 * np.abs(A).max()).all(axis=(1, 2)))
-        for k in hit:
-            if (np.allclose(gW[k], W, rtol=1e-14, atol=0.0) and np.array_equal(gC[k], C)
-                    and np.array_equal(gL[k], Lw)):
-                return gP[k].copy()
-    return None
 
 
 def place_observer(A: np.ndarray, C: np.ndarray, poles) -> np.ndarray:

@@ -9,8 +9,8 @@ estimators hold their output there). All randomness comes from
 ``numpy.random.default_rng(seed)`` in a fixed order, so a seed reproduces a run
 bit for bit.
 
-Defaults follow the paper's ESP sensors: yaw-rate range +-100 deg/s, resolution
-0.3 deg/s; lateral accelerometer +-1.8 g, resolution 0.005 g. Speed is the mean
+Defaults follow the paper's ESP sensors (``roadbank.params.ESP_*``): yaw-rate range +-100 deg/s,
+resolution 0.3 deg/s; lateral accelerometer +-1.8 g, resolution 0.005 g. Speed is the mean
 of the two (undriven) rear wheel speeds times the wheel radius.
 
 Misalignment: the paper's "ay = ay_real cos(10 deg)" is ``ay_misalignment =
@@ -26,7 +26,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..constants import G
+from ..params import (ESP_AY_NOISE, ESP_AY_RANGE, ESP_AY_RESOLUTION, ESP_R_NOISE, ESP_R_RANGE, ESP_R_RESOLUTION,
+                      ESP_RATE, ESP_SPEED_NOISE, ESP_SPEED_RESOLUTION, ESP_STEERING_NOISE, ESP_STEERING_RANGE,
+                      ESP_STEERING_RESOLUTION)
 
 
 @dataclass(frozen=True)
@@ -61,16 +63,17 @@ class ChannelErrorModel:
 class SensorConfig:
     """Sensor cluster configuration (see the module docstring)."""
 
-    rate: float = 100.0
+    rate: float = ESP_RATE
     latency: float = 0.0
     dropout_prob: float = 0.0
     yaw_rate: ChannelErrorModel = field(default_factory=lambda: ChannelErrorModel(
-        noise_std=math.radians(0.1), resolution=math.radians(0.3), range=math.radians(100.0)))
+        noise_std=ESP_R_NOISE, resolution=ESP_R_RESOLUTION, range=ESP_R_RANGE))
     ay: ChannelErrorModel = field(default_factory=lambda: ChannelErrorModel(
-        noise_std=0.03, resolution=0.005 * G, range=1.8 * G))
-    speed: ChannelErrorModel = field(default_factory=lambda: ChannelErrorModel(noise_std=0.02, resolution=0.01))
+        noise_std=ESP_AY_NOISE, resolution=ESP_AY_RESOLUTION, range=ESP_AY_RANGE))
+    speed: ChannelErrorModel = field(default_factory=lambda: ChannelErrorModel(
+        noise_std=ESP_SPEED_NOISE, resolution=ESP_SPEED_RESOLUTION))
     steering: ChannelErrorModel = field(default_factory=lambda: ChannelErrorModel(
-        resolution=math.radians(0.1), range=math.radians(780.0)))
+        noise_std=ESP_STEERING_NOISE, resolution=ESP_STEERING_RESOLUTION, range=ESP_STEERING_RANGE))
     ay_misalignment: float = 0.0
     ay_cross_axis: bool = False
 

@@ -6,7 +6,9 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from ..constants import G
+from ..params import (ESP_AY_NOISE, ESP_AY_RANGE, ESP_AY_RESOLUTION, ESP_R_NOISE, ESP_R_RANGE, ESP_R_RESOLUTION,
+                      ESP_RATE, ESP_SPEED_NOISE, ESP_SPEED_RESOLUTION, ESP_STEERING_NOISE, ESP_STEERING_RANGE,
+                      ESP_STEERING_RESOLUTION)
 
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
 # them: loading a car (load_vehicle, --vehicle) loads neither
@@ -16,7 +18,8 @@ __all__ = ["SensorSpec"]
 
 @dataclass(frozen=True)
 class SensorSpec:
-    """A car's ESP sensor cluster (SI). Defaults: the paper's ESP sensors = ``SensorConfig()``.
+    """A car's ESP sensor cluster (SI). Defaults: the paper's ESP sensors (``roadbank.params.ESP_*``,
+    also those of ``SensorConfig()``).
 
     Parameters
     ----------
@@ -39,23 +42,23 @@ class SensorSpec:
         Steering-wheel angle sensor (rad): 0, 0.1 deg, 780 deg.
     """
 
-    rate: float = 100.0
+    rate: float = ESP_RATE
     latency: float = 0.0
     dropout_prob: float = 0.0
-    ay_noise: float = 0.03
-    ay_resolution: float = 0.005 * G
-    ay_range: float = 1.8 * G
+    ay_noise: float = ESP_AY_NOISE
+    ay_resolution: float = ESP_AY_RESOLUTION
+    ay_range: float = ESP_AY_RANGE
     ay_bias: float = 0.0
     ay_misalignment: float = 0.0
-    r_noise: float = math.radians(0.1)
-    r_resolution: float = math.radians(0.3)
-    r_range: float = math.radians(100.0)
+    r_noise: float = ESP_R_NOISE
+    r_resolution: float = ESP_R_RESOLUTION
+    r_range: float = ESP_R_RANGE
     r_bias: float = 0.0
-    speed_noise: float = 0.02
-    speed_resolution: float = 0.01
-    steering_noise: float = 0.0
-    steering_resolution: float = math.radians(0.1)
-    steering_range: float = math.radians(780.0)
+    speed_noise: float = ESP_SPEED_NOISE
+    speed_resolution: float = ESP_SPEED_RESOLUTION
+    steering_noise: float = ESP_STEERING_NOISE
+    steering_resolution: float = ESP_STEERING_RESOLUTION
+    steering_range: float = ESP_STEERING_RANGE
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):

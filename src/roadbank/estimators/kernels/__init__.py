@@ -97,8 +97,8 @@ the states, shape ``(N, max(n, 2))``). The inputs come in the order of
 :meth:`Estimator.step(t, vx, ay, r, delta_f) <roadbank.estimators.base.Estimator.step>`
 puts ``delta_f`` last because it is optional, and is the one place that reorders them.
 Units: t (s), vx (m/s), ay (m/s^2), r (rad/s), d (rad). ``smooth_backward`` has its own
-arguments (its docstring); the offset learner (:mod:`roadbank.estimators.offset_kernel`)
-follows ``Estimator.step``'s order.
+arguments (its docstring); the offset learner's (:mod:`roadbank.estimators.offset_kernel`)
+``offsets_step(mem, cfg, t, vx, d, ay, r, out)`` takes its inputs in the same order.
 """
 
 from __future__ import annotations
