@@ -186,4 +186,6 @@ def test_the_backward_pass_compiles_once_whole_selected_or_joined():
     slow = Signals(a.t, np.where(np.arange(len(a)) % 97 == 5, 1.0, a.vx), a.ay, a.r, a.delta_f)  # below v_min
     assert not est.run(slow).valid.all()
     est.run(a, lookahead=Signals(b.t + a.t[-1] + 0.01, b.vx, b.ay, b.r, b.delta_f))
+    strided = np.stack([a.ay, a.ay])                                   # a table's column: not contiguous
+    est.run(Signals(a.t, a.vx, strided.T[:, 0], a.r, a.delta_f))
     assert len(set(K.smooth_backward.signatures)) == 1, K.smooth_backward.signatures

@@ -190,8 +190,9 @@ class PIFSmoother(PIF):
             # restarts after a gap longer than max_gap
             if not every:
                 t, vx, ay = t[idx], vx[idx], ay[idx]
-            # read-only as a log's channels are, whether taken whole, selected or joined: the
-            # compiled pass has one signature (a writable copy would compile it a second time)
+            # read-only and contiguous as a log's channels are, whether taken whole, selected or
+            # joined: the compiled pass has one signature (a writable or strided array would
+            # compile it a second time)
             t, vx, ay = (_read_only(a) for a in (t, vx, ay))
             xv = xs if every else xs[idx]
             xo = xv.copy()                           # the pass reads xv[k + 1] after writing xo[k + 1]
@@ -218,8 +219,9 @@ class PIFSmoother(PIF):
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:
-    """A read-only view of ``a`` (same units)."""
-    v = a.view()
+    """A read-only, C-contiguous view of ``a`` (a copy where ``a`` is strided, e.g. a column of a
+    table; same units): the compiled pass then sees one array type whatever it was given."""
+    v = np.ascontiguousarray(a).view()
     v.flags.writeable = False
     return v
 
