@@ -144,11 +144,11 @@ def test_the_c_tables_are_read_at_the_kernels_offsets(name):
             (0, row.Gam0 - row.Phi, row.Gam1 - row.Phi)
     obs, roll = _observer_system(est._nstate), _roll_system(d.nr)
     for s in (U.RESTART, U.FIXED):
-        assert c_sum(s, obs, indent="        ") in src and c_sum(s, roll, indent="        ") in src
+        assert c_sum(s, obs) in src and c_sum(s, roll, indent="        ") in src
     assert c_sum(U.OUTPUT, obs, target="w") in src and c_sum(U.OUTPUT, roll, target="phi") in src
     if est._nstate == 3:                           # the loops name the blocks at the layout's offsets
         assert "acc += c[RB_OGAM0 + p * 3 + q] * st->eta[q] + c[RB_OGAM1 + p * 3 + q] * u[q];" in src
-        assert "acc += c[RB_OJ + p * 3 + q] * u[q];" in src and "w += c[RB_OH + q] * st->x[q];" in src
+        assert "acc += c[RB_OJ + p * 3 + q] * u[q];" in src and "w += c[RB_OH + q] * x[q];" in src
 
 
 @pytest.mark.parametrize("name", EXPORTABLE)

@@ -34,7 +34,7 @@ import numpy as np
 
 from .. import __version__
 from ..estimators.layout import NETA, lpv_row
-from ..estimators.update_spec import FIXED, GENERAL, OUTPUT, RESTART, block_shape
+from ..estimators.update_spec import FIXED, GENERAL, OUTPUT, PATHS, RESTART, Sum, block_shape
 from .design import ExportDesign
 from .readme import readme
 from .update_c import CSystem, c_sum, interp_ranges
@@ -213,22 +213,14 @@ static const real_t RB_TAB[RB_NG][RB_NK] = {
 ${table}
 };
 ${discrete_tables}${gate_consts}
-/* c[k] = t0[k] + a (t1[k] - t0[k]) for lo <= k < hi: the schedule between two table rows */
-static void rb_interp(real_t *c, const real_t *t0, const real_t *t1, real_t a, int lo, int hi)
-{
-    int k;
-    for (k = lo; k < hi && k < RB_NROW; ++k) {
-        c[k] = t0[k] + a * (t1[k] - t0[k]);
-    }
-}
 
 ${nsub_fn}${lu_fns}${tustin_fn}${observer_fn}
 static int rb_finish(state_t *st, real_t w, real_t ay, real_t dt, int restart, int fixed)
 {
     real_t phi;
     real_t wc;
-${finish_roll}    st->ay_last = ay;
-${finish_phi}    wc = w > -1.0_R ? w : -1.0_R;
+${finish_decl}${finish_roll}    st->ay_last = ay;
+${finish_phi}${finish_store}    wc = w > -1.0_R ? w : -1.0_R;
     wc = wc < 1.0_R ? wc : 1.0_R;
     st->w = w;
     st->theta = RB_ASIN(wc);
@@ -532,21 +524,20 @@ def _observer_system(n: int) -> CSystem:
     """The observer as the generated C holds it: blocks in ``c`` at the kernels' row offsets."""
     return CSystem(ns=n, ns_c="RB_N", m=NETA, m_c=str(NETA),
                    block=lambda b, k: f"c[RB_O{b.upper()} + {k}]",
-                   vector={"x": lambda k: f"st->x[{k}]", "e": lambda k: f"u[{k}]",
-                           "e_prev": lambda k: f"st->eta[{k}]"},
-                   state="st->x", names={"x": "xi", "e": "eta", "e_prev": "eta-", "y": "w"})
+                   inputs={"e": lambda k: f"u[{k}]", "e_prev": lambda k: f"st->eta[{k}]"},
+                   state="st->x", new="x", names={"x": "xi", "e": "eta", "e_prev": "eta-", "y": "w"})
 
 
 def _roll_system(nr: int) -> CSystem:
     """The roll model as the generated C holds it: its blocks as ``RB_ROLL_*`` constants."""
     return CSystem(ns=nr, ns_c="RB_NR", m=1, m_c="1",
                    block=lambda b, k: "RB_ROLL_D" if b == "D" else f"RB_ROLL_{b.upper()}[{k}]",
-                   vector={"x": lambda k: f"st->z[{k}]", "e": lambda k: "ay", "e_prev": lambda k: "st->ay_last"},
-                   state="st->z", names={"x": "z", "e": "ay", "e_prev": "ay-", "y": "phi"})
+                   inputs={"e": lambda k: "ay", "e_prev": lambda k: "st->ay_last"},
+                   state="st->z", new="z", names={"x": "z", "e": "ay", "e_prev": "ay-", "y": "phi"})
 
 
 def _interp_c(path: str, n: int, indent: str) -> str:
-    """``rb_interp`` calls for the blocks ``path`` reads (update_spec.blocks_read): continuous
+    """Loops interpolating the blocks ``path`` reads (update_spec.blocks_read): continuous
     blocks from RB_TAB, fixed-rate ones from RB_DTAB, into ``c`` at the kernels' row offsets."""
     row = lpv_row(n)
     names: dict[int, str] = {row.cont: "RB_NK"}
@@ -560,14 +551,15 @@ def _interp_c(path: str, n: int, indent: str) -> str:
     for lo, hi in interp_ranges(path, row, n, NETA):
         read = ", ".join(b for b in _BLOCKS if lo <= getattr(row, b) < hi and block_shape(b, n, NETA)[0]
                          * block_shape(b, n, NETA)[1])
+        parts = []
         if lo < row.cont:
-            h = min(hi, row.cont)
-            out.append(f"{indent}rb_interp(c, RB_TAB[i], RB_TAB[i + 1], a, {names.get(lo, lo)}, "
-                       f"{names.get(h, h)});   /* {read} */\n")
+            parts.append(("RB_TAB", "c[k]", names.get(lo, lo), names.get(min(hi, row.cont), min(hi, row.cont))))
         if hi > row.cont:
             lo_d, hi_d = max(lo, row.cont) - row.Phi, hi - row.Phi
-            out.append(f"{indent}rb_interp(c + RB_OPHI, RB_DTAB[i], RB_DTAB[i + 1], a, {dnames.get(lo_d, lo_d)}, "
-                       f"{dnames.get(hi_d, hi_d)});   /* {read} */\n")
+            parts.append(("RB_DTAB", "c[RB_OPHI + k]", dnames.get(lo_d, lo_d), dnames.get(hi_d, hi_d)))
+        for tab, dest, a, b in parts:
+            out.append(f"{indent}for (k = {a}; k < {b}; ++k) {{   /* {read} at vx */\n"
+                       f"{indent}    {dest} = {tab}[i][k] + a * ({tab}[i + 1][k] - {tab}[i][k]);\n{indent}}}\n")
     return "".join(out)
 
 
@@ -576,32 +568,46 @@ def _trapezoid_c(n: int, indent: str) -> str:
     eq = _observer_system(n).equation(GENERAL.equation)
     if n == 0:
         return f"{indent}(void)dt;   /* no state */\n"
+    copy = f"{indent}for (k = 0; k < RB_N; ++k) {{\n{indent}    x[k] = st->x[k];\n{indent}}}\n"
     if n == 3:
-        return f"{indent}/* {eq} */\n{indent}rb_trapezoid3(st->x, c + RB_OF, c + RB_OG, st->eta, u, dt);\n"
-    return f"{indent}/* {eq} */\n{indent}rb_tustin(st->x, RB_N, c + RB_OF, c + RB_OG, 3, st->eta, u, dt);\n"
+        return f"{indent}/* {eq} */\n{copy}{indent}rb_trapezoid3(x, c + RB_OF, c + RB_OG, st->eta, u, dt);\n"
+    return f"{indent}/* {eq} */\n{copy}{indent}rb_tustin(x, RB_N, c + RB_OF, c + RB_OG, 3, st->eta, u, dt);\n"
 
 
 def _observer_fn(d: ExportDesign) -> str:
-    """``rb_observer``: the observer's update of one usable sample from the update description."""
+    """The observer's update of one usable sample from the update description: one function per
+    path (interpolation of the blocks it reads, its update, the output) and ``rb_observer``."""
     sy = _observer_system(d.n)
-    ind = "        "
     fixed = d.discrete is not None
-    body = ["    if (restart) {\n", _interp_c("restart", d.n, ind), c_sum(RESTART, sy, indent=ind)]
-    if fixed:
-        body += ["    } else if (fixed) {\n", _interp_c("fixed", d.n, ind), c_sum(FIXED, sy, indent=ind)]
-    body += ["    } else {\n", _interp_c("general", d.n, ind), _trapezoid_c(d.n, ind), "    }\n"]
-    paths = "restart, fixed rate or trapezoidal rule" if fixed else "restart or trapezoidal rule"
-    return (("" if d.n != 3 else _TRAPEZOID3)
+    out_w = c_sum(OUTPUT, sy, target="w")
+    store = "    for (k = 0; k < RB_N; ++k) {\n        st->x[k] = x[k];\n    }\n" if d.n else ""
+    fns = []
+    for path, what in (("restart", "restart at the equilibrium"), ("fixed", "a sample at the fixed rate"),
+                       ("general", "any other interval")):
+        if path == "fixed" and not fixed:
+            continue
+        step = PATHS[path]
+        update = c_sum(step, sy) if isinstance(step, Sum) else _trapezoid_c(d.n, "    ")
+        dt_arg = ", real_t dt" if path == "general" else ""
+        fns.append(f"/* {what}: {sy.equation(step.equation)}; then {sy.equation(OUTPUT.equation)} */\n"
+                   f"static real_t rb_observer_{path}(state_t *st, int i, real_t a, const real_t *u{dt_arg})\n{{\n"
+                   "    real_t c[RB_NROW];\n"
+                   + ("    real_t x[RB_N];   /* xi after the update */\n" if d.n else "")
+                   + "    real_t w;\n    int k;\n"
+                   + _interp_c(path, d.n, "    ") + update + out_w + store
+                   + "    for (k = 0; k < 3; ++k) {\n        st->eta[k] = u[k];\n    }\n    return w;\n}\n\n")
+    call_fixed = ("    if (fixed) {\n        return rb_observer_fixed(st, i, a, u);\n    }\n" if fixed
+                  else "    (void)fixed;\n")
+    return (("" if d.n != 3 else _TRAPEZOID3) + "".join(fns)
             + "/* The observer's update of one usable sample (roadbank.estimators.update_spec, the\n"
               " * description the Python kernels follow): the blocks the path reads interpolated at vx\n"
-              f" * into c, at the kernels' row offsets; {paths};\n"
-              " * the output w; eta becomes the previous inputs. Returns w. */\n"
+              " * into c, at the kernels' row offsets, the path's update of xi, the output w from the\n"
+              " * new xi; eta becomes the previous inputs. Returns w. */\n"
               "static real_t rb_observer(state_t *st, int i, real_t a, const real_t *u, real_t dt, int restart,\n"
               "                          int fixed)\n{\n"
-              "    real_t c[RB_NROW];\n    real_t w;\n    int k;\n"
-            + ("" if fixed else "    (void)fixed;\n")
-            + "".join(body) + c_sum(OUTPUT, sy, target="w")
-            + "    for (k = 0; k < 3; ++k) {\n        st->eta[k] = u[k];\n    }\n    return w;\n}\n")
+              "    if (restart) {\n        return rb_observer_restart(st, i, a, u);\n    }\n"
+            + call_fixed + "    return rb_observer_general(st, i, a, u, dt);\n}\n")
+
 
 def _discrete_parts(d: ExportDesign, float32: bool) -> dict:
     """Pieces of the fixed-rate mode (or their general-path stand-ins)."""
@@ -649,7 +655,7 @@ def _roll_parts(d: ExportDesign, float32: bool) -> dict:
     if d.nr == 0:
         return {"roll_tables": "",
                 "finish_roll": "    (void)dt;\n    (void)restart;\n    (void)fixed;\n",
-                "finish_phi": phi, "init_z": ""}
+                "finish_phi": phi, "finish_store": "", "finish_decl": "", "init_z": ""}
     tables = (f"/* roll model z' = F z + G ay (F {d.nr}x{d.nr}, G {d.nr}x1), phi = H z + D ay; "
               "J = -F^-1 G */\n"
               f"static const real_t RB_ROLL_F[RB_NR * RB_NR] = {{{_array(d.roll_F, float32, 8, '')}}};\n"
@@ -661,11 +667,15 @@ def _roll_parts(d: ExportDesign, float32: bool) -> dict:
     finish = ("    /* roll model (roadbank.estimators.update_spec, as the observer) */\n"
               "    if (restart) {\n" + c_sum(RESTART, sy, indent=ind) + fixed_roll +
               "    } else {\n"
+              f"{ind}int k;\n"
               f"{ind}/* {sy.equation(GENERAL.equation)} */\n"
-              f"{ind}rb_tustin(st->z, RB_NR, RB_ROLL_F, RB_ROLL_G, 1, &st->ay_last, &ay, dt);\n"
+              f"{ind}for (k = 0; k < RB_NR; ++k) {{\n{ind}    z[k] = st->z[k];\n{ind}}}\n"
+              f"{ind}rb_tustin(z, RB_NR, RB_ROLL_F, RB_ROLL_G, 1, &st->ay_last, &ay, dt);\n"
               "    }\n" + ("" if d.discrete is not None else "    (void)fixed;\n"))
     init = "    for (k = 0; k < RB_NR; ++k) {\n        s->z[k] = 0.0_R;\n    }\n"
-    return {"roll_tables": tables, "finish_roll": finish, "finish_phi": phi, "init_z": init}
+    store = "    {\n        int k;\n        for (k = 0; k < RB_NR; ++k) {\n            st->z[k] = z[k];\n        }\n    }\n"
+    return {"roll_tables": tables, "finish_roll": finish, "finish_phi": phi, "finish_store": store,
+            "finish_decl": "    real_t z[RB_NR];   /* z after the update */\n", "init_z": init}
 
 
 def _gate_parts(d: ExportDesign, float32: bool) -> dict:

@@ -23,8 +23,9 @@ class CSystem:
 
     ``ns``, ``m``: states and inputs, with the C names of those sizes (``ns_c``, ``m_c``: an enum
     constant or a literal); ``block(name, index)``: the C expression of a block's entry at a
-    row-major index expression; ``vector[name](index)``: the C expression of an entry of ``x``,
-    ``e`` or ``e_prev``; ``state``: the C array of the state (written by an ``x`` target);
+    row-major index expression; ``inputs[name](index)``: the C expression of an entry of ``e``
+    or ``e_prev``; ``state``: the C array of the state before the sample (what an update reads),
+    ``new``: the local array of the state after it (what an update writes and the output reads);
     ``names``: the system's names of ``x, e, e_prev, y`` for comments.
     """
 
@@ -33,9 +34,16 @@ class CSystem:
     m: int
     m_c: str
     block: Callable[[str, str], str]
-    vector: dict[str, Callable[[str], str]]
+    inputs: dict[str, Callable[[str], str]]
     state: str
+    new: str
     names: dict[str, str]
+
+    def vector(self, name: str, index: str, after: bool) -> str:
+        """C expression of an entry of ``x`` (before or ``after`` the update), ``e`` or ``e_prev``."""
+        if name == "x":
+            return f"{self.new if after else self.state}[{index}]"
+        return self.inputs[name](index)
 
     def size(self, vector: str) -> tuple[int, str]:
         """Length of a vector, and its C name."""
@@ -57,9 +65,12 @@ def _index(row: str | None, col: str | None, ncols_c: str) -> str:
 def c_sum(s: Sum, sy: CSystem, target: str | None = None, indent: str = "    ") -> str:
     """C statements computing ``s`` for the system ``sy``.
 
-    An ``x`` target is written into ``sy.state`` (through a scratch ``y`` when the sum reads
-    the state); a ``y`` target into the scalar lvalue ``target``. Groups of no columns and
-    targets of no rows emit nothing. The statements sit in their own block (their locals).
+    An ``x`` target (an update: it reads the state before the sample) is written into
+    ``sy.new``; a ``y`` target (the output: it reads the state after the update) into the scalar
+    lvalue ``target``. The running sum starts from
+    the first product instead of ``0 +`` it (the same number; only a zero sum's sign may
+    differ), its column loop from 1. Groups of no columns and targets of no rows emit nothing.
+    The statements sit in their own block (their locals).
     """
     rows = sy.ns if s.target == "x" else 1
     if rows == 0:
@@ -68,48 +79,46 @@ def c_sum(s: Sum, sy: CSystem, target: str | None = None, indent: str = "    ") 
     acc = "acc" if s.target == "x" else target
     if acc is None:
         raise ValueError("a y target needs a C lvalue")
-    body, used = [], set()
-    pad = indent + ("        " if prow else "    ")
+    pad = indent + ("        " if s.target == "x" else "    ")
+    body: list[str] = []
+    used = {"p"} if prow else set()
+
+    def terms(group, col):
+        out = []
+        for prod in group:
+            brows, bcols = block_shape(prod.block, sy.ns, sy.m)
+            b = sy.block(prod.block, _index(prow if brows > 1 else None, col if bcols > 1 else None,
+                                            sy.size(group[0].vector)[1]))
+            out.append(f"{b} * {sy.vector(prod.vector, col or '0', after=s.target == 'y')}")
+        return " + ".join(out)
+
     for group in s.groups:
         ncol, ncol_c = sy.size(group[0].vector)
         if ncol == 0:
             continue
-        col = "q" if ncol > 1 else None
-        terms = []
-        for prod in group:
-            brows, bcols = block_shape(prod.block, sy.ns, sy.m)
-            b = sy.block(prod.block, _index(prow if brows > 1 else None, col if bcols > 1 else None, ncol_c))
-            terms.append(f"{b} * {sy.vector[prod.vector](col or '0')}")
-        line = f"{acc} += {' + '.join(terms)};"
-        if col:
+        lo = 0
+        if not body:                        # the first product starts the sum
+            decl = "real_t acc" if s.target == "x" else acc
+            body.append(f"{pad}{decl} = {terms(group, '0' if ncol > 1 else None)};")
+            lo = 1
+        if ncol - lo == 1:
+            body.append(f"{pad}{acc} += {terms(group, str(lo) if ncol > 1 else None)};")
+        elif ncol - lo > 1:
             used.add("q")
-            body += [f"{pad}for (q = 0; q < {ncol_c}; ++q) {{", f"{pad}    {line}", f"{pad}}}"]
-        else:
-            body.append(f"{pad}{line}")
-    scratch = s.target == "x" and s.reads("x")
+            body += [f"{pad}for (q = {lo}; q < {ncol_c}; ++q) {{", f"{pad}    {acc} += {terms(group, 'q')};",
+                     f"{pad}}}"]
+    if not body:
+        body.append(f"{pad}{'real_t acc' if s.target == 'x' else acc} = 0.0_R;")
     out = [f"{indent}/* {sy.equation(s.equation)} */", f"{indent}{{"]
-    if prow:
-        used.add("p")
-    decl = [f"{indent}    int {v};" for v in sorted(used)]
-    if scratch:
-        decl.append(f"{indent}    real_t y[{sy.ns_c}];")
-    out += decl
-    dest = (lambda k: f"y[{k}]") if scratch else (lambda k: f"{sy.state}[{k}]")
+    out += [f"{indent}    int {v};" for v in sorted(used)]
     if s.target == "x":
-        k = prow or "0"
-        inner = [f"{pad}real_t acc = 0.0_R;"] + body + [f"{pad}{dest(k)} = acc;"]
+        inner = body + [f"{pad}{sy.new}[{prow or '0'}] = acc;"]
         if prow:
             out += [f"{indent}    for (p = 0; p < {sy.ns_c}; ++p) {{"] + inner + [f"{indent}    }}"]
         else:
-            out += [f"{indent}    {{"] + [f"    {ln}" for ln in inner] + [f"{indent}    }}"]
-        if scratch:
-            if prow:
-                out += [f"{indent}    for (p = 0; p < {sy.ns_c}; ++p) {{",
-                        f"{indent}        {sy.state}[p] = y[p];", f"{indent}    }}"]
-            else:
-                out.append(f"{indent}    {sy.state}[0] = y[0];")
+            out += [f"{indent}    {{"] + inner + [f"{indent}    }}"]
     else:
-        out += [f"{pad}{acc} = 0.0_R;"] + body
+        out += body
     out.append(f"{indent}}}")
     return "\n".join(out) + "\n"
 
