@@ -116,19 +116,9 @@ def test_blocks_read_are_the_kernels_interpolated_ranges():
     ``lpv`` step interpolates: H..J and Phi..end (fixed), H..cont (restart), F..J (general)."""
     for n in (1, 3, 4):
         row = lpv_row(n)
-
-        def ranges(path):
-            idx = sorted(k for b in U.blocks_read(path) for k in range(getattr(row, b), getattr(row, b)
-                                                                      + np.prod(U.block_shape(b, n, NETA))))
-            out, lo = [], idx[0]
-            for k0, k1 in zip(idx, idx[1:] + [None]):
-                if k1 != k0 + 1:
-                    out.append((lo, k0 + 1))
-                    lo = k1
-            return out
-        assert ranges("fixed") == [(row.H, row.J), (row.Phi, row.end)]
-        assert ranges("restart") == [(row.H, row.cont)]
-        assert ranges("general") == [(row.F, row.J)]
+        assert U.row_ranges("fixed", row, n, NETA) == [(row.H, row.J), (row.Phi, row.end)]
+        assert U.row_ranges("restart", row, n, NETA) == [(row.H, row.cont)]
+        assert U.row_ranges("general", row, n, NETA) == [(row.F, row.J)]
 
 
 def test_evaluate_is_the_matrix_algebra():

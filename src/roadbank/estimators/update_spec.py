@@ -31,7 +31,8 @@ description: per output row ``s = 0``, then for each group in turn and each colu
 :func:`roadbank.estimators.kernels.sample.finish`) add in this order, the C generator
 (:mod:`roadbank.export.ccode`) writes its loops from these objects, and tests/test_update_spec.py
 checks the kernels against :func:`evaluate` bit for bit. The schedule at ``vx`` is
-:func:`grid_point` and :func:`interpolate` (the blocks a path reads: :func:`blocks_read`).
+:func:`grid_point` and :func:`interpolate` (the blocks a path reads: :func:`blocks_read`,
+:func:`row_ranges`).
 """
 
 from __future__ import annotations
@@ -70,10 +71,6 @@ class Sum:
     def blocks(self) -> tuple[str, ...]:
         """The blocks the sum reads, in order."""
         return tuple(p.block for g in self.groups for p in g)
-
-    def reads(self, vector: str) -> bool:
-        """Whether the sum reads ``vector`` (then the target must be written after all rows)."""
-        return any(p.vector == vector for g in self.groups for p in g)
 
 
 @dataclass(frozen=True)
@@ -114,6 +111,21 @@ def blocks_read(path: str) -> tuple[str, ...]:
     step = PATHS[path]
     own = step.blocks() if isinstance(step, Sum) else (step.F, step.G)
     return tuple(dict.fromkeys(own + OUTPUT.blocks()))
+
+
+def row_ranges(path: str, row, n: int, m: int) -> list[tuple[int, int]]:
+    """The contiguous ranges ``[lo, hi)`` of a table row with block offsets ``row`` (e.g.
+    :func:`~roadbank.estimators.layout.lpv_row` of ``n`` states, ``m`` inputs) holding the
+    blocks ``path`` reads: what the kernels and the C interpolate at ``vx``."""
+    idx = sorted({k for b in blocks_read(path)
+                  for k in range(getattr(row, b), getattr(row, b) + math.prod(block_shape(b, n, m)))})
+    out: list[tuple[int, int]] = []
+    for k in idx:
+        if out and out[-1][1] == k:
+            out[-1] = (out[-1][0], k + 1)
+        else:
+            out.append((k, k + 1))
+    return out
 
 
 def evaluate(s: Sum, blocks: Mapping[str, Sequence[float]], vectors: Mapping[str, Sequence[float]],

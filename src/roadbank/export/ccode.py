@@ -1,28 +1,22 @@
 """C99 source of an exported estimator: header, implementation, interface README.
 
-The generated step function is the ``lpv`` kernel of
-:mod:`roadbank.estimators.kernels.lpv` written out in C, step by step (the compiled
-kernel orders some sums differently, e.g. its fixed-rate batch loop, so the two
-agree to rounding: tests/test_export_c.py, 1e-9 rad in float64): linear interpolation of the
-table rows on the speed grid (clamped at both ends), the trapezoidal (Tustin)
-substeps of at most ``max_substep`` with the inputs interpolated linearly over
-the step, the three-state observer through the adjugate of ``I - h/2 F`` and
-larger ones through an LU factorisation with partial pivoting, the
-(re)initialisation at the observer equilibrium ``xi = J eta`` after a gap
-longer than ``max_gap``, the held outputs of unusable samples, the static or
-dynamic roll separation and the plausibility flag ``|w| <= sin(max_angle)``.
+The generated step function is the ``lpv`` kernel of :mod:`roadbank.estimators.kernels.lpv`
+written out in C: the sample checks, the speed grid (``update_spec.grid_point``, clamped at both
+ends), the (re)initialisation after a gap longer than ``max_gap``, the held outputs of unusable
+samples and the plausibility flag ``|w| <= sin(max_angle)``. The per-sample maths of the observer
+and the roll model is not written here: it is generated (:mod:`roadbank.export.update_c`) from
+the one update description the kernels follow, :mod:`roadbank.estimators.update_spec` -- per path
+(restart ``x = J e``, fixed rate ``x = Gam0 e- + Gam1 e + Phi x``, otherwise the trapezoidal
+rule) the blocks it reads interpolated at ``vx`` into ``c`` at the kernels' row offsets
+(:func:`roadbank.estimators.layout.lpv_row`: ``RB_OF`` .. ``RB_OGAM1``), the update as loops in
+the description's order of sums, then the output ``y = D e + H x``. So on restart and fixed-rate
+samples the float64 module computes the kernels' numbers bit for bit (tests/test_update_spec.py);
+the trapezoidal path solves its substeps through the adjugate (three states) or LU with partial
+pivoting and agrees to rounding (tests/test_export_c.py, 1e-9 rad).
 
 Rules of the generated code: C99, no dynamic memory, no recursion, no mutable
 global state (the state is a caller-owned struct), every loop bounded by a
 compile-time constant, tables as ``static const`` arrays.
-
-The observer update of the general path (continuous tables discretised per
-sample) comes from :func:`_observer_tustin`; with the kernels' fixed-rate tables
-(:func:`_discrete_parts`), a sample at the design rate is instead one update with
-the exact discrete-time observer interpolated on the grid, as in the kernels. The
-tables are the kernels' rows, and every offset into them (``RB_OG`` .. ``RB_OJ``,
-``RB_DGAM0``, ``RB_DGAM1`` and the entries of the three-state update) is written from
-:func:`roadbank.estimators.layout.lpv_row`, the function the kernels index with.
 """
 
 from __future__ import annotations
@@ -34,10 +28,10 @@ import numpy as np
 
 from .. import __version__
 from ..estimators.layout import NETA, lpv_row
-from ..estimators.update_spec import FIXED, GENERAL, OUTPUT, PATHS, RESTART, Sum, block_shape
+from ..estimators.update_spec import FIXED, GENERAL, OUTPUT, PATHS, RESTART, Sum, block_shape, row_ranges
 from .design import ExportDesign
 from .readme import readme
-from .update_c import CSystem, c_sum, interp_ranges
+from .update_c import CSystem, c_sum
 
 __all__ = ["generate", "real_literal"]
 
@@ -161,8 +155,9 @@ _SOURCE = Template("""\
  * Do not edit: regenerate. Design fingerprint ${fingerprint}; ${precision} build.
  *
 ${provenance} *
- * Algorithm (the lpv kernel of roadbank.estimators.kernels, same operations in
- * the same order): the observer xi' = F(vx) xi + G(vx) eta, w = H(vx) xi + D(vx) eta,
+ * Algorithm (the lpv kernel of roadbank.estimators.kernels; the update loops are
+ * generated from roadbank.estimators.update_spec, the description the kernels follow):
+ * the observer xi' = F(vx) xi + G(vx) eta, w = H(vx) xi + D(vx) eta,
  * eta = [delta_f, ay, r], with F, G, H, D interpolated linearly on a speed grid,
  * advanced by the trapezoidal rule in substeps of at most ${sub_lit} s with eta
  * interpolated linearly between the samples${fixed_note}. C99; no dynamic memory, no
@@ -548,7 +543,7 @@ def _interp_c(path: str, n: int, indent: str) -> str:
     dnames = {row.Phi - row.Phi: "RB_DPHI", row.Gam0 - row.Phi: "RB_DGAM0", row.Gam1 - row.Phi: "RB_DGAM1",
               row.end - row.Phi: "RB_NKD"}
     out = []
-    for lo, hi in interp_ranges(path, row, n, NETA):
+    for lo, hi in row_ranges(path, row, n, NETA):
         read = ", ".join(b for b in _BLOCKS if lo <= getattr(row, b) < hi and block_shape(b, n, NETA)[0]
                          * block_shape(b, n, NETA)[1])
         parts = []
@@ -673,7 +668,8 @@ def _roll_parts(d: ExportDesign, float32: bool) -> dict:
               f"{ind}rb_tustin(z, RB_NR, RB_ROLL_F, RB_ROLL_G, 1, &st->ay_last, &ay, dt);\n"
               "    }\n" + ("" if d.discrete is not None else "    (void)fixed;\n"))
     init = "    for (k = 0; k < RB_NR; ++k) {\n        s->z[k] = 0.0_R;\n    }\n"
-    store = "    {\n        int k;\n        for (k = 0; k < RB_NR; ++k) {\n            st->z[k] = z[k];\n        }\n    }\n"
+    store = ("    {\n        int k;\n        for (k = 0; k < RB_NR; ++k) {\n            st->z[k] = z[k];\n"
+             "        }\n    }\n")
     return {"roll_tables": tables, "finish_roll": finish, "finish_phi": phi, "finish_store": store,
             "finish_decl": "    real_t z[RB_NR];   /* z after the update */\n", "init_z": init}
 
@@ -778,7 +774,8 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
         ceil="ceilf" if float32 else "ceil", ng=d.ng, nk=d.nk, nsub_max=d.nsub_max,
         of=row.F, og=row.G, oh=row.H, od=row.D, oj=row.J, ophi=row.Phi, ogam0=row.Gam0, ogam1=row.Gam1,
         nrow=row.end if d.discrete is not None else row.cont,
-        v0=lit(d.v0), dv=lit(d.dv), inv_dv=lit(1.0 / d.dv), vmin=lit(d.v_min), sub=lit(d.max_substep), gap=lit(d.max_gap),
+        v0=lit(d.v0), dv=lit(d.dv), inv_dv=lit(1.0 / d.dv), vmin=lit(d.v_min), sub=lit(d.max_substep),
+        gap=lit(d.max_gap),
         wmax=lit(d.wmax), roll_d=lit(d.roll_D), uses=", ".join(str(int(u)) for u in d.uses),
         table=",\n".join(rows),
         nsub_fn=_NSUB if (d.n > 0 or d.nr > 0) else "",

@@ -2,8 +2,7 @@
 
 :func:`c_sum` writes one :class:`~roadbank.estimators.update_spec.Sum` as C99 in the
 description's order of operations (``acc = 0``, then per group and column ``acc += (products)``),
-with a comment giving the equation in the system's own names; :func:`interp_ranges` lists the
-contiguous parts of a kernel row a path reads. :mod:`roadbank.export.ccode` builds the exported
+with a comment giving the equation in the system's own names. :mod:`roadbank.export.ccode` builds the exported
 observer and roll model from these, so the generated C and the compiled kernels follow one
 description.
 """
@@ -14,7 +13,7 @@ import re
 from dataclasses import dataclass
 from typing import Callable
 
-from ..estimators.update_spec import Sum, block_shape, blocks_read
+from ..estimators.update_spec import Sum, block_shape
 
 
 @dataclass(frozen=True)
@@ -67,10 +66,10 @@ def c_sum(s: Sum, sy: CSystem, target: str | None = None, indent: str = "    ") 
 
     An ``x`` target (an update: it reads the state before the sample) is written into
     ``sy.new``; a ``y`` target (the output: it reads the state after the update) into the scalar
-    lvalue ``target``. The running sum starts from
-    the first product instead of ``0 +`` it (the same number; only a zero sum's sign may
-    differ), its column loop from 1. Groups of no columns and targets of no rows emit nothing.
-    The statements sit in their own block (their locals).
+    lvalue ``target``. The running sum starts from the first product instead of ``0 +`` it (the
+    same number; only a zero sum's sign may differ), its column loop from 1. Groups of no
+    columns and targets of no rows emit nothing. The statements sit in their own block (their
+    locals).
     """
     rows = sy.ns if s.target == "x" else 1
     if rows == 0:
@@ -121,17 +120,3 @@ def c_sum(s: Sum, sy: CSystem, target: str | None = None, indent: str = "    ") 
         out += body
     out.append(f"{indent}}}")
     return "\n".join(out) + "\n"
-
-
-def interp_ranges(path: str, row, n: int, m: int) -> list[tuple[int, int]]:
-    """The contiguous ranges ``[lo, hi)`` of a kernel row (offsets ``row``, e.g.
-    :func:`~roadbank.estimators.layout.lpv_row`) holding the blocks ``path`` reads."""
-    idx = sorted({k for b in blocks_read(path)
-                  for k in range(getattr(row, b), getattr(row, b) + block_shape(b, n, m)[0] * block_shape(b, n, m)[1])})
-    out: list[tuple[int, int]] = []
-    for k in idx:
-        if out and out[-1][1] == k:
-            out[-1] = (out[-1][0], k + 1)
-        else:
-            out.append((k, k + 1))
-    return out
