@@ -124,10 +124,10 @@ def test_the_c_tables_are_read_at_the_kernels_offsets(name):
     from roadbank.estimators import update_spec as U
     from roadbank.estimators.layout import lpv_row
     from roadbank.export.ccode import _fix_literals, _observer_system, _roll_system, generate
-    from roadbank.export.update_c import c_sum as c_sum_r
+    from roadbank.export import update_c
 
     def c_sum(*a, **kw):
-        return _fix_literals(c_sum_r(*a, **kw), False)
+        return _fix_literals(update_c.c_sum(*a, **kw), False)
 
     est = E.make(name)                             # sample_rate "auto": with the fixed-rate tables
     d = export_design(est, 100.0)
@@ -144,7 +144,8 @@ def test_the_c_tables_are_read_at_the_kernels_offsets(name):
             (0, row.Gam0 - row.Phi, row.Gam1 - row.Phi)
     obs, roll = _observer_system(est._nstate), _roll_system(d.nr)
     for s in (U.RESTART, U.FIXED):
-        assert c_sum(s, obs) in src and c_sum(s, roll, indent="        ") in src
+        assert _fix_literals(update_c.c_update_output(s, U.OUTPUT, obs, "w"), False) in src
+        assert c_sum(s, roll, indent="        ") in src
     assert c_sum(U.OUTPUT, obs, target="w") in src and c_sum(U.OUTPUT, roll, target="phi") in src
     if est._nstate == 3:                           # the loops name the blocks at the layout's offsets
         assert "acc += c[RB_OGAM0 + p * 3 + q] * st->eta[q] + c[RB_OGAM1 + p * 3 + q] * u[q];" in src

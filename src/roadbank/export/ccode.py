@@ -21,6 +21,7 @@ compile-time constant, tables as ``static const`` arrays.
 
 from __future__ import annotations
 
+import math
 import re
 from string import Template
 
@@ -31,7 +32,7 @@ from ..estimators.layout import NETA, lpv_row
 from ..estimators.update_spec import FIXED, GENERAL, OUTPUT, PATHS, RESTART, Sum, block_shape, row_ranges
 from .design import ExportDesign
 from .readme import readme
-from .update_c import CSystem, c_sum
+from .update_c import CSystem, c_sum, c_update_output
 
 __all__ = ["generate", "real_literal"]
 
@@ -459,10 +460,10 @@ static void rb_tustin(real_t *x, int n, const real_t *F, const real_t *G, int m,
 
 _TRAPEZOID3 = """\
 /* The trapezoidal rule for three states (update_spec.Trapezoid): x' = F x + G e over dt in
- * rb_nsub(dt) substeps, e linear in time from e0 to e1; M = I - (h/2) F inverted through its
- * adjugate. */
-static void rb_trapezoid3(real_t *x, const real_t *F, const real_t *G, const real_t *e0, const real_t *e1,
-                          real_t dt)
+ * rb_nsub(dt) substeps, e linear in time from e0 to e1, from x to xn; M = I - (h/2) F inverted
+ * through its adjugate. */
+static void rb_trapezoid3(const real_t *x, real_t *xn, const real_t *F, const real_t *G, const real_t *e0,
+                          const real_t *e1, real_t dt)
 {
     const real_t p0 = e0[0];
     const real_t p1 = e0[1];
@@ -504,9 +505,9 @@ static void rb_trapezoid3(real_t *x, const real_t *F, const real_t *G, const rea
         x1 = (c10 * b0 + c11 * b1 + c12 * b2) * inv;
         x2 = (c20 * b0 + c21 * b1 + c22 * b2) * inv;
     }
-    x[0] = x0;
-    x[1] = x1;
-    x[2] = x2;
+    xn[0] = x0;
+    xn[1] = x1;
+    xn[2] = x2;
 }
 
 """
@@ -536,24 +537,23 @@ def _interp_c(path: str, n: int, indent: str) -> str:
     blocks from RB_TAB, fixed-rate ones from RB_DTAB, into ``c`` at the kernels' row offsets."""
     row = lpv_row(n)
     names: dict[int, str] = {row.cont: "RB_NK"}
-    for b in _BLOCKS:
-        if block_shape(b, n, NETA)[0] * block_shape(b, n, NETA)[1]:
-            names.setdefault(getattr(row, b), f"RB_O{b.upper()}")
+    sized = [b for b in _BLOCKS if math.prod(block_shape(b, n, NETA))]      # blocks of n states that hold entries
+    for b in sized:
+        names.setdefault(getattr(row, b), f"RB_O{b.upper()}")
     names.setdefault(row.end, "RB_NROW")
     dnames = {row.Phi - row.Phi: "RB_DPHI", row.Gam0 - row.Phi: "RB_DGAM0", row.Gam1 - row.Phi: "RB_DGAM1",
               row.end - row.Phi: "RB_NKD"}
     out = []
     for lo, hi in row_ranges(path, row, n, NETA):
-        read = ", ".join(b for b in _BLOCKS if lo <= getattr(row, b) < hi and block_shape(b, n, NETA)[0]
-                         * block_shape(b, n, NETA)[1])
+        read = ", ".join(b for b in sized if lo <= getattr(row, b) < hi)
         parts = []
         if lo < row.cont:
             parts.append(("RB_TAB", "c[k]", names.get(lo, lo), names.get(min(hi, row.cont), min(hi, row.cont))))
         if hi > row.cont:
             lo_d, hi_d = max(lo, row.cont) - row.Phi, hi - row.Phi
             parts.append(("RB_DTAB", "c[RB_OPHI + k]", dnames.get(lo_d, lo_d), dnames.get(hi_d, hi_d)))
-        for tab, dest, a, b in parts:
-            out.append(f"{indent}for (k = {a}; k < {b}; ++k) {{   /* {read} at vx */\n"
+        for tab, dest, first, end in parts:
+            out.append(f"{indent}for (k = {first}; k < {end}; ++k) {{   /* {read} at vx */\n"
                        f"{indent}    {dest} = {tab}[i][k] + a * ({tab}[i + 1][k] - {tab}[i][k]);\n{indent}}}\n")
     return "".join(out)
 
@@ -565,7 +565,7 @@ def _trapezoid_c(n: int, indent: str) -> str:
         return f"{indent}(void)dt;   /* no state */\n"
     copy = f"{indent}for (k = 0; k < RB_N; ++k) {{\n{indent}    x[k] = st->x[k];\n{indent}}}\n"
     if n == 3:
-        return f"{indent}/* {eq} */\n{copy}{indent}rb_trapezoid3(x, c + RB_OF, c + RB_OG, st->eta, u, dt);\n"
+        return f"{indent}/* {eq} */\n{indent}rb_trapezoid3(st->x, x, c + RB_OF, c + RB_OG, st->eta, u, dt);\n"
     return f"{indent}/* {eq} */\n{copy}{indent}rb_tustin(x, RB_N, c + RB_OF, c + RB_OG, 3, st->eta, u, dt);\n"
 
 
@@ -582,14 +582,15 @@ def _observer_fn(d: ExportDesign) -> str:
         if path == "fixed" and not fixed:
             continue
         step = PATHS[path]
-        update = c_sum(step, sy) if isinstance(step, Sum) else _trapezoid_c(d.n, "    ")
+        update = (c_update_output(step, OUTPUT, sy, "w") if isinstance(step, Sum)
+                  else _trapezoid_c(d.n, "    ") + out_w)
         dt_arg = ", real_t dt" if path == "general" else ""
         fns.append(f"/* {what}: {sy.equation(step.equation)}; then {sy.equation(OUTPUT.equation)} */\n"
                    f"static real_t rb_observer_{path}(state_t *st, int i, real_t a, const real_t *u{dt_arg})\n{{\n"
                    "    real_t c[RB_NROW];\n"
                    + ("    real_t x[RB_N];   /* xi after the update */\n" if d.n else "")
                    + "    real_t w;\n    int k;\n"
-                   + _interp_c(path, d.n, "    ") + update + out_w + store
+                   + _interp_c(path, d.n, "    ") + update + store
                    + "    for (k = 0; k < 3; ++k) {\n        st->eta[k] = u[k];\n    }\n    return w;\n}\n\n")
     call_fixed = ("    if (fixed) {\n        return rb_observer_fixed(st, i, a, u);\n    }\n" if fixed
                   else "    (void)fixed;\n")
