@@ -117,26 +117,39 @@ def test_the_issue_list_is_exportable_and_the_others_say_why():
 @pytest.mark.parametrize("name", ["kinematic", "kinematic-lp", "pif-modified", "uio", "pif-gated"])
 def test_the_c_tables_are_read_at_the_kernels_offsets(name):
     """The generated C indexes its table rows at the offsets of the kernels' layout
-    (``layout.lpv_row``), for every state count and with the fixed-rate tables."""
+    (``layout.lpv_row``), for every state count and with the fixed-rate tables, and its
+    observer and roll updates are the loops written from the one update description."""
     import re
 
+    from roadbank.estimators import update_spec as U
     from roadbank.estimators.layout import lpv_row
-    from roadbank.export.ccode import generate
+    from roadbank.export.ccode import _fix_literals, _observer_system, _roll_system, generate
+    from roadbank.export import update_c
+
+    def c_sum(*a, **kw):
+        return _fix_literals(update_c.c_sum(*a, **kw), False)
 
     est = E.make(name)                             # sample_rate "auto": with the fixed-rate tables
     d = export_design(est, 100.0)
     src = next(t for f, t in generate(d).items() if f.endswith(".c"))
-    enum = {k: int(v) for k, v in re.findall(r"\b(RB_O[GHDJ]|RB_NKC|RB_NK|RB_D(?:PHI|GAM0|GAM1))\s*=\s*(\d+)", src)}
+    enum = {k: int(v) for k, v in re.findall(r"\b(RB_O[A-Z0-9]+|RB_NK|RB_NROW|RB_D(?:PHI|GAM0|GAM1))\s*=\s*(\d+)",
+                                             src)}
     row = lpv_row(est._nstate)
     assert enum["RB_NK"] == row.cont == est._tab_cont.shape[1]
-    assert (enum["RB_OG"], enum["RB_OH"], enum["RB_OD"], enum["RB_OJ"], enum["RB_NKC"]) == \
-        (row.G, row.H, row.D, row.J, row.J)
+    assert enum["RB_NROW"] == row.end
+    assert {b: enum[f"RB_O{b.upper()}"] for b in ("F", "G", "H", "D", "J", "Phi", "Gam0", "Gam1")} == \
+        {b: getattr(row, b) for b in ("F", "G", "H", "D", "J", "Phi", "Gam0", "Gam1")}
     if est._nstate:
         assert (enum["RB_DPHI"], enum["RB_DGAM0"], enum["RB_DGAM1"]) == \
             (0, row.Gam0 - row.Phi, row.Gam1 - row.Phi)
-    if est._nstate == 3:                           # the update written out entry by entry: J rows and H, D
-        assert f"rb_lerp(t0, t1, a, {row.J + 3} + q)" in src
-        assert f"c[{row.H}] * x0 + c[{row.H + 1}] * x1" in src and f"c[{row.D + 2}] * u[2]" in src
+    obs, roll = _observer_system(est._nstate), _roll_system(d.nr)
+    for s in (U.RESTART, U.FIXED):
+        assert _fix_literals(update_c.c_update_output(s, U.OUTPUT, obs, "w"), False) in src
+        assert c_sum(s, roll, indent="        ") in src
+    assert c_sum(U.OUTPUT, obs, target="w") in src and c_sum(U.OUTPUT, roll, target="phi") in src
+    if est._nstate == 3:                           # the loops name the blocks at the layout's offsets
+        assert "acc += c[RB_OGAM0 + p * 3 + q] * st->eta[q] + c[RB_OGAM1 + p * 3 + q] * u[q];" in src
+        assert "acc += c[RB_OJ + p * 3 + q] * u[q];" in src and "w += c[RB_OH + q] * x[q];" in src
 
 
 @pytest.mark.parametrize("name", EXPORTABLE)

@@ -1,32 +1,27 @@
 """C99 source of an exported estimator: header, implementation, interface README.
 
-The generated step function is the ``lpv`` kernel of
-:mod:`roadbank.estimators.kernels.lpv` written out in C, step by step (the compiled
-kernel orders some sums differently, e.g. its fixed-rate batch loop, so the two
-agree to rounding: tests/test_export_c.py, 1e-9 rad in float64): linear interpolation of the
-table rows on the speed grid (clamped at both ends), the trapezoidal (Tustin)
-substeps of at most ``max_substep`` with the inputs interpolated linearly over
-the step, the three-state observer through the adjugate of ``I - h/2 F`` and
-larger ones through an LU factorisation with partial pivoting, the
-(re)initialisation at the observer equilibrium ``xi = J eta`` after a gap
-longer than ``max_gap``, the held outputs of unusable samples, the static or
-dynamic roll separation and the plausibility flag ``|w| <= sin(max_angle)``.
+The generated step function is the ``lpv`` kernel of :mod:`roadbank.estimators.kernels.lpv`
+written out in C: the sample checks, the speed grid (``update_spec.grid_point``, clamped at both
+ends), the (re)initialisation after a gap longer than ``max_gap``, the held outputs of unusable
+samples and the plausibility flag ``|w| <= sin(max_angle)``. The per-sample maths of the observer
+and the roll model is not written here: it is generated (:mod:`roadbank.export.update_c`) from
+the one update description the kernels follow, :mod:`roadbank.estimators.update_spec` -- per path
+(restart ``x = J e``, fixed rate ``x = Gam0 e- + Gam1 e + Phi x``, otherwise the trapezoidal
+rule) the blocks it reads interpolated at ``vx`` into ``c`` at the kernels' row offsets
+(:func:`roadbank.estimators.layout.lpv_row`: ``RB_OF`` .. ``RB_OGAM1``), the update as loops in
+the description's order of sums, then the output ``y = D e + H x``. So on restart and fixed-rate
+samples the float64 module computes the kernels' numbers bit for bit (tests/test_update_spec.py);
+the trapezoidal path solves its substeps through the adjugate (three states) or LU with partial
+pivoting and agrees to rounding (tests/test_export_c.py, 1e-9 rad).
 
 Rules of the generated code: C99, no dynamic memory, no recursion, no mutable
 global state (the state is a caller-owned struct), every loop bounded by a
 compile-time constant, tables as ``static const`` arrays.
-
-The observer update of the general path (continuous tables discretised per
-sample) comes from :func:`_observer_tustin`; with the kernels' fixed-rate tables
-(:func:`_discrete_parts`), a sample at the design rate is instead one update with
-the exact discrete-time observer interpolated on the grid, as in the kernels. The
-tables are the kernels' rows, and every offset into them (``RB_OG`` .. ``RB_OJ``,
-``RB_DGAM0``, ``RB_DGAM1`` and the entries of the three-state update) is written from
-:func:`roadbank.estimators.layout.lpv_row`, the function the kernels index with.
 """
 
 from __future__ import annotations
 
+import math
 import re
 from string import Template
 
@@ -34,8 +29,10 @@ import numpy as np
 
 from .. import __version__
 from ..estimators.layout import NETA, lpv_row
+from ..estimators.update_spec import FIXED, GENERAL, OUTPUT, PATHS, RESTART, Sum, block_shape, row_ranges
 from .design import ExportDesign
 from .readme import readme
+from .update_c import CSystem, c_sum, c_update_output
 
 __all__ = ["generate", "real_literal"]
 
@@ -159,8 +156,9 @@ _SOURCE = Template("""\
  * Do not edit: regenerate. Design fingerprint ${fingerprint}; ${precision} build.
  *
 ${provenance} *
- * Algorithm (the lpv kernel of roadbank.estimators.kernels, same operations in
- * the same order): the observer xi' = F(vx) xi + G(vx) eta, w = H(vx) xi + D(vx) eta,
+ * Algorithm (the lpv kernel of roadbank.estimators.kernels; the update loops are
+ * generated from roadbank.estimators.update_spec, the description the kernels follow):
+ * the observer xi' = F(vx) xi + G(vx) eta, w = H(vx) xi + D(vx) eta,
  * eta = [delta_f, ay, r], with F, G, H, D interpolated linearly on a speed grid,
  * advanced by the trapezoidal rule in substeps of at most ${sub_lit} s with eta
  * interpolated linearly between the samples${fixed_note}. C99; no dynamic memory, no
@@ -183,16 +181,21 @@ enum {
     RB_NR = ${nr},            /* roll-model states */
     RB_NG = ${ng},          /* grid speeds (table rows) */
     RB_NK = ${nk},           /* floats per table row: F | G | H | D | J */
-    RB_NKC = ${nkc},          /* F | G | H | D: the part interpolated every sample */
-    RB_OG = ${og},           /* offsets in a row (as the Python kernels' table): G, H, D, J */
-    RB_OH = ${oh},
+    RB_OF = ${of},            /* offsets of the blocks in a row, as the Python kernels' table */
+    RB_OG = ${og},            /* (layout.lpv_row): F, G, H, D, J, then the fixed-rate Phi, */
+    RB_OH = ${oh},            /* Gam0, Gam1 (their rows: RB_DTAB) */
     RB_OD = ${od},
     RB_OJ = ${oj},
+    RB_OPHI = ${ophi},
+    RB_OGAM0 = ${ogam0},
+    RB_OGAM1 = ${ogam1},
+    RB_NROW = ${nrow},         /* floats of the schedule at vx (rb_observer's c) */
     RB_NSUB_MAX = ${nsub_max}      /* most substeps of one sample (dt <= max_gap) */
 };
 
 #define RB_V0 (${v0})       /* m/s, first grid speed */
 #define RB_DV (${dv})       /* m/s, grid spacing */
+#define RB_INV_DV (${inv_dv})   /* 1/m/s, 1 / RB_DV (the kernels' grid_point) */
 #define RB_VMIN (${vmin})     /* m/s */
 #define RB_SUB (${sub})     /* s, longest substep */
 #define RB_GAP (${gap})     /* s, longest gap before a restart */
@@ -206,19 +209,14 @@ static const real_t RB_TAB[RB_NG][RB_NK] = {
 ${table}
 };
 ${discrete_tables}${gate_consts}
-static real_t rb_lerp(const real_t *t0, const real_t *t1, real_t a, int k)
-{
-    return t0[k] + a * (t1[k] - t0[k]);
-}
 
 ${nsub_fn}${lu_fns}${tustin_fn}${observer_fn}
 static int rb_finish(state_t *st, real_t w, real_t ay, real_t dt, int restart, int fixed)
 {
     real_t phi;
     real_t wc;
-${finish_roll}    st->ay_last = ay;
-    phi = RB_ROLL_D * ay;
-${finish_phi}    wc = w > -1.0_R ? w : -1.0_R;
+${finish_decl}${finish_roll}    st->ay_last = ay;
+${finish_phi}${finish_store}    wc = w > -1.0_R ? w : -1.0_R;
     wc = wc < 1.0_R ? wc : 1.0_R;
     st->w = w;
     st->theta = RB_ASIN(wc);
@@ -247,8 +245,8 @@ static int rb_update(state_t *st, int restart, int fixed, real_t dt, real_t vx, 
     real_t a;
     int i;
     real_t u[3];
-    /* index and weight on the speed grid, clamped at both ends */
-    sg = (vx - RB_V0) / RB_DV;
+    /* index and weight on the speed grid, clamped at both ends (update_spec.grid_point) */
+    sg = (vx - RB_V0) * RB_INV_DV;
     if (sg <= 0.0_R) {
         i = 0;
         a = 0.0_R;
@@ -262,7 +260,8 @@ static int rb_update(state_t *st, int restart, int fixed, real_t dt, real_t vx, 
     u[0] = RB_USES[0] ? d : 0.0_R;
     u[1] = RB_USES[1] ? ay : 0.0_R;
     u[2] = RB_USES[2] ? r : 0.0_R;
-${observer_call}${gate_call}    return rb_finish(st, w, ay, dt, restart, fixed);
+    w = rb_observer(st, i, a, u, dt, restart, fixed);
+${gate_call}    return rb_finish(st, w, ay, dt, restart, fixed);
 }
 
 static int rb_output(const state_t *st, int ok, output_t *out)
@@ -459,214 +458,157 @@ static void rb_tustin(real_t *x, int n, const real_t *F, const real_t *G, int m,
 
 """
 
-_LERP_ROW = """\
-/* F | G | H | D of the speed between two table rows */
-static void rb_lerp_row(const real_t *t0, const real_t *t1, real_t a, real_t *c)
+_TRAPEZOID3 = """\
+/* The trapezoidal rule for three states (update_spec.Trapezoid): x' = F x + G e over dt in
+ * rb_nsub(dt) substeps, e linear in time from e0 to e1, from x to xn; M = I - (h/2) F inverted
+ * through its adjugate. */
+static void rb_trapezoid3(const real_t *x, real_t *xn, const real_t *F, const real_t *G, const real_t *e0,
+                          const real_t *e1, real_t dt)
 {
+    const real_t p0 = e0[0];
+    const real_t p1 = e0[1];
+    const real_t p2 = e0[2];
+    const int nsub = rb_nsub(dt);
+    const real_t hh = nsub == 1 ? 0.5_R * dt : 0.5_R * (dt / (real_t)nsub);
+    const real_t m00 = 1.0_R - hh * F[0];
+    const real_t m01 = -hh * F[1];
+    const real_t m02 = -hh * F[2];
+    const real_t m10 = -hh * F[3];
+    const real_t m11 = 1.0_R - hh * F[4];
+    const real_t m12 = -hh * F[5];
+    const real_t m20 = -hh * F[6];
+    const real_t m21 = -hh * F[7];
+    const real_t m22 = 1.0_R - hh * F[8];
+    const real_t c00 = m11 * m22 - m12 * m21;
+    const real_t c01 = m02 * m21 - m01 * m22;
+    const real_t c02 = m01 * m12 - m02 * m11;
+    const real_t c10 = m12 * m20 - m10 * m22;
+    const real_t c11 = m00 * m22 - m02 * m20;
+    const real_t c12 = m02 * m10 - m00 * m12;
+    const real_t c20 = m10 * m21 - m11 * m20;
+    const real_t c21 = m01 * m20 - m00 * m21;
+    const real_t c22 = m00 * m11 - m01 * m10;
+    const real_t inv = 1.0_R / (m00 * c00 + m01 * c10 + m02 * c20);
+    real_t x0 = x[0];
+    real_t x1 = x[1];
+    real_t x2 = x[2];
     int k;
-    for (k = 0; k < RB_NKC; ++k) {
-        c[k] = rb_lerp(t0, t1, a, k);
+    for (k = 0; k < nsub && k < RB_NSUB_MAX; ++k) {
+        const real_t s = nsub == 1 ? 1.0_R : (2.0_R * (real_t)k + 1.0_R) / (real_t)nsub;
+        const real_t v0 = 2.0_R * p0 + s * (e1[0] - p0);
+        const real_t v1 = 2.0_R * p1 + s * (e1[1] - p1);
+        const real_t v2 = 2.0_R * p2 + s * (e1[2] - p2);
+        const real_t b0 = x0 + hh * (F[0] * x0 + F[1] * x1 + F[2] * x2 + G[0] * v0 + G[1] * v1 + G[2] * v2);
+        const real_t b1 = x1 + hh * (F[3] * x0 + F[4] * x1 + F[5] * x2 + G[3] * v0 + G[4] * v1 + G[5] * v2);
+        const real_t b2 = x2 + hh * (F[6] * x0 + F[7] * x1 + F[8] * x2 + G[6] * v0 + G[7] * v1 + G[8] * v2);
+        x0 = (c00 * b0 + c01 * b1 + c02 * b2) * inv;
+        x1 = (c10 * b0 + c11 * b1 + c12 * b2) * inv;
+        x2 = (c20 * b0 + c21 * b1 + c22 * b2) * inv;
     }
+    xn[0] = x0;
+    xn[1] = x1;
+    xn[2] = x2;
 }
 
 """
 
-_OBSERVER3 = """\
-/* Three-state observer: interpolated F, G, H, D; restart at xi = J eta or one
- * trapezoidal step with M = I - (h/2) F inverted through its adjugate. Returns w. */
-static real_t rb_observer(state_t *st, const real_t *t0, const real_t *t1, real_t a,
-                          const real_t *u, real_t dt, int restart)
-{
-    real_t c[RB_NKC];
-    real_t x0;
-    real_t x1;
-    real_t x2;
-    int k;
-    rb_lerp_row(t0, t1, a, c);
-    if (restart) {
-        int q;
-        x0 = 0.0_R;
-        x1 = 0.0_R;
-        x2 = 0.0_R;
-        for (q = 0; q < 3; ++q) {
-            x0 += rb_lerp(t0, t1, a, $j0 + q) * u[q];
-            x1 += rb_lerp(t0, t1, a, $j1 + q) * u[q];
-            x2 += rb_lerp(t0, t1, a, $j2 + q) * u[q];
-        }
-    } else {
-        const real_t p0 = st->eta[0];
-        const real_t p1 = st->eta[1];
-        const real_t p2 = st->eta[2];
-        const int nsub = rb_nsub(dt);
-        const real_t hh = nsub == 1 ? 0.5_R * dt : 0.5_R * (dt / (real_t)nsub);
-        const real_t m00 = 1.0_R - hh * c[$f0];
-        const real_t m01 = -hh * c[$f1];
-        const real_t m02 = -hh * c[$f2];
-        const real_t m10 = -hh * c[$f3];
-        const real_t m11 = 1.0_R - hh * c[$f4];
-        const real_t m12 = -hh * c[$f5];
-        const real_t m20 = -hh * c[$f6];
-        const real_t m21 = -hh * c[$f7];
-        const real_t m22 = 1.0_R - hh * c[$f8];
-        const real_t c00 = m11 * m22 - m12 * m21;
-        const real_t c01 = m02 * m21 - m01 * m22;
-        const real_t c02 = m01 * m12 - m02 * m11;
-        const real_t c10 = m12 * m20 - m10 * m22;
-        const real_t c11 = m00 * m22 - m02 * m20;
-        const real_t c12 = m02 * m10 - m00 * m12;
-        const real_t c20 = m10 * m21 - m11 * m20;
-        const real_t c21 = m01 * m20 - m00 * m21;
-        const real_t c22 = m00 * m11 - m01 * m10;
-        const real_t inv = 1.0_R / (m00 * c00 + m01 * c10 + m02 * c20);
-        x0 = st->x[0];
-        x1 = st->x[1];
-        x2 = st->x[2];
-        for (k = 0; k < nsub && k < RB_NSUB_MAX; ++k) {
-            const real_t s = nsub == 1 ? 1.0_R : (2.0_R * (real_t)k + 1.0_R) / (real_t)nsub;
-            const real_t v0 = 2.0_R * p0 + s * (u[0] - p0);
-            const real_t v1 = 2.0_R * p1 + s * (u[1] - p1);
-            const real_t v2 = 2.0_R * p2 + s * (u[2] - p2);
-            const real_t b0 = x0 + hh * (c[$f0] * x0 + c[$f1] * x1 + c[$f2] * x2
-                                         + c[$g0] * v0 + c[$g1] * v1 + c[$g2] * v2);
-            const real_t b1 = x1 + hh * (c[$f3] * x0 + c[$f4] * x1 + c[$f5] * x2
-                                         + c[$g3] * v0 + c[$g4] * v1 + c[$g5] * v2);
-            const real_t b2 = x2 + hh * (c[$f6] * x0 + c[$f7] * x1 + c[$f8] * x2
-                                         + c[$g6] * v0 + c[$g7] * v1 + c[$g8] * v2);
-            x0 = (c00 * b0 + c01 * b1 + c02 * b2) * inv;
-            x1 = (c10 * b0 + c11 * b1 + c12 * b2) * inv;
-            x2 = (c20 * b0 + c21 * b1 + c22 * b2) * inv;
-        }
-    }
-    st->x[0] = x0;
-    st->x[1] = x1;
-    st->x[2] = x2;
-    for (k = 0; k < 3; ++k) {
-        st->eta[k] = u[k];
-    }
-    return c[$h0] * x0 + c[$h1] * x1 + c[$h2] * x2 + c[$d0] * u[0] + c[$d1] * u[1] + c[$d2] * u[2];
-}
-
-"""
-
-_OBSERVER_N = """\
-/* Observer with RB_N states: interpolated F, G, H, D; restart at xi = J eta or
- * trapezoidal substeps (LU with partial pivoting). Returns w. */
-static real_t rb_observer(state_t *st, const real_t *t0, const real_t *t1, real_t a,
-                          const real_t *u, real_t dt, int restart)
-{
-    real_t c[RB_NKC];   /* F | G | H | D */
-    real_t w = 0.0_R;
-    int p;
-    int q;
-    rb_lerp_row(t0, t1, a, c);
-    if (restart) {
-        for (p = 0; p < RB_N; ++p) {
-            real_t acc = 0.0_R;
-            for (q = 0; q < 3; ++q) {
-                acc += rb_lerp(t0, t1, a, RB_OJ + p * 3 + q) * u[q];
-            }
-            st->x[p] = acc;
-        }
-    } else {
-        rb_tustin(st->x, RB_N, c, c + RB_OG, 3, st->eta, u, dt);
-    }
-    for (p = 0; p < RB_N; ++p) {
-        w += c[RB_OH + p] * st->x[p];
-    }
-    for (q = 0; q < 3; ++q) {
-        w += c[RB_OD + q] * u[q];
-    }
-    for (q = 0; q < 3; ++q) {
-        st->eta[q] = u[q];
-    }
-    return w;
-}
-
-"""
-
-_OBSERVER_0 = """\
-/* No observer state: w = D(vx) eta, a direct function of the sample. */
-static real_t rb_observer(state_t *st, const real_t *t0, const real_t *t1, real_t a,
-                          const real_t *u, real_t dt, int restart)
-{
-    real_t w = 0.0_R;
-    int q;
-    (void)dt;
-    (void)restart;
-    for (q = 0; q < 3; ++q) {
-        w += rb_lerp(t0, t1, a, RB_OD + q) * u[q];
-    }
-    for (q = 0; q < 3; ++q) {
-        st->eta[q] = u[q];
-    }
-    return w;
-}
-
-"""
+#: the blocks of a system, in the order of a kernel row
+_BLOCKS = ("F", "G", "H", "D", "J", "Phi", "Gam0", "Gam1")
 
 
-def _observer_tustin(d: ExportDesign) -> str:
-    """The observer update of today's general path (continuous tables, Tustin per sample)."""
-    if d.n == 0:
-        return _OBSERVER_0
-    if d.n != 3:
-        return _LERP_ROW + _OBSERVER_N
-    row = lpv_row(3)            # the three-state update written out entry by entry, at the layout's offsets
-    idx = {f"j{p}": row.J + NETA * p for p in range(3)}       # J row p; H, D entry i; F, G entry k
-    for i in range(3):
-        idx[f"h{i}"] = row.H + i
-        idx[f"d{i}"] = row.D + i
-    for k in range(9):
-        idx[f"f{k}"] = row.F + k
-        idx[f"g{k}"] = row.G + k
-    return _LERP_ROW + Template(_OBSERVER3).substitute(idx)
+def _observer_system(n: int) -> CSystem:
+    """The observer as the generated C holds it: blocks in ``c`` at the kernels' row offsets."""
+    return CSystem(ns=n, ns_c="RB_N", m=NETA, m_c=str(NETA),
+                   block=lambda b, k: f"c[RB_O{b.upper()} + {k}]",
+                   inputs={"e": lambda k: f"u[{k}]", "e_prev": lambda k: f"st->eta[{k}]"},
+                   state="st->x", new="x", names={"x": "xi", "e": "eta", "e_prev": "eta-", "y": "w"})
 
 
-_OBSERVER_FIXED = """\
-/* Fixed-rate sample (interval RB_DT_FIX within RB_DT_TOL): the exact discrete map
- * xi = Phi(vx) xi + Gam0(vx) eta_prev + Gam1(vx) eta, tables interpolated on the grid. */
-static real_t rb_observer_fixed(state_t *st, const real_t *t0, const real_t *t1, const real_t *d0,
-                                const real_t *d1, real_t a, const real_t *u)
-{
-    real_t c[RB_NKD];   /* Phi | Gam0 | Gam1 */
-    real_t y[RB_N];
-    real_t w = 0.0_R;
-    int k;
-    int p;
-    int q;
-    for (k = 0; k < RB_NKD; ++k) {
-        c[k] = rb_lerp(d0, d1, a, k);
-    }
-    for (p = 0; p < RB_N; ++p) {
-        real_t acc = 0.0_R;
-        for (k = 0; k < RB_N; ++k) {
-            acc += c[RB_DPHI + p * RB_N + k] * st->x[k];
-        }
-        for (q = 0; q < 3; ++q) {
-            acc += c[RB_DGAM0 + p * 3 + q] * st->eta[q] + c[RB_DGAM1 + p * 3 + q] * u[q];
-        }
-        y[p] = acc;
-    }
-    for (p = 0; p < RB_N; ++p) {
-        st->x[p] = y[p];
-        w += rb_lerp(t0, t1, a, RB_OH + p) * y[p];
-    }
-    for (q = 0; q < 3; ++q) {
-        w += rb_lerp(t0, t1, a, RB_OD + q) * u[q];
-        st->eta[q] = u[q];
-    }
-    return w;
-}
+def _roll_system(nr: int) -> CSystem:
+    """The roll model as the generated C holds it: its blocks as ``RB_ROLL_*`` constants."""
+    return CSystem(ns=nr, ns_c="RB_NR", m=1, m_c="1",
+                   block=lambda b, k: "RB_ROLL_D" if b == "D" else f"RB_ROLL_{b.upper()}[{k}]",
+                   inputs={"e": lambda k: "ay", "e_prev": lambda k: "st->ay_last"},
+                   state="st->z", new="z", names={"x": "z", "e": "ay", "e_prev": "ay-", "y": "phi"})
 
-"""
+
+def _interp_c(path: str, n: int, indent: str) -> str:
+    """Loops interpolating the blocks ``path`` reads (update_spec.blocks_read): continuous
+    blocks from RB_TAB, fixed-rate ones from RB_DTAB, into ``c`` at the kernels' row offsets."""
+    row = lpv_row(n)
+    names: dict[int, str] = {row.cont: "RB_NK"}
+    sized = [b for b in _BLOCKS if math.prod(block_shape(b, n, NETA))]      # blocks of n states that hold entries
+    for b in sized:
+        names.setdefault(getattr(row, b), f"RB_O{b.upper()}")
+    names.setdefault(row.end, "RB_NROW")
+    dnames = {row.Phi - row.Phi: "RB_DPHI", row.Gam0 - row.Phi: "RB_DGAM0", row.Gam1 - row.Phi: "RB_DGAM1",
+              row.end - row.Phi: "RB_NKD"}
+    out = []
+    for lo, hi in row_ranges(path, row, n, NETA):
+        read = ", ".join(b for b in sized if lo <= getattr(row, b) < hi)
+        parts = []
+        if lo < row.cont:
+            parts.append(("RB_TAB", "c[k]", names.get(lo, lo), names.get(min(hi, row.cont), min(hi, row.cont))))
+        if hi > row.cont:
+            lo_d, hi_d = max(lo, row.cont) - row.Phi, hi - row.Phi
+            parts.append(("RB_DTAB", "c[RB_OPHI + k]", dnames.get(lo_d, lo_d), dnames.get(hi_d, hi_d)))
+        for tab, dest, first, end in parts:
+            out.append(f"{indent}for (k = {first}; k < {end}; ++k) {{   /* {read} at vx */\n"
+                       f"{indent}    {dest} = {tab}[i][k] + a * ({tab}[i + 1][k] - {tab}[i][k]);\n{indent}}}\n")
+    return "".join(out)
+
+
+def _trapezoid_c(n: int, indent: str) -> str:
+    """The general path's solver: the adjugate for three states, LU otherwise (update_spec.Trapezoid)."""
+    eq = _observer_system(n).equation(GENERAL.equation)
+    if n == 0:
+        return f"{indent}(void)dt;   /* no state */\n"
+    copy = f"{indent}for (k = 0; k < RB_N; ++k) {{\n{indent}    x[k] = st->x[k];\n{indent}}}\n"
+    if n == 3:
+        return f"{indent}/* {eq} */\n{indent}rb_trapezoid3(st->x, x, c + RB_OF, c + RB_OG, st->eta, u, dt);\n"
+    return f"{indent}/* {eq} */\n{copy}{indent}rb_tustin(x, RB_N, c + RB_OF, c + RB_OG, 3, st->eta, u, dt);\n"
+
+
+def _observer_fn(d: ExportDesign) -> str:
+    """The observer's update of one usable sample from the update description: one function per
+    path (interpolation of the blocks it reads, its update, the output) and ``rb_observer``."""
+    sy = _observer_system(d.n)
+    fixed = d.discrete is not None
+    out_w = c_sum(OUTPUT, sy, target="w")
+    store = "    for (k = 0; k < RB_N; ++k) {\n        st->x[k] = x[k];\n    }\n" if d.n else ""
+    fns = []
+    for path, what in (("restart", "restart at the equilibrium"), ("fixed", "a sample at the fixed rate"),
+                       ("general", "any other interval")):
+        if path == "fixed" and not fixed:
+            continue
+        step = PATHS[path]
+        update = (c_update_output(step, OUTPUT, sy, "w") if isinstance(step, Sum)
+                  else _trapezoid_c(d.n, "    ") + out_w)
+        dt_arg = ", real_t dt" if path == "general" else ""
+        fns.append(f"/* {what}: {sy.equation(step.equation)}; then {sy.equation(OUTPUT.equation)} */\n"
+                   f"static real_t rb_observer_{path}(state_t *st, int i, real_t a, const real_t *u{dt_arg})\n{{\n"
+                   "    real_t c[RB_NROW];\n"
+                   + ("    real_t x[RB_N];   /* xi after the update */\n" if d.n else "")
+                   + "    real_t w;\n    int k;\n"
+                   + _interp_c(path, d.n, "    ") + update + store
+                   + "    for (k = 0; k < 3; ++k) {\n        st->eta[k] = u[k];\n    }\n    return w;\n}\n\n")
+    call_fixed = ("    if (fixed) {\n        return rb_observer_fixed(st, i, a, u);\n    }\n" if fixed
+                  else "    (void)fixed;\n")
+    return (("" if d.n != 3 else _TRAPEZOID3) + "".join(fns)
+            + "/* The observer's update of one usable sample (roadbank.estimators.update_spec, the\n"
+              " * description the Python kernels follow): the blocks the path reads interpolated at vx\n"
+              " * into c, at the kernels' row offsets, the path's update of xi, the output w from the\n"
+              " * new xi; eta becomes the previous inputs. Returns w. */\n"
+              "static real_t rb_observer(state_t *st, int i, real_t a, const real_t *u, real_t dt, int restart,\n"
+              "                          int fixed)\n{\n"
+              "    if (restart) {\n        return rb_observer_restart(st, i, a, u);\n    }\n"
+            + call_fixed + "    return rb_observer_general(st, i, a, u, dt);\n}\n")
 
 
 def _discrete_parts(d: ExportDesign, float32: bool) -> dict:
     """Pieces of the fixed-rate mode (or their general-path stand-ins)."""
-    general_call = "    w = rb_observer(st, RB_TAB[i], RB_TAB[i + 1], a, u, dt, restart);\n"
     if d.discrete is None:
-        return {"discrete_tables": "", "observer_fixed_fn": "",
-                "observer_call": general_call,
+        return {"discrete_tables": "",
                 "fixed_t": "        const int fixed = 0;\n", "fixed_dt": "            const int fixed = 0;\n"}
     x = d.discrete
     h = float(x["dt"])
@@ -690,18 +632,11 @@ def _discrete_parts(d: ExportDesign, float32: bool) -> dict:
                    f"/* Fixed-rate tables for {1.0 / h:g} Hz (exact first-order-hold discretisation of row k\n"
                    " * of RB_TAB over RB_DT_FIX): Phi (n x n) | Gam0 (n x 3) | Gam1 (n x 3). */\n"
                    f"static const real_t RB_DTAB[RB_NG][RB_NKD] = {{\n{body}\n}};\n")
-        call = ("    if (fixed) {\n"
-                "        w = rb_observer_fixed(st, RB_TAB[i], RB_TAB[i + 1], RB_DTAB[i], RB_DTAB[i + 1], a, u);\n"
-                "    } else {\n    " + general_call.replace("\n", "\n    ").rstrip(" ") + "    }\n")
-        fixed_fn = _OBSERVER_FIXED
-    else:
-        call = general_call
-        fixed_fn = ""
     if d.nr > 0:
         tables += (f"static const real_t RB_ROLL_PHI[RB_NR * RB_NR] = {{{_array(x['Phi_r'], float32, 8, '')}}};\n"
                    f"static const real_t RB_ROLL_GAM0[RB_NR] = {{{_array(x['Gam0_r'], float32, 8, '')}}};\n"
                    f"static const real_t RB_ROLL_GAM1[RB_NR] = {{{_array(x['Gam1_r'], float32, 8, '')}}};\n")
-    return {"discrete_tables": tables, "observer_fixed_fn": fixed_fn, "observer_call": call,
+    return {"discrete_tables": tables,
             "fixed_t": "        const int fixed = !restart && fabs((t - s->t_last) - RB_DT_FIX_D) <= "
                        "RB_DT_TOL_D * RB_DT_FIX_D;\n",
             "fixed_dt": "            const int fixed = !restart && RB_FABS(s->since_valid - RB_DT_FIX) <= "
@@ -709,47 +644,35 @@ def _discrete_parts(d: ExportDesign, float32: bool) -> dict:
 
 
 def _roll_parts(d: ExportDesign, float32: bool) -> dict:
+    """The roll model's tables and its update in ``rb_finish``, from the update description
+    (the observer's, with ``z``, ``ay`` and ``phi``)."""
+    sy = _roll_system(d.nr)
+    phi = c_sum(OUTPUT, sy, target="phi")
     if d.nr == 0:
         return {"roll_tables": "",
                 "finish_roll": "    (void)dt;\n    (void)restart;\n    (void)fixed;\n",
-                "finish_phi": "", "init_z": ""}
+                "finish_phi": phi, "finish_store": "", "finish_decl": "", "init_z": ""}
     tables = (f"/* roll model z' = F z + G ay (F {d.nr}x{d.nr}, G {d.nr}x1), phi = H z + D ay; "
               "J = -F^-1 G */\n"
               f"static const real_t RB_ROLL_F[RB_NR * RB_NR] = {{{_array(d.roll_F, float32, 8, '')}}};\n"
               f"static const real_t RB_ROLL_G[RB_NR] = {{{_array(d.roll_G, float32, 8, '')}}};\n"
               f"static const real_t RB_ROLL_H[RB_NR] = {{{_array(d.roll_H, float32, 8, '')}}};\n"
               f"static const real_t RB_ROLL_J[RB_NR] = {{{_array(d.roll_J, float32, 8, '')}}};\n")
-    fixed_roll = ("    } else if (fixed) {\n"
-                  "        real_t y[RB_NR];\n"
-                  "        int i;\n"
-                  "        int j;\n"
-                  "        for (i = 0; i < RB_NR; ++i) {\n"
-                  "            real_t acc = RB_ROLL_GAM0[i] * st->ay_last + RB_ROLL_GAM1[i] * ay;\n"
-                  "            for (j = 0; j < RB_NR; ++j) {\n"
-                  "                acc += RB_ROLL_PHI[i * RB_NR + j] * st->z[j];\n"
-                  "            }\n"
-                  "            y[i] = acc;\n"
-                  "        }\n"
-                  "        for (i = 0; i < RB_NR; ++i) {\n"
-                  "            st->z[i] = y[i];\n"
-                  "        }\n") if d.discrete is not None else ""
-    finish = ("    if (restart) {\n"
-              "        int i;\n"
-              "        for (i = 0; i < RB_NR; ++i) {\n"
-              "            st->z[i] = RB_ROLL_J[i] * ay;\n"
-              "        }\n"
-              + fixed_roll +
+    ind = "        "
+    fixed_roll = ("    } else if (fixed) {\n" + c_sum(FIXED, sy, indent=ind)) if d.discrete is not None else ""
+    finish = ("    /* roll model (roadbank.estimators.update_spec, as the observer) */\n"
+              "    if (restart) {\n" + c_sum(RESTART, sy, indent=ind) + fixed_roll +
               "    } else {\n"
-              "        rb_tustin(st->z, RB_NR, RB_ROLL_F, RB_ROLL_G, 1, &st->ay_last, &ay, dt);\n"
+              f"{ind}int k;\n"
+              f"{ind}/* {sy.equation(GENERAL.equation)} */\n"
+              f"{ind}for (k = 0; k < RB_NR; ++k) {{\n{ind}    z[k] = st->z[k];\n{ind}}}\n"
+              f"{ind}rb_tustin(z, RB_NR, RB_ROLL_F, RB_ROLL_G, 1, &st->ay_last, &ay, dt);\n"
               "    }\n" + ("" if d.discrete is not None else "    (void)fixed;\n"))
-    phi = ("    {\n"
-           "        int i;\n"
-           "        for (i = 0; i < RB_NR; ++i) {\n"
-           "            phi += RB_ROLL_H[i] * st->z[i];\n"
-           "        }\n"
-           "    }\n")
     init = "    for (k = 0; k < RB_NR; ++k) {\n        s->z[k] = 0.0_R;\n    }\n"
-    return {"roll_tables": tables, "finish_roll": finish, "finish_phi": phi, "init_z": init}
+    store = ("    {\n        int k;\n        for (k = 0; k < RB_NR; ++k) {\n            st->z[k] = z[k];\n"
+             "        }\n    }\n")
+    return {"roll_tables": tables, "finish_roll": finish, "finish_phi": phi, "finish_store": store,
+            "finish_decl": "    real_t z[RB_NR];   /* z after the update */\n", "init_z": init}
 
 
 def _gate_parts(d: ExportDesign, float32: bool) -> dict:
@@ -824,7 +747,6 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
     # scratch size of the LU/Tustin helpers: the observer (unless the 3-state path) and the roll model
     nt = max(d.n if d.n not in (0, 3) else 0, d.nr)
     row = lpv_row(d.n)
-    nkc = row.J                   # F | G | H | D
     rows = []
     for k in range(d.ng):
         body = _array(d.table[k], float32, 4, "     ")
@@ -850,18 +772,20 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
         fixed_note="" if d.discrete is None else
         f" (a sample {1.0 / d.rate:g} s after the last: the exact discrete\n * observer for {d.rate:g} Hz, RB_DTAB)",
         asin="asinf" if float32 else "asin", fabs="fabsf" if float32 else "fabs",
-        ceil="ceilf" if float32 else "ceil", ng=d.ng, nk=d.nk, nkc=nkc, nsub_max=d.nsub_max,
-        og=row.G, oh=row.H, od=row.D, oj=row.J,
-        v0=lit(d.v0), dv=lit(d.dv), vmin=lit(d.v_min), sub=lit(d.max_substep), gap=lit(d.max_gap),
+        ceil="ceilf" if float32 else "ceil", ng=d.ng, nk=d.nk, nsub_max=d.nsub_max,
+        of=row.F, og=row.G, oh=row.H, od=row.D, oj=row.J, ophi=row.Phi, ogam0=row.Gam0, ogam1=row.Gam1,
+        nrow=row.end if d.discrete is not None else row.cont,
+        v0=lit(d.v0), dv=lit(d.dv), inv_dv=lit(1.0 / d.dv), vmin=lit(d.v_min), sub=lit(d.max_substep),
+        gap=lit(d.max_gap),
         wmax=lit(d.wmax), roll_d=lit(d.roll_D), uses=", ".join(str(int(u)) for u in d.uses),
         table=",\n".join(rows),
         nsub_fn=_NSUB if (d.n > 0 or d.nr > 0) else "",
         lu_fns=(f"enum {{ RB_NT = {nt} }};   /* size of the LU / Tustin scratch */\n\n" + _LU)
         if helpers_needed else "",
         tustin_fn=_TUSTIN if helpers_needed else "",
-        observer_fn=_observer_tustin(d) + _discrete_parts(d, float32)["observer_fixed_fn"],
+        observer_fn=_observer_fn(d),
         init_x=("    for (k = 0; k < RB_N; ++k) {\n        s->x[k] = 0.0_R;\n    }\n" if d.n else ""),
-        **{k: v for k, v in _discrete_parts(d, float32).items() if k != "observer_fixed_fn"},
+        **_discrete_parts(d, float32),
         **_roll_parts(d, float32), **_gate_parts(d, float32))
     p = names["p"]
     return {f"{p}.h": _fix_literals(header, float32),

@@ -6,7 +6,9 @@ per-sample step (:func:`lpv_step`), the batch run (:func:`lpv_run`, whose sample
 three-state fixed-rate loop go through :func:`lpv_step`) and the families built on it
 (``adaptive``, ``gated``). A three-state observer's fixed-rate map is :func:`fixed3` in the step
 and in the batch loop (:func:`lpv3_fixed_run`) alike, so ``run()`` and ``step()`` are the same
-arithmetic by construction.
+arithmetic by construction. The order of their sums is the update description of
+:mod:`roadbank.estimators.update_spec` (from which the exported C is generated); tests/test_update_spec.py
+checks these kernels against it bit for bit.
 """
 
 from __future__ import annotations
