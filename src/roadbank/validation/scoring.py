@@ -28,7 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import filtfilt, lfilter
+from numba import njit
 
 from ..signals import sample_rate
 from ..vehicle import SensorSpec, log_conditions, make_estimator
@@ -88,6 +88,10 @@ def lowpass(x: np.ndarray, tau: float, dt: float, zero_phase: bool = True) -> np
 
     Discretised as ``y += dt/(tau+dt) (x - y)``; zero-phase by forward-backward.
     """
+    # imported here: scipy.signal takes about a second to import, and a jittered log (KITTI)
+    # never comes here
+    from scipy.signal import filtfilt, lfilter
+
     a = dt / (tau + dt)
     b, den = [a], [1.0, -(1.0 - a)]
     x = np.asarray(x, dtype=np.float64)
@@ -97,8 +101,13 @@ def lowpass(x: np.ndarray, tau: float, dt: float, zero_phase: bool = True) -> np
     return y
 
 
+@njit(cache=True, error_model="numpy")
 def _lowpass_steps(x: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """``y[0] = x[0]``, ``y[k] = y[k-1] + a[k-1] (x[k] - y[k-1])`` (compiled: the same operations in
+    the same order as the loop in Python, so the same numbers)."""
     y = np.empty_like(x)
+    if len(x) == 0:
+        return y
     y[0] = x[0]
     for k in range(1, len(x)):
         y[k] = y[k - 1] + a[k - 1] * (x[k] - y[k - 1])
@@ -117,9 +126,9 @@ def lowpass_t(x: np.ndarray, t: np.ndarray, tau: float, zero_phase: bool = True)
         return lowpass(x, tau, float(np.median(np.diff(t))), zero_phase)
     d = np.diff(t)
     a = d / (tau + d)
-    y = _lowpass_steps(x, a)
+    y = _lowpass_steps(np.ascontiguousarray(x), a)
     if zero_phase:
-        y = _lowpass_steps(y[::-1], a[::-1])[::-1]
+        y = _lowpass_steps(np.ascontiguousarray(y[::-1]), np.ascontiguousarray(a[::-1]))[::-1]
     return y
 
 
@@ -139,6 +148,43 @@ def pearson_r(a, b) -> float:
     if len(a) < 3 or np.std(a) == 0 or np.std(b) == 0:
         return float("nan")
     return float(np.corrcoef(a, b)[0, 1])
+
+
+def lag_correlations(x: np.ndarray, ref: np.ndarray, idx: np.ndarray, lags: np.ndarray) -> np.ndarray:
+    """Pearson r of ``x[idx + k]`` with ``ref[idx]`` for every ``k`` of ``lags`` at once (one array;
+    NaN where :func:`pearson_r` would give NaN, or where a spread is zero). The same quantity as
+    :func:`pearson_r` per lag, up to rounding."""
+    if len(idx) < 3:
+        return np.full(len(lags), np.nan)
+    X = x[idx[:, None] + lags[None, :]]
+    y = ref[idx]
+    X = X - X.mean(axis=0)
+    y = y - y.mean()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return (y @ X) / np.sqrt((X * X).sum(axis=0) * (y @ y))
+
+
+#: lags whose vectorised r is within this of the largest are checked again with :func:`pearson_r`
+#: (rounding of the two ways of computing r differs by ~1e-16)
+_LAG_TIE = 1e-9
+
+
+def best_lag(x: np.ndarray, ref: np.ndarray, idx: np.ndarray, lags) -> tuple[float, int]:
+    """``(r, k)``: the lag ``k`` of ``lags`` (samples) whose ``x[idx + k]`` best correlates with
+    ``ref[idx]``, and its Pearson r (:func:`pearson_r`); NaN correlations count as the lowest, and of
+    equal ones the first lag wins (as ``max`` over the lags in order).
+
+    The candidates are found with :func:`lag_correlations` (all lags at once); those within
+    rounding of the best, and any that came out NaN, get :func:`pearson_r` itself, so the answer is
+    the one of :func:`pearson_r` lag by lag.
+    """
+    lags = np.asarray(lags)
+    r = lag_correlations(x, ref, idx, lags)
+    ok = np.isfinite(r)
+    top = r[ok].max() if ok.any() else -np.inf
+    check = [k for k, rk, f in zip(lags, r, ok) if not f or rk >= top - _LAG_TIE]
+    return max(((pearson_r(x[idx + k], ref[idx]), k) for k in check),
+               key=lambda z: -np.inf if np.isnan(z[0]) else z[0])
 
 
 def _rms_deg(e) -> float:
@@ -188,7 +234,7 @@ def score(t, theta, phi_b, valid, ref, fit, scored, scoring: Scoring, max_lag_s:
     lags = np.arange(-nl, nl + 1, max(1, int(round(0.01 / dt))))
     idx = np.flatnonzero(scored)
     idx = idx[(idx < len(xs) - nl) & (idx >= nl)]  # room for the lags at both ends
-    best = max(((pearson_r(xs[idx + k], rs[idx]), k) for k in lags), key=lambda z: -np.inf if np.isnan(z[0]) else z[0])
+    best = best_lag(xs, rs, idx, lags)
     return Score(r=pearson_r(xs[scored], rs[scored]), rms_deg=_rms_deg(xs[scored] + off - rs[scored]),
                  offset_deg=float(np.degrees(off)), r_raw=pearson_r(theta[scored], ref[scored]),
                  rms_raw_deg=_rms_deg(theta[scored] + off - ref[scored]),
