@@ -26,6 +26,8 @@ import numpy as np
 PADE13 = (64764752532480000.0, 32382376266240000.0, 7771770303897600.0, 1187353796428800.0,
           129060195264000.0, 10559470521600.0, 670442572800.0, 33522128640.0, 1323241920.0,
           40840800.0, 960960.0, 16380.0, 182.0, 1.0)
+#: the same divided by b_0 (the constant terms are then 1: ``exp(0)`` comes out exactly ``I``)
+_PADE13_UNIT = tuple(c / PADE13[0] for c in PADE13)
 #: largest 1-norm for which the [13/13] approximant's backward error is below the unit roundoff
 THETA13 = 5.371920351148152
 
@@ -52,12 +54,12 @@ def expm_stack(A: np.ndarray) -> np.ndarray:
     if A.ndim < 2 or A.shape[-1] != A.shape[-2]:
         raise ValueError(f"expm_stack: expected square matrices (..., n, n), got shape {A.shape}")
     shape, n = A.shape, A.shape[-1]
-    A = A.reshape(-1, n, n)
-    if A.shape[0] == 0 or n == 0:
+    if A.size == 0:
         return np.zeros(shape)
+    A = A.reshape(-1, n, n)
     s = squarings(A)
     B = A * np.ldexp(1.0, -s)[:, None, None]          # exact: a power of two
-    b = PADE13
+    b = _PADE13_UNIT
     eye = np.eye(n)
     B2 = B @ B
     B4 = B2 @ B2
