@@ -80,7 +80,37 @@ class Score:
 def is_uniform(t: np.ndarray, rel: float = 1e-6) -> bool:
     """True if the steps of ``t`` (s) are all equal within ``rel`` of the median step."""
     d = np.diff(t)
-    return bool(np.all(np.abs(d - np.median(d)) <= rel * np.median(d)))
+    return _uniform_steps(d, np.median(d), rel)
+
+
+def _uniform_steps(d: np.ndarray, median: float, rel: float = 1e-6) -> bool:
+    return bool(np.all(np.abs(d - median) <= rel * median))
+
+
+@dataclass(frozen=True)
+class TimeGrid:
+    """The steps of a time grid, worked out once for the many low-passes of one log.
+
+    Attributes
+    ----------
+    steps : array
+        ``diff(t)`` (s).
+    median_step : float
+        Their median (s).
+    uniform : bool
+        :func:`is_uniform` of the grid.
+    """
+
+    steps: np.ndarray
+    median_step: float
+    uniform: bool
+
+    @classmethod
+    def of(cls, t: np.ndarray) -> TimeGrid:
+        """The grid of the time stamps ``t`` (s)."""
+        d = np.diff(np.asarray(t, dtype=np.float64))
+        med = float(np.median(d))
+        return cls(d, med, _uniform_steps(d, med))
 
 
 def lowpass(x: np.ndarray, tau: float, dt: float, zero_phase: bool = True) -> np.ndarray:
@@ -114,17 +144,19 @@ def _lowpass_steps(x: np.ndarray, a: np.ndarray) -> np.ndarray:
     return y
 
 
-def lowpass_t(x: np.ndarray, t: np.ndarray, tau: float, zero_phase: bool = True) -> np.ndarray:
+def lowpass_t(x: np.ndarray, t: np.ndarray, tau: float, zero_phase: bool = True,
+              grid: TimeGrid | None = None) -> np.ndarray:
     """:func:`lowpass` on any time grid ``t`` (s): per-step ``a = dt_k/(tau + dt_k)``.
 
     A uniform grid uses :func:`lowpass` exactly; a jittered one (KITTI, 0.06-0.14 s)
     runs the same recursion with each step's own ``dt``, forward then backward.
+    ``grid``: :meth:`TimeGrid.of` of ``t`` if already known (it is then not worked out again).
     """
     x = np.asarray(x, dtype=np.float64)
-    t = np.asarray(t, dtype=np.float64)
-    if is_uniform(t):
-        return lowpass(x, tau, float(np.median(np.diff(t))), zero_phase)
-    d = np.diff(t)
+    grid = grid or TimeGrid.of(t)
+    if grid.uniform:
+        return lowpass(x, tau, grid.median_step, zero_phase)
+    d = grid.steps
     a = d / (tau + d)
     y = _lowpass_steps(np.ascontiguousarray(x), a)
     if zero_phase:
@@ -209,27 +241,31 @@ def masks(t: np.ndarray, vx: np.ndarray, scoring: Scoring) -> tuple[np.ndarray, 
     return fit, keep & ~fit
 
 
-def score(t, theta, phi_b, valid, ref, fit, scored, scoring: Scoring, max_lag_s: float = 1.0) -> Score:
+def score(t, theta, phi_b, valid, ref, fit, scored, scoring: Scoring, max_lag_s: float = 1.0,
+          grid: TimeGrid | None = None) -> Score:
     """Score one estimate (rad) against the reference roll (rad) on the given masks.
 
     ``theta``, ``phi_b`` must already be held over not-valid samples (:func:`hold_invalid`).
     Returns NaN scores when nothing usable is scored (e.g. every sample flagged not valid).
+    ``t`` (s) is the time grid; ``grid`` its :meth:`TimeGrid.of` if already known.
     """
     both = fit | scored
     vf = float(np.mean(valid[both])) if both.any() else 0.0
     if not scored.any() or vf == 0.0 or not np.all(np.isfinite(theta[both])):
         nan = float("nan")
         return Score(nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, vf)
+    grid = grid or TimeGrid.of(t)
+
     def f(x):
-        return lowpass_t(x, t, scoring.tau)
+        return lowpass_t(x, t, scoring.tau, grid=grid)
 
     rs, xs, ps = f(ref), f(theta), f(phi_b)
     fitted = fit.any()
     off = float(np.mean(rs[fit] - xs[fit])) if fitted else 0.0
     offp = float(np.mean(rs[fit] - ps[fit])) if fitted else 0.0
-    rc = lowpass_t(ref, t, scoring.tau, False)
-    xc = lowpass_t(theta, t, scoring.tau, False)
-    dt = float(np.median(np.diff(t)))
+    rc = lowpass_t(ref, t, scoring.tau, False, grid=grid)
+    xc = lowpass_t(theta, t, scoring.tau, False, grid=grid)
+    dt = grid.median_step
     nl = int(round(max_lag_s / dt))
     lags = np.arange(-nl, nl + 1, max(1, int(round(0.01 / dt))))
     idx = np.flatnonzero(scored)
@@ -310,17 +346,18 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     fit, scored = masks(t, signals.vx, scoring)
     scores, smooth, raw, flags = {}, {}, {}, {}
     cond = log_conditions(signals)
+    grid = TimeGrid.of(t)
     for name in names:
         est = make_estimator(name, params, sensors=sensors, **cond,
                              **{**tuning, **per_estimator.get(name, {})}).run(signals)
         th, pb = hold_invalid(est.theta), hold_invalid(est.phi_b)
-        sc = score(t, th, pb, est.valid, ref, fit, scored, scoring)
+        sc = score(t, th, pb, est.valid, ref, fit, scored, scoring, grid=grid)
         scores[name] = sc
         raw[name] = th
         flags[name] = est.valid
-        smooth[name] = (lowpass_t(th, t, scoring.tau) + np.radians(sc.offset_deg)
+        smooth[name] = (lowpass_t(th, t, scoring.tau, grid=grid) + np.radians(sc.offset_deg)
                         if np.all(np.isfinite(th)) else th)
-    return Scored(scores, t, lowpass_t(ref, t, scoring.tau), smooth, ref, raw, fit, scored, flags)
+    return Scored(scores, t, lowpass_t(ref, t, scoring.tau, grid=grid), smooth, ref, raw, fit, scored, flags)
 
 
 def pooled(runs, names) -> dict[str, dict[str, float]]:
