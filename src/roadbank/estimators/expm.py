@@ -197,8 +197,10 @@ def foh_blocks(F: np.ndarray, G: np.ndarray, h: float) -> tuple[np.ndarray, np.n
     """``(Phi, A1, A2)``: the blocks of ``exp(h [[F, G, 0], [0, 0, I], [0, 0, 0]])`` of every system
     of a stack, ``F`` (g, n, n) (1/s), ``G`` (g, n, m), ``h`` (s).
 
-    The method of the module docstring on that matrix, block by block (the zero blocks of its powers never computed; compiled): ``Phi`` (g, n, n) ``= e^{hF}``,
-    ``A1``, ``A2`` (g, n, m) the blocks of the exponential in the second and third block columns.
+    The method of the module docstring on that matrix, block by block (the zero blocks of its
+    powers never computed; compiled): ``Phi`` (g, n, n) ``= e^{hF}``, ``A1``, ``A2`` (g, n, m) the
+    blocks of the exponential in the second and third block columns (dimensionless times s, s^2:
+    those of ``G``'s units times seconds). A system that is not finite comes out NaN.
     """
     F = np.ascontiguousarray(F, dtype=np.float64)
     G = np.ascontiguousarray(G, dtype=np.float64)
