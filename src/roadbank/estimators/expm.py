@@ -199,8 +199,8 @@ def foh_blocks(F: np.ndarray, G: np.ndarray, h: float) -> tuple[np.ndarray, np.n
 
     The method of the module docstring on that matrix, block by block (the zero blocks of its
     powers never computed; compiled): ``Phi`` (g, n, n) ``= e^{hF}``, ``A1``, ``A2`` (g, n, m) the
-    blocks of the exponential in the second and third block columns (dimensionless times s, s^2:
-    those of ``G``'s units times seconds). A system that is not finite comes out NaN.
+    blocks of the exponential in the second and third block columns (``G``'s units times s and
+    times s^2). A system that is not finite comes out NaN.
     """
     F = np.ascontiguousarray(F, dtype=np.float64)
     G = np.ascontiguousarray(G, dtype=np.float64)
