@@ -1,4 +1,4 @@
-"""The compiled exponential of the fixed-rate discretisation (estimators/expm.py) against closed
+"""The batched exponential of the fixed-rate discretisation (estimators/expm.py) against closed
 forms and scipy.linalg.expm, and the discretised observers and their output with it."""
 
 from __future__ import annotations

@@ -18,8 +18,8 @@ the default car at 100 Hz, each repeat with a new ``ay`` noise level (so no desi
 
 Wall time (``time.perf_counter``) and CPU time of the process (``time.process_time``, less
 sensitive to other load on a shared machine); medians over the repeats. The designs are
-numpy/scipy; the fixed-rate tables' exponential is compiled (:mod:`roadbank.estimators.expm`,
-loaded from numba's disk cache by the first, untimed design), and the scipy path takes
+numpy/scipy; the fixed-rate tables' exponential is batched over the speed grid in numpy
+(:mod:`roadbank.estimators.expm`), and the scipy path takes
 ``scipy.linalg.expm`` point by point as before.
 """
 

@@ -14,7 +14,7 @@ general trapezoidal path), the exact solution after one interval ``h`` is
 :func:`roadbank.estimators.expm.foh_blocks` evaluates the exponential (:func:`foh_grid`: of a
 whole speed grid at once, the same numbers as :func:`foh` per grid point); inside
 :func:`roadbank.estimators.synthesis.reference_solvers` it is ``scipy.linalg.expm`` of the
-whole matrix, the exponential the compiled one is compared with (they agree to about 1e-15
+whole matrix, the exponential the batched one is compared with (they agree to about 1e-15
 relative).
 """
 
