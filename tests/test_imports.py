@@ -28,6 +28,8 @@ OPTIONAL = {"asammdf", "can", "cantools", "rosbags", "mcap", "dask", "distribute
 DEFERRED = {
     # roadbank estimate never loads scipy.signal (which pulls in scipy.stats): only pole placement needs it
     "estimators/synthesis.py": {"scipy.signal"},
+    # scipy.signal (about a second) only for a log on a uniform grid: a KITTI drive's workers never load it
+    "validation/scoring.py": {"scipy.signal"},
     # `roadbank validate --help` imports report.html: the markdown parser loads when a page is written
     "report/html.py": {"markdown_it"},
     # the numba dispatcher of the one kernel family asked about

@@ -260,3 +260,82 @@ def test_a_drive_whose_ins_is_not_credible_is_flagged_and_not_pooled(tmp_path):
     assert "leftward speed 8.0 m/s" in v.flagged[0][1]
     assert v.pooled["kinematic"]["n"] == int(v.drives[1].run.scored.sum())     # the credible drive only
     assert v.by_split["validation"]["drives"] == ["2011_10_03_drive_0047"]
+
+
+# ---------------------------------------------------------------- speed-ups that must not change a number
+def _steps_in_python(x, a):
+    y = np.empty_like(x)
+    y[0] = x[0]
+    for k in range(1, len(x)):
+        y[k] = y[k - 1] + a[k - 1] * (x[k] - y[k - 1])
+    return y
+
+
+def test_the_compiled_low_pass_gives_the_numbers_of_the_loop():
+    rng = np.random.default_rng(4)
+    t = np.cumsum(rng.uniform(0.06, 0.14, 2000))
+    x = np.cumsum(rng.normal(size=2000))
+    d = np.diff(t)
+    a = d / (0.7 + d)
+    np.testing.assert_array_equal(lowpass_t(x, t, 0.7, zero_phase=False), _steps_in_python(x, a))
+    back = _steps_in_python(_steps_in_python(x, a)[::-1], a[::-1])[::-1]
+    np.testing.assert_array_equal(lowpass_t(x, t, 0.7), back)
+    np.testing.assert_array_equal(lowpass_t(x[::3], t[::3], 0.7, zero_phase=False),        # strided input
+                                  _steps_in_python(x[::3], np.diff(t[::3]) / (0.7 + np.diff(t[::3]))))
+
+
+def test_best_lag_is_the_first_best_of_pearson_r_lag_by_lag():
+    from roadbank.validation.scoring import best_lag, pearson_r
+
+    def by_loop(x, ref, idx, lags):
+        return max(((pearson_r(x[idx + k], ref[idx]), k) for k in lags),
+                   key=lambda z: -np.inf if np.isnan(z[0]) else z[0])
+
+    rng = np.random.default_rng(5)
+    lags = np.arange(-10, 11)
+    idx = np.arange(10, 990)
+    ref = np.convolve(rng.normal(size=1000), np.ones(15) / 15, "same")
+    for x in (np.roll(ref, 3) + 0.1 * rng.normal(size=1000),       # a clear best lag (3 samples)
+              rng.normal(size=1000),                                # none
+              np.tile(rng.normal(size=4), 250),                     # period 4: lags k, k+4 tie, the first wins
+              np.r_[np.full(500, 0.2), ref[500:]]):                 # some lags see a constant part
+        got, want = best_lag(x, ref, idx, lags), by_loop(x, ref, idx, lags)
+        assert got[1] == want[1] and (got[0] == want[0] or np.isnan(got[0]) and np.isnan(want[0]))
+    const = np.full(1000, 0.1)                                     # every lag NaN: the first lag
+    assert best_lag(const, ref, idx, lags)[1] == by_loop(const, ref, idx, lags)[1] == -10
+    assert best_lag(ref, ref, idx[:2], lags)[1] == -10             # too few samples
+
+
+class _RecordingPool:
+    """In-process tasks, run when submitted, in the order submitted (as a pool of workers sees them)."""
+
+    in_process = False
+
+    def __init__(self):
+        self.order = []
+
+    def submit(self, fn, path, *args):
+        self.order.append(Path(path).name)
+        return fn(path, *args)
+
+    def outcome(self, task):
+        return task, None
+
+
+@needs_kitti
+def test_figures_are_drawn_in_the_drives_tasks_longest_submitted_first(tmp_path):
+    from roadbank.validation.kitti import drive_frames, validate_kitti
+    from roadbank.validation.kitti_report import drive_png, plot_drive
+
+    drives = [KITTI / "2011_09_26_drive_0070", KITTI / "2011_10_03_drive_0047"]
+    frames = [drive_frames(d) for d in drives]
+    assert frames == [len(list((d / "oxts" / "data").iterdir())) for d in drives] and frames[1] > frames[0]
+    pool = _RecordingPool()
+    v = validate_kitti(drives, names=["kinematic", "pif-modified"], sensitivity=False, pool=pool, figure=drive_png)
+    assert pool.order == [drives[1].name, drives[0].name]                    # the longer drive first
+    assert [d.label for d in v.drives] == [d.name for d in drives]           # reported in the order given
+    plain = validate_kitti(drives, names=["kinematic", "pif-modified"], sensitivity=False)
+    assert plain.figures == {} and plain.pooled == v.pooled
+    for d in plain.drives:                                                    # the file plot_drive writes
+        plot_drive(d, tmp_path / f"{d.label}.png")
+        assert v.figures[d.label] == (tmp_path / f"{d.label}.png").read_bytes()

@@ -17,8 +17,10 @@ the default car at 100 Hz, each repeat with a new ``ay`` noise level (so no desi
   design replaced, the peer of the ratio.
 
 Wall time (``time.perf_counter``) and CPU time of the process (``time.process_time``, less
-sensitive to other load on a shared machine); medians over the repeats. Nothing is compiled:
-the designs are numpy/scipy (the numba kernels only run the filters).
+sensitive to other load on a shared machine); medians over the repeats. The designs are
+numpy/scipy; the fixed-rate tables' exponential is batched over the speed grid in numpy
+(:mod:`roadbank.estimators.expm`), and the scipy path takes
+``scipy.linalg.expm`` point by point as before.
 """
 
 from __future__ import annotations

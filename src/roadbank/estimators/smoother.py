@@ -45,7 +45,7 @@ import numpy as np
 from .. import cache
 from ..signals import Estimate, Signals, interval_rate
 from . import kernels as K
-from .discretise import foh
+from .discretise import foh_grid
 from .layout import DT_REL_TOL
 from .pif import PIF, modified_steady
 
@@ -120,12 +120,12 @@ class PIFSmoother(PIF):
         ftab = _TABLES.get(key)
         if ftab is None:
             n = self._nstate
-            rows = []
-            for row in self._smooth_tab:
-                S, M, b = row[:n * n].reshape(n, n), row[n * n:2 * n * n].reshape(n, n), row[2 * n * n:]
-                Phi, G0, G1 = foh(S, np.hstack([M, -b[:, None]]), h)
-                rows.append(np.concatenate([Phi.ravel(), G0.ravel(), G1.ravel()]))
-            ftab = _TABLES[key] = np.ascontiguousarray(np.array(rows))
+            tab = self._smooth_tab
+            g = tab.shape[0]
+            S, M, b = tab[:, :n * n].reshape(g, n, n), tab[:, n * n:2 * n * n].reshape(g, n, n), tab[:, 2 * n * n:]
+            Phi, G0, G1 = foh_grid(S, np.concatenate([M, -b[:, :, None]], axis=2), h)
+            ftab = _TABLES[key] = np.ascontiguousarray(
+                np.hstack([Phi.reshape(g, -1), G0.reshape(g, -1), G1.reshape(g, -1)]))
         return ftab
 
     @property

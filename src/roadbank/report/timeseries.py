@@ -197,13 +197,17 @@ def reference_figure(t, reference, estimates: dict, *, valid: dict | None = None
     return fig
 
 
-def save_figure(fig, path) -> Path:
-    """Save ``fig`` to ``path`` (format from the suffix; folders created) and close it."""
+def save_figure(fig, path):
+    """Save ``fig`` to ``path`` (format from the suffix; folders created) and close it; ``path`` may
+    also be a binary file object (a PNG is written to it). Returns ``path``."""
     import matplotlib.pyplot as plt
 
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    if hasattr(path, "write"):
+        fig.savefig(path, format="png", dpi=110)
+    else:
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
 

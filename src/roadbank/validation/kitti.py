@@ -22,6 +22,7 @@ chosen from these results.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -71,7 +72,8 @@ class KittiValidation:
     ``"validation"`` and ``"unseen"`` (:mod:`roadbank.validation.splits`) present, the drive
     labels, the pooled scores and each estimator's median raw RMS (deg) over its drives;
     ``flagged`` lists ``(drive, reason)`` for the drives whose INS is not credible
-    (:func:`ins_doubt`), scored but kept out of every pooled and median score.
+    (:func:`ins_doubt`), scored but kept out of every pooled and median score; ``figures`` maps
+    each drive label to its figure, when :func:`validate_kitti` was given one to draw.
     """
 
     drives: list[ValidationResult]
@@ -80,6 +82,7 @@ class KittiValidation:
     settings: dict = field(default_factory=dict)
     by_split: dict = field(default_factory=dict)
     flagged: list = field(default_factory=list)
+    figures: dict = field(default_factory=dict)
 
 
 def kinematic_residual(signals, ref, mask, taus) -> dict:
@@ -185,24 +188,38 @@ def expand_drives(paths) -> list[Path]:
     return out
 
 
-def _drive_outcome(path, names, params, scoring, sensitivity, tuning, sensors):
-    """``(ValidationResult, None)`` of one drive, or ``(None, reason)`` when it cannot be read: one
-    task of :func:`validate_kitti` (in this process or on a worker)."""
+def _drive_outcome(path, names, params, scoring, sensitivity, tuning, sensors, figure=None):
+    """``(ValidationResult, None, figure)`` of one drive (``figure(result)``, or None without
+    ``figure``), or ``(None, reason, None)`` when it cannot be read: one task of
+    :func:`validate_kitti` (in this process or on a worker)."""
     try:
-        return validate_kitti_drive(path, names, params, scoring, sensitivity, tuning, sensors), None
+        res = validate_kitti_drive(path, names, params, scoring, sensitivity, tuning, sensors)
     except (LogError, OSError) as exc:
-        return None, str(exc)
+        return None, str(exc), None
+    return res, None, (None if figure is None else figure(res))
 
 
 def _collected(pool, path, task):
     """:func:`_drive_outcome` of a drive's pool task; a task that failed on its worker gives the reason."""
     value, failure = pool.outcome(task)
-    return value if failure is None else (None, f"{path}: {failure}")
+    return value if failure is None else (None, f"{path}: {failure}", None)
+
+
+def drive_frames(path) -> int:
+    """Number of frames of a drive folder (or its ``oxts`` folder): the files in ``oxts/data`` (0 when
+    that folder cannot be listed). What a drive's task costs grows with it."""
+    for d in (Path(path) / "oxts" / "data", Path(path) / "data"):
+        try:
+            with os.scandir(d) as it:
+                return sum(1 for _ in it)
+        except OSError:
+            continue
+    return 0
 
 
 def validate_kitti(paths, names=None, params: VehicleParams | None = None,
                    scoring: Scoring = KITTI_SCORING, sensitivity: bool = True,
-                   tuning=None, sensors=None, pool=None) -> KittiValidation:
+                   tuning=None, sensors=None, pool=None, figure=None) -> KittiValidation:
     """Validate any number of KITTI drives; a drive that cannot be read is reported, the others go on.
 
     Parameters
@@ -215,22 +232,32 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
         Where the drives run, one task each (a pool of :func:`roadbank.fleet.cluster.open_pool`;
         default: one after another in this process). The results are taken in the order of the drives,
         so the validation is the same on any number of workers; a drive whose worker failed is
-        reported with the reason.
+        reported with the reason. The longest drives (:func:`drive_frames`) are submitted first, so
+        that no worker is left with a long one at the end while the others wait.
+    figure : callable, optional
+        ``figure(result)``: a drive's figure drawn in its task, so on its worker (e.g. the PNG bytes of
+        :func:`roadbank.validation.kitti_report.drive_png`; a module-level function for a pool); what
+        it returns goes to ``figures`` under the drive's label.
     """
     names = list(names or estimators.NAMES)
-    drives, errors = [], []
+    drives, errors, figures = [], [], {}
     expanded = expand_drives(paths)
-    args = (names, params, scoring, sensitivity, tuning, sensors)
+    args = (names, params, scoring, sensitivity, tuning, sensors, figure)
     if pool is None:
         outcomes = (_drive_outcome(p, *args) for p in expanded)
     else:
-        tasks = [pool.submit(_drive_outcome, p, *args) for p in expanded]
-        outcomes = (_collected(pool, p, task) for p, task in zip(expanded, tasks))
-    for res, error in outcomes:
+        frames = [0 if pool.in_process else drive_frames(p) for p in expanded]
+        tasks = {}
+        for i in sorted(range(len(expanded)), key=lambda i: -frames[i]):
+            tasks[i] = pool.submit(_drive_outcome, expanded[i], *args)
+        outcomes = (_collected(pool, p, tasks[i]) for i, p in enumerate(expanded))
+    for res, error, fig in outcomes:
         if error is not None:
             errors.append(error)
         else:
             drives.append(res)
+            if fig is not None:
+                figures[res.label] = fig
     credible = [d for d in drives if not d.data.get("ins_doubt")]
     by_split = {}
     for split in ("training", "validation", "unseen"):
@@ -243,7 +270,7 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
                            settings={"tau": scoring.tau, "warmup_s": scoring.warmup_s,
                                      "v_gate": scoring.v_gate, "fit_fraction": scoring.fit_fraction},
                            by_split=by_split, flagged=[(d.label, d.data["ins_doubt"]) for d in drives
-                                                       if d.data.get("ins_doubt")])
+                                                       if d.data.get("ins_doubt")], figures=figures)
 
 
 def _median(values) -> float:

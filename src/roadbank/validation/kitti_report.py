@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import math
 
 from ..constants import G
@@ -43,17 +44,35 @@ def to_json(v: KittiValidation) -> dict:
             "flagged": [{"drive": d, "reason": why} for d, why in v.flagged]}
 
 
-def plot_drive(res, path, show=("kinematic", "pif-modified", DEFAULT)) -> None:
+def drive_figure(res, show=("kinematic", "pif-modified", DEFAULT)):
     """Raw theta of some estimators and the INS roll (deg), and their error, against time from the
-    drive start (s); unscored spans grey, spans an estimator flagged not valid red."""
+    drive start (s); unscored spans grey, spans an estimator flagged not valid red (a matplotlib figure)."""
     run = res.run
     names = [n for n in show if n in run.raw_estimates and res.scores[n].valid_fraction > 0]
-    fig = reference_figure(res.t, run.raw_reference, {f"{n} theta": run.raw_estimates[n] for n in names},
-                           valid={f"{n} theta": run.valid[n] for n in names if n in run.valid},
-                           unscored=~run.scored,
-                           quantity="roll", reference_label="INS roll (reference)",
-                           title=f"KITTI {res.label}: theta vs INS roll (grey: not scored, vx < 5 m/s or warm-up)")
-    save_figure(fig, path)
+    return reference_figure(res.t, run.raw_reference, {f"{n} theta": run.raw_estimates[n] for n in names},
+                            valid={f"{n} theta": run.valid[n] for n in names if n in run.valid},
+                            unscored=~run.scored,
+                            quantity="roll", reference_label="INS roll (reference)",
+                            title=f"KITTI {res.label}: theta vs INS roll (grey: not scored, vx < 5 m/s or warm-up)")
+
+
+def plot_drive(res, path, show=("kinematic", "pif-modified", DEFAULT)) -> None:
+    """:func:`drive_figure` saved to ``path`` (format from the suffix)."""
+    save_figure(drive_figure(res, show), path)
+
+
+def drive_png(res) -> bytes:
+    """:func:`plot_drive` of one drive as the bytes of its PNG file (the same file): what a drive's task
+    draws on its worker (``figure`` of :func:`roadbank.validation.kitti.validate_kitti`), for the
+    caller to write."""
+    buf = io.BytesIO()
+    save_figure(drive_figure(res), buf)
+    return buf.getvalue()
+
+
+def figure_name(stem: str, label: str) -> str:
+    """File name of a drive's figure next to a report whose file name is ``{stem}.md``."""
+    return f"{stem}-kitti-{label}.png"
 
 
 def _table(L, rows):

@@ -28,7 +28,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.signal import filtfilt, lfilter
+from numba import njit
 
 from ..signals import sample_rate
 from ..vehicle import SensorSpec, log_conditions, make_estimator
@@ -80,7 +80,37 @@ class Score:
 def is_uniform(t: np.ndarray, rel: float = 1e-6) -> bool:
     """True if the steps of ``t`` (s) are all equal within ``rel`` of the median step."""
     d = np.diff(t)
-    return bool(np.all(np.abs(d - np.median(d)) <= rel * np.median(d)))
+    return _uniform_steps(d, np.median(d), rel)
+
+
+def _uniform_steps(d: np.ndarray, median: float, rel: float = 1e-6) -> bool:
+    return bool(np.all(np.abs(d - median) <= rel * median))
+
+
+@dataclass(frozen=True)
+class TimeGrid:
+    """The steps of a time grid, worked out once for the many low-passes of one log.
+
+    Attributes
+    ----------
+    steps : array
+        ``diff(t)`` (s).
+    median_step : float
+        Their median (s).
+    uniform : bool
+        :func:`is_uniform` of the grid.
+    """
+
+    steps: np.ndarray
+    median_step: float
+    uniform: bool
+
+    @classmethod
+    def of(cls, t: np.ndarray) -> TimeGrid:
+        """The grid of the time stamps ``t`` (s)."""
+        d = np.diff(np.asarray(t, dtype=np.float64))
+        med = float(np.median(d))
+        return cls(d, med, _uniform_steps(d, med))
 
 
 def lowpass(x: np.ndarray, tau: float, dt: float, zero_phase: bool = True) -> np.ndarray:
@@ -88,6 +118,10 @@ def lowpass(x: np.ndarray, tau: float, dt: float, zero_phase: bool = True) -> np
 
     Discretised as ``y += dt/(tau+dt) (x - y)``; zero-phase by forward-backward.
     """
+    # imported here: scipy.signal takes about a second to import, and a jittered log (KITTI)
+    # never comes here
+    from scipy.signal import filtfilt, lfilter
+
     a = dt / (tau + dt)
     b, den = [a], [1.0, -(1.0 - a)]
     x = np.asarray(x, dtype=np.float64)
@@ -97,29 +131,36 @@ def lowpass(x: np.ndarray, tau: float, dt: float, zero_phase: bool = True) -> np
     return y
 
 
+@njit(cache=True, error_model="numpy")
 def _lowpass_steps(x: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """``y[0] = x[0]``, ``y[k] = y[k-1] + a[k-1] (x[k] - y[k-1])`` (compiled: the same operations in
+    the same order as the loop in Python, so the same numbers)."""
     y = np.empty_like(x)
+    if len(x) == 0:
+        return y
     y[0] = x[0]
     for k in range(1, len(x)):
         y[k] = y[k - 1] + a[k - 1] * (x[k] - y[k - 1])
     return y
 
 
-def lowpass_t(x: np.ndarray, t: np.ndarray, tau: float, zero_phase: bool = True) -> np.ndarray:
+def lowpass_t(x: np.ndarray, t: np.ndarray, tau: float, zero_phase: bool = True,
+              grid: TimeGrid | None = None) -> np.ndarray:
     """:func:`lowpass` on any time grid ``t`` (s): per-step ``a = dt_k/(tau + dt_k)``.
 
     A uniform grid uses :func:`lowpass` exactly; a jittered one (KITTI, 0.06-0.14 s)
     runs the same recursion with each step's own ``dt``, forward then backward.
+    ``grid``: :meth:`TimeGrid.of` of ``t`` if already known (it is then not worked out again).
     """
     x = np.asarray(x, dtype=np.float64)
-    t = np.asarray(t, dtype=np.float64)
-    if is_uniform(t):
-        return lowpass(x, tau, float(np.median(np.diff(t))), zero_phase)
-    d = np.diff(t)
+    grid = grid or TimeGrid.of(t)
+    if grid.uniform:
+        return lowpass(x, tau, grid.median_step, zero_phase)
+    d = grid.steps
     a = d / (tau + d)
-    y = _lowpass_steps(x, a)
+    y = _lowpass_steps(np.ascontiguousarray(x), a)
     if zero_phase:
-        y = _lowpass_steps(y[::-1], a[::-1])[::-1]
+        y = _lowpass_steps(np.ascontiguousarray(y[::-1]), np.ascontiguousarray(a[::-1]))[::-1]
     return y
 
 
@@ -139,6 +180,43 @@ def pearson_r(a, b) -> float:
     if len(a) < 3 or np.std(a) == 0 or np.std(b) == 0:
         return float("nan")
     return float(np.corrcoef(a, b)[0, 1])
+
+
+def lag_correlations(x: np.ndarray, ref: np.ndarray, idx: np.ndarray, lags: np.ndarray) -> np.ndarray:
+    """Pearson r of ``x[idx + k]`` with ``ref[idx]`` for every ``k`` of ``lags`` at once (one array;
+    NaN where :func:`pearson_r` would give NaN, or where a spread is zero). The same quantity as
+    :func:`pearson_r` per lag, up to rounding."""
+    if len(idx) < 3:
+        return np.full(len(lags), np.nan)
+    X = x[idx[:, None] + lags[None, :]]
+    y = ref[idx]
+    X = X - X.mean(axis=0)
+    y = y - y.mean()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return (y @ X) / np.sqrt((X * X).sum(axis=0) * (y @ y))
+
+
+#: lags whose vectorised r is within this of the largest are checked again with :func:`pearson_r`
+#: (rounding of the two ways of computing r differs by ~1e-16)
+_LAG_TIE = 1e-9
+
+
+def best_lag(x: np.ndarray, ref: np.ndarray, idx: np.ndarray, lags) -> tuple[float, int]:
+    """``(r, k)``: the lag ``k`` of ``lags`` (samples) whose ``x[idx + k]`` best correlates with
+    ``ref[idx]``, and its Pearson r (:func:`pearson_r`); NaN correlations count as the lowest, and of
+    equal ones the first lag wins (as ``max`` over the lags in order).
+
+    The candidates are found with :func:`lag_correlations` (all lags at once); those within
+    rounding of the best, and any that came out NaN, get :func:`pearson_r` itself, so the answer is
+    the one of :func:`pearson_r` lag by lag.
+    """
+    lags = np.asarray(lags)
+    r = lag_correlations(x, ref, idx, lags)
+    ok = np.isfinite(r)
+    top = r[ok].max() if ok.any() else -np.inf
+    check = [k for k, rk, f in zip(lags, r, ok) if not f or rk >= top - _LAG_TIE]
+    return max(((pearson_r(x[idx + k], ref[idx]), k) for k in check),
+               key=lambda z: -np.inf if np.isnan(z[0]) else z[0])
 
 
 def _rms_deg(e) -> float:
@@ -163,32 +241,36 @@ def masks(t: np.ndarray, vx: np.ndarray, scoring: Scoring) -> tuple[np.ndarray, 
     return fit, keep & ~fit
 
 
-def score(t, theta, phi_b, valid, ref, fit, scored, scoring: Scoring, max_lag_s: float = 1.0) -> Score:
+def score(t, theta, phi_b, valid, ref, fit, scored, scoring: Scoring, max_lag_s: float = 1.0,
+          grid: TimeGrid | None = None) -> Score:
     """Score one estimate (rad) against the reference roll (rad) on the given masks.
 
     ``theta``, ``phi_b`` must already be held over not-valid samples (:func:`hold_invalid`).
     Returns NaN scores when nothing usable is scored (e.g. every sample flagged not valid).
+    ``t`` (s) is the time grid; ``grid`` its :meth:`TimeGrid.of` if already known.
     """
     both = fit | scored
     vf = float(np.mean(valid[both])) if both.any() else 0.0
     if not scored.any() or vf == 0.0 or not np.all(np.isfinite(theta[both])):
         nan = float("nan")
         return Score(nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, vf)
+    grid = grid or TimeGrid.of(t)
+
     def f(x):
-        return lowpass_t(x, t, scoring.tau)
+        return lowpass_t(x, t, scoring.tau, grid=grid)
 
     rs, xs, ps = f(ref), f(theta), f(phi_b)
     fitted = fit.any()
     off = float(np.mean(rs[fit] - xs[fit])) if fitted else 0.0
     offp = float(np.mean(rs[fit] - ps[fit])) if fitted else 0.0
-    rc = lowpass_t(ref, t, scoring.tau, False)
-    xc = lowpass_t(theta, t, scoring.tau, False)
-    dt = float(np.median(np.diff(t)))
+    rc = lowpass_t(ref, t, scoring.tau, False, grid=grid)
+    xc = lowpass_t(theta, t, scoring.tau, False, grid=grid)
+    dt = grid.median_step
     nl = int(round(max_lag_s / dt))
     lags = np.arange(-nl, nl + 1, max(1, int(round(0.01 / dt))))
     idx = np.flatnonzero(scored)
     idx = idx[(idx < len(xs) - nl) & (idx >= nl)]  # room for the lags at both ends
-    best = max(((pearson_r(xs[idx + k], rs[idx]), k) for k in lags), key=lambda z: -np.inf if np.isnan(z[0]) else z[0])
+    best = best_lag(xs, rs, idx, lags)
     return Score(r=pearson_r(xs[scored], rs[scored]), rms_deg=_rms_deg(xs[scored] + off - rs[scored]),
                  offset_deg=float(np.degrees(off)), r_raw=pearson_r(theta[scored], ref[scored]),
                  rms_raw_deg=_rms_deg(theta[scored] + off - ref[scored]),
@@ -264,17 +346,18 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     fit, scored = masks(t, signals.vx, scoring)
     scores, smooth, raw, flags = {}, {}, {}, {}
     cond = log_conditions(signals)
+    grid = TimeGrid.of(t)
     for name in names:
         est = make_estimator(name, params, sensors=sensors, **cond,
                              **{**tuning, **per_estimator.get(name, {})}).run(signals)
         th, pb = hold_invalid(est.theta), hold_invalid(est.phi_b)
-        sc = score(t, th, pb, est.valid, ref, fit, scored, scoring)
+        sc = score(t, th, pb, est.valid, ref, fit, scored, scoring, grid=grid)
         scores[name] = sc
         raw[name] = th
         flags[name] = est.valid
-        smooth[name] = (lowpass_t(th, t, scoring.tau) + np.radians(sc.offset_deg)
+        smooth[name] = (lowpass_t(th, t, scoring.tau, grid=grid) + np.radians(sc.offset_deg)
                         if np.all(np.isfinite(th)) else th)
-    return Scored(scores, t, lowpass_t(ref, t, scoring.tau), smooth, ref, raw, fit, scored, flags)
+    return Scored(scores, t, lowpass_t(ref, t, scoring.tau, grid=grid), smooth, ref, raw, fit, scored, flags)
 
 
 def pooled(runs, names) -> dict[str, dict[str, float]]:
