@@ -66,8 +66,15 @@ def _assert_same_tables(fast, ref):
     assert np.ptp(ref._tab_cont, axis=0).max() > 0
 
 
+def _slow_but_first(values):
+    """``values`` as parameters, all but the first marked ``slow`` (the quick suite keeps one case,
+    the full suite runs every one)."""
+    return [v if i == 0 else pytest.param(*(v if isinstance(v, tuple) else (v,)), marks=pytest.mark.slow)
+            for i, v in enumerate(values)]
+
+
 @pytest.mark.parametrize("rate", [10.0, 100.0])
-@pytest.mark.parametrize("car", CARS)
+@pytest.mark.parametrize("car", _slow_but_first(CARS))
 @pytest.mark.parametrize("name", ["pif-modified", "pif-rate", "pif-gated"])
 def test_speed_grid_designs_equal_the_scipy_path(name, car, rate):
     fast, ref = _pair(name, car, rate, NOISE[car])
@@ -75,16 +82,17 @@ def test_speed_grid_designs_equal_the_scipy_path(name, car, rate):
     assert fast.fixed_dt == ref.fixed_dt == 1.0 / rate
 
 
-@pytest.mark.parametrize("car", CARS)
+@pytest.mark.parametrize("car", _slow_but_first(CARS))
 @pytest.mark.parametrize("name", ["kalman", "pio-modified", "pif-original"])
 def test_other_riccati_and_placed_designs_equal_the_scipy_path(name, car):
     fast, ref = _pair(name, car, 100.0, NOISE[car])
     _assert_same_tables(fast, ref)
 
 
-@pytest.mark.parametrize("name,car,rate", [("pif-adaptive", "suv-paper", 100.0), ("pif-adaptive", "van", 10.0),
-                                           ("pif-rate-adaptive", "sedan", 100.0),
-                                           ("pif-rate-adaptive", "compact", 10.0)])
+@pytest.mark.parametrize("name,car,rate", _slow_but_first([("pif-adaptive", "suv-paper", 100.0),
+                                                           ("pif-adaptive", "van", 10.0),
+                                                           ("pif-rate-adaptive", "sedan", 100.0),
+                                                           ("pif-rate-adaptive", "compact", 10.0)]))
 def test_speed_excitation_designs_equal_the_scipy_path(name, car, rate):
     fast, ref = _pair(name, car, rate, NOISE[car])
     _assert_same_tables(fast, ref)
@@ -184,8 +192,8 @@ def _theta_pair(name, signals, car="suv-paper"):
     return fast.run(signals).theta, ref.run(signals).theta
 
 
-@pytest.mark.parametrize("scenario,condition", [("s-curve", "nominal"), ("bank-lane-change", "low-mu"),
-                                                ("track-lane-change", "cf50")])
+@pytest.mark.parametrize("scenario,condition", _slow_but_first([("s-curve", "nominal"), ("bank-lane-change", "low-mu"),
+                                                                 ("track-lane-change", "cf50")]))
 def test_bank_estimates_equal_on_the_paper_scenarios(scenario, condition):
     from roadbank.sim import run_scenario
     s = run_scenario(scenario, condition).signals
@@ -195,6 +203,7 @@ def test_bank_estimates_equal_on_the_paper_scenarios(scenario, condition):
         assert np.nanmax(np.abs(b)) > np.deg2rad(0.5)              # a bank was estimated
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not any(KITTI.glob("*/oxts")), reason=f"KITTI oxts drives absent at {KITTI}")
 def test_bank_estimates_equal_on_the_shared_kitti_drives():
     from roadbank.io.kitti import find_oxts_dirs, load_kitti_oxts
