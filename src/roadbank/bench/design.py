@@ -45,13 +45,8 @@ RATE_HZ = 100.0
 
 
 def _clear_memos(models: bool = True) -> None:
-    from ..estimators import base, grid_design
-    base._DESIGN_CACHE.clear()
-    base._DISCRETE_CACHE.clear()
-    grid_design._NOISE.clear()
-    if models:
-        grid_design._MODELS.clear()
-        base._augmented_design_model.cache_clear()
+    from ..estimators.grid_design import clear_memos
+    clear_memos(models)
 
 
 def _time_design(name: str, noise: float, grid: dict, *, models: bool = True) -> tuple[float, float]:

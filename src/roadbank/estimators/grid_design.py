@@ -33,7 +33,7 @@ from dataclasses import replace
 import numpy as np
 
 from .. import cache
-from . import synthesis
+from . import base, synthesis
 from .are_grid import solve_grid
 from .base import augmented_design_model
 
@@ -45,6 +45,20 @@ _NOISE: dict = {}
 #: the whole-grid Riccati solutions ``(P, ok)`` of recent steady PIF designs, by estimator class
 #: and design inputs (:func:`pif_solution`)
 _SOLUTIONS: dict = {}
+
+
+def clear_memos(models: bool = True) -> None:
+    """Forget every design this process has memoised (the tables, the fixed-rate tables, the grid's
+    noise densities and Riccati solutions; ``models``: the car's design models too), so that the
+    next design of anything is made anew, as in a fresh process (the disk cache is apart:
+    ``ROADBANK_CACHE_DIR=off``). For benchmarks that time designs."""
+    base._DESIGN_CACHE.clear()
+    base._DISCRETE_CACHE.clear()
+    _NOISE.clear()
+    _SOLUTIONS.clear()
+    if models:
+        _MODELS.clear()
+        base._augmented_design_model.cache_clear()
 
 
 def _grid_models(key: tuple, build) -> tuple:

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from ..estimators.grid_design import clear_memos
 from ..io.stream import CHUNK_ROWS
 from .run import run_fleet
 
@@ -249,6 +250,7 @@ def fleet_speedup(n_logs: int = 200, seconds: float = 600.0, workers=(1, 2), est
     os.environ["ROADBANK_CACHE_DIR"] = "off"
     try:
         for w in workers:
+            clear_memos()      # the in-process run designs every log anew, as a fresh worker does
             t0 = time.perf_counter()
             out = work / f"out-{fmt}-{w}-{batch or 'auto'}"
             res = run_fleet(paths, out, [estimator], workers=w, batch=batch)
