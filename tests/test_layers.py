@@ -13,7 +13,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "roadbank"
 
 #: lowest first; a unit may import from any unit of a lower layer
 LAYERS = (
-    {"__version__", "constants"},                        # the root package's version string; physical constants
+    {"__version__", "constants", "runtime"},             # version string; physical constants; process settings
     {"params", "units", "defaults", "cache", "vehicles"},
     {"signals", "models"},
     {"io", "estimators", "sim"},

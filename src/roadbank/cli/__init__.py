@@ -7,18 +7,11 @@ numba compilation of estimators it does not use.
 
 from __future__ import annotations
 
-import os
+# the process's settings (one BLAS thread, Arrow's allocator, freed memory kept for the next
+# log: roadbank.runtime), before numpy is imported; an explicit user setting wins
+from .. import runtime
 
-# The command line works on small matrices (3x3 to 6x6 Riccati designs, per-sample
-# kernels) and parallelises with processes (--jobs): a multi-threaded BLAS only spins
-# there (designing the Kalman + PIF schedules took 3-8 s instead of 0.5 s on a loaded
-# 2-core machine). Set before numpy is imported; an explicit user setting wins.
-for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
-# Arrow buffers from the C allocator rather than Arrow's default mimalloc pool, which
-# keeps its segments: 10-18 MiB less peak memory when a long log is streamed
-# (docs/io.md), no measurable cost at these buffer sizes. Read when pyarrow loads.
-os.environ.setdefault("ARROW_DEFAULT_MEMORY_POOL", "system")
+runtime.configure()
 
 import importlib  # noqa: E402
 import importlib.util  # noqa: E402

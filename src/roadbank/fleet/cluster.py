@@ -36,6 +36,8 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
+from .. import runtime
+
 #: input a batch of logs aims at (bytes of log files): one Dask task of about half a second
 BATCH_BYTES = 32 * 2**20
 #: the most logs in one batch
@@ -187,6 +189,7 @@ def _warm_worker(warm) -> None:
     """A pool process's initializer: ``warm`` (``(fn, *args)`` or None) once, its failure left to the
     tasks (they report it against their logs); the process will end by :func:`_quick_exit`."""
     multiprocessing.util.Finalize(None, _quick_exit, exitpriority=-1000)
+    runtime.keep_freed_memory()       # a fresh process, like the parent once it has run a few logs
     if warm is not None:
         try:
             warm[0](*warm[1:])
