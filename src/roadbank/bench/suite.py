@@ -89,8 +89,6 @@ SIZES = {
 
 RATE_HZ = 100.0
 
-#: environment variables the bench command set for itself (not passed on to `reproduce`)
-_SET_BY_BENCH: set[str] = set()
 
 
 # --------------------------------------------------------------------------
@@ -425,7 +423,7 @@ def _timed_reproduce(outdir: Path, timeout: float, env=None):
     """Run ``roadbank reproduce -o outdir`` in a fresh process: ``(wall s, None)`` or ``(None, reason)``."""
     cmd = [sys.executable, "-m", "roadbank.cli", "reproduce", "-o", str(outdir)]
     if env is None:   # the user's environment, as `roadbank reproduce` would see it
-        env = {k: v for k, v in os.environ.items() if k not in _SET_BY_BENCH}
+        env = dict(os.environ)
     t0 = time.perf_counter()
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
@@ -455,7 +453,7 @@ def reproduce_bench(timeout: float = 900.0, warm_runs: int = 2) -> dict:
     walls = []
     with tempfile.TemporaryDirectory() as tmp, tempfile.TemporaryDirectory() as cache:
         # the first run as after `pip install`: an empty numba cache (its own directory)
-        env = {k: v for k, v in os.environ.items() if k not in _SET_BY_BENCH}
+        env = dict(os.environ)
         # (and an empty design cache, roadbank.cache)
         cold, reason = _timed_reproduce(Path(tmp) / "cold", timeout,
                                         dict(env, NUMBA_CACHE_DIR=cache, ROADBANK_CACHE_DIR=f"{cache}/roadbank"))

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
 import shlex
 import sys
 from pathlib import Path
@@ -23,14 +22,7 @@ import click
 def bench(output, quick, tiny, as_json, fleet_logs):
     """Benchmark the estimators, the plant, cold start and reproduce against peers and speed targets."""
     size = "tiny" if tiny else "quick" if quick else "full"
-    # The kernels are single-threaded; the designs call LAPACK on 3x3..6x6 matrices
-    # where BLAS worker threads only spin (badly so on shared cores). Only effective
-    # when numpy is not imported yet (always the case for the `roadbank` command).
-    from ..bench import suite
-    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
-        if var not in os.environ:
-            os.environ[var] = "1"
-            suite._SET_BY_BENCH.add(var)
+    # one BLAS thread: set for every command by roadbank.runtime when roadbank.cli loads
     from ..bench import markdown, run_suite, to_json
     from ..report.html import write_document
     command = "roadbank bench" + "".join(f" {a}" for a in sys.argv[2:]) if sys.argv[1:2] == ["bench"] \

@@ -51,9 +51,9 @@ def expm_stack(M: np.ndarray) -> np.ndarray:
     """``exp(M)`` of every matrix of a stack ``M`` (k, p, p) (module docstring); a matrix that is not
     finite comes out NaN."""
     M = np.asarray(M, dtype=np.float64)
-    out = np.full(M.shape, np.nan)
     if M.shape[0] == 0 or M.shape[-1] == 0:
         return np.zeros(M.shape)
+    out = np.full(M.shape, np.nan)
     finite = np.isfinite(M).all(axis=(-2, -1))
     norm = np.where(finite, np.abs(np.where(np.isfinite(M), M, 0.0)).sum(axis=-2).max(axis=-1), 0.0)
     with np.errstate(divide="ignore"):
