@@ -143,27 +143,38 @@ def test_the_shipped_bank_rate_and_kappa_are_what_the_rule_picks():
 
 @pytest.mark.slow
 @pytest.mark.skipif(not (DATA / "kitti-oxts-extra").is_dir(), reason="../shared/data/kitti-oxts-extra not present")
-def test_the_shipped_quiet_ratio_is_what_the_rule_picks():
-    """The third stage (kinematic_pif_candidates(3)): the shipped quiet ratio against its grid
-    neighbours, in increasing order (exact ties go to the smaller). Holding the gate open on quiet
-    logs must not touch a real training drive (all are loud) and must gain on the simulated ones."""
-    from roadbank.tuning.real import QUIET_RATIOS, choose_by_roads, per_log, simulated_sets, training_logs
-    from roadbank.vehicle import QUIET_RATIO
+def test_the_shipped_quiet_ratio_and_filter_are_what_the_rule_picks():
+    """The third stage (kinematic_pif_candidates(3): the default PIF on a quiet log) chose the
+    shipped ratio against its grid neighbours, in increasing order (exact ties go to the smaller);
+    the fourth (kinematic_pif_candidates(4)) the shipped filter at that ratio against the other
+    filters of the PIF family, in the stage's order. A quiet filter must not touch a real training
+    drive (all are loud) and must gain on the simulated ones."""
+    from roadbank.tuning.real import (QUIET_FILTERS, QUIET_RATIOS, choose_by_roads, per_log, simulated_sets,
+                                      training_logs)
+    from roadbank.vehicle import QUIET_FILTER, QUIET_RATIO
 
     logs, sims = training_logs(DATA), simulated_sets()
     i = QUIET_RATIOS.index(QUIET_RATIO)
-    cands = [QUIET_RATIOS[j] for j in (0, i - 1, i, i + 1) if 0 <= j < len(QUIET_RATIOS)]
-    builds = {q: per_log("kinematic-pif", quiet_ratio=q) for q in sorted(set(cands))}
-    chosen, real, sim = choose_by_roads(builds, logs, sims)
+    ratios = sorted({QUIET_RATIOS[j] for j in (0, i - 1, i, i + 1) if 0 <= j < len(QUIET_RATIOS)})
+    third = {q: per_log("kinematic-pif", quiet_ratio=q, quiet_filter="pif-modified") for q in ratios}
+    chosen, real, sim = choose_by_roads(third, logs, sims)
     assert chosen == QUIET_RATIO, (real, sim)
     assert real[QUIET_RATIO] == real[0.0]
     assert sim[QUIET_RATIO] < sim[0.0] - 0.005
+    fourth = {f: per_log("kinematic-pif", quiet_filter=f) for f in QUIET_FILTERS if f.startswith("pif-")}
+    chosen4, real4, sim4 = choose_by_roads(fourth, logs, sims)
+    assert chosen4 == QUIET_FILTER, (real4, sim4)
+    assert real4[QUIET_FILTER] == real[0.0]
+    assert sim4["pif-modified"] == sim[QUIET_RATIO]        # the third stage's choice
+    assert sim4[QUIET_FILTER] < sim4["pif-modified"] - 0.01
 
 
-def test_a_quiet_log_holds_the_gate_open_and_a_loud_one_does_not(lane_change):
+def test_a_quiet_log_gets_the_quiet_filter_and_a_loud_one_the_blend(lane_change):
     """The rule of roadbank.vehicle.is_quiet in every command's factory: on a log whose ay carries
-    the data sheet's noise the output is the PIF's; with the road noise of a real road, the blend."""
-    from roadbank.vehicle import SensorSpec, is_quiet, log_conditions
+    the data sheet's noise kinematic-pif is the quiet filter under its own name; with the road noise
+    of a real road, the blend."""
+    from roadbank.estimators.gated import KinematicPIF
+    from roadbank.vehicle import QUIET_FILTER, SensorSpec, is_quiet, log_conditions
 
     s = lane_change.signals
     sheet = SensorSpec()
@@ -175,11 +186,16 @@ def test_a_quiet_log_holds_the_gate_open_and_a_loud_one_does_not(lane_change):
     assert not is_quiet(sheet, lc["log_rate"], lc["log_ay_noise"])
     assert not is_quiet(sheet, cond["log_rate"], float("nan")) and not is_quiet(sheet, 100.0, 0.0, ratio=0.0)
     quiet_est, loud_est = for_log("kinematic-pif", s), for_log("kinematic-pif", loud)
-    assert quiet_est.gate_on == -quiet_est.gate_span and loud_est.gate_on == KINEMATIC_PIF_GATE["gate_on"]
-    got, pif = quiet_est.run(s), for_log("pif-modified", s).run(s)
-    np.testing.assert_allclose(got.w[1:], pif.w[1:], rtol=0, atol=1e-12)
+    assert quiet_est.name == loud_est.name == "kinematic-pif"
+    assert not isinstance(quiet_est, KinematicPIF) and isinstance(loud_est, KinematicPIF)
+    got, ref = quiet_est.run(s), for_log(QUIET_FILTER, s).run(s)
+    assert got.name == "kinematic-pif"
+    np.testing.assert_array_equal(got.w, ref.w)
+    np.testing.assert_array_equal(got.valid, ref.valid)
+    # the low-pass's options do not reach the quiet filter; another quiet filter can be named
+    np.testing.assert_array_equal(for_log("kinematic-pif", s, cutoff=0.3, kappa=0.1).run(s).w, ref.w)
+    pif = for_log("kinematic-pif", s, quiet_filter="pif-modified").run(s)
+    np.testing.assert_array_equal(pif.w, for_log("pif-modified", s).run(s).w)
     # an explicit gate, or quiet_ratio=0, keeps the blend
     assert for_log("kinematic-pif", s, gate_on=3.0).gate_on == 3.0
     assert for_log("kinematic-pif", s, quiet_ratio=0.0).gate_on == KINEMATIC_PIF_GATE["gate_on"]
-    with pytest.raises(ValueError, match="gate_on or hold_open"):
-        E.make("kinematic-pif", hold_open=True, gate_on=1.0)

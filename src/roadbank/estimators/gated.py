@@ -216,6 +216,11 @@ class KinematicPIF(_GatedPair):
     :mod:`roadbank.tuning.real` on training data (:data:`KINEMATIC_PIF_GATE`). Stacked states
     ``[w_lp, vy, r, w]``; ``run`` equals ``step``; C export as ``pif-gated``.
 
+    This class is the blend. Every command (:func:`roadbank.vehicle.make_estimator`) builds it for a
+    log whose ``ay`` the road shakes; on a quiet log, which carries little more noise than its data
+    sheet says (:func:`roadbank.vehicle.is_quiet`), the model is worth more than the low-pass and
+    ``kinematic-pif`` is :data:`roadbank.vehicle.QUIET_FILTER` (``pif-adaptive``) under this name.
+
     Parameters
     ----------
     params : VehicleParams
@@ -231,12 +236,6 @@ class KinematicPIF(_GatedPair):
         ``[tuning.pif-modified]`` applies).
     gate_tf, gate_release, gate_on, gate_span : float, optional
         As :class:`PIFGated`; defaults :data:`KINEMATIC_PIF_GATE`.
-    hold_open : bool
-        Hold the gate open: the output is the PIF's from the second sample after each (re)start
-        (the gate's ramp then starts at ``gate_on = -gate_span``). What every command chooses for
-        a quiet log, whose ``ay`` carries no more noise than its data sheet says
-        (:func:`roadbank.vehicle.is_quiet`): there the car's model is worth more than the
-        low-pass. Default False.
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator` (both filters).
     """
@@ -246,16 +245,10 @@ class KinematicPIF(_GatedPair):
 
     def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, tuning=None, Q=None, R=None, S=None,
                  th=None, Q_ay=None, adapt_th=None, gate_tf=None, gate_release=None, gate_on=None, gate_span=None,
-                 hold_open=False, **kw):
+                 **kw):
         d = KINEMATIC_PIF_GATE
         opt = {k: float(d[k] if v is None else v) for k, v in (
             ("gate_tf", gate_tf), ("gate_release", gate_release), ("gate_on", gate_on), ("gate_span", gate_span))}
-        if not isinstance(hold_open, (bool, np.bool_)):
-            raise ValueError(f"{self.name}: hold_open must be True or False, got {hold_open!r}")
-        if hold_open:   # the ramp (j - gate_on) / gate_span >= 1 for every j = vx |dr/dt| >= 0
-            if gate_on is not None:
-                raise ValueError(f"{self.name}: give gate_on or hold_open, not both")
-            opt["gate_on"] = -opt["gate_span"]
         _check_gate(self.name, opt)
         common = {k: kw[k] for k in _COMMON if k in kw}
         self._fast = PIF(params, model="modified", tuning=tuning, Q=Q, R=R, S=S, th=th, Q_ay=Q_ay,

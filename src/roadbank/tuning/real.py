@@ -30,10 +30,12 @@ as its one prior. Its constants are chosen by the same real-roads-first rule in 
 over a fixed grid: first the bank rate (:data:`BANK_RATES_DEG`) and ``kappa`` (:data:`KAPPAS`)
 with the gate held at its value, then the gate (:data:`GATE_GRID`) at the chosen pair
 (:func:`kinematic_pif_candidates`). Both stages ran before the third existed (``quiet_ratio=0``).
-The third stage chooses, by the same rule, for which logs the gate is held open (the PIF with the
-car's model throughout): those whose ``ay`` road noise is at most ``quiet_ratio`` times the data
-sheet's (:func:`roadbank.vehicle.is_quiet`), over :data:`QUIET_RATIOS`; exact ties go to the
-smaller ratio (fewer logs leave the low-pass).
+The third stage chose, by the same rule, for which logs the gate is held open (the default PIF
+with the car's model throughout): those whose ``ay`` road noise is at most ``quiet_ratio`` times
+the data sheet's (:func:`roadbank.vehicle.is_quiet`), over :data:`QUIET_RATIOS`; exact ties go to
+the smaller ratio (fewer logs leave the low-pass). It chose 1.5. The fourth stage chooses, at
+that ratio and by the same rule, the filter of a quiet log over :data:`QUIET_FILTERS` (exact ties
+go to the earlier one); it chose ``pif-adaptive``.
 """
 
 from __future__ import annotations
@@ -64,8 +66,12 @@ GATE_GRID = {"gate_on": (1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0), "gate_spa
              "gate_release": (1.0, 2.0, 4.0, 8.0)}
 #: candidate root-mean-square bank rates of roads (deg/s) for ``kinematic-pif``'s scheduled low-pass
 BANK_RATES_DEG = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 1.0)
-#: candidate quiet ratios of ``kinematic-pif`` (-; 0: the gate never held open)
+#: candidate quiet ratios of ``kinematic-pif`` (-; 0: never quiet)
 QUIET_RATIOS = (0.0, 1.5, 2.0, 3.0, 6.0, 10.0, 30.0, 100.0)
+#: candidate filters of ``kinematic-pif`` on a quiet log: the causal estimators that read the
+#: car's model, the stage-3 choice (the default PIF) first, and the two low-passes
+QUIET_FILTERS = ("pif-modified", "pif-rate", "pif-gated", "pif-adaptive", "pif-rate-adaptive", "pio-modified",
+                 "kalman", "dfc", "kinematic-ff", "kinematic-lp")
 #: the shipped cars of the simulated part, and the number of training drives per car
 SIM_CARS = ("suv-paper", "sedan", "compact", "van")
 SIM_DRIVES = 24
@@ -158,17 +164,21 @@ def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kap
 
     ``stage`` 1: every ``(bank rate deg/s, kappa)`` of :data:`BANK_RATES_DEG` x :data:`KAPPAS`, the
     gate as shipped; ``stage`` 2: every ``(gate_on, gate_span, gate_release)`` of :data:`GATE_GRID`
-    at ``bank_rate_deg`` and ``kappa`` (the first stage's choice); neither holds the gate open on
-    quiet logs (``quiet_ratio=0``: they ran before that). ``stage`` 3: every quiet ratio of
-    :data:`QUIET_RATIOS`, in increasing order, with the shipped constants of the first two.
+    at ``bank_rate_deg`` and ``kappa`` (the first stage's choice); neither is quiet on any log
+    (``quiet_ratio=0``: they ran before that). ``stage`` 3: every quiet ratio of
+    :data:`QUIET_RATIOS`, in increasing order, with the shipped constants of the first two and the
+    default PIF on a quiet log; ``stage`` 4: every filter of :data:`QUIET_FILTERS` on a quiet log, in
+    that order, with the shipped constants of the first three.
     """
     if stage == 1:
         return {(b, k): per_log("kinematic-pif", bank_rate=float(np.radians(b)), kappa=k, quiet_ratio=0.0)
                 for b in BANK_RATES_DEG for k in KAPPAS}
     if stage == 3:
-        return {q: per_log("kinematic-pif", quiet_ratio=q) for q in QUIET_RATIOS}
+        return {q: per_log("kinematic-pif", quiet_ratio=q, quiet_filter="pif-modified") for q in QUIET_RATIOS}
+    if stage == 4:
+        return {f: per_log("kinematic-pif", quiet_filter=f) for f in QUIET_FILTERS}
     if stage != 2 or bank_rate_deg is None or kappa is None:
-        raise ValueError("kinematic_pif_candidates: stage 1 or 3, or stage 2 with the first stage's bank rate "
+        raise ValueError("kinematic_pif_candidates: stage 1, 3 or 4, or stage 2 with the first stage's bank rate "
                          "and kappa")
     return {(on, sp, rel): per_log("kinematic-pif", bank_rate=float(np.radians(bank_rate_deg)), kappa=kappa,
                                    gate_on=on, gate_span=sp, gate_release=rel)

@@ -20,8 +20,8 @@ from .sensors import SensorSpec
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
 # them: loading a car (load_vehicle, --vehicle) loads neither
 
-__all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "design_span", "has_design_span", "log_conditions",
-           "noise_densities", "is_quiet", "make_estimator"]
+__all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "QUIET_FILTER", "design_span", "has_design_span",
+           "log_conditions", "noise_densities", "is_quiet", "make_estimator"]
 
 
 #: seconds of driving (``vx >= v_min``) at the start of a log on which :func:`log_conditions` measures it (s)
@@ -29,10 +29,16 @@ DESIGN_SPAN_S = 60.0
 #: ... read at most this far into the log (s): a log that stands still longer is measured on what it has
 DESIGN_MAX_S = 600.0
 #: a log is quiet (:func:`is_quiet`) when its ``ay`` road-noise density is at most this many times
-#: the accelerometer's data-sheet density (-; chosen by the rule of :mod:`roadbank.tuning.real`)
+#: the accelerometer's data-sheet density (-; chosen by the rule of :mod:`roadbank.tuning.real`,
+#: its third stage), and ``kinematic-pif`` is then :data:`QUIET_FILTER`
 QUIET_RATIO = 1.5
+#: the filter that ``kinematic-pif`` is on a quiet log: the car's model, with the tyre's fall-off
+#: near the friction limit (the rule's fourth stage, over :data:`roadbank.tuning.real.QUIET_FILTERS`)
+QUIET_FILTER = "pif-adaptive"
 #: the options of ``kinematic-pif`` that set its gate: given one, the caller's gate is kept
-_GATE_OPTIONS = ("gate_on", "gate_span", "gate_tf", "gate_release", "hold_open")
+_GATE_OPTIONS = ("gate_on", "gate_span", "gate_tf", "gate_release")
+#: ``kinematic-pif``'s options of its low-pass and gate, which its quiet filter does not take
+_BLEND_OPTIONS = ("cutoff", "kappa", "bank_rate") + _GATE_OPTIONS
 
 
 def design_span(signals, v_min: float = 5.0) -> int:
@@ -164,19 +170,25 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
-        :data:`QUIET_RATIO`; 0: never): on a quiet log (:func:`is_quiet` with that ratio) its
-        gate is held open (``hold_open=True``: the PIF, with the car's model, throughout),
-        unless the options set the gate themselves.
+        :data:`QUIET_RATIO`; 0: never) and ``quiet_filter`` (default :data:`QUIET_FILTER`): on a
+        quiet log (:func:`is_quiet` with that ratio) it is that filter, with the car's model
+        throughout, built from the same options less those of the low-pass and the gate and
+        named ``kinematic-pif`` (its outputs keep their columns); unless the options set the
+        gate themselves.
     """
     from .. import estimators
     from ..estimators.pif import with_sensor_noise
 
     sensors = sensors if sensors is not None else SensorSpec()
+    label = name
     if name == "kinematic-pif":
         ratio = float(options.pop("quiet_ratio", QUIET_RATIO))
+        quiet_filter = options.pop("quiet_filter", QUIET_FILTER)
         if not any(k in options for k in _GATE_OPTIONS) and is_quiet(sensors, log_rate, log_ay_noise, ratio):
-            options["hold_open"] = True
+            name, options = quiet_filter, {k: v for k, v in options.items() if k not in _BLEND_OPTIONS}
     if sensors.r_variance > 0:
         R, Q_ay = noise_densities(sensors, log_rate, log_ay_noise, log_r_noise)
         options = with_sensor_noise(name, options, R, Q_ay)
-    return estimators.make(name, params, **options)
+    est = estimators.make(name, params, **options)
+    est.name = label
+    return est
