@@ -5,7 +5,7 @@
   handed to the default PIF while the yaw rate changes fast), chosen on training data only by
   the real-roads-first rule of :mod:`roadbank.tuning.real` (the KITTI training drives first, the
   simulated drives of cars that are not described to break ties; docs/estimators.md). Its
-  low-pass uses no tyre data.
+  low-pass uses no tyre data. On a quiet log it is ``pif-adaptive`` (:func:`roadbank.vehicle.is_quiet`).
 * :data:`VEHICLE` — a log whose car is not described: the estimators that need a car model are
   designed for the parameters of this shipped car (with the data sheet's ESP sensors) in every
   command that reads logs (``estimate``, ``map``, ``validate``) and in

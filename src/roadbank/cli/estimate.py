@@ -49,7 +49,8 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
 @click.option("--estimators", "-e", "est_names", multiple=True, default=(DEFAULT,),
               show_default=True, help="Estimators, comma-separated or repeated; 'all' for every one. "
                                       "Default kinematic-pif: the filtered kinematic estimate on real "
-                                      "roads, the paper's PIF while the yaw rate changes fast (README). "
+                                      "roads, the paper's PIF while the yaw rate changes fast; on a quiet "
+                                      "log pif-adaptive (README). "
                                       "pif-modified is roadbank's default tuning of the paper's filter; "
                                       "pif-paper the same filter with the paper's Table 4 weights.")
 @click.option("-o", "--output", required=True, type=click.Path(),
