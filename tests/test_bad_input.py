@@ -16,16 +16,16 @@ ALL = list(E.NAMES)
 def test_nan_inf_and_low_speed_samples_are_held(name):
     signals, w = linear_plant_run(P, T=25.0)
     ay, r, vx, d = (np.array(a) for a in (signals.ay, signals.r, signals.vx, signals.delta_f))
+    est = E.make(name)
     ay[500] = np.nan
     r[900:905] = np.inf
     d[1200] = -np.inf
-    vx[1500:1530] = 1.0                               # below v_min
+    vx[1500:1530] = 0.5 * est.v_min                   # below v_min (the estimator's own)
     vx[1700] = np.nan
     bad = np.zeros(len(ay), bool)
     bad[[500, 1700]] = True
     bad[900:905] = True
     bad[1500:1530] = True
-    est = E.make(name)
     if est.uses[0]:
         bad[1200] = True
     e = est.run(Signals(signals.t, vx, ay, r, d))

@@ -47,19 +47,19 @@ def scenarios():
     return out
 
 
-def hard_log(scenarios, *, nan_time=True):
-    """bank-lane-change with a 2.5 s gap, a slow stretch, speeds at and beyond the grid's
-    ends, an implausible lateral acceleration, NaN/inf inputs, a repeated and a backward
-    time stamp and irregular steps up to 45 ms (several substeps)."""
+def hard_log(scenarios, *, nan_time=True, v_min=5.0):
+    """bank-lane-change with a 2.5 s gap, a slow stretch (below ``v_min``, m/s: the estimator's), speeds
+    at and beyond the grid's ends, an implausible lateral acceleration, NaN/inf inputs, a repeated and
+    a backward time stamp and irregular steps up to 45 ms (several substeps)."""
     t, vx, ay, r, d = (a.copy() for a in scenarios["bank-lane-change"])
     n = len(t)
     t[400:] += 2.5
-    vx[600:700] = 3.0
+    vx[600:700] = 0.6 * v_min
     ay[800:805] = np.nan
     r[900] = np.inf
     d[950:960] = np.nan
     vx[1000] = np.nan
-    vx[720:740] = 5.0                                  # exactly v_min: the first grid speed
+    vx[720:740] = v_min                                # exactly v_min: the first grid speed
     vx[740:760] = 130.0                                # beyond the grid: clamped schedule
     ay[1020:1040] = 40.0                               # |w| > sin(max_angle): flagged implausible
     t[1100] = t[1099]
@@ -156,13 +156,13 @@ def test_the_c_tables_are_read_at_the_kernels_offsets(name):
 def test_float64_equals_step_on_every_scenario_and_a_hard_log(name, scenarios, built_modules):
     mod = built_modules(name)
     est = BUILT[name]
-    for scen, cols in {**scenarios, "hard": hard_log(scenarios)}.items():
+    for scen, cols in {**scenarios, "hard": hard_log(scenarios, v_min=est.v_min)}.items():
         py = python_steps(est, cols)
         assert_same(py, mod.run(*cols), TOL64, TOL64, f"{name} on {scen}")
         if scen == "hard":
             assert 50 < np.count_nonzero(~py["valid"]) < len(py["valid"]) // 2   # the log exercises flags
     # the dt entry point (time since the previous call) on the same log, time stamps all finite
-    cols = hard_log(scenarios, nan_time=False)
+    cols = hard_log(scenarios, nan_time=False, v_min=est.v_min)
     assert_same(python_steps(est, cols), mod.run(*cols, use_dt=True), TOL64, TOL64, f"{name} step_dt")
 
 

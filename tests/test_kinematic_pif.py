@@ -169,6 +169,27 @@ def test_the_shipped_quiet_ratio_and_filter_are_what_the_rule_picks():
     assert sim4[QUIET_FILTER] < sim4["pif-modified"] - 0.01
 
 
+@pytest.mark.slow
+@pytest.mark.skipif(not (DATA / "kitti-oxts-extra").is_dir(), reason="../shared/data/kitti-oxts-extra not present")
+def test_the_shipped_lowest_speed_is_what_the_rule_picks():
+    """The fifth stage (kinematic_pif_candidates(5)): the shipped lowest speed against its grid
+    neighbour and the former 5 m/s, the real drives scored with the seconds after each stop. It
+    must gain there and change nothing where the other stages score (5 s after each start)."""
+    from roadbank.estimators.gated import KINEMATIC_PIF_V_MIN
+    from roadbank.tuning.real import V_MINS, choose_by_roads, objective, per_log, simulated_sets, training_logs
+    from roadbank.validation.kitti import KITTI_SCORING_STOPS
+
+    i = V_MINS.index(KINEMATIC_PIF_V_MIN)
+    cands = sorted({V_MINS[j] for j in (0, i - 1, i, i + 1) if 0 <= j < len(V_MINS)}, reverse=True)
+    builds = {v: per_log("kinematic-pif", v_min=v) for v in cands}
+    chosen, real, sim = choose_by_roads(builds, training_logs(DATA, KITTI_SCORING_STOPS), simulated_sets())
+    assert chosen == KINEMATIC_PIF_V_MIN, (real, sim)
+    assert real[KINEMATIC_PIF_V_MIN] < real[5.0] - 0.02
+    each_start = training_logs(DATA)
+    assert objective(builds[KINEMATIC_PIF_V_MIN], each_start, []) == pytest.approx(
+        objective(builds[5.0], each_start, []), abs=1e-3)
+
+
 def test_a_quiet_log_gets_the_quiet_filter_and_a_loud_one_the_blend(lane_change):
     """The rule of roadbank.vehicle.is_quiet in every command's factory: on a log whose ay carries
     the data sheet's noise kinematic-pif is the quiet filter under its own name; with the road noise
@@ -199,3 +220,40 @@ def test_a_quiet_log_gets_the_quiet_filter_and_a_loud_one_the_blend(lane_change)
     # an explicit gate, or quiet_ratio=0, keeps the blend
     assert for_log("kinematic-pif", s, gate_on=3.0).gate_on == 3.0
     assert for_log("kinematic-pif", s, quiet_ratio=0.0).gate_on == KINEMATIC_PIF_GATE["gate_on"]
+
+
+def test_the_blend_runs_through_a_stop_instead_of_starting_again():
+    """A car on a 2 deg bank stops and pulls away 15 times, its ay shaken as on a real road. The
+    kinematic estimate holds at any speed, so the blend (lowest speed KINEMATIC_PIF_V_MIN) keeps
+    filtering down to 1 m/s: in the second after the car passes 5 m/s again its error is about the
+    steady one, while the same filter stopped at 5 m/s starts again from one noisy sample (its
+    max_gap of 1 s has passed) and has about twice the error there."""
+    from roadbank.estimators.gated import KINEMATIC_PIF_V_MIN
+
+    t = np.arange(0.0, 450.0, 0.1)
+    phase = t % 30.0
+    vx = np.interp(phase, [0, 15, 20, 24, 30], [10, 10, 0, 0, 10])
+    bank = np.radians(2.0)
+    rng = np.random.default_rng(0)
+    ay = 9.81 * np.sin(bank) + 0.2 * rng.standard_normal(t.size)
+    s = Signals(t, vx, ay, np.zeros_like(t), np.full_like(t, np.nan))
+    est = for_log("kinematic-pif", s)
+    assert est.v_min == KINEMATIC_PIF_V_MIN == 1.0
+    assert isinstance(est, E.KinematicPIF)                 # loud: the blend
+    through, stopped = est.run(s), for_log("kinematic-pif", s, v_min=5.0).run(s)
+    assert through.valid[(vx >= 1.0) & (t > 1.0)].all() and not stopped.valid[vx < 5.0].any()
+    after = np.zeros(t.size, bool)
+    for k in np.flatnonzero((vx[1:] >= 5.0) & (vx[:-1] < 5.0)) + 1:
+        after[k:k + 10] = True
+    steady = (phase > 5.0) & (phase < 15.0) & (t > 30.0)
+
+    def rms(e, m):
+        return float(np.degrees(np.sqrt(np.mean((e.theta[m] - bank) ** 2))))
+
+    assert rms(through, steady) == pytest.approx(rms(stopped, steady), rel=1e-6)
+    assert rms(through, after) < 1.5 * rms(through, steady)
+    assert rms(stopped, after) > 1.5 * rms(through, after)
+    # the quiet filter keeps its own lowest speed (its tyre model's limit)
+    quiet = Signals(t, vx, 9.81 * np.sin(bank) + 0.01 * rng.standard_normal(t.size), s.r, s.delta_f)
+    assert not isinstance(for_log("kinematic-pif", quiet), E.KinematicPIF)
+    assert for_log("kinematic-pif", quiet).v_min == 5.0

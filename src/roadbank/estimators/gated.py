@@ -200,6 +200,9 @@ KINEMATIC_PIF_GATE = dict(gate_tf=0.05, gate_release=8.0, gate_on=4.0, gate_span
 KINEMATIC_PIF_BANK_RATE = float(np.radians(0.6))
 #: :class:`KinematicPIF`'s centripetal feed-forward gain (-; the same rule)
 KINEMATIC_PIF_KAPPA = 0.3
+#: :class:`KinematicPIF`'s lowest speed (m/s; the same rule): the blend runs through the slow part of a
+#: stop instead of starting again from one noisy sample when the car pulls away
+KINEMATIC_PIF_V_MIN = 1.0
 
 
 class KinematicPIF(_GatedPair):
@@ -250,6 +253,7 @@ class KinematicPIF(_GatedPair):
         opt = {k: float(d[k] if v is None else v) for k, v in (
             ("gate_tf", gate_tf), ("gate_release", gate_release), ("gate_on", gate_on), ("gate_span", gate_span))}
         _check_gate(self.name, opt)
+        kw.setdefault("v_min", KINEMATIC_PIF_V_MIN)
         common = {k: kw[k] for k in _COMMON if k in kw}
         self._fast = PIF(params, model="modified", tuning=tuning, Q=Q, R=R, S=S, th=th, Q_ay=Q_ay,
                          adapt_th=adapt_th, sample_rate=None, **common)

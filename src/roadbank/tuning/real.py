@@ -35,7 +35,11 @@ with the car's model throughout): those whose ``ay`` road noise is at most ``qui
 the data sheet's (:func:`roadbank.vehicle.is_quiet`), over :data:`QUIET_RATIOS`; exact ties go to
 the smaller ratio (fewer logs leave the low-pass). It chose 1.5. The fourth stage chooses, at
 that ratio and by the same rule, the filter of a quiet log over :data:`QUIET_FILTERS` (exact ties
-go to the earlier one); it chose ``pif-adaptive``.
+go to the earlier one); it chose ``pif-adaptive``. The fifth stage chooses the lowest speed of the
+blend (:data:`V_MINS`): the kinematic estimate holds at any speed (a car at rest on a bank reads
+``ay = g sin theta``) and the low-pass need not restart after every stop. Its real-road part scores
+the seconds after each stop too (:data:`~roadbank.validation.kitti.KITTI_SCORING_STOPS`), which the
+other stages drop and which only the lowest speed changes; it chose 1 m/s.
 """
 
 from __future__ import annotations
@@ -68,6 +72,8 @@ GATE_GRID = {"gate_on": (1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0), "gate_spa
 BANK_RATES_DEG = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 1.0)
 #: candidate quiet ratios of ``kinematic-pif`` (-; 0: never quiet)
 QUIET_RATIOS = (0.0, 1.5, 2.0, 3.0, 6.0, 10.0, 30.0, 100.0)
+#: candidate lowest speeds (m/s) of ``kinematic-pif``'s blend, highest first
+V_MINS = (5.0, 4.0, 3.0, 2.0, 1.0)
 #: candidate filters of ``kinematic-pif`` on a quiet log: the causal estimators that read the
 #: car's model, the stage-3 choice (the default PIF) first, and the two low-passes
 QUIET_FILTERS = ("pif-modified", "pif-rate", "pif-gated", "pif-adaptive", "pif-rate-adaptive", "pio-modified",
@@ -92,15 +98,16 @@ def _pick(cands: dict) -> tuple[float, float]:
     return min(ok, key=lambda fk: (fk[1], fk[0]))
 
 
-def training_logs(data_dir):
-    """``(signals, reference roll rad, scored mask)`` of each KITTI training drive found under ``data_dir``."""
+def training_logs(data_dir, scoring=KITTI_SCORING):
+    """``(signals, reference roll rad, scored mask)`` of each KITTI training drive found under ``data_dir``
+    (the mask of ``scoring``, default :data:`~roadbank.validation.kitti.KITTI_SCORING`)."""
     out = []
     for name in KITTI_TRAINING:
         found = [p for p in Path(data_dir).glob(f"*/{name}") if p.is_dir()]
         if not found:
             continue
         log = load_kitti_oxts(found[0])
-        out.append((log.signals, log.reference_roll, masks(log.signals.t, log.signals.vx, KITTI_SCORING)[1]))
+        out.append((log.signals, log.reference_roll, masks(log.signals.t, log.signals.vx, scoring)[1]))
     return out
 
 
@@ -168,7 +175,9 @@ def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kap
     (``quiet_ratio=0``: they ran before that). ``stage`` 3: every quiet ratio of
     :data:`QUIET_RATIOS`, in increasing order, with the shipped constants of the first two and the
     default PIF on a quiet log; ``stage`` 4: every filter of :data:`QUIET_FILTERS` on a quiet log, in
-    that order, with the shipped constants of the first three.
+    that order, with the shipped constants of the first three; ``stage`` 5: every lowest speed of
+    :data:`V_MINS`, highest first (scored with the seconds after each stop,
+    :data:`~roadbank.validation.kitti.KITTI_SCORING_STOPS`).
     """
     if stage == 1:
         return {(b, k): per_log("kinematic-pif", bank_rate=float(np.radians(b)), kappa=k, quiet_ratio=0.0)
@@ -177,8 +186,10 @@ def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kap
         return {q: per_log("kinematic-pif", quiet_ratio=q, quiet_filter="pif-modified") for q in QUIET_RATIOS}
     if stage == 4:
         return {f: per_log("kinematic-pif", quiet_filter=f) for f in QUIET_FILTERS}
+    if stage == 5:
+        return {v: per_log("kinematic-pif", v_min=v) for v in V_MINS}
     if stage != 2 or bank_rate_deg is None or kappa is None:
-        raise ValueError("kinematic_pif_candidates: stage 1, 3 or 4, or stage 2 with the first stage's bank rate "
+        raise ValueError("kinematic_pif_candidates: stage 1, 3, 4 or 5, or stage 2 with the first stage's bank rate "
                          "and kappa")
     return {(on, sp, rel): per_log("kinematic-pif", bank_rate=float(np.radians(bank_rate_deg)), kappa=kappa,
                                    gate_on=on, gate_span=sp, gate_release=rel)

@@ -22,6 +22,8 @@ chosen from these results.
 
 from __future__ import annotations
 
+import math
+
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -42,6 +44,9 @@ from .splits import split_of
 
 #: KITTI scoring: no offset fitted (reference and inputs come from one INS frame).
 KITTI_SCORING = Scoring(fit_fraction=0.0)
+#: the same with the warm-up once per drive: every sample at vx >= 5 m/s from 5 s after the first
+#: is scored, the seconds after each stop too (what a user reads after pulling away)
+KITTI_SCORING_STOPS = Scoring(fit_fraction=0.0, max_gap=math.inf)
 #: largest credible RMS (m/s) of the INS's leftward ground speed while driving (vx >= 5 m/s): a
 #: car's sideslip velocity is a few tenths of a m/s in ordinary driving (the 16 shared drives:
 #: 0.02-0.11 m/s); an INS that reports more has lost its heading or its alignment, and its roll
