@@ -107,6 +107,9 @@ def test_cli_writes_the_document(scores, tmp_path):
             row = (f"| {label} | {car or 'all cars'} | {k.median_deg:.3f} / {k.p95_deg:.3f} | "
                    f"{u.median_deg:.3f} / {u.p95_deg:.3f} |")
             assert row in text, row
+    same = all(np.array_equal(scores.errors[(n, "known", "sedan")], scores.errors[(n, "undescribed", "sedan")])
+               for n in NAMES)
+    assert ("the two modes give the same error on every drive" in text) == same
     pooled = scores.summary("kinematic-pif", "known")
     verdict = "met" if pooled.median_deg <= 0.30 and pooled.p95_deg <= 0.65 else "not met"
     assert f"| all cars | {pooled.median_deg:.3f} | {pooled.p95_deg:.3f} | {verdict} |" in text

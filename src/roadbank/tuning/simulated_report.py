@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from .. import defaults, estimators
 from .manoeuvres import DURATION, TRAIN_ROADS
 from .objective import SETTLE
@@ -68,9 +70,18 @@ def _intro(scores: SimulatedScores) -> list[str]:
     ]
 
 
+def _same_modes(scores: SimulatedScores) -> list[str]:
+    """The cars on which both modes gave the same error on every drive for every estimator."""
+    return [car for car in scores.cars
+            if all(np.array_equal(*(scores.errors[(nm, mode, car)] for mode in MODES)) for nm in scores.names)]
+
+
 def _summary_table(scores: SimulatedScores) -> list[str]:
+    same = _same_modes(scores)
+    note = (f" On {', '.join(f'`{c}`' for c in same)} the two modes give the same error on every drive."
+            if same else "")
     rows = ["## Summary", "",
-            "Bank RMS error per drive, median / p95 (deg):", "",
+            f"Bank RMS error per drive, median / p95 (deg).{note}", "",
             "| estimator | car | car known | car not described |", "|---|---|---:|---:|"]
     for nm in scores.names:
         for car in (*scores.cars, None):
