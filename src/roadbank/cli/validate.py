@@ -226,3 +226,45 @@ def all_(data_dir, output, no_jitter, workers, scheduler):
     click.echo(f"wrote {output} and {len(figs)} figure(s)", err=True)
     if failed:
         sys.exit(1)
+
+
+
+def _sim_command(names, drives: int, seed: int, output) -> str:
+    """The ``roadbank validate sim`` command line of these options (the defaults left out)."""
+    return ("roadbank validate sim" + ("" if names is None else f" -e {names}")
+            + ("" if drives == 24 else f" -n {drives}") + ("" if seed == 0 else f" --seed {seed}")
+            + ("" if output is None else f" -o {output}"))
+
+
+@validate.command("sim")
+@click.option("--estimators", "-e", "names", default=None,
+              help="Comma-separated estimator names or 'all'. Default: kinematic-pif (the default estimator), "
+                   "kinematic-lp, pif-modified, pif-adaptive, pif-gated, pif-smoother (offline).")
+@click.option("-n", "--drives", type=click.IntRange(min=1), default=24, show_default=True,
+              help="Drives per car.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the drive set.")
+@click.option("--json", "as_json", is_flag=True,
+              help='Print {"estimators": {name: {"known" | "undescribed": {"cars", "all", "families"}}}, ...} '
+                   "(deg) on stdout.")
+@click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
+              help="Write the markdown document here (e.g. docs/sim-validation.md; .html: a self-contained page).")
+def sim(names, drives, seed, as_json, output):
+    """Score the estimators on the simulated validation set of every shipped car (roadbank tune's
+    validation drives), built with the car known (as with --vehicle CAR) and with the car not
+    described (no --vehicle). Without --json or -o the document is printed.
+
+    Regenerate docs/sim-validation.md with: roadbank validate sim -o docs/sim-validation.md
+    """
+    from ..tuning.simulated import DEFAULT_NAMES, score_simulated, to_json
+    from ..tuning.simulated_report import markdown
+
+    sel = list(DEFAULT_NAMES) if names is None else _names(names)
+    scores = score_simulated(sel, n=drives, seed=seed)
+    if output is not None:
+        output.parent.mkdir(parents=True, exist_ok=True)
+        write_document(output, markdown(scores, command=_sim_command(names, drives, seed, output)))
+        click.echo(f"wrote {output}", err=True)
+    if as_json:
+        click.echo(json.dumps(to_json(scores), indent=2))
+    elif output is None:
+        click.echo(markdown(scores, command=_sim_command(names, drives, seed, None)))
