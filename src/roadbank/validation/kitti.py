@@ -39,7 +39,7 @@ from ..params import VehicleParams
 from ..signals import sample_rate
 from ..vehicle import SensorSpec, noise_densities, undescribed_params
 from .comma2k19 import ValidationResult
-from .scoring import Scoring, hold_invalid, lowpass_t, pooled, run_and_score
+from .scoring import Scoring, hold_invalid, lowpass_t, masks, pooled, run_and_score
 from .splits import split_of
 
 #: KITTI scoring: no offset fitted (reference and inputs come from one INS frame).
@@ -125,6 +125,17 @@ def drive_data(log, run, scoring: Scoring) -> dict:
             "lat_lon": (log.extra.get("lat_deg"), log.extra.get("lon_deg"))}
 
 
+def rms_with_stops(run, vx) -> dict[str, float]:
+    """Raw RMS error (deg) of each estimate of ``run`` (a :class:`~roadbank.validation.scoring.Scored`)
+    on the samples of :data:`KITTI_SCORING_STOPS`: the seconds after each stop scored too; ``vx``
+    (m/s) the drive's speed."""
+    m = masks(run.t, vx, KITTI_SCORING_STOPS)[1]
+    if not m.any():
+        return {n: float("nan") for n in run.raw_estimates}
+    return {n: float(np.degrees(np.sqrt(np.mean((th[m] - run.raw_reference[m]) ** 2))))
+            for n, th in run.raw_estimates.items()}
+
+
 def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
                          scoring: Scoring = KITTI_SCORING, sensitivity: bool = True,
                          tuning=None, sensors=None) -> ValidationResult:
@@ -176,6 +187,7 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     settings = {"tau": scoring.tau, "warmup_s": scoring.warmup_s, "fit_fraction": scoring.fit_fraction,
                 "v_gate": scoring.v_gate, "dt": float(np.median(np.diff(t))), "path": str(path)}
     data = drive_data(log, run, scoring)
+    data["rms_raw_stops_deg"] = rms_with_stops(run, log.signals.vx)
     data["split"] = split_of(log.metadata["drive"])
     data["ins_doubt"] = ins_doubt(log, scoring.v_gate)
     return ValidationResult(scores=run.scores, params=params, t=t, reference=run.reference,
@@ -270,7 +282,9 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
         if ds:
             by_split[split] = {"drives": [d.label for d in ds], "pooled": pooled([d.run for d in ds], names),
                                "median_rms_raw_deg": {n: _median([d.scores[n].rms_raw_deg for d in ds])
-                                                      for n in names}}
+                                                      for n in names},
+                               "median_rms_raw_stops_deg": {n: _median([d.data["rms_raw_stops_deg"][n]
+                                                                        for d in ds]) for n in names}}
     return KittiValidation(drives=drives, pooled=pooled([d.run for d in credible], names), errors=errors,
                            settings={"tau": scoring.tau, "warmup_s": scoring.warmup_s,
                                      "v_gate": scoring.v_gate, "fit_fraction": scoring.fit_fraction},
