@@ -30,8 +30,8 @@ as its one prior. Its constants are chosen by the same real-roads-first rule in 
 over a fixed grid: first the bank rate (:data:`BANK_RATES_DEG`) and ``kappa`` (:data:`KAPPAS`)
 with the gate held at its value, then the gate (:data:`GATE_GRID`) at the chosen pair
 (:func:`kinematic_pif_candidates`). Both stages ran before the third existed (``quiet_ratio=0``).
-The third stage chose, by the same rule, for which logs the gate is held open (the default PIF
-with the car's model throughout): those whose ``ay`` road noise is at most ``quiet_ratio`` times
+The third stage chose, by the same rule, on which logs the blend gives way to the car's model
+throughout (then the default PIF): those whose ``ay`` road noise is at most ``quiet_ratio`` times
 the data sheet's (:func:`roadbank.vehicle.is_quiet`), over :data:`QUIET_RATIOS`; exact ties go to
 the smaller ratio (fewer logs leave the low-pass). It chose 1.5. The fourth stage chooses, at
 that ratio and by the same rule, the filter of a quiet log over :data:`QUIET_FILTERS` (exact ties

@@ -23,7 +23,6 @@ chosen from these results.
 from __future__ import annotations
 
 import math
-
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
