@@ -336,7 +336,8 @@ def test_cli_writes_the_module_and_refuses_dfc(tmp_path):
     res = runner.invoke(main, ["export", "c", "-e", "kinematic", "--v-step", "1", "--v-max", "41",
                                "-o", str(tmp_path / "coarse")])
     assert res.exit_code == 0, res.output
-    assert "RB_NG = 37," in (tmp_path / "coarse" / "roadbank_kinematic.c").read_text()   # 5, 6, .., 41 m/s
+    from roadbank.estimators.kinematic import KINEMATIC_V_MIN             # the grid: v_min, v_min + 1, .., 41 m/s
+    assert f"RB_NG = {int(41 - KINEMATIC_V_MIN) + 1}," in (tmp_path / "coarse" / "roadbank_kinematic.c").read_text()
     from roadbank.vehicle import load_vehicle                 # the car's tuning reaches the design
 
     car = load_vehicle("sedan").with_tuning("kalman", {"v_step": 1.0})

@@ -254,7 +254,8 @@ def test_validate_comma2k19_html_report(tmp_path):
 
 # ------------------------------------------------------------------ time plots
 def _synthetic_log():
-    """20 s at 100 Hz on a 3 deg -> 8 deg bank ramp; ay NaN in [5, 6) s, vx = 2 m/s in [12, 13) s."""
+    """20 s at 100 Hz on a 3 deg -> 8 deg bank ramp; ay NaN in [5, 6) s, vx = 0.5 m/s in [12, 13) s
+    (below every estimator's lowest speed)."""
     from roadbank import Signals
 
     t = 100.0 + np.arange(0.0, 20.0, 0.01)          # the log does not start at 0
@@ -263,7 +264,7 @@ def _synthetic_log():
     ay = 9.81 * np.sin(bank)
     vx = np.full_like(t, 20.0)
     ay[(rel >= 5.0) & (rel < 6.0)] = np.nan
-    vx[(rel >= 12.0) & (rel < 13.0)] = 2.0
+    vx[(rel >= 12.0) & (rel < 13.0)] = 0.5
     return Signals(t, vx, ay, np.zeros_like(t), np.zeros_like(t)), bank
 
 

@@ -41,6 +41,7 @@ import numpy as np
 
 from . import layout
 from .base import DesignInputs, ScheduledObserver
+from .kinematic import KINEMATIC_V_MIN
 from .lowpass import KinematicFeedForward
 from .pif import PIF, RATE_TUNING, PIFRate
 
@@ -202,7 +203,7 @@ KINEMATIC_PIF_BANK_RATE = float(np.radians(0.6))
 KINEMATIC_PIF_KAPPA = 0.3
 #: :class:`KinematicPIF`'s lowest speed (m/s; the same rule): the blend runs through the slow part of a
 #: stop instead of starting again from one noisy sample when the car pulls away
-KINEMATIC_PIF_V_MIN = 1.0
+KINEMATIC_PIF_V_MIN = KINEMATIC_V_MIN
 
 
 class KinematicPIF(_GatedPair):

@@ -1,7 +1,9 @@
 r"""Kinematic estimate (paper eq 9): :math:`\hat w_v = (a_y - v_x r)/g`.
 
 Exact only when :math:`\dot v_y = 0`; the baseline every other method improves
-on. No state: the output is a direct function of the current sample.
+on. No state: the output is a direct function of the current sample. It holds at any speed (a
+car at rest on a bank reads :math:`a_y = g \sin\theta`), so the kinematic estimators run down to
+:data:`KINEMATIC_V_MIN`, not to the model-based filters' 5 m/s.
 """
 
 from __future__ import annotations
@@ -9,6 +11,12 @@ from __future__ import annotations
 import numpy as np
 
 from .base import DesignInputs, ScheduledObserver
+
+#: lowest speed (m/s) of the kinematic estimators (``kinematic``, ``kinematic-lp``, ``kinematic-ff``
+#: and the blend of ``kinematic-pif``): the value the fifth stage of :mod:`roadbank.tuning.real` chose
+#: for ``kinematic-pif``, where it matters most (a low-pass that stops below 5 m/s starts again from
+#: one noisy sample each time the car pulls away)
+KINEMATIC_V_MIN = 1.0
 
 
 def kinematic_observer(d: DesignInputs, vx: float):
@@ -22,6 +30,10 @@ class Kinematic(ScheduledObserver):
 
     name = "kinematic"
     uses = (False, True, True)
+
+    def __init__(self, params=None, **kw):
+        kw.setdefault("v_min", KINEMATIC_V_MIN)
+        super().__init__(params, **kw)
 
     def observer(self, vx: float):
         return kinematic_observer(self.design, vx)

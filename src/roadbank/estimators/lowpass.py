@@ -37,6 +37,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .base import DesignInputs, ScheduledObserver
+from .kinematic import KINEMATIC_V_MIN
 
 #: ``kinematic-lp``'s cut-off (Hz): the rule of :mod:`roadbank.tuning.real` with kappa = 0
 LP_CUTOFF_HZ = 0.5
@@ -118,7 +119,8 @@ class KinematicLowPass(ScheduledObserver):
         Noise densities of ``ay`` ((m/s^2)^2 s) and of the yaw rate ((rad/s)^2 s) for the
         scheduled cut-off (default 0: only the other counts).
     **kw
-        Common options of :class:`~roadbank.estimators.base.Estimator`.
+        Common options of :class:`~roadbank.estimators.base.Estimator`; ``v_min`` (m/s) defaults to
+        :data:`~roadbank.estimators.kinematic.KINEMATIC_V_MIN` (the estimate holds at any speed).
     """
 
     uses = (False, True, True)
@@ -145,6 +147,7 @@ class KinematicLowPass(ScheduledObserver):
         if not np.isfinite(self.kappa):
             raise ValueError(f"{self.label}: kappa must be finite, got {kappa}")
         self.name = self.label
+        kw.setdefault("v_min", KINEMATIC_V_MIN)
         super().__init__(params, **kw)
 
     def _design_fields(self) -> dict:
