@@ -126,26 +126,28 @@ def kitti_default():
 
 
 @needs_kitti
-def test_the_seconds_after_each_stop_are_scored_in_their_own_column(kitti_default):
-    """KITTI_SCORING_STOPS scores every sample at vx >= 5 m/s from 5 s after the drive's first: a
-    superset of KITTI_SCORING's samples, larger on a drive that stops (0047 does); each drive's
-    rms_raw_stops_deg is the raw RMS of the held estimate on it, and the split's median is theirs."""
-    from roadbank.validation.kitti import KITTI_SCORING, KITTI_SCORING_STOPS
+def test_the_seconds_after_each_stop_are_scored_and_the_each_start_column_leaves_them_out(kitti_default):
+    """KITTI_SCORING scores every sample at vx >= 5 m/s from 5 s after the drive's first, the seconds
+    after each stop included; KITTI_SCORING_EACH_START (the last column) a subset, smaller on a drive
+    that stops (0047 does). Each drive's rms_raw_each_start_deg is the raw RMS of the held estimate
+    on that subset, and the split's median is theirs."""
+    from roadbank.validation.kitti import KITTI_SCORING, KITTI_SCORING_EACH_START
 
     for d in kitti_default.drives:
         run, vx = d.run, _vx(d)
-        each, stops = masks(run.t, vx, KITTI_SCORING)[1], masks(run.t, vx, KITTI_SCORING_STOPS)[1]
-        np.testing.assert_array_equal(each, run.scored)
-        assert not (each & ~stops).any()
+        whole, each = masks(run.t, vx, KITTI_SCORING)[1], masks(run.t, vx, KITTI_SCORING_EACH_START)[1]
+        np.testing.assert_array_equal(whole, run.scored)
+        assert not (each & ~whole).any()
         for n in ("kinematic", "pif-modified"):
-            e = run.raw_estimates[n][stops] - run.raw_reference[stops]
-            assert d.data["rms_raw_stops_deg"][n] == pytest.approx(np.degrees(np.sqrt(np.mean(e ** 2))), rel=1e-12)
+            e = run.raw_estimates[n][each] - run.raw_reference[each]
+            assert d.data["rms_raw_each_start_deg"][n] == pytest.approx(np.degrees(np.sqrt(np.mean(e ** 2))),
+                                                                       rel=1e-12)
     by = {d.label: d for d in kitti_default.drives}
     stopping = by["2011_10_03_drive_0047"]
-    assert masks(stopping.run.t, _vx(stopping), KITTI_SCORING_STOPS)[1].sum() > stopping.run.scored.sum()
+    assert masks(stopping.run.t, _vx(stopping), KITTI_SCORING_EACH_START)[1].sum() < stopping.run.scored.sum()
     part = kitti_default.by_split["validation"]
-    assert part["median_rms_raw_stops_deg"]["kinematic"] == pytest.approx(
-        np.median([by[x].data["rms_raw_stops_deg"]["kinematic"] for x in part["drives"]]))
+    assert part["median_rms_raw_each_start_deg"]["kinematic"] == pytest.approx(
+        np.median([by[x].data["rms_raw_each_start_deg"]["kinematic"] for x in part["drives"]]))
 
 
 def _vx(drive_result):

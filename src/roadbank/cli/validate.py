@@ -228,7 +228,6 @@ def all_(data_dir, output, no_jitter, workers, scheduler):
         sys.exit(1)
 
 
-
 def _sim_command(names, drives: int, seed: int, output) -> str:
     """The ``roadbank validate sim`` command line of these options (the defaults left out)."""
     return ("roadbank validate sim" + ("" if names is None else f" -e {names}")
