@@ -200,7 +200,7 @@ KINEMATIC_PIF_GATE = dict(gate_tf=0.05, gate_release=8.0, gate_on=4.0, gate_span
 #: log's noise (:func:`roadbank.estimators.lowpass.cutoff_for_noise`; the rule of :mod:`roadbank.tuning.real`)
 KINEMATIC_PIF_BANK_RATE = float(np.radians(0.6))
 #: :class:`KinematicPIF`'s centripetal feed-forward gain (-; the same rule)
-KINEMATIC_PIF_KAPPA = 0.25
+KINEMATIC_PIF_KAPPA = 0.2
 #: :class:`KinematicPIF`'s lowest speed (m/s; the same rule): the blend runs through the slow part of a
 #: stop instead of starting again from one noisy sample when the car pulls away
 KINEMATIC_PIF_V_MIN = KINEMATIC_V_MIN

@@ -4,8 +4,8 @@ The scoring is :mod:`roadbank.validation.scoring`, the same as for comma2k19
 (speed gate 5 m/s, 5 s warm-up, zero-phase smoothing tau = 2/3 s, r and RMS of
 ``theta``, smoothed and raw). Specific to KITTI:
 
-* the warm-up is once per drive (:data:`KITTI_SCORING`): the seconds after each
-  stop are scored, as a user reads them; the split tables also give the raw RMS
+* the warm-up is the drive's first 5 s (:data:`KITTI_SCORING`): the seconds
+  after each stop are scored, as a user reads them; the split tables also give the raw RMS
   with a warm-up after each start (:data:`KITTI_SCORING_EACH_START`);
 
 * reader :func:`roadbank.io.kitti.load_kitti_oxts`: the frames stay on their
@@ -26,7 +26,6 @@ chosen from these results.
 
 from __future__ import annotations
 
-import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -45,10 +44,10 @@ from .comma2k19 import ValidationResult
 from .scoring import Scoring, hold_invalid, lowpass_t, masks, pooled, run_and_score
 from .splits import split_of
 
-#: KITTI scoring: no offset fitted (reference and inputs come from one INS frame), the warm-up once
-#: per drive: every sample at vx >= 5 m/s from 5 s after the drive's first is scored, the seconds
-#: after each stop too (what a user reads after pulling away; the real-road target's own scoring)
-KITTI_SCORING = Scoring(fit_fraction=0.0, max_gap=math.inf)
+#: KITTI scoring: no offset fitted (reference and inputs come from one INS frame), the warm-up the
+#: drive's first 5 s: every later sample at vx >= 5 m/s is scored, the seconds after each stop too
+#: (what a user reads after pulling away; the real-road target's own scoring)
+KITTI_SCORING = Scoring(fit_fraction=0.0, from_log_start=True)
 #: the same with the warm-up after each start (after each stop longer than 1 s): the seconds after
 #: pulling away are not scored (the scoring before the target's was matched)
 KITTI_SCORING_EACH_START = Scoring(fit_fraction=0.0)

@@ -8,7 +8,9 @@ fixed before looking at any result and applied to every estimator alike:
    ``v_min``) are scored.
 3. Warm-up: samples less than ``warmup_s`` (5 s) after a start are dropped; a
    start is the first gated sample of the log or after more than ``max_gap``
-   (1 s, the estimators' re-initialisation gap) below the gate.
+   (1 s, the estimators' re-initialisation gap) below the gate. With
+   ``from_log_start`` the warm-up is the first ``warmup_s`` of the log, once: every
+   gated sample after it is scored, those after each stop too.
 4. Smoothing: the reference and every estimate (held over not-valid samples) go
    through the same zero-phase first-order low-pass (``tau`` = 2/3 s, the paper's
    reference filter, run forward and backward so it adds no lag of its own).
@@ -50,6 +52,8 @@ class Scoring:
         Fraction of the scored samples used to fit a constant offset (0 = none).
     max_gap : float
         Time below the gate (s) after which the warm-up starts again.
+    from_log_start : bool
+        The warm-up is the first ``warmup_s`` of the log, once (``max_gap`` unused).
     """
 
     tau: float = 2.0 / 3.0
@@ -57,6 +61,7 @@ class Scoring:
     v_gate: float = 5.0
     fit_fraction: float = 0.3
     max_gap: float = 1.0
+    from_log_start: bool = False
 
 
 @dataclass
@@ -226,14 +231,17 @@ def _rms_deg(e) -> float:
 def masks(t: np.ndarray, vx: np.ndarray, scoring: Scoring) -> tuple[np.ndarray, np.ndarray]:
     """``(fit, scored)`` boolean masks of the samples (see the module docstring, steps 2, 3, 5)."""
     gate = np.isfinite(vx) & (vx >= scoring.v_gate)
-    keep = np.zeros(len(t), bool)
-    start = None
-    last = -np.inf
-    for k in np.flatnonzero(gate):
-        if start is None or t[k] - last > scoring.max_gap:
-            start = t[k]
-        last = t[k]
-        keep[k] = t[k] - start >= scoring.warmup_s
+    if scoring.from_log_start:
+        keep = gate & (t - t[0] >= scoring.warmup_s) if len(t) else np.zeros(0, bool)
+    else:
+        keep = np.zeros(len(t), bool)
+        start = None
+        last = -np.inf
+        for k in np.flatnonzero(gate):
+            if start is None or t[k] - last > scoring.max_gap:
+                start = t[k]
+            last = t[k]
+            keep[k] = t[k] - start >= scoring.warmup_s
     idx = np.flatnonzero(keep)
     n_fit = int(scoring.fit_fraction * len(idx))
     fit = np.zeros(len(t), bool)
