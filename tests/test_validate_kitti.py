@@ -37,6 +37,19 @@ def test_masks_gate_and_warmup_restart():
     assert fit3.sum() == int(0.3 * n) and sc3.sum() == n - int(0.3 * n) and not (fit3 & sc3).any()
 
 
+def test_masks_warmup_from_the_log_start_scores_the_seconds_after_a_stop():
+    t = 50.0 + np.arange(0.0, 40.0, 0.1)                  # the log does not start at 0
+    rel = t - t[0]
+    vx = np.where((rel >= 10) & (rel < 12), 2.0, 10.0)     # 2 s below the gate
+    vx[:20] = 0.0                                          # parked for the first 2 s
+    fit, sc = masks(t, vx, Scoring(fit_fraction=0.0, from_log_start=True))
+    assert not fit.any()
+    np.testing.assert_array_equal(sc, (rel >= 5.0 - 1e-9) & (vx >= 5.0))
+    # the each-start scoring drops the 5 s after the dip and after the first moving sample
+    _, each = masks(t, vx, Scoring(fit_fraction=0.0))
+    assert not (each & ~sc).any() and sc[(rel >= 12) & (rel < 17)].all() and not each[(rel >= 12) & (rel < 16.9)].any()
+
+
 def test_lowpass_on_jittered_time_is_first_order():
     rng = np.random.default_rng(1)
     t = np.cumsum(rng.uniform(0.06, 0.14, 400))
