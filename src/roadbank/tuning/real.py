@@ -186,8 +186,8 @@ def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kap
     :data:`QUIET_RATIOS`, in increasing order, with the shipped constants of the first two and the
     default PIF on a quiet log; ``stage`` 4: every filter of :data:`QUIET_FILTERS` on a quiet log, in
     that order, with the shipped constants of the first three; ``stage`` 5: every lowest speed of
-    :data:`V_MINS`, highest first (scored with the seconds after each stop,
-    :data:`~roadbank.validation.kitti.KITTI_SCORING_STOPS`).
+    :data:`V_MINS`, highest first. Every stage scores the real drives with
+    :data:`~roadbank.validation.kitti.KITTI_SCORING` (:func:`training_logs`' default).
     """
     if stage == 1:
         return {(b, k): per_log("kinematic-pif", bank_rate=float(np.radians(b)), kappa=k, quiet_ratio=0.0)
