@@ -2,7 +2,10 @@
 
 Modules: :mod:`.manoeuvres` (training and validation drive sets), :mod:`.objective`
 (what is minimised), :mod:`.spaces` (which options vary), :mod:`.optimise` (differential
-evolution, local or Dask workers), :mod:`.pipeline` (:func:`tune_car`, the whole run).
+evolution, local or Dask workers), :mod:`.pipeline` (:func:`tune_car`, the whole run),
+:mod:`.real` (the rules that chose the defaults on real and simulated training drives),
+:mod:`.simulated` and :mod:`.simulated_report` (``roadbank validate sim``: the simulated
+validation set, car known and not described).
 """
 
 from .manoeuvres import TRAIN_ROADS, VALIDATION_ROADS, Drive, drive_set
