@@ -132,8 +132,9 @@ class Estimator:
     ----------
     params : VehicleParams
         Design parameters (the estimator's model of the car).
-    v_min : float, default 5.0
-        Minimum speed (m/s); below it the outputs are held and flagged not valid.
+    v_min : float, optional
+        Minimum speed (m/s); below it the outputs are held and flagged not valid. Default the
+        class's :attr:`default_v_min` (5 m/s; the kinematic estimators' is lower).
     roll : {"static", "dynamic", "none"}, default "static"
         Roll model used to separate the body roll from ``theta`` (docs/estimators.md, Roll separation).
     max_substep : float, default 0.02
@@ -174,12 +175,15 @@ class Estimator:
     state_names: tuple[str, ...] = ()
     #: the frozen dataclass of this estimator's design inputs (:attr:`design`)
     design_type: type[DesignInputs] = DesignInputs
+    #: ``v_min`` (m/s) when none is given
+    default_v_min: float = 5.0
 
-    def __init__(self, params: VehicleParams | None = None, *, v_min: float = 5.0,
+    def __init__(self, params: VehicleParams | None = None, *, v_min: float | None = None,
                  roll: str = "static", max_substep: float = 0.02, max_gap: float = 1.0,
                  max_angle: float = np.deg2rad(60.0), v_step: float = V_GRID_STEP,
                  v_max: float = V_GRID_MAX, sample_rate: float | str | None = "auto"):
         self.params = params if params is not None else VehicleParams()
+        v_min = self.default_v_min if v_min is None else v_min
         if not isinstance(self.params, VehicleParams):
             raise TypeError("params must be a roadbank.VehicleParams")
         for label, v in (("v_min", v_min), ("max_substep", max_substep), ("max_gap", max_gap)):

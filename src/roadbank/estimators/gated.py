@@ -246,6 +246,7 @@ class KinematicPIF(_GatedPair):
 
     name = "kinematic-pif"
     state_names = ("w_lp", "vy", "r", "w")
+    default_v_min = KINEMATIC_PIF_V_MIN
 
     def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, tuning=None, Q=None, R=None, S=None,
                  th=None, Q_ay=None, adapt_th=None, gate_tf=None, gate_release=None, gate_on=None, gate_span=None,
@@ -254,7 +255,7 @@ class KinematicPIF(_GatedPair):
         opt = {k: float(d[k] if v is None else v) for k, v in (
             ("gate_tf", gate_tf), ("gate_release", gate_release), ("gate_on", gate_on), ("gate_span", gate_span))}
         _check_gate(self.name, opt)
-        kw.setdefault("v_min", KINEMATIC_PIF_V_MIN)
+        kw.setdefault("v_min", self.default_v_min)       # both filters' (one schedule, one validity)
         common = {k: kw[k] for k in _COMMON if k in kw}
         self._fast = PIF(params, model="modified", tuning=tuning, Q=Q, R=R, S=S, th=th, Q_ay=Q_ay,
                          adapt_th=adapt_th, sample_rate=None, **common)

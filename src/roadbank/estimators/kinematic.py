@@ -30,10 +30,7 @@ class Kinematic(ScheduledObserver):
 
     name = "kinematic"
     uses = (False, True, True)
-
-    def __init__(self, params=None, **kw):
-        kw.setdefault("v_min", KINEMATIC_V_MIN)
-        super().__init__(params, **kw)
+    default_v_min = KINEMATIC_V_MIN
 
     def observer(self, vx: float):
         return kinematic_observer(self.design, vx)

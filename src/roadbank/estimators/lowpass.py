@@ -124,6 +124,7 @@ class KinematicLowPass(ScheduledObserver):
     """
 
     uses = (False, True, True)
+    default_v_min = KINEMATIC_V_MIN
     state_names = ("w_lp",)
     label = "kinematic-lp"
     defaults = dict(cutoff=LP_CUTOFF_HZ, kappa=0.0)
@@ -147,7 +148,6 @@ class KinematicLowPass(ScheduledObserver):
         if not np.isfinite(self.kappa):
             raise ValueError(f"{self.label}: kappa must be finite, got {kappa}")
         self.name = self.label
-        kw.setdefault("v_min", KINEMATIC_V_MIN)
         super().__init__(params, **kw)
 
     def _design_fields(self) -> dict:
