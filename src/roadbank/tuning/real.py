@@ -5,8 +5,8 @@ The rule: for each candidate ``(cutoff, kappa)`` of a fixed grid,
 * **real roads**: run the estimator on every KITTI *training* drive
   (:data:`roadbank.validation.splits.KITTI_TRAINING`) and take the raw RMS error (deg) of
   ``theta`` against the INS roll on the scored samples (:data:`roadbank.validation.kitti.KITTI_SCORING`:
-  vx >= 5 m/s from 5 s after the drive's first such sample, the seconds after each stop included, no
-  offset: how the real-road target is stated); median over the drives;
+  vx >= 5 m/s after the drive's first 5 s, the seconds after each stop included, no offset: how the
+  real-road target is stated); median over the drives;
 * **simulated drives, car not described**: ``roadbank tune``'s *training* drive set
   (:func:`roadbank.tuning.drive_set`, seed 0, :data:`SIM_DRIVES` drives) for each shipped car
   (:data:`SIM_CARS`), the estimator built without the car (default parameters); bank RMS error

@@ -41,7 +41,7 @@ from ..params import VehicleParams
 from ..signals import sample_rate
 from ..vehicle import SensorSpec, noise_densities, undescribed_params
 from .comma2k19 import ValidationResult
-from .scoring import Scoring, hold_invalid, lowpass_t, masks, pooled, run_and_score
+from .scoring import Scoring, _rms_deg, hold_invalid, lowpass_t, masks, pooled, run_and_score
 from .splits import split_of
 
 #: KITTI scoring: no offset fitted (reference and inputs come from one INS frame), the warm-up the
@@ -134,10 +134,7 @@ def rms_each_start(run, vx) -> dict[str, float]:
     on the samples of :data:`KITTI_SCORING_EACH_START`: the seconds after each stop not scored; ``vx``
     (m/s) the drive's speed."""
     m = masks(run.t, vx, KITTI_SCORING_EACH_START)[1]
-    if not m.any():
-        return {n: float("nan") for n in run.raw_estimates}
-    return {n: float(np.degrees(np.sqrt(np.mean((th[m] - run.raw_reference[m]) ** 2))))
-            for n, th in run.raw_estimates.items()}
+    return {n: _rms_deg(th[m] - run.raw_reference[m]) for n, th in run.raw_estimates.items()}
 
 
 def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
@@ -189,7 +186,8 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     t = log.signals.t
     first = np.flatnonzero(run.scored)
     settings = {"tau": scoring.tau, "warmup_s": scoring.warmup_s, "fit_fraction": scoring.fit_fraction,
-                "v_gate": scoring.v_gate, "dt": float(np.median(np.diff(t))), "path": str(path)}
+                "v_gate": scoring.v_gate, "from_log_start": scoring.from_log_start,
+                "dt": float(np.median(np.diff(t))), "path": str(path)}
     data = drive_data(log, run, scoring)
     data["rms_raw_each_start_deg"] = rms_each_start(run, log.signals.vx)
     data["split"] = split_of(log.metadata["drive"])
@@ -291,7 +289,8 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
                                                                              for d in ds]) for n in names}}
     return KittiValidation(drives=drives, pooled=pooled([d.run for d in credible], names), errors=errors,
                            settings={"tau": scoring.tau, "warmup_s": scoring.warmup_s,
-                                     "v_gate": scoring.v_gate, "fit_fraction": scoring.fit_fraction},
+                                     "v_gate": scoring.v_gate, "fit_fraction": scoring.fit_fraction,
+                                     "from_log_start": scoring.from_log_start},
                            by_split=by_split, flagged=[(d.label, d.data["ins_doubt"]) for d in drives
                                                        if d.data.get("ins_doubt")], figures=figures)
 

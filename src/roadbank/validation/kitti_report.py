@@ -81,6 +81,15 @@ def figure_name(stem: str, label: str) -> str:
     return f"{stem}-kitti-{label}.png"
 
 
+def _warmup_text(settings: dict) -> str:
+    """How the scored samples start, from a validation's ``settings`` (a sentence)."""
+    if settings.get("from_log_start"):
+        return (f"The first {settings['warmup_s']:g} s of each drive are not scored; after them every sample is, "
+                "the seconds after each stop too (what a user reads after pulling away).")
+    return (f"A {settings['warmup_s']:g} s warm-up after each start (the first sample above the gate, or after "
+            "more than 1 s below it) is not scored.")
+
+
 def _table(L, rows):
     """Per-estimator scores (best of each score column in bold) appended to the lines ``L``."""
     body = []
@@ -119,9 +128,8 @@ def split_lines(v: KittiValidation, h: str) -> list[str]:
     L = [f"{h}# Training and validation drives\n",
          f"Raw theta RMS (deg) against the INS roll at vx >= 5 m/s; the default estimator is `{DEFAULT}`. "
          "Choices were made on the training drives only (docs/estimators.md); the validation drives are "
-         "reported, never used to choose. The scored samples start 5 s after the drive's first at that "
-         "speed and include the seconds after each stop (what a user reads after pulling away); the last "
-         "column leaves out the 5 s after each stop longer than 1 s.\n"]
+         f"reported, never used to choose. {_warmup_text(v.settings)} The last column leaves out the 5 s "
+         "after each stop longer than 1 s.\n"]
     for split in ("training", "validation", "unseen"):
         if split not in v.by_split:
             continue
@@ -239,10 +247,9 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
              "time stamps (no resampling): the estimators integrate each step with trapezoidal substeps "
              "of at most 20 ms (see the 10 Hz section below).")
     L.append(f"- Scoring: the same code as comma2k19 (`roadbank.validation.scoring`): samples with vx >= "
-             f"{st['v_gate']:g} m/s; {st['warmup_s']:g} s warm-up once per drive (from its first sample above the "
-             "gate: the seconds after each stop are scored, as a user reads them; the split tables also give "
-             "the RMS with a warm-up after each stop longer than 1 s); the estimate compared is "
-             "`theta` (bank + body roll, what the INS roll measures).")
+             f"{st['v_gate']:g} m/s. {_warmup_text(st)} The split tables also give the RMS with a warm-up "
+             "after each stop longer than 1 s. The estimate compared is `theta` (bank + body roll, what the "
+             "INS roll measures).")
     L.append("- No offset is fitted on KITTI: the roll, `ay` and `wz` are outputs of one INS in one "
              "vehicle-aligned frame, so there is no mounting offset to remove, and a bias of an estimator "
              "must count. (comma2k19 fits one because its reference is the roll of a phone on the "
