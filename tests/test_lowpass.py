@@ -57,6 +57,38 @@ def test_kinematic_ff_adds_the_high_passed_centripetal_term():
     assert np.max(np.abs(out.w - ref)) < 1e-6
 
 
+@pytest.mark.parametrize("fixed_rate", [True, False])
+def test_the_lead_is_a_zero_against_scipy_and_shortens_a_ramps_lag_by_itself(fixed_rate):
+    """With ``lead`` the low-pass is (c tau s + 1)/(tau s + 1), c = lead/tau (scipy's lsim of that
+    transfer function, on a noisy drive); on a bank ramp the output lags by tau - lead, so half a
+    sample interval gives the lag of the first-order filter of the samples (K = 1 - exp(-h/tau)); a
+    lead beyond tau passes the kinematic estimate unfiltered."""
+    fc, h = 0.4, 0.1
+    tau = 1.0 / (2 * np.pi * fc)
+    s = _drive(fs=1.0 / h, T=60.0)
+    kin = (s.ay - s.vx * s.r) / G
+    out = estimators.make("kinematic-lp", cutoff=fc, lead=h / 2, sample_rate="auto" if fixed_rate else None).run(s)
+    c = (h / 2) / tau
+    ref = lsim(([c * tau, 1.0], [tau, 1.0]), kin - kin[0], s.t)[1] + kin[0]    # from rest at the first value
+    assert np.max(np.abs(out.w - ref)) < (1e-9 if fixed_rate else 2e-3 * np.std(kin))
+    t = np.arange(0.0, 40.0, h)
+    rate = np.deg2rad(0.5)                                     # bank rate (rad/s), no noise
+    ramp = Signals(t, np.full_like(t, 20.0), G * np.sin(rate * t), np.zeros_like(t), np.full_like(t, np.nan))
+    late = t > 30.0
+    K = 1.0 - np.exp(-h / tau)
+    sampled = np.empty_like(t)
+    sampled[0] = ramp.ay[0] / G
+    for k in range(1, len(t)):
+        sampled[k] = sampled[k - 1] + K * (ramp.ay[k] / G - sampled[k - 1])
+    for lead in (0.0, h / 2, 0.3, 0.5):        # beyond tau (0.40 s) the input passes straight: no lag
+        w = estimators.make("kinematic-lp", cutoff=fc, lead=lead).run(ramp).w
+        lag = (np.sin(rate * t) - w)[late] / (rate * np.cos(rate * t[late]))   # seconds, to first order
+        assert np.allclose(lag, max(tau - lead, 0.0), atol=2e-3), lead
+    lag_sampled = (np.sin(rate * t) - sampled)[late] / (rate * np.cos(rate * t[late]))
+    assert np.allclose(lag_sampled, (1 - K) / K * h, atol=2e-3)     # its exact lag
+    assert (1 - K) / K * h == pytest.approx(tau - h / 2, abs=0.03 * h)
+
+
 def test_steady_turn_on_a_bank_has_no_bias():
     t = np.arange(0.0, 30.0, 0.01)
     vx, r, bank = 15.0, 0.2, np.deg2rad(4.0)
@@ -72,6 +104,8 @@ def test_bad_settings_are_refused():
         estimators.make("kinematic-lp", cutoff=0.0)
     with pytest.raises(ValueError, match="kappa must be finite"):
         estimators.make("kinematic-ff", kappa=float("nan"))
+    with pytest.raises(ValueError, match="lead must be >= 0"):
+        estimators.make("kinematic-ff", lead=-0.01)
 
 
 needs_kitti = pytest.mark.skipif(not (DATA_DIR / "kitti-oxts-extra").is_dir(),

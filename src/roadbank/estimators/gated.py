@@ -39,6 +39,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..params import ESP_RATE
 from . import layout
 from .base import DesignInputs, ScheduledObserver
 from .kinematic import KINEMATIC_V_MIN
@@ -204,6 +205,10 @@ KINEMATIC_PIF_KAPPA = 0.2
 #: :class:`KinematicPIF`'s lowest speed (m/s; the same rule): the blend runs through the slow part of a
 #: stop instead of starting again from one noisy sample when the car pulls away
 KINEMATIC_PIF_V_MIN = KINEMATIC_V_MIN
+#: :class:`KinematicPIF`'s sampled-data lead (sample intervals; the same rule): its low-pass lags as the
+#: first-order filter of the samples does (:mod:`roadbank.estimators.lowpass`); ``lead`` (s) is this many
+#: intervals of the log (:func:`roadbank.vehicle.make_estimator`), by default of the data sheet's rate
+KINEMATIC_PIF_LEAD_SAMPLES = 0.5
 
 
 class KinematicPIF(_GatedPair):
@@ -235,6 +240,10 @@ class KinematicPIF(_GatedPair):
         and ``R`` (the log's, when built for a log) give, with the road prior ``bank_rate``.
     bank_rate : float, optional
         Root-mean-square bank rate of roads (rad/s); default :data:`KINEMATIC_PIF_BANK_RATE`.
+    lead : float, optional
+        The low-pass's sampled-data lead (s, :class:`~roadbank.estimators.lowpass.KinematicLowPass`);
+        default :data:`KINEMATIC_PIF_LEAD_SAMPLES` intervals of the data sheet's sensors
+        (:data:`roadbank.params.ESP_RATE`; a log's own, built for it).
     tuning, Q, R, S, th, Q_ay, adapt_th : optional
         The PIF's, as :class:`~roadbank.estimators.pif.PIF` (modified model; a vehicle file's
         ``[tuning.pif-modified]`` applies).
@@ -248,9 +257,9 @@ class KinematicPIF(_GatedPair):
     state_names = ("w_lp", "vy", "r", "w")
     default_v_min = KINEMATIC_PIF_V_MIN
 
-    def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, tuning=None, Q=None, R=None, S=None,
-                 th=None, Q_ay=None, adapt_th=None, gate_tf=None, gate_release=None, gate_on=None, gate_span=None,
-                 **kw):
+    def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, lead=None, tuning=None, Q=None, R=None,
+                 S=None, th=None, Q_ay=None, adapt_th=None, gate_tf=None, gate_release=None, gate_on=None,
+                 gate_span=None, **kw):
         d = KINEMATIC_PIF_GATE
         opt = {k: float(d[k] if v is None else v) for k, v in (
             ("gate_tf", gate_tf), ("gate_release", gate_release), ("gate_on", gate_on), ("gate_span", gate_span))}
@@ -265,8 +274,10 @@ class KinematicPIF(_GatedPair):
             bank_rate=KINEMATIC_PIF_BANK_RATE if bank_rate is None else bank_rate, Q_ay=self._fast.Q_ay,
             R=float(self._fast.R[-1, -1]))
         self._slow = KinematicFeedForward(params, cutoff=cutoff, kappa=KINEMATIC_PIF_KAPPA if kappa is None else kappa,
+                                          lead=KINEMATIC_PIF_LEAD_SAMPLES / ESP_RATE if lead is None else lead,
                                           sample_rate=None, **noise, **common)
         self.cutoff, self.kappa, self.bank_rate = self._slow.cutoff, self._slow.kappa, self._slow.bank_rate
+        self.lead = self._slow.lead
         self.Q, self.th, self.R, self.S, self.Q_ay = (self._fast.Q, self._fast.th, self._fast.R, self._fast.S,
                                                       self._fast.Q_ay)
         for k, v in opt.items():

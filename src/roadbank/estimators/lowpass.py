@@ -27,6 +27,22 @@ simulated training drives of the four shipped cars, built without the car
 passenger cars, not one car's tyres. In a steady turn the feed-forward cancels
 (:math:`\hat w` = the low-passed kinematic estimate); it acts only while :math:`v_x r` changes,
 as a lead :math:`\kappa\, \tau s/(\tau s + 1)\, a`.
+
+**Sampled-data lead** (``lead``, s; 0 by default). The filter runs on samples. The
+continuous-time low-pass, exact on a signal linear between samples, lags its input by
+:math:`\tau` at low frequencies. The first-order filter of the samples themselves, the one-line
+low-pass :math:`x_k = x_{k-1} + K (u_k - x_{k-1})` with the same pole
+(:math:`K = 1 - e^{-h/\tau}`), weighs the newest sample more and lags by
+:math:`\tau - h/2` (:math:`h` the sample interval). Both are written as one continuous-time
+filter, with a share :math:`c = \min(1, \mathrm{lead}/\tau)` of its input passed straight
+through, its zero at :math:`-1/(c\tau)`:
+
+.. math::
+    \hat w = (1 - c)\, x + c\, u + \kappa a, \qquad u = \frac{a_y - v_x r}{g} - \kappa a,
+    \qquad \frac{\hat w - \kappa a}{u} = \frac{c \tau s + 1}{\tau s + 1}
+
+It lags by :math:`\tau - \mathrm{lead}`; ``lead = h/2`` gives the sampled filter's lag, and
+``kinematic-pif`` takes it (:data:`roadbank.estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES`).
 """
 
 from __future__ import annotations
@@ -74,13 +90,15 @@ def cutoff_for_noise(noise_density: float, bank_rate: float) -> float:
 class LowPassDesign(DesignInputs):
     """Design inputs of :class:`KinematicLowPass`: the cut-off ``cutoff`` (Hz; None: scheduled on the
     noise), the centripetal feed-forward gain ``kappa`` (-), and for a scheduled cut-off the bank rate
-    of roads ``bank_rate`` (rad/s) and the noise densities ``Q_ay`` ((m/s^2)^2 s) and ``R`` ((rad/s)^2 s)."""
+    of roads ``bank_rate`` (rad/s), the noise densities ``Q_ay`` ((m/s^2)^2 s) and ``R`` ((rad/s)^2 s), and
+    the sampled-data lead ``lead`` (s; module docstring)."""
 
     cutoff: float | None
     kappa: float
     bank_rate: float | None = None
     Q_ay: float | None = None
     R: float | None = None
+    lead: float = 0.0
 
 
 def lowpass_cutoff(d: LowPassDesign, vx: float) -> float:
@@ -93,11 +111,13 @@ def lowpass_cutoff(d: LowPassDesign, vx: float) -> float:
 
 
 def lowpass_observer(d: LowPassDesign, vx: float):
-    """``(F, G, H, D)`` of the low-passed kinematic estimate at ``vx`` (m/s); inputs ``[delta_f, ay, r]``."""
+    """``(F, G, H, D)`` of the low-passed kinematic estimate at ``vx`` (m/s); inputs ``[delta_f, ay, r]``;
+    the share ``c`` of the input passed through is ``min(1, 2 pi f_c lead)`` (module docstring)."""
     g, wc, k = d.params.g, 2.0 * np.pi * lowpass_cutoff(d, vx), d.kappa
+    c = min(1.0, wc * d.lead)
+    u = np.array([[0.0, 1.0 / g, -(1.0 + k) * vx / g]])       # the filter's input per eta
     F = np.array([[-wc]])
-    G = np.array([[0.0, wc / g, -wc * (1.0 + k) * vx / g]])
-    return F, G, np.array([[1.0]]), np.array([[0.0, 0.0, k * vx / g]])
+    return F, wc * u, np.array([[1.0 - c]]), c * u + np.array([[0.0, 0.0, k * vx / g]])
 
 
 class KinematicLowPass(ScheduledObserver):
@@ -118,6 +138,9 @@ class KinematicLowPass(ScheduledObserver):
     Q_ay, R : float, optional
         Noise densities of ``ay`` ((m/s^2)^2 s) and of the yaw rate ((rad/s)^2 s) for the
         scheduled cut-off (default 0: only the other counts).
+    lead : float, optional
+        Sampled-data lead (s, >= 0; default 0): the output lags its input by ``1/(2 pi f_c) - lead``
+        (module docstring).
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator`; ``v_min`` (m/s) defaults to
         :data:`~roadbank.estimators.kinematic.KINEMATIC_V_MIN` (the estimate holds at any speed).
@@ -133,7 +156,7 @@ class KinematicLowPass(ScheduledObserver):
         @property
         def design(self) -> LowPassDesign: ...     # an instance of design_type
 
-    def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, Q_ay=None, R=None, **kw):
+    def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, Q_ay=None, R=None, lead=None, **kw):
         scheduled = cutoff is None and bank_rate is not None
         self.cutoff = None if scheduled else float(self.defaults["cutoff"] if cutoff is None else cutoff)
         self.kappa = float(self.defaults["kappa"] if kappa is None else kappa)
@@ -147,11 +170,15 @@ class KinematicLowPass(ScheduledObserver):
             raise ValueError(f"{self.label}: need bank_rate > 0 and Q_ay, R >= 0, got {bank_rate}, {Q_ay}, {R}")
         if not np.isfinite(self.kappa):
             raise ValueError(f"{self.label}: kappa must be finite, got {kappa}")
+        self.lead = float(0.0 if lead is None else lead)
+        if not (np.isfinite(self.lead) and self.lead >= 0):
+            raise ValueError(f"{self.label}: lead must be >= 0 s, got {lead}")
         self.name = self.label
         super().__init__(params, **kw)
 
     def _design_fields(self) -> dict:
-        return dict(cutoff=self.cutoff, kappa=self.kappa, bank_rate=self.bank_rate, Q_ay=self.Q_ay, R=self.R)
+        return dict(cutoff=self.cutoff, kappa=self.kappa, bank_rate=self.bank_rate, Q_ay=self.Q_ay, R=self.R,
+                    lead=self.lead)
 
     def cutoff_at(self, vx: float) -> float:
         """The low-pass's cut-off (Hz) at ``vx`` (m/s): fixed, or scheduled on the noise (:func:`lowpass_cutoff`)."""

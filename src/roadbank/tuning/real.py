@@ -84,6 +84,9 @@ BANK_RATES_DEG = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 1.0)
 QUIET_RATIOS = (0.0, 1.5, 2.0, 3.0, 6.0, 10.0, 30.0, 100.0)
 #: candidate lowest speeds (m/s) of ``kinematic-pif``'s blend, highest first
 V_MINS = (5.0, 4.0, 3.0, 2.0, 1.0)
+#: candidate sampled-data leads of ``kinematic-pif``'s low-pass (sample intervals of the log; 0: the
+#: continuous-time filter, 0.5: the lag of the first-order filter of the samples)
+LEADS_SAMPLES = (0.0, 0.25, 0.5, 0.75, 1.0)
 #: candidate filters of ``kinematic-pif`` on a quiet log: the causal estimators that read the
 #: car's model, the stage-3 choice (the default PIF) first, and the two low-passes
 QUIET_FILTERS = ("pif-modified", "pif-rate", "pif-gated", "pif-adaptive", "pif-rate-adaptive", "pio-modified",
@@ -186,7 +189,8 @@ def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kap
     :data:`QUIET_RATIOS`, in increasing order, with the shipped constants of the first two and the
     default PIF on a quiet log; ``stage`` 4: every filter of :data:`QUIET_FILTERS` on a quiet log, in
     that order, with the shipped constants of the first three; ``stage`` 5: every lowest speed of
-    :data:`V_MINS`, highest first. Every stage scores the real drives with
+    :data:`V_MINS`, highest first; ``stage`` 6: every sampled-data lead of :data:`LEADS_SAMPLES`, in
+    that order (the continuous-time filter first). Every stage scores the real drives with
     :data:`~roadbank.validation.kitti.KITTI_SCORING` (:func:`training_logs`' default).
     """
     if stage == 1:
@@ -198,8 +202,10 @@ def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kap
         return {f: per_log("kinematic-pif", quiet_filter=f) for f in QUIET_FILTERS}
     if stage == 5:
         return {v: per_log("kinematic-pif", v_min=v) for v in V_MINS}
+    if stage == 6:
+        return {n: per_log("kinematic-pif", lead_samples=n) for n in LEADS_SAMPLES}
     if stage != 2 or bank_rate_deg is None or kappa is None:
-        raise ValueError("kinematic_pif_candidates: stage 1, 3, 4 or 5, or stage 2 with the first stage's bank rate "
+        raise ValueError("kinematic_pif_candidates: stage 1, 3, 4, 5 or 6, or stage 2 with the first stage's bank rate "
                          "and kappa")
     return {(on, sp, rel): per_log("kinematic-pif", bank_rate=float(np.radians(bank_rate_deg)), kappa=kappa,
                                    gate_on=on, gate_span=sp, gate_release=rel)

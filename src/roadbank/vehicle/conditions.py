@@ -38,7 +38,7 @@ QUIET_FILTER = "pif-adaptive"
 #: the options of ``kinematic-pif`` that set its gate: given one, the caller's gate is kept
 _GATE_OPTIONS = ("gate_on", "gate_span", "gate_tf", "gate_release")
 #: ``kinematic-pif``'s options of its low-pass and gate, which its quiet filter does not take
-_BLEND_OPTIONS = ("cutoff", "kappa", "bank_rate") + _GATE_OPTIONS
+_BLEND_OPTIONS = ("cutoff", "kappa", "bank_rate", "lead") + _GATE_OPTIONS
 
 
 def design_span(signals, v_min: float = 5.0) -> int:
@@ -174,7 +174,9 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         quiet log (:func:`is_quiet` with that ratio) it is that filter, with the car's model
         throughout, built from the same options less those of the low-pass and the gate and
         named ``kinematic-pif`` (its outputs keep their columns); unless the options set the
-        gate themselves.
+        gate themselves. The blend's low-pass gets the sampled-data lead of the log's rate:
+        ``lead = lead_samples / rate`` (s; ``lead_samples`` default
+        :data:`~roadbank.estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES`), unless ``lead`` is given.
     """
     from .. import estimators
     from ..estimators.pif import with_sensor_noise
@@ -184,8 +186,11 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     if name == "kinematic-pif":
         ratio = float(options.pop("quiet_ratio", QUIET_RATIO))
         quiet_filter = options.pop("quiet_filter", QUIET_FILTER)
+        lead_samples = float(options.pop("lead_samples", estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES))
         if not any(k in options for k in _GATE_OPTIONS) and is_quiet(sensors, log_rate, log_ay_noise, ratio):
             name, options = quiet_filter, {k: v for k, v in options.items() if k not in _BLEND_OPTIONS}
+        else:
+            options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
     if sensors.r_variance > 0:
         R, Q_ay = noise_densities(sensors, log_rate, log_ay_noise, log_r_noise)
         options = with_sensor_noise(name, options, R, Q_ay)
