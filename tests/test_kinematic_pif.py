@@ -15,6 +15,8 @@ from roadbank.vehicle import for_log
 from test_gated import _gate_reference  # the gate written out in plain Python
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+#: the rule's stages before the sixth ran without the sampled-data lead
+NO_LEAD = {"lead_samples": 0.0}
 
 
 @pytest.fixture(scope="module")
@@ -122,19 +124,19 @@ def test_the_shipped_gate_and_the_default_are_what_the_rule_picks():
     logs, sims = training_logs(DATA), simulated_sets()
     g = dict(KINEMATIC_PIF_GATE)
     # the second stage ran before the third (the gate held open on quiet logs): quiet_ratio=0
-    builds = {"kinematic-ff": per_log("kinematic-ff"), "shipped": per_log("kinematic-pif", quiet_ratio=0.0)}
+    builds = {"kinematic-ff": per_log("kinematic-ff"), "shipped": per_log("kinematic-pif", **NO_LEAD, quiet_ratio=0.0)}
     for key in ("gate_on", "gate_span", "gate_release"):
         values = GATE_GRID[key]
         i = values.index(g[key])
         for j in (i - 1, i + 1):
             if 0 <= j < len(values):
-                builds[(key, values[j])] = per_log("kinematic-pif", **{key: values[j]})
+                builds[(key, values[j])] = per_log("kinematic-pif", **NO_LEAD, **{key: values[j]})
     chosen, real, sim = choose_by_roads(builds, logs, sims)
     assert chosen == "shipped", (real, sim)
     assert ESTIMATOR == "kinematic-pif"
     # what the gate buys on simulated manoeuvres: the same pair with the gate held shut
     from roadbank.tuning.real import objective
-    assert sim["shipped"] < objective(per_log("kinematic-pif", gate_on=1e9), [], sims) - 0.03
+    assert sim["shipped"] < objective(per_log("kinematic-pif", **NO_LEAD, gate_on=1e9), [], sims) - 0.03
 
 
 @pytest.mark.slow
@@ -148,13 +150,13 @@ def test_the_shipped_bank_rate_and_kappa_are_what_the_rule_picks():
 
     logs, sims = training_logs(DATA), simulated_sets()
     b, k = float(np.degrees(KINEMATIC_PIF_BANK_RATE)), KINEMATIC_PIF_KAPPA
-    builds = {"shipped": per_log("kinematic-pif", quiet_ratio=0.0)}      # the first stage ran before the third
+    builds = {"shipped": per_log("kinematic-pif", **NO_LEAD, quiet_ratio=0.0)}  # the first stage ran before the third
     for grid, key in ((BANK_RATES_DEG, "b"), (KAPPAS, "k")):
         i = grid.index(b if key == "b" else k)
         for j in (i - 1, i + 1):
             if 0 <= j < len(grid):
                 bb, kk = (grid[j], k) if key == "b" else (b, grid[j])
-                builds[(bb, kk)] = per_log("kinematic-pif", bank_rate=float(np.radians(bb)), kappa=kk,
+                builds[(bb, kk)] = per_log("kinematic-pif", **NO_LEAD, bank_rate=float(np.radians(bb)), kappa=kk,
                                            quiet_ratio=0.0)
     chosen, real, sim = choose_by_roads(builds, logs, sims)
     assert chosen == "shipped", (real, sim)
@@ -162,9 +164,9 @@ def test_the_shipped_bank_rate_and_kappa_are_what_the_rule_picks():
     # the seconds after each stop scored: 0.4071 against 0.4256 deg; with them left out it was 0.3843
     # against 0.4184), and on the simulated drives by more than 0.02 deg
     from roadbank.tuning.real import TIE_DEG
-    fixed = per_log("kinematic-pif", cutoff=0.6, kappa=0.2, quiet_ratio=0.0)
+    fixed = per_log("kinematic-pif", **NO_LEAD, cutoff=0.6, kappa=0.2, quiet_ratio=0.0)
     assert real["shipped"] < objective(fixed, logs, []) - 5 * TIE_DEG
-    assert objective(per_log("kinematic-pif", quiet_ratio=0.0), [], sims) < objective(fixed, [], sims) - 0.02
+    assert objective(per_log("kinematic-pif", **NO_LEAD, quiet_ratio=0.0), [], sims) < objective(fixed, [], sims) - 0.02
 
 
 @pytest.mark.slow
@@ -182,12 +184,12 @@ def test_the_shipped_quiet_ratio_and_filter_are_what_the_rule_picks():
     logs, sims = training_logs(DATA), simulated_sets()
     i = QUIET_RATIOS.index(QUIET_RATIO)
     ratios = sorted({QUIET_RATIOS[j] for j in (0, i - 1, i, i + 1) if 0 <= j < len(QUIET_RATIOS)})
-    third = {q: per_log("kinematic-pif", quiet_ratio=q, quiet_filter="pif-modified") for q in ratios}
+    third = {q: per_log("kinematic-pif", **NO_LEAD, quiet_ratio=q, quiet_filter="pif-modified") for q in ratios}
     chosen, real, sim = choose_by_roads(third, logs, sims)
     assert chosen == QUIET_RATIO, (real, sim)
     assert real[QUIET_RATIO] == real[0.0]
     assert sim[QUIET_RATIO] < sim[0.0] - 0.005
-    fourth = {f: per_log("kinematic-pif", quiet_filter=f) for f in QUIET_FILTERS if f.startswith("pif-")}
+    fourth = {f: per_log("kinematic-pif", **NO_LEAD, quiet_filter=f) for f in QUIET_FILTERS if f.startswith("pif-")}
     chosen4, real4, sim4 = choose_by_roads(fourth, logs, sims)
     assert chosen4 == QUIET_FILTER, (real4, sim4)
     assert real4[QUIET_FILTER] == real[0.0]
@@ -208,7 +210,7 @@ def test_the_shipped_lowest_speed_is_what_the_rule_picks():
 
     i = V_MINS.index(KINEMATIC_PIF_V_MIN)
     cands = sorted({V_MINS[j] for j in (0, i - 1, i, i + 1) if 0 <= j < len(V_MINS)}, reverse=True)
-    builds = {v: per_log("kinematic-pif", v_min=v) for v in cands}
+    builds = {v: per_log("kinematic-pif", **NO_LEAD, v_min=v) for v in cands}
     chosen, real, sim = choose_by_roads(builds, training_logs(DATA), simulated_sets())
     assert chosen == KINEMATIC_PIF_V_MIN, (real, sim)
     assert real[KINEMATIC_PIF_V_MIN] < real[5.0] - 0.02

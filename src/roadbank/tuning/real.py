@@ -94,6 +94,8 @@ QUIET_FILTERS = ("pif-modified", "pif-rate", "pif-gated", "pif-adaptive", "pif-r
 #: the shipped cars of the simulated part, and the number of training drives per car
 SIM_CARS = ("suv-paper", "sedan", "compact", "van")
 SIM_DRIVES = 24
+#: the stages before the sixth ran without the sampled-data lead
+_NO_LEAD = {"lead_samples": 0.0}
 
 
 @dataclass(frozen=True)
@@ -190,23 +192,25 @@ def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kap
     default PIF on a quiet log; ``stage`` 4: every filter of :data:`QUIET_FILTERS` on a quiet log, in
     that order, with the shipped constants of the first three; ``stage`` 5: every lowest speed of
     :data:`V_MINS`, highest first; ``stage`` 6: every sampled-data lead of :data:`LEADS_SAMPLES`, in
-    that order (the continuous-time filter first). Every stage scores the real drives with
+    that order (the continuous-time filter first). Stages 1-5 ran before the sixth existed: their
+    candidates have no lead (``lead_samples=0``). Every stage scores the real drives with
     :data:`~roadbank.validation.kitti.KITTI_SCORING` (:func:`training_logs`' default).
     """
     if stage == 1:
-        return {(b, k): per_log("kinematic-pif", bank_rate=float(np.radians(b)), kappa=k, quiet_ratio=0.0)
-                for b in BANK_RATES_DEG for k in KAPPAS}
+        return {(b, k): per_log("kinematic-pif", bank_rate=float(np.radians(b)), kappa=k, quiet_ratio=0.0,
+                                **_NO_LEAD) for b in BANK_RATES_DEG for k in KAPPAS}
     if stage == 3:
-        return {q: per_log("kinematic-pif", quiet_ratio=q, quiet_filter="pif-modified") for q in QUIET_RATIOS}
+        return {q: per_log("kinematic-pif", quiet_ratio=q, quiet_filter="pif-modified", **_NO_LEAD)
+                for q in QUIET_RATIOS}
     if stage == 4:
-        return {f: per_log("kinematic-pif", quiet_filter=f) for f in QUIET_FILTERS}
+        return {f: per_log("kinematic-pif", quiet_filter=f, **_NO_LEAD) for f in QUIET_FILTERS}
     if stage == 5:
-        return {v: per_log("kinematic-pif", v_min=v) for v in V_MINS}
+        return {v: per_log("kinematic-pif", v_min=v, **_NO_LEAD) for v in V_MINS}
     if stage == 6:
         return {n: per_log("kinematic-pif", lead_samples=n) for n in LEADS_SAMPLES}
     if stage != 2 or bank_rate_deg is None or kappa is None:
         raise ValueError("kinematic_pif_candidates: stage 1, 3, 4, 5 or 6, or stage 2 with the first stage's bank rate "
                          "and kappa")
     return {(on, sp, rel): per_log("kinematic-pif", bank_rate=float(np.radians(bank_rate_deg)), kappa=kappa,
-                                   gate_on=on, gate_span=sp, gate_release=rel)
+                                   gate_on=on, gate_span=sp, gate_release=rel, **_NO_LEAD)
             for on in GATE_GRID["gate_on"] for sp in GATE_GRID["gate_span"] for rel in GATE_GRID["gate_release"]}
