@@ -322,6 +322,24 @@ def test_generated_object_has_no_heap_no_mutable_globals_no_recursion(tmp_path):
                                                       rate=100.0).table_bytes
 
 
+def test_cli_designs_for_the_target_rate(tmp_path):
+    """``--rate 10`` designs as for a 10 Hz log: the default's low-pass takes half of that interval as its
+    lead and the PIF the sensors' noise densities at 10 Hz, so the module is the one of
+    ``Vehicle.make(name, log_rate=10)``, not of the sensors' own 100 Hz."""
+    from roadbank.cli import main
+    from roadbank.vehicle import load_vehicle
+
+    res = CliRunner().invoke(main, ["export", "c", "--vehicle", "suv-paper", "-e", "kinematic-pif", "--rate", "10",
+                                   "-o", str(tmp_path / "cli")])
+    assert res.exit_code == 0, res.output
+    car = load_vehicle("suv-paper")
+    at10, at100 = car.make("kinematic-pif", log_rate=10.0), car.make("kinematic-pif")
+    assert at10.lead == pytest.approx(0.05) and at100.lead == pytest.approx(0.005)
+    got = (tmp_path / "cli" / "roadbank_kinematic_pif.c").read_text()
+    assert got == export_c(at10, tmp_path / "py10", rate=10.0).source.read_text()
+    assert got != export_c(at100, tmp_path / "py100", rate=10.0).source.read_text()
+
+
 def test_cli_writes_the_module_and_refuses_dfc(tmp_path):
     from roadbank.cli import main
 

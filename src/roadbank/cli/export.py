@@ -26,7 +26,8 @@ def export():
               help="Estimator to export (a speed-scheduled linear observer: kinematic, uio, pio-*, "
                    "pif-* steady-state, kalman, ...).")
 @click.option("--rate", type=float, default=None,
-              help="Nominal sample rate of the target (Hz). Default: the vehicle's sensor rate (100).")
+              help="Nominal sample rate of the target (Hz); the design is for it (the sensors' noise "
+                   "densities at that rate, the default's lead). Default: the vehicle's sensor rate (100).")
 @click.option("--float32", "float32", is_flag=True, help="Single precision (tables, state and arithmetic).")
 @click.option("--fixed-rate/--no-fixed-rate", "fixed_rate", default=None,
               help="With (default, as roadbank runs the estimator) or without the exact discrete tables "
@@ -70,7 +71,7 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
             raise click.BadParameter(str(exc), param_hint="--name") from None
     overrides = {k: v for k, v in (("roll", roll), ("v_step", v_step), ("v_max", v_max)) if v is not None}
     try:
-        est = vehicle.make(name, **overrides)
+        est = vehicle.make(name, log_rate=rate, **overrides)     # designed for the target's rate
     except (ValueError, TypeError, NoStabilisingSolution) as exc:
         raise click.ClickException(f"{name}: cannot design for vehicle {vehicle.name!r}: {exc}") from None
     if online_offsets:
