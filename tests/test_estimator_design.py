@@ -83,10 +83,10 @@ def test_unknown_name_and_bad_tuning():
         E.make("pif")
     with pytest.raises(ValueError, match="bad tuning"):
         E.make("kinematic", Q=3)
-    assert len(E.NAMES) == 16 and set(E.NAMES) == {
+    assert len(E.NAMES) == 17 and set(E.NAMES) == {
         "kinematic", "kinematic-lp", "kinematic-ff", "kinematic-pif", "dfc", "uio", "pio-original", "pio-modified",
         "pif-modified", "pif-original", "kalman",
-        "pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-gated", "pif-smoother"}
+        "pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-gated", "pif-smoother", "kinematic-smoother"}
 
 
 @pytest.mark.parametrize("name", ["pif-rate", "pif-adaptive", "pif-rate-adaptive", "pif-smoother"])

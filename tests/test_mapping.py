@@ -139,8 +139,9 @@ def test_simulated_drive_recovers_the_tracks_bank_per_cell(tmp_path):
 
 
 def test_default_map_estimator_is_the_smoother_and_removes_the_lane_change_lag(tmp_path):
-    """bank-lane-change (flat and 14 deg lanes): mapped with the default estimator (the offline
-    pif-smoother) against the simulator's truth per cell, and with the causal default PIF."""
+    """bank-lane-change (flat and 14 deg lanes): mapped with the default estimator (kinematic-smoother,
+    which on this quiet simulated log is the offline pif-smoother) against the simulator's truth per
+    cell, and with the causal default PIF."""
     from roadbank import estimators
     from roadbank.io.channels import read_channel_map
     from roadbank.vehicle import load_vehicle

@@ -6,6 +6,9 @@
   the real-roads-first rule of :mod:`roadbank.tuning.real` (the KITTI training drives first, the
   simulated drives of cars that are not described to break ties; docs/estimators.md). Its
   low-pass uses no tyre data. On a quiet log it is ``pif-adaptive`` (:func:`roadbank.vehicle.is_quiet`).
+* :data:`MAP_ESTIMATOR` — the estimator of ``roadbank map`` (a map is built after the drives, so it
+  may use the samples after each instant): ``kinematic-smoother``, the kinematic estimate low-passed
+  forward and backward; on a quiet log ``pif-smoother``.
 * :data:`VEHICLE` — a log whose car is not described: the estimators that need a car model are
   designed for the parameters of this shipped car (with the data sheet's ESP sensors) in every
   command that reads logs (``estimate``, ``map``, ``validate``) and in
@@ -19,5 +22,8 @@
 
 #: name of the default estimator
 ESTIMATOR = "kinematic-pif"
+#: name of the estimator of ``roadbank map`` (offline): chosen among the offline estimators by the same
+#: real-roads-first rule on training data (:mod:`roadbank.tuning.real`, docs/estimators.md)
+MAP_ESTIMATOR = "kinematic-smoother"
 #: shipped vehicle whose parameters stand for a car nobody described
 VEHICLE = "sedan"

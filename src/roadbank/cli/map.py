@@ -8,6 +8,7 @@ from pathlib import Path
 
 import click
 
+from ..defaults import MAP_ESTIMATOR
 from ..io.readers import FORMATS
 from .inputs import channel_map_and_logs
 from .options import vehicle_option
@@ -34,9 +35,9 @@ def _origin(ctx, param, value):
               help="Channel map (TOML) with 'latitude' and 'longitude' channels (docs/io.md).")
 @click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default=None,
               help="Input format (default: from the suffix / directory layout).")
-@click.option("--estimator", "-e", "estimator", default="pif-smoother", show_default=True,
-              help="Estimator whose valid bank estimates are mapped (default: the offline smoother, as a map "
-                   "is made after the drives; docs/estimators.md).")
+@click.option("--estimator", "-e", "estimator", default=MAP_ESTIMATOR, show_default=True,
+              help="Estimator whose valid bank estimates are mapped (default: the offline kinematic smoother, "
+                   "pif-smoother on a quiet log, as a map is made after the drives; docs/estimators.md).")
 @click.option("--cell", "cell_m", type=float, default=10.0, show_default=True, help="Cell edge (m).")
 @click.option("--sectors", type=int, default=4, show_default=True,
               help="Heading sectors per cell (the bank's sign depends on the direction of travel); 1 = none.")

@@ -238,7 +238,8 @@ def _sim_command(names, drives: int, seed: int, output) -> str:
 @validate.command("sim")
 @click.option("--estimators", "-e", "names", default=None,
               help="Comma-separated estimator names or 'all'. Default: kinematic-pif (the default estimator), "
-                   "kinematic-lp, pif-modified, pif-adaptive, pif-gated, pif-smoother (offline).")
+                   "kinematic-lp, pif-modified, pif-adaptive, pif-gated, pif-smoother and kinematic-smoother "
+                   "(offline).")
 @click.option("-n", "--drives", type=click.IntRange(min=1), default=24, show_default=True,
               help="Drives per car.")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the drive set.")

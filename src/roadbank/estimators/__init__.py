@@ -7,8 +7,8 @@
 ``NAMES`` lists the estimators (the paper's, the Kalman peer, the low-passed kinematic estimates
 ``kinematic-lp`` and ``kinematic-ff``, ``kinematic-pif`` (the default of every command,
 :data:`DEFAULT`), ``pif-rate``, ``pif-adaptive``, ``pif-rate-adaptive``, ``pif-gated`` and the offline
-``pif-smoother``); ``make(name, params, **tuning)`` builds one, :func:`roadbank.vehicle.for_log`
-builds one for a log as the command line does.
+``pif-smoother`` and ``kinematic-smoother``); ``make(name, params, **tuning)`` builds one,
+:func:`roadbank.vehicle.for_log` builds one for a log as the command line does.
 ``PRESETS`` are further names ``make`` accepts: ``pif-paper`` is ``pif-modified`` with the paper's
 Table 4 weights (``pif-modified`` itself is roadbank's default tuning).
 Each has ``run(signals) -> Estimate``, ``step(t, vx, ay, r, delta_f)`` and ``reset()``.
@@ -26,6 +26,7 @@ from .dfc import DFC
 from .gated import KinematicPIF, PIFGated
 from .kalman import Kalman
 from .kinematic import Kinematic
+from .kinematic_smoother import KinematicSmoother
 from .lowpass import KinematicFeedForward, KinematicLowPass
 from .offsets import OffsetSettings, OnlineOffsets, with_online_offsets
 from .pif import PIF, SENSOR_R_ESTIMATORS, PIFAdaptive, PIFRate, PIFRateAdaptive
@@ -51,6 +52,7 @@ _FACTORIES: dict[str, Callable[..., Estimator]] = {
     "pif-rate-adaptive": PIFRateAdaptive,
     "pif-gated": PIFGated,
     "pif-smoother": PIFSmoother,
+    "kinematic-smoother": KinematicSmoother,
     "pif-paper": partial(PIF, model="modified", tuning="paper"),
 }
 
@@ -101,4 +103,4 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
 __all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "Estimator", "StepResult",
            "NoStabilisingSolution", "Kinematic", "KinematicLowPass", "KinematicFeedForward", "KinematicPIF", "DFC",
            "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
-           "Kalman", "with_online_offsets", "OnlineOffsets", "OffsetSettings"]
+           "Kalman", "KinematicSmoother", "with_online_offsets", "OnlineOffsets", "OffsetSettings"]

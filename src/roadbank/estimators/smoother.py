@@ -75,6 +75,8 @@ class PIFSmoother(PIF):
     label = "pif-smoother"
     #: the outputs of :meth:`run` use later samples (not causal)
     offline = True
+    #: the causal estimator of its forward pass (what an ECU runs instead)
+    forward_filter = "pif-modified"
 
     def __init__(self, params=None, *, tuning=None, **kw):
         super().__init__(params, **modified_steady(self.label, kw), tuning=tuning)

@@ -167,7 +167,7 @@ def check_exportable(est) -> None:
     if getattr(est, "offline", False):
         raise NotExportable(f"{est.name}: not exportable: an offline estimator (its run() smooths with the "
                             "samples after each instant); an ECU runs its forward filter: export "
-                            "pif-modified with the same weights")
+                            f"{getattr(est, 'forward_filter', 'pif-modified')} with the same weights")
     if kernel not in ("lpv", "gated"):
         why = _NOT_LPV_REASON.get(kernel, f"its runtime is the {kernel!r} kernel, not a "
                                           "speed-scheduled linear observer")

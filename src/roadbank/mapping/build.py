@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..defaults import MAP_ESTIMATOR
 from ..estimators import OFFLINE
 from ..io import LogError
 from ..io.channels import ChannelMap
@@ -40,7 +41,7 @@ def _origin(lat, lon) -> LocalProjection | None:
 class MapSettings:
     """How every log of a map is read, estimated and gridded (see :func:`map_logs`)."""
 
-    estimator: str = "pif-smoother"
+    estimator: str = MAP_ESTIMATOR
     channels: ChannelMap | str | Path | None = None
     format: str | None = None
     params: VehicleParams | None = None
@@ -166,7 +167,7 @@ def _parts_on_pool(pool, paths, settings, projection, on_log=None) -> list[tuple
     return [done[k] for k in range(len(paths))]
 
 
-def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: str | None = None, params=None,
+def map_logs(logs, estimator: str = MAP_ESTIMATOR, *, channels=None, format: str | None = None, params=None,
              vehicle=None, cell_m: float = 10.0, sectors: int = 4, origin: tuple | None = None,
              chunk_rows: int | None = None, on_log=None, pool=None) -> tuple[BankMap | None, list[MappedLog]]:
     """Build a bank map from logs that carry GNSS positions.
@@ -178,9 +179,10 @@ def map_logs(logs, estimator: str = "pif-smoother", *, channels=None, format: st
         ``lat_deg`` / ``lon_deg``: a channel map with ``latitude`` / ``longitude`` roles
         (CSV, Parquet, MDF4, CAN, ROS ``NavSatFix``), comma2k19 (ECEF pose), KITTI oxts.
     estimator : str
-        Estimator whose valid ``phi_b`` is mapped; default the offline ``pif-smoother`` (a map is
-        made after the drives, so the samples after each instant may be used; each streamed
-        chunk is smoothed with the chunks after it as lookahead, as one run over the log).
+        Estimator whose valid ``phi_b`` is mapped; default :data:`roadbank.defaults.MAP_ESTIMATOR`,
+        the offline ``kinematic-smoother`` (``pif-smoother`` on a quiet log; a map is made after
+        the drives, so the samples after each instant may be used; each streamed chunk is smoothed
+        with the chunks after it as lookahead, as one run over the log).
     channels, format, params, vehicle
         As for :func:`roadbank.fleet.estimate_log`.
     cell_m, sectors

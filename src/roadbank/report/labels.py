@@ -15,6 +15,7 @@ LABELS = {
     "pif-rate-adaptive": "PIF + bank rate + friction schedule (ours)",
     "pif-gated": "PIF switched to a fast bank-rate PIF on yaw acceleration (ours)",
     "pif-smoother": "PIF smoother, offline (ours)",
+    "kinematic-smoother": "Kinematic, low-passed forward and backward, offline (ours)",
     "kinematic": "Kinematic",
     "kinematic-lp": "Kinematic, low-passed (ours)",
     "kinematic-ff": "Kinematic, low-passed + centripetal feed-forward (ours)",

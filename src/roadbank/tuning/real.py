@@ -65,6 +65,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import vehicle
+from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
 from ..validation.kitti import KITTI_SCORING
@@ -171,6 +172,17 @@ def choose_lowpass(logs, sim_sets, cutoffs=CUTOFFS_HZ, kappas=KAPPAS) -> Lowpass
            for fc in cutoffs for k in kappas}
     lp = _pick({fk: v for fk, v in obj.items() if fk[1] == 0.0})
     return LowpassChoice(lp=lp, ff=_pick(obj), objective=obj)
+
+
+def choose_smoother(logs, sim_sets, cutoffs=CUTOFFS_HZ) -> tuple[float, dict]:
+    """The cut-off (Hz) of ``kinematic-smoother`` by the rule of ``kinematic-lp`` (module docstring: the sum
+    of the real and the simulated medians over :data:`CUTOFFS_HZ`; ties within :data:`TIE_DEG` to the
+    smaller cut-off), and every objective (deg)."""
+    if not logs:
+        raise ValueError("choose_smoother: no training drives")
+    obj = {fc: objective(fixed(KinematicSmoother(cutoff=fc)), logs, sim_sets) for fc in cutoffs}
+    best = min(obj.values())
+    return min(fc for fc, v in obj.items() if v <= best + TIE_DEG), obj
 
 
 def choose_by_roads(builds: dict, logs, sim_sets) -> tuple:

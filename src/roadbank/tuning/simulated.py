@@ -34,7 +34,8 @@ MODES = ("known", "undescribed")
 TARGET_MEDIAN_DEG = 0.30
 TARGET_P95_DEG = 0.65
 #: the estimators ``roadbank validate sim`` scores when none are named
-DEFAULT_NAMES = ("kinematic-pif", "kinematic-lp", "pif-modified", "pif-adaptive", "pif-gated", "pif-smoother")
+DEFAULT_NAMES = ("kinematic-pif", "kinematic-lp", "pif-modified", "pif-adaptive", "pif-gated", "pif-smoother",
+                 "kinematic-smoother")
 
 
 @dataclass(frozen=True)

@@ -20,8 +20,8 @@ from .sensors import SensorSpec
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
 # them: loading a car (load_vehicle, --vehicle) loads neither
 
-__all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "QUIET_FILTER", "design_span", "has_design_span",
-           "log_conditions", "noise_densities", "is_quiet", "make_estimator"]
+__all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "QUIET_FILTER", "QUIET_MODELS", "design_span",
+           "has_design_span", "log_conditions", "noise_densities", "is_quiet", "make_estimator"]
 
 
 #: seconds of driving (``vx >= v_min``) at the start of a log on which :func:`log_conditions` measures it (s)
@@ -35,6 +35,9 @@ QUIET_RATIO = 1.5
 #: the filter that ``kinematic-pif`` is on a quiet log: the car's model, with the tyre's fall-off
 #: near the friction limit (the rule's fourth stage, over :data:`roadbank.tuning.real.QUIET_FILTERS`)
 QUIET_FILTER = "pif-adaptive"
+#: what each real-road estimator (the low-pass of the kinematic estimate) is on a quiet log: the car's
+#: model (``kinematic-pif``: :data:`QUIET_FILTER`; the offline ``kinematic-smoother``: the offline PIF)
+QUIET_MODELS = {"kinematic-pif": QUIET_FILTER, "kinematic-smoother": "pif-smoother"}
 #: the options of ``kinematic-pif`` that set its gate: given one, the caller's gate is kept
 _GATE_OPTIONS = ("gate_on", "gate_span", "gate_tf", "gate_release")
 #: ``kinematic-pif``'s options of its low-pass and gate, which its quiet filter does not take
@@ -174,7 +177,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         quiet log (:func:`is_quiet` with that ratio) it is that filter, with the car's model
         throughout, built from the same options less those of the low-pass and the gate and
         named ``kinematic-pif`` (its outputs keep their columns); unless the options set the
-        gate themselves. The blend's low-pass gets the sampled-data lead of the log's rate:
+        gate themselves. ``kinematic-smoother`` likewise (:data:`QUIET_MODELS`: ``pif-smoother``).
+        The blend's low-pass gets the sampled-data lead of the log's rate:
         ``lead = lead_samples / rate`` (s; ``lead_samples`` default
         :data:`~roadbank.estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES`), unless ``lead`` is given.
     """
@@ -183,13 +187,13 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
 
     sensors = sensors if sensors is not None else SensorSpec()
     label = name
-    if name == "kinematic-pif":
+    if name in QUIET_MODELS:
         ratio = float(options.pop("quiet_ratio", QUIET_RATIO))
-        quiet_filter = options.pop("quiet_filter", QUIET_FILTER)
+        quiet_filter = options.pop("quiet_filter", QUIET_MODELS[name])
         lead_samples = float(options.pop("lead_samples", estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES))
         if not any(k in options for k in _GATE_OPTIONS) and is_quiet(sensors, log_rate, log_ay_noise, ratio):
             name, options = quiet_filter, {k: v for k, v in options.items() if k not in _BLEND_OPTIONS}
-        else:
+        elif name == "kinematic-pif":
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
     if sensors.r_variance > 0:
         R, Q_ay = noise_densities(sensors, log_rate, log_ay_noise, log_r_noise)

@@ -1,0 +1,106 @@
+r"""``kinematic-smoother`` — the kinematic estimate low-passed forward and backward over the whole log.
+
+An *offline* estimator (beyond the paper), the offline counterpart of ``kinematic-lp``: for
+post-processing, bank maps and reference signals, where the whole log is known before the bank
+is needed. A causal low-pass must trade lag against noise; run over the log once forward and
+once backward (in reversed time) and averaged, the two lags cancel:
+
+.. math::
+    \hat w = \tfrac12 \left( \mathrm{LP}_{\rightarrow}(u) + \mathrm{LP}_{\leftarrow}(u) \right),
+    \qquad u = \frac{a_y - v_x r}{g},
+
+with :math:`\mathrm{LP}` the first-order low-pass of ``kinematic-lp`` (:mod:`.lowpass`, cut-off
+:math:`f_c`, :math:`\tau = 1/(2\pi f_c)`). For a first-order filter the average of the two passes
+is the zero-phase filter :math:`\mathrm{Re}\, H(j\omega) = |H(j\omega)|^2 = 1/(1 + \omega^2\tau^2)`:
+what running it forward and then backward over its own output (``filtfilt``) gives, without the
+second pass's start at the first pass's transient. Its cut-off was chosen by a written rule on
+training data only (:func:`roadbank.tuning.real.choose_smoother`, docs/estimators.md).
+
+Interface as ``pif-smoother``: :meth:`KinematicSmoother.run` returns the smoothed estimate of the
+log given; :meth:`~roadbank.estimators.base.Estimator.step` is the forward filter's (the smoothed
+estimate of the newest sample given the samples so far). A log processed in chunks
+(``run(reset=False)``) is smoothed as a whole when each chunk comes with the next one as
+``lookahead`` (covering :attr:`KinematicSmoother.lookahead_s` or reaching the log's end). Invalid
+samples (``vx < v_min``, non-finite inputs) are stepped over by both passes, each restarting after
+a gap longer than ``max_gap``; the output is valid where both passes are, and held (0 before the
+first such sample) where either is not. The body roll (for
+``phi_b``) is the forward pass's. Not for an ECU: no C export.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..signals import Estimate, Signals, concat_signals
+from .lowpass import KinematicLowPass
+
+#: ``kinematic-smoother``'s cut-off (Hz): the rule of :func:`roadbank.tuning.real.choose_smoother`
+SMOOTHER_CUTOFF_HZ = 0.5
+
+
+class KinematicSmoother(KinematicLowPass):
+    """``kinematic-smoother``: :class:`~roadbank.estimators.lowpass.KinematicLowPass` forward and backward,
+    averaged (module docstring).
+
+    Parameters
+    ----------
+    params : VehicleParams, optional
+        Only ``g`` and the roll model (for ``phi_b``) are used.
+    cutoff : float, optional
+        Cut-off (Hz) of each pass; default :data:`SMOOTHER_CUTOFF_HZ`.
+    **kw
+        The other options of :class:`~roadbank.estimators.lowpass.KinematicLowPass` (``kappa`` 0
+        by default), for both passes.
+    """
+
+    label = "kinematic-smoother"
+    defaults = dict(cutoff=SMOOTHER_CUTOFF_HZ, kappa=0.0)
+    #: the outputs of :meth:`run` use later samples (not causal)
+    offline = True
+    #: the causal estimator of its forward pass (what an ECU runs instead)
+    forward_filter = "kinematic-lp"
+
+    def __init__(self, params=None, **kw):
+        super().__init__(params, **kw)
+        opts = {**kw, "kappa": self.kappa, "lead": self.lead}
+        if self.cutoff is not None:
+            opts["cutoff"] = self.cutoff
+        self._reverse = KinematicLowPass(self.params, **opts)      # the same design, run in reversed time
+
+    @property
+    def lookahead_s(self) -> float:
+        """Samples after a log's end (s) that make :meth:`run` agree with smoothing the whole: 25 time
+        constants of the slowest low-pass over the speed grid, after which their influence is below 1e-10."""
+        return 25.0 / float(np.min(-self._tab_cont[:, 0]))
+
+    def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
+        """Smoothed estimate over the log ``signals`` (module docstring); ``reset`` as
+        :meth:`~roadbank.estimators.base.Estimator.run`. Units: ``w`` (-), angles (rad).
+
+        ``lookahead``: the samples that follow ``signals``, of which the first :attr:`lookahead_s`
+        seconds are the later samples of the backward pass; the forward state stays that at the end
+        of ``signals``, so consecutive chunks, each with the next one as ``lookahead``, give what one
+        run over the whole log gives (to about 1e-10) when each covers :attr:`lookahead_s` or reaches
+        the log's end.
+        """
+        n = len(signals)
+        fwd = super().run(signals, reset=reset)
+        whole = signals
+        if lookahead is not None and len(lookahead):
+            m = np.flatnonzero(lookahead.t > signals.t[-1] + self.lookahead_s)
+            whole = concat_signals([signals, lookahead[:m[0] + 1] if m.size else lookahead])
+        t = whole.t
+        back = self._reverse.run(Signals(t[-1] - t[::-1], whole.vx[::-1], whole.ay[::-1], whole.r[::-1],
+                                         whole.delta_f[::-1]))
+        wb, valid_b = back.w[::-1][:n], back.valid[::-1][:n]
+        both = fwd.valid & valid_b
+        w = np.where(both, 0.5 * (fwd.w + wb), 0.0)
+        last = np.maximum.accumulate(np.where(both, np.arange(n), -1))
+        held = ~both & (last >= 0)
+        w[held] = w[last[held]]                   # held where a pass does not use the sample, 0 before the first
+        theta = np.arcsin(np.clip(w, -1.0, 1.0))
+        phi = fwd.states["phi"].copy()
+        phi[held] = phi[last[held]]
+        valid = both & (np.abs(w) <= np.sin(self.max_angle))
+        states = {"w_lp": fwd.states["w_lp"].copy(), "w_lp_backward": wb.copy(), "phi": phi}
+        return Estimate(self.name, fwd.t, w, theta, theta - phi, valid, states)

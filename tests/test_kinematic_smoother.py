@@ -1,0 +1,106 @@
+"""kinematic-smoother: the zero-phase low-pass of the kinematic estimate (analytic), streamed in chunks as one run,
+its step() the forward filter, the model on a quiet log, and the rule's choices on the real training drives."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from roadbank import Signals
+from roadbank import estimators as E
+from roadbank.estimators.kinematic_smoother import SMOOTHER_CUTOFF_HZ
+from roadbank.params import G
+from roadbank.vehicle import for_log
+
+DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+
+
+def _sine_bank(fs=100.0, T=60.0, f0=0.3, amp_deg=2.0):
+    t = np.arange(0.0, T, 1.0 / fs)
+    bank = np.radians(amp_deg) * np.sin(2 * np.pi * f0 * t)
+    vx = np.full_like(t, 20.0)
+    return Signals(t, vx, G * np.sin(bank), np.zeros_like(t), np.full_like(t, np.nan)), np.sin(bank)
+
+
+@pytest.mark.parametrize("fc", [0.2, SMOOTHER_CUTOFF_HZ])
+def test_it_is_the_zero_phase_low_pass(fc):
+    """Away from the log's ends a sine of sin(theta) comes out scaled by 1/(1 + (f0/fc)^2) and in phase:
+    Re H = |H|^2 of the first-order low-pass, what filtfilt gives; the causal kinematic-lp lags it by
+    atan(f0/fc)/(2 pi f0) seconds."""
+    f0 = 0.3
+    s, u = _sine_bank(f0=f0)
+    out = E.make("kinematic-smoother", cutoff=fc).run(s)
+    inner = (s.t > 20.0) & (s.t < 40.0)
+    want = u / (1.0 + (f0 / fc) ** 2)
+    assert np.max(np.abs(out.w - want)[inner]) < 1e-4 * np.max(np.abs(u))
+    assert out.valid.all()
+    lp = E.make("kinematic-lp", cutoff=fc).run(s).w
+    lag = np.arctan(f0 / fc) / (2 * np.pi * f0)
+    shifted = np.interp(s.t - lag, s.t, u) / np.sqrt(1.0 + (f0 / fc) ** 2)
+    assert np.max(np.abs(lp - shifted)[inner]) < 1e-3 * np.max(np.abs(u))
+
+
+def test_chunks_with_lookahead_are_one_run_and_step_is_the_forward_filter():
+    rng = np.random.default_rng(4)
+    s, _ = _sine_bank(fs=10.0, T=120.0, f0=0.05)
+    s = Signals(s.t, s.vx, s.ay + 0.3 * rng.standard_normal(len(s.t)), s.r, s.delta_f)
+    est = E.make("kinematic-smoother")
+    whole = est.run(s).w.copy()
+    assert 2.0 < est.lookahead_s < 20.0                 # 25 time constants of the 0.5 Hz pass: 8 s
+    chunks = [s[a:a + 300] for a in range(0, len(s), 300)]
+    est.reset()
+    parts = [est.run(c, reset=False, lookahead=chunks[i + 1] if i + 1 < len(chunks) else None).w.copy()
+             for i, c in enumerate(chunks)]
+    np.testing.assert_allclose(np.concatenate(parts), whole, rtol=0, atol=1e-10)
+    fwd = E.make("kinematic-lp", cutoff=SMOOTHER_CUTOFF_HZ).run(s).w
+    est.reset()
+    stepped = np.array([est.step(*(float(getattr(s, c)[k]) for c in ("t", "vx", "ay", "r", "delta_f"))).w
+                        for k in range(len(s))])
+    np.testing.assert_allclose(stepped, fwd, rtol=0, atol=1e-12)
+    assert np.std(whole - fwd) > 0.1 * np.std(fwd - np.mean(fwd))    # run() is not the forward filter
+
+
+def test_a_quiet_log_gets_the_offline_pif_and_a_loud_one_the_smoother():
+    from roadbank.sim.scenarios import run_scenario
+
+    s = run_scenario("track-lane-change", "nominal", seed=0).signals
+    rng = np.random.default_rng(1)
+    loud = Signals(s.t, s.vx, s.ay + 0.15 * rng.standard_normal(len(s.t)), s.r, s.delta_f)
+    quiet_est, loud_est = for_log("kinematic-smoother", s), for_log("kinematic-smoother", loud)
+    assert quiet_est.name == loud_est.name == "kinematic-smoother"
+    assert isinstance(loud_est, E.KinematicSmoother) and isinstance(quiet_est, E.PIFSmoother)
+    np.testing.assert_array_equal(quiet_est.run(s).w, for_log("pif-smoother", s).run(s).w)
+    assert isinstance(for_log("kinematic-smoother", s, quiet_ratio=0.0), E.KinematicSmoother)
+
+
+def test_it_is_not_exported_for_an_ecu(tmp_path):
+    from roadbank.export import NotExportable, export_c
+
+    with pytest.raises(NotExportable, match="export kinematic-lp"):
+        export_c(E.make("kinematic-smoother"), tmp_path, rate=100.0)
+
+
+needs_kitti = pytest.mark.skipif(not (DATA / "kitti-oxts-extra").is_dir(),
+                                 reason="the shared KITTI drives (../shared/data/kitti-oxts*) are not here")
+
+
+@pytest.mark.slow
+@needs_kitti
+def test_the_cutoff_and_the_map_default_are_what_the_rule_picks():
+    """On training data only: the shipped cut-off is choose_smoother's among its grid neighbours, and
+    the map's default is the real-roads-first rule's among the offline estimators; on the real training
+    drives it is below half of pif-smoother's error (which restarts from one sample after each stop)."""
+    from roadbank.defaults import MAP_ESTIMATOR
+    from roadbank.tuning.real import CUTOFFS_HZ, choose_by_roads, choose_smoother, per_log, simulated_sets
+    from roadbank.tuning.real import training_logs
+
+    logs, sims = training_logs(DATA), simulated_sets()
+    i = CUTOFFS_HZ.index(SMOOTHER_CUTOFF_HZ)
+    chosen, obj = choose_smoother(logs, sims, cutoffs=CUTOFFS_HZ[max(0, i - 1):i + 2])
+    assert chosen == SMOOTHER_CUTOFF_HZ, obj
+    builds = {name: per_log(name) for name in E.OFFLINE}
+    builds["kinematic-smoother, never quiet"] = per_log("kinematic-smoother", quiet_ratio=0.0)
+    best, real, sim = choose_by_roads(builds, logs, sims)
+    assert best == MAP_ESTIMATOR == "kinematic-smoother", (real, sim)
+    assert real["kinematic-smoother"] < 0.5 * real["pif-smoother"]
+    assert sim["kinematic-smoother"] < sim["kinematic-smoother, never quiet"] - 0.05
