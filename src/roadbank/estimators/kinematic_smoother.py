@@ -65,7 +65,10 @@ class KinematicSmoother(KinematicLowPass):
         opts = {**kw, "kappa": self.kappa, "lead": self.lead}
         if self.cutoff is not None:
             opts["cutoff"] = self.cutoff
-        self._reverse = KinematicLowPass(self.params, **opts)      # the same design, run in reversed time
+        # the same design, run in reversed time; on the forward pass's fixed rate (not one detected anew
+        # in each chunk's reversed time, which would make a streamed log differ from one run)
+        self._reverse = KinematicLowPass(self.params, **{**opts, "sample_rate": None})
+        self._reverse_dt: float | None = None
 
     @property
     def lookahead_s(self) -> float:
@@ -90,6 +93,9 @@ class KinematicSmoother(KinematicLowPass):
             m = np.flatnonzero(lookahead.t > signals.t[-1] + self.lookahead_s)
             whole = concat_signals([signals, lookahead[:m[0] + 1] if m.size else lookahead])
         t = whole.t
+        if self._reverse_dt != self.fixed_dt:
+            self._reverse.set_sample_rate(None if self.fixed_dt is None else 1.0 / self.fixed_dt)
+            self._reverse_dt = self.fixed_dt
         back = self._reverse.run(Signals(t[-1] - t[::-1], whole.vx[::-1], whole.ay[::-1], whole.r[::-1],
                                          whole.delta_f[::-1]))
         wb, valid_b = back.w[::-1][:n], back.valid[::-1][:n]
