@@ -317,3 +317,18 @@ def test_the_blend_runs_through_a_stop_instead_of_starting_again():
     quiet = Signals(t, vx, 9.81 * np.sin(bank) + 0.01 * rng.standard_normal(t.size), s.r, s.delta_f)
     assert not isinstance(for_log("kinematic-pif", quiet), E.KinematicPIF)
     assert for_log("kinematic-pif", quiet).v_min == 5.0
+
+
+def test_the_rules_tie_break_ignores_float_rounding(monkeypatch):
+    """choose_by_roads: real medians within TIE_DEG tie, the simulated median decides, and simulated medians
+    equal but for float rounding (1e-16) leave the choice to the candidates' order, not to the rounding."""
+    from roadbank.tuning import real as R
+
+    table = {("a", "real"): 0.4000, ("b", "real"): 0.4005, ("c", "real"): 0.5,
+             ("a", "sim"): 0.3 + 1e-16, ("b", "sim"): 0.3, ("c", "sim"): 0.1}
+    monkeypatch.setattr(R, "objective", lambda build, logs, sims: table[(build, "real" if logs else "sim")])
+    builds = {"a": "a", "b": "b", "c": "c"}
+    chosen, real, sim = R.choose_by_roads(builds, ["one log"], [])
+    assert chosen == "a" and set(sim) == {"a", "b"}                # c is not tied on real roads
+    table[("b", "sim")] = 0.3 - 1e-6
+    assert R.choose_by_roads(builds, ["one log"], [])[0] == "b"    # a real difference decides

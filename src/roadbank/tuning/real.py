@@ -49,7 +49,8 @@ kinematic estimate's 0.91 deg and a 0.3 Hz low-pass's 0.38, are those of that sc
 (:data:`~roadbank.validation.kitti.KITTI_SCORING`), in order, the lowest speed at 1 m/s until the
 fifth: the low-pass constants, the bank rate, the gate, the quiet ratio and the quiet filter are
 the same; ``kappa`` became 0.2 (first 0.3), the lowest speed 3 m/s (first 1 m/s; 3, 2 and 1 m/s tie
-on the real drives within 0.0003 deg and on the simulated ones, which never slow down, to 1e-16).
+on the real drives within 0.0003 deg and on the simulated ones, which never slow down, to float
+rounding: :func:`choose_by_roads` counts that as equal, :data:`EQUAL_DEG`, and takes the first, 3 m/s).
 The sixth stage, run after the fifth with the same scoring, chooses the low-pass's sampled-data lead
 (:data:`LEADS_SAMPLES`, in sample intervals of the log; :mod:`roadbank.estimators.lowpass`): it chose
 half an interval, the lag of the first-order filter of the samples (KITTI training median 0.4071 ->
@@ -80,6 +81,8 @@ CUTOFFS_HZ = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.8)
 KAPPAS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4)
 #: objectives closer than this (deg) count as equal
 TIE_DEG = 0.002
+#: the rule's simulated tie-break counts medians as equal to this (deg): the size of float rounding
+EQUAL_DEG = 1e-9
 #: gate candidates of ``kinematic-pif``: ``gate_on`` (m/s^3), ``gate_span`` (m/s^3), ``gate_release`` (s)
 GATE_GRID = {"gate_on": (1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0), "gate_span": (1.0, 2.0, 4.0, 8.0),
              "gate_release": (1.0, 2.0, 4.0, 8.0)}
@@ -189,12 +192,13 @@ def choose_by_roads(builds: dict, logs, sim_sets) -> tuple:
     """The real-roads-first rule (module docstring) over ``builds`` (``{key: build}``, see
     :func:`objective`). Returns ``(chosen key, {key: real median}, {key: simulated median})``; the
     simulated median is computed for the candidates within :data:`TIE_DEG` of the best real one only;
-    of candidates equal on both, the first in ``builds``' order wins."""
+    of candidates equal on both to :data:`EQUAL_DEG` (float rounding, e.g. the lowest speeds on
+    simulated drives that never slow down), the first in ``builds``' order wins."""
     real = {k: objective(b, logs, []) for k, b in builds.items()}
     best = min(real.values())
     tied = [k for k, v in real.items() if v <= best + TIE_DEG]
     sim = {k: objective(builds[k], [], sim_sets) for k in tied}
-    return min(tied, key=lambda k: (sim[k], real[k])), real, sim
+    return min(tied, key=lambda k: (round(sim[k] / EQUAL_DEG), round(real[k] / EQUAL_DEG))), real, sim
 
 
 def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kappa: float | None = None) -> dict:
