@@ -16,7 +16,7 @@ from .base import DesignInputs, ScheduledObserver
 #: and the blend of ``kinematic-pif``): the value the fifth stage of :mod:`roadbank.tuning.real` chose
 #: for ``kinematic-pif``, where it matters most (a low-pass that stops at 5 m/s starts again from
 #: one noisy sample each time the car pulls away)
-KINEMATIC_V_MIN = 3.0
+KINEMATIC_V_MIN = 1.0
 
 
 def kinematic_observer(d: DesignInputs, vx: float):

@@ -48,13 +48,14 @@ kinematic estimate's 0.91 deg and a 0.3 Hz low-pass's 0.38, are those of that sc
 0.380; with a warm-up after each start 0.927 and 0.362), so every stage was run again with it
 (:data:`~roadbank.validation.kitti.KITTI_SCORING`), in order, the lowest speed at 1 m/s until the
 fifth: the low-pass constants, the bank rate, the gate, the quiet ratio and the quiet filter are
-the same; ``kappa`` became 0.2 (first 0.3), the lowest speed 3 m/s (first 1 m/s; 3, 2 and 1 m/s tie
-on the real drives within 0.0003 deg and on the simulated ones, which never slow down, to float
-rounding: :func:`choose_by_roads` counts that as equal, :data:`EQUAL_DEG`, and takes the first, 3 m/s).
+the same; ``kappa`` became 0.2 (first 0.3); the lowest speed stayed 1 m/s (3, 2 and 1 m/s tie on the
+real drives within 0.0003 deg and on the simulated ones, which never slow down, to float rounding, which
+first decided for 3 m/s; :func:`choose_by_roads` counts that as equal, :data:`EQUAL_DEG`, and the real
+median decides).
 The sixth stage, run after the fifth with the same scoring, chooses the low-pass's sampled-data lead
 (:data:`LEADS_SAMPLES`, in sample intervals of the log; :mod:`roadbank.estimators.lowpass`): it chose
-half an interval, the lag of the first-order filter of the samples (KITTI training median 0.4071 ->
-0.3934 deg). The stages before it ran without a lead and were not run again.
+half an interval, the lag of the first-order filter of the samples (KITTI training median 0.4068 ->
+0.3931 deg). The stages before it ran without a lead and were not run again.
 """
 
 from __future__ import annotations
