@@ -59,16 +59,18 @@ def test_kinematic_ff_adds_the_high_passed_centripetal_term():
 
 @pytest.mark.parametrize("fixed_rate", [True, False])
 def test_the_lead_is_a_zero_against_scipy_and_shortens_a_ramps_lag_by_itself(fixed_rate):
-    """With ``lead`` the low-pass is (c tau s + 1)/(tau s + 1), c = lead/tau (scipy's lsim of that
-    transfer function, on a noisy drive); on a bank ramp the output lags by tau - lead, so half a
-    sample interval gives the lag of the first-order filter of the samples (K = 1 - exp(-h/tau)); a
-    lead beyond tau passes the kinematic estimate unfiltered."""
+    """With ``lead`` the low-pass is (c tau s + 1)/(tau s + 1) (scipy's lsim of that transfer function, on
+    a noisy drive). On a bank ramp its output lags by (1 - c) tau: with half a sample interval exactly
+    the lag of the first-order filter of the samples (K = 1 - exp(-h/tau), run here in plain Python),
+    about tau - lead for a small lead, and a lead beyond tau (a slow log) still filters (c < 1)."""
+    from roadbank.estimators.lowpass import lead_share
+
     fc, h = 0.4, 0.1
     tau = 1.0 / (2 * np.pi * fc)
     s = _drive(fs=1.0 / h, T=60.0)
     kin = (s.ay - s.vx * s.r) / G
     out = estimators.make("kinematic-lp", cutoff=fc, lead=h / 2, sample_rate="auto" if fixed_rate else None).run(s)
-    c = (h / 2) / tau
+    c = lead_share((h / 2) / tau)
     ref = lsim(([c * tau, 1.0], [tau, 1.0]), kin - kin[0], s.t)[1] + kin[0]    # from rest at the first value
     assert np.max(np.abs(out.w - ref)) < (1e-9 if fixed_rate else 2e-3 * np.std(kin))
     t = np.arange(0.0, 40.0, h)
@@ -80,13 +82,20 @@ def test_the_lead_is_a_zero_against_scipy_and_shortens_a_ramps_lag_by_itself(fix
     sampled[0] = ramp.ay[0] / G
     for k in range(1, len(t)):
         sampled[k] = sampled[k - 1] + K * (ramp.ay[k] / G - sampled[k - 1])
-    for lead in (0.0, h / 2, 0.3, 0.5):        # beyond tau (0.40 s) the input passes straight: no lag
-        w = estimators.make("kinematic-lp", cutoff=fc, lead=lead).run(ramp).w
-        lag = (np.sin(rate * t) - w)[late] / (rate * np.cos(rate * t[late]))   # seconds, to first order
-        assert np.allclose(lag, max(tau - lead, 0.0), atol=2e-3), lead
-    lag_sampled = (np.sin(rate * t) - sampled)[late] / (rate * np.cos(rate * t[late]))
-    assert np.allclose(lag_sampled, (1 - K) / K * h, atol=2e-3)     # its exact lag
-    assert (1 - K) / K * h == pytest.approx(tau - h / 2, abs=0.03 * h)
+
+    def lag(w):                                                # seconds, to first order in the ramp's curvature
+        return (np.sin(rate * t) - w)[late] / (rate * np.cos(rate * t[late]))
+
+    assert np.allclose(lag(sampled), (1 - K) / K * h, atol=2e-3)            # the sampled filter's exact lag
+    lags = {lead: lag(estimators.make("kinematic-lp", cutoff=fc, lead=lead).run(ramp).w) for lead in (0.0, h / 2, 0.01,
+                                                                                                        0.5, 5.0)}
+    assert np.allclose(lags[0.0], tau, atol=2e-3)
+    assert np.allclose(lags[h / 2], (1 - K) / K * h, atol=2e-3) and np.allclose(lags[h / 2], lag(sampled), atol=1e-3)
+    assert np.allclose(lags[0.01], tau - 0.01, atol=2e-3)
+    for lead in (0.5, 5.0):                                    # beyond tau (0.40 s)
+        c = lead_share(lead / tau)
+        assert 0.5 < c < 1.0 and np.allclose(lags[lead], (1 - c) * tau, atol=2e-3)
+    assert lead_share(0.0) == 0.0 and lead_share(1e-12) == pytest.approx(1e-12, rel=1e-6)
 
 
 def test_steady_turn_on_a_bank_has_no_bias():

@@ -32,21 +32,27 @@ as a lead :math:`\kappa\, \tau s/(\tau s + 1)\, a`.
 continuous-time low-pass, exact on a signal linear between samples, lags its input by
 :math:`\tau` at low frequencies. The first-order filter of the samples themselves, the one-line
 low-pass :math:`x_k = x_{k-1} + K (u_k - x_{k-1})` with the same pole
-(:math:`K = 1 - e^{-h/\tau}`), weighs the newest sample more and lags by
-:math:`\tau - h/2` (:math:`h` the sample interval). Both are written as one continuous-time
-filter, with a share :math:`c = \min(1, \mathrm{lead}/\tau)` of its input passed straight
-through, its zero at :math:`-1/(c\tau)`:
+(:math:`K = 1 - e^{-h/\tau}`, :math:`h` the sample interval), weighs the newest sample more and
+lags by :math:`h (1-K)/K = \tau - h/2 + O(h^2/\tau)`. Both are written as one continuous-time
+filter, with a share :math:`c` of its input passed straight through, its zero at :math:`-1/(c\tau)`:
 
 .. math::
     \hat w = (1 - c)\, x + c\, u + \kappa a, \qquad u = \frac{a_y - v_x r}{g} - \kappa a,
-    \qquad \frac{\hat w - \kappa a}{u} = \frac{c \tau s + 1}{\tau s + 1}
+    \qquad \frac{\hat w - \kappa a}{u} = \frac{c \tau s + 1}{\tau s + 1},
 
-It lags by :math:`\tau - \mathrm{lead}`; ``lead = h/2`` gives the sampled filter's lag, and
-``kinematic-pif`` takes it (:data:`roadbank.estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES`).
+which lags by :math:`(1 - c)\tau`. With :math:`z = 2\,\mathrm{lead}/\tau`,
+
+.. math::
+    c = 1 - \frac{z e^{-z}}{1 - e^{-z}} \;(= \mathrm{lead}/\tau + O(z^2)), \qquad c = 0 \text{ at lead} = 0,
+
+so ``lead = h/2`` lags exactly as the sampled filter, a small lead shortens the lag by itself,
+and a long one (a slow log) never passes the input through unfiltered (:math:`c < 1`).
+``kinematic-pif`` takes ``lead = h/2`` (:data:`roadbank.estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES`).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -110,11 +116,20 @@ def lowpass_cutoff(d: LowPassDesign, vx: float) -> float:
     return cutoff_for_noise((d.Q_ay + vx * vx * d.R) / d.params.g ** 2, d.bank_rate)  # type: ignore[operator, arg-type]
 
 
+def lead_share(lead_per_tau: float) -> float:
+    """The share ``c`` (-) of the low-pass's input passed straight through for a lead of ``lead_per_tau``
+    time constants: ``1 - z e^-z / (1 - e^-z)``, ``z = 2 lead_per_tau`` (module docstring; 0 at 0)."""
+    z = 2.0 * lead_per_tau
+    if z < 1e-8:
+        return lead_per_tau                     # the series' first term, exact to 1e-16
+    return 1.0 - z * math.exp(-z) / -math.expm1(-z)
+
+
 def lowpass_observer(d: LowPassDesign, vx: float):
     """``(F, G, H, D)`` of the low-passed kinematic estimate at ``vx`` (m/s); inputs ``[delta_f, ay, r]``;
-    the share ``c`` of the input passed through is ``min(1, 2 pi f_c lead)`` (module docstring)."""
+    the share ``c`` of the input passed through is :func:`lead_share` of ``2 pi f_c lead`` (module docstring)."""
     g, wc, k = d.params.g, 2.0 * np.pi * lowpass_cutoff(d, vx), d.kappa
-    c = min(1.0, wc * d.lead)
+    c = lead_share(wc * d.lead)
     u = np.array([[0.0, 1.0 / g, -(1.0 + k) * vx / g]])       # the filter's input per eta
     F = np.array([[-wc]])
     return F, wc * u, np.array([[1.0 - c]]), c * u + np.array([[0.0, 0.0, k * vx / g]])
@@ -139,8 +154,8 @@ class KinematicLowPass(ScheduledObserver):
         Noise densities of ``ay`` ((m/s^2)^2 s) and of the yaw rate ((rad/s)^2 s) for the
         scheduled cut-off (default 0: only the other counts).
     lead : float, optional
-        Sampled-data lead (s, >= 0; default 0): the output lags its input by ``1/(2 pi f_c) - lead``
-        (module docstring).
+        Sampled-data lead (s, >= 0; default 0): about ``lead`` less lag than the low-pass's
+        ``1/(2 pi f_c)`` (exactly that of the sampled filter at ``lead = h/2``; module docstring).
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator`; ``v_min`` (m/s) defaults to
         :data:`~roadbank.estimators.kinematic.KINEMATIC_V_MIN` (the estimate holds at any speed).

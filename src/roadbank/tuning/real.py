@@ -55,7 +55,7 @@ median decides).
 The sixth stage, run after the fifth with the same scoring, chooses the low-pass's sampled-data lead
 (:data:`LEADS_SAMPLES`, in sample intervals of the log; :mod:`roadbank.estimators.lowpass`): it chose
 half an interval, the lag of the first-order filter of the samples (KITTI training median 0.4068 ->
-0.3931 deg). The stages before it ran without a lead and were not run again.
+0.3929 deg). The stages before it ran without a lead and were not run again.
 """
 
 from __future__ import annotations
