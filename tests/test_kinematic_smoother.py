@@ -75,6 +75,8 @@ def test_a_quiet_log_gets_the_offline_pif_and_a_loud_one_the_smoother():
     assert isinstance(loud_est, E.KinematicSmoother) and isinstance(quiet_est, E.PIFSmoother)
     np.testing.assert_array_equal(quiet_est.run(s).w, for_log("pif-smoother", s).run(s).w)
     assert isinstance(for_log("kinematic-smoother", s, quiet_ratio=0.0), E.KinematicSmoother)
+    with pytest.raises(ValueError, match="bad tuning option"):      # the blend's option is not the smoother's
+        for_log("kinematic-smoother", loud, lead_samples=0.5)
 
 
 def test_it_is_not_exported_for_an_ecu(tmp_path):

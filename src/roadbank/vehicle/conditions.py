@@ -190,10 +190,11 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     if name in QUIET_MODELS:
         ratio = float(options.pop("quiet_ratio", QUIET_RATIO))
         quiet_filter = options.pop("quiet_filter", QUIET_MODELS[name])
-        lead_samples = float(options.pop("lead_samples", estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES))
+        lead_samples = (float(options.pop("lead_samples", estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES))
+                        if name == "kinematic-pif" else None)        # the blend's option only
         if not any(k in options for k in _GATE_OPTIONS) and is_quiet(sensors, log_rate, log_ay_noise, ratio):
             name, options = quiet_filter, {k: v for k, v in options.items() if k not in _BLEND_OPTIONS}
-        elif name == "kinematic-pif":
+        elif lead_samples is not None:
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
     if sensors.r_variance > 0:
         R, Q_ay = noise_densities(sensors, log_rate, log_ay_noise, log_r_noise)
