@@ -324,3 +324,36 @@ def test_the_rules_tie_break_ignores_float_rounding(monkeypatch):
     assert chosen == "a" and set(sim) == {"a", "b"}                # c is not tied on real roads
     table[("b", "sim")] = 0.3 - 1e-6
     assert R.choose_by_roads(builds, ["one log"], [])[0] == "b"    # a real difference decides
+
+
+def test_a_described_car_takes_its_model_on_logs_up_to_its_own_quiet_ratio(lane_change):
+    """A log 1.5-6 times as noisy as the data sheet: the blend for a car nobody described, the quiet filter
+    (the car's model) with the car's file (Vehicle.make: QUIET_RATIO_DESCRIBED); an explicit ratio wins."""
+    from roadbank.vehicle import QUIET_RATIO, QUIET_RATIO_DESCRIBED, SensorSpec, load_vehicle, log_conditions
+
+    s = lane_change.signals
+    rng = np.random.default_rng(5)
+    mid = Signals(s.t, s.vx, s.ay + 0.05 * rng.standard_normal(len(s.t)), s.r, s.delta_f)
+    cond, sheet = log_conditions(mid), SensorSpec()
+    ratio = cond["log_ay_noise"] ** 2 / cond["log_rate"] / sheet.ay_noise_density(cond["log_rate"])
+    assert QUIET_RATIO < ratio < QUIET_RATIO_DESCRIBED == 6.0, ratio
+    car = load_vehicle("suv-paper")
+    assert isinstance(for_log("kinematic-pif", mid), E.KinematicPIF)
+    assert not isinstance(for_log("kinematic-pif", mid, vehicle=car), E.KinematicPIF)
+    assert isinstance(for_log("kinematic-pif", mid, vehicle=car, quiet_ratio=QUIET_RATIO), E.KinematicPIF)
+    assert isinstance(for_log("kinematic-smoother", mid, vehicle=car), E.PIFSmoother)
+
+
+@pytest.mark.slow
+def test_the_described_cars_quiet_ratio_is_what_the_rule_picks():
+    """The seventh stage (tuning.real.choose_described_ratio) on the simulated training drives, each built
+    for its own car: the shipped ratio against the undescribed car's and its grid neighbours; it gains
+    more than 0.01 deg over the undescribed car's ratio."""
+    from roadbank.tuning.real import QUIET_RATIOS, choose_described_ratio, simulated_sets
+    from roadbank.vehicle import QUIET_RATIO, QUIET_RATIO_DESCRIBED
+
+    i = QUIET_RATIOS.index(QUIET_RATIO_DESCRIBED)
+    cands = sorted({QUIET_RATIO, QUIET_RATIOS[i - 1], QUIET_RATIO_DESCRIBED, QUIET_RATIOS[i + 1]})
+    chosen, meds = choose_described_ratio(simulated_sets(), ratios=cands)
+    assert chosen == QUIET_RATIO_DESCRIBED, meds
+    assert meds[QUIET_RATIO_DESCRIBED] < meds[QUIET_RATIO] - 0.01

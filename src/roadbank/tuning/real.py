@@ -55,7 +55,9 @@ median decides).
 The sixth stage, run after the fifth with the same scoring, chooses the low-pass's sampled-data lead
 (:data:`LEADS_SAMPLES`, in sample intervals of the log; :mod:`roadbank.estimators.lowpass`): it chose
 half an interval, the lag of the first-order filter of the samples (KITTI training median 0.4068 ->
-0.3929 deg). The stages before it ran without a lead and were not run again.
+0.3929 deg). The stages before it ran without a lead and were not run again. The seventh
+(:func:`choose_described_ratio`) chooses the quiet ratio for a car that is described
+(:data:`roadbank.vehicle.QUIET_RATIO_DESCRIBED`) on the simulated drives built for their own car: 6.
 """
 
 from __future__ import annotations
@@ -187,6 +189,24 @@ def choose_smoother(logs, sim_sets, cutoffs=CUTOFFS_HZ) -> tuple[float, dict]:
     obj = {fc: objective(fixed(KinematicSmoother(cutoff=fc)), logs, sim_sets) for fc in cutoffs}
     best = min(obj.values())
     return min(fc for fc, v in obj.items() if v <= best + TIE_DEG), obj
+
+
+def choose_described_ratio(sim_sets, cars=SIM_CARS, ratios=QUIET_RATIOS) -> tuple[float, dict]:
+    """The seventh stage: the quiet ratio of ``kinematic-pif`` for a car that is described. Each candidate
+    ratio (:data:`QUIET_RATIOS`) builds the default for each simulated training drive of each car in
+    ``cars`` with that car's own file (``for_log(..., vehicle=load_vehicle(car))``, as
+    ``roadbank estimate --vehicle CAR`` does); bank RMS per drive, median per car, median over the cars
+    (deg). No real log of a described car is at hand, so the simulated drives alone decide; the lowest
+    wins, ties within :data:`EQUAL_DEG` to the smaller ratio (fewer logs leave the low-pass). Returns
+    ``(ratio, {ratio: median})``."""
+    meds: dict[float, float] = {}
+    for q in sorted(ratios):
+        per_car = []
+        for car, drives in zip(cars, sim_sets):
+            build = per_log("kinematic-pif", vehicle=load_vehicle(car), quiet_ratio=q)
+            per_car.append(float(np.median([drive_errors(build(d.signals), [d])[0][0] for d in drives])))
+        meds[q] = float(np.median(per_car))
+    return min(meds, key=lambda q: (round(meds[q] / EQUAL_DEG), q)), meds
 
 
 def choose_by_roads(builds: dict, logs, sim_sets) -> tuple:

@@ -20,8 +20,8 @@ from .sensors import SensorSpec
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
 # them: loading a car (load_vehicle, --vehicle) loads neither
 
-__all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "QUIET_FILTER", "QUIET_MODELS", "design_span",
-           "has_design_span", "log_conditions", "noise_densities", "is_quiet", "make_estimator"]
+__all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "QUIET_RATIO_DESCRIBED", "QUIET_FILTER", "QUIET_MODELS",
+           "design_span", "has_design_span", "log_conditions", "noise_densities", "is_quiet", "make_estimator"]
 
 
 #: seconds of driving (``vx >= v_min``) at the start of a log on which :func:`log_conditions` measures it (s)
@@ -32,6 +32,10 @@ DESIGN_MAX_S = 600.0
 #: the accelerometer's data-sheet density (-; chosen by the rule of :mod:`roadbank.tuning.real`,
 #: its third stage), and ``kinematic-pif`` is then :data:`QUIET_FILTER`
 QUIET_RATIO = 1.5
+#: ... and for a car that is described (a :class:`~roadbank.vehicle.Vehicle`: its parameters, sensors and
+#: tuning), whose model is then worth more: the rule's seventh stage, on the simulated training drives of
+#: the shipped cars built for their own car (no real log of a described car is at hand to weigh against)
+QUIET_RATIO_DESCRIBED = 6.0
 #: the filter that ``kinematic-pif`` is on a quiet log: the car's model, with the tyre's fall-off
 #: near the friction limit (the rule's fourth stage, over :data:`roadbank.tuning.real.QUIET_FILTERS`)
 QUIET_FILTER = "pif-adaptive"
