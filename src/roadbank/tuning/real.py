@@ -166,15 +166,15 @@ def per_log(name: str, **options):
     return build
 
 
-def choose_lowpass(logs, sim_sets, cutoffs=CUTOFFS_HZ, kappas=KAPPAS) -> LowpassChoice:
+def choose_lowpass(logs, sim_sets, cutoffs=CUTOFFS_HZ, kappas=KAPPAS, estimator=KinematicLowPass) -> LowpassChoice:
     """Apply the module's rule to ``logs`` (from :func:`training_logs`) and ``sim_sets``
-    (from :func:`simulated_sets`).
+    (from :func:`simulated_sets`), for the low-pass class ``estimator`` (default ``kinematic-lp``'s).
 
     Returns the chosen ``(cutoff Hz, kappa)`` of ``kinematic-lp`` (kappa 0) and of ``kinematic-ff``.
     """
     if not logs:
         raise ValueError("choose_lowpass: no training drives")
-    obj = {(fc, k): objective(fixed(KinematicLowPass(cutoff=fc, kappa=k)), logs, sim_sets)
+    obj = {(fc, k): objective(fixed(estimator(cutoff=fc, kappa=k)), logs, sim_sets)
            for fc in cutoffs for k in kappas}
     lp = _pick({fk: v for fk, v in obj.items() if fk[1] == 0.0})
     return LowpassChoice(lp=lp, ff=_pick(obj), objective=obj)
@@ -184,11 +184,8 @@ def choose_smoother(logs, sim_sets, cutoffs=CUTOFFS_HZ) -> tuple[float, dict]:
     """The cut-off (Hz) of ``kinematic-smoother`` by the rule of ``kinematic-lp`` (module docstring: the sum
     of the real and the simulated medians over :data:`CUTOFFS_HZ`; ties within :data:`TIE_DEG` to the
     smaller cut-off), and every objective (deg)."""
-    if not logs:
-        raise ValueError("choose_smoother: no training drives")
-    obj = {fc: objective(fixed(KinematicSmoother(cutoff=fc)), logs, sim_sets) for fc in cutoffs}
-    best = min(obj.values())
-    return min(fc for fc, v in obj.items() if v <= best + TIE_DEG), obj
+    choice = choose_lowpass(logs, sim_sets, cutoffs, kappas=(0.0,), estimator=KinematicSmoother)
+    return choice.lp[0], {fc: v for (fc, _), v in choice.objective.items()}
 
 
 def choose_described_ratio(sim_sets, cars=SIM_CARS, ratios=QUIET_RATIOS) -> tuple[float, dict]:
@@ -201,11 +198,8 @@ def choose_described_ratio(sim_sets, cars=SIM_CARS, ratios=QUIET_RATIOS) -> tupl
     ``(ratio, {ratio: median})``."""
     meds: dict[float, float] = {}
     for q in sorted(ratios):
-        per_car = []
-        for car, drives in zip(cars, sim_sets):
-            build = per_log("kinematic-pif", vehicle=load_vehicle(car), quiet_ratio=q)
-            per_car.append(float(np.median([drive_errors(build(d.signals), [d])[0][0] for d in drives])))
-        meds[q] = float(np.median(per_car))
+        meds[q] = float(np.median([objective(per_log("kinematic-pif", vehicle=load_vehicle(car), quiet_ratio=q), [],
+                                             [drives]) for car, drives in zip(cars, sim_sets)]))
     return min(meds, key=lambda q: (round(meds[q] / EQUAL_DEG), q)), meds
 
 
