@@ -54,7 +54,7 @@ table of units the log readers use too.
 from __future__ import annotations
 
 from ..units import SI_UNIT, UNITS, parse_quantity
-from .conditions import (DESIGN_MAX_S, DESIGN_SPAN_S, QUIET_FILTER, QUIET_RATIO, QUIET_RATIO_DESCRIBED, design_span,
+from .conditions import (DESIGN_MAX_S, DESIGN_SPAN_S, QUIET_FILTER, QUIET_RATIO, design_span,
                          has_design_span, is_quiet, log_conditions, make_estimator, noise_densities)
 from .errors import VehicleFileError
 from .factory import for_conditions, for_log, undescribed_params
@@ -68,5 +68,5 @@ __all__ = ["Vehicle", "SensorSpec", "VehicleFileError", "load_vehicle", "builtin
            # the rest of the package's public names
            "SI_UNIT", "DEFAULT_VEHICLE", "TABLES", "META_KEYS", "REQUIRED_VEHICLE_KEYS", "OFFSET_CHANNELS",
            "WHEELBASE_RANGE", "SENSOR_FIELDS", "PLANT_FIELDS", "DESIGN_SPAN_S", "DESIGN_MAX_S", "design_span",
-           "has_design_span", "log_conditions", "noise_densities", "QUIET_RATIO", "QUIET_RATIO_DESCRIBED",
+           "has_design_span", "log_conditions", "noise_densities", "QUIET_RATIO",
            "QUIET_FILTER", "is_quiet", "make_estimator", "for_conditions", "for_log", "undescribed_params"]

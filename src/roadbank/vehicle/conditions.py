@@ -20,7 +20,7 @@ from .sensors import SensorSpec
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
 # them: loading a car (load_vehicle, --vehicle) loads neither
 
-__all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "QUIET_RATIO_DESCRIBED", "QUIET_FILTER", "QUIET_MODELS",
+__all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "QUIET_FILTER", "QUIET_MODELS",
            "design_span", "has_design_span", "log_conditions", "noise_densities", "is_quiet", "make_estimator"]
 
 
@@ -32,10 +32,6 @@ DESIGN_MAX_S = 600.0
 #: the accelerometer's data-sheet density (-; chosen by the rule of :mod:`roadbank.tuning.real`,
 #: its third stage), and ``kinematic-pif`` is then :data:`QUIET_FILTER`
 QUIET_RATIO = 1.5
-#: ... and for a car that is described (a :class:`~roadbank.vehicle.Vehicle`: its parameters, sensors and
-#: tuning), whose model is then worth more: the rule's seventh stage, on the simulated training drives of
-#: the shipped cars built for their own car (no real log of a described car is at hand to weigh against)
-QUIET_RATIO_DESCRIBED = 6.0
 #: the filter that ``kinematic-pif`` is on a quiet log: the car's model, with the tyre's fall-off
 #: near the friction limit (the rule's fourth stage, over :data:`roadbank.tuning.real.QUIET_FILTERS`)
 QUIET_FILTER = "pif-adaptive"
@@ -137,7 +133,7 @@ def is_quiet(sensors: SensorSpec, log_rate: float | None = None, log_ay_noise: f
     ``log_rate`` Hz: :func:`log_conditions`) at most ``ratio`` times the accelerometer's
     data-sheet density at that rate (:meth:`SensorSpec.ay_noise_density`).
 
-    A car's ESP sensor on a smooth road (and every simulated drive: 0.9-6 times) is quiet; a
+    A car's ESP sensor on a smooth road (and every simulated drive: 0.93-1.13 times) is quiet; a
     road that shakes the accelerometer, a 10 Hz INS that samples without an anti-alias filter, a
     phone is not (the KITTI training drives: 15-190 times the paper's ESP accelerometer).
     Not measured (None or NaN) or ``ratio <= 0``: False.

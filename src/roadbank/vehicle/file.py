@@ -21,7 +21,7 @@ from pathlib import Path
 
 from ..params import VehicleParams
 from ..signals import CHANNELS, Signals
-from .conditions import QUIET_MODELS, QUIET_RATIO_DESCRIBED, make_estimator
+from .conditions import make_estimator
 from .errors import VehicleFileError
 from .plausibility import (PLANT_FIELDS, PLAUSIBLE, SENSOR_FIELDS, check_document, check_free_table, check_tuning,
                            checked_value, unknown_key)
@@ -187,19 +187,15 @@ class Vehicle:
         conditions: its rate ``log_rate`` (Hz; default the sensor's ``rate``) and the road noise
         of its ``ay`` (``log_ay_noise``, m/s^2) and yaw rate (``log_r_noise``, rad/s), by
         :func:`~roadbank.vehicle.conditions.noise_densities`. ``kinematic-pif`` and
-        ``kinematic-smoother`` take the car's model on logs up to
-        :data:`~roadbank.vehicle.conditions.QUIET_RATIO_DESCRIBED` times the data sheet's noise
-        (``quiet_ratio``; a car nobody described: :data:`~roadbank.vehicle.conditions.QUIET_RATIO`).
+        ``kinematic-smoother`` take the car's model on a quiet log
+        (:func:`~roadbank.vehicle.conditions.is_quiet`), this car's sensors giving the data sheet.
         """
         from ..estimators import TUNED_AS
         # an estimator tuned as itself looks up None: no table
         tuning = {**self.tuning.get(TUNED_AS.get(estimator_name), {}),  # type: ignore[arg-type]
                   **self.tuning.get(estimator_name, {})}
-        # a described car's model is worth more: its quiet logs reach further (QUIET_RATIO_DESCRIBED)
-        described = {"quiet_ratio": QUIET_RATIO_DESCRIBED} if estimator_name in QUIET_MODELS else {}
         return make_estimator(estimator_name, self.params, sensors=self.sensors, log_rate=log_rate,
-                              log_ay_noise=log_ay_noise, log_r_noise=log_r_noise,
-                              **{**described, **tuning, **overrides})
+                              log_ay_noise=log_ay_noise, log_r_noise=log_r_noise, **{**tuning, **overrides})
 
     @property
     def sensor_offsets(self) -> dict[str, float]:
