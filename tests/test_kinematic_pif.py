@@ -16,7 +16,8 @@ from test_gated import _gate_reference  # the gate written out in plain Python
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 #: the rule's stages before the sixth ran without the sampled-data lead
-NO_LEAD = {"lead_samples": 0.0}
+NO_LEAD = {"lead_samples": 0.0, "car_margin": float("inf")}    # stages 1-5: no lead, the static car
+STATIC_CAR = {"car_margin": float("inf")}                       # stages 1-7: the static car
 
 
 @pytest.fixture(scope="module")
@@ -124,7 +125,8 @@ def test_the_shipped_gate_and_the_default_are_what_the_rule_picks():
     logs, sims = training_logs(DATA), simulated_sets()
     g = dict(KINEMATIC_PIF_GATE)
     # the second stage ran before the third (the gate held open on quiet logs): quiet_ratio=0
-    builds = {"kinematic-ff": per_log("kinematic-ff"), "shipped": per_log("kinematic-pif", **NO_LEAD, quiet_ratio=0.0)}
+    builds = {"kinematic-ff": per_log("kinematic-ff", **STATIC_CAR),
+              "shipped": per_log("kinematic-pif", **NO_LEAD, quiet_ratio=0.0)}
     for key in ("gate_on", "gate_span", "gate_release"):
         values = GATE_GRID[key]
         i = values.index(g[key])
@@ -221,7 +223,7 @@ def test_the_shipped_lead_is_what_the_rule_picks():
 
     i = LEADS_SAMPLES.index(KINEMATIC_PIF_LEAD_SAMPLES)
     cands = sorted({LEADS_SAMPLES[j] for j in (0, i - 1, i, i + 1) if 0 <= j < len(LEADS_SAMPLES)})
-    builds = {n: per_log("kinematic-pif", lead_samples=n) for n in cands}
+    builds = {n: per_log("kinematic-pif", lead_samples=n, **STATIC_CAR) for n in cands}
     chosen, real, sim = choose_by_roads(builds, training_logs(DATA), simulated_sets())
     assert chosen == KINEMATIC_PIF_LEAD_SAMPLES == 0.5, (real, sim)
     assert real[0.5] < real[0.0] - 0.01 and real[0.75] > real[0.5]

@@ -12,7 +12,8 @@
 * :data:`VEHICLE` — a log whose car is not described: the estimators that need a car model are
   designed for the parameters of this shipped car (with the data sheet's ESP sensors) in every
   command that reads logs (``estimate``, ``map``, ``validate``) and in
-  :func:`roadbank.vehicle.for_log`: :func:`roadbank.vehicle.undescribed_params`. Chosen by a
+  :func:`roadbank.vehicle.for_log`, unless another shipped car fits the log clearly better
+  (:func:`roadbank.vehicle.design_car`; :func:`roadbank.vehicle.undescribed_params`). Chosen by a
   rule on training data: of the four shipped cars, the design car with the lowest objective of
   the default-tuned PIF (median raw error on the KITTI training drives + median over the four
   plant cars of the simulated training drives; docs/estimators.md). ``--vehicle`` / a

@@ -116,10 +116,12 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     from ..vehicle import undescribed_params
 
     names = _parse_estimators(est_names)
-    params = vehicle.params if vehicle is not None else undescribed_params()
+    # no car described: each log's estimators are designed for the shipped car that fits it
+    # (roadbank.vehicle.design_car, in estimate_log); a steering ratio alone keeps the static car
+    params = vehicle.params if vehicle is not None else None
     if steering_ratio is not None:
         try:
-            params = params.replace(steering_ratio=steering_ratio)
+            params = (params or undescribed_params()).replace(steering_ratio=steering_ratio)
         except ValueError as exc:
             raise click.BadParameter(str(exc), param_hint="--steering-ratio") from None
         if vehicle is not None:
@@ -142,7 +144,8 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
         click.echo("removing the sensor offsets identified in the vehicle file from every log: "
                    + ", ".join(_OFFSET_TEXT[c](v) for c, v in offsets.items()), err=True)
     meta = {"estimators": ",".join(names),
-            "steering_ratio": str(cmap.steering_ratio if cmap and cmap.steering_ratio else params.steering_ratio)}
+            "steering_ratio": str(cmap.steering_ratio if cmap and cmap.steering_ratio
+                                  else (params or undescribed_params()).steering_ratio)}
     if not batch:
         s = estimate_log(paths[0], output, names, channels=cmap, format=fmt, vehicle=vehicle, params=params,
                          chunk_rows=chunk_rows, metadata=dict(meta, source=str(paths[0])), plot=plot,

@@ -197,13 +197,15 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
         correct = (lambda s: s) if vehicle is None else vehicle.correct
         # an offline estimator smooths each chunk with the chunks after it as lookahead (as many as
         # cover its lookahead_s: what makes the chunked result that of one run)
-        chunks = ReadAhead(stream_log(path, channels=channels, format=format, params=params,
+        chunks = ReadAhead(stream_log(path, channels=channels, format=format,
+                                      params=params if params is not None else undescribed_params(),
                                       chunk_rows=chunk_rows or CHUNK_ROWS))
         span = None
         for k, chunk in enumerate(chunks):
             if k == 0:  # designed for the log's own rate and road noise, measured on its first minute of driving
-                cond = log_conditions(chunks.leading(chunk.signals, DESIGN_MAX_S, has_design_span))
-                car = params if params is not None else undescribed_params()
+                lead = chunks.leading(chunk.signals, DESIGN_MAX_S, has_design_span)
+                cond = log_conditions(lead)
+                car = params if params is not None else undescribed_params(lead)
                 ests = [for_conditions(n, cond, car, vehicle=vehicle) for n in names]
                 if online_offsets:      # causal ones: a smoother's later samples would see later offsets
                     ests = [e if n in OFFLINE else with_online_offsets(e, car) for e, n in zip(ests, names)]

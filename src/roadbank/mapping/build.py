@@ -13,7 +13,7 @@ from ..io import LogError
 from ..io.channels import ChannelMap
 from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..params import VehicleParams
-from ..vehicle import DESIGN_MAX_S, Vehicle, for_conditions, has_design_span, log_conditions
+from ..vehicle import DESIGN_MAX_S, Vehicle, for_conditions, has_design_span, log_conditions, undescribed_params
 from .geo import CourseStream, LocalProjection
 from .grid import BankMap
 
@@ -52,12 +52,15 @@ class MapSettings:
 
 
 def _design(settings: MapSettings, signals, designs: dict):
-    """The estimator for a log (its sample rate and road noise, :func:`roadbank.vehicle.for_conditions`),
-    memoised in ``designs`` by those conditions."""
+    """The estimator for a log (its sample rate and road noise, :func:`roadbank.vehicle.for_conditions`; a car
+    that is not described chosen for the log, :func:`roadbank.vehicle.undescribed_params`), memoised in
+    ``designs`` by those conditions and the car."""
     cond = log_conditions(signals)
-    key = tuple(round(v, 6) if np.isfinite(v) else None for v in cond.values())
+    car = (settings.params if settings.params is not None or settings.vehicle is not None
+           else undescribed_params(signals))
+    key = (tuple(round(v, 6) if np.isfinite(v) else None for v in cond.values()), car)
     if key not in designs:
-        designs[key] = for_conditions(settings.estimator, cond, settings.params, vehicle=settings.vehicle)
+        designs[key] = for_conditions(settings.estimator, cond, car, vehicle=settings.vehicle)
     return designs[key]
 
 

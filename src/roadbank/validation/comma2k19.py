@@ -89,14 +89,16 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
         The car's sensors (a vehicle file's ``[sensors]``; default the paper's ESP): the
         default PIFs' ``R`` is their noise density at the log's rate.
     """
-    params = params or undescribed_params()
+    described, params = params, params or undescribed_params()
     names = list(names or estimators.NAMES)
     scoring = Scoring(tau=tau, warmup_s=warmup_s, fit_fraction=fit_fraction)
     log = load_comma2k19(path, params=params)
     s, ref = log.signals, hold_invalid(log.reference_roll)
     t = s.t
     dt = float(np.median(np.diff(t)))
-    run = run_and_score(s, ref, names, params, scoring, per_estimator=tuning, sensors=sensors)
+    # a car not described: designed for the one that fits the segment (read with the static one)
+    design = undescribed_params(s) if described is None else params
+    run = run_and_score(s, ref, names, design, scoring, per_estimator=tuning, sensors=sensors)
     scores, smoothed = run.scores, run.estimates
     m_fit, m_sc = run.fit, run.scored
     m_all = m_fit | m_sc
@@ -173,7 +175,7 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
                                          ref, m_fit, m_sc, scoring)
     settings = {"tau": tau, "warmup_s": warmup_s, "fit_fraction": fit_fraction, "dt": dt,
                 "path": str(path)}
-    return ValidationResult(scores=scores, params=params, t=t, reference=run.reference, estimates=smoothed,
+    return ValidationResult(scores=scores, params=design, t=t, reference=run.reference, estimates=smoothed,
                             split_time=float(t[i_split]), data=data, sensitivity=sens,
                             settings=settings, run=run, label="comma2k19 example segment",
                             dataset="comma2k19", valid=run.valid)

@@ -164,9 +164,9 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
         The car's sensors (a vehicle file's ``[sensors]``): the default PIFs' ``R`` is their
         noise density at the drive's rate (:func:`roadbank.vehicle.make_estimator`).
     """
-    params = params or undescribed_params()
     names = list(names or estimators.NAMES)
     log = load_kitti_oxts(path)
+    params = params or undescribed_params(log.signals)      # a car not described: the one that fits the drive
     run = run_and_score(log.signals, log.reference_roll, names, params, scoring, per_estimator=tuning,
                         sensors=sensors)
     sens = {}

@@ -81,8 +81,9 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
              "frame, `g = R^T down`, `roll = atan2(g[1], g[2])` (20 Hz, linearly interpolated to 100 Hz). "
              f"Range {d['ref_range_deg'][0]:.2f} to {d['ref_range_deg'][1]:.2f} deg.")
     L.append(f"4. Vehicle parameters: the car is not identified in the data, so the rule for a car nobody "
-             f"described applies, as in `roadbank estimate`: the shipped `sedan`'s parameters "
-             f"(`roadbank.vehicle.undescribed_params()`): m = {p.m:.0f} kg, Iz = {p.Iz:.0f} kg m^2, Lf = {p.Lf} m, "
+             f"described applies, as in `roadbank estimate`: the parameters of the shipped car that fits the "
+             f"segment (`roadbank.vehicle.undescribed_params(signals)`): m = {p.m:.0f} kg, Iz = {p.Iz:.0f} kg m^2, "
+             f"Lf = {p.Lf} m, "
              f"Lr = {p.Lr} m, Cf = {p.Cf:.0f} N/rad, Cr = {p.Cr:.0f} N/rad, steering ratio {p.steering_ratio}. "
              "The paper's SUV is scored too (below). Estimator tuning: the library defaults (docs/estimators.md); "
              "nothing is tuned on this segment.")

@@ -43,7 +43,8 @@ The package, one job a module (every name below is importable from ``roadbank.ve
 * :mod:`~roadbank.vehicle.conditions` -- what a log tells the design (:func:`log_conditions`), the
   sensor-noise rule (:func:`noise_densities`) and :func:`make_estimator`;
 * :mod:`~roadbank.vehicle.factory` -- the estimator for a log as every command builds it
-  (:func:`for_log`, :func:`for_conditions`, :func:`undescribed_params`);
+  (:func:`for_log`, :func:`for_conditions`) and the car of a log whose car is not described
+  (:func:`undescribed_params`, :func:`design_car`: the shipped car that fits the log);
 * :mod:`~roadbank.vehicle.errors`, :mod:`~roadbank.vehicle.tomltext` -- :class:`VehicleFileError`;
   TOML text of values.
 
@@ -57,7 +58,8 @@ from ..units import SI_UNIT, UNITS, parse_quantity
 from .conditions import (DESIGN_MAX_S, DESIGN_SPAN_S, QUIET_FILTER, QUIET_RATIO, design_span,
                          has_design_span, is_quiet, log_conditions, make_estimator, noise_densities)
 from .errors import VehicleFileError
-from .factory import for_conditions, for_log, undescribed_params
+from .factory import (CAR_MARGIN, UNDESCRIBED_CARS, bank_band_power, design_car, for_conditions, for_log,
+                      undescribed_params)
 from .file import (BUILTINS, DEFAULT_VEHICLE, META_KEYS, OFFSET_CHANNELS, REQUIRED_VEHICLE_KEYS, TABLES, Vehicle,
                    builtin_names, load_vehicle)
 from .plausibility import PLANT_FIELDS, PLAUSIBLE, SENSOR_FIELDS, WHEELBASE_RANGE
@@ -69,4 +71,5 @@ __all__ = ["Vehicle", "SensorSpec", "VehicleFileError", "load_vehicle", "builtin
            "SI_UNIT", "DEFAULT_VEHICLE", "TABLES", "META_KEYS", "REQUIRED_VEHICLE_KEYS", "OFFSET_CHANNELS",
            "WHEELBASE_RANGE", "SENSOR_FIELDS", "PLANT_FIELDS", "DESIGN_SPAN_S", "DESIGN_MAX_S", "design_span",
            "has_design_span", "log_conditions", "noise_densities", "QUIET_RATIO",
-           "QUIET_FILTER", "is_quiet", "make_estimator", "for_conditions", "for_log", "undescribed_params"]
+           "QUIET_FILTER", "is_quiet", "make_estimator", "for_conditions", "for_log", "undescribed_params",
+           "UNDESCRIBED_CARS", "CAR_MARGIN", "design_car", "bank_band_power"]

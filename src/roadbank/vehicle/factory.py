@@ -1,31 +1,118 @@
-"""Estimators for a log as every command builds them: the car a log is driven with, or the undescribed car."""
+"""Estimators for a log as every command builds them: the car a log is driven with, or the undescribed car.
+
+A log whose car is not described is designed for one of the shipped passenger cars
+(:data:`UNDESCRIBED_CARS`), the one that fits the log (:func:`design_car`): not one car's tyres
+for every log. Without a log to look at, the car is :data:`roadbank.defaults.VEHICLE`.
+"""
 
 from __future__ import annotations
 
 import functools
+import math
+
+import numpy as np
 
 from .. import defaults
 from ..params import VehicleParams
-from .conditions import log_conditions, make_estimator
+from ..signals import sample_rate
+from .conditions import design_span, log_conditions, make_estimator
 from .file import load_vehicle
 
-__all__ = ["undescribed_params", "for_conditions", "for_log"]
+__all__ = ["UNDESCRIBED_CARS", "CAR_MARGIN", "FIT_BAND_HZ", "undescribed_params", "design_car", "bank_band_power",
+           "for_conditions", "for_log"]
+
+#: the shipped cars a log whose car is not described may be designed for: the range of passenger cars
+UNDESCRIBED_CARS = ("suv-paper", "sedan", "compact", "van")
+#: another car replaces :data:`roadbank.defaults.VEHICLE` only where its misfit (:func:`bank_band_power`)
+#: is this many times smaller (-; chosen by the rule of :mod:`roadbank.tuning.real`, its eighth stage)
+CAR_MARGIN = 1.25
+#: band (Hz) of the default estimate whose power measures how badly a design car fits a log
+FIT_BAND_HZ = (0.2, 3.0)
+#: seconds at the start of the design span that the misfit leaves out (the filters settle)
+FIT_SETTLE_S = 2.0
 
 
-@functools.lru_cache(maxsize=1)
-def undescribed_params() -> VehicleParams:
-    """The car parameters for a log whose car is not described (:data:`roadbank.defaults.VEHICLE`;
-    read once, the parameters are immutable)."""
-    return load_vehicle(defaults.VEHICLE).params
+@functools.lru_cache(maxsize=None)
+def _car(name: str) -> VehicleParams:
+    return load_vehicle(name).params
+
+
+def undescribed_params(signals=None, margin: float = CAR_MARGIN) -> VehicleParams:
+    """The car parameters for a log whose car is not described.
+
+    Without ``signals`` (or with an infinite ``margin``): those of :data:`roadbank.defaults.VEHICLE` (the
+    static rule). With the log's ``signals``: those of :func:`design_car` (``margin`` as there). The
+    parameters are immutable.
+    """
+    if signals is None or margin == math.inf:
+        return _car(defaults.VEHICLE)
+    return _car(design_car(signals, margin))
+
+
+def bank_band_power(signals, estimate) -> float:
+    r"""Misfit (-, mean square of :math:`\sin\theta`) of a design car to a log: the mean square of the
+    estimate's ``w`` (the estimator's :class:`~roadbank.signals.Estimate` over ``signals``) band-passed
+    without phase over :data:`FIT_BAND_HZ`, on its valid samples after the first :data:`FIT_SETTLE_S`.
+
+    The band-pass is applied in the frequency domain to the detrended series (samples in order, at the
+    log's median rate; not-valid samples held at the last valid value), with the gain
+    :math:`G = \frac{(f/f_1)^4}{1 + (f/f_1)^4} \frac{1}{1 + (f/f_2)^4}`: second-order Butterworth
+    high- and low-passes run forward and backward, as :func:`roadbank.signals.road_noise_std` does.
+
+    Roads bank and the body rolls slowly; a filter designed for the wrong car reads its model error at
+    every yaw transient as bank (spikes at the steering ramps, docs/estimators.md), so the design that
+    fits the car leaves the least power in this band. Infinite where fewer than 10 samples count.
+    """
+    rate = sample_rate(signals.t)
+    lo, hi = FIT_BAND_HZ
+    t = np.asarray(signals.t, dtype=np.float64)
+    valid = np.asarray(estimate.valid, dtype=bool) & np.isfinite(estimate.w)
+    m = valid & (t >= t[0] + FIT_SETTLE_S) if len(t) else np.zeros(0, bool)
+    if not math.isfinite(rate) or m.sum() < 10:
+        return math.inf
+    w = np.asarray(estimate.w, dtype=np.float64)
+    idx = np.maximum.accumulate(np.where(valid, np.arange(len(w)), 0))      # hold the last valid value
+    w = np.where(valid[idx], w[idx], w[valid][0])
+    k = np.arange(len(w))
+    w = w - np.polyval(np.polyfit(k, w, 1), k)
+    f = np.fft.rfftfreq(len(w), d=1.0 / rate)
+    q = (f / lo) ** 4
+    band = np.fft.irfft(np.fft.rfft(w) * q / (1.0 + q) / (1.0 + (f / hi) ** 4), len(w))
+    return float(np.mean(band[m] ** 2))
+
+
+def design_car(signals, margin: float = CAR_MARGIN) -> str:
+    """The shipped car (a name of :data:`UNDESCRIBED_CARS`) that a log whose car is not described is
+    designed for: identification from the log before filtering, on its ``ay``, yaw rate and speed.
+
+    On the log's design span (its first minute of driving, :func:`~roadbank.vehicle.design_span`, the
+    span its noise is measured on) the default estimator (:data:`roadbank.defaults.ESTIMATOR`) is built
+    for each car and the log's conditions, as every command builds it, and run; the car with the lowest
+    misfit (:func:`bank_band_power`) is chosen where it is ``margin`` times below that of
+    :data:`roadbank.defaults.VEHICLE`, which is kept otherwise (and where the span tells nothing: every
+    misfit infinite). On a loud log the default is the car-free low-pass almost throughout, the misfits
+    are nearly equal and the static car stays.
+    """
+    n = design_span(signals)
+    span = signals[:n] if n < len(signals) else signals
+    cond: dict = log_conditions(span)
+    power = {}
+    for car in UNDESCRIBED_CARS:
+        try:
+            power[car] = bank_band_power(span, make_estimator(defaults.ESTIMATOR, _car(car), **cond).run(span))
+        except ValueError:          # a design the log's conditions leave without a solution: not this car
+            power[car] = math.inf
+    best = min(UNDESCRIBED_CARS, key=lambda c: power[c])
+    return best if power[best] * margin < power[defaults.VEHICLE] else defaults.VEHICLE
 
 
 def for_conditions(name: str, cond: dict, params: VehicleParams | None = None, *, vehicle=None, **tuning):
     """Build the estimator ``name`` for a log's conditions ``cond`` (:func:`log_conditions`).
 
     The car is ``vehicle`` (a :class:`Vehicle`: its parameters, sensors and tuning tables) or
-    ``params`` with the data sheet's sensors; neither: the car for a log whose car is not
-    described (:func:`undescribed_params`). What ``roadbank estimate``, ``map`` and
-    :func:`for_log` build.
+    ``params`` with the data sheet's sensors; neither: :func:`undescribed_params` without a log
+    (the callers that have the log pass ``undescribed_params(signals)`` as ``params``). What
+    ``roadbank estimate``, ``map`` and :func:`for_log` build.
     """
     if vehicle is not None:
         return vehicle.make(name, **cond, **tuning)
@@ -36,7 +123,10 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
     """Build the estimator ``name`` for the log ``signals`` as ``roadbank estimate`` does.
 
     A default-tuned PIF is designed for the log's sample rate and the road noise measured on
-    its ``ay`` and yaw rate (:func:`log_conditions`); the car as :func:`for_conditions`.
+    its ``ay`` and yaw rate (:func:`log_conditions`); the car as :func:`for_conditions`, a car that is
+    not described chosen for the log (:func:`undescribed_params` of ``signals``).
     ``for_log(name, s).run(s)`` is what the command line writes for the log ``s``.
     """
+    if params is None and vehicle is None:
+        params = undescribed_params(signals)
     return for_conditions(name, log_conditions(signals), params, vehicle=vehicle, **tuning)
