@@ -19,7 +19,7 @@ from roadbank.estimators.pif import Q_AY_ESP, R_ESP
 from roadbank.evaluation.compare import usable_samples
 from roadbank.evaluation.metrics import error_metrics
 from roadbank.signals import white_noise_std
-from roadbank.vehicle import SensorSpec, log_conditions, make_estimator
+from roadbank.vehicle import SensorSpec, is_quiet, log_conditions, make_estimator
 
 
 @pytest.mark.parametrize("sigma", [0.02, 0.2])
@@ -229,3 +229,118 @@ def test_a_log_that_starts_at_a_standstill_is_measured_on_its_first_minute_of_dr
     # a log that never drives is measured on its first DESIGN_MAX_S at most
     idle = _standstill_then_driving(700.0, 0.0)
     assert idle.t[design_span(idle) - 1] == pytest.approx(DESIGN_MAX_S, abs=0.11)
+
+
+# ---- the noise floor: what the quiet decision reads -------------------------------------------------
+
+
+@pytest.mark.parametrize("rate", [10.0, 100.0])
+def test_the_noise_floor_of_stationary_white_noise_is_its_standard_deviation(rate):
+    """Truth: the standard deviation of white noise drawn on a smooth manoeuvre-like signal; the floor is
+    the median of windowed Welch-type variances, within 10 % of it, like the mean over the span."""
+    from roadbank.signals import road_noise_floor_std, road_noise_std
+
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 120.0, 1.0 / rate)
+    x = 2.0 * np.sin(2 * np.pi * 0.1 * t) + rng.normal(0.0, 0.1, t.size)
+    assert road_noise_floor_std(x, t) == pytest.approx(0.1, rel=0.1)
+    assert road_noise_floor_std(x, t) == pytest.approx(road_noise_std(x, t), rel=0.1)
+    assert math.isnan(road_noise_floor_std(x[:50], t[:50]))
+
+
+def test_the_noise_floor_leaves_out_bursts_that_the_mean_counts():
+    """Bursts of vibration five times the base noise in a quarter of a 100 Hz log: the mean over the span
+    (road_noise_std) counts them (sqrt(0.75 + 0.25 * 25) = 2.6 times the base), the floor reads the base."""
+    from roadbank.signals import road_noise_floor_std, road_noise_std
+
+    rng = np.random.default_rng(6)
+    t = np.arange(0.0, 60.0, 0.01)
+    burst = (t % 20.0) >= 15.0
+    x = rng.normal(0.0, 0.05, t.size) * np.where(burst, 5.0, 1.0)
+    assert road_noise_std(x, t) == pytest.approx(0.05 * math.sqrt(0.75 + 0.25 * 25.0), rel=0.1)
+    assert road_noise_floor_std(x, t) == pytest.approx(0.05, rel=0.15)
+
+
+def test_is_quiet_reads_the_floor_where_it_is_given():
+    sheet = SensorSpec()
+    quiet = math.sqrt(sheet.ay_noise_density(100.0) * 100.0)          # the data sheet's std at 100 Hz
+    assert not is_quiet(sheet, 100.0, 3.0 * quiet)
+    assert is_quiet(sheet, 100.0, 3.0 * quiet, log_ay_floor=quiet)
+    assert not is_quiet(sheet, 100.0, quiet, log_ay_floor=3.0 * quiet)
+    assert is_quiet(sheet, 100.0, quiet, log_ay_floor=float("nan"))   # not measured: the road noise decides
+
+
+@pytest.fixture(scope="module")
+def s_curves():
+    """The paper's S-curve (steering wheel +-360 deg at 60 km/h, mu 0.85: at the tyres' limit) for each
+    shipped car, on the data sheet's sensors."""
+    from roadbank.sim import run_scenario
+    from roadbank.sim.params import PlantParams
+    from roadbank.vehicle import load_vehicle
+
+    return {car: run_scenario("s-curve", plant=PlantParams(vehicle=load_vehicle(car).params), seed=1)
+            for car in ("suv-paper", "sedan", "compact", "van")}
+
+
+@pytest.mark.parametrize("car", ["suv-paper", "compact", "van"])
+def test_a_drive_at_the_tyres_limit_on_data_sheet_sensors_is_quiet(s_curves, car):
+    """Truth: the simulator's sensors are the data sheet's, so the drive is quiet. Its response above 3 Hz
+    while the tyres saturate makes the mean over the drive read 2-4.5 times their density; the floor reads
+    them within 15 %, so the default is the car's model (the quiet filter), and it is nearer the true bank
+    than the blend the mean would have chosen."""
+    from roadbank.vehicle import for_conditions, is_quiet, undescribed_params
+    from roadbank.vehicle.conditions import QUIET_FILTER
+
+    res = s_curves[car]
+    s, sheet = res.signals, SensorSpec()
+    cond = log_conditions(s)
+    density = sheet.ay_noise_density(100.0) * 100.0
+    assert cond["log_ay_noise"] ** 2 / density > 2.0
+    assert 0.85 < cond["log_ay_floor"] ** 2 / density < 1.15
+    assert is_quiet(sheet, 100.0, cond["log_ay_noise"], log_ay_floor=cond["log_ay_floor"])
+    car_params = undescribed_params(s)
+    default = for_conditions("kinematic-pif", cond, car_params)
+    by_mean = for_conditions("kinematic-pif", {**cond, "log_ay_floor": None}, car_params)
+    assert type(default) is type(E.make(QUIET_FILTER)) and type(by_mean) is not type(default)
+    m = s.t >= s.t[0] + 5.0
+
+    def rms(est):
+        return float(np.degrees(np.sqrt(np.mean((est.run(s).theta[m] - res.truth.theta[m]) ** 2))))
+    assert rms(default) < 0.8 * rms(by_mean)
+
+
+def test_every_shared_kitti_drive_stays_loud_by_its_floor():
+    """The real 10 Hz INS logs carry 3.7-160 times the paper's accelerometer density by the floor (4.5-190
+    by the mean): the default stays the low-pass on every one."""
+    from pathlib import Path
+
+    from roadbank.io.kitti import load_kitti_oxts
+    from roadbank.vehicle.conditions import QUIET_RATIO
+
+    data = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+    drives = sorted(data.glob("kitti-oxts*/2011_*"))
+    if not drives:
+        pytest.skip("../shared/data/kitti-oxts* not present")
+    sheet = SensorSpec()
+    for d in drives:
+        cond = log_conditions(load_kitti_oxts(d).signals)
+        density = sheet.ay_noise_density(sheet.rate_for(cond["log_rate"])) * sheet.rate_for(cond["log_rate"])
+        assert cond["log_ay_floor"] ** 2 / density > 2.0 * QUIET_RATIO, d.name
+        assert not is_quiet(sheet, cond["log_rate"], cond["log_ay_noise"], log_ay_floor=cond["log_ay_floor"])
+
+
+@pytest.mark.slow
+def test_the_ninth_stage_ties_on_training_and_the_paper_scenarios_choose_the_floor():
+    """The rule's ninth stage (roadbank.tuning.real.choose_quiet_measure): every training drive gives the
+    same error by either measure; the paper's scenarios break the tie, for the floor."""
+    from pathlib import Path
+
+    from roadbank.tuning.real import choose_quiet_measure, paper_sets, simulated_sets, training_logs
+
+    data = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+    if not (data / "kitti-oxts-extra").is_dir():
+        pytest.skip("../shared/data/kitti-oxts-extra not present")
+    chosen, table = choose_quiet_measure(training_logs(data), simulated_sets(), paper_sets())
+    assert chosen == "floor", table
+    assert table["floor"][0] == pytest.approx(table["mean"][0], abs=1e-9)
+    assert table["floor"][1] < table["mean"][1] - 0.05

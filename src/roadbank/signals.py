@@ -226,6 +226,39 @@ def road_noise_std(x, t, valid=None, band_hz: float | None = None) -> float:
     return float(np.sqrt(power / weight)) if weight > 0 else float("nan")
 
 
+#: length (s) of the windows over which :func:`road_noise_floor_std` takes its median (at least as
+#: many samples as :func:`road_noise_std` needs of one run)
+NOISE_FLOOR_WINDOW_S = 4.0
+
+
+def road_noise_floor_std(x, t, valid=None, band_hz: float | None = None) -> float:
+    """The noise floor (unit of ``x``) of a channel: :func:`road_noise_std` of half-overlapping windows
+    of :data:`NOISE_FLOOR_WINDOW_S` (longer where the log is slow: at least the samples one run needs
+    there), the median of their variances.
+
+    :func:`road_noise_std` counts everything above the dynamics band over the whole span, the bursts
+    too: road vibration that comes and goes is noise a filter must stand, but so is the response of a
+    manoeuvre at the tyres' limit, which reaches past 3 Hz while it lasts (the paper's S-curve on the
+    data sheet's sensors reads 2-6 times their density over the drive). The median over windows reads
+    what the channel carries most of the time, the sensor and the road surface, and not a few seconds
+    of manoeuvre: on that S-curve it reads the data sheet's noise. Same arguments as
+    :func:`road_noise_std`; NaN where no window has enough valid samples.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    t = np.asarray(t, dtype=np.float64)
+    ok = np.ones(len(x), dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
+    rate = sample_rate(t)
+    if not np.isfinite(rate):
+        return float("nan")
+    band = noise_band_hz(rate) if band_hz is None else band_hz
+    n = max(int(round(NOISE_FLOOR_WINDOW_S * rate)), MIN_NOISE_TRIPLES,
+            int(np.ceil(ROAD_NOISE_MIN_PERIODS * rate / band)))
+    var = [road_noise_std(x[a:a + n], t[a:a + n], ok[a:a + n], band) ** 2
+           for a in range(0, max(len(x) - n, 0) + 1, max(n // 2, 1))]
+    var = [v for v in var if np.isfinite(v)]
+    return float(np.sqrt(np.median(var))) if var else float("nan")
+
+
 def road_wheel_angle(steering_wheel_angle, params: VehicleParams | None = None) -> np.ndarray:
     """Front road-wheel angle (rad) from the steering-wheel angle (rad) by the steering ratio."""
     p = params or VehicleParams()

@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from ..params import VehicleParams
-from ..signals import road_noise_std, sample_rate
+from ..signals import road_noise_floor_std, road_noise_std, sample_rate
 from .sensors import SensorSpec
 
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
@@ -69,11 +69,12 @@ def has_design_span(signals, v_min: float = 5.0) -> bool:
 
 def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     """What a log tells :func:`make_estimator` about its sensors: ``{"log_rate": Hz,
-    "log_ay_noise": m/s^2, "log_r_noise": rad/s}`` — the sample rate of its time base
-    (:func:`roadbank.signals.sample_rate`) and the road noise of its ``ay`` and yaw rate on the
+    "log_ay_noise": m/s^2, "log_r_noise": rad/s, "log_ay_floor": m/s^2}`` — the sample rate of its
+    time base (:func:`roadbank.signals.sample_rate`), the road noise of its ``ay`` and yaw rate on the
     samples at ``vx >= v_min`` (m/s): what they carry above the vehicle's dynamics band, taken
     as white (:func:`roadbank.signals.road_noise_std`, the noise model of real roads; NaN when
-    too few samples). Measured on the log's first :data:`DESIGN_SPAN_S` of driving
+    too few samples), and the noise floor of its ``ay`` (:func:`roadbank.signals.road_noise_floor_std`,
+    what :func:`is_quiet` reads). Measured on the log's first :data:`DESIGN_SPAN_S` of driving
     (:func:`design_span`), so that a streamed log gets the same design whatever its chunk size.
     """
     n = design_span(signals, v_min)
@@ -84,9 +85,10 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
         moving = vx >= v_min
     ay_noise = road_noise_std(signals.ay, signals.t, moving)
     r_noise = road_noise_std(signals.r, signals.t, moving)
+    ay_floor = road_noise_floor_std(signals.ay, signals.t, moving)
     # two significant digits: logs of one car and road share a design (the design cache)
     return {"log_rate": sample_rate(signals.t), "log_ay_noise": float(f"{ay_noise:.2g}"),
-            "log_r_noise": float(f"{r_noise:.2g}")}
+            "log_r_noise": float(f"{r_noise:.2g}"), "log_ay_floor": float(f"{ay_floor:.2g}")}
 
 
 def noise_densities(sensors: SensorSpec, log_rate: float | None = None, log_ay_noise: float | None = None,
@@ -128,16 +130,23 @@ def noise_densities(sensors: SensorSpec, log_rate: float | None = None, log_ay_n
 
 
 def is_quiet(sensors: SensorSpec, log_rate: float | None = None, log_ay_noise: float | None = None,
-             ratio: float = QUIET_RATIO) -> bool:
-    """Whether a log's ``ay`` is quiet: its road-noise density (``log_ay_noise``, m/s^2, at
-    ``log_rate`` Hz: :func:`log_conditions`) at most ``ratio`` times the accelerometer's
-    data-sheet density at that rate (:meth:`SensorSpec.ay_noise_density`).
+             ratio: float = QUIET_RATIO, log_ay_floor: float | None = None) -> bool:
+    """Whether a log's ``ay`` is quiet: its noise floor (``log_ay_floor``, m/s^2, at ``log_rate`` Hz:
+    :func:`log_conditions`; not given or NaN: its road noise ``log_ay_noise``), as a density, at most
+    ``ratio`` times the accelerometer's data-sheet density at that rate (:meth:`SensorSpec.ay_noise_density`).
+
+    The floor, not the road noise over the whole span, because the question is the sensor's and the
+    road's: a manoeuvre at the tyres' limit reaches past the dynamics band for a few seconds, and a
+    limit drive on the data sheet's sensors would read loud by its mean (the ninth stage of
+    :mod:`roadbank.tuning.real`, docs/estimators.md). The design's weights keep the road noise.
 
     A car's ESP sensor on a smooth road (and every simulated drive: 0.93-1.13 times) is quiet; a
     road that shakes the accelerometer, a 10 Hz INS that samples without an anti-alias filter, a
     phone is not (the KITTI training drives: 15-190 times the paper's ESP accelerometer).
     Not measured (None or NaN) or ``ratio <= 0``: False.
     """
+    if log_ay_floor is not None and math.isfinite(log_ay_floor):
+        log_ay_noise = log_ay_floor
     if log_ay_noise is None or not math.isfinite(log_ay_noise) or not ratio > 0:
         return False
     rate = sensors.rate_for(log_rate)
@@ -146,7 +155,7 @@ def is_quiet(sensors: SensorSpec, log_rate: float | None = None, log_ay_noise: f
 
 def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: SensorSpec | None = None,
                    log_rate: float | None = None, log_ay_noise: float | None = None,
-                   log_r_noise: float | None = None, **options):
+                   log_r_noise: float | None = None, log_ay_floor: float | None = None, **options):
     """``estimators.make(name, params, **options)`` for a log sampled at ``log_rate`` by ``sensors``.
 
     A default-tuned PIF (:func:`roadbank.estimators.pif.with_sensor_noise`) gets the weights
@@ -170,6 +179,9 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     log_ay_noise, log_r_noise : float, optional
         Road-noise standard deviation of the log's ``ay`` (m/s^2) and yaw rate (rad/s)
         (:func:`roadbank.signals.road_noise_std`); None or NaN: not measured.
+    log_ay_floor : float, optional
+        Noise floor of the log's ``ay`` (m/s^2, :func:`roadbank.signals.road_noise_floor_std`), what
+        :func:`is_quiet` reads; None or NaN: ``log_ay_noise``.
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
@@ -192,7 +204,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         quiet_filter = options.pop("quiet_filter", QUIET_MODELS[name])
         lead_samples = (float(options.pop("lead_samples", estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES))
                         if name == "kinematic-pif" else None)        # the blend's option only
-        if not any(k in options for k in _GATE_OPTIONS) and is_quiet(sensors, log_rate, log_ay_noise, ratio):
+        if not any(k in options for k in _GATE_OPTIONS) and is_quiet(sensors, log_rate, log_ay_noise, ratio,
+                                                                       log_ay_floor):
             name, options = quiet_filter, {k: v for k, v in options.items() if k not in _BLEND_OPTIONS}
         elif lead_samples is not None:
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))

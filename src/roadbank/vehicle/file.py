@@ -175,7 +175,7 @@ class Vehicle:
 
     # ---- use --------------------------------------------------------------------------------
     def make(self, estimator_name: str, *, log_rate: float | None = None, log_ay_noise: float | None = None,
-             log_r_noise: float | None = None, **overrides):
+             log_r_noise: float | None = None, log_ay_floor: float | None = None, **overrides):
         """Build an estimator for this car: its params, sensors and ``[tuning.<name>]`` options.
 
         :func:`make_estimator` ``(name, self.params, sensors=self.sensors, log_rate=log_rate,
@@ -188,14 +188,16 @@ class Vehicle:
         of its ``ay`` (``log_ay_noise``, m/s^2) and yaw rate (``log_r_noise``, rad/s), by
         :func:`~roadbank.vehicle.conditions.noise_densities`. ``kinematic-pif`` and
         ``kinematic-smoother`` take the car's model on a quiet log
-        (:func:`~roadbank.vehicle.conditions.is_quiet`), this car's sensors giving the data sheet.
+        (:func:`~roadbank.vehicle.conditions.is_quiet` of the ``ay`` noise floor ``log_ay_floor``,
+        m/s^2), this car's sensors giving the data sheet.
         """
         from ..estimators import TUNED_AS
         # an estimator tuned as itself looks up None: no table
         tuning = {**self.tuning.get(TUNED_AS.get(estimator_name), {}),  # type: ignore[arg-type]
                   **self.tuning.get(estimator_name, {})}
         return make_estimator(estimator_name, self.params, sensors=self.sensors, log_rate=log_rate,
-                              log_ay_noise=log_ay_noise, log_r_noise=log_r_noise, **{**tuning, **overrides})
+                              log_ay_noise=log_ay_noise, log_r_noise=log_r_noise, log_ay_floor=log_ay_floor,
+                              **{**tuning, **overrides})
 
     @property
     def sensor_offsets(self) -> dict[str, float]:
