@@ -101,6 +101,37 @@ def test_estimate_designs_each_log_for_its_car_as_for_log_does(tmp_path, suv_dri
     assert np.max(np.abs(lib.theta - static.theta)) > 1e-3          # not the static car's design
 
 
+def test_estimate_says_what_each_log_was_designed_for(tmp_path, suv_drives):
+    """The summary (text, --json, summary.csv) names the car (fitted to the log, or the vehicle file) and
+    whether the log is quiet; truth: the simulator's plant car and its data-sheet sensors (quiet), a KITTI
+    drive (loud), and a log that cannot be read (no design)."""
+    import csv
+    import json
+
+    d = next(d for d in suv_drives if design_car(d.signals) == "suv-paper")
+    s = d.signals
+    log = tmp_path / "suv.parquet"
+    pq.write_table(pa.table({"t": s.t, "vx": s.vx, "ay": s.ay, "r": s.r, "delta_f": s.delta_f}), log)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,vx\n0,1\n")
+    res = CliRunner().invoke(main, ["estimate", str(log), str(bad), "-o", str(tmp_path / "out"), "--json"])
+    logs = {Path(r["log"]).name: r for r in json.loads(res.stdout)["logs"]}
+    design = logs["suv.parquet"]["design"]
+    assert design["car"] == "suv-paper" and design["car_from"] == "fitted to the log" and design["quiet"] is True
+    assert 0 < design["ay_floor"] <= design["ay_noise"] * 1.2
+    assert logs["bad.csv"]["design"] == {}
+    rows = {Path(r["log"]).name: r for r in csv.DictReader(open(tmp_path / "out" / "summary.csv"))}
+    assert "car=suv-paper" in rows["suv.parquet"]["design"] and "quiet=True" in rows["suv.parquet"]["design"]
+    text = CliRunner().invoke(main, ["estimate", str(log), "-o", str(tmp_path / "o.csv"), "--vehicle", "van"])
+    assert "designed for suv.parquet: van (vehicle file)" in text.stderr
+    assert "quiet, so kinematic-pif is pif-adaptive" in text.stderr
+    kitti = DATA / "kitti-oxts" / "2011_09_26_drive_0070"
+    if kitti.is_dir():
+        text = CliRunner().invoke(main, ["estimate", str(kitti), "-o", str(tmp_path / "k.csv")])
+        assert "sedan (fitted to the log)" in text.stderr
+        assert "loud, so kinematic-pif is the low-pass blend" in text.stderr
+
+
 @pytest.mark.slow
 def test_the_shipped_margin_is_what_the_rule_picks():
     """The eighth stage (kinematic_pif_candidates(8)): the real training drives tie (every one keeps the

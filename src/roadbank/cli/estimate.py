@@ -172,6 +172,8 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
         click.echo(json.dumps(summary_json(summaries, names), indent=1))
     elif batch or summaries[0].status == "ok":
         click.echo(summary_table(summaries, names))
+        for line in design_lines(summaries):
+            click.echo(line, err=True)
     for s in summaries:
         for w in filter(None, s.warnings.split("; ")):
             click.echo(f"warning: {w}", err=True)
@@ -218,20 +220,31 @@ def summary_table(summaries, estimators) -> str:
     return "\n".join(lines + notes)
 
 
+def design_lines(summaries) -> list[str]:
+    """One line per log that was read: what its estimators were designed for
+    (:func:`roadbank.fleet.process.design_words`)."""
+    from ..fleet.process import design_words
+
+    return [f"designed for {Path(s.log).name[-32:]}: {design_words(s.design, s.estimator)}"
+            for s in summaries if s.design]
+
+
 def _finite(x):
     return None if isinstance(x, float) and not math.isfinite(x) else x
 
 
 def summary_json(summaries, estimators) -> dict:
     """What ``--json`` prints: ``{"estimators": [...], "logs": [...], "written": n, "failed": n}``; per log
-    its status, error, output, samples, duration_s, seconds, warnings (list), time_repairs (kind -> int)
-    and per estimator valid_share, bank_mean_deg, bank_min_deg, bank_max_deg (null where undefined)."""
+    its status, error, output, samples, duration_s, seconds, warnings (list), time_repairs (kind -> int),
+    design (:attr:`roadbank.fleet.LogSummary.design`; ``{}`` on error) and per estimator valid_share,
+    bank_mean_deg, bank_min_deg, bank_max_deg (null where undefined)."""
     logs = []
     for s in summaries:
         logs.append({"log": s.log, "status": s.status, "error": s.error, "output": s.output,
                      "samples": s.samples, "duration_s": _finite(s.duration_s), "seconds": round(s.seconds, 3),
                      "warnings": [w for w in s.warnings.split("; ") if w],
                      "time_repairs": {k: int(v) for k, v in s.time_repairs.items()},
+                     "design": {k: _finite(v) for k, v in s.design.items()},
                      "estimators": {n: {k: _finite(v) for k, v in st.items()} for n, st in s.estimators.items()}})
     failed = sum(s.status != "ok" for s in summaries)
     return {"estimators": list(estimators), "logs": logs, "written": len(summaries) - failed, "failed": failed}

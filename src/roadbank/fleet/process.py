@@ -15,12 +15,14 @@ from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..io.timebase import add_counts
 from ..io.writers import TableWriter, estimate_table
 from ..signals import Estimate
-from ..vehicle import DESIGN_MAX_S, for_conditions, has_design_span, log_conditions, undescribed_params
+from ..vehicle import (DESIGN_MAX_S, SensorSpec, for_conditions, has_design_span, is_quiet, load_vehicle,
+                       log_conditions, undescribed_car, undescribed_params)
+from ..vehicle.conditions import QUIET_MODELS
 
 #: columns of the summary table, in order (see LogSummary)
 SUMMARY_COLUMNS = ("log", "status", "error", "output", "estimator", "samples", "duration_s", "valid_share",
                    "bank_mean_deg", "bank_min_deg", "bank_max_deg", "chunks", "seconds", "warnings",
-                   "time_repairs")
+                   "time_repairs", "design")
 
 
 @dataclass
@@ -59,6 +61,11 @@ class LogSummary:
     estimators : dict name -> dict
         ``valid_share``, ``bank_mean_deg``, ``bank_min_deg``, ``bank_max_deg`` of every estimator
         asked for (the columns above are those of the first one).
+    design : dict
+        What the estimators were designed for (:func:`log_design`): ``car`` (a name), ``car_from``
+        ("fitted to the log", "vehicle file", "parameters given"), ``quiet`` (bool,
+        :func:`roadbank.vehicle.is_quiet`), ``ay_noise`` and ``ay_floor`` (m/s^2, the log's conditions);
+        in the summary table as ``key=value`` pairs (:func:`design_text`). Empty on error.
     """
 
     log: str
@@ -77,6 +84,7 @@ class LogSummary:
     warnings: str = ""
     time_repairs: dict = field(default_factory=dict)
     estimators: dict = field(default_factory=dict)
+    design: dict = field(default_factory=dict)
     kept: object = field(default=None, repr=False, compare=False)
 
     def row(self) -> dict:
@@ -84,7 +92,36 @@ class LogSummary:
         d = asdict(self)
         d.pop("kept")
         d["time_repairs"] = "; ".join(f"{k}={v}" for k, v in self.time_repairs.items() if v)
+        d["design"] = design_text(self.design)
         return {k: d[k] for k in SUMMARY_COLUMNS}
+
+
+def log_design(cond: dict, car: str, car_from: str, sensors: SensorSpec | None = None) -> dict:
+    """The record of what a log's estimators are designed for (:attr:`LogSummary.design`): the car ``car``
+    (a name) and where it came from, whether the log is quiet (:func:`roadbank.vehicle.is_quiet` with
+    ``sensors``, default the data sheet's) and its ``ay`` noise and floor (m/s^2) from ``cond``
+    (:func:`roadbank.vehicle.log_conditions`)."""
+    quiet = is_quiet(sensors or SensorSpec(), cond.get("log_rate"), cond.get("log_ay_noise"),
+                     log_ay_floor=cond.get("log_ay_floor"))
+    return {"car": car, "car_from": car_from, "quiet": bool(quiet), "ay_noise": cond.get("log_ay_noise"),
+            "ay_floor": cond.get("log_ay_floor")}
+
+
+def design_text(design: dict) -> str:
+    """:attr:`LogSummary.design` as ``key=value`` pairs, "; "-separated ('' when empty)."""
+    return "; ".join(f"{k}={v}" for k, v in design.items())
+
+
+def design_words(design: dict, estimator: str) -> str:
+    """:attr:`LogSummary.design` in words, for the estimator ``estimator`` ('' when empty): the car, the
+    ``ay`` noise and floor, and for an estimator that changes on a quiet log what it is."""
+    if not design:
+        return ""
+    words = (f"{design['car']} ({design['car_from']}); ay noise {design['ay_noise']:.2g} m/s^2, "
+             f"floor {design['ay_floor']:.2g}: {'quiet' if design['quiet'] else 'loud'}")
+    if estimator in QUIET_MODELS:
+        words += f", so {estimator} is {QUIET_MODELS[estimator] if design['quiet'] else 'the low-pass blend'}"
+    return words
 
 
 class _BankStats:
@@ -205,7 +242,13 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
             if k == 0:  # designed for the log's own rate and road noise, measured on its first minute of driving
                 lead = chunks.leading(chunk.signals, DESIGN_MAX_S, has_design_span)
                 cond = log_conditions(lead)
-                car = params if params is not None else undescribed_params(lead)
+                if params is None:
+                    name = undescribed_car(lead)
+                    car, summary.design = load_vehicle(name).params, log_design(cond, name, "fitted to the log")
+                else:
+                    car = params
+                    summary.design = log_design(cond, vehicle.name, "vehicle file", vehicle.sensors) \
+                        if vehicle is not None else log_design(cond, "-", "parameters given")
                 ests = [for_conditions(n, cond, car, vehicle=vehicle) for n in names]
                 if online_offsets:      # causal ones: a smoother's later samples would see later offsets
                     ests = [e if n in OFFLINE else with_online_offsets(e, car) for e, n in zip(ests, names)]

@@ -18,8 +18,8 @@ from ..signals import sample_rate
 from .conditions import design_span, log_conditions, make_estimator
 from .file import load_vehicle
 
-__all__ = ["UNDESCRIBED_CARS", "CAR_MARGIN", "FIT_BAND_HZ", "undescribed_params", "design_car", "bank_band_power",
-           "for_conditions", "for_log"]
+__all__ = ["UNDESCRIBED_CARS", "CAR_MARGIN", "FIT_BAND_HZ", "undescribed_car", "undescribed_params", "design_car",
+           "bank_band_power", "for_conditions", "for_log"]
 
 #: the shipped cars a log whose car is not described may be designed for: the range of passenger cars
 UNDESCRIBED_CARS = ("suv-paper", "sedan", "compact", "van")
@@ -37,16 +37,20 @@ def _car(name: str) -> VehicleParams:
     return load_vehicle(name).params
 
 
-def undescribed_params(signals=None, margin: float = CAR_MARGIN) -> VehicleParams:
-    """The car parameters for a log whose car is not described.
+def undescribed_car(signals=None, margin: float = CAR_MARGIN) -> str:
+    """The shipped car (its name) a log whose car is not described is designed for.
 
-    Without ``signals`` (or with an infinite ``margin``): those of :data:`roadbank.defaults.VEHICLE` (the
-    static rule). With the log's ``signals``: those of :func:`design_car` (``margin`` as there). The
-    parameters are immutable.
+    Without ``signals`` (or with an infinite ``margin``): :data:`roadbank.defaults.VEHICLE` (the static
+    rule). With the log's ``signals``: :func:`design_car` (``margin`` as there).
     """
     if signals is None or margin == math.inf:
-        return _car(defaults.VEHICLE)
-    return _car(design_car(signals, margin))
+        return defaults.VEHICLE
+    return design_car(signals, margin)
+
+
+def undescribed_params(signals=None, margin: float = CAR_MARGIN) -> VehicleParams:
+    """The parameters of :func:`undescribed_car` (same arguments); immutable."""
+    return _car(undescribed_car(signals, margin))
 
 
 def bank_band_power(signals, estimate) -> float:
