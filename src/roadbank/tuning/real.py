@@ -336,4 +336,3 @@ def choose_quiet_measure(logs, sim_sets, runs) -> tuple[str, dict]:
     paper = {m: paper_median(_quiet_by(m), runs) for m in tied}
     chosen = min(tied, key=lambda m: round(paper[m] / EQUAL_DEG))
     return chosen, {m: (obj[m], paper.get(m, math.nan)) for m in QUIET_MEASURES}
-
