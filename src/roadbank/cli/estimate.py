@@ -107,7 +107,11 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     sent back are repaired (samples reordered or dropped, the ones next to a
     repair flagged not valid) and counted in the summary; a log with no
     increasing time base is refused (docs/io.md). Output columns
-    are SI (rad); the summary is in degrees, one row per log and estimator. With --vehicle, the sensor offsets
+    are SI (rad); the summary is in degrees, one row per log and estimator, and a
+    line per log (on stderr; the design column of summary.csv, design in --json)
+    says what it was designed for: the car (without --vehicle the shipped one
+    that fits the log), its ay noise and noise floor, and whether it is quiet
+    (the default then uses the car's model). With --vehicle, the sensor offsets
     `roadbank identify` wrote into the file (yaw rate, ay, steering) are
     subtracted from every log first (docs/identification.md).
     """
