@@ -344,3 +344,23 @@ def test_the_ninth_stage_ties_on_training_and_the_paper_scenarios_choose_the_flo
     assert chosen == "floor", table
     assert table["floor"][0] == pytest.approx(table["mean"][0], abs=1e-9)
     assert table["floor"][1] < table["mean"][1] - 0.05
+
+
+def test_the_command_line_reads_the_floor_as_the_library_does(tmp_path, s_curves):
+    """A log quiet by its floor only (the SUV's S-curve): `roadbank estimate` (the streamed path, on its
+    read-ahead first minute) builds the quiet filter as for_log does, sample for sample, and says so."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    from click.testing import CliRunner
+
+    from roadbank.cli import main
+    from roadbank.vehicle import for_log
+
+    s = s_curves["suv-paper"].signals
+    log = tmp_path / "s-curve.parquet"
+    pq.write_table(pa.table({"t": s.t, "vx": s.vx, "ay": s.ay, "r": s.r, "delta_f": s.delta_f}), log)
+    res = CliRunner().invoke(main, ["estimate", str(log), "-o", str(tmp_path / "o.parquet"), "--no-online-offsets"])
+    assert res.exit_code == 0, res.output
+    assert "quiet, so kinematic-pif is pif-adaptive" in res.stderr
+    cli = pq.read_table(tmp_path / "o.parquet").to_pandas()["kinematic-pif.theta"].to_numpy()
+    np.testing.assert_allclose(cli, for_log("kinematic-pif", s).run(s).theta, rtol=0, atol=1e-12)
