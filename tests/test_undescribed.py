@@ -119,6 +119,7 @@ def test_estimate_says_what_each_log_was_designed_for(tmp_path, suv_drives):
     design = logs["suv.parquet"]["design"]
     assert design["car"] == "suv-paper" and design["car_from"] == "fitted to the log" and design["quiet"] is True
     assert 0 < design["ay_floor"] <= design["ay_noise"] * 1.2
+    assert 0.8 < design["ay_floor_ratio"] < 1.2                 # the simulator's data-sheet accelerometer
     assert logs["bad.csv"]["design"] == {}
     rows = {Path(r["log"]).name: r for r in csv.DictReader(open(tmp_path / "out" / "summary.csv"))}
     assert "car=suv-paper" in rows["suv.parquet"]["design"] and "quiet=True" in rows["suv.parquet"]["design"]

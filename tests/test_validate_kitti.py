@@ -116,6 +116,12 @@ def test_validate_kitti_json_report_and_figures(kitti_cli):
     assert {"2011_09_26_drive_0070", "2011_10_03_drive_0047"} <= set(in_validation)
     assert "Training and validation drives" in text and f"**validation** ({len(in_validation)} drives)" in text
     assert data["splits"]["validation"]["drives"] == in_validation and data["flagged"] == []
+    # each drive's design: the rule's car for a loud 10 Hz INS log (its floor several times the data sheet's)
+    for drive in drives:
+        design = data["designs"][drive]
+        assert design["car"] == "sedan" and design["car_from"] == "fitted to the log" and design["quiet"] is False
+        assert design["ay_floor_ratio"] > 3.0 and design["ay_floor"] <= design["ay_noise"]
+        assert f"sedan, loud ({design['ay_floor_ratio']:.2g} x)" in text
 
 
 def test_default_pif_noise_density_follows_the_log_rate():

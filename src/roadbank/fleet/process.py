@@ -15,8 +15,8 @@ from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..io.timebase import add_counts
 from ..io.writers import TableWriter, estimate_table
 from ..signals import Estimate
-from ..vehicle import (DESIGN_MAX_S, SensorSpec, for_conditions, has_design_span, is_quiet, load_vehicle,
-                       log_conditions, undescribed_car, undescribed_params)
+from ..vehicle import (DESIGN_MAX_S, design_record, for_conditions, has_design_span, load_vehicle, log_conditions,
+                       undescribed_car, undescribed_params)
 from ..vehicle.conditions import QUIET_MODELS
 
 #: columns of the summary table, in order (see LogSummary)
@@ -62,10 +62,9 @@ class LogSummary:
         ``valid_share``, ``bank_mean_deg``, ``bank_min_deg``, ``bank_max_deg`` of every estimator
         asked for (the columns above are those of the first one).
     design : dict
-        What the estimators were designed for (:func:`log_design`): ``car`` (a name), ``car_from``
-        ("fitted to the log", "vehicle file", "parameters given"), ``quiet`` (bool,
-        :func:`roadbank.vehicle.is_quiet`), ``ay_noise`` and ``ay_floor`` (m/s^2, the log's conditions);
-        in the summary table as ``key=value`` pairs (:func:`design_text`). Empty on error.
+        What the estimators were designed for (:func:`roadbank.vehicle.design_record`: the car, whether
+        the log is quiet, its ``ay`` noise and floor); in the summary table as ``key=value`` pairs
+        (:func:`design_text`). Empty on error.
     """
 
     log: str
@@ -96,17 +95,6 @@ class LogSummary:
         return {k: d[k] for k in SUMMARY_COLUMNS}
 
 
-def log_design(cond: dict, car: str, car_from: str, sensors: SensorSpec | None = None) -> dict:
-    """The record of what a log's estimators are designed for (:attr:`LogSummary.design`): the car ``car``
-    (a name) and where it came from, whether the log is quiet (:func:`roadbank.vehicle.is_quiet` with
-    ``sensors``, default the data sheet's) and its ``ay`` noise and floor (m/s^2) from ``cond``
-    (:func:`roadbank.vehicle.log_conditions`)."""
-    quiet = is_quiet(sensors or SensorSpec(), cond.get("log_rate"), cond.get("log_ay_noise"),
-                     log_ay_floor=cond.get("log_ay_floor"))
-    return {"car": car, "car_from": car_from, "quiet": bool(quiet), "ay_noise": cond.get("log_ay_noise"),
-            "ay_floor": cond.get("log_ay_floor")}
-
-
 def design_text(design: dict) -> str:
     """:attr:`LogSummary.design` as ``key=value`` pairs, "; "-separated ('' when empty)."""
     return "; ".join(f"{k}={v}" for k, v in design.items())
@@ -118,7 +106,8 @@ def design_words(design: dict, estimator: str) -> str:
     if not design:
         return ""
     words = (f"{design['car']} ({design['car_from']}); ay noise {design['ay_noise']:.2g} m/s^2, "
-             f"floor {design['ay_floor']:.2g}: {'quiet' if design['quiet'] else 'loud'}")
+             f"floor {design['ay_floor']:.2g} ({design['ay_floor_ratio']:.2g} x the data sheet): "
+             f"{'quiet' if design['quiet'] else 'loud'}")
     if estimator in QUIET_MODELS:
         words += f", so {estimator} is {QUIET_MODELS[estimator] if design['quiet'] else 'the low-pass blend'}"
     return words
@@ -244,11 +233,11 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
                 cond = log_conditions(lead)
                 if params is None:
                     name = undescribed_car(lead)
-                    car, summary.design = load_vehicle(name).params, log_design(cond, name, "fitted to the log")
+                    car, summary.design = load_vehicle(name).params, design_record(cond, name, "fitted to the log")
                 else:
                     car = params
-                    summary.design = log_design(cond, vehicle.name, "vehicle file", vehicle.sensors) \
-                        if vehicle is not None else log_design(cond, "-", "parameters given")
+                    summary.design = design_record(cond, vehicle.name, "vehicle file", vehicle.sensors) \
+                        if vehicle is not None else design_record(cond, "-", "parameters given")
                 ests = [for_conditions(n, cond, car, vehicle=vehicle) for n in names]
                 if online_offsets:      # causal ones: a smoother's later samples would see later offsets
                     ests = [e if n in OFFLINE else with_online_offsets(e, car) for e, n in zip(ests, names)]

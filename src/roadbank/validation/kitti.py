@@ -39,7 +39,7 @@ from ..io import LogError
 from ..io.kitti import find_oxts_dirs, load_kitti_oxts
 from ..params import VehicleParams
 from ..signals import sample_rate
-from ..vehicle import SensorSpec, noise_densities, undescribed_params
+from ..vehicle import SensorSpec, design_record, load_vehicle, log_conditions, noise_densities, undescribed_car
 from .comma2k19 import ValidationResult
 from .scoring import Scoring, _rms_deg, hold_invalid, lowpass_t, masks, pooled, run_and_score
 from .splits import split_of
@@ -166,7 +166,11 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     """
     names = list(names or estimators.NAMES)
     log = load_kitti_oxts(path)
-    params = params or undescribed_params(log.signals)      # a car not described: the one that fits the drive
+    if params is None:                                      # a car not described: the one that fits the drive
+        car = undescribed_car(log.signals)
+        params, design = load_vehicle(car).params, design_record(log_conditions(log.signals), car, "fitted to the log")
+    else:
+        design = design_record(log_conditions(log.signals), "-", "parameters given", sensors)
     run = run_and_score(log.signals, log.reference_roll, names, params, scoring, per_estimator=tuning,
                         sensors=sensors)
     sens = {}
@@ -192,6 +196,7 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     data["rms_raw_each_start_deg"] = rms_each_start(run, log.signals.vx)
     data["split"] = split_of(log.metadata["drive"])
     data["ins_doubt"] = ins_doubt(log, scoring.v_gate)
+    data["design"] = design
     return ValidationResult(scores=run.scores, params=params, t=t, reference=run.reference,
                             estimates=run.estimates, split_time=float(t[first[0]]) if len(first) else float(t[0]),
                             data=data, sensitivity=sens, settings=settings, run=run,

@@ -10,6 +10,7 @@ from ..defaults import ESTIMATOR as DEFAULT
 from ..estimators import OFFLINE
 from ..report.markdown import md_table
 from ..report.timeseries import reference_figure, save_figure
+from ..vehicle import QUIET_RATIO
 from .kitti import KittiValidation
 
 #: the best value of each score column: smallest RMS, largest correlation
@@ -27,7 +28,8 @@ def _j(x):
 def to_json(v: KittiValidation) -> dict:
     """``{"drives": {drive: {estimator: {...}}}, "pooled": {estimator: {...}}, "errors": [...],
     "splits": {split: {"drives", "median_rms_raw_deg", "median_rms_raw_each_start_deg", "pooled"}},
-    "flagged": [{"drive", "reason"}]}``.
+    "flagged": [{"drive", "reason"}], "designs": {drive: design}}`` (``design``:
+    :func:`roadbank.vehicle.design_record`).
 
     Per estimator: ``r``, ``rms_deg`` (smoothed), ``r_raw``, ``rms_raw_deg`` (unsmoothed),
     ``rms_raw_each_start_deg`` (unsmoothed, the seconds after each stop not scored:
@@ -47,7 +49,9 @@ def to_json(v: KittiValidation) -> dict:
                              for n, p in part["pooled"].items()}}
               for k, part in v.by_split.items()}
     return {"drives": drives, "pooled": pool, "errors": list(v.errors), "splits": splits,
-            "flagged": [{"drive": d, "reason": why} for d, why in v.flagged]}
+            "flagged": [{"drive": d, "reason": why} for d, why in v.flagged],
+            "designs": {d.label: {k: _j(x) if isinstance(x, float) else x for k, x in d.data.get("design", {}).items()}
+                        for d in v.drives}}
 
 
 def drive_figure(res, show=("kinematic", "pif-modified", DEFAULT)):
@@ -103,6 +107,13 @@ def _table(L, rows):
                        "lag for max r (s)", "valid"], body, digits=3, formats={"lag for max r (s)": "+.2f"},
                       align="lrrrrrrr", best=_BEST, best_in="column"))
     L.append("")
+
+
+def _design_cell(design: dict) -> str:
+    """A drive's :func:`roadbank.vehicle.design_record` in a table cell: car, quiet or loud (floor ratio)."""
+    if not design:
+        return "-"
+    return f"{design['car']}, {'quiet' if design['quiet'] else 'loud'} ({design['ay_floor_ratio']:.2g} x)"
 
 
 def split_rows(v: KittiValidation, split: str) -> list[list]:
@@ -189,12 +200,16 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
              "roads, `roadbank.signals.road_noise_std`; docs/estimators.md); no vehicle file, so the car "
              "for a log whose car is not described. Choices were made on the training drives only.\n")
     L.append(md_table(["drive", "duration (s)", "frames (dropped)", "step (s)", "speed (m/s)", "roll (deg)",
-                       "max yaw rate (rad/s)", "scored (s)"],
+                       "max yaw rate (rad/s)", "scored (s)", "designed for"],
                       [[d.label, d.data["duration_s"], f"{d.data['frames']} ({d.data['dropped_frames']})",
                         "{:.3f}-{:.3f}".format(*d.data["dt_range"]), "{:.1f}-{:.1f}".format(*d.data["speed_range"]),
                         "{:+.2f} .. {:+.2f}".format(*d.data["ref_range_deg"]), d.data["yaw_rate_max"],
-                        d.data["scored_s"]] for d in v.drives],
-                      digits={"duration (s)": 1, "scored (s)": 1}, align="lrrrrrrr"))
+                        d.data["scored_s"], _design_cell(d.data.get("design", {}))] for d in v.drives],
+                      digits={"duration (s)": 1, "scored (s)": 1}, align="lrrrrrrrl"))
+    L.append("\nDesigned for: the car (without a vehicle file the shipped one that fits the drive, "
+             "`roadbank.vehicle.design_car`) and whether the drive is quiet, with its `ay` noise floor over the "
+             f"data sheet's density (`roadbank.vehicle.design_record`; quiet at most {QUIET_RATIO:g}: the default is "
+             "then the car's model).")
     L.append("")
     for e in v.errors:
         L.append(f"- not read: {e}")

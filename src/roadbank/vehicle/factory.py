@@ -15,11 +15,12 @@ import numpy as np
 from .. import defaults
 from ..params import VehicleParams
 from ..signals import sample_rate
-from .conditions import design_span, log_conditions, make_estimator
+from .conditions import design_span, is_quiet, log_conditions, make_estimator
 from .file import load_vehicle
+from .sensors import SensorSpec
 
 __all__ = ["UNDESCRIBED_CARS", "CAR_MARGIN", "FIT_BAND_HZ", "undescribed_car", "undescribed_params", "design_car",
-           "bank_band_power", "for_conditions", "for_log"]
+           "bank_band_power", "design_record", "for_conditions", "for_log"]
 
 #: the shipped cars a log whose car is not described may be designed for: the range of passenger cars
 UNDESCRIBED_CARS = ("suv-paper", "sedan", "compact", "van")
@@ -108,6 +109,24 @@ def design_car(signals, margin: float = CAR_MARGIN) -> str:
             power[car] = math.inf
     best = min(UNDESCRIBED_CARS, key=lambda c: power[c])
     return best if power[best] * margin < power[defaults.VEHICLE] else defaults.VEHICLE
+
+
+def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | None = None) -> dict:
+    """What a log's estimators are designed for, to report: ``car`` (a name) and ``car_from`` (where it
+    came from: "fitted to the log", "vehicle file", "parameters given"), ``quiet`` (bool,
+    :func:`~roadbank.vehicle.is_quiet` with ``sensors``, default the data sheet's), ``ay_noise`` and
+    ``ay_floor`` (m/s^2) from ``cond`` (:func:`~roadbank.vehicle.log_conditions`), and ``ay_floor_ratio``
+    (-), the floor's density over the sensors' (what ``quiet`` compares with :data:`~roadbank.vehicle.QUIET_RATIO`; NaN
+    when not measured)."""
+    sensors = sensors or SensorSpec()
+    floor = cond.get("log_ay_floor")
+    rate = sensors.rate_for(cond.get("log_rate"))
+    ratio = (floor ** 2 / rate / sensors.ay_noise_density(rate)
+             if floor is not None and math.isfinite(floor) and sensors.ay_noise_density(rate) > 0 else math.nan)
+    return {"car": car, "car_from": car_from,
+            "quiet": bool(is_quiet(sensors, cond.get("log_rate"), cond.get("log_ay_noise"),
+                                   log_ay_floor=floor)),
+            "ay_noise": cond.get("log_ay_noise"), "ay_floor": floor, "ay_floor_ratio": float(f"{ratio:.3g}")}
 
 
 def for_conditions(name: str, cond: dict, params: VehicleParams | None = None, *, vehicle=None, **tuning):
