@@ -15,8 +15,8 @@ from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..io.timebase import add_counts
 from ..io.writers import TableWriter, estimate_table
 from ..signals import Estimate
-from ..vehicle import (DESIGN_MAX_S, design_record, for_conditions, has_design_span, load_vehicle, log_conditions,
-                       undescribed_car, undescribed_params)
+from ..vehicle import (DESIGN_MAX_S, car_for_log, for_conditions, has_design_span, log_conditions,
+                       undescribed_params)
 from ..vehicle.conditions import QUIET_MODELS
 
 #: columns of the summary table, in order (see LogSummary)
@@ -231,13 +231,7 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
             if k == 0:  # designed for the log's own rate and road noise, measured on its first minute of driving
                 lead = chunks.leading(chunk.signals, DESIGN_MAX_S, has_design_span)
                 cond = log_conditions(lead)
-                if params is None:
-                    name = undescribed_car(lead)
-                    car, summary.design = load_vehicle(name).params, design_record(cond, name, "fitted to the log")
-                else:
-                    car = params
-                    summary.design = design_record(cond, vehicle.name, "vehicle file", vehicle.sensors) \
-                        if vehicle is not None else design_record(cond, "-", "parameters given")
+                car, summary.design = car_for_log(lead, cond, params, vehicle)
                 ests = [for_conditions(n, cond, car, vehicle=vehicle) for n in names]
                 if online_offsets:      # causal ones: a smoother's later samples would see later offsets
                     ests = [e if n in OFFLINE else with_online_offsets(e, car) for e, n in zip(ests, names)]

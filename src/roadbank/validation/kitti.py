@@ -39,7 +39,7 @@ from ..io import LogError
 from ..io.kitti import find_oxts_dirs, load_kitti_oxts
 from ..params import VehicleParams
 from ..signals import sample_rate
-from ..vehicle import SensorSpec, design_record, load_vehicle, log_conditions, noise_densities, undescribed_car
+from ..vehicle import SensorSpec, car_for_log, log_conditions, noise_densities
 from .comma2k19 import ValidationResult
 from .scoring import Scoring, _rms_deg, hold_invalid, lowpass_t, masks, pooled, run_and_score
 from .splits import split_of
@@ -166,11 +166,8 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     """
     names = list(names or estimators.NAMES)
     log = load_kitti_oxts(path)
-    if params is None:                                      # a car not described: the one that fits the drive
-        car = undescribed_car(log.signals)
-        params, design = load_vehicle(car).params, design_record(log_conditions(log.signals), car, "fitted to the log")
-    else:
-        design = design_record(log_conditions(log.signals), "-", "parameters given", sensors)
+    # a car not described: the one that fits the drive
+    params, design = car_for_log(log.signals, log_conditions(log.signals), params, sensors=sensors)
     run = run_and_score(log.signals, log.reference_roll, names, params, scoring, per_estimator=tuning,
                         sensors=sensors)
     sens = {}

@@ -21,7 +21,8 @@ from .sensors import SensorSpec
 # them: loading a car (load_vehicle, --vehicle) loads neither
 
 __all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "QUIET_FILTER", "QUIET_MODELS",
-           "design_span", "has_design_span", "log_conditions", "noise_densities", "is_quiet", "make_estimator"]
+           "design_span", "has_design_span", "log_conditions", "noise_densities", "is_quiet", "quiet_noise_ratio",
+           "make_estimator"]
 
 
 #: seconds of driving (``vx >= v_min``) at the start of a log on which :func:`log_conditions` measures it (s)
@@ -145,12 +146,23 @@ def is_quiet(sensors: SensorSpec, log_rate: float | None = None, log_ay_noise: f
     phone is not (the KITTI training drives: 15-190 times the paper's ESP accelerometer).
     Not measured (None or NaN) or ``ratio <= 0``: False.
     """
-    if log_ay_floor is not None and math.isfinite(log_ay_floor):
-        log_ay_noise = log_ay_floor
-    if log_ay_noise is None or not math.isfinite(log_ay_noise) or not ratio > 0:
-        return False
+    return ratio > 0 and quiet_noise_ratio(sensors, log_rate, log_ay_noise, log_ay_floor) <= ratio
+
+
+def quiet_noise_ratio(sensors: SensorSpec, log_rate: float | None = None, log_ay_noise: float | None = None,
+                      log_ay_floor: float | None = None) -> float:
+    """The number :func:`is_quiet` compares with its ratio (-): the density of the log's ``ay`` noise floor
+    (``log_ay_floor``, m/s^2; not given or NaN: its road noise ``log_ay_noise``) at ``log_rate`` Hz over the
+    accelerometer's data-sheet density at that rate. NaN when neither is measured; 0 for a noiseless log,
+    infinite for a noisy one on a sensor without noise."""
+    noise = log_ay_floor if log_ay_floor is not None and math.isfinite(log_ay_floor) else log_ay_noise
+    if noise is None or not math.isfinite(noise):
+        return math.nan
     rate = sensors.rate_for(log_rate)
-    return log_ay_noise ** 2 / rate <= ratio * sensors.ay_noise_density(rate)
+    density, sheet = noise ** 2 / rate, sensors.ay_noise_density(rate)
+    if density == 0.0:
+        return 0.0
+    return density / sheet if sheet > 0 else math.inf
 
 
 def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: SensorSpec | None = None,

@@ -15,12 +15,12 @@ import numpy as np
 from .. import defaults
 from ..params import VehicleParams
 from ..signals import sample_rate
-from .conditions import design_span, is_quiet, log_conditions, make_estimator
+from .conditions import design_span, is_quiet, log_conditions, make_estimator, quiet_noise_ratio
 from .file import load_vehicle
 from .sensors import SensorSpec
 
 __all__ = ["UNDESCRIBED_CARS", "CAR_MARGIN", "FIT_BAND_HZ", "undescribed_car", "undescribed_params", "design_car",
-           "bank_band_power", "design_record", "for_conditions", "for_log"]
+           "bank_band_power", "design_record", "car_for_log", "for_conditions", "for_log"]
 
 #: the shipped cars a log whose car is not described may be designed for: the range of passenger cars
 UNDESCRIBED_CARS = ("suv-paper", "sedan", "compact", "van")
@@ -116,17 +116,27 @@ def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | Non
     came from: "fitted to the log", "vehicle file", "parameters given"), ``quiet`` (bool,
     :func:`~roadbank.vehicle.is_quiet` with ``sensors``, default the data sheet's), ``ay_noise`` and
     ``ay_floor`` (m/s^2) from ``cond`` (:func:`~roadbank.vehicle.log_conditions`), and ``ay_floor_ratio``
-    (-), the floor's density over the sensors' (what ``quiet`` compares with :data:`~roadbank.vehicle.QUIET_RATIO`; NaN
-    when not measured)."""
+    (-, :func:`~roadbank.vehicle.conditions.quiet_noise_ratio`: what ``quiet`` compares with
+    :data:`~roadbank.vehicle.QUIET_RATIO`; NaN when not measured)."""
     sensors = sensors or SensorSpec()
-    floor = cond.get("log_ay_floor")
-    rate = sensors.rate_for(cond.get("log_rate"))
-    ratio = (floor ** 2 / rate / sensors.ay_noise_density(rate)
-             if floor is not None and math.isfinite(floor) and sensors.ay_noise_density(rate) > 0 else math.nan)
-    return {"car": car, "car_from": car_from,
-            "quiet": bool(is_quiet(sensors, cond.get("log_rate"), cond.get("log_ay_noise"),
-                                   log_ay_floor=floor)),
-            "ay_noise": cond.get("log_ay_noise"), "ay_floor": floor, "ay_floor_ratio": float(f"{ratio:.3g}")}
+    noise, floor = cond.get("log_ay_noise"), cond.get("log_ay_floor")
+    ratio = quiet_noise_ratio(sensors, cond.get("log_rate"), noise, floor)
+    return {"car": car, "car_from": car_from, "quiet": bool(is_quiet(sensors, cond.get("log_rate"), noise,
+                                                                     log_ay_floor=floor)),
+            "ay_noise": noise, "ay_floor": floor, "ay_floor_ratio": float(f"{ratio:.3g}")}
+
+
+def car_for_log(signals, cond: dict, params: VehicleParams | None = None, vehicle=None,
+                sensors: SensorSpec | None = None) -> tuple[VehicleParams, dict]:
+    """The car a log's estimators are designed for, and its :func:`design_record` (``cond``: the log's
+    :func:`log_conditions`): ``vehicle``'s (a :class:`Vehicle`), else ``params`` (with ``sensors``), else
+    :func:`undescribed_car` of the log's ``signals`` (the one that fits it)."""
+    if vehicle is not None:
+        return vehicle.params, design_record(cond, vehicle.name, "vehicle file", vehicle.sensors)
+    if params is not None:
+        return params, design_record(cond, "-", "parameters given", sensors)
+    name = undescribed_car(signals)
+    return _car(name), design_record(cond, name, "fitted to the log")
 
 
 def for_conditions(name: str, cond: dict, params: VehicleParams | None = None, *, vehicle=None, **tuning):
