@@ -98,6 +98,12 @@ e.set_sample_rate(100.0)
 def work():
     e.run(s); e.run(s2); e.reset(); e.step(0.0, 20.0, 0.5, 0.01, 0.002); e.step(0.01, 20.0, 0.5, 0.01, 0.002)
 """,
+    "offsets": _TWO_LOGS + """
+e = estimators.with_online_offsets(estimators.make("kinematic"))
+e.inner.run(s); e.inner.step(0.0, 20.0, 0.5, 0.01, 0.002)   # the inner (lpv) kernel: its own family
+def work():
+    e.correct(s); e.reset(); e.step(0.0, 20.0, 0.5, 0.01, 0.002)
+""",
     "smooth": """
 import numpy as np
 from roadbank import Signals, estimators

@@ -46,7 +46,7 @@ steering offset has ``min_straight`` s. The estimator's own ``valid`` output is 
 
 :func:`with_online_offsets` wraps any estimator: it corrects ``r``, ``ay`` and ``delta_f`` with
 the offsets learnt up to each sample (causal) before the estimator sees them. The per-sample
-step is one compiled function (:mod:`.offset_kernel`), the same for ``run`` and ``step``.
+step is one compiled function (:mod:`.kernels.offsets`), the same for ``run`` and ``step``.
 """
 
 from __future__ import annotations
@@ -60,7 +60,7 @@ import numpy as np
 from ..models.bicycle import understeer_gradient
 from ..params import VehicleParams
 from ..signals import Estimate, Signals
-from . import offset_kernel as K
+from .kernels import offsets as K
 from .base import Estimator, StepResult
 
 
@@ -137,7 +137,7 @@ class OffsetSettings:
                 raise ValueError(f"OffsetSettings.{name} must be > 0, got {getattr(self, name)}")
 
     def cfg(self, params: VehicleParams) -> np.ndarray:
-        """The kernel's settings array (:mod:`.offset_kernel` ``C_*``) for the car ``params``."""
+        """The kernel's settings array (:mod:`.kernels.offsets` ``C_*``) for the car ``params``."""
         c = np.zeros(K.N_CFG)
         c[K.C_VSTOP], c[K.C_TSTOP], c[K.C_TAUSTOP] = self.v_stop, self.stop_settle, self.tau_stop
         c[K.C_NSTOP], c[K.C_RSTOP], c[K.C_TRAIL] = self.min_standstill, self.stop_r_max, self.stop_trail
@@ -207,7 +207,7 @@ class OnlineOffsets:
 
     def correct(self, signals: Signals, *, reset: bool = True) -> tuple[Signals, np.ndarray]:
         """Run the learner over ``signals``: the corrected signals and the learner's output rows
-        ``(n, 7)`` (:mod:`.offset_kernel` ``O_*``). ``reset=False`` continues from its state."""
+        ``(n, 7)`` (:mod:`.kernels.offsets` ``O_*``). ``reset=False`` continues from its state."""
         if reset:
             self._omem = K.new_memory()
         n = len(signals)

@@ -1,6 +1,6 @@
 """C99 source of the online sensor-offset learner, added to an exported module.
 
-The operations of :func:`roadbank.estimators.offset_kernel.offsets_step`, in the same
+The operations of :func:`roadbank.estimators.kernels.offsets.offsets_step`, in the same
 order, with the learner's settings as constants: a caller-owned ``<prefix>_offsets``
 state, ``<prefix>_offsets_init``, ``<prefix>_offsets_step`` (one sample: learn, then
 return the corrected channels, the offsets and their flags) and ``<prefix>_step_learning``
@@ -15,7 +15,7 @@ from string import Template
 
 import numpy as np
 
-from ..estimators import offset_kernel as K
+from ..estimators.kernels import offsets as K
 from .ccode import _fix_literals, real_literal
 
 _HEADER = Template("""
@@ -67,7 +67,7 @@ int ${p}_step_learning(${p}_state *s, ${p}_offsets *o, double t, ${real} vx, ${r
 """)
 
 _SOURCE = Template("""
-/* ---- online sensor offsets: the operations of roadbank.estimators.offset_kernel --------- */
+/* ---- online sensor offsets: the operations of roadbank.estimators.kernels.offsets --------- */
 #define RBO_VSTOP (${VSTOP})
 #define RBO_TSTOP (${TSTOP})
 #define RBO_TAUSTOP (${TAUSTOP})

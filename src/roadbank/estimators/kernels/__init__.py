@@ -9,7 +9,8 @@ its offset functions, compiled). One module per family, over shared parts:
 * :mod:`.simd` — the four-lane intrinsics of the three-state batch loop;
 * :mod:`.lpv` — the one observer update (:func:`~.lpv.observer_update`, with
   :func:`~.lpv.fixed3` its three-state fixed-rate form) and the ``lpv`` family;
-* :mod:`.adaptive`, :mod:`.gated`, :mod:`.dfc`, :mod:`.riccati`, :mod:`.smoother`.
+* :mod:`.adaptive`, :mod:`.gated`, :mod:`.dfc`, :mod:`.riccati`, :mod:`.smoother`;
+* :mod:`.offsets` — the online sensor-offset learner that corrects an estimator's inputs.
 
 The families:
 
@@ -97,7 +98,7 @@ the states, shape ``(N, max(n, 2))``). The inputs come in the order of
 :meth:`Estimator.step(t, vx, ay, r, delta_f) <roadbank.estimators.base.Estimator.step>`
 puts ``delta_f`` last because it is optional, and is the one place that reorders them.
 Units: t (s), vx (m/s), ay (m/s^2), r (rad/s), d (rad). ``smooth_backward`` has its own
-arguments (its docstring); the offset learner's (:mod:`roadbank.estimators.offset_kernel`)
+arguments (its docstring); the offset learner's (:mod:`.offsets`)
 ``offsets_step(mem, cfg, t, vx, d, ay, r, out)`` takes its inputs in the same order.
 """
 

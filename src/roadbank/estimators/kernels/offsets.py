@@ -1,10 +1,12 @@
-"""The compiled per-sample step of the online sensor-offset learner (:mod:`.offsets`).
+"""The compiled per-sample step of the online sensor-offset learner
+(:mod:`roadbank.estimators.offsets`).
 
 One function, :func:`offsets_step`, does all the work of a sample; :func:`offsets_run`
 is the same function in a loop, so a log processed in one call and sample by sample
 gives identical numbers. Layouts of ``cfg`` (settings) and ``mem`` (state) are the
-``C_*`` and ``M_*`` indices below; :mod:`.offsets` fills ``cfg`` and explains the rules,
-:mod:`roadbank.export.offsets_c` writes the same operations in C.
+``C_*`` and ``M_*`` indices below; :mod:`roadbank.estimators.offsets` fills ``cfg`` and explains
+the rules, :mod:`roadbank.export.offsets_c` writes the same operations in C. Compiled with the
+kernels' options (:mod:`._jit`: no reference counting, numpy's division rules, helpers inlined).
 
 Units: t (s), vx (m/s), ay (m/s^2), r (rad/s), delta_f (front road-wheel angle, rad).
 """
@@ -15,6 +17,8 @@ import math
 
 import numpy as np
 from numba import njit
+
+from ._jit import ENTRY, INLINE
 
 # ---- cfg: settings -----------------------------------------------------------------------
 (C_VSTOP, C_TSTOP, C_TAUSTOP, C_NSTOP, C_RSTOP, C_TRAIL, C_VSTR, C_AYSTR, C_DSTR, C_RSTR, C_RDOT,
@@ -29,7 +33,7 @@ from numba import njit
 (O_R, O_AY, O_D, O_BR, O_BD, O_RLEARNT, O_DLEARNT, N_OUT) = range(8)
 
 
-@njit(cache=True)
+@njit(**INLINE)
 def _clamp(x, lim):
     if x > lim:
         return lim
@@ -38,7 +42,7 @@ def _clamp(x, lim):
     return x
 
 
-@njit(cache=True)
+@njit(**INLINE)
 def _combine(b0, e0, ssum, se, cfg):
     """Offset from the committed one ``b0`` (evidence ``e0``, weighing at most ``C_TAUSTOP`` s)
     and a stop's sum of ``r dt`` over ``se`` seconds."""
@@ -48,7 +52,7 @@ def _combine(b0, e0, ssum, se, cfg):
     return _clamp((w0 * b0 + ssum) / (w0 + se), cfg[C_RMAX])
 
 
-@njit(cache=True)
+@njit(**INLINE)
 def _end_stop(mem, cfg):
     """The car drives off (or a gap): commit the stop's samples up to snapshot B, those at least
     ``C_TRAIL`` s before its end (a creeping drive-off turns already), and forget the stop."""
@@ -64,7 +68,7 @@ def _end_stop(mem, cfg):
     mem[M_BE] = 0.0
 
 
-@njit(cache=True)
+@njit(**ENTRY)
 def offsets_step(mem, cfg, t, vx, d, ay, r, out):
     """Learn from one sample and write its corrected channels into ``out`` (layout ``O_*``).
 
@@ -162,7 +166,7 @@ def offsets_step(mem, cfg, t, vx, d, ay, r, out):
     out[O_DLEARNT] = 1.0 if mem[M_ESTRD] >= cfg[C_NSTR] else 0.0
 
 
-@njit(cache=True)
+@njit(**ENTRY)
 def offsets_run(mem, cfg, t, vx, d, ay, r, out):
     """:func:`offsets_step` over every sample; ``out`` has shape ``(n, N_OUT)``."""
     for k in range(t.shape[0]):
