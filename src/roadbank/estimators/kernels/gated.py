@@ -8,15 +8,17 @@ import numpy as np
 from numba import njit
 
 from ..layout import C_GAP, C_N, C_NR, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, gate_states, gated_block
-from ._jit import ENTRY
+from ._jit import ENTRY, HELPER
 from .lpv import lpv_step
 from .sample import output, sample_valid, store
 
 
-@njit(**ENTRY)
-def gated_step(mem, cfg, tab, work, t, vx, d, ay, r):
+@njit(inline="always", **HELPER)
+def gated_sample(mem, cfg, tab, work, t, vx, d, ay, r):
     r"""One sample of two stacked observers whose outputs are blended by a gate; returns
-    ``(w, theta, phi_b, valid)``.
+    ``(w, theta, phi_b, valid)``. Inlined into :func:`gated_run`, the family's one compiled function
+    (:func:`gated_step` runs it on one-sample arrays, as ``riccati_step`` does), so that numba
+    optimises the sample's code once, not in a step and again in the loop that calls it.
 
     The states of both observers form one block-diagonal ``lpv`` observer (the table and the
     fixed-rate path of :func:`~roadbank.estimators.kernels.lpv.lpv_step`, whose output
@@ -65,8 +67,20 @@ def gated_step(mem, cfg, tab, work, t, vx, d, ay, r):
 @njit(**ENTRY)
 def gated_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
               out_x):
-    """Batch version of :func:`gated_step` (same arithmetic, sample by sample)."""
+    """:func:`gated_sample` over every sample."""
     n = np.int64(cfg[C_N])
     for k in range(t.shape[0]):
-        ok = gated_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
+        ok = gated_sample(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
         store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
+
+
+def gated_step(mem, cfg, tab, work, t, vx, d, ay, r):
+    """One sample of :func:`gated_run`; returns ``(w, theta, phi_b, valid)`` (Python: one-sample arrays)."""
+    n = np.int64(cfg[C_N])
+    inp = np.array([t, vx, d, ay, r], dtype=np.float64)
+    inp.flags.writeable = False        # as Signals' arrays: the same compiled version as run()
+    out = np.empty((4, 1))
+    valid = np.empty(1, dtype=np.bool_)
+    gated_run(mem, cfg, tab, work, inp[0:1], inp[1:2], inp[2:3], inp[3:4], inp[4:5], out[0], out[1], out[2],
+              out[3], valid, np.empty((1, max(n, 2))))
+    return float(out[0, 0]), float(out[1, 0]), float(out[2, 0]), bool(valid[0])
