@@ -58,8 +58,9 @@ _COMMON = ("v_min", "max_substep", "max_gap", "max_angle", "v_step", "v_max", "r
 
 @dataclass(frozen=True)
 class GatedDesign(DesignInputs):
-    """Design inputs of a gated pair: the two filters' design inputs (``slow``, ``fast``) and the
-    gate's ``gate_tf``, ``gate_release`` (s), ``gate_on``, ``gate_span`` (m/s^3)."""
+    """Design inputs of a gated pair: the two filters' design inputs (``slow``, ``fast``), the
+    gate's ``gate_tf``, ``gate_release`` (s), ``gate_on``, ``gate_span`` (m/s^3), and the limit of the
+    slow filter's ``ay`` ``clip`` (-, standard deviations of its input's noise; 0: none)."""
 
     slow: DesignInputs
     fast: DesignInputs
@@ -67,6 +68,7 @@ class GatedDesign(DesignInputs):
     gate_release: float
     gate_on: float
     gate_span: float
+    clip: float = 0.0
 
 
 class _GatedPair(ScheduledObserver):
@@ -92,7 +94,8 @@ class _GatedPair(ScheduledObserver):
 
     def _design_fields(self) -> dict:
         return dict(slow=self._slow.design, fast=self._fast.design, gate_tf=self.gate_tf,
-                    gate_release=self.gate_release, gate_on=self.gate_on, gate_span=self.gate_span)
+                    gate_release=self.gate_release, gate_on=self.gate_on, gate_span=self.gate_span,
+                    clip=self.clip)
 
     @property
     def slow(self) -> ScheduledObserver:
@@ -104,10 +107,25 @@ class _GatedPair(ScheduledObserver):
         """The PIF the output moves to while the gate is open."""
         return self._fast
 
+    #: the slow filter's ``ay`` limited to this many standard deviations of its input's noise (-; 0: not
+    #: limited): :func:`roadbank.estimators.kernels.gated.limited_ay`; set by :class:`KinematicPIF`
+    clip = 0.0
+
     def observer(self, vx: float):
         """``(F, G, H, D)`` of the stacked observer at ``vx`` (m/s): block-diagonal ``F``, stacked
-        ``G``; ``H``, ``D`` give the slow filter's ``w`` (the fast one's is :meth:`fast_output`)."""
-        return _stack(self._slow.observer(vx), self._fast.observer(vx))
+        ``G``; ``H``, ``D`` give the slow filter's ``w`` (the fast one's is :meth:`fast_output`). With a
+        limit (:attr:`clip`) the slow filter reads its ``ay`` from the first input slot."""
+        return _stack(self._slow.observer(vx), self._fast.observer(vx), self.clip > 0)
+
+    def _limit_constants(self) -> list[float]:
+        """``[clip, g, Q_ay, R]`` of :func:`~roadbank.estimators.kernels.gated.limited_ay`
+        (:class:`roadbank.estimators.layout.GatedBlock`); zeros without a limit."""
+        return [0.0] * 4
+
+    def _fill_cfg_head(self, head):
+        super()._fill_cfg_head(head)
+        if self.clip > 0:
+            head[layout.C_USE] = 1.0        # the slow filter's limited ay, in the steering's slot
 
     def fast_output(self) -> np.ndarray:
         """``H_f`` (n,): the fast filter's ``w`` from the stacked states (constant)."""
@@ -130,10 +148,12 @@ class _GatedPair(ScheduledObserver):
                 mats.append((r[row.F:row.G].reshape(n, n), r[row.G:row.H].reshape(n, layout.NETA),
                              r[row.H:row.D].reshape(1, n), r[row.D:row.J].reshape(1, layout.NETA),
                              r[row.J:row.cont].reshape(n, layout.NETA)))
-            F, G, H, D = _stack(mats[0][:4], mats[1][:4])
-            J = np.vstack([mats[0][4], mats[1][4]])
+            F, G, H, D = _stack(mats[0][:4], mats[1][:4], self.clip > 0)
+            Js = _ay_slot(mats[0][4]) if self.clip > 0 else mats[0][4]
+            J = np.vstack([Js, mats[1][4]])
             rows.append(np.concatenate([F.ravel(), G.ravel(), H.ravel(), D.ravel(), J.ravel()]))
-        extra = np.concatenate([self.fast_output(), [d.gate_tf, d.gate_release, d.gate_on, d.gate_span]])
+        extra = np.concatenate([self.fast_output(), [d.gate_tf, d.gate_release, d.gate_on, d.gate_span],
+                                self._limit_constants()])
         return np.ascontiguousarray(np.array(rows)), len(self.state_names), extra
 
 
@@ -209,6 +229,10 @@ KINEMATIC_PIF_V_MIN = KINEMATIC_V_MIN
 #: first-order filter of the samples does (:mod:`roadbank.estimators.lowpass`); ``lead`` (s) is this many
 #: intervals of the log (:func:`roadbank.vehicle.make_estimator`), by default of the data sheet's rate
 KINEMATIC_PIF_LEAD_SAMPLES = 0.5
+#: :class:`KinematicPIF`'s limit of its low-pass's update (-, standard deviations of the input's white noise as
+#: the cut-off is designed for; 0: linear; the rule of :mod:`roadbank.tuning.real`, tenth stage): road
+#: vibration is heavy-tailed, and a pothole's spike moves the estimate by at most this much
+KINEMATIC_PIF_CLIP = 3.0
 
 
 class KinematicPIF(_GatedPair):
@@ -223,7 +247,10 @@ class KinematicPIF(_GatedPair):
     of the lateral jerk :math:`v_x |\dot r|` (:func:`roadbank.estimators.kernels.gated_step`):
     :math:`w = w_{ff} + g (w_{PIF} - w_{ff})`. The gate's settings were chosen by the rule of
     :mod:`roadbank.tuning.real` on training data (:data:`KINEMATIC_PIF_GATE`). Stacked states
-    ``[w_lp, vy, r, w]``; ``run`` equals ``step``; C export as ``pif-gated``.
+    ``[k_lp, a_lp, vy, r, w]`` (the low-pass in its split form, :mod:`~roadbank.estimators.lowpass`: the
+    kinematic estimate and the centripetal term low-passed apart, so that the kinematic estimate's
+    innovation, which carries the road's noise, can be limited alone: ``clip``); ``run`` equals ``step``;
+    C export as ``pif-gated``.
 
     This class is the blend. Every command (:func:`roadbank.vehicle.make_estimator`) builds it for a
     log whose ``ay`` the road shakes; on a quiet log, which carries little more noise than its data
@@ -249,18 +276,27 @@ class KinematicPIF(_GatedPair):
         ``[tuning.pif-modified]`` applies).
     gate_tf, gate_release, gate_on, gate_span : float, optional
         As :class:`PIFGated`; defaults :data:`KINEMATIC_PIF_GATE`.
+    clip : float, optional
+        The low-pass's update limit (-, >= 0; default :data:`KINEMATIC_PIF_CLIP`; 0: linear): the low-pass
+        reads ``ay`` less what its innovation exceeds ``clip`` standard deviations of the white noise
+        :math:`(Q_{ay} + v_x^2 R)/\Delta t` by (:func:`roadbank.estimators.kernels.gated.limited_ay`), a
+        Huber-type update: heavy-tailed road vibration (a pothole, a kerb) moves it by at most that much
+        per sample, a bank or a turn that lasts passes as before. The PIF reads ``ay`` as it is.
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator` (both filters).
     """
 
     name = "kinematic-pif"
-    state_names = ("w_lp", "vy", "r", "w")
+    state_names = ("k_lp", "a_lp", "vy", "r", "w")
     default_v_min = KINEMATIC_PIF_V_MIN
 
     def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, lead=None, tuning=None, Q=None, R=None,
                  S=None, th=None, Q_ay=None, adapt_th=None, gate_tf=None, gate_release=None, gate_on=None,
-                 gate_span=None, **kw):
+                 gate_span=None, clip=None, **kw):
         d = KINEMATIC_PIF_GATE
+        self.clip = float(KINEMATIC_PIF_CLIP if clip is None else clip)
+        if not (np.isfinite(self.clip) and self.clip >= 0):
+            raise ValueError(f"{self.name}: clip must be >= 0 (standard deviations), got {clip}")
         opt = {k: float(d[k] if v is None else v) for k, v in (
             ("gate_tf", gate_tf), ("gate_release", gate_release), ("gate_on", gate_on), ("gate_span", gate_span))}
         _check_gate(self.name, opt)
@@ -275,7 +311,7 @@ class KinematicPIF(_GatedPair):
             R=float(self._fast.R[-1, -1]))
         self._slow = KinematicFeedForward(params, cutoff=cutoff, kappa=KINEMATIC_PIF_KAPPA if kappa is None else kappa,
                                           lead=KINEMATIC_PIF_LEAD_SAMPLES / ESP_RATE if lead is None else lead,
-                                          sample_rate=None, **noise, **common)
+                                          split=True, sample_rate=None, **noise, **common)
         self.cutoff, self.kappa, self.bank_rate = self._slow.cutoff, self._slow.kappa, self._slow.bank_rate
         self.lead = self._slow.lead
         self.Q, self.th, self.R, self.S, self.Q_ay = (self._fast.Q, self._fast.th, self._fast.R, self._fast.S,
@@ -284,10 +320,27 @@ class KinematicPIF(_GatedPair):
             setattr(self, k, v)
         super().__init__(params, **kw)
 
+    def _limit_constants(self) -> list[float]:
+        if self.clip <= 0:
+            return super()._limit_constants()
+        return [self.clip, float(self.params.g), float(self.Q_ay), float(self._fast.R[-1, -1])]
 
-def _stack(slow, fast):
-    """Block-diagonal ``F``, stacked ``G``, the slow filter's ``H`` (zero on the fast states) and ``D``."""
+
+def _ay_slot(M):
+    """``M`` (rows over the inputs ``[delta_f, ay, r]``) with its ``ay`` column moved to the first slot."""
+    M = np.array(M, dtype=float, copy=True)
+    M[..., 0], M[..., 1] = M[..., 1], 0.0
+    return M
+
+
+def _stack(slow, fast, slow_ay_first=False):
+    """Block-diagonal ``F``, stacked ``G``, the slow filter's ``H`` (zero on the fast states) and ``D``;
+    ``slow_ay_first``: the slow filter reads its ``ay`` from the first input slot (it reads no steering)."""
     Fs, Gs, Hs, Ds = slow
+    if slow_ay_first:
+        if np.any(np.asarray(Gs)[..., 0]) or np.any(np.asarray(Ds)[..., 0]):
+            raise ValueError("a slow filter that reads the steering angle cannot have its ay limited")
+        Gs, Ds = _ay_slot(Gs), _ay_slot(Ds)
     Ff, Gf, _, _ = fast
     ns, nf = Fs.shape[0], Ff.shape[0]
     F = np.zeros((ns + nf, ns + nf))

@@ -327,21 +327,28 @@ class GatedBlock(NamedTuple):
     """Offsets in ``cfg`` of the ``gated`` family's constants: the second observer's output row
     ``HF`` (n, over the stacked states), the yaw-rate low-pass time constant ``TF`` (s), the gate's
     release time constant ``TAU`` (s), the yaw jerk ``ON`` (m/s^3) where it starts to open and the
-    ``SPAN`` (m/s^3) over which it opens fully."""
+    ``SPAN`` (m/s^3) over which it opens fully; then the limit of the first observer's ``ay``
+    (:func:`roadbank.estimators.kernels.gated.limited_ay`): ``CLIP`` (-, standard deviations; 0:
+    none), the gravity ``GRAV`` (m/s^2) of its prediction, and the noise densities ``QAY``
+    ((m/s^2)^2 s) and ``RR`` ((rad/s)^2 s) of its spread."""
 
     HF: int
     TF: int
     TAU: int
     ON: int
     SPAN: int
+    CLIP: int
+    GRAV: int
+    QAY: int
+    RR: int
     end: int
 
 
 @_compiled
 def gated_block(n: int, nr: int) -> GatedBlock:
     """:class:`GatedBlock` after the roll block of ``nr`` states (at ``cfg[C_OFAM]``)."""
-    o = roll_block(nr).end
-    return GatedBlock(o, o + n, o + n + 1, o + n + 2, o + n + 3, o + n + 4)
+    o = roll_block(nr).end + n
+    return GatedBlock(o - n, o, o + 1, o + 2, o + 3, o + 4, o + 5, o + 6, o + 7, o + 8)
 
 
 @_compiled

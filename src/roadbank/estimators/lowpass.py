@@ -48,6 +48,17 @@ which lags by :math:`(1 - c)\tau`. With :math:`z = 2\,\mathrm{lead}/\tau`,
 so ``lead = h/2`` lags exactly as the sampled filter, a small lead shortens the lag by itself,
 and a long one (a slow log) never passes the input through unfiltered (:math:`c < 1`).
 ``kinematic-pif`` takes ``lead = h/2`` (:data:`roadbank.estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES`).
+
+**Split form** (``split=True``, ``kinematic-pif``'s). The same filter with two states, the kinematic
+estimate and the centripetal term low-passed apart (:math:`\mathrm{LP}(u) = \mathrm{LP}(k) - \kappa\,
+\mathrm{LP}(a)`, :math:`k = (a_y - v_x r)/g`):
+
+.. math::
+    \hat w = (1 - c)\,(x_k - \kappa x_a) + c\,k + (1 - c)\,\kappa a,
+
+so that the first state's innovation :math:`k - x_k` is the kinematic estimate's alone, which carries the
+road's noise; the centripetal term's steps (a turn's entry) are not in it. ``kinematic-pif`` limits it
+(:func:`roadbank.estimators.kernels.gated.limited_ay`).
 """
 
 from __future__ import annotations
@@ -96,8 +107,9 @@ def cutoff_for_noise(noise_density: float, bank_rate: float) -> float:
 class LowPassDesign(DesignInputs):
     """Design inputs of :class:`KinematicLowPass`: the cut-off ``cutoff`` (Hz; None: scheduled on the
     noise), the centripetal feed-forward gain ``kappa`` (-), and for a scheduled cut-off the bank rate
-    of roads ``bank_rate`` (rad/s), the noise densities ``Q_ay`` ((m/s^2)^2 s) and ``R`` ((rad/s)^2 s), and
-    the sampled-data lead ``lead`` (s; module docstring)."""
+    of roads ``bank_rate`` (rad/s), the noise densities ``Q_ay`` ((m/s^2)^2 s) and ``R`` ((rad/s)^2 s),
+    the sampled-data lead ``lead`` (s; module docstring), and ``split``: the two-state form (module
+    docstring)."""
 
     cutoff: float | None
     kappa: float
@@ -105,6 +117,7 @@ class LowPassDesign(DesignInputs):
     Q_ay: float | None = None
     R: float | None = None
     lead: float = 0.0
+    split: bool = False
 
 
 def lowpass_cutoff(d: LowPassDesign, vx: float) -> float:
@@ -127,12 +140,19 @@ def lead_share(lead_per_tau: float) -> float:
 
 def lowpass_observer(d: LowPassDesign, vx: float):
     """``(F, G, H, D)`` of the low-passed kinematic estimate at ``vx`` (m/s); inputs ``[delta_f, ay, r]``;
-    the share ``c`` of the input passed through is :func:`lead_share` of ``2 pi f_c lead`` (module docstring)."""
+    the share ``c`` of the input passed through is :func:`lead_share` of ``2 pi f_c lead`` (module docstring).
+    ``d.split``: the states are the kinematic estimate and the centripetal term low-passed apart (module
+    docstring), the same filter."""
     g, wc, k = d.params.g, 2.0 * np.pi * lowpass_cutoff(d, vx), d.kappa
     c = lead_share(wc * d.lead)
+    ff = np.array([[0.0, 0.0, k * vx / g]])                   # the feed-forward kappa a per eta
+    if d.split:
+        kin, a = np.array([[0.0, 1.0 / g, -vx / g]]), np.array([[0.0, 0.0, vx / g]])
+        u = np.vstack([kin, a])
+        return -wc * np.eye(2), wc * u, np.array([[1.0 - c, -k * (1.0 - c)]]), c * kin + (1.0 - c) * ff
     u = np.array([[0.0, 1.0 / g, -(1.0 + k) * vx / g]])       # the filter's input per eta
     F = np.array([[-wc]])
-    return F, wc * u, np.array([[1.0 - c]]), c * u + np.array([[0.0, 0.0, k * vx / g]])
+    return F, wc * u, np.array([[1.0 - c]]), c * u + ff
 
 
 class KinematicLowPass(ScheduledObserver):
@@ -156,6 +176,10 @@ class KinematicLowPass(ScheduledObserver):
     lead : float, optional
         Sampled-data lead (s, >= 0; default 0): about ``lead`` less lag than the low-pass's
         ``1/(2 pi f_c)`` (exactly that of the sampled filter at ``lead = h/2``; module docstring).
+    split : bool, optional
+        Two states, the kinematic estimate and the centripetal term each low-passed (``k_lp``,
+        ``a_lp``), instead of one: the same filter, whose first state's innovation is the kinematic
+        estimate's alone (what ``kinematic-pif`` limits; module docstring). Default False.
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator`; ``v_min`` (m/s) defaults to
         :data:`~roadbank.estimators.kinematic.KINEMATIC_V_MIN` (the estimate holds at any speed).
@@ -171,8 +195,12 @@ class KinematicLowPass(ScheduledObserver):
         @property
         def design(self) -> LowPassDesign: ...     # an instance of design_type
 
-    def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, Q_ay=None, R=None, lead=None, **kw):
+    def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, Q_ay=None, R=None, lead=None,
+                 split=False, **kw):
         scheduled = cutoff is None and bank_rate is not None
+        self.split = bool(split)
+        if self.split:
+            self.state_names = ("k_lp", "a_lp")
         self.cutoff = None if scheduled else float(self.defaults["cutoff"] if cutoff is None else cutoff)
         self.kappa = float(self.defaults["kappa"] if kappa is None else kappa)
         self.bank_rate = float(bank_rate) if scheduled else None
@@ -193,7 +221,7 @@ class KinematicLowPass(ScheduledObserver):
 
     def _design_fields(self) -> dict:
         return dict(cutoff=self.cutoff, kappa=self.kappa, bank_rate=self.bank_rate, Q_ay=self.Q_ay, R=self.R,
-                    lead=self.lead)
+                    lead=self.lead, split=self.split)
 
     def cutoff_at(self, vx: float) -> float:
         """The low-pass's cut-off (Hz) at ``vx`` (m/s): fixed, or scheduled on the noise (:func:`lowpass_cutoff`)."""

@@ -260,7 +260,7 @@ static int rb_update(state_t *st, int restart, int fixed, real_t dt, real_t vx, 
     u[0] = RB_USES[0] ? d : 0.0_R;
     u[1] = RB_USES[1] ? ay : 0.0_R;
     u[2] = RB_USES[2] ? r : 0.0_R;
-    w = rb_observer(st, i, a, u, dt, restart, fixed);
+${gate_input}    w = rb_observer(st, i, a, u, dt, restart, fixed);
 ${gate_call}    return rb_finish(st, w, ay, dt, restart, fixed);
 }
 
@@ -679,10 +679,26 @@ def _gate_parts(d: ExportDesign, float32: bool) -> dict:
     """The gate of a ``pif-gated`` module (:func:`roadbank.estimators.kernels.gated_step`, same
     operations in the same order), or nothing."""
     if d.gate is None:
-        return {"gate_consts": "", "gate_call": "", "init_gate": ""}
+        return {"gate_consts": "", "gate_call": "", "init_gate": "", "gate_input": ""}
     g = d.gate
     lit = lambda x: real_literal(x, float32)  # noqa: E731
-    consts = (f"#define RB_EXP {'expf' if float32 else 'exp'}\n"
+    limit, limit_input = "", ""
+    if g["clip"] > 0:
+        limit = ("/* the first observer's ay limited to RB_CLIP standard deviations of its input's noise\n"
+                 " * (kernels.gated.limited_ay): gravity (m/s^2), Q_ay ((m/s^2)^2 s), R ((rad/s)^2 s) */\n"
+                 f"#define RB_SQRT {'sqrtf' if float32 else 'sqrt'}\n"
+                 f"#define RB_CLIP ({lit(g['clip'])})\n#define RB_CLIP_G ({lit(g['grav'])})\n"
+                 f"#define RB_CLIP_Q ({lit(g['qay'])})\n"
+                 f"#define RB_CLIP_R ({lit(g['rr'])})\n")
+        limit_input = ("    u[0] = ay;   /* the first observer reads its ay in the steering's slot */\n"
+                       "    if (!restart) {\n"
+                       "        const real_t e = ay - (RB_CLIP_G * st->x[0] + vx * r);\n"
+                       "        const real_t s = RB_CLIP * RB_SQRT((RB_CLIP_Q + vx * vx * RB_CLIP_R) / dt);\n"
+                       "        real_t ec = e < s ? e : s;\n"
+                       "        ec = ec > -s ? ec : -s;\n"
+                       "        u[0] = ay - (e - ec);\n"
+                       "    }\n")
+    consts = limit + (f"#define RB_EXP {'expf' if float32 else 'exp'}\n"
               "/* gate between the two observers (the second's w = RB_GATE_HF . x): yaw rate low-pass (s),\n"
               " * release (s), yaw jerk vx |r'| where it starts to open and over which it opens (m/s^3) */\n"
               f"static const real_t RB_GATE_HF[RB_N] = {{{_array(g['HF'], float32, 8, '')}}};\n"
@@ -708,7 +724,8 @@ def _gate_parts(d: ExportDesign, float32: bool) -> dict:
             "        }\n"
             "        w = w + st->g * (wf - w);\n"
             "    }\n")
-    return {"gate_consts": consts, "gate_call": call, "init_gate": "    s->rf = 0.0_R;\n    s->g = 0.0_R;\n"}
+    return {"gate_consts": consts, "gate_call": call, "init_gate": "    s->rf = 0.0_R;\n    s->g = 0.0_R;\n",
+            "gate_input": limit_input}
 
 
 def _provenance(d: ExportDesign) -> str:

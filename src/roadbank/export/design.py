@@ -21,6 +21,9 @@ from ..estimators.base import Estimator
 from ..estimators.layout import DT_REL_TOL, gated_block, lpv_row
 
 #: why an estimator on another kernel cannot be exported (kernel -> reason)
+#: the constants of a gated module (:attr:`ExportDesign.gate`), in the fingerprint's order
+GATE_KEYS = ("HF", "tf", "tau", "on", "span", "clip", "grav", "qay", "rr")
+
 _NOT_LPV_REASON = {
     "dfc": "DFC gates its estimate by a nonlinear function of the dynamic-factor indicator "
            "(|DFC| / a_ref): it is not a speed-scheduled linear observer",
@@ -92,7 +95,9 @@ class ExportDesign:
     #: relative tolerance on the interval for the fixed-rate tables
     dt_tol: float = 0.0
     #: ``pif-gated``: the second observer's output row ``HF`` (n,) and the gate's ``tf``, ``tau`` (s),
-    #: ``on``, ``span`` (m/s^3) (:func:`roadbank.estimators.kernels.gated_step`); None for one observer
+    #: ``on``, ``span`` (m/s^3) (:func:`roadbank.estimators.kernels.gated_step`), and the limit of the first
+    #: observer's ``ay`` (``clip`` -, 0: none; ``grav`` m/s^2, ``qay`` (m/s^2)^2 s, ``rr`` (rad/s)^2 s:
+    #: :func:`roadbank.estimators.kernels.gated.limited_ay`); None for one observer
     gate: dict | None = None
 
     @property
@@ -145,7 +150,7 @@ class ExportDesign:
                     [np.asarray(self.discrete[k], float) for k in ("Phi", "Gam0", "Gam1", "Phi_r", "Gam0_r",
                                                                    "Gam1_r", "dt")]),
                   *([] if self.gate is None else
-                    [np.asarray(self.gate[k], float) for k in ("HF", "tf", "tau", "on", "span")])):
+                    [np.asarray(self.gate[k], float) for k in GATE_KEYS])):
             h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
         return h.hexdigest()[:16]
 
@@ -257,4 +262,5 @@ def _gate(est, n: int, nr: int) -> dict | None:
     b = gated_block(n, nr)
     cfg = est._cfg
     return {"HF": np.array(cfg[b.HF:b.TF], float), "tf": float(cfg[b.TF]), "tau": float(cfg[b.TAU]),
-            "on": float(cfg[b.ON]), "span": float(cfg[b.SPAN])}
+            "on": float(cfg[b.ON]), "span": float(cfg[b.SPAN]), "clip": float(cfg[b.CLIP]),
+            "grav": float(cfg[b.GRAV]), "qay": float(cfg[b.QAY]), "rr": float(cfg[b.RR])}

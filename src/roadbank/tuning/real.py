@@ -140,8 +140,13 @@ QUIET_MEASURES = ("mean", "floor")
 #: the ninth stage's tie-break: the paper's scenarios (:data:`roadbank.sim.SCENARIOS`) of every car of
 #: :data:`SIM_CARS` at these noise seeds, nominal conditions
 PAPER_SEEDS = (0, 1, 2)
+#: candidate limits of ``kinematic-pif``'s low-pass update (-, standard deviations of its input's white noise;
+#: :func:`roadbank.estimators.kernels.gated.limited_ay`), the tenth stage's; 0: linear (the stages before), first
+CLIPS = (0.0, 6.0, 4.0, 3.0, 2.5, 2.0, 1.5)
+#: the stages before the tenth ran with the linear low-pass
+_LINEAR = {"clip": 0.0}
 #: the stages before the eighth designed a car not described for the static car
-_STATIC_CAR = {"car_margin": math.inf}
+_STATIC_CAR = {"car_margin": math.inf, **_LINEAR}
 #: the stages before the sixth ran without the sampled-data lead
 _NO_LEAD = {"lead_samples": 0.0, **_STATIC_CAR}
 
@@ -269,9 +274,10 @@ def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kap
     that order, with the shipped constants of the first three; ``stage`` 5: every lowest speed of
     :data:`V_MINS`, highest first; ``stage`` 6: every sampled-data lead of :data:`LEADS_SAMPLES`, in
     that order (the continuous-time filter first); ``stage`` 8: every car margin of :data:`CAR_MARGINS`
-    (the static car first: :func:`roadbank.vehicle.design_car`). Stages 1-5 ran before the sixth existed:
+    (the static car first: :func:`roadbank.vehicle.design_car`); ``stage`` 10: every limit of the low-pass's
+    update of :data:`CLIPS` (the linear low-pass first). Stages 1-5 ran before the sixth existed:
     their candidates have no lead (``lead_samples=0``); stages 1-7 before the eighth: a car not described
-    is the static one (``car_margin=inf``). Every stage scores the real drives with
+    is the static one (``car_margin=inf``); stages 1-9 before the tenth: the low-pass is linear (``clip=0``). Every stage scores the real drives with
     :data:`~roadbank.validation.kitti.KITTI_SCORING` (:func:`training_logs`' default).
     """
     if stage == 1:
@@ -287,10 +293,12 @@ def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kap
     if stage == 6:
         return {n: per_log("kinematic-pif", lead_samples=n, **_STATIC_CAR) for n in LEADS_SAMPLES}
     if stage == 8:
-        return {m: per_log("kinematic-pif", car_margin=m) for m in CAR_MARGINS}
+        return {m: per_log("kinematic-pif", car_margin=m, **_LINEAR) for m in CAR_MARGINS}
+    if stage == 10:
+        return {c: per_log("kinematic-pif", clip=c) for c in CLIPS}
     if stage != 2 or bank_rate_deg is None or kappa is None:
-        raise ValueError("kinematic_pif_candidates: stage 1, 3, 4, 5, 6 or 8, or stage 2 with the first stage's "
-                         "bank rate and kappa")
+        raise ValueError("kinematic_pif_candidates: stage 1, 3, 4, 5, 6, 8 or 10, or stage 2 with the first "
+                         "stage's bank rate and kappa")
     return {(on, sp, rel): per_log("kinematic-pif", bank_rate=float(np.radians(bank_rate_deg)), kappa=kappa,
                                    gate_on=on, gate_span=sp, gate_release=rel, **_NO_LEAD)
             for on in GATE_GRID["gate_on"] for sp in GATE_GRID["gate_span"] for rel in GATE_GRID["gate_release"]}
@@ -304,7 +312,7 @@ def _quiet_by(measure: str):
             cond = {**cond, "log_ay_floor": None}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
-            return vehicle.for_conditions("kinematic-pif", cond, vehicle.undescribed_params(signals))
+            return vehicle.for_conditions("kinematic-pif", cond, vehicle.undescribed_params(signals), **_LINEAR)
     return build
 
 

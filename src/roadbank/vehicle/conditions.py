@@ -42,7 +42,7 @@ QUIET_MODELS = {"kinematic-pif": QUIET_FILTER, "kinematic-smoother": "pif-smooth
 #: the options of ``kinematic-pif`` that set its gate: given one, the caller's gate is kept
 _GATE_OPTIONS = ("gate_on", "gate_span", "gate_tf", "gate_release")
 #: ``kinematic-pif``'s options of its low-pass and gate, which its quiet filter does not take
-_BLEND_OPTIONS = ("cutoff", "kappa", "bank_rate", "lead") + _GATE_OPTIONS
+_BLEND_OPTIONS = ("cutoff", "kappa", "bank_rate", "lead", "clip") + _GATE_OPTIONS
 
 
 def design_span(signals, v_min: float = 5.0) -> int:

@@ -14,6 +14,33 @@ from .sample import output, sample_valid, store
 
 
 @njit(inline="always", **HELPER)
+def limited_ay(mem, cfg, t, vx, ay, r):
+    r"""The ``ay`` (m/s^2) the first observer reads when its update is limited (``cfg[CLIP] > 0``;
+    :class:`roadbank.estimators.gated.KinematicPIF`'s low-pass): ``ay`` less what the kinematic
+    estimate's innovation exceeds ``CLIP`` standard deviations of its white noise by.
+
+    The first state :math:`x` (``mem[M_X]``) is the kinematic estimate :math:`(a_y - v_x r)/g`
+    low-passed (the split low-pass, :mod:`roadbank.estimators.lowpass`), its prediction; the
+    innovation in ``ay`` units is :math:`e = a_y - (g x + v_x r)`, its limit
+    :math:`s = c \sqrt{(Q_{ay} + v_x^2 R) / \Delta t}` (the noise the cut-off is designed for, sampled
+    at the interval :math:`\Delta t`), and the result :math:`a_y - (e - \mathrm{clip}(e, -s, s))`: a
+    Huber-type update, linear within ``s``. At a (re)start, or with the limit off, ``ay`` itself.
+    NaN in, NaN out.
+    """
+    n = np.int64(cfg[C_N])
+    gb = gated_block(n, np.int64(cfg[C_NR]))
+    c = cfg[gb.CLIP]
+    dt = t - mem[M_TLAST]
+    if not (c > 0.0) or mem[M_INIT] == 0.0 or not (dt > 0.0) or dt > cfg[C_GAP]:
+        return ay
+    e = ay - (cfg[gb.GRAV] * mem[M_X] + vx * r)
+    s = c * math.sqrt((cfg[gb.QAY] + vx * vx * cfg[gb.RR]) / dt)
+    ec = e if e < s else s
+    ec = ec if ec > -s else -s
+    return ay - (e - ec)
+
+
+@njit(inline="always", **HELPER)
 def gated_sample(mem, cfg, tab, work, t, vx, d, ay, r):
     r"""One sample of two stacked observers whose outputs are blended by a gate; returns
     ``(w, theta, phi_b, valid)``. Inlined into :func:`gated_run`, the family's one compiled function
@@ -32,8 +59,12 @@ def gated_sample(mem, cfg, tab, work, t, vx, d, ay, r):
     :math:`g \leftarrow g_k` if :math:`g_k > g`, else :math:`g \mathrel{+}= (1 -
     e^{-\Delta t/\tau})(g_k - g)`. At a (re)start ``r_f = r``, ``g = 0``. Output
     :math:`w = w_s + g (w_f - w_s)`, :math:`\theta = \arcsin w`, :math:`\phi_b = \theta - \phi`.
-    ``r_f`` and ``g`` in ``mem`` (:func:`~roadbank.estimators.layout.gate_states`).
+    ``r_f`` and ``g`` in ``mem`` (:func:`~roadbank.estimators.layout.gate_states`). With a limit
+    (``kinematic-pif``'s low-pass) the first observer reads :func:`limited_ay` in the steering's input
+    slot, which neither observer of that pair reads otherwise; the second reads ``ay``.
     """
+    if cfg[gated_block(np.int64(cfg[C_N]), np.int64(cfg[C_NR])).CLIP] > 0.0:
+        d = limited_ay(mem, cfg, t, vx, ay, r)      # the first observer's ay, in the steering's slot
     if not sample_valid(mem, cfg, t, vx, d, ay, r):
         return mem[M_W], mem[M_THETA], mem[M_PHIB], False
     restart = mem[M_INIT] == 0.0 or (t - mem[M_TLAST]) > cfg[C_GAP]
