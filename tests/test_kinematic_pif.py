@@ -18,7 +18,6 @@ DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 #: the rule's stages before the sixth ran without the sampled-data lead
 NO_LEAD = {"lead_samples": 0.0, "car_margin": float("inf"), "clip": 0.0}   # stages 1-5: no lead, the static car
 STATIC_CAR = {"car_margin": float("inf"), "clip": 0.0}                       # stages 1-7: the static car
-LINEAR = {"clip": 0.0}                                                       # stages 1-9: the linear low-pass
 
 
 @pytest.fixture(scope="module")
@@ -189,7 +188,7 @@ def test_the_shipped_gate_and_the_default_are_what_the_rule_picks():
     logs, sims = training_logs(DATA), simulated_sets()
     g = dict(KINEMATIC_PIF_GATE)
     # the second stage ran before the third (the gate held open on quiet logs): quiet_ratio=0
-    builds = {"kinematic-ff": per_log("kinematic-ff", **STATIC_CAR),
+    builds = {"kinematic-ff": per_log("kinematic-ff", car_margin=float("inf")),
               "shipped": per_log("kinematic-pif", **NO_LEAD, quiet_ratio=0.0)}
     for key in ("gate_on", "gate_span", "gate_release"):
         values = GATE_GRID[key]
