@@ -10,7 +10,7 @@ from numba import njit
 from ..layout import C_GAP, C_N, C_NR, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, gate_states, gated_block
 from ._jit import ENTRY, HELPER
 from .lpv import lpv_step
-from .sample import output, sample_valid, store
+from .sample import output, sample_valid, step_by_run, store
 
 
 @njit(inline="always", **HELPER)
@@ -106,12 +106,5 @@ def gated_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, 
 
 
 def gated_step(mem, cfg, tab, work, t, vx, d, ay, r):
-    """One sample of :func:`gated_run`; returns ``(w, theta, phi_b, valid)`` (Python: one-sample arrays)."""
-    n = np.int64(cfg[C_N])
-    inp = np.array([t, vx, d, ay, r], dtype=np.float64)
-    inp.flags.writeable = False        # as Signals' arrays: the same compiled version as run()
-    out = np.empty((4, 1))
-    valid = np.empty(1, dtype=np.bool_)
-    gated_run(mem, cfg, tab, work, inp[0:1], inp[1:2], inp[2:3], inp[3:4], inp[4:5], out[0], out[1], out[2],
-              out[3], valid, np.empty((1, max(n, 2))))
-    return float(out[0, 0]), float(out[1, 0]), float(out[2, 0]), bool(valid[0])
+    """One sample of :func:`gated_run`; returns ``(w, theta, phi_b, valid)`` (Python: :func:`step_by_run`)."""
+    return step_by_run(gated_run, mem, cfg, tab, work, t, vx, d, ay, r)

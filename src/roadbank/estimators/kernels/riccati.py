@@ -11,7 +11,7 @@ from ..layout import (C_N, C_NR, C_P, C_SUB, C_USE, M_ETA, M_X, NETA, riccati_bl
                       riccati_work)
 from ._jit import ENTRY
 from .linalg import lu_factor, lu_solve, tustin
-from .sample import begin, finish, grid, sample_valid, store
+from .sample import begin, finish, grid, sample_valid, step_by_run, store
 
 
 @njit(**ENTRY)
@@ -165,12 +165,5 @@ def riccati_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib
 
 
 def riccati_step(mem, cfg, tab, work, t, vx, d, ay, r):
-    """One sample of :func:`riccati_run`; returns ``(w, theta, phi_b, valid)`` (Python: one-sample arrays)."""
-    n = np.int64(cfg[C_N])
-    inp = np.array([t, vx, d, ay, r], dtype=np.float64)
-    inp.flags.writeable = False        # as Signals' arrays: the same compiled version as run()
-    out = np.empty((4, 1))
-    valid = np.empty(1, dtype=np.bool_)
-    riccati_run(mem, cfg, tab, work, inp[0:1], inp[1:2], inp[2:3], inp[3:4], inp[4:5], out[0], out[1], out[2],
-                out[3], valid, np.empty((1, max(n, 2))))
-    return float(out[0, 0]), float(out[1, 0]), float(out[2, 0]), bool(valid[0])
+    """One sample of :func:`riccati_run`; returns ``(w, theta, phi_b, valid)`` (Python: :func:`step_by_run`)."""
+    return step_by_run(riccati_run, mem, cfg, tab, work, t, vx, d, ay, r)

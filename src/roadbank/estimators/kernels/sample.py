@@ -242,3 +242,17 @@ def store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x):
     out_phi[k] = mem[M_PHI]
     for p in range(n):
         out_x[k, p] = mem[M_X + p]
+
+
+def step_by_run(run, mem, cfg, tab, work, t, vx, d, ay, r):
+    """One sample through a family's batch kernel ``run`` (one-sample arrays, read-only inputs as
+    ``Signals``' arrays are, so that the compiled version is the one ``run()`` uses); returns
+    ``(w, theta, phi_b, valid)``. The ``step`` of the families compiled as one function (Python)."""
+    n = np.int64(cfg[C_N])
+    inp = np.array([t, vx, d, ay, r], dtype=np.float64)
+    inp.flags.writeable = False
+    out = np.empty((4, 1))
+    valid = np.empty(1, dtype=np.bool_)
+    run(mem, cfg, tab, work, inp[0:1], inp[1:2], inp[2:3], inp[3:4], inp[4:5], out[0], out[1], out[2], out[3], valid,
+        np.empty((1, max(n, 2))))
+    return float(out[0, 0]), float(out[1, 0]), float(out[2, 0]), bool(valid[0])
