@@ -214,7 +214,8 @@ def test_what_export_c_gives_by_default_for_a_car(car, scenarios, built_modules)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name,roll", [("pif-modified", "dynamic"), ("uio", "static"), ("kinematic", "dynamic")])
+@pytest.mark.parametrize("name,roll", [("pif-modified", "dynamic"), ("uio", "static"), ("kinematic", "dynamic"),
+                                       ("kinematic-pif", "dynamic")])
 def test_fixed_rate_tables_follow_the_kernels_fixed_rate_path(name, roll, scenarios, tmp_path):
     """``discrete=True`` adds the kernels' fixed-rate tables (Estimator.discrete_tables): the module
     then equals step() with that sample rate set; an estimator fixed at another rate is refused."""
