@@ -88,6 +88,9 @@ class _GatedPair(ScheduledObserver):
     gate_release: float
     gate_on: float
     gate_span: float
+    #: the slow filter's ``ay`` limited to this many standard deviations of its input's noise (-; 0: not
+    #: limited): :func:`roadbank.estimators.kernels.gated.limited_ay`; set by :class:`KinematicPIF`
+    clip: float = 0.0
     if TYPE_CHECKING:
         @property
         def design(self) -> GatedDesign: ...     # an instance of design_type
@@ -106,10 +109,6 @@ class _GatedPair(ScheduledObserver):
     def fast(self) -> PIF:
         """The PIF the output moves to while the gate is open."""
         return self._fast
-
-    #: the slow filter's ``ay`` limited to this many standard deviations of its input's noise (-; 0: not
-    #: limited): :func:`roadbank.estimators.kernels.gated.limited_ay`; set by :class:`KinematicPIF`
-    clip = 0.0
 
     def observer(self, vx: float):
         """``(F, G, H, D)`` of the stacked observer at ``vx`` (m/s): block-diagonal ``F``, stacked

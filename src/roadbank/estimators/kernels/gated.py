@@ -17,24 +17,22 @@ from .sample import output, sample_valid, step_by_run, store
 def limited_ay(mem, cfg, t, vx, ay, r):
     r"""The ``ay`` (m/s^2) the first observer reads when its update is limited (``cfg[CLIP] > 0``;
     :class:`roadbank.estimators.gated.KinematicPIF`'s low-pass): ``ay`` less what the kinematic
-    estimate's innovation exceeds ``CLIP`` standard deviations of its white noise by.
+    estimate's innovation exceeds ``CLIP`` (> 0; the caller checks) standard deviations of its white noise by.
 
     The first state :math:`x` (``mem[M_X]``) is the kinematic estimate :math:`(a_y - v_x r)/g`
     low-passed (the split low-pass, :mod:`roadbank.estimators.lowpass`), its prediction; the
     innovation in ``ay`` units is :math:`e = a_y - (g x + v_x r)`, its limit
     :math:`s = c \sqrt{(Q_{ay} + v_x^2 R) / \Delta t}` (the noise the cut-off is designed for, sampled
     at the interval :math:`\Delta t`), and the result :math:`a_y - (e - \mathrm{clip}(e, -s, s))`: a
-    Huber-type update, linear within ``s``. At a (re)start, or with the limit off, ``ay`` itself.
-    NaN in, NaN out.
+    Huber-type update, linear within ``s``. At a (re)start ``ay`` itself. NaN in, NaN out.
     """
     n = np.int64(cfg[C_N])
     gb = gated_block(n, np.int64(cfg[C_NR]))
-    c = cfg[gb.CLIP]
     dt = t - mem[M_TLAST]
-    if not (c > 0.0) or mem[M_INIT] == 0.0 or not (dt > 0.0) or dt > cfg[C_GAP]:
+    if mem[M_INIT] == 0.0 or not (dt > 0.0) or dt > cfg[C_GAP]:
         return ay
     e = ay - (cfg[gb.GRAV] * mem[M_X] + vx * r)
-    s = c * math.sqrt((cfg[gb.QAY] + vx * vx * cfg[gb.RR]) / dt)
+    s = cfg[gb.CLIP] * math.sqrt((cfg[gb.QAY] + vx * vx * cfg[gb.RR]) / dt)
     ec = e if e < s else s
     ec = ec if ec > -s else -s
     return ay - (e - ec)
