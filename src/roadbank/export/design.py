@@ -20,10 +20,10 @@ import numpy as np
 from ..estimators.base import Estimator
 from ..estimators.layout import DT_REL_TOL, gated_block, lpv_row
 
-#: why an estimator on another kernel cannot be exported (kernel -> reason)
 #: the constants of a gated module (:attr:`ExportDesign.gate`), in the fingerprint's order
 GATE_KEYS = ("HF", "tf", "tau", "on", "span", "clip", "grav", "qay", "rr")
 
+#: why an estimator on another kernel cannot be exported (kernel -> reason)
 _NOT_LPV_REASON = {
     "dfc": "DFC gates its estimate by a nonlinear function of the dynamic-factor indicator "
            "(|DFC| / a_ref): it is not a speed-scheduled linear observer",

@@ -103,7 +103,7 @@ def _gate_text(d: ExportDesign) -> str:
             f"{g['tf']:g} s): 0 below {g['on']:g} m/s^3, 1 above {g['on'] + g['span']:g} m/s^3, rising at once and\n"
             f"falling back with a {g['tau']:g} s release (state members `rf`, `g`).\n"
             + ("" if not g["clip"] > 0 else
-               f"The first filter (the low-pass) reads `ay` in the steering's input slot, limited: its innovation\n"
-               f"`e = ay - (g x[0] + vx r)` (`x[0]` the kinematic estimate low-passed) is clipped to `+-{g['clip']:g} sqrt((Q_ay + vx^2 R) / dt)`\n"
-               f"(`RB_CLIP`, a Huber-type update: a pothole's spike moves it by at most that much); the second reads\n"
-               f"`ay` as it is.\n"))
+               "The first filter (the low-pass) reads `ay` in the steering's input slot, limited: its innovation\n"
+               "`e = ay - (g x[0] + vx r)` (`x[0]` the kinematic estimate low-passed) is clipped to\n"
+               f"`+-{g['clip']:g} sqrt((Q_ay + vx^2 R) / dt)` (`RB_CLIP`, a Huber-type update: a pothole's\n"
+               "spike moves it by at most that much); the second reads `ay` as it is.\n"))
