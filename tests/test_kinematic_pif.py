@@ -136,6 +136,11 @@ def test_the_limit_is_refused_when_negative_and_off_at_zero():
         E.make("kinematic-pif", clip=-1.0)
     assert E.make("kinematic-pif").clip == KINEMATIC_PIF_CLIP == 3.0
     assert E.make("kinematic-pif", clip=0.0)._cfg[E.layout.C_USE] == 0.0
+    # an accelerometer without noise (Q_ay = 0) gives nothing to limit against: the linear low-pass, not a frozen one
+    s, _ = _shaken(sigma=0.0)
+    noiseless = E.make("kinematic-pif", Q_ay=0.0)
+    assert noiseless.clip == 0.0
+    np.testing.assert_array_equal(noiseless.run(s).w, E.make("kinematic-pif", Q_ay=0.0, clip=0.0).run(s).w)
 
 
 def test_the_output_blends_by_the_documented_gate():

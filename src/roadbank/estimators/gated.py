@@ -280,7 +280,8 @@ class KinematicPIF(_GatedPair):
         reads ``ay`` less what its innovation exceeds ``clip`` standard deviations of the white noise
         :math:`(Q_{ay} + v_x^2 R)/\Delta t` by (:func:`roadbank.estimators.kernels.gated.limited_ay`), a
         Huber-type update: heavy-tailed road vibration (a pothole, a kerb) moves it by at most that much
-        per sample, a bank or a turn that lasts passes as before. The PIF reads ``ay`` as it is.
+        per sample, a bank or a turn that lasts passes as before. The PIF reads ``ay`` as it is. With
+        ``Q_ay = 0`` (no ``ay`` noise to measure against) the low-pass is linear.
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator` (both filters).
     """
@@ -315,6 +316,8 @@ class KinematicPIF(_GatedPair):
         self.lead = self._slow.lead
         self.Q, self.th, self.R, self.S, self.Q_ay = (self._fast.Q, self._fast.th, self._fast.R, self._fast.S,
                                                       self._fast.Q_ay)
+        if not self.Q_ay > 0:
+            self.clip = 0.0         # no ay noise to measure the innovation against: the linear low-pass
         for k, v in opt.items():
             setattr(self, k, v)
         super().__init__(params, **kw)
