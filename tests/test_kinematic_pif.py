@@ -92,7 +92,7 @@ def _shaken(seed=0, n=3000, sigma=0.3, spikes=()):
 
 def test_the_limit_is_the_documented_huber_update():
     """With ``clip`` the low-pass reads ay less what the kinematic estimate's innovation exceeds clip
-    standard deviations of its designed noise by (kernels.gated.limited_ay), written out here from the
+    standard deviations of its designed noise by (kernels.sample.limited_ay), written out here from the
     blend's own states: the linear blend (clip 0) run on that ay gives the same estimate to 1e-12."""
     s, _ = _shaken(spikes=((1500, 8.0), (2200, -6.0)))
     est = E.make("kinematic-pif", gate_on=1e9, clip=3.0, Q_ay=0.3 ** 2 / 100.0)

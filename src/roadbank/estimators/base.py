@@ -341,6 +341,9 @@ class Estimator:
         head[L.C_DTFIX] = self.fixed_dt or 0.0
         head[L.C_DTOL] = L.DT_REL_TOL
         head[L.C_OFAM] = L.roll_block(nr).end
+        if self.limited:        # the limit's constants end the design's extra; its ay in the steering's slot
+            head[L.C_LIM] = L.roll_block(nr).end + len(self._extra) - L.NLIM
+            head[L.C_USE] = 1.0
         self._fill_cfg_head(head)
         roll = np.concatenate([F.ravel(), G.ravel(), H.ravel(), D.ravel(), J]
                               + [np.ravel(m) for m in roll_discrete])
@@ -455,6 +458,16 @@ class Estimator:
 
     def _fill_cfg_head(self, head: np.ndarray) -> None:
         """Hook for estimator scalars stored in the cfg head (e.g. DFC a_ref)."""
+
+    #: whether a kinematic low-pass's update is limited (:class:`~roadbank.estimators.lowpass.KinematicLowPass`):
+    #: then the design's extra ends with :meth:`limit_constants` and the kernel reads the limited ``ay`` in
+    #: the steering's slot (:func:`roadbank.estimators.kernels.sample.limited_ay`)
+    limited = False
+
+    def limit_constants(self) -> list[float]:
+        """The :class:`~roadbank.estimators.layout.LimitBlock` ``[clip, g, Q_ay, R]`` of a limited
+        estimator (-, m/s^2, (m/s^2)^2 s, (rad/s)^2 s); empty otherwise."""
+        return []
 
     # -- public API ----------------------------------------------------------
     def reset(self) -> None:

@@ -58,9 +58,8 @@ _COMMON = ("v_min", "max_substep", "max_gap", "max_angle", "v_step", "v_max", "r
 
 @dataclass(frozen=True)
 class GatedDesign(DesignInputs):
-    """Design inputs of a gated pair: the two filters' design inputs (``slow``, ``fast``), the
-    gate's ``gate_tf``, ``gate_release`` (s), ``gate_on``, ``gate_span`` (m/s^3), and the limit of the
-    slow filter's ``ay`` ``clip`` (-, standard deviations of its input's noise; 0: none)."""
+    """Design inputs of a gated pair: the two filters' design inputs (``slow``, ``fast``) and the
+    gate's ``gate_tf``, ``gate_release`` (s), ``gate_on``, ``gate_span`` (m/s^3)."""
 
     slow: DesignInputs
     fast: DesignInputs
@@ -68,7 +67,6 @@ class GatedDesign(DesignInputs):
     gate_release: float
     gate_on: float
     gate_span: float
-    clip: float = 0.0
 
 
 class _GatedPair(ScheduledObserver):
@@ -88,17 +86,13 @@ class _GatedPair(ScheduledObserver):
     gate_release: float
     gate_on: float
     gate_span: float
-    #: the slow filter's ``ay`` limited to this many standard deviations of its input's noise (-; 0: not
-    #: limited): :func:`roadbank.estimators.kernels.gated.limited_ay`; set by :class:`KinematicPIF`
-    clip: float = 0.0
     if TYPE_CHECKING:
         @property
         def design(self) -> GatedDesign: ...     # an instance of design_type
 
     def _design_fields(self) -> dict:
         return dict(slow=self._slow.design, fast=self._fast.design, gate_tf=self.gate_tf,
-                    gate_release=self.gate_release, gate_on=self.gate_on, gate_span=self.gate_span,
-                    clip=self.clip)
+                    gate_release=self.gate_release, gate_on=self.gate_on, gate_span=self.gate_span)
 
     @property
     def slow(self) -> ScheduledObserver:
@@ -110,21 +104,18 @@ class _GatedPair(ScheduledObserver):
         """The PIF the output moves to while the gate is open."""
         return self._fast
 
+    @property
+    def limited(self) -> bool:           # type: ignore[override]
+        """Whether the slow filter's update is limited (a limited low-pass, ``kinematic-pif``'s)."""
+        return self._slow.limited
+
+    def limit_constants(self) -> list[float]:
+        return self._slow.limit_constants()
+
     def observer(self, vx: float):
         """``(F, G, H, D)`` of the stacked observer at ``vx`` (m/s): block-diagonal ``F``, stacked
-        ``G``; ``H``, ``D`` give the slow filter's ``w`` (the fast one's is :meth:`fast_output`). With a
-        limit (:attr:`clip`) the slow filter reads its ``ay`` from the first input slot."""
-        return _stack(self._slow.observer(vx), self._fast.observer(vx), self.clip > 0)
-
-    def _limit_constants(self) -> list[float]:
-        """``[clip, g, Q_ay, R]`` of :func:`~roadbank.estimators.kernels.gated.limited_ay`
-        (:class:`roadbank.estimators.layout.GatedBlock`); zeros without a limit."""
-        return [0.0] * 4
-
-    def _fill_cfg_head(self, head):
-        super()._fill_cfg_head(head)
-        if self.clip > 0:
-            head[layout.C_USE] = 1.0        # the slow filter's limited ay, in the steering's slot
+        ``G``; ``H``, ``D`` give the slow filter's ``w`` (the fast one's is :meth:`fast_output`)."""
+        return _stack(self._slow.observer(vx), self._fast.observer(vx))
 
     def fast_output(self) -> np.ndarray:
         """``H_f`` (n,): the fast filter's ``w`` from the stacked states (constant)."""
@@ -147,12 +138,11 @@ class _GatedPair(ScheduledObserver):
                 mats.append((r[row.F:row.G].reshape(n, n), r[row.G:row.H].reshape(n, layout.NETA),
                              r[row.H:row.D].reshape(1, n), r[row.D:row.J].reshape(1, layout.NETA),
                              r[row.J:row.cont].reshape(n, layout.NETA)))
-            F, G, H, D = _stack(mats[0][:4], mats[1][:4], self.clip > 0)
-            Js = _ay_slot(mats[0][4]) if self.clip > 0 else mats[0][4]
-            J = np.vstack([Js, mats[1][4]])
+            F, G, H, D = _stack(mats[0][:4], mats[1][:4])
+            J = np.vstack([mats[0][4], mats[1][4]])
             rows.append(np.concatenate([F.ravel(), G.ravel(), H.ravel(), D.ravel(), J.ravel()]))
         extra = np.concatenate([self.fast_output(), [d.gate_tf, d.gate_release, d.gate_on, d.gate_span],
-                                self._limit_constants()])
+                                self.limit_constants()])
         return np.ascontiguousarray(np.array(rows)), len(self.state_names), extra
 
 
@@ -278,7 +268,7 @@ class KinematicPIF(_GatedPair):
     clip : float, optional
         The low-pass's update limit (-, >= 0; default :data:`KINEMATIC_PIF_CLIP`; 0: linear): the low-pass
         reads ``ay`` less what its innovation exceeds ``clip`` standard deviations of the white noise
-        :math:`(Q_{ay} + v_x^2 R)/\Delta t` by (:func:`roadbank.estimators.kernels.gated.limited_ay`), a
+        :math:`(Q_{ay} + v_x^2 R)/\Delta t` by (:func:`roadbank.estimators.kernels.sample.limited_ay`), a
         Huber-type update: heavy-tailed road vibration (a pothole, a kerb) moves it by at most that much
         per sample, a bank or a turn that lasts passes as before. The PIF reads ``ay`` as it is. With
         ``Q_ay = 0`` (no ``ay`` noise to measure against) the low-pass is linear.
@@ -294,8 +284,7 @@ class KinematicPIF(_GatedPair):
                  S=None, th=None, Q_ay=None, adapt_th=None, gate_tf=None, gate_release=None, gate_on=None,
                  gate_span=None, clip=None, **kw):
         d = KINEMATIC_PIF_GATE
-        self.clip = float(KINEMATIC_PIF_CLIP if clip is None else clip)
-        if not (np.isfinite(self.clip) and self.clip >= 0):
+        if clip is not None and not (np.isfinite(clip) and clip >= 0):
             raise ValueError(f"{self.name}: clip must be >= 0 (standard deviations), got {clip}")
         opt = {k: float(d[k] if v is None else v) for k, v in (
             ("gate_tf", gate_tf), ("gate_release", gate_release), ("gate_on", gate_on), ("gate_span", gate_span))}
@@ -306,43 +295,26 @@ class KinematicPIF(_GatedPair):
                          adapt_th=adapt_th, sample_rate=None, **common)
         common.setdefault("roll", self._fast.roll)
         kw["roll"] = common["roll"]
-        noise = {} if cutoff is not None else dict(
-            bank_rate=KINEMATIC_PIF_BANK_RATE if bank_rate is None else bank_rate, Q_ay=self._fast.Q_ay,
-            R=float(self._fast.R[-1, -1]))
+        # the low-pass's noise: the PIF's densities schedule its cut-off (unless one is given) and set its limit
+        noise = dict(Q_ay=self._fast.Q_ay, R=float(self._fast.R[-1, -1]))
+        if cutoff is None:
+            noise["bank_rate"] = KINEMATIC_PIF_BANK_RATE if bank_rate is None else bank_rate
         self._slow = KinematicFeedForward(params, cutoff=cutoff, kappa=KINEMATIC_PIF_KAPPA if kappa is None else kappa,
                                           lead=KINEMATIC_PIF_LEAD_SAMPLES / ESP_RATE if lead is None else lead,
-                                          split=True, sample_rate=None, **noise, **common)
+                                          split=True, clip=KINEMATIC_PIF_CLIP if clip is None else clip,
+                                          sample_rate=None, **noise, **common)
         self.cutoff, self.kappa, self.bank_rate = self._slow.cutoff, self._slow.kappa, self._slow.bank_rate
-        self.lead = self._slow.lead
+        self.lead, self.clip = self._slow.lead, self._slow.clip
         self.Q, self.th, self.R, self.S, self.Q_ay = (self._fast.Q, self._fast.th, self._fast.R, self._fast.S,
                                                       self._fast.Q_ay)
-        if not self.Q_ay > 0:
-            self.clip = 0.0         # no ay noise to measure the innovation against: the linear low-pass
         for k, v in opt.items():
             setattr(self, k, v)
         super().__init__(params, **kw)
 
-    def _limit_constants(self) -> list[float]:
-        if self.clip <= 0:
-            return super()._limit_constants()
-        return [self.clip, float(self.params.g), float(self.Q_ay), float(self._fast.R[-1, -1])]
 
-
-def _ay_slot(M):
-    """``M`` (rows over the inputs ``[delta_f, ay, r]``) with its ``ay`` column moved to the first slot."""
-    M = np.array(M, dtype=float, copy=True)
-    M[..., 0], M[..., 1] = M[..., 1], 0.0
-    return M
-
-
-def _stack(slow, fast, slow_ay_first=False):
-    """Block-diagonal ``F``, stacked ``G``, the slow filter's ``H`` (zero on the fast states) and ``D``;
-    ``slow_ay_first``: the slow filter reads its ``ay`` from the first input slot (it reads no steering)."""
+def _stack(slow, fast):
+    """Block-diagonal ``F``, stacked ``G``, the slow filter's ``H`` (zero on the fast states) and ``D``."""
     Fs, Gs, Hs, Ds = slow
-    if slow_ay_first:
-        if np.any(np.asarray(Gs)[..., 0]) or np.any(np.asarray(Ds)[..., 0]):
-            raise ValueError("a slow filter that reads the steering angle cannot have its ay limited")
-        Gs, Ds = _ay_slot(Gs), _ay_slot(Ds)
     Ff, Gf, _, _ = fast
     ns, nf = Fs.shape[0], Ff.shape[0]
     F = np.zeros((ns + nf, ns + nf))

@@ -94,7 +94,8 @@ C_WMAX = 15     # sin(max_angle): a larger |w| is flagged implausible
 C_DTFIX = 16    # sample interval of the fixed-rate path (s); 0: no fixed-rate tables
 C_DTOL = 17     # relative tolerance on the interval for the fixed-rate path (-)
 C_OFAM = 18     # offset of the family-specific constants (after the roll blocks)
-C_ROLL = 19     # start of the roll block
+C_LIM = 19      # offset of the low-pass's update limit (LimitBlock, the last constants); 0: no limit
+C_ROLL = 20     # start of the roll block
 NHEAD = C_ROLL
 
 #: relative deviation of a sample interval from the fixed rate's that still uses the fixed-rate path
@@ -327,28 +328,43 @@ class GatedBlock(NamedTuple):
     """Offsets in ``cfg`` of the ``gated`` family's constants: the second observer's output row
     ``HF`` (n, over the stacked states), the yaw-rate low-pass time constant ``TF`` (s), the gate's
     release time constant ``TAU`` (s), the yaw jerk ``ON`` (m/s^3) where it starts to open and the
-    ``SPAN`` (m/s^3) over which it opens fully; then the limit of the first observer's ``ay``
-    (:func:`roadbank.estimators.kernels.gated.limited_ay`): ``CLIP`` (-, standard deviations; 0:
-    none), the gravity ``GRAV`` (m/s^2) of its prediction, and the noise densities ``QAY``
-    ((m/s^2)^2 s) and ``RR`` ((rad/s)^2 s) of its spread."""
+    ``SPAN`` (m/s^3) over which it opens fully (then, with a limit, its :class:`LimitBlock`)."""
 
     HF: int
     TF: int
     TAU: int
     ON: int
     SPAN: int
-    CLIP: int
-    GRAV: int
-    QAY: int
-    RR: int
     end: int
 
 
 @_compiled
 def gated_block(n: int, nr: int) -> GatedBlock:
     """:class:`GatedBlock` after the roll block of ``nr`` states (at ``cfg[C_OFAM]``)."""
-    o = roll_block(nr).end + n
-    return GatedBlock(o - n, o, o + 1, o + 2, o + 3, o + 4, o + 5, o + 6, o + 7, o + 8)
+    o = roll_block(nr).end
+    return GatedBlock(o, o + n, o + n + 1, o + n + 2, o + n + 3, o + n + 4)
+
+
+#: number of constants of a :class:`LimitBlock`
+NLIM = 4
+
+
+class LimitBlock(NamedTuple):
+    """Offsets in ``cfg`` of the limit of a kinematic low-pass's update (at ``cfg[C_LIM]``, the last
+    :data:`NLIM` constants; :func:`roadbank.estimators.kernels.sample.limited_ay`): ``CLIP`` (-, standard
+    deviations), the gravity ``GRAV`` (m/s^2) of its prediction, and the noise densities ``QAY``
+    ((m/s^2)^2 s) and ``RR`` ((rad/s)^2 s) of its spread."""
+
+    CLIP: int
+    GRAV: int
+    QAY: int
+    RR: int
+
+
+@_compiled
+def limit_block(o: int) -> LimitBlock:
+    """:class:`LimitBlock` at offset ``o`` (``cfg[C_LIM]``)."""
+    return LimitBlock(o, o + 1, o + 2, o + 3)
 
 
 @_compiled

@@ -58,7 +58,7 @@ estimate and the centripetal term low-passed apart (:math:`\mathrm{LP}(u) = \mat
 
 so that the first state's innovation :math:`k - x_k` is the kinematic estimate's alone, which carries the
 road's noise; the centripetal term's steps (a turn's entry) are not in it. ``kinematic-pif`` limits it
-(:func:`roadbank.estimators.kernels.gated.limited_ay`).
+(:func:`roadbank.estimators.kernels.sample.limited_ay`).
 """
 
 from __future__ import annotations
@@ -108,8 +108,8 @@ class LowPassDesign(DesignInputs):
     """Design inputs of :class:`KinematicLowPass`: the cut-off ``cutoff`` (Hz; None: scheduled on the
     noise), the centripetal feed-forward gain ``kappa`` (-), and for a scheduled cut-off the bank rate
     of roads ``bank_rate`` (rad/s), the noise densities ``Q_ay`` ((m/s^2)^2 s) and ``R`` ((rad/s)^2 s),
-    the sampled-data lead ``lead`` (s; module docstring), and ``split``: the two-state form (module
-    docstring)."""
+    the sampled-data lead ``lead`` (s; module docstring), ``split``: the two-state form (module
+    docstring), and the update's limit ``clip`` (-, standard deviations of ``Q_ay`` and ``R``; 0: linear)."""
 
     cutoff: float | None
     kappa: float
@@ -118,6 +118,7 @@ class LowPassDesign(DesignInputs):
     R: float | None = None
     lead: float = 0.0
     split: bool = False
+    clip: float = 0.0
 
 
 def lowpass_cutoff(d: LowPassDesign, vx: float) -> float:
@@ -146,11 +147,15 @@ def lowpass_observer(d: LowPassDesign, vx: float):
     g, wc, k = d.params.g, 2.0 * np.pi * lowpass_cutoff(d, vx), d.kappa
     c = lead_share(wc * d.lead)
     ff = np.array([[0.0, 0.0, k * vx / g]])                   # the feed-forward kappa a per eta
+    # a limited low-pass reads its ay in the steering's slot (kernels.sample.limited_ay)
+    iay = 0 if d.clip > 0 else 1
+    kin = np.zeros((1, 3))
+    kin[0, iay], kin[0, 2] = 1.0 / g, -vx / g                 # the kinematic estimate per eta
     if d.split:
-        kin, a = np.array([[0.0, 1.0 / g, -vx / g]]), np.array([[0.0, 0.0, vx / g]])
-        u = np.vstack([kin, a])
+        u = np.vstack([kin, [[0.0, 0.0, vx / g]]])
         return -wc * np.eye(2), wc * u, np.array([[1.0 - c, -k * (1.0 - c)]]), c * kin + (1.0 - c) * ff
-    u = np.array([[0.0, 1.0 / g, -(1.0 + k) * vx / g]])       # the filter's input per eta
+    u = np.zeros((1, 3))
+    u[0, iay], u[0, 2] = 1.0 / g, -(1.0 + k) * vx / g         # the filter's input per eta
     F = np.array([[-wc]])
     return F, wc * u, np.array([[1.0 - c]]), c * u + ff
 
@@ -172,7 +177,7 @@ class KinematicLowPass(ScheduledObserver):
         of roads (rad/s) by :func:`cutoff_for_noise`.
     Q_ay, R : float, optional
         Noise densities of ``ay`` ((m/s^2)^2 s) and of the yaw rate ((rad/s)^2 s) for the
-        scheduled cut-off (default 0: only the other counts).
+        scheduled cut-off and the limit (default 0: only the other counts).
     lead : float, optional
         Sampled-data lead (s, >= 0; default 0): about ``lead`` less lag than the low-pass's
         ``1/(2 pi f_c)`` (exactly that of the sampled filter at ``lead = h/2``; module docstring).
@@ -180,6 +185,13 @@ class KinematicLowPass(ScheduledObserver):
         Two states, the kinematic estimate and the centripetal term each low-passed (``k_lp``,
         ``a_lp``), instead of one: the same filter, whose first state's innovation is the kinematic
         estimate's alone (what ``kinematic-pif`` limits; module docstring). Default False.
+    clip : float, optional
+        The update's limit (-, >= 0; default 0, linear): the low-pass reads ``ay`` less what the kinematic
+        estimate's innovation exceeds ``clip`` standard deviations of the white noise
+        :math:`(Q_{ay} + v_x^2 R)/\\Delta t` by (:func:`roadbank.estimators.kernels.sample.limited_ay`), a
+        Huber-type update for heavy-tailed road vibration. Needs ``Q_ay > 0`` (without it: linear) and no
+        feed-forward in the one-state form (``kappa = 0`` or ``split``: the feed-forward's own steps would be
+        in the innovation).
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator`; ``v_min`` (m/s) defaults to
         :data:`~roadbank.estimators.kinematic.KINEMATIC_V_MIN` (the estimate holds at any speed).
@@ -196,7 +208,7 @@ class KinematicLowPass(ScheduledObserver):
         def design(self) -> LowPassDesign: ...     # an instance of design_type
 
     def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, Q_ay=None, R=None, lead=None,
-                 split=False, **kw):
+                 split=False, clip=None, **kw):
         scheduled = cutoff is None and bank_rate is not None
         self.split = bool(split)
         if self.split:
@@ -204,8 +216,16 @@ class KinematicLowPass(ScheduledObserver):
         self.cutoff = None if scheduled else float(self.defaults["cutoff"] if cutoff is None else cutoff)
         self.kappa = float(self.defaults["kappa"] if kappa is None else kappa)
         self.bank_rate = float(bank_rate) if scheduled else None
-        self.Q_ay = float(Q_ay or 0.0) if scheduled else None
-        self.R = float(R or 0.0) if scheduled else None
+        clip = float(self.defaults.get("clip", 0.0) if clip is None else clip)
+        if not (np.isfinite(clip) and clip >= 0):
+            raise ValueError(f"{self.label}: clip must be >= 0 (standard deviations), got {clip}")
+        noise = scheduled or (clip > 0 and Q_ay is not None)        # the densities take part in the design
+        self.Q_ay = float(Q_ay or 0.0) if noise else None
+        self.R = float(R or 0.0) if noise else None
+        # no ay noise to measure the innovation against: the linear low-pass, not a frozen one
+        self.clip = clip if (self.Q_ay or 0.0) > 0 else 0.0
+        if self.clip > 0 and self.kappa != 0 and not self.split:
+            raise ValueError(f"{self.label}: a limit needs kappa = 0 or the split form (split=True)")
         if not scheduled and not (np.isfinite(self.cutoff) and self.cutoff > 0):
             raise ValueError(f"{self.label}: cutoff must be > 0 Hz, got {cutoff}")
         if scheduled and not (self.bank_rate > 0 and np.isfinite(self.bank_rate) and self.Q_ay >= 0
@@ -221,7 +241,21 @@ class KinematicLowPass(ScheduledObserver):
 
     def _design_fields(self) -> dict:
         return dict(cutoff=self.cutoff, kappa=self.kappa, bank_rate=self.bank_rate, Q_ay=self.Q_ay, R=self.R,
-                    lead=self.lead, split=self.split)
+                    lead=self.lead, split=self.split, clip=self.clip)
+
+    @property
+    def limited(self) -> bool:           # type: ignore[override]
+        """Whether the update is limited (``clip > 0`` with an ``ay`` noise density)."""
+        return self.clip > 0
+
+    def limit_constants(self) -> list[float]:
+        if not self.limited:
+            return []
+        return [self.clip, float(self.params.g), float(self.Q_ay or 0.0), float(self.R or 0.0)]
+
+    def _design(self):
+        tab, n, extra = super()._design()
+        return tab, n, np.concatenate([np.asarray(extra, float), self.limit_constants()])
 
     def cutoff_at(self, vx: float) -> float:
         """The low-pass's cut-off (Hz) at ``vx`` (m/s): fixed, or scheduled on the noise (:func:`lowpass_cutoff`)."""

@@ -208,7 +208,7 @@ ${roll_tables}
 static const real_t RB_TAB[RB_NG][RB_NK] = {
 ${table}
 };
-${discrete_tables}${gate_consts}
+${discrete_tables}${gate_consts}${limit_consts}
 
 ${nsub_fn}${lu_fns}${tustin_fn}${observer_fn}
 static int rb_finish(state_t *st, real_t w, real_t ay, real_t dt, int restart, int fixed)
@@ -260,7 +260,7 @@ static int rb_update(state_t *st, int restart, int fixed, real_t dt, real_t vx, 
     u[0] = RB_USES[0] ? d : 0.0_R;
     u[1] = RB_USES[1] ? ay : 0.0_R;
     u[2] = RB_USES[2] ? r : 0.0_R;
-${gate_input}    w = rb_observer(st, i, a, u, dt, restart, fixed);
+${limit_input}    w = rb_observer(st, i, a, u, dt, restart, fixed);
 ${gate_call}    return rb_finish(st, w, ay, dt, restart, fixed);
 }
 
@@ -679,26 +679,10 @@ def _gate_parts(d: ExportDesign, float32: bool) -> dict:
     """The gate of a ``pif-gated`` module (:func:`roadbank.estimators.kernels.gated_step`, same
     operations in the same order), or nothing."""
     if d.gate is None:
-        return {"gate_consts": "", "gate_call": "", "init_gate": "", "gate_input": ""}
+        return {"gate_consts": "", "gate_call": "", "init_gate": ""}
     g = d.gate
     lit = lambda x: real_literal(x, float32)  # noqa: E731
-    limit, limit_input = "", ""
-    if g["clip"] > 0:
-        limit = ("/* the first observer's ay limited to RB_CLIP standard deviations of its input's noise\n"
-                 " * (kernels.gated.limited_ay): gravity (m/s^2), Q_ay ((m/s^2)^2 s), R ((rad/s)^2 s) */\n"
-                 f"#define RB_SQRT {'sqrtf' if float32 else 'sqrt'}\n"
-                 f"#define RB_CLIP ({lit(g['clip'])})\n#define RB_CLIP_G ({lit(g['grav'])})\n"
-                 f"#define RB_CLIP_Q ({lit(g['qay'])})\n"
-                 f"#define RB_CLIP_R ({lit(g['rr'])})\n")
-        limit_input = ("    u[0] = ay;   /* the first observer reads its ay in the steering's slot */\n"
-                       "    if (!restart) {\n"
-                       "        const real_t e = ay - (RB_CLIP_G * st->x[0] + vx * r);\n"
-                       "        const real_t s = RB_CLIP * RB_SQRT((RB_CLIP_Q + vx * vx * RB_CLIP_R) / dt);\n"
-                       "        real_t ec = e < s ? e : s;\n"
-                       "        ec = ec > -s ? ec : -s;\n"
-                       "        u[0] = ay - (e - ec);\n"
-                       "    }\n")
-    consts = limit + (f"#define RB_EXP {'expf' if float32 else 'exp'}\n"
+    consts = (f"#define RB_EXP {'expf' if float32 else 'exp'}\n"
               "/* gate between the two observers (the second's w = RB_GATE_HF . x): yaw rate low-pass (s),\n"
               " * release (s), yaw jerk vx |r'| where it starts to open and over which it opens (m/s^3) */\n"
               f"static const real_t RB_GATE_HF[RB_N] = {{{_array(g['HF'], float32, 8, '')}}};\n"
@@ -724,8 +708,30 @@ def _gate_parts(d: ExportDesign, float32: bool) -> dict:
             "        }\n"
             "        w = w + st->g * (wf - w);\n"
             "    }\n")
-    return {"gate_consts": consts, "gate_call": call, "init_gate": "    s->rf = 0.0_R;\n    s->g = 0.0_R;\n",
-            "gate_input": limit_input}
+    return {"gate_consts": consts, "gate_call": call, "init_gate": "    s->rf = 0.0_R;\n    s->g = 0.0_R;\n"}
+
+
+def _limit_parts(d: ExportDesign, float32: bool) -> dict:
+    """A limited low-pass's ``ay`` (:func:`roadbank.estimators.kernels.sample.limited_ay`, same operations
+    in the same order), read in the steering's input slot; or nothing."""
+    if d.limit is None:
+        return {"limit_consts": "", "limit_input": ""}
+    g = d.limit
+    lit = lambda x: real_literal(x, float32)  # noqa: E731
+    consts = ("/* the low-pass's ay limited to RB_CLIP standard deviations of its noise (kernels.sample.limited_ay):\n"
+              " * gravity (m/s^2), Q_ay ((m/s^2)^2 s), R ((rad/s)^2 s) */\n"
+              f"#define RB_SQRT {'sqrtf' if float32 else 'sqrt'}\n"
+              f"#define RB_CLIP ({lit(g['clip'])})\n#define RB_CLIP_G ({lit(g['grav'])})\n"
+              f"#define RB_CLIP_Q ({lit(g['qay'])})\n#define RB_CLIP_R ({lit(g['rr'])})\n")
+    code = ("    u[0] = ay;   /* the low-pass reads its ay in the steering's slot */\n"
+            "    if (!restart) {\n"
+            "        const real_t e = ay - (RB_CLIP_G * st->x[0] + vx * r);\n"
+            "        const real_t s = RB_CLIP * RB_SQRT((RB_CLIP_Q + vx * vx * RB_CLIP_R) / dt);\n"
+            "        real_t ec = e < s ? e : s;\n"
+            "        ec = ec > -s ? ec : -s;\n"
+            "        u[0] = ay - (e - ec);\n"
+            "    }\n")
+    return {"limit_consts": consts, "limit_input": code}
 
 
 def _provenance(d: ExportDesign) -> str:
@@ -803,7 +809,7 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
         observer_fn=_observer_fn(d),
         init_x=("    for (k = 0; k < RB_N; ++k) {\n        s->x[k] = 0.0_R;\n    }\n" if d.n else ""),
         **_discrete_parts(d, float32),
-        **_roll_parts(d, float32), **_gate_parts(d, float32))
+        **_roll_parts(d, float32), **_gate_parts(d, float32), **_limit_parts(d, float32))
     p = names["p"]
     return {f"{p}.h": _fix_literals(header, float32),
             f"{p}.c": _fix_literals(source, float32),

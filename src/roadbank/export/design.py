@@ -18,10 +18,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..estimators.base import Estimator
-from ..estimators.layout import DT_REL_TOL, gated_block, lpv_row
+from ..estimators.layout import C_LIM, DT_REL_TOL, gated_block, limit_block, lpv_row
 
-#: the constants of a gated module (:attr:`ExportDesign.gate`), in the fingerprint's order
-GATE_KEYS = ("HF", "tf", "tau", "on", "span", "clip", "grav", "qay", "rr")
+#: the constants of a gated module (:attr:`ExportDesign.gate`) and of a limited low-pass
+#: (:attr:`ExportDesign.limit`), in the fingerprint's order
+GATE_KEYS = ("HF", "tf", "tau", "on", "span")
+LIMIT_KEYS = ("clip", "grav", "qay", "rr")
 
 #: why an estimator on another kernel cannot be exported (kernel -> reason)
 _NOT_LPV_REASON = {
@@ -95,10 +97,11 @@ class ExportDesign:
     #: relative tolerance on the interval for the fixed-rate tables
     dt_tol: float = 0.0
     #: ``pif-gated``: the second observer's output row ``HF`` (n,) and the gate's ``tf``, ``tau`` (s),
-    #: ``on``, ``span`` (m/s^3) (:func:`roadbank.estimators.kernels.gated_step`), and the limit of the first
-    #: observer's ``ay`` (``clip`` -, 0: none; ``grav`` m/s^2, ``qay`` (m/s^2)^2 s, ``rr`` (rad/s)^2 s:
-    #: :func:`roadbank.estimators.kernels.gated.limited_ay`); None for one observer
+    #: ``on``, ``span`` (m/s^3) (:func:`roadbank.estimators.kernels.gated_step`); None for one observer
     gate: dict | None = None
+    #: a limited low-pass (``kinematic-pif``'s): ``clip`` (-), ``grav`` (m/s^2), ``qay`` ((m/s^2)^2 s), ``rr``
+    #: ((rad/s)^2 s) (:func:`roadbank.estimators.kernels.sample.limited_ay`); None without a limit
+    limit: dict | None = None
 
     @property
     def ng(self) -> int:
@@ -150,7 +153,8 @@ class ExportDesign:
                     [np.asarray(self.discrete[k], float) for k in ("Phi", "Gam0", "Gam1", "Phi_r", "Gam0_r",
                                                                    "Gam1_r", "dt")]),
                   *([] if self.gate is None else
-                    [np.asarray(self.gate[k], float) for k in GATE_KEYS])):
+                    [np.asarray(self.gate[k], float) for k in GATE_KEYS]),
+                  *([] if self.limit is None else [np.asarray(self.limit[k], float) for k in LIMIT_KEYS])):
             h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
         return h.hexdigest()[:16]
 
@@ -252,7 +256,7 @@ def export_design(est, rate: float, module_name: str | None = None, *,
         max_substep=float(est.max_substep), max_gap=float(est.max_gap),
         max_angle=float(est.max_angle), wmax=float(np.sin(est.max_angle)), rate=float(rate),
         state_names=tuple(getattr(est, "state_names", ())), provenance=provenance,
-        discrete=disc, dt_tol=dt_tol, gate=_gate(est, n, nr))
+        discrete=disc, dt_tol=dt_tol, gate=_gate(est, n, nr), limit=_limit(est))
 
 
 def _gate(est, n: int, nr: int) -> dict | None:
@@ -262,5 +266,13 @@ def _gate(est, n: int, nr: int) -> dict | None:
     b = gated_block(n, nr)
     cfg = est._cfg
     return {"HF": np.array(cfg[b.HF:b.TF], float), "tf": float(cfg[b.TF]), "tau": float(cfg[b.TAU]),
-            "on": float(cfg[b.ON]), "span": float(cfg[b.SPAN]), "clip": float(cfg[b.CLIP]),
-            "grav": float(cfg[b.GRAV]), "qay": float(cfg[b.QAY]), "rr": float(cfg[b.RR])}
+            "on": float(cfg[b.ON]), "span": float(cfg[b.SPAN])}
+
+
+def _limit(est) -> dict | None:
+    """The limit of a low-pass's update as the kernels' ``cfg`` holds it (None without one)."""
+    o = int(est._cfg[C_LIM])
+    if o <= 0:
+        return None
+    b = limit_block(o)
+    return {k: float(est._cfg[i]) for k, i in zip(LIMIT_KEYS, (b.CLIP, b.GRAV, b.QAY, b.RR))}

@@ -87,7 +87,7 @@ scheduled on speed: `xi' = F(vx) xi + G(vx) eta`, `w = H(vx) xi + D(vx) eta`,
 `eta = [delta_f, ay, r]`, tabulated every {d.dv:g} m/s from {d.v0:g} m/s ({d.ng} speeds; clamped
 beyond), interpolated linearly and discretised per sample by the trapezoidal rule. Roll
 separation: {'dynamic second-order roll model' if d.nr else 'static roll gain ' + f'{d.roll_D:.6g} rad per m/s^2'}.
-{_gate_text(d)}Estimator: `{d.provenance.get('estimator', d.name)}`. See roadbank's docs/embedded.md
+{_gate_text(d)}{_limit_text(d)}Estimator: `{d.provenance.get('estimator', d.name)}`. See roadbank's docs/embedded.md
 for how the tables are designed and how to regenerate them for another car.
 """
 
@@ -101,9 +101,14 @@ def _gate_text(d: ExportDesign) -> str:
             f"`w + g (w_f - w)`, `w_f` the second filter's (`RB_GATE_HF . xi`), with the gate `g` in [0, 1]\n"
             f"following the yaw part of the lateral jerk, `vx |r_f'|` (yaw rate low-passed with\n"
             f"{g['tf']:g} s): 0 below {g['on']:g} m/s^3, 1 above {g['on'] + g['span']:g} m/s^3, rising at once and\n"
-            f"falling back with a {g['tau']:g} s release (state members `rf`, `g`).\n"
-            + ("" if not g["clip"] > 0 else
-               "The first filter (the low-pass) reads `ay` in the steering's input slot, limited: its innovation\n"
-               "`e = ay - (g x[0] + vx r)` (`x[0]` the kinematic estimate low-passed) is clipped to\n"
-               f"`+-{g['clip']:g} sqrt((Q_ay + vx^2 R) / dt)` (`RB_CLIP`, a Huber-type update: a pothole's\n"
-               "spike moves it by at most that much); the second reads `ay` as it is.\n"))
+            f"falling back with a {g['tau']:g} s release (state members `rf`, `g`).\n")
+
+
+def _limit_text(d: ExportDesign) -> str:
+    """The paragraph on a limited low-pass (empty without a limit)."""
+    if d.limit is None:
+        return ""
+    return ("The low-pass reads `ay` in the steering's input slot, limited: the kinematic estimate's innovation\n"
+            "`e = ay - (g x[0] + vx r)` (`x[0]` the kinematic estimate low-passed) is clipped to\n"
+            f"`+-{d.limit['clip']:g} sqrt((Q_ay + vx^2 R) / dt)` (`RB_CLIP`, a Huber-type update: a pothole's\n"
+            "spike moves it by at most that much); a filter behind a gate reads `ay` as it is.\n")

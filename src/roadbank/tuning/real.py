@@ -83,7 +83,7 @@ noise seeds; median theta RMS after 5 s), which the split leaves out of both val
 
 The tenth stage (``kinematic_pif_candidates(10)``) chooses the limit of the blend's low-pass update, in
 standard deviations of the kinematic estimate's designed noise (:data:`CLIPS`; 0: linear, as every stage
-before ran; :func:`roadbank.estimators.kernels.gated.limited_ay`): road vibration is heavy-tailed. It chose 3
+before ran; :func:`roadbank.estimators.kernels.sample.limited_ay`): road vibration is heavy-tailed. It chose 3
 (KITTI training median 0.3929 -> 0.3853 deg; every simulated training drive is quiet, so they tie).
 """
 
@@ -146,7 +146,7 @@ QUIET_MEASURES = ("mean", "floor")
 #: :data:`SIM_CARS` at these noise seeds, nominal conditions
 PAPER_SEEDS = (0, 1, 2)
 #: candidate limits of ``kinematic-pif``'s low-pass update (-, standard deviations of its input's white noise;
-#: :func:`roadbank.estimators.kernels.gated.limited_ay`), the tenth stage's; 0: linear (the stages before), first
+#: :func:`roadbank.estimators.kernels.sample.limited_ay`), the tenth stage's; 0: linear (the stages before), first
 CLIPS = (0.0, 6.0, 4.0, 3.0, 2.5, 2.0, 1.5)
 #: the stages before the tenth ran with the linear low-pass
 _LINEAR = {"clip": 0.0}

@@ -7,35 +7,11 @@ import math
 import numpy as np
 from numba import njit
 
-from ..layout import C_GAP, C_N, C_NR, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, gate_states, gated_block
+from ..layout import (C_GAP, C_LIM, C_N, C_NR, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, gate_states,
+                      gated_block)
 from ._jit import ENTRY, HELPER
 from .lpv import lpv_step
-from .sample import output, sample_valid, step_by_run, store
-
-
-@njit(inline="always", **HELPER)
-def limited_ay(mem, cfg, t, vx, ay, r):
-    r"""The ``ay`` (m/s^2) the first observer reads when its update is limited (``cfg[CLIP] > 0``;
-    :class:`roadbank.estimators.gated.KinematicPIF`'s low-pass): ``ay`` less what the kinematic
-    estimate's innovation exceeds ``CLIP`` (> 0; the caller checks) standard deviations of its white noise by.
-
-    The first state :math:`x` (``mem[M_X]``) is the kinematic estimate :math:`(a_y - v_x r)/g`
-    low-passed (the split low-pass, :mod:`roadbank.estimators.lowpass`), its prediction; the
-    innovation in ``ay`` units is :math:`e = a_y - (g x + v_x r)`, its limit
-    :math:`s = c \sqrt{(Q_{ay} + v_x^2 R) / \Delta t}` (the noise the cut-off is designed for, sampled
-    at the interval :math:`\Delta t`), and the result :math:`a_y - (e - \mathrm{clip}(e, -s, s))`: a
-    Huber-type update, linear within ``s``. At a (re)start ``ay`` itself. NaN in, NaN out.
-    """
-    n = np.int64(cfg[C_N])
-    gb = gated_block(n, np.int64(cfg[C_NR]))
-    dt = t - mem[M_TLAST]
-    if mem[M_INIT] == 0.0 or not (dt > 0.0) or dt > cfg[C_GAP]:
-        return ay
-    e = ay - (cfg[gb.GRAV] * mem[M_X] + vx * r)
-    s = cfg[gb.CLIP] * math.sqrt((cfg[gb.QAY] + vx * vx * cfg[gb.RR]) / dt)
-    ec = e if e < s else s
-    ec = ec if ec > -s else -s
-    return ay - (e - ec)
+from .sample import limited_ay, output, sample_valid, step_by_run, store
 
 
 @njit(inline="always", **HELPER)
@@ -58,10 +34,13 @@ def gated_sample(mem, cfg, tab, work, t, vx, d, ay, r):
     e^{-\Delta t/\tau})(g_k - g)`. At a (re)start ``r_f = r``, ``g = 0``. Output
     :math:`w = w_s + g (w_f - w_s)`, :math:`\theta = \arcsin w`, :math:`\phi_b = \theta - \phi`.
     ``r_f`` and ``g`` in ``mem`` (:func:`~roadbank.estimators.layout.gate_states`). With a limit
-    (``kinematic-pif``'s low-pass) the first observer reads :func:`limited_ay` in the steering's input
-    slot, which neither observer of that pair reads otherwise; the second reads ``ay``.
+    (``kinematic-pif``'s low-pass) the first observer reads
+    :func:`~roadbank.estimators.kernels.sample.limited_ay` in the steering's input slot, which neither
+    observer of that pair reads otherwise (before the validity test, which reads that slot;
+    :func:`~roadbank.estimators.kernels.lpv.lpv_step` computes it again, the same number); the second
+    reads ``ay``.
     """
-    if cfg[gated_block(np.int64(cfg[C_N]), np.int64(cfg[C_NR])).CLIP] > 0.0:
+    if cfg[C_LIM] > 0.0:
         d = limited_ay(mem, cfg, t, vx, ay, r)      # the first observer's ay, in the steering's slot
     if not sample_valid(mem, cfg, t, vx, d, ay, r):
         return mem[M_W], mem[M_THETA], mem[M_PHIB], False

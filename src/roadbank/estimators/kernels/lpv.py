@@ -18,12 +18,13 @@ import math
 import numpy as np
 from numba import njit
 
-from ..layout import (C_DTFIX, C_DTOL, C_DV, C_GAP, C_N, C_NG, C_NR, C_SUB, C_USE, C_V0, C_VMIN, C_WMAX, M_AY,
+from ..layout import (C_DTFIX, C_DTOL, C_DV, C_GAP, C_LIM, C_N, C_NG, C_NR, C_SUB, C_USE, C_V0, C_VMIN, C_WMAX, M_AY,
                       M_ETA, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, NETA, batch3_block, lpv_row,
                       roll_states)
 from ._jit import ENTRY, HELPER
 from .linalg import tustin
-from .sample import ROLL0, ROLL2, angles, begin, finish, grid, interp, roll_fixed2, roll_map, sample_valid, store
+from .sample import (ROLL0, ROLL2, angles, begin, finish, grid, interp, limited_ay, roll_fixed2, roll_map, sample_valid,
+                     store)
 from .simd import interp4, map4
 
 #: offsets of the batch loop's block in a three-state lpv row (layout.batch3_block)
@@ -107,8 +108,11 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     ``F, G, H, D, J``, then (when ``cfg[C_DTFIX] > 0``) the fixed-rate
     ``Phi, Gam0, Gam1`` (and for three states the batch block, :func:`fixed3`).
     ``work`` (:func:`~roadbank.estimators.layout.work_size` floats) receives the
-    interpolated row at the same offsets, then scratch.
+    interpolated row at the same offsets, then scratch. A limited low-pass (``cfg[C_LIM] > 0``) reads
+    :func:`~roadbank.estimators.kernels.sample.limited_ay` in the steering's slot.
     """
+    if cfg[C_LIM] > 0.0:
+        d = limited_ay(mem, cfg, t, vx, ay, r)
     if not sample_valid(mem, cfg, t, vx, d, ay, r):
         return mem[M_W], mem[M_THETA], mem[M_PHIB], False
     n = np.int64(cfg[C_N])
@@ -269,7 +273,7 @@ def lpv_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, ou
     """
     n = np.int64(cfg[C_N])
     nr = np.int64(cfg[C_NR])
-    fast = n == 3 and (nr == 0 or nr == 2) and cfg[C_DTFIX] > 0.0
+    fast = n == 3 and (nr == 0 or nr == 2) and cfg[C_DTFIX] > 0.0 and cfg[C_LIM] == 0.0
     N = t.shape[0]
     k = np.int64(0)              # not a literal: one compiled lpv3_fixed_run
     while k < N:

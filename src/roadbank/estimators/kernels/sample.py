@@ -9,8 +9,8 @@ from fractions import Fraction
 import numpy as np
 from numba import njit
 
-from ..layout import (C_DTFIX, C_DTOL, C_DV, C_GAP, C_N, C_NG, C_NR, C_SUB, C_USE, C_V0, C_VMIN, C_WMAX, M_AY,
-                      M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, roll_block, roll_states)
+from ..layout import (C_DTFIX, C_DTOL, C_DV, C_GAP, C_LIM, C_N, C_NG, C_NR, C_SUB, C_USE, C_V0, C_VMIN, C_WMAX,
+                      M_AY, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, limit_block, roll_block, roll_states)
 from ._jit import HELPER, INLINE
 
 #: the roll block's offsets in ``cfg`` for the two roll models (``nr`` 0: static gain or none; 2: dynamic),
@@ -242,6 +242,31 @@ def store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x):
     out_phi[k] = mem[M_PHI]
     for p in range(n):
         out_x[k, p] = mem[M_X + p]
+
+
+@njit(**INLINE)
+def limited_ay(mem, cfg, t, vx, ay, r):
+    r"""The ``ay`` (m/s^2) a limited kinematic low-pass reads (``cfg[C_LIM] > 0``, the caller checks; its
+    :class:`~roadbank.estimators.layout.LimitBlock`): ``ay`` less what the kinematic estimate's innovation
+    exceeds ``CLIP`` standard deviations of its white noise by.
+
+    The observer's first state :math:`x` (``mem[M_X]``) is the kinematic estimate :math:`(a_y - v_x r)/g`
+    low-passed (``kinematic-lp`` without feed-forward, or the split low-pass,
+    :mod:`roadbank.estimators.lowpass`), its prediction; the innovation in ``ay`` units is
+    :math:`e = a_y - (g x + v_x r)`, its limit :math:`s = c \sqrt{(Q_{ay} + v_x^2 R) / \Delta t}` (the noise
+    the low-pass is designed for, sampled at the interval :math:`\Delta t`), and the result
+    :math:`a_y - (e - \mathrm{clip}(e, -s, s))`: a Huber-type update, linear within ``s``. At a (re)start
+    ``ay`` itself. NaN in, NaN out. The observer reads it in the steering's input slot.
+    """
+    lb = limit_block(np.int64(cfg[C_LIM]))
+    dt = t - mem[M_TLAST]
+    if mem[M_INIT] == 0.0 or not (dt > 0.0) or dt > cfg[C_GAP]:
+        return ay
+    e = ay - (cfg[lb.GRAV] * mem[M_X] + vx * r)
+    s = cfg[lb.CLIP] * math.sqrt((cfg[lb.QAY] + vx * vx * cfg[lb.RR]) / dt)
+    ec = e if e < s else s
+    ec = ec if ec > -s else -s
+    return ay - (e - ec)
 
 
 def step_by_run(run, mem, cfg, tab, work, t, vx, d, ay, r):
