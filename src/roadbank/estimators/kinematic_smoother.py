@@ -36,6 +36,10 @@ from .lowpass import KinematicLowPass
 
 #: ``kinematic-smoother``'s cut-off (Hz): the rule of :func:`roadbank.tuning.real.choose_smoother`
 SMOOTHER_CUTOFF_HZ = 0.5
+#: ``kinematic-smoother``'s limit of each pass's update (-, standard deviations of the log's noise; the
+#: eleventh stage of :mod:`roadbank.tuning.real`); acts where the log's noise is given (``Q_ay``, as
+#: :func:`roadbank.vehicle.make_estimator` gives it)
+SMOOTHER_CLIP = 2.5
 
 
 class KinematicSmoother(KinematicLowPass):
@@ -50,11 +54,11 @@ class KinematicSmoother(KinematicLowPass):
         Cut-off (Hz) of each pass; default :data:`SMOOTHER_CUTOFF_HZ`.
     **kw
         The other options of :class:`~roadbank.estimators.lowpass.KinematicLowPass` (``kappa`` 0
-        by default), for both passes.
+        by default; ``clip`` :data:`SMOOTHER_CLIP`, acting with the log's ``Q_ay`` and ``R``), for both passes.
     """
 
     label = "kinematic-smoother"
-    defaults = dict(cutoff=SMOOTHER_CUTOFF_HZ, kappa=0.0)
+    defaults = dict(cutoff=SMOOTHER_CUTOFF_HZ, kappa=0.0, clip=SMOOTHER_CLIP)
     #: the outputs of :meth:`run` use later samples (not causal)
     offline = True
     #: the causal estimator of its forward pass (what an ECU runs instead)
@@ -62,7 +66,7 @@ class KinematicSmoother(KinematicLowPass):
 
     def __init__(self, params=None, **kw):
         super().__init__(params, **kw)
-        opts = {**kw, "kappa": self.kappa, "lead": self.lead}
+        opts = {**kw, "kappa": self.kappa, "lead": self.lead, "clip": self.clip, "Q_ay": self.Q_ay, "R": self.R}
         if self.cutoff is not None:
             opts["cutoff"] = self.cutoff
         # the same design, run in reversed time; on the forward pass's fixed rate (not one detected anew

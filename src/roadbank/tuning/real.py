@@ -310,6 +310,13 @@ def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kap
             for on in GATE_GRID["gate_on"] for sp in GATE_GRID["gate_span"] for rel in GATE_GRID["gate_release"]}
 
 
+def smoother_clip_candidates() -> dict:
+    """``{clip: build}`` of ``kinematic-smoother`` over :data:`CLIPS` (the linear smoother first), each
+    designed for the log as the command line does (the log's noise measures the limit), for
+    :func:`choose_by_roads`: the eleventh stage, the limit of the offline default's two passes."""
+    return {c: per_log("kinematic-smoother", clip=c) for c in CLIPS}
+
+
 def _quiet_by(measure: str):
     """``build`` of the default for a log whose car is not described, quiet as ``measure`` reads it."""
     def build(signals):

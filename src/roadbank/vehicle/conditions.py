@@ -40,6 +40,9 @@ QUIET_FILTER = "pif-adaptive"
 #: model (``kinematic-pif``: :data:`QUIET_FILTER`; the offline ``kinematic-smoother``: the offline PIF)
 QUIET_MODELS = {"kinematic-pif": QUIET_FILTER, "kinematic-smoother": "pif-smoother"}
 #: the options of ``kinematic-pif`` that set its gate: given one, the caller's gate is kept
+#: low-passes whose update is limited by default (their ``clip``), given the log's noise densities ``Q_ay`` and ``R``
+#: (:func:`noise_densities`) by :func:`make_estimator`, as a sensor-weighted PIF is
+LIMITED_LOWPASSES = ("kinematic-smoother",)
 _GATE_OPTIONS = ("gate_on", "gate_span", "gate_tf", "gate_release")
 #: ``kinematic-pif``'s options of its low-pass and gate, which its quiet filter does not take
 _BLEND_OPTIONS = ("cutoff", "kappa", "bank_rate", "lead", "clip") + _GATE_OPTIONS
@@ -224,6 +227,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     if sensors.r_variance > 0:
         R, Q_ay = noise_densities(sensors, log_rate, log_ay_noise, log_r_noise)
         options = with_sensor_noise(name, options, R, Q_ay)
+        if name in LIMITED_LOWPASSES:       # the noise its update's limit is measured in
+            options = {"Q_ay": Q_ay, "R": R, **options}
     est = estimators.make(name, params, **options)
     est.name = label
     return est
