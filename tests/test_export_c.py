@@ -166,6 +166,25 @@ def test_float64_equals_step_on_every_scenario_and_a_hard_log(name, scenarios, b
     assert_same(python_steps(est, cols), mod.run(*cols, use_dt=True), TOL64, TOL64, f"{name} step_dt")
 
 
+def test_a_limited_low_pass_exports_its_limit(scenarios, tmp_path):
+    """kinematic-lp with its update limited (the map smoother's passes; the limit acts on the paper's
+    manoeuvres at the data sheet's noise): the module reads the limited ay in the steering's slot as the kernel
+    does, float64 equal to step() on every scenario and a hard log; without the limit the module has none."""
+    est = make("kinematic-lp", clip=2.5, Q_ay=float(BUILT["pif-modified"].Q_ay), R=1e-6)
+    assert est.limited
+    res = export_c(est, tmp_path / "lim", rate=100.0)
+    assert "RB_CLIP" in res.source.read_text()
+    assert "RB_CLIP" not in export_c(BUILT["kinematic-lp"], tmp_path / "lin", rate=100.0).source.read_text()
+    mod = CModule(res.source, tmp_path / "lim")
+    lin = make("kinematic-lp")
+    acted = False
+    for scen, cols in {**scenarios, "hard": hard_log(scenarios, v_min=est.v_min)}.items():
+        py = python_steps(est, cols)
+        assert_same(py, mod.run(*cols), TOL64, TOL64, f"limited kinematic-lp on {scen}")
+        acted |= bool(np.nanmax(np.abs(py["w"] - python_steps(lin, cols)["w"])) > 1e-6)
+    assert acted
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", EXPORTABLE)
 def test_float32_within_a_thousandth_of_a_degree(name, scenarios, built_modules):
