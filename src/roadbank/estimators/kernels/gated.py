@@ -11,7 +11,7 @@ from ..layout import (C_GAP, C_LIM, C_N, C_NR, M_INIT, M_PHI, M_PHIB, M_THETA, M
                       gated_block)
 from ._jit import ENTRY, HELPER
 from .lpv import lpv_step
-from .sample import limited_ay, output, sample_valid, step_by_run, store
+from .sample import output, sample_valid, step_by_run, store
 
 
 @njit(inline="always", **HELPER)
@@ -36,13 +36,12 @@ def gated_sample(mem, cfg, tab, work, t, vx, d, ay, r):
     ``r_f`` and ``g`` in ``mem`` (:func:`~roadbank.estimators.layout.gate_states`). With a limit
     (``kinematic-pif``'s low-pass) the first observer reads
     :func:`~roadbank.estimators.kernels.sample.limited_ay` in the steering's input slot, which neither
-    observer of that pair reads otherwise (before the validity test, which reads that slot;
-    :func:`~roadbank.estimators.kernels.lpv.lpv_step` computes it again, the same number); the second
+    observer of that pair reads otherwise (:func:`~roadbank.estimators.kernels.lpv.lpv_step` computes it;
+    the validity test here reads ``ay`` in that slot, finite exactly where the limited one is); the second
     reads ``ay``.
     """
-    if cfg[C_LIM] > 0.0:
-        d = limited_ay(mem, cfg, t, vx, ay, r)      # the first observer's ay, in the steering's slot
-    if not sample_valid(mem, cfg, t, vx, d, ay, r):
+    # validity as lpv_step sees the sample: a limited low-pass's slot holds ay limited, finite where ay is
+    if not sample_valid(mem, cfg, t, vx, ay if cfg[C_LIM] > 0.0 else d, ay, r):
         return mem[M_W], mem[M_THETA], mem[M_PHIB], False
     restart = mem[M_INIT] == 0.0 or (t - mem[M_TLAST]) > cfg[C_GAP]
     dt = t - mem[M_TLAST]
