@@ -13,6 +13,7 @@ from roadbank.estimators.gated import (KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_CL
 from roadbank.vehicle import for_log
 
 from test_gated import _gate_reference  # the gate written out in plain Python
+from test_kinematic_smoother import limited_reference  # the limit written out in numpy
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 #: the rule's stages before the sixth ran without the sampled-data lead
@@ -97,14 +98,8 @@ def test_the_limit_is_the_documented_huber_update():
     s, _ = _shaken(spikes=((1500, 8.0), (2200, -6.0)))
     est = E.make("kinematic-pif", gate_on=1e9, clip=3.0, Q_ay=0.3 ** 2 / 100.0)
     out = est.run(s)
-    g = est.params.g
-    x = out.states["k_lp"]
-    t, vx, ay, r = (np.asarray(a) for a in (s.t, s.vx, s.ay, s.r))
-    e = ay[1:] - (g * x[:-1] + vx[1:] * r[1:])
-    lim = 3.0 * np.sqrt((est.Q_ay + vx[1:] ** 2 * est.R[-1, -1]) / np.diff(t))
-    limited = ay.copy()
-    limited[1:] = ay[1:] - (e - np.clip(e, -lim, lim))
-    assert 0.001 < np.mean(limited != ay) < 0.02            # the spikes and the tails of the noise
+    limited = limited_reference(s, out.states["k_lp"], 3.0, est.Q_ay, est.R[-1, -1], est.params.g)
+    assert 0.001 < np.mean(limited != np.asarray(s.ay)) < 0.02     # the spikes and the tails of the noise
     lin = E.make("kinematic-pif", gate_on=1e9, clip=0.0, Q_ay=0.3 ** 2 / 100.0)
     ref = lin.run(Signals(s.t, s.vx, limited, s.r, s.delta_f))
     np.testing.assert_allclose(out.w, ref.w, rtol=0, atol=1e-12)

@@ -105,6 +105,18 @@ def _spiky(seed=1, n=1200, sigma=0.3):
     return Signals(t, vx, ay, r, np.full(n, np.nan))
 
 
+def limited_reference(s, x, clip, Q_ay, R, g=G):
+    """The ay a limited low-pass reads (kernels.sample.limited_ay's docstring, written out in numpy) from its
+    first state ``x`` (the kinematic estimate low-passed) one sample earlier: ay less what the innovation
+    e = ay - (g x + vx r) exceeds clip sqrt((Q_ay + vx^2 R) / dt) by; the first sample as it is."""
+    t, vx, ay, r = (np.asarray(a) for a in (s.t, s.vx, s.ay, s.r))
+    e = ay[1:] - (g * x[:-1] + vx[1:] * r[1:])
+    lim = clip * np.sqrt((Q_ay + vx[1:] ** 2 * R) / np.diff(t))
+    limited = ay.copy()
+    limited[1:] = ay[1:] - (e - np.clip(e, -lim, lim))
+    return limited
+
+
 def test_a_limited_low_pass_is_the_documented_huber_update():
     """kinematic-lp with clip reads ay less what the kinematic estimate's innovation exceeds clip standard
     deviations of (Q_ay + vx^2 R)/dt by (kernels.sample.limited_ay), written out here from its own state: the
@@ -113,13 +125,8 @@ def test_a_limited_low_pass_is_the_documented_huber_update():
     q, R = 0.3 ** 2 / 10.0, 1e-6
     lim = E.make("kinematic-lp", clip=2.5, Q_ay=q, R=R)
     out = lim.run(s)
-    x = out.states["w_lp"]
-    t, vx, ay, r = (np.asarray(a) for a in (s.t, s.vx, s.ay, s.r))
-    e = ay[1:] - (G * x[:-1] + vx[1:] * r[1:])
-    s_lim = 2.5 * np.sqrt((q + vx[1:] ** 2 * R) / np.diff(t))
-    limited = ay.copy()
-    limited[1:] = ay[1:] - (e - np.clip(e, -s_lim, s_lim))
-    assert 0.005 < np.mean(limited != ay) < 0.1
+    limited = limited_reference(s, out.states["w_lp"], 2.5, q, R)
+    assert 0.005 < np.mean(limited != np.asarray(s.ay)) < 0.1
     ref = E.make("kinematic-lp").run(Signals(s.t, s.vx, limited, s.r, s.delta_f))
     np.testing.assert_allclose(out.w, ref.w, rtol=0, atol=1e-12)
     with pytest.raises(ValueError, match="a limit needs kappa = 0 or the split form"):
