@@ -185,6 +185,40 @@ def test_a_limited_low_pass_exports_its_limit(scenarios, tmp_path):
     assert acted
 
 
+@pytest.mark.parametrize("discrete", [False, True])
+def test_a_low_pass_following_its_running_noise_exports_it(discrete, scenarios, tmp_path):
+    """kinematic-pif as built for a log (a running noise estimate relative to the design span's: here a reference
+    a quarter of what the paper's manoeuvres read, so that the ratio moves, to about 4): the module keeps
+    the ratio and the previous kinematic acceleration as state and scales the low-pass's update as the kernel
+    does, float64 equal to step() on every scenario and a hard log (general and fixed-rate paths), float32 within
+    a thousandth of a degree; it differs from the same design without the running noise."""
+    from roadbank.signals import diff_noise_std
+
+    t, vx, ay, r, d = scenarios["bank-lane-change"]
+    ref = 0.25 * diff_noise_std(ay - vx * r) ** 2
+    est = make("kinematic-pif", noise_ref=ref, noise_tau=5.0, Q_ay=float(BUILT["pif-modified"].Q_ay) * 25)
+    plain = make("kinematic-pif", Q_ay=float(BUILT["pif-modified"].Q_ay) * 25)
+    assert est.noise_tau == 5.0 and plain.noise_tau == 0.0      # no reference, no running noise
+    if discrete:
+        est.set_sample_rate(100.0)
+        plain.set_sample_rate(100.0)
+    cols_all = {**scenarios, "hard": hard_log(scenarios, v_min=est.v_min)}
+    acted = False
+    for f32 in (False, True):
+        res = export_c(est, tmp_path / f"n{f32}", rate=100.0, float32=f32, discrete=discrete)
+        assert "RB_NOISE_TN" in res.source.read_text()
+        mod = CModule(res.source, tmp_path / f"n{f32}")
+        assert mod.state_size == export_design(est, 100.0).state_bytes(float32=f32)
+        for scen, cols in cols_all.items():
+            py = python_steps(est, cols)
+            assert_same(py, mod.run(*cols), None if f32 else TOL64, TOL32_BANK if f32 else TOL64,
+                        f"kinematic-pif with running noise {'f32' if f32 else 'f64'} on {scen}")
+            acted |= bool(np.nanmax(np.abs(py["w"] - python_steps(plain, cols)["w"])) > 1e-4)
+    assert acted
+    assert "RB_NOISE_TN" not in export_c(plain, tmp_path / "plain", rate=100.0, discrete=discrete).source.read_text()
+    est.set_sample_rate(None)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", EXPORTABLE)
 def test_float32_within_a_thousandth_of_a_degree(name, scenarios, built_modules):

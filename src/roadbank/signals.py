@@ -259,6 +259,35 @@ def road_noise_floor_std(x, t, valid=None, band_hz: float | None = None) -> floa
     return float(np.sqrt(np.median(var))) if var else float("nan")
 
 
+#: the Huber limit of :func:`diff_noise_std` (squared standard deviations), as the kernels' running estimate's
+#: (:data:`roadbank.estimators.kernels.sample.NOISE_HUBER`)
+DIFF_NOISE_HUBER = 9.0
+
+
+def diff_noise_std(x, valid=None) -> float:
+    r"""White-noise standard deviation (unit of ``x``) that the first differences of ``x`` read, Huber-robust:
+    the fixed point of :math:`\sigma^2 = \operatorname{mean}\min\left((\Delta x)^2/2,\; H \sigma^2\right)`,
+    :math:`H` = :data:`DIFF_NOISE_HUBER` (a difference counts at most 3 standard deviations), from the plain
+    mean square. The same measure as the running noise estimate of a limited low-pass
+    (:func:`roadbank.estimators.kernels.sample.noise_update`), which reads its noise relative to this one on
+    the log's design span. Only differences of consecutive finite samples that are both ``valid`` (bool
+    array, default all) count; NaN with fewer than :data:`MIN_NOISE_TRIPLES` of them.
+    """
+    x = np.asarray(x, dtype=np.float64)
+    ok = np.isfinite(x) if valid is None else np.isfinite(x) & np.asarray(valid, dtype=bool)
+    ok2 = ok[1:] & ok[:-1]
+    if ok2.sum() < MIN_NOISE_TRIPLES:
+        return float("nan")
+    u = 0.5 * np.diff(x)[ok2] ** 2
+    var = float(np.mean(u))
+    for _ in range(50):
+        new = float(np.mean(np.minimum(u, DIFF_NOISE_HUBER * var)))
+        if abs(new - var) <= 1e-12 * var:
+            break
+        var = new
+    return float(np.sqrt(var))
+
+
 def road_wheel_angle(steering_wheel_angle, params: VehicleParams | None = None) -> np.ndarray:
     """Front road-wheel angle (rad) from the steering-wheel angle (rad) by the steering ratio."""
     p = params or VehicleParams()

@@ -17,7 +17,8 @@ sample:
     M_X       observer states (n), then :func:`roll_states` (nr), then
               :func:`riccati_p` (n*n, Riccati variant only) or
               :func:`adaptive_state` (2, ``adaptive`` family only) or
-              :func:`gate_states` (2, ``gated`` family only)
+              :func:`gate_states` (2, ``gated`` family only), then
+              :func:`limit_states` (2, a limited low-pass only)
     ========  ===========================================================
 
 ``cfg`` — constants of one estimator (built once per design)
@@ -346,25 +347,46 @@ def gated_block(n: int, nr: int) -> GatedBlock:
 
 
 #: number of constants of a :class:`LimitBlock`
-NLIM = 4
+NLIM = 7
 
 
 class LimitBlock(NamedTuple):
     """Offsets in ``cfg`` of the limit of a kinematic low-pass's update (at ``cfg[C_LIM]``, the last
     :data:`NLIM` constants; :func:`roadbank.estimators.kernels.sample.limited_ay`): ``CLIP`` (-, standard
-    deviations), the gravity ``GRAV`` (m/s^2) of its prediction, and the noise densities ``QAY``
-    ((m/s^2)^2 s) and ``RR`` ((rad/s)^2 s) of its spread."""
+    deviations), the gravity ``GRAV`` (m/s^2) of its prediction, the noise densities ``QAY``
+    ((m/s^2)^2 s) and ``RR`` ((rad/s)^2 s) of its spread, and the running noise estimate's time constant
+    ``TN`` (s; 0: none) and reference variance ``REF`` ((m/s^2)^2;
+    :func:`roadbank.estimators.kernels.sample.noise_update`), and the number ``NLP`` of the low-pass's states
+    whose update follows it (:func:`roadbank.estimators.kernels.sample.scale_update`)."""
 
     CLIP: int
     GRAV: int
     QAY: int
     RR: int
+    TN: int
+    REF: int
+    NLP: int
 
 
 @_compiled
 def limit_block(o: int) -> LimitBlock:
     """:class:`LimitBlock` at offset ``o`` (``cfg[C_LIM]``)."""
-    return LimitBlock(o, o + 1, o + 2, o + 3)
+    return LimitBlock(o, o + 1, o + 2, o + 3, o + 4, o + 5, o + 6)
+
+
+class LimitState(NamedTuple):
+    """Offsets in ``mem`` of a limited low-pass's running noise ratio ``NV`` (-) and previous kinematic
+    acceleration ``KA`` (m/s^2) (:func:`roadbank.estimators.kernels.sample.noise_update`)."""
+
+    NV: int
+    KA: int
+
+
+@_compiled
+def limit_states(n: int, nr: int) -> LimitState:
+    """:class:`LimitState` after the ``gated`` family's two states (which a one-observer low-pass leaves free)."""
+    o = M_X + n + nr + 2
+    return LimitState(o, o + 1)
 
 
 @_compiled
@@ -433,8 +455,9 @@ def smooth_fixed_row(n: int) -> SmoothFixedRow:
 
 @_compiled
 def mem_size(n: int, nr: int) -> int:
-    """Length of ``mem`` for ``n`` observer and ``nr`` roll states (room for a Riccati ``P``)."""
-    return M_X + n + nr + n * n + 2
+    """Length of ``mem`` for ``n`` observer and ``nr`` roll states (room for a Riccati ``P``, and for the
+    gate's and the limit's states after them)."""
+    return M_X + n + nr + n * n + 4
 
 
 @_compiled

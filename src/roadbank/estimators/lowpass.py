@@ -59,6 +59,14 @@ estimate and the centripetal term low-passed apart (:math:`\mathrm{LP}(u) = \mat
 so that the first state's innovation :math:`k - x_k` is the kinematic estimate's alone, which carries the
 road's noise; the centripetal term's steps (a turn's entry) are not in it. ``kinematic-pif`` limits it
 (:func:`roadbank.estimators.kernels.sample.limited_ay`).
+
+**Running noise** (``noise_tau``, s; with a limit). The cut-off is designed for the noise of the log's first
+minute; a long drive changes roads. With ``noise_tau > 0`` and the design span's noise ``noise_ref``, the
+limited update follows a running estimate of the noise (:func:`roadbank.estimators.kernels.sample.noise_update`:
+the ratio :math:`m` of the kinematic acceleration's first differences, time constant ``noise_tau``, to their
+variance ``noise_ref`` on the design span): its limit scales with :math:`\sqrt m`, and the update of its states
+(both, in the split form) with :math:`m^{-1/3}`, as the cut-off :func:`cutoff_for_noise` gives :math:`m` times
+the designed noise (:func:`roadbank.estimators.kernels.sample.scale_update`).
 """
 
 from __future__ import annotations
@@ -109,7 +117,9 @@ class LowPassDesign(DesignInputs):
     noise), the centripetal feed-forward gain ``kappa`` (-), and for a scheduled cut-off the bank rate
     of roads ``bank_rate`` (rad/s), the noise densities ``Q_ay`` ((m/s^2)^2 s) and ``R`` ((rad/s)^2 s),
     the sampled-data lead ``lead`` (s; module docstring), ``split``: the two-state form (module
-    docstring), and the update's limit ``clip`` (-, standard deviations of ``Q_ay`` and ``R``; 0: linear)."""
+    docstring), the update's limit ``clip`` (-, standard deviations of ``Q_ay`` and ``R``; 0: linear) and its
+    running noise estimate's time constant ``noise_tau`` (s; 0: none) and reference variance ``noise_ref``
+    ((m/s^2)^2; module docstring)."""
 
     cutoff: float | None
     kappa: float
@@ -119,6 +129,8 @@ class LowPassDesign(DesignInputs):
     lead: float = 0.0
     split: bool = False
     clip: float = 0.0
+    noise_tau: float = 0.0
+    noise_ref: float = 0.0
 
 
 def lowpass_cutoff(d: LowPassDesign, vx: float) -> float:
@@ -192,6 +204,11 @@ class KinematicLowPass(ScheduledObserver):
         Huber-type update for heavy-tailed road vibration. Needs ``Q_ay > 0`` (without it: linear) and no
         feed-forward in the one-state form (``kappa = 0`` or ``split``: the feed-forward's own steps would be
         in the innovation).
+    noise_tau, noise_ref : float, optional
+        With a limit: the time constant (s, >= 0; default 0, none) of the running noise estimate that the limit
+        and the gain follow, and the variance ((m/s^2)^2, > 0) of the kinematic acceleration's noise on the
+        design span it is relative to (:func:`roadbank.signals.diff_noise_std` squared; module docstring). Without
+        ``noise_ref`` (or without a limit) there is none.
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator`; ``v_min`` (m/s) defaults to
         :data:`~roadbank.estimators.kinematic.KINEMATIC_V_MIN` (the estimate holds at any speed).
@@ -208,7 +225,7 @@ class KinematicLowPass(ScheduledObserver):
         def design(self) -> LowPassDesign: ...     # an instance of design_type
 
     def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, Q_ay=None, R=None, lead=None,
-                 split=False, clip=None, **kw):
+                 split=False, clip=None, noise_tau=None, noise_ref=None, **kw):
         scheduled = cutoff is None and bank_rate is not None
         self.split = bool(split)
         if self.split:
@@ -226,6 +243,14 @@ class KinematicLowPass(ScheduledObserver):
         self.clip = clip if (self.Q_ay or 0.0) > 0 else 0.0
         if self.clip > 0 and self.kappa != 0 and not self.split:
             raise ValueError(f"{self.label}: a limit needs kappa = 0 or the split form (split=True)")
+        tau = float(self.defaults.get("noise_tau", 0.0) if noise_tau is None else noise_tau)
+        ref = float("nan") if noise_ref is None else float(noise_ref)
+        if not (np.isfinite(tau) and tau >= 0) or not (np.isnan(ref) or ref > 0 and np.isfinite(ref)):
+            raise ValueError(f"{self.label}: need noise_tau >= 0 s and noise_ref > 0 (m/s^2)^2, got {noise_tau}, "
+                             f"{noise_ref}")
+        # a running noise estimate needs the limit it scales and the design span's noise it is relative to
+        running = self.clip > 0 and tau > 0 and ref > 0
+        self.noise_tau, self.noise_ref = (tau, ref) if running else (0.0, 0.0)
         if not scheduled and not (np.isfinite(self.cutoff) and self.cutoff > 0):
             raise ValueError(f"{self.label}: cutoff must be > 0 Hz, got {cutoff}")
         if scheduled and not (self.bank_rate > 0 and np.isfinite(self.bank_rate) and self.Q_ay >= 0
@@ -241,7 +266,8 @@ class KinematicLowPass(ScheduledObserver):
 
     def _design_fields(self) -> dict:
         return dict(cutoff=self.cutoff, kappa=self.kappa, bank_rate=self.bank_rate, Q_ay=self.Q_ay, R=self.R,
-                    lead=self.lead, split=self.split, clip=self.clip)
+                    lead=self.lead, split=self.split, clip=self.clip, noise_tau=self.noise_tau,
+                    noise_ref=self.noise_ref)
 
     @property
     def limited(self) -> bool:           # type: ignore[override]
@@ -251,7 +277,8 @@ class KinematicLowPass(ScheduledObserver):
     def limit_constants(self) -> list[float]:
         if not self.limited:
             return []
-        return [self.clip, float(self.params.g), float(self.Q_ay or 0.0), float(self.R or 0.0)]
+        return [self.clip, float(self.params.g), float(self.Q_ay or 0.0), float(self.R or 0.0), self.noise_tau,
+                self.noise_ref, float(len(self.state_names))]
 
     def _design(self):
         tab, n, extra = super()._design()

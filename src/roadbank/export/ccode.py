@@ -28,6 +28,7 @@ from string import Template
 import numpy as np
 
 from .. import __version__
+from ..estimators.kernels.sample import NOISE_HUBER, NOISE_RATIO_MAX, NOISE_RATIO_MIN
 from ..estimators.layout import NETA, lpv_row
 from ..estimators.update_spec import FIXED, GENERAL, OUTPUT, PATHS, RESTART, Sum, block_shape, row_ranges
 from .design import ExportDesign
@@ -245,7 +246,7 @@ static int rb_update(state_t *st, int restart, int fixed, real_t dt, real_t vx, 
     real_t a;
     int i;
     real_t u[3];
-    /* index and weight on the speed grid, clamped at both ends (update_spec.grid_point) */
+${limit_decl}    /* index and weight on the speed grid, clamped at both ends (update_spec.grid_point) */
     sg = (vx - RB_V0) * RB_INV_DV;
     if (sg <= 0.0_R) {
         i = 0;
@@ -261,7 +262,7 @@ static int rb_update(state_t *st, int restart, int fixed, real_t dt, real_t vx, 
     u[1] = RB_USES[1] ? ay : 0.0_R;
     u[2] = RB_USES[2] ? r : 0.0_R;
 ${limit_input}    w = rb_observer(st, i, a, u, dt, restart, fixed);
-${gate_call}    return rb_finish(st, w, ay, dt, restart, fixed);
+${limit_scale}${gate_call}    return rb_finish(st, w, ay, dt, restart, fixed);
 }
 
 static int rb_output(const state_t *st, int ok, output_t *out)
@@ -285,7 +286,7 @@ void ${p}_init(state_t *s)
     for (k = 0; k < 3; ++k) {
         s->eta[k] = 0.0_R;
     }
-${init_x}${init_z}${init_gate}    s->ay_last = 0.0_R;
+${init_x}${init_z}${init_gate}${init_noise}    s->ay_last = 0.0_R;
     s->w = 0.0_R;
     s->theta = 0.0_R;
     s->phi_b = 0.0_R;
@@ -713,25 +714,78 @@ def _gate_parts(d: ExportDesign, float32: bool) -> dict:
 
 def _limit_parts(d: ExportDesign, float32: bool) -> dict:
     """A limited low-pass's ``ay`` (:func:`roadbank.estimators.kernels.sample.limited_ay`, same operations
-    in the same order), read in the steering's input slot; or nothing."""
+    in the same order), read in the steering's input slot, and its running noise
+    (:func:`~roadbank.estimators.kernels.sample.noise_update`,
+    :func:`~roadbank.estimators.kernels.sample.scale_update`); or nothing."""
+    none = {"limit_consts": "", "limit_decl": "", "limit_input": "", "limit_scale": "", "init_noise": ""}
     if d.limit is None:
-        return {"limit_consts": "", "limit_input": ""}
+        return none
     g = d.limit
     lit = lambda x: real_literal(x, float32)  # noqa: E731
+    f = "f" if float32 else ""
     consts = ("/* the low-pass's ay limited to RB_CLIP standard deviations of its noise (kernels.sample.limited_ay):\n"
               " * gravity (m/s^2), Q_ay ((m/s^2)^2 s), R ((rad/s)^2 s) */\n"
-              f"#define RB_SQRT {'sqrtf' if float32 else 'sqrt'}\n"
+              f"#define RB_SQRT sqrt{f}\n"
               f"#define RB_CLIP ({lit(g['clip'])})\n#define RB_CLIP_G ({lit(g['grav'])})\n"
               f"#define RB_CLIP_Q ({lit(g['qay'])})\n#define RB_CLIP_R ({lit(g['rr'])})\n")
+    if not d.running_noise:
+        code = ("    u[0] = ay;   /* the low-pass reads its ay in the steering's slot */\n"
+                "    if (!restart) {\n"
+                "        const real_t e = ay - (RB_CLIP_G * st->x[0] + vx * r);\n"
+                "        const real_t s = RB_CLIP * RB_SQRT((RB_CLIP_Q + vx * vx * RB_CLIP_R) / dt);\n"
+                "        real_t ec = e < s ? e : s;\n"
+                "        ec = ec > -s ? ec : -s;\n"
+                "        u[0] = ay - (e - ec);\n"
+                "    }\n")
+        return {**none, "limit_consts": consts, "limit_input": code}
+    nlp = int(g["nlp"])
+    consts += ("/* its running noise ratio nv (kernels.sample.noise_update): time constant (s), the design span's\n"
+               " * variance of the kinematic acceleration ((m/s^2)^2), Huber limit, bounds; the update of the\n"
+               f" * first {nlp} states follows it */\n"
+               f"#define RB_POW pow{f}\n"
+               f"#define RB_NOISE_TN ({lit(g['tn'])})\n#define RB_NOISE_REF ({lit(g['ref'])})\n"
+               f"#define RB_NOISE_H ({lit(NOISE_HUBER)})\n#define RB_NOISE_MIN ({lit(NOISE_RATIO_MIN)})\n"
+               f"#define RB_NOISE_MAX ({lit(NOISE_RATIO_MAX)})\n#define RB_NLP {nlp}\n")
+    decl = "    real_t rho = 1.0_R;\n    real_t x_prev[RB_NLP];\n    int k;\n"
     code = ("    u[0] = ay;   /* the low-pass reads its ay in the steering's slot */\n"
             "    if (!restart) {\n"
             "        const real_t e = ay - (RB_CLIP_G * st->x[0] + vx * r);\n"
-            "        const real_t s = RB_CLIP * RB_SQRT((RB_CLIP_Q + vx * vx * RB_CLIP_R) / dt);\n"
+            "        const real_t s = RB_CLIP * RB_SQRT((RB_CLIP_Q + vx * vx * RB_CLIP_R) * st->nv / dt);\n"
             "        real_t ec = e < s ? e : s;\n"
             "        ec = ec > -s ? ec : -s;\n"
             "        u[0] = ay - (e - ec);\n"
+            "    }\n"
+            "    {\n"
+            "        const real_t ka = ay - vx * r;\n"
+            "        if (restart) {\n"
+            "            st->nv = st->nv > 0.0_R ? st->nv : 1.0_R;\n"
+            "        } else {\n"
+            "            const real_t da = ka - st->ka;\n"
+            "            real_t m = st->nv;\n"
+            "            real_t q = da * da / (2.0_R * RB_NOISE_REF);\n"
+            "            q = q < RB_NOISE_H * m ? q : RB_NOISE_H * m;\n"
+            "            m = m + dt / (RB_NOISE_TN + dt) * (q - m);\n"
+            "            m = m > RB_NOISE_MIN ? m : RB_NOISE_MIN;\n"
+            "            m = m < RB_NOISE_MAX ? m : RB_NOISE_MAX;\n"
+            "            st->nv = m;\n"
+            "            rho = 1.0_R / RB_POW(m, 1.0_R / 3.0_R);\n"
+            "        }\n"
+            "        st->ka = ka;\n"
+            "    }\n"
+            "    for (k = 0; k < RB_NLP; ++k) {\n"
+            "        x_prev[k] = st->x[k];\n"
             "    }\n")
-    return {"limit_consts": consts, "limit_input": code}
+    scale = ("    if (rho != 1.0_R) {   /* the low-pass's update follows its running noise (scale_update) */\n"
+             "        const int i1 = i + 1 < RB_NG ? i + 1 : RB_NG - 1;\n"
+             "        for (k = 0; k < RB_NLP; ++k) {\n"
+             "            const real_t h = RB_TAB[i][RB_OH + k] + a * (RB_TAB[i1][RB_OH + k] - RB_TAB[i][RB_OH + k]);\n"
+             "            const real_t xs = x_prev[k] + rho * (st->x[k] - x_prev[k]);\n"
+             "            w += h * (xs - st->x[k]);\n"
+             "            st->x[k] = xs;\n"
+             "        }\n"
+             "    }\n")
+    return {"limit_consts": consts, "limit_decl": decl, "limit_input": code, "limit_scale": scale,
+            "init_noise": "    s->nv = 0.0_R;\n    s->ka = 0.0_R;\n"}
 
 
 def _provenance(d: ExportDesign) -> str:
@@ -788,7 +842,10 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
                   if d.nr else ""),
         gate_member=(f"    {names['real']} rf;              /* rad/s, low-passed yaw rate (gate) */\n"
                      f"    {names['real']} g;               /* -, gate: 0 first observer, 1 second */\n"
-                     if d.gate else ""))
+                     if d.gate else "")
+        + (f"    {names['real']} nv;              /* -, running noise ratio (limited low-pass) */\n"
+           f"    {names['real']} ka;              /* m/s^2, ay - vx r of the last valid sample */\n"
+           if d.running_noise else ""))
     helpers_needed = nt > 0
     source = _SOURCE.substitute(
         common, provenance=_provenance(d), sub_lit=f"{d.max_substep:g}",

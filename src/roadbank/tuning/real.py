@@ -87,6 +87,14 @@ before ran; :func:`roadbank.estimators.kernels.sample.limited_ay`): road vibrati
 (KITTI training median 0.3929 -> 0.3853 deg; every simulated training drive is quiet, so they tie).
 The eleventh (:func:`smoother_clip_candidates`) chooses the same for both passes of the offline
 ``kinematic-smoother``: 2.5 (0.2168 -> 0.2082 deg).
+
+The twelfth stage (:func:`choose_noise_tau`) chooses the time constant of the running noise estimate that the
+blend's limited low-pass follows (:data:`NOISE_TAUS`; 0: the design span's noise throughout, as every stage
+before ran; :func:`roadbank.estimators.kernels.sample.noise_update`): a long drive changes roads after the
+minute it is designed on. Its objective adds to the KITTI training median that of the same drives put end to
+end in both orders (:func:`long_logs`, :func:`long_median`), a long drive starting on either end of them. It
+chose 60 s: drives one by one 0.3853 -> 0.3867 deg, end to end 0.4084 -> 0.3884 (in order 0.3886 -> 0.3871,
+reversed 0.4084 -> 0.3899); the simulated training drives are quiet and do not take part.
 """
 
 from __future__ import annotations
@@ -104,6 +112,7 @@ from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
 from ..sim import SCENARIOS, run_scenario
 from ..sim.params import PlantParams
+from ..signals import Signals, concat_signals
 from ..validation.kitti import KITTI_SCORING
 from ..validation.scoring import masks
 from ..validation.splits import KITTI_TRAINING
@@ -150,7 +159,15 @@ PAPER_SEEDS = (0, 1, 2)
 #: candidate limits of ``kinematic-pif``'s low-pass update (-, standard deviations of its input's white noise;
 #: :func:`roadbank.estimators.kernels.sample.limited_ay`), the tenth stage's; 0: linear (the stages before), first
 CLIPS = (0.0, 6.0, 4.0, 3.0, 2.5, 2.0, 1.5)
-#: the stages before the tenth ran with the linear low-pass
+#: candidate time constants (s) of the running noise estimate that ``kinematic-pif``'s limited low-pass follows
+#: (:func:`roadbank.estimators.kernels.sample.noise_update`), the twelfth stage's; 0: the design span's noise
+#: throughout (the stages before), first; then the longer first (ties go to the earlier)
+NOISE_TAUS = (0.0, 60.0, 30.0, 15.0, 8.0, 4.0)
+#: seconds between the training drives put end to end (:func:`long_logs`): more than a restart's gap
+LONG_GAP_S = 2.0
+#: the stages before the twelfth ran on the design span's noise throughout
+_DESIGN_NOISE = {"noise_tau": 0.0}
+#: the stages before the tenth ran with the linear low-pass (no limit: no running noise either)
 _LINEAR = {"clip": 0.0}
 #: the stages before the eighth designed a car not described for the static car
 _STATIC_CAR = {"car_margin": math.inf, **_LINEAR}
@@ -282,9 +299,11 @@ def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kap
     :data:`V_MINS`, highest first; ``stage`` 6: every sampled-data lead of :data:`LEADS_SAMPLES`, in
     that order (the continuous-time filter first); ``stage`` 8: every car margin of :data:`CAR_MARGINS`
     (the static car first: :func:`roadbank.vehicle.design_car`); ``stage`` 10: every limit of the low-pass's
-    update of :data:`CLIPS` (the linear low-pass first). Stages 1-5 ran before the sixth existed:
-    their candidates have no lead (``lead_samples=0``); stages 1-7 before the eighth: a car not described
-    is the static one (``car_margin=inf``); stages 1-9 before the tenth: the low-pass is linear (``clip=0``).
+    update of :data:`CLIPS` (the linear low-pass first); ``stage`` 12: every time constant of the running
+    noise estimate of :data:`NOISE_TAUS` (none first; :func:`choose_noise_tau`). Stages 1-5 ran before the
+    sixth existed: their candidates have no lead (``lead_samples=0``); stages 1-7 before the eighth: a car not
+    described is the static one (``car_margin=inf``); stages 1-9 before the tenth: the low-pass is linear
+    (``clip=0``); stages 1-11 before the twelfth: no running noise (``noise_tau=0``).
     Every stage scores the real drives with :data:`~roadbank.validation.kitti.KITTI_SCORING`
     (:func:`training_logs`' default).
     """
@@ -303,13 +322,58 @@ def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kap
     if stage == 8:
         return {m: per_log("kinematic-pif", car_margin=m, **_LINEAR) for m in CAR_MARGINS}
     if stage == 10:
-        return {c: per_log("kinematic-pif", clip=c) for c in CLIPS}
+        return {c: per_log("kinematic-pif", clip=c, **_DESIGN_NOISE) for c in CLIPS}
+    if stage == 12:
+        return {tau: per_log("kinematic-pif", noise_tau=tau) for tau in NOISE_TAUS}
     if stage != 2 or bank_rate_deg is None or kappa is None:
-        raise ValueError("kinematic_pif_candidates: stage 1, 3, 4, 5, 6, 8 or 10, or stage 2 with the first "
+        raise ValueError("kinematic_pif_candidates: stage 1, 3, 4, 5, 6, 8, 10 or 12, or stage 2 with the first "
                          "stage's bank rate and kappa")
     return {(on, sp, rel): per_log("kinematic-pif", bank_rate=float(np.radians(bank_rate_deg)), kappa=kappa,
                                    gate_on=on, gate_span=sp, gate_release=rel, **_NO_LEAD)
             for on in GATE_GRID["gate_on"] for sp in GATE_GRID["gate_span"] for rel in GATE_GRID["gate_release"]}
+
+
+def long_logs(logs, gap: float = LONG_GAP_S) -> list:
+    """The drives of ``logs`` (:func:`training_logs`) put end to end, ``gap`` s apart, in their order and in the
+    reverse: a long drive that changes roads after the minute it is designed on, starting on either end. Each
+    is ``(signals, [(first sample, samples, reference roll rad, scored mask)] per drive)``."""
+    out = []
+    for order in (list(range(len(logs))), list(range(len(logs)))[::-1]):
+        parts, spans, t0, first = [], [], 0.0, 0
+        for i in order:
+            s, ref, m = logs[i]
+            t = np.asarray(s.t, dtype=np.float64) - s.t[0] + t0
+            parts.append(Signals(t, s.vx, s.ay, s.r, s.delta_f))
+            spans.append((first, len(s), ref, m))
+            first, t0 = first + len(s), t[-1] + gap
+        out.append((concat_signals(parts), spans))
+    return out
+
+
+def long_median(build, long) -> float:
+    """Median (deg) over every drive of every long log of ``long`` (:func:`long_logs`) of the raw RMS error of
+    ``theta`` against the INS roll on the drive's scored samples, the long log run as one (``build(signals)``
+    designed for it as the command line does: on its first minute)."""
+    errs = []
+    for signals, spans in long:
+        theta = build(signals).run(signals).theta
+        for first, n, ref, m in spans:
+            errs.append(float(np.degrees(np.sqrt(np.mean((theta[first:first + n][m] - ref[m]) ** 2)))))
+    return float(np.median(errs))
+
+
+def choose_noise_tau(logs, long=None) -> tuple[float, dict]:
+    """The twelfth stage: the time constant of :data:`NOISE_TAUS` for ``kinematic-pif``'s running noise estimate.
+    Each candidate's objective is the KITTI training median (drive by drive, :func:`objective` without simulated
+    drives: every one is quiet, so the low-pass is not used there) plus :func:`long_median` over ``long`` (default
+    :func:`long_logs` of ``logs``); the lowest wins, ties within :data:`TIE_DEG` going to the earlier candidate.
+    Returns ``(time constant s, {time constant: (drive median, long median)})``."""
+    long = long_logs(logs) if long is None else long
+    cands = kinematic_pif_candidates(12)
+    scores = {tau: (objective(b, logs, []), long_median(b, long)) for tau, b in cands.items()}
+    best = min(a + b for a, b in scores.values())
+    chosen = next(tau for tau in NOISE_TAUS if sum(scores[tau]) <= best + TIE_DEG)
+    return chosen, scores
 
 
 def smoother_clip_candidates() -> dict:

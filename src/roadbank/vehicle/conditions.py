@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from ..params import VehicleParams
-from ..signals import road_noise_floor_std, road_noise_std, sample_rate
+from ..signals import diff_noise_std, road_noise_floor_std, road_noise_std, sample_rate
 from .sensors import SensorSpec
 
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
@@ -45,7 +45,7 @@ QUIET_MODELS = {"kinematic-pif": QUIET_FILTER, "kinematic-smoother": "pif-smooth
 LIMITED_LOWPASSES = ("kinematic-smoother",)
 _GATE_OPTIONS = ("gate_on", "gate_span", "gate_tf", "gate_release")
 #: ``kinematic-pif``'s options of its low-pass and gate, which its quiet filter does not take
-_BLEND_OPTIONS = ("cutoff", "kappa", "bank_rate", "lead", "clip") + _GATE_OPTIONS
+_BLEND_OPTIONS = ("cutoff", "kappa", "bank_rate", "lead", "clip", "noise_tau", "noise_ref") + _GATE_OPTIONS
 
 
 def design_span(signals, v_min: float = 5.0) -> int:
@@ -73,12 +73,14 @@ def has_design_span(signals, v_min: float = 5.0) -> bool:
 
 def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     """What a log tells :func:`make_estimator` about its sensors: ``{"log_rate": Hz,
-    "log_ay_noise": m/s^2, "log_r_noise": rad/s, "log_ay_floor": m/s^2}`` — the sample rate of its
-    time base (:func:`roadbank.signals.sample_rate`), the road noise of its ``ay`` and yaw rate on the
-    samples at ``vx >= v_min`` (m/s): what they carry above the vehicle's dynamics band, taken
+    "log_ay_noise": m/s^2, "log_r_noise": rad/s, "log_ay_floor": m/s^2, "log_diff_noise": m/s^2}`` — the
+    sample rate of its time base (:func:`roadbank.signals.sample_rate`), the road noise of its ``ay`` and
+    yaw rate on the samples at ``vx >= v_min`` (m/s): what they carry above the vehicle's dynamics band, taken
     as white (:func:`roadbank.signals.road_noise_std`, the noise model of real roads; NaN when
-    too few samples), and the noise floor of its ``ay`` (:func:`roadbank.signals.road_noise_floor_std`,
-    what :func:`is_quiet` reads). Measured on the log's first :data:`DESIGN_SPAN_S` of driving
+    too few samples), the noise floor of its ``ay`` (:func:`roadbank.signals.road_noise_floor_std`,
+    what :func:`is_quiet` reads), and the noise that the first differences of the kinematic acceleration
+    ``ay - vx r`` read (:func:`roadbank.signals.diff_noise_std`: what a limited low-pass's running noise
+    estimate is relative to, ``noise_ref``). Measured on the log's first :data:`DESIGN_SPAN_S` of driving
     (:func:`design_span`), so that a streamed log gets the same design whatever its chunk size.
     """
     n = design_span(signals, v_min)
@@ -90,9 +92,12 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     ay_noise = road_noise_std(signals.ay, signals.t, moving)
     r_noise = road_noise_std(signals.r, signals.t, moving)
     ay_floor = road_noise_floor_std(signals.ay, signals.t, moving)
+    with np.errstate(invalid="ignore"):
+        diff_noise = diff_noise_std(np.asarray(signals.ay, np.float64) - vx * np.asarray(signals.r, np.float64), moving)
     # two significant digits: logs of one car and road share a design (the design cache)
     return {"log_rate": sample_rate(signals.t), "log_ay_noise": float(f"{ay_noise:.2g}"),
-            "log_r_noise": float(f"{r_noise:.2g}"), "log_ay_floor": float(f"{ay_floor:.2g}")}
+            "log_r_noise": float(f"{r_noise:.2g}"), "log_ay_floor": float(f"{ay_floor:.2g}"),
+            "log_diff_noise": float(f"{diff_noise:.2g}")}
 
 
 def noise_densities(sensors: SensorSpec, log_rate: float | None = None, log_ay_noise: float | None = None,
@@ -170,7 +175,8 @@ def quiet_noise_ratio(sensors: SensorSpec, log_rate: float | None = None, log_ay
 
 def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: SensorSpec | None = None,
                    log_rate: float | None = None, log_ay_noise: float | None = None,
-                   log_r_noise: float | None = None, log_ay_floor: float | None = None, **options):
+                   log_r_noise: float | None = None, log_ay_floor: float | None = None,
+                   log_diff_noise: float | None = None, **options):
     """``estimators.make(name, params, **options)`` for a log sampled at ``log_rate`` by ``sensors``.
 
     A default-tuned PIF (:func:`roadbank.estimators.pif.with_sensor_noise`) gets the weights
@@ -197,6 +203,10 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     log_ay_floor : float, optional
         Noise floor of the log's ``ay`` (m/s^2, :func:`roadbank.signals.road_noise_floor_std`), what
         :func:`is_quiet` reads; None or NaN: ``log_ay_noise``.
+    log_diff_noise : float, optional
+        Noise of the log's kinematic acceleration ``ay - vx r`` by its first differences (m/s^2,
+        :func:`roadbank.signals.diff_noise_std`): the blend's low-pass (``kinematic-pif``) follows a running
+        estimate of it (``noise_ref``, its square), unless ``noise_ref`` is given; None or NaN: it does not.
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
@@ -224,6 +234,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
             name, options = quiet_filter, {k: v for k, v in options.items() if k not in _BLEND_OPTIONS}
         elif lead_samples is not None:
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
+            if log_diff_noise is not None and math.isfinite(log_diff_noise) and log_diff_noise > 0:
+                options.setdefault("noise_ref", log_diff_noise ** 2)
     if sensors.r_variance > 0:
         R, Q_ay = noise_densities(sensors, log_rate, log_ay_noise, log_r_noise)
         options = with_sensor_noise(name, options, R, Q_ay)

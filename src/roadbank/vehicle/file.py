@@ -175,7 +175,8 @@ class Vehicle:
 
     # ---- use --------------------------------------------------------------------------------
     def make(self, estimator_name: str, *, log_rate: float | None = None, log_ay_noise: float | None = None,
-             log_r_noise: float | None = None, log_ay_floor: float | None = None, **overrides):
+             log_r_noise: float | None = None, log_ay_floor: float | None = None,
+             log_diff_noise: float | None = None, **overrides):
         """Build an estimator for this car: its params, sensors and ``[tuning.<name>]`` options.
 
         :func:`make_estimator` ``(name, self.params, sensors=self.sensors, log_rate=log_rate,
@@ -189,7 +190,8 @@ class Vehicle:
         :func:`~roadbank.vehicle.conditions.noise_densities`. ``kinematic-pif`` and
         ``kinematic-smoother`` take the car's model on a quiet log
         (:func:`~roadbank.vehicle.conditions.is_quiet` of the ``ay`` noise floor ``log_ay_floor``,
-        m/s^2), this car's sensors giving the data sheet.
+        m/s^2), this car's sensors giving the data sheet; the blend's low-pass follows the running noise of
+        the kinematic acceleration relative to ``log_diff_noise`` (m/s^2).
         """
         from ..estimators import TUNED_AS
         # an estimator tuned as itself looks up None: no table
@@ -197,6 +199,7 @@ class Vehicle:
                   **self.tuning.get(estimator_name, {})}
         return make_estimator(estimator_name, self.params, sensors=self.sensors, log_rate=log_rate,
                               log_ay_noise=log_ay_noise, log_r_noise=log_r_noise, log_ay_floor=log_ay_floor,
+                              log_diff_noise=log_diff_noise,
                               **{**tuning, **overrides})
 
     @property

@@ -23,8 +23,8 @@ from ..layout import (C_DTFIX, C_DTOL, C_DV, C_GAP, C_LIM, C_N, C_NG, C_NR, C_SU
                       roll_states)
 from ._jit import ENTRY, HELPER
 from .linalg import tustin
-from .sample import (ROLL0, ROLL2, angles, begin, finish, grid, interp, limited_ay, roll_fixed2, roll_map, sample_valid,
-                     store)
+from .sample import (ROLL0, ROLL2, angles, begin, finish, grid, interp, limited_ay, noise_update, roll_fixed2, roll_map,
+                     sample_valid, scale_update, store)
 from .simd import interp4, map4
 
 #: offsets of the batch loop's block in a three-state lpv row (layout.batch3_block)
@@ -109,7 +109,8 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     ``Phi, Gam0, Gam1`` (and for three states the batch block, :func:`fixed3`).
     ``work`` (:func:`~roadbank.estimators.layout.work_size` floats) receives the
     interpolated row at the same offsets, then scratch. A limited low-pass (``cfg[C_LIM] > 0``) reads
-    :func:`~roadbank.estimators.kernels.sample.limited_ay` in the steering's slot.
+    :func:`~roadbank.estimators.kernels.sample.limited_ay` in the steering's slot, then updates its running
+    noise (:func:`~roadbank.estimators.kernels.sample.noise_update`).
     """
     if cfg[C_LIM] > 0.0:
         d = limited_ay(mem, cfg, t, vx, ay, r)
@@ -120,7 +121,8 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     row = lpv_row(n)
     eta = (d if cfg[C_USE] > 0 else 0.0, ay if cfg[C_USE + 1] > 0 else 0.0, r if cfg[C_USE + 2] > 0 else 0.0)
     dt, restart, fixed = begin(mem, cfg, t)
-    if fixed and n == 3:
+    rho = noise_update(mem, cfg, vx, ay, r, dt, restart) if cfg[C_LIM] > 0.0 else 1.0
+    if fixed and n == 3 and cfg[C_LIM] == 0.0:
         x0, x1, x2, w = fixed3(tab[i], a, mem[M_ETA], mem[M_ETA + 1], mem[M_ETA + 2], eta[0], eta[1], eta[2],
                                mem[M_X], mem[M_X + 1], mem[M_X + 2])
         mem[M_X] = x0
@@ -135,7 +137,11 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
             interp(tab, i, a, row.Phi, row.end, work)
         else:
             interp(tab, i, a, row.F if not restart else row.H, row.J if not restart else row.cont, work)
+        x0 = mem[M_X]
+        x1 = mem[M_X + 1] if n > 1 else 0.0
         w = observer_update(mem, cfg, work, n, eta, dt, restart, fixed)
+        if rho != 1.0:          # a limited low-pass following its running noise
+            w = scale_update(mem, cfg, work, row.H, x0, x1, rho, w)
     ok = finish(mem, cfg, w, ay, dt, restart, fixed)
     return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
 

@@ -10,7 +10,8 @@ import numpy as np
 from numba import njit
 
 from ..layout import (C_DTFIX, C_DTOL, C_DV, C_GAP, C_LIM, C_N, C_NG, C_NR, C_SUB, C_USE, C_V0, C_VMIN, C_WMAX,
-                      M_AY, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, limit_block, roll_block, roll_states)
+                      M_AY, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, limit_block, limit_states, roll_block,
+                      roll_states)
 from ._jit import HELPER, INLINE
 
 #: the roll block's offsets in ``cfg`` for the two roll models (``nr`` 0: static gain or none; 2: dynamic),
@@ -244,6 +245,13 @@ def store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x):
         out_x[k, p] = mem[M_X + p]
 
 
+#: the running noise estimate's Huber limit: a squared difference counts at most this many times the running
+#: variance (3 standard deviations), so that one pothole moves it little (:func:`noise_update`)
+NOISE_HUBER = 9.0
+#: bounds (-) of the running noise ratio (:func:`noise_update`): the cut-off moves at most by a factor 2
+NOISE_RATIO_MIN, NOISE_RATIO_MAX = 0.125, 8.0
+
+
 @njit(**INLINE)
 def limited_ay(mem, cfg, t, vx, ay, r):
     r"""The ``ay`` (m/s^2) a limited kinematic low-pass reads (``cfg[C_LIM] > 0``, the caller checks; its
@@ -253,20 +261,85 @@ def limited_ay(mem, cfg, t, vx, ay, r):
     The observer's first state :math:`x` (``mem[M_X]``) is the kinematic estimate :math:`(a_y - v_x r)/g`
     low-passed (``kinematic-lp`` without feed-forward, or the split low-pass,
     :mod:`roadbank.estimators.lowpass`), its prediction; the innovation in ``ay`` units is
-    :math:`e = a_y - (g x + v_x r)`, its limit :math:`s = c \sqrt{(Q_{ay} + v_x^2 R) / \Delta t}` (the noise
-    the low-pass is designed for, sampled at the interval :math:`\Delta t`), and the result
-    :math:`a_y - (e - \mathrm{clip}(e, -s, s))`: a Huber-type update, linear within ``s``. At a (re)start
-    ``ay`` itself. NaN in, NaN out. The observer reads it in the steering's input slot.
+    :math:`e = a_y - (g x + v_x r)`, its limit :math:`s = c \sqrt{m (Q_{ay} + v_x^2 R) / \Delta t}` (the noise
+    the low-pass is designed for, sampled at the interval :math:`\Delta t`, times the running noise ratio
+    :math:`m` of :func:`noise_update`; 1 without one), and the result :math:`a_y - (e - \mathrm{clip}(e, -s, s))`:
+    a Huber-type update, linear within ``s``. At a (re)start ``ay`` itself. NaN in, NaN out. The observer
+    reads it in the steering's input slot.
     """
     lb = limit_block(np.int64(cfg[C_LIM]))
     dt = t - mem[M_TLAST]
     if mem[M_INIT] == 0.0 or not (dt > 0.0) or dt > cfg[C_GAP]:
         return ay
+    m = mem[limit_states(np.int64(cfg[C_N]), np.int64(cfg[C_NR])).NV] if cfg[lb.TN] > 0.0 else 1.0
     e = ay - (cfg[lb.GRAV] * mem[M_X] + vx * r)
-    s = cfg[lb.CLIP] * math.sqrt((cfg[lb.QAY] + vx * vx * cfg[lb.RR]) / dt)
+    s = cfg[lb.CLIP] * math.sqrt((cfg[lb.QAY] + vx * vx * cfg[lb.RR]) * m / dt)
     ec = e if e < s else s
     ec = ec if ec > -s else -s
     return ay - (e - ec)
+
+
+#: the running noise estimate's Huber limit: a squared difference counts at most this many times the running
+#: variance (3 standard deviations), so that one pothole moves it little (:func:`noise_update`)
+NOISE_HUBER = 9.0
+#: bounds (-) of the running noise ratio (:func:`noise_update`): the low-pass's gain moves at most by a factor 2
+NOISE_RATIO_MIN, NOISE_RATIO_MAX = 0.125, 8.0
+
+
+@njit(**INLINE)
+def noise_update(mem, cfg, vx, ay, r, dt, restart):
+    r"""The running noise ratio :math:`m` of a limited low-pass (``cfg[C_LIM] > 0``, the caller checks) at a
+    used sample; returns the factor :math:`\rho = m^{-1/3}` (-) on its low-pass states' update
+    (:func:`scale_update`): 1 at a (re)start and unless the limit's ``TN > 0``.
+
+    With :math:`a = a_y - v_x r` (m/s^2, the kinematic acceleration, whose first difference over a 10 Hz
+    log is road vibration and sensor noise far more than manoeuvre) and ``REF`` its white-noise variance
+    over the design span (:func:`roadbank.signals.diff_noise_std` squared), the ratio
+
+    .. math::
+        m \mathrel{+}= \frac{\Delta t}{T_N + \Delta t}\left(\min\left(\frac{(\Delta a)^2}{2\,\mathrm{REF}},
+        H m\right) - m\right), \qquad H = 9,
+
+    clipped to [:data:`NOISE_RATIO_MIN`, :data:`NOISE_RATIO_MAX`]: a Huber-type running variance (a
+    spike counts at most 3 of its standard deviations) with time constant :math:`T_N`, relative to the
+    design's. At a (re)start :math:`m = 1`. The low-pass's cut-off for :math:`m` times the designed noise is
+    :math:`m^{-1/3}` times the designed one (:func:`~roadbank.estimators.lowpass.cutoff_for_noise`), and so,
+    for a slow filter (:math:`2\pi f_c \Delta t \ll 1`), its gain. The states are in ``mem``
+    (:func:`~roadbank.estimators.layout.limit_states`).
+    """
+    lb = limit_block(np.int64(cfg[C_LIM]))
+    if not cfg[lb.TN] > 0.0:
+        return 1.0
+    ls = limit_states(np.int64(cfg[C_N]), np.int64(cfg[C_NR]))
+    a = ay - vx * r
+    if restart:             # the road's noise outlasts a gap in the log: m is kept (0 only before the first sample)
+        mem[ls.NV] = mem[ls.NV] if mem[ls.NV] > 0.0 else 1.0
+        mem[ls.KA] = a
+        return 1.0
+    da = a - mem[ls.KA]
+    mem[ls.KA] = a
+    m = mem[ls.NV]
+    u = da * da / (2.0 * cfg[lb.REF])
+    u = u if u < NOISE_HUBER * m else NOISE_HUBER * m
+    m = m + dt / (cfg[lb.TN] + dt) * (u - m)
+    m = m if m > NOISE_RATIO_MIN else NOISE_RATIO_MIN
+    m = m if m < NOISE_RATIO_MAX else NOISE_RATIO_MAX
+    mem[ls.NV] = m
+    return 1.0 / m ** (1.0 / 3.0)
+
+
+@njit(**INLINE)
+def scale_update(mem, cfg, work, h, x0, x1, rho, w):
+    """The update of a limited low-pass's first ``NLP`` states (its :class:`~roadbank.estimators.layout.LimitBlock`;
+    1 or 2, from ``x0``, ``x1`` before the update) times ``rho`` (:func:`noise_update`), and the output ``w``
+    moved with them (``work[h:]``: the output row ``H`` at ``vx``); returns ``w``."""
+    nlp = np.int64(cfg[limit_block(np.int64(cfg[C_LIM])).NLP])
+    for p in range(nlp):
+        xo = x0 if p == 0 else x1
+        xs = xo + rho * (mem[M_X + p] - xo)
+        w += work[h + p] * (xs - mem[M_X + p])
+        mem[M_X + p] = xs
+    return w
 
 
 def step_by_run(run, mem, cfg, tab, work, t, vx, d, ay, r):
