@@ -70,6 +70,48 @@ def test_simulate_csv_and_parquet_read_without_map(tmp_path):
     assert load_log(pq_p).metadata["scenario"] == "const-bank"
 
 
+def test_a_log_without_steering_reads_with_the_default_map_and_estimates(tmp_path):
+    """An IMU/INS-style table (t, vx, ay, r; no steering column) reads with the default map: delta_f NaN and
+    a warning naming the file and the channel, the other channels as written; `roadbank estimate` with no
+    option writes the default's estimate (it does not read the steering angle), every sample at speed
+    valid; an estimator that reads it gives no valid sample. A map the user wrote that names a steering
+    column the file lacks is still refused."""
+    from click.testing import CliRunner
+
+    from roadbank.cli import main
+
+    cols = {k: v for k, v in _sim_columns(3000).items() if k in ("t", "vx", "ay", "r")}
+    p = _write_csv(tmp_path / "imu.csv", cols)
+    from roadbank.io.stream import stream_log
+
+    log = load_log(p)
+    assert np.isnan(log.signals.delta_f).all()
+    np.testing.assert_allclose(log.signals.ay, cols["ay"], atol=1e-12)
+    note = "imu.csv: channel 'steering': no column 'delta_f' or 'steering_wheel_angle'"
+    assert sum(note in w for w in log.warnings) == 1, log.warnings
+    pq.write_table(pa.table(cols), tmp_path / "imu.parquet")
+    chunks = list(stream_log(tmp_path / "imu.parquet", chunk_rows=700))     # streamed: the warning once
+    assert len(chunks) > 1 and sum(note.replace(".csv", ".parquet") in w for c in chunks for w in c.warnings) == 1
+    res = CliRunner().invoke(main, ["estimate", str(p), "-o", str(tmp_path / "out.csv")])
+    assert res.exit_code == 0, res.output
+    import pandas as pd
+    out = pd.read_csv(tmp_path / "out.csv")
+    assert out.filter(like="valid").to_numpy().all()
+    res = CliRunner().invoke(main, ["estimate", str(p), "-e", "uio", "-o", str(tmp_path / "uio.csv")])
+    assert res.exit_code == 0, res.output
+    assert not pd.read_csv(tmp_path / "uio.csv").filter(like="valid").to_numpy().any()
+    m = _write_map(tmp_path / "map.toml", """
+[channels]
+time = { column = "t", unit = "s" }
+speed = { column = "vx", unit = "m/s" }
+lateral_acceleration = { column = "ay", unit = "m/s^2" }
+yaw_rate = { column = "r", unit = "rad/s" }
+steering_wheel_angle = { column = "swa", unit = "deg" }
+""")
+    with pytest.raises(LogError, match=r"imu.csv.*'steering'.*missing: no column 'swa'"):
+        load_log(p, channels=read_channel_map(m))
+
+
 def test_default_map_falls_back_to_steering_wheel_over_ratio(tmp_path):
     cols = _sim_columns()
     del cols["delta_f"]

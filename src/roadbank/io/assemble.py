@@ -70,12 +70,14 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
     """Roles to read: speed, lateral_acceleration, yaw_rate, [the steering role], [reference_roll].
 
     The steering role is the road-wheel angle if its column exists, else the
-    steering-wheel angle (none if the map has no steering channel: ROS maps). ``have`` are the columns
-    present; ``names`` all the file's columns (for messages). LogError for a missing column.
+    steering-wheel angle (none if the map has no steering channel: ROS maps; none if the file has
+    neither column and the map's steering is optional: the default map, :func:`steering_note`).
+    ``have`` are the columns present; ``names`` all the file's columns (for messages). LogError for a
+    missing column.
     """
     steer_roles = [r for r in ("road_wheel_angle", "steering_wheel_angle") if r in cmap.channels]
     present: list[str | None] = [r for r in steer_roles if cmap.channels[r].column in have]
-    if not steer_roles:      # allowed for ROS maps only (ChannelMap): no steering, delta_f NaN
+    if not steer_roles or (not present and cmap.steering_optional):   # no steering: delta_f NaN
         present = [None]
     roles = ["speed", "lateral_acceleration", "yaw_rate"]
     for role in roles:
@@ -94,6 +96,18 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
             raise channel_error(p, "reference_roll", col, f"column not found in the file "
                                 f"(it has: {', '.join(names) or 'nothing'})")
     return roles
+
+
+def steering_note(p, cmap: ChannelMap, roles: list[str]) -> list[str]:
+    """The warning for a file read without the steering columns its (optional-steering) map names: the
+    steering angle is NaN; ``[]`` otherwise."""
+    steer = [r for r in ("road_wheel_angle", "steering_wheel_angle") if r in cmap.channels]
+    if not steer or any(r in roles for r in steer):
+        return []
+    cols = " or ".join(f"'{cmap.channels[r].column}'" for r in steer)
+    return [f"{Path(p).name}: channel 'steering': no column {cols}, so the steering angle is NaN (the default "
+            "estimator and the modified-model filters do not read it, the original-model ones, uio, dfc and "
+            "kalman give no valid sample)"]
 
 
 def steering_delta_f(cmap: ChannelMap, params: VehicleParams, roles: list[str], values: dict) -> np.ndarray:
@@ -294,6 +308,7 @@ def assemble(src, cmap: ChannelMap, params: VehicleParams, fmt: str) -> Iterator
     """
     p = src.path
     roles = select_roles(p, cmap, set(src.names), src.names)
+    src.warnings += steering_note(p, cmap, roles)
     gnss = gnss_roles(cmap)
     for r in gnss:
         if cmap.channels[r].column not in src.names:

@@ -162,6 +162,11 @@ class ChannelMap:
     no_steering : bool
         The log records no steering angle (a fixed layout such as KITTI's, built in code):
         no steering channel is required and ``delta_f`` is NaN.
+    steering_optional : bool
+        A file that has none of the steering columns the map names is read with ``delta_f`` NaN and a
+        warning, not refused (the default map: roadbank's default estimator does not read the
+        steering angle, and an IMU or INS log has none); a map the user wrote names columns that
+        must be there.
     """
 
     channels: dict[str, ChannelSpec]
@@ -175,6 +180,7 @@ class ChannelMap:
     dbc: str | None = None
     ros_time: str = "header"
     no_steering: bool = False
+    steering_optional: bool = False
 
     @property
     def timed_channels(self) -> bool:
@@ -244,7 +250,7 @@ def default_channel_map() -> ChannelMap:
         "road_wheel_angle": ChannelSpec("road_wheel_angle", "delta_f", "rad"),
         "steering_wheel_angle": ChannelSpec("steering_wheel_angle", "steering_wheel_angle", "rad"),
     }
-    return ChannelMap(ch, truth_prefix="true_", source="default channel map")
+    return ChannelMap(ch, truth_prefix="true_", source="default channel map", steering_optional=True)
 
 
 _TOP_KEYS = {"convention", "steering_ratio", "resample", "channels", "truth_prefix", "dbc", "ros_time"}

@@ -158,7 +158,9 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
     A default-tuned PIF is designed for the log's sample rate and the road noise measured on
     its ``ay`` and yaw rate (:func:`log_conditions`); the car as :func:`for_conditions`, a car that is
     not described chosen for the log (:func:`undescribed_params` of ``signals``).
-    ``for_log(name, s).run(s)`` is what the command line writes for the log ``s``.
+    ``for_log(name, s).run(s)`` is what the command line writes for the log ``s`` with ``--no-online-offsets``;
+    by default it adds the online offset learner
+    (``with_online_offsets(for_log(name, s), est.params).run(s)``), which differs after a standstill.
     """
     if params is None and vehicle is None:
         params = undescribed_params(signals)
