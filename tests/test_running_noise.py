@@ -14,7 +14,7 @@ from roadbank import estimators as E
 from roadbank.estimators import layout as L
 from roadbank.estimators.gated import KINEMATIC_PIF_NOISE_TAU
 from roadbank.estimators.kernels.sample import NOISE_HUBER, NOISE_RATIO_MAX, NOISE_RATIO_MIN
-from roadbank.signals import diff_noise_std
+from roadbank.signals import DIFF_NOISE_HUBER, diff_noise_std
 from roadbank.vehicle import for_log, log_conditions
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
@@ -39,6 +39,7 @@ def test_diff_noise_std_reads_white_noise_as_the_huber_fixed_point():
     x = sigma * rng.standard_normal(400_000)
     c = huber_fixed_point()
     assert 0.99 < c < 1.0
+    assert DIFF_NOISE_HUBER == NOISE_HUBER          # the design span's reference and the kernel's running value
     assert diff_noise_std(x) ** 2 / sigma ** 2 == pytest.approx(c, rel=0.01)
     # a few huge spikes barely move it (each counts at most 3 standard deviations)
     y = x.copy()

@@ -245,13 +245,6 @@ def store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x):
         out_x[k, p] = mem[M_X + p]
 
 
-#: the running noise estimate's Huber limit: a squared difference counts at most this many times the running
-#: variance (3 standard deviations), so that one pothole moves it little (:func:`noise_update`)
-NOISE_HUBER = 9.0
-#: bounds (-) of the running noise ratio (:func:`noise_update`): the cut-off moves at most by a factor 2
-NOISE_RATIO_MIN, NOISE_RATIO_MAX = 0.125, 8.0
-
-
 @njit(**INLINE)
 def limited_ay(mem, cfg, t, vx, ay, r):
     r"""The ``ay`` (m/s^2) a limited kinematic low-pass reads (``cfg[C_LIM] > 0``, the caller checks; its
@@ -302,7 +295,8 @@ def noise_update(mem, cfg, vx, ay, r, dt, restart):
 
     clipped to [:data:`NOISE_RATIO_MIN`, :data:`NOISE_RATIO_MAX`]: a Huber-type running variance (a
     spike counts at most 3 of its standard deviations) with time constant :math:`T_N`, relative to the
-    design's. At a (re)start :math:`m = 1`. The low-pass's cut-off for :math:`m` times the designed noise is
+    design's; 1 at the first sample, kept over a restart (the road's noise outlasts a gap in the log). The
+    low-pass's cut-off for :math:`m` times the designed noise is
     :math:`m^{-1/3}` times the designed one (:func:`~roadbank.estimators.lowpass.cutoff_for_noise`), and so,
     for a slow filter (:math:`2\pi f_c \Delta t \ll 1`), its gain. The states are in ``mem``
     (:func:`~roadbank.estimators.layout.limit_states`).
@@ -312,7 +306,7 @@ def noise_update(mem, cfg, vx, ay, r, dt, restart):
         return 1.0
     ls = limit_states(np.int64(cfg[C_N]), np.int64(cfg[C_NR]))
     a = ay - vx * r
-    if restart:             # the road's noise outlasts a gap in the log: m is kept (0 only before the first sample)
+    if restart:             # m is kept (0 only before the first sample)
         mem[ls.NV] = mem[ls.NV] if mem[ls.NV] > 0.0 else 1.0
         mem[ls.KA] = a
         return 1.0
