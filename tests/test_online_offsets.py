@@ -204,13 +204,23 @@ def _hard_offsets_log():
 
 
 @pytest.mark.parametrize("float32", [False, True])
-def test_the_c_export_learns_the_offsets_as_step_does(tmp_path, float32):
+@pytest.mark.parametrize("name", ["pif-modified", "kinematic-pif"])
+def test_the_c_export_learns_the_offsets_as_step_does(tmp_path, float32, name):
+    """The module's learner equals step()'s; for kinematic-pif with its low-pass following a running noise
+    estimate (a reference a quarter of the log's, so that it moves), the two together."""
     import ctypes
 
     from roadbank.export import export_c
     from roadbank.export.build import compile_c
+    from roadbank.signals import diff_noise_std
 
-    est = E.with_online_offsets(E.make("pif-modified"))
+    if name == "kinematic-pif":
+        t, vx, ay, r, _ = _hard_offsets_log()
+        ref = 0.25 * diff_noise_std(ay - vx * r) ** 2
+        est = E.with_online_offsets(E.make(name, Q_ay=1e-3, noise_ref=ref, noise_tau=5.0))
+        assert est.inner.noise_tau == 5.0
+    else:
+        est = E.with_online_offsets(E.make(name))
     res = export_c(est, tmp_path, rate=100.0, float32=float32)
     p = res.source.stem
     assert f"{p}_step_learning" in res.header.read_text() and "Online sensor offsets" in res.readme.read_text()
