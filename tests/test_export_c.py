@@ -185,18 +185,21 @@ def test_a_limited_low_pass_exports_its_limit(scenarios, tmp_path):
     assert acted
 
 
-@pytest.mark.parametrize("discrete", [False, True])
-def test_a_low_pass_following_its_running_noise_exports_it(discrete, scenarios, tmp_path):
+@pytest.mark.parametrize("discrete,limit_tau", [(False, None), (True, None), (False, 0.0)])
+def test_a_low_pass_following_its_running_noise_exports_it(discrete, limit_tau, scenarios, tmp_path):
     """kinematic-pif as built for a log (a running noise estimate relative to the design span's: here a reference
     a quarter of what the paper's manoeuvres read, so that the ratio moves, to about 4): the module keeps
     the ratio and the previous kinematic acceleration as state and scales the low-pass's update as the kernel
     does, float64 equal to step() on every scenario and a hard log (general and fixed-rate paths), float32 within
-    a thousandth of a degree; it differs from the same design without the running noise."""
+    a thousandth of a degree; it differs from the same design without the running noise. The limit reads its
+    shorter ratio (the default limit_tau) or the gain's (limit_tau=0)."""
     from roadbank.signals import diff_noise_std
 
     t, vx, ay, r, d = scenarios["bank-lane-change"]
     ref = 0.25 * diff_noise_std(ay - vx * r) ** 2
-    est = make("kinematic-pif", noise_ref=ref, noise_tau=5.0, Q_ay=float(BUILT["pif-modified"].Q_ay) * 25)
+    est = make("kinematic-pif", noise_ref=ref, noise_tau=5.0, limit_tau=limit_tau,
+               Q_ay=float(BUILT["pif-modified"].Q_ay) * 25)
+    assert (est.limit_tau > 0) == (limit_tau is None)
     plain = make("kinematic-pif", Q_ay=float(BUILT["pif-modified"].Q_ay) * 25)
     assert est.noise_tau == 5.0 and plain.noise_tau == 0.0      # no reference, no running noise
     if discrete:

@@ -465,8 +465,9 @@ class Estimator:
     limited = False
 
     def limit_constants(self) -> list[float]:
-        """The :class:`~roadbank.estimators.layout.LimitBlock` ``[clip, g, Q_ay, R, noise_tau, noise_ref, nlp]`` of a
-        limited estimator (-, m/s^2, (m/s^2)^2 s, (rad/s)^2 s, s, (m/s^2)^2, -); empty otherwise."""
+        """The :class:`~roadbank.estimators.layout.LimitBlock` ``[clip, g, Q_ay, R, noise_tau, noise_ref, nlp,
+        limit_tau]`` of a limited estimator (-, m/s^2, (m/s^2)^2 s, (rad/s)^2 s, s, (m/s^2)^2, -, s); empty
+        otherwise."""
         return []
 
     # -- public API ----------------------------------------------------------

@@ -226,6 +226,10 @@ KINEMATIC_PIF_CLIP = 3.0
 #: (:func:`roadbank.estimators.kernels.sample.noise_update`; 0: the design span's noise throughout; the rule of
 #: :mod:`roadbank.tuning.real`, twelfth stage): a long drive changes roads after the minute it was designed on
 KINEMATIC_PIF_NOISE_TAU = 60.0
+#: time constant (s) of the shorter running noise ratio that the limit alone reads (0: the gain's; the rule of
+#: :mod:`roadbank.tuning.real`, thirteenth stage): the limit is for the heavy tail, and a burst of vibration
+#: that lasts seconds is the road's noise, not a pothole
+KINEMATIC_PIF_LIMIT_TAU = 8.0
 
 
 class KinematicPIF(_GatedPair):
@@ -276,10 +280,11 @@ class KinematicPIF(_GatedPair):
         Huber-type update: heavy-tailed road vibration (a pothole, a kerb) moves it by at most that much
         per sample, a bank or a turn that lasts passes as before. The PIF reads ``ay`` as it is. With
         ``Q_ay = 0`` (no ``ay`` noise to measure against) the low-pass is linear.
-    noise_tau, noise_ref : float, optional
+    noise_tau, noise_ref, limit_tau : float, optional
         The limited low-pass's running noise estimate (:class:`~roadbank.estimators.lowpass.KinematicLowPass`):
-        its time constant (s; default :data:`KINEMATIC_PIF_NOISE_TAU`) and the design span's noise variance
-        ((m/s^2)^2) it is relative to; without ``noise_ref`` (a log's, built for it:
+        its time constant (s; default :data:`KINEMATIC_PIF_NOISE_TAU`), the design span's noise variance
+        ((m/s^2)^2) it is relative to, and the time constant (s; default :data:`KINEMATIC_PIF_LIMIT_TAU`) of
+        the shorter one the limit reads; without ``noise_ref`` (a log's, built for it:
         :func:`roadbank.vehicle.make_estimator`) there is none.
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator` (both filters).
@@ -291,7 +296,7 @@ class KinematicPIF(_GatedPair):
 
     def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, lead=None, tuning=None, Q=None, R=None,
                  S=None, th=None, Q_ay=None, adapt_th=None, gate_tf=None, gate_release=None, gate_on=None,
-                 gate_span=None, clip=None, noise_tau=None, noise_ref=None, **kw):
+                 gate_span=None, clip=None, noise_tau=None, noise_ref=None, limit_tau=None, **kw):
         d = KINEMATIC_PIF_GATE
         if clip is not None and not (np.isfinite(clip) and clip >= 0):
             raise ValueError(f"{self.name}: clip must be >= 0 (standard deviations), got {clip}")
@@ -312,10 +317,13 @@ class KinematicPIF(_GatedPair):
                                           lead=KINEMATIC_PIF_LEAD_SAMPLES / ESP_RATE if lead is None else lead,
                                           split=True, clip=KINEMATIC_PIF_CLIP if clip is None else clip,
                                           noise_tau=KINEMATIC_PIF_NOISE_TAU if noise_tau is None else noise_tau,
-                                          noise_ref=noise_ref, sample_rate=None, **noise, **common)
+                                          noise_ref=noise_ref,
+                                          limit_tau=KINEMATIC_PIF_LIMIT_TAU if limit_tau is None else limit_tau,
+                                          sample_rate=None, **noise, **common)
         self.cutoff, self.kappa, self.bank_rate = self._slow.cutoff, self._slow.kappa, self._slow.bank_rate
         self.lead, self.clip = self._slow.lead, self._slow.clip
-        self.noise_tau, self.noise_ref = self._slow.noise_tau, self._slow.noise_ref
+        self.noise_tau, self.noise_ref, self.limit_tau = (self._slow.noise_tau, self._slow.noise_ref,
+                                                          self._slow.limit_tau)
         self.Q, self.th, self.R, self.S, self.Q_ay = (self._fast.Q, self._fast.th, self._fast.R, self._fast.S,
                                                       self._fast.Q_ay)
         for k, v in opt.items():

@@ -18,7 +18,7 @@ sample:
               :func:`riccati_p` (n*n, Riccati variant only) or
               :func:`adaptive_state` (2, ``adaptive`` family only) or
               :func:`gate_states` (2, ``gated`` family only), then
-              :func:`limit_states` (2, a limited low-pass only)
+              :func:`limit_states` (3, a limited low-pass only)
     ========  ===========================================================
 
 ``cfg`` — constants of one estimator (built once per design)
@@ -347,7 +347,7 @@ def gated_block(n: int, nr: int) -> GatedBlock:
 
 
 #: number of constants of a :class:`LimitBlock`
-NLIM = 7
+NLIM = 8
 
 
 class LimitBlock(NamedTuple):
@@ -356,8 +356,9 @@ class LimitBlock(NamedTuple):
     deviations), the gravity ``GRAV`` (m/s^2) of its prediction, the noise densities ``QAY``
     ((m/s^2)^2 s) and ``RR`` ((rad/s)^2 s) of its spread, and the running noise estimate's time constant
     ``TN`` (s; 0: none) and reference variance ``REF`` ((m/s^2)^2;
-    :func:`roadbank.estimators.kernels.sample.noise_update`), and the number ``NLP`` of the low-pass's states
-    whose update follows it (:func:`roadbank.estimators.kernels.sample.scale_update`)."""
+    :func:`roadbank.estimators.kernels.sample.noise_update`), the number ``NLP`` of the low-pass's states
+    whose update follows it (:func:`roadbank.estimators.kernels.sample.scale_update`), and the time constant
+    ``TS`` (s; 0: ``TN``'s ratio) of the second ratio the limit reads."""
 
     CLIP: int
     GRAV: int
@@ -366,27 +367,30 @@ class LimitBlock(NamedTuple):
     TN: int
     REF: int
     NLP: int
+    TS: int
 
 
 @_compiled
 def limit_block(o: int) -> LimitBlock:
     """:class:`LimitBlock` at offset ``o`` (``cfg[C_LIM]``)."""
-    return LimitBlock(o, o + 1, o + 2, o + 3, o + 4, o + 5, o + 6)
+    return LimitBlock(o, o + 1, o + 2, o + 3, o + 4, o + 5, o + 6, o + 7)
 
 
 class LimitState(NamedTuple):
-    """Offsets in ``mem`` of a limited low-pass's running noise ratio ``NV`` (-) and previous kinematic
-    acceleration ``KA`` (m/s^2) (:func:`roadbank.estimators.kernels.sample.noise_update`)."""
+    """Offsets in ``mem`` of a limited low-pass's running noise ratio ``NV`` (-), previous kinematic
+    acceleration ``KA`` (m/s^2) and the limit's shorter ratio ``NS`` (-)
+    (:func:`roadbank.estimators.kernels.sample.noise_update`)."""
 
     NV: int
     KA: int
+    NS: int
 
 
 @_compiled
 def limit_states(n: int, nr: int) -> LimitState:
     """:class:`LimitState` after the ``gated`` family's two states (which a one-observer low-pass leaves free)."""
     o = M_X + n + nr + 2
-    return LimitState(o, o + 1)
+    return LimitState(o, o + 1, o + 2)
 
 
 @_compiled
@@ -457,7 +461,7 @@ def smooth_fixed_row(n: int) -> SmoothFixedRow:
 def mem_size(n: int, nr: int) -> int:
     """Length of ``mem`` for ``n`` observer and ``nr`` roll states (room for a Riccati ``P``, and for the
     gate's and the limit's states after them)."""
-    return M_X + n + nr + n * n + 4
+    return M_X + n + nr + n * n + 5
 
 
 @_compiled

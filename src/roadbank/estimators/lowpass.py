@@ -66,7 +66,9 @@ limited update follows a running estimate of the noise (:func:`roadbank.estimato
 the ratio :math:`m` of the kinematic acceleration's first differences, time constant ``noise_tau``, to their
 variance ``noise_ref`` on the design span): its limit scales with :math:`\sqrt m`, and the update of its states
 (both, in the split form) with :math:`m^{-1/3}`, as the cut-off :func:`cutoff_for_noise` gives :math:`m` times
-the designed noise (:func:`roadbank.estimators.kernels.sample.scale_update`).
+the designed noise (:func:`roadbank.estimators.kernels.sample.scale_update`). With ``limit_tau > 0`` the limit
+reads a second ratio of the same measure with that (shorter) time constant: the limit, whose job is the
+heavy tail, follows a burst within seconds; the gain, whose job is the road's noise level, over a minute.
 """
 
 from __future__ import annotations
@@ -119,7 +121,8 @@ class LowPassDesign(DesignInputs):
     the sampled-data lead ``lead`` (s; module docstring), ``split``: the two-state form (module
     docstring), the update's limit ``clip`` (-, standard deviations of ``Q_ay`` and ``R``; 0: linear) and its
     running noise estimate's time constant ``noise_tau`` (s; 0: none) and reference variance ``noise_ref``
-    ((m/s^2)^2; module docstring)."""
+    ((m/s^2)^2), and the time constant ``limit_tau`` (s; 0: ``noise_tau``'s) of the one its limit reads (module
+    docstring)."""
 
     cutoff: float | None
     kappa: float
@@ -131,6 +134,7 @@ class LowPassDesign(DesignInputs):
     clip: float = 0.0
     noise_tau: float = 0.0
     noise_ref: float = 0.0
+    limit_tau: float = 0.0
 
 
 def lowpass_cutoff(d: LowPassDesign, vx: float) -> float:
@@ -209,6 +213,10 @@ class KinematicLowPass(ScheduledObserver):
         and the gain follow, and the variance ((m/s^2)^2, > 0) of the kinematic acceleration's noise on the
         design span it is relative to (:func:`roadbank.signals.diff_noise_std` squared; module docstring). Without
         ``noise_ref`` (or without a limit) there is none.
+    limit_tau : float, optional
+        With a running noise estimate: the time constant (s, >= 0; default 0: ``noise_tau``'s estimate) of a
+        second, shorter one that the limit reads (module docstring): the limit follows a burst of vibration
+        within seconds, the gain the road over a minute.
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator`; ``v_min`` (m/s) defaults to
         :data:`~roadbank.estimators.kinematic.KINEMATIC_V_MIN` (the estimate holds at any speed).
@@ -225,7 +233,7 @@ class KinematicLowPass(ScheduledObserver):
         def design(self) -> LowPassDesign: ...     # an instance of design_type
 
     def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, Q_ay=None, R=None, lead=None,
-                 split=False, clip=None, noise_tau=None, noise_ref=None, **kw):
+                 split=False, clip=None, noise_tau=None, noise_ref=None, limit_tau=None, **kw):
         scheduled = cutoff is None and bank_rate is not None
         self.split = bool(split)
         if self.split:
@@ -251,6 +259,10 @@ class KinematicLowPass(ScheduledObserver):
         # a running noise estimate needs the limit it scales and the design span's noise it is relative to
         running = self.clip > 0 and tau > 0 and ref > 0
         self.noise_tau, self.noise_ref = (tau, ref) if running else (0.0, 0.0)
+        ltau = float(self.defaults.get("limit_tau", 0.0) if limit_tau is None else limit_tau)
+        if not (np.isfinite(ltau) and ltau >= 0):
+            raise ValueError(f"{self.label}: limit_tau must be >= 0 s, got {limit_tau}")
+        self.limit_tau = ltau if running else 0.0
         if not scheduled and not (np.isfinite(self.cutoff) and self.cutoff > 0):
             raise ValueError(f"{self.label}: cutoff must be > 0 Hz, got {cutoff}")
         if scheduled and not (self.bank_rate > 0 and np.isfinite(self.bank_rate) and self.Q_ay >= 0
@@ -267,7 +279,7 @@ class KinematicLowPass(ScheduledObserver):
     def _design_fields(self) -> dict:
         return dict(cutoff=self.cutoff, kappa=self.kappa, bank_rate=self.bank_rate, Q_ay=self.Q_ay, R=self.R,
                     lead=self.lead, split=self.split, clip=self.clip, noise_tau=self.noise_tau,
-                    noise_ref=self.noise_ref)
+                    noise_ref=self.noise_ref, limit_tau=self.limit_tau)
 
     @property
     def limited(self) -> bool:           # type: ignore[override]
@@ -278,7 +290,7 @@ class KinematicLowPass(ScheduledObserver):
         if not self.limited:
             return []
         return [self.clip, float(self.params.g), float(self.Q_ay or 0.0), float(self.R or 0.0), self.noise_tau,
-                self.noise_ref, float(len(self.state_names))]
+                self.noise_ref, float(len(self.state_names)), self.limit_tau]
 
     def _design(self):
         tab, n, extra = super()._design()

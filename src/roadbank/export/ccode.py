@@ -739,18 +739,28 @@ def _limit_parts(d: ExportDesign, float32: bool) -> dict:
                 "    }\n")
         return {**none, "limit_consts": consts, "limit_input": code}
     nlp = int(g["nlp"])
-    consts += ("/* its running noise ratio nv (kernels.sample.noise_update): time constant (s), the design span's\n"
+    short = g["ts"] > 0
+    consts += ("/* its running noise ratios (kernels.sample.noise_update): nv with time constant RB_NOISE_TN (s)\n"
+               " * for the gain, ns with RB_LIMIT_TS (s; 0: the limit reads nv) for the limit; the design span's\n"
                " * variance of the kinematic acceleration ((m/s^2)^2), Huber limit, bounds; the update of the\n"
-               f" * first {nlp} states follows it */\n"
+               " * first RB_NLP states follows nv */\n"
                f"#define RB_POW pow{f}\n"
-               f"#define RB_NOISE_TN ({lit(g['tn'])})\n#define RB_NOISE_REF ({lit(g['ref'])})\n"
+               f"#define RB_NOISE_TN ({lit(g['tn'])})\n#define RB_LIMIT_TS ({lit(g['ts'])})\n"
+               f"#define RB_NOISE_REF ({lit(g['ref'])})\n"
                f"#define RB_NOISE_H ({lit(NOISE_HUBER)})\n#define RB_NOISE_MIN ({lit(NOISE_RATIO_MIN)})\n"
-               f"#define RB_NOISE_MAX ({lit(NOISE_RATIO_MAX)})\n#define RB_NLP {nlp}\n")
+               f"#define RB_NOISE_MAX ({lit(NOISE_RATIO_MAX)})\n#define RB_NLP {nlp}\n\n"
+               "/* one step of a running noise ratio (kernels.sample.ratio_step) */\n"
+               "static real_t rb_ratio(real_t m, real_t u, real_t dt, real_t tau)\n{\n"
+               "    u = u < RB_NOISE_H * m ? u : RB_NOISE_H * m;\n"
+               "    m = m + dt / (tau + dt) * (u - m);\n"
+               "    m = m > RB_NOISE_MIN ? m : RB_NOISE_MIN;\n"
+               "    return m < RB_NOISE_MAX ? m : RB_NOISE_MAX;\n}\n")
     decl = "    real_t rho = 1.0_R;\n    real_t x_prev[RB_NLP];\n    int k;\n"
     code = ("    u[0] = ay;   /* the low-pass reads its ay in the steering's slot */\n"
             "    if (!restart) {\n"
             "        const real_t e = ay - (RB_CLIP_G * st->x[0] + vx * r);\n"
-            "        const real_t s = RB_CLIP * RB_SQRT((RB_CLIP_Q + vx * vx * RB_CLIP_R) * st->nv / dt);\n"
+            "        const real_t s = RB_CLIP * RB_SQRT((RB_CLIP_Q + vx * vx * RB_CLIP_R) * "
+            f"st->{'ns' if short else 'nv'} / dt);\n"
             "        real_t ec = e < s ? e : s;\n"
             "        ec = ec > -s ? ec : -s;\n"
             "        u[0] = ay - (e - ec);\n"
@@ -759,16 +769,13 @@ def _limit_parts(d: ExportDesign, float32: bool) -> dict:
             "        const real_t ka = ay - vx * r;\n"
             "        if (restart) {\n"
             "            st->nv = st->nv > 0.0_R ? st->nv : 1.0_R;\n"
+            "            st->ns = st->ns > 0.0_R ? st->ns : 1.0_R;\n"
             "        } else {\n"
             "            const real_t da = ka - st->ka;\n"
-            "            real_t m = st->nv;\n"
-            "            real_t q = da * da / (2.0_R * RB_NOISE_REF);\n"
-            "            q = q < RB_NOISE_H * m ? q : RB_NOISE_H * m;\n"
-            "            m = m + dt / (RB_NOISE_TN + dt) * (q - m);\n"
-            "            m = m > RB_NOISE_MIN ? m : RB_NOISE_MIN;\n"
-            "            m = m < RB_NOISE_MAX ? m : RB_NOISE_MAX;\n"
-            "            st->nv = m;\n"
-            "            rho = 1.0_R / RB_POW(m, 1.0_R / 3.0_R);\n"
+            "            const real_t q = da * da / (2.0_R * RB_NOISE_REF);\n"
+            + ("            st->ns = rb_ratio(st->ns, q, dt, RB_LIMIT_TS);\n" if short else "")
+            + "            st->nv = rb_ratio(st->nv, q, dt, RB_NOISE_TN);\n"
+            "            rho = 1.0_R / RB_POW(st->nv, 1.0_R / 3.0_R);\n"
             "        }\n"
             "        st->ka = ka;\n"
             "    }\n"
@@ -785,7 +792,7 @@ def _limit_parts(d: ExportDesign, float32: bool) -> dict:
              "        }\n"
              "    }\n")
     return {"limit_consts": consts, "limit_decl": decl, "limit_input": code, "limit_scale": scale,
-            "init_noise": "    s->nv = 0.0_R;\n    s->ka = 0.0_R;\n"}
+            "init_noise": "    s->nv = 0.0_R;\n    s->ka = 0.0_R;\n    s->ns = 0.0_R;\n"}
 
 
 def _provenance(d: ExportDesign) -> str:
@@ -845,6 +852,7 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
                      if d.gate else "")
         + (f"    {names['real']} nv;              /* -, running noise ratio (limited low-pass) */\n"
            f"    {names['real']} ka;              /* m/s^2, ay - vx r of the last valid sample */\n"
+           f"    {names['real']} ns;              /* -, the limit's shorter running noise ratio */\n"
            if d.running_noise else ""))
     helpers_needed = nt > 0
     source = _SOURCE.substitute(

@@ -23,7 +23,7 @@ from ..estimators.layout import C_LIM, DT_REL_TOL, gated_block, limit_block, lpv
 #: the constants of a gated module (:attr:`ExportDesign.gate`) and of a limited low-pass
 #: (:attr:`ExportDesign.limit`), in the fingerprint's order
 GATE_KEYS = ("HF", "tf", "tau", "on", "span")
-LIMIT_KEYS = ("clip", "grav", "qay", "rr", "tn", "ref", "nlp")
+LIMIT_KEYS = ("clip", "grav", "qay", "rr", "tn", "ref", "nlp", "ts")
 
 #: why an estimator on another kernel cannot be exported (kernel -> reason)
 _NOT_LPV_REASON = {
@@ -101,13 +101,13 @@ class ExportDesign:
     gate: dict | None = None
     #: a limited low-pass (``kinematic-pif``'s): ``clip`` (-), ``grav`` (m/s^2), ``qay`` ((m/s^2)^2 s), ``rr``
     #: ((rad/s)^2 s) (:func:`roadbank.estimators.kernels.sample.limited_ay`), its running noise's ``tn`` (s; 0:
-    #: none) and ``ref`` ((m/s^2)^2), and ``nlp`` (its states,
-    #: :func:`~roadbank.estimators.kernels.sample.noise_update`); None without a limit
+    #: none) and ``ref`` ((m/s^2)^2), ``nlp`` (its states, :func:`~roadbank.estimators.kernels.sample.noise_update`)
+    #: and ``ts`` (s; the limit's shorter ratio, 0: none); None without a limit
     limit: dict | None = None
 
     @property
     def running_noise(self) -> bool:
-        """Whether a limited low-pass follows a running noise estimate (state members ``nv``, ``ka``)."""
+        """Whether a limited low-pass follows a running noise estimate (state members ``nv``, ``ka``, ``ns``)."""
         return self.limit is not None and self.limit["tn"] > 0
 
     @property
@@ -145,7 +145,7 @@ class ExportDesign:
         r = 4 if float32 else 8
         fields = [(4, 4), (8, 8), (r, r), (3 * r, r)] + ([(self.n * r, r)] if self.n else []) \
             + ([(self.nr * r, r)] if self.nr else []) + [(r, r)] * (5 + (2 if self.gate else 0)
-                                                                    + (2 if self.running_noise else 0))
+                                                                    + (3 if self.running_noise else 0))
         size = 0
         for nbytes, align in fields:
             size = -(-size // align) * align + nbytes
@@ -283,4 +283,5 @@ def _limit(est) -> dict | None:
     if o <= 0:
         return None
     b = limit_block(o)
-    return {k: float(est._cfg[i]) for k, i in zip(LIMIT_KEYS, (b.CLIP, b.GRAV, b.QAY, b.RR, b.TN, b.REF, b.NLP))}
+    return {k: float(est._cfg[i]) for k, i in zip(LIMIT_KEYS, (b.CLIP, b.GRAV, b.QAY, b.RR, b.TN, b.REF, b.NLP,
+                                                               b.TS))}

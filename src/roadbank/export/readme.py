@@ -113,7 +113,8 @@ def _limit_text(d: ExportDesign) -> str:
             f"`+-{d.limit['clip']:g} sqrt((Q_ay + vx^2 R) / dt)` (`RB_CLIP`, a Huber-type update: a pothole's\n"
             "spike moves it by at most that much); a filter behind a gate reads `ay` as it is.\n"
             + ("" if not d.running_noise else
-               "The limit and the low-pass follow the road's noise (state members `nv`, `ka`): `nv` is a running\n"
+               "The limit and the low-pass follow the road's noise (state members `nv`, `ns`, `ka`): `nv` is a running\n"
                f"mean ({d.limit['tn']:g} s) of `(Delta(ay - vx r))^2 / 2`, each term at most 9 `nv`, over the variance\n"
-               f"{d.limit['ref']:.3g} (m/s^2)^2 of the log the module was designed for; the limit grows with `sqrt(nv)`\n"
-               f"and the update of the first {int(d.limit['nlp'])} states is scaled by `nv^(-1/3)`, the cut-off for that noise.\n"))
+               f"{d.limit['ref']:.3g} (m/s^2)^2 of the log the module was designed for, `ns` the same with\n"
+               f"{d.limit['ts']:g} s (0: `nv` itself); the limit grows with `sqrt(ns)` and the update of the first\n"
+               f"{int(d.limit['nlp'])} states is scaled by `nv^(-1/3)`, the cut-off for that noise.\n"))

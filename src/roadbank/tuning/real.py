@@ -165,8 +165,13 @@ CLIPS = (0.0, 6.0, 4.0, 3.0, 2.5, 2.0, 1.5)
 NOISE_TAUS = (0.0, 60.0, 30.0, 15.0, 8.0, 4.0)
 #: seconds between the training drives put end to end (:func:`long_logs`): more than a restart's gap
 LONG_GAP_S = 2.0
+#: candidate time constants (s) of the shorter running noise ratio that the limit alone reads, the thirteenth
+#: stage's; 0: the gain's ratio (the stages before), first; then the longer first (ties go to the earlier)
+LIMIT_TAUS = (0.0, 8.0, 4.0, 2.0, 1.0)
 #: the stages before the twelfth ran on the design span's noise throughout
 _DESIGN_NOISE = {"noise_tau": 0.0}
+#: the stages before the thirteenth: the limit reads the gain's ratio
+_ONE_RATIO = {"limit_tau": 0.0}
 #: the stages before the tenth ran with the linear low-pass (no limit: no running noise either)
 _LINEAR = {"clip": 0.0}
 #: the stages before the eighth designed a car not described for the static car
@@ -300,10 +305,12 @@ def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kap
     that order (the continuous-time filter first); ``stage`` 8: every car margin of :data:`CAR_MARGINS`
     (the static car first: :func:`roadbank.vehicle.design_car`); ``stage`` 10: every limit of the low-pass's
     update of :data:`CLIPS` (the linear low-pass first); ``stage`` 12: every time constant of the running
-    noise estimate of :data:`NOISE_TAUS` (none first; :func:`choose_noise_tau`). Stages 1-5 ran before the
+    noise estimate of :data:`NOISE_TAUS` (none first; :func:`choose_noise_tau`); ``stage`` 13: every time
+    constant of the shorter one the limit reads, :data:`LIMIT_TAUS` (the gain's first). Stages 1-5 ran before the
     sixth existed: their candidates have no lead (``lead_samples=0``); stages 1-7 before the eighth: a car not
     described is the static one (``car_margin=inf``); stages 1-9 before the tenth: the low-pass is linear
-    (``clip=0``); stages 1-11 before the twelfth: no running noise (``noise_tau=0``).
+    (``clip=0``); stages 1-11 before the twelfth: no running noise (``noise_tau=0``); stages 1-12 before the
+    thirteenth: the limit reads the gain's ratio (``limit_tau=0``).
     Every stage scores the real drives with :data:`~roadbank.validation.kitti.KITTI_SCORING`
     (:func:`training_logs`' default).
     """
@@ -324,10 +331,12 @@ def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kap
     if stage == 10:
         return {c: per_log("kinematic-pif", clip=c, **_DESIGN_NOISE) for c in CLIPS}
     if stage == 12:
-        return {tau: per_log("kinematic-pif", noise_tau=tau) for tau in NOISE_TAUS}
+        return {tau: per_log("kinematic-pif", noise_tau=tau, **_ONE_RATIO) for tau in NOISE_TAUS}
+    if stage == 13:
+        return {tau: per_log("kinematic-pif", limit_tau=tau) for tau in LIMIT_TAUS}
     if stage != 2 or bank_rate_deg is None or kappa is None:
-        raise ValueError("kinematic_pif_candidates: stage 1, 3, 4, 5, 6, 8, 10 or 12, or stage 2 with the first "
-                         "stage's bank rate and kappa")
+        raise ValueError("kinematic_pif_candidates: stage 1, 3, 4, 5, 6, 8, 10, 12 or 13, or stage 2 with the "
+                         "first stage's bank rate and kappa")
     return {(on, sp, rel): per_log("kinematic-pif", bank_rate=float(np.radians(bank_rate_deg)), kappa=kappa,
                                    gate_on=on, gate_span=sp, gate_release=rel, **_NO_LEAD)
             for on in GATE_GRID["gate_on"] for sp in GATE_GRID["gate_span"] for rel in GATE_GRID["gate_release"]}
@@ -362,17 +371,18 @@ def long_median(build, long) -> float:
     return float(np.median(errs))
 
 
-def choose_noise_tau(logs, long=None) -> tuple[float, dict]:
-    """The twelfth stage: the time constant of :data:`NOISE_TAUS` for ``kinematic-pif``'s running noise estimate.
-    Each candidate's objective is the KITTI training median (drive by drive, :func:`objective` without simulated
-    drives: every one is quiet, so the low-pass is not used there) plus :func:`long_median` over ``long`` (default
-    :func:`long_logs` of ``logs``); the lowest wins, ties within :data:`TIE_DEG` going to the earlier candidate.
-    Returns ``(time constant s, {time constant: (drive median, long median)})``."""
+def choose_noise_tau(logs, long=None, stage: int = 12) -> tuple[float, dict]:
+    """The twelfth stage: the time constant of :data:`NOISE_TAUS` for ``kinematic-pif``'s running noise estimate
+    (``stage`` 13: of :data:`LIMIT_TAUS` for the shorter one its limit reads). Each candidate's objective is the
+    KITTI training median (drive by drive, :func:`objective` without simulated drives: every one is quiet, so the
+    low-pass is not used there) plus :func:`long_median` over ``long`` (default :func:`long_logs` of ``logs``);
+    the lowest wins, ties within :data:`TIE_DEG` going to the earlier candidate. Returns ``(time constant s,
+    {time constant: (drive median, long median)})``."""
     long = long_logs(logs) if long is None else long
-    cands = kinematic_pif_candidates(12)
+    cands = kinematic_pif_candidates(stage)
     scores = {tau: (objective(b, logs, []), long_median(b, long)) for tau, b in cands.items()}
     best = min(a + b for a, b in scores.values())
-    chosen = next(tau for tau in NOISE_TAUS if sum(scores[tau]) <= best + TIE_DEG)
+    chosen = next(tau for tau in cands if sum(scores[tau]) <= best + TIE_DEG)
     return chosen, scores
 
 

@@ -256,7 +256,8 @@ def limited_ay(mem, cfg, t, vx, ay, r):
     :mod:`roadbank.estimators.lowpass`), its prediction; the innovation in ``ay`` units is
     :math:`e = a_y - (g x + v_x r)`, its limit :math:`s = c \sqrt{m (Q_{ay} + v_x^2 R) / \Delta t}` (the noise
     the low-pass is designed for, sampled at the interval :math:`\Delta t`, times the running noise ratio
-    :math:`m` of :func:`noise_update`; 1 without one), and the result :math:`a_y - (e - \mathrm{clip}(e, -s, s))`:
+    :math:`m` of :func:`noise_update`, its shorter one with ``TS > 0``; 1 without one), and the result
+    :math:`a_y - (e - \mathrm{clip}(e, -s, s))`:
     a Huber-type update, linear within ``s``. At a (re)start ``ay`` itself. NaN in, NaN out. The observer
     reads it in the steering's input slot.
     """
@@ -264,7 +265,8 @@ def limited_ay(mem, cfg, t, vx, ay, r):
     dt = t - mem[M_TLAST]
     if mem[M_INIT] == 0.0 or not (dt > 0.0) or dt > cfg[C_GAP]:
         return ay
-    m = mem[limit_states(np.int64(cfg[C_N]), np.int64(cfg[C_NR])).NV] if cfg[lb.TN] > 0.0 else 1.0
+    ls = limit_states(np.int64(cfg[C_N]), np.int64(cfg[C_NR]))
+    m = (mem[ls.NS] if cfg[lb.TS] > 0.0 else mem[ls.NV]) if cfg[lb.TN] > 0.0 else 1.0
     e = ay - (cfg[lb.GRAV] * mem[M_X] + vx * r)
     s = cfg[lb.CLIP] * math.sqrt((cfg[lb.QAY] + vx * vx * cfg[lb.RR]) * m / dt)
     ec = e if e < s else s
@@ -295,7 +297,9 @@ def noise_update(mem, cfg, vx, ay, r, dt, restart):
 
     clipped to [:data:`NOISE_RATIO_MIN`, :data:`NOISE_RATIO_MAX`]: a Huber-type running variance (a
     spike counts at most 3 of its standard deviations) with time constant :math:`T_N`, relative to the
-    design's; 1 at the first sample, kept over a restart (the road's noise outlasts a gap in the log). The
+    design's; 1 at the first sample, kept over a restart (the road's noise outlasts a gap in the log). With
+    the limit's ``TS > 0`` a second ratio of the same recursion with time constant ``TS``, which only the
+    limit reads (:func:`limited_ay`; its own Huber limit, its own state ``NS``). The
     low-pass's cut-off for :math:`m` times the designed noise is
     :math:`m^{-1/3}` times the designed one (:func:`~roadbank.estimators.lowpass.cutoff_for_noise`), and so,
     for a slow filter (:math:`2\pi f_c \Delta t \ll 1`), its gain. The states are in ``mem``
@@ -308,18 +312,27 @@ def noise_update(mem, cfg, vx, ay, r, dt, restart):
     a = ay - vx * r
     if restart:             # m is kept (0 only before the first sample)
         mem[ls.NV] = mem[ls.NV] if mem[ls.NV] > 0.0 else 1.0
+        mem[ls.NS] = mem[ls.NS] if mem[ls.NS] > 0.0 else 1.0
         mem[ls.KA] = a
         return 1.0
     da = a - mem[ls.KA]
     mem[ls.KA] = a
-    m = mem[ls.NV]
     u = da * da / (2.0 * cfg[lb.REF])
-    u = u if u < NOISE_HUBER * m else NOISE_HUBER * m
-    m = m + dt / (cfg[lb.TN] + dt) * (u - m)
-    m = m if m > NOISE_RATIO_MIN else NOISE_RATIO_MIN
-    m = m if m < NOISE_RATIO_MAX else NOISE_RATIO_MAX
+    if cfg[lb.TS] > 0.0:
+        mem[ls.NS] = ratio_step(mem[ls.NS], u, dt, cfg[lb.TS])
+    m = ratio_step(mem[ls.NV], u, dt, cfg[lb.TN])
     mem[ls.NV] = m
     return 1.0 / m ** (1.0 / 3.0)
+
+
+@njit(**INLINE)
+def ratio_step(m, u, dt, tau):
+    """One step of a running noise ratio (:func:`noise_update`): ``m`` (-) towards the sample's ``u`` (-), at most
+    :data:`NOISE_HUBER` ``m``, with time constant ``tau`` over ``dt`` (s), clipped to its bounds."""
+    u = u if u < NOISE_HUBER * m else NOISE_HUBER * m
+    m = m + dt / (tau + dt) * (u - m)
+    m = m if m > NOISE_RATIO_MIN else NOISE_RATIO_MIN
+    return m if m < NOISE_RATIO_MAX else NOISE_RATIO_MAX
 
 
 @njit(**INLINE)
