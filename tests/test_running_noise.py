@@ -180,6 +180,10 @@ def test_every_command_designs_it_for_a_loud_log():
     np.testing.assert_allclose(np.concatenate(parts), whole, rtol=0, atol=0)
     with pytest.raises(ValueError, match="noise_tau >= 0"):
         E.make("kinematic-pif", noise_tau=-1.0)
+    with pytest.raises(ValueError, match="limit_tau must be >= 0"):
+        E.make("kinematic-pif", limit_tau=-1.0)
+    assert E.make("kinematic-pif", noise_ref=0.01).limit_tau == KINEMATIC_PIF_LIMIT_TAU
+    assert E.make("kinematic-pif", noise_ref=0.01, noise_tau=0.0).limit_tau == 0.0     # no running noise
 
 
 @pytest.mark.slow

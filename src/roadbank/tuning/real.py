@@ -94,7 +94,10 @@ before ran; :func:`roadbank.estimators.kernels.sample.noise_update`): a long dri
 minute it is designed on. Its objective adds to the KITTI training median that of the same drives put end to
 end in both orders (:func:`long_logs`, :func:`long_median`), a long drive starting on either end of them. It
 chose 60 s: drives one by one 0.3853 -> 0.3867 deg, end to end 0.4084 -> 0.3884 (in order 0.3886 -> 0.3871,
-reversed 0.4084 -> 0.3899); the simulated training drives are quiet and do not take part.
+reversed 0.4084 -> 0.3899); the simulated training drives are quiet and do not take part. The thirteenth
+(``choose_noise_tau(..., stage=13)``, the same objective) chooses the time constant of a second, shorter ratio
+that the limit alone reads (:data:`LIMIT_TAUS`; 0: the gain's ratio, as the stages before ran): 8 s (0.3867 ->
+0.3847 one by one, 0.3884 -> 0.3860 end to end; 4 s was 0.0019 deg lower in sum, within the tie).
 """
 
 from __future__ import annotations
