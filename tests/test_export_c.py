@@ -397,6 +397,50 @@ def test_cli_designs_for_the_target_rate(tmp_path):
     assert got != export_c(at100, tmp_path / "py100", rate=10.0).source.read_text()
 
 
+def test_cli_designs_for_a_recorded_drive(tmp_path):
+    """``--log``: the module is the one of the estimator `roadbank estimate` builds for that log (for_log: the car
+    fitted to it, its rate, its road noise and the running noise's reference), here for a loud 10 Hz drive; with
+    --vehicle the car's, at --rate. A quiet log's kinematic-pif (the car's model) is refused with the reason, and
+    a log that cannot be read names the file."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from roadbank.cli import main
+    from roadbank.io import load_log
+    from roadbank.vehicle import for_log, load_vehicle, log_conditions
+
+    rng = np.random.default_rng(2)
+    t = np.arange(0.0, 120.0, 0.1)
+    vx = 15.0 + 2.0 * np.sin(0.05 * t)
+    r = 0.05 * np.sin(0.2 * t)
+    ay = vx * r + 9.81 * np.sin(np.radians(2.0)) + 0.3 * rng.standard_normal(t.size)
+    pq.write_table(pa.table({"t": t, "vx": vx, "ay": ay, "r": r}), tmp_path / "drive.parquet")
+    res = CliRunner().invoke(main, ["export", "c", "-e", "kinematic-pif", "--log", str(tmp_path / "drive.parquet"),
+                                   "-o", str(tmp_path / "cli")])
+    assert res.exit_code == 0, res.output
+    assert "fitted to drive.parquet" in res.output
+    s = load_log(tmp_path / "drive.parquet").signals
+    est = for_log("kinematic-pif", s)
+    assert est.noise_ref > 0
+    got = (tmp_path / "cli" / "roadbank_kinematic_pif.c").read_text()
+    assert "RB_NOISE_TN" in got
+    assert got == export_c(est, tmp_path / "py", rate=log_conditions(s)["log_rate"]).source.read_text()
+    res = CliRunner().invoke(main, ["export", "c", "-e", "kinematic-pif", "--log", str(tmp_path / "drive.parquet"),
+                                   "--vehicle", "van", "--rate", "10", "-o", str(tmp_path / "van")])
+    assert res.exit_code == 0, res.output
+    van = load_vehicle("van").make("kinematic-pif", **{**log_conditions(s), "log_rate": 10.0})
+    assert (tmp_path / "van" / "roadbank_kinematic_pif.c").read_text() == \
+        export_c(van, tmp_path / "pyvan", rate=10.0).source.read_text()
+    quiet = run_scenario("s-curve").signals
+    pq.write_table(pa.table({"t": quiet.t, "vx": quiet.vx, "ay": quiet.ay, "r": quiet.r, "delta_f": quiet.delta_f}),
+                   tmp_path / "quiet.parquet")
+    res = CliRunner().invoke(main, ["export", "c", "-e", "kinematic-pif", "--log", str(tmp_path / "quiet.parquet"),
+                                   "-o", str(tmp_path / "q")])
+    assert res.exit_code == 1 and "the log is quiet, so kinematic-pif is pif-adaptive for it" in res.output
+    res = CliRunner().invoke(main, ["export", "c", "--log", str(tmp_path / "none.csv"), "-o", str(tmp_path / "n")])
+    assert res.exit_code == 1 and "none.csv" in res.output and "Traceback" not in res.output
+
+
 def test_cli_writes_the_module_and_refuses_dfc(tmp_path):
     from roadbank.cli import main
 

@@ -21,7 +21,9 @@ def export():
 
 
 @export.command("c")
-@vehicle_option("The estimator is designed for this car, with its [tuning.<estimator>] options.")
+@vehicle_option("The estimator is designed for this car, with its [tuning.<estimator>] options; with --log "
+                "and no --vehicle, for the shipped car that fits the log, as `roadbank estimate` chooses it.",
+                none_if_absent=True)
 @click.option("--estimator", "-e", "name", default="pif-modified", show_default=True,
               help="Estimator to export (a speed-scheduled linear observer: kinematic, uio, pio-*, "
                    "pif-* steady-state, kalman, ...).")
@@ -45,12 +47,24 @@ def export():
 @click.option("--online-offsets", "online_offsets", is_flag=True,
               help="Add the online sensor-offset learner (<prefix>_step_learning: yaw-rate offset at "
                    "standstill, steering offset on straights).")
+@click.option("--log", "log", type=click.Path(path_type=Path), default=None,
+              help="A recorded drive of the car (any format `roadbank estimate` reads): the module is designed "
+                   "for its conditions as `roadbank estimate` designs for it (the road noise of its first minute "
+                   "of driving, quiet or loud, the running noise's reference; its sample rate unless --rate).")
+@click.option("--channels", "channels", type=click.Path(path_type=Path), default=None,
+              help="Channel map (TOML) of --log, as for `roadbank estimate`.")
+@click.option("--format", "fmt", default=None, help="Format of --log (default: from its suffix).")
 @click.option("--output", "-o", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Output directory (created if missing).")
 def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: str | None,
                  v_step: float | None, v_max: float | None, module_name: str | None, fixed_rate: bool | None,
-                 online_offsets: bool, output: Path):
-    """Write roadbank_<estimator>.h/.c (C99, no malloc, tables in flash) and its README."""
+                 online_offsets: bool, log: Path | None, channels: Path | None, fmt: str | None, output: Path):
+    """Write roadbank_<estimator>.h/.c (C99, no malloc, tables in flash) and its README.
+
+    \b
+    roadbank export c --vehicle car.toml -e pif-modified --rate 100 -o ecu/
+    roadbank export c -e kinematic-pif --log drive.parquet --rate 100 -o ecu/
+    """
     from .. import estimators
     from ..export import NotExportable, export_c
     from ..estimators import NoStabilisingSolution
@@ -58,8 +72,12 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
     if name not in estimators.NAMES:
         raise click.BadParameter(f"unknown estimator '{name}' (choose from {', '.join(estimators.NAMES)})",
                                  param_hint="--estimator")
+    cond, car = _log_design(log, channels, fmt, vehicle)
+    if vehicle is None and car is None:
+        from ..vehicle import load_vehicle
+        vehicle = load_vehicle()                   # the paper's SUV
     if rate is None:
-        rate = float(getattr(getattr(vehicle, "sensors", None), "rate", 100.0))
+        rate = cond.get("log_rate") or float(getattr(getattr(vehicle, "sensors", None), "rate", 100.0))
     if not rate > 0 or rate != rate or rate == float("inf"):
         raise click.BadParameter(f"must be a positive number of Hz, got {rate}", param_hint="--rate")
     if module_name is not None:
@@ -70,25 +88,56 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
         except ValueError as exc:
             raise click.BadParameter(str(exc), param_hint="--name") from None
     overrides = {k: v for k, v in (("roll", roll), ("v_step", v_step), ("v_max", v_max)) if v is not None}
-    try:
-        est = vehicle.make(name, log_rate=rate, **overrides)     # designed for the target's rate
+    car_name = vehicle.name if vehicle is not None else f"{car[0]} (fitted to {log.name})"
+    try:      # designed for the target's rate (and the log's conditions)
+        if vehicle is not None:
+            est = vehicle.make(name, **{**cond, "log_rate": rate}, **overrides)
+        else:
+            from ..vehicle import make_estimator
+            est = make_estimator(name, car[1], **{**cond, "log_rate": rate}, **overrides)
     except (ValueError, TypeError, NoStabilisingSolution) as exc:
-        raise click.ClickException(f"{name}: cannot design for vehicle {vehicle.name!r}: {exc}") from None
+        raise click.ClickException(f"{name}: cannot design for vehicle {car_name!r}: {exc}") from None
     if online_offsets:
         est = estimators.with_online_offsets(est)
     try:
         res = export_c(est, output, rate=rate, float32=float32, module_name=module_name, discrete=fixed_rate)
     except NotExportable as exc:
-        raise click.ClickException(str(exc)) from None
+        from ..vehicle.conditions import QUIET_FILTER
+        quiet = name == "kinematic-pif" and not isinstance(getattr(est, "inner", est), estimators.KinematicPIF)
+        why = str(exc).split("not exportable: ", 1)[-1]
+        raise click.ClickException(f"{name}: the log is quiet, so {name} is {QUIET_FILTER} for it, not exportable: "
+                                   f"{why}" if quiet else str(exc)) from None
     except ValueError as exc:
         raise click.ClickException(f"{name}: cannot export: {exc}") from None
     except OSError as exc:
         raise click.ClickException(f"cannot write into {output}: {exc.strerror or exc}") from None
     d = res.design
-    click.echo(f"{name} for {vehicle.name} ({'float32' if float32 else 'float64'}, {rate:g} Hz"
+    click.echo(f"{name} for {car_name} ({'float32' if float32 else 'float64'}, {rate:g} Hz"
                f"{'' if res.design.discrete is None else ' with fixed-rate tables'}, "
                f"{d.n} observer states, roll {est.roll}): tables {res.table_bytes} bytes "
                f"({d.ng} speeds x {d.nk}{'' if d.discrete is None else f' + {d.n * d.n + 6 * d.n}'}), "
                f"fingerprint {d.fingerprint()}")
     for path in (res.header, res.source, res.readme):
         click.echo(f"  {path}")
+
+
+def _log_design(log: Path | None, channels: Path | None, fmt: str | None, vehicle) -> tuple[dict, tuple | None]:
+    """The conditions of ``log`` (:func:`roadbank.vehicle.log_conditions` of its first minute of driving; {} without
+    a log) and, when no car is given, the shipped car fitted to it (``(name, VehicleParams)``; else None). A log
+    that cannot be read is a one-line error naming the file."""
+    if log is None:
+        return {}, None
+    from ..io import LogError, load_log, read_channel_map
+    from ..vehicle import load_vehicle, log_conditions, undescribed_car, undescribed_params
+
+    try:
+        cmap = read_channel_map(channels) if channels is not None else None
+        signals = load_log(log, channels=cmap, format=fmt,
+                           params=vehicle.params if vehicle is not None else undescribed_params()).signals
+    except (LogError, OSError) as exc:
+        raise click.ClickException(f"--log: {exc}") from None
+    cond = log_conditions(signals)
+    if vehicle is not None:
+        return cond, None
+    name = undescribed_car(signals)
+    return cond, (name, load_vehicle(name).params)
