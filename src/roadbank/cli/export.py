@@ -72,8 +72,8 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
     if name not in estimators.NAMES:
         raise click.BadParameter(f"unknown estimator '{name}' (choose from {', '.join(estimators.NAMES)})",
                                  param_hint="--estimator")
-    cond, car = _log_design(log, channels, fmt, vehicle)
-    if vehicle is None and car is None:
+    cond, params, car_name = _log_design(log, channels, fmt, vehicle)
+    if vehicle is None and params is None:
         from ..vehicle import load_vehicle
         vehicle = load_vehicle()                   # the paper's SUV
     if rate is None:
@@ -88,13 +88,10 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
         except ValueError as exc:
             raise click.BadParameter(str(exc), param_hint="--name") from None
     overrides = {k: v for k, v in (("roll", roll), ("v_step", v_step), ("v_max", v_max)) if v is not None}
-    car_name = vehicle.name if vehicle is not None else f"{car[0]} (fitted to {log.name})"
-    try:      # designed for the target's rate (and the log's conditions)
-        if vehicle is not None:
-            est = vehicle.make(name, **{**cond, "log_rate": rate}, **overrides)
-        else:
-            from ..vehicle import make_estimator
-            est = make_estimator(name, car[1], **{**cond, "log_rate": rate}, **overrides)
+    car_name = car_name or vehicle.name
+    try:      # designed for the target's rate (and the log's conditions), as every command designs
+        from ..vehicle import for_conditions
+        est = for_conditions(name, {**cond, "log_rate": rate}, params, vehicle=vehicle, **overrides)
     except (ValueError, TypeError, NoStabilisingSolution) as exc:
         raise click.ClickException(f"{name}: cannot design for vehicle {car_name!r}: {exc}") from None
     if online_offsets:
@@ -121,14 +118,15 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
         click.echo(f"  {path}")
 
 
-def _log_design(log: Path | None, channels: Path | None, fmt: str | None, vehicle) -> tuple[dict, tuple | None]:
-    """The conditions of ``log`` (:func:`roadbank.vehicle.log_conditions` of its first minute of driving; {} without
-    a log) and, when no car is given, the shipped car fitted to it (``(name, VehicleParams)``; else None). A log
+def _log_design(log: Path | None, channels: Path | None, fmt: str | None, vehicle) -> tuple[dict, object, str | None]:
+    """``(conditions, params, car name)`` of ``log``: its :func:`roadbank.vehicle.log_conditions` (of its first minute
+    of driving) and, when no car is given, the shipped car fitted to it (:func:`roadbank.vehicle.car_for_log`,
+    as ``roadbank estimate`` chooses it); ``({}, None, None)`` without a log, ``params`` None with a car. A log
     that cannot be read is a one-line error naming the file."""
     if log is None:
-        return {}, None
+        return {}, None, None
     from ..io import LogError, load_log, read_channel_map
-    from ..vehicle import load_vehicle, log_conditions, undescribed_car, undescribed_params
+    from ..vehicle import car_for_log, log_conditions, undescribed_params
 
     try:
         cmap = read_channel_map(channels) if channels is not None else None
@@ -138,6 +136,6 @@ def _log_design(log: Path | None, channels: Path | None, fmt: str | None, vehicl
         raise click.ClickException(f"--log: {exc}") from None
     cond = log_conditions(signals)
     if vehicle is not None:
-        return cond, None
-    name = undescribed_car(signals)
-    return cond, (name, load_vehicle(name).params)
+        return cond, None, None
+    params, design = car_for_log(signals, cond)
+    return cond, params, f"{design['car']} (fitted to {log.name})"

@@ -728,18 +728,20 @@ def _limit_parts(d: ExportDesign, float32: bool) -> dict:
               f"#define RB_SQRT sqrt{f}\n"
               f"#define RB_CLIP ({lit(g['clip'])})\n#define RB_CLIP_G ({lit(g['grav'])})\n"
               f"#define RB_CLIP_Q ({lit(g['qay'])})\n#define RB_CLIP_R ({lit(g['rr'])})\n")
+    short = d.running_noise and g["ts"] > 0
+    # the noise ratio the limit reads (none without running noise: the kernel's factor 1, exact)
+    ratio = "" if not d.running_noise else f" * st->{'ns' if short else 'nv'}"
+    limited = ("    u[0] = ay;   /* the low-pass reads its ay in the steering's slot */\n"
+               "    if (!restart) {\n"
+               "        const real_t e = ay - (RB_CLIP_G * st->x[0] + vx * r);\n"
+               f"        const real_t s = RB_CLIP * RB_SQRT((RB_CLIP_Q + vx * vx * RB_CLIP_R){ratio} / dt);\n"
+               "        real_t ec = e < s ? e : s;\n"
+               "        ec = ec > -s ? ec : -s;\n"
+               "        u[0] = ay - (e - ec);\n"
+               "    }\n")
     if not d.running_noise:
-        code = ("    u[0] = ay;   /* the low-pass reads its ay in the steering's slot */\n"
-                "    if (!restart) {\n"
-                "        const real_t e = ay - (RB_CLIP_G * st->x[0] + vx * r);\n"
-                "        const real_t s = RB_CLIP * RB_SQRT((RB_CLIP_Q + vx * vx * RB_CLIP_R) / dt);\n"
-                "        real_t ec = e < s ? e : s;\n"
-                "        ec = ec > -s ? ec : -s;\n"
-                "        u[0] = ay - (e - ec);\n"
-                "    }\n")
-        return {**none, "limit_consts": consts, "limit_input": code}
+        return {**none, "limit_consts": consts, "limit_input": limited}
     nlp = int(g["nlp"])
-    short = g["ts"] > 0
     consts += ("/* its running noise ratios (kernels.sample.noise_update): nv with time constant RB_NOISE_TN (s)\n"
                " * for the gain, ns with RB_LIMIT_TS (s; 0: the limit reads nv) for the limit; the design span's\n"
                " * variance of the kinematic acceleration ((m/s^2)^2), Huber limit, bounds; the update of the\n"
@@ -756,16 +758,8 @@ def _limit_parts(d: ExportDesign, float32: bool) -> dict:
                "    m = m > RB_NOISE_MIN ? m : RB_NOISE_MIN;\n"
                "    return m < RB_NOISE_MAX ? m : RB_NOISE_MAX;\n}\n")
     decl = "    real_t rho = 1.0_R;\n    real_t x_prev[RB_NLP];\n    int k;\n"
-    code = ("    u[0] = ay;   /* the low-pass reads its ay in the steering's slot */\n"
-            "    if (!restart) {\n"
-            "        const real_t e = ay - (RB_CLIP_G * st->x[0] + vx * r);\n"
-            "        const real_t s = RB_CLIP * RB_SQRT((RB_CLIP_Q + vx * vx * RB_CLIP_R) * "
-            f"st->{'ns' if short else 'nv'} / dt);\n"
-            "        real_t ec = e < s ? e : s;\n"
-            "        ec = ec > -s ? ec : -s;\n"
-            "        u[0] = ay - (e - ec);\n"
-            "    }\n"
-            "    {\n"
+    code = (limited
+            + "    {\n"
             "        const real_t ka = ay - vx * r;\n"
             "        if (restart) {\n"
             "            st->nv = st->nv > 0.0_R ? st->nv : 1.0_R;\n"

@@ -40,7 +40,7 @@ import numpy as np
 
 from ..params import VehicleParams
 from ..signals import Signals, concat_signals, road_wheel_angle
-from .channels import ChannelMap, check_plausible
+from .channels import STEERING, ChannelMap, check_plausible
 from .consistency import MIN_SAMPLES, check_balance, turning, usable
 from .errors import LogError, channel_error
 from .geodesy import ecef_to_latlon
@@ -75,7 +75,7 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
     ``have`` are the columns present; ``names`` all the file's columns (for messages). LogError for a
     missing column.
     """
-    steer_roles = [r for r in ("road_wheel_angle", "steering_wheel_angle") if r in cmap.channels]
+    steer_roles = [r for r in STEERING if r in cmap.channels]
     present: list[str | None] = [r for r in steer_roles if cmap.channels[r].column in have]
     if not steer_roles or (not present and cmap.steering_optional):   # no steering: delta_f NaN
         present = [None]
@@ -101,7 +101,7 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
 def steering_note(p, cmap: ChannelMap, roles: list[str]) -> list[str]:
     """The warning for a file read without the steering columns its (optional-steering) map names: the
     steering angle is NaN; ``[]`` otherwise."""
-    steer = [r for r in ("road_wheel_angle", "steering_wheel_angle") if r in cmap.channels]
+    steer = [r for r in STEERING if r in cmap.channels]
     if not steer or any(r in roles for r in steer):
         return []
     cols = " or ".join(f"'{cmap.channels[r].column}'" for r in steer)

@@ -220,9 +220,14 @@ def objective(build, logs, sim_sets) -> float:
     """The rule's objective (deg) of the estimator that ``build(signals)`` makes for each log
     (module docstring): a fixed estimator, or one designed for each log
     (:func:`roadbank.vehicle.for_log`, as the command line builds it)."""
-    errs = [float(np.degrees(np.sqrt(np.mean((build(s).run(s).theta[m] - ref[m]) ** 2)))) for s, ref, m in logs]
+    errs = [_rms_deg(build(s).run(s).theta[m], ref[m]) for s, ref, m in logs]
     sim = [float(np.median([drive_errors(build(d.signals), [d])[0][0] for d in drives])) for drives in sim_sets]
     return (float(np.median(errs)) if errs else 0.0) + (float(np.median(sim)) if sim else 0.0)
+
+
+def _rms_deg(theta, ref) -> float:
+    """RMS (deg) of ``theta - ref`` (rad)."""
+    return float(np.degrees(np.sqrt(np.mean((theta - ref) ** 2))))
 
 
 def fixed(est):
@@ -370,7 +375,7 @@ def long_median(build, long) -> float:
     for signals, spans in long:
         theta = build(signals).run(signals).theta
         for first, n, ref, m in spans:
-            errs.append(float(np.degrees(np.sqrt(np.mean((theta[first:first + n][m] - ref[m]) ** 2)))))
+            errs.append(_rms_deg(theta[first:first + n][m], ref[m]))
     return float(np.median(errs))
 
 
@@ -420,7 +425,7 @@ def paper_median(build, runs) -> float:
     for res in runs:
         s = res.signals
         m = np.asarray(s.t) >= s.t[0] + 5.0
-        errs.append(float(np.degrees(np.sqrt(np.mean((build(s).run(s).theta[m] - res.truth.theta[m]) ** 2)))))
+        errs.append(_rms_deg(build(s).run(s).theta[m], res.truth.theta[m]))
     return float(np.median(errs))
 
 

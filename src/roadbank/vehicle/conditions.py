@@ -39,10 +39,10 @@ QUIET_FILTER = "pif-adaptive"
 #: what each real-road estimator (the low-pass of the kinematic estimate) is on a quiet log: the car's
 #: model (``kinematic-pif``: :data:`QUIET_FILTER`; the offline ``kinematic-smoother``: the offline PIF)
 QUIET_MODELS = {"kinematic-pif": QUIET_FILTER, "kinematic-smoother": "pif-smoother"}
-#: the options of ``kinematic-pif`` that set its gate: given one, the caller's gate is kept
 #: low-passes whose update is limited by default (their ``clip``), given the log's noise densities ``Q_ay`` and ``R``
 #: (:func:`noise_densities`) by :func:`make_estimator`, as a sensor-weighted PIF is
 LIMITED_LOWPASSES = ("kinematic-smoother",)
+#: the options of ``kinematic-pif`` that set its gate: given one, the caller's gate is kept
 _GATE_OPTIONS = ("gate_on", "gate_span", "gate_tf", "gate_release")
 #: ``kinematic-pif``'s options of its low-pass and gate, which its quiet filter does not take
 _BLEND_OPTIONS = ("cutoff", "kappa", "bank_rate", "lead", "clip", "noise_tau", "noise_ref", "limit_tau") + _GATE_OPTIONS
