@@ -129,3 +129,22 @@ def test_cli_unknown_estimator_is_a_one_line_error():
     assert "Traceback" not in res.output
     errors = [ln for ln in res.stderr.splitlines() if ln.startswith("Error")]
     assert len(errors) == 1 and "--estimators" in errors[0] and "no-such-filter" in errors[0], res.stderr
+
+
+def test_the_set_the_target_was_stated_on_is_roadbank_tunes_validation_set():
+    """The default set's SUV row is ``roadbank tune``'s validation set (its 40 drives, seed 0), on which the
+    target was first stated; the document gives its verdict, from the same numbers as its table."""
+    from roadbank.tuning.pipeline import DEFAULT_VALIDATION
+    from roadbank.tuning.simulated import TARGET_CAR, TARGET_DRIVES
+    from roadbank.tuning.simulated_report import markdown
+    assert TARGET_DRIVES == DEFAULT_VALIDATION == 40 and TARGET_CAR in SIM_CARS
+    one = score_simulated(["kinematic-pif"], cars=(TARGET_CAR,), n=TARGET_DRIVES)
+    own = drive_set("validation", DEFAULT_VALIDATION, 0, load_vehicle(TARGET_CAR).params)
+    assert one.roads[TARGET_CAR] == tuple(d.road for d in own)
+    s = one.summary("kinematic-pif", "known", TARGET_CAR)
+    verdict = "met" if s.median_deg <= 0.30 and s.p95_deg <= 0.65 else "not met"
+    line = (f"On the set it was first stated on (`{TARGET_CAR}`, {TARGET_DRIVES} drives, seed 0): "
+            f"{s.median_deg:.3f} / {s.p95_deg:.3f} deg, {verdict}.")
+    assert line in markdown(one, command="x")
+    assert "first stated on (" not in markdown(score_simulated(["kinematic-pif"], cars=(TARGET_CAR,), n=2),
+                                                command="x")

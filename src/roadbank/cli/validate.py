@@ -228,10 +228,10 @@ def all_(data_dir, output, no_jitter, workers, scheduler):
         sys.exit(1)
 
 
-def _sim_command(names, drives: int, seed: int, output) -> str:
+def _sim_command(names, drives: int | None, seed: int, output) -> str:
     """The ``roadbank validate sim`` command line of these options (the defaults left out)."""
     return ("roadbank validate sim" + ("" if names is None else f" -e {names}")
-            + ("" if drives == 24 else f" -n {drives}") + ("" if seed == 0 else f" --seed {seed}")
+            + ("" if drives is None else f" -n {drives}") + ("" if seed == 0 else f" --seed {seed}")
             + ("" if output is None else f" -o {output}"))
 
 
@@ -240,8 +240,8 @@ def _sim_command(names, drives: int, seed: int, output) -> str:
               help="Comma-separated estimator names or 'all'. Default: kinematic-pif (the default estimator), "
                    "kinematic-lp, pif-modified, pif-adaptive, pif-gated, pif-smoother and kinematic-smoother "
                    "(offline).")
-@click.option("-n", "--drives", type=click.IntRange(min=1), default=24, show_default=True,
-              help="Drives per car.")
+@click.option("-n", "--drives", type=click.IntRange(min=1), default=None,
+              help="Drives per car. Default: as many as roadbank tune's validation set (40).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the drive set.")
 @click.option("--json", "as_json", is_flag=True,
               help='Print {"estimators": {name: {"known" | "undescribed": {"cars", "all", "families"}}}, ...} '
@@ -259,7 +259,7 @@ def sim(names, drives, seed, as_json, output):
     from ..tuning.simulated_report import markdown
 
     sel = list(DEFAULT_NAMES) if names is None else _names(names)
-    scores = score_simulated(sel, n=drives, seed=seed)
+    scores = score_simulated(sel, seed=seed) if drives is None else score_simulated(sel, n=drives, seed=seed)
     if output is not None:
         output.parent.mkdir(parents=True, exist_ok=True)
         write_document(output, markdown(scores, command=_sim_command(names, drives, seed, output)))
