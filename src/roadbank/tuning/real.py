@@ -98,6 +98,15 @@ reversed 0.4084 -> 0.3899); the simulated training drives are quiet and do not t
 (``choose_noise_tau(..., stage=13)``, the same objective) chooses the time constant of a second, shorter ratio
 that the limit alone reads (:data:`LIMIT_TAUS`; 0: the gain's ratio, as the stages before ran): 8 s (0.3867 ->
 0.3847 one by one, 0.3884 -> 0.3860 end to end; 4 s was 0.0019 deg lower in sum, within the tie).
+The fourteenth stage (``choose_noise_tau(..., stage=14)``; rule written 2026-12-04 before any candidate ran) asks
+whether the road prior of the blend's scheduled cut-off, the root-mean-square rate at which the bank changes, is
+a rate in time or along the road: the bank rate at ``vx`` is ``bank_rate (vx / BANK_SPEED_REF)^p``
+(:data:`BANK_SPEED_REF` = 10 m/s, a round speed of the KITTI drives, fixed before measuring, so that ``p`` leaves the
+prior at that speed), over :data:`BANK_SPEED_EXPS` (``p`` = 0: a rate in time, as every stage before ran; 1: a
+gradient along the road, crossed faster at speed). The objective is the twelfth stage's, ties within
+:data:`TIE_DEG` going to the earlier candidate; and, the thirteenth stage's lesson, a candidate other than the
+first is taken only where the mean of the same drive scores (the drives one by one and every drive of the long
+logs) is lower than the first's too; otherwise the first stays.
 """
 
 from __future__ import annotations
@@ -171,6 +180,10 @@ LONG_GAP_S = 2.0
 #: candidate time constants (s) of the shorter running noise ratio that the limit alone reads, the thirteenth
 #: stage's; 0: the gain's ratio (the stages before), first; then the longer first (ties go to the earlier)
 LIMIT_TAUS = (0.0, 8.0, 4.0, 2.0, 1.0)
+#: the fourteenth stage's exponents (-) of the speed in the bank-rate prior: a rate in time first
+BANK_SPEED_EXPS = (0.0, 0.5, 1.0)
+#: the speed (m/s) at which the bank-rate prior is the same for every exponent (module docstring)
+BANK_SPEED_REF = 10.0
 #: the stages before the twelfth ran on the design span's noise throughout
 _DESIGN_NOISE = {"noise_tau": 0.0}
 #: the stages before the thirteenth: the limit reads the gain's ratio
