@@ -196,6 +196,28 @@ def test_the_scheduled_cutoff_follows_the_speed_and_equals_a_fixed_filter_at_one
         estimators.make("kinematic-ff", bank_rate=-1.0, Q_ay=q_ay)
 
 
+@pytest.mark.parametrize("p", [0.5, 1.0])
+def test_a_bank_prior_along_the_road_is_crossed_faster_at_speed(p):
+    """With ``bank_speed_exp = 1`` the prior is a bank gradient along the road (rad/m): at ``vx`` its rate in time
+    is ``gradient * vx``, and the cut-off is cutoff_for_noise's for that rate; 0.5 takes the geometric mean of the
+    two priors. At BANK_SPEED_REF every exponent gives the same filter; 0 (the default) is a rate in time."""
+    from roadbank.estimators.lowpass import BANK_SPEED_REF, cutoff_for_noise
+
+    q_ay, r, b = 4e-3, 1e-6, np.radians(0.6)
+    gradient = b / BANK_SPEED_REF                                 # rad/m: the same prior at 10 m/s
+    est = estimators.make("kinematic-ff", bank_rate=b, Q_ay=q_ay, R=r, bank_speed_exp=p)
+    for vx in (2.0, 5.0, 20.0, 35.0):
+        along = gradient * vx
+        assert est.cutoff_at(vx) == pytest.approx(cutoff_for_noise((q_ay + vx ** 2 * r) / G ** 2,
+                                                                   along ** p * b ** (1.0 - p)), rel=1e-12)
+    flat = estimators.make("kinematic-ff", bank_rate=b, Q_ay=q_ay, R=r)
+    assert est.cutoff_at(BANK_SPEED_REF) == pytest.approx(flat.cutoff_at(BANK_SPEED_REF), rel=1e-12)
+    assert est.cutoff_at(30.0) > flat.cutoff_at(30.0) and est.cutoff_at(3.0) < flat.cutoff_at(3.0)
+    assert estimators.make("kinematic-pif").bank_speed_exp == 0.0
+    with pytest.raises(ValueError, match="bank_speed_exp"):
+        estimators.make("kinematic-ff", bank_rate=b, Q_ay=q_ay, bank_speed_exp=-1.0)
+
+
 @pytest.mark.skipif(not (DATA_DIR / "kitti-oxts").is_dir(), reason="../shared/data/kitti-oxts not present")
 def test_the_default_low_pass_is_slow_on_a_shaken_10hz_log_and_fast_on_a_quiet_100hz_one():
     """The command line's kinematic-pif (vehicle.for_log) reads the log's own noise."""

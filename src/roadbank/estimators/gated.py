@@ -209,6 +209,9 @@ KINEMATIC_PIF_GATE = dict(gate_tf=0.05, gate_release=8.0, gate_on=4.0, gate_span
 #: root-mean-square bank rate of roads (rad/s) that schedules :class:`KinematicPIF`'s low-pass on the
 #: log's noise (:func:`roadbank.estimators.lowpass.cutoff_for_noise`; the rule of :mod:`roadbank.tuning.real`)
 KINEMATIC_PIF_BANK_RATE = float(np.radians(0.6))
+#: exponent (-) of the speed in that prior, ``bank_rate (vx / 10 m/s)^p`` (0: a rate in time; the rule of
+#: :mod:`roadbank.tuning.real`, fourteenth stage)
+KINEMATIC_PIF_BANK_SPEED_EXP = 0.0
 #: :class:`KinematicPIF`'s centripetal feed-forward gain (-; the same rule)
 KINEMATIC_PIF_KAPPA = 0.2
 #: :class:`KinematicPIF`'s lowest speed (m/s; the same rule): the blend runs through the slow part of a
@@ -264,6 +267,9 @@ class KinematicPIF(_GatedPair):
         and ``R`` (the log's, when built for a log) give, with the road prior ``bank_rate``.
     bank_rate : float, optional
         Root-mean-square bank rate of roads (rad/s); default :data:`KINEMATIC_PIF_BANK_RATE`.
+    bank_speed_exp : float, optional
+        Its exponent of the speed (-; default :data:`KINEMATIC_PIF_BANK_SPEED_EXP`;
+        :class:`~roadbank.estimators.lowpass.KinematicLowPass`).
     lead : float, optional
         The low-pass's sampled-data lead (s, :class:`~roadbank.estimators.lowpass.KinematicLowPass`);
         default :data:`KINEMATIC_PIF_LEAD_SAMPLES` intervals of the data sheet's sensors
@@ -296,7 +302,8 @@ class KinematicPIF(_GatedPair):
 
     def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, lead=None, tuning=None, Q=None, R=None,
                  S=None, th=None, Q_ay=None, adapt_th=None, gate_tf=None, gate_release=None, gate_on=None,
-                 gate_span=None, clip=None, noise_tau=None, noise_ref=None, limit_tau=None, **kw):
+                 gate_span=None, clip=None, noise_tau=None, noise_ref=None, limit_tau=None, bank_speed_exp=None,
+                 **kw):
         d = KINEMATIC_PIF_GATE
         if clip is not None and not (np.isfinite(clip) and clip >= 0):
             raise ValueError(f"{self.name}: clip must be >= 0 (standard deviations), got {clip}")
@@ -313,6 +320,7 @@ class KinematicPIF(_GatedPair):
         noise = dict(Q_ay=self._fast.Q_ay, R=float(self._fast.R[-1, -1]))
         if cutoff is None:
             noise["bank_rate"] = KINEMATIC_PIF_BANK_RATE if bank_rate is None else bank_rate
+            noise["bank_speed_exp"] = KINEMATIC_PIF_BANK_SPEED_EXP if bank_speed_exp is None else bank_speed_exp
         self._slow = KinematicFeedForward(params, cutoff=cutoff, kappa=KINEMATIC_PIF_KAPPA if kappa is None else kappa,
                                           lead=KINEMATIC_PIF_LEAD_SAMPLES / ESP_RATE if lead is None else lead,
                                           split=True, clip=KINEMATIC_PIF_CLIP if clip is None else clip,
@@ -321,6 +329,7 @@ class KinematicPIF(_GatedPair):
                                           limit_tau=KINEMATIC_PIF_LIMIT_TAU if limit_tau is None else limit_tau,
                                           sample_rate=None, **noise, **common)
         self.cutoff, self.kappa, self.bank_rate = self._slow.cutoff, self._slow.kappa, self._slow.bank_rate
+        self.bank_speed_exp = self._slow.bank_speed_exp
         self.lead, self.clip = self._slow.lead, self._slow.clip
         self.noise_tau, self.noise_ref, self.limit_tau = (self._slow.noise_tau, self._slow.noise_ref,
                                                           self._slow.limit_tau)

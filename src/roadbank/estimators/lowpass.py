@@ -89,6 +89,8 @@ FF_CUTOFF_HZ = 0.6
 FF_KAPPA = 0.2
 #: bounds (Hz) of a cut-off scheduled on the noise (:func:`cutoff_for_noise`)
 CUTOFF_MIN_HZ, CUTOFF_MAX_HZ = 0.05, 5.0
+#: the speed (m/s) at which a bank-rate prior that grows with speed (``bank_speed_exp``) is the design's ``bank_rate``
+BANK_SPEED_REF = 10.0
 
 
 def cutoff_for_noise(noise_density: float, bank_rate: float) -> float:
@@ -135,15 +137,18 @@ class LowPassDesign(DesignInputs):
     noise_tau: float = 0.0
     noise_ref: float = 0.0
     limit_tau: float = 0.0
+    bank_speed_exp: float = 0.0
 
 
 def lowpass_cutoff(d: LowPassDesign, vx: float) -> float:
     """The cut-off (Hz) at ``vx`` (m/s): ``d.cutoff``, or :func:`cutoff_for_noise` of the kinematic
-    estimate's noise density :math:`(Q_{ay} + v_x^2 R)/g^2` and ``d.bank_rate``."""
+    estimate's noise density :math:`(Q_{ay} + v_x^2 R)/g^2` and the bank rate
+    ``d.bank_rate (vx / BANK_SPEED_REF)^d.bank_speed_exp`` (``vx`` taken as at least 0.1 m/s)."""
     if d.cutoff is not None:
         return d.cutoff
     # a design without a cut-off has the bank rate and both noise densities
-    return cutoff_for_noise((d.Q_ay + vx * vx * d.R) / d.params.g ** 2, d.bank_rate)  # type: ignore[operator, arg-type]
+    bank = d.bank_rate * (max(vx, 0.1) / BANK_SPEED_REF) ** d.bank_speed_exp  # type: ignore[operator]
+    return cutoff_for_noise((d.Q_ay + vx * vx * d.R) / d.params.g ** 2, bank)  # type: ignore[operator]
 
 
 def lead_share(lead_per_tau: float) -> float:
@@ -191,6 +196,9 @@ class KinematicLowPass(ScheduledObserver):
         With it and no ``cutoff``, the cut-off is scheduled on speed from the noise of the
         kinematic estimate, :math:`(Q_{ay} + v_x^2 R)/g^2`, and this root-mean-square bank rate
         of roads (rad/s) by :func:`cutoff_for_noise`.
+    bank_speed_exp : float, optional
+        With ``bank_rate``: the bank rate at ``vx`` is ``bank_rate (vx / BANK_SPEED_REF)^bank_speed_exp``
+        (-, >= 0; default 0: a rate in time; 1: a gradient along the road, crossed faster at speed).
     Q_ay, R : float, optional
         Noise densities of ``ay`` ((m/s^2)^2 s) and of the yaw rate ((rad/s)^2 s) for the
         scheduled cut-off and the limit (default 0: only the other counts).
@@ -233,7 +241,7 @@ class KinematicLowPass(ScheduledObserver):
         def design(self) -> LowPassDesign: ...     # an instance of design_type
 
     def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, Q_ay=None, R=None, lead=None,
-                 split=False, clip=None, noise_tau=None, noise_ref=None, limit_tau=None, **kw):
+                 split=False, clip=None, noise_tau=None, noise_ref=None, limit_tau=None, bank_speed_exp=None, **kw):
         scheduled = cutoff is None and bank_rate is not None
         self.split = bool(split)
         if self.split:
@@ -241,6 +249,10 @@ class KinematicLowPass(ScheduledObserver):
         self.cutoff = None if scheduled else float(self.defaults["cutoff"] if cutoff is None else cutoff)
         self.kappa = float(self.defaults["kappa"] if kappa is None else kappa)
         self.bank_rate = float(bank_rate) if scheduled else None
+        bexp = float(0.0 if bank_speed_exp is None else bank_speed_exp)
+        if not (np.isfinite(bexp) and bexp >= 0):
+            raise ValueError(f"{self.label}: bank_speed_exp must be >= 0, got {bank_speed_exp}")
+        self.bank_speed_exp = bexp if scheduled else 0.0
         clip = float(self.defaults.get("clip", 0.0) if clip is None else clip)
         if not (np.isfinite(clip) and clip >= 0):
             raise ValueError(f"{self.label}: clip must be >= 0 (standard deviations), got {clip}")
@@ -279,7 +291,7 @@ class KinematicLowPass(ScheduledObserver):
     def _design_fields(self) -> dict:
         return dict(cutoff=self.cutoff, kappa=self.kappa, bank_rate=self.bank_rate, Q_ay=self.Q_ay, R=self.R,
                     lead=self.lead, split=self.split, clip=self.clip, noise_tau=self.noise_tau,
-                    noise_ref=self.noise_ref, limit_tau=self.limit_tau)
+                    noise_ref=self.noise_ref, limit_tau=self.limit_tau, bank_speed_exp=self.bank_speed_exp)
 
     @property
     def limited(self) -> bool:           # type: ignore[override]

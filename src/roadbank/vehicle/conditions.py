@@ -45,7 +45,8 @@ LIMITED_LOWPASSES = ("kinematic-smoother",)
 #: the options of ``kinematic-pif`` that set its gate: given one, the caller's gate is kept
 _GATE_OPTIONS = ("gate_on", "gate_span", "gate_tf", "gate_release")
 #: ``kinematic-pif``'s options of its low-pass and gate, which its quiet filter does not take
-_BLEND_OPTIONS = ("cutoff", "kappa", "bank_rate", "lead", "clip", "noise_tau", "noise_ref", "limit_tau") + _GATE_OPTIONS
+_BLEND_OPTIONS = ("cutoff", "kappa", "bank_rate", "bank_speed_exp", "lead", "clip", "noise_tau", "noise_ref",
+                  "limit_tau") + _GATE_OPTIONS
 
 
 def design_span(signals, v_min: float = 5.0) -> int:
