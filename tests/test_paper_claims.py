@@ -6,6 +6,7 @@ import pytest
 from roadbank import estimators as E
 from roadbank.evaluation import evaluate
 from roadbank.report import claims
+from roadbank.report.tables import lookup
 from roadbank.report.reproduce import run_study, write_outputs
 from roadbank.sim import CONDITIONS_BY_SCENARIO, run_scenario
 
@@ -33,8 +34,23 @@ def test_study_covers_every_cell_and_estimator(study):
             assert np.isfinite(r["value"]), r
 
 
-def test_claim1_pif_pio_no_steady_state_error_dfc_uio_do(study):
-    c = claims.claim_steady_state(study.rows)
+def test_claim1_pif_has_no_steady_state_error_dfc_uio_do(study):
+    """Beyond the kinematic estimate's (exact in a steady state but for the sensors), the PIF's steady error is at
+    most 0.1 deg in every const-bank condition (measured 0.00-0.09); DFC's and UIO's are not (0.27-106 deg)."""
+    c = claims.claim_steady_state(study.rows, names=("pif-paper",))
+    assert c.holds, c.detail
+    ss = {(c, n): v for (sc, c, n), v in lookup(study.rows, "theta", "steady_deg").items() if sc == "const-bank"}
+    for cond in ("nominal", "cf120", "low-mu", "misaligned"):
+        assert abs(ss[(cond, "pif-paper")] - ss[(cond, "kinematic")]) <= claims.STEADY_TOL_DEG, cond
+    assert abs(ss[("cf120", "dfc")] - ss[("cf120", "kinematic")]) > 1.0        # grows with the Cf error
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "The PIO (original model, Table 4) has a steady error of its own on low friction: theta 2.06 deg against the "
+    "kinematic estimate's -0.03 (docs/results.md); elsewhere at most 0.06 deg. Its model's steering term is wrong "
+    "once the front tyres saturate; the modified-model PIO, which does not use the steering, has 0.17 there."))
+def test_claim1_pio_has_no_steady_state_error(study):
+    c = claims.claim_steady_state(study.rows, names=("pio-original",))
     assert c.holds, c.detail
 
 
@@ -44,15 +60,29 @@ def test_claim1_dfc_uio_error_grows_with_cf(study, scenario):
     assert c.holds, c.detail
 
 
-def test_claim2_pif_best_on_const_bank_under_low_mu_misalignment_cf(study):
-    c = claims.claim_pif_best(study.rows)
+@pytest.mark.parametrize("condition", ["low-mu", "cf120"])
+def test_claim2_pif_best_on_const_bank_under_low_mu_and_cf(study, condition):
+    c = claims.claim_pif_best(study.rows, conditions=(condition,))
+    assert c.holds, c.detail
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "With the misaligned accelerometer (a bias of -0.32 deg that every estimator reads as bank) the PIO has theta "
+    "RMS 0.26 deg against the PIF's 0.30: the PIO's own steady error (+0.05 deg beyond the kinematic estimate's) "
+    "happens to cancel part of the misalignment's (docs/results.md)."))
+def test_claim2_pif_best_on_const_bank_with_a_misaligned_accelerometer(study):
+    c = claims.claim_pif_best(study.rows, conditions=("misaligned",))
     assert c.holds, c.detail
 
 
 @pytest.mark.parametrize("scenario", ["s-curve", "track-lane-change"])
 def test_claim3_pif_modified_robust_to_cf_original_not(study, scenario):
+    """In the S-curve the original-model PIF has failed already with the right stiffness (bank RMS 67 deg at the
+    tyre limit), so that, not a change with Cf, is what the claim rests on there; on the track lane change it
+    degrades with Cf (+40 deg at cf50)."""
     c = claims.claim_pif_cf_robust(study.rows, scenario=scenario)
     assert c.holds, c.detail
+    assert ("fails with the nominal stiffness" in c.detail) == (scenario == "s-curve"), c.detail
 
 
 @pytest.mark.xfail(strict=True, reason=(

@@ -175,7 +175,7 @@ def test_missing_figure_is_a_clear_error(tmp_path):
 def reproduced(tmp_path_factory):
     out = tmp_path_factory.mktemp("repro")
     res = CliRunner().invoke(main, ["reproduce", "-o", str(out), "--scenarios", "const-bank", "-j", "1",
-                                    "--estimators", "pif-paper,pio-original,dfc,uio",
+                                    "--estimators", "kinematic,pif-paper,pio-original,dfc,uio",
                                     "--docs", str(out / "results.md")])
     assert res.exit_code == 0, res.output
     return out
@@ -196,7 +196,7 @@ def test_reproduce_report_html_and_markdown(reproduced):
     assert [(_text(r[0]), _text(r[2])) for r in claims["rows"]] == expected
     assert any("|" in text for text, _ in expected)
     # the metric tables: one row per cell, the smallest |value| of each row in bold
-    rms = next(t for t in tables if t["header"][:3] == ["scenario", "condition", "PIF, Table 4"])
+    rms = next(t for t in tables if t["header"][:4] == ["scenario", "condition", "Kinematic", "PIF, Table 4"])
     assert len(rms["rows"]) == 4                      # const-bank: 4 conditions
     assert best_cells_are_minimal(rms, 2) == len(rms["rows"])
 
