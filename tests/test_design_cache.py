@@ -109,18 +109,26 @@ def test_concurrent_writers_and_readers_see_whole_entries(disk):
         for _ in range(10):
             cache.store("design", "shared", {"tab": big})
 
+    done = threading.Event()
+
     def read():
-        for _ in range(40):
+        last = False
+        while not last:                 # while the writers write, and once after they have finished
+            last = done.is_set()
             z = cache.load("design", "shared")
             if z is not None:
                 seen.append(np.array_equal(z["tab"], big))
 
-    threads = [threading.Thread(target=f) for f in (write, write, read, read)]
-    for t in threads:
+    writers = [threading.Thread(target=write) for _ in range(2)]
+    readers = [threading.Thread(target=read) for _ in range(2)]
+    for t in writers + readers:
         t.start()
-    for t in threads:
+    for t in writers:
         t.join()
-    assert all(seen)
+    done.set()
+    for t in readers:
+        t.join()
+    assert len(seen) >= 2 and all(seen)
     assert len(_entries(disk)) == 1 and not list(disk.glob(".tmp-*"))
 
 

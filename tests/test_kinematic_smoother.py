@@ -93,8 +93,6 @@ needs_kitti = pytest.mark.skipif(not (DATA / "kitti-oxts-extra").is_dir(),
                                  reason="the shared KITTI drives (../shared/data/kitti-oxts*) are not here")
 
 
-@pytest.mark.slow
-@needs_kitti
 def _spiky(seed=1, n=1200, sigma=0.3):
     """A 10 Hz drive through a turn on a 3 deg bank, ay shaken by Student-t noise (4 dof) of ``sigma`` (m/s^2)."""
     rng = np.random.default_rng(seed)
@@ -167,6 +165,8 @@ def test_the_smoothers_limit_is_what_the_rule_picks():
     assert real[1.5] > real[2.5]
 
 
+@pytest.mark.slow
+@needs_kitti
 def test_the_cutoff_and_the_map_default_are_what_the_rule_picks():
     """On training data only: the shipped cut-off is choose_smoother's among its grid neighbours, and
     the map's default is the real-roads-first rule's among the offline estimators; on the real training

@@ -182,8 +182,9 @@ def test_comma2k19_map_against_pose_roll():
     ok = estimators.make("kinematic").run(log.signals).valid
     ref.add(log.extra["lat_deg"], log.extra["lon_deg"], log.reference_roll, ok)
     d = tab["bank_mean_deg"] - ref.table()["bank_mean_deg"]
-    # the pose roll includes the phone's mounting offset (about 0.56 deg, docs/real-data.md): remove the mean
-    assert abs(d.mean()) < 1.0 and np.sqrt(np.mean((d - d.mean()) ** 2)) < 0.5
+    # the pose roll includes the phone's mounting offset (reference minus estimate about +0.56 deg,
+    # docs/real-data.md): the map sits that far below it, and the rest is the kinematic estimate's noise
+    assert d.mean() == pytest.approx(-0.56, abs=0.1) and np.sqrt(np.mean((d - d.mean()) ** 2)) < 0.4
 
 
 def test_log_without_position_reported_others_mapped(tmp_path):

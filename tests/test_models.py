@@ -75,9 +75,15 @@ def test_unobservable_pair_detected():
     assert not is_observable(np.diag([1.0, 2.0]), np.array([[1.0, 0.0]]))
 
 
-def test_roll_gain_in_suv_range():
-    k = np.rad2deg(steady_roll_gain(P))
-    assert 0.5 <= k <= 1.0          # an SUV's roll gain: about 0.5-1 deg per m/s^2
+def test_roll_gain_is_the_static_balance_and_the_dynamic_models_steady_state():
+    """The static gain is the roll-moment balance ms h ay = (k_roll - ms g h) phi, and the dynamic roll model's
+    steady state D - H F^-1 G; for the paper's SUV about 0.57 deg per m/s^2 (an SUV: about 0.5-1)."""
+    from roadbank.models import roll_state_space
+    k = steady_roll_gain(P)
+    assert k == pytest.approx(P.ms * P.h_roll / (P.k_roll - P.ms * P.g * P.h_roll), rel=1e-12)
+    F, G, H, D = (np.atleast_2d(a) for a in roll_state_space(P, "dynamic"))
+    assert (D - H @ np.linalg.solve(F, G))[0, 0] == pytest.approx(k, rel=1e-9)
+    assert 0.5 <= np.rad2deg(k) <= 1.0
 
 
 def test_models_reject_zero_speed():

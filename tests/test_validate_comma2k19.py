@@ -38,12 +38,19 @@ def test_validate_json_and_report(tmp_path):
     data = json.loads(res.stdout)
     assert set(data) == set(estimators.NAMES)
     for v in data.values():
-        assert set(v) == {"r", "rms_deg", "offset_deg"}
-        assert -1 <= v["r"] <= 1 and v["rms_deg"] >= 0 and np.isfinite(v["offset_deg"])
-    # the README's rough first look: the kinematic estimate correlates clearly (about 0.55+)
-    assert data["kinematic"]["r"] > 0.5
-    # offsets are a fraction of a degree to ~1 deg: the reference mean is ~1.25 deg
-    assert all(abs(v["offset_deg"]) < 2.0 for v in data.values())
+        assert set(v) == {"r", "rms_deg", "offset_deg"} and np.isfinite(v["offset_deg"])
+    # against the phone's pose roll, smoothed (docs/real-data.md: kinematic r 0.930 / 0.111 deg, the default
+    # 0.870 / 0.105, pif-modified 0.920 / 0.108): regressions of the reader or the filters show here
+    assert data["kinematic"]["r"] > 0.9 and data["kinematic"]["rms_deg"] < 0.13
+    for name in ("kinematic-pif", "pif-modified"):
+        assert data[name]["r"] > 0.85 and data[name]["rms_deg"] < 0.12, name
+    # the mounting offset is the phone's, the same for every estimator that does not read the steering
+    # (0.54-0.57 deg; those that do carry the steering's own errors)
+    kin = data["kinematic"]["offset_deg"]
+    assert 0.4 < kin < 0.7
+    for name, v in data.items():
+        if not estimators.make(name).uses[0]:
+            assert abs(v["offset_deg"] - kin) < 0.05, name
     text = out.read_text()
     assert "| pif-modified |" in text and out.with_suffix(".png").exists()
 

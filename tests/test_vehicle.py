@@ -412,7 +412,7 @@ def test_bad_vehicle_file_on_the_cli(command, tmp_path, van_run):
     args = [a.format(out=tmp_path / "o", log=van_run) for a in command] + ["--vehicle", str(bad)]
     r = CliRunner().invoke(main, args)
     assert r.exit_code == 2
-    assert "Traceback" not in r.output and r.exception is None or isinstance(r.exception, SystemExit)
+    assert "Traceback" not in r.output and (r.exception is None or isinstance(r.exception, SystemExit))
     err = [line for line in r.output.splitlines() if line.startswith("Error")]
     assert len(err) == 1 and f"{bad}: [vehicle] m = -5: must be > 0 kg" in err[0]
 
