@@ -148,3 +148,21 @@ def test_the_set_the_target_was_stated_on_is_roadbank_tunes_validation_set():
     assert line in markdown(one, command="x")
     assert "first stated on (" not in markdown(score_simulated(["kinematic-pif"], cars=(TARGET_CAR,), n=2),
                                                 command="x")
+
+
+@pytest.mark.slow
+def test_the_default_meets_the_car_known_target_on_the_set_it_was_stated_on():
+    """Issue 23's target, car known: median <= 0.30 and p95 <= 0.65 deg on ``roadbank tune``'s validation set of
+    the paper's SUV (40 drives, seed 0), against the simulator's true bank (measured 0.299 / 0.624)."""
+    from roadbank.tuning.simulated import TARGET_CAR, TARGET_DRIVES
+    s = score_simulated(["kinematic-pif"], cars=(TARGET_CAR,), n=TARGET_DRIVES).summary("kinematic-pif", "known")
+    assert s.n == 40 and s.median_deg <= 0.30 and s.p95_deg <= 0.65, s
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason=(
+    "target not met on the four shipped cars pooled (40 drives each): 0.317 / 0.704 deg; the sedan 0.338 / 0.722 "
+    "and the compact 0.338 / 0.695 miss it, the van (0.304 / 0.628) by its median (docs/sim-validation.md)"))
+def test_the_default_meets_the_car_known_target_on_every_car():
+    s = score_simulated(["kinematic-pif"], n=40).summary("kinematic-pif", "known")
+    assert s.median_deg <= 0.30 and s.p95_deg <= 0.65, s
