@@ -41,6 +41,7 @@ import numpy as np
 from ..params import VehicleParams
 from ..signals import Signals, concat_signals, road_wheel_angle
 from .channels import STEERING, ChannelMap, check_plausible
+from .limits import Dropouts
 from .consistency import MIN_SAMPLES, check_balance, turning, usable
 from .errors import LogError, channel_error
 from .geodesy import ecef_to_latlon
@@ -341,6 +342,7 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     logs.warnings += src.warnings
     finite = dict.fromkeys(roles, False)
     period = _Period(p, tspec)
+    drops = Dropouts(p, {r: cmap.channels[r].column for r in roles})
     rs = None
     for last, t, cols, vals, w, fix in _table_rows(src, cmap, roles, wanted, prefix):
         logs.warnings += w
@@ -348,12 +350,13 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
         period.add(t, last)
         for r in roles:
             spec = cmap.channels[r]
-            finite[r] = finite[r] or bool(np.isfinite(vals[r]).any())
-            if last and not finite[r]:
-                raise channel_error(p, r, spec.column, "no finite values")
             w = check_plausible(p, r, spec.column, spec.unit, t, vals[r])
             if first:
                 logs.warnings += w
+            vals[r] = drops.apply(r, t, vals[r])
+            finite[r] = finite[r] or bool(np.isfinite(vals[r]).any())
+            if last and not finite[r]:
+                raise channel_error(p, r, spec.column, "no finite values")
         if first:
             base = ("clock" if same_rate(t, vals, roles) else "uniform") if tb == "auto" else tb
             # carried channels: on the clock as they are; on any other base, interpolated with their gap
@@ -375,6 +378,7 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
             for k in rs.done:
                 rs.finish(k)
         yield from logs.add(_emit(p, rs), fix.take_counts())
+    logs.warnings += drops.warnings()
     yield from logs.finish({})
 
 
@@ -410,6 +414,7 @@ def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     checked = dict.fromkeys(roles, False)
     logs = _Logs(p, fmt, cmap, params, roles, gnss, [], src.metadata, carried)
     logs.warnings += src.warnings
+    drops = Dropouts(p, {r: col[r] for r in roles})
 
     def counts() -> dict:
         total: dict = {}
@@ -436,12 +441,13 @@ def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
                     logs.warnings += w
                     if r in FLAGGED_ROLES:
                         v[flagged] = np.nan
-                    finite[r] = finite[r] or bool(np.isfinite(v).any())
                     spec = cmap.channels[r]
                     w = check_plausible(p, r, spec.column, spec.unit, t, v)
                     if len(t) and not checked[r]:
                         checked[r] = True
                         logs.warnings += w
+                    v = drops.apply(r, t, v)
+                    finite[r] = finite[r] or bool(np.isfinite(v).any())
                 rs.add(r, t, v)
             if ends:
                 if r in roles and not rows[r]:
@@ -450,6 +456,7 @@ def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
                     raise channel_error(p, r, c, "no finite values")
                 rs.finish(r)
         yield from logs.add(_emit(p, rs), counts())
+    logs.warnings += drops.warnings()
     yield from logs.finish(counts())
 
 

@@ -27,18 +27,23 @@ FIXED = 0.45 * G         #: ... and below this after a correction means the corr
 TURN = 3.0               #: samples with |vx r| above this (m/s^2) are "turning"
 MIN_SAMPLES = 100        #: turning samples needed to conclude anything
 
-#: (channel role, description, correction of (vx, ay, r))
+#: (channel roles, description, correction of (vx, ay, r)); a sign flip of ``ay`` and one of ``r`` balance
+#: alike, so that candidate names both channels
 CANDIDATES = (
-    ("speed", "speed looks like km/h declared as m/s", lambda vx, ay, r: (vx / 3.6, ay, r)),
-    ("speed", "speed looks like mph declared as m/s", lambda vx, ay, r: (vx * 0.44704, ay, r)),
-    ("yaw_rate", "yaw rate looks like deg/s declared as rad/s", lambda vx, ay, r: (vx, ay, r * math.pi / 180)),
-    ("lateral_acceleration", "lateral acceleration looks like g declared as m/s^2",
+    (("speed",), "speed looks like km/h declared as m/s", lambda vx, ay, r: (vx / 3.6, ay, r)),
+    (("speed",), "speed looks like mph declared as m/s", lambda vx, ay, r: (vx * 0.44704, ay, r)),
+    (("yaw_rate",), "yaw rate looks like deg/s declared as rad/s", lambda vx, ay, r: (vx, ay, r * math.pi / 180)),
+    (("lateral_acceleration",), "lateral acceleration looks like g declared as m/s^2",
      lambda vx, ay, r: (vx, ay * G, r)),
-    ("lateral_acceleration", "lateral acceleration has the opposite sign convention (positive right)",
-     lambda vx, ay, r: (vx, -ay, r)),
-    ("yaw_rate", "yaw rate has the opposite sign convention (positive clockwise)",
-     lambda vx, ay, r: (vx, ay, -r)),
+    (("lateral_acceleration", "yaw_rate"), "one of them has the opposite sign convention (positive right, or "
+     "clockwise; these channels cannot tell which)", lambda vx, ay, r: (vx, -ay, r)),
 )
+#: the slope of ``ay`` on ``vx r`` over the turning samples (-): about 1 (1.1 with the body's roll; less on a
+#: banked track, where the bank carries part of the turn). Below :data:`SLOPE_G` with ``G`` times it in
+#: :data:`SLOPE_G_RANGE` the lateral acceleration reads like g; below :data:`SLOPE_FLIPPED` its sign or the
+#: yaw rate's reads flipped. Both only warn: a car turning near the neutral speed of a steep banked track
+#: (or slower than it) reads the same
+SLOPE_G, SLOPE_G_RANGE, SLOPE_FLIPPED = 0.2, (0.6, 1.6), -0.5
 
 
 def turning(vx, ay, r) -> np.ndarray:
@@ -52,6 +57,14 @@ def _residual(vx, ay, r) -> tuple[float, int]:
     sel = turning(vx, ay, r)
     n = int(sel.sum())
     return (float(np.median(np.abs(ay[sel] - vx[sel] * r[sel]))) if n else 0.0), n
+
+
+def _slope(vx, ay, r) -> tuple[float, int]:
+    """Least-squares slope (-) of ``ay`` on ``vx r`` through the origin over the turning samples, and their count."""
+    sel = turning(vx, ay, r)
+    n = int(sel.sum())
+    a = vx[sel] * r[sel]
+    return (float(np.sum(ay[sel] * a) / np.sum(a * a)) if n else math.nan), n
 
 
 def usable(vx, ay, r) -> np.ndarray:
@@ -92,14 +105,28 @@ def check_balance(vx, ay, r, source="signals", columns: dict | None = None) -> l
     """:func:`check_consistency` of the arrays ``vx`` (m/s), ``ay`` (m/s^2), ``r`` (rad/s)."""
     vx, ay, r = (np.asarray(a, float) for a in (vx, ay, r))
     res, n = _residual(vx, ay, r)
-    if n < MIN_SAMPLES or res <= LIMIT:
+    if n < MIN_SAMPLES:
         return []
     cols = columns or {}
-    for role, text, fix in CANDIDATES:
+
+    def named(roles):
+        return " or ".join(f"'{x}'" + (f" (column '{cols[x]}')" if x in cols else "") for x in roles)
+
+    if res <= LIMIT:
+        k, _ = _slope(vx, ay, r)
+        if k < SLOPE_G and SLOPE_G_RANGE[0] <= G * k <= SLOPE_G_RANGE[1]:
+            return [f"{source}: channel {named(('lateral_acceleration',))}: ay is {k:.2f} times vx r over {n} "
+                    "turning samples (about 1 on a road): it looks like g declared as m/s^2, unless the car "
+                    "turned on a steep banked track near its neutral speed"]
+        if k < SLOPE_FLIPPED:
+            return [f"{source}: channel {named(('lateral_acceleration', 'yaw_rate'))}: ay is {k:.2f} times vx r "
+                    f"over {n} turning samples (about +1 on a road): one of them looks like the opposite sign "
+                    "convention, unless the car turned slowly on a steep banked track"]
+        return []
+    for roles, text, fix in CANDIDATES:
         fres, fn = _residual(*fix(vx, ay, r))
         if fn >= MIN_SAMPLES and fres <= FIXED:
-            col = f" (column '{cols[role]}')" if role in cols else ""
-            raise LogError(f"{source}: channel '{role}'{col}: {text}: ay, vx and yaw rate do not balance "
+            raise LogError(f"{source}: channel {named(roles)}: {text}: ay, vx and yaw rate do not balance "
                            f"(median |ay - vx r| = {res:.1f} m/s^2 over {n} turning samples, "
                            f"{fres:.1f} m/s^2 after correcting it); fix the unit or sign in the channel map")
     return [f"{source}: ay, vx and yaw rate do not balance (median |ay - vx r| = {res:.1f} m/s^2 over "

@@ -72,17 +72,30 @@ def has_design_span(signals, v_min: float = 5.0) -> bool:
     return design_span(signals, v_min) < len(signals)
 
 
+#: the road noise a design reads is at most this many times the channel's noise floor (:func:`log_conditions`)
+NOISE_FLOOR_CAP = 3.0
+
+
+def _at_most(noise: float, floor: float) -> float:
+    """``noise`` capped at :data:`NOISE_FLOOR_CAP` times ``floor`` (same unit; a NaN floor caps nothing)."""
+    return min(noise, NOISE_FLOOR_CAP * floor) if math.isfinite(floor) else noise
+
+
 def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     """What a log tells :func:`make_estimator` about its sensors: ``{"log_rate": Hz,
     "log_ay_noise": m/s^2, "log_r_noise": rad/s, "log_ay_floor": m/s^2, "log_diff_noise": m/s^2}`` — the
     sample rate of its time base (:func:`roadbank.signals.sample_rate`), the road noise of its ``ay`` and
     yaw rate on the samples at ``vx >= v_min`` (m/s): what they carry above the vehicle's dynamics band, taken
     as white (:func:`roadbank.signals.road_noise_std`, the noise model of real roads; NaN when
-    too few samples), the noise floor of its ``ay`` (:func:`roadbank.signals.road_noise_floor_std`,
-    what :func:`is_quiet` reads), and the noise that the first differences of the kinematic acceleration
-    ``ay - vx r`` read (:func:`roadbank.signals.diff_noise_std`: what a limited low-pass's running noise
-    estimate is relative to, ``noise_ref``). Measured on the log's first :data:`DESIGN_SPAN_S` of driving
-    (:func:`design_span`), so that a streamed log gets the same design whatever its chunk size.
+    too few samples), at most :data:`NOISE_FLOOR_CAP` times the channel's noise floor (its median over 4 s
+    windows: a few glitches in the first minute, one ``ay`` sample of 2.5 g, would otherwise set the design for
+    the whole log; on every log the project has, real or simulated, the road noise is within 1.7 times the
+    floor, so the cap changes none of them), the noise floor of its ``ay``
+    (:func:`roadbank.signals.road_noise_floor_std`, what :func:`is_quiet` reads), and the noise that the first
+    differences of the kinematic acceleration ``ay - vx r`` read (:func:`roadbank.signals.diff_noise_std`: what a
+    limited low-pass's running noise estimate is relative to, ``noise_ref``). Measured on the log's first
+    :data:`DESIGN_SPAN_S` of driving (:func:`design_span`), so that a streamed log gets the same design whatever
+    its chunk size.
     """
     n = design_span(signals, v_min)
     if n < len(signals):
@@ -90,9 +103,9 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     vx = np.asarray(signals.vx, dtype=np.float64)
     with np.errstate(invalid="ignore"):
         moving = vx >= v_min
-    ay_noise = road_noise_std(signals.ay, signals.t, moving)
-    r_noise = road_noise_std(signals.r, signals.t, moving)
     ay_floor = road_noise_floor_std(signals.ay, signals.t, moving)
+    ay_noise = _at_most(road_noise_std(signals.ay, signals.t, moving), ay_floor)
+    r_noise = _at_most(road_noise_std(signals.r, signals.t, moving), road_noise_floor_std(signals.r, signals.t, moving))
     with np.errstate(invalid="ignore"):
         diff_noise = diff_noise_std(np.asarray(signals.ay, np.float64) - vx * np.asarray(signals.r, np.float64), moving)
     # two significant digits: logs of one car and road share a design (the design cache)

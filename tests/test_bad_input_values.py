@@ -1,0 +1,126 @@
+"""Bad values inside a readable log: samples no car can have are dropouts, one glitch does not set the
+design of the whole log, and a lateral acceleration in g or a flipped sign is named."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from roadbank import Signals
+from roadbank.cli import main
+from roadbank.cli.simulate import write_result
+from roadbank.io import LogError, load_log
+from roadbank.io.limits import LIMITS
+from roadbank.sim import run_scenario
+from roadbank.vehicle import for_log, log_conditions
+from roadbank.vehicle.conditions import NOISE_FLOOR_CAP
+
+DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+KITTI_0070 = DATA / "kitti-oxts" / "2011_09_26_drive_0070"
+
+
+@pytest.fixture(scope="module")
+def scurve():
+    return run_scenario("s-curve")
+
+
+def _csv(tmp_path, sim, name="log.csv", **edit):
+    """``sim`` written as roadbank's CSV, each column of ``edit`` passed through its function first."""
+    path = tmp_path / name
+    write_result(sim, path)
+    data = np.genfromtxt(path, delimiter=",", names=True)
+    cols = list(data.dtype.names)
+    arr = np.column_stack([edit.get(c, lambda x: x)(data[c].copy()) for c in cols])
+    np.savetxt(path, arr, delimiter=",", header=",".join(cols), comments="", fmt="%.10g")
+    return path
+
+
+def _spike(k, value):
+    def put(x):
+        x[k] = value
+        return x
+    return put
+
+
+@pytest.mark.parametrize("column, role, value", [("ay", "lateral_acceleration", 300.0),
+                                                  ("r", "yaw_rate", -50.0), ("vx", "speed", 1e4)])
+def test_a_sample_no_car_can_have_is_a_dropout(tmp_path, scurve, column, role, value):
+    """One impossible sample is NaN in the log (the estimators hold and flag it), the warning names the file,
+    the channel and its time, and the estimate is that of the log with the sample missing (NaN written in the
+    file), near the clean log's."""
+    k = 1500
+    clean = load_log(_csv(tmp_path, scurve, "clean.csv"))
+    bad = load_log(_csv(tmp_path, scurve, "bad.csv", **{column: _spike(k, value)}))
+    field = {"ay": "ay", "r": "r", "vx": "vx"}[column]
+    got, want = getattr(bad.signals, field), getattr(clean.signals, field)
+    assert np.isnan(got[k]) and np.array_equal(np.delete(got, k), np.delete(want, k))
+    w = [x for x in bad.warnings if "read as dropouts" in x]
+    assert len(w) == 1 and f"channel '{role}' (column '{column}')" in w[0] and "bad.csv" in w[0]
+    assert f"t = {bad.signals.t[k]:.3f} s" in w[0] and "1 sample(s)" in w[0]
+    assert not [x for x in clean.warnings if "dropouts" in x]
+    gap = load_log(_csv(tmp_path, scurve, "gap.csv", **{column: _spike(k, np.nan)}))
+    a, b, c = (for_log("kinematic-pif", log.signals).run(log.signals) for log in (clean, bad, gap))
+    assert not b.valid[k] and b.theta[k] == b.theta[k - 1]
+    assert np.array_equal(b.theta, c.theta) and np.array_equal(b.valid, c.valid)
+    assert np.degrees(np.max(np.abs(a.theta - b.theta))) < 0.2
+
+
+def test_the_limits_are_a_cars():
+    """Beyond a passenger car's grip with any bank, a spin, and any road speed; within them every sample the
+    shared real drives and the paper's scenarios have."""
+    assert LIMITS["lateral_acceleration"] == (pytest.approx(-29.42, abs=0.01), pytest.approx(29.42, abs=0.01))
+    assert LIMITS["yaw_rate"] == (-5.0, 5.0) and LIMITS["speed"] == (-30.0, 120.0)
+
+
+def test_one_glitch_in_the_first_minute_does_not_set_the_design(scurve):
+    """A single ``ay`` sample of 2.5 g (within the limits) read as road noise made the design's noise 20 times the
+    real one; the design reads at most NOISE_FLOOR_CAP times the noise floor (its median over 4 s windows, which
+    one sample does not move)."""
+    s = scurve.signals
+    ay = np.array(s.ay, float)
+    ay[len(ay) // 2] = 25.0
+    clean, bad = log_conditions(s), log_conditions(Signals(s.t, s.vx, ay, s.r, s.delta_f))
+    assert bad["log_ay_floor"] == pytest.approx(clean["log_ay_floor"], rel=0.1)
+    assert bad["log_ay_noise"] <= NOISE_FLOOR_CAP * bad["log_ay_floor"] * 1.05     # two significant digits
+    assert bad["log_ay_noise"] < 4 * clean["log_ay_noise"]
+
+
+@pytest.mark.skipif(not KITTI_0070.is_dir(), reason="../shared/data/kitti-oxts not present")
+def test_the_cap_leaves_a_real_drive_alone_and_bounds_a_glitch_on_it():
+    """On the KITTI drive the road noise is within 1.7 times its floor, so the cap changes nothing; with one
+    ``ay`` sample of 2.5 g the default's estimate stays within 0.5 deg of the clean drive's but for a few samples
+    (without the cap, 202 of 420 samples moved by more, up to 1.8 deg)."""
+    from roadbank.io.kitti import load_kitti_oxts
+    s = load_kitti_oxts(KITTI_0070).signals
+    cond = log_conditions(s)
+    assert cond["log_ay_noise"] < NOISE_FLOOR_CAP * cond["log_ay_floor"] / 1.5
+    ay = np.array(s.ay, float)
+    ay[200] = 25.0
+    s2 = Signals(s.t, s.vx, ay, s.r, s.delta_f)
+    a, b = (for_log("kinematic-pif", x).run(x).theta for x in (s, s2))
+    assert np.count_nonzero(np.degrees(np.abs(a - b)) > 0.5) <= 10
+
+
+def test_ay_in_g_is_named_on_a_turning_log(tmp_path, scurve):
+    """ay in g declared as m/s^2 is a tenth of vx r in the turns: the log is read with a warning that names the
+    channel (a car near the neutral speed of a steep banked track reads the same, so it does not refuse)."""
+    log = load_log(_csv(tmp_path, scurve, ay=lambda x: x / 9.80665))
+    w = [x for x in log.warnings if "looks like g declared as m/s^2" in x]
+    assert len(w) == 1 and "channel 'lateral_acceleration' (column 'ay')" in w[0]
+    assert not [x for x in load_log(_csv(tmp_path, scurve, "ok.csv")).warnings if "vx r" in x]
+
+
+def test_a_flipped_sign_names_both_channels(tmp_path, scurve):
+    """A flipped yaw rate and a flipped ay balance alike: the error names both."""
+    with pytest.raises(LogError, match=r"'lateral_acceleration' \(column 'ay'\) or 'yaw_rate' \(column 'r'\)"):
+        load_log(_csv(tmp_path, scurve, r=lambda x: -x))
+
+
+def test_the_cli_writes_the_log_and_says_what_it_dropped(tmp_path, scurve):
+    path = _csv(tmp_path, scurve, ay=_spike(1500, 300.0))
+    res = CliRunner().invoke(main, ["estimate", str(path), "-o", str(tmp_path / "out.csv")])
+    assert res.exit_code == 0 and "Traceback" not in res.output, res.output
+    assert "read as dropouts" in res.output and (tmp_path / "out.csv").exists()
