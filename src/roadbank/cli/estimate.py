@@ -10,8 +10,9 @@ from pathlib import Path
 import click
 
 from ..defaults import ESTIMATOR as DEFAULT
+from ..io.errors import LogError
 from ..io.readers import FORMATS
-from .inputs import channel_map_and_logs
+from .inputs import channel_map_and_logs, check_output
 from .options import vehicle_option
 
 
@@ -100,7 +101,8 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     chunks (bounded memory) and the output is written as it is computed. With
     several logs, -o is a directory: one table per log plus summary.csv (per log:
     duration, valid share, bank mean/min/max, error), appended as each log
-    finishes. A bad log is reported (name and reason) and never stops the
+    finishes (an -o ending in .csv or .parquet is then refused, not made a
+    directory). A bad log is reported (name and reason) and never stops the
     others; files that are not logs (a README.md a glob picked up) are skipped
     and said so; the exit code is 1 if any log failed, 0 otherwise. A folder of
     KITTI drives gives each drive. Time stamps a logger duplicated, swapped or
@@ -137,9 +139,20 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     cmap, paths = channel_map_and_logs(channels, logs, fmt)
     batch = (len(paths) > 1 or len(logs) != 1 or paths[0] != Path(logs[0]) or as_dir
              or output.is_dir() or workers > 1 or scheduler is not None or resume)
-    if not batch and output.suffix.lower() not in (".csv", ".parquet", ".pq"):
+    tables = (".csv", ".parquet", ".pq")
+    if not batch and output.suffix.lower() not in tables:
         raise click.BadParameter("for one log, -o must end in .csv or .parquet (or be a directory)",
                                  param_hint="-o")
+    if batch and output.suffix.lower() in tables and not as_dir and not output.is_dir():
+        # a directory called x.csv is not what anyone asking for x.csv expects
+        why = (f"{len(paths)} logs are written" if len(paths) > 1 else
+               "with a folder or pattern of logs, --workers, --scheduler or --resume the output is a directory")
+        raise click.BadParameter(f"'{output}' names a file, but {why} (one table per log and summary.csv); "
+                                 f"give a directory, e.g. '{output.with_suffix('')}/' (or '{output}/' to call it so)",
+                                 param_hint="-o")
+    check_output(output, "-o", directory=batch)
+    if plot is not None:
+        check_output(plot, "--plot", directory=batch)
     try:
         offsets = vehicle.sensor_offsets if vehicle is not None else {}
     except ValueError as exc:
@@ -165,10 +178,12 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
                                 output_format=output_format, workers=workers, scheduler=scheduler, resume=resume,
                                 chunk_rows=chunk_rows, metadata=meta, plot_dir=plot, on_result=progress,
                                 online_offsets=online_offsets)
-            except (ConnectionError, RuntimeError) as exc:
+            except (OSError, RuntimeError, LogError) as exc:    # the cluster, the output directory, summary.csv
                 click.echo(f"\nerror: {exc}", err=True)
                 sys.exit(1)
         summaries = res.summaries
+        for note in res.notes:
+            click.echo(note, err=True)
         if res.skipped:
             click.echo(f"{len(res.skipped)} log(s) already finished (--resume), skipped", err=True)
         click.echo(f"summary: {Path(output) / 'summary.csv'}", err=True)
@@ -184,8 +199,10 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     failures = [s for s in summaries if s.status != "ok"]
     for s in failures:
         click.echo(f"FAILED {s.error}" if s.error.startswith(s.log) else f"FAILED {s.log}: {s.error}", err=True)
-    click.echo(f"{len(summaries) - len(failures)} log(s) written, {len(failures)} failed", err=True)
-    sys.exit(1 if failures else 0)
+    unplotted = [s for s in summaries if s.plot_error]      # the table written, its PNG not (said in a warning)
+    click.echo(f"{len(summaries) - len(failures)} log(s) written, {len(failures)} failed"
+               + (f", {len(unplotted)} plot(s) not written" if unplotted else ""), err=True)
+    sys.exit(1 if failures or unplotted else 0)
 
 
 def repairs_text(repairs: dict) -> str:

@@ -8,9 +8,11 @@ designed speed schedule as ``static const`` tables (docs/embedded.md).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import click
+import numpy as np
 
 from .options import vehicle_option
 
@@ -135,7 +137,15 @@ def _log_design(log: Path | None, channels: Path | None, fmt: str | None, vehicl
     except (LogError, OSError) as exc:
         raise click.ClickException(f"--log: {exc}") from None
     cond = log_conditions(signals)
+    idle = not math.isfinite(cond.get("log_ay_noise", math.nan))
+    if idle:        # nothing measured: the design is the default one, which the user should know
+        with np.errstate(invalid="ignore"):
+            moving = int(np.sum(np.asarray(signals.vx, dtype=np.float64) >= 5.0))
+        what = ("no driving to design on (the speed stays below 5 m/s)" if not moving else
+                f"too little driving to design on ({moving} sample(s) at 5 m/s or more)")
+        click.echo(f"warning: --log {log}: {what}; using the default design (the data sheet's sensor noise, "
+                   "not the log's)", err=True)
     if vehicle is not None:
         return cond, None, None
     params, design = car_for_log(signals, cond)
-    return cond, params, f"{design['car']} (fitted to {log.name})"
+    return cond, params, f"{design['car']} ({'the default design for' if idle else 'fitted to'} {log.name})"

@@ -41,12 +41,13 @@ def not_a_log(path: Path, fmt: str | None) -> str | None:
 
 def expand_kitti(paths: list[Path]) -> list[Path]:
     """Each path, with a folder holding several KITTI raw drives replaced by its drives (as
-    ``roadbank validate kitti`` takes them)."""
+    ``roadbank validate kitti`` takes them), broken ones too (an ``oxts/`` folder without
+    ``timestamps.txt`` or ``data/``: each is then reported, not passed over)."""
     from ..io.kitti import find_oxts_dirs
 
     out = []
     for p in paths:
-        found = find_oxts_dirs(p) if p.is_dir() else []
+        found = find_oxts_dirs(p, broken=True) if p.is_dir() else []
         out += [d.parent if d.name == "oxts" else d for d in found] if len(found) > 1 else [p]
     return sorted(dict.fromkeys(out))
 
@@ -82,3 +83,15 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
         click.echo(f"error: {what} in {', '.join(map(str, logs))}{hint}", err=True)
         sys.exit(1)
     return cmap, kept
+
+
+def check_output(path, option: str, directory: bool = False) -> None:
+    """Exit with a one-line error (exit code 1) if ``path``, given as ``option``, cannot be written as a file
+    (``directory``: created as a directory), e.g. ``error: -o: cannot write 'a.csv/o.csv': 'a.csv' is a file,
+    not a directory`` -- checked before the work (:func:`roadbank.io.writers.output_problem`)."""
+    from ..io.writers import output_problem
+
+    why = output_problem(path, directory)
+    if why:
+        click.echo(f"error: {option}: {why}", err=True)
+        sys.exit(1)

@@ -10,7 +10,7 @@ import click
 
 from ..defaults import MAP_ESTIMATOR
 from ..io.readers import FORMATS
-from .inputs import channel_map_and_logs
+from .inputs import channel_map_and_logs, check_output
 from .options import vehicle_option
 from .parallel import pool_options, start_pool
 
@@ -70,6 +70,9 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
                                  param_hint="--estimator")
     if output.suffix.lower() not in (".parquet", ".pq"):
         raise click.BadParameter("the map table must end in .parquet", param_hint="-o")
+    for path, option in ((output, "-o"), (geojson, "--geojson"), (png, "--png")):
+        if path is not None:        # before the work, not after it
+            check_output(path, option)
     cmap, paths = channel_map_and_logs(channels, logs, fmt)
     try:
         with contextlib.ExitStack() as stack:
@@ -87,8 +90,12 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
     if bmap is None or len(bmap) == 0:
         click.echo("error: no valid bank estimate with a position: nothing to map", err=True)
         sys.exit(1)
-    files = write_outputs(bmap, output, geojson, png, {"estimator": estimator,
-                                                       "logs": ",".join(r.log for r in recs if r.status == "ok")})
+    try:
+        files = write_outputs(bmap, output, geojson, png, {"estimator": estimator,
+                                                           "logs": ",".join(r.log for r in recs if r.status == "ok")})
+    except OSError as exc:          # names the file and what was written before it
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(1)
     tab = bmap.table()
     mapped = sum(r.mapped for r in recs)
     click.echo(f"{len(tab['ix'])} cell(s) x sector from {mapped} valid estimate(s) of "

@@ -11,9 +11,10 @@ import numpy as np
 from ..defaults import ESTIMATOR as DEFAULT
 from ..estimators import OFFLINE, with_online_offsets
 from ..io import LogError
+from ..io.kitti import broken_drive
 from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..io.timebase import add_counts
-from ..io.writers import TableWriter, estimate_table
+from ..io.writers import TableWriter, estimate_table, write_error
 from ..signals import Estimate
 from ..vehicle import (DESIGN_MAX_S, car_for_log, for_conditions, has_design_span, log_conditions,
                        undescribed_params)
@@ -65,6 +66,8 @@ class LogSummary:
         What the estimators were designed for (:func:`roadbank.vehicle.design_record`: the car, whether
         the log is quiet, its ``ay`` noise and floor); in the summary table as ``key=value`` pairs
         (:func:`design_text`). Empty on error.
+    plot_error : str
+        Why the log's plot could not be written (its table was; not a column: the warning says it).
     """
 
     log: str
@@ -85,6 +88,7 @@ class LogSummary:
     estimators: dict = field(default_factory=dict)
     design: dict = field(default_factory=dict)
     kept: object = field(default=None, repr=False, compare=False)
+    plot_error: str = field(default="", compare=False)
 
     def row(self) -> dict:
         """The summary-table row (every column of :data:`SUMMARY_COLUMNS`)."""
@@ -159,6 +163,21 @@ def concat_estimates(parts: list):
                     np.concatenate([p.valid for p in parts]), states)
 
 
+def _plot(summary: LogSummary, plot, whole, title: str) -> None:
+    """Draw the log's PNG; one that cannot be written is a warning and ``summary.plot_error``, not a failed
+    log: its table is written."""
+    from ..report.timeseries import plot_estimates
+
+    t, series, roll, truth = whole
+    try:
+        plot_estimates(plot, t, series, roll, title=title, truth=truth)
+    except (OSError, ValueError) as exc:
+        why = str(write_error(plot, exc)) if isinstance(exc, OSError) else f"cannot write '{plot}': {exc}"
+        summary.plot_error = why
+        summary.warnings = "; ".join(filter(None, [summary.warnings, f"plot not written: {why} (the table "
+                                                                     f"{summary.output} was written)"]))
+
+
 def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: str | None = None,
                  params=None, vehicle=None, chunk_rows: int | None = None, metadata: dict | None = None,
                  keep: bool = False, plot=None, online_offsets: bool = True) -> LogSummary:
@@ -193,7 +212,8 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
         Also keep the whole series in ``summary.kept`` = ``(t, [Estimate], reference_roll, truth)``
         (memory then grows with the log).
     plot : path-like, optional
-        Draw theta / phi_b against time into this PNG (keeps the whole series).
+        Draw theta / phi_b against time into this PNG (keeps the whole series). A PNG that cannot be
+        written leaves the log "ok" (its table is written): a warning and ``plot_error`` say why.
     online_offsets : bool
         Learn the yaw-rate and steering offsets while the log runs (at standstill, on straights:
         :func:`roadbank.estimators.with_online_offsets`) and remove them before every estimator.
@@ -219,6 +239,9 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
         kept_est: list[list] = [[] for _ in names]
         kept_roll: list[np.ndarray] = []
         kept_truth: dict[str, list[np.ndarray]] = {}
+        broken = broken_drive(path) if format is None else None
+        if broken:      # a KITTI drive short of a file: said so, not "neither a comma2k19 segment nor ..."
+            raise LogError(broken)
         writer = TableWriter(output, metadata=metadata)
         correct = (lambda s: s) if vehicle is None else vehicle.correct
         # an offline estimator smooths each chunk with the chunks after it as lookahead (as many as
@@ -265,9 +288,7 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
                      {c: np.concatenate(v) for c, v in kept_truth.items()})
             summary.kept = whole
             if plot is not None:
-                from ..report.timeseries import plot_estimates
-                t, series, roll, truth = whole
-                plot_estimates(plot, t, series, roll, title=str(path), truth=truth)
+                _plot(summary, plot, whole, str(path))
     except (LogError, ValueError, OSError) as exc:
         summary.status, summary.error = "error", str(exc)
     except Exception as exc:  # never a traceback for one bad file

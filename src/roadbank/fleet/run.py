@@ -8,14 +8,17 @@ Layout of an output directory::
 
 ``resume=True`` reads ``summary.csv`` and skips every log whose row says
 ``ok`` and whose output file exists; logs that failed are tried again (a fixed
-file then goes through). A log's output name depends only on the sorted list of
-logs, so it is the same on every resume.
+file then goes through). A last row cut off mid-line (the run was killed while
+writing it) is dropped from the file and its log estimated again; a summary that
+is not one (not UTF-8 text, no header) is a :class:`LogError` naming it. A log's
+output name depends only on the sorted list of logs, so it is the same on every resume.
 """
 
 from __future__ import annotations
 
 import csv
 import glob
+import io
 import math
 import tempfile
 import time
@@ -27,7 +30,9 @@ import numpy as np
 from ..defaults import ESTIMATOR as DEFAULT
 from ..io import detect_format, read_channel_map
 from ..io.errors import LogError
+from ..io.kitti import broken_drive, drive_name, find_oxts_dirs
 from ..io.stream import stream_log
+from ..io.writers import output_problem, write_error
 from .cluster import BATCH_BYTES, BATCH_MAX_LOGS, BATCHES_PER_WORKER, batches  # noqa: F401  (public here too)
 from .cluster import open_pool
 from .process import SUMMARY_COLUMNS, LogSummary, estimate_log
@@ -51,21 +56,23 @@ def expand_logs(args) -> list[Path]:
 
     A directory that is not itself a log (comma2k19 segment, ROS 2 bag, KITTI
     drive) contributes its files with a log suffix (:data:`LOG_SUFFIXES`) and
-    its log sub-directories, recursively. A pattern with ``*``, ``?`` or ``[``
-    that is not an existing path is expanded (``**`` recursive). Sorted, unique.
+    its log sub-directories, recursively; a KITTI drive short of a file
+    (:func:`~roadbank.io.kitti.broken_drive`) counts as a log, to be reported.
+    A pattern with ``*``, ``?`` or ``[`` that is not an existing path is
+    expanded (``**`` recursive). Sorted, unique.
     """
     out: list[Path] = []
     for a in args:
         p = Path(a)
         if not p.exists() and any(ch in str(a) for ch in "*?["):
             out += [Path(x) for x in sorted(glob.glob(str(a), recursive=True))]
-        elif p.is_dir() and not _is_log_dir(p):
+        elif p.is_dir() and not _is_log_dir(p) and not broken_drive(p):
             stack = [p]
             while stack:
                 d = stack.pop()
                 for c in sorted(d.iterdir()):
                     if c.is_dir():
-                        (out.append(c) if _is_log_dir(c) else stack.append(c))
+                        (out.append(c) if _is_log_dir(c) or broken_drive(c) else stack.append(c))
                     elif c.suffix.lower() in LOG_SUFFIXES and not c.name.endswith((".bank.csv", ".bank.parquet")) \
                             and c.name != SUMMARY:
                         out.append(c)
@@ -80,12 +87,20 @@ def _estimate_batch(jobs, estimators, kw) -> list[LogSummary]:
     return [estimate_log(p, out, estimators, metadata=meta, plot=png, **kw) for p, out, meta, png in jobs]
 
 
+def _stem(p: Path) -> str:
+    """A log's name: a file's stem, a directory's name; a folder holding one KITTI drive: the drive's."""
+    if p.is_file():
+        return p.stem
+    found = find_oxts_dirs(p)
+    return drive_name(found[0]) if len(found) == 1 and found[0] not in (p, p / "oxts") else p.name
+
+
 def output_names(paths: list[Path], suffix: str) -> dict[Path, str]:
     """``<stem>.bank.<suffix>`` per log, made unique in the order of ``paths``."""
     used: set[str] = set()
     names = {}
     for p in paths:
-        stem = p.stem if p.is_file() else p.name
+        stem = _stem(p)
         s, k = stem, 1
         while s in used:
             k += 1
@@ -95,26 +110,70 @@ def output_names(paths: list[Path], suffix: str) -> dict[Path, str]:
     return names
 
 
+def _parse_summary(f: Path) -> tuple[list[str], list[dict], int | None]:
+    """``(columns, rows, cut)`` of the summary file ``f``: its header and complete rows, and the bytes
+    to keep when its last row was cut off mid-line (None: the file is whole; ``columns`` empty: nothing
+    to keep). LogError naming ``f`` if it is not a summary."""
+    data = f.read_bytes()
+    again = "delete it to start the batch again, or give another -o"
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise LogError(f"{f}: not a readable summary (not UTF-8 text: byte 0x{data[exc.start]:02x} at position "
+                       f"{exc.start}); {again}") from None
+    lines = list(io.StringIO(text, newline=""))
+    reader = csv.reader(lines)
+    rows, ends = [], []
+    try:
+        for row in reader:
+            if row:
+                rows.append(row)
+                ends.append(reader.line_num)
+    except csv.Error as exc:
+        raise LogError(f"{f}: not a readable summary ({exc}); {again}") from None
+    whole = text.endswith(("\n", "\r"))
+    if len(rows) < 1 + (not whole):     # empty, or a header cut off: nothing to keep
+        return [], [], None
+    if not {"log", "status", "output"} <= set(rows[0]):
+        raise LogError(f"{f}: not a roadbank summary (no log, status and output columns in its first line); "
+                       f"{again}")
+    cut = None
+    if not whole:       # the run stopped while writing the last row: that log is estimated again
+        rows.pop()
+        cut = len("".join(lines[:ends[-2]]).encode("utf-8"))
+    return rows[0], [dict(zip(rows[0], r)) for r in rows[1:]], cut
+
+
 def read_summary(outdir) -> list[dict]:
-    """Rows of ``OUTDIR/summary.csv`` (empty list if there is none)."""
+    """Complete rows of ``OUTDIR/summary.csv`` (empty list if there is none; a last row cut off mid-line
+    is left out). LogError naming the file if it is not a summary (binary, not UTF-8, no header)."""
     f = Path(outdir) / SUMMARY
     if not f.exists():
         return []
-    with open(f, newline="") as fh:
-        return list(csv.DictReader(fh))
+    return _parse_summary(f)[1]
 
 
 class _SummaryFile:
-    """``summary.csv``, appended row by row and flushed at once."""
+    """``summary.csv``, appended row by row and flushed at once. Resuming, a last row cut off mid-line
+    is removed first (``notes`` says so) and the rows go on after the complete ones."""
 
     def __init__(self, outdir: Path, resume: bool):
         self.path = outdir / SUMMARY
+        self.notes: list[str] = []
+        columns, cut = list(SUMMARY_COLUMNS), None
         new = not (resume and self.path.exists())
-        columns = list(SUMMARY_COLUMNS)
         if not new:         # appending: the existing file's columns (one written before a column was added)
-            with open(self.path, newline="") as fh:
-                columns = next(csv.reader(fh), []) or columns
-        self.fh = open(self.path, "w" if new else "a", newline="")
+            old, _, cut = _parse_summary(self.path)
+            columns, new = old or columns, not old
+        try:
+            if cut is not None:
+                with open(self.path, "r+b") as fh:
+                    fh.truncate(cut)
+                self.notes.append(f"{self.path}: its last row was cut off (an interrupted run?): removed, "
+                                  "that log is estimated again")
+            self.fh = open(self.path, "w" if new else "a", newline="")
+        except OSError as exc:
+            raise write_error(self.path, exc) from None
         self.w = csv.DictWriter(self.fh, fieldnames=columns, extrasaction="ignore")
         if new:
             self.w.writeheader()
@@ -153,6 +212,8 @@ class FleetResult:
     client_cpu_s : float
         CPU seconds of this process over that time on workers (the client); 0 in-process (it is
         ``cpu_s``).
+    notes : list of str
+        What was done to ``summary.csv`` besides appending (a cut-off last row removed).
     """
 
     summaries: list = field(default_factory=list)
@@ -162,6 +223,7 @@ class FleetResult:
     wall_s: float = 0.0
     cpu_s: float = math.nan
     client_cpu_s: float = 0.0
+    notes: list = field(default_factory=list)
 
     @property
     def failed(self) -> list[LogSummary]:
@@ -237,7 +299,7 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
     scheduler : str, optional
         Address of a running Dask scheduler (``tcp://host:8786``); overrides ``workers``.
     resume : bool
-        Skip logs ``summary.csv`` lists as ok whose output exists.
+        Skip logs ``summary.csv`` lists as ok whose output exists (module doc: a damaged summary).
     chunk_rows : int, optional
         Streaming chunk size (rows).
     metadata : dict, optional
@@ -256,7 +318,11 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
     FleetResult
     """
     outdir = Path(outdir)
-    outdir.mkdir(parents=True, exist_ok=True)
+    try:
+        outdir.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OSError(output_problem(outdir, directory=True) or f"cannot create directory '{outdir}': "
+                      f"{exc.strerror or exc}") from None
     if channels is not None and not hasattr(channels, "channels"):
         channels = read_channel_map(channels)
     paths = [Path(p) for p in logs]
@@ -269,6 +335,7 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
     todo = [p for p in paths if str(p) not in done]
     result = FleetResult(skipped=[str(p) for p in paths if str(p) in done])
     summary = _SummaryFile(outdir, resume)
+    result.notes += summary.notes
     jobs = [(p, outdir / names[p], dict(metadata or {}, source=str(p)),
              None if plot_dir is None else Path(plot_dir) / (names[p].split(".bank.")[0] + ".png"))
             for p in todo]

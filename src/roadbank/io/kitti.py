@@ -79,19 +79,46 @@ def is_oxts_dir(p: Path) -> bool:
     return (p / "timestamps.txt").is_file() and (p / "data").is_dir()
 
 
-def find_oxts_dirs(path) -> list[Path]:
+def find_oxts_dirs(path, broken: bool = False) -> list[Path]:
     """Every oxts folder at ``path``: the folder itself, a drive folder, or a folder of drives.
 
-    Returns a sorted list (empty if there is none).
+    ``broken``: also every folder named ``oxts`` that lacks ``timestamps.txt`` or ``data/`` but holds
+    another of them, ``dataformat.txt`` or nothing (a drive to report as broken, :func:`broken_drive`,
+    rather than to pass over). Returns a sorted list (empty if there is none).
     """
     p = Path(path)
     if not p.is_dir():
         return []
-    if is_oxts_dir(p):
+
+    def found(d: Path) -> bool:
+        return is_oxts_dir(d) or (broken and d.name == "oxts" and _kitti_like(d))
+    if found(p):
         return [p]
-    if is_oxts_dir(p / "oxts"):
+    if found(p / "oxts"):
         return [p / "oxts"]
-    return sorted(d / "oxts" for d in p.iterdir() if d.is_dir() and is_oxts_dir(d / "oxts"))
+    return sorted(d / "oxts" for d in p.iterdir() if d.is_dir() and found(d / "oxts"))
+
+
+def _kitti_like(oxts: Path) -> bool:
+    """An ``oxts`` folder with a KITTI file or folder in it, or empty (not one that holds other logs)."""
+    try:
+        return oxts.is_dir() and (any((oxts / n).exists() for n in ("timestamps.txt", "data", "dataformat.txt"))
+                                  or not any(oxts.iterdir()))
+    except OSError:
+        return False
+
+
+def broken_drive(path) -> str | None:
+    """Why ``path``, a drive folder holding an ``oxts/`` folder (or that folder), is not a readable KITTI
+    raw drive: ``"<path>: not a KITTI raw drive (no oxts/timestamps.txt and oxts/data/): oxts/timestamps.txt
+    missing"``; None if it is a drive or no KITTI folder at all."""
+    p = Path(path)
+    oxts = p if p.name == "oxts" else p / "oxts"
+    if not _kitti_like(oxts) or is_oxts_dir(oxts):
+        return None
+    missing = [f"oxts/{n}" for n, ok in (("timestamps.txt", (oxts / "timestamps.txt").is_file()),
+                                         ("data/", (oxts / "data").is_dir())) if not ok]
+    return f"{p}: not a KITTI raw drive (no oxts/timestamps.txt and oxts/data/): {' and '.join(missing)} missing"
 
 
 def drive_name(oxts: Path) -> str:
@@ -171,7 +198,7 @@ def find_drive(path) -> Path:
     p = Path(path)
     found = find_oxts_dirs(p)
     if not found:
-        raise LogError(f"{p}: not a KITTI raw drive (no oxts/timestamps.txt and oxts/data/)")
+        raise LogError(broken_drive(p) or f"{p}: not a KITTI raw drive (no oxts/timestamps.txt and oxts/data/)")
     if len(found) > 1:
         raise LogError(f"{p}: holds {len(found)} KITTI drives ({', '.join(drive_name(d) for d in found)}); "
                        "give one drive folder")

@@ -1,4 +1,5 @@
-"""Writing estimation results: one table per log, CSV or Parquet.
+"""Writing estimation results: one table per log, CSV or Parquet; whether an output path can be written
+(:func:`output_problem`), and errors that name it (:func:`write_error`).
 
 Columns (SI): ``t`` (s), then for every estimator ``<name>.theta`` (rad, bank +
 body roll), ``<name>.phi_b`` (rad, road bank), ``<name>.valid`` (0/1), and
@@ -37,18 +38,21 @@ def write_table(path, cols: dict[str, np.ndarray], metadata: dict | None = None,
     fmt = format or OUTPUT_FORMATS.get(p.suffix.lower())
     if fmt not in ("csv", "parquet"):
         raise ValueError(f"{p}: output must end in .csv or .parquet")
-    p.parent.mkdir(parents=True, exist_ok=True)
-    if fmt == "parquet":
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-        meta = {k: (v if isinstance(v, str) else json.dumps(v)) for k, v in (metadata or {}).items()}
-        table = pa.table({k: pa.array(v) for k, v in cols.items()})
-        table = table.replace_schema_metadata(meta)
-        pq.write_table(table, p, use_dictionary=False)   # float columns: dictionaries cost 15x the time
-    else:
-        with open(p, "w", newline="") as fh:
-            csv.writer(fh).writerow(list(cols))
-            _csv_rows(fh, cols)
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        if fmt == "parquet":
+            import pyarrow as pa
+            import pyarrow.parquet as pq
+            meta = {k: (v if isinstance(v, str) else json.dumps(v)) for k, v in (metadata or {}).items()}
+            table = pa.table({k: pa.array(v) for k, v in cols.items()})
+            table = table.replace_schema_metadata(meta)
+            pq.write_table(table, p, use_dictionary=False)   # float columns: dictionaries cost 15x the time
+        else:
+            with open(p, "w", newline="") as fh:
+                csv.writer(fh).writerow(list(cols))
+                _csv_rows(fh, cols)
+    except OSError as exc:      # named: the path and why (a full disk, a file where a folder should be)
+        raise write_error(p, exc) from exc
     return p
 
 
@@ -106,7 +110,14 @@ class TableWriter:
         self._names: list[str] | None = None
 
     def write(self, cols: dict[str, np.ndarray]) -> None:
-        """Append one chunk (dict name -> 1-D array, all the same length)."""
+        """Append one chunk (dict name -> 1-D array, all the same length). An ``OSError`` (a full disk, a
+        path that cannot be created) names the output file (:func:`write_error`)."""
+        try:
+            self._write(cols)
+        except OSError as exc:
+            raise write_error(self.path, exc) from exc
+
+    def _write(self, cols: dict[str, np.ndarray]) -> None:
         if self._names is None:
             self._names = list(cols)
             self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -131,24 +142,31 @@ class TableWriter:
 
     def close(self) -> Path:
         """Finish the file and move it into place; returns its path."""
-        if self._pq is not None:
-            self._pq.close()
-        if self._fh is not None:
-            self._fh.close()
         if self._names is None:
             raise ValueError(f"{self.path}: nothing was written")
-        os.replace(self.tmp, self.path)
+        try:
+            if self._pq is not None:
+                self._pq.close()
+            if self._fh is not None:
+                self._fh.close()
+            os.replace(self.tmp, self.path)
+        except OSError as exc:
+            raise write_error(self.path, exc) from exc
         return self.path
 
     def abort(self) -> None:
-        """Close and delete the partial file."""
+        """Close and delete the partial file (never raises: the error that made the caller abort is the one
+        to report)."""
         for h in (self._pq, self._fh):
             try:
                 if h is not None:
                     h.close()
             except Exception:
                 pass
-        self.tmp.unlink(missing_ok=True)
+        try:
+            self.tmp.unlink(missing_ok=True)
+        except OSError:     # not there to remove: its folder is a file, the name a directory, ...
+            pass
 
     def __enter__(self):
         return self
@@ -159,3 +177,47 @@ class TableWriter:
         else:
             self.abort()
         return False
+
+
+def output_problem(path, directory: bool = False) -> str | None:
+    """Why ``path`` cannot be written as a file (``directory``: created as a directory), as far as can be
+    told without writing: ``"cannot write 'a.csv/o.csv': 'a.csv' is a file, not a directory"``; None if it can be.
+
+    A file is written under ``<name>.partial`` first (:class:`roadbank.io.writers.TableWriter`), so that
+    name being a directory is a problem too.
+    """
+    p = Path(path)
+    start = "cannot create directory" if directory else "cannot write"
+
+    def problem(reason: str) -> str:
+        return f"{start} '{p}': {reason}"
+    if directory and p.exists() and not p.is_dir():
+        return problem("it is a file, not a directory")
+    if not directory:
+        if p.is_dir():
+            return problem("it is a directory")
+        tmp = p.with_name(p.name + ".partial")
+        if tmp.is_dir():
+            return problem(f"its temporary file '{tmp}' is a directory (remove it)")
+    q = p if directory and p.is_dir() else p.parent
+    while not q.exists() and q != q.parent:
+        q = q.parent
+    if q.exists() and not q.is_dir():
+        return problem(f"'{q}' is a file, not a directory")
+    if q.is_dir() and not os.access(q, os.W_OK | os.X_OK):
+        return problem(f"'{q}' is not writable (permission denied)")
+    return None
+
+
+class WriteError(OSError):
+    """An output file could not be written: the message names it and why (:func:`write_error`)."""
+
+
+def write_error(path, exc: OSError) -> OSError:
+    """A :class:`WriteError` whose message names ``path`` and why writing it failed (the error ``exc``
+    writing it raised: a full disk, or what :func:`output_problem` finds); ``exc`` itself if it is one."""
+    if isinstance(exc, WriteError):
+        return exc
+    err = WriteError(output_problem(path) or f"cannot write '{path}': {exc.strerror or exc}")
+    err.errno = exc.errno
+    return err

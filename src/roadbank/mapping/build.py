@@ -11,6 +11,8 @@ from ..defaults import MAP_ESTIMATOR
 from ..estimators import OFFLINE
 from ..io import LogError
 from ..io.channels import ChannelMap
+from ..io.writers import write_error
+from ..io.kitti import broken_drive
 from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..params import VehicleParams
 from ..vehicle import DESIGN_MAX_S, Vehicle, for_conditions, has_design_span, log_conditions, undescribed_params
@@ -96,6 +98,9 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
         if part is not None and len(crs):
             rec.mapped += part.add(*arrays, log_id=log_id, course_rad=crs)
     try:
+        broken = broken_drive(path) if s.format is None else None
+        if broken:      # a KITTI drive short of a file: said so
+            raise LogError(broken)
         chunks = ReadAhead(stream_log(path, channels=s.channels, format=s.format, params=params,
                                       chunk_rows=s.chunk_rows or CHUNK_ROWS))
         # an offline estimator smooths each chunk with the chunks after it as lookahead
@@ -243,10 +248,16 @@ def map_logs(logs, estimator: str = MAP_ESTIMATOR, *, channels=None, format: str
 
 
 def write_outputs(bmap: BankMap, output, geojson=None, png=None, metadata: dict | None = None) -> list[Path]:
-    """Write the map's Parquet table and, if asked, its GeoJSON and PNG."""
-    out = [bmap.write_parquet(output, metadata)]
-    if geojson is not None:
-        out.append(bmap.write_geojson(geojson))
-    if png is not None:
-        out.append(bmap.plot(png))
+    """Write the map's Parquet table and, if asked, its GeoJSON and PNG. A file that cannot be written is
+    an ``OSError`` naming it, why, and the files written before it."""
+    out: list[Path] = []
+    for path, write in ((output, lambda p: bmap.write_parquet(p, metadata)), (geojson, bmap.write_geojson),
+                        (png, bmap.plot)):
+        if path is None:
+            continue
+        try:
+            out.append(write(path))
+        except (OSError, ValueError) as exc:    # ValueError: matplotlib, a suffix it cannot draw
+            why = str(write_error(path, exc)) if isinstance(exc, OSError) else f"cannot write '{path}': {exc}"
+            raise OSError(why + (f" ({', '.join(map(str, out))} written)" if out else "")) from None
     return out
