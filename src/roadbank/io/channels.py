@@ -9,7 +9,7 @@ A channel map is a small TOML file (read with the standard-library ``tomllib``):
 
     [resample]                # optional, see roadbank.io.resample
     time_base = "auto"        # "auto", "uniform", "clock" or a role name, e.g. "lateral_acceleration"
-    rate_hz = 100.0           # rate of the uniform grid
+    rate_hz = 100.0           # rate of the uniform grid, 1 to 10000 Hz (RATE_HZ_RANGE)
     max_gap_s = 0.5           # longer gaps in a channel become NaN, never bridged
 
     [channels]
@@ -93,6 +93,9 @@ CONVENTIONS = ("ISO", "FRD")
 #: NED systems (PX4, aerospace IMUs) give body rates and forces in FRD
 CONVENTION_ALIASES = {"FLU": "ISO", "NED": "FRD"}
 TIME_BASES = ("auto", "uniform", "clock")
+#: accepted ``resample.rate_hz`` (Hz): below 1 Hz a grid cannot carry a car's lateral dynamics; above
+#: 10 kHz (100x an ESP log's rate) it only costs memory (1e9 Hz would ask for 112 GiB on a 15 s log)
+RATE_HZ_RANGE = (1.0, 10_000.0)
 
 
 @dataclass(frozen=True)
@@ -217,8 +220,10 @@ class ChannelMap:
         if self.time_base not in TIME_BASES and self.time_base not in ROLES:
             raise LogError(f"{src}: resample.time_base must be 'auto', 'uniform', 'clock' or a role name, "
                            f"got '{self.time_base}'")
-        if not (self.rate_hz > 0 and np.isfinite(self.rate_hz)):
-            raise LogError(f"{src}: resample.rate_hz must be > 0, got {self.rate_hz}")
+        lo, hi = RATE_HZ_RANGE
+        if not lo <= self.rate_hz <= hi:
+            raise LogError(f"{src}: resample.rate_hz = {self.rate_hz:g} is implausible: the grid's rate must be "
+                           f"{lo:g} to {hi:g} Hz")
         if not self.max_gap_s > 0:
             raise LogError(f"{src}: resample.max_gap_s must be > 0, got {self.max_gap_s}")
         if self.steering_ratio is not None and not (self.steering_ratio > 0 and np.isfinite(self.steering_ratio)):
@@ -282,6 +287,17 @@ def _column_of(source, role: str, entry: dict) -> str:
     return str(entry["column"])
 
 
+def _number(source, key: str, value) -> float:
+    """``value`` of map key ``key`` as a float; LogError naming the map and the key for anything but a
+    number (a TOML string such as "sixteen", a boolean, a table)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+        raise LogError(f"{source}: {key} must be a number, got {value!r}")
+    try:
+        return float(value)
+    except ValueError:
+        raise LogError(f"{source}: {key} must be a number, got {value!r}") from None
+
+
 def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
     """Build a :class:`ChannelMap` from the parsed TOML structure (see module doc)."""
     if not isinstance(d, dict):
@@ -324,10 +340,11 @@ def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
         return ChannelMap(
             specs,
             convention=cast(str, _convention(d.get("convention", "ISO"))),   # a default is given: never None
-            steering_ratio=None if d.get("steering_ratio") is None else float(d["steering_ratio"]),
+            steering_ratio=None if d.get("steering_ratio") is None else _number(source, "steering_ratio",
+                                                                                d["steering_ratio"]),
             time_base=str(rs.get("time_base", "auto")),
-            rate_hz=float(rs.get("rate_hz", 100.0)),
-            max_gap_s=float(rs.get("max_gap_s", 0.5)),
+            rate_hz=_number(source, "resample.rate_hz", rs.get("rate_hz", 100.0)),
+            max_gap_s=_number(source, "resample.max_gap_s", rs.get("max_gap_s", 0.5)),
             truth_prefix=d.get("truth_prefix"),
             source=source,
             dbc=None if d.get("dbc") is None else str(d["dbc"]),
@@ -356,12 +373,29 @@ def read_channel_map(path) -> ChannelMap:
         raise LogError(f"{p}: channel map not found") from None
     except tomllib.TOMLDecodeError as exc:
         raise LogError(f"{p}: not a valid TOML channel map ({exc})") from None
+    except UnicodeDecodeError as exc:      # TOML is UTF-8 text (a Latin-1 "°" in a comment, a binary file)
+        raise LogError(f"{p}: not a valid TOML channel map (not UTF-8 text: byte 0x{exc.object[exc.start]:02x} "
+                       f"at position {exc.start})") from None
+    except OSError as exc:
+        raise LogError(f"{p}: cannot read the channel map ({exc.strerror})") from None
     if isinstance(d, dict) and isinstance(d.get("dbc"), str):
         d = dict(d, dbc=str(p.parent / d["dbc"]))   # relative to the map file (absolute stays)
     return channel_map_from_dict(d, source=str(p))
 
 
 # ---------------------------------------------------------------- plausibility
+def _time_unit_hint(dt_si: float, declared_unit: str) -> str:
+    """`` (is the unit ns? ...)``: the time unit under which a time column's median step, ``dt_si`` s with
+    the ``declared_unit``, is a plausible sample period (10 us to 1 s; the one nearest 10 ms when several
+    are), or '' when none is."""
+    stored = dt_si / units.factor("time", declared_unit)
+    fits = {u: stored * f for u, f in units.FACTORS["time"].items() if 1e-5 <= stored * f <= 1.0}
+    if not fits:
+        return ""
+    unit = min(fits, key=lambda u: abs(np.log10(fits[u] / 0.01)))
+    return f" (is the unit {unit}? that gives a period of {fits[unit]:g} s)"
+
+
 def check_plausible(source, role: str, column: str, declared_unit: str,
                     t_si: np.ndarray | None, v_si: np.ndarray) -> list[str]:
     """Catch units that are obviously wrong, after conversion to SI.
@@ -378,11 +412,11 @@ def check_plausible(source, role: str, column: str, declared_unit: str,
             if dt > 1.0:
                 raise channel_error(source, role, column,
                                     f"median sample period {dt:g} s with unit '{declared_unit}': "
-                                    "implausible for an ESP log (is the unit ms?)")
+                                    f"implausible for an ESP log{_time_unit_hint(dt, declared_unit)}")
             if 0 < dt < 1e-5:
                 raise channel_error(source, role, column,
                                     f"median sample period {dt:g} s with unit '{declared_unit}' "
-                                    "(> 100 kHz): implausible (is the unit s rather than ms/us?)")
+                                    f"(> 100 kHz): implausible{_time_unit_hint(dt, declared_unit)}")
         return warn
     if len(v) == 0:
         return warn

@@ -139,15 +139,19 @@ class SegmentSource:
         for key, rel in FILES.items():
             t = np.asarray(_load(p, rel + "/t"), dtype=np.float64).reshape(-1)
             v = np.asarray(_load(p, rel + "/value"), dtype=np.float64)
+            shape = v.shape
             if v.ndim == 1:
                 v = v[:, None]
-            if len(t) != len(v) or len(t) == 0:
-                raise LogError(f"{p}: comma2k19 '{rel}': {len(t)} time stamps but {len(v)} values")
+            if len(t) == 0 and len(v) == 0:
+                raise LogError(f"{p}: comma2k19 '{rel}': no samples (t and value are empty)")
+            if len(t) != len(v):
+                raise LogError(f"{p}: comma2k19 '{rel}': {len(t)} time stamps (t) but {len(v)} values (value)")
+            if key in ("accelerometer", "gyro") and (v.ndim != 2 or v.shape[1] != 3):
+                raise LogError(f"{p}: comma2k19 '{rel}/value': IMU array of shape {shape}, need (n, 3) "
+                               "(forward, right, down)")
             arr[key] = (t, v)
         acc_t, acc = arr["accelerometer"]
         gyr_t, gyr = arr["gyro"]
-        if acc.shape[1] != 3 or gyr.shape[1] != 3:
-            raise LogError(f"{p}: comma2k19 IMU arrays must have 3 columns")
         ft = np.asarray(_load(p, "global_pose/frame_times"), dtype=np.float64).reshape(-1)
         pos = np.asarray(_load(p, "global_pose/frame_positions"), dtype=np.float64)
         quat = np.asarray(_load(p, "global_pose/frame_orientations"), dtype=np.float64)

@@ -13,6 +13,12 @@ later ``import sympy`` anywhere gets the real package. Conversions therefore wor
 exactly as with a plain ``import asammdf``; only their cost moves to the first file
 that needs them. Without sympy installed nothing is replaced (asammdf's own
 fallback applies).
+
+:func:`import_asammdf` also guards the finaliser of asammdf's MDF3/MDF4 objects: when a truncated or
+corrupt file makes the constructor fail, the half-built object's ``__del__`` calls ``close()``, which
+raises (``'MDF4' object has no attribute 'header'``) and Python prints that traceback as "Exception
+ignored in ...", after the reader's own one-line error. The guarded finaliser closes a half-built
+object quietly; a fully built one is closed as before.
 """
 
 from __future__ import annotations
@@ -95,4 +101,27 @@ def import_asammdf() -> types.ModuleType:
     ImportError
         If asammdf (or one of its required dependencies) is not installed.
     """
-    return import_deferring("asammdf", DEFERRED)
+    mod = import_deferring("asammdf", DEFERRED)
+    _guard_finalisers()
+    return mod
+
+
+def _guard_finalisers() -> None:
+    """Make ``__del__`` of asammdf's MDF3 and MDF4 classes quiet on an object whose constructor failed
+    (no ``header`` yet): ``close()`` releases the file first and then fails on the attributes the
+    constructor never set; that error is dropped. Idempotent."""
+    for module, name in (("asammdf.blocks.mdf_v4", "MDF4"), ("asammdf.blocks.mdf_v3", "MDF3")):
+        cls = getattr(sys.modules.get(module), name, None)
+        original = getattr(cls, "__del__", None)
+        if original is None or getattr(original, "_roadbank_guarded", False):
+            continue
+
+        def __del__(self, _close=original):
+            try:
+                _close(self)
+            except Exception:
+                if hasattr(self, "header"):     # a fully built object: not ours to hide
+                    raise
+
+        __del__._roadbank_guarded = True  # type: ignore[attr-defined]
+        cls.__del__ = __del__  # type: ignore[method-assign]

@@ -200,11 +200,13 @@ def parquet_metadata(schema) -> dict[str, str]:
 
 
 def _to_float_numpy(col) -> np.ndarray:
-    """Arrow (chunked) array -> writable float64 numpy array, nulls as NaN (without pyarrow's pandas path)."""
+    """Arrow (chunked) array -> writable float64 numpy array, nulls as NaN (without pyarrow's pandas path).
+
+    Integers beyond 2^53 (an int64 epoch in ns) are rounded to the nearest float64, not refused."""
     import pyarrow as pa
     import pyarrow.compute as pc
 
-    arr = pc.cast(col, pa.float64())
+    arr = pc.cast(col, pa.float64(), safe=not pa.types.is_integer(col.type))
     if isinstance(arr, pa.ChunkedArray):
         arr = arr.combine_chunks()
     if arr.null_count:
@@ -213,20 +215,47 @@ def _to_float_numpy(col) -> np.ndarray:
     return np.frombuffer(arr.buffers()[1], dtype=np.float64, count=len(arr), offset=arr.offset * 8).copy()
 
 
-def arrow_column_floats(p, c: str, label: str, col, row0: int = 0) -> np.ndarray:
-    """One Arrow column -> float64 (timestamps -> s since the epoch); ``row0`` numbers rows in messages."""
+#: ticks per second of an Arrow time unit
+_TICKS_PER_S = {"s": 1, "ms": 10**3, "us": 10**6, "ns": 10**9}
+
+
+def _arrow_seconds(col) -> np.ndarray:
+    """An Arrow ``timestamp`` (any unit, any time zone: stored as UTC ticks since the epoch) or ``duration``
+    column -> float64 seconds (since the epoch / of the duration), nulls as NaN.
+
+    The int64 ticks are split into whole seconds and the rest before converting, so an epoch in ns
+    (about 1.7e18 > 2^53) gives the float64 nearest the true seconds."""
     import pyarrow as pa
     import pyarrow.compute as pc
 
+    per = _TICKS_PER_S[col.type.unit]
+    ticks = pc.cast(col, pa.int64())            # the column's own unit, no scaling
+    if isinstance(ticks, pa.ChunkedArray):
+        ticks = ticks.combine_chunks()
+    if len(ticks) == 0:
+        return np.zeros(0)
+    filled = pc.fill_null(ticks, 0) if ticks.null_count else ticks
+    v = np.frombuffer(filled.buffers()[1], dtype=np.int64, count=len(filled), offset=filled.offset * 8)
+    whole, rest = np.divmod(v, per)
+    out = whole.astype(np.float64) + rest / per
+    if ticks.null_count:
+        out[_to_float_numpy(pc.is_null(ticks)) > 0] = math.nan
+    return out
+
+
+def arrow_column_floats(p, c: str, label: str, col, row0: int = 0) -> np.ndarray:
+    """One Arrow column -> float64: numbers as they are; ``timestamp`` (any unit and time zone) -> s since the
+    epoch; ``duration`` -> s; ``row0`` numbers rows in messages."""
+    import pyarrow as pa
+
     t = col.type
-    if pa.types.is_timestamp(t):
-        ns = _to_float_numpy(pc.cast(col, pa.int64()))
-        return ns * 1e-9  # seconds since the epoch
+    if pa.types.is_timestamp(t) or pa.types.is_duration(t):
+        return _arrow_seconds(col)
     if pa.types.is_integer(t) or pa.types.is_floating(t) or pa.types.is_boolean(t) or pa.types.is_decimal(t):
         return _to_float_numpy(col)
     if pa.types.is_string(t) or pa.types.is_large_string(t):
         return _parse_floats(p, c, label, col.to_pylist(), "row", range(row0, row0 + len(col)))
-    raise LogError(f"{p}: {label}: unsupported column type {t} (need numbers)")
+    raise LogError(f"{p}: {label}: unsupported column type {t} (need numbers, timestamp or duration)")
 
 
 def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTable:

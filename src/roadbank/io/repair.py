@@ -27,24 +27,43 @@ def repair_stamps(source, column: str, t: np.ndarray, label: str = "time", after
     line / row / sample it touched (an empty list when nothing was). ``rownums`` number the samples
     in messages (default: 0, 1, ...). Raises :class:`LogError` when the stamps cannot be repaired.
     """
+    def row(i: int) -> str:
+        return f"{row_label} {rownums[i] if rownums is not None else i}"
+
     try:
         rep = repair_time(t, after=after)
     except UnrepairableTime as exc:
-        where = ""
-        if after is not None and len(t):         # a streamed chunk: say where it is
+        text = str(exc)
+        if exc.at is not None:                   # name the sample by its row
+            text = text.replace(f"at sample {exc.at}", f"at {row(exc.at)}")
+        elif after is not None and len(t):       # a streamed chunk: say where it is
             lo, hi = (rownums[0], rownums[len(t) - 1]) if rownums is not None else (0, len(t) - 1)
-            where = f" ({row_label}s {lo}-{hi})"
-        raise channel_error(source, label, column, f"{exc}{where}") from None
+            text += f" ({row_label}s {lo}-{hi})"
+        raise channel_error(source, label, column, text) from None
     if not rep.changed:
         return rep, []
     touched = np.ones(len(t), dtype=bool)
     touched[rep.keep] = False
     touched[rep.keep[rep.flagged]] = True
     first = int(np.flatnonzero(touched)[0])
-    where = f"{row_label} {rownums[first] if rownums is not None else first}"
     n_flag = int(rep.flagged.sum())
     return rep, [f"{source}: channel '{label}' (column '{column}'): time stamps repaired: "
-                 f"{describe(rep.counts)} (first at {where}), {n_flag} sample(s) flagged not valid"]
+                 f"{describe(rep.counts)} (first at {row(first)}), {n_flag} sample(s) flagged not valid"
+                 f"{_restart_note(t, rep, row)}"]
+
+
+def _restart_note(t: np.ndarray, rep: TimeRepair, row) -> str:
+    """`` -- the logger's clock restarts at <row> (...): ... kept <rows> (...)`` for a repair that kept
+    one part of a drive whose clock restarts (``row(i)`` names input sample ``i``); '' for none."""
+    if not rep.restarts or not len(rep.keep):
+        return ""
+    j = rep.restarts[0]
+    before = t[:j][np.isfinite(t[:j])]
+    back = f"from {before[-1]:.3f} s back to {t[j]:.3f} s" if len(before) else f"back to {t[j]:.3f} s"
+    more = f" (and {len(rep.restarts) - 1} more time(s))" if len(rep.restarts) > 1 else ""
+    k0, k1 = int(rep.keep[0]), int(rep.keep[-1])
+    return (f" -- the logger's clock restarts at {row(j)} ({back}){more}: the parts are not spliced, only the "
+            f"longest is kept: {row(k0)} to {row(k1)} ({t[k0]:.3f} to {t[k1]:.3f} s)")
 
 
 def repair_counts(rep: TimeRepair) -> dict:
@@ -72,6 +91,8 @@ class ChunkRepair:
         self.carry = False       # the row before the held ones was dropped: flag the first one kept
         self.counts: dict = {}
         self.warned = False
+        self.rows = 0            # rows fed, and rows kept, so far
+        self.kept = 0
 
     def feed(self, t: np.ndarray, cols: dict, rownums, last: bool):
         """``(t, cols, flagged, warnings)`` of the rows that are final; ``last`` for the final chunk.
@@ -91,7 +112,9 @@ class ChunkRepair:
         if self.carry and len(rep.keep):     # as the whole file's repair: the sample after a dropped one
             rep.flagged[0] = True
         self.carry = False
-        if not last and _odd_tail(t, rep):
+        # the dropped part after a clock restart is final: no later stamp brings it back
+        after_restart = bool(rep.restarts) and (not len(rep.keep) or int(rep.keep.max()) < rep.restarts[-1])
+        if not last and not after_restart and _odd_tail(t, rep):
             cut = max(n - HOLD_ROWS, 0)
             late = np.flatnonzero(rep.keep >= cut)
             c0 = min(cut, int(rep.keep[late[0]:].min())) if len(late) else cut
@@ -105,6 +128,11 @@ class ChunkRepair:
         else:
             warns = []
         keep = rep.keep
+        self.rows += len(rep.kind)
+        self.kept += len(keep)
+        if last and self.rows and self.kept < 2 and self.label in ("time", *FLAGGED_ROLES):   # (not a GNSS fix)
+            raise channel_error(self.source, self.label, self.column, "no increasing time base: fewer than two "
+                                f"distinct stamps ({self.rows} {self.row_label}{'s' if self.rows != 1 else ''})")
         if len(keep):
             self.after = float(t[keep[-1]])
         if len(keep) == n and not np.any(rep.kind):      # every row kept, in order: no copies

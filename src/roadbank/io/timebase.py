@@ -11,12 +11,23 @@ it can place on a strictly increasing time base and says what it did:
   the fewest samples that leave an increasing time base are dropped (the longest increasing run
   of stamps is kept);
 * a forward jump (a **gap** longer than :data:`GAP_PERIODS` sample periods) -- kept as it is (the
-  estimators re-initialise after a long gap); only counted.
+  estimators re-initialise after a long gap); only counted;
+* a **clock restart** -- the stamps go back by more than :data:`GAP_PERIODS` periods and no drop
+  of at most that many samples mends them (the clock restarted, e.g. at 0, or stepped back and runs
+  on from there; a log written twice): any increasing run would splice two parts of the drive and
+  hide the time between them, so the part between restarts with the most samples is kept and the
+  others are dropped (counted as out of order; the warning names the restart and what was kept).
+  In a log read in chunks the part before a restart may have been passed on already: a restart
+  is repaired so within the first chunk only, and refused after it.
 
 Samples next to a repair (a reordered pair, the first sample of a duplicate, the sample after a
 dropped one) are *flagged*: the readers set their values to NaN, so the estimators hold their
-output there and flag it not valid. A time base that cannot be repaired -- fewer than two
-distinct stamps, or more than half of the stamps dropped -- raises :class:`UnrepairableTime`.
+output there and flag it not valid. Two stamps that end up next to each other after samples
+between them were dropped, less than half a period apart (two parts of a drive meeting at
+almost the same stamp), are a duplicate: the later one is dropped, the first flagged. A time base
+that cannot be repaired -- fewer than two distinct stamps, more than half of the stamps dropped,
+or more than half of the kept ones repeated (every stamp written twice, or a clock coarser than
+the sample rate: the value of a repeated stamp is not trusted) -- raises :class:`UnrepairableTime`.
 """
 
 from __future__ import annotations
@@ -33,7 +44,14 @@ KINDS = ("missing", "duplicate", "swapped", "out_of_order", "gaps")
 
 
 class UnrepairableTime(ValueError):
-    """The stamps hold no increasing time base (the message says why, without file or channel)."""
+    """The stamps hold no increasing time base (the message says why, without file or channel).
+
+    ``at``: the index of the sample the message is about (a clock restart), or None; the message then
+    ends where the caller adds ``at <row>``."""
+
+    def __init__(self, message: str, at: int | None = None):
+        super().__init__(message)
+        self.at = at
 
 
 #: per-sample codes of :attr:`TimeRepair.kind`
@@ -56,12 +74,16 @@ class TimeRepair:
         :data:`DUPLICATE`, :data:`OUT_OF_ORDER`).
     gaps : int
         Forward jumps longer than :data:`GAP_PERIODS` median periods among the kept stamps (kept).
+    restarts : tuple of int
+        Input indices where the clock restarts (the first sample after the step back); the samples of
+        the parts not kept are dropped as :data:`OUT_OF_ORDER`.
     """
 
     keep: np.ndarray
     flagged: np.ndarray
     kind: np.ndarray
     gaps: int = 0
+    restarts: tuple = ()
 
     @property
     def counts(self) -> dict:
@@ -82,7 +104,8 @@ class TimeRepair:
         ``t`` (the stamps repaired) after ``after``."""
         sel = self.keep < n
         keep = self.keep[sel]
-        return TimeRepair(keep, self.flagged[sel], self.kind[:n], count_gaps(np.asarray(t)[keep], after))
+        return TimeRepair(keep, self.flagged[sel], self.kind[:n], count_gaps(np.asarray(t)[keep], after),
+                          tuple(j for j in self.restarts if j < n))
 
 
 def count_gaps(tk: np.ndarray, after: float | None = None) -> int:
@@ -166,13 +189,16 @@ def repair_time(t, after: float | None = None) -> TimeRepair:
     Raises
     ------
     UnrepairableTime
-        Fewer than two distinct stamps (without ``after``), or more than half the stamps dropped.
+        Fewer than two distinct stamps (without ``after``), more than half the stamps dropped, more
+        than half of the kept ones repeated, or (with ``after``) a clock restart.
     """
     t = np.asarray(t, dtype=np.float64)
     n = len(t)
     kind = np.zeros(n, dtype=np.int8)
     follows_drop = np.zeros(n, dtype=bool)     # (original index) the sample after a dropped one
     flag = np.zeros(n, dtype=bool)
+    repeated = np.zeros(n, dtype=bool)         # (original index) kept first sample of a repeated stamp
+    restarts: tuple = ()
     finite = np.isfinite(t)
     idx = np.flatnonzero(finite)
     kind[~finite] = MISSING
@@ -204,7 +230,7 @@ def repair_time(t, after: float | None = None) -> TimeRepair:
         tt = t[idx]
         dup = np.concatenate(([False], tt[1:] == tt[:-1]))
         if dup.any():
-            flag[idx[np.flatnonzero(dup) - 1]] = True
+            repeated[idx[np.flatnonzero(dup) - 1]] = True
             drop(dup, DUPLICATE, flag_next=False)
         # 3. isolated bad stamps (too high or too low on their own)
         iso = _isolated(t[idx])
@@ -212,21 +238,123 @@ def repair_time(t, after: float | None = None) -> TimeRepair:
             m = np.zeros(len(idx), dtype=bool)
             m[iso] = True
             drop(m, OUT_OF_ORDER)
-        # 4. what is left out of order (backwards jumps): keep the longest increasing run
+        # 4. what is left out of order (backwards jumps): keep the longest increasing run of one part
+        # of the drive (never two parts spliced at a clock restart)
         tt = t[idx]
         if len(tt) > 1 and not np.all(np.diff(tt) > 0):
-            drop(~_in_longest_run(tt), OUT_OF_ORDER)
+            period = _period(tt)
+            keep, cuts = _one_part(tt, period)
+            if cuts and after is not None:
+                j = int(idx[cuts[0]])
+                raise UnrepairableTime(_restart_refused(float(tt[cuts[0] - 1]), float(t[j]), j), at=j)
+            restarts = tuple(int(i) for i in idx[cuts])
+            near = _near_joins(tt, keep, period)
+            k = np.flatnonzero(keep)
+            repeated[idx[k[np.searchsorted(k, np.flatnonzero(near)) - 1]]] = True   # the kept one before
+            drop(~keep, OUT_OF_ORDER)
+            drop(near[keep], DUPLICATE, flag_next=False)
+    if after is not None:
+        _check_no_restart(t, idx, after)
     lost = int(np.count_nonzero((kind != KEPT) & (kind != SWAPPED)))
+    where = f" (the clock restarts {len(restarts)} time(s), first at sample {restarts[0]})" if restarts else ""
     if n >= 2 and after is None and len(idx) < 2:
         fin = t[finite]
         what = (f"all {n} stamps equal ({float(fin[0])!r})" if len(fin) == n and np.all(fin == fin[0])
                 else f"only {len(idx)} of {n} stamps in increasing order")
-        raise UnrepairableTime(f"no increasing time base: {what}")
+        raise UnrepairableTime(f"no increasing time base: {what}{where}", at=restarts[0] if restarts else None)
     if n and lost > n / 2:
         raise UnrepairableTime(f"no increasing time base: {lost} of {n} stamps missing, repeated or "
-                               "out of order")
-    return TimeRepair(keep=idx, flagged=flag[idx] | follows_drop[idx], kind=kind,
-                      gaps=count_gaps(t[idx], after))
+                               f"out of order{where}", at=restarts[0] if restarts else None)
+    n_rep = int(np.count_nonzero(repeated[idx]))
+    if n_rep > len(idx) / 2:
+        what = "every stamp is repeated" if n_rep >= len(idx) - 1 else f"{n_rep} of {len(idx)} stamps repeated"
+        raise UnrepairableTime(f"no increasing time base: {what} (every row written twice, or a clock coarser "
+                               "than the sample rate?), and the value at a repeated stamp is not trusted")
+    return TimeRepair(keep=idx, flagged=flag[idx] | repeated[idx] | follows_drop[idx], kind=kind,
+                      gaps=count_gaps(t[idx], after), restarts=restarts)
+
+
+def _period(t: np.ndarray) -> float:
+    """The median of the positive steps of stamps ``t`` (s): the sample period; NaN without one."""
+    d = np.diff(t)
+    d = d[d > 0]
+    return float(np.median(d)) if len(d) else np.nan
+
+
+def _restart_refused(before: float, after: float, j: int) -> str:
+    """The message for a clock restart in a log read in chunks (the part before it is passed on already)."""
+    return (f"no increasing time base: the clock restarts at sample {j} (from {before:.3f} s back to "
+            f"{after:.3f} s), and read in chunks the part before it is passed on already and cannot be dropped "
+            "(read the log in one chunk: --chunk-rows above its length)")
+
+
+def _check_no_restart(t: np.ndarray, idx: np.ndarray, after: float) -> None:
+    """UnrepairableTime if a streamed chunk's stamps ``t`` (``idx`` kept), read on from ``after`` (the last
+    stamp passed on), hold a clock restart (:func:`_restarts`, ``after`` as the first kept stamp)."""
+    if len(t) - len(idx) <= GAP_PERIODS:         # a restart drops more samples than that
+        return
+    fin = np.flatnonzero(np.isfinite(t))
+    kept = np.zeros(len(t), dtype=bool)
+    kept[idx] = True
+    seg = np.concatenate(([after], t[fin]))
+    keep = np.concatenate(([True], kept[fin]))
+    p = _period(seg)
+    found = _restarts(seg, keep, p) if np.isfinite(p) else []
+    if found:
+        j = int(fin[found[0] - 1])
+        raise UnrepairableTime(_restart_refused(float(seg[found[0] - 1]), float(t[j]), j), at=j)
+
+
+def _restarts(seg: np.ndarray, keep: np.ndarray, p: float) -> list[int]:
+    """Positions in ``seg`` where the clock restarts, given the longest increasing run ``keep`` and the
+    period ``p`` (s): more than :data:`GAP_PERIODS` samples dropped between two kept ones (or before the
+    first, after the last), among them a step back of more than that many periods, and the dropped
+    samples' time not in the kept stamps (their count minus the periods the stamps move on across
+    them above :data:`GAP_PERIODS`). The position is that of the largest step back."""
+    n = len(seg)
+    k = np.flatnonzero(keep)
+    a = np.concatenate(([-1], k))
+    b = np.concatenate((k, [n]))
+    out = []
+    for i in np.flatnonzero(b - a - 1 > GAP_PERIODS).tolist():
+        lo, hi = max(int(a[i]), 0), min(int(b[i]), n - 1)
+        back = seg[lo:hi] - seg[lo + 1:hi + 1]
+        j = int(np.argmax(back))
+        if back[j] <= GAP_PERIODS * p:
+            continue
+        if a[i] >= 0 and b[i] < n and (b[i] - a[i]) * p - (seg[b[i]] - seg[a[i]]) <= GAP_PERIODS * p:
+            continue                      # the dropped samples' time is in the stamps: a glitch
+        out.append(lo + 1 + j)
+    return out
+
+
+def _one_part(tt: np.ndarray, p: float) -> tuple[np.ndarray, list[int]]:
+    """(mask of the samples of ``tt`` to keep, positions of the clock restarts): the longest increasing
+    run, within the part between restarts with the most samples (the earlier on a tie), found again
+    in that part until it has no restart (or holds less than half the samples: refused after)."""
+    lo, hi, cuts = 0, len(tt), []
+    keep = _in_longest_run(tt)
+    found = _restarts(tt, keep, p) if np.isfinite(p) else []
+    while found and 2 * (hi - lo) >= len(tt):
+        edges = [lo] + [lo + j for j in found] + [hi]
+        cuts += edges[1:-1]
+        lo, hi = max(zip(edges[:-1], edges[1:]), key=lambda e: e[1] - e[0])
+        keep = _in_longest_run(tt[lo:hi])
+        found = _restarts(tt[lo:hi], keep, p)
+    mask = np.zeros(len(tt), dtype=bool)
+    mask[lo:hi] = keep
+    return mask, sorted(cuts)
+
+
+def _near_joins(tt: np.ndarray, keep: np.ndarray, p: float) -> np.ndarray:
+    """Mask of the kept samples of ``tt`` less than half a period ``p`` after the kept one before them
+    while samples between the two are dropped: two stretches meeting at almost the same stamp."""
+    k = np.flatnonzero(keep)
+    out = np.zeros(len(tt), dtype=bool)
+    if len(k) > 1 and np.isfinite(p):
+        join = (np.diff(k) > 1) & (np.diff(tt[k]) < 0.5 * p)
+        out[k[1:][join]] = True
+    return out
 
 
 def _in_longest_run(t: np.ndarray) -> np.ndarray:
