@@ -147,7 +147,7 @@ def lowpass_cutoff(d: LowPassDesign, vx: float) -> float:
     if d.cutoff is not None:
         return d.cutoff
     # a design without a cut-off has the bank rate and both noise densities
-    bank = d.bank_rate * (max(vx, 0.1) / BANK_SPEED_REF) ** d.bank_speed_exp  # type: ignore[operator]
+    bank = float(d.bank_rate) * (max(vx, 0.1) / BANK_SPEED_REF) ** d.bank_speed_exp  # type: ignore[arg-type]
     return cutoff_for_noise((d.Q_ay + vx * vx * d.R) / d.params.g ** 2, bank)  # type: ignore[operator]
 
 

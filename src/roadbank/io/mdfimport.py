@@ -112,8 +112,8 @@ def _guard_finalisers() -> None:
     constructor never set; that error is dropped. Idempotent."""
     for module, name in (("asammdf.blocks.mdf_v4", "MDF4"), ("asammdf.blocks.mdf_v3", "MDF3")):
         cls = getattr(sys.modules.get(module), name, None)
-        original = getattr(cls, "__del__", None)
-        if original is None or getattr(original, "_roadbank_guarded", False):
+        original = None if cls is None else getattr(cls, "__del__", None)
+        if cls is None or original is None or getattr(original, "_roadbank_guarded", False):
             continue
 
         def __del__(self, _close=original):
@@ -124,4 +124,4 @@ def _guard_finalisers() -> None:
                     raise
 
         __del__._roadbank_guarded = True  # type: ignore[attr-defined]
-        cls.__del__ = __del__  # type: ignore[method-assign]
+        setattr(cls, "__del__", __del__)  # noqa: B010  (a method assigned on a class: mypy refuses the plain form)

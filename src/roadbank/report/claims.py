@@ -105,7 +105,7 @@ def claim_pif_best(rows, conditions=("low-mu", "misaligned", "cf120"), scenario=
     for c in conditions:
         pif = _get(rms, scenario, c, "pif-paper")
         others = {n: _get(rms, scenario, c, n) for n in ("pio-original", "dfc", "uio")}
-        best = min(others, key=others.get)
+        best = min(others, key=lambda n: others[n])
         ok &= bool(pif <= others[best])
         parts.append(f"{c}: pif-paper {pif:.3f} vs {best} {others[best]:.3f}")
     return Claim(f"pif_best_{scenario}", f"{scenario}: PIF best of PIF/PIO/DFC/UIO under "
