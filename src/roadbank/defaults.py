@@ -1,10 +1,10 @@
 """What roadbank assumes when the user says nothing (no import cost: plain constants).
 
-* :data:`ESTIMATOR` — the estimator of every command (``estimate``, ``map`` streams, the fleet) and
-  of :func:`roadbank.vehicle.for_log` when none is named: ``kinematic-pif`` (``kinematic-ff``,
-  handed to the default PIF while the yaw rate changes fast), chosen on training data only by
-  the real-roads-first rule of :mod:`roadbank.tuning.real` (the KITTI training drives first, the
-  simulated drives of cars that are not described to break ties; docs/estimators.md). Its
+* :data:`ESTIMATOR` — the estimator of every command (``estimate``, ``map`` streams, the fleet) when
+  none is named (``roadbank.vehicle.for_log(ESTIMATOR, signals)`` builds it as they do):
+  ``kinematic-pif`` (``kinematic-ff``, handed to the default PIF while the yaw rate changes fast), chosen
+  on training data only by the real-roads-first rule of :mod:`roadbank.tuning.real` (the KITTI training
+  drives first, the simulated drives of cars that are not described to break ties; docs/estimators.md). Its
   low-pass uses no tyre data. On a quiet log it is ``pif-adaptive`` (:func:`roadbank.vehicle.is_quiet`).
 * :data:`MAP_ESTIMATOR` — the estimator of ``roadbank map`` (a map is built after the drives, so it
   may use the samples after each instant): ``kinematic-smoother``, the kinematic estimate low-passed

@@ -66,7 +66,7 @@ def jitter_markdown(results, level: int = 2) -> str:
         L.append("The `100 Hz / 10 Hz` columns run `estimators.make(name)`: the default PIFs designed for the "
                  "100 Hz ESP sensor on both runs. `designed for the log` is the same PIF designed for the 10 Hz "
                  "run (`roadbank.vehicle.make_estimator` with `log_conditions`: the sensors' noise densities at "
-                 "10 Hz, ten times the 100 Hz `R` and `Q_ay`, and `Q_ay` at least the white noise measured on "
+                 "10 Hz, ten times the 100 Hz `R` and `Q_ay`, and `Q_ay` at least the road noise measured on "
                  "the run's `ay`), which is what `roadbank estimate` and `validate kitti` build for a 10 Hz "
                  "log. With the same `Q` the filter is slower (its gain scales roughly with sqrt(Q/R)): here, "
                  "where the noise per sample is the ESP sensors' and the error is mostly the lag behind the "

@@ -235,7 +235,7 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
         L.append("")
     if any("R_nominal" in d.sensitivity for d in v.drives):
         L.append("Raw theta RMS (deg) of the sensor-weighted PIFs designed as above (the ESP sensors' "
-                 "noise densities at the drive's 10 Hz, and the `ay` input's at least the white noise "
+                 "noise densities at the drive's 10 Hz, and the `ay` input's at least the road noise "
                  "measured on the drive's own `ay`: `roadbank.vehicle.log_conditions`), from the data sheet "
                  "alone at 10 Hz (no measured `ay` noise), and from the data sheet at the sensor's nominal "
                  "100 Hz (`R`, `Q_ay` ten times smaller, a faster filter; see the 10 Hz section for the "

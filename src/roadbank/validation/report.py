@@ -153,7 +153,7 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
     if pif is not None:
         verdict = "reaches" if pif.r >= 0.9 else "does not reach"
         L.append(f"- The PIF on the modified model with roadbank's default tuning (R from the ESP yaw-rate "
-                 f"sensor at the log's rate, the ay input's noise density Q_ay at least the white noise "
+                 f"sensor at the log's rate, the ay input's noise density Q_ay at least the road noise "
                  f"measured on the log's own ay, Q and th from `roadbank tune`; docs/estimators.md) {verdict} "
                  f"r = 0.9: r = {pif.r:.3f} against the kinematic estimate's "
                  f"r = {res.scores['kinematic'].r:.3f}. A causal observer follows the bank with some "
