@@ -11,9 +11,9 @@ from ..defaults import MAP_ESTIMATOR
 from ..estimators import OFFLINE
 from ..io import LogError
 from ..io.channels import ChannelMap
-from ..io.writers import write_error
 from ..io.kitti import broken_drive
 from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
+from ..io.writers import write_error
 from ..params import VehicleParams
 from ..vehicle import DESIGN_MAX_S, Vehicle, for_conditions, has_design_span, log_conditions, undescribed_params
 from .geo import CourseStream, LocalProjection
