@@ -11,7 +11,6 @@ import numpy as np
 from ..defaults import ESTIMATOR as DEFAULT
 from ..estimators import OFFLINE, with_online_offsets
 from ..io import LogError
-from ..io.kitti import broken_drive
 from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..io.timebase import add_counts
 from ..io.writers import TableWriter, estimate_table, write_error
@@ -239,9 +238,6 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
         kept_est: list[list] = [[] for _ in names]
         kept_roll: list[np.ndarray] = []
         kept_truth: dict[str, list[np.ndarray]] = {}
-        broken = broken_drive(path) if format is None else None
-        if broken:      # a KITTI drive short of a file: said so, not "neither a comma2k19 segment nor ..."
-            raise LogError(broken)
         writer = TableWriter(output, metadata=metadata)
         correct = (lambda s: s) if vehicle is None else vehicle.correct
         # an offline estimator smooths each chunk with the chunks after it as lookahead (as many as

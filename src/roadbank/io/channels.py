@@ -69,7 +69,7 @@ from typing import cast
 import numpy as np
 
 from . import units
-from .errors import LogError, channel_error
+from .errors import LogError, channel_error, channel_text
 
 #: role -> (unit kind, axis it lies along / rotates about; None for time)
 ROLES: dict[str, tuple[str, str | None]] = {
@@ -444,8 +444,8 @@ def check_plausible(source, role: str, column: str, declared_unit: str,
                                 f"|steering-wheel angle| reaches {mx:.1f} rad (> 720 deg) after "
                                 f"converting from '{declared_unit}' -- probably deg")
         if p99 > 2 * np.pi:
-            warn.append(f"{source}: channel '{role}' (column '{column}'): 99th-percentile "
-                        f"|angle| {np.degrees(p99):.0f} deg exceeds one turn; check the unit")
+            warn.append(channel_text(source, role, column, f"99th-percentile |angle| {np.degrees(p99):.0f} deg "
+                                     "exceeds one turn; check the unit"))
     if role == "road_wheel_angle" and p99 > 1.0:
         raise channel_error(source, role, column,
                             f"99th-percentile |road-wheel angle| = {p99:.2f} rad after converting "

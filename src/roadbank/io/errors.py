@@ -13,7 +13,13 @@ class LogError(ValueError):
     """
 
 
+def channel_text(source, role: str, column: str | None, problem: str) -> str:
+    """``<source>: channel '<role>' (column '<column>'): <problem>``: how a message names one channel of one file
+    (an error's, :func:`channel_error`, or a warning's)."""
+    col = f" (column '{column}')" if column else ""
+    return f"{source}: channel '{role}'{col}: {problem}"
+
+
 def channel_error(source, role: str, column: str | None, problem: str) -> LogError:
     """Build a :class:`LogError` for one channel of one file."""
-    col = f" (column '{column}')" if column else ""
-    return LogError(f"{source}: channel '{role}'{col}: {problem}")
+    return LogError(channel_text(source, role, column, problem))

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..constants import G
+from .errors import channel_text
 
 #: (lowest, highest) value of each channel role a passenger car can have (SI): speed (m/s; reversing
 #: included), lateral acceleration (m/s^2: 3 g, beyond the tyres' grip with any bank and roll; an ESP
@@ -47,10 +48,7 @@ class Dropouts:
 
     def warnings(self) -> list[str]:
         """One warning per channel that had samples beyond its limits; [] for a clean log."""
-        out = []
-        for role, n in self.count.items():
-            lo, hi = LIMITS[role]
-            col = f" (column '{self.columns[role]}')" if role in self.columns else ""
-            out.append(f"{self.source}: channel '{role}'{col}: {n} sample(s) outside [{lo:g}, {hi:g}] (SI), "
-                       f"impossible for a car, read as dropouts (the first at t = {self.first[role]:.3f} s)")
-        return out
+        return [channel_text(self.source, role, self.columns.get(role),
+                             f"{n} sample(s) outside [{LIMITS[role][0]:g}, {LIMITS[role][1]:g}] (SI), impossible for "
+                             f"a car, read as dropouts (the first at t = {self.first[role]:.3f} s)")
+                for role, n in self.count.items()]

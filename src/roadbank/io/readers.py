@@ -19,7 +19,7 @@ from .files import existing_nonempty, open_mdf
 from .formats import CAN_FORMATS as CAN_FORMATS
 from .formats import FORMATS, SUFFIXES
 from .formats import ROS_FORMATS as ROS_FORMATS
-from .kitti import find_oxts_dirs
+from .kitti import broken_drive, find_oxts_dirs
 from .types import RawTable
 
 #: strings read as a missing sample (NaN) rather than an error
@@ -36,6 +36,9 @@ def detect_format(path) -> str:
             return "rosbag2"
         if find_oxts_dirs(p):
             return "kitti-oxts"
+        broken = broken_drive(p)
+        if broken:              # a KITTI drive short of a file: said so
+            raise LogError(broken)
         raise LogError(f"{p}: a directory, but neither a comma2k19 segment (no processed_log/) "
                        "nor a KITTI raw drive (no oxts/timestamps.txt)")
     fmt = SUFFIXES.get(p.suffix.lower())

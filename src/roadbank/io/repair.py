@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import channel_error
+from .errors import channel_error, channel_text
 from .timebase import MISSING, OUT_OF_ORDER, TimeRepair, UnrepairableTime, add_counts, describe, repair_time
 
 #: the signal roles whose values are set to NaN on a sample flagged by the time-stamp repair
@@ -47,9 +47,8 @@ def repair_stamps(source, column: str, t: np.ndarray, label: str = "time", after
     touched[rep.keep[rep.flagged]] = True
     first = int(np.flatnonzero(touched)[0])
     n_flag = int(rep.flagged.sum())
-    return rep, [f"{source}: channel '{label}' (column '{column}'): time stamps repaired: "
-                 f"{describe(rep.counts)} (first at {row(first)}), {n_flag} sample(s) flagged not valid"
-                 f"{_restart_note(t, rep, row)}"]
+    return rep, [channel_text(source, label, column, f"time stamps repaired: {describe(rep.counts)} (first at "
+                              f"{row(first)}), {n_flag} sample(s) flagged not valid{_restart_note(t, rep, row)}")]
 
 
 def _restart_note(t: np.ndarray, rep: TimeRepair, row) -> str:

@@ -11,7 +11,6 @@ from ..defaults import MAP_ESTIMATOR
 from ..estimators import OFFLINE
 from ..io import LogError
 from ..io.channels import ChannelMap
-from ..io.kitti import broken_drive
 from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..io.writers import write_error
 from ..params import VehicleParams
@@ -98,9 +97,6 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
         if part is not None and len(crs):
             rec.mapped += part.add(*arrays, log_id=log_id, course_rad=crs)
     try:
-        broken = broken_drive(path) if s.format is None else None
-        if broken:      # a KITTI drive short of a file: said so
-            raise LogError(broken)
         chunks = ReadAhead(stream_log(path, channels=s.channels, format=s.format, params=params,
                                       chunk_rows=s.chunk_rows or CHUNK_ROWS))
         # an offline estimator smooths each chunk with the chunks after it as lookahead
