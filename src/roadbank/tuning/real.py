@@ -235,9 +235,15 @@ def objective(build, logs, sim_sets) -> float:
     """The rule's objective (deg) of the estimator that ``build(signals)`` makes for each log
     (module docstring): a fixed estimator, or one designed for each log
     (:func:`roadbank.vehicle.for_log`, as the command line builds it)."""
-    errs = [_rms_deg(build(s).run(s).theta[m], ref[m]) for s, ref, m in logs]
+    errs = log_errors(build, logs)
     sim = [float(np.median([drive_errors(build(d.signals), [d])[0][0] for d in drives])) for drives in sim_sets]
     return (float(np.median(errs)) if errs else 0.0) + (float(np.median(sim)) if sim else 0.0)
+
+
+def log_errors(build, logs) -> list[float]:
+    """The raw RMS error (deg) of ``theta`` against the INS roll on each log's scored samples (``logs`` from
+    :func:`training_logs`), the estimator ``build(signals)`` makes for it."""
+    return [_rms_deg(build(s).run(s).theta[m], ref[m]) for s, ref, m in logs]
 
 
 def _rms_deg(theta, ref) -> float:
@@ -413,8 +419,7 @@ def choose_noise_tau(logs, long=None, stage: int = 12) -> tuple[float, dict]:
     median, long median)})``."""
     long = long_logs(logs) if long is None else long
     cands = kinematic_pif_candidates(stage)
-    errs = {k: ([_rms_deg(b(sg).run(sg).theta[m], ref[m]) for sg, ref, m in logs], long_errors(b, long))
-            for k, b in cands.items()}
+    errs = {k: (log_errors(b, logs), long_errors(b, long)) for k, b in cands.items()}
     scores = {k: (float(np.median(a)), float(np.median(b))) for k, (a, b) in errs.items()}
     best = min(a + b for a, b in scores.values())
     chosen = next(k for k in cands if sum(scores[k]) <= best + TIE_DEG)
