@@ -109,6 +109,18 @@ candidate other than the first is taken only where the mean of the same drive sc
 every drive of the long logs) is lower than the first's too; otherwise the first stays. It kept 0, a rate in time:
 one by one 0.3847 / 0.3883 / 0.3942 deg and end to end 0.3860 / 0.3912 / 0.3985 for 0 / 0.5 / 1 (means 0.4385 /
 0.4444 / 0.4540): a faster prior at speed costs on the training drives.
+
+The fifteenth stage (:func:`choose_described_filter`; rule written 2026-12-04 before any candidate ran) chooses the
+filter of a quiet log when the car *is* described (a vehicle file or a shipped car's name: ``roadbank estimate LOG
+--vehicle CAR``). The fourth stage chose ``pif-adaptive`` for a car nobody described, whose model is a guess; with the
+car's own data a filter that leans more on the model may do better. Candidates: :data:`DESCRIBED_FILTERS`, the
+shipped :data:`roadbank.vehicle.QUIET_FILTER` first, then the rest of :data:`QUIET_FILTERS` in order. Objective, as
+the seventh stage's: each simulated training drive of each shipped car (:func:`simulated_sets`, every one quiet) built
+for its own car (``for_log(..., vehicle=load_vehicle(car), quiet_filter=f)``), bank RMS per drive, the median per
+car, then the median over the cars (deg); no real log of a described car is at hand, so the simulated drives alone
+decide. The lowest wins; ties within :data:`TIE_DEG` go to the earlier candidate; and, as from the fourteenth stage,
+a candidate other than the first wins only where the mean over every drive of every car is lower than the first's
+too. Neither ``roadbank tune``'s validation set nor the real drives take part.
 """
 
 from __future__ import annotations
@@ -184,6 +196,8 @@ LONG_GAP_S = 2.0
 LIMIT_TAUS = (0.0, 8.0, 4.0, 2.0, 1.0)
 #: the fourteenth stage's exponents (-) of the speed in the bank-rate prior: a rate in time first
 BANK_SPEED_EXPS = (0.0, 0.5, 1.0)
+#: the fifteenth stage's candidate filters of a quiet log whose car is described: the shipped one first
+DESCRIBED_FILTERS = (vehicle.QUIET_FILTER, *(f for f in QUIET_FILTERS if f != vehicle.QUIET_FILTER))
 #: the stages before the fourteenth took the bank-rate prior as a rate in time
 _TIME_RATE = {"bank_speed_exp": 0.0}
 #: the stages before the twelfth ran on the design span's noise throughout
@@ -305,6 +319,26 @@ def choose_described_ratio(sim_sets, cars=SIM_CARS, ratios=QUIET_RATIOS) -> tupl
         meds[q] = float(np.median([objective(per_log("kinematic-pif", vehicle=load_vehicle(car), quiet_ratio=q), [],
                                              [drives]) for car, drives in zip(cars, sim_sets)]))
     return min(meds, key=lambda q: (round(meds[q] / EQUAL_DEG), q)), meds
+
+
+def choose_described_filter(sim_sets, cars=SIM_CARS, filters=DESCRIBED_FILTERS) -> tuple[str, dict]:
+    """The fifteenth stage: the filter of a quiet log whose car is described (module docstring). Each candidate of
+    ``filters`` (default :data:`DESCRIBED_FILTERS`, the shipped one first) builds the default for each simulated
+    training drive of each car in ``cars`` (``sim_sets`` from :func:`simulated_sets`, in that order) with that
+    car's own file and ``quiet_filter``; bank RMS per drive (deg). The lowest median over the cars of the per-car
+    medians wins, ties within :data:`TIE_DEG` to the earlier candidate; a candidate other than the first wins only
+    where the mean over every drive is lower than the first's too. Returns ``(filter, {filter: (median, mean)})``."""
+    scores: dict[str, tuple[float, float]] = {}
+    for f in filters:
+        errs = [[drive_errors(per_log("kinematic-pif", vehicle=load_vehicle(car), quiet_filter=f)(d.signals), [d])[0][0]
+                 for d in drives] for car, drives in zip(cars, sim_sets)]
+        scores[f] = (float(np.median([np.median(e) for e in errs])), float(np.mean(np.concatenate(errs))))
+    best = min(m for m, _ in scores.values())
+    chosen = next(f for f in filters if scores[f][0] <= best + TIE_DEG)
+    first = filters[0]
+    if chosen != first and not scores[chosen][1] < scores[first][1]:
+        chosen = first
+    return chosen, scores
 
 
 def choose_by_roads(builds: dict, logs, sim_sets) -> tuple:
