@@ -440,3 +440,19 @@ def test_the_described_cars_quiet_ratio_is_what_the_rule_picks():
     assert chosen == QUIET_RATIO, meds
     assert abs(meds[6.0] - meds[QUIET_RATIO]) < EQUAL_DEG
     assert meds[QUIET_RATIO] < meds[0.0] - 0.03
+
+
+@pytest.mark.slow
+def test_the_described_cars_quiet_filter_is_what_the_rule_picks():
+    """The fifteenth stage (tuning.real.choose_described_filter) on the simulated training drives, each built for
+    its own car: the shipped quiet filter (pif-adaptive) stays, clearly ahead of the plain PIF and of the low-passes
+    (the model is worth more than a low-pass on a quiet log of a known car)."""
+    from roadbank.tuning.real import TIE_DEG, choose_described_filter, simulated_sets
+    from roadbank.vehicle import QUIET_FILTER
+
+    chosen, scores = choose_described_filter(simulated_sets(),
+                                             filters=(QUIET_FILTER, "pif-modified", "pif-gated", "kinematic-ff"))
+    assert chosen == QUIET_FILTER, scores
+    median = {f: m for f, (m, _) in scores.items()}
+    assert median[QUIET_FILTER] < min(median["pif-modified"], median["pif-gated"]) - TIE_DEG
+    assert median["pif-modified"] < median["kinematic-ff"] - 0.05
