@@ -53,18 +53,17 @@ def turning(vx, ay, r) -> np.ndarray:
         return np.isfinite(vr) & np.isfinite(ay) & (np.abs(vr) > TURN) & (vx >= 5.0)
 
 
-def _residual(vx, ay, r) -> tuple[float, int]:
+def _residual(vx, ay, r) -> tuple[float, int, np.ndarray]:
+    """Median ``|ay - vx r|`` (m/s^2) over the turning samples, their count and their mask."""
     sel = turning(vx, ay, r)
     n = int(sel.sum())
-    return (float(np.median(np.abs(ay[sel] - vx[sel] * r[sel]))) if n else 0.0), n
+    return (float(np.median(np.abs(ay[sel] - vx[sel] * r[sel]))) if n else 0.0), n, sel
 
 
-def _slope(vx, ay, r) -> tuple[float, int]:
-    """Least-squares slope (-) of ``ay`` on ``vx r`` through the origin over the turning samples, and their count."""
-    sel = turning(vx, ay, r)
-    n = int(sel.sum())
+def _slope(vx, ay, r, sel) -> float:
+    """Least-squares slope (-) of ``ay`` on ``vx r`` through the origin over the samples of the mask ``sel``."""
     a = vx[sel] * r[sel]
-    return (float(np.sum(ay[sel] * a) / np.sum(a * a)) if n else math.nan), n
+    return float(np.sum(ay[sel] * a) / np.sum(a * a)) if sel.any() else math.nan
 
 
 def usable(vx, ay, r) -> np.ndarray:
@@ -104,7 +103,7 @@ def check_consistency(signals, source="signals", columns: dict | None = None) ->
 def check_balance(vx, ay, r, source="signals", columns: dict | None = None) -> list[str]:
     """:func:`check_consistency` of the arrays ``vx`` (m/s), ``ay`` (m/s^2), ``r`` (rad/s)."""
     vx, ay, r = (np.asarray(a, float) for a in (vx, ay, r))
-    res, n = _residual(vx, ay, r)
+    res, n, sel = _residual(vx, ay, r)
     if n < MIN_SAMPLES:
         return []
     cols = columns or {}
@@ -113,7 +112,7 @@ def check_balance(vx, ay, r, source="signals", columns: dict | None = None) -> l
         return " or ".join(f"'{x}'" + (f" (column '{cols[x]}')" if x in cols else "") for x in roles)
 
     if res <= LIMIT:
-        k, _ = _slope(vx, ay, r)
+        k = _slope(vx, ay, r, sel)
         if k < SLOPE_G and SLOPE_G_RANGE[0] <= G * k <= SLOPE_G_RANGE[1]:
             return [f"{source}: channel {named(('lateral_acceleration',))}: ay is {k:.2f} times vx r over {n} "
                     "turning samples (about 1 on a road): it looks like g declared as m/s^2, unless the car "
@@ -124,7 +123,7 @@ def check_balance(vx, ay, r, source="signals", columns: dict | None = None) -> l
                     "convention, unless the car turned slowly on a steep banked track"]
         return []
     for roles, text, fix in CANDIDATES:
-        fres, fn = _residual(*fix(vx, ay, r))
+        fres, fn, _ = _residual(*fix(vx, ay, r))
         if fn >= MIN_SAMPLES and fres <= FIXED:
             raise LogError(f"{source}: channel {named(roles)}: {text}: ay, vx and yaw rate do not balance "
                            f"(median |ay - vx r| = {res:.1f} m/s^2 over {n} turning samples, "
