@@ -13,6 +13,8 @@ from click.testing import CliRunner
 
 from roadbank.cli import main
 from roadbank.fleet import estimate_log
+from roadbank.io.writers import WriteError
+from roadbank.mapping import BankMap, LocalProjection
 
 
 def _csv(path: Path, n: int = 300, vx: float = 20.0) -> Path:
@@ -129,6 +131,18 @@ def test_map_file_that_fails_says_what_was_written(tmp_path):
     assert res.exit_code == 1
     assert "error: cannot write 'm.xyz'" in res.output and "(m.parquet written)" in res.output
     assert (tmp_path / "m.parquet").is_file()
+
+
+def test_bank_map_files_that_cannot_be_written_name_the_path(tmp_path):
+    """Through the API (no pre-check): a WriteError naming the path and why, not the raw OSError."""
+    bmap = BankMap(LocalProjection(48.0, 11.0), sectors=1)
+    bmap.add(48.0 + np.arange(50) * 1e-5, np.full(50, 11.0), np.full(50, 0.03), np.ones(50, bool))
+    Path("f.txt").write_text("a file")
+    for write, out in ((bmap.write_geojson, "f.txt/m.geojson"), (bmap.plot, "f.txt/sub/m.png")):
+        with pytest.raises(WriteError) as err:
+            write(out)
+        assert str(err.value) == f"cannot write '{out}': 'f.txt' is a file, not a directory"
+    assert bmap.write_geojson("ok/m.geojson").is_file() and bmap.plot("ok/m.png").is_file()
 
 
 # ------------------------------------------------------------------ the note: -o x.csv with several logs

@@ -4,7 +4,8 @@ fragments naming the file, the channel or the map key.
 
 Covers the robustness sweep's rows 1 (Arrow timestamps), 5 (a channel map not in UTF-8), 8 and 9 (time
 stamp and comma2k19 messages, a non-numeric map value), 10 (a truncated MDF4 file), 11 (a clock that
-restarts part-way) and 13 (an absurd resample rate).
+restarts part-way) and 13 (an absurd resample rate); also boolean columns mapped to a channel and a time
+unit declared for a column whose type carries its own.
 """
 
 from __future__ import annotations
@@ -16,7 +17,9 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+from click.testing import CliRunner
 
+from roadbank.cli import main
 from roadbank.io import LogError, load_log, read_channel_map
 from roadbank.io.channels import RATE_HZ_RANGE, ChannelMap, default_channel_map
 from roadbank.io.readers import arrow_column_floats
@@ -100,6 +103,56 @@ def test_parquet_int64_ns_epoch_beyond_2_53(tmp_path):
     (tmp_path / "ns.toml").write_text(MAP.format(unit="ns"))
     t = load_log(p, channels=tmp_path / "ns.toml").signals.t
     np.testing.assert_allclose(t, EPOCH_S + np.arange(n) * DT, rtol=0, atol=1e-6)
+
+
+def test_declared_time_unit_of_a_timestamp_column_is_ignored_with_a_warning(tmp_path):
+    # the column carries its own unit (read in s): the map's "ms" on top would make the log 1000 times shorter
+    n = 300
+    p = tmp_path / "ts_ms.parquet"
+    pq.write_table(pa.table({"t": pa.array([EPOCH_S * 10**6 + k * 10**4 for k in range(n)], type=pa.timestamp("us")),
+                             **_signals(n)}), p)
+    m = tmp_path / "ms.toml"
+    m.write_text(MAP.format(unit="ms"))
+    plain = load_log(p)                                  # the default map: t in s
+    assert not [w for w in plain.warnings if "ignored" in w]
+    whole, chunks = load_log(p, channels=m), list(stream_log(p, channels=m, chunk_rows=70))
+    np.testing.assert_array_equal(whole.signals.t, plain.signals.t)
+    np.testing.assert_array_equal(np.concatenate([c.signals.t for c in chunks]), plain.signals.t)
+    for warns in (whole.warnings, [w for c in chunks for w in c.warnings]):
+        w = [x for x in warns if "ignored" in x]
+        assert w == [f"{p}: channel 'time' (column 't'): the map's unit 'ms' is ignored: the column is "
+                     "timestamp[us], which carries its own unit (read in s)"], warns
+
+
+# ------------------------------------------------------------------ boolean columns mapped to a channel
+def test_boolean_column_of_a_channel_is_refused_naming_it(tmp_path):
+    n = 300
+    sig = _signals(n)
+    p = tmp_path / "bool_r.parquet"
+    pq.write_table(pa.table({"t": np.arange(n) * DT, **sig, "r": sig["r"] > 0}), p)
+    for read in (lambda: load_log(p), lambda: list(stream_log(p, chunk_rows=70))):
+        with pytest.raises(LogError) as err:
+            read()
+        assert str(err.value).startswith(f"{p}: channel 'yaw_rate' (column 'r'): holds booleans"), str(err.value)
+        assert "not numbers" in str(err.value)
+    q = tmp_path / "bool_r.csv"        # as pandas writes a bool column
+    q.write_text("t,vx,ay,r,delta_f\n" + "".join(f"{k * DT},{sig['vx'][k]},{sig['ay'][k]},{sig['r'][k] > 0},"
+                                                 f"{sig['delta_f'][k]}\n" for k in range(n)))
+    with pytest.raises(LogError, match=r"bool_r\.csv: channel 'yaw_rate' \(column 'r'\): holds booleans"):
+        load_log(q)
+    res = CliRunner().invoke(main, ["estimate", str(p), "-o", str(tmp_path / "o.csv")])
+    assert res.exit_code != 0 and "Traceback" not in res.output, res.output
+    lines = [x for x in res.output.splitlines() if "holds booleans" in x]
+    assert len(lines) == 1 and "column 'r'" in lines[0], res.output
+
+
+def test_boolean_column_not_mapped_to_a_channel_is_read(tmp_path):
+    n = 300
+    p = tmp_path / "flag.parquet"
+    cols = {"t": np.arange(n) * DT, **_signals(n), "brake": np.arange(n) % 7 == 0, "true_flag": np.arange(n) % 2 == 0}
+    pq.write_table(pa.table(cols), p)
+    log = load_log(p)
+    assert len(log) == n and log.truth["true_flag"].tolist() == (np.arange(n) % 2 == 0).tolist()
 
 
 # ------------------------------------------------------------------ row 5: a channel map that is not UTF-8

@@ -7,7 +7,8 @@ segments, whose sources bring their own channel map) comes here from its source
 1. **channel selection**: the roles the map names and the file has (:func:`select_roles`);
 2. **time stamps**: the table clock, or each channel's own, repaired chunk by chunk
    (:class:`~roadbank.io.repair.ChunkRepair`); samples next to a repair are set to NaN;
-3. **SI and ISO 8855**: each channel's unit and sign convention (:meth:`ChannelMap.to_si_iso`);
+3. **SI and ISO 8855**: each channel's unit and sign convention (:meth:`ChannelMap.to_si_iso`; a time column
+   whose type carries its own unit is in s whatever the map declares: :func:`own_time_unit`);
 4. **plausibility** of each channel's values in its declared unit
    (:func:`~roadbank.io.channels.check_plausible`);
 5. **resampling** onto one time base (:class:`~roadbank.io.resample.StreamResampler`);
@@ -34,16 +35,18 @@ Which samples each check sees:
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from ..params import VehicleParams
 from ..signals import Signals, concat_signals, road_wheel_angle
+from . import units
 from .channels import STEERING, ChannelMap, check_plausible
 from .limits import Dropouts
 from .consistency import MIN_SAMPLES, check_balance, turning, usable
-from .errors import LogError, channel_error
+from .errors import LogError, channel_error, channel_text
 from .geodesy import ecef_to_latlon
 from .repair import FLAGGED_ROLES, ChunkRepair
 from .resample import StreamResampler, clean_series
@@ -109,6 +112,19 @@ def steering_note(p, cmap: ChannelMap, roles: list[str]) -> list[str]:
     return [f"{Path(p).name}: channel 'steering': no column {cols}, so the steering angle is NaN (the default "
             "estimator and the modified-model filters do not read it, the original-model ones, uio, dfc and "
             "kalman give no valid sample)"]
+
+
+def own_time_unit(p, cmap: ChannelMap, time_typed: dict[str, str]) -> tuple[ChannelMap, list[str]]:
+    """The map to read a table with: its time channel in s when the column's type carries its own unit
+    (``time_typed``: column -> type, a Parquet timestamp or duration, which the readers give in s), with the
+    warning that the unit the map declares is ignored; ``cmap`` and ``[]`` otherwise."""
+    spec = cmap.channels["time"]
+    typed = time_typed.get(spec.column)
+    if typed is None or units.factor("time", spec.unit) == 1.0:
+        return cmap, []
+    note = channel_text(p, "time", spec.column, f"the map's unit '{spec.unit}' is ignored: the column is {typed}, "
+                        "which carries its own unit (read in s)")
+    return replace(cmap, channels={**cmap.channels, "time": replace(spec, unit="s")}), [note]
 
 
 def steering_delta_f(cmap: ChannelMap, params: VehicleParams, roles: list[str], values: dict) -> np.ndarray:
@@ -326,6 +342,7 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     p, names = src.path, src.names
     if "time" not in cmap.channels:
         raise LogError(f"{cmap.source}: channel map has no 'time' channel (required for {fmt})")
+    cmap, note = own_time_unit(p, cmap, getattr(src, "time_typed", {}))      # (KITTI drives: none typed)
     tspec = cmap.channels["time"]
     if tspec.column not in names:
         raise missing_column(p, "time", tspec.column, names)
@@ -339,7 +356,7 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
                                                  _table_rows(src, cmap, roles, used, None)), roles) else "uniform"
     carried = dict(src.carried)
     logs = _Logs(p, fmt, cmap, params, roles, gnss, truth_cols, src.metadata, carried)
-    logs.warnings += src.warnings
+    logs.warnings += src.warnings + note
     finite = dict.fromkeys(roles, False)
     period = _Period(p, tspec)
     drops = Dropouts(p, {r: cmap.channels[r].column for r in roles})

@@ -57,8 +57,15 @@ def column_label(labels: dict[str, str], col: str) -> str:
     return f"channel '{role}' (column '{col}')" if role and role != col else f"column '{col}'"
 
 
+def _not_numbers(path, label: str, what: str) -> LogError:
+    """The error for a channel's column that holds booleans (``what``: the type or the first value): read as
+    0/1 they would be taken for a physical quantity."""
+    return LogError(f"{path}: {label}: holds booleans ({what}), not numbers")
+
+
 def _parse_floats(path, col: str, label: str, values, row_label: str, rownums) -> np.ndarray:
-    """Strings -> float64; missing markers -> NaN; anything else -> LogError with its row."""
+    """Strings -> float64; missing markers -> NaN; anything else -> LogError with its row (``True`` / ``False``:
+    :func:`_not_numbers`)."""
     out = np.empty(len(values), dtype=np.float64)
     for i, s in enumerate(values):
         if s is None:
@@ -70,6 +77,8 @@ def _parse_floats(path, col: str, label: str, values, row_label: str, rownums) -
         except ValueError:
             if s.lower() in MISSING:
                 out[i] = math.nan
+            elif s.lower() in ("true", "false"):
+                raise _not_numbers(path, label, f"{s!r} at {row_label} {rownums[i]}") from None
             else:
                 raise LogError(f"{path}: {label}: non-numeric value {s!r} at {row_label} "
                                f"{rownums[i]}") from None
@@ -187,9 +196,18 @@ def read_parquet(path, wanted: dict[str, str], prefix: str | None = None) -> Raw
         raise LogError(f"{p}: not a readable Parquet file (truncated or corrupt?): {exc}") from None
     if table.num_rows == 0:
         raise LogError(f"{p}: no data rows")
-    data = {c: arrow_column_floats(p, c, column_label(wanted, c), table.column(c)) for c in cols}
+    data = {c: arrow_column_floats(p, c, column_label(wanted, c), table.column(c), flag=c not in wanted)
+            for c in cols}
     return RawTable(names, data, metadata=parquet_metadata(schema), row_label="row",
-                    rownums=range(table.num_rows))
+                    rownums=range(table.num_rows), time_typed=time_typed(schema))
+
+
+def time_typed(schema) -> dict[str, str]:
+    """The columns of an Arrow ``schema`` whose type carries its own time unit (``timestamp``, ``duration``;
+    read as s, :func:`arrow_column_floats`): column -> type, e.g. ``"timestamp[us]"``."""
+    import pyarrow as pa
+
+    return {f.name: str(f.type) for f in schema if pa.types.is_timestamp(f.type) or pa.types.is_duration(f.type)}
 
 
 def parquet_metadata(schema) -> dict[str, str]:
@@ -246,14 +264,17 @@ def _arrow_seconds(col) -> np.ndarray:
     return out
 
 
-def arrow_column_floats(p, c: str, label: str, col, row0: int = 0) -> np.ndarray:
+def arrow_column_floats(p, c: str, label: str, col, row0: int = 0, flag: bool = False) -> np.ndarray:
     """One Arrow column -> float64: numbers as they are; ``timestamp`` (any unit and time zone) -> s since the
-    epoch; ``duration`` -> s; ``row0`` numbers rows in messages."""
+    epoch; ``duration`` -> s; ``row0`` numbers rows in messages. A ``bool`` column is 0/1 when it is a ``flag``
+    (a column no channel of the map names: truth, extras), else refused (:func:`_not_numbers`)."""
     import pyarrow as pa
 
     t = col.type
     if pa.types.is_timestamp(t) or pa.types.is_duration(t):
         return _arrow_seconds(col)
+    if pa.types.is_boolean(t) and not flag:
+        raise _not_numbers(p, label, f"Arrow type {t}")
     if pa.types.is_integer(t) or pa.types.is_floating(t) or pa.types.is_boolean(t) or pa.types.is_decimal(t):
         return _to_float_numpy(col)
     if pa.types.is_string(t) or pa.types.is_large_string(t):

@@ -14,8 +14,10 @@ A source knows a file format, not physics. Opening one reads what the format say
 Every source has ``path``, ``names`` (the columns), ``metadata``, ``warnings``, ``row_label``,
 ``shared_clock`` (a table), ``whole`` (read in one chunk) and ``carried``: channels the source derives
 itself (column -> the longest gap, s, interpolated across), which go into :attr:`Log.extra` as they
-are. The data sets with a fixed layout (:mod:`roadbank.io.kitti`, :mod:`roadbank.io.comma2k19`) also
-bring their ``channel_map``: which column is which channel, in which unit and sign convention.
+are. :class:`WholeSource` and :class:`ParquetBatches` also have ``time_typed``: the columns whose type carries
+its own time unit (:attr:`~roadbank.io.types.RawTable.time_typed`; a source without it has none). The data sets
+with a fixed layout (:mod:`roadbank.io.kitti`, :mod:`roadbank.io.comma2k19`) also bring their ``channel_map``:
+which column is which channel, in which unit and sign convention.
 
 Read whole (``chunk_rows=None``) a source gives one chunk: the whole file (the readers of
 :mod:`roadbank.io.readers`, :mod:`roadbank.io.can`, :mod:`roadbank.io.ros`). Streamed, Parquet is read
@@ -54,6 +56,7 @@ class WholeSource:
         self.shared_clock = shared_clock
         self.whole = True
         self.carried: dict[str, float] = {}
+        self.time_typed = dict(table.time_typed)
 
     def close(self) -> None:
         """Nothing to close: the file was read when the source was opened."""
@@ -93,6 +96,7 @@ class ParquetBatches:
             raise LogError(f"{path}: no data rows")
         self.names = list(pf.schema_arrow.names)
         self.metadata = readers.parquet_metadata(pf.schema_arrow)
+        self.time_typed = readers.time_typed(pf.schema_arrow)
 
     def close(self) -> None:
         """Nothing to close: each pass opens the file for itself."""
@@ -110,8 +114,8 @@ class ParquetBatches:
             # no pre-buffering, one thread: 5x faster here and ~60 MB less than pyarrow's defaults on a 24 h file
             pf = pq.ParquetFile(p, pre_buffer=False)
             for b in pf.iter_batches(batch_size=self.chunk_rows, columns=cols, use_threads=False):
-                data = {c: readers.arrow_column_floats(p, c, readers.column_label(wanted, c), b.column(c), row0)
-                        for c in cols}
+                data = {c: readers.arrow_column_floats(p, c, readers.column_label(wanted, c), b.column(c), row0,
+                                                       flag=c not in wanted) for c in cols}
                 yield RawChunk(data, rownums=np.arange(row0, row0 + b.num_rows))
                 row0 += b.num_rows
         except (pa.ArrowException, OSError) as exc:

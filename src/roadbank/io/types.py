@@ -33,6 +33,9 @@ class RawTable:
     rownums : sequence of int or None
         Row number (in that counting) of each data row, for messages (CSV:
         file line numbers, the header being line 1). None for MDF4.
+    time_typed : dict name -> str
+        Columns whose type carries its own time unit (Parquet ``timestamp`` /
+        ``duration``, read as s), with that type, e.g. ``"timestamp[us]"``.
     """
 
     names: list[str]
@@ -41,6 +44,7 @@ class RawTable:
     metadata: dict[str, str] = field(default_factory=dict)
     row_label: str = "row"
     rownums: object = None
+    time_typed: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io.writers import write_table
+from ..io.writers import write_error, write_table
 from .geo import LocalProjection, course
 
 #: columns of the map table, in order
@@ -185,7 +185,8 @@ class BankMap:
         return write_table(path, self.table(), dict(self.metadata(), **(extra_metadata or {})), format="parquet")
 
     def write_geojson(self, path) -> Path:
-        """One Polygon feature per (cell, sector) with the table's values as properties."""
+        """One Polygon feature per (cell, sector) with the table's values as properties. A path that cannot be
+        written is a :class:`~roadbank.io.writers.WriteError` naming it."""
         tab = self.table()
         feats = []
         for j in range(len(tab["ix"])):
@@ -201,13 +202,11 @@ class BankMap:
                                                         for a, b in zip(lo, la)]]}})
         doc = {"type": "FeatureCollection", "features": feats,
                "properties": {k: v for k, v in self.metadata().items()}}
-        p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        p.write_text(json.dumps(doc))
-        return p
+        return _write(path, lambda p: p.write_text(json.dumps(doc)))
 
     def plot(self, path, title: str = "") -> Path:
-        """PNG (or SVG by suffix): cells in the local plane coloured by mean bank (deg)."""
+        """PNG (or SVG by suffix): cells in the local plane coloured by mean bank (deg). A path that cannot be
+        written is a :class:`~roadbank.io.writers.WriteError` naming it."""
         import matplotlib
 
         matplotlib.use("Agg")
@@ -229,8 +228,19 @@ class BankMap:
                      fontsize=10)
         ax.grid(alpha=0.3)
         fig.tight_layout()
-        p = Path(path)
+        try:
+            return _write(path, lambda p: fig.savefig(p, dpi=110))
+        finally:
+            plt.close(fig)
+
+
+def _write(path, write) -> Path:
+    """``write(p)`` the file ``p = Path(path)``, its folder made first; an ``OSError`` is a
+    :class:`~roadbank.io.writers.WriteError` naming the path and why (:func:`~roadbank.io.writers.write_error`)."""
+    p = Path(path)
+    try:
         p.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
-        return p
+        write(p)
+    except OSError as exc:
+        raise write_error(p, exc) from exc
+    return p
