@@ -6,7 +6,8 @@
 
 Built-in extra sections: the estimator designs (:mod:`roadbank.bench.design`), fleets of short
 logs on 1 and 2 workers (:mod:`roadbank.bench.fleet`), the exported C
-step and long logs (:mod:`roadbank.bench.sections`). Extend it with :func:`register_section`
+step and long logs (:mod:`roadbank.bench.sections`), and the default's targets on real data
+(:mod:`roadbank.bench.accuracy`, with ``--data``). Extend it with :func:`register_section`
 (a :class:`Section` with a ``run`` and an optional ``markdown`` function): the section runs after the built-in ones,
 its results land in ``res[name]`` and in the report.
 """
@@ -15,11 +16,12 @@ from .cold import FAMILY_PROBES, cold_compile, probe_family
 from .report import markdown, obstacles, to_json
 from .suite import (SECTIONS, SIZES, TARGETS, Section, machine_info, register_section, run_suite,
                     synthetic_log, target_status)
+from .accuracy import SECTION as _ACCURACY_SECTION
 from .design import SECTION as _DESIGN_SECTION
 from .fleet import SECTION as _FLEET_SECTION
 from .sections import SECTIONS as _BUILTIN_SECTIONS
 
-for _section in (_DESIGN_SECTION, _FLEET_SECTION, *_BUILTIN_SECTIONS):
+for _section in (_DESIGN_SECTION, _FLEET_SECTION, *_BUILTIN_SECTIONS, _ACCURACY_SECTION):
     register_section(_section)
 
 __all__ = ["FAMILY_PROBES", "SECTIONS", "SIZES", "TARGETS", "Section", "cold_compile", "machine_info",

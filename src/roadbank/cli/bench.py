@@ -19,7 +19,10 @@ import click
 @click.option("--fleet-logs", type=click.IntRange(min=0), default=0, show_default=True, metavar="N",
               help="Also run a fleet at scale: N Parquet logs of 10 min at 100 Hz end to end on 1 and 2 "
                    "workers (written to a temporary folder, about 1 MB a log; 0: not run).")
-def bench(output, quick, tiny, as_json, fleet_logs):
+@click.option("--data", type=click.Path(exists=True, file_okay=False, path_type=Path), default=None, metavar="DIR",
+              help="Also score the default's targets on the real data sets under DIR (e.g. ../shared/data: KITTI "
+                   "drives, comma2k19 segments), as `roadbank validate all` does; not timed.")
+def bench(output, quick, tiny, as_json, fleet_logs, data):
     """Benchmark the estimators, the plant, cold start and reproduce against peers and speed targets."""
     size = "tiny" if tiny else "quick" if quick else "full"
     # one BLAS thread: set for every command by roadbank.runtime when roadbank.cli loads
@@ -27,8 +30,8 @@ def bench(output, quick, tiny, as_json, fleet_logs):
     from ..report.html import write_document
     command = "roadbank bench" + "".join(f" {a}" for a in sys.argv[2:]) if sys.argv[1:2] == ["bench"] \
         else "roadbank bench" + (f" -o {output}" if output else "") + (f" --{size}" if size != "full" else "")
-    res = run_suite(size, progress=lambda msg: click.echo(f"[bench] {msg}", err=True),
-                    options={"fleet_logs": fleet_logs} if fleet_logs else None)
+    options = {k: v for k, v in (("fleet_logs", fleet_logs), ("data", data and str(data))) if v}
+    res = run_suite(size, progress=lambda msg: click.echo(f"[bench] {msg}", err=True), options=options or None)
     if output is not None:
         output.parent.mkdir(parents=True, exist_ok=True)
         write_document(output, markdown(res, shlex.join(shlex.split(command))), "roadbank benchmarks")

@@ -1,4 +1,5 @@
-"""Tidy metric tables (CSV + Parquet) and the pivoted summaries used by the report."""
+"""Tidy metric tables (CSV + Parquet), the pivoted summaries used by the report, and the table of the default's
+targets (:func:`targets_markdown`)."""
 
 from __future__ import annotations
 
@@ -9,8 +10,9 @@ import pyarrow as pa
 import pyarrow.csv as pacsv
 import pyarrow.parquet as pq
 
+from ..defaults import ESTIMATOR as DEFAULT
 from .labels import label
-from .markdown import md_table
+from .markdown import Markdown, md_table
 
 COLUMNS = ("scenario", "condition", "estimator", "reference", "metric", "value")
 
@@ -52,3 +54,12 @@ def markdown_table(rows: list[dict], reference: str, metric: str, *, digits: int
     body = [[sc, cond] + [values.get((sc, cond, n), np.nan) for n in names] for sc, cond in cells]
     return md_table(["scenario", "condition"] + [label(n) for n in names], body, digits=digits,
                     best="absmin" if highlight_best else None)
+
+
+def targets_markdown(targets) -> list[str]:
+    """Markdown lines: a table of ``targets`` (:class:`~roadbank.evaluation.targets.Target`: data, target,
+    measured, met), then an empty line; nothing when there are none."""
+    if not targets:
+        return []
+    rows = [[t.data, t.text, t.measured, Markdown("yes" if t.met else "**no**")] for t in targets]
+    return [md_table(["data", f"target of the default ({DEFAULT})", "measured", "met?"], rows, align="llll"), ""]

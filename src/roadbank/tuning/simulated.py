@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import estimators
+from ..evaluation.targets import Target
 from ..vehicle import load_vehicle
 from .manoeuvres import drive_set
 from .objective import drive_errors
@@ -149,3 +150,18 @@ def to_json(scores: SimulatedScores) -> dict:
                            "families": {r: scores.family_median(nm, mode, r) for r in scores.families()}}
         out["estimators"][nm] = entry
     return out
+
+
+def sim_targets(scores: SimulatedScores, name: str = estimators.DEFAULT) -> list[Target]:
+    """The simulated targets of ``name`` with the car known (:class:`~roadbank.validation.targets.Target`): on the set
+    they were first stated on (:data:`TARGET_CAR`, at most :data:`TARGET_DRIVES` drives) and over every car of
+    ``scores`` pooled; none where ``scores`` lacks ``name`` or the car."""
+    if name not in scores.names or TARGET_CAR not in scores.cars:
+        return []
+    aim = f"car known: median <= {TARGET_MEDIAN_DEG:.2f}, p95 <= {TARGET_P95_DEG:.2f} deg"
+    own = summarise(scores.errors[(name, "known", TARGET_CAR)][:TARGET_DRIVES])
+    pooled = scores.summary(name, "known")
+    return [Target(f"simulated validation set, {TARGET_CAR} ({own.n} drives, where it was stated)", aim,
+                   f"{own.median_deg:.3f} / {own.p95_deg:.3f} deg", own.meets_target),
+            Target(f"simulated validation set, {len(scores.cars)} shipped cars pooled ({pooled.n} drives)", aim,
+                   f"{pooled.median_deg:.3f} / {pooled.p95_deg:.3f} deg", pooled.meets_target)]

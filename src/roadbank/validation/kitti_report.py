@@ -9,9 +9,11 @@ from ..constants import G
 from ..defaults import ESTIMATOR as DEFAULT
 from ..estimators import OFFLINE
 from ..report.markdown import md_table
+from ..report.tables import targets_markdown
 from ..report.timeseries import reference_figure, save_figure
 from ..vehicle import QUIET_RATIO
 from .kitti import KittiValidation
+from .targets import kitti_targets
 
 #: the best value of each score column: smallest RMS, largest correlation
 _BEST = {"rms raw (deg)": "min", "r raw": "max", "rms smoothed (deg)": "min", "r smoothed": "max", "r causal LP": "max"}
@@ -157,6 +159,10 @@ def split_lines(v: KittiValidation, h: str) -> list[str]:
         L.append(f"- **not pooled**: {label}: {why}")
     if v.flagged:
         L.append("")
+    found = kitti_targets(v)
+    if found:
+        L.append("The default's targets on the validation drives (`roadbank.validation.targets`):\n")
+        L += targets_markdown(found)
     return L
 
 

@@ -7,8 +7,10 @@ import math
 from ..constants import G
 from ..defaults import ESTIMATOR as DEFAULT
 from ..report.markdown import md_table
+from ..report.tables import targets_markdown
 from ..report.timeseries import reference_figure, save_figure
 from .comma2k19 import ValidationResult
+from .targets import comma_targets
 
 #: the best value of each score column: largest correlation, smallest error
 _BEST = {"r": "max", "rms_deg": "min", "r raw": "max", "r causal LP": "max", "r whole span": "max",
@@ -59,6 +61,10 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
                         sc.rms_phi_b_deg, sc.best_lag_s, sc.r_at_best_lag] for name, sc in res.scores.items()],
                       digits=3, formats={"lag for max r (s)": "+.2f"}, best=_BEST, best_in="column"))
     L.append("\nBest value of each score column in bold (largest r, smallest RMS).\n")
+    found = comma_targets(res)
+    if found:
+        L.append("The default's targets on this segment (`roadbank.validation.targets`):\n")
+        L += targets_markdown(found)
     L.append("Columns: **r**, **rms_deg** -- Pearson correlation and RMS error (deg, after adding the "
              "offset) on the scored part, both signals smoothed; **offset_deg** -- reference minus "
              "estimate, fitted on the first part; **r raw** -- same split, no smoothing; **r causal LP** -- "

@@ -1,0 +1,98 @@
+"""Benchmark section ``accuracy``: the default's accuracy targets, as ``roadbank validate`` and ``campaign`` judge them.
+
+Accuracy, not speed, so that one benchmark run states every target of the project, timed and not:
+
+* **real data** (:mod:`roadbank.validation.targets`): the KITTI validation drives and the comma2k19 segment found
+  under ``roadbank bench --data DIR`` (e.g. ``../shared/data``), every causal estimator run (the KITTI target
+  compares the default with all of them); without ``--data`` it says so;
+* **simulated validation set, car known** (:func:`roadbank.tuning.simulated.sim_targets`), the default only;
+* **campaign** (:func:`roadbank.campaign.report.default_target`): its first :data:`CAMPAIGN_RUNS` runs (seed 0,
+  standstill starts, offsets learnt online), the default only, in this process.
+
+The simulated parts run in the full suite only.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+from .suite import Section
+
+#: runs of the campaign part (the campaign documented in docs/campaign.md has 400)
+CAMPAIGN_RUNS = 400
+
+
+def _real(data) -> list:
+    from ..estimators import NAMES, OFFLINE
+    from ..validation.comma2k19 import validate_comma2k19
+    from ..validation.document import find_datasets
+    from ..validation.kitti import validate_kitti
+    from ..validation.targets import comma_targets, kitti_targets
+
+    names = [n for n in NAMES if n not in OFFLINE]
+    found = find_datasets(data)
+    out = kitti_targets(validate_kitti(found["kitti"], names=names, sensitivity=False)) if found["kitti"] else []
+    for seg in found["comma2k19"]:
+        out += comma_targets(validate_comma2k19(seg, names=names, sensitivity=False))
+    return out
+
+
+def _simulated() -> list:
+    from ..estimators import DEFAULT
+    from ..tuning.simulated import score_simulated, sim_targets
+
+    return sim_targets(score_simulated([DEFAULT]))
+
+
+def _campaign() -> list:
+    import pandas as pd
+
+    from ..campaign.report import default_target
+    from ..campaign.runner import RunOptions, run_batch
+    from ..campaign.sampling import draw
+    from ..estimators import DEFAULT
+
+    rows = run_batch([draw(k, 0) for k in range(CAMPAIGN_RUNS)], RunOptions(names=(DEFAULT,)))
+    target = default_target(pd.DataFrame(rows))
+    return [] if target is None else [target]
+
+
+def accuracy(cfg: dict) -> dict:
+    """The targets measured (module docstring); ``notes`` say which parts did not run and why."""
+    if cfg["size"] == "tiny":
+        return {"reason": "not run with --tiny (it scores real drives and simulated sets)"}
+    full = cfg["size"] == "full"
+    parts = (("real data", lambda: _real(cfg["data"]), bool(cfg.get("data")),
+              "no real data given (roadbank bench --data DIR, e.g. ../shared/data)"),
+             ("simulated validation set", _simulated, full, "full suite only"),
+             ("campaign", _campaign, full, "full suite only"))
+    targets, notes, wall = [], [], {}
+    for what, run, ok, why in parts:
+        if not ok:
+            notes.append(f"{what}: not run: {why}")
+            continue
+        t0 = time.perf_counter()
+        found = run()
+        wall[what] = time.perf_counter() - t0
+        targets += found
+        if not found:
+            notes.append(f"{what}: nothing to score")
+    return {"targets": [dataclasses.asdict(t) for t in targets], "notes": notes, "wall_s": wall,
+            "data": cfg.get("data")}
+
+
+def accuracy_markdown(out: dict) -> list[str]:
+    from ..evaluation.targets import Target
+    from ..report.tables import targets_markdown
+
+    took = ", ".join(f"{k} {v:.0f} s" for k, v in out["wall_s"].items())
+    data = f", data under `{out['data']}`" if out["data"] else ""
+    notes = [f"- {n}" for n in out["notes"]]
+    return targets_markdown([Target(**t) for t in out["targets"]]) + notes + ([""] if notes else []) + [
+        "Not timed" + (f" ({took})" if took else "") + f". The same verdicts as `roadbank validate all` "
+        f"(docs/real-data.md{data}), `roadbank validate sim` (docs/sim-validation.md) and the campaign report "
+        "(docs/campaign.md); measured medians and percentiles in deg."]
+
+
+SECTION = Section("accuracy", "The default's accuracy targets", accuracy, accuracy_markdown)
