@@ -6,8 +6,8 @@
 
 Built-in extra sections: the estimator designs (:mod:`roadbank.bench.design`), fleets of short
 logs on 1 and 2 workers (:mod:`roadbank.bench.fleet`), the exported C
-step and long logs (:mod:`roadbank.bench.sections`), and the default's targets on real data
-(:mod:`roadbank.bench.accuracy`, with ``--data``). Extend it with :func:`register_section`
+step and long logs (:mod:`roadbank.bench.sections`), and the default's accuracy targets
+(:mod:`roadbank.bench.accuracy`; the real drives with ``--data``). Extend it with :func:`register_section`
 (a :class:`Section` with a ``run`` and an optional ``markdown`` function): the section runs after the built-in ones,
 its results land in ``res[name]`` and in the report.
 """

@@ -42,7 +42,7 @@ PIF_GOAL_P95_DEG = 1.0
 
 
 def default_target(df, name: str = DEFAULT) -> Target | None:
-    """The campaign target of the default estimator ``name`` (:class:`~roadbank.validation.targets.Target`): the
+    """The campaign target of the default estimator ``name`` (:class:`~roadbank.evaluation.targets.Target`): the
     95th percentile of its per-run bank RMS at most :data:`PIF_GOAL_P95_DEG`, the runs starting at standstill with
     the offsets learnt online; None where ``df`` (the campaign's rows) has no scored run of it."""
     rms = df[(df["estimator"] == name) & (df["error"] == "")]["rms_deg"].dropna()

@@ -124,10 +124,25 @@ too. Neither ``roadbank tune``'s validation set nor the real drives take part. I
 mean 0.2878) by a clear margin: ``pif-gated`` 0.2550, ``pif-rate`` 0.2730, ``pif-rate-adaptive`` 0.2742,
 ``pif-modified`` 0.2862, ``kinematic-ff`` 0.4076, ``kinematic-lp`` 0.5433, the steering-angle observers 0.83-0.94. The
 adaptive weights are worth as much for a car that is described as for one that is not; one quiet filter for every car.
+
+The sixteenth stage (:func:`choose_loud_gate`; rule written 2026-12-04 before any candidate ran) chooses the gate of
+the blend again. The second stage broke its tie on the real drives (70 gates within :data:`TIE_DEG`) on simulated
+drives that then ran the blend; since the third stage every simulated training drive is quiet and runs the car's
+model, so the gate acts only on loud logs, and no stage has chosen it on a loud simulated drive. Candidates: the
+shipped gate first, every other point of :data:`GATE_GRID`, then no gate (``gate_on`` = :data:`NO_GATE`: the
+low-pass throughout). Objective, real roads first as the second stage's: the KITTI training median (drives one by
+one); among the candidates within :data:`TIE_DEG` of the best, the lowest median over the cars of the per-car
+medians on the *loud* simulated training drives (:func:`loud_sets`: :func:`simulated_sets` read at
+:data:`LOUD_RATE_HZ` with Student-t vibration on ``ay``, built as for a car not described, so the blend runs);
+equal to :data:`EQUAL_DEG`: the earlier. A candidate other than the shipped gate wins only where the mean of the
+drive scores it was judged on (the eight training drives and every loud simulated drive) is lower than the shipped
+gate's too; otherwise the shipped gate stays.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import itertools
 import math
 import warnings
 from dataclasses import dataclass
@@ -201,6 +216,11 @@ LIMIT_TAUS = (0.0, 8.0, 4.0, 2.0, 1.0)
 BANK_SPEED_EXPS = (0.0, 0.5, 1.0)
 #: the fifteenth stage's candidate filters of a quiet log whose car is described: the shipped one first
 DESCRIBED_FILTERS = (vehicle.QUIET_FILTER, *(f for f in QUIET_FILTERS if f != vehicle.QUIET_FILTER))
+#: the sixteenth stage's loud simulated drives: read at this rate (Hz, KITTI's), with Student-t vibration of this many
+#: degrees of freedom and this RMS (m/s^2, KITTI's training drives carry 0.07-0.33) added to ``ay``, numpy seed
+LOUD_RATE_HZ, LOUD_DOF, LOUD_AY_NOISE, LOUD_SEED = 10.0, 4, 0.15, 1
+#: ``gate_on`` (m/s^3) of the sixteenth stage's candidate without a gate: no yaw jerk of a car reaches it
+NO_GATE = 1e9
 #: the stages before the fourteenth took the bank-rate prior as a rate in time
 _TIME_RATE = {"bank_speed_exp": 0.0}
 #: the stages before the twelfth ran on the design span's noise throughout
@@ -342,6 +362,56 @@ def choose_described_filter(sim_sets, cars=SIM_CARS, filters=DESCRIBED_FILTERS) 
     if chosen != first and not scores[chosen][1] < scores[first][1]:
         chosen = first
     return chosen, scores
+
+
+def loud_sets(sim_sets, rate: float = LOUD_RATE_HZ, dof: int = LOUD_DOF, noise: float = LOUD_AY_NOISE,
+              seed: int = LOUD_SEED) -> list:
+    """``sim_sets`` (:func:`simulated_sets`) as a 10 Hz INS on a shaking road reads them: every drive sampled at
+    ``rate`` Hz (every n-th sample of its log) and Student-t noise with ``dof`` degrees of freedom and RMS ``noise``
+    (m/s^2) added to its ``ay`` (one numpy generator, ``seed``, drawn in the sets' order); the true bank likewise."""
+    rng = np.random.default_rng(seed)
+    scale = noise / math.sqrt(dof / (dof - 2.0))
+    out = []
+    for drives in sim_sets:
+        loud = []
+        for d in drives:
+            s = d.signals
+            step = max(1, int(round(1.0 / (rate * float(np.median(np.diff(s.t)))))))
+            ay = s.ay[::step] + scale * rng.standard_t(dof, len(s.ay[::step]))
+            loud.append(dataclasses.replace(d, signals=Signals(s.t[::step], s.vx[::step], ay, s.r[::step],
+                                                               s.delta_f[::step]), phi_b=d.phi_b[::step]))
+        out.append(loud)
+    return out
+
+
+def loud_gate_candidates() -> dict:
+    """``{(gate_on, gate_span, gate_release): build}`` of the sixteenth stage: the shipped gate, the rest of
+    :data:`GATE_GRID`, no gate (:data:`NO_GATE`), in that order; ``kinematic-pif`` built as the command line does."""
+    from ..estimators.gated import KINEMATIC_PIF_GATE as g
+
+    shipped = (g["gate_on"], g["gate_span"], g["gate_release"])
+    keys = [shipped] + [k for k in itertools.product(*GATE_GRID.values()) if k != shipped] + [(NO_GATE, 1.0, 1.0)]
+    return {k: per_log("kinematic-pif", gate_on=k[0], gate_span=k[1], gate_release=k[2]) for k in keys}
+
+
+def choose_loud_gate(logs, sim_sets) -> tuple:
+    """The sixteenth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs`) and the loud
+    simulated drives ``sim_sets`` (:func:`loud_sets`). Returns ``(chosen key, {key: real median}, {key: loud
+    simulated median})``, the latter for the shipped gate and the candidates within :data:`TIE_DEG` of the best real
+    median."""
+    cands = loud_gate_candidates()
+    real = {k: log_errors(b, logs) for k, b in cands.items()}
+    best = min(float(np.median(e)) for e in real.values())
+    tied = [k for k in cands if float(np.median(real[k])) <= best + TIE_DEG]
+    first = next(iter(cands))
+    sim = {k: [[drive_errors(cands[k](d.signals), [d])[0][0] for d in drives] for drives in sim_sets]
+           for k in dict.fromkeys([first, *tied])}
+    med = {k: float(np.median([np.median(e) for e in v])) for k, v in sim.items()}
+    chosen = min(tied, key=lambda k: round(med[k] / EQUAL_DEG))
+    mean = {k: float(np.mean(np.concatenate([real[k], *sim[k]]))) for k in (first, chosen)}
+    if chosen != first and not mean[chosen] < mean[first]:
+        chosen = first
+    return chosen, {k: float(np.median(e)) for k, e in real.items()}, med
 
 
 def choose_by_roads(builds: dict, logs, sim_sets) -> tuple:

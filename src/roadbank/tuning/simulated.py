@@ -153,7 +153,7 @@ def to_json(scores: SimulatedScores) -> dict:
 
 
 def sim_targets(scores: SimulatedScores, name: str = estimators.DEFAULT) -> list[Target]:
-    """The simulated targets of ``name`` with the car known (:class:`~roadbank.validation.targets.Target`): on the set
+    """The simulated targets of ``name`` with the car known (:class:`~roadbank.evaluation.targets.Target`): on the set
     they were first stated on (:data:`TARGET_CAR`, at most :data:`TARGET_DRIVES` drives) and over every car of
     ``scores`` pooled; none where ``scores`` lacks ``name`` or the car."""
     if name not in scores.names or TARGET_CAR not in scores.cars:
