@@ -456,3 +456,40 @@ def test_the_described_cars_quiet_filter_is_what_the_rule_picks():
     median = {f: m for f, (m, _) in scores.items()}
     assert median[QUIET_FILTER] < min(median["pif-modified"], median["pif-gated"]) - TIE_DEG
     assert median["pif-modified"] < median["kinematic-ff"] - 0.05
+
+
+def test_loud_sets_read_a_drive_at_10_hz_with_student_t_vibration_on_ay():
+    from roadbank.tuning.manoeuvres import Drive
+    from roadbank.tuning.real import LOUD_AY_NOISE, LOUD_RATE_HZ, loud_sets
+
+    t = np.arange(0.0, 600.0, 0.01)
+    s = Signals(t, np.full(t.size, 20.0), 0.3 * np.sin(0.1 * t), np.zeros(t.size), np.zeros(t.size))
+    d = Drive("train", 0, "bank-step", {}, s, 0.01 * np.sin(0.1 * t))
+    (loud,), = loud_sets([[d]])
+    assert np.allclose(np.diff(loud.signals.t), 1.0 / LOUD_RATE_HZ)
+    assert np.array_equal(loud.phi_b, d.phi_b[::10]) and np.array_equal(loud.signals.vx, s.vx[::10])
+    noise = loud.signals.ay - s.ay[::10]
+    assert np.sqrt(np.mean(noise ** 2)) == pytest.approx(LOUD_AY_NOISE, rel=0.1)
+    assert np.mean(noise ** 4) / np.mean(noise ** 2) ** 2 > 4.0         # heavy tails (a Gaussian has 3)
+    (again,), = loud_sets([[d]])
+    assert np.array_equal(again.signals.ay, loud.signals.ay)              # one seed, the same drives
+
+
+@pytest.mark.slow
+def test_the_gate_on_loud_logs_is_what_the_rule_keeps():
+    """The sixteenth stage (tuning.real.choose_loud_gate) between the shipped gate and no gate: they tie on the KITTI
+    training drives; on the loud simulated drives no gate has the lower median but the higher mean (the hard
+    transients it loses), so the mean guard keeps the gate."""
+    from roadbank.tuning.real import (NO_GATE, TIE_DEG, choose_loud_gate, loud_gate_candidates, loud_sets,
+                                      simulated_sets, training_logs)
+
+    logs = training_logs(DATA)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+
+    cands = loud_gate_candidates()
+    shipped, none = next(iter(cands)), (NO_GATE, 1.0, 1.0)
+    chosen, real, med = choose_loud_gate(logs, loud_sets(simulated_sets()), {k: cands[k] for k in (shipped, none)})
+    assert chosen == shipped
+    assert abs(real[none] - real[shipped]) <= TIE_DEG
+    assert med[none] < med[shipped] - 0.01
