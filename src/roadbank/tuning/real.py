@@ -155,6 +155,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import vehicle
+from ..estimators.gated import KINEMATIC_PIF_GATE
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
@@ -391,8 +392,7 @@ def loud_sets(sim_sets, rate: float = LOUD_RATE_HZ, dof: int = LOUD_DOF, noise: 
 def loud_gate_candidates() -> dict:
     """``{(gate_on, gate_span, gate_release): build}`` of the sixteenth stage: the shipped gate, the rest of
     :data:`GATE_GRID`, no gate (:data:`NO_GATE`), in that order; ``kinematic-pif`` built as the command line does."""
-    from ..estimators.gated import KINEMATIC_PIF_GATE as g
-
+    g = KINEMATIC_PIF_GATE
     shipped = (g["gate_on"], g["gate_span"], g["gate_release"])
     keys = [shipped] + [k for k in itertools.product(*GATE_GRID.values()) if k != shipped] + [(NO_GATE, 1.0, 1.0)]
     return {k: per_log("kinematic-pif", gate_on=k[0], gate_span=k[1], gate_release=k[2]) for k in keys}
