@@ -10,14 +10,16 @@ from __future__ import annotations
 
 import csv
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from roadbank import Signals, estimators
 from roadbank.cli import main
-from roadbank.signals import sample_rate
+from roadbank.signals import sample_rate, spread_rate
 from roadbank.vehicle import SensorSpec, load_vehicle, log_conditions, make_estimator
 
 KITTI = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "kitti-oxts"
@@ -35,6 +37,31 @@ def test_sample_rate_of_uniform_jittered_and_degenerate_time_bases():
     t = np.cumsum(rng.uniform(0.06, 0.14, 400))            # KITTI-like frames
     assert sample_rate(t) == pytest.approx(10.0, rel=0.05)
     assert math.isnan(sample_rate([1.0])) and math.isnan(sample_rate([2.0, 2.0]))
+
+
+def test_spread_rate_is_the_sample_rate_read_from_an_even_sample_of_the_intervals():
+    rng = np.random.default_rng(4)
+    short = np.cumsum(rng.uniform(0.06, 0.14, 4000))
+    assert spread_rate(short) == sample_rate(short)                # up to 4096 intervals: every one
+    assert spread_rate(np.arange(360_001) * 0.01) == 100.0         # a uniform log: exactly its rate
+    long = np.cumsum(rng.uniform(0.06, 0.14, 200_000))
+    assert spread_rate(long) == pytest.approx(sample_rate(long), rel=0.02)
+    # a log whose second half runs at another rate: the sample spans both halves as the whole log does
+    both = np.concatenate([np.arange(100_000) * 0.01, 1000.0 + np.arange(300_000) * 0.1])
+    assert spread_rate(both) == sample_rate(both) == 10.0
+    assert math.isnan(spread_rate([1.0])) and math.isnan(spread_rate([2.0, 2.0]))
+
+
+def test_an_estimator_warns_of_a_log_far_from_its_data_sheet_rate_once():
+    t = np.arange(0.0, 600.0, 0.1)                                  # 10 Hz, 6000 samples
+    s = Signals(t, np.full(t.size, 15.0), np.zeros(t.size), np.zeros(t.size), np.zeros(t.size))
+    est = estimators.make("pif-modified")
+    with pytest.warns(RuntimeWarning, match="sampled at 10 Hz"):
+        est.run(s)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        est.run(s)                                                  # once
+        estimators.make("pif-modified").run(Signals(t / 10, s.vx, s.ay, s.r, s.delta_f))   # 100 Hz: none
 
 
 @pytest.mark.parametrize("name", ["pif-modified", "pif-rate", "pif-adaptive"])

@@ -23,7 +23,7 @@ from .. import cache
 from ..models.bicycle import augment, disturbance_output, modified_model, original_model
 from ..models.roll import roll_state_space
 from ..params import VehicleParams
-from ..signals import Estimate, Signals, interval_rate, sample_rate
+from ..signals import Estimate, Signals, interval_rate, spread_rate
 from . import kernels as K
 from . import layout as L
 from ._buffers import OutputBuffers
@@ -225,8 +225,9 @@ class Estimator:
 
     def _check_log_rate(self, t) -> None:
         """Warn (once) when a log's rate is far from :attr:`sheet_rate`: the weights then do not
-        describe its sensors (:func:`roadbank.vehicle.for_log` designs for the log)."""
-        rate = sample_rate(t)
+        describe its sensors (:func:`roadbank.vehicle.for_log` designs for the log). The rate is read from an even
+        sample of the log's intervals (:func:`roadbank.signals.spread_rate`): every ``run`` pays for it."""
+        rate = spread_rate(t)
         # sheet_rate is set: the caller checks
         if np.isfinite(rate) and abs(rate / self.sheet_rate - 1.0) > 0.25:  # type: ignore[operator]
             warnings.warn(f"{self.name}: its weights are the data sheet's {self.sheet_rate:.0f} Hz sensor's, "
