@@ -22,11 +22,13 @@ from __future__ import annotations
 import os
 import tempfile
 
+from ..defaults import ESTIMATOR
 from ..report.markdown import Markdown, md_table
 from .suite import Section
 
-#: the estimator of the fleet runs (a designed PIF: its design is part of the cost per log)
-FLEET_ESTIMATOR = "pif-modified"
+#: the estimator of the fleet runs: what `roadbank estimate` runs (designed for each log: its design is part of the
+#: cost per log)
+FLEET_ESTIMATOR = ESTIMATOR
 #: target of the fleet benchmark: 2 workers at least this many times 1 worker's samples/s
 SPEEDUP_TARGET = 1.8
 #: per suite size: logs, seconds per log, formats, worker counts

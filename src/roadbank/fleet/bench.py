@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from ..defaults import ESTIMATOR
 from ..estimators.grid_design import clear_memos
 from ..io.stream import CHUNK_ROWS
 from .run import run_fleet
@@ -139,7 +140,7 @@ print(json.dumps(res))
 """
 
 
-def measure(mode: str, log, out, estimator: str = "pif-modified", chunk_rows: int | None = None) -> dict:
+def measure(mode: str, log, out, estimator: str = ESTIMATOR, chunk_rows: int | None = None) -> dict:
     """Run one measurement in a fresh Python process.
 
     Parameters
@@ -227,7 +228,7 @@ def fleet_logs(workdir, n_logs: int, seconds: float, fmt: str = "parquet", bad_e
     return paths, samples
 
 
-def fleet_speedup(n_logs: int = 200, seconds: float = 600.0, workers=(1, 2), estimator: str = "pif-modified",
+def fleet_speedup(n_logs: int = 200, seconds: float = 600.0, workers=(1, 2), estimator: str = ESTIMATOR,
                   bad_every: int = 20, workdir=None, batch: int | None = None, fmt: str = "parquet",
                   keep_outputs: bool = True) -> list[dict]:
     """Wall time of ``run_fleet`` on ``n_logs`` logs of ``seconds`` (100 Hz, every ``bad_every``-th corrupt).
@@ -278,7 +279,7 @@ def main(argv=None) -> int:
     ap.add_argument("--hours", type=float, default=24.0)
     ap.add_argument("--peer-hours", type=float, default=2.0)
     ap.add_argument("--formats", default="parquet,mdf4")
-    ap.add_argument("--estimator", default="pif-modified")
+    ap.add_argument("--estimator", default=ESTIMATOR, help="default: the command line's default estimator")
     ap.add_argument("--chunk-rows", type=int, default=None, help="default: roadbank.io.stream.CHUNK_ROWS")
     ap.add_argument("--fleet", type=int, default=0, help="also time N small logs with 1 and 2 workers")
     ap.add_argument("--fleet-seconds", type=float, default=600.0, help="length of each fleet log (s)")
