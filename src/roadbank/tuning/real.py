@@ -278,8 +278,24 @@ def objective(build, logs, sim_sets) -> float:
     (module docstring): a fixed estimator, or one designed for each log
     (:func:`roadbank.vehicle.for_log`, as the command line builds it)."""
     errs = log_errors(build, logs)
-    sim = [float(np.median([drive_errors(build(d.signals), [d])[0][0] for d in drives])) for drives in sim_sets]
-    return (float(np.median(errs)) if errs else 0.0) + (float(np.median(sim)) if sim else 0.0)
+    return (float(np.median(errs)) if errs else 0.0) + (cars_median(sim_errors(build, sim_sets)) if sim_sets else 0.0)
+
+
+def sim_errors(build, sim_sets) -> list[list[float]]:
+    """The bank RMS error (deg) of each simulated drive as ``roadbank tune`` scores it, per set of ``sim_sets``
+    (:func:`simulated_sets`), the estimator ``build(signals)`` makes for the drive."""
+    return [[float(drive_errors(build(d.signals), [d])[0][0]) for d in drives] for drives in sim_sets]
+
+
+def cars_median(errs) -> float:
+    """The median over the sets (the cars) of each set's median (deg) of :func:`sim_errors`."""
+    return float(np.median([np.median(e) for e in errs]))
+
+
+def guarded(chosen, first, mean: dict):
+    """The fourteenth stage's guard: ``chosen`` where it is ``first`` or its mean drive score is lower than
+    ``first``'s (``mean``: key -> mean, deg), else ``first``."""
+    return chosen if chosen == first or mean[chosen] < mean[first] else first
 
 
 def log_errors(build, logs) -> list[float]:
@@ -358,15 +374,12 @@ def choose_described_filter(sim_sets, cars=SIM_CARS, filters=DESCRIBED_FILTERS) 
     where the mean over every drive is lower than the first's too. Returns ``(filter, {filter: (median, mean)})``."""
     scores: dict[str, tuple[float, float]] = {}
     for f in filters:
-        errs = [[drive_errors(per_log("kinematic-pif", vehicle=load_vehicle(car), quiet_filter=f)(d.signals), [d])[0][0]
-                 for d in drives] for car, drives in zip(cars, sim_sets)]
-        scores[f] = (float(np.median([np.median(e) for e in errs])), float(np.mean(np.concatenate(errs))))
+        errs = [sim_errors(per_log("kinematic-pif", vehicle=load_vehicle(car), quiet_filter=f), [drives])[0]
+                for car, drives in zip(cars, sim_sets)]
+        scores[f] = (cars_median(errs), float(np.mean(np.concatenate(errs))))
     best = min(m for m, _ in scores.values())
     chosen = next(f for f in filters if scores[f][0] <= best + TIE_DEG)
-    first = filters[0]
-    if chosen != first and not scores[chosen][1] < scores[first][1]:
-        chosen = first
-    return chosen, scores
+    return guarded(chosen, filters[0], {f: mean for f, (_, mean) in scores.items()}), scores
 
 
 def loud_sets(sim_sets, rate: float = LOUD_RATE_HZ, dof: int = LOUD_DOF, noise: float = LOUD_AY_NOISE,
@@ -408,14 +421,11 @@ def choose_loud_gate(logs, sim_sets, cands: dict | None = None) -> tuple:
     best = min(float(np.median(e)) for e in real.values())
     tied = [k for k in cands if float(np.median(real[k])) <= best + TIE_DEG]
     first = next(iter(cands))
-    sim = {k: [[drive_errors(cands[k](d.signals), [d])[0][0] for d in drives] for drives in sim_sets]
-           for k in dict.fromkeys([first, *tied])}
-    med = {k: float(np.median([np.median(e) for e in v])) for k, v in sim.items()}
+    sim = {k: sim_errors(cands[k], sim_sets) for k in dict.fromkeys([first, *tied])}
+    med = {k: cars_median(v) for k, v in sim.items()}
     chosen = min(tied, key=lambda k: round(med[k] / EQUAL_DEG))
-    mean = {k: float(np.mean(np.concatenate([real[k], *sim[k]]))) for k in (first, chosen)}
-    if chosen != first and not mean[chosen] < mean[first]:
-        chosen = first
-    return chosen, {k: float(np.median(e)) for k, e in real.items()}, med
+    mean = {k: float(np.mean(np.concatenate([real[k], *v]))) for k, v in sim.items()}
+    return guarded(chosen, first, mean), {k: float(np.median(e)) for k, e in real.items()}, med
 
 
 def choose_by_roads(builds: dict, logs, sim_sets) -> tuple:
@@ -534,10 +544,8 @@ def choose_noise_tau(logs, long=None, stage: int = 12) -> tuple[float, dict]:
     scores = {k: (float(np.median(a)), float(np.median(b))) for k, (a, b) in errs.items()}
     best = min(a + b for a, b in scores.values())
     chosen = next(k for k in cands if sum(scores[k]) <= best + TIE_DEG)
-    first = next(iter(cands))
-    if stage >= 14 and chosen != first and not np.mean(np.concatenate(errs[chosen])) < np.mean(
-            np.concatenate(errs[first])):
-        chosen = first
+    if stage >= 14:
+        chosen = guarded(chosen, next(iter(cands)), {k: float(np.mean(np.concatenate(e))) for k, e in errs.items()})
     return chosen, scores
 
 
