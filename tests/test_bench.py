@@ -101,3 +101,21 @@ def test_builtin_sections_c_step_and_long_log_on_a_tiny_run():
     assert "c_f32_ns" in out["rows"][0]
     assert "| `pif-modified` |" in "\n".join(c_step_markdown(out))
     assert "full suite only" in long_log({"size": "tiny"})["reason"]
+
+
+def test_bench_data_option_reaches_the_accuracy_section(tmp_path):
+    # a tiny run never scores real data; the option is passed through and a folder that does not exist is refused
+    result = CliRunner().invoke(main, ["bench", "--tiny", "--json", "--data", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert "tiny" in json.loads(result.stdout)["accuracy"]["reason"]
+    missing = CliRunner().invoke(main, ["bench", "--tiny", "--data", str(tmp_path / "nowhere")])
+    assert missing.exit_code == 2 and "does not exist" in missing.output
+
+
+def test_accuracy_section_without_data_says_what_it_did_not_run():
+    from roadbank.bench.accuracy import accuracy, accuracy_markdown
+
+    out = accuracy({"size": "quick"})
+    assert out["targets"] == [] and len(out["notes"]) == 3
+    assert "--data DIR" in out["notes"][0] and all("full suite only" in n for n in out["notes"][1:])
+    assert "Not timed." in "\n".join(accuracy_markdown(out))
