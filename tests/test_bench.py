@@ -104,12 +104,28 @@ def test_builtin_sections_c_step_and_long_log_on_a_tiny_run():
 
 
 def test_bench_data_option_reaches_the_accuracy_section(tmp_path):
-    # a tiny run never scores real data; the option is passed through and a folder that does not exist is refused
-    result = CliRunner().invoke(main, ["bench", "--tiny", "--json", "--data", str(tmp_path)])
+    # the folder given reaches the section's settings; one that does not exist is refused
+    from roadbank.bench import SECTIONS
+
+    original = next(sec for sec in SECTIONS if sec.name == "accuracy")
+    seen = []
+    register_section(Section("accuracy", original.title, lambda cfg: seen.append(cfg.get("data")) or {"reason": "-"}))
+    try:
+        result = CliRunner().invoke(main, ["bench", "--tiny", "--json", "--data", str(tmp_path)])
+    finally:
+        register_section(original)
     assert result.exit_code == 0, result.output
-    assert "tiny" in json.loads(result.stdout)["accuracy"]["reason"]
+    assert seen == [str(tmp_path)]
     missing = CliRunner().invoke(main, ["bench", "--tiny", "--data", str(tmp_path / "nowhere")])
     assert missing.exit_code == 2 and "does not exist" in missing.output
+
+
+def test_accuracy_section_on_a_folder_without_data_sets_notes_it(tmp_path):
+    from roadbank.bench.accuracy import accuracy
+
+    out = accuracy({"size": "quick", "data": str(tmp_path)})
+    assert out["targets"] == []
+    assert out["notes"][:2] == ["KITTI: no drive found", "comma2k19: no segment found"]
 
 
 def test_accuracy_section_without_data_says_what_it_did_not_run():

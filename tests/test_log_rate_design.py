@@ -49,6 +49,9 @@ def test_spread_rate_is_the_sample_rate_read_from_an_even_sample_of_the_interval
     # a log whose second half runs at another rate: the sample spans both halves as the whole log does
     both = np.concatenate([np.arange(100_000) * 0.01, 1000.0 + np.arange(300_000) * 0.1])
     assert spread_rate(both) == sample_rate(both) == 10.0
+    # two rows per 10 Hz frame: runs of consecutive intervals see the pattern as the whole log does
+    twice = np.repeat(np.arange(9000) * 0.1, 2)
+    assert spread_rate(twice) == sample_rate(twice) == 10.0
     assert math.isnan(spread_rate([1.0])) and math.isnan(spread_rate([2.0, 2.0]))
 
 

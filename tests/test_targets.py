@@ -14,7 +14,7 @@ import pytest
 from roadbank.campaign.report import default_target
 from roadbank.estimators import DEFAULT
 from roadbank.tuning.simulated import TARGET_CAR, TARGET_DRIVES, SimulatedScores, sim_targets
-from roadbank.validation.targets import comma_targets, kitti_targets
+from roadbank.validation.targets import CAUSAL, comma_targets, kitti_targets
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 SETS = ("comma2k19-example", "kitti-oxts", "kitti-oxts-extra")
@@ -25,12 +25,14 @@ def _score(rms_raw=1.0, r=0.9, rms=0.1, lag=0.0):
     return SimpleNamespace(rms_raw_deg=rms_raw, r=r, rms_deg=rms, best_lag_s=lag)
 
 
-def _kitti(medians: dict, below: int, drives: int):
-    """A KITTI validation result whose validation drives have ``medians`` and on which the default is below the
-    kinematic estimate on ``below`` of ``drives``."""
-    ds = [SimpleNamespace(label=f"d{k}", scores={DEFAULT: _score(0.3), "kinematic": _score(0.2 if k >= below else 0.9)})
-          for k in range(drives)]
-    part = {"drives": [d.label for d in ds], "median_rms_raw_deg": medians}
+def _kitti(medians: dict, below: int, drives: int, every: bool = True, car_from: str = "fitted to the log"):
+    """A KITTI validation result whose validation drives have ``medians`` (``every``: with every other causal
+    estimator at 1 deg, those that need a steering angle NaN, as on KITTI) and on which the default is below the
+    kinematic estimate on ``below`` of ``drives``, designed for a car ``car_from``."""
+    ds = [SimpleNamespace(label=f"d{k}", scores={DEFAULT: _score(0.3), "kinematic": _score(0.2 if k >= below else 0.9)},
+                          data={"design": {"car_from": car_from}}) for k in range(drives)]
+    rest = {n: float("nan") if n in ("dfc", "uio", "pio-original", "pif-original", "kalman") else 1.0 for n in CAUSAL}
+    part = {"drives": [d.label for d in ds], "median_rms_raw_deg": {**(rest if every else {}), **medians}}
     return SimpleNamespace(by_split={"validation": part}, drives=ds)
 
 
@@ -52,9 +54,18 @@ def test_the_kitti_target_asks_the_default_below_the_kinematic_estimate_on_90_pe
     assert share.met is met and share.measured.startswith(f"{below} of {drives} ")
 
 
+def test_the_lowest_causal_target_needs_every_causal_estimator_and_says_how_the_drives_were_designed():
+    only = kitti_targets(_kitti({DEFAULT: 0.30, "kinematic": 0.6}, 8, 8, every=False))
+    assert [t.text for t in only] == ["below the raw kinematic estimate on >= 90 % of the drives"]
+    described = kitti_targets(_kitti({DEFAULT: 0.30, "kinematic": 0.6}, 8, 8, car_from="vehicle file"))
+    assert {t.data for t in described} == {"KITTI validation drives (8), car given"}
+    plain = kitti_targets(_kitti({DEFAULT: 0.3}, 8, 8))
+    assert {t.data for t in plain} == {"KITTI validation drives (8), no vehicle file"}
+
+
 def test_no_kitti_target_without_validation_drives_or_the_default():
     assert kitti_targets(SimpleNamespace(by_split={}, drives=[])) == []
-    assert kitti_targets(_kitti({"kinematic": 0.6}, 1, 1)) == []
+    assert kitti_targets(_kitti({"kinematic": 0.6}, 1, 1, every=False)) == []
 
 
 @pytest.mark.parametrize("d, met", [
@@ -81,14 +92,19 @@ def test_the_simulated_targets_on_the_stated_set_and_pooled():
     assert pooled.measured == f"{np.median(both):.3f} / {np.percentile(both, 95):.3f} deg"
     assert pooled.met is False                      # p95 of U(0.2, 0.9) draws is far above 0.65
     assert sim_targets(scores, name="kinematic-lp") == []
+    # another seed is not the set the target was stated on: the pooled verdict only
+    other = SimulatedScores((DEFAULT,), cars, TARGET_DRIVES, 1, {}, scores.errors)
+    assert [t.measured for t in sim_targets(other)] == [pooled.measured]
 
 
 def test_the_campaign_target_is_the_default_p95_of_its_scored_runs():
     rms = np.linspace(0.1, 1.2, 100)
     df = pd.DataFrame({"estimator": [DEFAULT] * 100 + ["kinematic"] * 2, "error": [""] * 99 + ["boom"] + [""] * 2,
-                       "rms_deg": list(rms) + [9.0, 9.0]})
+                       "rms_deg": list(rms) + [9.0, 9.0], "standstill_s": 3.0, "offsets": True})
     t = default_target(df)
     assert t.measured == f"{np.percentile(rms[:99], 95):.3f} deg" and t.met is False
+    assert t.data == "campaign (99 runs, standstill starts, offsets learnt online)"
+    assert default_target(df.assign(standstill_s=0.0, offsets=False)).data == "campaign (99 runs)"
     assert default_target(df.assign(rms_deg=df["rms_deg"] / 2)).met is True
     assert default_target(df[df["estimator"] == "kinematic"]) is None
 

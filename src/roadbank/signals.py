@@ -130,14 +130,17 @@ def sample_rate(t) -> float:
     return interval_rate(np.diff(np.asarray(t, dtype=np.float64)))
 
 
-def spread_rate(t, intervals: int = 4096) -> float:
-    """Sample rate (Hz) of a time base ``t`` (s) by :func:`interval_rate` of at most ``intervals`` of its
-    intervals ``t[k+1] - t[k]``, taken at every ``step``-th sample across the whole log: :func:`sample_rate` itself
-    for a log of up to ``intervals`` intervals, else the median of an even sample of them. For checks on a hot path
-    (an estimator's run warns when a log's rate is far from its design's): constant cost, not a pass over the log."""
+def spread_rate(t, windows: int = 64, width: int = 64) -> float:
+    """Sample rate (Hz) of a time base ``t`` (s) by :func:`interval_rate` of ``windows`` runs of ``width`` consecutive
+    intervals spread evenly over the log: :func:`sample_rate` itself for a log of at most ``windows * width``
+    intervals. Consecutive intervals, so that a time base with a repeating pattern (two rows per frame) reads as a
+    whole one does. For checks on a hot path (an estimator's run warns when a log's rate is far from its design's):
+    constant cost, not a pass over the log."""
     t = np.asarray(t, dtype=np.float64)
-    step = max(1, (t.size - 1) // intervals)
-    k = np.arange(0, t.size - 1, step)
+    n = t.size - 1
+    if n <= windows * width:
+        return sample_rate(t)
+    k = (np.linspace(0, n - width, windows).astype(np.int64)[:, None] + np.arange(width)).ravel()
     return interval_rate(t[k + 1] - t[k])
 
 

@@ -26,6 +26,7 @@ chosen from these results.
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -295,6 +296,14 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
                                      "from_log_start": scoring.from_log_start},
                            by_split=by_split, flagged=[(d.label, d.data["ins_doubt"]) for d in drives
                                                        if d.data.get("ins_doubt")], figures=figures)
+
+
+def below_kinematic(drives, name: str) -> tuple[int, int]:
+    """On how many of ``drives`` (:class:`~roadbank.validation.comma2k19.ValidationResult` with ``kinematic`` and
+    ``name`` scored) ``name``'s raw RMS is below the raw kinematic estimate's, and of how many it has a score."""
+    pairs = [(d.scores[name].rms_raw_deg, d.scores["kinematic"].rms_raw_deg) for d in drives
+             if "kinematic" in d.scores and name in d.scores and math.isfinite(d.scores[name].rms_raw_deg)]
+    return sum(a < b for a, b in pairs), len(pairs)
 
 
 def _median(values) -> float:

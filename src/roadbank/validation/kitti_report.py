@@ -12,7 +12,7 @@ from ..report.markdown import md_table
 from ..report.tables import targets_markdown
 from ..report.timeseries import reference_figure, save_figure
 from ..vehicle import QUIET_RATIO
-from .kitti import KittiValidation
+from .kitti import KittiValidation, below_kinematic
 from .targets import kitti_targets
 
 #: the best value of each score column: smallest RMS, largest correlation
@@ -128,10 +128,9 @@ def split_rows(v: KittiValidation, split: str) -> list[list]:
         p = part["pooled"][name]
         if not p["n"]:
             continue
-        kin = [(d.scores[name].rms_raw_deg < d.scores["kinematic"].rms_raw_deg) for d in drives
-               if "kinematic" in d.scores and math.isfinite(d.scores[name].rms_raw_deg)]
+        below, scored = below_kinematic(drives, name)
         rows.append([name + (" (offline)" if name in OFFLINE else ""), med, p["rms_raw_deg"], p["r_raw"],
-                     f"{100 * sum(kin) / len(kin):.0f} %" if kin and name != "kinematic" else "-",
+                     f"{100 * below / scored:.0f} %" if scored and name != "kinematic" else "-",
                      part["median_rms_raw_each_start_deg"][name]])
     return rows
 

@@ -61,10 +61,6 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
                         sc.rms_phi_b_deg, sc.best_lag_s, sc.r_at_best_lag] for name, sc in res.scores.items()],
                       digits=3, formats={"lag for max r (s)": "+.2f"}, best=_BEST, best_in="column"))
     L.append("\nBest value of each score column in bold (largest r, smallest RMS).\n")
-    found = comma_targets(res)
-    if found:
-        L.append("The default's targets on this segment (`roadbank.validation.targets`):\n")
-        L += targets_markdown(found)
     L.append("Columns: **r**, **rms_deg** -- Pearson correlation and RMS error (deg, after adding the "
              "offset) on the scored part, both signals smoothed; **offset_deg** -- reference minus "
              "estimate, fitted on the first part; **r raw** -- same split, no smoothing; **r causal LP** -- "
@@ -73,6 +69,10 @@ def markdown(res: ValidationResult, figure: str | None = None, command: str = ""
              "static roll model) instead of `theta`; **lag for max r** -- shifting the estimate by this "
              "much (positive = the estimate lags the reference) would maximise r (diagnostic, not used "
              "in the score).\n")
+    found = comma_targets(res)
+    if found:
+        L.append("The default's targets on this segment (`roadbank.validation.targets`):\n")
+        L += targets_markdown(found)
     if figure:
         L.append(f"![estimates vs reference]({figure})\n")
     L.append("## Method\n")
