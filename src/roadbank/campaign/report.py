@@ -43,9 +43,9 @@ PIF_GOAL_P95_DEG = 1.0
 
 def default_target(df, name: str = DEFAULT) -> Target | None:
     """The campaign target of the default estimator ``name`` (:class:`~roadbank.evaluation.targets.Target`): the
-    95th percentile of its per-run bank RMS at most :data:`PIF_GOAL_P95_DEG` (the issue states it for runs that start
-    at standstill with the offsets learnt online; the label says how these ran); None where ``df`` (the campaign's
-    rows) has no scored run of it."""
+    95th percentile of its per-run bank RMS at most :data:`PIF_GOAL_P95_DEG` (stated for runs that start at standstill
+    with the offsets learnt online; the label says how these ran); None where ``df`` (the campaign's rows) has no
+    scored run of it."""
     rms = df[(df["estimator"] == name) & (df["error"] == "")]["rms_deg"].dropna()
     if not len(rms):
         return None

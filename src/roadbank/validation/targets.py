@@ -1,6 +1,6 @@
 """The default's targets on real data, stated once: what ``roadbank validate`` and ``roadbank bench`` report.
 
-The targets of the project's real-roads issue for the default estimator (:data:`roadbank.defaults.ESTIMATOR`),
+The project's targets for the default estimator on real roads (:data:`roadbank.defaults.ESTIMATOR`),
 each judged on data no choice looked at, raw RMS in deg:
 
 * **KITTI validation drives** (:data:`roadbank.validation.splits.KITTI_VALIDATION`, no vehicle file, INS roll as
