@@ -27,13 +27,12 @@ CAMPAIGN_RUNS = 400
 def _real(data) -> tuple[list, list]:
     """The real-data targets on the data sets under ``data``, as ``roadbank validate all`` reads them (every KITTI
     drive, the first comma2k19 segment), and notes on what could not be judged."""
-    from ..estimators import NAMES, OFFLINE
     from ..validation.comma2k19 import validate_comma2k19
     from ..validation.document import find_datasets
     from ..validation.kitti import validate_kitti
-    from ..validation.targets import comma_targets, kitti_targets
+    from ..validation.targets import CAUSAL, comma_targets, kitti_targets
 
-    names = [n for n in NAMES if n not in OFFLINE]
+    names = list(CAUSAL)
     found, targets, notes = find_datasets(data), [], []
     if found["kitti"]:
         v = validate_kitti(found["kitti"], names=names, sensitivity=False)

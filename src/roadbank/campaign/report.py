@@ -46,11 +46,11 @@ def default_target(df, name: str = DEFAULT) -> Target | None:
     95th percentile of its per-run bank RMS at most :data:`PIF_GOAL_P95_DEG` (stated for runs that start at standstill
     with the offsets learnt online; the label says how these ran); None where ``df`` (the campaign's rows) has no
     scored run of it."""
-    rms = df[(df["estimator"] == name) & (df["error"] == "")]["rms_deg"].dropna()
+    ran = df[df["estimator"] == name]
+    rms = ran[ran["error"] == ""]["rms_deg"].dropna()
     if not len(rms):
         return None
     p95 = float(np.percentile(rms, 95))
-    ran = df[df["estimator"] == name]
     how = [w for w, on in (("standstill starts", (ran["standstill_s"] > 0).any()),
                            ("offsets learnt online", ran["offsets"].astype(bool).any())) if on]
     return Target(f"campaign ({len(rms)} runs" + "".join(f", {w}" for w in how) + ")",

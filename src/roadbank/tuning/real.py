@@ -161,7 +161,7 @@ from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
 from ..sim import SCENARIOS, run_scenario
 from ..sim.params import PlantParams
-from ..signals import Signals, concat_signals
+from ..signals import Signals, concat_signals, sample_rate
 from ..validation.kitti import KITTI_SCORING
 from ..validation.scoring import masks
 from ..validation.splits import KITTI_TRAINING
@@ -394,7 +394,7 @@ def loud_sets(sim_sets, rate: float = LOUD_RATE_HZ, dof: int = LOUD_DOF, noise: 
         loud = []
         for d in drives:
             s = d.signals
-            step = max(1, int(round(1.0 / (rate * float(np.median(np.diff(s.t)))))))
+            step = max(1, int(round(sample_rate(s.t) / rate)))
             ay = s.ay[::step] + scale * rng.standard_t(dof, len(s.ay[::step]))
             loud.append(dataclasses.replace(d, signals=Signals(s.t[::step], s.vx[::step], ay, s.r[::step],
                                                                s.delta_f[::step]), phi_b=d.phi_b[::step]))
