@@ -475,6 +475,24 @@ def test_loud_sets_read_a_drive_at_10_hz_with_student_t_vibration_on_ay():
     assert np.array_equal(again.signals.ay, loud.signals.ay)              # one seed, the same drives
 
 
+def test_gate_filter_sets_read_the_loud_drives_at_each_rate_from_one_seed():
+    from roadbank.tuning.manoeuvres import Drive
+    from roadbank.tuning.real import GATE_TF_RATES, LOUD_AY_NOISE, gate_filter_sets, loud_sets
+
+    t = np.arange(0.0, 600.0, 0.01)
+    s = Signals(t, np.full(t.size, 20.0), 0.3 * np.sin(0.1 * t), np.zeros(t.size), np.zeros(t.size))
+    d = Drive("train", 0, "bank-step", {}, s, 0.01 * np.sin(0.1 * t))
+    sets = gate_filter_sets([[d], [d]])
+    assert len(sets) == 2 * len(GATE_TF_RATES)
+    for i, rate in enumerate(GATE_TF_RATES):
+        for drives in sets[2 * i:2 * i + 2]:
+            assert np.allclose(np.diff(drives[0].signals.t), 1.0 / rate)
+        noise = sets[2 * i][0].signals.ay - s.ay[::int(round(100.0 / rate))]
+        assert np.sqrt(np.mean(noise ** 2)) == pytest.approx(LOUD_AY_NOISE, rel=0.1)
+    ten, = [k for k, r in enumerate(GATE_TF_RATES) if r == 10.0]
+    assert np.array_equal(sets[2 * ten][0].signals.ay, loud_sets([[d]])[0][0].signals.ay)   # the sixteenth's set
+
+
 @pytest.mark.slow
 def test_the_gate_on_loud_logs_is_what_the_rule_keeps():
     """The sixteenth stage (tuning.real.choose_loud_gate) between the shipped gate and no gate: they tie on the KITTI

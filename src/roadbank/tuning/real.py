@@ -141,6 +141,21 @@ drives (0.3846-0.3866 deg; the shipped 0.3847); on the loud simulated drives no 
 against the shipped 0.5975) but not the lowest mean (0.8324 against 0.7867 over every score judged; loud simulated
 p95 2.49 against 2.05, worst drive 3.15 against 2.44): without the handover the hard transients of a loud log go
 wrong, and the mean guard keeps the gate that catches them.
+
+The seventeenth stage (:func:`choose_gate_filter`; rule written 2026-12-04 before any candidate ran) chooses the
+time constant of the gate's yaw-rate low-pass (``gate_tf``), which no stage has chosen: it is ``pif-gated``'s
+0.05 s, designed on 100 Hz drives with the data sheet's gyro. The gate reads the change of the filtered yaw rate
+over one sample; at 10 Hz a 0.05 s filter barely acts (the sample interval is the filter), while at 100 Hz the
+noise of that jerk from a given gyro is about ``(0.1 / 0.05)^1.5``, near 2.8 times the 10 Hz one: the gate was
+chosen at a rate where its filter does not matter and runs unchanged at one where it does. Candidates
+:data:`GATE_TFS` (s), the shipped 0.05 first. Objective, real roads first as the sixteenth stage's and with its
+code (:func:`choose_loud_gate`): the KITTI training median; among the candidates within :data:`TIE_DEG` of the best,
+the lowest median over the sets of the per-set medians on the loud simulated training drives read at each rate of
+:data:`GATE_TF_RATES` (:func:`gate_filter_sets`: the sixteenth stage's 10 Hz set, and the same drives at their own
+100 Hz with the same vibration on ``ay``; the gyro is the data sheet's, because no training log says how a shaking
+road moves a gyro: eight sets, four cars at two rates); equal to :data:`EQUAL_DEG`: the earlier; the mean guard over
+every score judged (the eight training drives and every loud simulated drive at both rates). Neither the KITTI
+validation drives nor comma2k19 (the one loud 100 Hz log at hand) take part.
 """
 
 from __future__ import annotations
@@ -226,6 +241,10 @@ DESCRIBED_FILTERS = (vehicle.QUIET_FILTER, *(f for f in QUIET_FILTERS if f != ve
 LOUD_RATE_HZ, LOUD_DOF, LOUD_AY_NOISE, LOUD_SEED = 10.0, 4, 0.15, 1
 #: ``gate_on`` (m/s^3) of the sixteenth stage's candidate without a gate: no yaw jerk of a car reaches it
 NO_GATE = 1e9
+#: the seventeenth stage's candidate time constants (s) of the gate's yaw-rate low-pass ``gate_tf``, the shipped first
+GATE_TFS = (KINEMATIC_PIF_GATE["gate_tf"], 0.1, 0.2, 0.4)
+#: the rates (Hz) at which the seventeenth stage reads the loud simulated drives: the sixteenth's, and their own
+GATE_TF_RATES = (LOUD_RATE_HZ, 100.0)
 #: the stages before the fourteenth took the bank-rate prior as a rate in time
 _TIME_RATE = {"bank_speed_exp": 0.0}
 #: the stages before the twelfth ran on the design span's noise throughout
@@ -414,7 +433,8 @@ def loud_gate_candidates() -> dict:
 def choose_loud_gate(logs, sim_sets, cands: dict | None = None) -> tuple:
     """The sixteenth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs`) and the loud
     simulated drives ``sim_sets`` (:func:`loud_sets`), over ``cands`` (default :func:`loud_gate_candidates`; the
-    first is the shipped gate). Returns ``(chosen key, {key: real median}, {key: loud simulated median})``, the
+    first is the shipped gate); the seventeenth's too, over its own candidates (:func:`choose_gate_filter`).
+    Returns ``(chosen key, {key: real median}, {key: loud simulated median})``, the
     latter for the shipped gate and the candidates within :data:`TIE_DEG` of the best real median."""
     cands = loud_gate_candidates() if cands is None else cands
     real = {k: log_errors(b, logs) for k, b in cands.items()}
@@ -426,6 +446,20 @@ def choose_loud_gate(logs, sim_sets, cands: dict | None = None) -> tuple:
     chosen = min(tied, key=lambda k: round(med[k] / EQUAL_DEG))
     mean = {k: float(np.mean(np.concatenate([real[k], *v]))) for k, v in sim.items()}
     return guarded(chosen, first, mean), {k: float(np.median(e)) for k, e in real.items()}, med
+
+
+def gate_filter_sets(sim_sets, rates=GATE_TF_RATES) -> list:
+    """The seventeenth stage's loud simulated drives: :func:`loud_sets` of ``sim_sets`` at each rate (Hz) of
+    ``rates``, one set per (rate, car), each drawn from the same seed (the first rate's sets are the sixteenth's)."""
+    return [drives for rate in rates for drives in loud_sets(sim_sets, rate=rate)]
+
+
+def choose_gate_filter(logs, sim_sets, tfs=GATE_TFS) -> tuple:
+    """The seventeenth stage (module docstring): :func:`choose_loud_gate` over ``kinematic-pif`` built as the command
+    line does with each ``gate_tf`` (s) of ``tfs`` (the shipped first), on the KITTI training ``logs`` and the loud
+    simulated drives ``sim_sets`` (:func:`gate_filter_sets`). Returns what :func:`choose_loud_gate` returns, keyed by
+    ``gate_tf``."""
+    return choose_loud_gate(logs, sim_sets, {tf: per_log("kinematic-pif", gate_tf=tf) for tf in tfs})
 
 
 def choose_by_roads(builds: dict, logs, sim_sets) -> tuple:
