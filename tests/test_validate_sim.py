@@ -142,12 +142,12 @@ def test_the_set_the_target_was_stated_on_is_roadbank_tunes_validation_set():
     own = drive_set("validation", DEFAULT_VALIDATION, 0, load_vehicle(TARGET_CAR).params)
     assert one.roads[TARGET_CAR] == tuple(d.road for d in own)
     s = one.summary("kinematic-pif", "known", TARGET_CAR)
-    verdict = "met" if s.median_deg <= 0.30 and s.p95_deg <= 0.65 else "not met"
-    line = (f"On the set it was first stated on (`{TARGET_CAR}`, {TARGET_DRIVES} drives, seed 0): "
-            f"{s.median_deg:.3f} / {s.p95_deg:.3f} deg, {verdict}.")
+    verdict = "yes" if s.median_deg <= 0.30 and s.p95_deg <= 0.65 else "**no**"
+    line = (f"| simulated validation set, {TARGET_CAR} ({TARGET_DRIVES} drives, where it was stated) | car known: "
+            f"median <= 0.30, p95 <= 0.65 deg | {s.median_deg:.3f} / {s.p95_deg:.3f} deg | {verdict} |")
     assert line in markdown(one, command="x")
-    assert "first stated on (" not in markdown(score_simulated(["kinematic-pif"], cars=(TARGET_CAR,), n=2),
-                                                command="x")
+    assert "where it was stated" not in markdown(score_simulated(["kinematic-pif"], cars=(TARGET_CAR,), n=2),
+                                                 command="x")
 
 
 @pytest.mark.slow

@@ -8,7 +8,9 @@ import numpy as np
 from .. import defaults, estimators
 from .manoeuvres import DURATION, TRAIN_ROADS
 from .objective import SETTLE
-from .simulated import MODES, TARGET_CAR, TARGET_DRIVES, TARGET_MEDIAN_DEG, TARGET_P95_DEG, SimulatedScores, Summary
+from ..report.tables import targets_markdown
+from .simulated import (MODES, TARGET_CAR, TARGET_DRIVES, TARGET_MEDIAN_DEG, TARGET_P95_DEG, SimulatedScores,
+                        Summary, sim_targets)
 
 #: what each validation road family is (:mod:`roadbank.tuning.manoeuvres`)
 ROAD_TEXT = {
@@ -102,20 +104,14 @@ def _target_section(scores: SimulatedScores) -> list[str]:
     if name not in scores.names:
         return head + [f"`{name}` was not among the estimators scored.", ""]
     rows = ["| car | median (deg) | p95 (deg) | target |", "|---|---:|---:|---|"]
-    verdicts = []
+    met = 0
     for car in (*scores.cars, None):
         s = scores.summary(name, "known", car)
-        verdicts.append(s.meets_target)
+        met += bool(car and s.meets_target)
         rows.append(f"| {car or 'all cars'} | {s.median_deg:.3f} | {s.p95_deg:.3f} | {_verdict(s)} |")
-    met = sum(verdicts[:-1])
-    own = ([f"On the set it was first stated on (`{TARGET_CAR}`, {TARGET_DRIVES} drives, seed 0): "
-            f"{_cell(scores.summary(name, 'known', TARGET_CAR))} deg, "
-            f"{_verdict(scores.summary(name, 'known', TARGET_CAR))}."]
-           if TARGET_CAR in scores.cars and scores.n == TARGET_DRIVES and scores.seed == 0 else [])
-    tail = (f"Met on {met} of {len(scores.cars)} cars; pooled: {'met' if verdicts[-1] else 'not met'}. "
-            f"With the car not described the same set gives, pooled, "
+    tail = (f"Met on {met} of {len(scores.cars)} cars. With the car not described the same set gives, pooled, "
             f"{_cell(scores.summary(name, 'undescribed'))} deg (median / p95; no target).")
-    return head + rows + ["", *own, tail, ""]
+    return head + rows + ["", *targets_markdown(sim_targets(scores, name)), tail, ""]
 
 
 def _family_table(scores: SimulatedScores) -> list[str]:
