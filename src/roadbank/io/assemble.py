@@ -342,7 +342,7 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     p, names = src.path, src.names
     if "time" not in cmap.channels:
         raise LogError(f"{cmap.source}: channel map has no 'time' channel (required for {fmt})")
-    cmap, note = own_time_unit(p, cmap, getattr(src, "time_typed", {}))      # (KITTI drives: none typed)
+    cmap, note = own_time_unit(p, cmap, src.time_typed)
     tspec = cmap.channels["time"]
     if tspec.column not in names:
         raise missing_column(p, "time", tspec.column, names)

@@ -128,6 +128,7 @@ class SegmentSource:
     shared_clock = False
     whole = True
     row_label = "sample"
+    time_typed: dict[str, str] = {}      # NumPy arrays of seconds: no column's type carries a time unit
 
     def __init__(self, path, params: VehicleParams | None = None, rate_hz: float = 100.0,
                  max_gap_s: float = 0.5):

@@ -14,10 +14,10 @@ A source knows a file format, not physics. Opening one reads what the format say
 Every source has ``path``, ``names`` (the columns), ``metadata``, ``warnings``, ``row_label``,
 ``shared_clock`` (a table), ``whole`` (read in one chunk) and ``carried``: channels the source derives
 itself (column -> the longest gap, s, interpolated across), which go into :attr:`Log.extra` as they
-are. :class:`WholeSource` and :class:`ParquetBatches` also have ``time_typed``: the columns whose type carries
-its own time unit (:attr:`~roadbank.io.types.RawTable.time_typed`; a source without it has none). The data sets
-with a fixed layout (:mod:`roadbank.io.kitti`, :mod:`roadbank.io.comma2k19`) also bring their ``channel_map``:
-which column is which channel, in which unit and sign convention.
+are, and ``time_typed``: the columns whose type carries its own time unit
+(:attr:`~roadbank.io.types.RawTable.time_typed`: Arrow timestamps and durations; empty for the other
+formats). The data sets with a fixed layout (:mod:`roadbank.io.kitti`, :mod:`roadbank.io.comma2k19`) also
+bring their ``channel_map``: which column is which channel, in which unit and sign convention.
 
 Read whole (``chunk_rows=None``) a source gives one chunk: the whole file (the readers of
 :mod:`roadbank.io.readers`, :mod:`roadbank.io.can`, :mod:`roadbank.io.ros`). Streamed, Parquet is read
@@ -143,6 +143,7 @@ class Mdf4Windows:
     shared_clock = False
     whole = False
     carried: dict[str, float] = {}
+    time_typed: dict[str, str] = {}      # MDF4 masters are seconds: no channel's type carries a time unit
 
     def __init__(self, path: Path, chunk_rows: int):
         self.path = path
