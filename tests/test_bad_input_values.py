@@ -6,6 +6,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
 import pytest
 from click.testing import CliRunner
 
@@ -124,3 +126,50 @@ def test_the_cli_writes_the_log_and_says_what_it_dropped(tmp_path, scurve):
     res = CliRunner().invoke(main, ["estimate", str(path), "-o", str(tmp_path / "out.csv")])
     assert res.exit_code == 0 and "Traceback" not in res.output, res.output
     assert "read as dropouts" in res.output and (tmp_path / "out.csv").exists()
+
+
+KITTI_DRIVES = sorted(p for p in DATA.glob("kitti-oxts*/20*") if p.is_dir())
+
+
+@pytest.mark.skipif(not KITTI_DRIVES, reason="../shared/data/kitti-oxts* not present")
+def test_ay_in_g_or_a_flipped_sign_is_named_on_a_log_that_only_turns_gently():
+    """No shared KITTI drive turns hard (|vx r| > 3 m/s^2 on 100 samples), so the turning check says nothing on them;
+    their gentle turns (|vx r| > 1 m/s^2) still give the slope of ay on vx r (0.8-1.2 on these drives): an ay in g or a
+    flipped sign is named on every drive with enough of them, and a clean drive gets no warning."""
+    from roadbank.io import check_consistency
+    from roadbank.io.consistency import MIN_GENTLE, MIN_SAMPLES, gentle_sums, turning
+    from roadbank.io.kitti import load_kitti_oxts
+
+    checked = 0
+    for drive in KITTI_DRIVES:
+        log = load_kitti_oxts(drive)
+        s = log.signals
+        assert turning(s.vx, s.ay, s.r).sum() < MIN_SAMPLES
+        assert not [w for w in log.warnings if "vx r" in w], drive.name
+        if gentle_sums(s.vx, s.ay, s.r)[2] < MIN_GENTLE:
+            continue
+        checked += 1
+        in_g = check_consistency(Signals(s.t, s.vx, s.ay / 9.80665, s.r, s.delta_f), drive.name)
+        assert len(in_g) == 1 and "looks like g declared as m/s^2" in in_g[0] and drive.name in in_g[0], in_g
+        flipped = check_consistency(Signals(s.t, s.vx, -s.ay, s.r, s.delta_f), drive.name)
+        assert len(flipped) == 1 and "opposite sign convention" in flipped[0], flipped
+    assert checked >= 8
+
+
+@pytest.mark.skipif(not KITTI_0070.parent.joinpath("2011_10_03_drive_0047").is_dir(),
+                    reason="../shared/data/kitti-oxts not present")
+@pytest.mark.parametrize("chunk_rows", [None, 64])
+def test_ay_in_g_on_a_gently_turning_file_is_named_read_whole_or_streamed(tmp_path, chunk_rows):
+    """The gentle turns' slope is summed chunk by chunk: a file read whole and one streamed in chunks of 64 rows
+    give the same one warning, on the last log, naming the file and the column."""
+    from roadbank.io.kitti import load_kitti_oxts
+    from roadbank.io.stream import stream_log
+
+    s = load_kitti_oxts(KITTI_0070.parent / "2011_10_03_drive_0047").signals
+    path = tmp_path / "gentle.parquet"
+    pq.write_table(pa.table({"t": s.t, "vx": s.vx, "ay": s.ay / 9.80665, "r": s.r}), path)
+    logs = [load_log(path)] if chunk_rows is None else list(stream_log(path, chunk_rows=chunk_rows))
+    said = [w for log in logs for w in log.warnings if "looks like g declared as m/s^2" in w]
+    assert len(said) == 1 and str(path) in said[0] and "(column 'ay')" in said[0], said
+    assert said[0] in logs[-1].warnings
+    assert not [w for log in logs[:-1] for w in log.warnings if "vx r" in w]

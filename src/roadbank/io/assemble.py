@@ -45,7 +45,7 @@ from ..signals import Signals, concat_signals, road_wheel_angle
 from . import units
 from .channels import STEERING, ChannelMap, check_plausible
 from .limits import Dropouts
-from .consistency import MIN_SAMPLES, check_balance, turning, usable
+from .consistency import MIN_SAMPLES, check_balance, gentle_sums, gentle_warnings, turning, usable
 from .errors import LogError, channel_error, channel_text
 from .geodesy import ecef_to_latlon
 from .repair import FLAGGED_ROLES, ChunkRepair
@@ -230,7 +230,7 @@ class _Logs:
             raise LogError(f"{self.p}: fewer than 2 samples on the common time base")
         assert self.pending is not None        # two samples or more were assembled
         self.pending.time_repairs = add_counts(self.pending.time_repairs, add_counts(self.counts, counts))
-        self.pending.warnings += self.warnings
+        self.pending.warnings += self.warnings + self.balance.finish()
         yield self.pending
 
 
@@ -238,12 +238,14 @@ class _Balance:
     """The cross-channel consistency check on the start of a log: the samples it reads
     (:func:`~roadbank.io.consistency.usable`), gathered chunk by chunk until
     :data:`~roadbank.io.consistency.MIN_SAMPLES` of them are turning, then decided once (a log read
-    whole: on the whole log). Holds those samples only."""
+    whole: on the whole log). Holds those samples only, and the sums of the gentle turns' slope for a log that
+    never gets there (:meth:`finish`)."""
 
     def __init__(self, p, columns: dict):
         self.p, self.columns = p, columns
         self.parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self.turning = 0
+        self.gentle = (0.0, 0.0, 0)         # gentle_sums so far
         self.decided = False
 
     def add(self, sig: Signals) -> list[str]:
@@ -252,6 +254,8 @@ class _Balance:
         if self.decided:
             return []
         vx, ay, r = (np.asarray(a, dtype=np.float64) for a in (sig.vx, sig.ay, sig.r))
+        say, saa, n = gentle_sums(vx, ay, r)
+        self.gentle = (self.gentle[0] + say, self.gentle[1] + saa, self.gentle[2] + n)
         keep = usable(vx, ay, r)
         self.parts.append((vx[keep], ay[keep], r[keep]))
         self.turning += int(turning(vx[keep], ay[keep], r[keep]).sum())
@@ -261,6 +265,11 @@ class _Balance:
         vx, ay, r = (np.concatenate(a) for a in zip(*self.parts))
         self.parts = []
         return check_balance(vx, ay, r, self.p, self.columns)
+
+    def finish(self) -> list[str]:
+        """At the end of the log: where it never had :data:`~roadbank.io.consistency.MIN_SAMPLES` turning samples,
+        the slope warnings of its gentle turns (:func:`~roadbank.io.consistency.gentle_warnings`)."""
+        return [] if self.decided else gentle_warnings(self.gentle, self.p, self.columns)
 
 
 class _Period:

@@ -9,8 +9,10 @@ convention breaks this by far as soon as the car turns — even when each channe
 alone looks plausible (60 km/h read as 60 m/s passes the per-channel check).
 
 :func:`check_consistency` tries the usual mistakes and names the channel whose
-correction restores the balance. Driving straight (``vx r`` near 0) shows
-nothing: then no conclusion is drawn.
+correction restores the balance. A log that never turns hard (fewer than :data:`MIN_SAMPLES` samples
+above :data:`TURN`, as every shared KITTI drive) is still read for the slope of ``ay`` on ``vx r`` over
+its gentle turns (above :data:`GENTLE_TURN`): an ``ay`` in g or a flipped sign is warned about there
+too. Driving straight (``vx r`` near 0) shows nothing: then no conclusion is drawn.
 """
 
 from __future__ import annotations
@@ -26,6 +28,8 @@ LIMIT = 0.8 * G          #: median |ay - vx r| above this (m/s^2) is physically 
 FIXED = 0.45 * G         #: ... and below this after a correction means the correction is right
 TURN = 3.0               #: samples with |vx r| above this (m/s^2) are "turning"
 MIN_SAMPLES = 100        #: turning samples needed to conclude anything
+GENTLE_TURN = 1.0        #: where a log never turns hard, samples with |vx r| above this (m/s^2) give the slope
+MIN_GENTLE = 20          #: ... and this many of them are needed for it
 
 #: (channel roles, description, correction of (vx, ay, r)); a sign flip of ``ay`` and one of ``r`` balance
 #: alike, so that candidate names both channels
@@ -46,11 +50,49 @@ CANDIDATES = (
 SLOPE_G, SLOPE_G_RANGE, SLOPE_FLIPPED = 0.2, (0.6, 1.6), -0.5
 
 
-def turning(vx, ay, r) -> np.ndarray:
-    """Mask of the samples the check reads: finite ``ay`` and ``vx r``, ``|vx r| > TURN``, ``vx >= 5`` m/s."""
+def turning(vx, ay, r, above: float = TURN) -> np.ndarray:
+    """Mask of the samples the check reads: finite ``ay`` and ``vx r``, ``|vx r| > above`` (m/s^2, default
+    :data:`TURN`), ``vx >= 5`` m/s."""
     with np.errstate(invalid="ignore", over="ignore"):
         vr = vx * r
-        return np.isfinite(vr) & np.isfinite(ay) & (np.abs(vr) > TURN) & (vx >= 5.0)
+        return np.isfinite(vr) & np.isfinite(ay) & (np.abs(vr) > above) & (vx >= 5.0)
+
+
+def gentle_sums(vx, ay, r) -> tuple[float, float, int]:
+    """``(sum ay vx r, sum (vx r)^2, count)`` over the gently turning samples (``|vx r| >`` :data:`GENTLE_TURN`;
+    ``vx`` m/s, ``ay`` m/s^2, ``r`` rad/s): the slope of :func:`gentle_warnings`, summed chunk by chunk."""
+    sel = turning(vx, ay, r, GENTLE_TURN)
+    a = vx[sel] * r[sel]
+    return float(np.sum(ay[sel] * a)), float(np.sum(a * a)), int(sel.sum())
+
+
+def gentle_warnings(sums, source="signals", columns: dict | None = None) -> list[str]:
+    """The slope warnings of :func:`check_balance` from :func:`gentle_sums` (added over the log's chunks), for a log
+    with fewer than :data:`MIN_SAMPLES` turning samples; nothing below :data:`MIN_GENTLE` gently turning ones."""
+    say, saa, n = sums
+    if n < MIN_GENTLE:
+        return []
+    return _slope_warnings(say / saa, n, "gently turning", source, _namer(columns))
+
+
+def _namer(columns: dict | None):
+    """Channel roles -> their words in a message, with the column names of ``columns`` (role -> column)."""
+    cols = columns or {}
+    return lambda roles: " or ".join(f"'{x}'" + (f" (column '{cols[x]}')" if x in cols else "") for x in roles)
+
+
+def _slope_warnings(k: float, n: int, what: str, source, named) -> list[str]:
+    """The warnings for a slope ``k`` (-) of ``ay`` on ``vx r`` over ``n`` samples (``what``: which) of the file
+    ``source``: g declared as m/s^2, or a flipped sign (:data:`SLOPE_G`, :data:`SLOPE_FLIPPED`)."""
+    if k < SLOPE_G and SLOPE_G_RANGE[0] <= G * k <= SLOPE_G_RANGE[1]:
+        return [f"{source}: channel {named(('lateral_acceleration',))}: ay is {k:.2f} times vx r over {n} {what} "
+                "samples (about 1 on a road): it looks like g declared as m/s^2, unless the car turned on a steep "
+                "banked track near its neutral speed"]
+    if k < SLOPE_FLIPPED:
+        return [f"{source}: channel {named(('lateral_acceleration', 'yaw_rate'))}: ay is {k:.2f} times vx r over "
+                f"{n} {what} samples (about +1 on a road): one of them looks like the opposite sign convention, "
+                "unless the car turned slowly on a steep banked track"]
+    return []
 
 
 def _residual(vx, ay, r) -> tuple[float, int, np.ndarray]:
@@ -105,23 +147,10 @@ def check_balance(vx, ay, r, source="signals", columns: dict | None = None) -> l
     vx, ay, r = (np.asarray(a, float) for a in (vx, ay, r))
     res, n, sel = _residual(vx, ay, r)
     if n < MIN_SAMPLES:
-        return []
-    cols = columns or {}
-
-    def named(roles):
-        return " or ".join(f"'{x}'" + (f" (column '{cols[x]}')" if x in cols else "") for x in roles)
-
+        return gentle_warnings(gentle_sums(vx, ay, r), source, columns)
+    named = _namer(columns)
     if res <= LIMIT:
-        k = _slope(vx, ay, r, sel)
-        if k < SLOPE_G and SLOPE_G_RANGE[0] <= G * k <= SLOPE_G_RANGE[1]:
-            return [f"{source}: channel {named(('lateral_acceleration',))}: ay is {k:.2f} times vx r over {n} "
-                    "turning samples (about 1 on a road): it looks like g declared as m/s^2, unless the car "
-                    "turned on a steep banked track near its neutral speed"]
-        if k < SLOPE_FLIPPED:
-            return [f"{source}: channel {named(('lateral_acceleration', 'yaw_rate'))}: ay is {k:.2f} times vx r "
-                    f"over {n} turning samples (about +1 on a road): one of them looks like the opposite sign "
-                    "convention, unless the car turned slowly on a steep banked track"]
-        return []
+        return _slope_warnings(_slope(vx, ay, r, sel), n, "turning", source, named)
     for roles, text, fix in CANDIDATES:
         fres, fn, _ = _residual(*fix(vx, ay, r))
         if fn >= MIN_SAMPLES and fres <= FIXED:
