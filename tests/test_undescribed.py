@@ -145,3 +145,31 @@ def test_the_shipped_margin_is_what_the_rule_picks():
     assert chosen == CAR_MARGIN, (real, sim)
     assert real[CAR_MARGIN] == pytest.approx(real[math.inf], abs=1e-9)
     assert sim[CAR_MARGIN] < sim[math.inf] - 0.03
+
+
+def test_the_design_line_says_what_was_not_measured_and_what_the_design_took(tmp_path):
+    """A log too short for its noise to be measured is designed for the data sheet's noise (the low-pass's cut-off is
+    then the data sheet's, the same as with no log at all), and the line says so instead of 'nan'; a log whose noise
+    is measured but whose floor is not says the ratio is the noise's."""
+    from roadbank.fleet.process import design_words
+    from roadbank.vehicle import log_conditions, make_estimator, undescribed_params
+
+    t = np.arange(0.0, 6.0, 0.1)
+    rng = np.random.default_rng(0)
+    s = Signals(t, np.full(t.size, 15.0), 0.2 * rng.standard_normal(t.size), np.zeros(t.size), np.zeros(t.size))
+    cond = log_conditions(s)
+    assert np.isnan(cond["log_ay_noise"]) and np.isnan(cond["log_ay_floor"])
+    sheet = make_estimator("kinematic-pif", undescribed_params(), log_rate=10.0)    # no log: the data sheet
+    assert for_log("kinematic-pif", s).Q_ay == pytest.approx(sheet.Q_ay)
+    log = tmp_path / "short.parquet"
+    pq.write_table(pa.table({"t": s.t, "vx": s.vx, "ay": s.ay, "r": s.r}), log)
+    res = CliRunner().invoke(main, ["estimate", str(log), "-o", str(tmp_path / "o.csv")])
+    assert res.exit_code == 0, res.output
+    line = next(x for x in res.stderr.splitlines() if x.startswith("designed for short.parquet"))
+    assert "nan" not in line and "not measured" in line and "the data sheet's noise" in line, line
+    base = {"car": "sedan", "car_from": "fitted to the log", "quiet": False}
+    words = design_words({**base, "ay_noise": 0.21, "ay_floor": math.nan, "ay_floor_ratio": 40.0}, "kinematic-pif")
+    assert "nan" not in words and "0.21 m/s^2 (40 x the data sheet; its floor not measured" in words, words
+    words = design_words({**base, "ay_noise": 0.1, "ay_floor": 0.085, "ay_floor_ratio": 6.6}, "kinematic-pif")
+    assert words == ("sedan (fitted to the log); ay noise 0.1 m/s^2, floor 0.085 (6.6 x the data sheet): loud, so "
+                     "kinematic-pif is the low-pass blend")

@@ -105,12 +105,21 @@ def design_text(design: dict) -> str:
 
 def design_words(design: dict, estimator: str) -> str:
     """:attr:`LogSummary.design` in words, for the estimator ``estimator`` ('' when empty): the car, the
-    ``ay`` noise and floor, and for an estimator that changes on a quiet log what it is."""
+    ``ay`` noise and floor (m/s^2; what was not measured is said so, and what the design took instead), and for an
+    estimator that changes on a quiet log what it is."""
     if not design:
         return ""
-    words = (f"{design['car']} ({design['car_from']}); ay noise {design['ay_noise']:.2g} m/s^2, "
-             f"floor {design['ay_floor']:.2g} ({design['ay_floor_ratio']:.2g} x the data sheet): "
-             f"{'quiet' if design['quiet'] else 'loud'}")
+    noise, floor, ratio = design["ay_noise"], design["ay_floor"], design["ay_floor_ratio"]
+    if not math.isfinite(noise) and not math.isfinite(floor):
+        heard = ("ay noise not measured (too little driving at 5 m/s or more in the log's first minute): designed "
+                 "for the data sheet's noise, not known to be quiet")
+    elif not math.isfinite(floor):
+        heard = (f"ay noise {noise:.2g} m/s^2 ({ratio:.2g} x the data sheet; its floor not measured: no stretch of "
+                 f"driving long enough): {'quiet' if design['quiet'] else 'loud'}")
+    else:
+        heard = (f"ay noise {noise:.2g} m/s^2, floor {floor:.2g} ({ratio:.2g} x the data sheet): "
+                 f"{'quiet' if design['quiet'] else 'loud'}")
+    words = f"{design['car']} ({design['car_from']}); {heard}"
     if estimator in QUIET_MODELS:
         words += f", so {estimator} is {QUIET_MODELS[estimator] if design['quiet'] else 'the low-pass blend'}"
     return words
