@@ -366,3 +366,23 @@ def test_the_command_line_reads_the_floor_as_the_library_does(tmp_path, s_curves
     assert "quiet, so kinematic-pif is pif-adaptive" in res.stderr
     cli = pq.read_table(tmp_path / "o.parquet").to_pandas()["kinematic-pif.theta"].to_numpy()
     np.testing.assert_allclose(cli, for_log("kinematic-pif", s).run(s).theta, rtol=0, atol=1e-12)
+
+
+def test_the_floor_read_at_10_hz_is_the_same_for_white_noise_and_sees_an_interpolated_log():
+    """road_noise_floor_std(at_rate=10): white noise at 100 Hz reads its own floor (the density is the same at either
+    rate); a 10 Hz noise interpolated onto 100 Hz, which carries almost nothing above 3 Hz, reads far below its own
+    floor at 100 Hz and near it at 10 Hz; at 10 Hz the option changes nothing."""
+    from roadbank.signals import block_means, road_noise_floor_std
+    rng = np.random.default_rng(0)
+    t = np.arange(0.0, 120.0, 0.01)
+    white = 0.03 * rng.standard_normal(t.size)
+    assert road_noise_floor_std(white, t, at_rate=10.0) == pytest.approx(road_noise_floor_std(white, t), rel=0.05)
+    t10 = np.arange(0.0, 120.0, 0.1)
+    x10 = 0.1 * rng.standard_normal(t10.size)
+    assert road_noise_floor_std(x10, t10, at_rate=10.0) == road_noise_floor_std(x10, t10)
+    up = np.interp(t, t10, x10)
+    own, at10 = road_noise_floor_std(x10, t10), road_noise_floor_std(up, t, at_rate=10.0) / np.sqrt(10.0)
+    assert road_noise_floor_std(up, t) / np.sqrt(10.0) < 0.2 * own          # the 100 Hz floor misses it
+    assert 0.5 * own < at10 < 1.2 * own                                      # read at 10 Hz it is there
+    xb, tb, ok = block_means(np.arange(7.0), np.arange(7.0), np.array([1, 1, 1, 0, 1, 1, 1], bool), 3)
+    assert np.array_equal(xb, [1.0, 4.0]) and np.array_equal(tb, [1.0, 4.0]) and np.array_equal(ok, [True, False])

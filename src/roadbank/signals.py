@@ -245,10 +245,13 @@ def road_noise_std(x, t, valid=None, band_hz: float | None = None) -> float:
 NOISE_FLOOR_WINDOW_S = 4.0
 
 
-def road_noise_floor_std(x, t, valid=None, band_hz: float | None = None) -> float:
+def road_noise_floor_std(x, t, valid=None, band_hz: float | None = None, at_rate: float = 0.0) -> float:
     """The noise floor (unit of ``x``) of a channel: :func:`road_noise_std` of half-overlapping windows
     of :data:`NOISE_FLOOR_WINDOW_S` (longer where the log is slow: at least the samples one run needs
-    there), the median of their variances.
+    there), the median of their variances. ``at_rate`` (Hz; 0: the log's own rate): where the log is faster
+    than 1.5 times it, the floor of the channel read at about that rate (:func:`block_means` of ``k`` samples,
+    ``k`` the rate ratio rounded), returned as the standard deviation that white noise of the same density at
+    the log's own rate has (times ``sqrt(k)``): white noise reads the same floor either way.
 
     :func:`road_noise_std` counts everything above the dynamics band over the whole span, the bursts
     too: road vibration that comes and goes is noise a filter must stand, but so is the response of a
@@ -264,6 +267,9 @@ def road_noise_floor_std(x, t, valid=None, band_hz: float | None = None) -> floa
     rate = sample_rate(t)
     if not np.isfinite(rate):
         return float("nan")
+    if at_rate > 0.0 and rate > 1.5 * at_rate:
+        k = int(round(rate / at_rate))
+        return float(np.sqrt(k)) * road_noise_floor_std(*block_means(x, t, ok, k), band_hz=band_hz)
     band = noise_band_hz(rate) if band_hz is None else band_hz
     n = max(int(round(NOISE_FLOOR_WINDOW_S * rate)), MIN_NOISE_TRIPLES,
             int(np.ceil(ROAD_NOISE_MIN_PERIODS * rate / band)))
@@ -271,6 +277,16 @@ def road_noise_floor_std(x, t, valid=None, band_hz: float | None = None) -> floa
            for a in range(0, max(len(x) - n, 0) + 1, max(n // 2, 1))]
     var = [v for v in var if np.isfinite(v)]
     return float(np.sqrt(np.median(var))) if var else float("nan")
+
+
+def block_means(x, t, valid, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(x, t, valid)`` averaged over consecutive blocks of ``k`` samples (the last partial block dropped): a
+    block is valid where all its samples are valid and finite. Units of ``x`` and ``t`` (s) kept."""
+    n = (len(x) // k) * k
+    xb = np.asarray(x[:n], dtype=np.float64).reshape(-1, k)
+    ok = np.asarray((np.asarray(valid[:n], dtype=bool) & np.isfinite(xb.reshape(-1))).reshape(-1, k).all(axis=1))
+    with np.errstate(invalid="ignore"):
+        return xb.mean(axis=1), np.asarray(t[:n], dtype=np.float64).reshape(-1, k).mean(axis=1), ok
 
 
 #: the Huber limit of :func:`diff_noise_std` (squared standard deviations), as the kernels' running estimate's

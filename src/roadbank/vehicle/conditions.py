@@ -74,6 +74,10 @@ def has_design_span(signals, v_min: float = 5.0) -> bool:
 
 #: the road noise a design reads is at most this many times the channel's noise floor (:func:`log_conditions`)
 NOISE_FLOOR_CAP = 3.0
+#: the rate (Hz) at which :func:`log_conditions` reads the ``ay`` noise floor that :func:`is_quiet` compares
+#: (:func:`roadbank.signals.road_noise_floor_std`'s ``at_rate``; 0: the log's own rate). The eighteenth stage of
+#: :mod:`roadbank.tuning.real` chooses it
+QUIET_FLOOR_RATE = 0.0
 
 
 def _at_most(noise: float, floor: float) -> float:
@@ -91,7 +95,8 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     windows: a few glitches in the first minute, one ``ay`` sample of 2.5 g, would otherwise set the design for
     the whole log; on every log the project has, real or simulated, the road noise is within 1.7 times the
     floor, so the cap changes none of them), the noise floor of its ``ay``
-    (:func:`roadbank.signals.road_noise_floor_std`, what :func:`is_quiet` reads), and the noise that the first
+    (:func:`roadbank.signals.road_noise_floor_std`, read at :data:`QUIET_FLOOR_RATE`: what :func:`is_quiet`
+    reads), and the noise that the first
     differences of the kinematic acceleration ``ay - vx r`` read (:func:`roadbank.signals.diff_noise_std`: what a
     limited low-pass's running noise estimate is relative to, ``noise_ref``). Measured on the log's first
     :data:`DESIGN_SPAN_S` of driving (:func:`design_span`), so that a streamed log gets the same design whatever
@@ -105,6 +110,8 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
         moving = vx >= v_min
     ay_floor = road_noise_floor_std(signals.ay, signals.t, moving)
     ay_noise = _at_most(road_noise_std(signals.ay, signals.t, moving), ay_floor)
+    if QUIET_FLOOR_RATE > 0.0:          # the floor the quiet decision reads; the cap above keeps the log's own
+        ay_floor = road_noise_floor_std(signals.ay, signals.t, moving, at_rate=QUIET_FLOOR_RATE)
     r_noise = _at_most(road_noise_std(signals.r, signals.t, moving), road_noise_floor_std(signals.r, signals.t, moving))
     with np.errstate(invalid="ignore"):
         diff_noise = diff_noise_std(np.asarray(signals.ay, np.float64) - vx * np.asarray(signals.r, np.float64), moving)
