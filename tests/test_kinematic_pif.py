@@ -528,3 +528,22 @@ def test_the_gate_filter_is_what_the_rule_keeps():
     assert chosen == GATE_TFS[0]
     assert abs(real[0.2] - real[GATE_TFS[0]]) <= TIE_DEG
     assert med[0.2] > med[GATE_TFS[0]] + 0.02
+
+
+@pytest.mark.slow
+def test_the_quiet_floor_rate_is_what_the_rule_keeps():
+    """The eighteenth stage (tuning.real.choose_quiet_floor_rate): reading the floor at 10 Hz calls no interpolated
+    100 Hz KITTI training drive quiet and lowers the real median by far, but calls loud most simulated drives with the
+    data sheet's sensors, whose manoeuvres fill the same band; the mean guard keeps the log's own rate."""
+    from roadbank.tuning.real import (QUIET_FLOOR_RATES, choose_quiet_floor_rate, simulated_sets, training_logs,
+                                      upsampled_logs)
+
+    logs = training_logs(DATA)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, real, sim = choose_quiet_floor_rate(logs, upsampled_logs(logs), simulated_sets())
+    shipped, at10 = QUIET_FLOOR_RATES
+    assert chosen == shipped
+    assert real[shipped][:8] == real[at10][:8]                                   # 10 Hz logs: the same
+    assert np.median(real[at10]) < np.median(real[shipped]) - 0.05
+    assert np.mean(np.concatenate(sim[at10])) > np.mean(np.concatenate(sim[shipped])) + 0.02
