@@ -39,23 +39,11 @@ def not_a_log(path: Path, fmt: str | None) -> str | None:
     return None
 
 
-def expand_kitti(paths: list[Path]) -> list[Path]:
-    """Each path, with a folder holding several KITTI raw drives replaced by its drives (as
-    ``roadbank validate kitti`` takes them), broken ones too (an ``oxts/`` folder without
-    ``timestamps.txt`` or ``data/``: each is then reported, not passed over)."""
-    from ..io.kitti import find_oxts_dirs
-
-    out = []
-    for p in paths:
-        found = find_oxts_dirs(p, broken=True) if p.is_dir() else []
-        out += [d.parent if d.name == "oxts" else d for d in found] if len(found) > 1 else [p]
-    return sorted(dict.fromkeys(out))
-
-
 def channel_map_and_logs(channels, logs, fmt: str | None = None):
     """``(ChannelMap or None, [Path])`` from ``--channels`` and the LOGS arguments (files, directories, globs).
 
-    A folder of KITTI drives gives its drives. Files that are not logs of ``fmt`` (or of a format
+    A folder gives every log it holds: each KITTI drive, comma2k19 segment and log file
+    (:func:`roadbank.fleet.expand_logs`, the one rule). Files that are not logs of ``fmt`` (or of a format
     known from their suffix) -- a README.md a glob picked up -- are skipped, each with a one-line
     message. A bad channel map or no log found is a one-line error (exit code 1), never a traceback.
     """
@@ -69,7 +57,7 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
         except LogError as exc:
             click.echo(f"error: {exc}", err=True)
             sys.exit(1)
-    paths = expand_kitti(expand_logs(logs))
+    paths = expand_logs(logs)
     kept = []
     for p in paths:
         why = not_a_log(p, fmt)

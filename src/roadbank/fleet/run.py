@@ -30,7 +30,7 @@ import numpy as np
 from ..defaults import ESTIMATOR as DEFAULT
 from ..io import detect_format, read_channel_map
 from ..io.errors import LogError
-from ..io.kitti import broken_drive, drive_name, find_oxts_dirs
+from ..io.kitti import broken_drive, drive_name, find_oxts_dirs, is_oxts_dir
 from ..io.stream import stream_log
 from ..io.writers import output_problem, write_error
 from .cluster import BATCH_BYTES, BATCH_MAX_LOGS, BATCHES_PER_WORKER, batches  # noqa: F401  (public here too)
@@ -43,41 +43,58 @@ LOG_SUFFIXES = {".csv", ".parquet", ".pq", ".mf4", ".mdf", ".blf", ".asc", ".trc
 
 
 def _is_log_dir(p: Path) -> bool:
-    """A directory that is itself one log (comma2k19 segment, ROS 2 bag, KITTI drive)."""
+    """A directory that is itself one log: a comma2k19 segment, a ROS 2 bag, a KITTI drive folder or its
+    ``oxts/`` folder. A folder that holds drives is not one: its logs are listed (:func:`_logs_in`)."""
     try:
-        detect_format(p)
-        return True
+        fmt = detect_format(p)
     except LogError:
         return False
+    return fmt != "kitti-oxts" or find_oxts_dirs(p) in ([p], [p / "oxts"])
+
+
+def _is_log_file(p: Path) -> bool:
+    """A file a folder contributes: a log suffix (:data:`LOG_SUFFIXES`), not an output of ``estimate``."""
+    return (p.suffix.lower() in LOG_SUFFIXES and not p.name.endswith((".bank.csv", ".bank.parquet"))
+            and p.name != SUMMARY)
+
+
+def _logs_in(d: Path) -> list[Path]:
+    """Every log the directory ``d`` holds, ``d`` not being one log itself: its log files, its log
+    sub-directories (comma2k19 segments, ROS 2 bags, KITTI drives; a drive short of a file too, to be
+    reported) and the logs of its other sub-directories, recursively.
+
+    A folder whose only log is one readable KITTI drive (a KITTI date folder) is that log: ``[d]``,
+    named after the drive (:func:`output_names`), as :func:`~roadbank.io.load_log` reads it.
+    """
+    out: list[Path] = []
+    for c in sorted(d.iterdir()):
+        if c.is_dir():
+            out += [c] if _is_log_dir(c) or broken_drive(c) else _logs_in(c)
+        elif _is_log_file(c):
+            out.append(c)
+    if len(out) == 1 and out[0].parent == d and is_oxts_dir(out[0] / "oxts"):
+        return [d]
+    return out
 
 
 def expand_logs(args) -> list[Path]:
     """Log paths from command-line arguments: files, log directories, directories of logs, glob patterns.
 
-    A directory that is not itself a log (comma2k19 segment, ROS 2 bag, KITTI
-    drive) contributes its files with a log suffix (:data:`LOG_SUFFIXES`) and
-    its log sub-directories, recursively; a KITTI drive short of a file
-    (:func:`~roadbank.io.kitti.broken_drive`) counts as a log, to be reported.
-    A pattern with ``*``, ``?`` or ``[`` that is not an existing path is
-    expanded (``**`` recursive). Sorted, unique.
+    A directory that is not itself a log (comma2k19 segment, ROS 2 bag, KITTI drive or its ``oxts/``
+    folder) gives every log it holds (:func:`_logs_in`): its files with a log suffix
+    (:data:`LOG_SUFFIXES`), each of its KITTI drives, comma2k19 segments and ROS 2 bags, recursively,
+    so a drive beside other logs never hides them; a folder holding one KITTI drive and no other log
+    stays that one log. A KITTI drive short of a file (:func:`~roadbank.io.kitti.broken_drive`)
+    counts as a log, to be reported. A pattern with ``*``, ``?`` or ``[`` that is not an existing
+    path is expanded (``**`` recursive), each directory it matches as if given. Sorted, unique.
     """
     out: list[Path] = []
     for a in args:
         p = Path(a)
-        if not p.exists() and any(ch in str(a) for ch in "*?["):
-            out += [Path(x) for x in sorted(glob.glob(str(a), recursive=True))]
-        elif p.is_dir() and not _is_log_dir(p) and not broken_drive(p):
-            stack = [p]
-            while stack:
-                d = stack.pop()
-                for c in sorted(d.iterdir()):
-                    if c.is_dir():
-                        (out.append(c) if _is_log_dir(c) or broken_drive(c) else stack.append(c))
-                    elif c.suffix.lower() in LOG_SUFFIXES and not c.name.endswith((".bank.csv", ".bank.parquet")) \
-                            and c.name != SUMMARY:
-                        out.append(c)
-        else:
-            out.append(p)
+        found = ([Path(x) for x in sorted(glob.glob(str(a), recursive=True))]
+                 if not p.exists() and any(ch in str(a) for ch in "*?[") else [p])
+        for q in found:
+            out += _logs_in(q) if q.is_dir() and not _is_log_dir(q) and not broken_drive(q) else [q]
     return sorted(dict.fromkeys(out))
 
 

@@ -95,8 +95,12 @@ def _text_floats(path, column: str, label: str, values: list[str], row_label: st
         return _parse_floats(path, column, label, values, row_label, rownums)
 
 
-def _plain_csv(p: Path, lines: list[str], delim: str, wanted: dict[str, str], prefix: str | None) -> RawTable | None:
+def _plain_csv(p: Path, lines: list[str], delim: str, wanted: dict[str, str], prefix: str | None,
+               first: int = 1) -> RawTable | None:
     """:func:`read_csv`'s result for a plain file, parsed by numpy in C; None for any other file.
+
+    ``lines`` start with the header, which is line ``first`` of the file (after the comment lines
+    before it, :func:`_header_index`).
 
     Plain: no quotes after the header, no blank line, every line with the header's number of
     fields, distinct names, at least one data row, and every field of the columns read a number
@@ -121,11 +125,37 @@ def _plain_csv(p: Path, lines: list[str], delim: str, wanted: dict[str, str], pr
     if values.shape[0] != len(lines) - 1:
         return None
     return RawTable(header, {c: np.ascontiguousarray(values[:, k]) for k, c in enumerate(cols)},
-                    row_label="line", rownums=list(range(2, len(lines) + 1)))
+                    row_label="line", rownums=list(range(first + 1, first + len(lines))))
+
+
+def _is_comment(line: str) -> bool:
+    """A comment line: ``#`` after optional whitespace or byte-order mark."""
+    return line.lstrip(" \t\ufeff").startswith("#")
+
+
+def _header_index(lines: list[str]) -> int:
+    """Index in ``lines`` of a CSV's header: the first line neither blank nor a comment (:func:`_is_comment`);
+    ``len(lines)`` if there is none."""
+    for i, line in enumerate(lines):
+        if line.strip(" \t\ufeff") and not _is_comment(line):
+            return i
+    return len(lines)
+
+
+def _is_number(field: str) -> bool:
+    """True if the text ``field`` reads as a number (as ``float()`` reads it)."""
+    try:
+        float(field)
+    except ValueError:
+        return False
+    return True
 
 
 def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTable:
     """Read a delimited text file with a header line.
+
+    Lines before the header that are blank or start with ``#`` (after optional whitespace or a
+    byte-order mark) are comments, skipped; messages and row numbers count every line of the file.
 
     Parameters
     ----------
@@ -148,19 +178,29 @@ def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTabl
     if not text.strip():
         raise LogError(f"{p}: file is empty")
     lines = text.splitlines()
+    skip = _header_index(lines)         # comment lines before the header
+    if skip == len(lines):
+        raise LogError(f"{p}: no header line (every line is blank or a comment starting with '#')")
+    lines = lines[skip:]
     header_line = lines[0]
     delim = max((",", ";", "\t"), key=header_line.count)
-    fast = _plain_csv(p, lines, delim, wanted, prefix)
+    if skip and all(_is_number(f) for f in header_line.split(delim)):
+        raise LogError(f"{p}: no header line: line {skip + 1} ({header_line.strip()[:40]!r}) holds numbers, not "
+                       "column names (the lines before it are blank or comments starting with '#')")
+    fast = _plain_csv(p, lines, delim, wanted, prefix, first=skip + 1)
     if fast is not None:
         return fast
     reader = csv.reader(lines, delimiter=delim)
     try:
         header = [h.strip() for h in next(reader)]
         rows = []
-        for lineno, row in enumerate(reader, start=2):
+        for lineno, row in enumerate(reader, start=skip + 2):
             if not row or not "".join(row).strip():
                 continue
             if len(row) != len(header):
+                if _is_comment(row[0]):
+                    raise LogError(f"{p}: line {lineno} is a comment ({delim.join(row).strip()[:40]!r}): comment "
+                                   "lines starting with '#' are read only before the header")
                 raise LogError(f"{p}: line {lineno} has {len(row)} field(s) but the header has "
                                f"{len(header)} (truncated or corrupt file)")
             rows.append((lineno, row))
