@@ -6,12 +6,15 @@ segments, whose sources bring their own channel map) comes here from its source
 
 1. **channel selection**: the roles the map names and the file has (:func:`select_roles`);
 2. **time stamps**: the table clock, or each channel's own, repaired chunk by chunk
-   (:class:`~roadbank.io.repair.ChunkRepair`); samples next to a repair are set to NaN;
+   (:class:`~roadbank.io.repair.ChunkRepair`); samples next to a repair are set to NaN. A table's rows
+   of one instant that carry different channels (a long table) are merged first
+   (:func:`~roadbank.io.repair.instants`): one instant, not a repeated stamp;
 3. **SI and ISO 8855**: each channel's unit and sign convention (:meth:`ChannelMap.to_si_iso`; a time column
    whose type carries its own unit is in s whatever the map declares: :func:`own_time_unit`);
 4. **plausibility** of each channel's values in its declared unit
    (:func:`~roadbank.io.channels.check_plausible`);
-5. **resampling** onto one time base (:class:`~roadbank.io.resample.StreamResampler`);
+5. **resampling** onto one time base (:class:`~roadbank.io.resample.StreamResampler`; a channel sampled
+   slower than ``max_gap_s`` is bridged (the speed) or warned about: :func:`rate_notes`);
 6. **the log**: :class:`~roadbank.Signals`, reference roll, truth, GNSS position, the channels a
    source derives itself (``carried``: KITTI's leftward speed, a data set's position in degrees; into
    :attr:`Log.extra` as they are), the cross-channel consistency check
@@ -48,8 +51,8 @@ from .limits import Dropouts
 from .consistency import MIN_SAMPLES, check_balance, gentle_sums, gentle_warnings, turning, usable
 from .errors import LogError, channel_error, channel_text
 from .geodesy import ecef_to_latlon
-from .repair import FLAGGED_ROLES, ChunkRepair
-from .resample import StreamResampler, clean_series
+from .repair import FLAGGED_ROLES, ChunkRepair, instants, interleaved_period
+from .resample import BRIDGE_PERIODS, StreamResampler, clean_series
 from .survey import auto_uses_clock
 from .timebase import add_counts
 from .types import Log
@@ -403,7 +406,9 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
         if last:
             for k in rs.done:
                 rs.finish(k)
-        yield from logs.add(_emit(p, rs), fix.take_counts())
+        out = _emit(p, rs)
+        logs.warnings += rate_notes(p, rs.take_notes(), {r: cmap.channels[r].column for r in roles}, cmap.max_gap_s)
+        yield from logs.add(out, fix.take_counts())
     logs.warnings += drops.warnings()
     yield from logs.finish({})
 
@@ -411,18 +416,24 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
 def _table_rows(src, cmap, roles, wanted, prefix):
     """The table's chunks with the clock repaired: ``(last, t, columns, role values, warnings, repair)``
     per chunk; ``t`` (s) and the role values (SI, ISO 8855, NaN where flagged by the repair) row for
-    row, the columns as stored."""
+    row, the columns as stored.
+
+    Rows that share a stamp and carry different channels (a long table) are first made one row
+    (:func:`~roadbank.io.repair.instants`), so each channel keeps its samples; the repair then sees a
+    stamp repeated for the same channel only. Gaps are counted against the fastest channel's period where
+    the rows interleave channels at different stamps (:func:`~roadbank.io.repair.interleaved_period`)."""
     tspec = cmap.channels["time"]
     fix = ChunkRepair(src.path, tspec.column, "time", src.row_label)
     flag_cols = [cmap.channels[r].column for r in FLAGGED_ROLES if r in cmap.channels]
-    for chunk in src.chunks(wanted, prefix):
-        t, cols, flagged, w = fix.feed(cmap.to_si_iso("time", chunk.data[tspec.column]), chunk.data,
-                                       chunk.rownums, chunk.last)
+    role_cols = [cmap.channels[r].column for r in roles]
+    for last, t, data, rownums in instants(src.chunks(wanted, prefix), tspec.column,
+                                           lambda a: cmap.to_si_iso("time", a)):
+        t, cols, flagged, w = fix.feed(t, data, rownums, last, interleaved_period(t, data, role_cols))
         for c in flag_cols:          # every column follows the repaired clock; flagged rows become NaN
             if c in cols:
                 cols[c][flagged] = np.nan
         vals = {r: cmap.to_si_iso(r, cols[cmap.channels[r].column]) for r in roles}
-        yield chunk.last, t, cols, vals, w, fix
+        yield last, t, cols, vals, w, fix
 
 
 def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
@@ -481,9 +492,29 @@ def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
                 if r in roles and not finite[r]:
                     raise channel_error(p, r, c, "no finite values")
                 rs.finish(r)
-        yield from logs.add(_emit(p, rs), counts())
+        out = _emit(p, rs)
+        logs.warnings += rate_notes(p, rs.take_notes(), col, cmap.max_gap_s)
+        yield from logs.add(out, counts())
     logs.warnings += drops.warnings()
     yield from logs.finish(counts())
+
+
+def rate_notes(p, notes, columns: dict, max_gap_s: float) -> list[str]:
+    """The warnings for channels sampled slower than the resampler's ``max_gap_s`` (s): ``notes`` are
+    :attr:`StreamResampler.notes` (role, sample period, bridged gap or None; s), ``columns`` role -> column."""
+    out = []
+    for role, period, bridged in notes:
+        head = (f"sampled every {period:.3g} s (the median step of its first samples), longer than the gap "
+                f"the resampler interpolates across (resample.max_gap_s = {max_gap_s:g} s)")
+        if bridged is not None:
+            text = (f"{head}: interpolated across its own steps up to {bridged:.3g} s ({BRIDGE_PERIODS:g} of its "
+                    "sample periods: a speed changes little in that time), a longer step stays a gap (NaN)")
+        else:
+            text = (f"{head}: the base times between its samples are NaN, not estimated -- to interpolate across "
+                    f"them, set max_gap_s above {period:.3g} s under [resample] in a channel map (--channels "
+                    f"map.toml, `roadbank channels {Path(p).name} -o map.toml` writes one)")
+        out.append(channel_text(p, role, columns.get(role), text))
+    return out
 
 
 def _emit(p, rs: StreamResampler):

@@ -3,9 +3,18 @@ log, chunk by chunk, with the messages that name the file, the channel and the f
 
 A log read whole is one chunk; a streamed log gives its chunks in order and the repair of each
 continues the one before (:class:`ChunkRepair`), so both give the same samples and counts.
+
+A table's clock is repaired once for all its columns. Before that, the rows of one instant are made
+one row (:func:`one_instant`, :func:`instants`): a "long" table -- each channel, or each bus message,
+on its own rows, blank elsewhere -- writes two channels sampled at the same instant on two rows with
+the same stamp, which are one sample of each channel, not a repeated stamp. A stamp repeated for the
+same channel stays a duplicate. In such a table the step between rows is no channel's sample period,
+so its gaps are counted against the period of its fastest channel (:func:`interleaved_period`).
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Iterator
 
 import numpy as np
 
@@ -20,18 +29,20 @@ HOLD_ROWS = 4
 
 
 def repair_stamps(source, column: str, t: np.ndarray, label: str = "time", after: float | None = None,
-                  rownums=None, row_label: str = "sample") -> tuple[TimeRepair, list[str]]:
+                  rownums=None, row_label: str = "sample",
+                  min_period: float | None = None) -> tuple[TimeRepair, list[str]]:
     """:func:`~roadbank.io.timebase.repair_time` of one channel's stamps ``t`` (s), with its message.
 
     Returns the repair and a warning naming the file, the channel, what was repaired and the first
     line / row / sample it touched (an empty list when nothing was). ``rownums`` number the samples
-    in messages (default: 0, 1, ...). Raises :class:`LogError` when the stamps cannot be repaired.
+    in messages (default: 0, 1, ...); ``after`` and ``min_period`` (s) as in
+    :func:`~roadbank.io.timebase.repair_time`. Raises :class:`LogError` when the stamps cannot be repaired.
     """
     def row(i: int) -> str:
         return f"{row_label} {rownums[i] if rownums is not None else i}"
 
     try:
-        rep = repair_time(t, after=after)
+        rep = repair_time(t, after=after, min_period=min_period)
     except UnrepairableTime as exc:
         text = str(exc)
         if exc.at is not None:                   # name the sample by its row
@@ -93,10 +104,12 @@ class ChunkRepair:
         self.rows = 0            # rows fed, and rows kept, so far
         self.kept = 0
 
-    def feed(self, t: np.ndarray, cols: dict, rownums, last: bool):
+    def feed(self, t: np.ndarray, cols: dict, rownums, last: bool, min_period: float | None = None):
         """``(t, cols, flagged, warnings)`` of the rows that are final; ``last`` for the final chunk.
 
-        ``rownums`` (one per row) number the rows in messages.
+        ``t`` in s; ``rownums`` (one per row) number the rows in messages; ``min_period`` (s): a sample
+        period longer than the stamps' median step, for counting gaps
+        (:func:`~roadbank.io.timebase.count_gaps`; :func:`interleaved_period`).
         """
         rownums = np.asarray(rownums, dtype=np.int64)
         if self.held is not None:
@@ -107,7 +120,7 @@ class ChunkRepair:
             self.held = None
         n = len(t)
         rep, warns = repair_stamps(self.source, self.column, t, label=self.label, after=self.after,
-                                   rownums=rownums, row_label=self.row_label)
+                                   rownums=rownums, row_label=self.row_label, min_period=min_period)
         if self.carry and len(rep.keep):     # as the whole file's repair: the sample after a dropped one
             rep.flagged[0] = True
         self.carry = False
@@ -118,7 +131,7 @@ class ChunkRepair:
             late = np.flatnonzero(rep.keep >= cut)
             c0 = min(cut, int(rep.keep[late[0]:].min())) if len(late) else cut
             self.carry = bool(0 < c0 < n and rep.kind[c0 - 1] in (MISSING, OUT_OF_ORDER))
-            rep = rep.head(c0, t, self.after)
+            rep = rep.head(c0, t, self.after, min_period)
             if c0 < n:
                 self.held = (rownums[c0:], t[c0:], {c: a[c0:] for c, a in cols.items()})
         self.counts = add_counts(self.counts, repair_counts(rep))
@@ -163,3 +176,118 @@ def _odd_tail(t: np.ndarray, rep) -> bool:
     d = d[np.isfinite(d)]
     # 1.5 periods: the later stamp of a pair swapped across the boundary makes a double step
     return bool(len(d) and (d[-1] <= 0 or d[-1] > 1.5 * float(np.median(d))))
+
+
+def one_instant(t: np.ndarray, cols: dict, rownums, skip: str) -> tuple[np.ndarray, dict, np.ndarray]:
+    """A table's neighbouring rows that share a time stamp and carry different channels, as one row.
+
+    Parameters
+    ----------
+    t : array (s)
+        The table's stamps, row for row.
+    cols : dict column -> array
+        The columns as stored, row for row; ``skip`` (the time column) is carried along.
+    rownums : int array
+        The rows' numbers in messages; a merged row keeps its first row's.
+    skip : str
+        The time column (every row carries it).
+
+    Returns
+    -------
+    (t, cols, rownums)
+        The rows, merged: a row goes into the first row of its stamp that carries none of its columns
+        (finite values); each column of a merged row is its value in the row where it is finite. A row
+        carrying a column that every earlier row of its stamp carries too stays a row of its own: a
+        stamp repeated for the same channel, which the time-stamp repair drops and counts as a
+        duplicate. A row with every column blank adds nothing and is merged. The inputs themselves
+        when no two neighbouring rows share a stamp.
+    """
+    n = len(t)
+    same = t[1:] == t[:-1]
+    if n < 2 or not same.any():
+        return t, cols, np.asarray(rownums)
+    names = [c for c in cols if c != skip]
+    fin = np.zeros((n, len(names)), dtype=bool)
+    for j, c in enumerate(names):
+        fin[:, j] = np.isfinite(cols[c])
+    start = np.concatenate(([True], ~same))
+    starts = np.flatnonzero(start)
+    ends = np.append(starts[1:], n)
+    group = np.cumsum(start) - 1
+    slot = np.zeros(n, dtype=np.int64)               # the merged row of its stamp that each row goes into
+    n_slots = np.ones(len(starts), dtype=np.int64)
+    per_stamp = np.add.reduceat(fin.astype(np.int64), starts, axis=0)     # rows carrying each column, per stamp
+    clash = np.any(per_stamp > 1, axis=1)
+    for g in np.flatnonzero(clash).tolist():        # a column on two rows of one stamp: first fit, row by row
+        taken: list[np.ndarray] = []
+        for i in range(int(starts[g]), int(ends[g])):
+            k = next((k for k, used in enumerate(taken) if not (used & fin[i]).any()), len(taken))
+            if k == len(taken):
+                taken.append(fin[i].copy())
+            else:
+                taken[k] |= fin[i]
+            slot[i] = k
+        n_slots[g] = len(taken)
+    out = np.concatenate(([0], np.cumsum(n_slots)[:-1]))[group] + slot
+    first = np.full(int(n_slots.sum()), n, dtype=np.int64)
+    np.minimum.at(first, out, np.arange(n))
+    merged = {}
+    for c, a in cols.items():
+        v = a[first]
+        if c != skip:
+            f = fin[:, names.index(c)]
+            v[out[f]] = a[f]
+        merged[c] = v
+    return t[first], merged, np.asarray(rownums)[first]
+
+
+def instants(chunks: Iterable, column: str,
+             to_s: Callable[[np.ndarray], np.ndarray]) -> Iterator[tuple[bool, np.ndarray, dict, np.ndarray]]:
+    """A table source's chunks (:class:`~roadbank.io.types.RawChunk`) with the rows of one instant merged
+    (:func:`one_instant`): ``(last, t, columns, rownums)`` per chunk, ``t`` (s) the time ``column``
+    converted by ``to_s``.
+
+    A chunk is given when the next one has been read: the rows at the start of the next that share the
+    stamp the chunk ends on are moved into it, so an instant that a chunk boundary splits is merged as
+    in the whole file. A table without shared stamps keeps its chunks as they are.
+    """
+    held: tuple[np.ndarray, dict, np.ndarray] | None = None     # (t, columns, rownums) of the chunk before
+    for chunk in chunks:
+        t, cols, rows = to_s(chunk.data[column]), chunk.data, np.asarray(chunk.rownums)
+        if held is not None:
+            ht, hc, hr = held
+            eq = t == ht[-1] if len(ht) else np.zeros(len(t), dtype=bool)
+            k = len(t) if eq.all() else int(np.argmin(eq))
+            if k:
+                held = (np.concatenate([ht, t[:k]]), {c: np.concatenate([a, cols[c][:k]]) for c, a in hc.items()},
+                        np.concatenate([hr, rows[:k]]))
+                t, cols, rows = t[k:], {c: a[k:] for c, a in cols.items()}, rows[k:]
+            if not len(t) and not chunk.last:     # nothing after that stamp in this chunk: read on
+                continue
+            yield (False, *one_instant(held[0], held[1], held[2], column))
+        held = (t, cols, rows)
+        if chunk.last:
+            yield (True, *one_instant(t, cols, rows, column))
+            return
+
+
+def interleaved_period(t: np.ndarray, cols: dict, columns) -> float | None:
+    """The sample period (s) of the fastest of ``columns`` on a table clock ``t`` (s) whose rows interleave
+    the channels' samples: the shortest median step between a column's finite values, when it is more
+    than 1 % longer than the clock's median step (the rows do not each carry every channel: a long table,
+    channels at different stamps); None otherwise (a channel comes at the clock's rate)."""
+    ok = np.isfinite(t)
+    d = np.diff(t[ok])
+    d = d[d > 0]
+    if not len(d):
+        return None
+    periods = []
+    for c in columns:
+        if c in cols:
+            dc = np.diff(t[ok & np.isfinite(cols[c])])
+            dc = dc[dc > 0]
+            if len(dc):
+                periods.append(float(np.median(dc)))
+    if not periods or min(periods) <= 1.01 * float(np.median(d)):
+        return None
+    return min(periods)

@@ -23,6 +23,17 @@ Rules (also in docs/io.md):
   the base never leaves the overlap. Where the two valid samples bracketing a
   base time are more than ``max_gap_s`` (default 0.5 s) apart, the result is
   NaN rather than a line drawn across the gap.
+* A channel sampled slower than ``max_gap_s`` (its **sample period**: the median
+  step of its first :data:`PERIOD_STEPS` valid samples) would be NaN between all
+  its samples. The speed (:data:`SMOOTH_ROLES`), when its period is at most
+  :data:`BRIDGE_MAX_PERIOD_S` (a GNSS speed at 0.5-2 Hz), is interpolated across
+  its steps up to :data:`BRIDGE_PERIODS` of its periods instead -- its own
+  sampling, never a lost sample: a car's speed changes little in 2 s (at a
+  change of acceleration of 1 m/s^3 a straight line between samples 1 s apart is
+  off by at most 1/8 m/s, which moves the bank by 0.07 deg at a yaw rate of
+  0.1 rad/s), unlike ay and the yaw rate, which carry the turns and the road
+  and are never bridged. Either way :attr:`StreamResampler.notes` says so, and
+  the reader warns naming the channel.
 """
 
 from __future__ import annotations
@@ -98,6 +109,25 @@ def interpolate(t: np.ndarray, v: np.ndarray, t_new: np.ndarray, max_gap_s: floa
     return out
 
 
+#: roles interpolated across their own sample steps when they are sampled slower than ``max_gap_s``
+SMOOTH_ROLES = ("speed",)
+#: such a role is interpolated across steps up to this many of its sample periods (jitter, not a lost sample)
+BRIDGE_PERIODS = 1.5
+#: ... when its sample period (s) is at most this long (a speed from GNSS fixes at 0.5 Hz or faster)
+BRIDGE_MAX_PERIOD_S = 2.0
+#: valid samples' steps at a channel's start whose median is its sample period
+PERIOD_STEPS = 20
+
+
+def bridge_gap(role: str, period: float, max_gap_s: float) -> float | None:
+    """The gap (s) role ``role`` is interpolated across when its own sample period ``period`` (s) is
+    longer than ``max_gap_s`` (s): :data:`BRIDGE_PERIODS` periods for a role of :data:`SMOOTH_ROLES`
+    sampled at least every :data:`BRIDGE_MAX_PERIOD_S`; None (``max_gap_s`` stays) otherwise."""
+    if role in SMOOTH_ROLES and max_gap_s < period <= BRIDGE_MAX_PERIOD_S:
+        return BRIDGE_PERIODS * period
+    return None
+
+
 def _median_period(t: np.ndarray) -> float:
     d = np.diff(t)
     return float(np.median(d)) if len(d) else np.inf
@@ -161,6 +191,12 @@ class StreamResampler:
     Feed chunks with :meth:`add` (any channel, any span, time-ordered per channel), mark exhausted
     channels with :meth:`finish`, collect output with :meth:`emit` (dict name -> array on ``"t"``).
     Memory: each channel keeps only the samples after the last emitted base time (plus one before it).
+
+    Each interpolated role's sample period is the median step of its first :data:`PERIOD_STEPS` valid
+    samples (all of them if it has fewer), whole or streamed alike; a role sampled slower than
+    ``max_gap_s`` gets the gap of :func:`bridge_gap` (the speed) or keeps ``max_gap_s``, and
+    :attr:`notes` gets ``(role, period, bridged gap or None)`` (s) for the reader's warning. Until a role's
+    period is known, nothing is emitted across a step of it longer than ``max_gap_s``.
     """
 
     def __init__(self, roles, aux=None, time_base="uniform", rate_hz=100.0, max_gap_s=0.5, raw=()):
@@ -177,6 +213,12 @@ class StreamResampler:
         self.last = {k: None for k in names}
         self.done = {k: False for k in names}
         self.clock = np.zeros(0)   # "clock": table times not emitted yet
+        self.gap = {k: self.aux.get(k, self.max_gap) for k in names}   # the longest step interpolated across (s)
+        #: role -> its first valid samples' steps (s), until its period is decided
+        self.steps: dict[str, list[np.ndarray]] = {k: [] for k in self.roles if not self._as_is(k)}
+        self.long_step = dict.fromkeys(self.steps, False)       # a step above max_gap_s seen before the period
+        #: (role, sample period, bridged gap or None), s, for roles sampled slower than max_gap_s
+        self.notes: list[tuple[str, float, float | None]] = []
         self.t0 = None       # grid start: latest first valid sample of the span roles
         self.k_next = 0      # next uniform grid index
         self.t_next = -np.inf   # role time base: next time not emitted yet
@@ -206,14 +248,47 @@ class StreamResampler:
             t, v = t[keep], v[keep]
         if len(t) == 0:
             return
+        if name in self.steps:
+            self._steps(name, t)
         if self.first[name] is None:
             self.first[name] = t[0]
         self.last[name] = t[-1]
         self.t[name] = np.concatenate([self.t[name], t])
         self.v[name] = np.concatenate([self.v[name], v])
 
+    def _steps(self, name: str, t: np.ndarray) -> None:
+        """Gather role ``name``'s steps from its new valid samples ``t`` (s) until :data:`PERIOD_STEPS`."""
+        prev = self.last[name]
+        d = np.diff(t if prev is None else np.concatenate(([prev], t)))
+        have = sum(len(x) for x in self.steps[name])
+        d = d[:PERIOD_STEPS - have]
+        self.steps[name].append(d)
+        self.long_step[name] = self.long_step[name] or bool(np.any(d > self.max_gap))
+        if have + len(d) >= PERIOD_STEPS:
+            self._decide(name)
+
+    def _decide(self, name: str) -> None:
+        """Role ``name``'s sample period from the steps gathered, and its gap."""
+        d = np.concatenate(self.steps.pop(name))
+        self.long_step.pop(name)
+        if not len(d):
+            return
+        period = float(np.median(d))
+        if period > self.max_gap:
+            bridged = bridge_gap(name, period, self.max_gap)
+            if bridged is not None:
+                self.gap[name] = bridged
+            self.notes.append((name, period, bridged))
+
     def finish(self, name: str) -> None:
         self.done[name] = True
+        if name in self.steps:
+            self._decide(name)
+
+    def take_notes(self) -> list[tuple[str, float, float | None]]:
+        """The :attr:`notes` added since the last call (role, sample period, bridged gap or None; s)."""
+        notes, self.notes = self.notes, []
+        return notes
 
     def buffered(self) -> int:
         """Samples held in the buffers (for memory checks)."""
@@ -250,6 +325,8 @@ class StreamResampler:
 
     def emit(self) -> dict[str, np.ndarray] | None:
         """Base samples that no later chunk can change; None if there are none yet."""
+        if any(self.long_step.values()):     # wait for that role's period: is the step bridged?
+            return None
         if self.time_base == "clock":
             return self._emit_clock()
         for k in self.roles:
@@ -284,7 +361,7 @@ class StreamResampler:
         if self._as_is(k):
             out = np.interp(grid, self.t[k], self.v[k])
         else:
-            out = interpolate(self.t[k], self.v[k], grid, self.aux.get(k, self.max_gap))
+            out = interpolate(self.t[k], self.v[k], grid, self.gap[k])
         i = max(int(np.searchsorted(self.t[k], grid[-1], side="right")) - 1, 0)
         self.t[k], self.v[k] = self.t[k][i:], self.v[k][i:]
         return out

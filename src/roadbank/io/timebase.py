@@ -11,7 +11,9 @@ it can place on a strictly increasing time base and says what it did:
   the fewest samples that leave an increasing time base are dropped (the longest increasing run
   of stamps is kept);
 * a forward jump (a **gap** longer than :data:`GAP_PERIODS` sample periods) -- kept as it is (the
-  estimators re-initialise after a long gap); only counted;
+  estimators re-initialise after a long gap); only counted. The sample period is the median step of
+  the stamps, or a longer one the caller knows (``min_period``: a table whose rows interleave the
+  samples of channels at different stamps, where the step between rows is no channel's period);
 * a **clock restart** -- the stamps go back by more than :data:`GAP_PERIODS` periods and no drop
   of at most that many samples mends them (the clock restarted, e.g. at 0, or stepped back and runs
   on from there; a log written twice): any increasing run would splice two parts of the drive and
@@ -98,25 +100,30 @@ class TimeRepair:
         """True if a sample was dropped, reordered or flagged (gaps alone change nothing)."""
         return bool(np.any(self.kind != KEPT) or self.flagged.any())
 
-    def head(self, n: int, t, after: float | None = None) -> "TimeRepair":
+    def head(self, n: int, t, after: float | None = None, min_period: float | None = None) -> "TimeRepair":
         """The repair of the first ``n`` input samples only (a streamed chunk without the rows held
         back for the next one): kept samples with an index below ``n``, their gaps recounted on
-        ``t`` (the stamps repaired) after ``after``."""
+        ``t`` (the stamps repaired, s) after ``after`` (s), as :func:`count_gaps` with ``min_period`` (s)."""
         sel = self.keep < n
         keep = self.keep[sel]
-        return TimeRepair(keep, self.flagged[sel], self.kind[:n], count_gaps(np.asarray(t)[keep], after),
+        return TimeRepair(keep, self.flagged[sel], self.kind[:n], count_gaps(np.asarray(t)[keep], after, min_period),
                           tuple(j for j in self.restarts if j < n))
 
 
-def count_gaps(tk: np.ndarray, after: float | None = None) -> int:
-    """Forward steps of the increasing stamps ``tk`` (s) longer than :data:`GAP_PERIODS` median steps
-    (the step from ``after``, when given, included)."""
+def count_gaps(tk: np.ndarray, after: float | None = None, min_period: float | None = None) -> int:
+    """Forward steps of the increasing stamps ``tk`` (s) longer than :data:`GAP_PERIODS` sample periods
+    (the step from ``after``, s, when given, included). The sample period is the median step, or
+    ``min_period`` (s) when that is longer: the period of the fastest channel of a table whose rows
+    interleave channels sampled at different stamps."""
     if after is not None:
         tk = np.concatenate(([after], tk))
     if len(tk) < 3:
         return 0
     d = np.diff(tk)
-    return int(np.count_nonzero(d > GAP_PERIODS * float(np.median(d))))
+    period = float(np.median(d))
+    if min_period is not None and min_period > period:
+        period = float(min_period)
+    return int(np.count_nonzero(d > GAP_PERIODS * period))
 
 
 def _lis(values: np.ndarray) -> np.ndarray:
@@ -170,7 +177,7 @@ def _isolated(t: np.ndarray) -> np.ndarray:
     return np.flatnonzero(bad)
 
 
-def repair_time(t, after: float | None = None) -> TimeRepair:
+def repair_time(t, after: float | None = None, min_period: float | None = None) -> TimeRepair:
     """The samples of ``t`` that make a strictly increasing time base, and what was repaired.
 
     Parameters
@@ -180,6 +187,8 @@ def repair_time(t, after: float | None = None) -> TimeRepair:
     after : float (s), optional
         The last good stamp before ``t`` (a streamed log's previous chunk): samples not later than
         it are dropped as out of order (or as a duplicate when equal to it).
+    min_period : float (s), optional
+        A sample period longer than the stamps' median step, for counting gaps (:func:`count_gaps`).
 
     Returns
     -------
@@ -271,7 +280,7 @@ def repair_time(t, after: float | None = None) -> TimeRepair:
         raise UnrepairableTime(f"no increasing time base: {what} (every row written twice, or a clock coarser "
                                "than the sample rate?), and the value at a repeated stamp is not trusted")
     return TimeRepair(keep=idx, flagged=flag[idx] | repeated[idx] | follows_drop[idx], kind=kind,
-                      gaps=count_gaps(t[idx], after), restarts=restarts)
+                      gaps=count_gaps(t[idx], after, min_period), restarts=restarts)
 
 
 def _period(t: np.ndarray) -> float:
