@@ -162,3 +162,12 @@ def factor(kind: str, unit: str) -> float:
         raise ValueError(f"unit '{unit}' is not a {dimension_of_kind(kind)} unit "
                          f"(accepted: {', '.join(table)})")
     return table[u]
+
+
+def reads_as_number(text: str) -> bool:
+    """True if ``text`` reads as a number as ``float()`` reads it (``"1e3"``, ``" 2.5"``, ``"nan"``, ``"inf"``)."""
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..units import reads_as_number
 from .errors import LogError
 from .files import existing_nonempty, open_mdf
 from .formats import CAN_FORMATS as CAN_FORMATS
@@ -142,15 +143,6 @@ def _header_index(lines: list[str]) -> int:
     return len(lines)
 
 
-def _is_number(field: str) -> bool:
-    """True if the text ``field`` reads as a number (as ``float()`` reads it)."""
-    try:
-        float(field)
-    except ValueError:
-        return False
-    return True
-
-
 def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTable:
     """Read a delimited text file with a header line.
 
@@ -184,7 +176,7 @@ def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTabl
     lines = lines[skip:]
     header_line = lines[0]
     delim = max((",", ";", "\t"), key=header_line.count)
-    if skip and all(_is_number(f) for f in header_line.split(delim)):
+    if skip and all(reads_as_number(f) for f in header_line.split(delim)):
         raise LogError(f"{p}: no header line: line {skip + 1} ({header_line.strip()[:40]!r}) holds numbers, not "
                        "column names (the lines before it are blank or comments starting with '#')")
     fast = _plain_csv(p, lines, delim, wanted, prefix, first=skip + 1)

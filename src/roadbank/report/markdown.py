@@ -18,6 +18,8 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
+from ..units import reads_as_number
+
 __all__ = ["Markdown", "escape", "md_table", "BEST", "Slugger", "contents"]
 
 
@@ -174,19 +176,13 @@ def _mark_best(rows, text, cells, key) -> None:
     cand = [(i, j) for i, j in cells if _finite(rows[i][j])]
     if len(cand) < 2:
         return
-    shown = {c: float(text[c[0]][c[1]]) if _parses(text[c[0]][c[1]]) else float(rows[c[0]][c[1]]) for c in cand}
+    shown = {c: float(text[c[0]][c[1]]) if reads_as_number(text[c[0]][c[1]]) else float(rows[c[0]][c[1]]) for c in cand}
     top = min(key(v) for v in shown.values())
     for (i, j), v in shown.items():
         if key(v) == top:
             text[i][j] = f"**{text[i][j]}**"
 
 
-def _parses(s: str) -> bool:
-    try:
-        float(s)
-    except ValueError:
-        return False
-    return True
 
 
 # what a heading's anchor drops: everything but letters, digits, '_', '-' and spaces (as GitHub)
