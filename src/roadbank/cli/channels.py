@@ -55,12 +55,16 @@ def channels(log, output, fmt):
     SteerAngle, SWA; timestamp, time ...) and from the data: plausible ranges (km/h or
     m/s, deg/s or rad/s, g or m/s^2), ay = vx r in turns (units and the yaw rate's sign)
     and the steering angle against the kinematic angle (road wheel or steering wheel,
-    deg or rad, sign). Each line of the map says how sure the guess is; ay is taken as
-    positive to the left (ISO 8855). Check the map before using it. Exit code 1 if a
-    required channel was not found (the map is written, with that channel to fill in).
+    deg or rad, sign). Each line of the map says how sure the guess is. The sign convention
+    is assumed, not read: ay positive to the left (ISO 8855); a log whose ay, yaw rate and
+    steering are all positive to the right reads the same (then convention = "FRD"). A log
+    with no column named like a steering angle (an IMU or INS log) gets a map without one:
+    the default estimator does not read it. Check the map before using it. Exit code 1 if
+    time, speed, ay or yaw rate was not found (the map is written, with that channel to fill
+    in) or the map does not read the log.
     """
     from ..io import LogError, load_log, read_channel_map
-    from ..io.guess import channel_map_toml, guess_channels
+    from ..io.guess import CONVENTION_NOTE, NO_STEERING, STEERING_ROLES, channel_map_toml, guess_channels
     from ..io.readers import detect_format
 
     try:
@@ -76,13 +80,16 @@ def channels(log, output, fmt):
     output.write_text(channel_map_toml(guesses, log.name))
     width = max(len(g.role) for g in guesses)
     for g in guesses:
-        if g.column is None:
+        if g.column is None and g.role in STEERING_ROLES:
+            click.echo(f"{'steering':<{width}}  none ({g.reason}): {NO_STEERING}")
+        elif g.column is None:
             click.echo(f"{g.role:<{width}}  not found ({g.reason})")
         else:
             sign = ", inverted" if g.invert else ""
             click.echo(f"{g.role:<{width}}  <- {g.column!r} in {g.unit}{sign}   {g.confidence}: {g.reason}")
+    click.echo(f"{'convention':<{width}}  {CONVENTION_NOTE}")
     click.echo(f"wrote {output}", err=True)
-    if any(g.column is None for g in guesses):
+    if any(g.column is None and g.role not in STEERING_ROLES for g in guesses):
         click.echo(f"error: not every required channel was found: fill in {output} by hand", err=True)
         sys.exit(1)
     try:

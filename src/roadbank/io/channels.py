@@ -42,12 +42,14 @@ ecef_x, ecef_y, ecef_z      m, km                none (optional, instead of lati
 Raw CAN (``dbc = "car.dbc"``, channels ``{ message = "...", signal = "...", unit = "..." }``)
 and ROS (channels ``{ topic = "...", field = "...", unit = "..." }``, ``ros_time``) are
 described in :mod:`roadbank.io.can`, :mod:`roadbank.io.ros` and docs/io.md; their channels
-carry their own time stamps (no ``time`` role), and a ROS map may leave steering out.
+carry their own time stamps (no ``time`` role).
 ``convention`` also accepts ``FLU`` (= ISO) and ``NED`` (body axes FRD).
 
-``time``, ``speed``, ``lateral_acceleration``, ``yaw_rate`` and one of
-``road_wheel_angle`` / ``steering_wheel_angle`` are required (if both are given,
-the road-wheel angle is used when its column exists in the file). ``invert = true``
+``time``, ``speed``, ``lateral_acceleration`` and ``yaw_rate`` are required. The steering
+angle is ``road_wheel_angle`` or ``steering_wheel_angle`` (if both are given, the road-wheel
+angle is used when its column exists in the file); a map with neither describes a log without
+one (an IMU or INS log): it is read with the steering angle absent (``delta_f`` NaN), as a KITTI
+drive is (:attr:`ChannelMap.no_steering`), which the default estimator does not read. ``invert = true``
 flips a channel's sign on top of the convention, for sensors whose sign is odd.
 All conversion to SI and ISO 8855 happens here, at the edge; inside roadbank
 everything is SI/ISO.
@@ -163,8 +165,9 @@ class ChannelMap:
         falling back to the log time for messages without a header) or ``"log"``
         (the time the recorder received it).
     no_steering : bool
-        The log records no steering angle (a fixed layout such as KITTI's, built in code):
-        no steering channel is required and ``delta_f`` is NaN.
+        The log records no steering angle (a fixed layout such as KITTI's, or a map file that names
+        no steering channel, :func:`channel_map_from_dict`): no steering channel is required and
+        ``delta_f`` (rad) is NaN.
     steering_optional : bool
         A file that has none of the steering columns the map names is read with ``delta_f`` NaN and a
         warning, not refused (the default map: roadbank's default estimator does not read the
@@ -206,7 +209,8 @@ class ChannelMap:
         ros = any(s.topic for s in self.channels.values())
         # robots often have no steering topic; some data sets record none
         if not any(r in self.channels for r in STEERING) and not ros and not self.no_steering:
-            raise LogError(f"{src}: channel map needs 'road_wheel_angle' or 'steering_wheel_angle'")
+            raise LogError(f"{src}: channel map needs 'road_wheel_angle' or 'steering_wheel_angle' "
+                           "(or no_steering=True for a log without one)")
         for role, spec in self.channels.items():
             if role not in ROLES:
                 raise LogError(f"{src}: unknown channel role '{role}' (known: {', '.join(ROLES)})")
@@ -299,7 +303,10 @@ def _number(source, key: str, value) -> float:
 
 
 def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
-    """Build a :class:`ChannelMap` from the parsed TOML structure (see module doc)."""
+    """Build a :class:`ChannelMap` from the parsed TOML structure (see module doc).
+
+    A map that names neither ``road_wheel_angle`` nor ``steering_wheel_angle`` describes a log without a
+    steering angle (:attr:`ChannelMap.no_steering`: ``delta_f`` NaN, rad)."""
     if not isinstance(d, dict):
         raise LogError(f"{source}: a channel map must be a table")
     unknown = set(d) - _TOP_KEYS
@@ -349,6 +356,7 @@ def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
             source=source,
             dbc=None if d.get("dbc") is None else str(d["dbc"]),
             ros_time=str(d.get("ros_time", "header")),
+            no_steering=not any(r in specs for r in STEERING),
         )
     except (TypeError, ValueError) as exc:
         if isinstance(exc, LogError):

@@ -4,7 +4,7 @@ Evidence, per channel:
 
 * **names** -- common spellings (``VehSpd``, ``speed``, ``v``; ``YawRate``, ``wz``, ``gyro_z``;
   ``LatAcc``, ``ay``; ``SteerAngle``, ``SWA``; ``timestamp``, ``time`` ...) and unit hints in
-  them (``_kmh``, ``_degps``, ``_ms``);
+  them (``_kmh``, ``_mph``, ``_degps``, ``_ms``);
 * **ranges** -- a sample period of 1-100 ms in s, ms, us or ns; speeds above 70 are not m/s;
   |ay| above 1.5 is not g; |yaw rate| above 2 is not rad/s; steering angles above 2 pi are deg;
 * **physics** -- in turns ``ay = vx r`` (steady cornering), which fixes the speed, ay and yaw-rate
@@ -12,15 +12,28 @@ Evidence, per channel:
   kinematic road-wheel angle ``L r / vx`` (L = 2.7 m), which tells a road-wheel from a
   steering-wheel angle, its unit and its sign.
 
+The units are chosen among every combination the ranges allow (speed: m/s, km/h and mph) by the slope
+of ``ay`` on ``vx r`` over the stronger turns: real roads give 0.7-1.3 (:data:`SLOPE_BAND`: a banked
+curve lowers it, the body's roll raises it), and the combination nearest the band's middle wins, or
+the one a unit in a column's name states. km/h and mph differ by a factor 1.61 only, less than the
+band spans: a unit is ``high`` only when no other unit of its channel gives a slope inside the band,
+and the guess names the other unit when one does.
+
 Each guess says how sure it is: ``high`` (name and data agree), ``medium`` (one of them, the
-other silent) or ``low`` (data only, or a conflict). ``ay`` is taken as ISO 8855 (positive to the
-left): no single log can tell a mirrored car from a mirrored sensor.
+other silent) or ``low`` (data only, a conflict, or two units the data cannot tell apart). The
+signs are read relative to ``ay``: ``ay`` is taken as ISO 8855 (positive to the left), an
+assumption the map states (:data:`CONVENTION_NOTE`): a log whose ay, yaw rate and steering are all
+positive to the right balances ``ay = vx r`` exactly as well, and no single log can tell a mirrored
+car from a mirrored sensor. A log with no column named like a steering angle gets a map without a
+steering channel (:data:`NO_STEERING`).
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
+import textwrap
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,11 +59,35 @@ UNIT_HINTS = {"kmh": "km/h", "kph": "km/h", "mph": "mph", "mps": "m/s", "ms2": "
               "deg": "deg", "rad": "rad", "ms": "ms", "us": "us", "ns": "ns", "sec": "s", "g": "g"}
 #: wheelbase (m) for the kinematic steering check (any car: 2.4-3.2 m)
 WHEELBASE_M = 2.7
-#: the gain of ay on vx r may be this far from 1 (a banked curve lowers ay) and still fix the units:
-#: the unit choices differ by 3.6 (km/h), 9.81 (g) and 57.3 (deg/s)
+#: the slope of ay on vx r may be this far from :data:`SLOPE_MID` and still choose the units (a factor, -)
 PHYSICS_TOL = 4.0
+#: the slopes of ay on vx r (-) real roads give over turns: 1 on a flat road, lower in a banked curve (the
+#: bank carries part of the turn), higher with the body's roll; read as :func:`_fit` does, 0.76-1.17 on the 14
+#: shared KITTI drives with turns enough, 0.97-1.02 there once the INS roll is taken out
+SLOPE_BAND = (0.7, 1.3)
+#: the band's (geometric) middle: the units whose slope lies nearest it are chosen
+SLOPE_MID = math.sqrt(SLOPE_BAND[0] * SLOPE_BAND[1])
 #: yaw rate (rad/s) and speed (m/s) above which a sample counts as in a turn
 TURN_R, TURN_V = 0.03, 5.0
+#: the slope is read over the stronger half (by ``|vx r|``) of the turning samples faster than this share of the
+#: log's 95th-percentile speed (a share: the same samples whatever the speed's unit); a bank of a few degrees
+#: weighs little in strong turns. Only where their RMS ``|vx r|`` is at least :data:`STRONG_TURN` (m/s^2) can a
+#: unit be ``high``
+MOVING_SHARE, STRONG_TURN = 0.2, 1.0
+#: turning samples needed to read the slope at all
+MIN_TURNS = 20
+#: the steering roles: a log without either is read with the steering angle absent
+STEERING_ROLES = ("steering_wheel_angle", "road_wheel_angle")
+#: what a map without a steering channel means
+NO_STEERING = ("the map has none, and the log is read with the steering angle absent (NaN), as a KITTI drive is: "
+               "the default estimator kinematic-pif does not read it; dfc, uio, pio-original, pif-original and "
+               "kalman give no valid sample")
+#: what the guess says of the overall sign convention: the data fix the signs relative to each other only
+ASSUMED_SIGN = "positive to the left assumed (ISO 8855): the data cannot tell (see convention)"
+#: the comment on the guessed map's ``convention`` (and the line ``roadbank channels`` prints)
+CONVENTION_NOTE = ("the sign convention cannot be told from the data and is assumed ISO 8855: ay positive to the "
+                   "left, yaw rate and steering counter-clockwise positive. A log whose ay, yaw rate and steering "
+                   "are all positive to the right balances ay = vx r alike: for one, write convention = \"FRD\"")
 
 
 def _norm(name: str) -> str:
@@ -172,7 +209,8 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
     Returns
     -------
     list of Guess
-        time (unless ``times``), speed, lateral_acceleration, yaw_rate and one steering role.
+        time (unless ``times``), speed, lateral_acceleration, yaw_rate and one steering role (its column None
+        when the log has no steering angle: :data:`NO_STEERING`).
     """
     numeric = [c for c in names if c in data and np.isfinite(data[c]).any()]
     used: set[str] = set()
@@ -208,6 +246,8 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
     rwcol, rws, rwh = pick("road_wheel_angle", numeric) if swcol is None else (None, 0, None)
     steer_col, steer_named = (swcol, "steering_wheel_angle") if swcol else (rwcol, "road_wheel_angle")
     steer_hint = swh if swcol else rwh
+    empty = [c for c in names if c not in numeric and c not in used
+             and any(name_match(k, c)[0] for k in ("steering_wheel_angle", "road_wheel_angle"))]
 
     def series(col):
         if col is None:
@@ -220,14 +260,65 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
     v, a, r = (series(out[k].column) for k in ("speed", "lateral_acceleration", "yaw_rate"))
     _units_from_physics(out, v, a, r, hints, scores)
     out_steer = _steering(steer_col, steer_named, steer_hint, series(steer_col), v, r, out)
+    if steer_col is None and empty:
+        out_steer.reason = f"column {empty[0]!r} is named like a steering angle but holds no numbers"
     roles = (["time"] if "time" in out else []) + ["speed", "lateral_acceleration", "yaw_rate"]
     return [out[k] for k in roles] + [out_steer]
 
 
+@dataclass(frozen=True)
+class _Fit:
+    """The balance ``ay = vx r`` under one choice of units (speed, ay, yaw rate)."""
+
+    units: tuple[str, str, str]
+    slope: float         #: |least-squares slope of ay on vx r| over the turns read (-)
+    corr: float          #: correlation of ay with vx r there (its sign: the yaw rate's against ay's)
+    strong: bool         #: the turns read are strong (RMS |vx r| >= STRONG_TURN), not only gentle ones
+
+    @property
+    def miss(self) -> float:
+        """How far the slope is from the middle of :data:`SLOPE_BAND` (log ratio, >= 0)."""
+        return abs(math.log(max(self.slope, 1e-9) / SLOPE_MID))
+
+    @property
+    def fits(self) -> bool:
+        return SLOPE_BAND[0] <= self.slope <= SLOPE_BAND[1]
+
+
+_PHYS_ROLES = ("speed", "lateral_acceleration", "yaw_rate")
+
+
+def _fit(units: tuple[str, str, str], v: np.ndarray, a: np.ndarray, r: np.ndarray, moving: np.ndarray) -> _Fit | None:
+    """The slope of ay on vx r with the stored ``v``, ``a``, ``r`` read in ``units``, over the stronger half (by
+    ``|vx r|``) of the ``moving`` samples that turn; None with fewer than :data:`MIN_TURNS` of them.
+
+    The samples do not depend on the speed's unit (``moving`` is relative to the log's own speeds), so the
+    slopes of two speed units differ by their factor exactly."""
+    vs = v * _CAND["speed"][units[0]]
+    as_ = a * _CAND["lateral_acceleration"][units[1]]
+    rs = r * _CAND["yaw_rate"][units[2]]
+    turn = moving & (np.abs(rs) > TURN_R)
+    if turn.sum() < MIN_TURNS:
+        return None
+    pred = vs * rs
+    sel = turn & (np.abs(pred) >= np.median(np.abs(pred[turn])))
+    p, y = pred[sel], as_[sel]
+    gain = float(np.dot(y, p) / max(float(np.dot(p, p)), 1e-300))
+    corr = float(np.corrcoef(y, p)[0, 1]) if np.std(p) > 0 and np.std(y) > 0 else 0.0
+    return _Fit(units, abs(gain), corr, float(np.sqrt(np.mean(p * p))) >= STRONG_TURN)
+
+
 def _units_from_physics(out, v, a, r, hints, scores) -> None:
-    """Units of speed, ay and yaw rate (ranges, name hints, ``ay = vx r`` in turns) and the yaw rate's sign."""
+    """Units of speed, ay and yaw rate (ranges, name hints, ``ay = vx r`` in turns) and the yaw rate's sign.
+
+    Every combination of the units each channel's range allows (speed: m/s, km/h, mph) is tried; the one whose
+    slope of ay on vx r lies nearest the middle of :data:`SLOPE_BAND` is chosen, or, among those inside the
+    band, the one the unit hints in the names agree with. A unit is ``high`` only when no other unit of its
+    channel gives a slope inside the band (km/h and mph differ by 1.61 only, the band spans 1.86) over strong
+    turns, or the name states it.
+    """
     cand, blind = {}, set()
-    for role, x in (("speed", v), ("lateral_acceleration", a), ("yaw_rate", r)):
+    for role, x in zip(_PHYS_ROLES, (v, a, r)):
         g = out[role]
         if x is None:
             g.reason = "no column named like it"
@@ -236,43 +327,66 @@ def _units_from_physics(out, v, a, r, hints, scores) -> None:
         if not units:
             blind.add(role)
             units = list(_CAND[role])[:1]
-        if role == "speed" and hints.get(role) != "mph" and len(units) > 1:
-            units = [u for u in units if u != "mph"]        # rare in vehicle logs: only when the name says so
         cand[role] = units
-    combos = []
+    fits: list[_Fit] = []
     if v is not None and a is not None and r is not None:
         ok = np.isfinite(v) & np.isfinite(a) & np.isfinite(r)
-        for uv in cand["speed"]:
-            for ua in cand["lateral_acceleration"]:
-                for ur in cand["yaw_rate"]:
-                    vs, as_, rs = v[ok] * _CAND["speed"][uv], a[ok] * _CAND["lateral_acceleration"][ua], \
-                        r[ok] * _CAND["yaw_rate"][ur]
-                    turn = (np.abs(rs) > TURN_R) & (vs > TURN_V)
-                    if turn.sum() < 20:
-                        continue
-                    pred = vs[turn] * rs[turn]
-                    # least-squares gain of ay on vx r: 1 in the right units (its sign: the yaw rate's)
-                    gain = float(np.dot(as_[turn], pred) / max(float(np.dot(pred, pred)), 1e-300))
-                    corr = float(np.corrcoef(as_[turn], pred)[0, 1]) if np.std(pred) > 0 else 0.0
-                    ratio = abs(gain)
-                    combos.append((abs(math.log(max(ratio, 1e-9))), uv, ua, ur, ratio, corr))
-    best = min(combos, default=None)
-    for role, x in (("speed", v), ("lateral_acceleration", a), ("yaw_rate", r)):
+        vo = v[ok]
+        moving = vo > MOVING_SHARE * (float(np.percentile(vo, 95)) if len(vo) else 0.0)
+        for uv, ua, ur in itertools.product(*(cand[k] for k in _PHYS_ROLES)):
+            f = _fit((uv, ua, ur), vo, a[ok], r[ok], moving)
+            if f is not None:
+                fits.append(f)
+    in_band = [f for f in fits if f.fits]
+    hinted = [f for f in in_band if all(hints.get(k) in (None, u) for k, u in zip(_PHYS_ROLES, f.units))]
+    best = min(hinted or fits, key=lambda f: f.miss, default=None)
+    if best is not None and best.miss >= math.log(PHYSICS_TOL):
+        best = None
+    band = f"{SLOPE_BAND[0]:g}-{SLOPE_BAND[1]:g}"
+    for i, (role, x) in enumerate(zip(_PHYS_ROLES, (v, a, r))):
         g = out[role]
         if x is None:
             continue
         hint = hints.get(role)
         units = cand[role]
         named = scores.get(role, 0) > 0
-        if best is not None and abs(best[0]) < math.log(PHYSICS_TOL):
-            unit = best[1 + ("speed", "lateral_acceleration", "yaw_rate").index(role)]
-            phys = f"ay = vx r in turns (gain {best[4]:.2f})"
-            agree = hint is None or hint == unit
-            close = abs(best[0]) < math.log(1.5)
+        if best is not None:
+            unit = best.units[i]
             g.unit = unit
-            g.confidence = "high" if named and agree and close else ("medium" if agree else "low")
-            g.reason = (("name, " if named else "") + ("unit in the name, " if hint == unit else "")
-                        + f"range and {phys} agree" if agree else f"{phys} says {unit}, the name says {hint}")
+            rivals: dict[str, _Fit] = {}        # the other units of this channel that fit, each with its best fit
+            for f in sorted(in_band, key=lambda f: f.miss):
+                if f.units[i] != unit:
+                    rivals.setdefault(f.units[i], f)
+            nxt = min((f for f in fits if f.units[i] != unit), key=lambda f: f.miss, default=None)
+            phys = f"ay = vx r in turns (slope {best.slope:.2f} in {unit})"
+            named_unit = "unit in the name, " if hint == unit else ""
+            if hint is not None and hint != unit:
+                g.confidence = "low"
+                g.reason = f"{phys} says {unit}, the name says {hint}"
+            elif rivals and hint == unit:
+                g.confidence = "high"
+                g.reason = (f"name, unit in the name and {phys} agree; the slope alone would not tell it from "
+                            + " or ".join(rivals))
+            elif rivals:
+                g.confidence = "low"
+                other = " or ".join(f"{u} (slope {f.slope:.2f})" for u, f in rivals.items())
+                g.reason = (f"ay = vx r in turns cannot tell {unit} (slope {best.slope:.2f}) from {other}: "
+                            f"both within {band}, the slopes real roads give; {unit} is nearer their middle "
+                            f"{SLOPE_MID:.2f} -- check the unit")
+            elif not best.fits:
+                g.confidence = "medium" if named else "low"
+                g.reason = (("name and " if named else "") + f"{phys} nearest in {unit}, but the slope is "
+                            f"outside {band}, the slopes real roads give")
+            elif not best.strong:
+                g.confidence = "medium" if named else "low"
+                g.reason = (("name, " if named else "") + named_unit + f"range and {phys} agree, "
+                            f"but over gentle turns only (RMS |vx r| below {STRONG_TURN:g} m/s^2)")
+            else:
+                g.confidence = "high" if named else "medium"
+                clear = (f"ay = vx r in turns agree (slope {best.slope:.2f} in {unit}"
+                         + (f"; {nxt.units[i]}: {nxt.slope:.2f}" if nxt is not None else "")
+                         + f"; no other unit within {band})")
+                g.reason = ("name, " if named else "") + named_unit + "range and " + clear
         else:
             unit = hint if hint in units else units[0]
             g.unit = unit
@@ -283,14 +397,18 @@ def _units_from_physics(out, v, a, r, hints, scores) -> None:
                 continue
             g.reason = (("name" if named else "no name match") + (", unit in the name" if hint == unit else "")
                         + (", range only fits " + unit if single else f", range fits {' or '.join(units)}")
-                        + ("" if combos else "; too few turns to check ay = vx r"))
-    if best is not None and abs(best[5]) > 0.5:
+                        + ("" if fits else "; too few turns to check ay = vx r"))
+    if a is not None:
+        out["lateral_acceleration"].reason += f"; sign: {ASSUMED_SIGN}"
+    if best is not None and abs(best.corr) > 0.5:
         g = out["yaw_rate"]
-        if best[5] < 0:
+        if best.corr < 0:
             g.invert = True
-            g.reason += f"; sign opposite to ay / vx in turns (correlation {best[5]:.2f}): inverted"
+            g.reason += (f"; sign opposite to ay's in turns (correlation {best.corr:.2f}): inverted, so "
+                         "counter-clockwise positive if ay is positive to the left (assumed)")
         else:
-            g.reason += f"; sign agrees with ay / vx in turns (correlation {best[5]:.2f})"
+            g.reason += (f"; sign the same as ay's in turns (correlation {best.corr:.2f}), so counter-clockwise "
+                         "positive if ay is positive to the left (assumed)")
     else:
         out["yaw_rate"].reason += "; sign not checked (no clear turn): ISO assumed"
 
@@ -326,7 +444,7 @@ def _steering(col, named_role, hint, x, v, r, out) -> Guess:
                   f"fits {unit} best for it ({by_size[0].replace('_', ' ')} in {by_size[1]} overall)")
         g.reason += ("; sign not checked (no clear turn): ISO assumed" if not sure else
                      f"; sign opposite to the yaw rate's (correlation {corr:.2f}): inverted" if corr < 0
-                     else f"; sign agrees with the yaw rate (correlation {corr:.2f})")
+                     else f"; sign the same as the yaw rate's (correlation {corr:.2f})")
         return g
     unit = hint or ("deg" if len(a) and float(a.max()) > 2 * math.pi else "rad")
     return Guess(named_role, col, unit, False, "low", "name and range only (too few turns to check)")
@@ -337,8 +455,12 @@ def channel_map_toml(guesses: list[Guess], source: str) -> str:
     comment per channel saying how sure the guess is; channels not found are left as comments."""
     lines = [f"# channel map guessed by `roadbank channels` from {source}",
              "# check every line: the confidence and the evidence are in the comments", "",
-             'convention = "ISO"', "", "[channels]"]
+             *_comment(CONVENTION_NOTE), 'convention = "ISO"', "", "[channels]"]
     for g in guesses:
+        if g.column is None and g.role in STEERING_ROLES:
+            lines += _comment(f"no steering channel ({g.reason}): {NO_STEERING}. If the log has one, add it, "
+                              'e.g. steering_wheel_angle = { column = "...", unit = "deg" }')
+            continue
         if g.column is None:
             lines.append(f'# {g.role} = {{ column = "?", unit = "?" }}   # not found: {g.reason}')
             continue
@@ -346,6 +468,11 @@ def channel_map_toml(guesses: list[Guess], source: str) -> str:
         lines.append(f"# {g.confidence}: {g.reason}")
         lines.append(f"{g.role} = {{ column = {_toml_str(g.column)}, unit = \"{g.unit}\"{inv} }}")
     return "\n".join(lines) + "\n"
+
+
+def _comment(text: str, width: int = 110) -> list[str]:
+    """``text`` as TOML comment lines."""
+    return ["# " + line for line in textwrap.wrap(text, width)]
 
 
 def _toml_str(s: str) -> str:
