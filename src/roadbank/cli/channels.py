@@ -64,7 +64,8 @@ def channels(log, output, fmt):
     in) or the map does not read the log.
     """
     from ..io import LogError, load_log, read_channel_map
-    from ..io.guess import CONVENTION_NOTE, NO_STEERING, STEERING_ROLES, channel_map_toml, guess_channels
+    from ..io.channels import STEERING
+    from ..io.guess import CONVENTION_NOTE, NO_STEERING, channel_map_toml, guess_channels
     from ..io.readers import detect_format
 
     try:
@@ -80,7 +81,7 @@ def channels(log, output, fmt):
     output.write_text(channel_map_toml(guesses, log.name))
     width = max(len(g.role) for g in guesses)
     for g in guesses:
-        if g.column is None and g.role in STEERING_ROLES:
+        if g.column is None and g.role in STEERING:
             click.echo(f"{'steering':<{width}}  none ({g.reason}): {NO_STEERING}")
         elif g.column is None:
             click.echo(f"{g.role:<{width}}  not found ({g.reason})")
@@ -89,7 +90,7 @@ def channels(log, output, fmt):
             click.echo(f"{g.role:<{width}}  <- {g.column!r} in {g.unit}{sign}   {g.confidence}: {g.reason}")
     click.echo(f"{'convention':<{width}}  {CONVENTION_NOTE}")
     click.echo(f"wrote {output}", err=True)
-    if any(g.column is None and g.role not in STEERING_ROLES for g in guesses):
+    if any(g.column is None and g.role not in STEERING for g in guesses):
         click.echo(f"error: not every required channel was found: fill in {output} by hand", err=True)
         sys.exit(1)
     try:

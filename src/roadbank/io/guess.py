@@ -38,6 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .channels import STEERING
 from .units import FACTORS
 
 #: role -> name spellings (normalised: lower case, letters and digits only)
@@ -76,8 +77,6 @@ TURN_R, TURN_V = 0.03, 5.0
 MOVING_SHARE, STRONG_TURN = 0.2, 1.0
 #: turning samples needed to read the slope at all
 MIN_TURNS = 20
-#: the steering roles: a log without either is read with the steering angle absent
-STEERING_ROLES = ("steering_wheel_angle", "road_wheel_angle")
 #: what a map without a steering channel means
 NO_STEERING = ("the map has none, and the log is read with the steering angle absent (NaN), as a KITTI drive is: "
                "the default estimator kinematic-pif does not read it; dfc, uio, pio-original, pif-original and "
@@ -247,7 +246,7 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
     steer_col, steer_named = (swcol, "steering_wheel_angle") if swcol else (rwcol, "road_wheel_angle")
     steer_hint = swh if swcol else rwh
     empty = [c for c in names if c not in numeric and c not in used
-             and any(name_match(k, c)[0] for k in ("steering_wheel_angle", "road_wheel_angle"))]
+             and any(name_match(k, c)[0] for k in STEERING)]
 
     def series(col):
         if col is None:
@@ -457,7 +456,7 @@ def channel_map_toml(guesses: list[Guess], source: str) -> str:
              "# check every line: the confidence and the evidence are in the comments", "",
              *_comment(CONVENTION_NOTE), 'convention = "ISO"', "", "[channels]"]
     for g in guesses:
-        if g.column is None and g.role in STEERING_ROLES:
+        if g.column is None and g.role in STEERING:
             lines += _comment(f"no steering channel ({g.reason}): {NO_STEERING}. If the log has one, add it, "
                               'e.g. steering_wheel_angle = { column = "...", unit = "deg" }')
             continue
