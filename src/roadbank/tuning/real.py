@@ -465,16 +465,24 @@ def choose_loud_gate(logs, sim_sets, cands: dict | None = None) -> tuple:
     first is the shipped gate); the seventeenth's too, over its own candidates (:func:`choose_gate_filter`).
     Returns ``(chosen key, {key: real median}, {key: loud simulated median})``, the
     latter for the shipped gate and the candidates within :data:`TIE_DEG` of the best real median."""
-    cands = loud_gate_candidates() if cands is None else cands
+    chosen, real, sim = _roads_then_guarded(loud_gate_candidates() if cands is None else cands, logs, sim_sets)
+    return chosen, {k: float(np.median(e)) for k, e in real.items()}, {k: cars_median(v) for k, v in sim.items()}
+
+
+def _roads_then_guarded(cands: dict, logs, sim_sets) -> tuple:
+    """The sixteenth to eighteenth stages' rule over ``cands`` (``{key: build}``, the shipped first): the median over
+    ``logs`` (:func:`log_errors`); among the candidates within :data:`TIE_DEG` of the best, the lowest
+    :func:`cars_median` over ``sim_sets`` (equal to :data:`EQUAL_DEG`: the earlier); then :func:`guarded` by the mean
+    of every score judged. Returns ``(chosen key, {key: real scores}, {key: simulated scores})`` (deg), the
+    simulated ones for the shipped candidate and the tied ones."""
     real = {k: log_errors(b, logs) for k, b in cands.items()}
     best = min(float(np.median(e)) for e in real.values())
     tied = [k for k in cands if float(np.median(real[k])) <= best + TIE_DEG]
     first = next(iter(cands))
     sim = {k: sim_errors(cands[k], sim_sets) for k in dict.fromkeys([first, *tied])}
-    med = {k: cars_median(v) for k, v in sim.items()}
-    chosen = min(tied, key=lambda k: round(med[k] / EQUAL_DEG))
+    chosen = min(tied, key=lambda k: round(cars_median(sim[k]) / EQUAL_DEG))
     mean = {k: float(np.mean(np.concatenate([real[k], *v]))) for k, v in sim.items()}
-    return guarded(chosen, first, mean), {k: float(np.median(e)) for k, e in real.items()}, med
+    return guarded(chosen, first, mean), real, sim
 
 
 def gate_filter_sets(sim_sets, rates=GATE_TF_RATES) -> list:
@@ -522,19 +530,18 @@ def choose_quiet_floor_rate(logs, up, sim_sets, rates=QUIET_FLOOR_RATES) -> tupl
     (:func:`simulated_sets`), over ``rates`` (Hz; the shipped first). Returns ``(chosen rate, {rate: real scores},
     {rate: simulated scores})``, the simulated ones for the shipped rate and the candidates within :data:`TIE_DEG`
     of the best real median."""
+    return _roads_then_guarded({rate: _at_floor_rate(rate) for rate in rates}, logs + up, sim_sets)
+
+
+def _at_floor_rate(rate: float):
+    """``build`` of the default as the command line builds it, the quiet decision reading the floor at ``rate`` (Hz;
+    :func:`quiet_floor_rate`): the design, where that decision is made, is built inside the block."""
     build = per_log("kinematic-pif")
-    real, sim = {}, {}
-    for rate in rates:
+
+    def at(signals):
         with quiet_floor_rate(rate):
-            real[rate] = log_errors(build, logs) + log_errors(build, up)
-    best = min(float(np.median(e)) for e in real.values())
-    tied = [k for k in rates if float(np.median(real[k])) <= best + TIE_DEG]
-    for rate in dict.fromkeys([rates[0], *tied]):
-        with quiet_floor_rate(rate):
-            sim[rate] = sim_errors(build, sim_sets)
-    chosen = min(tied, key=lambda k: round(cars_median(sim[k]) / EQUAL_DEG))
-    mean = {k: float(np.mean(np.concatenate([real[k], *v]))) for k, v in sim.items()}
-    return guarded(chosen, rates[0], mean), real, sim
+            return build(signals)
+    return at
 
 
 def choose_by_roads(builds: dict, logs, sim_sets) -> tuple:
