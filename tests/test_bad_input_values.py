@@ -133,9 +133,10 @@ KITTI_DRIVES = sorted(p for p in DATA.glob("kitti-oxts*/20*") if p.is_dir())
 
 @pytest.mark.skipif(not KITTI_DRIVES, reason="../shared/data/kitti-oxts* not present")
 def test_ay_in_g_or_a_flipped_sign_is_named_on_a_log_that_only_turns_gently():
-    """No shared KITTI drive turns hard (|vx r| > 3 m/s^2 on 100 samples), so the turning check says nothing on them;
-    their gentle turns (|vx r| > 1 m/s^2) still give the slope of ay on vx r (0.8-1.2 on these drives): an ay in g or a
-    flipped sign is named on every drive with enough of them, and a clean drive gets no warning."""
+    """The shared KITTI drives do not turn hard (|vx r| > 3 m/s^2 on 100 samples; a drive that does is the turning
+    check's, tested elsewhere), so that check says nothing on them; their gentle turns (|vx r| > 1 m/s^2) still give
+    the slope of ay on vx r (0.8-1.2 on these drives): an ay in g or a flipped sign is named on every drive with
+    enough of them, and a clean drive gets no warning."""
     from roadbank.io import check_consistency
     from roadbank.io.consistency import MIN_GENTLE, MIN_SAMPLES, gentle_sums, turning
     from roadbank.io.kitti import load_kitti_oxts
@@ -144,9 +145,8 @@ def test_ay_in_g_or_a_flipped_sign_is_named_on_a_log_that_only_turns_gently():
     for drive in KITTI_DRIVES:
         log = load_kitti_oxts(drive)
         s = log.signals
-        assert turning(s.vx, s.ay, s.r).sum() < MIN_SAMPLES
         assert not [w for w in log.warnings if "vx r" in w], drive.name
-        if gentle_sums(s.vx, s.ay, s.r)[2] < MIN_GENTLE:
+        if turning(s.vx, s.ay, s.r).sum() >= MIN_SAMPLES or gentle_sums(s.vx, s.ay, s.r)[2] < MIN_GENTLE:
             continue
         checked += 1
         in_g = check_consistency(Signals(s.t, s.vx, s.ay / 9.80665, s.r, s.delta_f), drive.name)
