@@ -179,6 +179,19 @@ from 0.597 to 0.501 deg (the interpolated drives' from 0.820 to 0.558; at 10 Hz 
 55 of the 96 simulated drives, whose data-sheet sensors are quiet, read loud: their manoeuvres fill the same 1-5 Hz
 that the road's aliased vibration fills on the interpolated drives, and the blend replaces the car's model there
 (simulated median 0.257 -> 0.299 deg, mean 0.346 -> 0.394); the mean of every score judged rises 0.385 -> 0.412.
+
+The nineteenth stage (:func:`choose_quiet_floor_signal`; rule written 2026-12-04 before any candidate ran) tries the
+candidate the eighteenth named: the floor of the kinematic acceleration ``ay - vx r`` instead of ``ay``
+(:data:`roadbank.vehicle.conditions.QUIET_FLOOR_SIGNAL`). A manoeuvre moves ``ay`` mostly through its centripetal
+part ``vx r``, which the gyro measures almost without noise; what is left is the sideslip acceleration, the bank and
+the noise, so a simulated drive's manoeuvres should fill the 1-5 Hz band much less, while the road's vibration on an
+interpolated KITTI drive stays. Candidates :data:`QUIET_FLOOR_READINGS` (channel, rate Hz): ``ay`` at the log's own
+rate (shipped) first, ``ay - vx r`` at the log's own rate, ``ay - vx r`` read at 10 Hz. The rule, the sets and the
+code are the eighteenth stage's (:func:`_roads_then_guarded`): the median over the KITTI training drives at 10 Hz and
+interpolated onto 100 Hz (sixteen scores); among the candidates within :data:`TIE_DEG` of the best, the lowest median
+over the cars of the simulated training drives (100 Hz, data-sheet sensors, car not described); equal to
+:data:`EQUAL_DEG`: the earlier; the mean guard over every score judged. Neither the KITTI validation drives nor
+comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -272,6 +285,8 @@ GATE_TFS = (KINEMATIC_PIF_GATE["gate_tf"], 0.1, 0.2, 0.4)
 GATE_TF_RATES = (LOUD_RATE_HZ, 100.0)
 #: the eighteenth stage's candidate rates (Hz) at which the quiet decision reads the ``ay`` floor (0: the log's own)
 QUIET_FLOOR_RATES = (0.0, 10.0)
+#: the nineteenth stage's candidates: (the channel the quiet decision reads the floor of, the rate Hz it reads it at)
+QUIET_FLOOR_READINGS = (("ay", 0.0), ("ay - vx r", 0.0), ("ay - vx r", 10.0))
 #: the rate (Hz) of the eighteenth stage's interpolated KITTI training drives
 UPSAMPLED_RATE_HZ = 100.0
 #: the stages before the fourteenth took the bank-rate prior as a rate in time
@@ -512,16 +527,19 @@ def upsampled_logs(logs, rate: float = UPSAMPLED_RATE_HZ, scoring=KITTI_SCORING)
 
 
 @contextmanager
-def quiet_floor_rate(rate: float):
-    """Within the block, every command's quiet decision reads the ``ay`` floor at ``rate`` (Hz; 0: the log's own):
-    :data:`roadbank.vehicle.conditions.QUIET_FLOOR_RATE`, restored after. The eighteenth stage runs each candidate
-    as it would ship."""
-    before = conditions.QUIET_FLOOR_RATE
-    conditions.QUIET_FLOOR_RATE = rate
+def quiet_floor(rate: float, signal: str = "ay"):
+    """Within the block, every command's quiet decision reads the floor of ``signal`` (``"ay"`` or ``"ay - vx r"``)
+    at ``rate`` (Hz; 0: the log's own): :data:`roadbank.vehicle.conditions.QUIET_FLOOR_RATE` and
+    :data:`~roadbank.vehicle.conditions.QUIET_FLOOR_SIGNAL`, restored after. The eighteenth and nineteenth stages run
+    each candidate as it would ship."""
+    if signal not in conditions.QUIET_FLOOR_SIGNALS:
+        raise ValueError(f"quiet floor signal must be one of {conditions.QUIET_FLOOR_SIGNALS}, got {signal!r}")
+    before = conditions.QUIET_FLOOR_RATE, conditions.QUIET_FLOOR_SIGNAL
+    conditions.QUIET_FLOOR_RATE, conditions.QUIET_FLOOR_SIGNAL = rate, signal
     try:
         yield
     finally:
-        conditions.QUIET_FLOOR_RATE = before
+        conditions.QUIET_FLOOR_RATE, conditions.QUIET_FLOOR_SIGNAL = before
 
 
 def choose_quiet_floor_rate(logs, up, sim_sets, rates=QUIET_FLOOR_RATES) -> tuple:
@@ -530,16 +548,24 @@ def choose_quiet_floor_rate(logs, up, sim_sets, rates=QUIET_FLOOR_RATES) -> tupl
     (:func:`simulated_sets`), over ``rates`` (Hz; the shipped first). Returns ``(chosen rate, {rate: real scores},
     {rate: simulated scores})``, the simulated ones for the shipped rate and the candidates within :data:`TIE_DEG`
     of the best real median."""
-    return _roads_then_guarded({rate: _at_floor_rate(rate) for rate in rates}, logs + up, sim_sets)
+    return _roads_then_guarded({rate: _at_floor(rate) for rate in rates}, logs + up, sim_sets)
 
 
-def _at_floor_rate(rate: float):
-    """``build`` of the default as the command line builds it, the quiet decision reading the floor at ``rate`` (Hz;
-    :func:`quiet_floor_rate`): the design, where that decision is made, is built inside the block."""
+def choose_quiet_floor_signal(logs, up, sim_sets, readings=QUIET_FLOOR_READINGS) -> tuple:
+    """The nineteenth stage (module docstring): :func:`choose_quiet_floor_rate`'s rule and sets over ``readings``
+    (``(channel, rate Hz)`` pairs, the shipped first). Returns ``(chosen reading, {reading: real scores},
+    {reading: simulated scores})``, the simulated ones for the shipped reading and the candidates within
+    :data:`TIE_DEG` of the best real median."""
+    return _roads_then_guarded({(sig, rate): _at_floor(rate, sig) for sig, rate in readings}, logs + up, sim_sets)
+
+
+def _at_floor(rate: float, signal: str = "ay"):
+    """``build`` of the default as the command line builds it, the quiet decision reading the floor of ``signal`` at
+    ``rate`` (Hz; :func:`quiet_floor`): the design, where that decision is made, is built inside the block."""
     build = per_log("kinematic-pif")
 
     def at(signals):
-        with quiet_floor_rate(rate):
+        with quiet_floor(rate, signal):
             return build(signals)
     return at
 

@@ -78,6 +78,12 @@ NOISE_FLOOR_CAP = 3.0
 #: (:func:`roadbank.signals.road_noise_floor_std`'s ``at_rate``; 0: the log's own rate). The eighteenth stage of
 #: :mod:`roadbank.tuning.real` chooses it
 QUIET_FLOOR_RATE = 0.0
+#: the channel whose floor :func:`log_conditions` reads for :func:`is_quiet`: ``"ay"``, or ``"ay - vx r"`` (m/s^2, the
+#: kinematic acceleration: ``ay`` without the centripetal part of a manoeuvre). The nineteenth stage of
+#: :mod:`roadbank.tuning.real` chooses it
+QUIET_FLOOR_SIGNAL = "ay"
+#: the channels :data:`QUIET_FLOOR_SIGNAL` may name
+QUIET_FLOOR_SIGNALS = ("ay", "ay - vx r")
 
 
 def _at_most(noise: float, floor: float) -> float:
@@ -95,8 +101,8 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     windows: a few glitches in the first minute, one ``ay`` sample of 2.5 g, would otherwise set the design for
     the whole log; on every log the project has, real or simulated, the road noise is within 1.7 times the
     floor, so the cap changes none of them), the noise floor of its ``ay``
-    (:func:`roadbank.signals.road_noise_floor_std`, read at :data:`QUIET_FLOOR_RATE`: what :func:`is_quiet`
-    reads), and the noise that the first
+    (:func:`roadbank.signals.road_noise_floor_std`, read at :data:`QUIET_FLOOR_RATE` on
+    :data:`QUIET_FLOOR_SIGNAL`: what :func:`is_quiet` reads), and the noise that the first
     differences of the kinematic acceleration ``ay - vx r`` read (:func:`roadbank.signals.diff_noise_std`: what a
     limited low-pass's running noise estimate is relative to, ``noise_ref``). Measured on the log's first
     :data:`DESIGN_SPAN_S` of driving (:func:`design_span`), so that a streamed log gets the same design whatever
@@ -110,8 +116,8 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
         moving = vx >= v_min
     ay_floor = road_noise_floor_std(signals.ay, signals.t, moving)
     ay_noise = _at_most(road_noise_std(signals.ay, signals.t, moving), ay_floor)
-    if QUIET_FLOOR_RATE > 0.0:          # the floor the quiet decision reads; the cap above keeps the log's own
-        ay_floor = road_noise_floor_std(signals.ay, signals.t, moving, at_rate=QUIET_FLOOR_RATE)
+    if QUIET_FLOOR_RATE > 0.0 or QUIET_FLOOR_SIGNAL != "ay":   # what the quiet decision reads; the cap keeps ay's
+        ay_floor = road_noise_floor_std(_floor_signal(signals, vx), signals.t, moving, at_rate=QUIET_FLOOR_RATE)
     r_noise = _at_most(road_noise_std(signals.r, signals.t, moving), road_noise_floor_std(signals.r, signals.t, moving))
     with np.errstate(invalid="ignore"):
         diff_noise = diff_noise_std(np.asarray(signals.ay, np.float64) - vx * np.asarray(signals.r, np.float64), moving)
@@ -119,6 +125,17 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     return {"log_rate": sample_rate(signals.t), "log_ay_noise": float(f"{ay_noise:.2g}"),
             "log_r_noise": float(f"{r_noise:.2g}"), "log_ay_floor": float(f"{ay_floor:.2g}"),
             "log_diff_noise": float(f"{diff_noise:.2g}")}
+
+
+def _floor_signal(signals, vx: np.ndarray) -> np.ndarray:
+    """The channel :data:`QUIET_FLOOR_SIGNAL` names (m/s^2) of ``signals``, speed ``vx`` (m/s)."""
+    if QUIET_FLOOR_SIGNAL not in QUIET_FLOOR_SIGNALS:
+        raise ValueError(f"QUIET_FLOOR_SIGNAL must be one of {QUIET_FLOOR_SIGNALS}, got {QUIET_FLOOR_SIGNAL!r}")
+    ay = np.asarray(signals.ay, dtype=np.float64)
+    if QUIET_FLOOR_SIGNAL == "ay":
+        return ay
+    with np.errstate(invalid="ignore"):
+        return ay - vx * np.asarray(signals.r, dtype=np.float64)
 
 
 def noise_densities(sensors: SensorSpec, log_rate: float | None = None, log_ay_noise: float | None = None,
