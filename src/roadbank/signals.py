@@ -289,6 +289,45 @@ def block_means(x, t, valid, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray
         return xb.mean(axis=1), np.asarray(t[:n], dtype=np.float64).reshape(-1, k).mean(axis=1), ok
 
 
+#: share (-) of a channel's second differences that must vanish for :func:`source_step` to read it as written from a
+#: slower source (a linear or held interpolation vanishes between the source's samples: 1 - 2/k of them at k samples
+#: per source sample; a quantised sensor at its own rate, the data sheet's, vanishes on at most 0.3 of them)
+SOURCE_ZERO_SHARE = 0.5
+#: a second difference vanishes below this share (-) of the channel's 99th percentile of them (a log written with
+#: four decimals or more keeps its interpolation's rounding below it)
+SOURCE_ZERO_REL = 1e-2
+#: the source's samples come at a steady rate: the interquartile range of the distances between the runs of
+#: non-vanishing second differences is at most this share (-) of their median (a quantised channel whose value
+#: holds for a while between random steps is not read as a slower source)
+SOURCE_SPREAD = 0.5
+
+
+def source_step(x, valid=None) -> int:
+    """How many samples of the sampled channel ``x`` (any unit) make one sample of its source: 1 for a channel at
+    its own rate, ``k`` for one that a logger interpolated linearly (or held) onto a grid ``k`` times faster than
+    the sensor (a 10 Hz INS written at 100 Hz: 10). Between the source's samples such a channel is a straight line,
+    so its second differences vanish there (below :data:`SOURCE_ZERO_REL` of their 99th percentile); where at least
+    :data:`SOURCE_ZERO_SHARE` of them do and the runs that do not start at a steady pace (:data:`SOURCE_SPREAD`),
+    ``k`` is the median distance (samples) between those starts. Only triples of finite samples that are all
+    ``valid`` (bool array, default all) count; 1 with fewer than :data:`MIN_NOISE_TRIPLES` of them."""
+    x = np.asarray(x, dtype=np.float64)
+    ok = np.isfinite(x) if valid is None else np.isfinite(x) & np.asarray(valid, dtype=bool)
+    ok3 = ok[2:] & ok[1:-1] & ok[:-2]
+    if ok3.sum() < MIN_NOISE_TRIPLES:
+        return 1
+    d2 = np.abs(x[2:] - 2.0 * x[1:-1] + x[:-2])
+    d2[~ok3] = 0.0
+    top = float(np.percentile(d2[ok3], 99.0))
+    bent = d2 > SOURCE_ZERO_REL * top
+    if top <= 0.0 or 1.0 - bent[ok3].mean() < SOURCE_ZERO_SHARE:
+        return 1
+    gaps = np.diff(np.flatnonzero(bent & ~np.r_[False, bent[:-1]]))
+    if len(gaps) < 2:
+        return 1
+    q1, mid, q3 = np.percentile(gaps, [25.0, 50.0, 75.0])
+    return max(1, int(round(float(mid)))) if q3 - q1 <= SOURCE_SPREAD * mid else 1
+
+
 #: the Huber limit of :func:`diff_noise_std` (squared standard deviations), as the kernels' running estimate's
 #: (:data:`roadbank.estimators.kernels.sample.NOISE_HUBER`)
 DIFF_NOISE_HUBER = 9.0

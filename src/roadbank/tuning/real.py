@@ -192,6 +192,17 @@ interpolated onto 100 Hz (sixteen scores); among the candidates within :data:`TI
 over the cars of the simulated training drives (100 Hz, data-sheet sensors, car not described); equal to
 :data:`EQUAL_DEG`: the earlier; the mean guard over every score judged. Neither the KITTI validation drives nor
 comma2k19 take part.
+
+The twentieth stage (:func:`choose_noise_at_source`; rule written 2026-12-04 before any candidate ran) reads the
+cause the eighteenth and nineteenth found: on a KITTI drive interpolated onto 100 Hz the channels are straight lines
+between the INS's 10 Hz samples, and the noise a design reads above the dynamics band is not there. Such a channel is
+recognised from its second differences, which vanish between the source's samples
+(:func:`roadbank.signals.source_step`; 10 on every interpolated training drive, 1 on every KITTI drive at its own
+rate, every simulated drive and comma2k19), and read on the source's samples
+(:data:`roadbank.vehicle.conditions.NOISE_AT_SOURCE`). Candidates :data:`NOISE_AT_SOURCE_CHOICES`: ``"none"``
+(shipped) first, ``"floor"`` (only the ``ay`` floor that the quiet decision reads), ``"all"`` (every noise reading of
+``ay`` and the yaw rate, so the design's densities too). The rule, the sets and the code are the eighteenth stage's
+(:func:`_roads_then_guarded`), as in the nineteenth. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -287,6 +298,8 @@ GATE_TF_RATES = (LOUD_RATE_HZ, 100.0)
 QUIET_FLOOR_RATES = (0.0, 10.0)
 #: the nineteenth stage's candidates: (the channel the quiet decision reads the floor of, the rate Hz it reads it at)
 QUIET_FLOOR_READINGS = (("ay", 0.0), ("ay - vx r", 0.0), ("ay - vx r", 10.0))
+#: the twentieth stage's candidates: which noise readings take a channel at its source's rate (the shipped first)
+NOISE_AT_SOURCE_CHOICES = conditions.NOISE_AT_SOURCE_CHOICES
 #: the rate (Hz) of the eighteenth stage's interpolated KITTI training drives
 UPSAMPLED_RATE_HZ = 100.0
 #: the stages before the fourteenth took the bank-rate prior as a rate in time
@@ -557,6 +570,36 @@ def choose_quiet_floor_signal(logs, up, sim_sets, readings=QUIET_FLOOR_READINGS)
     {reading: simulated scores})``, the simulated ones for the shipped reading and the candidates within
     :data:`TIE_DEG` of the best real median."""
     return _roads_then_guarded({(sig, rate): _at_floor(rate, sig) for sig, rate in readings}, logs + up, sim_sets)
+
+
+@contextmanager
+def noise_at_source(choice: str):
+    """Within the block, every command's design reads the noise of the channels ``choice`` names at their source's
+    rate (:data:`roadbank.vehicle.conditions.NOISE_AT_SOURCE`), restored after. The twentieth stage runs each
+    candidate as it would ship."""
+    if choice not in conditions.NOISE_AT_SOURCE_CHOICES:
+        raise ValueError(f"noise at source must be one of {conditions.NOISE_AT_SOURCE_CHOICES}, got {choice!r}")
+    before = conditions.NOISE_AT_SOURCE
+    conditions.NOISE_AT_SOURCE = choice
+    try:
+        yield
+    finally:
+        conditions.NOISE_AT_SOURCE = before
+
+
+def choose_noise_at_source(logs, up, sim_sets, choices=NOISE_AT_SOURCE_CHOICES) -> tuple:
+    """The twentieth stage (module docstring): :func:`choose_quiet_floor_rate`'s rule and sets over ``choices``
+    (:data:`roadbank.vehicle.conditions.NOISE_AT_SOURCE` values, the shipped first). Returns ``(chosen, {choice: real
+    scores}, {choice: simulated scores})``, the simulated ones for the shipped choice and the candidates within
+    :data:`TIE_DEG` of the best real median."""
+    build = per_log("kinematic-pif")
+
+    def at(choice):
+        def made(signals):
+            with noise_at_source(choice):
+                return build(signals)
+        return made
+    return _roads_then_guarded({c: at(c) for c in choices}, logs + up, sim_sets)
 
 
 def _at_floor(rate: float, signal: str = "ay"):

@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from ..params import VehicleParams
-from ..signals import diff_noise_std, road_noise_floor_std, road_noise_std, sample_rate
+from ..signals import diff_noise_std, road_noise_floor_std, road_noise_std, sample_rate, source_step
 from .sensors import SensorSpec
 
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
@@ -84,6 +84,12 @@ QUIET_FLOOR_RATE = 0.0
 QUIET_FLOOR_SIGNAL = "ay"
 #: the channels :data:`QUIET_FLOOR_SIGNAL` may name
 QUIET_FLOOR_SIGNALS = ("ay", "ay - vx r")
+#: which noise readings of :func:`log_conditions` take a channel at its source's rate where a logger wrote it faster
+#: (:func:`roadbank.signals.source_step`): ``"none"``, ``"floor"`` (the ``ay`` floor that :func:`is_quiet` reads) or
+#: ``"all"`` (every reading of ``ay`` and the yaw rate). The twentieth stage of :mod:`roadbank.tuning.real` chooses it
+NOISE_AT_SOURCE = "none"
+#: the values :data:`NOISE_AT_SOURCE` may take
+NOISE_AT_SOURCE_CHOICES = ("none", "floor", "all")
 
 
 def _at_most(noise: float, floor: float) -> float:
@@ -106,7 +112,8 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     differences of the kinematic acceleration ``ay - vx r`` read (:func:`roadbank.signals.diff_noise_std`: what a
     limited low-pass's running noise estimate is relative to, ``noise_ref``). Measured on the log's first
     :data:`DESIGN_SPAN_S` of driving (:func:`design_span`), so that a streamed log gets the same design whatever
-    its chunk size.
+    its chunk size. :data:`NOISE_AT_SOURCE` says which of these readings take a channel that a logger wrote faster
+    than its sensor at the sensor's rate (:func:`_at_source`).
     """
     n = design_span(signals, v_min)
     if n < len(signals):
@@ -114,17 +121,35 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     vx = np.asarray(signals.vx, dtype=np.float64)
     with np.errstate(invalid="ignore"):
         moving = vx >= v_min
-    ay_floor = road_noise_floor_std(signals.ay, signals.t, moving)
-    ay_noise = _at_most(road_noise_std(signals.ay, signals.t, moving), ay_floor)
+    if NOISE_AT_SOURCE not in NOISE_AT_SOURCE_CHOICES:
+        raise ValueError(f"NOISE_AT_SOURCE must be one of {NOISE_AT_SOURCE_CHOICES}, got {NOISE_AT_SOURCE!r}")
+    k_quiet = source_step(signals.ay, moving) if NOISE_AT_SOURCE != "none" else 1
+    k_ay = k_quiet if NOISE_AT_SOURCE == "all" else 1
+    k_r = source_step(signals.r, moving) if NOISE_AT_SOURCE == "all" else 1
+    ay_floor = _at_source(road_noise_floor_std, signals.ay, signals.t, moving, k_ay)
+    ay_noise = _at_most(_at_source(road_noise_std, signals.ay, signals.t, moving, k_ay), ay_floor)
     if QUIET_FLOOR_RATE > 0.0 or QUIET_FLOOR_SIGNAL != "ay":   # what the quiet decision reads; the cap keeps ay's
         ay_floor = road_noise_floor_std(_floor_signal(signals, vx), signals.t, moving, at_rate=QUIET_FLOOR_RATE)
-    r_noise = _at_most(road_noise_std(signals.r, signals.t, moving), road_noise_floor_std(signals.r, signals.t, moving))
+    elif k_quiet != k_ay:
+        ay_floor = _at_source(road_noise_floor_std, signals.ay, signals.t, moving, k_quiet)
+    r_noise = _at_most(_at_source(road_noise_std, signals.r, signals.t, moving, k_r),
+                       _at_source(road_noise_floor_std, signals.r, signals.t, moving, k_r))
     with np.errstate(invalid="ignore"):
         diff_noise = diff_noise_std(np.asarray(signals.ay, np.float64) - vx * np.asarray(signals.r, np.float64), moving)
     # two significant digits: logs of one car and road share a design (the design cache)
     return {"log_rate": sample_rate(signals.t), "log_ay_noise": float(f"{ay_noise:.2g}"),
             "log_r_noise": float(f"{r_noise:.2g}"), "log_ay_floor": float(f"{ay_floor:.2g}"),
             "log_diff_noise": float(f"{diff_noise:.2g}")}
+
+
+def _at_source(read, x, t, valid, k: int) -> float:
+    """``read(x, t, valid)`` (a noise standard deviation, unit of ``x``; ``t`` s) of a channel whose source is ``k``
+    times slower than the log (:func:`roadbank.signals.source_step`): read on every ``k``-th sample, where the
+    source's noise is, and returned as the standard deviation that white noise of the same density has at the
+    log's rate (times ``sqrt(k)``)."""
+    if k < 2:
+        return read(x, t, valid)
+    return math.sqrt(k) * read(np.asarray(x)[::k], np.asarray(t)[::k], np.asarray(valid)[::k])
 
 
 def _floor_signal(signals, vx: np.ndarray) -> np.ndarray:
