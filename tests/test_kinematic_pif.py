@@ -547,3 +547,44 @@ def test_the_quiet_floor_rate_is_what_the_rule_keeps():
     assert real[shipped][:8] == real[at10][:8]                                   # 10 Hz logs: the same
     assert np.median(real[at10]) < np.median(real[shipped]) - 0.05
     assert np.mean(np.concatenate(sim[at10])) > np.mean(np.concatenate(sim[shipped])) + 0.02
+
+
+@pytest.mark.slow
+def test_the_quiet_floor_signal_is_what_the_rule_keeps():
+    """The nineteenth stage (tuning.real.choose_quiet_floor_signal): the floor of ay - vx r at the log's own rate
+    decides as ay's does; read at 10 Hz it calls no interpolated KITTI training drive quiet, but still calls loud
+    simulated drives with the data sheet's sensors (not the centripetal part fills their 1-5 Hz): the mean guard
+    keeps ay at the log's own rate."""
+    from roadbank.tuning.real import (QUIET_FLOOR_READINGS, choose_quiet_floor_signal, simulated_sets, training_logs,
+                                      upsampled_logs)
+
+    logs = training_logs(DATA)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, real, sim = choose_quiet_floor_signal(logs, upsampled_logs(logs), simulated_sets())
+    shipped, own, at10 = QUIET_FLOOR_READINGS
+    assert chosen == shipped
+    assert real[own] == real[shipped]
+    assert np.median(real[at10]) < np.median(real[shipped]) - 0.05
+    assert np.mean(np.concatenate(sim[at10])) > np.mean(np.concatenate(sim[shipped])) + 0.02
+
+
+@pytest.mark.slow
+def test_noise_at_the_source_rate_is_what_the_rule_chooses():
+    """The twentieth stage (tuning.real.choose_noise_at_source): every noise reading of a channel written faster
+    than its sensor taken at the sensor's rate brings the interpolated KITTI training drives near their own 10 Hz
+    error and changes nothing else (no simulated drive or 10 Hz drive is read otherwise); the quiet floor alone
+    does half of it."""
+    from roadbank.tuning.real import (NOISE_AT_SOURCE_CHOICES, choose_noise_at_source, simulated_sets, training_logs,
+                                      upsampled_logs)
+
+    logs = training_logs(DATA)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, real, sim = choose_noise_at_source(logs, upsampled_logs(logs), simulated_sets())
+    none, floor, every = NOISE_AT_SOURCE_CHOICES
+    assert chosen == every
+    assert real[every][:8] == real[none][:8]                                     # 10 Hz logs: the same
+    assert np.median(real[every][8:]) < np.median(real[floor][8:]) - 0.1 < np.median(real[none][8:]) - 0.3
+    assert np.median(real[every][8:]) < 1.1 * np.median(real[every][:8])
+    assert sim[every] == sim[none]                                               # no simulated drive read otherwise

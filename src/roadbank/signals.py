@@ -308,7 +308,8 @@ def source_step(x, valid=None) -> int:
     the sensor (a 10 Hz INS written at 100 Hz: 10). Between the source's samples such a channel is a straight line,
     so its second differences vanish there (below :data:`SOURCE_ZERO_REL` of their 99th percentile); where at least
     :data:`SOURCE_ZERO_SHARE` of them do and the runs that do not start at a steady pace (:data:`SOURCE_SPREAD`),
-    ``k`` is the median distance (samples) between those starts. Only triples of finite samples that are all
+    ``k`` is the median distance (samples) between those starts (with every triple between them read). It reads
+    ``k`` >= 4 (below, too few vanish: 2 and 3 read 1). Only triples of finite samples that are all
     ``valid`` (bool array, default all) count; 1 with fewer than :data:`MIN_NOISE_TRIPLES` of them."""
     x = np.asarray(x, dtype=np.float64)
     ok = np.isfinite(x) if valid is None else np.isfinite(x) & np.asarray(valid, dtype=bool)
@@ -321,7 +322,9 @@ def source_step(x, valid=None) -> int:
     bent = d2 > SOURCE_ZERO_REL * top
     if top <= 0.0 or 1.0 - bent[ok3].mean() < SOURCE_ZERO_SHARE:
         return 1
-    gaps = np.diff(np.flatnonzero(bent & ~np.r_[False, bent[:-1]]))
+    starts = np.flatnonzero(bent & ~np.r_[False, bent[:-1]])
+    unread = np.r_[0, np.cumsum(~ok3)]                  # triples left out before each index
+    gaps = np.diff(starts)[unread[starts[1:]] == unread[starts[:-1]]]     # between starts, every triple read
     if len(gaps) < 2:
         return 1
     q1, mid, q3 = np.percentile(gaps, [25.0, 50.0, 75.0])

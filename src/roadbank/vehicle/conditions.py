@@ -87,7 +87,7 @@ QUIET_FLOOR_SIGNALS = ("ay", "ay - vx r")
 #: which noise readings of :func:`log_conditions` take a channel at its source's rate where a logger wrote it faster
 #: (:func:`roadbank.signals.source_step`): ``"none"``, ``"floor"`` (the ``ay`` floor that :func:`is_quiet` reads) or
 #: ``"all"`` (every reading of ``ay`` and the yaw rate). The twentieth stage of :mod:`roadbank.tuning.real` chooses it
-NOISE_AT_SOURCE = "none"
+NOISE_AT_SOURCE = "all"
 #: the values :data:`NOISE_AT_SOURCE` may take
 NOISE_AT_SOURCE_CHOICES = ("none", "floor", "all")
 

@@ -1,0 +1,139 @@
+"""A channel that a logger wrote faster than its sensor: recognised, and its noise read where it is.
+
+Truth: synthetic channels of known source rate (white noise sampled at 10 Hz with jitter, interpolated
+linearly or held onto a 100 Hz grid, written with four decimals), channels at their own rate (white
+noise, a smooth manoeuvre, a quantised gyro whose value holds between random steps), the density
+of white noise interpolated linearly (two thirds of the source's, the mean of ``a^2 + (1 - a)^2``), and
+the KITTI drives at their own 10 Hz against the same drives interpolated onto 100 Hz.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from roadbank.signals import Signals, road_noise_std, source_step
+from roadbank.vehicle import conditions, for_log, log_conditions
+
+DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+
+
+def _source(rate=10.0, seconds=120.0, jitter=0.4, seed=0):
+    """White noise (std 1) on stamps at ``rate`` Hz, each interval off by up to ``jitter`` of it."""
+    rng = np.random.default_rng(seed)
+    n = int(seconds * rate)
+    t = np.cumsum((1.0 + jitter * rng.uniform(-1.0, 1.0, n)) / rate)
+    return t, rng.normal(0.0, 1.0, n)
+
+
+def _grid(t, rate=100.0):
+    return t[0] + np.arange(int((t[-1] - t[0]) * rate)) / rate
+
+
+@pytest.mark.parametrize("jitter", [0.0, 0.4])
+def test_a_linearly_interpolated_channel_reads_its_source(jitter):
+    t, x = _source(jitter=jitter)
+    g = _grid(t)
+    up = np.interp(g, t, x)
+    assert source_step(up) == 10
+    assert source_step(np.round(up, 4)) == 10                # written with four decimals
+    assert source_step(x) == 1                               # the source itself
+
+
+@pytest.mark.parametrize("k", [4, 5, 10, 20])
+def test_a_held_channel_reads_its_source(k):
+    _, x = _source()
+    assert source_step(np.repeat(x, k)) == k
+
+
+@pytest.mark.parametrize("k", [2, 3])
+def test_a_source_two_or_three_times_slower_reads_one(k):
+    """Below four samples per source sample too few second differences vanish to tell (documented)."""
+    _, x = _source()
+    assert source_step(np.repeat(x, k)) == 1
+
+
+def test_channels_at_their_own_rate_read_one():
+    rng = np.random.default_rng(3)
+    t = np.arange(20_000) / 100.0
+    assert source_step(rng.normal(size=t.size)) == 1
+    assert source_step(2.0 * np.sin(2 * np.pi * 0.3 * t) + 0.01 * rng.normal(size=t.size)) == 1
+    # a gyro quantised at 0.01 rad/s whose noise is below its step: the value holds between random steps
+    gyro = np.round((0.002 * rng.normal(size=t.size) + 0.05 * np.sin(2 * np.pi * 0.05 * t)) / 0.01) * 0.01
+    assert np.mean(np.diff(gyro, 2) == 0.0) > 0.5                 # most second differences vanish here too
+    assert source_step(gyro) == 1
+    assert source_step(rng.normal(size=50)) == 1                  # too few samples
+
+
+def test_the_flagged_samples_are_left_out():
+    t, x = _source(jitter=0.0)
+    up = np.interp(_grid(t), t, x)
+    valid = (np.arange(up.size) % 1000) >= 200              # 2 s of every 10 s flagged (a stop, a glitch)
+    spiky = up.copy()
+    spiky[~valid] = 1e3 * np.sin(np.arange((~valid).sum()))   # garbage where flagged
+    assert source_step(spiky, valid) == 10
+    assert source_step(spiky) == 1
+
+
+@pytest.mark.parametrize("jitter, low, high", [(0.0, 0.9, 1.1), (0.4, 0.5, 0.75)])
+def test_the_noise_of_an_interpolated_channel_is_read_at_its_source(jitter, low, high):
+    """White noise at 10 Hz interpolated onto 100 Hz: read at the log's rate above the dynamics band, almost
+    nothing; read on the source's samples (every tenth, ``conditions._at_source``) and taken at the log's rate, the
+    source's density where the grid meets its samples, and where it falls between them (jitter) the density of
+    linearly interpolated white noise, the mean of ``a^2 + (1 - a)^2``: two thirds, less where two of the
+    samples read fall between the same pair."""
+    t, x = _source(jitter=jitter, seconds=600.0)
+    g = _grid(t)
+    up = np.interp(g, t, x)
+    ok = np.ones(g.size, bool)
+    density_source = road_noise_std(x, t) ** 2 / 10.0
+    at_log = road_noise_std(up, g) ** 2 / 100.0
+    at_source = conditions._at_source(road_noise_std, up, g, ok, source_step(up)) ** 2 / 100.0
+    assert at_log < 0.02 * density_source
+    assert low * density_source < at_source < high * density_source
+
+
+def _upsampled(signals, rate=100.0):
+    t = _grid(signals.t, rate)
+    return Signals(t, *(np.interp(t, signals.t, getattr(signals, c)) for c in ("vx", "ay", "r", "delta_f")))
+
+
+@pytest.mark.parametrize("drive", ["2011_09_26_drive_0070", "2011_10_03_drive_0047"])
+def test_a_kitti_drive_written_at_100_hz_is_designed_as_at_its_own_rate(drive):
+    """A KITTI drive interpolated onto 100 Hz, as a logger that resamples its 10 Hz INS writes it: its noise is read
+    on the INS's samples (the densities within a factor 0.5-1 of the 10 Hz drive's, against below 0.02 read at
+    100 Hz), it is loud as the drive is, and the default's error against the INS roll stays within a tenth of the
+    10 Hz drive's."""
+    from roadbank.io.kitti import load_kitti_oxts
+    from roadbank.validation.kitti import KITTI_SCORING
+    from roadbank.validation.scoring import masks
+
+    found = sorted(DATA.glob(f"*/{drive}"))
+    if not found:
+        pytest.skip(f"KITTI drive {drive} not under {DATA}")
+    log = load_kitti_oxts(found[0])
+    s = log.signals
+    up = _upsampled(s)
+    a, b = log_conditions(s), log_conditions(up)
+    for key in ("log_ay_noise", "log_r_noise", "log_ay_floor"):
+        ratio = (b[key] ** 2 / b["log_rate"]) / (a[key] ** 2 / a["log_rate"])
+        assert 0.5 < ratio < 1.0, key
+    before = conditions.NOISE_AT_SOURCE
+    try:
+        conditions.NOISE_AT_SOURCE = "none"
+        none = log_conditions(up)
+    finally:
+        conditions.NOISE_AT_SOURCE = before
+    assert none["log_ay_noise"] ** 2 / 100.0 < 0.02 * a["log_ay_noise"] ** 2 / a["log_rate"]
+
+    def error(signals):
+        est = for_log("kinematic-pif", signals)
+        m = masks(signals.t, signals.vx, KITTI_SCORING)[1]
+        ref = np.interp(signals.t, s.t, log.reference_roll)
+        return est.name, float(np.degrees(np.sqrt(np.mean((est.run(signals).theta[m] - ref[m]) ** 2))))
+
+    (name_own, own), (name_up, at_100) = error(s), error(up)
+    assert name_own == name_up == "kinematic-pif"
+    assert at_100 < 1.1 * own
