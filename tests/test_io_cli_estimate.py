@@ -28,7 +28,7 @@ def test_estimate_single_csv_and_plot(tmp_path):
     res = CliRunner().invoke(main, ["estimate", str(p), "-e", "kinematic", "-o", str(out), "--plot", str(png)])
     assert res.exit_code == 0, res.output
     header = out.read_text().splitlines()[0].split(",")
-    assert header == ["t", "kinematic.theta", "kinematic.phi_b", "kinematic.valid"]
+    assert header == ["t", "kinematic.theta", "kinematic.phi_b", "kinematic.valid", "kinematic.settled"]
     data = np.loadtxt(out, delimiter=",", skiprows=1)
     # kinematic: w = (ay - vx r)/g = sin(0.05) -> theta = 0.05 rad
     np.testing.assert_allclose(data[:, 1], 0.05, atol=1e-9)
@@ -53,8 +53,8 @@ def test_batch_bad_file_reported_and_others_written(tmp_path):
     assert rows["broken.parquet"]["status"] == "error" and "not a readable Parquet" in rows["broken.parquet"]["error"]
     assert rows["a.parquet"]["status"] == "ok" and rows["a.parquet"]["estimator"] == "kinematic"
     cols = pq.read_table(outdir / "a.bank.parquet").column_names
-    assert cols == ["t", "kinematic.theta", "kinematic.phi_b", "kinematic.valid",
-                    "dfc.theta", "dfc.phi_b", "dfc.valid"]
+    assert cols == ["t", "kinematic.theta", "kinematic.phi_b", "kinematic.valid", "kinematic.settled",
+                    "dfc.theta", "dfc.phi_b", "dfc.valid", "dfc.settled"]
 
 
 def test_batch_all_good_exit_zero(tmp_path):

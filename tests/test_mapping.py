@@ -19,6 +19,8 @@ import pytest
 from click.testing import CliRunner
 
 from roadbank.cli import main
+from roadbank.defaults import MAP_ESTIMATOR
+from roadbank.vehicle import for_log
 from roadbank.mapping import BankMap, LocalProjection, map_logs
 from roadbank.mapping.geo import EARTH_RADIUS
 
@@ -142,7 +144,6 @@ def test_default_map_estimator_is_the_smoother_and_removes_the_lane_change_lag(t
     """bank-lane-change (flat and 14 deg lanes): mapped with the default estimator (kinematic-smoother,
     which on this quiet simulated log is the offline pif-smoother) against the simulator's truth per
     cell, and with the causal default PIF."""
-    from roadbank import estimators
     from roadbank.io.channels import read_channel_map
     from roadbank.vehicle import load_vehicle
 
@@ -156,10 +157,14 @@ def test_default_map_estimator_is_the_smoother_and_removes_the_lane_change_lag(t
                               origin=(48.0, 11.0), vehicle=suv, **kw)
         assert recs[0].status == "ok"
         got = bmap.table()
-        truth = BankMap(proj)
-        truth.add(lat, lon, res.truth.phi_b, estimators.make(name or "pif-smoother").run(res.signals).valid)
+        truth, every = BankMap(proj), BankMap(proj)
+        built = for_log(name or MAP_ESTIMATOR, res.signals, vehicle=suv)      # as the map builds it for the log
+        out = built.run(res.signals)
+        truth.add(lat, lon, res.truth.phi_b, out.settled)         # the map takes settled samples
+        every.add(lat, lon, res.truth.phi_b, out.valid)
         want = truth.table()
         np.testing.assert_array_equal(got["count"], want["count"])
+        assert 0 < np.sum(every.table()["count"]) - np.sum(got["count"]) <= 100 * out.t.size / (out.t[-1] - out.t[0])
         full = np.asarray(got["count"]) >= 20
         errs[name] = np.asarray(got["bank_mean_deg"])[full] - want["bank_mean_deg"][full]
     rms = {k: float(np.sqrt(np.mean(e ** 2))) for k, e in errs.items()}

@@ -389,6 +389,10 @@ class Estimate:
     states : dict of arrays
         Estimator-specific internal states (e.g. ``vy``, ``r`` of the observer,
         ``phi`` the estimated body roll), SI.
+    settled : bool array
+        ``valid``, and at least the estimator's settling time after its last (re)start (the first
+        usable sample, or the first after a gap longer than its ``max_gap``), where it begins from one
+        sample: :mod:`roadbank.estimators.settle`. Not given: ``valid``.
     """
 
     name: str
@@ -398,6 +402,11 @@ class Estimate:
     phi_b: np.ndarray
     valid: np.ndarray
     states: dict[str, np.ndarray] = field(default_factory=dict)
+    settled: np.ndarray = None      # type: ignore[assignment]     # __post_init__: valid where not given
+
+    def __post_init__(self) -> None:
+        if self.settled is None:
+            self.settled = self.valid
 
     def __len__(self) -> int:
         return len(self.t)

@@ -28,10 +28,15 @@ from . import kernels as K
 from . import layout as L
 from ._buffers import OutputBuffers
 from .discretise import foh, foh_grid
+from .settle import settled_flags, settling_time
 from .synthesis import NoStabilisingSolution, using_reference_solvers
 
 #: Default speed grid of the gain schedules (m/s): v_min .. V_GRID_MAX.
 V_GRID_MAX = 100.0
+#: speeds (m/s) of the grid at which :attr:`Estimator.settle_time` is read: at most this many, spread from the lowest
+#: to :data:`SETTLE_V_MAX` (a car's road speeds; the grid reaches further so that no speed falls off it)
+SETTLE_SPEEDS = 8
+SETTLE_V_MAX = 40.0
 V_GRID_STEP = 0.25
 
 #: designed tables by design key (:meth:`Estimator._design_key`), or the NoStabilisingSolution raised
@@ -39,6 +44,8 @@ _DESIGN_CACHE: dict = {}
 #: kernel families with the fixed-rate path (``lpv`` rows; ``gated`` steps them through ``lpv_step``)
 FIXED_RATE_KERNELS = ("lpv", "gated")
 _DISCRETE_CACHE: dict = {}
+#: settling times (s) by design key (:attr:`Estimator.settle_time`)
+_SETTLE_CACHE: dict = {}
 #: entries each in-process memo keeps, the least recently used going first
 MEMO_SIZE = 512
 
@@ -477,6 +484,7 @@ class Estimator:
         self._mem = np.zeros(L.mem_size(self._nstate, self._roll[0].shape[0]))
         self._initial_memory(self._mem)
         self._det_t = math.nan     # automatic rate detector (sample_rate="auto"): last finite time
+        self._settle_last = (math.nan, math.nan)   # settle.settled_flags' carry: last valid time, last restart
 
     def step(self, t: float, vx: float, ay: float, r: float, delta_f: float = float("nan")) -> StepResult:
         """Process one sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), delta_f (rad).
@@ -540,7 +548,41 @@ class Estimator:
                              phib[a:b], phi[a:b], valid[a:b], xs[a:b])
         states = {name: xs[:, i] for i, name in enumerate(self.state_names)}
         states["phi"] = phi
-        return Estimate(self.name, signals.t, w, theta, phib, valid, states)
+        return Estimate(self.name, signals.t, w, theta, phib, valid, states, self._settled(signals.t, valid))
+
+    @property
+    def settle_time(self) -> float:
+        """Settling time (s) of the estimate after a (re)start (:mod:`roadbank.estimators.settle`): the longest
+        :func:`~roadbank.estimators.settle.settling_time` of the observer's output over its speed schedule; 0 for
+        an estimator without states."""
+        if self._settle_s is None:
+            key = self._design_key()
+            hit = _memo_get(_SETTLE_CACHE, key)
+            self._settle_s = self._settling_time() if hit is None else hit
+            _memo_put(_SETTLE_CACHE, key, self._settle_s)
+        return self._settle_s
+
+    _settle_s: float | None = None
+
+    def _settling_time(self) -> float:
+        """:attr:`settle_time` of the ``lpv`` table's continuous observer, at up to :data:`SETTLE_SPEEDS` speeds of
+        the grid spread from the lowest to :data:`SETTLE_V_MAX` (a family with another table overrides it)."""
+        n = self._nstate
+        row = L.lpv_row(n)
+        top = max(int(np.searchsorted(self.vgrid, SETTLE_V_MAX, side="right")), 1)
+        picks = np.unique(np.linspace(0, top - 1, min(SETTLE_SPEEDS, top)).round().astype(int))
+        out = 0.0
+        for k in picks:
+            r = self._tab_cont[k]
+            out = max(out, settling_time(r[row.F:row.G].reshape(n, n), r[row.G:row.H].reshape(n, L.NETA),
+                                         r[row.H:row.D], r[row.D:row.J]))
+        return out
+
+    def _settled(self, t, valid) -> np.ndarray:
+        """:func:`~roadbank.estimators.settle.settled_flags` of a run's outputs, carried over chunks (``run(...,
+        reset=False)``) as the estimator's state is."""
+        flags, self._settle_last = settled_flags(t, valid, self.settle_time, self.max_gap, self._settle_last)
+        return flags
 
     def _outputs(self, n: int):
         """Output arrays of :meth:`run` for ``n`` samples: ``w, theta, phi_b, phi, valid, xs``.

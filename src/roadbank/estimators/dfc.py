@@ -27,11 +27,14 @@ estimate and hide the method's character, so 4 is the compromise.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..models.bicycle import steady_state_gains
 from . import layout as L
 from .base import DesignInputs, Estimator, Tables
+from .settle import SETTLE_SHARE
 
 A_REF = 4.0
 TAU_LPF = 2.0 / 3.0
@@ -51,6 +54,12 @@ class DFC(Estimator):
     kernel = "dfc"
     uses = (True, True, True)
     state_names = ("w_lpf", "dfc")
+
+    @property
+    def settle_time(self) -> float:
+        """Settling time (s) of the paper's first-order low-pass: ``tau ln(1 / share)``
+        (:mod:`roadbank.estimators.settle`; ``tau`` is not a design input, so not through the design-keyed cache)."""
+        return self.tau * math.log(1.0 / SETTLE_SHARE)
 
     def __init__(self, params=None, *, a_ref=A_REF, tau=TAU_LPF, **kw):
         if not (a_ref > 0 and tau > 0):

@@ -113,4 +113,4 @@ class KinematicSmoother(KinematicLowPass):
         phi[held] = phi[last[held]]
         valid = both & (np.abs(w) <= np.sin(self.max_angle))
         states = {"w_lp": fwd.states["w_lp"].copy(), "w_lp_backward": wb.copy(), "phi": phi}
-        return Estimate(self.name, fwd.t, w, theta, theta - phi, valid, states)
+        return Estimate(self.name, fwd.t, w, theta, theta - phi, valid, states, valid & fwd.settled)

@@ -173,7 +173,7 @@ class PIFSmoother(PIF):
         valid &= np.abs(w) <= np.sin(self.max_angle)
         states = {name: xs[:, i] for i, name in enumerate(self.state_names)}
         states["phi"] = phi
-        return Estimate(self.name, fwd.t, w, theta, theta - phi, valid, states)
+        return Estimate(self.name, fwd.t, w, theta, theta - phi, valid, states, valid & fwd.settled)
 
     def _backward(self, parts):
         """Smoothed states ``(N, n)`` and the forward validity of the consecutive ``(signals,

@@ -97,6 +97,9 @@ typedef ${ctype} ${real};
 #define ${P}_N_ROLL_STATES ${nr}   /* roll-model states (0: static roll gain or none) */
 #define ${P}_RATE_HZ ${rate_lit}  /* nominal sample rate the module was generated for */
 #define ${P}_V_MIN ${vmin_lit}    /* m/s: slower samples are held and flagged not valid */
+#define ${P}_SETTLE_S ${settle_lit}  /* s: the estimate settles within this time after a (re)start, the first
+                                       valid sample with initialised == 0 or after a gap longer than ${gap_lit} s;
+                                       roadbank flags the samples before as valid but not settled */
 #define ${P}_FINGERPRINT "${fingerprint}"
 
 /* Caller-owned state: one per estimator instance; the module keeps no mutable
@@ -836,6 +839,7 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
     header = _HEADER.substitute(
         common, ctype="float" if float32 else "double", state_list=state_list,
         rate_lit=real_literal(d.rate, False), vmin_lit=lit(d.v_min), gap_lit=f"{d.max_gap:g}",
+        settle_lit=real_literal(d.settle_s if math.isfinite(d.settle_s) else 1e300, False),
         max_angle_deg=f"{np.rad2deg(d.max_angle):g}",
         x_member=(f"    {names['real']} x[{d.n}];         /* observer state{state_list} */\n"
                   if d.n else ""),

@@ -92,6 +92,8 @@ class ExportDesign:
     rate: float
     state_names: tuple = ()
     provenance: dict = field(default_factory=dict)
+    #: settling time (s) after a (re)start (:attr:`roadbank.estimators.Estimator.settle_time`), for the header
+    settle_s: float = 0.0
     #: fixed-rate tables (``Estimator.discrete_tables(1/rate)``) or None (general path only)
     discrete: dict | None = None
     #: relative tolerance on the interval for the fixed-rate tables
@@ -263,7 +265,7 @@ def export_design(est, rate: float, module_name: str | None = None, *,
         uses=tuple(bool(u) for u in est.uses), v_min=float(est.v_min),
         max_substep=float(est.max_substep), max_gap=float(est.max_gap),
         max_angle=float(est.max_angle), wmax=float(np.sin(est.max_angle)), rate=float(rate),
-        state_names=tuple(getattr(est, "state_names", ())), provenance=provenance,
+        state_names=tuple(getattr(est, "state_names", ())), provenance=provenance, settle_s=float(est.settle_time),
         discrete=disc, dt_tol=dt_tol, gate=_gate(est, n, nr), limit=_limit(est))
 
 

@@ -168,7 +168,7 @@ def concat_estimates(parts: list):
     states = {k: np.concatenate([p.states[k] for p in parts]) for k in first.states}
     return Estimate(first.name, np.concatenate([p.t for p in parts]), np.concatenate([p.w for p in parts]),
                     np.concatenate([p.theta for p in parts]), np.concatenate([p.phi_b for p in parts]),
-                    np.concatenate([p.valid for p in parts]), states)
+                    np.concatenate([p.valid for p in parts]), states, np.concatenate([p.settled for p in parts]))
 
 
 def _plot(summary: LogSummary, plot, whole, title: str) -> None:
@@ -197,7 +197,7 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
         The log (any format :func:`roadbank.io.load_log` reads; Parquet and MDF4 are streamed).
     output : path-like
         ``.csv`` or ``.parquet`` result table: ``t`` (s), ``<est>.theta``, ``<est>.phi_b`` (rad),
-        ``<est>.valid``, [``reference_roll`` (rad)] (see :mod:`roadbank.io.writers`).
+        ``<est>.valid``, ``<est>.settled``, [``reference_roll`` (rad)] (see :mod:`roadbank.io.writers`).
     estimators : sequence of str
         Estimator names (:data:`roadbank.estimators.NAMES`); the first one is summarised.
     channels, format, params

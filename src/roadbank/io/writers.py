@@ -2,8 +2,9 @@
 (:func:`output_problem`), and errors that name it (:func:`write_error`).
 
 Columns (SI): ``t`` (s), then for every estimator ``<name>.theta`` (rad, bank +
-body roll), ``<name>.phi_b`` (rad, road bank), ``<name>.valid`` (0/1), and
-``reference_roll`` (rad) when the log has one.
+body roll), ``<name>.phi_b`` (rad, road bank), ``<name>.valid`` (0/1: the sample was usable),
+``<name>.settled`` (0/1: valid, and the estimator's settling time after its last (re)start:
+:attr:`roadbank.signals.Estimate.settled`), and ``reference_roll`` (rad) when the log has one.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ def estimate_table(t, estimates, reference_roll=None) -> dict[str, np.ndarray]:
         cols[f"{est.name}.theta"] = np.asarray(est.theta, dtype=np.float64)
         cols[f"{est.name}.phi_b"] = np.asarray(est.phi_b, dtype=np.float64)
         cols[f"{est.name}.valid"] = np.asarray(est.valid, dtype=bool)
+        cols[f"{est.name}.settled"] = np.asarray(est.settled, dtype=bool)
     if reference_roll is not None:
         cols["reference_roll"] = np.asarray(reference_roll, dtype=np.float64)
     return cols

@@ -1,4 +1,4 @@
-"""Logs -> bank map: stream each log, estimate the bank, attach valid estimates to their GNSS position."""
+"""Logs -> bank map: stream each log, estimate the bank, attach settled estimates to their GNSS position."""
 
 from __future__ import annotations
 
@@ -115,7 +115,7 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
             out = est.run(correct(chunk.signals), reset=(k == 0), lookahead=None if nxt is None else correct(nxt))
             rec.samples += len(out.t)
             if part is not None:
-                add(*track.push(*part.projection.to_en(lat, lon), lat, lon, out.phi_b, out.valid))
+                add(*track.push(*part.projection.to_en(lat, lon), lat, lon, out.phi_b, out.settled))
         add(*track.finish())
     except (LogError, ValueError, OSError) as exc:
         rec.status, rec.error = "error", str(exc)
@@ -183,7 +183,8 @@ def map_logs(logs, estimator: str = MAP_ESTIMATOR, *, channels=None, format: str
         ``lat_deg`` / ``lon_deg``: a channel map with ``latitude`` / ``longitude`` roles
         (CSV, Parquet, MDF4, CAN, ROS ``NavSatFix``), comma2k19 (ECEF pose), KITTI oxts.
     estimator : str
-        Estimator whose valid ``phi_b`` is mapped; default :data:`roadbank.defaults.MAP_ESTIMATOR`,
+        Estimator whose settled ``phi_b`` is mapped (:attr:`~roadbank.signals.Estimate.settled`); default
+        :data:`roadbank.defaults.MAP_ESTIMATOR`,
         the offline ``kinematic-smoother`` (``pif-smoother`` on a quiet log; a map is made after
         the drives, so the samples after each instant may be used; each streamed chunk is smoothed
         with the chunks after it as lookahead, as one run over the log).
