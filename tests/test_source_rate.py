@@ -137,3 +137,24 @@ def test_a_kitti_drive_written_at_100_hz_is_designed_as_at_its_own_rate(drive):
     (name_own, own), (name_up, at_100) = error(s), error(up)
     assert name_own == name_up == "kinematic-pif"
     assert at_100 < 1.1 * own
+
+
+def test_the_design_says_which_channels_were_read_at_their_source():
+    """``roadbank estimate``'s design line and summary name the channels read at their sensor's rate, and say
+    nothing of it for a log at its own rate."""
+    from roadbank.fleet.process import design_words
+    from roadbank.vehicle import car_for_log
+    from roadbank.vehicle.conditions import source_rates
+
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 120.0, 0.1)
+    own = Signals(t, np.full(t.size, 12.0), 0.2 * rng.normal(size=t.size), 0.01 * rng.normal(size=t.size),
+                  np.zeros(t.size))
+    up = _upsampled(own)
+    assert source_rates(own) == {}
+    assert source_rates(up) == {"ay": pytest.approx(10.0, rel=0.01), "r": pytest.approx(10.0, rel=0.01)}
+    _, record = car_for_log(up, log_conditions(up))
+    assert record["source"] == "ay 10 Hz, r 10 Hz"
+    assert design_words(record, "kinematic-pif").endswith("read at the sensor's rate: ay 10 Hz, r 10 Hz")
+    _, plain = car_for_log(own, log_conditions(own))
+    assert "source" not in plain and "sensor's rate" not in design_words(plain, "kinematic-pif")

@@ -105,8 +105,9 @@ def design_text(design: dict) -> str:
 
 def design_words(design: dict, estimator: str) -> str:
     """:attr:`LogSummary.design` in words, for the estimator ``estimator`` ('' when empty): the car, the
-    ``ay`` noise and floor (m/s^2; what was not measured is said so, and what the design took instead), and for an
-    estimator that changes on a quiet log what it is."""
+    ``ay`` noise and floor (m/s^2; what was not measured is said so, and what the design took instead), the channels
+    written faster than their sensor (their noise read at the source's rate), and for an estimator that changes on a
+    quiet log what it is."""
     if not design:
         return ""
     noise, floor, ratio = design["ay_noise"], design["ay_floor"], design["ay_floor_ratio"]
@@ -122,6 +123,8 @@ def design_words(design: dict, estimator: str) -> str:
     words = f"{design['car']} ({design['car_from']}); {heard}"
     if estimator in QUIET_MODELS:
         words += f", so {estimator} is {QUIET_MODELS[estimator] if design['quiet'] else 'the low-pass blend'}"
+    if design.get("source"):
+        words += f"; written faster than their sensor, noise read at the sensor's rate: {design['source']}"
     return words
 
 

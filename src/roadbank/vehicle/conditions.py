@@ -115,17 +115,11 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     its chunk size. :data:`NOISE_AT_SOURCE` says which of these readings take a channel that a logger wrote faster
     than its sensor at the sensor's rate (:func:`_at_source`).
     """
-    n = design_span(signals, v_min)
-    if n < len(signals):
-        signals = signals[:n]
-    vx = np.asarray(signals.vx, dtype=np.float64)
-    with np.errstate(invalid="ignore"):
-        moving = vx >= v_min
-    if NOISE_AT_SOURCE not in NOISE_AT_SOURCE_CHOICES:
-        raise ValueError(f"NOISE_AT_SOURCE must be one of {NOISE_AT_SOURCE_CHOICES}, got {NOISE_AT_SOURCE!r}")
-    k_quiet = source_step(signals.ay, moving) if NOISE_AT_SOURCE != "none" else 1
+    signals, vx, moving = _design_part(signals, v_min)
+    steps = _source_steps(signals, moving)
+    k_quiet = steps["ay"]
     k_ay = k_quiet if NOISE_AT_SOURCE == "all" else 1
-    k_r = source_step(signals.r, moving) if NOISE_AT_SOURCE == "all" else 1
+    k_r = steps["r"]
     ay_floor = _at_source(road_noise_floor_std, signals.ay, signals.t, moving, k_ay)
     ay_noise = _at_most(_at_source(road_noise_std, signals.ay, signals.t, moving, k_ay), ay_floor)
     if QUIET_FLOOR_RATE > 0.0 or QUIET_FLOOR_SIGNAL != "ay":   # what the quiet decision reads; the cap keeps ay's
@@ -140,6 +134,35 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     return {"log_rate": sample_rate(signals.t), "log_ay_noise": float(f"{ay_noise:.2g}"),
             "log_r_noise": float(f"{r_noise:.2g}"), "log_ay_floor": float(f"{ay_floor:.2g}"),
             "log_diff_noise": float(f"{diff_noise:.2g}")}
+
+
+def _design_part(signals, v_min: float):
+    """``(signals, vx m/s, moving)``: the log's first :data:`DESIGN_SPAN_S` of driving (:func:`design_span`), its speed
+    and where it is at least ``v_min`` (m/s)."""
+    n = design_span(signals, v_min)
+    if n < len(signals):
+        signals = signals[:n]
+    vx = np.asarray(signals.vx, dtype=np.float64)
+    with np.errstate(invalid="ignore"):
+        return signals, vx, vx >= v_min
+
+
+def _source_steps(signals, moving) -> dict[str, int]:
+    """``{"ay": k, "r": k}``: the log samples per sample of each channel's source (:func:`roadbank.signals.source_step`
+    on the ``moving`` samples) that :data:`NOISE_AT_SOURCE` reads at the source's rate, 1 for the others."""
+    if NOISE_AT_SOURCE not in NOISE_AT_SOURCE_CHOICES:
+        raise ValueError(f"NOISE_AT_SOURCE must be one of {NOISE_AT_SOURCE_CHOICES}, got {NOISE_AT_SOURCE!r}")
+    return {"ay": source_step(signals.ay, moving) if NOISE_AT_SOURCE != "none" else 1,
+            "r": source_step(signals.r, moving) if NOISE_AT_SOURCE == "all" else 1}
+
+
+def source_rates(signals, v_min: float = 5.0) -> dict[str, float]:
+    """The channels of ``signals`` whose noise :func:`log_conditions` reads at their source's rate, because a logger
+    wrote them faster than their sensor: ``{"ay" or "r": the source's rate (Hz)}`` (empty for a log at its sensors'
+    rate), on the same samples as :func:`log_conditions`."""
+    signals, _, moving = _design_part(signals, v_min)
+    rate = sample_rate(signals.t)
+    return {ch: rate / k for ch, k in _source_steps(signals, moving).items() if k > 1}
 
 
 def _at_source(read, x, t, valid, k: int) -> float:

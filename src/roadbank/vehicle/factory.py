@@ -15,7 +15,7 @@ import numpy as np
 from .. import defaults
 from ..params import VehicleParams
 from ..signals import sample_rate
-from .conditions import design_span, is_quiet, log_conditions, make_estimator, quiet_noise_ratio
+from .conditions import design_span, is_quiet, log_conditions, make_estimator, quiet_noise_ratio, source_rates
 from .file import load_vehicle
 from .sensors import SensorSpec
 
@@ -111,19 +111,25 @@ def design_car(signals, margin: float = CAR_MARGIN) -> str:
     return best if power[best] * margin < power[defaults.VEHICLE] else defaults.VEHICLE
 
 
-def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | None = None) -> dict:
+def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | None = None,
+                  sources: dict | None = None) -> dict:
     """What a log's estimators are designed for, to report: ``car`` (a name) and ``car_from`` (where it
     came from: "fitted to the log", "vehicle file", "parameters given"), ``quiet`` (bool,
     :func:`~roadbank.vehicle.is_quiet` with ``sensors``, default the data sheet's), ``ay_noise`` and
     ``ay_floor`` (m/s^2) from ``cond`` (:func:`~roadbank.vehicle.log_conditions`), and ``ay_floor_ratio``
     (-, :func:`~roadbank.vehicle.conditions.quiet_noise_ratio`: what ``quiet`` compares with
-    :data:`~roadbank.vehicle.QUIET_RATIO`; NaN when not measured)."""
+    :data:`~roadbank.vehicle.QUIET_RATIO`; NaN when not measured); where ``sources``
+    (:func:`~roadbank.vehicle.conditions.source_rates`) names channels written faster than their sensor,
+    ``source`` says which and at what rate their noise was read (e.g. ``"ay 10 Hz, r 10 Hz"``)."""
     sensors = sensors or SensorSpec()
     noise, floor = cond.get("log_ay_noise"), cond.get("log_ay_floor")
     ratio = quiet_noise_ratio(sensors, cond.get("log_rate"), noise, floor)
-    return {"car": car, "car_from": car_from, "quiet": bool(is_quiet(sensors, cond.get("log_rate"), noise,
-                                                                     log_ay_floor=floor)),
-            "ay_noise": noise, "ay_floor": floor, "ay_floor_ratio": float(f"{ratio:.3g}")}
+    record = {"car": car, "car_from": car_from, "quiet": bool(is_quiet(sensors, cond.get("log_rate"), noise,
+                                                                       log_ay_floor=floor)),
+              "ay_noise": noise, "ay_floor": floor, "ay_floor_ratio": float(f"{ratio:.3g}")}
+    if sources:
+        record["source"] = ", ".join(f"{ch} {hz:.3g} Hz" for ch, hz in sources.items())
+    return record
 
 
 def car_for_log(signals, cond: dict, params: VehicleParams | None = None, vehicle=None,
@@ -131,12 +137,13 @@ def car_for_log(signals, cond: dict, params: VehicleParams | None = None, vehicl
     """The car a log's estimators are designed for, and its :func:`design_record` (``cond``: the log's
     :func:`log_conditions`): ``vehicle``'s (a :class:`Vehicle`), else ``params`` (with ``sensors``), else
     :func:`undescribed_car` of the log's ``signals`` (the one that fits it)."""
+    sources = source_rates(signals)
     if vehicle is not None:
-        return vehicle.params, design_record(cond, vehicle.name, "vehicle file", vehicle.sensors)
+        return vehicle.params, design_record(cond, vehicle.name, "vehicle file", vehicle.sensors, sources)
     if params is not None:
-        return params, design_record(cond, "-", "parameters given", sensors)
+        return params, design_record(cond, "-", "parameters given", sensors, sources)
     name = undescribed_car(signals)
-    return _car(name), design_record(cond, name, "fitted to the log")
+    return _car(name), design_record(cond, name, "fitted to the log", sources=sources)
 
 
 def for_conditions(name: str, cond: dict, params: VehicleParams | None = None, *, vehicle=None, **tuning):
