@@ -6,6 +6,8 @@ turning left; ``ay`` positive to the left; roll and bank positive left side up).
 
 from __future__ import annotations
 
+import math
+
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -194,7 +196,7 @@ def noise_band_hz(rate: float) -> float:
 ROAD_NOISE_MIN_PERIODS = 4.0
 
 
-def road_noise_std(x, t, valid=None, band_hz: float | None = None) -> float:
+def road_noise_std(x, t, valid=None, band_hz: float | None = None, top_hz: float = math.inf) -> float:
     """Standard deviation (unit of ``x``) of the noise a channel carries on a real road.
 
     The noise model of real roads: what the sampled channel ``x`` (on time stamps ``t``, s)
@@ -211,7 +213,9 @@ def road_noise_std(x, t, valid=None, band_hz: float | None = None) -> float:
     coloured part of the vibration, which pass a filter designed for white noise. Only finite
     samples that are ``valid`` (bool array, default all) count; NaN with fewer than
     :data:`MIN_NOISE_TRIPLES` of them in such runs. Where the log is too slow for the band
-    (``rate <= 4 band_hz``) it falls back to :func:`white_noise_std`.
+    (``rate <= 4 band_hz``) it falls back to :func:`white_noise_std`. ``top_hz`` (Hz, default none): the band read
+    ends there too, ``G`` times the low-pass ``1 / (1 + (f/top)^8)`` (the density read in ``band .. top``, taken as
+    the whole band's: the noise where a filter's stop band begins, whatever lies above).
     """
     x = np.asarray(x, dtype=np.float64)
     ok = np.isfinite(x) if valid is None else np.isfinite(x) & np.asarray(valid, dtype=bool)
@@ -233,7 +237,7 @@ def road_noise_std(x, t, valid=None, band_hz: float | None = None) -> float:
         w = np.hanning(n)
         f = np.fft.rfftfreq(n, d=1.0 / rate)
         q = (f / band_hz) ** 8
-        gain = q / (1.0 + q)
+        gain = q / (1.0 + q) / (1.0 + (f / top_hz) ** 8)
         h = np.fft.irfft(np.fft.rfft(y * w) * gain, n)
         power += float(np.sum(h ** 2)) / float(np.mean(gain ** 2))
         weight += float(np.sum(w ** 2))
@@ -245,13 +249,15 @@ def road_noise_std(x, t, valid=None, band_hz: float | None = None) -> float:
 NOISE_FLOOR_WINDOW_S = 4.0
 
 
-def road_noise_floor_std(x, t, valid=None, band_hz: float | None = None, at_rate: float = 0.0) -> float:
+def road_noise_floor_std(x, t, valid=None, band_hz: float | None = None, at_rate: float = 0.0,
+                         top_hz: float = math.inf) -> float:
     """The noise floor (unit of ``x``) of a channel: :func:`road_noise_std` of half-overlapping windows
     of :data:`NOISE_FLOOR_WINDOW_S` (longer where the log is slow: at least the samples one run needs
-    there), the median of their variances. ``at_rate`` (Hz; 0: the log's own rate): where the log is faster
-    than 1.5 times it, the floor of the channel read at about that rate (:func:`block_means` of ``k`` samples,
-    ``k`` the rate ratio rounded), returned as the standard deviation that white noise of the same density at
-    the log's own rate has (times ``sqrt(k)``): white noise reads the same floor either way.
+    there), the median of their variances (``band_hz``, ``top_hz`` as there). ``at_rate`` (Hz; 0: the log's own
+    rate): where the log is faster than 1.5 times it, the floor of the channel read at about that rate
+    (:func:`block_means` of ``k`` samples, ``k`` the rate ratio rounded), returned as the standard deviation that
+    white noise of the same density at the log's own rate has (times ``sqrt(k)``): white noise reads the same floor
+    either way.
 
     :func:`road_noise_std` counts everything above the dynamics band over the whole span, the bursts
     too: road vibration that comes and goes is noise a filter must stand, but so is the response of a
@@ -269,11 +275,11 @@ def road_noise_floor_std(x, t, valid=None, band_hz: float | None = None, at_rate
         return float("nan")
     if at_rate > 0.0 and rate > 1.5 * at_rate:
         k = int(round(rate / at_rate))
-        return float(np.sqrt(k)) * road_noise_floor_std(*block_means(x, t, ok, k), band_hz=band_hz)
+        return float(np.sqrt(k)) * road_noise_floor_std(*block_means(x, t, ok, k), band_hz=band_hz, top_hz=top_hz)
     band = noise_band_hz(rate) if band_hz is None else band_hz
     n = max(int(round(NOISE_FLOOR_WINDOW_S * rate)), MIN_NOISE_TRIPLES,
             int(np.ceil(ROAD_NOISE_MIN_PERIODS * rate / band)))
-    var = [road_noise_std(x[a:a + n], t[a:a + n], ok[a:a + n], band) ** 2
+    var = [road_noise_std(x[a:a + n], t[a:a + n], ok[a:a + n], band, top_hz) ** 2
            for a in range(0, max(len(x) - n, 0) + 1, max(n // 2, 1))]
     var = [v for v in var if np.isfinite(v)]
     return float(np.sqrt(np.median(var))) if var else float("nan")

@@ -211,6 +211,21 @@ acceleration and the body's roll, not the centripetal part, fill their 1-5 Hz. T
 median 0.597 (none) / 0.501 (floor) / 0.397 (all; the interpolated drives 0.820 / 0.558 / 0.401 against 0.385 at
 their own 10 Hz), the simulated drives unchanged (none is read otherwise: median 0.257, mean 0.346), every score
 judged 0.385 -> 0.360. The eighteenth and nineteenth stages run as they ran, every channel at the log's rate.
+
+The twenty-first stage (:func:`choose_noise_octave`; rule written 2026-12-04 before any candidate ran) takes the
+same failure from the other side: a logger that resamples without aliasing (a polyphase low-pass, as
+``scipy.signal.resample_poly`` or an anti-aliased logger writes a 10 Hz INS at 100 Hz), or a sensor's own low-pass,
+leaves no straight lines to recognise, just nothing above the source's Nyquist frequency, and the noise read above
+3 Hz at 100 Hz, taken as white up to 50 Hz, is then a small part of what the road puts where the low-pass's stop
+band begins (measured on the training drives so resampled: every one is called quiet, median 0.84 deg against 0.385
+at their own 10 Hz). Candidates :data:`NOISE_OCTAVES` (:data:`roadbank.vehicle.conditions.NOISE_OCTAVE`): ``"none"``
+(shipped: white over the whole band above the dynamics band), ``"fast"`` (the density of the octave above the
+dynamics band, ``band .. 2 band``, taken as the whole band's, on logs whose band is the dynamics band, 30 Hz or
+faster; a 10 Hz log as before), ``"all"`` (that octave at every rate: 1-2 Hz at 10 Hz). White noise reads the same
+either way. The rule, the guard and the code are the eighteenth stage's (:func:`_roads_then_guarded`), the real
+part over twenty-four scores: the eight KITTI training drives at 10 Hz, interpolated linearly onto 100 Hz
+(:func:`upsampled_logs`) and resampled onto 100 Hz (:func:`resampled_logs`); the simulated training drives as
+before. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -224,6 +239,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy.signal import resample_poly
 
 from .. import vehicle
 from ..vehicle import conditions
@@ -308,6 +324,11 @@ QUIET_FLOOR_RATES = (0.0, 10.0)
 QUIET_FLOOR_READINGS = (("ay", 0.0), ("ay - vx r", 0.0), ("ay - vx r", 10.0))
 #: the twentieth stage's candidates: which noise readings take a channel at its source's rate (the shipped first)
 NOISE_AT_SOURCE_CHOICES = conditions.NOISE_AT_SOURCE_CHOICES
+#: the twenty-first stage's candidates: where the noise is read in one octave above the dynamics band (the shipped
+#: first)
+NOISE_OCTAVES = conditions.NOISE_OCTAVES
+#: how many times faster than its source the twenty-first stage's resampled KITTI training drives are written
+RESAMPLE_FACTOR = 10
 #: the rate (Hz) of the eighteenth stage's interpolated KITTI training drives
 UPSAMPLED_RATE_HZ = 100.0
 #: the stages before the fourteenth took the bank-rate prior as a rate in time
@@ -548,19 +569,42 @@ def upsampled_logs(logs, rate: float = UPSAMPLED_RATE_HZ, scoring=KITTI_SCORING)
 
 
 @contextmanager
-def quiet_floor(rate: float, signal: str = "ay"):
-    """Within the block, every command's quiet decision reads the floor of ``signal`` (``"ay"`` or ``"ay - vx r"``)
-    at ``rate`` (Hz; 0: the log's own): :data:`roadbank.vehicle.conditions.QUIET_FLOOR_RATE` and
-    :data:`~roadbank.vehicle.conditions.QUIET_FLOOR_SIGNAL`, restored after. The eighteenth and nineteenth stages run
-    each candidate as it would ship."""
-    if signal not in conditions.QUIET_FLOOR_SIGNALS:
-        raise ValueError(f"quiet floor signal must be one of {conditions.QUIET_FLOOR_SIGNALS}, got {signal!r}")
-    before = conditions.QUIET_FLOOR_RATE, conditions.QUIET_FLOOR_SIGNAL
-    conditions.QUIET_FLOOR_RATE, conditions.QUIET_FLOOR_SIGNAL = rate, signal
+def design_settings(**settings):
+    """Within the block, the settings of :mod:`roadbank.vehicle.conditions` that the stages from the eighteenth on
+    choose (``QUIET_FLOOR_RATE``, ``QUIET_FLOOR_SIGNAL``, ``NOISE_AT_SOURCE``, ``NOISE_OCTAVE``: keyword names in
+    lower case) as given, restored after: every command's design reads them, so a stage runs each candidate as it
+    would ship. A value that is not one of the setting's choices is refused when a design reads it."""
+    names = {k: k.upper() for k in settings}
+    unknown = [k for k, n in names.items() if n not in _DESIGN_SETTINGS]
+    if unknown:
+        raise ValueError(f"not a design setting: {', '.join(unknown)} (one of {', '.join(_DESIGN_SETTINGS).lower()})")
+    before = {n: getattr(conditions, n) for n in names.values()}
+    for k, n in names.items():
+        setattr(conditions, n, settings[k])
     try:
         yield
     finally:
-        conditions.QUIET_FLOOR_RATE, conditions.QUIET_FLOOR_SIGNAL = before
+        for n, v in before.items():
+            setattr(conditions, n, v)
+
+
+#: the module settings of :mod:`roadbank.vehicle.conditions` that :func:`design_settings` sets
+_DESIGN_SETTINGS = ("QUIET_FLOOR_RATE", "QUIET_FLOOR_SIGNAL", "NOISE_AT_SOURCE", "NOISE_OCTAVE")
+#: the settings as each stage ran: the eighteenth and nineteenth before the twentieth, the twentieth before the
+#: twenty-first
+_BEFORE_SOURCE = {"noise_at_source": "none", "noise_octave": "none"}
+_BEFORE_OCTAVE = {"noise_octave": "none"}
+
+
+def _with_settings(**settings):
+    """``build`` of the default as the command line builds it, within :func:`design_settings` ``(**settings)``: the
+    design, where the settings are read, is built inside the block."""
+    build = per_log("kinematic-pif")
+
+    def at(signals):
+        with design_settings(**settings):
+            return build(signals)
+    return at
 
 
 def choose_quiet_floor_rate(logs, up, sim_sets, rates=QUIET_FLOOR_RATES) -> tuple:
@@ -569,7 +613,8 @@ def choose_quiet_floor_rate(logs, up, sim_sets, rates=QUIET_FLOOR_RATES) -> tupl
     (:func:`simulated_sets`), over ``rates`` (Hz; the shipped first). Returns ``(chosen rate, {rate: real scores},
     {rate: simulated scores})``, the simulated ones for the shipped rate and the candidates within :data:`TIE_DEG`
     of the best real median."""
-    return _roads_then_guarded({rate: _at_floor(rate) for rate in rates}, logs + up, sim_sets)
+    return _roads_then_guarded({rate: _with_settings(quiet_floor_rate=rate, **_BEFORE_SOURCE) for rate in rates},
+                               logs + up, sim_sets)
 
 
 def choose_quiet_floor_signal(logs, up, sim_sets, readings=QUIET_FLOOR_READINGS) -> tuple:
@@ -577,22 +622,9 @@ def choose_quiet_floor_signal(logs, up, sim_sets, readings=QUIET_FLOOR_READINGS)
     (``(channel, rate Hz)`` pairs, the shipped first). Returns ``(chosen reading, {reading: real scores},
     {reading: simulated scores})``, the simulated ones for the shipped reading and the candidates within
     :data:`TIE_DEG` of the best real median."""
-    return _roads_then_guarded({(sig, rate): _at_floor(rate, sig) for sig, rate in readings}, logs + up, sim_sets)
-
-
-@contextmanager
-def noise_at_source(choice: str):
-    """Within the block, every command's design reads the noise of the channels ``choice`` names at their source's
-    rate (:data:`roadbank.vehicle.conditions.NOISE_AT_SOURCE`), restored after. The twentieth stage runs each
-    candidate as it would ship."""
-    if choice not in conditions.NOISE_AT_SOURCE_CHOICES:
-        raise ValueError(f"noise at source must be one of {conditions.NOISE_AT_SOURCE_CHOICES}, got {choice!r}")
-    before = conditions.NOISE_AT_SOURCE
-    conditions.NOISE_AT_SOURCE = choice
-    try:
-        yield
-    finally:
-        conditions.NOISE_AT_SOURCE = before
+    return _roads_then_guarded({(sig, rate): _with_settings(quiet_floor_rate=rate, quiet_floor_signal=sig,
+                                                            **_BEFORE_SOURCE) for sig, rate in readings},
+                               logs + up, sim_sets)
 
 
 def choose_noise_at_source(logs, up, sim_sets, choices=NOISE_AT_SOURCE_CHOICES) -> tuple:
@@ -600,26 +632,33 @@ def choose_noise_at_source(logs, up, sim_sets, choices=NOISE_AT_SOURCE_CHOICES) 
     (:data:`roadbank.vehicle.conditions.NOISE_AT_SOURCE` values, the shipped first). Returns ``(chosen, {choice: real
     scores}, {choice: simulated scores})``, the simulated ones for the shipped choice and the candidates within
     :data:`TIE_DEG` of the best real median."""
-    build = per_log("kinematic-pif")
-
-    def at(choice):
-        def made(signals):
-            with noise_at_source(choice):
-                return build(signals)
-        return made
-    return _roads_then_guarded({c: at(c) for c in choices}, logs + up, sim_sets)
+    return _roads_then_guarded({c: _with_settings(noise_at_source=c, **_BEFORE_OCTAVE) for c in choices},
+                               logs + up, sim_sets)
 
 
-def _at_floor(rate: float, signal: str = "ay"):
-    """``build`` of the default as the command line builds it, the quiet decision reading the floor of ``signal`` at
-    ``rate`` (Hz; :func:`quiet_floor`): the design, where that decision is made, is built inside the block; every
-    channel read at the log's rate, as the eighteenth and nineteenth stages ran (:func:`noise_at_source`)."""
-    build = per_log("kinematic-pif")
+def resampled_logs(logs, factor: int = RESAMPLE_FACTOR, scoring=KITTI_SCORING) -> list:
+    """``logs`` (:func:`training_logs`) as a logger that resamples its channels without aliasing writes them: each
+    drive first linear onto a uniform grid at its own median rate, then ``factor`` times faster by a polyphase
+    low-pass (``scipy.signal.resample_poly``; nothing above the source's Nyquist frequency); the reference roll (rad)
+    linear onto the same grid; the scored samples recomputed with ``scoring``."""
+    out = []
+    for s, ref, _ in logs:
+        rate = sample_rate(s.t)
+        base = s.t[0] + np.arange(int(np.floor((s.t[-1] - s.t[0]) * rate)) + 1) / rate
+        t = s.t[0] + np.arange(base.size * factor) / (rate * factor)
+        up = Signals(t, *(resample_poly(np.interp(base, s.t, getattr(s, c)), factor, 1)
+                          for c in ("vx", "ay", "r", "delta_f")))
+        out.append((up, np.interp(t, s.t, ref), masks(up.t, up.vx, scoring)[1]))
+    return out
 
-    def at(signals):
-        with quiet_floor(rate, signal), noise_at_source("none"):     # as they ran: before the twentieth stage
-            return build(signals)
-    return at
+
+def choose_noise_octave(logs, up, resampled, sim_sets, choices=NOISE_OCTAVES) -> tuple:
+    """The twenty-first stage (module docstring): the eighteenth stage's rule over ``choices``
+    (:data:`roadbank.vehicle.conditions.NOISE_OCTAVE` values, the shipped first), on the KITTI training ``logs``, the
+    same interpolated (``up``, :func:`upsampled_logs`) and resampled (``resampled``, :func:`resampled_logs`), and the
+    simulated training drives ``sim_sets``. Returns ``(chosen, {choice: real scores}, {choice: simulated scores})``,
+    the simulated ones for the shipped choice and the candidates within :data:`TIE_DEG` of the best real median."""
+    return _roads_then_guarded({c: _with_settings(noise_octave=c) for c in choices}, logs + up + resampled, sim_sets)
 
 
 def choose_by_roads(builds: dict, logs, sim_sets) -> tuple:

@@ -14,7 +14,8 @@ import math
 import numpy as np
 
 from ..params import VehicleParams
-from ..signals import diff_noise_std, road_noise_floor_std, road_noise_std, sample_rate, source_step
+from ..signals import (DYNAMICS_BAND_HZ, diff_noise_std, noise_band_hz, road_noise_floor_std, road_noise_std,
+                       sample_rate, source_step)
 from .sensors import SensorSpec
 
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
@@ -90,6 +91,13 @@ QUIET_FLOOR_SIGNALS = ("ay", "ay - vx r")
 NOISE_AT_SOURCE = "all"
 #: the values :data:`NOISE_AT_SOURCE` may take
 NOISE_AT_SOURCE_CHOICES = ("none", "floor", "all")
+#: where :func:`log_conditions` reads a channel's noise density in the octave above the dynamics band only (``band ..
+#: 2 band`` Hz, :func:`roadbank.signals.noise_band_hz`), taken as the whole band's: ``"none"`` (white over the whole
+#: band above it), ``"fast"`` (on logs of 30 Hz or more, whose band is the dynamics band), ``"all"``. The
+#: twenty-first stage of :mod:`roadbank.tuning.real` chooses it
+NOISE_OCTAVE = "none"
+#: the values :data:`NOISE_OCTAVE` may take
+NOISE_OCTAVES = ("none", "fast", "all")
 
 
 def _at_most(noise: float, floor: float) -> float:
@@ -120,20 +128,41 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     k_quiet = steps["ay"]
     k_ay = k_quiet if NOISE_AT_SOURCE == "all" else 1
     k_r = steps["r"]
-    ay_floor = _at_source(road_noise_floor_std, signals.ay, signals.t, moving, k_ay)
-    ay_noise = _at_most(_at_source(road_noise_std, signals.ay, signals.t, moving, k_ay), ay_floor)
+    ay_floor = _at_source(_floor, signals.ay, signals.t, moving, k_ay)
+    ay_noise = _at_most(_at_source(_noise, signals.ay, signals.t, moving, k_ay), ay_floor)
     if QUIET_FLOOR_RATE > 0.0 or QUIET_FLOOR_SIGNAL != "ay":   # what the quiet decision reads; the cap keeps ay's
         ay_floor = road_noise_floor_std(_floor_signal(signals, vx), signals.t, moving, at_rate=QUIET_FLOOR_RATE)
     elif k_quiet != k_ay:
-        ay_floor = _at_source(road_noise_floor_std, signals.ay, signals.t, moving, k_quiet)
-    r_noise = _at_most(_at_source(road_noise_std, signals.r, signals.t, moving, k_r),
-                       _at_source(road_noise_floor_std, signals.r, signals.t, moving, k_r))
+        ay_floor = _at_source(_floor, signals.ay, signals.t, moving, k_quiet)
+    r_noise = _at_most(_at_source(_noise, signals.r, signals.t, moving, k_r),
+                       _at_source(_floor, signals.r, signals.t, moving, k_r))
     with np.errstate(invalid="ignore"):
         diff_noise = diff_noise_std(np.asarray(signals.ay, np.float64) - vx * np.asarray(signals.r, np.float64), moving)
     # two significant digits: logs of one car and road share a design (the design cache)
     return {"log_rate": sample_rate(signals.t), "log_ay_noise": float(f"{ay_noise:.2g}"),
             "log_r_noise": float(f"{r_noise:.2g}"), "log_ay_floor": float(f"{ay_floor:.2g}"),
             "log_diff_noise": float(f"{diff_noise:.2g}")}
+
+
+def _octave_top(t) -> float:
+    """The top (Hz) of the band in which :func:`log_conditions` reads the noise of samples at times ``t`` (s):
+    twice :func:`roadbank.signals.noise_band_hz` of their rate where :data:`NOISE_OCTAVE` says so, else none."""
+    if NOISE_OCTAVE not in NOISE_OCTAVES:
+        raise ValueError(f"NOISE_OCTAVE must be one of {NOISE_OCTAVES}, got {NOISE_OCTAVE!r}")
+    band = noise_band_hz(sample_rate(t))
+    if NOISE_OCTAVE == "none" or (NOISE_OCTAVE == "fast" and band < DYNAMICS_BAND_HZ):
+        return math.inf
+    return 2.0 * band
+
+
+def _noise(x, t, valid) -> float:
+    """:func:`roadbank.signals.road_noise_std` (unit of ``x``) in the band :func:`_octave_top` says."""
+    return road_noise_std(x, t, valid, top_hz=_octave_top(t))
+
+
+def _floor(x, t, valid) -> float:
+    """:func:`roadbank.signals.road_noise_floor_std` (unit of ``x``) in the band :func:`_octave_top` says."""
+    return road_noise_floor_std(x, t, valid, top_hz=_octave_top(t))
 
 
 def _design_part(signals, v_min: float):
