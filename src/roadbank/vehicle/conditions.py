@@ -95,7 +95,7 @@ NOISE_AT_SOURCE_CHOICES = ("none", "floor", "all")
 #: 2 band`` Hz, :func:`roadbank.signals.noise_band_hz`), taken as the whole band's: ``"none"`` (white over the whole
 #: band above it), ``"fast"`` (on logs of 30 Hz or more, whose band is the dynamics band), ``"all"``. The
 #: twenty-first stage of :mod:`roadbank.tuning.real` chooses it
-NOISE_OCTAVE = "none"
+NOISE_OCTAVE = "all"
 #: the values :data:`NOISE_OCTAVE` may take
 NOISE_OCTAVES = ("none", "fast", "all")
 
