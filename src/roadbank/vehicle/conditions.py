@@ -121,7 +121,8 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     limited low-pass's running noise estimate is relative to, ``noise_ref``). Measured on the log's first
     :data:`DESIGN_SPAN_S` of driving (:func:`design_span`), so that a streamed log gets the same design whatever
     its chunk size. :data:`NOISE_AT_SOURCE` says which of these readings take a channel that a logger wrote faster
-    than its sensor at the sensor's rate (:func:`_at_source`).
+    than its sensor at the sensor's rate (:func:`_at_source`), :data:`NOISE_OCTAVE` in which band the density is
+    read (:func:`_octave_top`: the octave above the dynamics band, taken as the whole band's).
     """
     signals, vx, moving = _design_part(signals, v_min)
     steps = _source_steps(signals, moving)
