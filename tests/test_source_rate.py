@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from roadbank.signals import Signals, road_noise_std, source_step
+from roadbank.tuning.real import design_settings
 from roadbank.vehicle import conditions, for_log, log_conditions
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
@@ -103,9 +104,10 @@ def _upsampled(signals, rate=100.0):
 @pytest.mark.parametrize("drive", ["2011_09_26_drive_0070", "2011_10_03_drive_0047"])
 def test_a_kitti_drive_written_at_100_hz_is_designed_as_at_its_own_rate(drive):
     """A KITTI drive interpolated onto 100 Hz, as a logger that resamples its 10 Hz INS writes it: its noise is read
-    on the INS's samples (the densities within a factor 0.5-1 of the 10 Hz drive's, against below 0.02 read at
-    100 Hz), it is loud as the drive is, and the default's error against the INS roll stays within a tenth of the
-    10 Hz drive's."""
+    on the INS's samples (the densities within a factor 0.5-1.25 of the 10 Hz drive's: read in 1-2 Hz, where linear
+    interpolation loses little, 0.77-1.04 on these two; against below 0.02 as the noise was read before the
+    twentieth and twenty-first stages), it is loud as the drive is, and the default's error against the INS roll
+    stays within a tenth of the 10 Hz drive's."""
     from roadbank.io.kitti import load_kitti_oxts
     from roadbank.validation.kitti import KITTI_SCORING
     from roadbank.validation.scoring import masks
@@ -119,14 +121,10 @@ def test_a_kitti_drive_written_at_100_hz_is_designed_as_at_its_own_rate(drive):
     a, b = log_conditions(s), log_conditions(up)
     for key in ("log_ay_noise", "log_r_noise", "log_ay_floor"):
         ratio = (b[key] ** 2 / b["log_rate"]) / (a[key] ** 2 / a["log_rate"])
-        assert 0.5 < ratio < 1.0, key
-    before = conditions.NOISE_AT_SOURCE
-    try:
-        conditions.NOISE_AT_SOURCE = "none"
-        none = log_conditions(up)
-    finally:
-        conditions.NOISE_AT_SOURCE = before
-    assert none["log_ay_noise"] ** 2 / 100.0 < 0.02 * a["log_ay_noise"] ** 2 / a["log_rate"]
+        assert 0.5 < ratio < 1.25, key
+    with design_settings(noise_at_source="none", noise_octave="none"):
+        none, own = log_conditions(up), log_conditions(s)
+    assert none["log_ay_noise"] ** 2 / 100.0 < 0.02 * own["log_ay_noise"] ** 2 / own["log_rate"]
 
     def error(signals):
         est = for_log("kinematic-pif", signals)
