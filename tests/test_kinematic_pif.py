@@ -530,18 +530,26 @@ def test_the_gate_filter_is_what_the_rule_keeps():
     assert med[0.2] > med[GATE_TFS[0]] + 0.02
 
 
-@pytest.mark.slow
-def test_the_quiet_floor_rate_is_what_the_rule_keeps():
-    """The eighteenth stage (tuning.real.choose_quiet_floor_rate): reading the floor at 10 Hz calls no interpolated
-    100 Hz KITTI training drive quiet and lowers the real median by far, but calls loud most simulated drives with the
-    data sheet's sensors, whose manoeuvres fill the same band; the mean guard keeps the log's own rate."""
-    from roadbank.tuning.real import (QUIET_FLOOR_RATES, choose_quiet_floor_rate, simulated_sets, training_logs,
-                                      upsampled_logs)
+@pytest.fixture(scope="module")
+def training_drives():
+    """The eight KITTI training drives (tuning.real.training_logs) and the same interpolated onto 100 Hz
+    (upsampled_logs), as the eighteenth to twenty-first stages read them; skipped where they are not all there."""
+    from roadbank.tuning.real import training_logs, upsampled_logs
 
     logs = training_logs(DATA)
     if len(logs) < 8:
         pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
-    chosen, real, sim = choose_quiet_floor_rate(logs, upsampled_logs(logs), simulated_sets())
+    return logs, upsampled_logs(logs)
+
+
+@pytest.mark.slow
+def test_the_quiet_floor_rate_is_what_the_rule_keeps(training_drives):
+    """The eighteenth stage (tuning.real.choose_quiet_floor_rate): reading the floor at 10 Hz calls no interpolated
+    100 Hz KITTI training drive quiet and lowers the real median by far, but calls loud most simulated drives with the
+    data sheet's sensors, whose manoeuvres fill the same band; the mean guard keeps the log's own rate."""
+    from roadbank.tuning.real import QUIET_FLOOR_RATES, choose_quiet_floor_rate, simulated_sets
+
+    chosen, real, sim = choose_quiet_floor_rate(*training_drives, simulated_sets())
     shipped, at10 = QUIET_FLOOR_RATES
     assert chosen == shipped
     assert real[shipped][:8] == real[at10][:8]                                   # 10 Hz logs: the same
@@ -550,18 +558,14 @@ def test_the_quiet_floor_rate_is_what_the_rule_keeps():
 
 
 @pytest.mark.slow
-def test_the_quiet_floor_signal_is_what_the_rule_keeps():
+def test_the_quiet_floor_signal_is_what_the_rule_keeps(training_drives):
     """The nineteenth stage (tuning.real.choose_quiet_floor_signal): the floor of ay - vx r at the log's own rate
     decides as ay's does; read at 10 Hz it calls no interpolated KITTI training drive quiet, but still calls loud
     simulated drives with the data sheet's sensors (not the centripetal part fills their 1-5 Hz): the mean guard
     keeps ay at the log's own rate."""
-    from roadbank.tuning.real import (QUIET_FLOOR_READINGS, choose_quiet_floor_signal, simulated_sets, training_logs,
-                                      upsampled_logs)
+    from roadbank.tuning.real import QUIET_FLOOR_READINGS, choose_quiet_floor_signal, simulated_sets
 
-    logs = training_logs(DATA)
-    if len(logs) < 8:
-        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
-    chosen, real, sim = choose_quiet_floor_signal(logs, upsampled_logs(logs), simulated_sets())
+    chosen, real, sim = choose_quiet_floor_signal(*training_drives, simulated_sets())
     shipped, own, at10 = QUIET_FLOOR_READINGS
     assert chosen == shipped
     assert real[own] == real[shipped]
@@ -570,18 +574,14 @@ def test_the_quiet_floor_signal_is_what_the_rule_keeps():
 
 
 @pytest.mark.slow
-def test_noise_at_the_source_rate_is_what_the_rule_chooses():
+def test_noise_at_the_source_rate_is_what_the_rule_chooses(training_drives):
     """The twentieth stage (tuning.real.choose_noise_at_source): every noise reading of a channel written faster
     than its sensor taken at the sensor's rate brings the interpolated KITTI training drives near their own 10 Hz
     error and changes nothing else (no simulated drive or 10 Hz drive is read otherwise); the quiet floor alone
     does half of it."""
-    from roadbank.tuning.real import (NOISE_AT_SOURCE_CHOICES, choose_noise_at_source, simulated_sets, training_logs,
-                                      upsampled_logs)
+    from roadbank.tuning.real import NOISE_AT_SOURCE_CHOICES, choose_noise_at_source, simulated_sets
 
-    logs = training_logs(DATA)
-    if len(logs) < 8:
-        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
-    chosen, real, sim = choose_noise_at_source(logs, upsampled_logs(logs), simulated_sets())
+    chosen, real, sim = choose_noise_at_source(*training_drives, simulated_sets())
     none, floor, every = NOISE_AT_SOURCE_CHOICES
     assert chosen == every
     assert real[every][:8] == real[none][:8]                                     # 10 Hz logs: the same
@@ -591,18 +591,16 @@ def test_noise_at_the_source_rate_is_what_the_rule_chooses():
 
 
 @pytest.mark.slow
-def test_the_noise_octave_is_what_the_rule_chooses():
+def test_the_noise_octave_is_what_the_rule_chooses(training_drives):
     """The twenty-first stage (tuning.real.choose_noise_octave): reading the noise density in the octave above the
     dynamics band brings the KITTI training drives resampled onto 100 Hz without aliasing (called quiet before) near
     their own 10 Hz error; at every rate ("all") it leads the real median by more than the tie, the simulated drives
     move by less than 0.01 deg, and the mean guard passes."""
     from roadbank.tuning.real import (NOISE_OCTAVES, TIE_DEG, cars_median, choose_noise_octave, resampled_logs,
-                                      simulated_sets, training_logs, upsampled_logs)
+                                      simulated_sets)
 
-    logs = training_logs(DATA)
-    if len(logs) < 8:
-        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
-    chosen, real, sim = choose_noise_octave(logs, upsampled_logs(logs), resampled_logs(logs), simulated_sets())
+    logs, up = training_drives
+    chosen, real, sim = choose_noise_octave(logs, up, resampled_logs(logs), simulated_sets())
     none, fast, every = NOISE_OCTAVES
     assert chosen == every
     assert np.median(real[none][16:]) > 0.7 > 0.5 > np.median(real[every][16:])     # resampled drives
