@@ -7,7 +7,6 @@ turning left; ``ay`` positive to the left; roll and bank positive left side up).
 from __future__ import annotations
 
 import math
-
 from dataclasses import dataclass, field
 
 import numpy as np

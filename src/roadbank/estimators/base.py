@@ -33,11 +33,11 @@ from .synthesis import NoStabilisingSolution, using_reference_solvers
 
 #: Default speed grid of the gain schedules (m/s): v_min .. V_GRID_MAX.
 V_GRID_MAX = 100.0
+V_GRID_STEP = 0.25
 #: speeds (m/s) of the grid at which :attr:`Estimator.settle_time` is read: at most this many, spread from the lowest
 #: to :data:`SETTLE_V_MAX` (a car's road speeds; the grid reaches further so that no speed falls off it)
 SETTLE_SPEEDS = 8
 SETTLE_V_MAX = 40.0
-V_GRID_STEP = 0.25
 
 #: designed tables by design key (:meth:`Estimator._design_key`), or the NoStabilisingSolution raised
 _DESIGN_CACHE: dict = {}
@@ -550,6 +550,9 @@ class Estimator:
         states["phi"] = phi
         return Estimate(self.name, signals.t, w, theta, phib, valid, states, self._settled(signals.t, valid))
 
+    #: :attr:`settle_time` once read (None: not yet)
+    _settle_s: float | None = None
+
     @property
     def settle_time(self) -> float:
         """Settling time (s) of the estimate after a (re)start (:mod:`roadbank.estimators.settle`): the longest
@@ -561,8 +564,6 @@ class Estimator:
             self._settle_s = self._settling_time() if hit is None else hit
             _memo_put(_SETTLE_CACHE, key, self._settle_s)
         return self._settle_s
-
-    _settle_s: float | None = None
 
     def _settling_time(self) -> float:
         """:attr:`settle_time` of the ``lpv`` table's continuous observer, at up to :data:`SETTLE_SPEEDS` speeds of
