@@ -36,7 +36,7 @@ def _origin(ctx, param, value):
 @click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default=None,
               help="Input format (default: from the suffix / directory layout).")
 @click.option("--estimator", "-e", "estimator", default=MAP_ESTIMATOR, show_default=True,
-              help="Estimator whose valid bank estimates are mapped (default: the offline kinematic smoother, "
+              help="Estimator whose settled bank estimates are mapped (default: the offline kinematic smoother, "
                    "pif-smoother on a quiet log, as a map is made after the drives; docs/estimators.md).")
 @click.option("--cell", "cell_m", type=float, default=10.0, show_default=True, help="Cell edge (m).")
 @click.option("--sectors", type=int, default=4, show_default=True,
@@ -50,7 +50,7 @@ def _origin(ctx, param, value):
 @pool_options("Logs", "The logs' cells are merged in the order of the logs: the same map as in one process.")
 def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, sectors, origin, chunk_rows, vehicle,
                 workers, scheduler):
-    """Map the road bank: attach each valid bank estimate of LOGS to its GNSS position and aggregate per cell.
+    """Map the road bank: attach each settled bank estimate of LOGS to its GNSS position and aggregate per cell.
 
     \b
     roadbank map ../shared/data/comma2k19-example -o bank_map.parquet --geojson map.geojson --png map.png
@@ -88,7 +88,7 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
     for r in failed:
         click.echo(f"FAILED {r.error}" if r.error.startswith(r.log) else f"FAILED {r.log}: {r.error}", err=True)
     if bmap is None or len(bmap) == 0:
-        click.echo("error: no valid bank estimate with a position: nothing to map", err=True)
+        click.echo("error: no settled bank estimate with a position: nothing to map", err=True)
         sys.exit(1)
     try:
         files = write_outputs(bmap, output, geojson, png, {"estimator": estimator,
@@ -98,7 +98,7 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
         sys.exit(1)
     tab = bmap.table()
     mapped = sum(r.mapped for r in recs)
-    click.echo(f"{len(tab['ix'])} cell(s) x sector from {mapped} valid estimate(s) of "
+    click.echo(f"{len(tab['ix'])} cell(s) x sector from {mapped} settled estimate(s) of "
                f"{len(recs) - len(failed)} log(s); bank {tab['bank_mean_deg'].min():.1f} .. "
                f"{tab['bank_mean_deg'].max():.1f} deg; origin {bmap.projection.lat0_deg:.5f}, "
                f"{bmap.projection.lon0_deg:.5f}; cell {bmap.cell_m:g} m")

@@ -1,4 +1,4 @@
-"""Bank maps: valid bank estimates attached to GNSS positions and aggregated per road cell.
+"""Bank maps: settled bank estimates attached to GNSS positions and aggregated per road cell.
 
 * :mod:`.geo` -- the local East/North projection of the map (equirectangular about an origin).
 * :mod:`.grid` -- :class:`BankMap`: square cells x heading sectors, running mean / spread / count;
