@@ -7,11 +7,11 @@ the observer's error dynamics decay. ``valid`` says that a sample was usable; ``
 addition, that the estimator has run for its settling time since its last (re)start.
 
 The settling time of a linear observer ``xi' = F xi + G eta``, ``w = H xi + D eta`` is that of the
-step response of ``w`` to its input ``ay``: started at the equilibrium of one sample, the output's
-error decays as the step response approaches its final value,
+step response of ``w`` to its inputs: started at the equilibrium of one sample, the output's error
+decays as the step response to input ``j`` approaches its final value,
 
 .. math::
-    e(t) = H F^{-1} e^{F t} G_{a_y}, \qquad w_\infty = D_{a_y} - H F^{-1} G_{a_y},
+    e(t) = H F^{-1} e^{F t} G_j, \qquad w_\infty = D_j - H F^{-1} G_j,
 
 and the settling time is the last instant at which :math:`|e(t)| > s\,|w_\infty|`, ``s`` =
 :data:`SETTLE_SHARE` (5 %: three time constants of a first-order low-pass, :math:`\tau \ln 20`), the
