@@ -232,6 +232,13 @@ drives 0.844 / 0.439 / 0.439, the interpolated ones 0.4006 / 0.4006 / 0.3968, th
 (five of the eight a little worse, by up to 0.019 deg, two better). ``"all"`` leads ``"fast"`` by 0.0024 deg, just
 more than the tie, so it is chosen on the real median; the simulated drives (read in 3-6 Hz under either) move from
 0.2569 to 0.2551 (median; mean 0.3460 -> 0.3470), and the mean of every score judged falls 0.3983 -> 0.3698.
+
+The twenty-second stage (:func:`choose_octave_top`; rule written 2026-12-04 before any candidate ran) chooses the width
+of that band, which the twenty-first fixed at one octave: a wider band reads more degrees of freedom (a 3 Hz band over
+15 s spreads about 10 % in standard deviation) but reaches further from where the low-pass's stop band begins, a
+narrower one the reverse. Candidates :data:`NOISE_OCTAVE_TOPS` (the top as a multiple of the lower edge; 2 shipped
+first; at 10 Hz the top is at most the Nyquist frequency, so 4 and more read the whole band there). The rule, the sets
+and the code are the twenty-first stage's. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -333,6 +340,9 @@ NOISE_AT_SOURCE_CHOICES = conditions.NOISE_AT_SOURCE_CHOICES
 #: the twenty-first stage's candidates: where the noise is read in one octave above the dynamics band (the shipped
 #: first)
 NOISE_OCTAVES = conditions.NOISE_OCTAVES
+#: the twenty-second stage's candidate tops of the band the noise is read in, as multiples of its lower edge (the
+#: shipped first)
+NOISE_OCTAVE_TOPS = (2.0, 1.5, 3.0, 4.0)
 #: how many times faster than its source the twenty-first stage's resampled KITTI training drives are written
 RESAMPLE_FACTOR = 10
 #: the rate (Hz) of the eighteenth stage's interpolated KITTI training drives
@@ -577,9 +587,9 @@ def upsampled_logs(logs, rate: float = UPSAMPLED_RATE_HZ, scoring=KITTI_SCORING)
 @contextmanager
 def design_settings(**settings):
     """Within the block, the settings of :mod:`roadbank.vehicle.conditions` that the stages from the eighteenth on
-    choose (``QUIET_FLOOR_RATE``, ``QUIET_FLOOR_SIGNAL``, ``NOISE_AT_SOURCE``, ``NOISE_OCTAVE``: keyword names in
-    lower case) as given, restored after: every command's design reads them, so a stage runs each candidate as it
-    would ship. A value that is not one of the setting's choices is refused when a design reads it."""
+    choose (``QUIET_FLOOR_RATE``, ``QUIET_FLOOR_SIGNAL``, ``NOISE_AT_SOURCE``, ``NOISE_OCTAVE``, ``NOISE_OCTAVE_TOP``:
+    keyword names in lower case) as given, restored after: every command's design reads them, so a stage runs each
+    candidate as it would ship. A value that is not one of the setting's choices is refused when a design reads it."""
     names = {k: k.upper() for k in settings}
     unknown = [k for k, n in names.items() if n not in _DESIGN_SETTINGS]
     if unknown:
@@ -595,11 +605,19 @@ def design_settings(**settings):
 
 
 #: the module settings of :mod:`roadbank.vehicle.conditions` that :func:`design_settings` sets
-_DESIGN_SETTINGS = ("QUIET_FLOOR_RATE", "QUIET_FLOOR_SIGNAL", "NOISE_AT_SOURCE", "NOISE_OCTAVE")
+_DESIGN_SETTINGS = ("QUIET_FLOOR_RATE", "QUIET_FLOOR_SIGNAL", "NOISE_AT_SOURCE", "NOISE_OCTAVE", "NOISE_OCTAVE_TOP")
 #: the settings as each stage ran: the eighteenth and nineteenth before the twentieth, the twentieth before the
 #: twenty-first
 _BEFORE_SOURCE = {"noise_at_source": "none", "noise_octave": "none"}
 _BEFORE_OCTAVE = {"noise_octave": "none"}
+
+
+def choose_octave_top(logs, up, resampled, sim_sets, tops=NOISE_OCTAVE_TOPS) -> tuple:
+    """The twenty-second stage (module docstring): :func:`choose_noise_octave`'s rule and sets over ``tops``
+    (:data:`roadbank.vehicle.conditions.NOISE_OCTAVE_TOP` values, the shipped first). Returns ``(chosen, {top: real
+    scores}, {top: simulated scores})``, the simulated ones for the shipped top and the candidates within
+    :data:`TIE_DEG` of the best real median."""
+    return _roads_then_guarded({w: _with_settings(noise_octave_top=w) for w in tops}, logs + up + resampled, sim_sets)
 
 
 def _with_settings(**settings):

@@ -98,6 +98,9 @@ NOISE_AT_SOURCE_CHOICES = ("none", "floor", "all")
 NOISE_OCTAVE = "all"
 #: the values :data:`NOISE_OCTAVE` may take
 NOISE_OCTAVES = ("none", "fast", "all")
+#: the top of that band as a multiple of its lower edge (-; 2: one octave). The twenty-second stage of
+#: :mod:`roadbank.tuning.real` chooses it
+NOISE_OCTAVE_TOP = 2.0
 
 
 def _at_most(noise: float, floor: float) -> float:
@@ -147,13 +150,14 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
 
 def _octave_top(t) -> float:
     """The top (Hz) of the band in which :func:`log_conditions` reads the noise of samples at times ``t`` (s):
-    twice :func:`roadbank.signals.noise_band_hz` of their rate where :data:`NOISE_OCTAVE` says so, else none."""
+    :data:`NOISE_OCTAVE_TOP` times :func:`roadbank.signals.noise_band_hz` of their rate where :data:`NOISE_OCTAVE`
+    says so, else none."""
     if NOISE_OCTAVE not in NOISE_OCTAVES:
         raise ValueError(f"NOISE_OCTAVE must be one of {NOISE_OCTAVES}, got {NOISE_OCTAVE!r}")
     band = noise_band_hz(sample_rate(t))
     if NOISE_OCTAVE == "none" or (NOISE_OCTAVE == "fast" and band < DYNAMICS_BAND_HZ):
         return math.inf
-    return 2.0 * band
+    return NOISE_OCTAVE_TOP * band
 
 
 def _noise(x, t, valid) -> float:
