@@ -20,6 +20,7 @@ from roadbank.evaluation.compare import usable_samples
 from roadbank.evaluation.metrics import error_metrics
 from roadbank.signals import white_noise_std
 from roadbank.vehicle import SensorSpec, is_quiet, log_conditions, make_estimator
+from roadbank.vehicle.conditions import NOISE_OCTAVE_TOP
 
 
 @pytest.mark.parametrize("sigma", [0.02, 0.2])
@@ -109,16 +110,19 @@ def test_the_logs_measured_ay_noise_helps_where_the_accelerometer_vibrates(banke
     # more than it gains, docs/estimators.md)
     noisy = banked_runs[scenario, "vibrating"]
     cond = log_conditions(noisy.signals)
-    # a 15 s drive read in one octave (3-6 Hz): about 10 % spread (test_the_octave_reads_white_noise_without_bias)
-    assert cond["log_rate"] == pytest.approx(100.0) and cond["log_ay_noise"] == pytest.approx(0.3, rel=0.2)
+    # a 15 s drive read in 3-4.5 Hz: 0.3 reads 0.227-0.360 in 95 % of draws (test_the_narrow_band_reads_white_noise...;
+    # this seed's 0.22 is at the low end, two significant digits)
+    assert cond["log_rate"] == pytest.approx(100.0) and 0.2 <= cond["log_ay_noise"] <= 0.4
     measured = make_estimator("pif-modified", **cond)
     sheet = make_estimator("pif-modified", log_rate=cond["log_rate"])
-    assert measured.Q_ay > 50 * sheet.Q_ay
+    assert measured.Q_ay == pytest.approx(cond["log_ay_noise"] ** 2 / cond["log_rate"], rel=1e-9)   # the log's
+    assert measured.Q_ay > 40 * sheet.Q_ay                              # (0.22 / 0.03)^2 read; 100 x in truth
     assert _rms(noisy, measured) < 0.8 * _rms(noisy, sheet)
     # on the ESP sensors the log tells nothing new: the same error within 0.01 deg
     clean = banked_runs[scenario, "esp"]
     cond = log_conditions(clean.signals)
-    assert cond["log_ay_noise"] == pytest.approx(math.sqrt(SensorSpec().ay_variance), rel=0.2)
+    # 15 s read in 3-4.5 Hz (about 11 % spread) of noise near the data sheet's quantisation: within 30 %
+    assert cond["log_ay_noise"] == pytest.approx(math.sqrt(SensorSpec().ay_variance), rel=0.3)
     assert _rms(clean, make_estimator("pif-modified", **cond)) == pytest.approx(
         _rms(clean, E.make("pif-modified")), abs=0.01)
     assert E.make("pif-modified").R[0, 0] == R_ESP
@@ -158,46 +162,49 @@ def test_the_noise_band_is_the_dynamics_band_as_far_as_the_log_reaches():
 @pytest.mark.parametrize("road", ["lane-change", "tyre-limit", "bank-step", "superelevated-curve"])
 def test_on_simulated_manoeuvres_the_noise_read_is_the_sensors_not_the_manoeuvre(road):
     """Truth: the simulator's accelerometer and gyro noise (the paper's ESP data sheet, 100 Hz). On the
-    training drives of each road family the noise density read in the octave above the dynamics band (3-6 Hz,
-    the twenty-first stage) is the data sheet's without a bias from the manoeuvres: the family's mean within
-    15 %, each 20 s drive within the spread of a 3 Hz band read over 18 s (about 10 % in standard deviation,
-    20 % in density; two significant digits add 7 %) and below the quiet ratio 1.5, so no drive reads loud. (Over
-    the whole band above 3 Hz, before that stage, each drive was within 15 %.) A 1 Hz band edge reads the
-    manoeuvre's content above 1 Hz as noise (up to 6 times the density) on the lane changes and near the tyre
-    limit."""
+    training drives of each road family the noise density read just above the dynamics band (3-4.5 Hz, the
+    twenty-first and twenty-second stages) is the data sheet's without a bias from the manoeuvres: the family's
+    mean within 25 % (measured 0.91-1.19), each 20 s drive within the spread of a 1.5 Hz band read over 18 s (about
+    a quarter in density; two significant digits add 7 %: measured 0.68-1.60) and every one quiet as the quiet
+    decision reads it (its floor). (Over the whole band above 3 Hz, before those stages, each drive was within
+    15 %.) A 1 Hz band edge reads the manoeuvre's content above 1 Hz as noise (up to 6 times the density) on the
+    lane changes and near the tyre limit."""
     from roadbank.signals import road_noise_std
     from roadbank.tuning import drive_set
-    from roadbank.vehicle import QUIET_RATIO
 
     sheet = SensorSpec()
     drives = [d for d in drive_set("train", 20, 0) if d.road == road]
-    at_1hz, ratios = [], []
+    at_1hz, ratios, r_ratios = [], [], []
     for d in drives:
         s = d.signals
         cond = log_conditions(s)
         assert cond["log_rate"] == 100.0
         ratios.append(cond["log_ay_noise"] ** 2 / 100.0 / sheet.ay_noise_density(100.0))
-        assert 0.6 < ratios[-1] < QUIET_RATIO, (d.index, ratios[-1])
-        assert 0.6 < cond["log_r_noise"] ** 2 / 100.0 / sheet.r_noise_density(100.0) < QUIET_RATIO, d.index
+        r_ratios.append(cond["log_r_noise"] ** 2 / 100.0 / sheet.r_noise_density(100.0))
+        assert 0.5 < ratios[-1] < 2.0 and 0.5 < r_ratios[-1] < 2.0, (d.index, ratios[-1], r_ratios[-1])
+        assert is_quiet(sheet, 100.0, cond["log_ay_noise"], log_ay_floor=cond["log_ay_floor"]), d.index
         at_1hz.append(road_noise_std(s.ay, s.t, s.vx >= 5.0, band_hz=1.0) ** 2 / 100.0 / sheet.ay_noise_density(100.0))
-    assert 0.85 < np.mean(ratios) < 1.15, ratios
+    assert 0.8 < np.mean(ratios) < 1.25 and 0.8 < np.mean(r_ratios) < 1.25, (ratios, r_ratios)
     if road in ("lane-change", "tyre-limit"):
         assert max(at_1hz) > 2.0, at_1hz
 
 
-def test_the_octave_reads_white_noise_without_bias():
-    """The density read in the octave above the dynamics band (``top_hz = 2 band``) of white noise: unbiased over
-    many draws, its spread that of the narrower band (15 s at 100 Hz: about 10 % in standard deviation, against 3 %
-    over the whole band above 3 Hz)."""
+def test_the_narrow_band_reads_white_noise_without_bias():
+    """The density read just above the dynamics band as the design reads it (``top_hz`` =
+    ``NOISE_OCTAVE_TOP`` x 3 Hz at 100 Hz) of white noise: unbiased over many draws (within 5 %; measured 3 % low),
+    its spread that of the narrower band (15 s: about 11 % in standard deviation, its 2.5-97.5 % range 0.227-0.360
+    for 0.3, against 3 % over the whole band above 3 Hz)."""
     from roadbank.signals import road_noise_std
+    from roadbank.vehicle.conditions import NOISE_OCTAVE_TOP
 
     rng = np.random.default_rng(1)
     t = np.arange(1501) / 100.0
-    reads = {top: np.array([road_noise_std(0.3 * rng.normal(size=t.size), t, top_hz=top) for _ in range(100)])
-             for top in (math.inf, 6.0)}
+    top = NOISE_OCTAVE_TOP * 3.0
+    reads = {k: np.array([road_noise_std(0.3 * rng.normal(size=t.size), t, top_hz=k) for _ in range(100)])
+             for k in (math.inf, top)}
     for v in reads.values():
-        assert np.mean(v ** 2) == pytest.approx(0.09, rel=0.03)
-    assert 0.06 < np.std(reads[6.0]) / 0.3 < 0.14 and np.std(reads[math.inf]) / 0.3 < 0.04
+        assert np.mean(v ** 2) == pytest.approx(0.09, rel=0.05)
+    assert 0.06 < np.std(reads[top]) / 0.3 < 0.16 and np.std(reads[math.inf]) / 0.3 < 0.04
 
 
 def test_on_the_kitti_drives_the_road_reads_more_than_the_white_rule():
@@ -213,9 +220,9 @@ def test_on_the_kitti_drives_the_road_reads_more_than_the_white_rule():
     moving = s.vx >= 5.0
     road, white = road_noise_std(s.ay, s.t, moving), white_noise_std(s.ay, moving)
     assert 1.2 * white < road < 3.0 * white
-    # the design reads the octave above the dynamics band (1-2 Hz at 10 Hz; the twenty-first stage): the road's
-    # noise is red, more there than over the whole band above 1 Hz
-    octave = road_noise_std(s.ay, s.t, moving, top_hz=2.0)
+    # the design reads just above the dynamics band (1-1.5 Hz at 10 Hz; the twenty-first and twenty-second stages):
+    # the road's noise is red, more there than over the whole band above 1 Hz
+    octave = road_noise_std(s.ay, s.t, moving, top_hz=NOISE_OCTAVE_TOP * 1.0)
     assert octave > 1.2 * road
     assert log_conditions(s)["log_ay_noise"] == pytest.approx(octave, abs=0.005)     # two significant digits
 

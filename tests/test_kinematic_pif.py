@@ -610,3 +610,23 @@ def test_the_noise_octave_is_what_the_rule_chooses(training_drives):
     assert abs(cars_median(sim[every]) - cars_median(sim[none])) < 0.01
     mean = {k: np.mean(np.concatenate([real[k], *v])) for k, v in sim.items()}
     assert mean[every] < mean[none]
+
+
+@pytest.mark.slow
+def test_the_band_width_is_what_the_rule_chooses(training_drives):
+    """The twenty-second stage (tuning.real.choose_octave_top): the band the noise is read in ends at 1.5 times its
+    lower edge. It leads the octave (2) on the real median by more than the tie, by the resampled drives (whose
+    polyphase filter already rolls off at 4-5 Hz of the 10 Hz source), wider bands lose, and the mean guard
+    passes; the 10 Hz drives move by less than the tie."""
+    from roadbank.tuning.real import NOISE_OCTAVE_TOPS, TIE_DEG, choose_octave_top, resampled_logs, simulated_sets
+
+    logs, up = training_drives
+    chosen, real, sim = choose_octave_top(logs, up, resampled_logs(logs), simulated_sets())
+    octave, narrow, three, four = NOISE_OCTAVE_TOPS
+    assert chosen == narrow
+    assert np.median(real[narrow]) < np.median(real[octave]) - TIE_DEG < np.median(real[three]) - TIE_DEG
+    assert np.median(real[three]) < np.median(real[four])
+    assert np.median(real[narrow][16:]) < np.median(real[octave][16:]) - 0.01
+    assert abs(np.median(real[narrow][:8]) - np.median(real[octave][:8])) < TIE_DEG
+    mean = {k: np.mean(np.concatenate([real[k], *v])) for k, v in sim.items()}
+    assert mean[narrow] < mean[octave]

@@ -310,9 +310,9 @@ def test_the_default_beats_the_baselines_on_the_validation_drives(validation_spl
 @pytest.mark.slow
 @needs_all_drives
 def test_the_default_is_the_lowest_causal_estimator_on_the_validation_drives(validation_split):
-    """Met since the twenty-first stage (the noise read in the octave above the dynamics band, chosen on training
-    data): 0.314 deg against kinematic-ff's 0.327 (before it 0.32804 against 0.32720, an expected failure; the
-    default was lower on 7 of the 8 drives and drive 2011_09_30_drive_0020 decided the median of 8)."""
+    """Met since the twenty-first stage (the noise read just above the dynamics band, chosen on training data):
+    0.315 deg against kinematic-ff's 0.327 (before it 0.32804 against 0.32720, an expected failure; the default was
+    lower on 7 of the 8 drives and drive 2011_09_30_drive_0020 decided the median of 8)."""
     from roadbank.estimators import DEFAULT
 
     med = validation_split.by_split["validation"]["median_rms_raw_deg"]

@@ -91,16 +91,16 @@ QUIET_FLOOR_SIGNALS = ("ay", "ay - vx r")
 NOISE_AT_SOURCE = "all"
 #: the values :data:`NOISE_AT_SOURCE` may take
 NOISE_AT_SOURCE_CHOICES = ("none", "floor", "all")
-#: where :func:`log_conditions` reads a channel's noise density in the octave above the dynamics band only (``band ..
-#: 2 band`` Hz, :func:`roadbank.signals.noise_band_hz`), taken as the whole band's: ``"none"`` (white over the whole
-#: band above it), ``"fast"`` (on logs of 30 Hz or more, whose band is the dynamics band), ``"all"``. The
-#: twenty-first stage of :mod:`roadbank.tuning.real` chooses it
+#: where :func:`log_conditions` reads a channel's noise density just above the dynamics band only (``band ..
+#: NOISE_OCTAVE_TOP band`` Hz, :func:`roadbank.signals.noise_band_hz`), taken as the whole band's: ``"none"``
+#: (white over the whole band above it), ``"fast"`` (on logs of 30 Hz or more, whose band is the dynamics band),
+#: ``"all"``. The twenty-first stage of :mod:`roadbank.tuning.real` chooses it
 NOISE_OCTAVE = "all"
 #: the values :data:`NOISE_OCTAVE` may take
 NOISE_OCTAVES = ("none", "fast", "all")
-#: the top of that band as a multiple of its lower edge (-; 2: one octave). The twenty-second stage of
-#: :mod:`roadbank.tuning.real` chooses it
-NOISE_OCTAVE_TOP = 2.0
+#: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
+#: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it
+NOISE_OCTAVE_TOP = 1.5
 
 
 def _at_most(noise: float, floor: float) -> float:
@@ -125,7 +125,7 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     :data:`DESIGN_SPAN_S` of driving (:func:`design_span`), so that a streamed log gets the same design whatever
     its chunk size. :data:`NOISE_AT_SOURCE` says which of these readings take a channel that a logger wrote faster
     than its sensor at the sensor's rate (:func:`_at_source`), :data:`NOISE_OCTAVE` in which band the density is
-    read (:func:`_octave_top`: the octave above the dynamics band, taken as the whole band's).
+    read (:func:`_octave_top`: just above the dynamics band, taken as the whole band's).
     """
     signals, vx, moving = _design_part(signals, v_min)
     steps = _source_steps(signals, moving)
