@@ -183,8 +183,6 @@ def _mark_best(rows, text, cells, key) -> None:
             text[i][j] = f"**{text[i][j]}**"
 
 
-
-
 # what a heading's anchor drops: everything but letters, digits, '_', '-' and spaces (as GitHub)
 _NOT_SLUG = re.compile(r"[^\w\- ]")
 
