@@ -246,6 +246,17 @@ ones 0.3968 / 0.3967 / 0.3970 / 0.3974, the 10 Hz ones 0.3856 / 0.3861 / 0.3877 
 -> 0.2553 (median; mean 0.3470 -> 0.3459); every score judged 0.3698 -> 0.3677. The price is the spread of the
 narrower band (a 1.5 Hz band over 15 s at 100 Hz: about 11 % in standard deviation); every simulated training drive
 stays quiet.
+
+The twenty-third stage (:func:`choose_prior_again`; rule written 2026-12-05 before any candidate ran) chooses the
+first stage's pair again, the blend's bank-rate prior and ``kappa``, with every later choice in place. The first
+stage ran with no lead, the static car, a linear low-pass, no running noise, and the noise read over the whole band
+at the log's rate; run as it ran but with today's noise reading, it takes its tied neighbour (0.7 deg/s, kappa
+0.25). Candidates: the shipped pair first, then every other pair of :data:`BANK_RATES_DEG` x :data:`KAPPAS` in the
+grid's order, ``kinematic-pif`` built as the command line builds it. The rule and the code are the eighteenth
+stage's (:func:`_roads_then_guarded`). The real sets are the twenty-second stage's: the KITTI training drives at
+10 Hz, interpolated and resampled to 100 Hz. The simulated sets are the sixteenth stage's loud drives
+(:func:`loud_sets`). The pair acts only there: every simulated training drive at its own rate is quiet and runs the
+car's model. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -263,7 +274,7 @@ from scipy.signal import resample_poly
 
 from .. import vehicle
 from ..vehicle import conditions
-from ..estimators.gated import KINEMATIC_PIF_GATE
+from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
@@ -691,6 +702,23 @@ def choose_noise_octave(logs, up, resampled, sim_sets, choices=NOISE_OCTAVES) ->
     the simulated ones for the shipped choice and the candidates within :data:`TIE_DEG` of the best real median."""
     return _roads_then_guarded({c: _with_settings(noise_octave=c, noise_octave_top=2.0) for c in choices},
                                logs + up + resampled, sim_sets)         # one octave, as it ran: the twenty-second
+
+
+def prior_candidates(rates=BANK_RATES_DEG, kappas=KAPPAS) -> dict:
+    """``{(bank rate deg/s, kappa): build}`` of the twenty-third stage: the shipped pair, then every other pair of
+    ``rates`` x ``kappas`` in the grid's order; ``kinematic-pif`` built as the command line does."""
+    shipped = (round(math.degrees(KINEMATIC_PIF_BANK_RATE), 6), KINEMATIC_PIF_KAPPA)
+    keys = [shipped] + [k for k in itertools.product(rates, kappas) if k != shipped]
+    return {(b, k): per_log("kinematic-pif", bank_rate=math.radians(b), kappa=k) for b, k in keys}
+
+
+def choose_prior_again(logs, up, resampled, loud, cands: dict | None = None) -> tuple:
+    """The twenty-third stage (module docstring): the eighteenth stage's rule over ``cands`` (default
+    :func:`prior_candidates`) on the KITTI training ``logs``, the same interpolated (``up``, :func:`upsampled_logs`)
+    and resampled (``resampled``, :func:`resampled_logs`), and the loud simulated drives ``loud`` (:func:`loud_sets`).
+    Returns ``(chosen pair, {pair: real scores}, {pair: simulated scores})``, the simulated ones for the shipped pair
+    and the candidates within :data:`TIE_DEG` of the best real median."""
+    return _roads_then_guarded(prior_candidates() if cands is None else cands, logs + up + resampled, loud)
 
 
 def choose_by_roads(builds: dict, logs, sim_sets) -> tuple:
