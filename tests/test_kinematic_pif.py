@@ -632,3 +632,27 @@ def test_the_band_width_is_what_the_rule_chooses(training_drives):
     assert abs(np.median(real[narrow][:8]) - np.median(real[octave][:8])) < TIE_DEG
     mean = {k: np.mean(np.concatenate([real[k], *v])) for k, v in sim.items()}
     assert mean[narrow] < mean[octave]
+
+
+@pytest.mark.slow
+def test_the_bank_rate_and_kappa_again_are_what_the_rule_keeps(training_drives):
+    """The twenty-third stage (tuning.real.choose_prior_again): the first stage's pair chosen again with every later
+    choice in place. Its whole grid ran once (tuning.real's docstring); here the shipped pair and the grid's best on
+    the real median (0.5 deg/s, kappa 0.25), which fixes the tie window. That pair leads the real median by more
+    than the tie, by the resampled drives, and loses the 10 Hz drives, the loud simulated ones and the mean of every
+    score judged: the guard keeps the shipped pair."""
+    from roadbank.tuning.real import (TIE_DEG, cars_median, choose_prior_again, loud_sets, prior_candidates,
+                                      resampled_logs, simulated_sets)
+
+    logs, up = training_drives
+    shipped, best = (round(float(np.degrees(KINEMATIC_PIF_BANK_RATE)), 6), KINEMATIC_PIF_KAPPA), (0.5, 0.25)
+    cands = {k: b for k, b in prior_candidates().items() if k in (shipped, best)}
+    assert list(cands) == [shipped, best]                       # the shipped pair first
+    chosen, real, sim = choose_prior_again(logs, up, resampled_logs(logs), loud_sets(simulated_sets()), cands)
+    assert chosen == shipped
+    assert np.median(real[best]) < np.median(real[shipped]) - TIE_DEG
+    assert np.median(real[best][16:]) < np.median(real[shipped][16:]) - 0.01          # resampled drives
+    assert np.median(real[best][:8]) > np.median(real[shipped][:8]) + TIE_DEG          # 10 Hz drives
+    assert cars_median(sim[best]) > cars_median(sim[shipped]) + 0.03
+    mean = {k: np.mean(np.concatenate([real[k], *v])) for k, v in sim.items()}
+    assert mean[best] > mean[shipped]
