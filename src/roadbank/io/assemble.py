@@ -48,7 +48,7 @@ from ..signals import Signals, concat_signals, road_wheel_angle
 from . import units
 from .channels import STEERING, ChannelMap, check_plausible
 from .limits import Dropouts
-from .consistency import MIN_SAMPLES, check_balance, gentle_sums, gentle_warnings, turning, usable
+from .consistency import MIN_SAMPLES, Sums, check_balance, log_verdict, turning, usable
 from .errors import LogError, channel_error, channel_text
 from .geodesy import ecef_to_latlon
 from .repair import FLAGGED_ROLES, ChunkRepair, instants, interleaved_period
@@ -248,17 +248,16 @@ class _Balance:
         self.p, self.columns = p, columns
         self.parts: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self.turning = 0
-        self.gentle = (0.0, 0.0, 0)         # gentle_sums so far
+        self.sums = Sums()                  # consistency.Sums so far
         self.decided = False
 
     def add(self, sig: Signals) -> list[str]:
         """The check's warnings once it is decided with ``sig`` (SI), [] before and after;
         LogError as :func:`~roadbank.io.consistency.check_consistency`."""
+        vx, ay, r = (np.asarray(a, dtype=np.float64) for a in (sig.vx, sig.ay, sig.r))
+        self.sums = self.sums + Sums.of(vx, ay, r)
         if self.decided:
             return []
-        vx, ay, r = (np.asarray(a, dtype=np.float64) for a in (sig.vx, sig.ay, sig.r))
-        say, saa, n = gentle_sums(vx, ay, r)
-        self.gentle = (self.gentle[0] + say, self.gentle[1] + saa, self.gentle[2] + n)
         keep = usable(vx, ay, r)
         self.parts.append((vx[keep], ay[keep], r[keep]))
         self.turning += int(turning(vx[keep], ay[keep], r[keep]).sum())
@@ -270,9 +269,10 @@ class _Balance:
         return check_balance(vx, ay, r, self.p, self.columns)
 
     def finish(self) -> list[str]:
-        """At the end of the log: where it never had :data:`~roadbank.io.consistency.MIN_SAMPLES` turning samples,
-        the slope warnings of its gentle turns (:func:`~roadbank.io.consistency.gentle_warnings`)."""
-        return [] if self.decided else gentle_warnings(self.gentle, self.p, self.columns)
+        """At the end of the log: the checks of the whole log (:func:`~roadbank.io.consistency.log_verdict`: a dead
+        channel, a unit that scales ``vx r``, and where it never had :data:`~roadbank.io.consistency.MIN_SAMPLES`
+        turning samples, the slope warnings of its gentle turns); LogError for a refusal."""
+        return log_verdict(self.sums, self.decided, self.p, self.columns)
 
 
 class _Period:

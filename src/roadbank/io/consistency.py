@@ -13,11 +13,30 @@ correction restores the balance. A log that never turns hard (fewer than :data:`
 above :data:`TURN`, as every shared KITTI drive) is still read for the slope of ``ay`` on ``vx r`` over
 its gentle turns (above :data:`GENTLE_TURN`): an ``ay`` in g or a flipped sign is warned about there
 too. Driving straight (``vx r`` near 0) shows nothing: then no conclusion is drawn.
+
+Over the whole log (:class:`Sums`, added chunk by chunk, read at its end by :func:`log_verdict`), two more
+mistakes that keep the balance's residual small are named:
+
+* a dead channel: ``ay`` or the yaw rate exactly constant over :data:`MIN_SAMPLES` moving samples. Refused
+  where the other channel shows turning (its standard deviation above :data:`DEAD_EVIDENCE`); otherwise only
+  warned (a yaw rate quantised coarsely on a straight road can hold one value).
+* a unit that scales ``vx r`` (:data:`UNIT_SCALES`): where ``ay`` and ``vx r`` move together (correlation over
+  every moving sample at least :data:`CORR_MIN`), the slope of ``ay`` on ``vx r`` is 0.35-1.6 on the real and
+  simulated logs the project has. A slope above :data:`SLOPE_PLAUSIBLE` (``vx r`` several times too small: a
+  yaw rate in rad/s declared deg/s, a speed in m/s declared km/h or mph) or about 1/57 (a yaw rate in deg/s
+  declared rad/s) that one unit's factor brings into :data:`SLOPE_FIXED` is refused naming the channel; the
+  turning samples cannot show them where ``vx r`` is too small to turn.
+
+The slope of the turning samples (or the gentle ones) names the same units. A slope between 0.04 and 0.4 is
+not read for a unit: roads bank their curves, so ``ay`` stays well below ``vx r`` in step with it (a simulated
+drive through banked curves reads 0.35 with a correlation of 0.98), and a speed in km/h declared m/s (0.28) is
+then named only by the turning samples' balance.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -48,6 +67,29 @@ CANDIDATES = (
 #: yaw rate's reads flipped. Both only warn: a car turning near the neutral speed of a steep banked track
 #: (or slower than it) reads the same
 SLOPE_G, SLOPE_G_RANGE, SLOPE_FLIPPED = 0.2, (0.6, 1.6), -0.5
+#: units that scale ``vx r`` by a factor, as the slope names them: (channel roles, description, true ``vx r`` over
+#: the one read). A slope ``k`` of ``ay`` on the ``vx r`` read is ``k / factor`` on the true one
+UNIT_SCALES = (
+    (("speed",), "speed looks like m/s declared as km/h", 3.6),
+    (("speed",), "speed looks like m/s declared as mph", 1 / 0.44704),
+    (("yaw_rate",), "yaw rate looks like deg/s declared as rad/s", math.pi / 180),
+    (("yaw_rate",), "yaw rate looks like rad/s declared as deg/s", 180 / math.pi),
+)
+#: slopes (-) of ``ay`` on ``vx r`` that a road may give (the 16 KITTI drives 0.76-1.35, ``roadbank tune``'s
+#: drives 0.35-1.63, the paper's banked track 0.18-0.74); a unit is named only outside them and only where its
+#: factor brings the slope into :data:`SLOPE_FIXED`
+SLOPE_PLAUSIBLE = (0.04, 2.5)
+SLOPE_FIXED = (0.7, 1.4)
+#: the correlation of ``ay`` with ``vx r`` over every moving sample from which their slope is read (the shared
+#: KITTI drives 0.44-0.98; a straight drive's is its noise's)
+CORR_MIN = 0.6
+#: the lowest speed (m/s) of the samples the whole log's checks read: low, so that a speed read 3.6 times too small
+#: (m/s declared km/h) still leaves a city drive's turns in
+MOVING = 1.0
+#: a channel constant over :data:`MIN_SAMPLES` moving samples is refused as dead where the other channel's
+#: standard deviation there is above this (m/s^2: the turning drives of the shared KITTI set have 0.47-0.99, the
+#: straight ones 0.16-0.32)
+DEAD_EVIDENCE = 0.4
 
 
 def turning(vx, ay, r, above: float = TURN) -> np.ndarray:
@@ -56,6 +98,89 @@ def turning(vx, ay, r, above: float = TURN) -> np.ndarray:
     with np.errstate(invalid="ignore", over="ignore"):
         vr = vx * r
         return np.isfinite(vr) & np.isfinite(ay) & (np.abs(vr) > above) & (vx >= 5.0)
+
+
+def moving(vx, ay, r) -> np.ndarray:
+    """Mask of the samples whose three channels are finite, moving forward (``vx >=`` :data:`MOVING` m/s)."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        return np.isfinite(vx * r) & np.isfinite(ay) & (vx >= MOVING)
+
+
+@dataclass(frozen=True)
+class Sums:
+    """What :func:`log_verdict` reads of a log, summed chunk by chunk (``+``): over the moving samples
+    (:func:`moving`) with ``a = vx r`` (m/s^2) and ``ay`` (m/s^2), ``moments = (n, sum a, sum ay, sum a^2, sum ay^2,
+    sum a ay)`` and ``ranges = (min ay, max ay, min r, max r)`` (m/s^2, rad/s); ``gentle`` is :func:`gentle_sums`."""
+
+    gentle: tuple = (0.0, 0.0, 0)
+    moments: tuple = (0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    ranges: tuple = (math.inf, -math.inf, math.inf, -math.inf)
+
+    @classmethod
+    def of(cls, vx, ay, r) -> Sums:
+        """The sums of one chunk: ``vx`` (m/s), ``ay`` (m/s^2), ``r`` (rad/s)."""
+        vx, ay, r = (np.asarray(x, dtype=np.float64) for x in (vx, ay, r))
+        sel = moving(vx, ay, r)
+        a, y, w = vx[sel] * r[sel], ay[sel], r[sel]
+        moments = (int(sel.sum()), float(a.sum()), float(y.sum()), float(a @ a), float(y @ y), float(a @ y))
+        ranges = ((float(y.min()), float(y.max()), float(w.min()), float(w.max())) if sel.any()
+                  else cls.ranges)
+        return cls(gentle_sums(vx, ay, r), moments, ranges)
+
+    def __add__(self, other: Sums) -> Sums:
+        lo = lambda i: min(self.ranges[i], other.ranges[i])      # noqa: E731
+        hi = lambda i: max(self.ranges[i], other.ranges[i])      # noqa: E731
+        return Sums(tuple(x + y for x, y in zip(self.gentle, other.gentle)),
+                    tuple(x + y for x, y in zip(self.moments, other.moments)), (lo(0), hi(1), lo(2), hi(3)))
+
+
+def _unit_error(k: float, what: str, source, named) -> None:
+    """LogError naming the units of :data:`UNIT_SCALES` that bring a slope ``k`` (-) of ``ay`` on ``vx r`` from
+    outside :data:`SLOPE_PLAUSIBLE` into :data:`SLOPE_FIXED` (``what``: over which samples)."""
+    if not math.isfinite(k) or SLOPE_PLAUSIBLE[0] <= k <= SLOPE_PLAUSIBLE[1]:
+        return
+    fits = [(roles, text) for roles, text, f in UNIT_SCALES if SLOPE_FIXED[0] <= k / f <= SLOPE_FIXED[1]]
+    if fits:
+        roles = tuple(dict.fromkeys(r for rs, _ in fits for r in rs))
+        raise LogError(f"{source}: channel {named(roles)}: {' or '.join(t for _, t in fits)}: ay is {k:.3g} times "
+                       f"vx r over {what} (about 1 on a road); fix the unit in the channel map")
+
+
+def log_verdict(sums: Sums, decided: bool, source="signals", columns: dict | None = None) -> list[str]:
+    """The checks of the whole log (module docstring) from its :class:`Sums`: a dead channel and a unit that scales
+    ``vx r``, and where the turning samples never decided (``decided`` False) the gentle turns' slope
+    (:func:`gentle_warnings`). Returns warnings; LogError for a refusal."""
+    named = _namer(columns)
+    out = _dead_channels(sums, source, named)
+    n, sa, sy, saa, syy, say = sums.moments
+    if n >= MIN_SAMPLES:
+        va, vy, cov = saa - sa * sa / n, syy - sy * sy / n, say - sa * sy / n
+        if va > 0 and vy > 0:
+            corr, k = cov / math.sqrt(va * vy), cov / va
+            if corr >= CORR_MIN:
+                _unit_error(k, f"{n} moving samples (correlation {corr:.2f})", source, named)
+    return out + ([] if decided else gentle_warnings(sums.gentle, source, columns))
+
+
+def _dead_channels(sums: Sums, source, named) -> list[str]:
+    """The dead-channel check of :func:`log_verdict`: warnings, or LogError where the other channel shows turning."""
+    n, sa, sy, saa, syy, _ = sums.moments
+    if n < MIN_SAMPLES:
+        return []
+    std = {"lateral_acceleration": math.sqrt(max(saa / n - (sa / n) ** 2, 0.0)),      # of vx r
+           "yaw_rate": math.sqrt(max(syy / n - (sy / n) ** 2, 0.0))}                  # of ay
+    out = []
+    for role, (lo, hi), unit in (("lateral_acceleration", sums.ranges[:2], "m/s^2"),
+                                 ("yaw_rate", sums.ranges[2:], "rad/s")):
+        if lo != hi:
+            continue
+        text = f"{source}: channel {named((role,))}: constant at {lo + 0.0:.6g} {unit} over {n} moving samples"
+        if std[role] > DEAD_EVIDENCE:
+            other = "vx r" if role == "lateral_acceleration" else "ay"
+            raise LogError(f"{text} while {other} varies by {std[role]:.2f} m/s^2 (standard deviation): a dead or "
+                           "disconnected sensor")
+        out.append(f"{text}: a dead sensor, unless the car drove straight and the channel is coarsely quantised")
+    return out
 
 
 def gentle_sums(vx, ay, r) -> tuple[float, float, int]:
@@ -83,7 +208,9 @@ def _namer(columns: dict | None):
 
 def _slope_warnings(k: float, n: int, what: str, source, named) -> list[str]:
     """The warnings for a slope ``k`` (-) of ``ay`` on ``vx r`` over ``n`` samples (``what``: which) of the file
-    ``source``: g declared as m/s^2, or a flipped sign (:data:`SLOPE_G`, :data:`SLOPE_FLIPPED`)."""
+    ``source``: g declared as m/s^2, or a flipped sign (:data:`SLOPE_G`, :data:`SLOPE_FLIPPED`); LogError for a unit
+    that scales ``vx r`` (:func:`_unit_error`)."""
+    _unit_error(k, f"{n} {what} samples", source, named)
     if k < SLOPE_G and SLOPE_G_RANGE[0] <= G * k <= SLOPE_G_RANGE[1]:
         return [f"{source}: channel {named(('lateral_acceleration',))}: ay is {k:.2f} times vx r over {n} {what} "
                 "samples (about 1 on a road): it looks like g declared as m/s^2, unless the car turned on a steep "
@@ -139,11 +266,15 @@ def check_consistency(signals, source="signals", columns: dict | None = None) ->
         When the log is inconsistent and one correction (unit or sign of one
         channel) makes it consistent; the message names that channel.
     """
-    return check_balance(signals.vx, signals.ay, signals.r, source, columns)
+    vx, ay, r = (np.asarray(a, float) for a in (signals.vx, signals.ay, signals.r))
+    decided = int(turning(vx, ay, r).sum()) >= MIN_SAMPLES
+    out = check_balance(vx, ay, r, source, columns) if decided else []
+    return out + log_verdict(Sums.of(vx, ay, r), decided, source, columns)
 
 
 def check_balance(vx, ay, r, source="signals", columns: dict | None = None) -> list[str]:
-    """:func:`check_consistency` of the arrays ``vx`` (m/s), ``ay`` (m/s^2), ``r`` (rad/s)."""
+    """The turning samples' part of :func:`check_consistency` on the arrays ``vx`` (m/s), ``ay`` (m/s^2), ``r``
+    (rad/s): with fewer than :data:`MIN_SAMPLES` of them, the gentle turns' slope warnings."""
     vx, ay, r = (np.asarray(a, float) for a in (vx, ay, r))
     res, n, sel = _residual(vx, ay, r)
     if n < MIN_SAMPLES:
