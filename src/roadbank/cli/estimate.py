@@ -151,6 +151,7 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
                                  f"give a directory, e.g. '{output.with_suffix('')}/' (or '{output}/' to call it so)",
                                  param_hint="-o")
     check_output(output, "-o", directory=batch)
+    _check_not_an_input(paths, output, batch, output_format)
     if plot is not None:
         check_output(plot, "--plot", directory=batch)
     try:
@@ -203,6 +204,20 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     click.echo(f"{len(summaries) - len(failures)} log(s) written, {len(failures)} failed"
                + (f", {len(unplotted)} plot(s) not written" if unplotted else ""), err=True)
     sys.exit(1 if failures or unplotted else 0)
+
+
+def _check_not_an_input(paths, output: Path, batch: bool, output_format: str) -> None:
+    """Exit with a usage error (exit code 2) before anything is read if an output file would be one of the input
+    logs ``paths``: ``-o`` itself for one log, ``-o``/<name> for each log of a batch
+    (:func:`roadbank.fleet.run.output_names`)."""
+    from ..fleet.run import output_names
+
+    outs = ([output / n for n in output_names(paths, output_format).values()] if batch else [output])
+    inputs = {p.resolve() for p in paths}
+    clash = [o for o in outs if o.resolve() in inputs]
+    if clash:
+        raise click.BadParameter(f"the output '{clash[0]}' is one of the input logs: writing it would overwrite the "
+                                 "log; give another -o", param_hint="-o")
 
 
 def repairs_text(repairs: dict) -> str:

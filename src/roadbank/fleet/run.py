@@ -54,8 +54,13 @@ def _is_log_dir(p: Path) -> bool:
 
 def _is_log_file(p: Path) -> bool:
     """A file a folder contributes: a log suffix (:data:`LOG_SUFFIXES`), not an output of ``estimate``."""
-    return (p.suffix.lower() in LOG_SUFFIXES and not p.name.endswith((".bank.csv", ".bank.parquet"))
-            and p.name != SUMMARY)
+    return p.suffix.lower() in LOG_SUFFIXES and not is_own_output(p)
+
+
+def is_own_output(p: Path) -> bool:
+    """Whether the file ``p`` is named as ``estimate`` names what it writes into an output directory (a result table
+    ``<stem>.bank.csv`` or ``.parquet``, ``summary.csv``): never read as a log from a folder or a pattern."""
+    return p.name.endswith((".bank.csv", ".bank.parquet")) or p.name == SUMMARY
 
 
 def _logs_in(d: Path) -> list[Path]:
@@ -86,14 +91,17 @@ def expand_logs(args) -> list[Path]:
     so a drive beside other logs never hides them; a folder holding one KITTI drive and no other log
     stays that one log. A KITTI drive short of a file (:func:`~roadbank.io.kitti.broken_drive`)
     counts as a log, to be reported. A pattern with ``*``, ``?`` or ``[`` that is not an existing
-    path is expanded (``**`` recursive), each directory it matches as if given. Sorted, unique.
+    path is expanded (``**`` recursive), each directory it matches as if given; of the files it matches, those named
+    as ``estimate``'s own outputs (:func:`is_own_output`) are left out, as a folder leaves them out. Sorted, unique.
     """
     out: list[Path] = []
     for a in args:
         p = Path(a)
-        found = ([Path(x) for x in sorted(glob.glob(str(a), recursive=True))]
-                 if not p.exists() and any(ch in str(a) for ch in "*?[") else [p])
+        pattern = not p.exists() and any(ch in str(a) for ch in "*?[")
+        found = [Path(x) for x in sorted(glob.glob(str(a), recursive=True))] if pattern else [p]
         for q in found:
+            if pattern and q.is_file() and is_own_output(q):
+                continue
             out += _logs_in(q) if q.is_dir() and not _is_log_dir(q) and not broken_drive(q) else [q]
     return sorted(dict.fromkeys(out))
 

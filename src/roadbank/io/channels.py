@@ -188,11 +188,6 @@ class ChannelMap:
     no_steering: bool = False
     steering_optional: bool = False
 
-    @property
-    def timed_channels(self) -> bool:
-        """True when every channel carries its own time stamps (raw CAN, ROS): no ``time`` role."""
-        return self.dbc is not None or any(s.topic for s in self.channels.values())
-
     def __post_init__(self) -> None:
         src = self.source
         if self.convention not in CONVENTIONS:
@@ -202,7 +197,7 @@ class ChannelMap:
         if self.ros_time not in ("header", "log"):
             raise LogError(f"{src}: ros_time must be 'header' or 'log', got '{self.ros_time}'")
         for role in REQUIRED:
-            if role == "time" and self.timed_channels:
+            if role == "time":          # a table's reader asks for it; MDF4, CAN and ROS channels carry their own
                 continue
             if role not in self.channels:
                 raise LogError(f"{src}: channel map has no '{role}' channel (required)")

@@ -198,8 +198,9 @@ def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTabl
             rows.append((lineno, row))
     except csv.Error as exc:
         raise LogError(f"{p}: corrupt CSV ({exc})") from None
-    if len(set(header)) != len(header):
-        dup = sorted({h for h in header if header.count(h) > 1})
+    named = [h for h in header if h]            # unnamed columns (a row ending in ",,") are never read
+    if len(set(named)) != len(named):
+        dup = sorted({h for h in named if named.count(h) > 1})
         raise LogError(f"{p}: duplicate column name(s) {dup} in the header")
     if not rows:
         raise LogError(f"{p}: no data rows after the header")

@@ -189,7 +189,9 @@ def output_problem(path, directory: bool = False) -> str | None:
     name being a directory is a problem too.
     """
     p = Path(path)
-    start = "cannot create directory" if directory else "cannot write"
+    start = "cannot write"
+    if directory:
+        start = "cannot write into directory" if p.is_dir() else "cannot create directory"
 
     def problem(reason: str) -> str:
         return f"{start} '{p}': {reason}"

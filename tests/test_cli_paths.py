@@ -1,0 +1,105 @@
+"""Where `roadbank estimate` reads and writes: it never overwrites an input log, never reads its own outputs back
+from a pattern, reads an MDF4 log with the map `roadbank channels` wrote for it, ignores unnamed empty columns, and
+names the right problem of an output directory it cannot write into."""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from roadbank.cli import main
+from roadbank.io.writers import output_problem
+from roadbank.sim import run_scenario
+
+
+@pytest.fixture(scope="module")
+def drive():
+    """A simulated S-curve's inputs (t s, vx m/s, ay m/s^2, r rad/s) as a table."""
+    s = run_scenario("s-curve").signals
+    return pd.DataFrame({"t": s.t, "vx": s.vx, "ay": s.ay, "r": s.r})
+
+
+def _estimate(*args):
+    return CliRunner().invoke(main, ["estimate", *map(str, args)])
+
+
+def _theta(path: Path) -> np.ndarray:
+    return pd.read_csv(path)["kinematic-pif.theta"].to_numpy()
+
+
+def test_an_output_that_is_an_input_is_refused_and_the_log_kept(tmp_path, drive):
+    log = tmp_path / "self.csv"
+    drive.to_csv(log, index=False)
+    before = log.read_bytes()
+    res = _estimate(log, "-o", log)
+    assert res.exit_code == 2 and "is one of the input logs" in res.output and "Traceback" not in res.output
+    assert log.read_bytes() == before
+    # in a batch: x.csv's result in the output directory would be x.bank.csv, which is another input
+    x, xb = tmp_path / "x.csv", tmp_path / "x.bank.csv"
+    drive.to_csv(x, index=False)
+    drive.to_csv(xb, index=False)
+    kept = xb.read_bytes()
+    res = _estimate(x, xb, "-o", tmp_path, "--output-format", "csv")
+    assert res.exit_code == 2 and f"the output '{xb}' is one of the input logs" in res.output, res.output
+    assert xb.read_bytes() == kept
+
+
+def test_a_pattern_leaves_out_the_outputs_a_folder_leaves_out(tmp_path, drive):
+    folder = tmp_path / "g"
+    folder.mkdir()
+    drive.to_csv(folder / "a.csv", index=False)
+    first = _estimate(folder, "-o", str(folder) + "/", "--output-format", "csv")
+    assert first.exit_code == 0 and (folder / "a.bank.csv").exists() and (folder / "summary.csv").exists()
+    theta = _theta(folder / "a.bank.csv")
+    again = _estimate(str(folder / "*"), "-o", str(folder) + "/", "--output-format", "csv")
+    assert again.exit_code == 0, again.output
+    assert "1 log(s) written, 0 failed" in again.output and "FAILED" not in again.output
+    np.testing.assert_array_equal(_theta(folder / "a.bank.csv"), theta)     # rewritten from a.csv, not from itself
+
+
+def test_unnamed_empty_columns_are_ignored(tmp_path, drive):
+    plain, trail = tmp_path / "plain.csv", tmp_path / "trail.csv"
+    drive.to_csv(plain, index=False, float_format="%.10g")
+    trail.write_text("".join(line + ",,\n" for line in plain.read_text().splitlines()))
+    for p in (plain, trail):
+        assert _estimate(p, "-o", p.with_suffix(".out.csv")).exit_code == 0
+    np.testing.assert_array_equal(_theta(trail.with_suffix(".out.csv")), _theta(plain.with_suffix(".out.csv")))
+    named = tmp_path / "dup.csv"
+    named.write_text(plain.read_text().replace("t,vx,ay,r", "t,vx,ay,ay", 1))
+    res = _estimate(named, "-o", tmp_path / "dup.out.csv")
+    assert res.exit_code == 1 and "duplicate column name(s) ['ay']" in res.output
+
+
+def test_the_map_channels_writes_for_an_mdf4_log_reads_it(tmp_path, drive):
+    asammdf = pytest.importorskip("asammdf")
+    mdf = asammdf.MDF(version="4.10")
+    mdf.append([asammdf.Signal(drive[c].to_numpy(), drive.t.to_numpy(), name=c) for c in ("vx", "ay", "r")])
+    log = tmp_path / "log.mf4"
+    mdf.save(log, overwrite=True)
+    cmap = tmp_path / "map.toml"
+    res = CliRunner().invoke(main, ["channels", str(log), "-o", str(cmap)])
+    assert res.exit_code == 0 and "the map reads" in res.output, res.output
+    assert "time" not in tomllib.loads(cmap.read_text())["channels"]             # MDF4 channels carry their own
+    res = _estimate(log, "--channels", cmap, "-o", tmp_path / "out.csv")
+    assert res.exit_code == 0 and (tmp_path / "out.csv").exists(), res.output
+    # a table still needs its time column, and says so
+    table = tmp_path / "log.csv"
+    drive.to_csv(table, index=False)
+    res = _estimate(table, "--channels", cmap, "-o", tmp_path / "t.csv")
+    assert res.exit_code == 1 and "no 'time' channel (required for csv)" in res.output
+
+
+def test_an_existing_directory_that_cannot_be_written_is_named_so(tmp_path, monkeypatch):
+    """As root a directory cannot be made unwritable, so the access check is what is replaced here."""
+    real = os.access
+    monkeypatch.setattr(os, "access", lambda p, mode: False if Path(p) == tmp_path else real(p, mode))
+    assert output_problem(tmp_path, directory=True) == (
+        f"cannot write into directory '{tmp_path}': '{tmp_path}' is not writable (permission denied)")
+    new = tmp_path / "new"
+    assert output_problem(new, directory=True).startswith(f"cannot create directory '{new}'")
