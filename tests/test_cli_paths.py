@@ -1,6 +1,6 @@
 """Where `roadbank estimate` reads and writes: it never overwrites an input log, never reads its own outputs back
 from a pattern, reads an MDF4 log with the map `roadbank channels` wrote for it, ignores unnamed empty columns, and
-names the right problem of an output directory it cannot write into."""
+names the right problem of an output directory it cannot write into; a decimal comma is named."""
 
 from __future__ import annotations
 
@@ -103,3 +103,15 @@ def test_an_existing_directory_that_cannot_be_written_is_named_so(tmp_path, monk
         f"cannot write into directory '{tmp_path}': '{tmp_path}' is not writable (permission denied)")
     new = tmp_path / "new"
     assert output_problem(new, directory=True).startswith(f"cannot create directory '{new}'")
+
+
+def test_a_decimal_comma_is_named_by_estimate_and_channels(tmp_path, drive):
+    """A spreadsheet's export with ';' and decimal commas: both commands say so (exit 1), naming the file, the
+    column and the line, where channels said before that no column was named like a time."""
+    eu = tmp_path / "eu.csv"
+    drive.to_csv(eu, sep=";", decimal=",", index=False, float_format="%.9g")
+    for cmd in (["estimate", str(eu), "-o", str(tmp_path / "x.csv")],
+                ["channels", str(eu), "-o", str(tmp_path / "m.toml")]):
+        res = CliRunner().invoke(main, cmd)
+        assert res.exit_code == 1 and "eu.csv" in res.output and "looks like a decimal comma" in res.output, res.output
+        assert "line 3" in res.output and "Traceback" not in res.output

@@ -13,7 +13,8 @@ def read_columns(path: Path, fmt: str):
     """``(names, data, times)`` of every numeric column of a CSV, Parquet or MDF4 log (as stored).
 
     Columns that are not numbers (a gear as text, a comment) are left out. LogError for a file
-    that cannot be read.
+    that cannot be read, and for one whose every column fails to read as numbers (the first column's reason:
+    e.g. numbers with a decimal comma).
     """
     from ..io import LogError, readers
 
@@ -25,14 +26,17 @@ def read_columns(path: Path, fmt: str):
         raw = reader(path, {n: n for n in names})
         data = raw.data
     except LogError:                          # a non-numeric column: read the others one by one
-        data, raw = {}, None
+        data, raw, why = {}, None, []
         for n in names:
             try:
                 got = reader(path, {n: n})
-            except LogError:
+            except LogError as exc:
+                why.append(exc)
                 continue
             data.update(got.data)
             raw = got
+        if not data and why:
+            raise why[0] from None
     times = dict(raw.times) if raw is not None else {}
     return names, data, times
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -81,9 +82,15 @@ def _parse_floats(path, col: str, label: str, values, row_label: str, rownums) -
             elif s.lower() in ("true", "false"):
                 raise _not_numbers(path, label, f"{s!r} at {row_label} {rownums[i]}") from None
             else:
+                hint = (": it looks like a decimal comma (a spreadsheet's export in a language that writes one); "
+                        "write the file with '.' as the decimal mark" if _DECIMAL_COMMA.fullmatch(s) else "")
                 raise LogError(f"{path}: {label}: non-numeric value {s!r} at {row_label} "
-                               f"{rownums[i]}") from None
+                               f"{rownums[i]}{hint}") from None
     return out
+
+
+#: a number written with a decimal comma (``-0,25``, ``1,5e-3``), which ``float()`` does not read
+_DECIMAL_COMMA = re.compile(r"[+-]?\d*,\d+([eE][+-]?\d+)?")
 
 
 def _text_floats(path, column: str, label: str, values: list[str], row_label: str, rownums) -> np.ndarray:
