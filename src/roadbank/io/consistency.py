@@ -96,14 +96,14 @@ def turning(vx, ay, r, above: float = TURN) -> np.ndarray:
     """Mask of the samples the check reads: finite ``ay`` and ``vx r``, ``|vx r| > above`` (m/s^2, default
     :data:`TURN`), ``vx >= 5`` m/s."""
     with np.errstate(invalid="ignore", over="ignore"):
-        vr = vx * r
-        return np.isfinite(vr) & np.isfinite(ay) & (np.abs(vr) > above) & (vx >= 5.0)
+        return moving(vx, ay, r, 5.0) & (np.abs(vx * r) > above)
 
 
-def moving(vx, ay, r) -> np.ndarray:
-    """Mask of the samples whose three channels are finite, moving forward (``vx >=`` :data:`MOVING` m/s)."""
+def moving(vx, ay, r, v_min: float = MOVING) -> np.ndarray:
+    """Mask of the samples whose ``ay`` and ``vx r`` are finite, moving forward (``vx >= v_min`` m/s, default
+    :data:`MOVING`)."""
     with np.errstate(invalid="ignore", over="ignore"):
-        return np.isfinite(vx * r) & np.isfinite(ay) & (vx >= MOVING)
+        return np.isfinite(vx * r) & np.isfinite(ay) & (vx >= v_min)
 
 
 @dataclass(frozen=True)
@@ -151,10 +151,12 @@ def log_verdict(sums: Sums, decided: bool, source="signals", columns: dict | Non
     ``vx r``, and where the turning samples never decided (``decided`` False) the gentle turns' slope
     (:func:`gentle_warnings`). Returns warnings; LogError for a refusal."""
     named = _namer(columns)
-    out = _dead_channels(sums, source, named)
+    out: list[str] = []
     n, sa, sy, saa, syy, say = sums.moments
     if n >= MIN_SAMPLES:
-        va, vy, cov = saa - sa * sa / n, syy - sy * sy / n, say - sa * sy / n
+        # sums of squared deviations of vx r and ay from their means, and of their products
+        va, vy, cov = max(saa - sa * sa / n, 0.0), max(syy - sy * sy / n, 0.0), say - sa * sy / n
+        out = _dead_channels(sums.ranges, n, math.sqrt(va / n), math.sqrt(vy / n), source, named)
         if va > 0 and vy > 0:
             corr, k = cov / math.sqrt(va * vy), cov / va
             if corr >= CORR_MIN:
@@ -162,22 +164,18 @@ def log_verdict(sums: Sums, decided: bool, source="signals", columns: dict | Non
     return out + ([] if decided else gentle_warnings(sums.gentle, source, columns))
 
 
-def _dead_channels(sums: Sums, source, named) -> list[str]:
-    """The dead-channel check of :func:`log_verdict`: warnings, or LogError where the other channel shows turning."""
-    n, sa, sy, saa, syy, _ = sums.moments
-    if n < MIN_SAMPLES:
-        return []
-    std = {"lateral_acceleration": math.sqrt(max(saa / n - (sa / n) ** 2, 0.0)),      # of vx r
-           "yaw_rate": math.sqrt(max(syy / n - (sy / n) ** 2, 0.0))}                  # of ay
+def _dead_channels(ranges: tuple, n: int, std_a: float, std_ay: float, source, named) -> list[str]:
+    """The dead-channel check of :func:`log_verdict` over ``n`` moving samples, from :attr:`Sums.ranges` and the
+    standard deviations (m/s^2) of ``vx r`` (``std_a``) and ``ay`` (``std_ay``) there: warnings, or LogError where the
+    other channel shows turning."""
     out = []
-    for role, (lo, hi), unit in (("lateral_acceleration", sums.ranges[:2], "m/s^2"),
-                                 ("yaw_rate", sums.ranges[2:], "rad/s")):
+    for role, (lo, hi), unit, other, std in (("lateral_acceleration", ranges[:2], "m/s^2", "vx r", std_a),
+                                             ("yaw_rate", ranges[2:], "rad/s", "ay", std_ay)):
         if lo != hi:
             continue
         text = f"{source}: channel {named((role,))}: constant at {lo + 0.0:.6g} {unit} over {n} moving samples"
-        if std[role] > DEAD_EVIDENCE:
-            other = "vx r" if role == "lateral_acceleration" else "ay"
-            raise LogError(f"{text} while {other} varies by {std[role]:.2f} m/s^2 (standard deviation): a dead or "
+        if std > DEAD_EVIDENCE:
+            raise LogError(f"{text} while {other} varies by {std:.2f} m/s^2 (standard deviation): a dead or "
                            "disconnected sensor")
         out.append(f"{text}: a dead sensor, unless the car drove straight and the channel is coarsely quantised")
     return out
