@@ -136,6 +136,27 @@ def _plain_csv(p: Path, lines: list[str], delim: str, wanted: dict[str, str], pr
                     row_label="line", rownums=list(range(first + 1, first + len(lines))))
 
 
+def _drop_unfinished_line(p: Path, text: str, lines: list[str], skip: int, delim: str) -> list[str]:
+    """Leave out the last of ``lines`` (the header and the data lines after it, line ``skip + 1`` of the file on)
+    when the file ``text`` does not end with a newline and the line holds the header's number of fields: a log
+    cut off while it was written ends inside its last line, whose cut number may look right (``-0`` of
+    ``-0.00095``). A table keeps the lines before it, so a file that merely lacks its final newline loses one
+    row, and the warning returned names the file and the line. A last line short of fields is left in: it is
+    refused as truncated, as a short line anywhere is. Nothing is dropped from a file with a single data line."""
+    if text.endswith(("\n", "\r")) or not lines[-1].strip() or sum(1 for ln in lines[1:] if ln.strip()) < 2:
+        return []
+    try:
+        n_fields = [len(next(csv.reader([ln], delimiter=delim))) for ln in (lines[0], lines[-1])]
+    except csv.Error:
+        return []
+    if n_fields[0] != n_fields[1]:
+        return []
+    cut = lines.pop()
+    return [f"{p}: line {skip + len(lines) + 1} was left out: it has no final newline, so it may have been cut "
+            f"off while the log was written (it ends {cut.strip()[-40:]!r}): if the file is complete, end it with "
+            "a newline"]
+
+
 def _is_comment(line: str) -> bool:
     """A comment line: ``#`` after optional whitespace or byte-order mark."""
     return line.lstrip(" \t\ufeff").startswith("#")
@@ -183,11 +204,13 @@ def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTabl
     lines = lines[skip:]
     header_line = lines[0]
     delim = max((",", ";", "\t"), key=header_line.count)
+    warnings = _drop_unfinished_line(p, text, lines, skip, delim)
     if skip and all(reads_as_number(f) for f in header_line.split(delim)):
         raise LogError(f"{p}: no header line: line {skip + 1} ({header_line.strip()[:40]!r}) holds numbers, not "
                        "column names (the lines before it are blank or comments starting with '#')")
     fast = _plain_csv(p, lines, delim, wanted, prefix, first=skip + 1)
     if fast is not None:
+        fast.warnings = warnings
         return fast
     reader = csv.reader(lines, delimiter=delim)
     try:
@@ -217,7 +240,7 @@ def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTabl
     for c in cols:
         j = header.index(c)
         data[c] = _text_floats(p, c, column_label(wanted, c), [row[j] for _, row in rows], "line", linenos)
-    return RawTable(header, data, row_label="line", rownums=linenos)
+    return RawTable(header, data, row_label="line", rownums=linenos, warnings=warnings)
 
 
 def read_parquet(path, wanted: dict[str, str], prefix: str | None = None) -> RawTable:

@@ -52,7 +52,7 @@ class WholeSource:
         self.names = list(table.names)
         self.metadata = dict(table.metadata)
         self.row_label = table.row_label
-        self.warnings = list(warnings)
+        self.warnings = list(table.warnings) + list(warnings)
         self.shared_clock = shared_clock
         self.whole = True
         self.carried: dict[str, float] = {}

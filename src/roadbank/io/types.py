@@ -36,6 +36,8 @@ class RawTable:
     time_typed : dict name -> str
         Columns whose type carries its own time unit (Parquet ``timestamp`` /
         ``duration``, read as s), with that type, e.g. ``"timestamp[us]"``.
+    warnings : list of str
+        Suspicious but usable things the reader found (a CSV's last line left out as cut off).
     """
 
     names: list[str]
@@ -45,6 +47,7 @@ class RawTable:
     row_label: str = "row"
     rownums: object = None
     time_typed: dict[str, str] = field(default_factory=dict)
+    warnings: list[str] = field(default_factory=list)
 
 
 @dataclass
