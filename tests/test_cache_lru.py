@@ -17,8 +17,11 @@ KITTI = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "kitti-
 
 @pytest.fixture
 def disk(tmp_path, monkeypatch):
+    """A fresh cache folder whose entries are counted at every store (cache.PRUNE_EVERY 1)."""
     monkeypatch.setenv("ROADBANK_CACHE_DIR", str(tmp_path))
     monkeypatch.setattr(base, "_DESIGN_CACHE", {})
+    monkeypatch.setattr(cache, "PRUNE_EVERY", 1)
+    monkeypatch.setattr(cache, "_STORES", {})
     return tmp_path / "design"
 
 
@@ -45,6 +48,23 @@ def test_a_full_folder_is_pruned_below_its_limit_so_the_next_stores_only_count(d
     assert len(left) == 16 - 16 // 8
     kept = {k for k in range(17) if cache.load("design", f"k{k}") is not None}
     assert kept == set(range(17 - len(left), 17))          # the newest ones
+
+
+def test_counted_every_few_stores_the_folder_never_exceeds_its_limit(disk, monkeypatch):
+    """Counting a folder reads every entry, so a process counts it at its first store and every PRUNE_EVERY stores
+    after it; the prune then leaves room for the stores until the next count."""
+    monkeypatch.setattr(cache, "MAX_ENTRIES", 16)
+    monkeypatch.setattr(cache, "PRUNE_EVERY", 4)
+    counts, real = [], cache._prune
+    monkeypatch.setattr(cache, "_prune", lambda folder, keep=None: counts.append(keep) or real(folder, keep))
+    sizes = []
+    for k in range(40):
+        _age(cache.store("design", f"k{k}", {"a": np.zeros(1)}), 1000 + k)
+        sizes.append(len(list(disk.glob("*.npz"))))
+    assert counts == [16 - 3] * 10                                  # stores 1, 5, 9, ... 37
+    assert max(sizes) <= 16 and sizes[-1] > 16 - 16 // 8            # full use of the room, never beyond it
+    kept = {k for k in range(40) if cache.load("design", f"k{k}") is not None}
+    assert kept == set(range(40 - sizes[-1], 40))                   # the newest ones
 
 
 def _designs_of_one_drive(tmp_path, monkeypatch) -> int:

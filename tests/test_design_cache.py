@@ -134,6 +134,7 @@ def test_concurrent_writers_and_readers_see_whole_entries(disk):
 
 def test_store_keeps_only_the_newest_entries(disk, monkeypatch):
     monkeypatch.setattr(cache, "MAX_ENTRIES", 3)
+    monkeypatch.setattr(cache, "PRUNE_EVERY", 1)                 # counted at every store
     for k in range(5):
         p = cache.store("design", f"k{k}", {"a": np.full(2, k)})
         os.utime(p, (1000 + k, 1000 + k))
