@@ -9,9 +9,11 @@ from pathlib import Path
 
 import click
 
+from .options import checked_output
+
 
 @click.command()
-@click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
+@click.option("-o", "--output", type=click.Path(path_type=Path), default=None, callback=checked_output(),
               help="Write the report here: markdown (e.g. docs/benchmarks.md), or a self-contained page for .html.")
 @click.option("--quick", is_flag=True, help="Shorter repeats and peers; finishes within 45 s (no reproduce).")
 @click.option("--tiny", is_flag=True, help="A 10 s log, for tests: checks the runner, not the speed.")

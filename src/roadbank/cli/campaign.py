@@ -13,19 +13,20 @@ from pathlib import Path
 
 import click
 
-from .options import vehicle_option
+from .options import SEED, checked_output, vehicle_option
+from .parallel import scheduler_option
 
 
 @click.command()
 @click.option("--runs", "-n", type=click.IntRange(min=1), required=True, help="Number of runs.")
 @click.option("--output", "-o", "outdir", required=True, type=click.Path(file_okay=False, path_type=Path),
-              help="Campaign directory (created).")
-@click.option("--scheduler", default=None, metavar="ADDRESS",
-              help="Dask scheduler address (tcp://host:8786). Default: a local cluster.")
+              callback=checked_output(directory=True), help="Campaign directory (created).")
+@scheduler_option("Dask scheduler address (tcp://host:8786 or host:8786). Default: a local cluster.",
+                  metavar="ADDRESS")
 @click.option("--workers", "-j", type=click.IntRange(min=1), default=2, show_default=True,
               help="Worker processes of the local cluster.")
 @click.option("--resume", is_flag=True, help="Continue the campaign stored in OUTDIR.")
-@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True, help="Campaign seed.")
+@click.option("--seed", type=SEED, default=0, show_default=True, help="Campaign seed.")
 @click.option("--batch-size", type=click.IntRange(min=1), default=50, show_default=True,
               help="Runs per Dask task.")
 @click.option("--duration-scale", type=click.FloatRange(0.0, 1.0, min_open=True), default=1.0,

@@ -14,6 +14,7 @@ from ..io.errors import LogError
 from ..io.readers import FORMATS
 from .inputs import channel_map_and_logs, check_output
 from .options import vehicle_option
+from .parallel import scheduler_option
 
 
 #: how the removed offsets are printed (Signals channel -> text)
@@ -74,8 +75,7 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
                    "steering offset) while the log runs, and remove it before the estimators.")
 @click.option("--workers", type=int, default=1, show_default=True,
               help="Logs in parallel on N worker processes on this machine (1: in this process).")
-@click.option("--scheduler", default=None, metavar="ADDR",
-              help="Run on the Dask scheduler at ADDR (tcp://host:8786) instead of local worker processes.")
+@scheduler_option("Run on the Dask scheduler at ADDR (tcp://host:8786) instead of local worker processes.")
 @click.option("--resume", is_flag=True,
               help="Skip logs the output directory's summary.csv lists as finished (failed ones are retried).")
 @click.option("--chunk-rows", type=int, default=None,

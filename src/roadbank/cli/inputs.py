@@ -76,10 +76,11 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
 def check_output(path, option: str, directory: bool = False) -> None:
     """Exit with a one-line error (exit code 1) if ``path``, given as ``option``, cannot be written as a file
     (``directory``: created as a directory), e.g. ``error: -o: cannot write 'a.csv/o.csv': 'a.csv' is a file,
-    not a directory`` -- checked before the work (:func:`roadbank.io.writers.output_problem`)."""
-    from ..io.writers import output_problem
+    not a directory`` -- checked before the work (:func:`roadbank.cli.options.output_path_problem`, the check
+    every command's output gets; the others' is a usage error, exit code 2)."""
+    from .options import output_path_problem
 
-    why = output_problem(path, directory)
+    why = output_path_problem(path, directory=directory)
     if why:
         click.echo(f"error: {option}: {why}", err=True)
         sys.exit(1)

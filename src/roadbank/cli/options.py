@@ -3,9 +3,15 @@
 ``vehicle_option`` adds ``--vehicle PATH|NAME``: the value reaching the command is a
 :class:`roadbank.vehicle.Vehicle` (the paper's SUV when the option is absent). A
 malformed file is a usage error (exit code 2) with the file/key message, no traceback.
+
+``SEED`` is every command's ``--seed`` type; ``checked_output`` the callback of the output
+options (``-o``, ``--docs``) that refuses a path that cannot be written before any work
+(a usage error naming the option and the path).
 """
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import click
 
@@ -51,3 +57,72 @@ def vehicle_option(help_extra: str = "", *, default_help: str = "the paper's SUV
             f"Default: {default_help}." + (f" {help_extra}" if help_extra else ""))
     return click.option("--vehicle", "vehicle", cls=_VehicleOption, default=None, metavar="PATH|NAME",
                         callback=_to_vehicle, none_if_absent=none_if_absent, help=text)
+
+
+#: ``--seed`` of every command: what numpy's and scipy's seeding accept everywhere (0 to 2**32 - 1)
+SEED = click.IntRange(0, 2**32 - 1)
+
+
+def output_path_problem(path, *, directory: bool = False, suffixes: tuple[str, ...] = (),
+                        next_to: tuple[str, ...] = (), what: str = "") -> str | None:
+    """Why ``path`` cannot be an output, as far as can be told before the work; None if it can be.
+
+    Parameters
+    ----------
+    path : str or Path
+        The output given on the command line.
+    directory : bool
+        The output is a directory (created if missing) rather than a file.
+    suffixes : tuple of str
+        The suffixes a file output may end in (lower case, with the dot); empty: any.
+    next_to : tuple of str
+        Suffixes of the files written next to the output with its stem (``.png``: ``report.png``
+        beside ``report.md``); each is checked as a file too.
+    what : str
+        Why only those suffixes, appended to their message ("tune writes a vehicle file").
+
+    Returns
+    -------
+    str or None
+        A one-line reason naming the path, e.g. ``"cannot write 'a.md/x.md': 'a.md' is a file, not a
+        directory"`` (:func:`roadbank.io.writers.output_problem`, the one rule), or
+        ``"'t.csv' must end in .toml (tune writes a vehicle file)"``.
+    """
+    from ..io.writers import output_problem
+
+    p = Path(path)
+    if suffixes and p.suffix.lower() not in suffixes:
+        return f"'{p}' must end in {' or '.join(suffixes)}" + (f" ({what})" if what else "")
+    why = output_problem(p, directory)
+    for suffix in () if why else next_to:
+        why = output_problem(p.with_suffix(suffix))
+        if why:
+            break
+    return why
+
+
+def checked_output(*, directory: bool = False, suffixes: tuple[str, ...] = (), next_to: tuple[str, ...] = (),
+                   what: str = ""):
+    """A click callback refusing an output path that cannot be written, before the command runs.
+
+    The refusal is a usage error (exit code 2) naming the option and the path, e.g.
+    ``Invalid value for '-o' / '--output': cannot write 'afile/x.md': 'afile' is a file, not a
+    directory``. A missing folder is no problem (the commands create it).
+
+    Parameters
+    ----------
+    directory, suffixes, next_to, what
+        As for :func:`output_path_problem`.
+
+    Returns
+    -------
+    callable
+        ``callback(ctx, param, value)`` for :func:`click.option`; an absent option (None) passes.
+    """
+    def check(ctx, param, value):
+        if value is not None:
+            why = output_path_problem(value, directory=directory, suffixes=suffixes, next_to=next_to, what=what)
+            if why:
+                raise click.BadParameter(why, ctx=ctx, param=param)
+        return value
+    return check

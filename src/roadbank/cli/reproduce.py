@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from .options import vehicle_option
+from .options import SEED, checked_output, vehicle_option
 
 
 def _split(values):
@@ -48,6 +48,7 @@ class _CellProgress:
 
 @click.command()
 @click.option("-o", "--outdir", type=click.Path(file_okay=False, path_type=Path), required=True,
+              callback=checked_output(directory=True),
               help="Output folder for figures, tables and the report.")
 @click.option("--scenarios", multiple=True,
               help="Scenarios to run (default: all of the paper's study). Repeat or comma-separate.")
@@ -56,8 +57,9 @@ class _CellProgress:
                    "Each name is the same filter and tuning as in `roadbank estimate -e`: pif-modified "
                    "is roadbank's default tuning, pif-paper the paper's Table 4 (the claims' PIF).")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=None, help="Parallel processes (default: all cores).")
-@click.option("--seed", type=int, default=0, show_default=True, help="Sensor-noise seed.")
+@click.option("--seed", type=SEED, default=0, show_default=True, help="Sensor-noise seed.")
 @click.option("--docs", "docs_results", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              callback=checked_output(),
               help="Also write the tables to this markdown file (e.g. docs/results.md).")
 @vehicle_option("The paper's scenarios and conditions with this car as plant (and its sensors) and as "
                 "the estimators' design; its [tuning.<name>] tables apply to the column of that name "

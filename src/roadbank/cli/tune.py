@@ -15,24 +15,27 @@ from pathlib import Path
 
 import click
 
-from .options import vehicle_option
+from .options import SEED, checked_output, vehicle_option
+from .parallel import scheduler_option
 
 
 @click.command()
 @vehicle_option("Its parameters design the estimators; its sensors and plant data shape the drives.")
 @click.option("-o", "--output", "out", required=True, type=click.Path(dir_okay=False, path_type=Path),
-              help="Vehicle file to write (the input car plus the tuned [tuning] and [scores] tables).")
+              callback=checked_output(suffixes=(".toml",), what="tune writes a vehicle file"),
+              help="Vehicle file to write, .toml (the input car plus the tuned [tuning] and [scores] tables); "
+                   "checked before the tuning starts (its folder is created if missing).")
 @click.option("--budget", type=click.IntRange(min=1), default=None,
               help="Objective evaluations per estimator (default 240: about 1 min on 2 cores).")
-@click.option("--seed", type=click.IntRange(min=0), default=0, show_default=True,
+@click.option("--seed", type=SEED, default=0, show_default=True,
               help="Seed of the drive sets and the optimiser (same seed, same result).")
 @click.option("--estimators", "names", default="", help="Comma-separated estimators to tune "
               "(default: pif-modified, pif-rate, kalman, pio-modified, dfc; also pif-adaptive, "
               "pif-rate-adaptive, pif-gated).")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=2, show_default=True,
               help="Local worker processes (ignored with --scheduler).")
-@click.option("--scheduler", default=None, metavar="ADDRESS",
-              help="Dask scheduler address (tcp://host:8786): evaluate there instead of locally.")
+@scheduler_option("Dask scheduler address (tcp://host:8786 or host:8786): evaluate there instead of locally.",
+                  metavar="ADDRESS")
 @click.option("--train-drives", type=click.IntRange(min=4), default=None, help="Drives in the training set (48).")
 @click.option("--validation-drives", type=click.IntRange(min=4), default=None,
               help="Drives in the validation set (40).")

@@ -10,7 +10,7 @@ from pathlib import Path
 import click
 
 from ..report.html import write_document
-from .options import vehicle_option
+from .options import SEED, checked_output, vehicle_option
 from .parallel import pool_options, start_pool
 
 _VEHICLE = vehicle_option("The estimators are designed for this car: its parameters and [tuning] tables.",
@@ -65,6 +65,7 @@ _ESTIMATORS = click.option("--estimators", "-e", "names", default="all", show_de
 @click.option("--json", "as_json", is_flag=True,
               help='Print {estimator: {"r", "rms_deg", "offset_deg"}} on stdout.')
 @click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
+              callback=checked_output(next_to=(".png",)),
               help="Write the markdown report here (e.g. docs/real-data.md; .html: a self-contained page) "
                    "and a PNG next to it.")
 @_ESTIMATORS
@@ -116,7 +117,7 @@ def _write_kitti_figures(v, output: Path) -> dict:
 @click.argument("paths", nargs=-1, required=True, type=click.Path(path_type=Path))
 @click.option("--json", "as_json", is_flag=True,
               help='Print {"drives": {drive: {estimator: scores}}, "pooled": {...}, "errors": [...]} on stdout.')
-@click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
+@click.option("-o", "--output", type=click.Path(path_type=Path), default=None, callback=checked_output(),
               help="Write the markdown report (KITTI section; .html: a self-contained page) here and one "
                    "PNG per drive next to it.")
 @_ESTIMATORS
@@ -170,6 +171,7 @@ def kitti(paths, as_json, output, names, no_sensitivity, vehicle, workers, sched
 @validate.command("all")
 @click.argument("data_dir", type=click.Path(path_type=Path, exists=True, file_okay=False))
 @click.option("-o", "--output", type=click.Path(path_type=Path), required=True,
+              callback=checked_output(next_to=(".png",)),
               help="The combined report (e.g. docs/real-data.md; .html: a self-contained page); figures "
                    "are written next to it.")
 @click.option("--no-jitter", is_flag=True, help="Skip the 10 Hz-with-jitter simulation study.")
@@ -242,11 +244,11 @@ def _sim_command(names, drives: int | None, seed: int, output) -> str:
                    "(offline).")
 @click.option("-n", "--drives", type=click.IntRange(min=1), default=None,
               help="Drives per car. Default: as many as roadbank tune's validation set (40).")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of the drive set.")
+@click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of the drive set.")
 @click.option("--json", "as_json", is_flag=True,
               help='Print {"estimators": {name: {"known" | "undescribed": {"cars", "all", "families"}}}, ...} '
                    "(deg) on stdout.")
-@click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
+@click.option("-o", "--output", type=click.Path(path_type=Path), default=None, callback=checked_output(),
               help="Write the markdown document here (e.g. docs/sim-validation.md; .html: a self-contained page).")
 def sim(names, drives, seed, as_json, output):
     """Score the estimators on the simulated validation set of every shipped car (roadbank tune's
