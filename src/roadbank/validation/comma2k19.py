@@ -29,7 +29,7 @@ from ..params import VehicleParams
 from ..vehicle import for_log, undescribed_params
 from .scoring import Score, Scored, Scoring, hold_invalid, lowpass, pearson_r, run_and_score, score
 
-__all__ = ["SEDAN", "ValidationResult", "validate_comma2k19", "lowpass"]
+__all__ = ["SEDAN", "ValidationResult", "comma2k19_outcome", "segment_name", "validate_comma2k19", "lowpass"]
 
 #: Plausible compact/mid-size sedan (Toyota Prius/Corolla/Camry, Honda Civic/Accord,
 #: Lexus ES class: most comma2k19 cars). The car is not identified in the data.
@@ -61,6 +61,24 @@ class ValidationResult:
     label: str = ""
     dataset: str = "comma2k19"
     valid: dict = field(default_factory=dict)
+
+
+def segment_name(path) -> str:
+    """The name a comma2k19 segment is reported under: its folder's name, with the route folder's in front
+    when the folder is a bare segment number (comma2k19 keeps ``Chunk_N/<route>/<segment number>/``), e.g.
+    ``comma2k19-example`` or ``b0c9d2329ad1606b|2018-07-27--06-03-57/3``."""
+    p = Path(path).resolve() if Path(path).name in ("", ".", "..") else Path(path)
+    return f"{p.parent.name}/{p.name}" if p.name.isdigit() and p.parent.name else p.name
+
+
+def comma2k19_outcome(path, **kwargs) -> tuple:
+    """``(ValidationResult, None)`` of one comma2k19 segment, or ``(None, reason)`` when it cannot be read
+    (a :class:`~roadbank.io.LogError` naming the file, or an OSError): one task per segment, so that one
+    bad segment never loses the others. ``kwargs``: those of :func:`validate_comma2k19`."""
+    try:
+        return validate_comma2k19(path, **kwargs), None
+    except (ValueError, OSError) as exc:       # LogError is a ValueError
+        return None, str(exc)
 
 
 def validate_comma2k19(path, names=None, params: VehicleParams | None = None, tau: float = 2.0 / 3.0,
@@ -177,5 +195,5 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
                 "path": str(path)}
     return ValidationResult(scores=scores, params=design, t=t, reference=run.reference, estimates=smoothed,
                             split_time=float(t[i_split]), data=data, sensitivity=sens,
-                            settings=settings, run=run, label="comma2k19 example segment",
+                            settings=settings, run=run, label=segment_name(path),
                             dataset="comma2k19", valid=run.valid)

@@ -37,7 +37,7 @@ from .. import estimators
 from ..constants import G
 from ..estimators.pif import SENSOR_R_ESTIMATORS
 from ..io import LogError
-from ..io.kitti import find_oxts_dirs, load_kitti_oxts
+from ..io.kitti import drive_name, find_oxts_dirs, load_kitti_oxts
 from ..params import VehicleParams
 from ..signals import sample_rate
 from ..vehicle import SensorSpec, car_for_log, log_conditions, noise_densities
@@ -84,6 +84,13 @@ class KittiValidation:
     ``flagged`` lists ``(drive, reason)`` for the drives whose INS is not credible
     (:func:`ins_doubt`), scored but kept out of every pooled and median score; ``figures`` maps
     each drive label to its figure, when :func:`validate_kitti` was given one to draw.
+
+    ``excluded`` lists ``(drive, path, reason)`` for every drive that could not be read or scored
+    (``drive`` the folder's name, None for a path that holds no KITTI folder at all; ``reason``
+    names the file and what is wrong with it): not scored, in no pooled score. ``errors`` says the
+    same in one line each (``"drive NAME excluded: REASON"``). ``notes`` are what was read but is
+    worth a word: a drive given more than once (scored once), two folders of one drive name, a
+    drive's reader warnings (a frame file missing from the numbering).
     """
 
     drives: list[ValidationResult]
@@ -93,6 +100,8 @@ class KittiValidation:
     by_split: dict = field(default_factory=dict)
     flagged: list = field(default_factory=list)
     figures: dict = field(default_factory=dict)
+    excluded: list = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
 
 def kinematic_residual(signals, ref, mask, taus) -> dict:
@@ -164,9 +173,21 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     sensors : roadbank.vehicle.SensorSpec, optional
         The car's sensors (a vehicle file's ``[sensors]``): the default PIFs' ``R`` is their
         noise density at the drive's rate (:func:`roadbank.vehicle.make_estimator`).
+
+    Raises
+    ------
+    LogError
+        The drive cannot be read (:func:`roadbank.io.kitti.load_kitti_oxts`: the message names the
+        file and what is wrong), or it has no sample to score (shorter than the warm-up, or never at
+        the speed gate): nothing of it could count.
     """
     names = list(names or estimators.NAMES)
     log = load_kitti_oxts(path)
+    if not masks(log.signals.t, log.signals.vx, scoring)[1].any():
+        s = log.signals
+        raise LogError(f"{path}: no sample to score: {len(s)} frames over {s.t[-1] - s.t[0]:.1f} s, speed at most "
+                       f"{np.nanmax(s.vx, initial=0.0):.1f} m/s (scored: vx >= {scoring.v_gate:g} m/s after the "
+                       f"first {scoring.warmup_s:g} s)")
     # a car not described: the one that fits the drive
     params, design = car_for_log(log.signals, log_conditions(log.signals), params, sensors=sensors)
     run = run_and_score(log.signals, log.reference_roll, names, params, scoring, per_estimator=tuning,
@@ -195,6 +216,7 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     data["split"] = split_of(log.metadata["drive"])
     data["ins_doubt"] = ins_doubt(log, scoring.v_gate)
     data["design"] = design
+    data["warnings"] = list(log.warnings)
     return ValidationResult(scores=run.scores, params=params, t=t, reference=run.reference,
                             estimates=run.estimates, split_time=float(t[first[0]]) if len(first) else float(t[0]),
                             data=data, sensitivity=sens, settings=settings, run=run,
@@ -202,22 +224,87 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
 
 
 def expand_drives(paths) -> list[Path]:
-    """Each path as given, or every drive under it (a folder holding drive folders)."""
+    """Each path as given when it is one drive (a drive folder or its ``oxts`` folder), else every drive
+    folder under it (a folder holding drive folders).
+
+    A drive folder whose ``oxts`` folder lacks ``timestamps.txt`` or ``data/``
+    (:func:`roadbank.io.kitti.find_oxts_dirs` with ``broken=True``) is listed too, so that reading it
+    reports what is missing rather than passing it over; a path with no KITTI folder at all is kept as
+    given (reading it says so).
+    """
+    return [d for _, d in _expanded(paths)]
+
+
+def _expanded(paths) -> list[tuple[Path, Path]]:
+    """``(path given, drive path)`` of each drive of :func:`expand_drives`."""
     out = []
     for p in map(Path, paths):
-        found = find_oxts_dirs(p)
-        out += [d.parent if d.name == "oxts" else d for d in found] if len(found) > 1 else [p]
+        found = sorted(set(find_oxts_dirs(p)) | set(find_oxts_dirs(p, broken=True)))
+        if not found or found in ([p], [p / "oxts"]):
+            out.append((p, p))
+        else:
+            out += [(p, d.parent if d.name == "oxts" else d) for d in found]
     return out
+
+
+def _same_folder(path: Path) -> Path:
+    """The folder of the drive at ``path`` with every link resolved (its ``oxts`` folder's parent when
+    ``path`` is that folder): two paths to one drive give the same."""
+    r = path.resolve()
+    return r.parent if r.name == "oxts" else r
+
+
+def _drive_label(path: Path) -> str | None:
+    """The name a drive at ``path`` is reported under (its folder's name), or None when ``path`` holds no
+    KITTI folder at all."""
+    found = find_oxts_dirs(path, broken=True)
+    return drive_name(found[0]) if len(found) == 1 else None
+
+
+def unique_drives(paths) -> tuple[list[Path], list[str]]:
+    """:func:`expand_drives` of ``paths`` with each drive once, and notes on what was left out.
+
+    Parameters
+    ----------
+    paths : sequence of path-like
+        Drive folders, oxts folders, or folders holding drive folders.
+
+    Returns
+    -------
+    drives : list of Path
+        In the order given; a drive reached a second time (the same folder once links are resolved,
+        e.g. a folder of drives and one of its drives both given) is left out.
+    notes : list of str
+        One per drive left out, naming it and how it was reached both times.
+    """
+    kept: dict[Path, tuple[Path, Path]] = {}
+    notes = []
+    for given, p in _expanded(paths):
+        key = _same_folder(p)
+        label = _drive_label(p)
+        if key in kept:
+            how = [f"as {d}" if g == d else f"in {g}" for g, d in (kept[key], (given, p))]
+            notes.append(f"drive {label or p.name} given more than once ({how[0]}, then {how[1]}; the same "
+                         f"folder {key}): scored once")
+            continue
+        kept[key] = (given, p)
+    return [p for _, p in kept.values()], notes
 
 
 def _drive_outcome(path, names, params, scoring, sensitivity, tuning, sensors, figure=None):
     """``(ValidationResult, None, figure)`` of one drive (``figure(result)``, or None without
-    ``figure``), or ``(None, reason, None)`` when it cannot be read: one task of
-    :func:`validate_kitti` (in this process or on a worker)."""
+    ``figure``), or ``(None, reason, None)`` when it cannot be read or scored: one task of
+    :func:`validate_kitti` (in this process or on a worker).
+
+    A malformed drive is a :class:`~roadbank.io.LogError` (its message names the file and the line);
+    any other failure is reported with its type, so one drive never stops the others.
+    """
     try:
         res = validate_kitti_drive(path, names, params, scoring, sensitivity, tuning, sensors)
     except (LogError, OSError) as exc:
         return None, str(exc), None
+    except Exception as exc:        # a drive the reader took but the scoring could not: still one drive
+        return None, f"{path}: {type(exc).__name__}: {exc}", None
     return res, None, (None if figure is None else figure(res))
 
 
@@ -256,14 +343,15 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
         so the validation is the same on any number of workers; a drive whose worker failed is
         reported with the reason. The longest drives (:func:`drive_frames`) are submitted first, so
         that no worker is left with a long one at the end while the others wait.
+        A drive reached twice (:func:`unique_drives`) runs once, with a note.
     figure : callable, optional
         ``figure(result)``: a drive's figure drawn in its task, so on its worker (e.g. the PNG bytes of
         :func:`roadbank.validation.kitti_report.drive_png`; a module-level function for a pool); what
         it returns goes to ``figures`` under the drive's label.
     """
     names = list(names or estimators.NAMES)
-    drives, errors, figures = [], [], {}
-    expanded = expand_drives(paths)
+    drives, errors, figures, excluded = [], [], {}, []
+    expanded, notes = unique_drives(paths)
     args = (names, params, scoring, sensitivity, tuning, sensors, figure)
     if pool is None:
         outcomes = (_drive_outcome(p, *args) for p in expanded)
@@ -273,13 +361,20 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
         for i in sorted(range(len(expanded)), key=lambda i: -frames[i]):
             tasks[i] = pool.submit(_drive_outcome, expanded[i], *args)
         outcomes = (_collected(pool, p, tasks[i]) for i, p in enumerate(expanded))
-    for res, error, fig in outcomes:
+    for path, (res, error, fig) in zip(expanded, outcomes):
         if error is not None:
-            errors.append(error)
+            label = _drive_label(path)
+            excluded.append((label, str(path), error))
+            errors.append(error if label is None else f"drive {label} excluded: {error}")
         else:
             drives.append(res)
+            notes += [f"drive {res.label}: {w}" for w in res.data.get("warnings", ())]
             if fig is not None:
                 figures[res.label] = fig
+    for label in sorted({d.label for d in drives if sum(e.label == d.label for e in drives) > 1}):
+        where = " and ".join(d.settings["path"] for d in drives if d.label == label)
+        notes.append(f"two folders hold a drive named {label} ({where}): both scored under that name (one "
+                     "figure); a copy of one drive counts twice in the pooled scores")
     credible = [d for d in drives if not d.data.get("ins_doubt")]
     by_split = {}
     for split in ("training", "validation", "unseen"):
@@ -295,7 +390,8 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
                                      "v_gate": scoring.v_gate, "fit_fraction": scoring.fit_fraction,
                                      "from_log_start": scoring.from_log_start},
                            by_split=by_split, flagged=[(d.label, d.data["ins_doubt"]) for d in drives
-                                                       if d.data.get("ins_doubt")], figures=figures)
+                                                       if d.data.get("ins_doubt")], figures=figures,
+                           excluded=excluded, notes=notes)
 
 
 def below_kinematic(drives, name: str) -> tuple[int, int]:

@@ -29,9 +29,11 @@ def _j(x):
 
 def to_json(v: KittiValidation) -> dict:
     """``{"drives": {drive: {estimator: {...}}}, "pooled": {estimator: {...}}, "errors": [...],
+    "excluded": [{"drive", "path", "reason"}], "notes": [...],
     "splits": {split: {"drives", "median_rms_raw_deg", "median_rms_raw_each_start_deg", "pooled"}},
     "flagged": [{"drive", "reason"}], "designs": {drive: design}}`` (``design``:
-    :func:`roadbank.vehicle.design_record`).
+    :func:`roadbank.vehicle.design_record`; ``excluded``: the drives not read or not scored, ``drive``
+    null for a path that holds no KITTI folder; ``notes``: :attr:`KittiValidation.notes`).
 
     Per estimator: ``r``, ``rms_deg`` (smoothed), ``r_raw``, ``rms_raw_deg`` (unsmoothed),
     ``rms_raw_each_start_deg`` (unsmoothed, the seconds after each stop not scored:
@@ -50,7 +52,9 @@ def to_json(v: KittiValidation) -> dict:
                   "pooled": {n: {k2: (_j(x) if k2 != "n" else x) for k2, x in p.items()}
                              for n, p in part["pooled"].items()}}
               for k, part in v.by_split.items()}
-    return {"drives": drives, "pooled": pool, "errors": list(v.errors), "splits": splits,
+    return {"drives": drives, "pooled": pool, "errors": list(v.errors),
+            "excluded": [{"drive": d, "path": p, "reason": why} for d, p, why in v.excluded],
+            "notes": list(v.notes), "splits": splits,
             "flagged": [{"drive": d, "reason": why} for d, why in v.flagged],
             "designs": {d.label: {k: _j(x) if isinstance(x, float) else x for k, x in d.data.get("design", {}).items()}
                         for d in v.drives}}
@@ -116,6 +120,16 @@ def _design_cell(design: dict) -> str:
     if not design:
         return "-"
     return f"{design['car']}, {'quiet' if design['quiet'] else 'loud'} ({design['ay_floor_ratio']:.2g} x)"
+
+
+def excluded_lines(v: KittiValidation) -> list[str]:
+    """The drives left out (each named, with the file and what is wrong with it) and the notes (a drive
+    given twice, a frame file missing), a markdown list; none when there is nothing to say."""
+    L = []
+    for drive, _, why in v.excluded:         # the reason starts with the path
+        L.append(f"- **excluded, not scored**: drive {drive}: {why}" if drive else f"- **not read**: {why}")
+    L += [f"- note: {n}" for n in v.notes]
+    return L + [""] if L else []
 
 
 def split_rows(v: KittiValidation, split: str) -> list[list]:
@@ -216,10 +230,7 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
              f"data sheet's density (`roadbank.vehicle.design_record`; quiet at most {QUIET_RATIO:g}: the default is "
              "then the car's model).")
     L.append("")
-    for e in v.errors:
-        L.append(f"- not read: {e}")
-    if v.errors:
-        L.append("")
+    L += excluded_lines(v)
     L += split_lines(v, h)
     for d in v.drives:
         L.append(f"{h}# {d.label}\n")
