@@ -17,6 +17,16 @@ import numpy as np
 from .options import vehicle_option
 
 
+def _rate(ctx, param, value):
+    """``--rate``: a number of Hz within :data:`~roadbank.export.design.RATE_RANGE_HZ` (usage error otherwise)."""
+    from ..export.design import RATE_RANGE_HZ       # (the export package loads the estimators)
+
+    lo, hi = RATE_RANGE_HZ
+    if value is not None and not (math.isfinite(value) and lo <= value <= hi):
+        raise click.BadParameter(f"must be {lo:g} to {hi:g} Hz (the target's sample rate), got {value:g}")
+    return value
+
+
 @click.group()
 def export():
     """Export a designed estimator for embedded targets."""
@@ -29,9 +39,10 @@ def export():
 @click.option("--estimator", "-e", "name", default="pif-modified", show_default=True,
               help="Estimator to export (a speed-scheduled linear observer: kinematic, uio, pio-*, "
                    "pif-* steady-state, kalman, ...).")
-@click.option("--rate", type=float, default=None,
-              help="Nominal sample rate of the target (Hz); the design is for it (the sensors' noise "
-                   "densities at that rate, the default's lead). Default: the vehicle's sensor rate (100).")
+@click.option("--rate", type=float, default=None, callback=_rate,
+              help="Nominal sample rate of the target (Hz, 1 to 10000); the design is for it (the sensors' noise "
+                   "densities at that rate, the default's lead). Default: the sample rate of --log, else the "
+                   "vehicle's sensor rate (100).")
 @click.option("--float32", "float32", is_flag=True, help="Single precision (tables, state and arithmetic).")
 @click.option("--fixed-rate/--no-fixed-rate", "fixed_rate", default=None,
               help="With (default, as roadbank runs the estimator) or without the exact discrete tables "
@@ -54,8 +65,8 @@ def export():
                    "for its conditions as `roadbank estimate` designs for it (the road noise of its first minute "
                    "of driving, quiet or loud, the running noise's reference; its sample rate unless --rate).")
 @click.option("--channels", "channels", type=click.Path(path_type=Path), default=None,
-              help="Channel map (TOML) of --log, as for `roadbank estimate`.")
-@click.option("--format", "fmt", default=None, help="Format of --log (default: from its suffix).")
+              help="Channel map (TOML) of --log, as for `roadbank estimate` (only with --log).")
+@click.option("--format", "fmt", default=None, help="Format of --log (default: from its suffix; only with --log).")
 @click.option("--output", "-o", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Output directory (created if missing).")
 def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: str | None,
@@ -69,19 +80,28 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
     """
     from .. import estimators
     from ..export import NotExportable, export_c
+    from ..export.design import RATE_RANGE_HZ
     from ..estimators import NoStabilisingSolution
 
     if name not in estimators.NAMES:
         raise click.BadParameter(f"unknown estimator '{name}' (choose from {', '.join(estimators.NAMES)})",
                                  param_hint="--estimator")
+    if log is None:
+        for given, option in ((channels, "--channels"), (fmt, "--format")):
+            if given is not None:       # would be ignored: a design without a log reads no channel map
+                raise click.UsageError(f"{option} describes --log, which is not given (a design for a recorded "
+                                       f"drive: --log drive.csv {option} ...)")
     cond, params, car_name = _log_design(log, channels, fmt, vehicle)
     if vehicle is None and params is None:
         from ..vehicle import load_vehicle
         vehicle = load_vehicle()                   # the paper's SUV
     if rate is None:
         rate = cond.get("log_rate") or float(getattr(getattr(vehicle, "sensors", None), "rate", 100.0))
-    if not rate > 0 or rate != rate or rate == float("inf"):
-        raise click.BadParameter(f"must be a positive number of Hz, got {rate}", param_hint="--rate")
+        lo, hi = RATE_RANGE_HZ
+        if not (math.isfinite(rate) and lo <= rate <= hi):
+            what = f"--log {log}: its sample rate" if cond.get("log_rate") else "the vehicle's sensor rate"
+            raise click.UsageError(f"{what} {rate:g} Hz is outside {lo:g} to {hi:g} Hz: give the target's "
+                                   "sample rate with --rate")
     if module_name is not None:
         from ..export.design import c_identifier
 

@@ -60,7 +60,9 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
     position: channel-map 'latitude'/'longitude' roles, comma2k19 (ECEF pose),
     KITTI oxts, ROS NavSatFix. Columns: cell indices, cell-centre lat/lon, heading
     sector, count, logs, bank mean/std/min/max (deg, left side up in the sector's
-    heading). A bad log is reported and skipped; exit code 1 if any failed.
+    heading). A bad log is reported and skipped, and so is a log without a GNSS fix (its latitude or
+    longitude all missing, or every position exactly 0,0, what a receiver without a fix logs; a 0,0 sample
+    is no position and never the origin); exit code 1 if any failed.
     """
     from .. import estimators
     from ..mapping.build import map_logs, write_outputs
@@ -84,9 +86,15 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
                                   on_log=lambda r: bar.update(1), pool=pool)
     except ValueError as exc:
         raise click.BadParameter(str(exc)) from None
+    for r in recs:
+        for w in r.warnings:
+            click.echo(f"warning: {w}", err=True)
     failed = [r for r in recs if r.status != "ok"]
     for r in failed:
         click.echo(f"FAILED {r.error}" if r.error.startswith(r.log) else f"FAILED {r.log}: {r.error}", err=True)
+    if len(failed) == len(recs):
+        click.echo(f"error: no log could be mapped ({len(failed)} not mapped, see above): nothing to map", err=True)
+        sys.exit(1)
     if bmap is None or len(bmap) == 0:
         click.echo("error: no settled bank estimate with a position: nothing to map", err=True)
         sys.exit(1)

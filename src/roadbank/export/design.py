@@ -25,6 +25,10 @@ from ..estimators.layout import C_LIM, DT_REL_TOL, gated_block, limit_block, lpv
 GATE_KEYS = ("HF", "tf", "tau", "on", "span")
 LIMIT_KEYS = ("clip", "grav", "qay", "rr", "tn", "ref", "nlp", "ts")
 
+#: the target sample rates an export is designed for (Hz), as a channel map's ``rate_hz``: below 1 Hz a car's
+#: bank changes between samples, above 10 kHz no vehicle bus or sensor delivers (a typo such as 1e9 is refused)
+RATE_RANGE_HZ = (1.0, 10_000.0)
+
 #: why an estimator on another kernel cannot be exported (kernel -> reason)
 _NOT_LPV_REASON = {
     "dfc": "DFC gates its estimate by a nonlinear function of the dynamic-factor indicator "
@@ -219,12 +223,13 @@ def export_design(est, rate: float, module_name: str | None = None, *,
     NotExportable
         For estimators whose runtime is not a scheduled linear observer.
     ValueError
-        For a bad rate, tables that are not finite, or an estimator whose fixed rate
-        (``set_sample_rate``) is not ``rate``.
+        For a rate (Hz) that is not a number within :data:`RATE_RANGE_HZ`, tables that are not finite, or an
+        estimator whose fixed rate (``set_sample_rate``) is not ``rate``.
     """
     check_exportable(est)
-    if not (math.isfinite(rate) and rate > 0):
-        raise ValueError(f"rate must be a positive number of Hz, got {rate}")
+    lo, hi = RATE_RANGE_HZ
+    if not (math.isfinite(rate) and lo <= rate <= hi):
+        raise ValueError(f"rate must be {lo:g} to {hi:g} Hz, got {rate:g}")
     n = int(est._nstate)
     # the continuous-time schedule (the kernels' general path), kept apart from the
     # fixed-rate tables the estimator appends for its sample rate

@@ -117,6 +117,15 @@ def steering_note(p, cmap: ChannelMap, roles: list[str]) -> list[str]:
             "kalman give no valid sample)"]
 
 
+def empty_steering(p, role: str, column: str | None, what: str = "no finite values") -> str:
+    """The warning for a steering channel whose column is in the file but holds no value (``what``: no
+    finite values, or no samples): the log is read as one without steering, its steering angle NaN, as
+    :func:`steering_note` words it for a file without the column."""
+    return channel_text(p, role, column, f"{what}, so the steering angle is NaN, as for a log without "
+                        "steering (the default estimator and the modified-model filters do not read it, the "
+                        "original-model ones, uio, dfc and kalman give no valid sample)")
+
+
 def own_time_unit(p, cmap: ChannelMap, time_typed: dict[str, str]) -> tuple[ChannelMap, list[str]]:
     """The map to read a table with: its time channel in s when the column's type carries its own unit
     (``time_typed``: column -> type, a Parquet timestamp or duration, which the readers give in s), with the
@@ -209,7 +218,8 @@ class _Logs:
         if out is None or not len(out["t"]):
             return
         p, cmap = self.p, self.cmap
-        delta = steering_delta_f(cmap, self.params, self.roles, out)
+        # a steering role left out at the log's end (no finite value) is not in the output
+        delta = steering_delta_f(cmap, self.params, [r for r in self.roles if r in out], out)
         try:
             sig = Signals(out["t"], out["speed"], out["lateral_acceleration"], out["yaw_rate"], delta)
         except ValueError as exc:
@@ -365,7 +375,8 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     if tb == "auto" and not src.whole:    # decided on the whole log, as when it is read in one chunk
         used = {cmap.channels[r].column: r for r in ["time"] + roles}     # (a pass reads these only)
         tb = "clock" if auto_uses_clock(lambda: ((t, vals) for _, t, _, vals, _, _ in
-                                                 _table_rows(src, cmap, roles, used, None)), roles) else "uniform"
+                                                 _table_rows(src, cmap, roles, used, None)), roles,
+                                        optional=STEERING) else "uniform"
     carried = dict(src.carried)
     logs = _Logs(p, fmt, cmap, params, roles, gnss, truth_cols, src.metadata, carried)
     logs.warnings += src.warnings + note
@@ -373,6 +384,7 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     period = _Period(p, tspec)
     drops = Dropouts(p, {r: cmap.channels[r].column for r in roles})
     rs = None
+    empty: list[str] = []       # a steering role without a finite value in the whole log
     for last, t, cols, vals, w, fix in _table_rows(src, cmap, roles, wanted, prefix):
         logs.warnings += w
         first = rs is None and len(t) > 0
@@ -385,9 +397,13 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
             vals[r] = drops.apply(r, t, vals[r])
             finite[r] = finite[r] or bool(np.isfinite(vals[r]).any())
             if last and not finite[r]:
-                raise channel_error(p, r, spec.column, "no finite values")
+                if r not in STEERING or r == tb:
+                    raise channel_error(p, r, spec.column, "no finite values")
+                logs.warnings.append(empty_steering(p, r, spec.column))
+                empty.append(r)     # read as a log without it
         if first:
-            base = ("clock" if same_rate(t, vals, roles) else "uniform") if tb == "auto" else tb
+            kept = [r for r in roles if r not in empty]
+            base = ("clock" if same_rate(t, vals, kept) else "uniform") if tb == "auto" else tb
             # carried channels: on the clock as they are; on any other base, interpolated with their gap
             aux = {**dict.fromkeys(gnss, GNSS_MAX_GAP_S), **({} if base == "clock" else carried)}
             rs = StreamResampler(roles, aux, base, cmap.rate_hz, cmap.max_gap_s,
@@ -396,9 +412,13 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
             if last:
                 raise LogError(f"{p}: fewer than 2 samples on the common time base")
             continue
+        for r in empty:
+            if r in rs.roles:
+                rs.drop(r)
         rs.add_clock(t)
         for r in roles:
-            rs.add(r, t, vals[r])
+            if r not in empty:
+                rs.add(r, t, vals[r])
         for r in gnss:
             rs.add(r, t, cmap.to_si_iso(r, cols[cmap.channels[r].column]))
         for c in truth_cols + list(carried):
@@ -486,11 +506,13 @@ def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
                     v = drops.apply(r, t, v)
                     finite[r] = finite[r] or bool(np.isfinite(v).any())
                 rs.add(r, t, v)
-            if ends:
-                if r in roles and not rows[r]:
-                    raise channel_error(p, r, c, "no samples")
-                if r in roles and not finite[r]:
-                    raise channel_error(p, r, c, "no finite values")
+            if ends and r in roles and not finite[r]:
+                what = "no samples" if not rows[r] else "no finite values"
+                if r not in STEERING or r == tb:
+                    raise channel_error(p, r, c, what)
+                logs.warnings.append(empty_steering(p, r, c, what))
+                rs.drop(r)          # read as a log without it
+            elif ends:
                 rs.finish(r)
         out = _emit(p, rs)
         logs.warnings += rate_notes(p, rs.take_notes(), col, cmap.max_gap_s)

@@ -285,6 +285,15 @@ class StreamResampler:
         if name in self.steps:
             self._decide(name)
 
+    def drop(self, name: str) -> None:
+        """Leave out role ``name`` (a steering angle without a finite value in the whole log): the base and the
+        output are then those of a log without it; LogError if it is the time base."""
+        if name == self.time_base:
+            raise LogError(f"resample.time_base '{name}': the channel has no finite value")
+        self.roles.remove(name)
+        for d in (self.t, self.v, self.first, self.last, self.done, self.gap, self.steps, self.long_step):
+            d.pop(name, None)
+
     def take_notes(self) -> list[tuple[str, float, float | None]]:
         """The :attr:`notes` added since the last call (role, sample period, bridged gap or None; s)."""
         notes, self.notes = self.notes, []

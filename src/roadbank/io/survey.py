@@ -116,28 +116,32 @@ def _within(r: ExactMedian, c: ExactMedian) -> bool | None:
     return None
 
 
-def auto_uses_clock(passes: Callable[[], Iterable[tuple[np.ndarray, dict]]], roles) -> bool:
+def auto_uses_clock(passes: Callable[[], Iterable[tuple[np.ndarray, dict]]], roles, optional=()) -> bool:
     """``time_base = "auto"`` on a whole table read in chunks: True when the table clock is kept.
 
     ``passes()`` gives one pass over the log: per chunk the repaired clock ``t`` (s) and the roles'
     values (role -> array on ``t``, NaN where not valid), in order. Same rule and result as
-    :func:`~roadbank.io.resample.common_time_base` on the whole log.
+    :func:`~roadbank.io.resample.common_time_base` on the whole log. A role of ``optional`` (the steering
+    angle) without a finite value in the whole log is left out, as the log is read without it.
     """
     clock = ExactMedian()
     steps = {r: ExactMedian() for r in roles}
+    seen: set = set()
     while True:
-        for _ in _one_pass(passes(), clock, steps):
+        for _ in _one_pass(passes(), clock, steps, seen):
             pass
         if clock.n == 0:              # fewer than two stamps
             return False
-        verdicts = [_within(steps[r], clock) for r in roles]
+        verdicts = [_within(steps[r], clock) for r in roles if r in seen or r not in optional]
         if False in verdicts:
             return False
         if None not in verdicts:
             return True
 
 
-def _one_pass(chunks, clock: ExactMedian, steps: dict) -> Iterator[None]:
+def _one_pass(chunks, clock: ExactMedian, steps: dict, seen: set) -> Iterator[None]:
+    """One pass over the log's chunks into the medians of ``clock`` and the roles' ``steps``; ``seen`` gets the
+    roles with a finite value."""
     last_t = None
     last_valid: dict[str, float | None] = dict.fromkeys(steps)
     for t, vals in chunks:
@@ -152,6 +156,7 @@ def _one_pass(chunks, clock: ExactMedian, steps: dict) -> Iterator[None]:
             if len(tv):
                 m.add(np.diff(tv))
                 last_valid[r] = tv[-1]
+                seen.add(r)
         yield
     clock.end_pass()
     for m in steps.values():

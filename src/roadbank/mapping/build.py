@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -10,7 +10,9 @@ import numpy as np
 from ..defaults import MAP_ESTIMATOR
 from ..estimators import OFFLINE
 from ..io import LogError
+from ..io.assemble import gnss_roles
 from ..io.channels import ChannelMap
+from ..io.errors import channel_text
 from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..io.writers import write_error
 from ..params import VehicleParams
@@ -21,17 +23,73 @@ from .grid import BankMap
 
 @dataclass
 class MappedLog:
-    """One log's part in a map: ``status`` "ok" or "error" (with ``error``), samples read and mapped."""
+    """One log's part in a map: ``status`` "ok" or "error" (with ``error``), samples read and mapped, and the
+    reader's warnings (file, channel, problem)."""
 
     log: str
     status: str = "ok"
     error: str = ""
     samples: int = 0
     mapped: int = 0
+    warnings: list[str] = field(default_factory=list)
+
+
+def fixes(lat_deg, lon_deg) -> tuple[np.ndarray, np.ndarray]:
+    """Positions (deg) with those that are no fix NaN: a latitude or longitude that is not finite, and exactly
+    0, 0 (what a GNSS receiver without a fix logs; no road there), both of the pair."""
+    lat, lon = np.asarray(lat_deg, dtype=np.float64), np.asarray(lon_deg, dtype=np.float64)
+    bad = ~(np.isfinite(lat) & np.isfinite(lon)) | ((lat == 0.0) & (lon == 0.0))
+    if not bad.any():
+        return lat, lon
+    return np.where(bad, np.nan, lat), np.where(bad, np.nan, lon)
+
+
+class FixCount:
+    """What a log's positions held, chunk by chunk: a finite latitude, a finite longitude, a pair at
+    exactly 0, 0, a fix (:func:`fixes`); :meth:`problem` words why a log without a fix is not mapped."""
+
+    def __init__(self):
+        self.lat = self.lon = self.zero = self.fix = False
+
+    def add(self, lat_deg, lon_deg) -> tuple[np.ndarray, np.ndarray]:
+        """Count one chunk's positions (deg); return them as :func:`fixes`."""
+        lat, lon = np.asarray(lat_deg, dtype=np.float64), np.asarray(lon_deg, dtype=np.float64)
+        self.lat = self.lat or bool(np.isfinite(lat).any())
+        self.lon = self.lon or bool(np.isfinite(lon).any())
+        self.zero = self.zero or bool(((lat == 0.0) & (lon == 0.0)).any())
+        lat, lon = fixes(lat, lon)
+        self.fix = self.fix or bool(np.isfinite(lat).any())
+        return lat, lon
+
+    def problem(self, path, cmap: ChannelMap | None) -> str | None:
+        """None if the log had a fix; else the reason it is not mapped, naming ``path`` and the position
+        channels (their roles and columns in ``cmap``: ``latitude``/``longitude`` or ``ecef_x/y/z``; a data
+        set's own: ``lat_deg``/``lon_deg``)."""
+        if self.fix:
+            return None
+        roles = gnss_roles(cmap) if cmap is not None else []
+        cols = {r: cmap.channels[r].column for r in roles} if cmap is not None else {}
+        lat, lon = ("latitude", "longitude") if "latitude" in roles else ("lat_deg", "lon_deg")
+        if roles and lat not in roles:      # ECEF: one position from three channels
+            names = ", ".join(f"'{r}' (column '{c}')" for r, c in cols.items())
+            return f"{path}: channels {names}: no finite position in the whole log: no fix, not mapped"
+        missing = [r for r, seen in ((lat, self.lat), (lon, self.lon)) if not seen]
+        for_role = {lat: "latitude", lon: "longitude"}
+        if missing:
+            return "; ".join(channel_text(path, r, cols.get(r), f"no finite {for_role[r]} in the whole log "
+                                          "(all missing): no position, not mapped") for r in missing)
+        names = f"channels '{lat}' (column '{cols.get(lat, lat)}') and '{lon}' (column '{cols.get(lon, lon)}')"
+        if self.zero:
+            return (f"{path}: {names}: no GNSS fix in the whole log (every position is missing or exactly 0, 0, "
+                    "which a receiver without a fix logs): not mapped")
+        return f"{path}: {names}: never both finite at one sample: no position, not mapped"
 
 
 def _origin(lat, lon) -> LocalProjection | None:
-    ok = np.isfinite(lat) & np.isfinite(lon)
+    """The projection of the first fix (:func:`fixes`) of positions ``lat``, ``lon`` (deg) rounded to
+    0.01 deg; None if they hold none."""
+    lat, lon = fixes(lat, lon)
+    ok = np.isfinite(lat)
     if not ok.any():
         return None
     # rounded to 0.01 deg, so maps of the same area made separately share one grid
@@ -92,11 +150,14 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
     params = s.vehicle.params if s.vehicle is not None else s.params
     rec, first, part = MappedLog(str(path)), None, None
     track = CourseStream()       # the course of each sample over the whole log, not its chunk
+    seen, cmap = FixCount(), None
 
     def add(crs, arrays):
         if part is not None and len(crs):
             rec.mapped += part.add(*arrays, log_id=log_id, course_rad=crs)
     try:
+        if not Path(path).exists():     # before its format is guessed from a suffix it may not have
+            raise LogError(f"{path}: not found (no such file or folder)")
         chunks = ReadAhead(stream_log(path, channels=s.channels, format=s.format, params=params,
                                       chunk_rows=s.chunk_rows or CHUNK_ROWS))
         # an offline estimator smooths each chunk with the chunks after it as lookahead
@@ -104,7 +165,9 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
             if "lat_deg" not in chunk.extra or "lon_deg" not in chunk.extra:
                 raise LogError(f"{path}: no GNSS position (map 'latitude' and 'longitude' in the channel "
                                "map, or use a format that has one: comma2k19, kitti-oxts, ROS NavSatFix)")
-            lat, lon = chunk.extra["lat_deg"], chunk.extra["lon_deg"]
+            cmap = chunk.channel_map
+            rec.warnings += chunk.warnings
+            lat, lon = seen.add(chunk.extra["lat_deg"], chunk.extra["lon_deg"])   # 0, 0: no fix, NaN
             first = first or _origin(lat, lon)
             plane = projection or first
             if part is None and plane is not None:
@@ -117,6 +180,9 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
             if part is not None:
                 add(*track.push(*part.projection.to_en(lat, lon), lat, lon, out.phi_b, out.settled))
         add(*track.finish())
+        why = seen.problem(path, cmap)
+        if why is not None:
+            raise LogError(why)
     except (LogError, ValueError, OSError) as exc:
         rec.status, rec.error = "error", str(exc)
     except Exception as exc:  # never a traceback for one bad file
