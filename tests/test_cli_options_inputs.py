@@ -91,6 +91,18 @@ def test_a_scheduler_that_cannot_be_used_is_one_line(tmp_path, monkeypatch, erro
     assert str(error).split(": ")[-1] in res.output
 
 
+@pytest.mark.parametrize("command", ["tune", "campaign", "validate kitti"])
+def test_a_tls_scheduler_without_tls_settings_is_one_line_before_any_work(tmp_path, monkeypatch, command):
+    """Dask itself refuses ``tls://`` without a TLS configuration (a TypeError inside its client): every
+    command says so in one line naming the address (exit code 1), and tune before drawing its training
+    drives."""
+    pytest.importorskip("distributed")
+    res = _run(SCHEDULED[command] + ["--scheduler", "tls://127.0.0.1:1"], tmp_path, monkeypatch)
+    assert res.exit_code == 1 and "Traceback" not in res.output, res.output
+    assert "cannot connect to the Dask scheduler at tls://127.0.0.1:1: " in res.output, res.output
+    assert "training set" not in res.output
+
+
 # ---------------------------------------------------------------- outputs
 BLOCKED = {
     "validate sim": (["validate", "sim", "-o", "afile/x.md"], "-o", "cannot write 'afile/x.md'"),

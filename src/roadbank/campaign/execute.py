@@ -82,7 +82,9 @@ def open_client(scheduler: str | None, workers: int, connect_timeout: float = 20
     """``(client, cluster)``: a Dask client on the scheduler at ``scheduler``, or on a new
     LocalCluster of ``workers`` single-threaded processes (``cluster`` None when connecting).
 
-    Raises DaskMissing without dask.distributed, ConnectionError if the scheduler is unreachable.
+    Raises DaskMissing without dask.distributed, ConnectionError if the scheduler is unreachable or
+    Dask cannot connect to a well-formed address (TypeError, ValueError: ``tls://`` without a TLS
+    configuration, ``ucx://`` without UCX installed).
     """
     dd = _distributed()
     if scheduler is None:
@@ -100,7 +102,7 @@ def open_client(scheduler: str | None, workers: int, connect_timeout: float = 20
         return dd.Client(cluster), cluster
     try:
         return dd.Client(scheduler, timeout=f"{connect_timeout}s"), None
-    except (OSError, TimeoutError) as exc:
+    except (OSError, TimeoutError, TypeError, ValueError) as exc:
         raise ConnectionError(f"cannot connect to the Dask scheduler at {scheduler}: {exc}") from None
 
 

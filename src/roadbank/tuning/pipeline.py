@@ -99,10 +99,6 @@ def tune_car(params=None, plant=None, sensors=None, *, names=TUNABLE, budget: in
         search_space(name)                    # unknown / untunable names fail before any work
     report = progress or (lambda stage, done, total: None)
 
-    report("training set", 0, n_train)
-    train = drive_set("train", n_train, seed, params, plant, sensors)
-    key = f"train-{seed}-{n_train}"
-    register_drives(key, train)
     total = budget * len(names)
     done = [0]
 
@@ -112,7 +108,13 @@ def tune_car(params=None, plant=None, sensors=None, *, names=TUNABLE, budget: in
 
     out = TuningOutcome()
     results = {}
+    # a DaskMapper connects when made, so an unreachable scheduler fails before the training set is
+    # drawn; a LocalMapper forks on entering, after register_drives (its workers inherit the drives)
     mapper = DaskMapper(scheduler, step) if scheduler else LocalMapper(jobs, step)
+    report("training set", 0, n_train)
+    train = drive_set("train", n_train, seed, params, plant, sensors)
+    key = f"train-{seed}-{n_train}"
+    register_drives(key, train)
     with mapper:
         if scheduler:
             mapper.share(key, train)  # type: ignore[union-attr]  # a scheduler: a DaskMapper
