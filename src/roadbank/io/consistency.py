@@ -110,11 +110,14 @@ def moving(vx, ay, r, v_min: float = MOVING) -> np.ndarray:
 class Sums:
     """What :func:`log_verdict` reads of a log, summed chunk by chunk (``+``): over the moving samples
     (:func:`moving`) with ``a = vx r`` (m/s^2) and ``ay`` (m/s^2), ``moments = (n, sum a, sum ay, sum a^2, sum ay^2,
-    sum a ay)`` and ``ranges = (min ay, max ay, min r, max r)`` (m/s^2, rad/s); ``gentle`` is :func:`gentle_sums`."""
+    sum a ay)`` and ``ranges = (min ay, max ay, min r, max r)`` (m/s^2, rad/s); ``gentle`` is :func:`gentle_sums`;
+    ``motion`` counts the samples in motion and those reversing (:func:`reversing_warnings`)."""
 
     gentle: tuple = (0.0, 0.0, 0)
     moments: tuple = (0, 0.0, 0.0, 0.0, 0.0, 0.0)
     ranges: tuple = (math.inf, -math.inf, math.inf, -math.inf)
+    #: ``(samples in motion, those of them reversing)``: finite ``|vx| >=`` :data:`MOVING`, and ``vx <= -MOVING``
+    motion: tuple = (0, 0)
 
     @classmethod
     def of(cls, vx, ay, r) -> Sums:
@@ -125,13 +128,16 @@ class Sums:
         moments = (int(sel.sum()), float(a.sum()), float(y.sum()), float(a @ a), float(y @ y), float(a @ y))
         ranges = ((float(y.min()), float(y.max()), float(w.min()), float(w.max())) if sel.any()
                   else cls.ranges)
-        return cls(gentle_sums(vx, ay, r), moments, ranges)
+        with np.errstate(invalid="ignore"):
+            motion = (int(np.count_nonzero(np.abs(vx) >= MOVING)), int(np.count_nonzero(vx <= -MOVING)))
+        return cls(gentle_sums(vx, ay, r), moments, ranges, motion)
 
     def __add__(self, other: Sums) -> Sums:
         lo = lambda i: min(self.ranges[i], other.ranges[i])      # noqa: E731
         hi = lambda i: max(self.ranges[i], other.ranges[i])      # noqa: E731
         return Sums(tuple(x + y for x, y in zip(self.gentle, other.gentle)),
-                    tuple(x + y for x, y in zip(self.moments, other.moments)), (lo(0), hi(1), lo(2), hi(3)))
+                    tuple(x + y for x, y in zip(self.moments, other.moments)), (lo(0), hi(1), lo(2), hi(3)),
+                    tuple(x + y for x, y in zip(self.motion, other.motion)))
 
 
 def _unit_error(k: float, what: str, source, named) -> None:
@@ -161,7 +167,22 @@ def log_verdict(sums: Sums, decided: bool, source="signals", columns: dict | Non
             corr, k = cov / math.sqrt(va * vy), cov / va
             if corr >= CORR_MIN:
                 _unit_error(k, f"{n} moving samples (correlation {corr:.2f})", source, named)
+    out += reversing_warnings(sums.motion, source, named)
     return out + ([] if decided else gentle_warnings(sums.gentle, source, columns))
+
+
+def reversing_warnings(motion: tuple, source, named) -> list[str]:
+    """A warning where most of a log's motion is backwards: ``motion = (samples in motion, those reversing)``
+    (:attr:`Sums.motion`), at least :data:`MIN_SAMPLES` in motion and more than half of them at ``vx <= -``
+    :data:`MOVING` m/s. The estimators need forward driving (``vx >= v_min``) and give no valid sample while
+    reversing, so such a log's estimate is mostly not valid; a car that drove forward with a speed logged
+    negative (an odd sign convention) is told how to read it."""
+    moving_n, back = motion
+    if moving_n < MIN_SAMPLES or 2 * back <= moving_n:
+        return []
+    return [f"{source}: channel {named(('speed',))}: negative on {back} of the {moving_n} samples in motion "
+            f"(|speed| >= {MOVING:g} m/s): the estimate is not valid while reversing (if the car drove forward, "
+            "the speed's sign is inverted: give it `invert = true` in a channel map)"]
 
 
 def _dead_channels(ranges: tuple, n: int, std_a: float, std_ay: float, source, named) -> list[str]:
