@@ -132,7 +132,7 @@ class _BankStats:
     """Running count / valid count / sum / min / max of phi_b over valid samples."""
 
     def __init__(self):
-        self.n = self.nvalid = 0
+        self.n = self.nvalid = self.nsettled = 0
         self.sum = 0.0
         self.min, self.max = math.inf, -math.inf
         self.t0 = self.t1 = math.nan
@@ -143,6 +143,7 @@ class _BankStats:
         if len(est.t):
             self.t0 = est.t[0] if math.isnan(self.t0) else self.t0
             self.t1 = est.t[-1]
+        self.nsettled += int(np.count_nonzero(est.settled))
         if len(v):
             self.nvalid += len(v)
             self.sum += float(v.sum())
@@ -163,6 +164,19 @@ class _BankStats:
             out.update(bank_mean_deg=math.degrees(self.sum / self.nvalid), bank_min_deg=math.degrees(self.min),
                        bank_max_deg=math.degrees(self.max))
         return out
+
+
+def unsettled_warnings(source: str, name: str, stats: _BankStats, settle_s: float) -> list[str]:
+    """A warning where the estimator ``name`` gave no valid sample, or no settled one (its valid samples all
+    within ``settle_s`` seconds of a (re)start, :mod:`roadbank.estimators.settle`): its bank columns are then
+    no estimate, which the summary's numbers alone do not say."""
+    if stats.n and not stats.nvalid:
+        return [f"{source}: {name} gave no valid sample: the log never drives forward at its lowest speed "
+                "(or its channels are not finite)"]
+    if stats.nvalid and not stats.nsettled:
+        return [f"{source}: {name} never settled: no stretch of valid samples lasts its settling time "
+                f"({settle_s:.1f} s), so its bank is the filter's start, not an estimate"]
+    return []
 
 
 def concat_estimates(parts: list):
@@ -289,6 +303,8 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
         if stats:
             stats[0].fill(summary)
         summary.estimators = {n: st.stats() for n, st in zip(names, stats)}
+        if stats:
+            warns += unsettled_warnings(str(path), names[0], stats[0], ests[0].settle_time)
         summary.warnings = "; ".join(warns)
         if keep:
             whole = (np.concatenate(kept_t), [concat_estimates(x) for x in kept_est],

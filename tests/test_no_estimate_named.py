@@ -1,5 +1,7 @@
-"""A log whose speed is negative most of the time is named: the estimators need forward driving, so its
-estimate is mostly not valid, and a speed logged with the opposite sign would otherwise pass in silence."""
+"""A log whose output is no estimate is named. A log whose speed is negative most of the time: the estimators
+need forward driving, so its estimate is mostly not valid, and a speed logged with the opposite sign would otherwise
+pass in silence. A log too short for the filter to settle, or with no valid sample: the summary's bank numbers are
+then the filter's start, or none."""
 
 from __future__ import annotations
 
@@ -35,6 +37,7 @@ def test_a_speed_logged_negative_is_named_and_a_map_reads_it(tmp_path, drive):
     drive.assign(vx=-drive.vx).to_csv(backward, index=False)
     text, out = _estimate(backward, tmp_path / "b.csv")
     assert "channel 'speed' (column 'vx'): negative on" in text and "invert = true" in text, text
+    assert "kinematic-pif gave no valid sample" in text
     assert out["kinematic-pif.valid"].mean() < 0.05          # nothing valid while "reversing"
 
     mapped = tmp_path / "map.toml"
@@ -44,7 +47,8 @@ def test_a_speed_logged_negative_is_named_and_a_map_reads_it(tmp_path, drive):
                       'yaw_rate = { column = "r", unit = "rad/s" }\n')
     text_mapped, fixed = _estimate(backward, tmp_path / "m.csv", "--channels", str(mapped))
     text_forward, ref = _estimate(forward, tmp_path / "f.csv")
-    assert "negative on" not in text_mapped + text_forward
+    both = text_mapped + text_forward
+    assert "negative on" not in both and "gave no valid sample" not in both and "never settled" not in both
     np.testing.assert_allclose(fixed["kinematic-pif.theta"], ref["kinematic-pif.theta"], atol=1e-12)
 
 
@@ -66,3 +70,11 @@ def test_no_real_drive_is_named():
     assert len(paths) >= 3
     for p in paths:
         assert not [w for w in load_log(p.parent).warnings if "negative on" in w], p
+
+
+def test_a_log_shorter_than_the_settling_time_is_named(tmp_path, drive):
+    log = tmp_path / "short.csv"
+    drive.iloc[:5].to_csv(log, index=False)                  # 0.04 s of driving
+    text, out = _estimate(log, tmp_path / "s.csv")
+    assert "kinematic-pif never settled" in text and "settling time" in text, text
+    assert out["kinematic-pif.valid"].all() and not out["kinematic-pif.settled"].any()
