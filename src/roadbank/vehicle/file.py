@@ -23,8 +23,8 @@ from ..params import VehicleParams
 from ..signals import CHANNELS, Signals
 from .conditions import make_estimator
 from .errors import VehicleFileError
-from .plausibility import (PLANT_FIELDS, PLAUSIBLE, SENSOR_FIELDS, check_document, check_free_table, check_tuning,
-                           checked_value, unknown_key)
+from .plausibility import (IDENTIFIED_OFFSETS, PLANT_FIELDS, PLAUSIBLE, SENSOR_FIELDS, check_document,
+                           check_free_table, check_identified_offset, check_tuning, checked_value, unknown_key)
 from .sensors import SensorSpec
 from .tomltext import fmt_options, fmt_value, is_scalar, toml_key, toml_type, toml_value
 
@@ -376,9 +376,9 @@ def _from_document(doc: dict, source: str, default_name: str) -> Vehicle:
     for key in sens_raw:
         if key not in SENSOR_FIELDS:
             raise VehicleFileError(f"{source}: [sensors] {key}: {unknown_key(key, SENSOR_FIELDS, 'key')}")
-    try:
-        sensors = SensorSpec(**{k: checked_value(source, "sensors", k, v, *SENSOR_FIELDS[k])
-                                for k, v in sens_raw.items()})
+    sens_values = {k: checked_value(source, "sensors", k, v, *SENSOR_FIELDS[k]) for k, v in sens_raw.items()}
+    try:  # the values' own errors name file, table and key already: only SensorSpec's are re-labelled
+        sensors = SensorSpec(**sens_values)
     except (ValueError, TypeError) as exc:
         raise _params_error(source, "sensors", sens_raw, exc) from None
 
@@ -395,6 +395,8 @@ def _from_document(doc: dict, source: str, default_name: str) -> Vehicle:
                 check_tuning(source, sub, values_)
             else:
                 check_free_table(source, table, sub, values_)
+                if table == "identified" and sub in IDENTIFIED_OFFSETS:
+                    check_identified_offset(source, sub, values_)
     try:
         return Vehicle(name=meta.get("name", default_name), description=meta.get("description", ""),
                        sources=tuple(sources), params=params, sensors=sensors,

@@ -1,0 +1,123 @@
+"""Odd inputs of ``roadbank identify`` and of the vehicle files it reads and writes: each is refused
+with a message naming the file (or option), the key (or channel) and the problem -- never a traceback,
+never a silent absurd value."""
+
+from __future__ import annotations
+
+import pytest
+from click.testing import CliRunner
+
+from roadbank.cli import main
+from roadbank.vehicle import Vehicle, VehicleFileError, load_vehicle
+
+BASE = "[vehicle]\nm = 1687\nIz = 3000\nLf = 1.2\nLr = 1.5\nCf = 80000\nCr = 90000\n"
+
+
+def _car(tmp_path, extra: str, name: str = "car.toml"):
+    path = tmp_path / name
+    path.write_text(BASE + extra)
+    return path
+
+
+def _identify(*args):
+    res = CliRunner().invoke(main, ["identify", *map(str, args)])
+    assert "Traceback" not in res.output, res.output
+    return res
+
+
+# ---- identified offsets: refused at load (file, key, allowed range or type) ----------------------
+
+@pytest.mark.parametrize("quantity,value,needles", [
+    ("yaw_rate_offset", "1e6", ["value = 1000000.0", "-0.1 .. 0.1 rad/s"]),
+    ("yaw_rate_offset", '"abc"', ['value = "abc"', "expected a number (rad/s)", "a string"]),
+    ("yaw_rate_offset", "nan", ["value = nan", "finite number (rad/s)"]),
+    ("ay_offset", "-3.0", ["value = -3.0", "-2 .. 2 m/s^2"]),
+    ("steering_offset", "0.5", ["value = 0.5", "-0.1 .. 0.1 rad"]),
+    ("steering_offset", "true", ["value = true", "expected a number (rad)", "a boolean"]),
+])
+def test_absurd_identified_offset_is_refused_at_load(tmp_path, quantity, value, needles):
+    path = _car(tmp_path, f'[identified.{quantity}]\nvalue = {value}\nstd = 1e-4\n')
+    with pytest.raises(VehicleFileError) as exc:
+        load_vehicle(path)
+    msg = str(exc.value)
+    assert msg.startswith(f"{path}: [identified.{quantity}] ")
+    for needle in needles:
+        assert needle in msg, msg
+
+
+def test_absurd_identified_offset_is_a_usage_error_on_the_command_line(tmp_path):
+    path = _car(tmp_path, "[identified.yaw_rate_offset]\nvalue = 1e6\n")
+    res = _identify(tmp_path / "drive.csv", "--vehicle", path, "-o", tmp_path / "out.toml")
+    assert res.exit_code == 2, res.output
+    assert "car.toml: [identified.yaw_rate_offset] value = 1000000.0" in res.output
+    assert "-0.1 .. 0.1 rad/s" in res.output
+
+
+def test_offset_std_and_missing_value_are_checked(tmp_path):
+    with pytest.raises(VehicleFileError, match=r"\[identified\.ay_offset\] std = -1\.0: must be >= 0 m/s\^2"):
+        load_vehicle(_car(tmp_path, "[identified.ay_offset]\nvalue = 0.1\nstd = -1.0\n"))
+    with pytest.raises(VehicleFileError, match=r"\[identified\.ay_offset\] value: missing"):
+        load_vehicle(_car(tmp_path, "[identified.ay_offset]\nstd = 0.1\n"))
+
+
+def test_a_vehicle_built_in_code_gets_the_offset_checks():
+    with pytest.raises(VehicleFileError, match=r"<vehicle suv-paper>: \[identified\.yaw_rate_offset\] value"):
+        Vehicle().with_identified({"yaw_rate_offset": {"value": 3.0, "std": 0.0, "unit": "rad/s"}})
+    # a plausible one passes, and a quantity that is not an offset stays free-form
+    Vehicle().with_identified({"yaw_rate_offset": {"value": 0.01, "std": 1e-4, "unit": "rad/s"},
+                               "r_offset": {"value": 1e6}})
+
+
+# ---- [sensors] messages: one prefix ---------------------------------------------------------------
+
+@pytest.mark.parametrize("line,needle", [
+    ('r_bias = "x"', '[sensors] r_bias = "x": expected a number'),
+    ("r_bias = 1e6", "[sensors] r_bias = 1000000.0: outside the plausible range"),
+    ("r_bias = nan", "[sensors] r_bias = nan: must be finite"),
+    ('r_bias = "1 kg"', "[sensors] r_bias = \"1 kg\": unit 'kg' is a mass"),
+])
+def test_sensor_key_error_names_file_and_key_once(tmp_path, line, needle):
+    path = _car(tmp_path, f"[sensors]\n{line}\n")
+    with pytest.raises(VehicleFileError) as exc:
+        load_vehicle(path)
+    msg = str(exc.value)
+    assert msg.startswith(f"{path}: {needle}"), msg
+    assert msg.count(str(path)) == 1 and msg.count("[sensors]") == 1, msg
+
+
+# ---- [tuning.*] values: checked at load, naming file, table and key -----------------------------
+
+@pytest.mark.parametrize("table,line,needles", [
+    ("pif-modified", 'Q = "abc"', ['[tuning.pif-modified] Q = "abc"', "expected a number", "a string"]),
+    ("pif-modified", "Q = nan", ["[tuning.pif-modified] Q = nan", "finite"]),
+    ("pif-modified", "th = inf", ["[tuning.pif-modified] th = inf", "finite"]),
+    ("pif-modified", "th = true", ["[tuning.pif-modified] th = true", "expected a number", "a boolean"]),
+    ("kalman", 'R = "x"', ['[tuning.kalman] R = "x"', "expected a number"]),
+    ("kalman", 'R = [1, "a"]', ['[tuning.kalman] R = [1, "a"]', "numbers", "a string"]),
+    ("kalman", "R = [[1, 2], [3]]", ["[tuning.kalman] R = [[1, 2], [3]]", "rectangular"]),
+    ("kalman", "R = [0.01, nan]", ["[tuning.kalman] R = [0.01, nan]", "finite"]),
+])
+def test_bad_tuning_value_is_refused_at_load(tmp_path, table, line, needles):
+    path = _car(tmp_path, f"[tuning.{table}]\n{line}\n")
+    with pytest.raises(VehicleFileError) as exc:
+        load_vehicle(path)
+    msg = str(exc.value)
+    assert msg.startswith(f"{path}: "), msg
+    for needle in needles:
+        assert needle in msg, msg
+    for internal in ("not supported between", "could not convert", "inhomogeneous", "Riccati", "array element"):
+        assert internal not in msg, msg
+
+
+def test_bad_tuning_value_is_a_usage_error_on_the_command_line(tmp_path):
+    path = _car(tmp_path, '[tuning.pif-modified]\nQ = "abc"\n')
+    res = _identify(tmp_path / "drive.csv", "--vehicle", path, "-o", tmp_path / "out.toml")
+    assert res.exit_code == 2, res.output
+    assert 'car.toml: [tuning.pif-modified] Q = "abc": expected a number' in res.output
+    assert "not supported between" not in res.output
+
+
+def test_good_tuning_values_still_load(tmp_path):
+    car = load_vehicle(_car(tmp_path, '[tuning.pif-modified]\nQ = 1e-4\nth = 2e4\nvariant = "riccati"\n'
+                                      "[tuning.kalman]\nR = [0.01, 2.5e-05]\n"))
+    assert car.tuning["kalman"]["R"] == [0.01, 2.5e-05] and car.tuning["pif-modified"]["variant"] == "riccati"
