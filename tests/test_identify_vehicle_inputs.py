@@ -121,3 +121,35 @@ def test_good_tuning_values_still_load(tmp_path):
     car = load_vehicle(_car(tmp_path, '[tuning.pif-modified]\nQ = 1e-4\nth = 2e4\nvariant = "riccati"\n'
                                       "[tuning.kalman]\nR = [0.01, 2.5e-05]\n"))
     assert car.tuning["kalman"]["R"] == [0.01, 2.5e-05] and car.tuning["pif-modified"]["variant"] == "riccati"
+
+
+# ---- option values: usage errors naming the option and its range --------------------------------
+
+@pytest.mark.parametrize("option,value,needle", [
+    ("--ay-max", "0", "1.0<x<=10.0"),
+    ("--ay-max", "-4", "1.0<x<=10.0"),
+    ("--ay-max", "nan", "1.0<x<=10.0"),
+    ("--ay-max", "1e9", "1.0<x<=10.0"),
+    ("--straight-bank", "30", "-20.0<x<20.0"),
+    ("--straight-bank", "nan", "-20.0<x<20.0"),
+])
+def test_out_of_range_option_is_a_usage_error_naming_it(tmp_path, option, value, needle):
+    res = _identify(tmp_path / "drive.csv", option, value, "-o", tmp_path / "out.toml")
+    assert res.exit_code == 2, res.output
+    assert f"Invalid value for '{option}'" in res.output and needle in res.output, res.output
+    assert "IdentifySettings" not in res.output
+
+
+# ---- -o: checked before any log is read ---------------------------------------------------------
+
+@pytest.mark.parametrize("output,needle", [
+    ("afile/car.toml", "afile' is a file, not a directory"),
+    ("car.csv", "must end in .toml"),
+])
+def test_output_is_checked_before_the_work(tmp_path, output, needle):
+    (tmp_path / "afile").write_text("x")
+    log = tmp_path / "missing.csv"               # never read: the output is refused first
+    res = _identify(log, "-o", tmp_path / output)
+    assert res.exit_code == 2, res.output
+    assert "Invalid value for '-o' / '--output'" in res.output and needle in res.output, res.output
+    assert "missing.csv" not in res.output and "FAILED" not in res.output
