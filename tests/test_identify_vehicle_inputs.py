@@ -4,10 +4,16 @@ never a silent absurd value."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from click.testing import CliRunner
 
 from roadbank.cli import main
+from roadbank.identification import IdentifySettings, identify
+from roadbank.identification.prepare import to_grid
+from roadbank.identification.segments import segment
+from roadbank.io import load_log
+from roadbank.io.writers import write_table
 from roadbank.vehicle import Vehicle, VehicleFileError, load_vehicle
 
 BASE = "[vehicle]\nm = 1687\nIz = 3000\nLf = 1.2\nLr = 1.5\nCf = 80000\nCr = 90000\n"
@@ -153,3 +159,72 @@ def test_output_is_checked_before_the_work(tmp_path, output, needle):
     assert res.exit_code == 2, res.output
     assert "Invalid value for '-o' / '--output'" in res.output and needle in res.output, res.output
     assert "missing.csv" not in res.output and "FAILED" not in res.output
+
+
+# ---- logs: what is missing is said, a flipped steering sign is caught -------------------------
+
+def _turning_log(path, seconds: float = 80.0, flip: bool = False, steering: bool = True, vx: float = 15.0):
+    """A test-track log at ``vx``: 8 s straights and 5 s steady corners at 2.5 m/s^2 (left, right, ...,
+    entered and left over 2 s), with the bicycle model's steering angle (wheelbase 2.7 m, Kus 0.004 rad
+    s^2/m); ``flip``: the steering angle with the wrong sign (left turns negative)."""
+    rate = 100.0
+    t = np.arange(int(seconds * rate)) / rate
+    ay = np.zeros_like(t)
+    for k, start in enumerate(np.arange(8.0, seconds - 10.0, 17.0)):
+        rise = np.clip((t - start) / 2.0, 0, 1) - np.clip((t - start - 7.0) / 2.0, 0, 1)
+        ay += (-1) ** k * 2.5 * (3 * rise ** 2 - 2 * rise ** 3)       # smooth entry and exit
+    r = ay / vx
+    delta = 2.7 * r / vx + 0.004 * ay
+    rng = np.random.default_rng(0)
+    cols = {"t": t, "vx": np.full_like(t, vx) + 0.01 * rng.standard_normal(len(t)),
+            "ay": ay + 0.02 * rng.standard_normal(len(t)), "r": r + 1e-3 * rng.standard_normal(len(t))}
+    if steering:
+        cols["delta_f"] = (-delta if flip else delta) + 1e-4 * rng.standard_normal(len(t))
+    write_table(path, cols, {})
+    return path
+
+
+def test_log_without_steering_says_the_steering_channel_is_missing(tmp_path):
+    log = _turning_log(tmp_path / "nosteer.csv", steering=False)
+    out = tmp_path / "car.toml"
+    res = _identify(log, "-o", out)
+    assert res.exit_code == 1 and not out.exists(), res.output
+    assert "NOT USED" in res.output and "no steering channel" in res.output, res.output
+    assert "delta_f" in res.output and "too slow" not in res.output
+
+
+def test_short_log_says_how_long_it_is_and_how_long_it_must_be(tmp_path):
+    log = _turning_log(tmp_path / "short.csv", seconds=2.0)
+    res = _identify(log, "-o", tmp_path / "car.toml")
+    assert res.exit_code == 1, res.output
+    assert "too short: 2.0 s of log" in res.output and "at least 20 s of driving" in res.output, res.output
+    assert "too slow" not in res.output
+
+
+def test_slow_log_is_still_too_slow(tmp_path):
+    log = _turning_log(tmp_path / "slow.csv", vx=4.0)
+    res = _identify(log, "-o", tmp_path / "car.toml")
+    assert res.exit_code == 1 and "too slow: top speed 4.0 m/s" in res.output, res.output
+
+
+def test_flipped_steering_sign_is_refused_naming_the_channel(tmp_path):
+    log = _turning_log(tmp_path / "flipped.csv", flip=True)
+    out = tmp_path / "car.toml"
+    res = _identify(log, "-o", out)
+    assert res.exit_code == 1 and not out.exists(), res.output
+    assert "steering sign flipped" in res.output and "delta_f" in res.output, res.output
+    assert "invert = true" in res.output and "channel map" in res.output
+    assert "Kus" not in res.output                  # no absurd understeer gradient reported
+
+
+def test_steering_sign_reads_the_correct_sign_as_correct(tmp_path):
+    """The same log with the right sign correlates near +1 and is not flagged; flipped near -1."""
+    from roadbank.identification.identify import steering_sign       # new with the check
+
+    for flip, sign in ((False, 1.0), (True, -1.0)):
+        log = load_log(_turning_log(tmp_path / f"log{flip}.csv", flip=flip))
+        res = identify([log])
+        corr, secs = steering_sign(segment(to_grid(log.signals.t, log.signals.vx, log.signals.ay, log.signals.r,
+                                                   log.signals.delta_f), IdentifySettings()), IdentifySettings())
+        assert corr * sign > 0.9 and secs > 20, (flip, corr, secs)
+        assert ("steering sign flipped" in res.logs[0].problem) == flip, res.logs[0].problem

@@ -90,7 +90,9 @@ def identify(logs, vehicle, channels, fmt, output, straight_bank, ay_max, as_jso
     Each value comes with a standard uncertainty (block bootstrap). A quantity the
     logs do not excite (straight driving only, too slow, too few corners or yaw
     transients) is REFUSED with the reason, never guessed. A log that cannot be
-    read or has no usable driving is reported and the others are used. The file is
+    read, has no usable driving (too short, too slow), lacks a channel (no steering
+    angle) or has its steering sign flipped is reported (NOT USED, with what is
+    missing) and the others are used. The file is
     written when anything was identified; the exit code is 0 only when every
     quantity was identified from every log, else 1. Method: docs/identification.md.
     """
