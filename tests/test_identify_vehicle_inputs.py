@@ -228,3 +228,19 @@ def test_steering_sign_reads_the_correct_sign_as_correct(tmp_path):
                                                    log.signals.delta_f), IdentifySettings()), IdentifySettings())
         assert corr * sign > 0.9 and secs > 20, (flip, corr, secs)
         assert ("steering sign flipped" in res.logs[0].problem) == flip, res.logs[0].problem
+
+
+def test_dead_steering_channel_is_refused_naming_the_channel(tmp_path):
+    """A steering angle stuck at one value while the car turns gave Kus about -7 deg/g without complaint."""
+    log = tmp_path / "dead.csv"
+    cols = _columns(_turning_log(tmp_path / "src.csv"))
+    write_table(log, {**cols, "delta_f": np.zeros(len(cols["t"]))}, {})
+    res = _identify(log, "-o", tmp_path / "car.toml")
+    assert res.exit_code == 1, res.output
+    assert "dead steering channel" in res.output and "delta_f" in res.output, res.output
+    assert "Kus" not in res.output
+
+
+def _columns(path):
+    s = load_log(path).signals
+    return {"t": s.t, "vx": s.vx, "ay": s.ay, "r": s.r}

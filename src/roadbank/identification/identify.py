@@ -73,7 +73,8 @@ def steering_sign(seg, s: IdentifySettings) -> tuple[float, float]:
 
     The correlation (-) of ``delta - delta0`` with ``r - r0`` about their median values on the straights
     (0 without straights), over the samples in the linear range that turn (``|vx (r - r0)|`` at least
-    ``s.corner_ay``); ``seconds`` (s) of such samples. NaN when fewer than ``s.corner_min`` seconds turn.
+    ``s.corner_ay``); ``seconds`` (s) of such samples. NaN when fewer than ``s.corner_min`` seconds turn;
+    0 when the steering angle does not change over them (a dead channel).
     """
     def straight_median(name: str) -> float:
         x = np.concatenate([getattr(p, name)[p.straight] for p in seg.pieces]) if seg.pieces else np.zeros(0)
@@ -87,14 +88,20 @@ def steering_sign(seg, s: IdentifySettings) -> tuple[float, float]:
         dd, rr = p.delta[turn] - d0, p.r[turn] - r0
         sdr, sdd, srr, n = sdr + float(dd @ rr), sdd + float(dd @ dd), srr + float(rr @ rr), n + int(turn.sum())
     secs = n / seg.fs
-    if secs < s.corner_min or sdd <= 0 or srr <= 0:
+    if secs < s.corner_min or srr <= 0:
         return float("nan"), secs
+    if sdd <= 0:
+        return 0.0, secs
     return sdr / np.sqrt(sdd * srr), secs
 
 
 def _sign_problem(seg, s: IdentifySettings) -> str:
-    """Why a log's steering sign looks flipped ("" if it does not, or cannot be told)."""
+    """Why a log's steering angle cannot be used: its sign looks flipped, or it never changes while the car
+    turns ("" if neither, or if it cannot be told)."""
     corr, secs = steering_sign(seg, s)
+    if corr == 0.0:
+        return (f"dead steering channel: the steering angle (delta_f) never changes over {secs:.0f} s of turning; "
+                f"check the channel map's road_wheel_angle or steering_wheel_angle column (docs/io.md)")
     if not corr < STEERING_SIGN_CORR:
         return ""
     return (f"steering sign flipped: the steering angle (delta_f) and the yaw rate correlate negatively over "
