@@ -102,6 +102,10 @@ def test_sensor_key_error_names_file_and_key_once(tmp_path, line, needle):
     ("kalman", 'R = [1, "a"]', ['[tuning.kalman] R = [1, "a"]', "numbers", "a string"]),
     ("kalman", "R = [[1, 2], [3]]", ["[tuning.kalman] R = [[1, 2], [3]]", "rectangular"]),
     ("kalman", "R = [0.01, nan]", ["[tuning.kalman] R = [0.01, nan]", "finite"]),
+    ("kalman", "R = [0.01, 2.5e-05, 3]", ["[tuning.kalman] R = [0.01, 2.5e-05, 3]", "shape (2,)", "got shape (3,)"]),
+    ("kalman", "R = 0.01", ["[tuning.kalman] R = 0.01", "shape (2,)", "got a number"]),
+    ("uio", "M = [1, 2]", ["[tuning.uio] M = [1, 2]", "shape (2, 2)"]),
+    ("dfc", "tau = [1, 2]", ["[tuning.dfc] tau = [1, 2]", "expected a number, got an array"]),
 ])
 def test_bad_tuning_value_is_refused_at_load(tmp_path, table, line, needles):
     path = _car(tmp_path, f"[tuning.{table}]\n{line}\n")
@@ -120,6 +124,15 @@ def test_bad_tuning_value_is_a_usage_error_on_the_command_line(tmp_path):
     res = _identify(tmp_path / "drive.csv", "--vehicle", path, "-o", tmp_path / "out.toml")
     assert res.exit_code == 2, res.output
     assert 'car.toml: [tuning.pif-modified] Q = "abc": expected a number' in res.output
+    assert "not supported between" not in res.output
+
+
+def test_array_where_the_estimator_takes_a_number_is_named_on_the_command_line(tmp_path):
+    """Q of a PIF defaults to None (a number is taken): the design finds the array, not numpy's comparison."""
+    path = _car(tmp_path, "[tuning.pif-modified]\nQ = [1e-4]\nth = [1, 2]\n")
+    res = _identify(tmp_path / "drive.csv", "--vehicle", path, "-o", tmp_path / "out.toml")
+    assert res.exit_code == 2, res.output
+    assert "car.toml: [tuning.pif-modified] Q = [0.0001]: pif-modified cannot take this array" in res.output
     assert "not supported between" not in res.output
 
 

@@ -266,9 +266,33 @@ class Vehicle:
             try:
                 self.make(name)
             except (ValueError, TypeError, NoStabilisingSolution) as exc:
-                raise VehicleFileError(f"{self.source or f'<vehicle {self.name}>'}: [tuning.{name}] "
-                                       f"{fmt_options(options)}: {exc}") from None
+                where = f"{self.source or f'<vehicle {self.name}>'}: [tuning.{name}]"
+                key = None if isinstance(exc, NoStabilisingSolution) else self._array_option_at_fault(name, options)
+                if key is not None:
+                    raise VehicleFileError(f"{where} {key} = {fmt_value(options[key])}: {name} cannot take this "
+                                           f"array for {key} (it takes a number, or an array of another "
+                                           f"shape)") from None
+                raise VehicleFileError(f"{where} {fmt_options(options)}: {exc}") from None
         return self
+
+    def _array_option_at_fault(self, name: str, options: Mapping[str, object]) -> str | None:
+        """The first array-valued option of ``[tuning.<name>]`` that fails the design on its own (with the
+        table's other, non-array options), where the design builds without the arrays; None: none such.
+        An array given where the estimator takes a number fails inside its design with a type error that
+        names neither the option nor the table."""
+        arrays = [k for k, v in options.items() if isinstance(v, list)]
+        base = {k: v for k, v in options.items() if k not in arrays}
+
+        def builds(opts) -> bool:
+            try:
+                self.with_tuning(name, opts).make(name)
+            except (ValueError, TypeError, ArithmeticError):
+                return False
+            return True
+
+        if not arrays or not builds(base):
+            return None
+        return next((k for k in arrays if not builds({**base, k: options[k]})), None)
 
     def to_plant(self, **changes):
         """The simulator's :class:`roadbank.sim.PlantParams` for this car.

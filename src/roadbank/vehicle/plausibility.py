@@ -261,6 +261,16 @@ def _array_problem(v) -> str | None:
     return None
 
 
+def _shape(v) -> tuple[int, ...]:
+    """Shape of a rectangular (nested) list."""
+    return (len(v), *_shape(v[0])) if isinstance(v, (list, tuple)) and v else ((0,) if isinstance(v, list) else ())
+
+
+def _fmt_default(v) -> str:
+    """A default tuple (of tuples) of numbers as TOML-like text with 6 significant digits, for messages."""
+    return "[" + ", ".join(map(_fmt_default, v)) + "]" if isinstance(v, (list, tuple)) else f"{float(v):.6g}"
+
+
 def check_tuning_value(source: str, name: str, key: str, value, default=None) -> None:
     """One ``[tuning.<name>]`` value: every number finite (arrays included), arrays rectangular arrays of
     numbers; an option that takes a number (its default a number or None, :func:`_option_kind`) a number or
@@ -274,11 +284,19 @@ def check_tuning_value(source: str, name: str, key: str, value, default=None) ->
             raise VehicleFileError(f"{where}: {why}")
         if kind == "flag":
             raise VehicleFileError(f"{where}: expected a boolean (true or false), got an array")
+        if _is_number(default) or hasattr(default, "dtype") and getattr(default, "ndim", 1) == 0:
+            raise VehicleFileError(f"{where}: expected a number, got an array")
+        if isinstance(default, (tuple, list)) and _shape(value) != _shape(list(default)):
+            raise VehicleFileError(f"{where}: expected an array of shape {_shape(list(default))} (as the default "
+                                   f"{_fmt_default(default)}), got shape {_shape(value)}")
         return
     if _is_number(value) and not math.isfinite(value):
         raise VehicleFileError(f"{where}: must be a finite number")
     if kind == "number" and not _is_number(value):
         raise VehicleFileError(f"{where}: expected a number or an array of numbers, got {toml_type(value)}")
+    if isinstance(default, (tuple, list)) and _is_number(value):
+        raise VehicleFileError(f"{where}: expected an array of shape {_shape(list(default))} (as the default "
+                               f"{_fmt_default(default)}), got a number")
     if kind == "flag" and not isinstance(value, bool):
         raise VehicleFileError(f"{where}: expected a boolean (true or false), got {toml_type(value)}")
 
