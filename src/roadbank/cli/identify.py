@@ -10,7 +10,13 @@ from pathlib import Path
 import click
 
 from ..constants import G
-from .options import vehicle_option
+from .options import FiniteRange, checked_output, vehicle_option
+
+#: ``--ay-max`` (m/s^2): above the corner threshold (``IdentifySettings.corner_ay``, 1 m/s^2; a lower linear
+#: range leaves no corner) and at most 1 g (beyond it no tyre is linear)
+AY_MAX_RANGE = (1.0, 10.0)
+#: ``--straight-bank`` (deg): below ``IdentifySettings``' limit of 20 deg in magnitude
+STRAIGHT_BANK_RANGE = (-20.0, 20.0)
 
 #: display unit per quantity: (label, factor from SI)
 _DISPLAY = {
@@ -63,12 +69,14 @@ def result_json(result, failed) -> dict:
 @click.option("--format", "fmt", default=None,
               help="Input format (csv, parquet, mdf4, comma2k19, ...). Default: from the file suffix.")
 @click.option("-o", "--output", required=True, type=click.Path(path_type=Path),
+              callback=checked_output(suffixes=(".toml",), what="identify writes a vehicle file"),
               help="Vehicle file (.toml) to write: the base car with the identified Cf, Cr and an "
                    "[identified] table.")
-@click.option("--straight-bank", type=float, default=0.0, show_default=True,
+@click.option("--straight-bank", type=FiniteRange(*STRAIGHT_BANK_RANGE, min_open=True, max_open=True), default=0.0,
+              show_default=True,
               help="Assumed mean bank (deg, left side up) of the straights driven; the ay offset is relative "
                    "to it (a 2 % crown draining to the right is 1.15).")
-@click.option("--ay-max", type=float, default=4.0, show_default=True,
+@click.option("--ay-max", type=FiniteRange(*AY_MAX_RANGE, min_open=True), default=4.0, show_default=True,
               help="Linear range (m/s^2): samples with larger |ay| are left out of the stiffness regression.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON on stdout.")
 def identify(logs, vehicle, channels, fmt, output, straight_bank, ay_max, as_json):
@@ -82,7 +90,9 @@ def identify(logs, vehicle, channels, fmt, output, straight_bank, ay_max, as_jso
     Each value comes with a standard uncertainty (block bootstrap). A quantity the
     logs do not excite (straight driving only, too slow, too few corners or yaw
     transients) is REFUSED with the reason, never guessed. A log that cannot be
-    read or has no usable driving is reported and the others are used. The file is
+    read, has no usable driving (too short, too slow), lacks a channel (no steering
+    angle) or has its steering sign flipped is reported (NOT USED, with what is
+    missing) and the others are used. The file is
     written when anything was identified; the exit code is 0 only when every
     quantity was identified from every log, else 1. Method: docs/identification.md.
     """
@@ -90,12 +100,7 @@ def identify(logs, vehicle, channels, fmt, output, straight_bank, ay_max, as_jso
     from ..io import LogError, load_log
     from .inputs import channel_map_and_logs
 
-    try:
-        settings = IdentifySettings(straight_bank=math.radians(straight_bank), ay_max=ay_max)
-    except ValueError as exc:
-        raise click.UsageError(str(exc)) from None
-    if output.suffix.lower() != ".toml":
-        raise click.BadParameter("the output must be a .toml vehicle file", param_hint="-o")
+    settings = IdentifySettings(straight_bank=math.radians(straight_bank), ay_max=ay_max)  # options in range
     cmap, logs = channel_map_and_logs(channels, logs)
     params = vehicle.params
     loaded, failed = [], []

@@ -4,9 +4,9 @@
 :class:`roadbank.vehicle.Vehicle` (the paper's SUV when the option is absent). A
 malformed file is a usage error (exit code 2) with the file/key message, no traceback.
 
-``SEED`` is every command's ``--seed`` type; ``checked_output`` the callback of the output
-options (``-o``, ``--docs``) that refuses a path that cannot be written before any work
-(a usage error naming the option and the path).
+``SEED`` is every command's ``--seed`` type; ``FiniteRange`` a float range that refuses NaN too;
+``checked_output`` the callback of the output options (``-o``, ``--docs``) that refuses a path that
+cannot be written before any work (a usage error naming the option and the path).
 """
 
 from __future__ import annotations
@@ -57,6 +57,20 @@ def vehicle_option(help_extra: str = "", *, default_help: str = "the paper's SUV
             f"Default: {default_help}." + (f" {help_extra}" if help_extra else ""))
     return click.option("--vehicle", "vehicle", cls=_VehicleOption, default=None, metavar="PATH|NAME",
                         callback=_to_vehicle, none_if_absent=none_if_absent, help=text)
+
+
+class FiniteRange(click.FloatRange):
+    """:class:`click.FloatRange` that also refuses NaN (which compares false with both bounds and would pass).
+
+    A value outside the range is a usage error naming the option and the range, e.g. ``Invalid value
+    for '--ay-max': 0.0 is not in the range 1<x<=10.``
+    """
+
+    def convert(self, value, param, ctx):
+        rv = super().convert(value, param, ctx)
+        if rv != rv:  # NaN
+            self.fail(f"{value!r} is not a number in the range {self._describe_range()}", param, ctx)
+        return rv
 
 
 #: ``--seed`` of every command: what numpy's and scipy's seeding accept everywhere (0 to 2**32 - 1)

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from ..models.roll import steady_roll_gain
 from ..params import VehicleParams
 from .offsets import Offsets, straight_offsets
@@ -26,18 +28,86 @@ from .stiffness import identify_stiffness
 #: usable driving (s at >= v_min) a log needs to be used at all
 MIN_USABLE_S = 20.0
 
+#: a log whose steering angle and yaw rate correlate below this over its turns (-, normalised about the
+#: straight-ahead values) has the steering sign flipped: every stable car steers into its turn (the
+#: steady yaw rate per steering angle is positive below the critical speed), so a left turn with a
+#: negative steering angle is a channel map's sign, not the car; the correct sign gives 0.9 .. 1
+STEERING_SIGN_CORR = -0.5
+
+#: the channels the identification reads: Signals field -> how the messages name it
+CHANNEL_NAMES = {"vx": "speed (vx)", "ay": "lateral acceleration (ay)", "r": "yaw rate (r)",
+                 "delta_f": "steering angle (delta_f)"}
+
 ORDER = ("Cf", "Cr", "Kus", "steering_offset", "yaw_rate_offset", "ay_offset", "roll_gain")
 
 
-def _usable_problem(seg, s: IdentifySettings) -> str:
+def _channel_problem(sig) -> str:
+    """Why a log cannot be identified from for a channel it lacks (every sample NaN); "" if it has them all."""
+    missing = [name for name in CHANNEL_NAMES if not np.isfinite(np.asarray(getattr(sig, name), float)).any()]
+    if not missing:
+        return ""
+    if missing == ["delta_f"]:
+        return ("no steering channel: the steering angle (delta_f) holds no value; the understeer gradient, the "
+                "stiffnesses and the steering offset need the road-wheel or steering-wheel angle (a channel map's "
+                "road_wheel_angle or steering_wheel_angle, docs/io.md)")
+    return f"no {' and no '.join(CHANNEL_NAMES[m] for m in missing)}: every sample is missing"
+
+
+def _usable_problem(seg, s: IdentifySettings, top_speed: float) -> str:
+    """Why a log has too little driving to use ("" if it has enough); ``top_speed`` (m/s) its highest speed."""
     secs = seg.seconds
     if secs["usable"] >= MIN_USABLE_S:
         return ""
-    if not seg.pieces:
-        return (f"too slow: no stretch of >= {s.min_run:g} s at >= {s.v_min:g} m/s in {secs['total']:.0f} s "
-                f"of log; identification needs >= {MIN_USABLE_S:g} s of driving at >= {s.v_min:g} m/s")
-    return (f"too little driving at >= {s.v_min:g} m/s: {secs['usable']:.1f} s of {secs['total']:.0f} s; "
-            f"needs >= {MIN_USABLE_S:g} s")
+    need = f"at least {MIN_USABLE_S:g} s of driving at >= {s.v_min:g} m/s needed"
+    if secs["total"] < MIN_USABLE_S:
+        return f"too short: {secs['total']:.1f} s of log; {need}"
+    if not seg.pieces and not top_speed >= s.v_min:
+        return (f"too slow: top speed {top_speed:.1f} m/s in {secs['total']:.0f} s of log; "
+                f"identification needs >= {MIN_USABLE_S:g} s of driving at >= {s.v_min:g} m/s")
+    return (f"too little driving at >= {s.v_min:g} m/s: {secs['usable']:.1f} s of {secs['total']:.0f} s in stretches "
+            f"of >= {s.min_run:g} s; {need}")
+
+
+def steering_sign(seg, s: IdentifySettings) -> tuple[float, float]:
+    """How a log's steering angle follows its yaw rate in the turns: ``(correlation, seconds)``.
+
+    The correlation (-) of ``delta - delta0`` with ``r - r0`` about their median values on the straights
+    (0 without straights), over the samples in the linear range that turn (``|vx (r - r0)|`` at least
+    ``s.corner_ay``); ``seconds`` (s) of such samples. NaN when fewer than ``s.corner_min`` seconds turn;
+    0 when the steering angle does not change over them (a dead channel).
+    """
+    def straight_median(name: str) -> float:
+        x = np.concatenate([getattr(p, name)[p.straight] for p in seg.pieces]) if seg.pieces else np.zeros(0)
+        return float(np.median(x)) if len(x) else 0.0
+
+    d0, r0 = straight_median("delta"), straight_median("r")
+    sdr = sdd = srr = 0.0
+    n = 0
+    for p in seg.pieces:
+        turn = p.regress & (np.abs(p.vx * (p.r_f - r0)) >= s.corner_ay)
+        dd, rr = p.delta[turn] - d0, p.r[turn] - r0
+        sdr, sdd, srr, n = sdr + float(dd @ rr), sdd + float(dd @ dd), srr + float(rr @ rr), n + int(turn.sum())
+    secs = n / seg.fs
+    if secs < s.corner_min or srr <= 0:
+        return float("nan"), secs
+    if sdd <= 0:
+        return 0.0, secs
+    return sdr / np.sqrt(sdd * srr), secs
+
+
+def _sign_problem(seg, s: IdentifySettings) -> str:
+    """Why a log's steering angle cannot be used: its sign looks flipped, or it never changes while the car
+    turns ("" if neither, or if it cannot be told)."""
+    corr, secs = steering_sign(seg, s)
+    if corr == 0.0:
+        return (f"dead steering channel: the steering angle (delta_f) never changes over {secs:.0f} s of turning; "
+                f"check the channel map's road_wheel_angle or steering_wheel_angle column (docs/io.md)")
+    if not corr < STEERING_SIGN_CORR:
+        return ""
+    return (f"steering sign flipped: the steering angle (delta_f) and the yaw rate correlate negatively over "
+            f"{secs:.0f} s of turning (correlation {corr:.2f}): a left turn reads as a negative steering angle, "
+            f"which no car does (the understeer gradient would come out absurd); flip the steering channel's sign "
+            f"in the channel map (invert = true on road_wheel_angle or steering_wheel_angle, docs/io.md)")
 
 
 def _merge_refusal(straights: Quantity, regression: Quantity) -> Quantity:
@@ -73,12 +143,18 @@ def identify(logs, params: VehicleParams | None = None, settings: IdentifySettin
     for log in logs:
         source = Path(getattr(log, "source", "") or "")
         sig = log.signals
+        missing = _channel_problem(sig)
+        if missing:
+            reports.append(LogReport(source, False, missing))
+            continue
         try:
             seg = segment(to_grid(sig.t, sig.vx, sig.ay, sig.r, sig.delta_f, log.reference_roll), s)
         except Exception as exc:  # one log that cannot be analysed never loses the others
             reports.append(LogReport(source, False, f"cannot be analysed: {type(exc).__name__}: {exc}"))
             continue
-        problem = _usable_problem(seg, s)
+        vx = np.asarray(sig.vx, float)
+        top = float(np.nanmax(vx)) if np.isfinite(vx).any() else float("nan")
+        problem = _usable_problem(seg, s, top) or _sign_problem(seg, s)
         reports.append(LogReport(source, not problem, problem, dict(seg.seconds), seg.n_corners, seg.speed_range))
         if not problem:
             segs.append(seg)

@@ -23,8 +23,8 @@ from ..params import VehicleParams
 from ..signals import CHANNELS, Signals
 from .conditions import make_estimator
 from .errors import VehicleFileError
-from .plausibility import (PLANT_FIELDS, PLAUSIBLE, SENSOR_FIELDS, check_document, check_free_table, check_tuning,
-                           checked_value, unknown_key)
+from .plausibility import (IDENTIFIED_OFFSETS, PLANT_FIELDS, PLAUSIBLE, SENSOR_FIELDS, check_document,
+                           check_free_table, check_identified_offset, check_tuning, checked_value, unknown_key)
 from .sensors import SensorSpec
 from .tomltext import fmt_options, fmt_value, is_scalar, toml_key, toml_type, toml_value
 
@@ -266,9 +266,33 @@ class Vehicle:
             try:
                 self.make(name)
             except (ValueError, TypeError, NoStabilisingSolution) as exc:
-                raise VehicleFileError(f"{self.source or f'<vehicle {self.name}>'}: [tuning.{name}] "
-                                       f"{fmt_options(options)}: {exc}") from None
+                where = f"{self.source or f'<vehicle {self.name}>'}: [tuning.{name}]"
+                key = None if isinstance(exc, NoStabilisingSolution) else self._array_option_at_fault(name, options)
+                if key is not None:
+                    raise VehicleFileError(f"{where} {key} = {fmt_value(options[key])}: {name} cannot take this "
+                                           f"array for {key} (it takes a number, or an array of another "
+                                           f"shape)") from None
+                raise VehicleFileError(f"{where} {fmt_options(options)}: {exc}") from None
         return self
+
+    def _array_option_at_fault(self, name: str, options: Mapping[str, object]) -> str | None:
+        """The first array-valued option of ``[tuning.<name>]`` that fails the design on its own (with the
+        table's other, non-array options), where the design builds without the arrays; None: none such.
+        An array given where the estimator takes a number fails inside its design with a type error that
+        names neither the option nor the table."""
+        arrays = [k for k, v in options.items() if isinstance(v, list)]
+        base = {k: v for k, v in options.items() if k not in arrays}
+
+        def builds(opts) -> bool:
+            try:
+                self.with_tuning(name, opts).make(name)
+            except (ValueError, TypeError, ArithmeticError):
+                return False
+            return True
+
+        if not arrays or not builds(base):
+            return None
+        return next((k for k in arrays if not builds({**base, k: options[k]})), None)
 
     def to_plant(self, **changes):
         """The simulator's :class:`roadbank.sim.PlantParams` for this car.
@@ -376,9 +400,9 @@ def _from_document(doc: dict, source: str, default_name: str) -> Vehicle:
     for key in sens_raw:
         if key not in SENSOR_FIELDS:
             raise VehicleFileError(f"{source}: [sensors] {key}: {unknown_key(key, SENSOR_FIELDS, 'key')}")
-    try:
-        sensors = SensorSpec(**{k: checked_value(source, "sensors", k, v, *SENSOR_FIELDS[k])
-                                for k, v in sens_raw.items()})
+    sens_values = {k: checked_value(source, "sensors", k, v, *SENSOR_FIELDS[k]) for k, v in sens_raw.items()}
+    try:  # the values' own errors name file, table and key already: only SensorSpec's are re-labelled
+        sensors = SensorSpec(**sens_values)
     except (ValueError, TypeError) as exc:
         raise _params_error(source, "sensors", sens_raw, exc) from None
 
@@ -395,6 +419,8 @@ def _from_document(doc: dict, source: str, default_name: str) -> Vehicle:
                 check_tuning(source, sub, values_)
             else:
                 check_free_table(source, table, sub, values_)
+                if table == "identified" and sub in IDENTIFIED_OFFSETS:
+                    check_identified_offset(source, sub, values_)
     try:
         return Vehicle(name=meta.get("name", default_name), description=meta.get("description", ""),
                        sources=tuple(sources), params=params, sensors=sensors,

@@ -22,8 +22,9 @@ from .tomltext import fmt_value, is_scalar, toml_type
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
 # them: loading a car (load_vehicle, --vehicle) loads neither
 
-__all__ = ["PLAUSIBLE", "WHEELBASE_RANGE", "SENSOR_FIELDS", "PLANT_FIELDS", "checked_value", "check_document",
-           "check_tuning", "check_free_table", "estimator_options", "unknown_key"]
+__all__ = ["PLAUSIBLE", "WHEELBASE_RANGE", "SENSOR_FIELDS", "PLANT_FIELDS", "IDENTIFIED_OFFSETS", "checked_value",
+           "check_document", "check_identified_offset", "check_tuning", "check_tuning_value", "check_free_table",
+           "estimator_options", "estimator_option_defaults", "unknown_key"]
 
 #: [vehicle] keys: dimension and plausible range for a road vehicle (passenger car to light
 #: van, SI). Outside the range is an error: it catches unit mistakes (mass in tonnes, Cf in
@@ -88,6 +89,47 @@ PLANT_FIELDS: dict[str, tuple[str, tuple[float, float] | None]] = {
     "load_transfer_lag": ("time", (1e-3, 1.0)),
 }
 
+#: ``[identified.<offset>]`` tables (sensor offsets, measured minus true, what ``roadbank identify``
+#: writes and :meth:`~roadbank.vehicle.Vehicle.correct` removes from every log): the SI unit of their
+#: ``value`` and ``std``, the largest plausible ``|value|`` in it and what the offset is (for messages).
+#: The limits are those of the sensor biases of ``[sensors]`` (``r_bias``, ``ay_bias``): 0.1 rad/s
+#: (5.7 deg/s) of yaw rate, 2 m/s^2 (0.2 g) of ay, and 0.1 rad (5.7 deg) of road-wheel angle, about
+#: 90 deg at the steering wheel; a larger value is a unit mistake or a file edited by hand, and would
+#: be subtracted from every sample of every log.
+IDENTIFIED_OFFSETS: dict[str, tuple[str, float, str]] = {
+    "yaw_rate_offset": ("rad/s", 0.1, "yaw-rate sensor offset"),
+    "ay_offset": ("m/s^2", 2.0, "lateral-acceleration sensor offset"),
+    "steering_offset": ("rad", 0.1, "steering offset (road-wheel angle)"),
+}
+
+
+def check_identified_offset(source: str, quantity: str, entry) -> None:
+    """An ``[identified.<offset>]`` table (:data:`IDENTIFIED_OFFSETS`): ``value`` a finite number within
+    the plausible range of its SI unit, ``std`` (if given) a finite number >= 0, ``unit`` (if given) that
+    unit. Every problem raises :class:`VehicleFileError` naming the source, the table, the key and the
+    allowed range or type."""
+    unit, limit, what = IDENTIFIED_OFFSETS[quantity]
+    where = f"{source}: [identified.{quantity}]"
+    if "value" not in entry:
+        raise VehicleFileError(f"{where} value: missing (the {what} in {unit})")
+    for key in ("value", "std"):
+        if key not in entry:
+            continue
+        v = entry[key]
+        shown = f"{where} {key} = {fmt_value(v) if is_scalar(v) else '...'}"
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise VehicleFileError(f"{shown}: expected a number ({unit}), got {toml_type(v)}")
+        if not math.isfinite(v):
+            raise VehicleFileError(f"{shown}: must be a finite number ({unit})")
+        if key == "std" and v < 0:
+            raise VehicleFileError(f"{shown}: must be >= 0 {unit}")
+        if key == "value" and abs(v) > limit:
+            raise VehicleFileError(f"{shown}: outside the plausible range {-limit:g} .. {limit:g} {unit} "
+                                   f"for a {what} (unit mistake?)")
+    if "unit" in entry and entry["unit"] != unit:
+        raise VehicleFileError(f"{where} unit = {fmt_value(entry['unit']) if is_scalar(entry['unit']) else '...'}: "
+                               f"the offset must be in {unit} (as roadbank identify writes it)")
+
 
 def unknown_key(key: str, known, what: str) -> str:
     """The message for an unknown ``key`` among ``known``, with the close match when there is one."""
@@ -142,8 +184,8 @@ def check_free_table(source: str, table: str, sub: str, values) -> None:
                                    f"or array of them, got {toml_type(v)}")
 
 
-def estimator_options(name: str) -> set[str] | None:
-    """Keyword options ``estimators.make(name, ...)`` accepts (None: cannot tell, accept any)."""
+def estimator_option_defaults(name: str) -> dict[str, object] | None:
+    """Keyword options ``estimators.make(name, ...)`` accepts and their defaults (None: cannot tell, accept any)."""
     from .. import estimators
 
     factory = getattr(estimators, "_FACTORIES", {}).get(name)
@@ -151,7 +193,7 @@ def estimator_options(name: str) -> set[str] | None:
         return None
     fixed = set(getattr(factory, "keywords", None) or ())
     cls = getattr(factory, "func", factory)
-    names: set[str] = set()
+    defaults: dict[str, object] = {}
     for klass in (inspect.getmro(cls) if inspect.isclass(cls) else (cls,)):
         init = vars(klass).get("__init__") if inspect.isclass(klass) else klass
         if init is None:            # a mixin without its own __init__: look further up
@@ -162,26 +204,117 @@ def estimator_options(name: str) -> set[str] | None:
             sig = inspect.signature(init)
         except (TypeError, ValueError):
             return None
-        names |= {p.name for p in sig.parameters.values()
-                  if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and p.name not in ("self", "params")}
+        for p in sig.parameters.values():
+            if (p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD) and p.name not in ("self", "params")
+                    and p.name not in fixed):
+                defaults.setdefault(p.name, p.default)
         if not any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values()):
             break
-    return names - fixed
+    return defaults
+
+
+def estimator_options(name: str) -> set[str] | None:
+    """Keyword options ``estimators.make(name, ...)`` accepts (None: cannot tell, accept any)."""
+    defaults = estimator_option_defaults(name)
+    return None if defaults is None else set(defaults)
+
+
+#: tuning options whose default is None that are not numbers: a preset's name (``tuning = "paper"``) and a
+#: flag (``adapt_th = true``); every other option defaulting to None takes a number or an array of numbers
+NON_NUMERIC_OPTIONS = ("tuning", "adapt_th")
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _option_kind(default, key: str) -> str:
+    """What an option takes, from its default: ``"number"`` (a number or an array of numbers), ``"flag"``
+    (a boolean) or ``"any"`` (a string option such as ``variant``, checked by the estimator)."""
+    if isinstance(default, bool):
+        return "flag"
+    if isinstance(default, str) or key in NON_NUMERIC_OPTIONS:
+        return "any"
+    if default is None or _is_number(default) or hasattr(default, "dtype") or isinstance(default, (tuple, list)):
+        return "number"
+    return "any"
+
+
+def _array_problem(v) -> str | None:
+    """Why a (nested) array is not a rectangular array of finite numbers; None if it is one."""
+    if not v:
+        return "expected a number or an array of numbers, got an empty array"
+    if all(isinstance(x, list) for x in v):
+        lengths = {len(x) for x in v}
+        if len(lengths) > 1:
+            return f"its rows differ in length ({', '.join(str(len(x)) for x in v)}); an array must be rectangular"
+        for x in v:
+            why = _array_problem(x)
+            if why:
+                return why
+        return None
+    for x in v:
+        if not _is_number(x):
+            return f"its elements must all be numbers, one is {toml_type(x)}"
+        if not math.isfinite(x):
+            return f"its elements must be finite, one is {fmt_value(x)}"
+    return None
+
+
+def _shape(v) -> tuple[int, ...]:
+    """Shape of a rectangular (nested) list."""
+    return (len(v), *_shape(v[0])) if isinstance(v, (list, tuple)) and v else ((0,) if isinstance(v, list) else ())
+
+
+def _fmt_default(v) -> str:
+    """A default tuple (of tuples) of numbers as TOML-like text with 6 significant digits, for messages."""
+    return "[" + ", ".join(map(_fmt_default, v)) + "]" if isinstance(v, (list, tuple)) else f"{float(v):.6g}"
+
+
+def check_tuning_value(source: str, name: str, key: str, value, default=None) -> None:
+    """One ``[tuning.<name>]`` value: every number finite (arrays included), arrays rectangular arrays of
+    numbers; an option that takes a number (its default a number or None, :func:`_option_kind`) a number or
+    an array, never a string or a boolean; a flag a boolean. Raises :class:`VehicleFileError` naming the
+    source, the table and the key; the estimator's own checks (ranges, a design) run when it is built."""
+    kind = _option_kind(default, key)
+    where = f"{source}: [tuning.{name}] {key} = {fmt_value(value)}"
+    if isinstance(value, list):
+        why = _array_problem(value)
+        if why:
+            raise VehicleFileError(f"{where}: {why}")
+        if kind == "flag":
+            raise VehicleFileError(f"{where}: expected a boolean (true or false), got an array")
+        if _is_number(default) or hasattr(default, "dtype") and getattr(default, "ndim", 1) == 0:
+            raise VehicleFileError(f"{where}: expected a number, got an array")
+        if isinstance(default, (tuple, list)) and _shape(value) != _shape(list(default)):
+            raise VehicleFileError(f"{where}: expected an array of shape {_shape(list(default))} (as the default "
+                                   f"{_fmt_default(default)}), got shape {_shape(value)}")
+        return
+    if _is_number(value) and not math.isfinite(value):
+        raise VehicleFileError(f"{where}: must be a finite number")
+    if kind == "number" and not _is_number(value):
+        raise VehicleFileError(f"{where}: expected a number or an array of numbers, got {toml_type(value)}")
+    if isinstance(default, (tuple, list)) and _is_number(value):
+        raise VehicleFileError(f"{where}: expected an array of shape {_shape(list(default))} (as the default "
+                               f"{_fmt_default(default)}), got a number")
+    if kind == "flag" and not isinstance(value, bool):
+        raise VehicleFileError(f"{where}: expected a boolean (true or false), got {toml_type(value)}")
 
 
 def check_tuning(source: str, name: str, options) -> None:
-    """A ``[tuning.<name>]`` table: a known estimator, TOML values, options its ``make`` accepts."""
+    """A ``[tuning.<name>]`` table: a known estimator, TOML values, options its ``make`` accepts, values of
+    the type each option takes (:func:`check_tuning_value`)."""
     from .. import estimators
 
     if name not in estimators.NAMES:
         raise VehicleFileError(f"{source}: [tuning.{name}]: {unknown_key(name, estimators.NAMES, 'estimator')}")
     check_free_table(source, "tuning", name, options)
-    known = estimator_options(name)
-    if known is not None:
-        for key in options:
-            if key not in known:
-                raise VehicleFileError(f"{source}: [tuning.{name}] {key}: "
-                                       f"{unknown_key(key, sorted(known), f'option of {name}')}")
+    defaults = estimator_option_defaults(name)
+    for key, value in options.items():
+        if defaults is not None and key not in defaults:
+            raise VehicleFileError(f"{source}: [tuning.{name}] {key}: "
+                                   f"{unknown_key(key, sorted(defaults), f'option of {name}')}")
+        check_tuning_value(source, name, key, value, None if defaults is None else defaults[key])
 
 
 def check_document(doc: dict, source: str) -> None:
@@ -204,3 +337,5 @@ def check_document(doc: dict, source: str) -> None:
     for table in ("scores", "identified"):
         for sub, values in doc[table].items():
             check_free_table(source, table, sub, values)
+            if table == "identified" and sub in IDENTIFIED_OFFSETS:
+                check_identified_offset(source, sub, values)
