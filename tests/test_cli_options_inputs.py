@@ -4,6 +4,9 @@ folder is a file, tune's -o that is not a .toml file."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import pytest
 from click.testing import CliRunner
 
@@ -92,15 +95,18 @@ def test_a_scheduler_that_cannot_be_used_is_one_line(tmp_path, monkeypatch, erro
 
 
 @pytest.mark.parametrize("command", ["tune", "campaign", "validate kitti"])
-def test_a_tls_scheduler_without_tls_settings_is_one_line_before_any_work(tmp_path, monkeypatch, command):
+def test_a_tls_scheduler_without_tls_settings_is_one_line_before_any_work(tmp_path, command):
     """Dask itself refuses ``tls://`` without a TLS configuration (a TypeError inside its client): every
     command says so in one line naming the address (exit code 1), and tune before drawing its training
-    drives."""
+    drives. Run as a user runs it, in its own process: a Dask client that failed to start leaves Dask's
+    event loop unusable for the next one in the same process."""
     pytest.importorskip("distributed")
-    res = _run(SCHEDULED[command] + ["--scheduler", "tls://127.0.0.1:1"], tmp_path, monkeypatch)
-    assert res.exit_code == 1 and "Traceback" not in res.output, res.output
-    assert "cannot connect to the Dask scheduler at tls://127.0.0.1:1: " in res.output, res.output
-    assert "training set" not in res.output
+    res = subprocess.run([sys.executable, "-m", "roadbank.cli", *SCHEDULED[command], "--scheduler",
+                          "tls://127.0.0.1:1"], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    out = res.stdout + res.stderr
+    assert res.returncode == 1 and "Traceback" not in out, out
+    assert "cannot connect to the Dask scheduler at tls://127.0.0.1:1: " in out, out
+    assert "training set" not in out
 
 
 # ---------------------------------------------------------------- outputs
