@@ -129,7 +129,7 @@ _FLAGS = {"output": "-o", "names": "-e", "no_sensitivity": "--no-sensitivity", "
 @validate.command("comma2k19")
 @click.argument("path", type=click.Path(path_type=Path))
 @click.option("--json", "as_json", is_flag=True,
-              help='Print {estimator: {"r", "rms_deg", "offset_deg"}} on stdout; when PATH holds several '
+              help='Print {estimator: {"r", "rms_deg", "offset_deg"}} on stdout; when PATH is a folder holding '
                    'segments {"segments": {segment: {estimator: ...}}, "errors": [...], "notes": [...]}.')
 @click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
               callback=checked_output(next_to=(".png",)),
