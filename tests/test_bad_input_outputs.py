@@ -250,4 +250,6 @@ def test_export_from_a_log_without_driving_warns(tmp_path):
     assert "(the default design for standing.csv)" in res.output and "fitted to" not in res.output
     _csv(tmp_path / "a.csv", n=3000)
     res = _run(["export", "c", "-e", "pif-modified", "--log", "a.csv", "-o", "ex2/"], tmp_path)
-    assert res.exit_code == 0 and "warning" not in res.output and "fitted to a.csv" in res.output
+    # no word on the design (the reader's own warnings, as estimate prints them, may be there: a.csv's yaw
+    # rate is constant 0)
+    assert res.exit_code == 0 and "warning: --log" not in res.output and "fitted to a.csv" in res.output

@@ -135,9 +135,10 @@ def test_map_cli_names_the_unmapped_log_and_fails_when_none_is_usable(logs, tmp_
 
 
 def test_map_names_a_missing_path(tmp_path):
-    """Before: 'cannot tell the format from the suffix ''' for a folder name that does not exist."""
+    """Before: 'cannot tell the format from the suffix ''' for a folder name that does not exist. No path given
+    exists: a usage error (exit code 2), as for estimate and identify (tests/test_cli_inputs_missing.py)."""
     res = CliRunner().invoke(main, ["map", str(tmp_path / "no_such_drive"), "-o", str(tmp_path / "m.parquet")])
-    assert res.exit_code == 1
+    assert res.exit_code == 2
     assert f"{tmp_path / 'no_such_drive'}: not found" in res.stderr and "suffix" not in res.stderr
 
 

@@ -2,9 +2,10 @@
 
 Accuracy, not speed, so that one benchmark run states every target of the project, timed and not:
 
-* **real data** (:mod:`roadbank.validation.targets`): the KITTI validation drives and the (first) comma2k19 segment
-  found under ``roadbank bench --data DIR`` (e.g. ``../shared/data``), as ``roadbank validate all`` reads them, every
-  causal estimator run (the KITTI target compares the default with all of them); without ``--data`` it says so;
+* **real data** (:mod:`roadbank.validation.targets`): the KITTI validation drives and every comma2k19 segment
+  found (at any depth, each once) under ``roadbank bench --data DIR`` (e.g. ``../shared/data``), as ``roadbank
+  validate all`` reads them, every causal estimator run (the KITTI target compares the default with all of them);
+  without ``--data`` it says so;
 * **simulated validation set, car known** (:func:`roadbank.tuning.simulated.sim_targets`), the default only;
 * **campaign** (:func:`roadbank.campaign.report.default_target`): its first :data:`CAMPAIGN_RUNS` runs (seed 0,
   standstill starts, offsets learnt online), the default only, in this process.
@@ -26,14 +27,15 @@ CAMPAIGN_RUNS = 400
 
 def _real(data) -> tuple[list, list]:
     """The real-data targets on the data sets under ``data``, as ``roadbank validate all`` reads them (every KITTI
-    drive, the first comma2k19 segment), and notes on what could not be judged."""
-    from ..validation.comma2k19 import validate_comma2k19
+    drive, every comma2k19 segment, each once), and notes on what could not be judged."""
+    from ..validation.comma2k19 import comma2k19_outcome, named_apart, unique_segments
     from ..validation.document import find_datasets
     from ..validation.kitti import validate_kitti
     from ..validation.targets import CAUSAL, comma_targets, kitti_targets
 
     names = list(CAUSAL)
-    found, targets, notes = find_datasets(data), [], []
+    found, targets = find_datasets(data), []
+    notes = list(found["notes"])
     if found["kitti"]:
         v = validate_kitti(found["kitti"], names=names, sensitivity=False)
         judged = kitti_targets(v)
@@ -43,9 +45,21 @@ def _real(data) -> tuple[list, list]:
             notes.append(f"KITTI: no validation drive among the {len(found['kitti'])} drives found")
     else:
         notes.append("KITTI: no drive found")
-    if found["comma2k19"]:
-        targets += comma_targets(validate_comma2k19(found["comma2k19"][0], names=names, sensitivity=False))
-    else:
+    segments, seg_notes = unique_segments(found["comma2k19"])
+    notes += [f"comma2k19: {n}" for n in seg_notes]
+    results = []
+    for path in segments:
+        res, error = comma2k19_outcome(path, names=names, sensitivity=False)
+        if error is None:
+            results.append(res)
+        else:
+            notes.append(f"comma2k19: not read: {error}")
+    for res in named_apart(results):
+        judged = comma_targets(res)
+        # several segments: each target names its segment (one: as validate all's report says it)
+        targets += judged if len(results) == 1 else [dataclasses.replace(t, data=f"{t.data} {res.label}")
+                                                     for t in judged]
+    if not segments:
         notes.append("comma2k19: no segment found")
     return targets, notes
 

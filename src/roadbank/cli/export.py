@@ -144,7 +144,8 @@ def _log_design(log: Path | None, channels: Path | None, fmt: str | None, vehicl
     """``(conditions, params, car name)`` of ``log``: its :func:`roadbank.vehicle.log_conditions` (of its first minute
     of driving) and, when no car is given, the shipped car fitted to it (:func:`roadbank.vehicle.car_for_log`,
     as ``roadbank estimate`` chooses it); ``({}, None, None)`` without a log, ``params`` None with a car. A log
-    that cannot be read is a one-line error naming the file."""
+    that cannot be read is a one-line error naming the file; the reader's warnings (a line left out, a gap
+    repaired) are printed as ``warning: ...``, as ``roadbank estimate`` prints them."""
     if log is None:
         return {}, None, None
     from ..io import LogError, load_log, read_channel_map
@@ -152,10 +153,13 @@ def _log_design(log: Path | None, channels: Path | None, fmt: str | None, vehicl
 
     try:
         cmap = read_channel_map(channels) if channels is not None else None
-        signals = load_log(log, channels=cmap, format=fmt,
-                           params=vehicle.params if vehicle is not None else undescribed_params()).signals
+        read = load_log(log, channels=cmap, format=fmt,
+                        params=vehicle.params if vehicle is not None else undescribed_params())
     except (LogError, OSError) as exc:
         raise click.ClickException(f"--log: {exc}") from None
+    for w in read.warnings:       # what the reader repaired or left out, as `roadbank estimate` says it
+        click.echo(f"warning: {w}", err=True)
+    signals = read.signals
     cond = log_conditions(signals)
     idle = not math.isfinite(cond.get("log_ay_noise", math.nan))
     if idle:        # nothing measured: the design is the default one, which the user should know

@@ -45,10 +45,14 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
     A folder gives every log it holds: each KITTI drive, comma2k19 segment and log file
     (:func:`roadbank.fleet.expand_logs`, the one rule). Files that are not logs of ``fmt`` (or of a format
     known from their suffix) -- a README.md a glob picked up -- are skipped, each with a one-line
-    message. A bad channel map or no log found is a one-line error (exit code 1), never a traceback.
+    message. A bad channel map or no log found is a one-line error (exit code 1), never a traceback. When
+    no path given exists (a mistyped name), that is a usage error naming each (exit code 2): its format
+    is not guessed from a suffix it may not have. A missing path among existing ones is the reader's
+    failure of that one log (:func:`roadbank.io.files.not_found`), the others are read.
     """
     from ..fleet import expand_logs
     from ..io import LogError, read_channel_map
+    from ..io.files import not_found
 
     cmap = None
     if channels is not None:
@@ -58,6 +62,8 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
             click.echo(f"error: {exc}", err=True)
             sys.exit(1)
     paths = expand_logs(logs)
+    if paths and not any(p.exists() for p in paths):
+        raise click.BadParameter("; ".join(str(not_found(p)) for p in paths), param_hint="LOGS")
     kept = []
     for p in paths:
         why = not_a_log(p, fmt)

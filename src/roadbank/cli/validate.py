@@ -40,16 +40,6 @@ def _names(names: str) -> list[str]:
     return sel
 
 
-def _comma2k19_outcome(path, **kwargs):
-    """``(ValidationResult, None)`` of one comma2k19 segment, or ``(None, reason)`` (one pool task)."""
-    from ..validation import validate_comma2k19
-
-    try:
-        return validate_comma2k19(path, **kwargs), None
-    except (ValueError, OSError) as exc:       # LogError is a ValueError
-        return None, str(exc)
-
-
 def _outcome(pool, task, what) -> tuple:
     """``(value, reason)`` of a task whose value is itself ``(value, reason)``."""
     value, failure = pool.outcome(task)
@@ -60,44 +50,139 @@ _ESTIMATORS = click.option("--estimators", "-e", "names", default="all", show_de
                            help="Comma-separated estimator names or 'all'.")
 
 
+def _warn(notes) -> None:
+    """Each note of a validation (a data set given twice, a reader warning) as ``warning: ...`` on stderr."""
+    for note in notes:
+        click.echo(f"warning: {note}", err=True)
+
+
+def _segments_under(path: Path) -> tuple[list[Path], list[str], bool]:
+    """The comma2k19 segments of ``validate comma2k19 PATH``, the notes on finding them, and whether PATH
+    is one segment (or holds none: reading it then says what is missing)."""
+    from ..validation.comma2k19 import unique_segments
+    from ..validation.document import find_datasets
+
+    found = find_datasets(path) if path.is_dir() else {"comma2k19": [], "notes": []}
+    if found["comma2k19"] in ([], [path]):
+        return [path], found["notes"], True
+    segments, notes = unique_segments(found["comma2k19"])
+    return segments, found["notes"] + notes, False
+
+
+def _run_segments(pool, segments, **kwargs) -> tuple[list, list[str]]:
+    """Every segment validated, one pool task each: ``(results, errors)``, each error naming its segment
+    (the others still scored); results named apart (:func:`roadbank.validation.comma2k19.named_apart`)."""
+    from ..validation.comma2k19 import comma2k19_outcome
+
+    tasks = [pool.submit(comma2k19_outcome, p, **kwargs) for p in segments]
+    return _collect_segments(pool, segments, tasks)
+
+
+def _collect_segments(pool, segments, tasks) -> tuple[list, list[str]]:
+    """``(results, errors)`` of the segments' tasks of :func:`_run_segments`."""
+    from ..validation.comma2k19 import named_apart
+
+    results, errors = [], []
+    for p, task in zip(segments, tasks):
+        res, error = _outcome(pool, task, p)
+        if error is None:
+            results.append(res)
+        else:
+            errors.append(error if str(p) in error else f"{p}: {error}")
+    return named_apart(results), errors
+
+
+def _segment_figures(results, output: Path) -> dict:
+    """Draw each segment's figure next to the report at ``output``: ``{"comma2k19": file}`` for one segment
+    (``output`` with ``.png``), ``{segment label: file}`` for several
+    (:func:`roadbank.validation.report.figure_name`)."""
+    from ..validation import plot
+    from ..validation.report import figure_name
+
+    output.parent.mkdir(parents=True, exist_ok=True)
+    if len(results) == 1:
+        plot(results[0], output.with_suffix(".png"))
+        return {"comma2k19": output.with_suffix(".png").name}
+    figs = {}
+    for res in results:
+        figs[res.label] = figure_name(output.stem, res.label)
+        plot(res, output.parent / figs[res.label])
+    return figs
+
+
+def _options(ctx: click.Context, flags: dict[str, str]) -> list[tuple[str, object]]:
+    """``(flag, value)`` of the options given on the command line (not at their defaults), for
+    :func:`roadbank.validation.document.command_line`; ``flags``: ``{parameter name: flag}``."""
+    out = []
+    for name, flag in flags.items():
+        given = ctx.get_parameter_source(name) not in (None, click.core.ParameterSource.DEFAULT)
+        value = ctx.params.get(name)
+        if given and value is not None:
+            out.append((flag, getattr(value, "name", value) if name == "vehicle" else value))
+    return out
+
+
+_FLAGS = {"output": "-o", "names": "-e", "no_sensitivity": "--no-sensitivity", "no_jitter": "--no-jitter",
+          "vehicle": "--vehicle", "as_json": "--json", "workers": "--workers", "scheduler": "--scheduler"}
+
+
 @validate.command("comma2k19")
 @click.argument("path", type=click.Path(path_type=Path))
 @click.option("--json", "as_json", is_flag=True,
-              help='Print {estimator: {"r", "rms_deg", "offset_deg"}} on stdout.')
+              help='Print {estimator: {"r", "rms_deg", "offset_deg"}} on stdout; when PATH is a folder holding '
+                   'segments {"segments": {segment: {estimator: ...}}, "errors": [...], "notes": [...]}.')
 @click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
               callback=checked_output(next_to=(".png",)),
               help="Write the markdown report here (e.g. docs/real-data.md; .html: a self-contained page) "
-                   "and a PNG next to it.")
+                   "and a PNG next to it (one per segment).")
 @_ESTIMATORS
 @click.option("--no-sensitivity", is_flag=True, help="Skip the SUV-parameter and PIF-Q sensitivity runs.")
 @_VEHICLE
-@pool_options("Tasks", "The segment is one task: more workers do not make it faster; `validate all` runs "
-                       "it next to the KITTI drives.")
-def comma2k19(path, as_json, output, names, no_sensitivity, vehicle, workers, scheduler):
-    """Score every estimator against the pose-derived roll of a comma2k19 segment at PATH."""
-    from ..validation import markdown, plot, to_json
+@pool_options("Tasks", "Each segment is one task: more workers than segments do not make it faster; "
+                       "`validate all` runs them next to the KITTI drives.")
+@click.pass_context
+def comma2k19(ctx, path, as_json, output, names, no_sensitivity, vehicle, workers, scheduler):
+    """Score every estimator against the pose-derived roll of the comma2k19 segment at PATH, or of every
+    segment under PATH (a folder holding processed_log/ and global_pose/, at any depth).
+
+    A segment that cannot be read is named and the others are still scored (exit code 1 then); a segment
+    reached twice (a link to it) is scored once, with a warning.
+    """
+    from ..validation import markdown, to_json
+    from ..validation.document import command_line, real_data_markdown
 
     sel = _names(names)
+    segments, notes, single = _segments_under(path)
+    _warn(notes)
     with contextlib.ExitStack() as stack:
         pool = start_pool(stack, workers, scheduler)
-        task = pool.submit(_comma2k19_outcome, path, names=sel, sensitivity=not no_sensitivity, **_car(vehicle))
-        res, error = _outcome(pool, task, path)
-    if error is not None:
-        click.echo(f"error: {error}", err=True)
+        results, errors = _run_segments(pool, segments, names=sel, sensitivity=not no_sensitivity, **_car(vehicle))
+    for e in errors:
+        click.echo(f"error: {e}", err=True)
+    if not results:
+        if not single:
+            click.echo(f"error: {path}: no comma2k19 segment could be read", err=True)
         sys.exit(1)
     if output is not None:
-        fig = output.with_suffix(".png")
-        plot(res, fig)
-        cmd = f"roadbank validate comma2k19 {path} -o {output}" + (f" --vehicle {vehicle.name}" if vehicle else "")
-        output.parent.mkdir(parents=True, exist_ok=True)
-        write_document(output, markdown(res, figure=fig.name, command=cmd))
-        click.echo(f"wrote {output} and {fig}", err=True)
+        figs = _segment_figures(results, output)
+        cmd = command_line(["roadbank", "validate", "comma2k19", path], _options(ctx, _FLAGS))
+        text = (markdown(results[0], figure=figs["comma2k19"], command=cmd) if single
+                else real_data_markdown(results, figures=figs, command=cmd))
+        write_document(output, text)
+        click.echo(f"wrote {output} and {len(figs)} figure(s)", err=True)
     if as_json:
-        click.echo(json.dumps(to_json(res), indent=2))
+        out = (to_json(results[0]) if single else
+               {"segments": {r.label: to_json(r) for r in results}, "errors": errors, "notes": notes})
+        click.echo(json.dumps(out, indent=2))
     elif output is None:
-        for name, v in to_json(res).items():
-            click.echo(f"{name:14s} r = {v['r']:.3f}  rms = {v['rms_deg']:.3f} deg  "
-                       f"offset = {v['offset_deg']:+.3f} deg")
+        for res in results:
+            if not single:
+                click.echo(res.label)
+            for name, v in to_json(res).items():
+                click.echo(f"{'  ' if not single else ''}{name:14s} r = {v['r']:.3f}  rms = {v['rms_deg']:.3f} deg  "
+                           f"offset = {v['offset_deg']:+.3f} deg")
+    if errors:
+        sys.exit(1)
 
 
 def _write_kitti_figures(v, output: Path) -> dict:
@@ -126,13 +211,16 @@ def _write_kitti_figures(v, output: Path) -> dict:
                    "sheet alone).")
 @_VEHICLE
 @pool_options("Drives")
-def kitti(paths, as_json, output, names, no_sensitivity, vehicle, workers, scheduler):
+@click.pass_context
+def kitti(ctx, paths, as_json, output, names, no_sensitivity, vehicle, workers, scheduler):
     """Score every estimator against the INS roll of KITTI raw drives.
 
     PATHS: drive folders (holding oxts/), oxts folders, or folders holding drive folders.
-    A drive that cannot be read is reported and the others are still scored (exit code 1 then).
-    With --workers or --scheduler each drive is one task; the report is the same as in one process.
+    A drive that cannot be read is reported and the others are still scored (exit code 1 then); a drive
+    reached twice is scored once, with a warning. With --workers or --scheduler each drive is one task;
+    the report is the same as in one process.
     """
+    from ..validation.document import command_line
     from ..validation.kitti import validate_kitti
     from ..validation.kitti_report import drive_png, markdown, to_json
 
@@ -141,6 +229,7 @@ def kitti(paths, as_json, output, names, no_sensitivity, vehicle, workers, sched
         pool = start_pool(stack, workers, scheduler)
         v = validate_kitti(paths, names=sel, sensitivity=not no_sensitivity, pool=pool,
                            figure=None if output is None else drive_png, **_car(vehicle))
+    _warn(v.notes)
     for e in v.errors:
         click.echo(f"error: {e}", err=True)
     if not v.drives:
@@ -148,8 +237,7 @@ def kitti(paths, as_json, output, names, no_sensitivity, vehicle, workers, sched
         sys.exit(1)
     if output is not None:
         figs = _write_kitti_figures(v, output)
-        cmd = ("roadbank validate kitti " + " ".join(map(str, paths)) + f" -o {output}"
-               + (f" --vehicle {vehicle.name}" if vehicle else ""))
+        cmd = command_line(["roadbank", "validate", "kitti", *paths], _options(ctx, _FLAGS))
         write_document(output, f"# Real-data validation: KITTI\n\n_Generated by `{cmd}`; do not edit by hand._\n\n"
                        + markdown(v, figs, level=2))
         click.echo(f"wrote {output} and {len(figs)} figure(s)", err=True)
@@ -175,58 +263,70 @@ def kitti(paths, as_json, output, names, no_sensitivity, vehicle, workers, sched
               help="The combined report (e.g. docs/real-data.md; .html: a self-contained page); figures "
                    "are written next to it.")
 @click.option("--no-jitter", is_flag=True, help="Skip the 10 Hz-with-jitter simulation study.")
-@pool_options("Tasks", "One task each: the comma2k19 segment, every KITTI drive, every jitter scenario.")
-def all_(data_dir, output, no_jitter, workers, scheduler):
-    """One report over every real data set under DATA_DIR (comma2k19 segments, KITTI drives).
+@click.option("--json", "as_json", is_flag=True,
+              help='Also print {"comma2k19": {segment: {estimator: {"r", "rms_deg", "offset_deg"}}}, "kitti": '
+                   '(as validate kitti --json, or null), "jitter": [scenario], "errors": [...], "notes": [...]} '
+                   "on stdout.")
+@pool_options("Tasks", "One task each: every comma2k19 segment, every KITTI drive, every jitter scenario.")
+@click.pass_context
+def all_(ctx, data_dir, output, no_jitter, as_json, workers, scheduler):
+    """One report over every real data set under DATA_DIR, at any depth (every comma2k19 segment, every
+    KITTI drive).
+
+    A segment or drive that cannot be read is named and the others are still scored (exit code 1 then);
+    one reached twice (a link to it) is scored once, with a warning.
 
     Regenerate docs/real-data.md with: roadbank validate all ../shared/data -o docs/real-data.md
     """
-    from ..validation import plot
-    from ..validation.document import find_datasets, real_data_markdown
+    from ..validation import to_json
+    from ..validation.comma2k19 import comma2k19_outcome, unique_segments
+    from ..validation.document import command_line, find_datasets, real_data_markdown
     from ..validation.jitter import jitter_study
     from ..validation.kitti import validate_kitti
     from ..validation.kitti_report import drive_png
+    from ..validation.kitti_report import to_json as kitti_json
 
     found = find_datasets(data_dir)
-    if not found["comma2k19"] and not found["kitti"]:
+    segments, notes = unique_segments(found["comma2k19"])
+    notes = found["notes"] + notes
+    _warn(notes)
+    if not segments and not found["kitti"]:
         click.echo(f"error: {data_dir}: no comma2k19 segment or KITTI drive found", err=True)
         sys.exit(1)
     output.parent.mkdir(parents=True, exist_ok=True)
-    figs, comma, kv, failed = {}, None, None, False
+    errors, kv = [], None
     scenarios = () if no_jitter else ("bank-lane-change", "s-curve", "track-lane-change")
     with contextlib.ExitStack() as stack:
         pool = start_pool(stack, workers, scheduler)
         # submitted first, so that on workers they run while the drives do
-        comma_task = pool.submit(_comma2k19_outcome, found["comma2k19"][0]) if found["comma2k19"] else None
+        comma_tasks = [pool.submit(comma2k19_outcome, p) for p in segments]
         jitter_tasks = [pool.submit(jitter_study, sc) for sc in scenarios]
         kv = validate_kitti(found["kitti"], pool=pool, figure=drive_png) if found["kitti"] else None
-        if comma_task is not None:
-            comma, error = _outcome(pool, comma_task, found["comma2k19"][0])
+        comma, comma_errors = _collect_segments(pool, segments, comma_tasks)
         jit = []
         for sc, task in zip(scenarios, jitter_tasks):
             value, failure = pool.outcome(task)
             if failure is not None:
-                click.echo(f"error: jitter study {sc}: {failure}", err=True)
-                failed = True
+                errors.append(f"jitter study {sc}: {failure}")
             else:
                 jit.append(value)
-    if comma_task is not None:
-        if error is not None:
-            click.echo(f"error: {error}", err=True)
-            failed = True
-        else:
-            f = output.with_suffix(".png")
-            plot(comma, f)
-            figs["comma2k19"] = f.name
+    errors = comma_errors + errors
+    figs = _segment_figures(comma, output) if comma else {}
     if kv is not None:
-        for e in kv.errors:
-            click.echo(f"error: {e}", err=True)
-        failed |= bool(kv.errors)
+        _warn(kv.notes)
+        notes += kv.notes
+        errors += kv.errors
         figs.update(_write_kitti_figures(kv, output))
-    cmd = f"roadbank validate all {data_dir} -o {output}"
-    write_document(output, real_data_markdown(comma, kv, jit, figs, command=cmd))
+    for e in errors:
+        click.echo(f"error: {e}", err=True)
+    cmd = command_line(["roadbank", "validate", "all", data_dir], _options(ctx, _FLAGS))
+    write_document(output, real_data_markdown(comma or None, kv, jit, figs, command=cmd))
     click.echo(f"wrote {output} and {len(figs)} figure(s)", err=True)
-    if failed:
+    if as_json:
+        click.echo(json.dumps({"comma2k19": {r.label: to_json(r) for r in comma},
+                               "kitti": None if kv is None else kitti_json(kv),
+                               "jitter": [r.scenario for r in jit], "errors": errors, "notes": notes}, indent=2))
+    if errors:
         sys.exit(1)
 
 

@@ -7,6 +7,20 @@ from pathlib import Path
 from .errors import LogError
 
 
+def not_found(path) -> LogError:
+    """The error for a log path that does not exist (a file or a folder: its format is not guessed from a
+    suffix it may not have): ``"<path>: not found (no such file or folder)"``."""
+    return LogError(f"{path}: not found (no such file or folder)")
+
+
+def must_exist(path) -> Path:
+    """``Path(path)``, or :func:`not_found` when nothing is there."""
+    p = Path(path)
+    if not p.exists():
+        raise not_found(p)
+    return p
+
+
 def existing_nonempty(path) -> Path:
     """``Path(path)``, or a :class:`LogError` if the file is missing or empty."""
     p = Path(path)

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..units import reads_as_number
 from .errors import LogError
-from .files import existing_nonempty, open_mdf
+from .files import existing_nonempty, must_exist, open_mdf
 from .formats import CAN_FORMATS as CAN_FORMATS
 from .formats import FORMATS, SUFFIXES
 from .formats import ROS_FORMATS as ROS_FORMATS
@@ -29,8 +29,9 @@ MISSING = {"", "nan", "na", "n/a", "null", "none", "-nan", "+nan"}
 
 
 def detect_format(path) -> str:
-    """Format of ``path`` from its suffix (or a comma2k19 segment / KITTI raw drive directory)."""
-    p = Path(path)
+    """Format of ``path`` from its suffix (or a comma2k19 segment / KITTI raw drive directory); a path that
+    does not exist is a :class:`LogError` saying so (:func:`~roadbank.io.files.not_found`)."""
+    p = must_exist(path)
     if p.is_dir():
         if (p / "processed_log").is_dir():
             return "comma2k19"

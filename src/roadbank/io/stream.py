@@ -29,6 +29,7 @@ from . import readers
 from .assemble import assemble
 from .channels import ChannelMap, default_channel_map, read_channel_map
 from .errors import LogError
+from .files import must_exist
 from .formats import DATASET_FORMATS, FORMATS
 from .repair import HOLD_ROWS, ChunkRepair  # noqa: F401  (where streaming code looks for them)
 from .resample import StreamResampler  # noqa: F401
@@ -48,7 +49,7 @@ def log_chunks(path, channels: ChannelMap | str | Path | None = None, format: st
     assembler (:func:`~roadbank.io.assemble.assemble`); ``chunk_rows=None`` reads it in one chunk.
     Arguments as :func:`stream_log`; comma2k19 segments and KITTI drives (fixed layouts) bring
     their own channel map (``channels`` is not used)."""
-    p = Path(path)
+    p = must_exist(path)              # before a format is guessed from a suffix it may not have
     fmt = (format or readers.detect_format(p)).lower()
     if fmt not in FORMATS:
         raise LogError(f"{p}: unknown format '{fmt}' (known: {', '.join(FORMATS)})")
@@ -58,8 +59,6 @@ def log_chunks(path, channels: ChannelMap | str | Path | None = None, format: st
         src = open_layout(p, fmt, params, rows)
         cmap = src.channel_map
     else:
-        if not p.exists():
-            raise LogError(f"{p}: file not found")
         cmap = channels if isinstance(channels, ChannelMap) else (
             read_channel_map(channels) if channels is not None else default_channel_map())
         if fmt == "mdf4" and cmap.dbc is not None:

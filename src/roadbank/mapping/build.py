@@ -13,6 +13,7 @@ from ..io import LogError
 from ..io.assemble import gnss_roles
 from ..io.channels import ChannelMap
 from ..io.errors import channel_text
+from ..io.files import must_exist
 from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..io.writers import write_error
 from ..params import VehicleParams
@@ -156,8 +157,7 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
         if part is not None and len(crs):
             rec.mapped += part.add(*arrays, log_id=log_id, course_rad=crs)
     try:
-        if not Path(path).exists():     # before its format is guessed from a suffix it may not have
-            raise LogError(f"{path}: not found (no such file or folder)")
+        must_exist(path)     # before its format is guessed from a suffix it may not have
         chunks = ReadAhead(stream_log(path, channels=s.channels, format=s.format, params=params,
                                       chunk_rows=s.chunk_rows or CHUNK_ROWS))
         # an offline estimator smooths each chunk with the chunks after it as lookahead

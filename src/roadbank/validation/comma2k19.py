@@ -29,7 +29,8 @@ from ..params import VehicleParams
 from ..vehicle import for_log, undescribed_params
 from .scoring import Score, Scored, Scoring, hold_invalid, lowpass, pearson_r, run_and_score, score
 
-__all__ = ["SEDAN", "ValidationResult", "comma2k19_outcome", "segment_name", "validate_comma2k19", "lowpass"]
+__all__ = ["SEDAN", "ValidationResult", "comma2k19_outcome", "named_apart", "segment_name", "unique_segments",
+           "validate_comma2k19", "lowpass"]
 
 #: Plausible compact/mid-size sedan (Toyota Prius/Corolla/Camry, Honda Civic/Accord,
 #: Lexus ES class: most comma2k19 cars). The car is not identified in the data.
@@ -69,6 +70,50 @@ def segment_name(path) -> str:
     ``comma2k19-example`` or ``b0c9d2329ad1606b|2018-07-27--06-03-57/3``."""
     p = Path(path).resolve() if Path(path).name in ("", ".", "..") else Path(path)
     return f"{p.parent.name}/{p.name}" if p.name.isdigit() and p.parent.name else p.name
+
+
+def unique_segments(paths) -> tuple[list[Path], list[str]]:
+    """``paths`` (comma2k19 segment folders) with each segment once, and notes on what was left out or
+    shares a name: the rule of :func:`roadbank.validation.kitti.unique_drives`.
+
+    Returns
+    -------
+    segments : list of Path
+        In the order given; a segment reached a second time (the same folder once links are resolved,
+        e.g. a link to a segment next to it) is left out.
+    notes : list of str
+        One per segment left out, naming it and both paths; one per name two kept folders share
+        (:func:`segment_name`: both are scored, reported under that one name).
+    """
+    kept: dict[Path, Path] = {}
+    notes = []
+    for p in map(Path, paths):
+        try:
+            key = p.resolve()
+        except (OSError, RuntimeError):     # a loop of links: validating it says what is wrong
+            key = p
+        if key in kept:
+            notes.append(f"comma2k19 segment {segment_name(p)} given more than once (as {kept[key]}, then as {p}; "
+                         f"the same folder {key}): scored once")
+            continue
+        kept[key] = p
+    segments = list(kept.values())
+    names = [segment_name(p) for p in segments]
+    for name in sorted({n for n in names if names.count(n) > 1}):
+        where = " and ".join(str(p) for p, n in zip(segments, names) if n == name)
+        notes.append(f"two folders hold a comma2k19 segment named {name} ({where}): both scored, each named by "
+                     "its folder's path")
+    return segments, notes
+
+
+def named_apart(results: list[ValidationResult]) -> list[ValidationResult]:
+    """``results`` with the label of every segment whose name another one shares replaced by its folder's
+    path (the note of :func:`unique_segments`), so that each has its own row, section and figure."""
+    labels = [r.label for r in results]
+    for r in results:
+        if labels.count(r.label) > 1:
+            r.label = str(r.settings.get("path", r.label))
+    return results
 
 
 def comma2k19_outcome(path, **kwargs) -> tuple:
