@@ -112,7 +112,9 @@ def _segment_figures(results, output: Path) -> dict:
 
 def _options(ctx: click.Context, flags: dict[str, str]) -> list[tuple[str, object]]:
     """``(flag, value)`` of the options given on the command line (not at their defaults), for
-    :func:`roadbank.validation.document.command_line`; ``flags``: ``{parameter name: flag}``."""
+    :func:`roadbank.validation.document.command_line`; ``flags``: ``{parameter name: flag}``. Where the work ran
+    (``--workers``, ``--scheduler``) is not among them: it changes no number, and a report made on a cluster is
+    the same document as one made in one process."""
     out = []
     for name, flag in flags.items():
         given = ctx.get_parameter_source(name) not in (None, click.core.ParameterSource.DEFAULT)
@@ -123,7 +125,7 @@ def _options(ctx: click.Context, flags: dict[str, str]) -> list[tuple[str, objec
 
 
 _FLAGS = {"output": "-o", "names": "-e", "no_sensitivity": "--no-sensitivity", "no_jitter": "--no-jitter",
-          "vehicle": "--vehicle", "as_json": "--json", "workers": "--workers", "scheduler": "--scheduler"}
+          "vehicle": "--vehicle", "as_json": "--json"}
 
 
 @validate.command("comma2k19")
