@@ -23,8 +23,8 @@ from ..params import VehicleParams
 from ..signals import CHANNELS, Signals
 from .conditions import make_estimator
 from .errors import VehicleFileError
-from .plausibility import (IDENTIFIED_OFFSETS, PLANT_FIELDS, PLAUSIBLE, SENSOR_FIELDS, check_document,
-                           check_free_table, check_identified_offset, check_tuning, checked_value, unknown_key)
+from .plausibility import (PLANT_FIELDS, PLAUSIBLE, SENSOR_FIELDS, check_document, check_table_entry, checked_value,
+                           unknown_key)
 from .sensors import SensorSpec
 from .tomltext import fmt_options, fmt_value, is_scalar, toml_key, toml_type, toml_value
 
@@ -415,12 +415,7 @@ def _from_document(doc: dict, source: str, default_name: str) -> Vehicle:
 
     for table in ("tuning", "scores", "identified"):
         for sub, values_ in doc.get(table, {}).items():
-            if table == "tuning":
-                check_tuning(source, sub, values_)
-            else:
-                check_free_table(source, table, sub, values_)
-                if table == "identified" and sub in IDENTIFIED_OFFSETS:
-                    check_identified_offset(source, sub, values_)
+            check_table_entry(source, table, sub, values_)
     try:
         return Vehicle(name=meta.get("name", default_name), description=meta.get("description", ""),
                        sources=tuple(sources), params=params, sensors=sensors,

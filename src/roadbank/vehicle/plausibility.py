@@ -23,8 +23,8 @@ from .tomltext import fmt_value, is_scalar, toml_type
 # them: loading a car (load_vehicle, --vehicle) loads neither
 
 __all__ = ["PLAUSIBLE", "WHEELBASE_RANGE", "SENSOR_FIELDS", "PLANT_FIELDS", "IDENTIFIED_OFFSETS", "checked_value",
-           "check_document", "check_identified_offset", "check_tuning", "check_tuning_value", "check_free_table",
-           "estimator_options", "estimator_option_defaults", "unknown_key"]
+           "check_document", "check_identified_offset", "check_table_entry", "check_tuning", "check_tuning_value",
+           "check_free_table", "estimator_options", "estimator_option_defaults", "unknown_key"]
 
 #: [vehicle] keys: dimension and plausible range for a road vehicle (passenger car to light
 #: van, SI). Outside the range is an error: it catches unit mistakes (mass in tonnes, Cf in
@@ -332,10 +332,17 @@ def check_document(doc: dict, source: str) -> None:
         if key not in PLANT_FIELDS:
             raise VehicleFileError(f"{source}: [plant] {key}: {unknown_key(key, PLANT_FIELDS, 'key')}")
         checked_value(source, "plant", key, value, *PLANT_FIELDS[key])
-    for name, options in doc["tuning"].items():
-        check_tuning(source, name, options)
-    for table in ("scores", "identified"):
+    for table in ("tuning", "scores", "identified"):
         for sub, values in doc[table].items():
-            check_free_table(source, table, sub, values)
-            if table == "identified" and sub in IDENTIFIED_OFFSETS:
-                check_identified_offset(source, sub, values)
+            check_table_entry(source, table, sub, values)
+
+
+def check_table_entry(source: str, table: str, sub: str, values) -> None:
+    """One ``[tuning.<sub>]``, ``[scores.<sub>]`` or ``[identified.<sub>]`` table, by the check of its kind:
+    :func:`check_tuning`, or :func:`check_free_table` and for a sensor offset :func:`check_identified_offset`."""
+    if table == "tuning":
+        check_tuning(source, sub, values)
+        return
+    check_free_table(source, table, sub, values)
+    if table == "identified" and sub in IDENTIFIED_OFFSETS:
+        check_identified_offset(source, sub, values)
