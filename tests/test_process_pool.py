@@ -92,3 +92,23 @@ def test_a_local_pool_cuts_logs_finer_than_dask(tmp_path):
     assert max(map(len, local)) <= LOCAL_BATCH_BYTES // 2**20
     assert len(local) >= 2 * LOCAL_BATCHES_PER_WORKER
     assert max(map(len, local)) < max(map(len, dask))
+
+
+def blas_threads() -> tuple:
+    """A task: the BLAS thread settings its process was started with."""
+    return tuple(os.environ.get(v) for v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"))
+
+
+def test_workers_get_one_blas_thread_unless_the_user_set_it(monkeypatch):
+    """Started from a script (no `roadbank` command to set it), each worker still gets one BLAS
+    thread: two workers with a thread per core each were slower than one process (docs/io.md).
+    A value the user set reaches the workers unchanged; this process's environment is not touched."""
+    for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        monkeypatch.delenv(var, raising=False)
+    monkeypatch.setenv("MKL_NUM_THREADS", "3")
+    with open_pool(2) as pool:
+        tasks = [pool.submit(blas_threads) for _ in range(4)]
+        got = {pool.outcome(t) for t in pool.as_completed(tasks)}
+    assert got == {(("1", "1", "3"), None)}
+    assert "OPENBLAS_NUM_THREADS" not in os.environ and "OMP_NUM_THREADS" not in os.environ
+    assert os.environ["MKL_NUM_THREADS"] == "3"

@@ -220,11 +220,12 @@ class OnProcesses:
         self.startup_s = time.perf_counter() - t0
 
     def _start(self, n: int) -> ProcessPoolExecutor:
-        ex = ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("spawn"), initializer=_warm_worker,
-                                 initargs=(self._warm,))
-        # every worker started and warmed up before the first task: each takes a short wait
-        for f in [ex.submit(time.sleep, 0.2) for _ in range(n)]:
-            f.result()
+        with runtime.one_blas_thread_in_children():
+            ex = ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("spawn"), initializer=_warm_worker,
+                                     initargs=(self._warm,))
+            # every worker started and warmed up before the first task: each takes a short wait
+            for f in [ex.submit(time.sleep, 0.2) for _ in range(n)]:
+                f.result()
         return ex
 
     def batches(self, paths) -> list[list[int]]:
