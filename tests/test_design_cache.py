@@ -9,6 +9,7 @@ import pytest
 from roadbank import VehicleParams, cache
 from roadbank import estimators as E
 from roadbank.estimators import base
+from roadbank.vehicle import load_vehicle
 
 GRID = {"v_step": 2.5, "v_max": 30.0}          # a short grid: each design takes milliseconds
 
@@ -262,3 +263,21 @@ def test_a_cached_design_is_bit_identical_to_a_fresh_one_whatever_was_designed_b
     assert cached.keys() == fresh.keys() and "pif-smoother.smooth" in fresh
     for k in fresh:
         assert cached[k].dtype == fresh[k].dtype and np.array_equal(cached[k], fresh[k]), k
+
+
+@pytest.mark.parametrize("name", ["kinematic-lp", "kinematic-ff"])
+def test_cars_that_differ_beyond_g_share_one_low_pass_design(disk, name):
+    """A low-pass's tables read only g of the car: designed for another car (other mass, tyres,
+    roll), the same tables come from the memo and one disk entry, equal to a fresh design for it;
+    another g is another design."""
+    suv, sedan = VehicleParams(), load_vehicle("sedan").params
+    assert sedan.g == suv.g and sedan != suv
+    first = E.make(name, suv, **GRID)
+    second = E.make(name, sedan, **GRID)
+    assert len(_entries(disk)) == 1
+    fresh = type(second)(sedan, **GRID)._design()               # _design() itself: no memo, no disk
+    assert np.array_equal(second._tab_cont, fresh[0]) and np.array_equal(second._extra, fresh[2])
+    assert np.array_equal(first._tab_cont, second._tab_cont)
+    assert second.design.params is sedan                        # the estimator keeps its own car
+    E.make(name, VehicleParams(g=9.78), **GRID)
+    assert len(_entries(disk)) == 2

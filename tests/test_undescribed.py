@@ -20,8 +20,9 @@ from roadbank import Signals
 from roadbank.cli import main
 from roadbank.tuning import drive_set
 from roadbank.tuning.objective import drive_errors
-from roadbank.vehicle import (CAR_MARGIN, UNDESCRIBED_CARS, bank_band_power, design_car, for_log, load_vehicle,
-                              undescribed_params)
+from roadbank.sim.scenarios import run_scenario
+from roadbank.vehicle import (CAR_MARGIN, UNDESCRIBED_CARS, bank_band_power, design_car, design_span, for_log,
+                              load_vehicle, log_conditions, undescribed_params)
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 
@@ -173,3 +174,22 @@ def test_the_design_line_says_what_was_not_measured_and_what_the_design_took(tmp
     words = design_words({**base, "ay_noise": 0.1, "ay_floor": 0.085, "ay_floor_ratio": 6.6}, "kinematic-pif")
     assert words == ("sedan (fitted to the log); ay noise 0.1 m/s^2, floor 0.085 (6.6 x the data sheet): loud, so "
                      "kinematic-pif is the low-pass blend")
+
+
+def test_the_design_span_of_the_design_span_is_itself():
+    """design_car takes the caller's log conditions, measured on the whole start of the log; they are
+    those of its design span because the span of the span is the span (on logs with a standstill, a
+    drive cut by the time limit, and a short one)."""
+    drive = run_scenario("s-curve", "nominal", seed=0).signals
+    t = np.arange(0.0, 700.0, 0.05)
+
+    def log(vx):
+        return Signals(t, vx, 0.1 * np.sin(t), 0.01 * np.cos(t), np.zeros_like(t))
+    parked_first = log(np.where(t < 30.0, 0.0, np.where(t < 150.0, 4.0, 12.0)))     # cut after 60 s of driving
+    crawling = log(np.where(t % 100.0 < 5.0, 6.0, 4.0))              # 35 s of driving: cut by the time limit
+    for s, cut in ((drive, False), (drive[:300], False), (parked_first, True), (crawling, True)):
+        n = design_span(s)
+        assert (n < len(s)) == cut
+        assert design_span(s[:n]) == n
+        np.testing.assert_equal(log_conditions(s[:n]), log_conditions(s))      # NaN where not measured
+        assert design_car(s, cond=log_conditions(s)) == design_car(s)

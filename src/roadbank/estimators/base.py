@@ -276,9 +276,15 @@ class Estimator:
         self._inputs = inputs
         return self._cached_design()
 
+    def _table_inputs(self) -> DesignInputs:
+        """The design inputs that ``_design()`` reads: :attr:`design`. A family whose tables read less of the car
+        narrows them, so that designs for cars that differ only elsewhere share one memo and cache entry."""
+        return self._inputs
+
     def _cached_design(self):
-        """``_design()`` of :attr:`design` through the memo and the on-disk cache (:meth:`_tables_of`)."""
-        key = self._design_key()
+        """``_design()`` of :attr:`design` through the memo and the on-disk cache (:meth:`_tables_of`), both keyed
+        on :meth:`_table_inputs`."""
+        key = (type(self), cache.canonical(self._table_inputs()))
         hit = _memo_get(_DESIGN_CACHE, key)
         if hit is None:
             try:
@@ -313,13 +319,13 @@ class Estimator:
 
     def _disk_key(self) -> str | None:
         """Key of this estimator's design in the on-disk cache (:mod:`roadbank.cache`): the class
-        and the exact values of the design inputs (:attr:`design`); None for a class whose
-        source has no identity (then nothing is cached on disk)."""
+        and the exact values of the design inputs its tables read (:meth:`_table_inputs`); None for a
+        class whose source has no identity (then nothing is cached on disk)."""
         cls = type(self)
         stamp = cache.code_stamp(cls)       # a subclass outside roadbank: its file's identity
         if stamp is None:
             return None
-        return cache.canonical((f"{cls.__module__}.{cls.__qualname__}", stamp, self._inputs))
+        return cache.canonical((f"{cls.__module__}.{cls.__qualname__}", stamp, self._table_inputs()))
 
     def _design_key(self) -> tuple:
         """Key of this estimator's design in the process: the class and the exact design inputs."""

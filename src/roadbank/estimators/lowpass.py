@@ -73,12 +73,14 @@ heavy tail, follows a burst within seconds; the gain, whose job is the road's no
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..params import VehicleParams
 from .base import DesignInputs, ScheduledObserver
 from .kinematic import KINEMATIC_V_MIN
 
@@ -292,6 +294,12 @@ class KinematicLowPass(ScheduledObserver):
         return dict(cutoff=self.cutoff, kappa=self.kappa, bank_rate=self.bank_rate, Q_ay=self.Q_ay, R=self.R,
                     lead=self.lead, split=self.split, clip=self.clip, noise_tau=self.noise_tau,
                     noise_ref=self.noise_ref, limit_tau=self.limit_tau, bank_speed_exp=self.bank_speed_exp)
+
+    def _table_inputs(self) -> LowPassDesign:
+        """:attr:`design` with the car reduced to its ``g``, all that the tables read (:func:`lowpass_observer`,
+        :meth:`limit_constants`): the shipped cars share one low-pass design (:func:`roadbank.vehicle.design_car`
+        builds the default for each of them on every log whose car is not described)."""
+        return dataclasses.replace(self.design, params=VehicleParams(g=self.params.g))
 
     @property
     def limited(self) -> bool:           # type: ignore[override]

@@ -857,12 +857,12 @@ def smoother_clip_candidates() -> dict:
 def _quiet_by(measure: str):
     """``build`` of the default for a log whose car is not described, quiet as ``measure`` reads it."""
     def build(signals):
-        cond = vehicle.log_conditions(signals)
-        if measure == "mean":
-            cond = {**cond, "log_ay_floor": None}
+        measured = vehicle.log_conditions(signals)
+        cond = {**measured, "log_ay_floor": None} if measure == "mean" else measured
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
-            return vehicle.for_conditions("kinematic-pif", cond, vehicle.undescribed_params(signals), **_LINEAR)
+            car = vehicle.undescribed_params(signals, cond=measured)
+            return vehicle.for_conditions("kinematic-pif", cond, car, **_LINEAR)
     return build
 
 

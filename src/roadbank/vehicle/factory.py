@@ -38,20 +38,20 @@ def _car(name: str) -> VehicleParams:
     return load_vehicle(name).params
 
 
-def undescribed_car(signals=None, margin: float = CAR_MARGIN) -> str:
+def undescribed_car(signals=None, margin: float = CAR_MARGIN, cond: dict | None = None) -> str:
     """The shipped car (its name) a log whose car is not described is designed for.
 
     Without ``signals`` (or with an infinite ``margin``): :data:`roadbank.defaults.VEHICLE` (the static
-    rule). With the log's ``signals``: :func:`design_car` (``margin`` as there).
+    rule). With the log's ``signals``: :func:`design_car` (``margin`` and ``cond`` as there).
     """
     if signals is None or margin == math.inf:
         return defaults.VEHICLE
-    return design_car(signals, margin)
+    return design_car(signals, margin, cond)
 
 
-def undescribed_params(signals=None, margin: float = CAR_MARGIN) -> VehicleParams:
+def undescribed_params(signals=None, margin: float = CAR_MARGIN, cond: dict | None = None) -> VehicleParams:
     """The parameters of :func:`undescribed_car` (same arguments); immutable."""
-    return _car(undescribed_car(signals, margin))
+    return _car(undescribed_car(signals, margin, cond))
 
 
 def bank_band_power(signals, estimate) -> float:
@@ -86,7 +86,7 @@ def bank_band_power(signals, estimate) -> float:
     return float(np.mean(band[m] ** 2))
 
 
-def design_car(signals, margin: float = CAR_MARGIN) -> str:
+def design_car(signals, margin: float = CAR_MARGIN, cond: dict | None = None) -> str:
     """The shipped car (a name of :data:`UNDESCRIBED_CARS`) that a log whose car is not described is
     designed for: identification from the log before filtering, on its ``ay``, yaw rate and speed.
 
@@ -96,11 +96,13 @@ def design_car(signals, margin: float = CAR_MARGIN) -> str:
     misfit (:func:`bank_band_power`) is chosen where it is ``margin`` times below that of
     :data:`roadbank.defaults.VEHICLE`, which is kept otherwise (and where the span tells nothing: every
     misfit infinite). On a loud log the default is the car-free low-pass almost throughout, the misfits
-    are nearly equal and the static car stays.
+    are nearly equal and the static car stays. ``cond``: the log's :func:`log_conditions` where the caller has
+    them (they are measured on this same span), else measured here.
     """
     n = design_span(signals)
     span = signals[:n] if n < len(signals) else signals
-    cond: dict = log_conditions(span)
+    if cond is None:
+        cond = log_conditions(span)
     power = {}
     for car in UNDESCRIBED_CARS:
         try:
@@ -142,7 +144,7 @@ def car_for_log(signals, cond: dict, params: VehicleParams | None = None, vehicl
         return vehicle.params, design_record(cond, vehicle.name, "vehicle file", vehicle.sensors, sources)
     if params is not None:
         return params, design_record(cond, "-", "parameters given", sensors, sources)
-    name = undescribed_car(signals)
+    name = undescribed_car(signals, cond=cond)
     return _car(name), design_record(cond, name, "fitted to the log", sources=sources)
 
 
@@ -169,6 +171,7 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
     by default it adds the online offset learner
     (``with_online_offsets(for_log(name, s), est.params).run(s)``), which differs after a standstill.
     """
+    cond = log_conditions(signals)
     if params is None and vehicle is None:
-        params = undescribed_params(signals)
-    return for_conditions(name, log_conditions(signals), params, vehicle=vehicle, **tuning)
+        params = undescribed_params(signals, cond=cond)
+    return for_conditions(name, cond, params, vehicle=vehicle, **tuning)
