@@ -128,22 +128,19 @@ class _GatedPair(ScheduledObserver):
         # the two filters' tables (designed from design.slow and design.fast) row by row: no
         # Riccati equation solved again
         d = self.design
-        rows = []
-        parts = [(e._tab_cont, e._nstate) for e in (self._slow, self._fast)]
-        for k in range(len(d.vgrid)):
-            mats = []
-            for tab, n in parts:
-                row = layout.lpv_row(n)
-                r = tab[k]
-                mats.append((r[row.F:row.G].reshape(n, n), r[row.G:row.H].reshape(n, layout.NETA),
-                             r[row.H:row.D].reshape(1, n), r[row.D:row.J].reshape(1, layout.NETA),
-                             r[row.J:row.cont].reshape(n, layout.NETA)))
-            F, G, H, D = _stack(mats[0][:4], mats[1][:4])
-            J = np.vstack([mats[0][4], mats[1][4]])
-            rows.append(np.concatenate([F.ravel(), G.ravel(), H.ravel(), D.ravel(), J.ravel()]))
+        g, ns, nf = len(d.vgrid), self._slow._nstate, self._fast._nstate
+        (Fs, Gs, Hs, Ds, Js), (Ff, Gf, _, _, Jf) = (_blocks(e._tab_cont[:g], e._nstate)
+                                                    for e in (self._slow, self._fast))
+        F = np.zeros((g, ns + nf, ns + nf))     # what _stack gives at each grid speed, all speeds at once
+        F[:, :ns, :ns] = Fs
+        F[:, ns:, ns:] = Ff
+        H = np.zeros((g, 1, ns + nf))
+        H[:, :, :ns] = Hs
+        G, J = np.concatenate([Gs, Gf], axis=1), np.concatenate([Js, Jf], axis=1)
+        rows = np.concatenate([a.reshape(g, -1) for a in (F, G, H, Ds, J)], axis=1)
         extra = np.concatenate([self.fast_output(), [d.gate_tf, d.gate_release, d.gate_on, d.gate_span],
                                 self.limit_constants()])
-        return np.ascontiguousarray(np.array(rows)), len(self.state_names), extra
+        return np.ascontiguousarray(rows), len(self.state_names), extra
 
 
 
@@ -338,6 +335,15 @@ class KinematicPIF(_GatedPair):
         for k, v in opt.items():
             setattr(self, k, v)
         super().__init__(params, **kw)
+
+
+def _blocks(tab: np.ndarray, n: int) -> tuple[np.ndarray, ...]:
+    """``(F, G, H, D, J)`` of an ``lpv`` table ``tab`` of ``n`` states, one per grid row: arrays ``(g, n, n)``,
+    ``(g, n, NETA)``, ``(g, 1, n)``, ``(g, 1, NETA)``, ``(g, n, NETA)`` (views of ``tab``)."""
+    row, g, e = layout.lpv_row(n), tab.shape[0], layout.NETA
+    return (tab[:, row.F:row.G].reshape(g, n, n), tab[:, row.G:row.H].reshape(g, n, e),
+            tab[:, row.H:row.D].reshape(g, 1, n), tab[:, row.D:row.J].reshape(g, 1, e),
+            tab[:, row.J:row.cont].reshape(g, n, e))
 
 
 def _stack(slow, fast):
