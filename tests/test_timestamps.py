@@ -53,7 +53,10 @@ def test_repair_after_previous_chunk():
 
 @pytest.mark.parametrize("t, why", [([1.0] * 5, "all 5 stamps equal"),
                                     ([5, 4, 3, 2, 1, 0], "only 1 of 6 stamps in increasing order"),
-                                    ([0, 1, 2, 1, 0, -1, -2, -3], "5 of 8 stamps missing, repeated or out of order")])
+                                    ([0, 1, 2, 1, 0, -1, -2, -3], "5 of 8 stamps missing, repeated or out of order"),
+                                    # every other stamp missing: each kept sample follows one and is not trusted
+                                    ([0, np.nan, 2, np.nan, 4, np.nan], r"3 of 6 stamps missing \(not numbers\); "
+                                     "the samples next to them are not trusted, which leaves 1 of 6 usable")])
 def test_unrepairable(t, why):
     with pytest.raises(UnrepairableTime, match=why):
         repair_time(t)
@@ -216,3 +219,23 @@ def test_load_log_refuses_what_cannot_be_repaired(tmp_path):
     write_table(tmp_path / "back.csv", {"t": -np.arange(40) * 0.01, "vx": z + 20, "ay": z, "r": z, "delta_f": z})
     with pytest.raises(LogError, match=r"back\.csv: channel 'time' \(column 't'\): no increasing time base"):
         load_log(tmp_path / "back.csv")
+
+
+def test_a_log_left_without_usable_samples_says_why(tmp_path):
+    """Every other stamp missing: no usable sample is left, and the one line says so about the time channel
+    (it used to read: channels do not overlap: 'speed' starts at 0.000 s but 'speed' ends at 0.000 s). A speed
+    channel with a single finite value is named as such."""
+    n = 400
+    t, z = np.arange(n) * 0.01, np.zeros(n)
+    write_table(tmp_path / "half.csv", {"t": np.where(np.arange(n) % 2, np.nan, t), "vx": z + 20, "ay": z, "r": z,
+                                        "delta_f": z})
+    write_table(tmp_path / "one.csv", {"t": t, "vx": np.where(np.arange(n) == 7, 20.0, np.nan), "ay": z, "r": z,
+                                       "delta_f": z})
+    res = CliRunner().invoke(main, ["estimate", str(tmp_path / "half.csv"), str(tmp_path / "one.csv"),
+                                    "-o", str(tmp_path / "out")])
+    assert res.exit_code == 1 and "Traceback" not in res.output
+    lines = sorted(x for x in res.output.splitlines() if x.startswith("FAILED"))
+    assert len(lines) == 2, res.output
+    assert "half.csv: channel 'time' (column 't'): no increasing time base: 200 of 400 stamps missing" in lines[0]
+    assert "which leaves 1 of 400 usable" in lines[0]
+    assert "one.csv: channel 'speed': a single valid (finite) sample, at 0.070 s" in lines[1], lines[1]

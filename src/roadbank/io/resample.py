@@ -74,11 +74,19 @@ def overlap(series: dict[str, tuple[np.ndarray, np.ndarray]]) -> tuple[float, fl
         starts[name], ends[name] = tc[0], tc[-1]
     t0, t1 = max(starts.values()), min(ends.values())
     if not t1 > t0:
-        late = max(starts, key=lambda k: starts[k])
-        early = min(ends, key=lambda k: ends[k])
-        raise LogError(f"channels do not overlap in time: '{late}' starts at {starts[late]:.3f} s "
-                       f"but '{early}' ends at {ends[early]:.3f} s")
+        raise no_overlap(starts, ends)
     return float(t0), float(t1)
+
+
+def no_overlap(starts: dict, ends: dict) -> LogError:
+    """The error for channels whose valid samples (first and last time stamps, s, by channel) share no time
+    span: the one that starts last and the one that ends first, or a channel with a single valid sample."""
+    late = max(starts, key=lambda k: starts[k])
+    early = min(ends, key=lambda k: ends[k])
+    if starts[early] == ends[early]:
+        return LogError(f"channel '{early}': a single valid (finite) sample, at {ends[early]:.3f} s")
+    return LogError(f"channels do not overlap in time: '{late}' starts at {starts[late]:.3f} s "
+                    f"but '{early}' ends at {ends[early]:.3f} s")
 
 
 def uniform_grid(t0: float, t1: float, rate_hz: float) -> np.ndarray:
@@ -326,10 +334,7 @@ class StreamResampler:
         t0 = max(self.first[k] for k in self.roles)
         t1 = min(self.last[k] for k in self.roles)
         if not t1 > t0:
-            late = max(self.roles, key=lambda k: self.first[k])
-            early = min(self.roles, key=lambda k: self.last[k])
-            raise LogError(f"channels do not overlap in time: '{late}' starts at {self.first[late]:.3f} s "
-                           f"but '{early}' ends at {self.last[early]:.3f} s")
+            raise no_overlap({k: self.first[k] for k in self.roles}, {k: self.last[k] for k in self.roles})
         return t1
 
     def emit(self) -> dict[str, np.ndarray] | None:
