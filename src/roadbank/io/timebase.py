@@ -274,6 +274,11 @@ def repair_time(t, after: float | None = None, min_period: float | None = None) 
     if n and lost > n / 2:
         raise UnrepairableTime(f"no increasing time base: {lost} of {n} stamps missing, repeated or "
                                f"out of order{where}", at=restarts[0] if restarts else None)
+    n_rep = int(np.count_nonzero(repeated[idx]))
+    if n_rep > len(idx) / 2:
+        what = "every stamp is repeated" if n_rep >= len(idx) - 1 else f"{n_rep} of {len(idx)} stamps repeated"
+        raise UnrepairableTime(f"no increasing time base: {what} (every row written twice, or a clock coarser "
+                               "than the sample rate?), and the value at a repeated stamp is not trusted")
     flagged = flag[idx] | repeated[idx] | follows_drop[idx]
     if n >= 2 and after is None and np.count_nonzero(~flagged) < 2:    # every kept sample next to a bad stamp
         missing = int(np.count_nonzero(~finite))
@@ -282,11 +287,6 @@ def repair_time(t, after: float | None = None, min_period: float | None = None) 
         raise UnrepairableTime(f"no increasing time base: {' and '.join(bad) or 'stamps swapped or repeated'}; "
                                f"the samples next to them are not trusted, which leaves "
                                f"{int(np.count_nonzero(~flagged))} of {n} usable")
-    n_rep = int(np.count_nonzero(repeated[idx]))
-    if n_rep > len(idx) / 2:
-        what = "every stamp is repeated" if n_rep >= len(idx) - 1 else f"{n_rep} of {len(idx)} stamps repeated"
-        raise UnrepairableTime(f"no increasing time base: {what} (every row written twice, or a clock coarser "
-                               "than the sample rate?), and the value at a repeated stamp is not trusted")
     return TimeRepair(keep=idx, flagged=flagged, kind=kind,
                       gaps=count_gaps(t[idx], after, min_period), restarts=restarts)
 
