@@ -125,7 +125,7 @@ class _GatedPair(ScheduledObserver):
         return h
 
     def _design(self):
-        # the two filters' tables (designed from design.slow and design.fast) row by row: no
+        # the two filters' tables (designed from design.slow and design.fast) stacked at every grid speed: no
         # Riccati equation solved again
         d = self.design
         g, ns, nf = len(d.vgrid), self._slow._nstate, self._fast._nstate
