@@ -220,6 +220,19 @@ def test_slow_log_is_still_too_slow(tmp_path):
     assert res.exit_code == 1 and "too slow: top speed 4.0 m/s" in res.output, res.output
 
 
+def test_a_log_driven_backwards_is_named_with_the_readers_warning(tmp_path):
+    """The reader's warnings reach identify's output as estimate's: a speed logged negative is named with the
+    channel and the way to invert it, beside why the log is not used."""
+    log = _turning_log(tmp_path / "ahead.csv")
+    back = tmp_path / "back.csv"
+    cols = load_log(log).signals
+    write_table(back, {"t": cols.t, "vx": -cols.vx, "ay": cols.ay, "r": cols.r, "delta_f": cols.delta_f}, {})
+    res = _identify(back, "-o", tmp_path / "car.toml")
+    assert res.exit_code == 1, res.output
+    assert "warning: " in res.output and "back.csv: channel 'speed' (column 'vx'): negative on" in res.output
+    assert "invert = true" in res.output and "NOT USED" in res.output, res.output
+
+
 def test_flipped_steering_sign_is_refused_naming_the_channel(tmp_path):
     log = _turning_log(tmp_path / "flipped.csv", flip=True)
     out = tmp_path / "car.toml"

@@ -113,6 +113,9 @@ def identify(logs, vehicle, channels, fmt, output, straight_bank, ay_max, as_jso
             failed.append((path, f"{type(exc).__name__}: {exc}"))
     for path, why in failed:
         click.echo(f"FAILED {why}" if why.startswith(str(path)) else f"FAILED {path}: {why}", err=True)
+    for log in loaded:          # what the reader found suspicious, as estimate, map and export say it
+        for w in log.warnings:
+            click.echo(f"warning: {w}", err=True)
     if not loaded:
         click.echo("error: no log could be read; nothing identified", err=True)
         sys.exit(1)
