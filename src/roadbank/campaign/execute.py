@@ -19,6 +19,7 @@ import logging
 import time
 from dataclasses import dataclass, field
 
+from .. import runtime
 from . import store
 from .runner import RunOptions, run_batch, warm_up
 from .sampling import draw
@@ -97,8 +98,7 @@ def open_client(scheduler: str | None, workers: int, connect_timeout: float = 20
         with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
             cluster = dd.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                       dashboard_address=None, silence_logs=logging.ERROR,
-                                      env={"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
-                                           "MKL_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"})
+                                      env={**dict.fromkeys(runtime.BLAS_THREAD_VARS, "1"), "NUMBA_NUM_THREADS": "1"})
         return dd.Client(cluster), cluster
     try:
         return dd.Client(scheduler, timeout=f"{connect_timeout}s"), None

@@ -280,13 +280,13 @@ def repair_time(t, after: float | None = None, min_period: float | None = None) 
         raise UnrepairableTime(f"no increasing time base: {what} (every row written twice, or a clock coarser "
                                "than the sample rate?), and the value at a repeated stamp is not trusted")
     flagged = flag[idx] | repeated[idx] | follows_drop[idx]
-    if n >= 2 and after is None and np.count_nonzero(~flagged) < 2:    # every kept sample next to a bad stamp
+    usable = int(np.count_nonzero(~flagged))
+    if n >= 2 and after is None and usable < 2:    # every kept sample next to a bad stamp
         missing = int(np.count_nonzero(~finite))
         bad = [f"{k} of {n} stamps {why}" for k, why in ((missing, "missing (not numbers)"),
                                                           (lost - missing, "out of order or repeated")) if k]
         raise UnrepairableTime(f"no increasing time base: {' and '.join(bad) or 'stamps swapped or repeated'}; "
-                               f"the samples next to them are not trusted, which leaves "
-                               f"{int(np.count_nonzero(~flagged))} of {n} usable")
+                               f"the samples next to them are not trusted, which leaves {usable} of {n} usable")
     return TimeRepair(keep=idx, flagged=flagged, kind=kind,
                       gaps=count_gaps(t[idx], after, min_period), restarts=restarts)
 
