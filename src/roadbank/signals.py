@@ -14,6 +14,8 @@ import numpy as np
 from .params import VehicleParams
 
 CHANNELS = ("t", "vx", "ay", "r", "delta_f")
+#: optional channels: present in a log that has them, None otherwise
+OPTIONAL_CHANNELS = ("p",)
 
 
 def _as_1d(name: str, a) -> np.ndarray:
@@ -45,8 +47,12 @@ class Signals:
     delta_f : array (rad)
         Front road-wheel angle, positive to the left. Use
         :meth:`from_steering_wheel` when the log holds the steering-wheel angle.
+    p : array (rad/s), optional
+        Roll rate (rotation about the forward axis, positive left side up), when the log has a
+        roll-rate gyro (an INS, a phone, a six-axis IMU); None for an ESP log without one. Only
+        the estimators of :data:`roadbank.estimators.GYRO` read it.
 
-    NaN / inf samples in ``vx, ay, r, delta_f`` are allowed: the estimators hold
+    NaN / inf samples in ``vx, ay, r, delta_f, p`` are allowed: the estimators hold
     their output there and flag it not valid. The time base itself must be clean.
     """
 
@@ -55,9 +61,11 @@ class Signals:
     ay: np.ndarray
     r: np.ndarray
     delta_f: np.ndarray
+    p: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        arrays = {name: _as_1d(name, getattr(self, name)) for name in CHANNELS}
+        names = CHANNELS + tuple(c for c in OPTIONAL_CHANNELS if getattr(self, c) is not None)
+        arrays = {name: _as_1d(name, getattr(self, name)) for name in names}
         n = len(arrays["t"])
         if n == 0:
             raise ValueError("Signals: empty arrays (no samples)")
@@ -86,7 +94,11 @@ class Signals:
         """Samples ``index`` (a slice) as a new :class:`Signals`."""
         if not isinstance(index, slice):
             raise TypeError("Signals can only be sliced with a slice")
-        return Signals(*(getattr(self, c)[index] for c in CHANNELS))
+        return Signals(*(getattr(self, c)[index] for c in CHANNELS), **self._optional(lambda a: a[index]))
+
+    def _optional(self, f) -> dict:
+        """``f`` of each optional channel this log has, by name (keyword arguments of :class:`Signals`)."""
+        return {c: f(getattr(self, c)) for c in OPTIONAL_CHANNELS if getattr(self, c) is not None}
 
     @classmethod
     def from_steering_wheel(cls, t, vx, ay, r, steering_wheel_angle,
@@ -103,7 +115,9 @@ def concat_signals(parts) -> "Signals":
     parts = list(parts)
     if len(parts) == 1:
         return parts[0]
-    return Signals(*(np.concatenate([getattr(p, c) for p in parts]) for c in CHANNELS))
+    optional = {c: np.concatenate([getattr(p, c) for p in parts]) for c in OPTIONAL_CHANNELS
+                if all(getattr(p, c) is not None for p in parts)}
+    return Signals(*(np.concatenate([getattr(p, c) for p in parts]) for c in CHANNELS), **optional)
 
 
 def interval_rate(dt) -> float:

@@ -24,6 +24,7 @@ from ..params import VehicleParams
 from .base import Estimator, StepResult
 from .dfc import DFC
 from .gated import KinematicPIF, PIFGated
+from .gyro import KinematicGyro
 from .kalman import Kalman
 from .kinematic import Kinematic
 from .kinematic_smoother import KinematicSmoother
@@ -54,6 +55,7 @@ _FACTORIES: dict[str, Callable[..., Estimator]] = {
     "pif-smoother": PIFSmoother,
     "kinematic-smoother": KinematicSmoother,
     "pif-paper": partial(PIF, model="modified", tuning="paper"),
+    "kinematic-gyro": KinematicGyro,
 }
 
 #: further names :func:`make` accepts: an estimator of :data:`NAMES` with a named tuning
@@ -61,8 +63,13 @@ _FACTORIES: dict[str, Callable[..., Estimator]] = {
 #: :data:`NAMES`: the same filter as one there, so the suites that try every estimator
 #: (and ``-e all``) would only run it twice.
 PRESETS = ("pif-paper",)
+#: estimators that also read a roll-rate gyro (:attr:`roadbank.Signals.p`), for logs that carry one (an INS, a
+#: phone, a six-axis IMU). Not in :data:`NAMES`: an ESP log has no roll rate, so the suites and reports that run
+#: every estimator on ESP signals leave them out; ``make`` builds them, and :func:`roadbank.vehicle.for_log`
+#: chooses ``kinematic-gyro`` for a log that has a roll rate (docs/estimators.md)
+GYRO = ("kinematic-gyro",)
 #: names of all estimators, in the order the reports list them
-NAMES = tuple(n for n in _FACTORIES if n not in PRESETS)
+NAMES = tuple(n for n in _FACTORIES if n not in PRESETS + GYRO)
 #: estimators whose ``run()`` also uses the samples after each instant (post-processing, not
 #: for an ECU); their ``step()`` is causal (see :mod:`roadbank.estimators.smoother`)
 OFFLINE = tuple(n for n, f in _FACTORIES.items() if getattr(f, "offline", False))
@@ -80,7 +87,7 @@ SHEET_RATE_HZ = 100.0
 
 
 def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
-    """Build the estimator ``name`` (one of :data:`NAMES` or :data:`PRESETS`) for ``params``.
+    """Build the estimator ``name`` (one of :data:`NAMES`, :data:`PRESETS` or :data:`GYRO`) for ``params``.
 
     ``tuning`` are the estimator's keyword options (see each class) plus the
     common ones ``v_min`` (m/s), ``roll``, ``max_substep`` (s), ``max_gap`` (s).
@@ -88,7 +95,7 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
     try:
         factory = _FACTORIES[name]
     except KeyError:
-        raise ValueError(f"unknown estimator {name!r}; choose one of {', '.join(NAMES + PRESETS)}") from None
+        raise ValueError(f"unknown estimator {name!r}; choose one of {', '.join(NAMES + PRESETS + GYRO)}") from None
     try:
         est = factory(params, **tuning)
     except TypeError as exc:
@@ -101,6 +108,6 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
 
 
 __all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "Estimator", "StepResult",
-           "NoStabilisingSolution", "Kinematic", "KinematicLowPass", "KinematicFeedForward", "KinematicPIF", "DFC",
+           "NoStabilisingSolution", "GYRO", "KinematicGyro", "Kinematic", "KinematicLowPass", "KinematicFeedForward", "KinematicPIF", "DFC",
            "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
            "Kalman", "KinematicSmoother", "with_online_offsets", "OnlineOffsets", "OffsetSettings"]

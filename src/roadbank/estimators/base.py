@@ -178,6 +178,9 @@ class Estimator:
     kernel = "lpv"
     #: which of (delta_f, ay, r) the estimator reads; others may be NaN
     uses = (True, True, True)
+    #: the :class:`~roadbank.signals.Signals` channel of the first input slot (``p``, the roll rate, for the
+    #: gyro-aided estimators, which read no steering)
+    first_input = "delta_f"
     #: names of the observer states reported in Estimate.states
     state_names: tuple[str, ...] = ()
     #: the frozen dataclass of this estimator's design inputs (:attr:`design`)
@@ -545,12 +548,13 @@ class Estimator:
         n = len(signals)
         w, theta, phib, phi, valid, xs = self._outputs(n)
         k = self._first_interval(signals.t) if self._auto_rate and self.fixed_dt is None else n
+        first = getattr(signals, self.first_input)
         for a, b in ((0, k), (k, n)):
             if a == k and k < n:
                 self._observe_time(float(signals.t[k]))   # sets the rate (and the detector)
             if b > a:
                 self._run_fn(self._mem, self._cfg, self._tab, self._work, signals.t[a:b], signals.vx[a:b],
-                             signals.delta_f[a:b], signals.ay[a:b], signals.r[a:b], w[a:b], theta[a:b],
+                             first[a:b], signals.ay[a:b], signals.r[a:b], w[a:b], theta[a:b],
                              phib[a:b], phi[a:b], valid[a:b], xs[a:b])
         states = {name: xs[:, i] for i, name in enumerate(self.state_names)}
         states["phi"] = phi

@@ -217,14 +217,14 @@ class OnlineOffsets:
                       f(signals.ay, float), f(signals.r, float), out)
         if n:
             self._oout[:] = out[-1]
-        return Signals(signals.t, signals.vx, out[:, K.O_AY].copy(), out[:, K.O_R].copy(),
-                       out[:, K.O_D].copy()), out
+        return dataclasses.replace(signals, ay=out[:, K.O_AY].copy(), r=out[:, K.O_R].copy(),
+                                   delta_f=out[:, K.O_D].copy()), out
 
     def _apply(self, signals: Signals) -> Signals:
         """``signals`` corrected by the current offsets, the learner not advanced."""
         o = self._omem
-        return Signals(signals.t, signals.vx, signals.ay - self._ocfg[K.C_AYOFF], signals.r - o[K.M_BR],
-                       signals.delta_f - o[K.M_BD])
+        return dataclasses.replace(signals, ay=signals.ay - self._ocfg[K.C_AYOFF], r=signals.r - o[K.M_BR],
+                                   delta_f=signals.delta_f - o[K.M_BD])
 
     def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
         """Estimate over a whole log with the offsets learnt online (see the class docstring).

@@ -74,7 +74,7 @@ def missing_column(p, role: str, column: str | None, names,
 
 
 def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
-    """Roles to read: speed, lateral_acceleration, yaw_rate, [the steering role], [reference_roll].
+    """Roles to read: speed, lateral_acceleration, yaw_rate, [the steering role], [roll_rate], [reference_roll].
 
     The steering role is the road-wheel angle if its column exists, else the
     steering-wheel angle (none if the map has no steering channel: ROS maps; none if the file has
@@ -96,6 +96,8 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
         raise missing_column(p, "steering", None, names, f"missing: no column {cols} in the file")
     if present[0] is not None:
         roles.append(present[0])
+    if "roll_rate" in cmap.channels and cmap.channels["roll_rate"].column in have:
+        roles.append("roll_rate")     # optional: a map's roll rate that the file lacks is said by roll_rate_note
     if "reference_roll" in cmap.channels:
         roles.append("reference_roll")
         col = cmap.channels["reference_roll"].column
@@ -103,6 +105,16 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
             raise channel_error(p, "reference_roll", col, f"column not found in the file "
                                 f"(it has: {', '.join(names) or 'nothing'})")
     return roles
+
+
+def roll_rate_note(p, cmap: ChannelMap, roles: list[str]) -> list[str]:
+    """The warning for a file read without the roll-rate column its map names (the default map's ``p`` is
+    not said: most logs have no roll-rate gyro); ``[]`` otherwise."""
+    spec = cmap.channels.get("roll_rate")
+    if spec is None or "roll_rate" in roles or cmap.source == "default channel map":
+        return []
+    return [channel_text(p, "roll_rate", spec.column, "column not found in the file, so the log is read without "
+                         "a roll rate (the gyro-aided estimators give no valid sample)")]
 
 
 def steering_note(p, cmap: ChannelMap, roles: list[str]) -> list[str]:
@@ -221,7 +233,8 @@ class _Logs:
         # a steering role left out at the log's end (no finite value) is not in the output
         delta = steering_delta_f(cmap, self.params, [r for r in self.roles if r in out], out)
         try:
-            sig = Signals(out["t"], out["speed"], out["lateral_acceleration"], out["yaw_rate"], delta)
+            sig = Signals(out["t"], out["speed"], out["lateral_acceleration"], out["yaw_rate"], delta,
+                          out.get("roll_rate"))
         except ValueError as exc:
             raise LogError(f"{p}: {exc}") from None
         pos = {r: out[r] for r in self.gnss}
@@ -347,7 +360,7 @@ def assemble(src, cmap: ChannelMap, params: VehicleParams, fmt: str) -> Iterator
     """
     p = src.path
     roles = select_roles(p, cmap, set(src.names), src.names)
-    src.warnings += steering_note(p, cmap, roles)
+    src.warnings += steering_note(p, cmap, roles) + roll_rate_note(p, cmap, roles)
     gnss = gnss_roles(cmap)
     for r in gnss:
         if cmap.channels[r].column not in src.names:

@@ -31,6 +31,8 @@ lateral_acceleration        m/s^2, g             flipped (y axis)
 yaw_rate                    rad/s, deg/s         flipped (z axis)
 steering_wheel_angle        rad, deg             flipped (rotation about z)
 road_wheel_angle            rad, deg             flipped (rotation about z)
+roll_rate                   rad/s, deg/s         none (rotation about x; optional:
+                                                 the gyro-aided estimators read it)
 reference_roll              rad, deg             none (rotation about x: right
                                                  side down in FRD = left side up
                                                  in ISO)
@@ -79,6 +81,7 @@ ROLES: dict[str, tuple[str, str | None]] = {
     "speed": ("speed", "x"),
     "lateral_acceleration": ("acceleration", "y"),
     "yaw_rate": ("angular_rate", "z"),
+    "roll_rate": ("angular_rate", "x"),
     "steering_wheel_angle": ("angle", "z"),
     "road_wheel_angle": ("angle", "z"),
     "reference_roll": ("angle", "x"),
@@ -253,6 +256,7 @@ def default_channel_map() -> ChannelMap:
         "yaw_rate": ChannelSpec("yaw_rate", "r", "rad/s"),
         "road_wheel_angle": ChannelSpec("road_wheel_angle", "delta_f", "rad"),
         "steering_wheel_angle": ChannelSpec("steering_wheel_angle", "steering_wheel_angle", "rad"),
+        "roll_rate": ChannelSpec("roll_rate", "p", "rad/s"),
     }
     return ChannelMap(ch, truth_prefix="true_", source="default channel map", steering_optional=True)
 

@@ -61,12 +61,12 @@ from .types import RawChunk
 #: fields per oxts frame (dataformat.txt)
 N_FIELDS = 30
 #: 0-based column of each channel
-COLUMNS = {"lat": 0, "lon": 1, "roll": 3, "vf": 8, "vl": 9, "ay": 12, "wz": 19}
+COLUMNS = {"lat": 0, "lon": 1, "roll": 3, "vf": 8, "vl": 9, "ay": 12, "wx": 17, "wz": 19}
 #: the time column of the table a drive makes (seconds from the first frame)
 TIME = "timestamps.txt"
 #: the channels a drive gives (oxts column -> stored unit); their column names: :func:`column`
 ROLES = {"speed": ("vf", "m/s"), "lateral_acceleration": ("ay", "m/s^2"), "yaw_rate": ("wz", "rad/s"),
-         "reference_roll": ("roll", "rad")}
+         "roll_rate": ("wx", "rad/s"), "reference_roll": ("roll", "rad")}
 #: columns carried into ``Log.extra`` as they are (name -> oxts column); on the frames' own clock
 CARRIED = {"lat_deg": "lat", "lon_deg": "lon", "vl_mps": "vl"}
 

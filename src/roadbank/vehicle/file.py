@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..params import VehicleParams
-from ..signals import CHANNELS, Signals
+from ..signals import Signals
 from .conditions import make_estimator
 from .errors import VehicleFileError
 from .plausibility import (PLANT_FIELDS, PLAUSIBLE, SENSOR_FIELDS, check_document, check_table_entry, checked_value,
@@ -252,8 +252,7 @@ class Vehicle:
         if not offsets:
             return signals
 
-        return Signals(*(getattr(signals, c) - offsets[c] if c in offsets else getattr(signals, c)
-                         for c in CHANNELS))
+        return dataclasses.replace(signals, **{c: getattr(signals, c) - offsets[c] for c in offsets})
 
     def check(self) -> "Vehicle":
         """Build every tuned estimator once; a failing design raises :class:`VehicleFileError`.

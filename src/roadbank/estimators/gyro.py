@@ -1,0 +1,150 @@
+r"""The kinematic estimate fused with a roll-rate gyro (``kinematic-gyro``): a complementary filter.
+
+An ESP cluster measures ``ay``, ``r``, ``vx`` and the steering angle; many logs carry more. An INS, a
+phone or any six-axis IMU also measures the roll rate :math:`p` about the forward axis, and the roll
+angle :math:`\theta` (bank + body roll) changes at that rate: :math:`\dot\theta = p` (small pitch,
+below). The kinematic estimate :math:`k = (a_y - v_x r)/g = \sin\theta + \dot v_y / g` has no drift
+but carries the road's vibration and the sideslip acceleration; the integrated gyro has no vibration
+to speak of but drifts. A complementary filter takes each where it is good: the low frequencies from
+:math:`k`, the high ones from :math:`p`, with no lag in between, where a low-pass of :math:`k` alone
+must lag to suppress its noise (:mod:`roadbank.estimators.lowpass`):
+
+.. math::
+    \dot x = p - b + \omega_c (k - x), \qquad \dot b = -\frac{\omega_c}{T_b} (k - x),
+    \qquad \hat w = x, \qquad \omega_c = 2\pi f_c
+
+``b`` (rad/s) is the gyro's offset, learnt from the disagreement of the two (a MEMS gyro's offset is
+0.1-1 deg/s; one left in would bias the estimate by :math:`b/\omega_c`); :math:`T_b` (s) is the time
+constant in which it is learnt (the characteristic polynomial :math:`s^2 + \omega_c s + \omega_c/T_b`
+has its poles near :math:`-\omega_c` and :math:`-1/T_b`). ``bias_tau = 0`` leaves it out (one state).
+The transfer from :math:`k` is a low-pass, that from :math:`p` its complement: a bank that the gyro
+sees passes without lag. :math:`f_c` and :math:`T_b` were chosen by a written rule on training data
+(:func:`roadbank.tuning.real.choose_gyro`, docs/estimators.md).
+
+The model's limits: :math:`\dot\theta = p + (q \sin\theta + r \cos\theta) \tan\vartheta` with
+:math:`\vartheta` the pitch, so on a grade the yaw rate leaks into the roll rate (a 5 % grade in a
+0.2 rad/s turn: 0.57 deg/s, which the low frequencies of :math:`k` correct within :math:`1/\omega_c`);
+:math:`\hat w` is :math:`\sin\theta` and :math:`p` the rate of :math:`\theta`, the same to 1.5 % below
+10 deg of roll. The filter is linear and scheduled on speed like every ``lpv`` observer (``step()``,
+fixed-rate tables); it reads the roll rate in the steering angle's input slot (it reads no steering),
+from :attr:`roadbank.Signals.p`. A log without a roll rate gives no valid sample (:meth:`KinematicGyro.run`
+says so).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..params import VehicleParams
+from ..signals import Estimate, Signals
+from . import layout as L
+from .base import DesignInputs, ScheduledObserver, StepResult, Tables
+from .kinematic import KINEMATIC_V_MIN
+
+#: ``kinematic-gyro``'s cut-off (Hz) and offset time constant (s): the rule of :mod:`roadbank.tuning.real`
+GYRO_CUTOFF_HZ = 0.1
+GYRO_BIAS_TAU_S = 20.0
+
+
+@dataclass(frozen=True)
+class GyroDesign(DesignInputs):
+    """Design inputs of :class:`KinematicGyro`: the cut-off ``cutoff`` (Hz) and the offset's time constant
+    ``bias_tau`` (s; 0: no offset state)."""
+
+    cutoff: float = GYRO_CUTOFF_HZ
+    bias_tau: float = GYRO_BIAS_TAU_S
+
+
+def gyro_observer(d: GyroDesign, vx: float):
+    """``(F, G, H, D)`` of the complementary filter at ``vx`` (m/s); inputs ``[p, ay, r]`` (module docstring);
+    states ``[x, b]`` (``[x]`` without the offset)."""
+    g, wc = d.params.g, 2.0 * np.pi * d.cutoff
+    kin = np.array([0.0, 1.0 / g, -vx / g])                   # the kinematic estimate per eta
+    gyro = np.array([1.0, 0.0, 0.0])                          # the roll rate per eta
+    if d.bias_tau <= 0:
+        return np.array([[-wc]]), (gyro + wc * kin)[None, :], np.array([[1.0]]), np.zeros((1, 3))
+    ki = wc / d.bias_tau
+    F = np.array([[-wc, -1.0], [ki, 0.0]])
+    G = np.vstack([gyro + wc * kin, -ki * kin])
+    return F, G, np.array([[1.0, 0.0]]), np.zeros((1, 3))
+
+
+class KinematicGyro(ScheduledObserver):
+    """The kinematic estimate and the roll-rate gyro in one complementary filter (module docstring).
+
+    Parameters
+    ----------
+    params : VehicleParams, optional
+        Only ``g`` and the roll model (for ``phi_b``) are used.
+    cutoff : float, optional
+        Cross-over frequency ``f_c`` (Hz, > 0): below it the estimate follows the kinematic estimate, above
+        it the integrated roll rate. Default :data:`GYRO_CUTOFF_HZ`.
+    bias_tau : float, optional
+        Time constant (s, >= 0) in which the gyro's offset is learnt; 0: no offset state. Default
+        :data:`GYRO_BIAS_TAU_S`.
+    **kw
+        Common options of :class:`~roadbank.estimators.base.Estimator`; ``v_min`` (m/s) defaults to
+        :data:`~roadbank.estimators.kinematic.KINEMATIC_V_MIN`.
+    """
+
+    name = "kinematic-gyro"
+    #: reads (p, ay, r): the roll rate in the steering angle's slot
+    uses = (True, True, True)
+    #: the :class:`~roadbank.signals.Signals` channel of the first input slot
+    first_input = "p"
+    default_v_min = KINEMATIC_V_MIN
+    design_type = GyroDesign
+    if TYPE_CHECKING:
+        @property
+        def design(self) -> GyroDesign: ...     # an instance of design_type
+
+    def __init__(self, params=None, *, cutoff=None, bias_tau=None, **kw):
+        self.cutoff = float(GYRO_CUTOFF_HZ if cutoff is None else cutoff)
+        self.bias_tau = float(GYRO_BIAS_TAU_S if bias_tau is None else bias_tau)
+        if not (np.isfinite(self.cutoff) and self.cutoff > 0):
+            raise ValueError(f"{self.name}: cutoff must be > 0 Hz, got {cutoff}")
+        if not (np.isfinite(self.bias_tau) and self.bias_tau >= 0):
+            raise ValueError(f"{self.name}: bias_tau must be >= 0 s, got {bias_tau}")
+        self.state_names = ("w", "p_offset") if self.bias_tau > 0 else ("w",)
+        super().__init__(params, **kw)
+
+    def _design_fields(self) -> dict:
+        return dict(cutoff=self.cutoff, bias_tau=self.bias_tau)
+
+    def _table_inputs(self) -> GyroDesign:
+        """:attr:`design` with the car reduced to its ``g``, all that the tables read."""
+        return GyroDesign(params=VehicleParams(g=self.params.g), v_min=self.v_min, v_step=self.v_step,
+                          v_max=self.v_max, cutoff=self.cutoff, bias_tau=self.bias_tau)
+
+    def observer(self, vx: float):
+        """``(F, G, H, D)`` at ``vx`` (m/s); inputs ``[p, ay, r]`` (:func:`gyro_observer`)."""
+        return gyro_observer(self.design, vx)
+
+    def _design(self):
+        tab, n, extra = super()._design()
+        # a (re)start takes the kinematic estimate and no offset, not the equilibrium of the current roll rate
+        # (J: the state per eta at a start)
+        row, g = L.lpv_row(n), self.params.g
+        J = np.zeros((len(tab), n, L.NETA))
+        J[:, 0, 1], J[:, 0, 2] = 1.0 / g, -self.design.vgrid / g
+        tab = np.array(tab)
+        tab[:, row.J:row.cont] = J.reshape(len(tab), -1)
+        return Tables(np.ascontiguousarray(tab), n, extra)
+
+    def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
+        """:meth:`Estimator.run <roadbank.estimators.base.Estimator.run>` of a log with a roll rate
+        (:attr:`roadbank.Signals.p`, rad/s); ValueError for a log without one."""
+        if isinstance(signals, Signals) and signals.p is None:
+            raise ValueError(f"{self.name}: the log has no roll rate (Signals.p); this estimator fuses the roll-rate "
+                             "gyro with the kinematic estimate (map a 'roll_rate' channel, or choose another "
+                             "estimator)")
+        return super().run(signals, reset=reset, lookahead=lookahead)
+
+    def step(self, t: float, vx: float, ay: float, r: float, delta_f: float = float("nan"),
+             p: float = float("nan")) -> StepResult:
+        """One sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), the unused delta_f (rad) and the roll rate
+        ``p`` (rad/s)."""
+        return super().step(t, vx, ay, r, p)
