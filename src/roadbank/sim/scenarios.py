@@ -24,7 +24,7 @@ from .driver import D_LATINT, D_SWA, D_VINT, ND, Driver
 from .drives import identification_drive
 from .integrate import outputs_at, simulate
 from .params import PlantParams
-from .plant import (A_AX, A_AY, A_DVY, A_FXW, A_FYW, A_FZW, NX, X_FXL, X_FYL, X_N, X_OMEGA, X_PHI, X_PSI, X_R,
+from .plant import (A_AX, A_AY, A_DVY, A_FXW, A_FYW, A_FZW, NX, X_DPHI, X_FXL, X_FYL, X_N, X_OMEGA, X_PHI, X_PSI, X_R,
                     X_S, X_VX, X_VY)
 from .road import Road, flat_road, straight_road, test_track, track_curve_start, truth_bank, two_lane_road
 from .scenario import Scenario
@@ -278,6 +278,20 @@ def _integrate(scenario: Scenario, plant: PlantParams, dt: float):
     return t, X, U, road_p, p
 
 
+def roll_rate(X: np.ndarray, rows: np.ndarray, road_p, v, dt: float) -> np.ndarray:
+    """The rate (rad/s) of bank + body roll at the integration ``rows`` of the plant's states ``X``: the body's
+    roll rate plus the rate at which the contact-height bank under the car changes (a central difference over
+    the integration step ``dt``, s; one-sided at the ends), what a roll-rate gyro on the body reads."""
+    def bank(k):
+        return truth_bank(road_p, X[k, X_S], X[k, X_N], X[k, X_PSI], v.Lf, v.Lr, v.track_f, v.track_r)
+    last = len(X) - 1
+    out = np.empty(len(rows))
+    for i, k in enumerate(rows):
+        a, b = max(int(k) - 1, 0), min(int(k) + 1, last)
+        out[i] = X[k, X_DPHI] + (bank(b) - bank(a)) / ((b - a) * dt)
+    return out
+
+
 def run(scenario: Scenario, plant: PlantParams | None = None, sensors: SensorConfig | None = None,
         seed: int = 0, condition: Condition | str | None = None, dt: float | None = None) -> SimResult:
     """Simulate ``scenario`` and sample the sensors.
@@ -325,10 +339,13 @@ def run(scenario: Scenario, plant: PlantParams | None = None, sensors: SensorCon
     Yt, Ym = Y[:n_samp], Y[n_samp:]
     v = plant.vehicle
     rng = np.random.default_rng(seed)
-    meas = measure({"r": X[rows_meas, X_R], "ay": Ym[:, A_AY], "ax": Ym[:, A_AX],
-                    "v_wheels": 0.5 * (X[rows_meas, X_OMEGA + 2] + X[rows_meas, X_OMEGA + 3]) * v.wheel_radius,
-                    "swa": U[rows_meas, 0]}, sensors, rng)
-    signals = Signals(ts, meas["vx"], meas["ay"], meas["r"], meas["swa"] / v.steering_ratio)
+    true = {"r": X[rows_meas, X_R], "ay": Ym[:, A_AY], "ax": Ym[:, A_AX],
+            "v_wheels": 0.5 * (X[rows_meas, X_OMEGA + 2] + X[rows_meas, X_OMEGA + 3]) * v.wheel_radius,
+            "swa": U[rows_meas, 0]}
+    if sensors.roll_rate is not None:
+        true["p"] = roll_rate(X, rows_meas, road_p, v, dt)
+    meas = measure(true, sensors, rng)
+    signals = Signals(ts, meas["vx"], meas["ay"], meas["r"], meas["swa"] / v.steering_ratio, meas.get("p"))
     Xt = X[rows]
     phib = np.array([truth_bank(road_p, Xt[k, X_S], Xt[k, X_N], Xt[k, X_PSI], v.Lf, v.Lr, v.track_f, v.track_r)
                      for k in range(n_samp)])

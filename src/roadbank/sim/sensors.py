@@ -76,6 +76,9 @@ class SensorConfig:
         noise_std=ESP_STEERING_NOISE, resolution=ESP_STEERING_RESOLUTION, range=ESP_STEERING_RANGE))
     ay_misalignment: float = 0.0
     ay_cross_axis: bool = False
+    #: a roll-rate gyro (the rate of bank + body roll about the forward axis, rad/s), None: none (an ESP
+    #: cluster has none). Its noise is drawn after every other channel's, so adding it changes no other channel.
+    roll_rate: ChannelErrorModel | None = None
 
     def __post_init__(self) -> None:
         if not (self.rate > 0 and math.isfinite(self.rate)):
@@ -102,11 +105,12 @@ def measure(truth: dict, config: SensorConfig, rng: np.random.Generator) -> dict
     ----------
     truth : dict of arrays
         ``r`` (rad/s), ``ay``, ``ax`` (m/s^2, specific force), ``v_wheels``
-        (m/s, rear wheel-speed mean), ``swa`` (rad), already delayed by the latency.
+        (m/s, rear wheel-speed mean), ``swa`` (rad), already delayed by the latency; ``p``
+        (rad/s, roll rate) with a roll-rate gyro (``config.roll_rate``).
 
     Returns
     -------
-    dict with ``r, ay, vx, swa`` (measured, NaN where dropped).
+    dict with ``r, ay, vx, swa`` (measured, NaN where dropped), and ``p`` with a roll-rate gyro.
     """
     n = len(truth["r"])
     noise = rng.standard_normal((4, n))
@@ -124,4 +128,7 @@ def measure(truth: dict, config: SensorConfig, rng: np.random.Generator) -> dict
         drop = rng.random(n) < config.dropout_prob
         for k in out:
             out[k] = np.where(drop, np.nan, out[k])
+    if config.roll_rate is not None:            # drawn last: the other channels are those of a cluster without it
+        p = config.roll_rate.apply(truth["p"], rng.standard_normal(n))
+        out["p"] = np.where(drop, np.nan, p) if config.dropout_prob > 0 else p
     return out

@@ -262,6 +262,21 @@ It kept the shipped pair (0.6 deg/s, 0.2), by the mean guard. The real median's 
 0.4020 against 0.4083, beyond the tie, alone within it. Its gain is on the resampled drives (0.4187 -> 0.4030); the
 10 Hz drives lose (0.3861 -> 0.3953), the interpolated ones lose too (0.3967 -> 0.4020). On the loud simulated
 drives it is worse (median 0.6164 -> 0.6854), and so is the mean of every score judged (0.7653 -> 0.8022).
+
+The twenty-fourth stage (:func:`choose_gyro`; rule written 2026-12-05 before any candidate ran) is for a log that
+carries a roll rate (:attr:`roadbank.Signals.p`: an INS, a phone, a six-axis IMU), which no stage before read. It
+chooses the cross-over and the offset time constant of ``kinematic-gyro`` (:mod:`roadbank.estimators.gyro`) over
+:data:`GYRO_CUTOFFS_HZ` x :data:`GYRO_BIAS_TAUS` (0: no offset state), and then whether ``kinematic-gyro`` is the
+default on such a log. Real sets (:func:`gyro_sets`): the KITTI training drives as read (the INS compensates its
+gyro's offset) and the same drives with a constant roll-rate offset of +:data:`GYRO_OFFSET_DEG` and of
+-:data:`GYRO_OFFSET_DEG` deg/s added (a MEMS gyro's, the range the campaign draws for the yaw rate). Objective: the
+mean over the three sets of the median raw RMS (the scoring of every stage). The lowest wins; ties within
+:data:`TIE_DEG` go to fewer states (no offset state), then to the longer offset time constant, then to the lower
+cross-over (the smoother filter). ``kinematic-gyro`` as chosen is then the default on a log with a roll rate if its
+objective is lower than that of the default as shipped (``kinematic-pif`` designed for each log, which reads no roll
+rate, so its three medians are one). No simulated set takes part: ``roadbank tune``'s drives last 15-25 s, shorter
+than an offset can be learnt in, and their sensors are an ESP cluster's. Neither the KITTI validation drives nor
+comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -280,6 +295,7 @@ from scipy.signal import resample_poly
 from .. import vehicle
 from ..vehicle import conditions
 from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
+from ..estimators.gyro import KinematicGyro
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
@@ -293,6 +309,11 @@ from ..vehicle import load_vehicle
 from .manoeuvres import drive_set
 from .objective import drive_errors
 
+#: the twenty-fourth stage's grid: ``kinematic-gyro``'s cross-over (Hz) and offset time constant (s; 0: none),
+#: and the roll-rate offset (deg/s) added to the training drives
+GYRO_CUTOFFS_HZ = (0.03, 0.05, 0.07, 0.1, 0.15, 0.2, 0.3)
+GYRO_BIAS_TAUS = (0.0, 10.0, 20.0, 40.0, 80.0)
+GYRO_OFFSET_DEG = 0.3
 #: candidate cut-offs (Hz) and feed-forward gains (-)
 CUTOFFS_HZ = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.8)
 KAPPAS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4)
@@ -852,6 +873,33 @@ def smoother_clip_candidates() -> dict:
     designed for the log as the command line does (the log's noise measures the limit), for
     :func:`choose_by_roads`: the eleventh stage, the limit of the offline default's two passes."""
     return {c: per_log("kinematic-smoother", clip=c) for c in CLIPS}
+
+
+def gyro_sets(logs, offset_deg: float | None = None) -> list[list]:
+    """The twenty-fourth stage's real sets: ``logs`` (:func:`training_logs`) as read, and with a constant roll-rate
+    offset of +``offset_deg`` and of -``offset_deg`` (deg/s; default :data:`GYRO_OFFSET_DEG`) added to ``p``."""
+    off = math.radians(GYRO_OFFSET_DEG if offset_deg is None else offset_deg)
+    return [logs] + [[(dataclasses.replace(s, p=s.p + sign * off), ref, m) for s, ref, m in logs]
+                     for sign in (1.0, -1.0)]
+
+
+def gyro_objective(build, sets) -> float:
+    """The twenty-fourth stage's objective (deg): the mean over ``sets`` (:func:`gyro_sets`) of the median raw RMS
+    of the estimator ``build(signals)`` makes."""
+    return float(np.mean([np.median(log_errors(build, logs)) for logs in sets]))
+
+
+def choose_gyro(logs, cutoffs=GYRO_CUTOFFS_HZ, bias_taus=GYRO_BIAS_TAUS) -> tuple:
+    """The twenty-fourth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs`). Returns
+    ``((cutoff Hz, bias_tau s), {(cutoff, bias_tau): objective}, default objective, gyro is the default)``."""
+    sets = gyro_sets(logs)
+    obj = {(fc, bt): gyro_objective(fixed(KinematicGyro(cutoff=fc, bias_tau=bt)), sets)
+           for fc, bt in itertools.product(cutoffs, bias_taus)}
+    best = min(obj.values())
+    tied = [k for k, v in obj.items() if v <= best + TIE_DEG]
+    chosen = min(tied, key=lambda k: (k[1] > 0, -k[1], k[0]))
+    shipped = gyro_objective(per_log("kinematic-pif"), sets[:1])
+    return chosen, obj, shipped, obj[chosen] < shipped
 
 
 def _quiet_by(measure: str):
