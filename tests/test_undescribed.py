@@ -105,7 +105,7 @@ def test_estimate_designs_each_log_for_its_car_as_for_log_does(tmp_path, suv_dri
 def test_estimate_says_what_each_log_was_designed_for(tmp_path, suv_drives):
     """The summary (text, --json, summary.csv) names the car (fitted to the log, or the vehicle file) and
     whether the log is quiet; truth: the simulator's plant car and its data-sheet sensors (quiet), a KITTI
-    drive (loud), and a log that cannot be read (no design)."""
+    drive (loud, with the INS's roll rate), and a log that cannot be read (no design)."""
     import csv
     import json
 
@@ -131,7 +131,7 @@ def test_estimate_says_what_each_log_was_designed_for(tmp_path, suv_drives):
     if kitti.is_dir():
         text = CliRunner().invoke(main, ["estimate", str(kitti), "-o", str(tmp_path / "k.csv")])
         assert "sedan (fitted to the log)" in text.stderr
-        assert "loud, so kinematic-pif is the low-pass blend" in text.stderr
+        assert "loud, so kinematic-pif is kinematic-gyro (the log has a roll rate)" in text.stderr
 
 
 @pytest.mark.slow

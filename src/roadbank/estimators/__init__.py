@@ -108,6 +108,7 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
 
 
 __all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "Estimator", "StepResult",
-           "NoStabilisingSolution", "GYRO", "KinematicGyro", "Kinematic", "KinematicLowPass", "KinematicFeedForward", "KinematicPIF", "DFC",
+           "NoStabilisingSolution", "GYRO", "KinematicGyro",
+           "Kinematic", "KinematicLowPass", "KinematicFeedForward", "KinematicPIF", "DFC",
            "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
            "Kalman", "KinematicSmoother", "with_online_offsets", "OnlineOffsets", "OffsetSettings"]

@@ -45,8 +45,8 @@ from .base import DesignInputs, ScheduledObserver, StepResult, Tables
 from .kinematic import KINEMATIC_V_MIN
 
 #: ``kinematic-gyro``'s cut-off (Hz) and offset time constant (s): the rule of :mod:`roadbank.tuning.real`
-GYRO_CUTOFF_HZ = 0.1
-GYRO_BIAS_TAU_S = 20.0
+GYRO_CUTOFF_HZ = 0.15
+GYRO_BIAS_TAU_S = 10.0
 
 
 @dataclass(frozen=True)

@@ -245,12 +245,14 @@ class OnlineOffsets:
         est.states["delta_offset_learnt"] = out[:, K.O_DLEARNT].copy()
         return est
 
-    def step(self, t: float, vx: float, ay: float, r: float, delta_f: float = float("nan")) -> StepResult:
-        """One sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), delta_f (rad); the inner
+    def step(self, t: float, vx: float, ay: float, r: float, delta_f: float = float("nan"),
+             **more: float) -> StepResult:
+        """One sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), delta_f (rad), and ``more`` the inner estimator
+        reads as they are (``p``, the roll rate in rad/s, of :data:`roadbank.estimators.GYRO`); the inner
         estimator's result for the corrected sample."""
         o = self._oout
         K.offsets_step(self._omem, self._ocfg, float(t), float(vx), float(delta_f), float(ay), float(r), o)
-        return self.inner.step(t, vx, o[K.O_AY], o[K.O_R], o[K.O_D])
+        return self.inner.step(t, vx, o[K.O_AY], o[K.O_R], o[K.O_D], **more)
 
     def __repr__(self) -> str:
         return f"<OnlineOffsets of {self.inner!r}>"

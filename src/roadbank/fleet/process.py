@@ -17,7 +17,7 @@ from ..io.writers import TableWriter, estimate_table, write_error
 from ..signals import Estimate
 from ..vehicle import (DESIGN_MAX_S, car_for_log, for_conditions, has_design_span, log_conditions,
                        undescribed_params)
-from ..vehicle.conditions import QUIET_MODELS
+from ..vehicle.conditions import GYRO_FILTER, QUIET_MODELS
 
 #: columns of the summary table, in order (see LogSummary)
 SUMMARY_COLUMNS = ("log", "status", "error", "output", "estimator", "samples", "duration_s", "valid_share",
@@ -122,7 +122,9 @@ def design_words(design: dict, estimator: str) -> str:
                  f"{'quiet' if design['quiet'] else 'loud'}")
     words = f"{design['car']} ({design['car_from']}); {heard}"
     if estimator in QUIET_MODELS:
-        words += f", so {estimator} is {QUIET_MODELS[estimator] if design['quiet'] else 'the low-pass blend'}"
+        loud = (f"{GYRO_FILTER} (the log has a roll rate)" if design.get("roll_rate") and estimator == "kinematic-pif"
+                else "the low-pass blend")
+        words += f", so {estimator} is {QUIET_MODELS[estimator] if design['quiet'] else loud}"
     if design.get("source"):
         words += f"; written faster than their sensor, noise read at the sensor's rate: {design['source']}"
     return words

@@ -420,16 +420,18 @@ def _pick(cands: dict) -> tuple[float, float]:
     return min(ok, key=lambda fk: (fk[1], fk[0]))
 
 
-def training_logs(data_dir, scoring=KITTI_SCORING):
+def training_logs(data_dir, scoring=KITTI_SCORING, roll_rate: bool = False):
     """``(signals, reference roll rad, scored mask)`` of each KITTI training drive found under ``data_dir``
-    (the mask of ``scoring``, default :data:`~roadbank.validation.kitti.KITTI_SCORING`)."""
+    (the mask of ``scoring``, default :data:`~roadbank.validation.kitti.KITTI_SCORING`). Without ``roll_rate`` the
+    signals are the ESP channels alone (``p`` None): the stages before the twenty-fourth read none, and ran so."""
     out = []
     for name in KITTI_TRAINING:
         found = [p for p in Path(data_dir).glob(f"*/{name}") if p.is_dir()]
         if not found:
             continue
         log = load_kitti_oxts(found[0])
-        out.append((log.signals, log.reference_roll, masks(log.signals.t, log.signals.vx, scoring)[1]))
+        s = log.signals if roll_rate else dataclasses.replace(log.signals, p=None)
+        out.append((s, log.reference_roll, masks(s.t, s.vx, scoring)[1]))
     return out
 
 
@@ -890,7 +892,8 @@ def gyro_objective(build, sets) -> float:
 
 
 def choose_gyro(logs, cutoffs=GYRO_CUTOFFS_HZ, bias_taus=GYRO_BIAS_TAUS) -> tuple:
-    """The twenty-fourth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs`). Returns
+    """The twenty-fourth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate). Returns
     ``((cutoff Hz, bias_tau s), {(cutoff, bias_tau): objective}, default objective, gyro is the default)``."""
     sets = gyro_sets(logs)
     obj = {(fc, bt): gyro_objective(fixed(KinematicGyro(cutoff=fc, bias_tau=bt)), sets)
@@ -898,7 +901,8 @@ def choose_gyro(logs, cutoffs=GYRO_CUTOFFS_HZ, bias_taus=GYRO_BIAS_TAUS) -> tupl
     best = min(obj.values())
     tied = [k for k, v in obj.items() if v <= best + TIE_DEG]
     chosen = min(tied, key=lambda k: (k[1] > 0, -k[1], k[0]))
-    shipped = gyro_objective(per_log("kinematic-pif"), sets[:1])
+    esp = [(dataclasses.replace(s, p=None), ref, m) for s, ref, m in logs]     # the default as it ran: no roll rate
+    shipped = gyro_objective(per_log("kinematic-pif"), [esp])
     return chosen, obj, shipped, obj[chosen] < shipped
 
 

@@ -40,6 +40,14 @@ QUIET_FILTER = "pif-adaptive"
 #: what each real-road estimator (the low-pass of the kinematic estimate) is on a quiet log: the car's
 #: model (``kinematic-pif``: :data:`QUIET_FILTER`; the offline ``kinematic-smoother``: the offline PIF)
 QUIET_MODELS = {"kinematic-pif": QUIET_FILTER, "kinematic-smoother": "pif-smoother"}
+#: what ``kinematic-pif`` is on a loud log that carries a roll rate (:func:`has_roll_rate`): the complementary filter
+#: of the kinematic estimate and the roll-rate gyro, chosen by the twenty-fourth stage of :mod:`roadbank.tuning.real`
+GYRO_FILTER = "kinematic-gyro"
+#: share (-) of the design span's samples at speed whose roll rate must be finite for a log to count as having one
+ROLL_RATE_SHARE = 0.5
+#: the options every estimator takes (:class:`roadbank.estimators.base.Estimator`): all that ``kinematic-pif``'s
+#: options give :data:`GYRO_FILTER`
+_COMMON_OPTIONS = ("v_min", "roll", "max_substep", "max_gap", "max_angle", "v_step", "v_max", "sample_rate")
 #: low-passes whose update is limited by default (their ``clip``), given the log's noise densities ``Q_ay`` and ``R``
 #: (:func:`noise_densities`) by :func:`make_estimator`, as a sensor-weighted PIF is
 LIMITED_LOWPASSES = ("kinematic-smoother",)
@@ -145,7 +153,17 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     # two significant digits: logs of one car and road share a design (the design cache)
     return {"log_rate": sample_rate(signals.t), "log_ay_noise": float(f"{ay_noise:.2g}"),
             "log_r_noise": float(f"{r_noise:.2g}"), "log_ay_floor": float(f"{ay_floor:.2g}"),
-            "log_diff_noise": float(f"{diff_noise:.2g}")}
+            "log_diff_noise": float(f"{diff_noise:.2g}"), "log_roll_rate": float(has_roll_rate(signals, moving))}
+
+
+def has_roll_rate(signals, moving) -> bool:
+    """Whether ``signals`` carry a roll rate (:attr:`roadbank.Signals.p`) finite on at least :data:`ROLL_RATE_SHARE`
+    of the samples ``moving`` (bool mask; none at speed: of all samples)."""
+    if getattr(signals, "p", None) is None:
+        return False
+    finite = np.isfinite(np.asarray(signals.p, dtype=np.float64))
+    part = finite[moving] if np.any(moving) else finite
+    return bool(part.size) and float(np.mean(part)) >= ROLL_RATE_SHARE
 
 
 def _octave_top(t) -> float:
@@ -296,7 +314,7 @@ def quiet_noise_ratio(sensors: SensorSpec, log_rate: float | None = None, log_ay
 def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: SensorSpec | None = None,
                    log_rate: float | None = None, log_ay_noise: float | None = None,
                    log_r_noise: float | None = None, log_ay_floor: float | None = None,
-                   log_diff_noise: float | None = None, **options):
+                   log_diff_noise: float | None = None, log_roll_rate: float | None = None, **options):
     """``estimators.make(name, params, **options)`` for a log sampled at ``log_rate`` by ``sensors``.
 
     A default-tuned PIF (:func:`roadbank.estimators.pif.with_sensor_noise`) gets the weights
@@ -327,6 +345,10 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         Noise of the log's kinematic acceleration ``ay - vx r`` by its first differences (m/s^2,
         :func:`roadbank.signals.diff_noise_std`): the blend's low-pass (``kinematic-pif``) follows a running
         estimate of it (``noise_ref``, its square), unless ``noise_ref`` is given; None or NaN: it does not.
+    log_roll_rate : float, optional
+        1 when the log carries a roll rate (:func:`has_roll_rate`): ``kinematic-pif`` is then :data:`GYRO_FILTER` on a
+        loud log (named ``kinematic-pif``, as on a quiet one; unless the options set the gate), with the options every
+        estimator takes; 0 or None: it has none.
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
@@ -349,14 +371,18 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         quiet_filter = options.pop("quiet_filter", QUIET_MODELS[name])
         lead_samples = (float(options.pop("lead_samples", estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES))
                         if name == "kinematic-pif" else None)        # the blend's option only
-        if not any(k in options for k in _GATE_OPTIONS) and is_quiet(sensors, log_rate, log_ay_noise, ratio,
-                                                                       log_ay_floor):
+        own_gate = any(k in options for k in _GATE_OPTIONS)
+        if not own_gate and is_quiet(sensors, log_rate, log_ay_noise, ratio, log_ay_floor):
             name, options = quiet_filter, {k: v for k, v in options.items() if k not in _BLEND_OPTIONS}
+        elif name == "kinematic-pif" and not own_gate and log_roll_rate:
+            # the blend's roll separation (its PIF's tuning chose the roll model) unless the options name one
+            roll = estimators.pif.DEFAULT_TUNING["roll"]
+            name, options = GYRO_FILTER, {"roll": roll, **{k: v for k, v in options.items() if k in _COMMON_OPTIONS}}
         elif lead_samples is not None:
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
             if log_diff_noise is not None and math.isfinite(log_diff_noise) and log_diff_noise > 0:
                 options.setdefault("noise_ref", log_diff_noise ** 2)
-    if sensors.r_variance > 0:
+    if sensors.r_variance > 0 and name != GYRO_FILTER:
         R, Q_ay = noise_densities(sensors, log_rate, log_ay_noise, log_r_noise)
         options = with_sensor_noise(name, options, R, Q_ay)
         if name in LIMITED_LOWPASSES:       # the noise its update's limit is measured in

@@ -1,0 +1,196 @@
+"""kinematic-gyro: the kinematic estimate and a roll-rate gyro in one complementary filter (roadbank.estimators.gyro).
+
+Checked against analytic results (a bank ramp passes without lag, a gyro offset is learnt or leaves b / w_c), the
+simulator's own roll (its roll-rate gyro is the rate of its bank + body roll), and the real drives' INS roll."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from roadbank import estimators
+from roadbank.estimators.gyro import GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, KinematicGyro
+from roadbank.params import ESP_R_NOISE, ESP_R_RESOLUTION
+from roadbank.signals import Signals
+from roadbank.sim.scenarios import SCENARIOS, run
+from roadbank.sim.sensors import ChannelErrorModel, SensorConfig
+from roadbank.vehicle import for_log
+from roadbank.vehicle.conditions import GYRO_FILTER, QUIET_FILTER
+
+G = 9.80665
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+KITTI = DATA / "kitti-oxts" / "2011_09_26_drive_0070"
+needs_kitti = pytest.mark.skipif(not KITTI.is_dir(), reason=f"shared KITTI data not found at {KITTI}")
+
+
+def _drive(theta, p, rate=100.0, vx=20.0, noise=0.0, seed=0):
+    """A straight drive (r = 0) whose roll is ``theta`` (rad, array) and whose gyro reads ``p`` (rad/s)."""
+    n = len(theta)
+    t = np.arange(n) / rate
+    ay = G * np.sin(theta) + noise * np.random.default_rng(seed).standard_normal(n)
+    return Signals(t, np.full(n, vx), ay, np.zeros(n), np.full(n, np.nan), p)
+
+
+def test_a_bank_ramp_passes_without_lag_where_a_low_pass_lags_by_its_time_constant():
+    """A roll rising at 0.2 deg/s (to 8 deg), the gyro reading its rate: the complementary filter follows it (no lag
+    for any cross-over; within 0.01 deg, what the filter's w = sin(theta) leaves at 8 deg), where the kinematic
+    estimate through a first-order low-pass of the same cross-over lags by ``rate / (2 pi f_c)`` (analytic)."""
+    rate, fc = 100.0, 0.15
+    t = np.arange(4000) / rate
+    slope = math.radians(0.2)
+    theta = slope * t
+    s = _drive(theta, np.full(len(t), slope), rate)
+    late = t > 30.0
+    gyro = KinematicGyro(cutoff=fc).run(s)
+    assert np.max(np.abs(gyro.theta[late] - theta[late])) < math.radians(0.01)
+    lp = estimators.make("kinematic-lp", cutoff=fc).run(s)
+    lag = theta[late] - lp.theta[late]
+    assert np.median(lag) == pytest.approx(slope / (2 * math.pi * fc), rel=0.02)
+
+
+@pytest.mark.parametrize("offset_dps", [0.3, -1.0])
+def test_a_gyro_offset_is_learnt_and_without_the_offset_state_costs_b_over_wc(offset_dps):
+    """A level road, the gyro offset by ``b``: with the offset state the estimate returns to the truth and the state
+    reads ``b``; without it the estimate stands ``b / (2 pi f_c)`` off (analytic steady state)."""
+    rate, b = 100.0, math.radians(offset_dps)
+    n = int(200 * rate)
+    s = _drive(np.zeros(n), np.full(n, b), rate)
+    learnt = KinematicGyro().run(s)
+    assert abs(learnt.theta[-1]) < 1e-3 * abs(b)
+    assert learnt.states["p_offset"][-1] == pytest.approx(b, rel=1e-3)
+    plain = KinematicGyro(bias_tau=0.0).run(s)
+    assert plain.theta[-1] == pytest.approx(b / (2 * math.pi * GYRO_CUTOFF_HZ), rel=1e-3)
+
+
+def test_road_vibration_is_kept_out_where_the_kinematic_estimate_carries_it():
+    """White noise of 0.3 m/s^2 on ay (a shaking road) over a bank that swings 2 deg at 0.3 Hz, the gyro exact:
+    the fused estimate is within a fifth of the raw kinematic estimate's error and below a 0.5 Hz low-pass's."""
+    rate = 100.0
+    t = np.arange(12000) / rate
+    theta = math.radians(2.0) * np.sin(2 * math.pi * 0.3 * t)
+    p = np.gradient(theta, t)
+    s = _drive(theta, p, rate, noise=0.3)
+    m = t > 20
+
+    def rms(x):
+        return float(np.sqrt(np.mean((x[m] - theta[m]) ** 2)))
+    kin = rms(np.arcsin(s.ay / G))
+    fused = rms(KinematicGyro().run(s).theta)
+    assert fused < kin / 5
+    assert fused < rms(estimators.make("kinematic-lp").run(s).theta)
+
+
+def test_step_gives_what_run_gives():
+    rng = np.random.default_rng(3)
+    n = 800
+    theta = np.cumsum(rng.normal(0, 1e-3, n))
+    s = _drive(theta, np.gradient(theta, 0.01) + 0.002, noise=0.1)
+    batch = KinematicGyro().run(s)
+    est = KinematicGyro()
+    for k in range(n):
+        out = est.step(s.t[k], s.vx[k], s.ay[k], s.r[k], p=s.p[k])
+        assert out.theta == batch.theta[k] and out.valid == batch.valid[k]
+    wrapped = estimators.with_online_offsets(KinematicGyro())
+    whole = estimators.with_online_offsets(KinematicGyro()).run(s)
+    got = [wrapped.step(s.t[k], s.vx[k], s.ay[k], s.r[k], p=s.p[k]).theta for k in range(n)]
+    np.testing.assert_array_equal(got, whole.theta)
+
+
+def test_a_log_without_a_roll_rate_is_refused_with_the_reason():
+    s = Signals(np.arange(10) * 0.01, np.full(10, 20.0), np.zeros(10), np.zeros(10), np.zeros(10))
+    with pytest.raises(ValueError, match="no roll rate"):
+        KinematicGyro().run(s)
+    assert "kinematic-gyro" in estimators.GYRO and "kinematic-gyro" not in estimators.NAMES
+    with pytest.raises(ValueError, match="cutoff"):
+        KinematicGyro(cutoff=0.0)
+    with pytest.raises(ValueError, match="bias_tau"):
+        KinematicGyro(bias_tau=-1.0)
+
+
+def test_a_sample_without_a_roll_rate_is_held_and_flagged():
+    n = 300
+    p = np.zeros(n)
+    p[100:120] = np.nan
+    out = KinematicGyro().run(_drive(np.full(n, 0.02), p))
+    assert not out.valid[100:120].any() and out.valid[130:].all()
+    assert np.all(out.theta[100:120] == out.theta[99])
+
+
+@pytest.mark.parametrize("scenario", ["bank-lane-change", "track-lane-change"])
+def test_the_simulators_roll_rate_gyro_reads_the_rate_of_its_bank_and_body_roll(scenario):
+    """The simulator's roll-rate gyro (ideal) integrates to the plant's own theta = bank + body roll (within 2 % of
+    its range), and kinematic-gyro on it beats the kinematic estimate and its low-pass against the plant's theta
+    (bank steps and a 40 deg test track: what the gyro sees without lag)."""
+    cfg = SensorConfig(roll_rate=ChannelErrorModel(noise_std=ESP_R_NOISE, resolution=ESP_R_RESOLUTION))
+    res = run(SCENARIOS[scenario], sensors=cfg, seed=1)
+    s, truth = res.signals, res.truth
+    ideal = run(SCENARIOS[scenario], sensors=SensorConfig.ideal().replace(roll_rate=ChannelErrorModel()), seed=1)
+    integrated = truth.theta[0] + np.concatenate([[0.0], np.cumsum(0.5 * (ideal.signals.p[1:] + ideal.signals.p[:-1])
+                                                                    * np.diff(ideal.signals.t))])
+    span = np.ptp(truth.theta)
+    assert np.max(np.abs(integrated - truth.theta)) < 0.02 * span
+    # the other channels are those of the cluster without the gyro: drawn first, the same numbers
+    plain = run(SCENARIOS[scenario], seed=1).signals
+    np.testing.assert_array_equal(plain.ay, s.ay)
+    m = s.t > 2.0
+
+    def rms(name, **kw):
+        return float(np.sqrt(np.mean((estimators.make(name, **kw).run(s).theta[m] - truth.theta[m]) ** 2)))
+    gyro = rms("kinematic-gyro")
+    assert gyro < rms("kinematic") and gyro < rms("kinematic-lp")
+
+
+@needs_kitti
+def test_the_kitti_reader_gives_the_ins_roll_rate():
+    from roadbank.io.kitti import load_kitti_oxts
+    log = load_kitti_oxts(KITTI)
+    frames = sorted((KITTI / "oxts" / "data").glob("*.txt"))
+    wx = np.array([float(f.read_text().split()[17]) for f in frames[:50]])
+    np.testing.assert_allclose(log.signals.p[:50], wx, rtol=0, atol=1e-12)
+
+
+@needs_kitti
+def test_the_default_on_a_log_with_a_roll_rate_is_the_gyro_filter_and_it_beats_the_blend_on_the_ins():
+    """A loud log with a roll rate gets kinematic-gyro as the default (named kinematic-pif); without its roll rate the
+    same log gets the blend; against the INS roll (raw RMS at vx >= 5 m/s after 5 s) the first is the lower."""
+    from roadbank.io.kitti import load_kitti_oxts
+    log = load_kitti_oxts(KITTI)
+    s, ref = log.signals, log.reference_roll
+    esp = dataclasses.replace(s, p=None)
+    with_gyro, without = for_log("kinematic-pif", s), for_log("kinematic-pif", esp)
+    assert isinstance(with_gyro, KinematicGyro) and with_gyro.name == "kinematic-pif"
+    assert isinstance(without, estimators.KinematicPIF)
+    m = (s.vx >= 5) & (s.t >= s.t[0] + 5)
+
+    def rms(est, sig):
+        return float(np.degrees(np.sqrt(np.mean((est.run(sig).theta[m] - ref[m]) ** 2))))
+    assert rms(with_gyro, s) < 0.75 * rms(without, esp)
+    # an explicit gate asks for the blend itself
+    assert isinstance(for_log("kinematic-pif", s, gate_on=4.0), estimators.KinematicPIF)
+
+
+def test_a_quiet_log_keeps_the_cars_model_with_a_roll_rate():
+    """The roll rate changes only the loud log's filter: a simulated ESP log with a roll-rate gyro is quiet and gets
+    the car's model (the quiet filter) as without it."""
+    cfg = SensorConfig(roll_rate=ChannelErrorModel(noise_std=ESP_R_NOISE, resolution=ESP_R_RESOLUTION))
+    s = run(SCENARIOS["s-curve"], sensors=cfg, seed=0).signals
+    est = for_log("kinematic-pif", s)
+    assert not isinstance(est, KinematicGyro) and type(est).__name__ == type(estimators.make(QUIET_FILTER)).__name__
+    assert GYRO_FILTER == "kinematic-gyro"
+
+
+@needs_kitti
+def test_the_twenty_fourth_stage_chose_the_shipped_constants_on_the_training_drives():
+    """The rule (tuning.real.choose_gyro) run again on the KITTI training drives picks the shipped cross-over and
+    offset time constant, and makes kinematic-gyro the default on a log with a roll rate."""
+    from roadbank.tuning import real
+    logs = real.training_logs(DATA, roll_rate=True)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, obj, shipped, is_default = real.choose_gyro(logs, cutoffs=(0.1, 0.15, 0.2), bias_taus=(0.0, 10.0, 20.0))
+    assert chosen == (GYRO_CUTOFF_HZ, GYRO_BIAS_TAU_S)
+    assert is_default and obj[chosen] < shipped
