@@ -194,3 +194,9 @@ def test_the_twenty_fourth_stage_chose_the_shipped_constants_on_the_training_dri
     chosen, obj, shipped, is_default = real.choose_gyro(logs, cutoffs=(0.1, 0.15, 0.2), bias_taus=(0.0, 10.0, 20.0))
     assert chosen == (GYRO_CUTOFF_HZ, GYRO_BIAS_TAU_S)
     assert is_default and obj[chosen] < shipped
+
+
+def test_the_c_export_refuses_the_gyro_filter_with_the_reason():
+    from roadbank.export import NotExportable, export_c
+    with pytest.raises(NotExportable, match="roll rate"):
+        export_c(KinematicGyro(), "unused-dir", rate=100.0)

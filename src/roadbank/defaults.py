@@ -5,7 +5,9 @@
   ``kinematic-pif`` (``kinematic-ff``, handed to the default PIF while the yaw rate changes fast), chosen
   on training data only by the real-roads-first rule of :mod:`roadbank.tuning.real` (the KITTI training
   drives first, the simulated drives of cars that are not described to break ties; docs/estimators.md). Its
-  low-pass uses no tyre data. On a quiet log it is ``pif-adaptive`` (:func:`roadbank.vehicle.is_quiet`).
+  low-pass uses no tyre data. On a quiet log it is ``pif-adaptive`` (:func:`roadbank.vehicle.is_quiet`); on a
+  loud log that carries a roll rate it is ``kinematic-gyro`` (the complementary filter of the kinematic estimate and
+  the roll-rate gyro; :data:`roadbank.vehicle.conditions.GYRO_FILTER`).
 * :data:`MAP_ESTIMATOR` — the estimator of ``roadbank map`` (a map is built after the drives, so it
   may use the samples after each instant): ``kinematic-smoother``, the kinematic estimate low-passed
   forward and backward; on a quiet log ``pif-smoother``.

@@ -195,6 +195,11 @@ def check_exportable(est) -> None:
         why = _NOT_LPV_REASON.get(kernel, f"its runtime is the {kernel!r} kernel, not a "
                                           "speed-scheduled linear observer")
         raise NotExportable(f"{est.name}: not exportable: {why}")
+    if getattr(est, "first_input", "delta_f") != "delta_f":
+        raise NotExportable(f"{est.name}: not exportable: it is the gyro-aided filter {type(est).__name__}, which "
+                            f"reads the roll rate ({est.first_input}) where the C step takes the steering angle; the C "
+                            "interface has no roll-rate input yet (export an ESP log's default, or name an ESP "
+                            "estimator)")
 
 
 def export_design(est, rate: float, module_name: str | None = None, *,

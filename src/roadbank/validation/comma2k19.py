@@ -26,8 +26,9 @@ import numpy as np
 from .. import estimators
 from ..io.comma2k19 import load_comma2k19
 from ..params import VehicleParams
-from ..vehicle import for_log, undescribed_params
-from .scoring import Score, Scored, Scoring, hold_invalid, lowpass, pearson_r, run_and_score, score
+from ..vehicle import undescribed_params
+from .scoring import (VALIDATION_NAMES, Score, Scored, Scoring, hold_invalid, lowpass, pearson_r, run_and_score,
+                      score)
 
 __all__ = ["SEDAN", "ValidationResult", "comma2k19_outcome", "named_apart", "segment_name", "unique_segments",
            "validate_comma2k19", "lowpass"]
@@ -136,7 +137,8 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     path : path-like
         Segment directory.
     names : sequence of str, optional
-        Estimators (default: all of :data:`roadbank.estimators.NAMES`).
+        Estimators (default: all of :data:`roadbank.estimators.NAMES` and the default without the roll rate,
+        :data:`~roadbank.validation.scoring.VALIDATION_NAMES`).
     params : VehicleParams, optional
         The car; default the rule for a car that is not described
         (:func:`roadbank.vehicle.undescribed_params`, as every command uses).
@@ -153,7 +155,7 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
         default PIFs' ``R`` is their noise density at the log's rate.
     """
     described, params = params, params or undescribed_params()
-    names = list(names or estimators.NAMES)
+    names = list(names or VALIDATION_NAMES)
     scoring = Scoring(tau=tau, warmup_s=warmup_s, fit_fraction=fit_fraction)
     log = load_comma2k19(path, params=params)
     s, ref = log.signals, hold_invalid(log.reference_roll)
@@ -225,11 +227,8 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     if sensitivity:
         other = VehicleParams()
         log_other = load_comma2k19(path, params=other)
-        sens["suv"] = {}
-        for name in names:
-            est = for_log(name, log_other.signals, other).run(log_other.signals)
-            sens["suv"][name] = score(t, hold_invalid(est.theta), hold_invalid(est.phi_b), est.valid,
-                                      ref, m_fit, m_sc, scoring)
+        # the same masks: the segment's time base and speed do not depend on the car
+        sens["suv"] = run_and_score(log_other.signals, ref, names, other, scoring).scores
         if "pif-modified" in names:
             sens["pif_Q"] = {}
             for Q in (0.01, 0.1, 1.0, 10.0):   # Table 4 weights with Q varied

@@ -9,8 +9,10 @@ from pathlib import Path
 from ..defaults import ESTIMATOR as DEFAULT
 from ..io.kitti import find_oxts_dirs
 from ..report.markdown import md_table
+from ..vehicle.conditions import GYRO_FILTER
 from . import kitti_report, report
 from .comma2k19 import ValidationResult
+from .scoring import ESP_DEFAULT
 
 
 #: how deep :func:`find_datasets` looks under its folder (levels of folders below it)
@@ -202,12 +204,13 @@ def real_data_markdown(comma=None, kitti=None, jitter=(), figures=None, command:
     rows = []
 
     def row(data, label, sc, split=""):
-        k, d, p, o = (sc.get(n) for n in ("kinematic", DEFAULT, "pif-modified", "pif-smoother"))
+        k, d, e, p, o = (sc.get(n) for n in ("kinematic", DEFAULT, ESP_DEFAULT, "pif-modified", "pif-smoother"))
         f = kitti_report._f
         if k is None or d is None:
             return
         rows.append([data, label + (f" ({split})" if split else ""), f"{f(k.rms_raw_deg)} / {f(k.rms_deg)}",
                      f"{f(d.rms_raw_deg)} / {f(d.rms_deg)}", f"{f(d.r_raw)} / {f(d.r)}",
+                     "n/a" if e is None else f"{f(e.rms_raw_deg)} / {f(e.rms_deg)}",
                      "n/a" if p is None else f"{f(p.rms_raw_deg)} / {f(p.rms_deg)}",
                      "n/a" if o is None else f"{f(o.rms_raw_deg)} / {f(o.rms_deg)}; r {f(o.r_raw)} / {f(o.r)}"])
     if len(segments) == 1:
@@ -219,10 +222,16 @@ def real_data_markdown(comma=None, kitti=None, jitter=(), figures=None, command:
             row("KITTI", d.label, d.scores, d.data.get("split", ""))
     L.append(md_table(["data", "log", "kinematic rms raw / smoothed (deg)",
                        f"default {DEFAULT} rms raw / smoothed (deg)", f"{DEFAULT} r raw / smoothed",
+                       "the default without the roll rate rms raw / smoothed (deg)",
                        "pif-modified rms raw / smoothed (deg)",
                        "offline pif-smoother rms raw / smoothed (deg); r raw / smoothed"],
-                      rows, align="llrrrrr"))
+                      rows, align="llrrrrrr"))
     L.append("")
+    L.append(f"Every log here carries a roll rate (the INS's, the phone's gyro), so the default `{DEFAULT}` is the "
+             f"gyro-aided filter on a loud one (`{GYRO_FILTER}`, docs/estimators.md); `{ESP_DEFAULT}` is the default "
+             "built as for the same log without its roll rate (the ESP channels alone, as every other estimator "
+             "reads). On KITTI the reference roll is the INS's own, which integrates the same gyro, so the default's "
+             f"agreement there is not independent of its input; `{ESP_DEFAULT}`'s is.\n")
     L.append("The offline `pif-smoother` (docs/estimators.md, last section) uses the samples after each "
              "instant too: for logs processed after the drive, not a real-time estimate.\n")
     if len(segments) == 1:

@@ -33,7 +33,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import estimators
 from ..constants import G
 from ..estimators.pif import SENSOR_R_ESTIMATORS
 from ..io import LogError
@@ -42,7 +41,7 @@ from ..params import VehicleParams
 from ..signals import sample_rate
 from ..vehicle import SensorSpec, car_for_log, log_conditions, noise_densities
 from .comma2k19 import ValidationResult
-from .scoring import Scoring, _rms_deg, hold_invalid, lowpass_t, masks, pooled, run_and_score
+from .scoring import VALIDATION_NAMES, Scoring, _rms_deg, hold_invalid, lowpass_t, masks, pooled, run_and_score
 from .splits import split_of
 
 #: KITTI scoring: no offset fitted (reference and inputs come from one INS frame), the warm-up the
@@ -157,7 +156,8 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     path : path-like
         The drive folder (or its ``oxts`` folder).
     names : sequence of str, optional
-        Estimators (default: all of :data:`roadbank.estimators.NAMES`).
+        Estimators (default: all of :data:`roadbank.estimators.NAMES` and the default without the roll rate,
+        :data:`~roadbank.validation.scoring.VALIDATION_NAMES`).
     params : VehicleParams, optional
         The car; default the rule for a car that is not described
         (:func:`roadbank.vehicle.undescribed_params`, as every command uses).
@@ -181,7 +181,7 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
         file and what is wrong), or it has no sample to score (shorter than the warm-up, or never at
         the speed gate): nothing of it could count.
     """
-    names = list(names or estimators.NAMES)
+    names = list(names or VALIDATION_NAMES)
     log = load_kitti_oxts(path)
     if not masks(log.signals.t, log.signals.vx, scoring)[1].any():
         s = log.signals
@@ -349,7 +349,7 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
         :func:`roadbank.validation.kitti_report.drive_png`; a module-level function for a pool); what
         it returns goes to ``figures`` under the drive's label.
     """
-    names = list(names or estimators.NAMES)
+    names = list(names or VALIDATION_NAMES)
     drives, errors, figures, excluded = [], [], {}, []
     expanded, notes = unique_drives(paths)
     args = (names, params, scoring, sensitivity, tuning, sensors, figure)

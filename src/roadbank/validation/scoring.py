@@ -32,8 +32,17 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from ..defaults import ESTIMATOR
+from ..estimators import NAMES
 from ..signals import sample_rate
 from ..vehicle import SensorSpec, log_conditions, make_estimator
+
+#: the default built as for a log without a roll rate (the ESP channels alone): on a log with one, the default is the
+#: gyro-aided filter (:data:`roadbank.vehicle.conditions.GYRO_FILTER`), and this row keeps the comparison on ESP
+#: signals, where every other estimator is (a label of the validation, not an estimator name)
+ESP_DEFAULT = f"{ESTIMATOR}-esp"
+#: what ``roadbank validate`` runs on a real log unless told: every estimator and :data:`ESP_DEFAULT`
+VALIDATION_NAMES = NAMES + (ESP_DEFAULT,)
 
 
 @dataclass(frozen=True)
@@ -330,7 +339,7 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     ref : array
         Reference roll (rad, ISO: left side up) on ``signals.t``.
     names : sequence of str
-        Estimator names.
+        Estimator names, or :data:`ESP_DEFAULT` (the default without the log's roll rate).
     params : VehicleParams
         The estimators' vehicle model.
     scoring : Scoring
@@ -356,7 +365,8 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     cond = log_conditions(signals)
     grid = TimeGrid.of(t)
     for name in names:
-        est = make_estimator(name, params, sensors=sensors, **cond,
+        build, own = (ESTIMATOR, {"log_roll_rate": 0.0}) if name == ESP_DEFAULT else (name, {})
+        est = make_estimator(build, params, sensors=sensors, **{**cond, **own},
                              **{**tuning, **per_estimator.get(name, {})}).run(signals)
         th, pb = hold_invalid(est.theta), hold_invalid(est.phi_b)
         sc = score(t, th, pb, est.valid, ref, fit, scored, scoring, grid=grid)
