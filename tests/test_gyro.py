@@ -200,3 +200,23 @@ def test_the_c_export_refuses_the_gyro_filter_with_the_reason():
     from roadbank.export import NotExportable, export_c
     with pytest.raises(NotExportable, match="roll rate"):
         export_c(KinematicGyro(), "unused-dir", rate=100.0)
+
+
+@needs_kitti
+@pytest.mark.parametrize("wrong", ["negated", "yaw rate", "deg/s read as rad/s"])
+def test_a_roll_rate_that_does_not_follow_the_roll_in_ay_is_not_used_and_said_so(wrong):
+    """A gyro channel of the wrong sign, axis or unit does not follow the roll that ay shows (slope of the kinematic
+    estimate on the integrated rate: 1.0 on the drive as read, -1, ~0.02, ~0.02): the default is the ESP blend, and
+    the summary line names the slope and that the roll rate is not used."""
+    from roadbank.fleet.process import design_words
+    from roadbank.io.kitti import load_kitti_oxts
+    from roadbank.vehicle import design_record, log_conditions
+    s = load_kitti_oxts(KITTI).signals
+    assert log_conditions(s)["log_roll_rate"] == pytest.approx(1.0, abs=0.15)
+    p = {"negated": -s.p, "yaw rate": s.r, "deg/s read as rad/s": np.degrees(s.p)}[wrong]
+    bad = dataclasses.replace(s, p=p)
+    cond = log_conditions(bad)
+    assert not 0.5 <= cond["log_roll_rate"] <= 2.0
+    assert isinstance(for_log("kinematic-pif", bad), estimators.KinematicPIF)
+    words = design_words(design_record(cond, "sedan", "fitted to the log"), "kinematic-pif")
+    assert "the low-pass blend" in words and "its roll rate does not follow the roll in its ay" in words

@@ -118,7 +118,7 @@ def _design(settings: MapSettings, signals, designs: dict):
     cond = log_conditions(signals)
     car = (settings.params if settings.params is not None or settings.vehicle is not None
            else undescribed_params(signals))
-    key = (tuple(round(v, 6) if np.isfinite(v) else None for v in cond.values()), car)
+    key = (tuple(round(v, 6) if v is not None and np.isfinite(v) else None for v in cond.values()), car)
     if key not in designs:
         designs[key] = for_conditions(settings.estimator, cond, car, vehicle=settings.vehicle)
     return designs[key]

@@ -365,7 +365,7 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     cond = log_conditions(signals)
     grid = TimeGrid.of(t)
     for name in names:
-        build, own = (ESTIMATOR, {"log_roll_rate": 0.0}) if name == ESP_DEFAULT else (name, {})
+        build, own = (ESTIMATOR, {"log_roll_rate": None}) if name == ESP_DEFAULT else (name, {})
         est = make_estimator(build, params, sensors=sensors, **{**cond, **own},
                              **{**tuning, **per_estimator.get(name, {})}).run(signals)
         th, pb = hold_invalid(est.theta), hold_invalid(est.phi_b)

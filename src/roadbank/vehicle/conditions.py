@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from ..constants import G
 from ..params import VehicleParams
 from ..signals import (DYNAMICS_BAND_HZ, diff_noise_std, noise_band_hz, road_noise_floor_std, road_noise_std,
                        sample_rate, source_step)
@@ -45,6 +46,13 @@ QUIET_MODELS = {"kinematic-pif": QUIET_FILTER, "kinematic-smoother": "pif-smooth
 GYRO_FILTER = "kinematic-gyro"
 #: share (-) of the design span's samples at speed whose roll rate must be finite for a log to count as having one
 ROLL_RATE_SHARE = 0.5
+#: the roll rate is used only where it follows the roll that ``ay`` shows: the least-squares slope (-) of the
+#: kinematic estimate on the integrated roll rate, both band-passed over the design span (centred moving averages
+#: of :data:`ROLL_CHECK_WINDOWS_S` (s), the shorter less the longer: about 0.05-0.5 Hz), within
+#: :data:`ROLL_SLOPE_RANGE`. On the 16 shared KITTI drives and comma2k19 it is 0.8-1.4; a roll rate of the wrong
+#: sign reads -1, a yaw rate in its place or deg/s read as rad/s about 0.02.
+ROLL_CHECK_WINDOWS_S = (1.0, 10.0)
+ROLL_SLOPE_RANGE = (0.5, 2.0)
 #: the options every estimator takes (:class:`roadbank.estimators.base.Estimator`): all that ``kinematic-pif``'s
 #: options give :data:`GYRO_FILTER`
 _COMMON_OPTIONS = ("v_min", "roll", "max_substep", "max_gap", "max_angle", "v_step", "v_max", "sample_rate")
@@ -116,7 +124,7 @@ def _at_most(noise: float, floor: float) -> float:
     return min(noise, NOISE_FLOOR_CAP * floor) if math.isfinite(floor) else noise
 
 
-def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
+def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
     """What a log tells :func:`make_estimator` about its sensors: ``{"log_rate": Hz,
     "log_ay_noise": m/s^2, "log_r_noise": rad/s, "log_ay_floor": m/s^2, "log_diff_noise": m/s^2}`` — the
     sample rate of its time base (:func:`roadbank.signals.sample_rate`), the road noise of its ``ay`` and
@@ -153,7 +161,13 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float]:
     # two significant digits: logs of one car and road share a design (the design cache)
     return {"log_rate": sample_rate(signals.t), "log_ay_noise": float(f"{ay_noise:.2g}"),
             "log_r_noise": float(f"{r_noise:.2g}"), "log_ay_floor": float(f"{ay_floor:.2g}"),
-            "log_diff_noise": float(f"{diff_noise:.2g}"), "log_roll_rate": float(has_roll_rate(signals, moving))}
+            "log_diff_noise": float(f"{diff_noise:.2g}"),
+            "log_roll_rate": _two_digits(roll_rate_slope(signals, vx, moving))}
+
+
+def _two_digits(x: float | None) -> float | None:
+    """``x`` to two significant digits (None stays None)."""
+    return None if x is None else float(f"{x:.2g}")
 
 
 def has_roll_rate(signals, moving) -> bool:
@@ -164,6 +178,45 @@ def has_roll_rate(signals, moving) -> bool:
     finite = np.isfinite(np.asarray(signals.p, dtype=np.float64))
     part = finite[moving] if np.any(moving) else finite
     return bool(part.size) and float(np.mean(part)) >= ROLL_RATE_SHARE
+
+
+def roll_rate_slope(signals, vx, moving) -> float | None:
+    """How the log's roll rate follows the roll that its ``ay`` shows: the least-squares slope (-) of the kinematic
+    estimate ``(ay - vx r)/g`` on the integrated roll rate (rad), both band-passed (:data:`ROLL_CHECK_WINDOWS_S`) and
+    read on the samples ``moving`` (at speed, away from the span's ends); 1 for a gyro about the car's forward axis.
+    None when the log has no roll rate (:func:`has_roll_rate`) or too few samples at speed for the band (a tenth
+    of the longer window's), or a roll rate that never moves (the slope is then also None)."""
+    if not has_roll_rate(signals, moving):
+        return None
+    t = np.asarray(signals.t, dtype=np.float64)
+    rate = sample_rate(t)
+    short, long = (max(int(round(w * rate)), 1) for w in ROLL_CHECK_WINDOWS_S)
+    k = (np.asarray(signals.ay, np.float64) - vx * np.asarray(signals.r, np.float64)) / G
+    p = np.asarray(signals.p, dtype=np.float64)
+    angle = np.concatenate([[0.0], np.cumsum(0.5 * np.nan_to_num(p[1:] + p[:-1]) * np.diff(t))])
+    band = [_centred_mean(x, short) - _centred_mean(x, long) for x in (np.nan_to_num(k), angle)]
+    inner = np.zeros(len(t), dtype=bool)
+    inner[long // 2:len(t) - long // 2] = True
+    use = inner & moving & np.isfinite(k)
+    if np.count_nonzero(use) < long // 10 + 2:
+        return None
+    kb, ab = band[0][use], band[1][use]
+    den = float(np.dot(ab, ab))
+    return float(np.dot(kb, ab) / den) if den > 0 else None
+
+
+def _centred_mean(x: np.ndarray, n: int) -> np.ndarray:
+    """The mean of ``x`` over ``n`` samples centred on each (the window shortened at the ends)."""
+    c = np.concatenate([[0.0], np.cumsum(x)])
+    i = np.arange(len(x))
+    lo, hi = np.maximum(i - n // 2, 0), np.minimum(i - n // 2 + n, len(x))
+    return (c[hi] - c[lo]) / (hi - lo)
+
+
+def roll_rate_usable(slope: float | None) -> bool:
+    """Whether a log whose :func:`roll_rate_slope` is ``slope`` (the ``log_roll_rate`` of :func:`log_conditions`)
+    has a roll rate that the default may use: within :data:`ROLL_SLOPE_RANGE`."""
+    return slope is not None and ROLL_SLOPE_RANGE[0] <= slope <= ROLL_SLOPE_RANGE[1]
 
 
 def _octave_top(t) -> float:
@@ -346,9 +399,9 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         :func:`roadbank.signals.diff_noise_std`): the blend's low-pass (``kinematic-pif``) follows a running
         estimate of it (``noise_ref``, its square), unless ``noise_ref`` is given; None or NaN: it does not.
     log_roll_rate : float, optional
-        1 when the log carries a roll rate (:func:`has_roll_rate`): ``kinematic-pif`` is then :data:`GYRO_FILTER` on a
-        loud log (named ``kinematic-pif``, as on a quiet one; unless the options set the gate), with the options every
-        estimator takes; 0 or None: it has none.
+        How the log's roll rate follows its ``ay`` (:func:`roll_rate_slope`; None or NaN: it has none). Where it does
+        (:func:`roll_rate_usable`), ``kinematic-pif`` is :data:`GYRO_FILTER` on a loud log (named ``kinematic-pif``, as
+        on a quiet one; unless the options set the gate), with the options every estimator takes.
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
@@ -374,7 +427,7 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         own_gate = any(k in options for k in _GATE_OPTIONS)
         if not own_gate and is_quiet(sensors, log_rate, log_ay_noise, ratio, log_ay_floor):
             name, options = quiet_filter, {k: v for k, v in options.items() if k not in _BLEND_OPTIONS}
-        elif name == "kinematic-pif" and not own_gate and log_roll_rate:
+        elif name == "kinematic-pif" and not own_gate and roll_rate_usable(log_roll_rate):
             # the blend's roll separation (its PIF's tuning chose the roll model) unless the options name one
             roll = estimators.pif.DEFAULT_TUNING["roll"]
             name, options = GYRO_FILTER, {"roll": roll, **{k: v for k, v in options.items() if k in _COMMON_OPTIONS}}

@@ -122,8 +122,9 @@ def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | Non
     (-, :func:`~roadbank.vehicle.conditions.quiet_noise_ratio`: what ``quiet`` compares with
     :data:`~roadbank.vehicle.QUIET_RATIO`; NaN when not measured); where ``sources``
     (:func:`~roadbank.vehicle.conditions.source_rates`) names channels written faster than their sensor,
-    ``source`` says which and at what rate their noise was read (e.g. ``"ay 10 Hz, r 10 Hz"``); ``roll_rate``
-    (True) where the log carries a roll rate (``log_roll_rate``: on a loud log the default is then the gyro-aided
+    ``source`` says which and at what rate their noise was read (e.g. ``"ay 10 Hz, r 10 Hz"``); ``roll_rate`` (-)
+    where the log carries a roll rate: how it follows the roll in ``ay`` (``log_roll_rate``,
+    :func:`~roadbank.vehicle.conditions.roll_rate_slope`; where usable, the default on a loud log is the gyro-aided
     filter)."""
     sensors = sensors or SensorSpec()
     noise, floor = cond.get("log_ay_noise"), cond.get("log_ay_floor")
@@ -133,8 +134,8 @@ def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | Non
               "ay_noise": noise, "ay_floor": floor, "ay_floor_ratio": float(f"{ratio:.3g}")}
     if sources:
         record["source"] = ", ".join(f"{ch} {hz:.3g} Hz" for ch, hz in sources.items())
-    if cond.get("log_roll_rate"):
-        record["roll_rate"] = True
+    if cond.get("log_roll_rate") is not None:
+        record["roll_rate"] = cond["log_roll_rate"]
     return record
 
 
