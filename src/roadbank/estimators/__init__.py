@@ -24,7 +24,7 @@ from ..params import VehicleParams
 from .base import Estimator, StepResult
 from .dfc import DFC
 from .gated import KinematicPIF, PIFGated
-from .gyro import KinematicGyro
+from .gyro import KinematicGyro, KinematicGyroSmoother
 from .kalman import Kalman
 from .kinematic import Kinematic
 from .kinematic_smoother import KinematicSmoother
@@ -56,6 +56,7 @@ _FACTORIES: dict[str, Callable[..., Estimator]] = {
     "kinematic-smoother": KinematicSmoother,
     "pif-paper": partial(PIF, model="modified", tuning="paper"),
     "kinematic-gyro": KinematicGyro,
+    "kinematic-gyro-smoother": KinematicGyroSmoother,
 }
 
 #: further names :func:`make` accepts: an estimator of :data:`NAMES` with a named tuning
@@ -67,7 +68,7 @@ PRESETS = ("pif-paper",)
 #: phone, a six-axis IMU). Not in :data:`NAMES`: an ESP log has no roll rate, so the suites and reports that run
 #: every estimator on ESP signals leave them out; ``make`` builds them, and :func:`roadbank.vehicle.for_log`
 #: chooses ``kinematic-gyro`` for a log that has a roll rate (docs/estimators.md)
-GYRO = ("kinematic-gyro",)
+GYRO = ("kinematic-gyro", "kinematic-gyro-smoother")
 #: names of all estimators, in the order the reports list them
 NAMES = tuple(n for n in _FACTORIES if n not in PRESETS + GYRO)
 #: estimators whose ``run()`` also uses the samples after each instant (post-processing, not
@@ -108,7 +109,7 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
 
 
 __all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "Estimator", "StepResult",
-           "NoStabilisingSolution", "GYRO", "KinematicGyro",
+           "NoStabilisingSolution", "GYRO", "KinematicGyro", "KinematicGyroSmoother",
            "Kinematic", "KinematicLowPass", "KinematicFeedForward", "KinematicPIF", "DFC",
            "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
            "Kalman", "KinematicSmoother", "with_online_offsets", "OnlineOffsets", "OffsetSettings"]

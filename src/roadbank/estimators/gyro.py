@@ -43,6 +43,7 @@ from ..signals import Estimate, Signals
 from . import layout as L
 from .base import DesignInputs, ScheduledObserver, StepResult, Tables
 from .kinematic import KINEMATIC_V_MIN
+from .kinematic_smoother import both_ways
 
 #: ``kinematic-gyro``'s cut-off (Hz) and offset time constant (s): the rule of :mod:`roadbank.tuning.real`
 GYRO_CUTOFF_HZ = 0.15
@@ -148,3 +149,39 @@ class KinematicGyro(ScheduledObserver):
         """One sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), the unused delta_f (rad) and the roll rate
         ``p`` (rad/s)."""
         return super().step(t, vx, ay, r, p)
+
+
+class KinematicGyroSmoother(KinematicGyro):
+    """``kinematic-gyro-smoother``: :class:`KinematicGyro` over the log forward and backward (in reversed time, the roll
+    rate negated), averaged: an *offline* estimator, for bank maps and post-processing
+    (:func:`roadbank.estimators.kinematic_smoother.both_ways`, as ``kinematic-smoother`` does with the low-pass). Each
+    pass has no lag between the kinematic estimate and the gyro; the average also cancels what each pass's offset
+    loop and cross-over leave in phase. Parameters as :class:`KinematicGyro`; ``step()`` is the forward pass's. Not for
+    an ECU: no C export.
+    """
+
+    name = "kinematic-gyro-smoother"
+    #: the outputs of :meth:`run` use later samples (not causal)
+    offline = True
+    #: the causal estimator of its forward pass (what an ECU runs instead)
+    forward_filter = "kinematic-gyro"
+
+    def __init__(self, params=None, *, cutoff=None, bias_tau=None, **kw):
+        super().__init__(params, cutoff=cutoff, bias_tau=bias_tau, **kw)
+        # the same design in reversed time, on the forward pass's fixed rate (as kinematic-smoother's)
+        self._reverse = KinematicGyro(self.params, cutoff=self.cutoff, bias_tau=self.bias_tau,
+                                      **{**kw, "sample_rate": None})
+        self._reverse_dt: float | None = None
+
+    @property
+    def lookahead_s(self) -> float:
+        """Samples after a log's end (s) that make :meth:`run` agree with smoothing the whole: 25 time constants of the
+        slowest pole of the filter over the speed grid."""
+        n = self._nstate
+        F = self._tab_cont[:, :n * n].reshape(-1, n, n)
+        return 25.0 / float(np.min(-np.linalg.eigvals(F).real))
+
+    def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
+        """Smoothed estimate over the log ``signals`` with its roll rate; ``reset`` and ``lookahead`` as
+        :meth:`roadbank.estimators.kinematic_smoother.KinematicSmoother.run`. Units: ``w`` (-), angles (rad)."""
+        return both_ways(self, super().run(signals, reset=reset), signals, lookahead)

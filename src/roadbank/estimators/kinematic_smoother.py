@@ -90,27 +90,43 @@ class KinematicSmoother(KinematicLowPass):
         run over the whole log gives (to about 1e-10) when each covers :attr:`lookahead_s` or reaches
         the log's end.
         """
-        n = len(signals)
-        fwd = super().run(signals, reset=reset)
-        whole = signals
-        if lookahead is not None and len(lookahead):
-            m = np.flatnonzero(lookahead.t > signals.t[-1] + self.lookahead_s)
-            whole = concat_signals([signals, lookahead[:m[0] + 1] if m.size else lookahead])
-        t = whole.t
-        if self._reverse_dt != self.fixed_dt:
-            self._reverse.set_sample_rate(None if self.fixed_dt is None else 1.0 / self.fixed_dt)
-            self._reverse_dt = self.fixed_dt
-        back = self._reverse.run(Signals(t[-1] - t[::-1], whole.vx[::-1], whole.ay[::-1], whole.r[::-1],
-                                         whole.delta_f[::-1]))
-        wb, valid_b = back.w[::-1][:n], back.valid[::-1][:n]
-        both = fwd.valid & valid_b
-        w = np.where(both, 0.5 * (fwd.w + wb), 0.0)
-        last = np.maximum.accumulate(np.where(both, np.arange(n), -1))
-        held = ~both & (last >= 0)
-        w[held] = w[last[held]]                   # held where a pass does not use the sample, 0 before the first
-        theta = np.arcsin(np.clip(w, -1.0, 1.0))
-        phi = fwd.states["phi"].copy()
-        phi[held] = phi[last[held]]
-        valid = both & (np.abs(w) <= np.sin(self.max_angle))
-        states = {"w_lp": fwd.states["w_lp"].copy(), "w_lp_backward": wb.copy(), "phi": phi}
-        return Estimate(self.name, fwd.t, w, theta, theta - phi, valid, states, valid & fwd.settled)
+        return both_ways(self, super().run(signals, reset=reset), signals, lookahead)
+
+
+def reversed_in_time(s: Signals) -> Signals:
+    """``s`` in reversed time (``t' = t_end - t``): every channel's samples in reverse order, the roll rate negated
+    (the rate of the angle read backwards); ``ay``, ``r`` and ``vx`` as they are, the kinematic estimate being a
+    function of each sample."""
+    t = s.t
+    return Signals(t[-1] - t[::-1], s.vx[::-1], s.ay[::-1], s.r[::-1], s.delta_f[::-1],
+                   None if s.p is None else -s.p[::-1])
+
+
+def both_ways(est, fwd: Estimate, signals: Signals, lookahead: Signals | None) -> Estimate:
+    """The smoothed estimate of an offline estimator ``est`` (its ``_reverse``: the same design run in reversed
+    time, and its ``lookahead_s``; ``_reverse_dt``: the rate the reverse pass was last set to) from its forward pass
+    ``fwd`` over ``signals`` and the samples ``lookahead`` that follow them: the two passes averaged where both are
+    valid, held where either is not (0 before the first such sample); the body roll is the forward pass's, the
+    forward state ``w_*`` kept and the backward one beside it (``<state>_backward``). Units: ``w`` (-), angles (rad)."""
+    n = len(signals)
+    whole = signals
+    if lookahead is not None and len(lookahead):
+        m = np.flatnonzero(lookahead.t > signals.t[-1] + est.lookahead_s)
+        whole = concat_signals([signals, lookahead[:m[0] + 1] if m.size else lookahead])
+    if est._reverse_dt != est.fixed_dt:
+        est._reverse.set_sample_rate(None if est.fixed_dt is None else 1.0 / est.fixed_dt)
+        est._reverse_dt = est.fixed_dt
+    back = est._reverse.run(reversed_in_time(whole))
+    wb, valid_b = back.w[::-1][:n], back.valid[::-1][:n]
+    both = fwd.valid & valid_b
+    w = np.where(both, 0.5 * (fwd.w + wb), 0.0)
+    last = np.maximum.accumulate(np.where(both, np.arange(n), -1))
+    held = ~both & (last >= 0)
+    w[held] = w[last[held]]                   # held where a pass does not use the sample, 0 before the first
+    theta = np.arcsin(np.clip(w, -1.0, 1.0))
+    phi = fwd.states["phi"].copy()
+    phi[held] = phi[last[held]]
+    valid = both & (np.abs(w) <= np.sin(est.max_angle))
+    first = est.state_names[0]
+    states = {first: fwd.states[first].copy(), f"{first}_backward": wb.copy(), "phi": phi}
+    return Estimate(est.name, fwd.t, w, theta, theta - phi, valid, states, valid & fwd.settled)

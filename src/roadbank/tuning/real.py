@@ -277,6 +277,12 @@ objective is lower than that of the default as shipped (``kinematic-pif`` design
 rate, so its three medians are one). No simulated set takes part: ``roadbank tune``'s drives last 15-25 s, shorter
 than an offset can be learnt in, and their sensors are an ESP cluster's. Neither the KITTI validation drives nor
 comma2k19 take part.
+
+The twenty-fifth stage (:func:`choose_gyro_map`; rule written 2026-12-05 before it ran, after the twenty-fourth was
+committed) asks the same of ``roadbank map``'s default: whether on a loud log with a roll rate it is
+``kinematic-gyro-smoother`` (``kinematic-gyro`` forward and backward, averaged; the twenty-fourth stage's cross-over
+and offset time constant, no grid of its own), by the twenty-fourth stage's objective on its three real sets,
+against the map's default as shipped (``kinematic-smoother`` built for each log, without the roll rate).
 """
 
 from __future__ import annotations
@@ -295,7 +301,7 @@ from scipy.signal import resample_poly
 from .. import vehicle
 from ..vehicle import conditions
 from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
-from ..estimators.gyro import KinematicGyro
+from ..estimators.gyro import KinematicGyro, KinematicGyroSmoother
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
@@ -904,6 +910,16 @@ def choose_gyro(logs, cutoffs=GYRO_CUTOFFS_HZ, bias_taus=GYRO_BIAS_TAUS) -> tupl
     esp = [(dataclasses.replace(s, p=None), ref, m) for s, ref, m in logs]     # the default as it ran: no roll rate
     shipped = gyro_objective(per_log("kinematic-pif"), [esp])
     return chosen, obj, shipped, obj[chosen] < shipped
+
+
+def choose_gyro_map(logs) -> tuple[float, float, bool]:
+    """The twenty-fifth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate). Returns ``(kinematic-gyro-smoother's objective, the shipped map default's, the first is the default)``."""
+    sets = gyro_sets(logs)
+    smoother = gyro_objective(fixed(KinematicGyroSmoother()), sets)
+    esp = [(dataclasses.replace(s, p=None), ref, m) for s, ref, m in logs]
+    shipped = gyro_objective(per_log("kinematic-smoother"), [esp])
+    return smoother, shipped, smoother < shipped
 
 
 def _quiet_by(measure: str):
