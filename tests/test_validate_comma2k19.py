@@ -12,7 +12,7 @@ from click.testing import CliRunner
 from roadbank import estimators
 from roadbank.cli import main
 from roadbank.validation.comma2k19 import lowpass
-from roadbank.validation.scoring import ESP_DEFAULT, VALIDATION_NAMES
+from roadbank.validation.scoring import ESP_DEFAULT, ESP_LABELS, VALIDATION_NAMES
 
 SEGMENT = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "comma2k19-example"
 needs_data = pytest.mark.skipif(not SEGMENT.is_dir(), reason=f"comma2k19 example segment absent at {SEGMENT}")
@@ -37,7 +37,7 @@ def test_validate_json_and_report(tmp_path):
                                     "-o", str(out)])
     assert res.exit_code == 0, res.output
     data = json.loads(res.stdout)
-    assert set(data) == set(VALIDATION_NAMES) == set(estimators.NAMES) | {ESP_DEFAULT}
+    assert set(data) == set(VALIDATION_NAMES) == set(estimators.NAMES) | set(ESP_LABELS)
     for v in data.values():
         assert set(v) == {"r", "rms_deg", "offset_deg"} and np.isfinite(v["offset_deg"])
     # against the phone's pose roll, smoothed (docs/real-data.md: kinematic r 0.930 / 0.111 deg, the default with
@@ -52,7 +52,7 @@ def test_validate_json_and_report(tmp_path):
     kin = data["kinematic"]["offset_deg"]
     assert 0.4 < kin < 0.7
     for name, v in data.items():
-        if not estimators.make("kinematic-pif" if name == ESP_DEFAULT else name).uses[0]:
+        if not estimators.make(ESP_LABELS.get(name, name)).uses[0]:
             assert abs(v["offset_deg"] - kin) < 0.05, name
     text = out.read_text()
     assert "| pif-modified |" in text and out.with_suffix(".png").exists()

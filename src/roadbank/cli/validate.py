@@ -33,10 +33,10 @@ def _names(names: str) -> list[str]:
     """``--estimators`` value -> list of names (BadParameter for an unknown one)."""
     from .. import estimators
 
-    from ..validation.scoring import ESP_DEFAULT, VALIDATION_NAMES
+    from ..validation.scoring import ESP_LABELS, VALIDATION_NAMES
 
     sel = list(VALIDATION_NAMES) if names.strip() == "all" else [n.strip() for n in names.split(",") if n.strip()]
-    bad = [n for n in sel if n not in estimators.NAMES + estimators.GYRO + (ESP_DEFAULT,)]
+    bad = [n for n in sel if n not in estimators.NAMES + estimators.GYRO + tuple(ESP_LABELS)]
     if bad:
         raise click.BadParameter(f"unknown estimator(s) {bad}", param_hint="--estimators")
     return sel

@@ -17,7 +17,7 @@ from ..io.writers import TableWriter, estimate_table, write_error
 from ..signals import Estimate
 from ..vehicle import (DESIGN_MAX_S, car_for_log, for_conditions, has_design_span, log_conditions,
                        undescribed_params)
-from ..vehicle.conditions import GYRO_FILTER, QUIET_MODELS, ROLL_SLOPE_RANGE, roll_rate_usable
+from ..vehicle.conditions import GYRO_MODELS, QUIET_MODELS, ROLL_SLOPE_RANGE, roll_rate_usable
 
 #: columns of the summary table, in order (see LogSummary)
 SUMMARY_COLUMNS = ("log", "status", "error", "output", "estimator", "samples", "duration_s", "valid_share",
@@ -123,8 +123,8 @@ def design_words(design: dict, estimator: str) -> str:
     words = f"{design['car']} ({design['car_from']}); {heard}"
     slope = design.get("roll_rate")
     if estimator in QUIET_MODELS:
-        gyro = slope is not None and roll_rate_usable(slope) and estimator == "kinematic-pif"
-        loud = f"{GYRO_FILTER} (the log has a roll rate)" if gyro else "the low-pass blend"
+        gyro = slope is not None and roll_rate_usable(slope)
+        loud = f"{GYRO_MODELS[estimator]} (the log has a roll rate)" if gyro else "the low-pass blend"
         words += f", so {estimator} is {QUIET_MODELS[estimator] if design['quiet'] else loud}"
     if slope is not None and not roll_rate_usable(slope):
         lo, hi = ROLL_SLOPE_RANGE

@@ -36,13 +36,17 @@ from ..defaults import ESTIMATOR
 from ..estimators import NAMES
 from ..signals import sample_rate
 from ..vehicle import SensorSpec, log_conditions, make_estimator
+from ..vehicle.conditions import GYRO_MODELS
 
-#: the default built as for a log without a roll rate (the ESP channels alone): on a log with one, the default is the
-#: gyro-aided filter (:data:`roadbank.vehicle.conditions.GYRO_FILTER`), and this row keeps the comparison on ESP
-#: signals, where every other estimator is (a label of the validation, not an estimator name)
+#: the real-road estimators built as for a log without a roll rate (the ESP channels alone), by label: on a log with
+#: one, ``kinematic-pif`` and ``kinematic-smoother`` are the gyro-aided filters
+#: (:data:`roadbank.vehicle.conditions.GYRO_MODELS`), and these rows keep the comparison on ESP signals, where every
+#: other estimator is (labels of the validation, not estimator names)
+ESP_LABELS = {f"{name}-esp": name for name in GYRO_MODELS}
+#: the default's label among them
 ESP_DEFAULT = f"{ESTIMATOR}-esp"
-#: what ``roadbank validate`` runs on a real log unless told: every estimator and :data:`ESP_DEFAULT`
-VALIDATION_NAMES = NAMES + (ESP_DEFAULT,)
+#: what ``roadbank validate`` runs on a real log unless told: every estimator and :data:`ESP_LABELS`
+VALIDATION_NAMES = NAMES + tuple(ESP_LABELS)
 
 
 @dataclass(frozen=True)
@@ -339,7 +343,7 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     ref : array
         Reference roll (rad, ISO: left side up) on ``signals.t``.
     names : sequence of str
-        Estimator names, or :data:`ESP_DEFAULT` (the default without the log's roll rate).
+        Estimator names, or labels of :data:`ESP_LABELS` (the estimator without the log's roll rate).
     params : VehicleParams
         The estimators' vehicle model.
     scoring : Scoring
@@ -365,7 +369,7 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     cond = log_conditions(signals)
     grid = TimeGrid.of(t)
     for name in names:
-        build, own = (ESTIMATOR, {"log_roll_rate": None}) if name == ESP_DEFAULT else (name, {})
+        build, own = (ESP_LABELS[name], {"log_roll_rate": None}) if name in ESP_LABELS else (name, {})
         est = make_estimator(build, params, sensors=sensors, **{**cond, **own},
                              **{**tuning, **per_estimator.get(name, {})}).run(signals)
         th, pb = hold_invalid(est.theta), hold_invalid(est.phi_b)

@@ -22,9 +22,9 @@ from .sensors import SensorSpec
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
 # them: loading a car (load_vehicle, --vehicle) loads neither
 
-__all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "QUIET_FILTER", "QUIET_MODELS",
-           "design_span", "has_design_span", "log_conditions", "noise_densities", "is_quiet", "quiet_noise_ratio",
-           "make_estimator"]
+__all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "QUIET_FILTER", "QUIET_MODELS", "GYRO_FILTER",
+           "GYRO_MODELS", "design_span", "has_design_span", "log_conditions", "noise_densities", "is_quiet",
+           "quiet_noise_ratio", "roll_rate_slope", "roll_rate_usable", "make_estimator"]
 
 
 #: seconds of driving (``vx >= v_min``) at the start of a log on which :func:`log_conditions` measures it (s)
@@ -41,9 +41,13 @@ QUIET_FILTER = "pif-adaptive"
 #: what each real-road estimator (the low-pass of the kinematic estimate) is on a quiet log: the car's
 #: model (``kinematic-pif``: :data:`QUIET_FILTER`; the offline ``kinematic-smoother``: the offline PIF)
 QUIET_MODELS = {"kinematic-pif": QUIET_FILTER, "kinematic-smoother": "pif-smoother"}
-#: what ``kinematic-pif`` is on a loud log that carries a roll rate (:func:`has_roll_rate`): the complementary filter
-#: of the kinematic estimate and the roll-rate gyro, chosen by the twenty-fourth stage of :mod:`roadbank.tuning.real`
+#: what ``kinematic-pif`` is on a loud log that carries a usable roll rate (:func:`roll_rate_usable`): the
+#: complementary filter of the kinematic estimate and the roll-rate gyro, chosen by the twenty-fourth stage of
+#: :mod:`roadbank.tuning.real`
 GYRO_FILTER = "kinematic-gyro"
+#: what each real-road estimator is on such a log (the offline ``kinematic-smoother`` of ``roadbank map``: the same
+#: filter forward and backward, the twenty-fifth stage)
+GYRO_MODELS = {"kinematic-pif": GYRO_FILTER, "kinematic-smoother": "kinematic-gyro-smoother"}
 #: share (-) of the design span's samples at speed whose roll rate must be finite for a log to count as having one
 ROLL_RATE_SHARE = 0.5
 #: the roll rate is used only where it follows the roll that ``ay`` shows: the least-squares slope (-) of the
@@ -401,7 +405,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     log_roll_rate : float, optional
         How the log's roll rate follows its ``ay`` (:func:`roll_rate_slope`; None or NaN: it has none). Where it does
         (:func:`roll_rate_usable`), ``kinematic-pif`` is :data:`GYRO_FILTER` on a loud log (named ``kinematic-pif``, as
-        on a quiet one; unless the options set the gate), with the options every estimator takes.
+        on a quiet one; unless the options set the gate), ``kinematic-smoother`` its offline form
+        (:data:`GYRO_MODELS`), with the options every estimator takes.
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
@@ -427,15 +432,16 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         own_gate = any(k in options for k in _GATE_OPTIONS)
         if not own_gate and is_quiet(sensors, log_rate, log_ay_noise, ratio, log_ay_floor):
             name, options = quiet_filter, {k: v for k, v in options.items() if k not in _BLEND_OPTIONS}
-        elif name == "kinematic-pif" and not own_gate and roll_rate_usable(log_roll_rate):
-            # the blend's roll separation (its PIF's tuning chose the roll model) unless the options name one
+        elif not own_gate and roll_rate_usable(log_roll_rate):
+            # the default's roll separation (its PIF's tuning chose the roll model) unless the options name one
             roll = estimators.pif.DEFAULT_TUNING["roll"]
-            name, options = GYRO_FILTER, {"roll": roll, **{k: v for k, v in options.items() if k in _COMMON_OPTIONS}}
+            name, options = GYRO_MODELS[name], {"roll": roll, **{k: v for k, v in options.items()
+                                                                 if k in _COMMON_OPTIONS}}
         elif lead_samples is not None:
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
             if log_diff_noise is not None and math.isfinite(log_diff_noise) and log_diff_noise > 0:
                 options.setdefault("noise_ref", log_diff_noise ** 2)
-    if sensors.r_variance > 0 and name != GYRO_FILTER:
+    if sensors.r_variance > 0 and name not in GYRO_MODELS.values():
         R, Q_ay = noise_densities(sensors, log_rate, log_ay_noise, log_r_noise)
         options = with_sensor_noise(name, options, R, Q_ay)
         if name in LIMITED_LOWPASSES:       # the noise its update's limit is measured in
