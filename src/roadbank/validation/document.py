@@ -230,8 +230,9 @@ def real_data_markdown(comma=None, kitti=None, jitter=(), figures=None, command:
     L.append(f"Every log here carries a roll rate (the INS's, the phone's gyro), so the default `{DEFAULT}` is the "
              f"gyro-aided filter on a loud one (`{GYRO_FILTER}`, docs/estimators.md; `kinematic-smoother` likewise "
              f"its offline form); `{ESP_DEFAULT}` is the default built as for the same log without its roll rate (the "
-             "ESP channels alone, as every other estimator reads), `kinematic-smoother-esp` the same. On KITTI the reference roll is the INS's own, which integrates the same gyro, so the default's "
-             f"agreement there is not independent of its input; `{ESP_DEFAULT}`'s is.\n")
+             "ESP channels alone, as every other estimator reads), `kinematic-smoother-esp` the same. On KITTI the "
+             "reference roll is the INS's own, which integrates the same gyro, so the default's agreement there is "
+             f"not independent of its input; `{ESP_DEFAULT}`'s is.\n")
     L.append("The offline `pif-smoother` (docs/estimators.md, last section) uses the samples after each "
              "instant too: for logs processed after the drive, not a real-time estimate.\n")
     if len(segments) == 1:
