@@ -66,8 +66,9 @@ _FACTORIES: dict[str, Callable[..., Estimator]] = {
 PRESETS = ("pif-paper",)
 #: estimators that also read a roll-rate gyro (:attr:`roadbank.Signals.p`), for logs that carry one (an INS, a
 #: phone, a six-axis IMU). Not in :data:`NAMES`: an ESP log has no roll rate, so the suites and reports that run
-#: every estimator on ESP signals leave them out; ``make`` builds them, and :func:`roadbank.vehicle.for_log`
-#: chooses ``kinematic-gyro`` for a log that has a roll rate (docs/estimators.md)
+#: every estimator on ESP signals leave them out; ``make`` builds them, and on a loud log whose roll rate follows its
+#: ``ay`` :func:`roadbank.vehicle.for_log` builds them for ``kinematic-pif`` and ``kinematic-smoother``
+#: (:data:`roadbank.vehicle.conditions.GYRO_MODELS`; docs/estimators.md)
 GYRO = ("kinematic-gyro", "kinematic-gyro-smoother")
 #: names of all estimators, in the order the reports list them
 NAMES = tuple(n for n in _FACTORIES if n not in PRESETS + GYRO)

@@ -27,12 +27,13 @@ The model's limits: :math:`\dot\theta = p + (q \sin\theta + r \cos\theta) \tan\v
 :math:`\hat w` is :math:`\sin\theta` and :math:`p` the rate of :math:`\theta`, the same to 1.5 % below
 10 deg of roll. The filter is linear and scheduled on speed like every ``lpv`` observer (``step()``,
 fixed-rate tables); it reads the roll rate in the steering angle's input slot (it reads no steering),
-from :attr:`roadbank.Signals.p`. A log without a roll rate gives no valid sample (:meth:`KinematicGyro.run`
-says so).
+from :attr:`roadbank.Signals.p`; :meth:`KinematicGyro.run` refuses a log without one, saying so, and a sample
+without it is held and flagged not valid.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -117,8 +118,7 @@ class KinematicGyro(ScheduledObserver):
 
     def _table_inputs(self) -> GyroDesign:
         """:attr:`design` with the car reduced to its ``g``, all that the tables read."""
-        return GyroDesign(params=VehicleParams(g=self.params.g), v_min=self.v_min, v_step=self.v_step,
-                          v_max=self.v_max, cutoff=self.cutoff, bias_tau=self.bias_tau)
+        return dataclasses.replace(self.design, params=VehicleParams(g=self.params.g))
 
     def observer(self, vx: float):
         """``(F, G, H, D)`` at ``vx`` (m/s); inputs ``[p, ay, r]`` (:func:`gyro_observer`)."""

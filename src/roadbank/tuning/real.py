@@ -436,9 +436,8 @@ def training_logs(data_dir, scoring=KITTI_SCORING, roll_rate: bool = False):
         if not found:
             continue
         log = load_kitti_oxts(found[0])
-        s = log.signals if roll_rate else dataclasses.replace(log.signals, p=None)
-        out.append((s, log.reference_roll, masks(s.t, s.vx, scoring)[1]))
-    return out
+        out.append((log.signals, log.reference_roll, masks(log.signals.t, log.signals.vx, scoring)[1]))
+    return out if roll_rate else without_roll_rate(out)
 
 
 def simulated_sets(cars=SIM_CARS, n=SIM_DRIVES):
@@ -891,6 +890,11 @@ def gyro_sets(logs, offset_deg: float | None = None) -> list[list]:
                      for sign in (1.0, -1.0)]
 
 
+def without_roll_rate(logs) -> list:
+    """``logs`` (:func:`training_logs`) with their ESP channels alone (``p`` None)."""
+    return [(dataclasses.replace(s, p=None), ref, m) for s, ref, m in logs]
+
+
 def gyro_objective(build, sets) -> float:
     """The twenty-fourth stage's objective (deg): the mean over ``sets`` (:func:`gyro_sets`) of the median raw RMS
     of the estimator ``build(signals)`` makes."""
@@ -907,8 +911,7 @@ def choose_gyro(logs, cutoffs=GYRO_CUTOFFS_HZ, bias_taus=GYRO_BIAS_TAUS) -> tupl
     best = min(obj.values())
     tied = [k for k, v in obj.items() if v <= best + TIE_DEG]
     chosen = min(tied, key=lambda k: (k[1] > 0, -k[1], k[0]))
-    esp = [(dataclasses.replace(s, p=None), ref, m) for s, ref, m in logs]     # the default as it ran: no roll rate
-    shipped = gyro_objective(per_log("kinematic-pif"), [esp])
+    shipped = gyro_objective(per_log("kinematic-pif"), [without_roll_rate(logs)])   # the default as it ran
     return chosen, obj, shipped, obj[chosen] < shipped
 
 
@@ -917,8 +920,7 @@ def choose_gyro_map(logs) -> tuple[float, float, bool]:
     rate). Returns ``(kinematic-gyro-smoother's objective, the shipped map default's, the first is the default)``."""
     sets = gyro_sets(logs)
     smoother = gyro_objective(fixed(KinematicGyroSmoother()), sets)
-    esp = [(dataclasses.replace(s, p=None), ref, m) for s, ref, m in logs]
-    shipped = gyro_objective(per_log("kinematic-smoother"), [esp])
+    shipped = gyro_objective(per_log("kinematic-smoother"), [without_roll_rate(logs)])
     return smoother, shipped, smoother < shipped
 
 
