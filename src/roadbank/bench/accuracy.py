@@ -31,9 +31,10 @@ def _real(data) -> tuple[list, list]:
     from ..validation.comma2k19 import comma2k19_outcome, named_apart, unique_segments
     from ..validation.document import find_datasets
     from ..validation.kitti import validate_kitti
+    from ..validation.scoring import ESP_DEFAULT
     from ..validation.targets import CAUSAL, comma_targets, kitti_targets
 
-    names = list(CAUSAL)
+    names = [*CAUSAL, ESP_DEFAULT]          # the default without the roll rate too: its own target row
     found, targets = find_datasets(data), []
     notes = list(found["notes"])
     if found["kitti"]:
