@@ -278,3 +278,23 @@ def test_the_map_default_on_a_log_with_a_roll_rate_is_the_gyro_smoother_by_the_t
         pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
     smoother, shipped, is_default = real.choose_gyro_map(logs)
     assert is_default and smoother < 0.85 * shipped
+
+
+def test_estimate_runs_a_gyro_estimator_by_name_and_names_a_log_without_a_roll_rate(tmp_path):
+    """`roadbank estimate -e kinematic-gyro`: a log with the default map's roll-rate column `p` is estimated; one
+    without it fails with one line naming the log and the missing roll rate (exit 1, no traceback)."""
+    from click.testing import CliRunner
+
+    from roadbank.cli import main
+    from roadbank.io.writers import write_table
+    n = 3000
+    t = np.arange(n) / 100.0
+    theta = math.radians(2.0) * np.sin(2 * math.pi * 0.05 * t)
+    cols = {"t": t, "vx": np.full(n, 20.0), "ay": G * np.sin(theta), "r": np.zeros(n), "delta_f": np.zeros(n)}
+    with_p = write_table(tmp_path / "imu.csv", {**cols, "p": np.gradient(theta, t)})
+    without = write_table(tmp_path / "esp.csv", cols)
+    ok = CliRunner().invoke(main, ["estimate", str(with_p), "-e", "kinematic-gyro", "-o", str(tmp_path / "o.csv")])
+    assert ok.exit_code == 0, ok.output
+    bad = CliRunner().invoke(main, ["estimate", str(without), "-e", "kinematic-gyro", "-o", str(tmp_path / "b.csv")])
+    assert bad.exit_code == 1 and "esp.csv" in bad.output and "no roll rate" in bad.output
+    assert "Traceback" not in bad.output

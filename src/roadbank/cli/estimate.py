@@ -33,10 +33,10 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
                 continue
             if n == "all":
                 names.extend(estimators.NAMES)
-            elif n not in estimators.NAMES + estimators.PRESETS:
+            elif n not in estimators.NAMES + estimators.PRESETS + estimators.GYRO:
                 raise click.BadParameter(f"unknown estimator '{n}' (choose from "
-                                         f"{', '.join(estimators.NAMES + estimators.PRESETS)} or 'all')",
-                                         param_hint="--estimators")
+                                         f"{', '.join(estimators.NAMES + estimators.PRESETS + estimators.GYRO)} or "
+                                         "'all')", param_hint="--estimators")
             else:
                 names.append(n)
     return list(dict.fromkeys(names)) or [DEFAULT]
@@ -52,7 +52,7 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
               show_default=True, help="Estimators, comma-separated or repeated; 'all' for every one. "
                                       "Default kinematic-pif: the filtered kinematic estimate on real "
                                       "roads, the paper's PIF while the yaw rate changes fast; on a quiet "
-                                      "log pif-adaptive (README). "
+                                      "log pif-adaptive; on a loud log with a roll rate kinematic-gyro (README). "
                                       "pif-modified is roadbank's default tuning of the paper's filter; "
                                       "pif-paper the same filter with the paper's Table 4 weights.")
 @click.option("-o", "--output", required=True, type=click.Path(),

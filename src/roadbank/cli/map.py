@@ -68,8 +68,9 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
     from .. import estimators
     from ..mapping.build import map_logs, write_outputs
 
-    if estimator not in estimators.NAMES:
-        raise click.BadParameter(f"unknown estimator '{estimator}' (choose from {', '.join(estimators.NAMES)})",
+    known = estimators.NAMES + estimators.GYRO
+    if estimator not in known:
+        raise click.BadParameter(f"unknown estimator '{estimator}' (choose from {', '.join(known)})",
                                  param_hint="--estimator")
     if output.suffix.lower() not in (".parquet", ".pq"):
         raise click.BadParameter("the map table must end in .parquet", param_hint="-o")
