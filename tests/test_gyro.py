@@ -298,3 +298,22 @@ def test_estimate_runs_a_gyro_estimator_by_name_and_names_a_log_without_a_roll_r
     bad = CliRunner().invoke(main, ["estimate", str(without), "-e", "kinematic-gyro", "-o", str(tmp_path / "b.csv")])
     assert bad.exit_code == 1 and "esp.csv" in bad.output and "no roll rate" in bad.output
     assert "Traceback" not in bad.output
+
+
+@needs_kitti
+def test_the_car_is_fitted_on_the_esp_default_whatever_the_roll_rate(monkeypatch):
+    """design_car fits the car for the estimators that model it: the default it runs per candidate car is the ESP
+    one even where the log has a roll rate (the gyro filter has no car, so every car would tie)."""
+    from roadbank.io.kitti import load_kitti_oxts
+    from roadbank.vehicle import design_car, factory
+    s = load_kitti_oxts(KITTI).signals
+    seen = []
+    real = factory.make_estimator
+
+    def spy(name, params=None, **kw):
+        seen.append(kw.get("log_roll_rate"))
+        return real(name, params, **kw)
+    monkeypatch.setattr(factory, "make_estimator", spy)
+    with_p = design_car(s)
+    assert len(seen) == 4 and all(v is None for v in seen)
+    assert with_p == design_car(dataclasses.replace(s, p=None))

@@ -97,12 +97,14 @@ def design_car(signals, margin: float = CAR_MARGIN, cond: dict | None = None) ->
     :data:`roadbank.defaults.VEHICLE`, which is kept otherwise (and where the span tells nothing: every
     misfit infinite). On a loud log the default is the car-free low-pass almost throughout, the misfits
     are nearly equal and the static car stays. ``cond``: the log's :func:`log_conditions` where the caller has
-    them (they are measured on this same span), else measured here.
+    them (they are measured on this same span), else measured here. A roll rate in the log is left out: the car is
+    for the estimators that model it, and the gyro-aided default has no car to fit.
     """
     n = design_span(signals)
     span = signals[:n] if n < len(signals) else signals
     if cond is None:
         cond = log_conditions(span)
+    cond = {**cond, "log_roll_rate": None}
     power = {}
     for car in UNDESCRIBED_CARS:
         try:
