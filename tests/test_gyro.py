@@ -317,3 +317,16 @@ def test_the_car_is_fitted_on_the_esp_default_whatever_the_roll_rate(monkeypatch
     with_p = design_car(s)
     assert len(seen) == 4 and all(v is None for v in seen)
     assert with_p == design_car(dataclasses.replace(s, p=None))
+
+
+@needs_kitti
+def test_a_streamed_log_gets_the_estimate_of_one_run():
+    """The default on a drive with a roll rate, behind the online offset learner as `roadbank estimate` runs it, in
+    chunks of 97 samples: the same numbers as one run (the roll rate is carried through every chunk)."""
+    from roadbank.io.kitti import load_kitti_oxts
+    s = load_kitti_oxts(KITTI).signals
+    est = estimators.with_online_offsets(for_log("kinematic-pif", s))
+    assert isinstance(est.inner, KinematicGyro)
+    whole = est.run(s).theta.copy()
+    parts = [est.run(s[a:a + 97], reset=(a == 0)).theta.copy() for a in range(0, len(s), 97)]
+    np.testing.assert_array_equal(np.concatenate(parts), whole)
