@@ -64,8 +64,7 @@ class Signals:
     p: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        names = CHANNELS + tuple(c for c in OPTIONAL_CHANNELS if getattr(self, c) is not None)
-        arrays = {name: _as_1d(name, getattr(self, name)) for name in names}
+        arrays = {name: _as_1d(name, getattr(self, name)) for name in self.channels}
         n = len(arrays["t"])
         if n == 0:
             raise ValueError("Signals: empty arrays (no samples)")
@@ -94,11 +93,18 @@ class Signals:
         """Samples ``index`` (a slice) as a new :class:`Signals`."""
         if not isinstance(index, slice):
             raise TypeError("Signals can only be sliced with a slice")
-        return Signals(*(getattr(self, c)[index] for c in CHANNELS), **self._optional(lambda a: a[index]))
+        return self.take(index)
 
-    def _optional(self, f) -> dict:
-        """``f`` of each optional channel this log has, by name (keyword arguments of :class:`Signals`)."""
-        return {c: f(getattr(self, c)) for c in OPTIONAL_CHANNELS if getattr(self, c) is not None}
+    @property
+    def channels(self) -> tuple[str, ...]:
+        """The names of the channels this log has: :data:`CHANNELS` and those of :data:`OPTIONAL_CHANNELS` it
+        carries."""
+        return CHANNELS + tuple(c for c in OPTIONAL_CHANNELS if getattr(self, c) is not None)
+
+    def take(self, index) -> "Signals":
+        """Samples ``index`` (a slice, or an index array in increasing order) of every channel, as a new
+        :class:`Signals`."""
+        return Signals(**{c: getattr(self, c)[index] for c in self.channels})
 
     @classmethod
     def from_steering_wheel(cls, t, vx, ay, r, steering_wheel_angle,
@@ -115,9 +121,8 @@ def concat_signals(parts) -> "Signals":
     parts = list(parts)
     if len(parts) == 1:
         return parts[0]
-    optional = {c: np.concatenate([getattr(p, c) for p in parts]) for c in OPTIONAL_CHANNELS
-                if all(getattr(p, c) is not None for p in parts)}
-    return Signals(*(np.concatenate([getattr(p, c) for p in parts]) for c in CHANNELS), **optional)
+    shared = [c for c in parts[0].channels if all(c in p.channels for p in parts)]
+    return Signals(**{c: np.concatenate([getattr(p, c) for p in parts]) for c in shared})
 
 
 def interval_rate(dt) -> float:

@@ -113,9 +113,9 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
     car_name = car_name or vehicle.name
     try:      # designed for the target's rate (and the log's conditions), as every command designs
         from ..vehicle import for_conditions
+        from ..vehicle.conditions import esp_conditions
         # the C step reads the ESP channels: a roll rate in the log does not choose the gyro-aided filter here
-        est = for_conditions(name, {**cond, "log_rate": rate, "log_roll_rate": None}, params, vehicle=vehicle,
-                             **overrides)
+        est = for_conditions(name, {**esp_conditions(cond), "log_rate": rate}, params, vehicle=vehicle, **overrides)
     except (ValueError, TypeError, NoStabilisingSolution) as exc:
         raise click.ClickException(f"{name}: cannot design for vehicle {car_name!r}: {exc}") from None
     if online_offsets:

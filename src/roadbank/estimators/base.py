@@ -41,6 +41,8 @@ SETTLE_V_MAX = 40.0
 
 #: designed tables by design key (:meth:`Estimator._design_key`), or the NoStabilisingSolution raised
 _DESIGN_CACHE: dict = {}
+#: the keyword options of :class:`Estimator` itself, which every estimator takes
+ESTIMATOR_OPTIONS = ("v_min", "roll", "max_substep", "max_gap", "max_angle", "v_step", "v_max", "sample_rate")
 #: kernel families with the fixed-rate path (``lpv`` rows; ``gated`` steps them through ``lpv_step``)
 FIXED_RATE_KERNELS = ("lpv", "gated")
 _DISCRETE_CACHE: dict = {}

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..params import ESP_RATE
 from . import layout
-from .base import DesignInputs, ScheduledObserver
+from .base import ESTIMATOR_OPTIONS, DesignInputs, ScheduledObserver
 from .kinematic import KINEMATIC_V_MIN
 from .lowpass import KinematicFeedForward
 from .pif import PIF, RATE_TUNING, PIFRate
@@ -52,8 +52,8 @@ from .pif import PIF, RATE_TUNING, PIFRate
 GATED_TUNING = dict(fast_Q=float(RATE_TUNING["Q"]), fast_Q_rate=10.0 * float(RATE_TUNING["Q_rate"]), fast_th=0.0,
                     gate_tf=0.05, gate_release=0.5, gate_on=2.0, gate_span=4.0)
 
-#: options of :class:`~roadbank.estimators.base.Estimator` that both filters share
-_COMMON = ("v_min", "max_substep", "max_gap", "max_angle", "v_step", "v_max", "roll")
+#: options of :class:`~roadbank.estimators.base.Estimator` that both filters share (each runs on the pair's rate)
+_COMMON = tuple(k for k in ESTIMATOR_OPTIONS if k != "sample_rate")
 
 
 @dataclass(frozen=True)

@@ -44,7 +44,7 @@ from ..signals import Estimate, Signals
 from . import layout as L
 from .base import DesignInputs, ScheduledObserver, StepResult, Tables
 from .kinematic import KINEMATIC_V_MIN
-from .kinematic_smoother import both_ways
+from .kinematic_smoother import both_ways, lookahead_of
 
 #: ``kinematic-gyro``'s cut-off (Hz) and offset time constant (s): the rule of :mod:`roadbank.tuning.real`
 GYRO_CUTOFF_HZ = 0.15
@@ -175,11 +175,9 @@ class KinematicGyroSmoother(KinematicGyro):
 
     @property
     def lookahead_s(self) -> float:
-        """Samples after a log's end (s) that make :meth:`run` agree with smoothing the whole: 25 time constants of the
-        slowest pole of the filter over the speed grid."""
-        n = self._nstate
-        F = self._tab_cont[:, :n * n].reshape(-1, n, n)
-        return 25.0 / float(np.min(-np.linalg.eigvals(F).real))
+        """Samples after a log's end (s) that make :meth:`run` agree with smoothing the whole: :func:`lookahead_of`
+        the filter (about 220 s: its offset loop is the slowest pole)."""
+        return lookahead_of(self)
 
     def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
         """Smoothed estimate over the log ``signals`` with its roll rate; ``reset`` and ``lookahead`` as

@@ -76,9 +76,9 @@ class KinematicSmoother(KinematicLowPass):
 
     @property
     def lookahead_s(self) -> float:
-        """Samples after a log's end (s) that make :meth:`run` agree with smoothing the whole: 25 time
-        constants of the slowest low-pass over the speed grid, after which their influence is below 1e-10."""
-        return 25.0 / float(np.min(-self._tab_cont[:, 0]))
+        """Samples after a log's end (s) that make :meth:`run` agree with smoothing the whole: :func:`lookahead_of`
+        the low-pass."""
+        return lookahead_of(self)
 
     def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
         """Smoothed estimate over the log ``signals`` (module docstring); ``reset`` as
@@ -91,6 +91,14 @@ class KinematicSmoother(KinematicLowPass):
         the log's end.
         """
         return both_ways(self, super().run(signals, reset=reset), signals, lookahead)
+
+
+def lookahead_of(est) -> float:
+    """The lookahead (s) of a two-way smoother whose pass is the ``lpv`` observer ``est``: 25 time constants of its
+    slowest pole over the speed grid, after which a later sample's influence is below 1e-10."""
+    n = est._nstate
+    F = est._tab_cont[:, :n * n].reshape(-1, n, n)
+    return 25.0 / float(np.min(-np.linalg.eigvals(F).real))
 
 
 def reversed_in_time(s: Signals) -> Signals:

@@ -59,7 +59,7 @@ def jittered_indices(n: int, dt_fine: float, dt_range=(0.06, 0.14), seed: int = 
 
 def subsample(s: Signals, idx: np.ndarray) -> Signals:
     """The samples ``idx`` of ``s``."""
-    return Signals(s.t[idx], s.vx[idx], s.ay[idx], s.r[idx], s.delta_f[idx], None if s.p is None else s.p[idx])
+    return s.take(idx)
 
 
 def jitter_study(scenario: str = "bank-lane-change", names=("kinematic", "pio-modified", "pif-modified"),

@@ -36,7 +36,7 @@ from ..defaults import ESTIMATOR
 from ..estimators import NAMES
 from ..signals import sample_rate
 from ..vehicle import SensorSpec, log_conditions, make_estimator
-from ..vehicle.conditions import GYRO_MODELS
+from ..vehicle.conditions import GYRO_MODELS, esp_conditions
 
 #: the real-road estimators built as for a log without a roll rate (the ESP channels alone), by label: on a log with
 #: one, ``kinematic-pif`` and ``kinematic-smoother`` are the gyro-aided filters
@@ -369,8 +369,8 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     cond = log_conditions(signals)
     grid = TimeGrid.of(t)
     for name in names:
-        build, own = (ESP_LABELS[name], {"log_roll_rate": None}) if name in ESP_LABELS else (name, {})
-        est = make_estimator(build, params, sensors=sensors, **{**cond, **own},
+        build, built_for = (ESP_LABELS[name], esp_conditions(cond)) if name in ESP_LABELS else (name, cond)
+        est = make_estimator(build, params, sensors=sensors, **built_for,
                              **{**tuning, **per_estimator.get(name, {})}).run(signals)
         th, pb = hold_invalid(est.theta), hold_invalid(est.phi_b)
         sc = score(t, th, pb, est.valid, ref, fit, scored, scoring, grid=grid)

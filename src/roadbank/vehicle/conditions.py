@@ -24,7 +24,7 @@ from .sensors import SensorSpec
 
 __all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "QUIET_FILTER", "QUIET_MODELS", "GYRO_FILTER",
            "GYRO_MODELS", "design_span", "has_design_span", "log_conditions", "noise_densities", "is_quiet",
-           "quiet_noise_ratio", "roll_rate_slope", "roll_rate_usable", "make_estimator"]
+           "quiet_noise_ratio", "roll_rate_slope", "roll_rate_usable", "esp_conditions", "make_estimator"]
 
 
 #: seconds of driving (``vx >= v_min``) at the start of a log on which :func:`log_conditions` measures it (s)
@@ -53,13 +53,10 @@ ROLL_RATE_SHARE = 0.5
 #: the roll rate is used only where it follows the roll that ``ay`` shows: the least-squares slope (-) of the
 #: kinematic estimate on the integrated roll rate, both band-passed over the design span (centred moving averages
 #: of :data:`ROLL_CHECK_WINDOWS_S` (s), the shorter less the longer: about 0.05-0.5 Hz), within
-#: :data:`ROLL_SLOPE_RANGE`. On the 16 shared KITTI drives and comma2k19 it is 0.8-1.4; a roll rate of the wrong
-#: sign reads -1, a yaw rate in its place or deg/s read as rad/s about 0.02.
+#: :data:`ROLL_SLOPE_RANGE`. On the design spans of the 16 shared KITTI drives and comma2k19 it is 1.0-1.5; negated,
+#: -1.0 to -1.5; the yaw rate in its place -0.22 to 0.10; deg/s read as rad/s 0.017-0.027.
 ROLL_CHECK_WINDOWS_S = (1.0, 10.0)
 ROLL_SLOPE_RANGE = (0.5, 2.0)
-#: the options every estimator takes (:class:`roadbank.estimators.base.Estimator`): all that ``kinematic-pif``'s
-#: options give :data:`GYRO_FILTER`
-_COMMON_OPTIONS = ("v_min", "roll", "max_substep", "max_gap", "max_angle", "v_step", "v_max", "sample_rate")
 #: low-passes whose update is limited by default (their ``clip``), given the log's noise densities ``Q_ay`` and ``R``
 #: (:func:`noise_densities`) by :func:`make_estimator`, as a sensor-weighted PIF is
 LIMITED_LOWPASSES = ("kinematic-smoother",)
@@ -130,7 +127,8 @@ def _at_most(noise: float, floor: float) -> float:
 
 def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
     """What a log tells :func:`make_estimator` about its sensors: ``{"log_rate": Hz,
-    "log_ay_noise": m/s^2, "log_r_noise": rad/s, "log_ay_floor": m/s^2, "log_diff_noise": m/s^2}`` — the
+    "log_ay_noise": m/s^2, "log_r_noise": rad/s, "log_ay_floor": m/s^2, "log_diff_noise": m/s^2, "log_roll_rate": -}``
+    (the last :func:`roll_rate_slope`, None for a log without a roll rate) — the
     sample rate of its time base (:func:`roadbank.signals.sample_rate`), the road noise of its ``ay`` and
     yaw rate on the samples at ``vx >= v_min`` (m/s): what they carry above the vehicle's dynamics band, taken
     as white (:func:`roadbank.signals.road_noise_std`, the noise model of real roads; NaN when
@@ -169,6 +167,12 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
             "log_roll_rate": _two_digits(roll_rate_slope(signals, vx, moving))}
 
 
+def esp_conditions(cond: dict) -> dict:
+    """The log's conditions ``cond`` (:func:`log_conditions`) as for the same log without its roll rate: what the
+    estimators of its ESP channels alone are built for."""
+    return {**cond, "log_roll_rate": None}
+
+
 def _two_digits(x: float | None) -> float | None:
     """``x`` to two significant digits (None stays None)."""
     return None if x is None else float(f"{x:.2g}")
@@ -188,8 +192,8 @@ def roll_rate_slope(signals, vx, moving) -> float | None:
     """How the log's roll rate follows the roll that its ``ay`` shows: the least-squares slope (-) of the kinematic
     estimate ``(ay - vx r)/g`` on the integrated roll rate (rad), both band-passed (:data:`ROLL_CHECK_WINDOWS_S`) and
     read on the samples ``moving`` (at speed, away from the span's ends); 1 for a gyro about the car's forward axis.
-    None when the log has no roll rate (:func:`has_roll_rate`) or too few samples at speed for the band (a tenth
-    of the longer window's), or a roll rate that never moves (the slope is then also None)."""
+    None when the log has no roll rate (:func:`has_roll_rate`), too few samples at speed for the band (a tenth of
+    the longer window's) or a roll rate whose integral never moves in the band."""
     if not has_roll_rate(signals, moving):
         return None
     t = np.asarray(signals.t, dtype=np.float64)
@@ -406,7 +410,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         How the log's roll rate follows its ``ay`` (:func:`roll_rate_slope`; None or NaN: it has none). Where it does
         (:func:`roll_rate_usable`), ``kinematic-pif`` is :data:`GYRO_FILTER` on a loud log (named ``kinematic-pif``, as
         on a quiet one; unless the options set the gate), ``kinematic-smoother`` its offline form
-        (:data:`GYRO_MODELS`), with the options every estimator takes.
+        (:data:`GYRO_MODELS`), with the options every estimator takes
+        (:data:`roadbank.estimators.base.ESTIMATOR_OPTIONS`).
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
@@ -436,12 +441,12 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
             # the default's roll separation (its PIF's tuning chose the roll model) unless the options name one
             roll = estimators.pif.DEFAULT_TUNING["roll"]
             name, options = GYRO_MODELS[name], {"roll": roll, **{k: v for k, v in options.items()
-                                                                 if k in _COMMON_OPTIONS}}
+                                                                 if k in estimators.base.ESTIMATOR_OPTIONS}}
         elif lead_samples is not None:
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
             if log_diff_noise is not None and math.isfinite(log_diff_noise) and log_diff_noise > 0:
                 options.setdefault("noise_ref", log_diff_noise ** 2)
-    if sensors.r_variance > 0 and name not in GYRO_MODELS.values():
+    if sensors.r_variance > 0:
         R, Q_ay = noise_densities(sensors, log_rate, log_ay_noise, log_r_noise)
         options = with_sensor_noise(name, options, R, Q_ay)
         if name in LIMITED_LOWPASSES:       # the noise its update's limit is measured in

@@ -15,7 +15,8 @@ import numpy as np
 from .. import defaults
 from ..params import VehicleParams
 from ..signals import sample_rate
-from .conditions import design_span, is_quiet, log_conditions, make_estimator, quiet_noise_ratio, source_rates
+from .conditions import (design_span, esp_conditions, is_quiet, log_conditions, make_estimator, quiet_noise_ratio,
+                         source_rates)
 from .file import load_vehicle
 from .sensors import SensorSpec
 
@@ -104,7 +105,7 @@ def design_car(signals, margin: float = CAR_MARGIN, cond: dict | None = None) ->
     span = signals[:n] if n < len(signals) else signals
     if cond is None:
         cond = log_conditions(span)
-    cond = {**cond, "log_roll_rate": None}
+    cond = esp_conditions(cond)
     power = {}
     for car in UNDESCRIBED_CARS:
         try:
