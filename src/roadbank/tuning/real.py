@@ -283,6 +283,20 @@ committed) asks the same of ``roadbank map``'s default: whether on a loud log wi
 ``kinematic-gyro-smoother`` (``kinematic-gyro`` forward and backward, averaged; the twenty-fourth stage's cross-over
 and offset time constant, no grid of its own), by the twenty-fourth stage's objective on its three real sets,
 against the map's default as shipped (``kinematic-smoother`` built for each log, without the roll rate).
+
+The twenty-sixth stage (:func:`choose_grade`; rule written 2026-12-05 before it ran, after an exploratory script on
+the training drives alone showed that the INS's own pitch takes their median from 0.249 to 0.225 deg) corrects the
+roll rate for the grade: the rate of the roll angle is :math:`p + (q \sin\theta + r \cos\theta) \tan\vartheta
+\approx p + r \tan\vartheta` with :math:`\vartheta` the pitch (positive nose down), which a log with a
+longitudinal accelerometer gives: :math:`\sin\vartheta = (\dot v_x - a_x)/g`, averaged causally over a window of
+:math:`W` s (:func:`roadbank.estimators.gyro.euler_roll_rate`). Candidates: :data:`GRADE_WINDOWS_S` (0: no
+correction), each ``kinematic-gyro`` with the twenty-fourth stage's cross-over and offset time constant (no grid of
+its own). Real sets and objective: the twenty-fourth stage's (:func:`gyro_sets`, :func:`gyro_objective`), the drives
+read with their ``ax``. The lowest wins; ties within :data:`TIE_DEG` go to no correction, then to the longer window.
+The correction is then used wherever ``kinematic-gyro`` (and its smoother) runs on a log with a usable ``ax``
+(:func:`roadbank.vehicle.conditions.log_conditions`: the slope of ``vx`` on the integrated ``ax``, band-passed as
+the roll rate's, within the roll rate's range; not chosen, stated). No simulated set (a flat road: nothing to
+correct); neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -315,6 +329,8 @@ from ..vehicle import load_vehicle
 from .manoeuvres import drive_set
 from .objective import drive_errors
 
+#: the twenty-sixth stage's candidates: the window (s) of the pitch that corrects the roll rate (0: no correction)
+GRADE_WINDOWS_S = (0.0, 0.5, 1.0, 2.0, 4.0)
 #: the twenty-fourth stage's grid: ``kinematic-gyro``'s cross-over (Hz) and offset time constant (s; 0: none),
 #: and the roll-rate offset (deg/s) added to the training drives
 GYRO_CUTOFFS_HZ = (0.03, 0.05, 0.07, 0.1, 0.15, 0.2, 0.3)
