@@ -15,7 +15,7 @@ from .params import VehicleParams
 
 CHANNELS = ("t", "vx", "ay", "r", "delta_f")
 #: optional channels: present in a log that has them, None otherwise
-OPTIONAL_CHANNELS = ("p",)
+OPTIONAL_CHANNELS = ("p", "ax")
 
 
 def _as_1d(name: str, a) -> np.ndarray:
@@ -51,8 +51,12 @@ class Signals:
         Roll rate (rotation about the forward axis, positive left side up), when the log has a
         roll-rate gyro (an INS, a phone, a six-axis IMU); None for an ESP log without one. Only
         the estimators of :data:`roadbank.estimators.GYRO` read it.
+    ax : array (m/s^2), optional
+        Measured longitudinal acceleration (specific force, positive forward: ``vx' - g sin(pitch)`` with the
+        pitch positive nose down), when the log has one; None otherwise. The gyro-aided estimators read the
+        road's grade from it (:func:`roadbank.estimators.gyro.euler_roll_rate`).
 
-    NaN / inf samples in ``vx, ay, r, delta_f, p`` are allowed: the estimators hold
+    NaN / inf samples in ``vx, ay, r, delta_f, p, ax`` are allowed: the estimators hold
     their output there and flag it not valid. The time base itself must be clean.
     """
 
@@ -62,6 +66,7 @@ class Signals:
     r: np.ndarray
     delta_f: np.ndarray
     p: np.ndarray | None = None
+    ax: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         arrays = {name: _as_1d(name, getattr(self, name)) for name in self.channels}

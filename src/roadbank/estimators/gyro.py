@@ -21,14 +21,18 @@ The transfer from :math:`k` is a low-pass, that from :math:`p` its complement: a
 sees passes without lag. :math:`f_c` and :math:`T_b` were chosen by a written rule on training data
 (:func:`roadbank.tuning.real.choose_gyro`, docs/estimators.md).
 
-The model's limits: :math:`\dot\theta = p + (q \sin\theta + r \cos\theta) \tan\vartheta` with
-:math:`\vartheta` the pitch, so on a grade the yaw rate leaks into the roll rate (a 5 % grade in a
-0.2 rad/s turn: 0.57 deg/s, which the low frequencies of :math:`k` correct within :math:`1/\omega_c`);
-:math:`\hat w` is :math:`\sin\theta` and :math:`p` the rate of :math:`\theta`, the same to 1.5 % below
-10 deg of roll. The filter is linear and scheduled on speed like every ``lpv`` observer (``step()``,
-fixed-rate tables); it reads the roll rate in the steering angle's input slot (it reads no steering),
-from :attr:`roadbank.Signals.p`; :meth:`KinematicGyro.run` refuses a log without one, saying so, and a sample
-without it is held and flagged not valid.
+The grade: :math:`\dot\theta = p + (q \sin\theta + r \cos\theta) \tan\vartheta` with :math:`\vartheta` the
+pitch, so on a grade the yaw rate leaks into the roll rate (a 5 % grade in a 0.2 rad/s turn: 0.57 deg/s, which
+the low frequencies of :math:`k` correct only within :math:`1/\omega_c`). A log with a longitudinal accelerometer
+(:attr:`roadbank.Signals.ax`) gives the pitch, and the filter reads :math:`p + r \tan\hat\vartheta` in place of
+:math:`p` (:mod:`roadbank.models.attitude`: the pitch a causal mean of :math:`(\dot v_x - a_x)/g` over
+``grade_window`` s, chosen by a written rule on training data, :func:`roadbank.tuning.real.choose_grade`; 0: not
+corrected); without ``ax``, or before the first window has passed, :math:`p` as measured. :math:`\hat w` is
+:math:`\sin\theta` and :math:`p` the rate of :math:`\theta`, the same to 1.5 % below 10 deg of roll. The filter
+is linear and scheduled on speed like every ``lpv`` observer (``step()``, fixed-rate tables); it reads the roll
+rate in the steering angle's input slot (it reads no steering), from :attr:`roadbank.Signals.p`;
+:meth:`KinematicGyro.run` refuses a log without one, saying so, and a sample without it is held and flagged not
+valid.
 """
 
 from __future__ import annotations
@@ -39,8 +43,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..models.attitude import euler_roll_rate, grade_pitch
 from ..params import VehicleParams
-from ..signals import Estimate, Signals
+from ..signals import Estimate, Signals, concat_signals
 from . import layout as L
 from .base import DesignInputs, ScheduledObserver, StepResult, Tables
 from .kinematic import KINEMATIC_V_MIN
@@ -49,6 +54,40 @@ from .kinematic_smoother import both_ways, lookahead_of
 #: ``kinematic-gyro``'s cut-off (Hz) and offset time constant (s): the rule of :mod:`roadbank.tuning.real`
 GYRO_CUTOFF_HZ = 0.15
 GYRO_BIAS_TAU_S = 10.0
+#: the window (s) of the pitch that corrects the roll rate for the grade (0: not corrected): the rule of
+#: :mod:`roadbank.tuning.real`
+GRADE_WINDOW_S = 0.0
+
+
+class GradeCarry:
+    """The roll rate of a log corrected for its grade (:func:`roadbank.models.attitude.euler_roll_rate`), chunk by
+    chunk: :func:`~roadbank.models.attitude.grade_pitch` over ``window`` s (0: no correction) continues across
+    chunks with the last window of samples kept, so a log in chunks gets what one run gets. ``g`` (m/s^2)."""
+
+    def __init__(self, window: float, g: float):
+        self.window, self.g = float(window), float(g)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the samples kept: the next chunk starts a log."""
+        self._tail: tuple[np.ndarray, ...] | None = None
+
+    def correct(self, s: Signals, advance: int | None = None) -> Signals:
+        """``s`` with its roll rate corrected (rad/s) and no ``ax`` (what the filter reads); the samples kept move
+        on by the first ``advance`` of ``s`` (default all; a lookahead's samples are corrected, not kept)."""
+        if s.ax is None or s.p is None or self.window <= 0:
+            return dataclasses.replace(s, ax=None)
+        t, vx, ax = s.t, s.vx, s.ax
+        tail = self._tail
+        if tail is not None and len(tail[0]) and tail[0][-1] < t[0]:
+            t, vx, ax = (np.concatenate([a, b]) for a, b in zip(tail, (t, vx, ax)))
+        pitch = grade_pitch(t, vx, ax, self.window, self.g)[len(t) - len(s):]
+        n = len(s) if advance is None else advance
+        if n:
+            end = len(t) - len(s) + n
+            first = max(int(np.searchsorted(t[:end], t[end - 1] - self.window, side="right")) - 1, 0)
+            self._tail = (t[first:end].copy(), vx[first:end].copy(), ax[first:end].copy())
+        return dataclasses.replace(s, p=euler_roll_rate(s.p, s.r, pitch), ax=None)
 
 
 @dataclass(frozen=True)
@@ -87,6 +126,9 @@ class KinematicGyro(ScheduledObserver):
     bias_tau : float, optional
         Time constant (s, >= 0) in which the gyro's offset is learnt; 0: no offset state. Default
         :data:`GYRO_BIAS_TAU_S`.
+    grade_window : float, optional
+        Window (s, >= 0) of the pitch that corrects the roll rate for the grade on a log with ``ax`` (module
+        docstring); 0: not corrected. Default :data:`GRADE_WINDOW_S`.
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator`; ``v_min`` (m/s) defaults to
         :data:`~roadbank.estimators.kinematic.KINEMATIC_V_MIN`.
@@ -103,15 +145,30 @@ class KinematicGyro(ScheduledObserver):
         @property
         def design(self) -> GyroDesign: ...     # an instance of design_type
 
-    def __init__(self, params=None, *, cutoff=None, bias_tau=None, **kw):
+    def __init__(self, params=None, *, cutoff=None, bias_tau=None, grade_window=None, **kw):
         self.cutoff = float(GYRO_CUTOFF_HZ if cutoff is None else cutoff)
         self.bias_tau = float(GYRO_BIAS_TAU_S if bias_tau is None else bias_tau)
+        window = float(GRADE_WINDOW_S if grade_window is None else grade_window)
         if not (np.isfinite(self.cutoff) and self.cutoff > 0):
             raise ValueError(f"{self.name}: cutoff must be > 0 Hz, got {cutoff}")
         if not (np.isfinite(self.bias_tau) and self.bias_tau >= 0):
             raise ValueError(f"{self.name}: bias_tau must be >= 0 s, got {bias_tau}")
+        if not (np.isfinite(window) and window >= 0):
+            raise ValueError(f"{self.name}: grade_window must be >= 0 s, got {grade_window}")
         self.state_names = ("w", "p_offset") if self.bias_tau > 0 else ("w",)
         super().__init__(params, **kw)
+        self.grade = GradeCarry(window, self.params.g)
+
+    @property
+    def grade_window(self) -> float:
+        """The window (s) of the pitch that corrects the roll rate (0: not corrected)."""
+        return self.grade.window
+
+    def reset(self) -> None:
+        """Forget all history, the samples kept for the grade's pitch too."""
+        super().reset()
+        if hasattr(self, "grade"):           # the base constructor resets before the window is set
+            self.grade.reset()
 
     def _design_fields(self) -> dict:
         return dict(cutoff=self.cutoff, bias_tau=self.bias_tau)
@@ -135,19 +192,34 @@ class KinematicGyro(ScheduledObserver):
         tab[:, row.J:row.cont] = J.reshape(len(tab), -1)
         return Tables(np.ascontiguousarray(tab), n, extra)
 
-    def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
-        """:meth:`Estimator.run <roadbank.estimators.base.Estimator.run>` of a log with a roll rate
-        (:attr:`roadbank.Signals.p`, rad/s); ValueError for a log without one."""
-        if isinstance(signals, Signals) and signals.p is None:
+    def _corrected(self, signals: Signals, reset: bool) -> Signals:
+        """``signals`` as the filter reads them (:meth:`GradeCarry.correct`), after the checks of :meth:`run` and, with
+        ``reset``, :meth:`reset` (so the run itself continues: ``reset=False``)."""
+        if not isinstance(signals, Signals):
+            raise TypeError("run() expects a roadbank.Signals")
+        if signals.p is None:
             raise ValueError(f"{self.name}: the log has no roll rate (Signals.p); this estimator fuses the roll-rate "
                              "gyro with the kinematic estimate (map a 'roll_rate' channel, or choose another "
                              "estimator)")
-        return super().run(signals, reset=reset, lookahead=lookahead)
+        if reset:
+            self.reset()
+        return self.grade.correct(signals)
+
+    def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
+        """:meth:`Estimator.run <roadbank.estimators.base.Estimator.run>` of a log with a roll rate
+        (:attr:`roadbank.Signals.p`, rad/s; corrected for the grade where the log has ``ax``, module docstring);
+        ValueError for a log without one."""
+        return super().run(self._corrected(signals, reset), reset=False, lookahead=lookahead)
 
     def step(self, t: float, vx: float, ay: float, r: float, delta_f: float = float("nan"),
-             p: float = float("nan")) -> StepResult:
-        """One sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), the unused delta_f (rad) and the roll rate
-        ``p`` (rad/s)."""
+             p: float = float("nan"), ax: float = float("nan")) -> StepResult:
+        """One sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), the unused delta_f (rad), the roll rate ``p``
+        (rad/s) and the longitudinal acceleration ``ax`` (m/s^2; NaN: the roll rate is not corrected for the
+        grade)."""
+        if self.grade.window > 0 and not np.isnan(ax):
+            one = Signals(**{c: np.array([float(v)]) for c, v in
+                             zip(("t", "vx", "ay", "r", "delta_f", "p", "ax"), (t, vx, ay, r, delta_f, p, ax))})
+            p = float(self.grade.correct(one).p[0])
         return super().step(t, vx, ay, r, p)
 
 
@@ -166,10 +238,11 @@ class KinematicGyroSmoother(KinematicGyro):
     #: the causal estimator of its forward pass (what an ECU runs instead)
     forward_filter = "kinematic-gyro"
 
-    def __init__(self, params=None, *, cutoff=None, bias_tau=None, **kw):
-        super().__init__(params, cutoff=cutoff, bias_tau=bias_tau, **kw)
-        # the same design in reversed time, on the forward pass's fixed rate (as kinematic-smoother's)
-        self._reverse = KinematicGyro(self.params, cutoff=self.cutoff, bias_tau=self.bias_tau,
+    def __init__(self, params=None, *, cutoff=None, bias_tau=None, grade_window=None, **kw):
+        super().__init__(params, cutoff=cutoff, bias_tau=bias_tau, grade_window=grade_window, **kw)
+        # the same design in reversed time, on the forward pass's fixed rate (as kinematic-smoother's); it reads
+        # the roll rate as the forward pass has corrected it
+        self._reverse = KinematicGyro(self.params, cutoff=self.cutoff, bias_tau=self.bias_tau, grade_window=0.0,
                                       **{**kw, "sample_rate": None})
         self._reverse_dt: float | None = None
 
@@ -182,4 +255,7 @@ class KinematicGyroSmoother(KinematicGyro):
     def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
         """Smoothed estimate over the log ``signals`` with its roll rate; ``reset`` and ``lookahead`` as
         :meth:`roadbank.estimators.kinematic_smoother.KinematicSmoother.run`. Units: ``w`` (-), angles (rad)."""
-        return both_ways(self, super().run(signals, reset=reset), signals, lookahead)
+        s = self._corrected(signals, reset)
+        if lookahead is not None and len(lookahead):
+            lookahead = self.grade.correct(concat_signals([signals, lookahead]), advance=0)[len(signals):]
+        return both_ways(self, ScheduledObserver.run(self, s, reset=False), s, lookahead)

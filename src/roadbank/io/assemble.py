@@ -46,7 +46,7 @@ import numpy as np
 from ..params import VehicleParams
 from ..signals import Signals, concat_signals, road_wheel_angle
 from . import units
-from .channels import STEERING, ChannelMap, check_plausible
+from .channels import OPTIONAL, STEERING, ChannelMap, check_plausible
 from .limits import Dropouts
 from .consistency import MIN_SAMPLES, Sums, check_balance, log_verdict, turning, usable
 from .errors import LogError, channel_error, channel_text
@@ -74,7 +74,8 @@ def missing_column(p, role: str, column: str | None, names,
 
 
 def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
-    """Roles to read: speed, lateral_acceleration, yaw_rate, [the steering role], [roll_rate], [reference_roll].
+    """Roles to read: speed, lateral_acceleration, yaw_rate, [the steering role], [the optional roles of
+    :data:`~roadbank.io.channels.OPTIONAL` whose column the file has], [reference_roll].
 
     The steering role is the road-wheel angle if its column exists, else the
     steering-wheel angle (none if the map has no steering channel: ROS maps; none if the file has
@@ -96,8 +97,8 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
         raise missing_column(p, "steering", None, names, f"missing: no column {cols} in the file")
     if present[0] is not None:
         roles.append(present[0])
-    if "roll_rate" in cmap.channels and cmap.channels["roll_rate"].column in have:
-        roles.append("roll_rate")     # optional: a map's roll rate that the file lacks is said by roll_rate_note
+    # optional: a map's optional channel that the file lacks is said by optional_notes
+    roles += [r for r in OPTIONAL if r in cmap.channels and cmap.channels[r].column in have]
     if "reference_roll" in cmap.channels:
         roles.append("reference_roll")
         col = cmap.channels["reference_roll"].column
@@ -107,14 +108,19 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
     return roles
 
 
-def roll_rate_note(p, cmap: ChannelMap, roles: list[str]) -> list[str]:
-    """The warning for a file read without the roll-rate column its map names (the default map's ``p`` is
-    not said: most logs have no roll-rate gyro); ``[]`` otherwise."""
-    spec = cmap.channels.get("roll_rate")
-    if spec is None or "roll_rate" in roles or cmap.source == "default channel map":
+#: what a log read without an optional channel loses (the end of :func:`optional_notes`' warning)
+OPTIONAL_LOSS = {"roll_rate": "a roll rate (the gyro-aided estimators give no valid sample)",
+                 "longitudinal_acceleration": "a longitudinal acceleration (the gyro-aided estimators do not "
+                                              "correct the roll rate for the grade)"}
+
+
+def optional_notes(p, cmap: ChannelMap, roles: list[str]) -> list[str]:
+    """The warnings for a file read without an optional column its map names (the default map's ``p`` and ``ax``
+    are not said: most logs have neither); ``[]`` otherwise."""
+    if cmap.source == "default channel map":
         return []
-    return [channel_text(p, "roll_rate", spec.column, "column not found in the file, so the log is read without "
-                         "a roll rate (the gyro-aided estimators give no valid sample)")]
+    return [channel_text(p, r, cmap.channels[r].column, f"column not found in the file, so the log is read without "
+                         f"{OPTIONAL_LOSS[r]}") for r in OPTIONAL if r in cmap.channels and r not in roles]
 
 
 def steering_note(p, cmap: ChannelMap, roles: list[str]) -> list[str]:
@@ -234,7 +240,7 @@ class _Logs:
         delta = steering_delta_f(cmap, self.params, [r for r in self.roles if r in out], out)
         try:
             sig = Signals(out["t"], out["speed"], out["lateral_acceleration"], out["yaw_rate"], delta,
-                          out.get("roll_rate"))
+                          **{c: out.get(r) for r, c in OPTIONAL.items()})
         except ValueError as exc:
             raise LogError(f"{p}: {exc}") from None
         pos = {r: out[r] for r in self.gnss}
@@ -360,7 +366,7 @@ def assemble(src, cmap: ChannelMap, params: VehicleParams, fmt: str) -> Iterator
     """
     p = src.path
     roles = select_roles(p, cmap, set(src.names), src.names)
-    src.warnings += steering_note(p, cmap, roles) + roll_rate_note(p, cmap, roles)
+    src.warnings += steering_note(p, cmap, roles) + optional_notes(p, cmap, roles)
     gnss = gnss_roles(cmap)
     for r in gnss:
         if cmap.channels[r].column not in src.names:

@@ -33,6 +33,8 @@ steering_wheel_angle        rad, deg             flipped (rotation about z)
 road_wheel_angle            rad, deg             flipped (rotation about z)
 roll_rate                   rad/s, deg/s         none (rotation about x; optional:
                                                  the gyro-aided estimators read it)
+longitudinal_acceleration   m/s^2, g             none (x axis; optional: the gyro-aided
+                                                 estimators read the grade from it)
 reference_roll              rad, deg             none (rotation about x: right
                                                  side down in FRD = left side up
                                                  in ISO)
@@ -82,6 +84,7 @@ ROLES: dict[str, tuple[str, str | None]] = {
     "lateral_acceleration": ("acceleration", "y"),
     "yaw_rate": ("angular_rate", "z"),
     "roll_rate": ("angular_rate", "x"),
+    "longitudinal_acceleration": ("acceleration", "x"),
     "steering_wheel_angle": ("angle", "z"),
     "road_wheel_angle": ("angle", "z"),
     "reference_roll": ("angle", "x"),
@@ -92,6 +95,8 @@ ROLES: dict[str, tuple[str, str | None]] = {
     "ecef_z": ("length", None),
 }
 REQUIRED = ("time", "speed", "lateral_acceleration", "yaw_rate")
+#: optional roles read when the file has their column -> the :class:`~roadbank.signals.Signals` channel they fill
+OPTIONAL = {"roll_rate": "p", "longitudinal_acceleration": "ax"}
 STEERING = ("road_wheel_angle", "steering_wheel_angle")
 CONVENTIONS = ("ISO", "FRD")
 #: other spellings of the body-axis conventions: ROS REP-103 bodies are FLU (= ISO 8855);
@@ -257,6 +262,7 @@ def default_channel_map() -> ChannelMap:
         "road_wheel_angle": ChannelSpec("road_wheel_angle", "delta_f", "rad"),
         "steering_wheel_angle": ChannelSpec("steering_wheel_angle", "steering_wheel_angle", "rad"),
         "roll_rate": ChannelSpec("roll_rate", "p", "rad/s"),
+        "longitudinal_acceleration": ChannelSpec("longitudinal_acceleration", "ax", "m/s^2"),
     }
     return ChannelMap(ch, truth_prefix="true_", source="default channel map", steering_optional=True)
 

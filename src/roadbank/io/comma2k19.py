@@ -12,7 +12,8 @@ suffix (read with ``allow_pickle=False``)::
 
 Mapping to roadbank (SI, ISO 8855):
 
-* ``ay = -accel[:, 1]``, ``r = -gyro[:, 2]``, roll rate ``p = gyro[:, 0]`` (forward-right-down -> ISO).
+* ``ay = -accel[:, 1]``, ``r = -gyro[:, 2]``, roll rate ``p = gyro[:, 0]``, ``ax = accel[:, 0]``
+  (forward-right-down -> ISO).
 * ``vx`` = CAN speed.
 * steering-wheel angle = CAN ``steering_angle`` in deg, **sign kept**: on the
   example segment it correlates positively with the ISO yaw rate (left turn ->
@@ -105,6 +106,7 @@ CHANNELS = {
     "lateral_acceleration": ("processed_log/IMU/accelerometer[1]", "m/s^2", "FRD"),
     "yaw_rate": ("processed_log/IMU/gyro[2]", "rad/s", "FRD"),
     "roll_rate": ("processed_log/IMU/gyro[0]", "rad/s", "FRD"),
+    "longitudinal_acceleration": ("processed_log/IMU/accelerometer[0]", "m/s^2", "FRD"),
     "steering_wheel_angle": ("processed_log/CAN/steering_angle", "deg", "ISO"),   # left already positive
     "reference_roll": ("global_pose (roll)", "rad", "ISO"),
 }
@@ -167,6 +169,7 @@ class SegmentSource:
             col["lateral_acceleration"]: (acc_t, acc[:, 1]),
             col["yaw_rate"]: (gyr_t, gyr[:, 2]),
             col["roll_rate"]: (gyr_t, gyr[:, 0]),
+            col["longitudinal_acceleration"]: (acc_t, acc[:, 0]),
             col["steering_wheel_angle"]: (arr["steering_angle"][0], arr["steering_angle"][1][:, 0]),
             col["reference_roll"]: (ft, pose_roll(pos, quat)),
             "lat_deg": (ft, np.degrees(lat)),

@@ -15,7 +15,9 @@ z up, so no sign changes):
 3   roll   roll angle (rad), positive = left side up (bank + body roll)  reference roll
 8   vf     forward speed parallel to the ground (m/s)                   ``vx``
 9   vl     leftward speed parallel to the ground (m/s)                  ``Log.extra`` (INS check)
+11  ax     specific force along the vehicle's forward axis (m/s^2)      ``ax``
 12  ay     specific force along the vehicle's left axis (m/s^2)         ``ay``
+17  wx     angular rate about the vehicle's forward axis (rad/s)        ``p``
 19  wz     angular rate about the vehicle's up axis (rad/s)             ``r``
 ==  =====  ==========================================================  ================
 
@@ -61,12 +63,13 @@ from .types import RawChunk
 #: fields per oxts frame (dataformat.txt)
 N_FIELDS = 30
 #: 0-based column of each channel
-COLUMNS = {"lat": 0, "lon": 1, "roll": 3, "vf": 8, "vl": 9, "ay": 12, "wx": 17, "wz": 19}
+COLUMNS = {"lat": 0, "lon": 1, "roll": 3, "vf": 8, "vl": 9, "ax": 11, "ay": 12, "wx": 17, "wz": 19}
 #: the time column of the table a drive makes (seconds from the first frame)
 TIME = "timestamps.txt"
 #: the channels a drive gives (oxts column -> stored unit); their column names: :func:`column`
 ROLES = {"speed": ("vf", "m/s"), "lateral_acceleration": ("ay", "m/s^2"), "yaw_rate": ("wz", "rad/s"),
-         "roll_rate": ("wx", "rad/s"), "reference_roll": ("roll", "rad")}
+         "roll_rate": ("wx", "rad/s"), "longitudinal_acceleration": ("ax", "m/s^2"),
+         "reference_roll": ("roll", "rad")}
 #: columns carried into ``Log.extra`` as they are (name -> oxts column); on the frames' own clock
 CARRIED = {"lat_deg": "lat", "lon_deg": "lon", "vl_mps": "vl"}
 

@@ -1,4 +1,4 @@
-"""Choices made on training data: the cut-off and feed-forward gain of ``kinematic-lp`` / ``kinematic-ff``.
+r"""Choices made on training data: the cut-off and feed-forward gain of ``kinematic-lp`` / ``kinematic-ff``.
 
 The rule: for each candidate ``(cutoff, kappa)`` of a fixed grid,
 

@@ -1,0 +1,85 @@
+r"""Attitude kinematics of a car body: its pitch from the longitudinal accelerometer, and the rate of its roll angle.
+
+A body-fixed gyro measures the body rates :math:`(p, q, r)` about the car's own axes (ISO 8855: x forward, y left,
+z up). The roll *angle* :math:`\theta` (the Euler angle of the yaw-pitch-roll sequence, what an INS reports and
+what the bank estimators estimate) changes at
+
+.. math::
+    \dot\theta = p + (q \sin\theta + r \cos\theta) \tan\vartheta \approx p + r \tan\vartheta
+
+with :math:`\vartheta` the pitch (positive nose down, ISO). On a grade, turning rotates pitch into roll: a car
+that circles on a tilted plane has :math:`p = q = 0` while its roll angle swings with its heading. So a filter that
+integrates :math:`p` needs the pitch, and a log with a longitudinal accelerometer gives it: the specific force along
+the forward axis is :math:`a_x = \dot v_x - g \sin\vartheta` (no lateral-velocity term to speak of: :math:`v_y r`
+is below 0.01 m/s^2 in normal driving), so over a window :math:`[t - W, t]`
+
+.. math::
+    \sin\hat\vartheta(t) = \frac{v_x(t) - v_x(t - W) - \int_{t-W}^{t} a_x \,dt}{g\, W}
+
+a causal mean of :math:`(\dot v_x - a_x)/g` that needs no derivative of the speed. A mount tilted about y adds
+the same angle to :math:`\hat\vartheta` as it moves :math:`r` into the measured roll rate, so the correction
+compensates it too (to first order).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..constants import G
+
+__all__ = ["MAX_SIN_PITCH", "grade_pitch", "euler_roll_rate"]
+
+#: the sine of the steepest pitch :func:`grade_pitch` reports (20 deg; a steeper reading is a fault, not a road)
+MAX_SIN_PITCH = 0.34
+
+
+def grade_pitch(t, vx, ax, window: float, g: float = G) -> np.ndarray:
+    r"""The pitch (rad, positive nose down) from the speed and the longitudinal accelerometer, causal (module
+    docstring).
+
+    Parameters
+    ----------
+    t : array (s)
+        Sample times, increasing.
+    vx : array (m/s)
+        Longitudinal speed.
+    ax : array (m/s^2)
+        Longitudinal specific force (positive forward).
+    window : float
+        ``W`` (s, > 0): the span each estimate averages, ending at its own sample.
+    g : float, optional
+        Gravity (m/s^2).
+
+    Returns
+    -------
+    array (rad)
+        NaN where the log has not yet lasted ``window``, where a non-finite ``vx`` or ``ax`` lies in the window
+        (its ends included) or where the reading is steeper than :data:`MAX_SIN_PITCH`.
+    """
+    t, vx, ax = (np.asarray(a, dtype=np.float64) for a in (t, vx, ax))
+    n = len(t)
+    bad = ~(np.isfinite(vx) & np.isfinite(ax))
+    area = np.zeros(n)
+    nbad = np.zeros(n)
+    if n > 1:
+        a = np.where(bad, 0.0, ax)
+        area[1:] = np.cumsum(0.5 * (a[1:] + a[:-1]) * np.diff(t))
+        nbad[1:] = np.cumsum(bad[1:] | bad[:-1])
+    start = np.searchsorted(t, t - window, side="right") - 1     # the last sample at least the window back
+    ok = start >= 0
+    m = np.where(ok, start, 0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s = (vx - vx[m] - (area - area[m])) / (g * (t - t[m]))
+    ok &= (nbad - nbad[m] == 0) & ~bad & ~bad[m] & (np.abs(s) <= MAX_SIN_PITCH)
+    return np.where(ok, np.arcsin(np.clip(s, -1.0, 1.0)), np.nan)
+
+
+def euler_roll_rate(p, r, pitch) -> np.ndarray:
+    r"""The rate of the roll angle (rad/s) from the body roll rate ``p`` and yaw rate ``r`` (rad/s) and the pitch
+    (rad, positive nose down): :math:`p + r \tan\vartheta` (module docstring; :math:`\cos\theta` taken as 1 and the
+    :math:`q \sin\theta` term, a product of the roll angle and the pitch rate, left out). Where the pitch is not
+    finite, ``p`` as it is."""
+    p, r, pitch = (np.asarray(a, dtype=np.float64) for a in (p, r, pitch))
+    with np.errstate(invalid="ignore"):
+        lean = r * np.tan(pitch)
+    return np.where(np.isfinite(lean), p + lean, p)
