@@ -43,7 +43,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..models.attitude import euler_roll_rate, grade_pitch
+from ..models.attitude import euler_roll_rate, grade_pitch, running_area
 from ..params import VehicleParams
 from ..signals import Estimate, Signals, concat_signals
 from . import layout as L
@@ -56,7 +56,7 @@ GYRO_CUTOFF_HZ = 0.15
 GYRO_BIAS_TAU_S = 10.0
 #: the window (s) of the pitch that corrects the roll rate for the grade (0: not corrected): the rule of
 #: :mod:`roadbank.tuning.real`
-GRADE_WINDOW_S = 0.0
+GRADE_WINDOW_S = 4.0
 
 
 class GradeCarry:
@@ -70,23 +70,27 @@ class GradeCarry:
 
     def reset(self) -> None:
         """Forget the samples kept: the next chunk starts a log."""
-        self._tail: tuple[np.ndarray, ...] | None = None
+        #: the last window's (t, vx, ax) and the running area and count at its first sample
+        self._tail: tuple | None = None
 
     def correct(self, s: Signals, advance: int | None = None) -> Signals:
         """``s`` with its roll rate corrected (rad/s) and no ``ax`` (what the filter reads); the samples kept move
         on by the first ``advance`` of ``s`` (default all; a lookahead's samples are corrected, not kept)."""
         if s.ax is None or s.p is None or self.window <= 0:
             return dataclasses.replace(s, ax=None)
-        t, vx, ax = s.t, s.vx, s.ax
+        t, vx, ax, start = s.t, s.vx, s.ax, (0.0, 0.0)
         tail = self._tail
-        if tail is not None and len(tail[0]) and tail[0][-1] < t[0]:
+        if tail is not None and tail[0][-1] < t[0]:
             t, vx, ax = (np.concatenate([a, b]) for a, b in zip(tail, (t, vx, ax)))
-        pitch = grade_pitch(t, vx, ax, self.window, self.g)[len(t) - len(s):]
+            start = tail[3]
+        area = running_area(t, vx, ax, start)
+        pitch = grade_pitch(t, vx, ax, self.window, self.g, area)[len(t) - len(s):]
         n = len(s) if advance is None else advance
         if n:
             end = len(t) - len(s) + n
             first = max(int(np.searchsorted(t[:end], t[end - 1] - self.window, side="right")) - 1, 0)
-            self._tail = (t[first:end].copy(), vx[first:end].copy(), ax[first:end].copy())
+            self._tail = (t[first:end].copy(), vx[first:end].copy(), ax[first:end].copy(),
+                          (float(area[0][first]), float(area[1][first])))
         return dataclasses.replace(s, p=euler_roll_rate(s.p, s.r, pitch), ax=None)
 
 

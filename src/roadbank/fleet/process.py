@@ -121,15 +121,19 @@ def design_words(design: dict, estimator: str) -> str:
         heard = (f"ay noise {noise:.2g} m/s^2, floor {floor:.2g} ({ratio:.2g} x the data sheet): "
                  f"{'quiet' if design['quiet'] else 'loud'}")
     words = f"{design['car']} ({design['car_from']}); {heard}"
-    slope = design.get("roll_rate")
+    slope, ax = design.get("roll_rate"), design.get("ax")
+    gyro = roll_rate_usable(slope)
     if estimator in QUIET_MODELS:
-        gyro = slope is not None and roll_rate_usable(slope)
-        loud = f"{GYRO_MODELS[estimator]} (the log has a roll rate)" if gyro else "the low-pass blend"
+        grade = "; corrected for the grade by its ax" if roll_rate_usable(ax) else ""
+        loud = f"{GYRO_MODELS[estimator]} (the log has a roll rate{grade})" if gyro else "the low-pass blend"
         words += f", so {estimator} is {QUIET_MODELS[estimator] if design['quiet'] else loud}"
-    if slope is not None and not roll_rate_usable(slope):
-        lo, hi = ROLL_SLOPE_RANGE
+    lo, hi = ROLL_SLOPE_RANGE
+    if slope is not None and not gyro:
         words += (f"; its roll rate does not follow the roll in its ay (slope {slope:.2g}, not {lo:g}-{hi:g}: another "
                   "axis, sign or unit?), so it is not used")
+    if gyro and ax is not None and not roll_rate_usable(ax):
+        words += (f"; its ax does not follow its speed (slope {ax:.2g}, not {lo:g}-{hi:g}: another axis, sign or "
+                  "unit?), so the roll rate is not corrected for the grade")
     if design.get("source"):
         words += f"; written faster than their sensor, noise read at the sensor's rate: {design['source']}"
     return words

@@ -27,13 +27,25 @@ import numpy as np
 
 from ..constants import G
 
-__all__ = ["MAX_SIN_PITCH", "grade_pitch", "euler_roll_rate"]
+__all__ = ["MAX_SIN_PITCH", "running_area", "grade_pitch", "euler_roll_rate"]
 
 #: the sine of the steepest pitch :func:`grade_pitch` reports (20 deg; a steeper reading is a fault, not a road)
 MAX_SIN_PITCH = 0.34
 
 
-def grade_pitch(t, vx, ax, window: float, g: float = G) -> np.ndarray:
+def running_area(t, vx, ax, start: tuple[float, float] = (0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
+    """The running integral of ``ax`` (m/s; trapezoidal over the times ``t``, s) and the running count of intervals
+    that touch a non-finite ``vx`` or ``ax`` (taken as 0 in the integral), from ``start`` (both, at the first
+    sample): a log read in pieces continues from the values at a piece's first sample, to the last bit."""
+    t, vx, ax = (np.asarray(a, dtype=np.float64) for a in (t, vx, ax))
+    bad = ~(np.isfinite(vx) & np.isfinite(ax))
+    a = np.where(bad, 0.0, ax)
+    area = np.cumsum(np.concatenate([[start[0]], 0.5 * (a[1:] + a[:-1]) * np.diff(t)]))   # sequential: exact carry
+    nbad = np.cumsum(np.concatenate([[start[1]], bad[1:] | bad[:-1]]))
+    return area, nbad
+
+
+def grade_pitch(t, vx, ax, window: float, g: float = G, area=None) -> np.ndarray:
     r"""The pitch (rad, positive nose down) from the speed and the longitudinal accelerometer, causal (module
     docstring).
 
@@ -49,6 +61,8 @@ def grade_pitch(t, vx, ax, window: float, g: float = G) -> np.ndarray:
         ``W`` (s, > 0): the span each estimate averages, ending at its own sample.
     g : float, optional
         Gravity (m/s^2).
+    area : tuple of arrays, optional
+        :func:`running_area` of these samples (default: from 0 at the first).
 
     Returns
     -------
@@ -57,14 +71,8 @@ def grade_pitch(t, vx, ax, window: float, g: float = G) -> np.ndarray:
         (its ends included) or where the reading is steeper than :data:`MAX_SIN_PITCH`.
     """
     t, vx, ax = (np.asarray(a, dtype=np.float64) for a in (t, vx, ax))
-    n = len(t)
+    area, nbad = running_area(t, vx, ax) if area is None else area
     bad = ~(np.isfinite(vx) & np.isfinite(ax))
-    area = np.zeros(n)
-    nbad = np.zeros(n)
-    if n > 1:
-        a = np.where(bad, 0.0, ax)
-        area[1:] = np.cumsum(0.5 * (a[1:] + a[:-1]) * np.diff(t))
-        nbad[1:] = np.cumsum(bad[1:] | bad[:-1])
     start = np.searchsorted(t, t - window, side="right") - 1     # the last sample at least the window back
     ok = start >= 0
     m = np.where(ok, start, 0)

@@ -907,8 +907,8 @@ def gyro_sets(logs, offset_deg: float | None = None) -> list[list]:
 
 
 def without_roll_rate(logs) -> list:
-    """``logs`` (:func:`training_logs`) with their ESP channels alone (``p`` None)."""
-    return [(dataclasses.replace(s, p=None), ref, m) for s, ref, m in logs]
+    """``logs`` (:func:`training_logs`) with their ESP channels alone (``p`` and ``ax`` None)."""
+    return [(dataclasses.replace(s, p=None, ax=None), ref, m) for s, ref, m in logs]
 
 
 def gyro_objective(build, sets) -> float:
@@ -922,7 +922,8 @@ def choose_gyro(logs, cutoffs=GYRO_CUTOFFS_HZ, bias_taus=GYRO_BIAS_TAUS) -> tupl
     rate). Returns
     ``((cutoff Hz, bias_tau s), {(cutoff, bias_tau): objective}, default objective, gyro is the default)``."""
     sets = gyro_sets(logs)
-    obj = {(fc, bt): gyro_objective(fixed(KinematicGyro(cutoff=fc, bias_tau=bt)), sets)
+    # the roll rate as it ran: not corrected for the grade (the twenty-sixth stage came after)
+    obj = {(fc, bt): gyro_objective(fixed(KinematicGyro(cutoff=fc, bias_tau=bt, grade_window=0.0)), sets)
            for fc, bt in itertools.product(cutoffs, bias_taus)}
     best = min(obj.values())
     tied = [k for k, v in obj.items() if v <= best + TIE_DEG]
@@ -935,9 +936,19 @@ def choose_gyro_map(logs) -> tuple[float, float, bool]:
     """The twenty-fifth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
     rate). Returns ``(kinematic-gyro-smoother's objective, the shipped map default's, the first is the default)``."""
     sets = gyro_sets(logs)
-    smoother = gyro_objective(fixed(KinematicGyroSmoother()), sets)
+    smoother = gyro_objective(fixed(KinematicGyroSmoother(grade_window=0.0)), sets)   # as it ran (no grade)
     shipped = gyro_objective(per_log("kinematic-smoother"), [without_roll_rate(logs)])
     return smoother, shipped, smoother < shipped
+
+
+def choose_grade(logs, windows=GRADE_WINDOWS_S) -> tuple[float, dict]:
+    """The twenty-sixth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate and ``ax``). Returns ``(window s, {window: objective deg})``."""
+    sets = gyro_sets(logs)
+    obj = {w: gyro_objective(fixed(KinematicGyro(grade_window=w)), sets) for w in windows}
+    best = min(obj.values())
+    tied = [w for w, v in obj.items() if v <= best + TIE_DEG]
+    return min(tied, key=lambda w: (w > 0, -w)), obj
 
 
 def _quiet_by(measure: str):

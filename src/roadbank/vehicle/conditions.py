@@ -24,7 +24,7 @@ from .sensors import SensorSpec
 
 __all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "QUIET_FILTER", "QUIET_MODELS", "GYRO_FILTER",
            "GYRO_MODELS", "design_span", "has_design_span", "log_conditions", "noise_densities", "is_quiet",
-           "quiet_noise_ratio", "roll_rate_slope", "roll_rate_usable", "esp_conditions", "make_estimator"]
+           "quiet_noise_ratio", "roll_rate_slope", "roll_rate_usable", "ax_slope", "esp_conditions", "make_estimator"]
 
 
 #: seconds of driving (``vx >= v_min``) at the start of a log on which :func:`log_conditions` measures it (s)
@@ -57,6 +57,9 @@ ROLL_RATE_SHARE = 0.5
 #: -1.0 to -1.5; the yaw rate in its place -0.22 to 0.10; deg/s read as rad/s 0.017-0.027.
 ROLL_CHECK_WINDOWS_S = (1.0, 10.0)
 ROLL_SLOPE_RANGE = (0.5, 2.0)
+#: the longitudinal acceleration likewise corrects the roll rate for the grade only where it follows the speed: the
+#: slope (-) of ``vx`` on the integrated ``ax``, band-passed in the same way, within :data:`ROLL_SLOPE_RANGE`
+#: (:func:`ax_slope`)
 #: low-passes whose update is limited by default (their ``clip``), given the log's noise densities ``Q_ay`` and ``R``
 #: (:func:`noise_densities`) by :func:`make_estimator`, as a sensor-weighted PIF is
 LIMITED_LOWPASSES = ("kinematic-smoother",)
@@ -127,8 +130,8 @@ def _at_most(noise: float, floor: float) -> float:
 
 def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
     """What a log tells :func:`make_estimator` about its sensors: ``{"log_rate": Hz,
-    "log_ay_noise": m/s^2, "log_r_noise": rad/s, "log_ay_floor": m/s^2, "log_diff_noise": m/s^2, "log_roll_rate": -}``
-    (the last :func:`roll_rate_slope`, None for a log without a roll rate) — the
+    "log_ay_noise": m/s^2, "log_r_noise": rad/s, "log_ay_floor": m/s^2, "log_diff_noise": m/s^2, "log_roll_rate": -,
+    "log_ax": -}`` (the last two :func:`roll_rate_slope` and :func:`ax_slope`, None for a log without the channel) — the
     sample rate of its time base (:func:`roadbank.signals.sample_rate`), the road noise of its ``ay`` and
     yaw rate on the samples at ``vx >= v_min`` (m/s): what they carry above the vehicle's dynamics band, taken
     as white (:func:`roadbank.signals.road_noise_std`, the noise model of real roads; NaN when
@@ -164,13 +167,14 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
     return {"log_rate": sample_rate(signals.t), "log_ay_noise": float(f"{ay_noise:.2g}"),
             "log_r_noise": float(f"{r_noise:.2g}"), "log_ay_floor": float(f"{ay_floor:.2g}"),
             "log_diff_noise": float(f"{diff_noise:.2g}"),
-            "log_roll_rate": _two_digits(roll_rate_slope(signals, vx, moving))}
+            "log_roll_rate": _two_digits(roll_rate_slope(signals, vx, moving)),
+            "log_ax": _two_digits(ax_slope(signals, vx, moving))}
 
 
 def esp_conditions(cond: dict) -> dict:
-    """The log's conditions ``cond`` (:func:`log_conditions`) as for the same log without its roll rate: what the
-    estimators of its ESP channels alone are built for."""
-    return {**cond, "log_roll_rate": None}
+    """The log's conditions ``cond`` (:func:`log_conditions`) as for the same log without its roll rate and ``ax``:
+    what the estimators of its ESP channels alone are built for."""
+    return {**cond, "log_roll_rate": None, "log_ax": None}
 
 
 def _two_digits(x: float | None) -> float | None:
@@ -178,12 +182,12 @@ def _two_digits(x: float | None) -> float | None:
     return None if x is None else float(f"{x:.2g}")
 
 
-def has_roll_rate(signals, moving) -> bool:
-    """Whether ``signals`` carry a roll rate (:attr:`roadbank.Signals.p`) finite on at least :data:`ROLL_RATE_SHARE`
-    of the samples ``moving`` (bool mask; none at speed: of all samples)."""
-    if getattr(signals, "p", None) is None:
+def has_channel(signals, name: str, moving) -> bool:
+    """Whether ``signals`` carry the optional channel ``name`` (``"p"``, ``"ax"``) finite on at least
+    :data:`ROLL_RATE_SHARE` of the samples ``moving`` (bool mask; none at speed: of all samples)."""
+    if getattr(signals, name, None) is None:
         return False
-    finite = np.isfinite(np.asarray(signals.p, dtype=np.float64))
+    finite = np.isfinite(np.asarray(getattr(signals, name), dtype=np.float64))
     part = finite[moving] if np.any(moving) else finite
     return bool(part.size) and float(np.mean(part)) >= ROLL_RATE_SHARE
 
@@ -192,25 +196,41 @@ def roll_rate_slope(signals, vx, moving) -> float | None:
     """How the log's roll rate follows the roll that its ``ay`` shows: the least-squares slope (-) of the kinematic
     estimate ``(ay - vx r)/g`` on the integrated roll rate (rad), both band-passed (:data:`ROLL_CHECK_WINDOWS_S`) and
     read on the samples ``moving`` (at speed, away from the span's ends); 1 for a gyro about the car's forward axis.
-    None when the log has no roll rate (:func:`has_roll_rate`), too few samples at speed for the band (a tenth of
+    None when the log has no roll rate (:func:`has_channel`), too few samples at speed for the band (a tenth of
     the longer window's) or a roll rate whose integral never moves in the band."""
-    if not has_roll_rate(signals, moving):
+    if not has_channel(signals, "p", moving):
         return None
-    t = np.asarray(signals.t, dtype=np.float64)
-    rate = sample_rate(t)
-    short, long = (max(int(round(w * rate)), 1) for w in ROLL_CHECK_WINDOWS_S)
     k = (np.asarray(signals.ay, np.float64) - vx * np.asarray(signals.r, np.float64)) / G
-    p = np.asarray(signals.p, dtype=np.float64)
-    angle = np.concatenate([[0.0], np.cumsum(0.5 * np.nan_to_num(p[1:] + p[:-1]) * np.diff(t))])
-    band = [_centred_mean(x, short) - _centred_mean(x, long) for x in (np.nan_to_num(k), angle)]
+    return _slope_on_integral(signals.t, k, signals.p, moving)
+
+
+def ax_slope(signals, vx, moving) -> float | None:
+    """How the log's longitudinal acceleration follows its speed: the slope (-) of ``vx`` (m/s) on the integrated
+    ``ax`` (m/s), band-passed and read as :func:`roll_rate_slope`; 1 for an accelerometer along the car's forward
+    axis (the grade's slow part of ``ax`` falls out of the band). None as there, for ``ax``."""
+    if not has_channel(signals, "ax", moving):
+        return None
+    return _slope_on_integral(signals.t, vx, signals.ax, moving)
+
+
+def _slope_on_integral(t, level, rate, moving) -> float | None:
+    """The least-squares slope of ``level`` on the time integral of ``rate`` (trapezoidal, non-finite samples as
+    0), both band-passed by centred means of :data:`ROLL_CHECK_WINDOWS_S` (the shorter less the longer) and read on
+    the samples ``moving`` away from the ends where ``level`` is finite; None with too few (a tenth of the longer
+    window's) or an integral that never moves in the band."""
+    t = np.asarray(t, dtype=np.float64)
+    level, rate = np.asarray(level, np.float64), np.asarray(rate, np.float64)
+    short, long = (max(int(round(w * sample_rate(t))), 1) for w in ROLL_CHECK_WINDOWS_S)
+    area = np.concatenate([[0.0], np.cumsum(0.5 * np.nan_to_num(rate[1:] + rate[:-1]) * np.diff(t))])
+    band = [_centred_mean(x, short) - _centred_mean(x, long) for x in (np.nan_to_num(level), area)]
     inner = np.zeros(len(t), dtype=bool)
     inner[long // 2:len(t) - long // 2] = True
-    use = inner & moving & np.isfinite(k)
+    use = inner & moving & np.isfinite(level)
     if np.count_nonzero(use) < long // 10 + 2:
         return None
-    kb, ab = band[0][use], band[1][use]
+    lb, ab = band[0][use], band[1][use]
     den = float(np.dot(ab, ab))
-    return float(np.dot(kb, ab) / den) if den > 0 else None
+    return float(np.dot(lb, ab) / den) if den > 0 else None
 
 
 def _centred_mean(x: np.ndarray, n: int) -> np.ndarray:
@@ -223,7 +243,8 @@ def _centred_mean(x: np.ndarray, n: int) -> np.ndarray:
 
 def roll_rate_usable(slope: float | None) -> bool:
     """Whether a log whose :func:`roll_rate_slope` is ``slope`` (the ``log_roll_rate`` of :func:`log_conditions`)
-    has a roll rate that the default may use: within :data:`ROLL_SLOPE_RANGE`."""
+    has a roll rate that the default may use: within :data:`ROLL_SLOPE_RANGE`. The same for :func:`ax_slope`
+    (``log_ax``)."""
     return slope is not None and ROLL_SLOPE_RANGE[0] <= slope <= ROLL_SLOPE_RANGE[1]
 
 
@@ -375,7 +396,8 @@ def quiet_noise_ratio(sensors: SensorSpec, log_rate: float | None = None, log_ay
 def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: SensorSpec | None = None,
                    log_rate: float | None = None, log_ay_noise: float | None = None,
                    log_r_noise: float | None = None, log_ay_floor: float | None = None,
-                   log_diff_noise: float | None = None, log_roll_rate: float | None = None, **options):
+                   log_diff_noise: float | None = None, log_roll_rate: float | None = None,
+                   log_ax: float | None = None, **options):
     """``estimators.make(name, params, **options)`` for a log sampled at ``log_rate`` by ``sensors``.
 
     A default-tuned PIF (:func:`roadbank.estimators.pif.with_sensor_noise`) gets the weights
@@ -412,6 +434,10 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         on a quiet one; unless the options set the gate), ``kinematic-smoother`` its offline form
         (:data:`GYRO_MODELS`), with the options every estimator takes
         (:data:`roadbank.estimators.base.ESTIMATOR_OPTIONS`).
+    log_ax : float, optional
+        How the log's longitudinal acceleration follows its speed (:func:`ax_slope`; None or NaN: it has none). Where
+        it does (:func:`roll_rate_usable`), that gyro-aided filter corrects the roll rate for the grade (its
+        ``grade_window``, :data:`roadbank.estimators.gyro.GRADE_WINDOW_S`); where not, it does not.
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
@@ -440,8 +466,10 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         elif not own_gate and roll_rate_usable(log_roll_rate):
             # the default's roll separation (its PIF's tuning chose the roll model) unless the options name one
             roll = estimators.pif.DEFAULT_TUNING["roll"]
-            name, options = GYRO_MODELS[name], {"roll": roll, **{k: v for k, v in options.items()
-                                                                 if k in estimators.base.ESTIMATOR_OPTIONS}}
+            window = estimators.gyro.GRADE_WINDOW_S if roll_rate_usable(log_ax) else 0.0
+            name, options = GYRO_MODELS[name], {"roll": roll, "grade_window": window,
+                                                **{k: v for k, v in options.items()
+                                                   if k in estimators.base.ESTIMATOR_OPTIONS}}
         elif lead_samples is not None:
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
             if log_diff_noise is not None and math.isfinite(log_diff_noise) and log_diff_noise > 0:

@@ -128,7 +128,8 @@ def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | Non
     ``source`` says which and at what rate their noise was read (e.g. ``"ay 10 Hz, r 10 Hz"``); ``roll_rate`` (-)
     where the log carries a roll rate: how it follows the roll in ``ay`` (``log_roll_rate``,
     :func:`~roadbank.vehicle.conditions.roll_rate_slope`; where usable, the default on a loud log is the gyro-aided
-    filter)."""
+    filter); ``ax`` (-) where it carries a longitudinal acceleration: how it follows the speed (``log_ax``,
+    :func:`~roadbank.vehicle.conditions.ax_slope`; where usable, that filter corrects the roll rate for the grade)."""
     sensors = sensors or SensorSpec()
     noise, floor = cond.get("log_ay_noise"), cond.get("log_ay_floor")
     ratio = quiet_noise_ratio(sensors, cond.get("log_rate"), noise, floor)
@@ -137,8 +138,9 @@ def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | Non
               "ay_noise": noise, "ay_floor": floor, "ay_floor_ratio": float(f"{ratio:.3g}")}
     if sources:
         record["source"] = ", ".join(f"{ch} {hz:.3g} Hz" for ch, hz in sources.items())
-    if cond.get("log_roll_rate") is not None:
-        record["roll_rate"] = cond["log_roll_rate"]
+    for key, name in (("log_roll_rate", "roll_rate"), ("log_ax", "ax")):
+        if cond.get(key) is not None:
+            record[name] = cond[key]
     return record
 
 
