@@ -40,15 +40,18 @@ def test_it_is_the_zero_phase_low_pass(fc):
     assert np.max(np.abs(lp - shifted)[inner]) < 1e-3 * np.max(np.abs(u))
 
 
-@pytest.mark.parametrize("jitter,limited", [(0.0, False), (0.3, False), (0.3, True)])
-def test_chunks_with_lookahead_are_one_run_and_step_is_the_forward_filter(jitter, limited):
+@pytest.mark.parametrize("jitter,limited,stop", [(0.0, False, False), (0.3, False, False), (0.3, True, False),
+                                                 (0.0, False, True)])
+def test_chunks_with_lookahead_are_one_run_and_step_is_the_forward_filter(jitter, limited, stop):
     """Also on jittered time stamps (KITTI's, 0.06-0.14 s at 10 Hz): the backward pass takes the forward
-    pass's fixed rate, not one found again in each chunk; and with the passes' update limited (the log's
-    noise given, as every command gives it), whose backward pass forgets its start as the linear one does."""
+    pass's fixed rate, not one found again in each chunk; with the passes' update limited (the log's
+    noise given, as every command gives it), whose backward pass forgets its start as the linear one does; and
+    with the log ending in a stop longer than a chunk (a chunk where no pass runs holds the last output)."""
     rng = np.random.default_rng(4)
     s, _ = _sine_bank(fs=10.0, T=120.0, f0=0.05)
     t = s.t + jitter * 0.1 * rng.uniform(-0.5, 0.5, len(s.t))
-    s = Signals(t, s.vx, s.ay + 0.3 * rng.standard_normal(len(s.t)), s.r, s.delta_f)
+    vx = np.where(s.t > 85.0, 0.0, s.vx) if stop else s.vx
+    s = Signals(t, vx, s.ay + 0.3 * rng.standard_normal(len(s.t)), s.r, s.delta_f)
     noise = {"Q_ay": 0.3 ** 2 / 10.0, "R": 1e-6} if limited else {}
     est = E.make("kinematic-smoother", **noise)
     assert est.limited == limited
@@ -59,6 +62,9 @@ def test_chunks_with_lookahead_are_one_run_and_step_is_the_forward_filter(jitter
     parts = [est.run(c, reset=False, lookahead=chunks[i + 1] if i + 1 < len(chunks) else None).w.copy()
              for i, c in enumerate(chunks)]
     np.testing.assert_allclose(np.concatenate(parts), whole, rtol=0, atol=1e-10)
+    if stop:
+        assert np.all(whole[s.t > 90.0] == whole[np.flatnonzero(s.t <= 85.0)[-1]]) and whole[-1] != 0.0
+        return
     fwd = E.make("kinematic-lp", cutoff=SMOOTHER_CUTOFF_HZ, clip=est.clip, **noise).run(s).w
     est.reset()
     stepped = np.array([est.step(*(float(getattr(s, c)[k]) for c in ("t", "vx", "ay", "r", "delta_f"))).w

@@ -250,6 +250,11 @@ class KinematicGyroSmoother(KinematicGyro):
                                       **{**kw, "sample_rate": None})
         self._reverse_dt: float | None = None
 
+    def reset(self) -> None:
+        """Forget all history, the last output held for the next chunk too (:func:`both_ways`)."""
+        super().reset()
+        self._held = None
+
     @property
     def lookahead_s(self) -> float:
         """Samples after a log's end (s) that make :meth:`run` agree with smoothing the whole: :func:`lookahead_of`
@@ -262,4 +267,4 @@ class KinematicGyroSmoother(KinematicGyro):
         s = self._corrected(signals, reset)
         if lookahead is not None and len(lookahead):
             lookahead = self.grade.correct(concat_signals([signals, lookahead]), advance=0)[len(signals):]
-        return both_ways(self, ScheduledObserver.run(self, s, reset=False), s, lookahead)
+        return both_ways(self, ScheduledObserver.run(self, s, reset=False), s, lookahead, reset)

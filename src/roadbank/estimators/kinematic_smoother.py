@@ -80,6 +80,11 @@ class KinematicSmoother(KinematicLowPass):
         the low-pass."""
         return lookahead_of(self)
 
+    def reset(self) -> None:
+        """Forget all history, the last output held for the next chunk too (:func:`both_ways`)."""
+        super().reset()
+        self._held = None
+
     def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
         """Smoothed estimate over the log ``signals`` (module docstring); ``reset`` as
         :meth:`~roadbank.estimators.base.Estimator.run`. Units: ``w`` (-), angles (rad).
@@ -90,7 +95,7 @@ class KinematicSmoother(KinematicLowPass):
         run over the whole log gives (to about 1e-10) when each covers :attr:`lookahead_s` or reaches
         the log's end.
         """
-        return both_ways(self, super().run(signals, reset=reset), signals, lookahead)
+        return both_ways(self, super().run(signals, reset=reset), signals, lookahead, reset)
 
 
 def lookahead_of(est) -> float:
@@ -110,11 +115,12 @@ def reversed_in_time(s: Signals) -> Signals:
                    None if s.p is None else -s.p[::-1])
 
 
-def both_ways(est, fwd: Estimate, signals: Signals, lookahead: Signals | None) -> Estimate:
+def both_ways(est, fwd: Estimate, signals: Signals, lookahead: Signals | None, reset: bool = True) -> Estimate:
     """The smoothed estimate of an offline estimator ``est`` (its ``_reverse``: the same design run in reversed
     time, and its ``lookahead_s``; ``_reverse_dt``: the rate the reverse pass was last set to) from its forward pass
     ``fwd`` over ``signals`` and the samples ``lookahead`` that follow them: the two passes averaged where both are
-    valid, held where either is not (0 before the first such sample); the body roll is the forward pass's, the
+    valid, held where either is not (before the first such sample: 0 after ``reset``, else the last output of the
+    previous chunk, ``est._held``, so that chunks are one run); the body roll is the forward pass's, the
     forward state ``w_*`` kept and the backward one beside it (``<state>_backward``). Units: ``w`` (-), angles (rad)."""
     n = len(signals)
     whole = signals
@@ -131,9 +137,13 @@ def both_ways(est, fwd: Estimate, signals: Signals, lookahead: Signals | None) -
     last = np.maximum.accumulate(np.where(both, np.arange(n), -1))
     held = ~both & (last >= 0)
     w[held] = w[last[held]]                   # held where a pass does not use the sample, 0 before the first
-    theta = np.arcsin(np.clip(w, -1.0, 1.0))
     phi = fwd.states["phi"].copy()
     phi[held] = phi[last[held]]
+    before = ~both & (last < 0)
+    if not reset and getattr(est, "_held", None) is not None:
+        w[before], phi[before] = est._held    # ... or the previous chunk's last output
+    est._held = (float(w[-1]), float(phi[-1]))
+    theta = np.arcsin(np.clip(w, -1.0, 1.0))
     valid = both & (np.abs(w) <= np.sin(est.max_angle))
     first = est.state_names[0]
     states = {first: fwd.states[first].copy(), f"{first}_backward": wb.copy(), "phi": phi}
