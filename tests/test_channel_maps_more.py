@@ -16,6 +16,7 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from roadbank.constants import G
 from roadbank.cli import main
 from roadbank.io import LogError, load_log, read_channel_map
 from roadbank.io.channels import ChannelMap, ChannelSpec, channel_map_from_dict
@@ -60,11 +61,12 @@ def _columns(name: str, unit: str = "m/s", speed_col: str = "VehSpd", steering: 
              mirrored: bool = False) -> dict:
     """The drive as a logger with its own names writes it: the speed in ``unit``; optionally a steering-wheel angle
     in deg (the kinematic one, ratio 16, wheelbase 2.7 m); ``mirrored``: ay, yaw rate and steering positive right.
-    The INS's roll rate in deg/s (the same about the forward axis in either convention)."""
+    The INS's roll rate in deg/s (the same about the forward axis in either convention) and its longitudinal
+    acceleration in g."""
     s = _signals(name).signals
     sign = -1.0 if mirrored else 1.0
     cols = {"timestamp": s.t, speed_col: s.vx / TO_SI[unit], "LatAcc": sign * s.ay, "YawRate": sign * s.r,
-            "RollRate": np.degrees(s.p)}
+            "RollRate": np.degrees(s.p), "LongAcc": s.ax / G}
     if steering:
         cols["SWA"] = sign * np.degrees(16.0 * 2.7 * s.r / np.maximum(s.vx, 2.0))
     return cols
@@ -105,24 +107,26 @@ speed = { column = "VehSpd", unit = "m/s" }
 lateral_acceleration = { column = "LatAcc", unit = "m/s^2" }
 yaw_rate = { column = "YawRate", unit = "rad/s" }
 """
-#: the drive's roll rate, for a map that reads it
-ROLL_RATE = 'roll_rate = { column = "RollRate", unit = "deg/s" }\n'
+#: the drive's roll rate and longitudinal acceleration, for a map that reads them
+IMU = ('roll_rate = { column = "RollRate", unit = "deg/s" }\n'
+       'longitudinal_acceleration = { column = "LongAcc", unit = "g" }\n')
 
 
 def test_map_without_steering_reads_and_estimates_as_the_kitti_drive(tmp_path):
     """A hand-written map with no steering channel is valid: the log reads with the steering angle NaN and
-    the other channels as the drive stores them (the roll rate given in deg/s, in rad/s); `roadbank estimate` gives
+    the other channels as the drive stores them (the roll rate given in deg/s, in rad/s; ax in g, in m/s^2);
+    `roadbank estimate` gives
     the drive's own estimate with the default estimator, and an estimator that reads the steering angle the same
     summary (no valid sample)."""
     name = SHARED[0]
     drive = _drive_dir(name)
     log_csv = write_table(tmp_path / "ins.csv", _columns(name))
-    (tmp_path / "map.toml").write_text(HAND_MAP + ROLL_RATE)
+    (tmp_path / "map.toml").write_text(HAND_MAP + IMU)
     cmap = read_channel_map(tmp_path / "map.toml")
     assert cmap.no_steering
     got, want = load_log(log_csv, channels=cmap), _signals(name)
     assert np.isnan(got.signals.delta_f).all()
-    for k in ("t", "vx", "ay", "r", "p"):
+    for k in ("t", "vx", "ay", "r", "p", "ax"):
         np.testing.assert_allclose(getattr(got.signals, k), getattr(want.signals, k), rtol=1e-12, atol=1e-12)
     out_csv, theta_csv = _estimate([str(log_csv), "--channels", str(tmp_path / "map.toml"),
                                     "-o", str(tmp_path / "csv_out.csv")])

@@ -297,6 +297,18 @@ The correction is then used wherever ``kinematic-gyro`` (and its smoother) runs 
 (:func:`roadbank.vehicle.conditions.log_conditions`: the slope of ``vx`` on the integrated ``ax``, band-passed as
 the roll rate's, within the roll rate's range; not chosen, stated). No simulated set (a flat road: nothing to
 correct); neither the KITTI validation drives nor comma2k19 take part.
+
+The twenty-seventh stage (:func:`choose_gyro_stops`; rule written 2026-12-05 before any candidate ran) asks how
+``kinematic-gyro`` passes a stop. As shipped it stops below ``v_min`` = 1 m/s like the kinematic family, and a gap
+of more than ``max_gap`` = 1 s between usable samples restarts it from one sample of the kinematic estimate with no
+offset learnt: after every stop at a traffic light. At rest the kinematic estimate is ``ay/g`` alone (no cornering,
+no road vibration) and the gyro reads its offset, so the filter may run through a stop (``v_min`` 0); or it may hold
+its state through a stop and go on from it (a longer ``max_gap``: a car at rest keeps its roll). Candidates:
+:data:`GYRO_V_MINS` x :data:`GYRO_MAX_GAPS`, ``kinematic-gyro`` with the twenty-fourth to twenty-sixth stages'
+constants; the twenty-fourth stage's real sets and objective (the drives with their ``ax``). The lowest wins; ties
+within :data:`TIE_DEG` go to the shipped pair (1 m/s, 1 s), then to the higher ``v_min``, then to the shorter
+``max_gap``. ``kinematic-gyro-smoother`` takes the same pair (its forward and backward passes are that filter).
+Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -329,6 +341,9 @@ from ..vehicle import load_vehicle
 from .manoeuvres import drive_set
 from .objective import drive_errors
 
+#: the twenty-seventh stage's candidates: ``kinematic-gyro``'s ``v_min`` (m/s) and ``max_gap`` (s)
+GYRO_V_MINS = (1.0, 0.0)
+GYRO_MAX_GAPS = (1.0, 10.0, 60.0)
 #: the twenty-sixth stage's candidates: the window (s) of the pitch that corrects the roll rate (0: no correction)
 GRADE_WINDOWS_S = (0.0, 0.5, 1.0, 2.0, 4.0)
 #: the twenty-fourth stage's grid: ``kinematic-gyro``'s cross-over (Hz) and offset time constant (s; 0: none),
@@ -949,6 +964,17 @@ def choose_grade(logs, windows=GRADE_WINDOWS_S) -> tuple[float, dict]:
     best = min(obj.values())
     tied = [w for w, v in obj.items() if v <= best + TIE_DEG]
     return min(tied, key=lambda w: (w > 0, -w)), obj
+
+
+def choose_gyro_stops(logs, v_mins=GYRO_V_MINS, max_gaps=GYRO_MAX_GAPS) -> tuple[tuple[float, float], dict]:
+    """The twenty-seventh stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their
+    roll rate and ``ax``). Returns ``((v_min m/s, max_gap s), {(v_min, max_gap): objective deg})``."""
+    sets = gyro_sets(logs)
+    obj = {(v, gap): gyro_objective(fixed(KinematicGyro(v_min=v, max_gap=gap)), sets)
+           for v, gap in itertools.product(v_mins, max_gaps)}
+    best = min(obj.values())
+    tied = [k for k, v in obj.items() if v <= best + TIE_DEG]
+    return min(tied, key=lambda k: (k != (v_mins[0], max_gaps[0]), -k[0], k[1])), obj
 
 
 def _quiet_by(measure: str):
