@@ -302,7 +302,9 @@ The twenty-seventh stage (:func:`choose_gyro_stops`; rule written 2026-12-05 bef
 ``kinematic-gyro`` passes a stop. As shipped it stops below ``v_min`` = 1 m/s like the kinematic family, and a gap
 of more than ``max_gap`` = 1 s between usable samples restarts it from one sample of the kinematic estimate with no
 offset learnt: after every stop at a traffic light. At rest the kinematic estimate is ``ay/g`` alone (no cornering,
-no road vibration) and the gyro reads its offset, so the filter may run through a stop (``v_min`` 0); or it may hold
+no road vibration) and the gyro reads its offset, so the filter may run through a stop (``v_min`` 0.05 m/s; the rule
+said 0, amended before any candidate ran when the estimators refused a ``v_min`` of 0; a speed at rest that reads
+below it, an INS's -0.1 m/s, is still held); or it may hold
 its state through a stop and go on from it (a longer ``max_gap``: a car at rest keeps its roll). Candidates:
 :data:`GYRO_V_MINS` x :data:`GYRO_MAX_GAPS`, ``kinematic-gyro`` with the twenty-fourth to twenty-sixth stages'
 constants; the twenty-fourth stage's real sets and objective (the drives with their ``ax``). The lowest wins; ties
@@ -342,7 +344,7 @@ from .manoeuvres import drive_set
 from .objective import drive_errors
 
 #: the twenty-seventh stage's candidates: ``kinematic-gyro``'s ``v_min`` (m/s) and ``max_gap`` (s)
-GYRO_V_MINS = (1.0, 0.0)
+GYRO_V_MINS = (1.0, 0.05)
 GYRO_MAX_GAPS = (1.0, 10.0, 60.0)
 #: the twenty-sixth stage's candidates: the window (s) of the pitch that corrects the roll rate (0: no correction)
 GRADE_WINDOWS_S = (0.0, 0.5, 1.0, 2.0, 4.0)
