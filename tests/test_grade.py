@@ -181,3 +181,36 @@ def test_the_twenty_sixth_stage_chose_the_shipped_window_on_the_training_drives(
         pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
     chosen, obj = real.choose_grade(logs)
     assert chosen == GRADE_WINDOW_S and obj[chosen] < obj[0.0]
+
+
+@needs_kitti
+def test_the_twenty_seventh_stage_chose_the_shipped_restart_gap_on_the_training_drives():
+    """The rule (tuning.real.choose_gyro_stops) run again on the KITTI training drives picks the shipped pair: a stop
+    is held through for up to GYRO_MAX_GAP_S, at the shipped v_min; and it is lower than the restart after 1 s."""
+    from roadbank.estimators.kinematic import KINEMATIC_V_MIN
+    from roadbank.estimators.gyro import GYRO_MAX_GAP_S
+    from roadbank.tuning import real
+    logs = real.training_logs(DATA, roll_rate=True)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, obj = real.choose_gyro_stops(logs)
+    assert chosen == (KINEMATIC_V_MIN, GYRO_MAX_GAP_S) and KinematicGyro().max_gap == GYRO_MAX_GAP_S
+    assert obj[chosen] < obj[(KINEMATIC_V_MIN, 1.0)]
+
+
+def test_a_stop_shorter_than_the_gap_is_held_through_with_the_offset_kept():
+    """A gyro offset of 0.3 deg/s learnt over 60 s of driving on a 3 deg bank, then 5 s at rest (held: below v_min),
+    then driving again: the filter goes on from its state (the learnt offset kept, the bank unchanged); with the
+    former 1 s gap it starts again from one sample with no offset learnt."""
+    rate = 20.0
+    t = np.arange(int(75 * rate)) / rate
+    n = len(t)
+    vx = np.where((t >= 60.0) & (t < 65.0), 0.0, 15.0)
+    bank, offset = math.radians(3.0), math.radians(0.3)
+    s = Signals(t, vx, np.full(n, G * math.sin(bank)), np.zeros(n), np.full(n, np.nan), p=np.full(n, offset))
+    after = np.flatnonzero(t >= 65.0)[0]
+    kept = KinematicGyro().run(s).states["p_offset"]
+    assert kept[after] == pytest.approx(kept[after - 1], abs=0.02 * offset)
+    assert kept[after - 1] == pytest.approx(offset, rel=0.01)
+    restarted = KinematicGyro(max_gap=1.0).run(s).states["p_offset"]
+    assert abs(restarted[after]) < 0.01 * offset

@@ -57,6 +57,9 @@ GYRO_BIAS_TAU_S = 10.0
 #: the window (s) of the pitch that corrects the roll rate for the grade (0: not corrected): the rule of
 #: :mod:`roadbank.tuning.real`
 GRADE_WINDOW_S = 4.0
+#: the gap (s) between usable samples after which ``kinematic-gyro`` starts again (a stop shorter than it is held
+#: through, the state kept: a car at rest keeps its roll): the twenty-seventh stage of :mod:`roadbank.tuning.real`
+GYRO_MAX_GAP_S = 10.0
 
 
 class GradeCarry:
@@ -135,7 +138,7 @@ class KinematicGyro(ScheduledObserver):
         docstring); 0: not corrected. Default :data:`GRADE_WINDOW_S`.
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator`; ``v_min`` (m/s) defaults to
-        :data:`~roadbank.estimators.kinematic.KINEMATIC_V_MIN`.
+        :data:`~roadbank.estimators.kinematic.KINEMATIC_V_MIN`, ``max_gap`` (s) to :data:`GYRO_MAX_GAP_S`.
     """
 
     name = "kinematic-gyro"
@@ -160,7 +163,7 @@ class KinematicGyro(ScheduledObserver):
         if not (np.isfinite(window) and window >= 0):
             raise ValueError(f"{self.name}: grade_window must be >= 0 s, got {grade_window}")
         self.state_names = ("w", "p_offset") if self.bias_tau > 0 else ("w",)
-        super().__init__(params, **kw)
+        super().__init__(params, **{"max_gap": GYRO_MAX_GAP_S, **kw})
         self.grade = GradeCarry(window, self.params.g)
 
     @property

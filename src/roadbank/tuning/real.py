@@ -939,8 +939,8 @@ def choose_gyro(logs, cutoffs=GYRO_CUTOFFS_HZ, bias_taus=GYRO_BIAS_TAUS) -> tupl
     rate). Returns
     ``((cutoff Hz, bias_tau s), {(cutoff, bias_tau): objective}, default objective, gyro is the default)``."""
     sets = gyro_sets(logs)
-    # the roll rate as it ran: not corrected for the grade (the twenty-sixth stage came after)
-    obj = {(fc, bt): gyro_objective(fixed(KinematicGyro(cutoff=fc, bias_tau=bt, grade_window=0.0)), sets)
+    # as it ran: the roll rate not corrected for the grade, a restart after 1 s (the later stages came after)
+    obj = {(fc, bt): gyro_objective(fixed(KinematicGyro(cutoff=fc, bias_tau=bt, grade_window=0.0, max_gap=1.0)), sets)
            for fc, bt in itertools.product(cutoffs, bias_taus)}
     best = min(obj.values())
     tied = [k for k, v in obj.items() if v <= best + TIE_DEG]
@@ -953,7 +953,7 @@ def choose_gyro_map(logs) -> tuple[float, float, bool]:
     """The twenty-fifth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
     rate). Returns ``(kinematic-gyro-smoother's objective, the shipped map default's, the first is the default)``."""
     sets = gyro_sets(logs)
-    smoother = gyro_objective(fixed(KinematicGyroSmoother(grade_window=0.0)), sets)   # as it ran (no grade)
+    smoother = gyro_objective(fixed(KinematicGyroSmoother(grade_window=0.0, max_gap=1.0)), sets)   # as it ran
     shipped = gyro_objective(per_log("kinematic-smoother"), [without_roll_rate(logs)])
     return smoother, shipped, smoother < shipped
 
@@ -962,7 +962,7 @@ def choose_grade(logs, windows=GRADE_WINDOWS_S) -> tuple[float, dict]:
     """The twenty-sixth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
     rate and ``ax``). Returns ``(window s, {window: objective deg})``."""
     sets = gyro_sets(logs)
-    obj = {w: gyro_objective(fixed(KinematicGyro(grade_window=w)), sets) for w in windows}
+    obj = {w: gyro_objective(fixed(KinematicGyro(grade_window=w, max_gap=1.0)), sets) for w in windows}   # as it ran
     best = min(obj.values())
     tied = [w for w, v in obj.items() if v <= best + TIE_DEG]
     return min(tied, key=lambda w: (w > 0, -w)), obj
