@@ -91,3 +91,25 @@ def test_straight_drive_says_it_is_unsure(drive):
                                         ("GyroY", "lateral_acceleration"), ("VehSpd", "time")])
 def test_names_that_are_not_the_channel(name, role):
     assert name_match(role, name)[0] == 0          # a heading is no yaw rate, a pitch rate no ay
+
+
+@pytest.mark.parametrize("names", [("RollRate", "AccX"), ("gyro_x_dps", "long_acc_g")])
+def test_an_imu_logs_roll_rate_and_longitudinal_acceleration_are_guessed_by_name(tmp_path, drive, names):
+    """Columns named like a roll rate (deg/s) and a longitudinal acceleration (g) go into the map, their units read
+    from the name or the range; the map reads them back in SI. A log without such columns gets no such lines."""
+    t = drive["t"]
+    p = 0.05 * np.sin(0.7 * t)                                   # rad/s
+    ax = 0.8 * np.cos(0.3 * t) - 0.3                             # m/s^2
+    cols = {**_foreign(drive), names[0]: np.degrees(p), names[1]: ax / 9.81}
+    f = tmp_path / "imu.csv"
+    write_table(f, cols)
+    m = tmp_path / "map.toml"
+    res = CliRunner().invoke(main, ["channels", str(f), "-o", str(m)])
+    assert res.exit_code == 0, res.output
+    assert "roll_rate" in res.output and f"<- {names[0]!r} in deg/s" in res.output
+    assert f"<- {names[1]!r} in g" in res.output
+    got = load_log(f, channels=read_channel_map(m)).signals
+    np.testing.assert_allclose(got.p, p, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(got.ax, ax, rtol=1e-9, atol=1e-9)
+    roles = [g.role for g in guess_channels(list(_foreign(drive)), _foreign(drive))]
+    assert "roll_rate" not in roles and "longitudinal_acceleration" not in roles

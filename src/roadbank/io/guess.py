@@ -53,7 +53,17 @@ NAMES = {
     "steering_wheel_angle": ("swa", "steerangle", "steeringangle", "steeringwheelangle", "steer", "swangle",
                              "strwhlang", "steeringwheel", "stwangle", "steerwheelangle", "handwheelangle"),
     "road_wheel_angle": ("deltaf", "delta", "roadwheelangle", "wheelangle", "rwa", "frontwheelangle"),
+    "roll_rate": ("p", "rollrate", "rollrt", "wx", "gyrox", "omegax", "rollvel", "rollvelocity", "phidot",
+                  "angularvelocityx", "rx"),
+    "longitudinal_acceleration": ("ax", "accx", "longacc", "lonacc", "longaccel", "lngacc", "longitudinalacceleration",
+                                  "longitudinalaccel", "accelx", "alon", "alng", "accelerationx", "longg"),
 }
+#: the optional roles: guessed by name alone (never by elimination), their unit by the name or the range; the
+#: default estimator checks each against the ESP channels before it uses it (docs/estimators.md)
+OPTIONAL_ROLES = ("roll_rate", "longitudinal_acceleration")
+#: above this 99th percentile of its magnitude a roll rate is not in rad/s (roads roll the body at 0.01-0.2 rad/s)
+#: and a longitudinal acceleration not in g (braking and grades: 0.05-0.4 g)
+OPTIONAL_RANGE = {"roll_rate": ("rad/s", "deg/s", 0.5), "longitudinal_acceleration": ("g", "m/s^2", 0.6)}
 #: unit hints found in a column name (after the role's spelling) -> unit
 UNIT_HINTS = {"kmh": "km/h", "kph": "km/h", "mph": "mph", "mps": "m/s", "ms2": "m/s^2", "mss": "m/s^2",
               "degps": "deg/s", "degs": "deg/s", "dps": "deg/s", "rads": "rad/s", "radps": "rad/s",
@@ -209,7 +219,8 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
     -------
     list of Guess
         time (unless ``times``), speed, lateral_acceleration, yaw_rate and one steering role (its column None
-        when the log has no steering angle: :data:`NO_STEERING`).
+        when the log has no steering angle: :data:`NO_STEERING`), then each of :data:`OPTIONAL_ROLES` that a
+        column is named like.
     """
     numeric = [c for c in names if c in data and np.isfinite(data[c]).any()]
     used: set[str] = set()
@@ -262,7 +273,30 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
     if steer_col is None and empty:
         out_steer.reason = f"column {empty[0]!r} is named like a steering angle but holds no numbers"
     roles = (["time"] if "time" in out else []) + ["speed", "lateral_acceleration", "yaw_rate"]
-    return [out[k] for k in roles] + [out_steer]
+    optional = []
+    for role in OPTIONAL_ROLES:
+        col, score, hint = pick(role, numeric)
+        optional.append(_optional(role, col, score, hint, series))
+    return [out[k] for k in roles] + [out_steer] + [g for g in optional if g is not None]
+
+
+def _optional(role: str, col, score: int, hint, series) -> Guess | None:
+    """The guess of an optional role for the column ``col`` named like it (``score`` of :func:`name_match`, its unit
+    ``hint``); ``series(col)`` its values. None when no column is named like it."""
+    if col is None or score == 0:
+        return None
+    small, large, limit = OPTIONAL_RANGE[role]
+    a = np.abs(_finite(series(col)))
+    if hint in (small, large):
+        unit, why = hint, "name, unit in the name"
+    elif len(a):
+        p99 = float(np.percentile(a, 99))
+        unit = small if p99 <= limit else large
+        why = f"name, range (99th percentile {p99:.3g}: {unit})"
+    else:
+        unit, why = small, f"name; no values to judge the unit by: {small} assumed"
+    return Guess(role, col, unit, False, "medium", f"{why}; optional, sign not checked here: the default uses it "
+                 "only where it follows the ESP channels")
 
 
 @dataclass(frozen=True)
