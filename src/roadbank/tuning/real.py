@@ -311,6 +311,17 @@ constants; the twenty-fourth stage's real sets and objective (the drives with th
 within :data:`TIE_DEG` go to the shipped pair (1 m/s, 1 s), then to the higher ``v_min``, then to the shorter
 ``max_gap``. ``kinematic-gyro-smoother`` takes the same pair (its forward and backward passes are that filter).
 Neither the KITTI validation drives nor comma2k19 take part.
+
+The twenty-eighth stage (:func:`choose_gyro_order`; rule written 2026-12-05 before any candidate ran) asks for the
+order of ``kinematic-gyro``'s complementary filter. On the training drives as read, its error above 0.5 Hz is
+0.09-0.21 deg: the road's vibration in the kinematic estimate, which the shipped filter (order 2) passes falling at
+20 dB a decade above its cross-over. Order 4 puts all four poles at :math:`\omega = 2\pi f`: the kinematic
+estimate's path :math:`(6\omega^2 s^2 + 4\omega^3 s + \omega^4)/(s + \omega)^4` falls at 40 dB a decade, and
+the roll rate's path :math:`s^2 (s + 4\omega)/(s + \omega)^4` (its complement over :math:`s`) still rejects a
+constant gyro offset. Candidates: the shipped filter, and order 4 at each :math:`f` of
+:data:`GYRO_ORDER4_CUTOFFS_HZ`; the grade correction and the stop handling as shipped; the twenty-fourth stage's
+real sets and objective. The lowest wins; ties within :data:`TIE_DEG` go to the shipped filter, then to the lower
+:math:`f`. ``kinematic-gyro-smoother`` takes the result. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -343,6 +354,8 @@ from ..vehicle import load_vehicle
 from .manoeuvres import drive_set
 from .objective import drive_errors
 
+#: the twenty-eighth stage's candidates: the frequency (Hz) of the four poles of an order-4 ``kinematic-gyro``
+GYRO_ORDER4_CUTOFFS_HZ = (0.05, 0.07, 0.1, 0.15, 0.2, 0.3)
 #: the twenty-seventh stage's candidates: ``kinematic-gyro``'s ``v_min`` (m/s) and ``max_gap`` (s)
 GYRO_V_MINS = (1.0, 0.05)
 GYRO_MAX_GAPS = (1.0, 10.0, 60.0)
