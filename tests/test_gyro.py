@@ -66,6 +66,33 @@ def test_a_gyro_offset_is_learnt_and_without_the_offset_state_costs_b_over_wc(of
     assert plain.theta[-1] == pytest.approx(b / (2 * math.pi * GYRO_CUTOFF_HZ), rel=1e-3)
 
 
+@pytest.mark.parametrize("f", [0.07, 0.3])
+def test_order_four_passes_a_ramp_rejects_an_offset_and_falls_at_40_db_a_decade(f):
+    """Order 4 (all four poles at 2 pi f): a roll ramp with a constant gyro offset passes exactly in the steady state
+    (the roll rate's path s^2 (s + 4w)/(s + w)^4 has a double zero; the kinematic estimate's path is 1 at DC); a
+    sine of sin(theta) in ay alone (the gyro silent) at 10 f comes out scaled by |6 w^2 s^2 + 4 w^3 s + w^4| /
+    |s + w|^4 (analytic), 40 dB a decade where order 2 loses 20."""
+    from roadbank.constants import G as g           # the filter's own gravity: k = ay / g exactly
+
+    def log(w, p):
+        n = len(w)
+        return Signals(t, np.full(n, 20.0), g * w, np.zeros(n), np.full(n, np.nan), p)
+    rate = 100.0
+    t = np.arange(int(300 * rate)) / rate
+    slope, b = math.radians(0.1), math.radians(0.5)
+    w = slope * t
+    est = KinematicGyro(order=4, cutoff=f)
+    late = t > 200.0
+    np.testing.assert_allclose(est.run(log(w, np.full(len(t), slope + b))).w[late], w[late], rtol=0, atol=1e-7)
+    f0 = 10 * f
+    amp = 0.01
+    u = amp * np.sin(2 * math.pi * f0 * t)
+    out = est.run(log(u, np.zeros(len(t)))).w
+    om, s0 = 2 * math.pi * f, 2j * math.pi * f0
+    gain = abs(6 * om ** 2 * s0 ** 2 + 4 * om ** 3 * s0 + om ** 4) / abs(s0 + om) ** 4
+    assert np.max(np.abs(out[late])) == pytest.approx(gain * amp, rel=0.02)
+
+
 def test_road_vibration_is_kept_out_where_the_kinematic_estimate_carries_it():
     """White noise of 0.3 m/s^2 on ay (a shaking road) over a bank that swings 2 deg at 0.3 Hz, the gyro exact:
     the fused estimate is within a fifth of the raw kinematic estimate's error and below a 0.5 Hz low-pass's."""
@@ -194,6 +221,20 @@ def test_the_twenty_fourth_stage_chose_the_shipped_constants_on_the_training_dri
     chosen, obj, shipped, is_default = real.choose_gyro(logs, cutoffs=(0.1, 0.15, 0.2), bias_taus=(0.0, 10.0, 20.0))
     assert chosen == (GYRO_CUTOFF_HZ, GYRO_BIAS_TAU_S)
     assert is_default and obj[chosen] < shipped
+
+
+@needs_kitti
+def test_the_twenty_eighth_stage_kept_order_two_on_the_training_drives():
+    """The rule (tuning.real.choose_gyro_order) run again on the KITTI training drives keeps the shipped filter: no
+    order-4 candidate comes within the tie."""
+    from roadbank.estimators.gyro import GYRO_ORDER
+    from roadbank.tuning import real
+    logs = real.training_logs(DATA, roll_rate=True)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, obj = real.choose_gyro_order(logs, cutoffs=(0.07, 0.1))
+    assert chosen == (GYRO_ORDER, GYRO_CUTOFF_HZ) == (2, GYRO_CUTOFF_HZ)
+    assert min(v for k, v in obj.items() if k[0] == 4) > obj[chosen] + real.TIE_DEG
 
 
 def test_the_c_export_refuses_the_gyro_filter_with_the_reason():

@@ -60,6 +60,8 @@ GRADE_WINDOW_S = 4.0
 #: the gap (s) between usable samples after which ``kinematic-gyro`` starts again (a stop shorter than it is held
 #: through, the state kept: a car at rest keeps its roll): the twenty-seventh stage of :mod:`roadbank.tuning.real`
 GYRO_MAX_GAP_S = 10.0
+#: the order of ``kinematic-gyro``'s complementary filter (2, or 4: :func:`gyro_observer`): the twenty-eighth stage
+GYRO_ORDER = 2
 
 
 class GradeCarry:
@@ -99,19 +101,29 @@ class GradeCarry:
 
 @dataclass(frozen=True)
 class GyroDesign(DesignInputs):
-    """Design inputs of :class:`KinematicGyro`: the cut-off ``cutoff`` (Hz) and the offset's time constant
-    ``bias_tau`` (s; 0: no offset state)."""
+    """Design inputs of :class:`KinematicGyro`: the cut-off ``cutoff`` (Hz), the offset's time constant
+    ``bias_tau`` (s; 0: no offset state) and the filter's ``order`` (2, or 4: :func:`gyro_observer`)."""
 
     cutoff: float = GYRO_CUTOFF_HZ
     bias_tau: float = GYRO_BIAS_TAU_S
+    order: int = 2
 
 
 def gyro_observer(d: GyroDesign, vx: float):
-    """``(F, G, H, D)`` of the complementary filter at ``vx`` (m/s); inputs ``[p, ay, r]`` (module docstring);
-    states ``[x, b]`` (``[x]`` without the offset)."""
+    r"""``(F, G, H, D)`` of the complementary filter at ``vx`` (m/s); inputs ``[p, ay, r]`` (module docstring);
+    states ``[x, b]`` (``[x]`` without the offset). Order 4 (``bias_tau`` not used): all four poles at
+    :math:`\omega = 2\pi f_c`, the kinematic estimate's path :math:`(6\omega^2 s^2 + 4\omega^3 s + \omega^4) /
+    (s+\omega)^4`, the roll rate's :math:`s^2 (s + 4\omega)/(s+\omega)^4`, in observable canonical form (the estimate
+    the first state)."""
     g, wc = d.params.g, 2.0 * np.pi * d.cutoff
     kin = np.array([0.0, 1.0 / g, -vx / g])                   # the kinematic estimate per eta
     gyro = np.array([1.0, 0.0, 0.0])                          # the roll rate per eta
+    if d.order == 4:
+        a = np.array([4.0 * wc, 6.0 * wc ** 2, 4.0 * wc ** 3, wc ** 4])     # (s + wc)^4 = s^4 + a1 s^3 + ...
+        F = np.zeros((4, 4))
+        F[:, 0], F[:3, 1:] = -a, np.eye(3)
+        G = np.outer([1.0, 4.0 * wc, 0.0, 0.0], gyro) + np.outer([0.0, *a[1:]], kin)
+        return F, G, np.eye(1, 4), np.zeros((1, 3))
     if d.bias_tau <= 0:
         return np.array([[-wc]]), (gyro + wc * kin)[None, :], np.array([[1.0]]), np.zeros((1, 3))
     ki = wc / d.bias_tau
@@ -132,7 +144,10 @@ class KinematicGyro(ScheduledObserver):
         it the integrated roll rate. Default :data:`GYRO_CUTOFF_HZ`.
     bias_tau : float, optional
         Time constant (s, >= 0) in which the gyro's offset is learnt; 0: no offset state. Default
-        :data:`GYRO_BIAS_TAU_S`.
+        :data:`GYRO_BIAS_TAU_S`. Not used at order 4.
+    order : int, optional
+        2 (the module docstring's filter) or 4 (:func:`gyro_observer`: ``cutoff`` the frequency of its four
+        poles). Default :data:`GYRO_ORDER`.
     grade_window : float, optional
         Window (s, >= 0) of the pitch that corrects the roll rate for the grade on a log with ``ax`` (module
         docstring); 0: not corrected. Default :data:`GRADE_WINDOW_S`.
@@ -152,9 +167,12 @@ class KinematicGyro(ScheduledObserver):
         @property
         def design(self) -> GyroDesign: ...     # an instance of design_type
 
-    def __init__(self, params=None, *, cutoff=None, bias_tau=None, grade_window=None, **kw):
+    def __init__(self, params=None, *, cutoff=None, bias_tau=None, grade_window=None, order=None, **kw):
         self.cutoff = float(GYRO_CUTOFF_HZ if cutoff is None else cutoff)
         self.bias_tau = float(GYRO_BIAS_TAU_S if bias_tau is None else bias_tau)
+        self.order = int(GYRO_ORDER if order is None else order)
+        if self.order not in (2, 4):
+            raise ValueError(f"{self.name}: order must be 2 or 4, got {order}")
         window = float(GRADE_WINDOW_S if grade_window is None else grade_window)
         if not (np.isfinite(self.cutoff) and self.cutoff > 0):
             raise ValueError(f"{self.name}: cutoff must be > 0 Hz, got {cutoff}")
@@ -162,7 +180,8 @@ class KinematicGyro(ScheduledObserver):
             raise ValueError(f"{self.name}: bias_tau must be >= 0 s, got {bias_tau}")
         if not (np.isfinite(window) and window >= 0):
             raise ValueError(f"{self.name}: grade_window must be >= 0 s, got {grade_window}")
-        self.state_names = ("w", "p_offset") if self.bias_tau > 0 else ("w",)
+        self.state_names = (("w", "c1", "c2", "c3") if self.order == 4 else
+                            ("w", "p_offset") if self.bias_tau > 0 else ("w",))
         super().__init__(params, **{"max_gap": GYRO_MAX_GAP_S, **kw})
         self.grade = GradeCarry(window, self.params.g)
 
@@ -178,7 +197,7 @@ class KinematicGyro(ScheduledObserver):
             self.grade.reset()
 
     def _design_fields(self) -> dict:
-        return dict(cutoff=self.cutoff, bias_tau=self.bias_tau)
+        return dict(cutoff=self.cutoff, bias_tau=self.bias_tau, order=self.order)
 
     def _table_inputs(self) -> GyroDesign:
         """:attr:`design` with the car reduced to its ``g``, all that the tables read."""
@@ -191,10 +210,13 @@ class KinematicGyro(ScheduledObserver):
     def _design(self):
         tab, n, extra = super()._design()
         # a (re)start takes the kinematic estimate and no offset, not the equilibrium of the current roll rate
-        # (J: the state per eta at a start)
+        # (J: the state per eta at a start; order 4: the rest state of a constant kinematic estimate k, [k, 4 w k,
+        # 0, 0])
         row, g = L.lpv_row(n), self.params.g
         J = np.zeros((len(tab), n, L.NETA))
         J[:, 0, 1], J[:, 0, 2] = 1.0 / g, -self.design.vgrid / g
+        if self.order == 4:
+            J[:, 1, :] = 4.0 * 2.0 * np.pi * self.cutoff * J[:, 0, :]
         tab = np.array(tab)
         tab[:, row.J:row.cont] = J.reshape(len(tab), -1)
         return Tables(np.ascontiguousarray(tab), n, extra)
@@ -245,12 +267,12 @@ class KinematicGyroSmoother(KinematicGyro):
     #: the causal estimator of its forward pass (what an ECU runs instead)
     forward_filter = "kinematic-gyro"
 
-    def __init__(self, params=None, *, cutoff=None, bias_tau=None, grade_window=None, **kw):
-        super().__init__(params, cutoff=cutoff, bias_tau=bias_tau, grade_window=grade_window, **kw)
+    def __init__(self, params=None, *, cutoff=None, bias_tau=None, grade_window=None, order=None, **kw):
+        super().__init__(params, cutoff=cutoff, bias_tau=bias_tau, grade_window=grade_window, order=order, **kw)
         # the same design in reversed time, on the forward pass's fixed rate (as kinematic-smoother's); it reads
         # the roll rate as the forward pass has corrected it
         self._reverse = KinematicGyro(self.params, cutoff=self.cutoff, bias_tau=self.bias_tau, grade_window=0.0,
-                                      **{**kw, "sample_rate": None})
+                                      order=self.order, **{**kw, "sample_rate": None})
         self._reverse_dt: float | None = None
 
     def reset(self) -> None:

@@ -340,7 +340,7 @@ from scipy.signal import resample_poly
 from .. import vehicle
 from ..vehicle import conditions
 from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
-from ..estimators.gyro import KinematicGyro, KinematicGyroSmoother
+from ..estimators.gyro import GYRO_CUTOFF_HZ, KinematicGyro, KinematicGyroSmoother
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
@@ -990,6 +990,18 @@ def choose_gyro_stops(logs, v_mins=GYRO_V_MINS, max_gaps=GYRO_MAX_GAPS) -> tuple
     best = min(obj.values())
     tied = [k for k, v in obj.items() if v <= best + TIE_DEG]
     return min(tied, key=lambda k: (k != (v_mins[0], max_gaps[0]), -k[0], k[1])), obj
+
+
+def choose_gyro_order(logs, cutoffs=GYRO_ORDER4_CUTOFFS_HZ) -> tuple[tuple[int, float], dict]:
+    """The twenty-eighth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate and ``ax``). Returns ``((order, cutoff Hz), {(order, cutoff): objective deg})``."""
+    sets = gyro_sets(logs)
+    shipped = (2, GYRO_CUTOFF_HZ)
+    cands = [shipped] + [(4, fc) for fc in cutoffs]
+    obj = {(o, fc): gyro_objective(fixed(KinematicGyro(order=o, cutoff=fc)), sets) for o, fc in cands}
+    best = min(obj.values())
+    tied = [k for k, v in obj.items() if v <= best + TIE_DEG]
+    return min(tied, key=lambda k: (k != shipped, k[1])), obj
 
 
 def _quiet_by(measure: str):
