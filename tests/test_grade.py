@@ -214,3 +214,16 @@ def test_a_stop_shorter_than_the_gap_is_held_through_with_the_offset_kept():
     assert kept[after - 1] == pytest.approx(offset, rel=0.01)
     restarted = KinematicGyro(max_gap=1.0).run(s).states["p_offset"]
     assert abs(restarted[after]) < 0.01 * offset
+
+
+def test_step_with_gaps_in_ax_gives_what_run_gives():
+    """Samples without ax (NaN) inside a log that has one: step() keeps them in its window as run() does."""
+    s, _ = _circle_on_a_plane(6.0, 0.1, rate=20.0, duration=30.0)
+    ax = s.ax.copy()
+    ax[100:110] = np.nan
+    s = dataclasses.replace(s, ax=ax)
+    whole = KinematicGyro().run(s).theta
+    est = KinematicGyro()
+    stepped = [est.step(*(float(getattr(s, c)[i]) for c in ("t", "vx", "ay", "r", "delta_f", "p", "ax"))).theta
+               for i in range(len(s))]
+    np.testing.assert_array_equal(stepped, whole)

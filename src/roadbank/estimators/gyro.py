@@ -78,6 +78,11 @@ class GradeCarry:
         #: the last window's (t, vx, ax) and the running area and count at its first sample
         self._tail: tuple | None = None
 
+    @property
+    def started(self) -> bool:
+        """Whether samples are kept from an earlier chunk."""
+        return self._tail is not None
+
     def correct(self, s: Signals, advance: int | None = None) -> Signals:
         """``s`` with its roll rate corrected (rad/s) and no ``ax`` (what the filter reads); the samples kept move
         on by the first ``advance`` of ``s`` (default all; a lookahead's samples are corrected, not kept)."""
@@ -244,8 +249,8 @@ class KinematicGyro(ScheduledObserver):
              p: float = float("nan"), ax: float = float("nan")) -> StepResult:
         """One sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), the unused delta_f (rad), the roll rate ``p``
         (rad/s) and the longitudinal acceleration ``ax`` (m/s^2; NaN: the roll rate is not corrected for the
-        grade)."""
-        if self.grade.window > 0 and not np.isnan(ax):
+        grade, and once an ``ax`` has come, the windows that hold the NaN are not, as in :meth:`run`)."""
+        if self.grade.window > 0 and (not np.isnan(ax) or self.grade.started):
             one = Signals(**{c: np.array([float(v)]) for c, v in
                              zip(("t", "vx", "ay", "r", "delta_f", "p", "ax"), (t, vx, ay, r, delta_f, p, ax))})
             p = float(self.grade.correct(one).p[0])
