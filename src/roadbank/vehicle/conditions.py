@@ -48,18 +48,18 @@ GYRO_FILTER = "kinematic-gyro"
 #: what each real-road estimator is on such a log (the offline ``kinematic-smoother`` of ``roadbank map``: the same
 #: filter forward and backward, the twenty-fifth stage)
 GYRO_MODELS = {"kinematic-pif": GYRO_FILTER, "kinematic-smoother": "kinematic-gyro-smoother"}
-#: share (-) of the design span's samples at speed whose roll rate must be finite for a log to count as having one
+#: share (-) of the design span's samples at speed where an optional channel (roll rate, ax) must be finite for a log
+#: to count as having it
 ROLL_RATE_SHARE = 0.5
 #: the roll rate is used only where it follows the roll that ``ay`` shows: the least-squares slope (-) of the
 #: kinematic estimate on the integrated roll rate, both band-passed over the design span (centred moving averages
 #: of :data:`ROLL_CHECK_WINDOWS_S` (s), the shorter less the longer: about 0.05-0.5 Hz), within
 #: :data:`ROLL_SLOPE_RANGE`. On the design spans of the 16 shared KITTI drives and comma2k19 it is 1.0-1.5; negated,
 #: -1.0 to -1.5; the yaw rate in its place -0.22 to 0.10; deg/s read as rad/s 0.017-0.027.
+#: The longitudinal acceleration likewise corrects the roll rate for the grade only where it follows the speed: the
+#: slope (-) of ``vx`` on the integrated ``ax``, band-passed in the same way, within the same range (:func:`ax_slope`).
 ROLL_CHECK_WINDOWS_S = (1.0, 10.0)
 ROLL_SLOPE_RANGE = (0.5, 2.0)
-#: the longitudinal acceleration likewise corrects the roll rate for the grade only where it follows the speed: the
-#: slope (-) of ``vx`` on the integrated ``ax``, band-passed in the same way, within :data:`ROLL_SLOPE_RANGE`
-#: (:func:`ax_slope`)
 #: low-passes whose update is limited by default (their ``clip``), given the log's noise densities ``Q_ay`` and ``R``
 #: (:func:`noise_densities`) by :func:`make_estimator`, as a sensor-weighted PIF is
 LIMITED_LOWPASSES = ("kinematic-smoother",)
