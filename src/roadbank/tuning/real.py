@@ -289,7 +289,7 @@ the training drives alone showed that the INS's own pitch takes their median fro
 roll rate for the grade: the rate of the roll angle is :math:`p + (q \sin\theta + r \cos\theta) \tan\vartheta
 \approx p + r \tan\vartheta` with :math:`\vartheta` the pitch (positive nose down), which a log with a
 longitudinal accelerometer gives: :math:`\sin\vartheta = (\dot v_x - a_x)/g`, averaged causally over a window of
-:math:`W` s (:func:`roadbank.estimators.gyro.euler_roll_rate`). Candidates: :data:`GRADE_WINDOWS_S` (0: no
+:math:`W` s (:mod:`roadbank.models.attitude`). Candidates: :data:`GRADE_WINDOWS_S` (0: no
 correction), each ``kinematic-gyro`` with the twenty-fourth stage's cross-over and offset time constant (no grid of
 its own). Real sets and objective: the twenty-fourth stage's (:func:`gyro_sets`, :func:`gyro_objective`), the drives
 read with their ``ax``. The lowest wins; ties within :data:`TIE_DEG` go to no correction, then to the longer window.
