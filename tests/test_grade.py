@@ -119,15 +119,6 @@ def test_step_and_chunks_give_what_one_run_gives():
 
 
 # ------------------------------------------------------------------ real drives and the default
-@needs_kitti
-def test_the_readers_give_the_longitudinal_acceleration():
-    from roadbank.io.kitti import load_kitti_oxts
-    log = load_kitti_oxts(KITTI)
-    frames = sorted((KITTI / "oxts" / "data").glob("*.txt"))
-    ax = np.array([float(f.read_text().split()[11]) for f in frames[:50]])
-    np.testing.assert_allclose(log.signals.ax[:50], ax, rtol=0, atol=1e-12)
-
-
 def test_a_csv_log_reads_ax_by_the_default_map_and_a_map_naming_a_missing_column_says_so(tmp_path):
     from roadbank.io import load_log
     n = 200

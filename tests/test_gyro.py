@@ -172,12 +172,14 @@ def test_the_simulators_roll_rate_gyro_reads_the_rate_of_its_bank_and_body_roll(
 
 
 @needs_kitti
-def test_the_kitti_reader_gives_the_ins_roll_rate():
+@pytest.mark.parametrize("channel, column", [("p", 17), ("ax", 11)])
+def test_the_kitti_reader_gives_the_ins_roll_rate_and_longitudinal_acceleration(channel, column):
+    """wx (column 17) and ax (column 11) of the oxts frames, as stored (the INS's axes are ISO already)."""
     from roadbank.io.kitti import load_kitti_oxts
     log = load_kitti_oxts(KITTI)
     frames = sorted((KITTI / "oxts" / "data").glob("*.txt"))
-    wx = np.array([float(f.read_text().split()[17]) for f in frames[:50]])
-    np.testing.assert_allclose(log.signals.p[:50], wx, rtol=0, atol=1e-12)
+    want = np.array([float(f.read_text().split()[column]) for f in frames[:50]])
+    np.testing.assert_allclose(getattr(log.signals, channel)[:50], want, rtol=0, atol=1e-12)
 
 
 @needs_kitti
