@@ -373,3 +373,19 @@ def test_a_streamed_log_gets_the_estimate_of_one_run():
     whole = est.run(s).theta.copy()
     parts = [est.run(s[a:a + 97], reset=(a == 0)).theta.copy() for a in range(0, len(s), 97)]
     np.testing.assert_array_equal(np.concatenate(parts), whole)
+
+
+def test_a_standstill_start_keeps_the_roll_rate_gyro():
+    """A simulated run with a roll-rate gyro and a standstill before it (sim.standstill): the gyro reads its own
+    offset at rest (the mean of the standstill's samples, within its noise over their count), then the run's samples
+    as they were."""
+    from roadbank.sim.standstill import with_standstill
+    bias = math.radians(0.4)
+    cfg = SensorConfig(roll_rate=ChannelErrorModel(noise_std=ESP_R_NOISE, bias=bias))
+    sc = SCENARIOS["const-bank"]
+    sim = run(sc, sensors=cfg, seed=2)
+    still = with_standstill(sim, sc, 3.0)
+    n = len(still.signals) - len(sim.signals)
+    assert n == 300 and still.signals.p is not None
+    np.testing.assert_array_equal(still.signals.p[n:], sim.signals.p)
+    assert np.mean(still.signals.p[:n]) == pytest.approx(bias, abs=4 * ESP_R_NOISE / math.sqrt(n))

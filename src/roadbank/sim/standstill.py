@@ -76,15 +76,19 @@ def with_standstill(result: SimResult, scenario: Scenario, seconds: float) -> Si
     rest = _at_rest(scenario, result)
     zeros = np.zeros(n)
     rng = np.random.default_rng([result.seed, 1])
-    meas = measure({"r": zeros, "ay": np.full(n, rest["ay"]), "ax": np.full(n, rest["ax"]), "v_wheels": zeros,
-                    "swa": np.full(n, rest["swa"])}, sens, rng)
+    sig = result.signals
+    at_rest = {"r": zeros, "ay": np.full(n, rest["ay"]), "ax": np.full(n, rest["ax"]), "v_wheels": zeros,
+               "swa": np.full(n, rest["swa"])}
+    if sig.p is not None:               # a run with a roll-rate gyro: it reads its error alone at rest
+        at_rest["p"] = zeros
+    meas = measure(at_rest, sens, rng)
     v = result.plant.vehicle
     shift = n / sens.rate
     t = np.concatenate([np.arange(n) / sens.rate, result.signals.t + shift])
-    sig = result.signals
     signals = Signals(t, np.concatenate([meas["vx"], sig.vx]), np.concatenate([meas["ay"], sig.ay]),
                       np.concatenate([meas["r"], sig.r]),
-                      np.concatenate([meas["swa"] / v.steering_ratio, sig.delta_f]))
+                      np.concatenate([meas["swa"] / v.steering_ratio, sig.delta_f]),
+                      p=None if sig.p is None else np.concatenate([meas["p"], sig.p]))
     tr = result.truth
     first = {"phi_b": rest["phi_b"], "phi": rest["phi"], "theta": rest["phi_b"] + rest["phi"], "vy": 0.0,
              "dvy_dt": 0.0, "r": 0.0, "ay_true": rest["ay"], "ax_true": rest["ax"], "vx": 0.0,
