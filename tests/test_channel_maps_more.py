@@ -240,17 +240,21 @@ def test_a_wrong_speed_unit_is_never_high(name):
 
 @pytest.mark.parametrize("name", SHARED)
 def test_mph_log_guessed_and_estimated_as_the_drive(tmp_path, name):
-    """A US car log (speed in mph under `VehSpd`, the rest SI, a steering-wheel angle): the map `roadbank
-    channels` writes reads the speed in mph, and `roadbank estimate` with it gives the estimate of the same log
-    written in SI and read with a map written here."""
+    """A US car log (speed in mph under `VehSpd`, the rest SI, a steering-wheel angle, the INS's roll rate in deg/s
+    and ax in g): the map `roadbank channels` writes reads the speed in mph and the roll rate and ax in their units,
+    and `roadbank estimate` with it gives the estimate of the same log written in SI and read with a map written
+    here."""
     log_csv = write_table(tmp_path / "us.csv", _columns(name, "mph", steering=True))
     m = tmp_path / "m.toml"
     res = CliRunner().invoke(main, ["channels", str(log_csv), "-o", str(m)])
     assert res.exit_code == 0, res.output
-    assert read_channel_map(m).channels["speed"].unit == "mph"
+    guessed = read_channel_map(m).channels
+    assert guessed["speed"].unit == "mph"
+    assert (guessed["roll_rate"].column, guessed["roll_rate"].unit) == ("RollRate", "deg/s")
+    assert (guessed["longitudinal_acceleration"].column, guessed["longitudinal_acceleration"].unit) == ("LongAcc", "g")
     _, got = _estimate([str(log_csv), "--channels", str(m), "-o", str(tmp_path / "us_out.csv")])
     si_csv = write_table(tmp_path / "si.csv", _columns(name, "m/s", steering=True))
-    (tmp_path / "si.toml").write_text(HAND_MAP + 'steering_wheel_angle = { column = "SWA", unit = "deg" }\n')
+    (tmp_path / "si.toml").write_text(HAND_MAP + IMU + 'steering_wheel_angle = { column = "SWA", unit = "deg" }\n')
     _, want = _estimate([str(si_csv), "--channels", str(tmp_path / "si.toml"), "-o", str(tmp_path / "si_out.csv")])
     np.testing.assert_allclose(got["kinematic-pif.theta"], want["kinematic-pif.theta"], rtol=1e-9, atol=1e-12)
 
