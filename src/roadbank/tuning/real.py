@@ -322,6 +322,19 @@ constant gyro offset. Candidates: the shipped filter, and order 4 at each :math:
 :data:`GYRO_ORDER4_CUTOFFS_HZ`; the grade correction and the stop handling as shipped; the twenty-fourth stage's
 real sets and objective. The lowest wins; ties within :data:`TIE_DEG` go to the shipped filter, then to the lower
 :math:`f`. ``kinematic-gyro-smoother`` takes the result. Neither the KITTI validation drives nor comma2k19 take part.
+
+The twenty-ninth stage (:func:`choose_gyro_sideslip`; rule written 2026-12-05 before any candidate ran) asks whether
+``kinematic-gyro`` takes the sideslip acceleration out of the kinematic estimate. :math:`k = \sin\theta +
+\dot v_y / g`, and the gyro does not see :math:`\dot v_y`, so what of it the kinematic estimate's path passes is
+error, largest at turn entries in town (:math:`L_r \dot r` of 0.3 m/s^2 is 1.7 deg in :math:`k`). The rear axle's
+quasi-static balance gives it without steering: :math:`v_y = L_r r - c\, v_x a_y`, :math:`c = m L_f / (C_r L)`, so
+:math:`\dot v_y \approx L_r \dot r - c\, v_x \dot a_y` (:math:`v_x` the schedule, held), with the car the
+estimator is built for (a log's fitted car, as the command line builds it). Candidates: ``"none"`` (shipped),
+``"geometry"`` (:math:`L_r \dot r` alone, :math:`c = 0`), ``"quasi-static"`` (both terms); the earlier stages'
+constants; the twenty-fourth stage's real sets and objective, each drive's estimator built for its own fitted car
+(:func:`roadbank.vehicle.undescribed_params`). The lowest wins; ties within :data:`TIE_DEG` go to ``"none"``, then
+``"geometry"``. ``kinematic-gyro-smoother`` takes the result. Neither the KITTI validation drives nor comma2k19 take
+part.
 """
 
 from __future__ import annotations
@@ -354,6 +367,8 @@ from ..vehicle import load_vehicle
 from .manoeuvres import drive_set
 from .objective import drive_errors
 
+#: the twenty-ninth stage's candidates: the sideslip acceleration ``kinematic-gyro`` takes out of the kinematic estimate
+GYRO_SIDESLIPS = ("none", "geometry", "quasi-static")
 #: the twenty-eighth stage's candidates: the frequency (Hz) of the four poles of an order-4 ``kinematic-gyro``
 GYRO_ORDER4_CUTOFFS_HZ = (0.05, 0.07, 0.1, 0.15, 0.2, 0.3)
 #: the twenty-seventh stage's candidates: ``kinematic-gyro``'s ``v_min`` (m/s) and ``max_gap`` (s)
