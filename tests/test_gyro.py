@@ -389,3 +389,52 @@ def test_a_standstill_start_keeps_the_roll_rate_gyro():
     assert n == 300 and still.signals.p is not None
     np.testing.assert_array_equal(still.signals.p[n:], sim.signals.p)
     assert np.mean(still.signals.p[:n]) == pytest.approx(bias, abs=4 * ESP_R_NOISE / math.sqrt(n))
+
+
+@pytest.mark.parametrize("mode", ["geometry", "quasi-static"])
+def test_the_sideslip_acceleration_the_rear_axle_balance_gives_is_taken_out(mode):
+    """A turn in and out on a level road, the gyro silent (no roll), ay = v_y' + v_x r with v_y from the rear axle's
+    quasi-static balance, v_y = L_r r - c v_x a_y (c = 0 for the geometry alone; for both terms the first-order
+    equation in a_y solved by scipy): the kinematic estimate carries v_y'/g (about 1 deg), the filter without the
+    compensation passes much of it, with it the output stays at zero (to 1e-3 deg: the sampled inputs)."""
+    from scipy.integrate import solve_ivp
+    from roadbank.params import VehicleParams
+    q = VehicleParams()
+    rate, vx = 100.0, 12.0
+    t = np.arange(int(40 * rate)) / rate
+    r = 0.15 * (np.tanh((t - 15.0) / 1.0) - np.tanh((t - 28.0) / 1.0))
+    rd = 0.15 * (1.0 / np.cosh((t - 15.0) / 1.0) ** 2 - 1.0 / np.cosh((t - 28.0) / 1.0) ** 2)
+    c = q.m * q.Lf / (q.Cr * (q.Lf + q.Lr)) if mode == "quasi-static" else 0.0
+    if c == 0.0:
+        ay = q.Lr * rd + vx * r
+    else:
+        def rhs(tt, y):
+            return [(q.Lr * np.interp(tt, t, rd) + vx * np.interp(tt, t, r) - y[0]) / (c * vx)]
+        ay = solve_ivp(rhs, (0.0, t[-1]), [0.0], t_eval=t, max_step=0.01, rtol=1e-10, atol=1e-12).y[0]
+    n = len(t)
+    s = Signals(t, np.full(n, vx), ay, r, np.full(n, np.nan), p=np.zeros(n))
+    k = np.degrees(np.max(np.abs((ay - vx * r) / q.g)))
+    plain = np.degrees(np.max(np.abs(KinematicGyro(q).run(s).theta)))
+    taken = np.degrees(np.max(np.abs(KinematicGyro(q, sideslip=mode).run(s).theta)))
+    assert k > 0.8 and plain > 0.5 * k and taken < 1e-3
+
+
+def test_a_sideslip_needs_order_two():
+    with pytest.raises(ValueError, match="sideslip"):
+        KinematicGyro(order=4, sideslip="geometry")
+
+
+@needs_kitti
+def test_the_twenty_ninth_stage_kept_no_sideslip_on_the_training_drives():
+    """The rule (tuning.real.choose_gyro_sideslip) run again on the KITTI training drives keeps the filter without
+    the sideslip term, by more than the tie; and the offline form refuses the option."""
+    from roadbank.estimators.gyro import GYRO_SIDESLIP, KinematicGyroSmoother
+    from roadbank.tuning import real
+    logs = real.training_logs(DATA, roll_rate=True)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, obj = real.choose_gyro_sideslip(logs)
+    assert chosen == GYRO_SIDESLIP == "none"
+    assert min(obj["geometry"], obj["quasi-static"]) > obj["none"] + real.TIE_DEG
+    with pytest.raises(ValueError, match="sideslip"):
+        KinematicGyroSmoother(sideslip="geometry")

@@ -1019,6 +1019,23 @@ def choose_gyro_order(logs, cutoffs=GYRO_ORDER4_CUTOFFS_HZ) -> tuple[tuple[int, 
     return min(tied, key=lambda k: (k != shipped, k[1])), obj
 
 
+def choose_gyro_sideslip(logs, modes=GYRO_SIDESLIPS) -> tuple[str, dict]:
+    """The twenty-ninth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate and ``ax``), each drive's filter built for its fitted car. Returns ``(mode, {mode: objective deg})``."""
+    sets = gyro_sets(logs)
+    cars = {}
+    for s, _, _ in logs:             # the fitted car reads the ESP channels: the same for the three sets' drives
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            cars[id(s.ay)] = vehicle.undescribed_params(s)
+
+    def build(mode):
+        return lambda signals: KinematicGyro(cars[id(signals.ay)], sideslip=mode)
+    obj = {mode: gyro_objective(build(mode), sets) for mode in modes}
+    best = min(obj.values())
+    return min((m for m, v in obj.items() if v <= best + TIE_DEG), key=modes.index), obj
+
+
 def _quiet_by(measure: str):
     """``build`` of the default for a log whose car is not described, quiet as ``measure`` reads it."""
     def build(signals):
