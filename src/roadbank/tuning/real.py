@@ -335,6 +335,20 @@ constants; the twenty-fourth stage's real sets and objective, each drive's estim
 (:func:`roadbank.vehicle.undescribed_params`). The lowest wins; ties within :data:`TIE_DEG` go to ``"none"``, then
 ``"geometry"``. ``kinematic-gyro-smoother`` takes the result. Neither the KITTI validation drives nor comma2k19 take
 part.
+
+The thirtieth stage (:func:`choose_roll_check`; rule written 2026-12-05 before any candidate ran) asks how the check
+that a log's roll rate follows its ``ay`` (:func:`roadbank.vehicle.conditions.roll_rate_slope`) decides on a short
+log. Many raw drives last 10-30 s; there the shipped check (centred means over 1 s and 10 s, slope within 0.5-2)
+often cannot decide (fewer than about 11 s at speed: no slope) or reads 0.4-2 on a good gyro, and the default falls
+back to the ESP blend. Pieces: each KITTI training drive cut into consecutive whole pieces of each of
+:data:`CHECK_PIECES_S`. Candidates: the windows of :data:`CHECK_WINDOWS_S` x the ranges of :data:`CHECK_RANGES`. For
+each piece: the default as the command line builds it with the roll rate accepted (``kinematic-gyro``) and without
+(the ESP default), each for the piece's fitted car; a candidate takes the first where its check accepts the piece's
+roll rate, else the second. Objective: the mean over the piece lengths of the median raw RMS over the pieces (the
+KITTI scoring within each piece). Constraint: a candidate that accepts, on any piece, the piece's roll rate negated,
+the yaw rate in its place, or the roll rate in deg/s read as rad/s is out. The lowest objective wins; ties within
+:data:`TIE_DEG` go to the shipped check, then to the longer windows, then to the narrower range. Neither the KITTI
+validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -367,6 +381,10 @@ from ..vehicle import load_vehicle
 from .manoeuvres import drive_set
 from .objective import drive_errors
 
+#: the thirtieth stage's pieces (s) and candidates: the check's centred-mean windows (s) and its slope range (-)
+CHECK_PIECES_S = (12.0, 20.0)
+CHECK_WINDOWS_S = ((1.0, 10.0), (0.5, 4.0))
+CHECK_RANGES = ((0.5, 2.0), (0.3, 3.0))
 #: the twenty-ninth stage's candidates: the sideslip acceleration ``kinematic-gyro`` takes out of the kinematic estimate
 GYRO_SIDESLIPS = ("none", "geometry", "quasi-static")
 #: the twenty-eighth stage's candidates: the frequency (Hz) of the four poles of an order-4 ``kinematic-gyro``
