@@ -438,3 +438,18 @@ def test_the_twenty_ninth_stage_kept_no_sideslip_on_the_training_drives():
     assert min(obj["geometry"], obj["quasi-static"]) > obj["none"] + real.TIE_DEG
     with pytest.raises(ValueError, match="sideslip"):
         KinematicGyroSmoother(sideslip="geometry")
+
+
+@needs_kitti
+def test_the_thirtieth_stage_kept_the_shipped_roll_rate_check():
+    """The rule (tuning.real.choose_roll_check) run again on the KITTI training drives cut into 12 s and 20 s pieces:
+    every candidate check, the shipped one included, accepts the yaw rate in the roll rate's place on some piece, so
+    none meets the constraint and the shipped check stays (ROLL_CHECK_WINDOWS_S, ROLL_SLOPE_RANGE)."""
+    from roadbank.tuning import real
+    from roadbank.vehicle.conditions import ROLL_CHECK_WINDOWS_S, ROLL_SLOPE_RANGE
+    logs = real.training_logs(DATA, roll_rate=True)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, obj, wrong = real.choose_roll_check(logs)
+    assert chosen == (ROLL_CHECK_WINDOWS_S, ROLL_SLOPE_RANGE)
+    assert min(wrong.values()) > 0 and set(obj) == set(wrong)

@@ -1054,6 +1054,62 @@ def choose_gyro_sideslip(logs, modes=GYRO_SIDESLIPS) -> tuple[str, dict]:
     return min((m for m, v in obj.items() if v <= best + TIE_DEG), key=modes.index), obj
 
 
+def check_pieces(logs, length: float) -> list:
+    """``logs`` (:func:`training_logs`) cut into consecutive whole pieces of ``length`` (s), each ``(signals, reference
+    roll rad, scored mask)`` with the KITTI scoring within the piece; pieces with no scored sample left out."""
+    out = []
+    for s, ref, _ in logs:
+        edges = np.searchsorted(s.t, s.t[0] + length * np.arange(int((s.t[-1] - s.t[0]) // length) + 1))
+        for a, b in zip(edges[:-1], edges[1:]):
+            piece = s[a:b]
+            m = masks(piece.t, piece.vx, KITTI_SCORING)[1]
+            if np.any(m):
+                out.append((piece, ref[a:b], m))
+    return out
+
+
+def _piece_checks(piece, windows) -> list:
+    """The check's slopes on ``piece`` with ``windows``: as read, then negated, the yaw rate in its place and deg/s
+    read as rad/s (to two digits, as :func:`roadbank.vehicle.log_conditions` gives them)."""
+    span, vx, moving = conditions._design_part(piece, 5.0)
+    variants = (span.p, -span.p, span.r, np.degrees(span.p))
+    return [conditions._two_digits(conditions.roll_rate_slope(dataclasses.replace(span, p=p), vx, moving, windows))
+            for p in variants]
+
+
+def choose_roll_check(logs, lengths=CHECK_PIECES_S, windows=CHECK_WINDOWS_S, ranges=CHECK_RANGES) -> tuple:
+    """The thirtieth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate and ``ax``). Returns ``((windows, range), {(windows, range): objective deg}, {(windows, range): pieces on
+    which a wrong channel was accepted})``; where every candidate accepts one, the shipped check."""
+    rows = []                                    # per piece: length, error with the gyro, without, slopes per window
+    for length in lengths:
+        for piece, ref, m in check_pieces(logs, length):
+            cond = vehicle.log_conditions(piece)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                car = vehicle.undescribed_params(piece, cond=cond)
+                gyro = vehicle.for_conditions("kinematic-pif", {**cond, "log_roll_rate": 1.0}, car)
+                esp = vehicle.for_conditions("kinematic-pif", conditions.esp_conditions(cond), car)
+            errs = [_rms_deg(est.run(piece).theta[m], ref[m]) for est in (gyro, esp)]
+            rows.append((length, *errs, {w: _piece_checks(piece, w) for w in windows}))
+    obj: dict = {}
+    wrong: dict = {}
+    for w, bounds in itertools.product(windows, ranges):
+        def ok(x, lo=bounds[0], hi=bounds[1]):
+            return x is not None and lo <= x <= hi
+        wrong[(w, bounds)] = sum(ok(x) for *_, checks in rows for x in checks[w][1:])
+        obj[(w, bounds)] = float(np.mean([np.median([eg if ok(checks[w][0]) else ee
+                                                     for n, eg, ee, checks in rows if n == length])
+                                          for length in lengths]))
+    shipped = (windows[0], ranges[0])
+    allowed = {k: v for k, v in obj.items() if wrong[k] == 0}
+    if not allowed:                              # none meets the constraint: the shipped check stays
+        return shipped, obj, wrong
+    best = min(allowed.values())
+    tied = [k for k, v in allowed.items() if v <= best + TIE_DEG]
+    return min(tied, key=lambda k: (k != shipped, -k[0][1], k[1][1] - k[1][0])), obj, wrong
+
+
 def _quiet_by(measure: str):
     """``build`` of the default for a log whose car is not described, quiet as ``measure`` reads it."""
     def build(signals):

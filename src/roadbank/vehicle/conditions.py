@@ -192,7 +192,7 @@ def has_channel(signals, name: str, moving) -> bool:
     return bool(part.size) and float(np.mean(part)) >= ROLL_RATE_SHARE
 
 
-def roll_rate_slope(signals, vx, moving) -> float | None:
+def roll_rate_slope(signals, vx, moving, windows=ROLL_CHECK_WINDOWS_S) -> float | None:
     """How the log's roll rate follows the roll that its ``ay`` shows: the least-squares slope (-) of the kinematic
     estimate ``(ay - vx r)/g`` on the integrated roll rate (rad), both band-passed (:data:`ROLL_CHECK_WINDOWS_S`) and
     read on the samples ``moving`` (at speed, away from the span's ends); 1 for a gyro about the car's forward axis.
@@ -201,7 +201,7 @@ def roll_rate_slope(signals, vx, moving) -> float | None:
     if not has_channel(signals, "p", moving):
         return None
     k = (np.asarray(signals.ay, np.float64) - vx * np.asarray(signals.r, np.float64)) / G
-    return _slope_on_integral(signals.t, k, signals.p, moving)
+    return _slope_on_integral(signals.t, k, signals.p, moving, windows)
 
 
 def ax_slope(signals, vx, moving) -> float | None:
@@ -213,14 +213,14 @@ def ax_slope(signals, vx, moving) -> float | None:
     return _slope_on_integral(signals.t, vx, signals.ax, moving)
 
 
-def _slope_on_integral(t, level, rate, moving) -> float | None:
+def _slope_on_integral(t, level, rate, moving, windows=ROLL_CHECK_WINDOWS_S) -> float | None:
     """The least-squares slope of ``level`` on the time integral of ``rate`` (trapezoidal, non-finite samples as
-    0), both band-passed by centred means of :data:`ROLL_CHECK_WINDOWS_S` (the shorter less the longer) and read on
-    the samples ``moving`` away from the ends where ``level`` is finite; None with too few (a tenth of the longer
-    window's) or an integral that never moves in the band."""
+    0), both band-passed by centred means over ``windows`` (s; the shorter less the longer) and read on the samples
+    ``moving`` away from the ends where ``level`` is finite; None with too few (a tenth of the longer window's) or an
+    integral that never moves in the band."""
     t = np.asarray(t, dtype=np.float64)
     level, rate = np.asarray(level, np.float64), np.asarray(rate, np.float64)
-    short, long = (max(int(round(w * sample_rate(t))), 1) for w in ROLL_CHECK_WINDOWS_S)
+    short, long = (max(int(round(w * sample_rate(t))), 1) for w in windows)
     area = np.concatenate([[0.0], np.cumsum(0.5 * np.nan_to_num(rate[1:] + rate[:-1]) * np.diff(t))])
     band = [_centred_mean(x, short) - _centred_mean(x, long) for x in (np.nan_to_num(level), area)]
     inner = np.zeros(len(t), dtype=bool)
