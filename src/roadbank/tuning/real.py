@@ -349,6 +349,16 @@ KITTI scoring within each piece). Constraint: a candidate that accepts, on any p
 the yaw rate in its place, or the roll rate in deg/s read as rad/s is out. The lowest objective wins; ties within
 :data:`TIE_DEG` go to the shipped check, then to the longer windows, then to the narrower range. Neither the KITTI
 validation drives nor comma2k19 take part.
+
+The thirty-first stage (:func:`choose_roll_check_again`; rule written 2026-12-05 before any candidate ran, after the
+thirtieth found every check accepting the yaw rate in the roll rate's place on some short piece, so that the
+shipped check stayed by default): the thirtieth stage's pieces, objective and candidates, each also with a second
+condition, that the roll rate is not the yaw rate: the magnitude of the correlation of the two channels over the
+design span's samples at speed below :data:`CHECK_MAX_CORR` (two gyros about different axes; a plausibility bound,
+not tuned). Constraint: the thirtieth stage's three wrong channels and a fourth, the INS's pitch rate (``wy``) in the
+roll rate's place (a gyro about the wrong horizontal axis, as a phone turned in its mount gives): a candidate that
+accepts any on any piece is out. Ties as the thirtieth stage's, then without the second condition. Where none meets
+the constraint, the shipped check stays. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -385,6 +395,8 @@ from .objective import drive_errors
 CHECK_PIECES_S = (12.0, 20.0)
 CHECK_WINDOWS_S = ((1.0, 10.0), (0.5, 4.0))
 CHECK_RANGES = ((0.5, 2.0), (0.3, 3.0))
+#: the thirty-first stage's second condition: the largest magnitude of the roll rate's correlation with the yaw rate
+CHECK_MAX_CORR = 0.9
 #: the twenty-ninth stage's candidates: the sideslip acceleration ``kinematic-gyro`` takes out of the kinematic estimate
 GYRO_SIDESLIPS = ("none", "geometry", "quasi-static")
 #: the twenty-eighth stage's candidates: the frequency (Hz) of the four poles of an order-4 ``kinematic-gyro``
