@@ -453,3 +453,21 @@ def test_the_thirtieth_stage_kept_the_shipped_roll_rate_check():
     chosen, obj, wrong = real.choose_roll_check(logs)
     assert chosen == (ROLL_CHECK_WINDOWS_S, ROLL_SLOPE_RANGE)
     assert min(wrong.values()) > 0 and set(obj) == set(wrong)
+
+
+@needs_kitti
+def test_the_thirty_first_stage_kept_the_shipped_roll_rate_check():
+    """The rule (tuning.real.choose_roll_check_again): with the condition that the roll rate is not the yaw rate,
+    and the INS's pitch rate as a fourth wrong channel, every candidate still accepts a wrong channel on some piece
+    (the pitch rate: the drives turn where they brake), so the shipped check stays; the yaw-rate condition removes
+    the yaw rate's false accepts and nothing else."""
+    from roadbank.tuning import real
+    logs = real.training_logs(DATA, roll_rate=True)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, obj, wrong = real.choose_roll_check_again(logs, real.training_pitch_rates(DATA))
+    assert chosen == (real.CHECK_WINDOWS_S[0], real.CHECK_RANGES[0], False)
+    assert min(wrong.values()) > 0
+    for (w, b, corr), n in wrong.items():
+        assert obj[(w, b, True)] == obj[(w, b, False)]                  # a real roll rate is never the yaw rate
+        assert corr or n > wrong[(w, b, True)]

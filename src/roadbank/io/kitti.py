@@ -18,6 +18,7 @@ z up, so no sign changes):
 11  ax     specific force along the vehicle's forward axis (m/s^2)      ``ax``
 12  ay     specific force along the vehicle's left axis (m/s^2)         ``ay``
 17  wx     angular rate about the vehicle's forward axis (rad/s)        ``p``
+18  wy     angular rate about the vehicle's left axis (rad/s)           ``Log.extra`` (a wrong axis, for checks)
 19  wz     angular rate about the vehicle's up axis (rad/s)             ``r``
 ==  =====  ==========================================================  ================
 
@@ -63,7 +64,7 @@ from .types import RawChunk
 #: fields per oxts frame (dataformat.txt)
 N_FIELDS = 30
 #: 0-based column of each channel
-COLUMNS = {"lat": 0, "lon": 1, "roll": 3, "vf": 8, "vl": 9, "ax": 11, "ay": 12, "wx": 17, "wz": 19}
+COLUMNS = {"lat": 0, "lon": 1, "roll": 3, "vf": 8, "vl": 9, "ax": 11, "ay": 12, "wx": 17, "wy": 18, "wz": 19}
 #: the time column of the table a drive makes (seconds from the first frame)
 TIME = "timestamps.txt"
 #: the channels a drive gives (oxts column -> stored unit); their column names: :func:`column`
@@ -71,7 +72,7 @@ ROLES = {"speed": ("vf", "m/s"), "lateral_acceleration": ("ay", "m/s^2"), "yaw_r
          "roll_rate": ("wx", "rad/s"), "longitudinal_acceleration": ("ax", "m/s^2"),
          "reference_roll": ("roll", "rad")}
 #: columns carried into ``Log.extra`` as they are (name -> oxts column); on the frames' own clock
-CARRIED = {"lat_deg": "lat", "lon_deg": "lon", "vl_mps": "vl"}
+CARRIED = {"lat_deg": "lat", "lon_deg": "lon", "vl_mps": "vl", "wy_radps": "wy"}
 
 _STAMP = re.compile(r"^(\d{4}-\d{2}-\d{2}) (\d{2}:\d{2}:\d{2})(?:\.(\d{1,9}))?$")
 _FRAME = re.compile(r"^(\d+)\.txt$")
@@ -288,7 +289,7 @@ def load_kitti_oxts(path):
     Log
         ``signals``: t (s from the first frame), vx (m/s), ay (m/s^2), r (rad/s),
         delta_f NaN; ``reference_roll`` (rad, ISO); ``extra``: ``lat_deg``,
-        ``lon_deg`` (deg), ``vl_mps`` (m/s, leftward speed); ``metadata``: dataset,
+        ``lon_deg`` (deg), ``vl_mps`` (m/s, leftward speed), ``wy_radps`` (rad/s, pitch rate); ``metadata``: dataset,
         drive, time_origin (UTC), dropped_frames, frames.
 
     Raises

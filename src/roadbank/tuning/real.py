@@ -1068,34 +1068,39 @@ def choose_gyro_sideslip(logs, modes=GYRO_SIDESLIPS) -> tuple[str, dict]:
 
 def check_pieces(logs, length: float) -> list:
     """``logs`` (:func:`training_logs`) cut into consecutive whole pieces of ``length`` (s), each ``(signals, reference
-    roll rad, scored mask)`` with the KITTI scoring within the piece; pieces with no scored sample left out."""
+    roll rad, scored mask, (drive index, first sample, end sample))`` with the KITTI scoring within the piece; pieces
+    with no scored sample left out."""
     out = []
-    for s, ref, _ in logs:
+    for i, (s, ref, _) in enumerate(logs):
         edges = np.searchsorted(s.t, s.t[0] + length * np.arange(int((s.t[-1] - s.t[0]) // length) + 1))
         for a, b in zip(edges[:-1], edges[1:]):
             piece = s[a:b]
             m = masks(piece.t, piece.vx, KITTI_SCORING)[1]
             if np.any(m):
-                out.append((piece, ref[a:b], m))
+                out.append((piece, ref[a:b], m, (i, a, b)))
     return out
 
 
-def _piece_checks(piece, windows) -> list:
-    """The check's slopes on ``piece`` with ``windows``: as read, then negated, the yaw rate in its place and deg/s
-    read as rad/s (to two digits, as :func:`roadbank.vehicle.log_conditions` gives them)."""
+def _piece_checks(piece, windows, pitch_rate=None) -> list:
+    """``(slope, |correlation with the yaw rate|)`` of the roll-rate check on ``piece`` with ``windows``, for the roll
+    rate as read, then negated, the yaw rate in its place, deg/s read as rad/s, and (given ``pitch_rate``, rad/s, the
+    piece's) the pitch rate in its place; slopes to two digits, as :func:`roadbank.vehicle.log_conditions` gives
+    them."""
+    n = conditions.design_span(piece)
     span, vx, moving = conditions._design_part(piece, 5.0)
-    variants = (span.p, -span.p, span.r, np.degrees(span.p))
-    return [conditions._two_digits(conditions.roll_rate_slope(dataclasses.replace(span, p=p), vx, moving, windows))
-            for p in variants]
+    variants = [span.p, -span.p, span.r, np.degrees(span.p)]
+    if pitch_rate is not None:
+        variants.append(np.asarray(pitch_rate)[:n])
+    return [(conditions._two_digits(conditions.roll_rate_slope(dataclasses.replace(span, p=p), vx, moving, windows)),
+             conditions.yaw_correlation(dataclasses.replace(span, p=p), moving)) for p in variants]
 
 
-def choose_roll_check(logs, lengths=CHECK_PIECES_S, windows=CHECK_WINDOWS_S, ranges=CHECK_RANGES) -> tuple:
-    """The thirtieth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
-    rate and ``ax``). Returns ``((windows, range), {(windows, range): objective deg}, {(windows, range): pieces on
-    which a wrong channel was accepted})``; where every candidate accepts one, the shipped check."""
-    rows = []                                    # per piece: length, error with the gyro, without, slopes per window
+def _check_rows(logs, lengths, windows, pitch_rates=None) -> list:
+    """Per piece of each length (:func:`check_pieces`): ``(length, error of the default with the roll rate accepted,
+    error without, {windows: _piece_checks})`` (deg); ``pitch_rates``: each drive's pitch rate (rad/s), or None."""
+    rows = []
     for length in lengths:
-        for piece, ref, m in check_pieces(logs, length):
+        for piece, ref, m, (i, a, b) in check_pieces(logs, length):
             cond = vehicle.log_conditions(piece)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
@@ -1103,23 +1108,60 @@ def choose_roll_check(logs, lengths=CHECK_PIECES_S, windows=CHECK_WINDOWS_S, ran
                 gyro = vehicle.for_conditions("kinematic-pif", {**cond, "log_roll_rate": 1.0}, car)
                 esp = vehicle.for_conditions("kinematic-pif", conditions.esp_conditions(cond), car)
             errs = [_rms_deg(est.run(piece).theta[m], ref[m]) for est in (gyro, esp)]
-            rows.append((length, *errs, {w: _piece_checks(piece, w) for w in windows}))
-    obj: dict = {}
-    wrong: dict = {}
-    for w, bounds in itertools.product(windows, ranges):
-        def ok(x, lo=bounds[0], hi=bounds[1]):
-            return x is not None and lo <= x <= hi
-        wrong[(w, bounds)] = sum(ok(x) for *_, checks in rows for x in checks[w][1:])
-        obj[(w, bounds)] = float(np.mean([np.median([eg if ok(checks[w][0]) else ee
-                                                     for n, eg, ee, checks in rows if n == length])
-                                          for length in lengths]))
-    shipped = (windows[0], ranges[0])
+            q = None if pitch_rates is None else pitch_rates[i][a:b]
+            rows.append((length, *errs, {w: _piece_checks(piece, w, q) for w in windows}))
+    return rows
+
+
+def _check_choice(rows, lengths, cands: dict, order) -> tuple:
+    """The thirtieth and thirty-first stages' choice over ``cands`` (key -> ``(windows, accept(slope, corr))``) on
+    ``rows`` (:func:`_check_rows`): ``(chosen key, {key: objective deg}, {key: wrong channels accepted})``; ties
+    within :data:`TIE_DEG` by ``order`` (a sort key of the keys, the shipped check first), none allowed: the first
+    of ``order``."""
+    obj, wrong = {}, {}
+    for key, (w, accept) in cands.items():
+        wrong[key] = sum(accept(*x) for *_, checks in rows for x in checks[w][1:])
+        obj[key] = float(np.mean([np.median([eg if accept(*checks[w][0]) else ee
+                                             for n, eg, ee, checks in rows if n == length]) for length in lengths]))
     allowed = {k: v for k, v in obj.items() if wrong[k] == 0}
     if not allowed:                              # none meets the constraint: the shipped check stays
-        return shipped, obj, wrong
+        return min(cands, key=order), obj, wrong
     best = min(allowed.values())
-    tied = [k for k, v in allowed.items() if v <= best + TIE_DEG]
-    return min(tied, key=lambda k: (k != shipped, -k[0][1], k[1][1] - k[1][0])), obj, wrong
+    return min((k for k, v in allowed.items() if v <= best + TIE_DEG), key=order), obj, wrong
+
+
+def _slope_within(lo: float, hi: float, max_corr: float = math.inf):
+    """``accept(slope, corr)``: the slope within ``[lo, hi]`` and the correlation with the yaw rate below
+    ``max_corr`` (a NaN correlation passes: it tells nothing)."""
+    return lambda slope, corr: slope is not None and lo <= slope <= hi and not corr >= max_corr
+
+
+def choose_roll_check(logs, lengths=CHECK_PIECES_S, windows=CHECK_WINDOWS_S, ranges=CHECK_RANGES) -> tuple:
+    """The thirtieth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate and ``ax``). Returns ``((windows, range), {(windows, range): objective deg}, {(windows, range): pieces on
+    which a wrong channel was accepted})``; where every candidate accepts one, the shipped check."""
+    cands = {(w, b): (w, _slope_within(b[0], b[1])) for w, b in itertools.product(windows, ranges)}
+    shipped = (windows[0], ranges[0])
+    return _check_choice(_check_rows(logs, lengths, windows), lengths, cands,
+                         lambda k: (k != shipped, -k[0][1], k[1][1] - k[1][0]))
+
+
+def training_pitch_rates(data_dir) -> list:
+    """The INS's pitch rate (rad/s) of each KITTI training drive under ``data_dir``, in :func:`training_logs`' order."""
+    return [load_kitti_oxts(found[0]).extra["wy_radps"] for name in KITTI_TRAINING
+            if (found := [p for p in Path(data_dir).glob(f"*/{name}") if p.is_dir()])]
+
+
+def choose_roll_check_again(logs, pitch_rates, lengths=CHECK_PIECES_S, windows=CHECK_WINDOWS_S,
+                            ranges=CHECK_RANGES) -> tuple:
+    """The thirty-first stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate and ``ax``) and their ``pitch_rates`` (:func:`training_pitch_rates`). Returns ``((windows, range, with the
+    yaw-rate condition), {key: objective deg}, {key: wrong channels accepted})``."""
+    cands = {(w, b, c): (w, _slope_within(b[0], b[1], CHECK_MAX_CORR if c else math.inf))
+             for w, b, c in itertools.product(windows, ranges, (False, True))}
+    shipped = (windows[0], ranges[0], False)
+    return _check_choice(_check_rows(logs, lengths, windows, pitch_rates), lengths, cands,
+                         lambda k: (k != shipped, -k[0][1], k[1][1] - k[1][0], k[2]))
 
 
 def _quiet_by(measure: str):

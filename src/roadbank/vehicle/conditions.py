@@ -204,6 +204,19 @@ def roll_rate_slope(signals, vx, moving, windows=ROLL_CHECK_WINDOWS_S) -> float 
     return _slope_on_integral(signals.t, k, signals.p, moving, windows)
 
 
+def yaw_correlation(signals, moving) -> float:
+    """The magnitude (-) of the correlation of the log's roll rate with its yaw rate over the samples ``moving`` where
+    both are finite (NaN without a roll rate, with fewer than three such samples or a constant channel): near 1 when
+    the roll-rate channel is the yaw rate itself."""
+    if getattr(signals, "p", None) is None:
+        return math.nan
+    p, r = np.asarray(signals.p, np.float64), np.asarray(signals.r, np.float64)
+    use = moving & np.isfinite(p) & np.isfinite(r)
+    if np.count_nonzero(use) < 3 or np.std(p[use]) == 0 or np.std(r[use]) == 0:
+        return math.nan
+    return float(abs(np.corrcoef(p[use], r[use])[0, 1]))
+
+
 def ax_slope(signals, vx, moving) -> float | None:
     """How the log's longitudinal acceleration follows its speed: the slope (-) of ``vx`` (m/s) on the integrated
     ``ax`` (m/s), band-passed and read as :func:`roll_rate_slope`; 1 for an accelerometer along the car's forward
