@@ -54,7 +54,7 @@ class Signals:
     ax : array (m/s^2), optional
         Measured longitudinal acceleration (specific force, positive forward: ``vx' - g sin(pitch)`` with the
         pitch positive nose down), when the log has one; None otherwise. The gyro-aided estimators read the
-        road's grade from it (:func:`roadbank.estimators.gyro.euler_roll_rate`).
+        road's grade from it (:mod:`roadbank.models.attitude`).
 
     NaN / inf samples in ``vx, ay, r, delta_f, p, ax`` are allowed: the estimators hold
     their output there and flag it not valid. The time base itself must be clean.

@@ -117,8 +117,8 @@ class GyroDesign(DesignInputs):
 
     cutoff: float = GYRO_CUTOFF_HZ
     bias_tau: float = GYRO_BIAS_TAU_S
-    order: int = 2
-    sideslip: str = "none"
+    order: int = GYRO_ORDER
+    sideslip: str = GYRO_SIDESLIP
 
 
 def gyro_observer(d: GyroDesign, vx: float):
@@ -167,7 +167,7 @@ class KinematicGyro(ScheduledObserver):
     Parameters
     ----------
     params : VehicleParams, optional
-        Only ``g`` and the roll model (for ``phi_b``) are used.
+        Only ``g`` and the roll model (for ``phi_b``) are used, and with a ``sideslip`` ``Lr``, ``Lf``, ``m``, ``Cr``.
     cutoff : float, optional
         Cross-over frequency ``f_c`` (Hz, > 0): below it the estimate follows the kinematic estimate, above
         it the integrated roll rate. Default :data:`GYRO_CUTOFF_HZ`.
@@ -253,24 +253,24 @@ class KinematicGyro(ScheduledObserver):
         # a (re)start takes the kinematic estimate and no offset, not the equilibrium of the current roll rate
         # (J: the state per eta at a start; order 4: the rest state of a constant kinematic estimate k, [k, 4 w k,
         # 0, 0])
-        row, g = L.lpv_row(n), self.params.g
+        row, g, wc = L.lpv_row(n), self.params.g, 2.0 * np.pi * self.cutoff
         J = np.zeros((len(tab), n, L.NETA))
         J[:, 0, 1], J[:, 0, 2] = 1.0 / g, -self.design.vgrid / g
         if self.sideslip != "none":        # the shifted states at a start: z = k + w_c u, beta = -k_i u
             u = np.array([sideslip_per_eta(self.design, v) for v in self.design.vgrid])
-            wc = 2.0 * np.pi * self.cutoff
             J[:, 0, :] += wc * u
             if n > 1:
                 J[:, 1, :] = -(wc / self.bias_tau) * u
         if self.order == 4:
-            J[:, 1, :] = 4.0 * 2.0 * np.pi * self.cutoff * J[:, 0, :]
+            J[:, 1, :] = 4.0 * wc * J[:, 0, :]
         tab = np.array(tab)
         tab[:, row.J:row.cont] = J.reshape(len(tab), -1)
         return Tables(np.ascontiguousarray(tab), n, extra)
 
-    def _corrected(self, signals: Signals, reset: bool) -> Signals:
+    def _corrected(self, signals: Signals, reset: bool, lookahead: Signals | None = None):
         """``signals`` as the filter reads them (:meth:`GradeCarry.correct`), after the checks of :meth:`run` and, with
-        ``reset``, :meth:`reset` (so the run itself continues: ``reset=False``)."""
+        ``reset``, :meth:`reset` (so the run itself continues: ``reset=False``); given a ``lookahead``, ``(signals,
+        lookahead)`` so corrected in one pass, the samples kept moving on through ``signals`` alone."""
         if not isinstance(signals, Signals):
             raise TypeError("run() expects a roadbank.Signals")
         if signals.p is None:
@@ -279,7 +279,11 @@ class KinematicGyro(ScheduledObserver):
                              "estimator)")
         if reset:
             self.reset()
-        return self.grade.correct(signals)
+        if lookahead is None:
+            return self.grade.correct(signals)
+        n = len(signals)
+        both = self.grade.correct(concat_signals([signals, lookahead]), advance=n)
+        return both[:n], both[n:]
 
     def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
         """:meth:`Estimator.run <roadbank.estimators.base.Estimator.run>` of a log with a roll rate
@@ -340,7 +344,8 @@ class KinematicGyroSmoother(KinematicGyro):
     def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
         """Smoothed estimate over the log ``signals`` with its roll rate; ``reset`` and ``lookahead`` as
         :meth:`roadbank.estimators.kinematic_smoother.KinematicSmoother.run`. Units: ``w`` (-), angles (rad)."""
-        s = self._corrected(signals, reset)
-        if lookahead is not None and len(lookahead):
-            lookahead = self.grade.correct(concat_signals([signals, lookahead]), advance=0)[len(signals):]
+        if lookahead is None or not len(lookahead) or lookahead.channels != signals.channels:
+            s = self._corrected(signals, reset)
+        else:
+            s, lookahead = self._corrected(signals, reset, lookahead)
         return both_ways(self, ScheduledObserver.run(self, s, reset=False), s, lookahead, reset)

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .channels import STEERING
+from .channels import OPTIONAL, STEERING
 from .units import FACTORS
 
 #: role -> name spellings (normalised: lower case, letters and digits only)
@@ -58,9 +58,6 @@ NAMES = {
     "longitudinal_acceleration": ("ax", "accx", "longacc", "lonacc", "longaccel", "lngacc", "longitudinalacceleration",
                                   "longitudinalaccel", "accelx", "alon", "alng", "accelerationx", "longg"),
 }
-#: the optional roles: guessed by name alone (never by elimination), their unit by the name or the range; the
-#: default estimator checks each against the ESP channels before it uses it (docs/estimators.md)
-OPTIONAL_ROLES = ("roll_rate", "longitudinal_acceleration")
 #: above this 99th percentile of its magnitude a roll rate is not in rad/s (roads roll the body at 0.01-0.2 rad/s)
 #: and a longitudinal acceleration not in g (braking and grades: 0.05-0.4 g)
 OPTIONAL_RANGE = {"roll_rate": ("rad/s", "deg/s", 0.5), "longitudinal_acceleration": ("g", "m/s^2", 0.6)}
@@ -219,8 +216,9 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
     -------
     list of Guess
         time (unless ``times``), speed, lateral_acceleration, yaw_rate and one steering role (its column None
-        when the log has no steering angle: :data:`NO_STEERING`), then each of :data:`OPTIONAL_ROLES` that a
-        column is named like.
+        when the log has no steering angle: :data:`NO_STEERING`), then each optional role
+        (:data:`roadbank.io.channels.OPTIONAL`) that a column is named like: by name alone, never by elimination,
+        its unit by the name or the range (the default checks each against the ESP channels before it uses it).
     """
     numeric = [c for c in names if c in data and np.isfinite(data[c]).any()]
     used: set[str] = set()
@@ -274,7 +272,7 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
         out_steer.reason = f"column {empty[0]!r} is named like a steering angle but holds no numbers"
     roles = (["time"] if "time" in out else []) + ["speed", "lateral_acceleration", "yaw_rate"]
     optional = []
-    for role in OPTIONAL_ROLES:
+    for role in OPTIONAL:
         col, score, hint = pick(role, numeric)
         optional.append(_optional(role, col, score, hint, series))
     return [out[k] for k in roles] + [out_steer] + [g for g in optional if g is not None]

@@ -511,10 +511,15 @@ class LowpassChoice:
     objective: dict
 
 
+def lowest_tied(obj: dict, order):
+    """The key of ``obj`` (key -> objective, deg) whose objective is the lowest, the keys within :data:`TIE_DEG` of
+    it going to the first by ``order`` (a sort key of the keys)."""
+    best = min(obj.values())
+    return min((k for k, v in obj.items() if v <= best + TIE_DEG), key=order)
+
+
 def _pick(cands: dict) -> tuple[float, float]:
-    best = min(cands.values())
-    ok = [k for k, v in cands.items() if v <= best + TIE_DEG]
-    return min(ok, key=lambda fk: (fk[1], fk[0]))
+    return lowest_tied(cands, lambda fk: (fk[1], fk[0]))
 
 
 def training_logs(data_dir, scoring=KITTI_SCORING, roll_rate: bool = False):
@@ -1000,9 +1005,7 @@ def choose_gyro(logs, cutoffs=GYRO_CUTOFFS_HZ, bias_taus=GYRO_BIAS_TAUS) -> tupl
     # as it ran: the roll rate not corrected for the grade, a restart after 1 s (the later stages came after)
     obj = {(fc, bt): gyro_objective(fixed(KinematicGyro(cutoff=fc, bias_tau=bt, grade_window=0.0, max_gap=1.0)), sets)
            for fc, bt in itertools.product(cutoffs, bias_taus)}
-    best = min(obj.values())
-    tied = [k for k, v in obj.items() if v <= best + TIE_DEG]
-    chosen = min(tied, key=lambda k: (k[1] > 0, -k[1], k[0]))
+    chosen = lowest_tied(obj, lambda k: (k[1] > 0, -k[1], k[0]))
     shipped = gyro_objective(per_log("kinematic-pif"), [without_roll_rate(logs)])   # the default as it ran
     return chosen, obj, shipped, obj[chosen] < shipped
 
@@ -1021,9 +1024,7 @@ def choose_grade(logs, windows=GRADE_WINDOWS_S) -> tuple[float, dict]:
     rate and ``ax``). Returns ``(window s, {window: objective deg})``."""
     sets = gyro_sets(logs)
     obj = {w: gyro_objective(fixed(KinematicGyro(grade_window=w, max_gap=1.0)), sets) for w in windows}   # as it ran
-    best = min(obj.values())
-    tied = [w for w, v in obj.items() if v <= best + TIE_DEG]
-    return min(tied, key=lambda w: (w > 0, -w)), obj
+    return lowest_tied(obj, lambda w: (w > 0, -w)), obj
 
 
 def choose_gyro_stops(logs, v_mins=GYRO_V_MINS, max_gaps=GYRO_MAX_GAPS) -> tuple[tuple[float, float], dict]:
@@ -1032,9 +1033,7 @@ def choose_gyro_stops(logs, v_mins=GYRO_V_MINS, max_gaps=GYRO_MAX_GAPS) -> tuple
     sets = gyro_sets(logs)
     obj = {(v, gap): gyro_objective(fixed(KinematicGyro(v_min=v, max_gap=gap)), sets)
            for v, gap in itertools.product(v_mins, max_gaps)}
-    best = min(obj.values())
-    tied = [k for k, v in obj.items() if v <= best + TIE_DEG]
-    return min(tied, key=lambda k: (k != (v_mins[0], max_gaps[0]), -k[0], k[1])), obj
+    return lowest_tied(obj, lambda k: (k != (v_mins[0], max_gaps[0]), -k[0], k[1])), obj
 
 
 def choose_gyro_order(logs, cutoffs=GYRO_ORDER4_CUTOFFS_HZ) -> tuple[tuple[int, float], dict]:
@@ -1044,9 +1043,7 @@ def choose_gyro_order(logs, cutoffs=GYRO_ORDER4_CUTOFFS_HZ) -> tuple[tuple[int, 
     shipped = (2, GYRO_CUTOFF_HZ)
     cands = [shipped] + [(4, fc) for fc in cutoffs]
     obj = {(o, fc): gyro_objective(fixed(KinematicGyro(order=o, cutoff=fc)), sets) for o, fc in cands}
-    best = min(obj.values())
-    tied = [k for k, v in obj.items() if v <= best + TIE_DEG]
-    return min(tied, key=lambda k: (k != shipped, k[1])), obj
+    return lowest_tied(obj, lambda k: (k != shipped, k[1])), obj
 
 
 def choose_gyro_sideslip(logs, modes=GYRO_SIDESLIPS) -> tuple[str, dict]:
@@ -1062,8 +1059,7 @@ def choose_gyro_sideslip(logs, modes=GYRO_SIDESLIPS) -> tuple[str, dict]:
     def build(mode):
         return lambda signals: KinematicGyro(cars[id(signals.ay)], sideslip=mode)
     obj = {mode: gyro_objective(build(mode), sets) for mode in modes}
-    best = min(obj.values())
-    return min((m for m, v in obj.items() if v <= best + TIE_DEG), key=modes.index), obj
+    return lowest_tied(obj, modes.index), obj
 
 
 def check_pieces(logs, length: float) -> list:
@@ -1126,8 +1122,7 @@ def _check_choice(rows, lengths, cands: dict, order) -> tuple:
     allowed = {k: v for k, v in obj.items() if wrong[k] == 0}
     if not allowed:                              # none meets the constraint: the shipped check stays
         return min(cands, key=order), obj, wrong
-    best = min(allowed.values())
-    return min((k for k, v in allowed.items() if v <= best + TIE_DEG), key=order), obj, wrong
+    return lowest_tied(allowed, order), obj, wrong
 
 
 def _slope_within(lo: float, hi: float, max_corr: float = math.inf):
