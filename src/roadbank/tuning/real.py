@@ -359,6 +359,25 @@ not tuned). Constraint: the thirtieth stage's three wrong channels and a fourth,
 roll rate's place (a gyro about the wrong horizontal axis, as a phone turned in its mount gives): a candidate that
 accepts any on any piece is out. Ties as the thirtieth stage's, then without the second condition. Where none meets
 the constraint, the shipped check stays. Neither the KITTI validation drives nor comma2k19 take part.
+
+The thirty-second stage (:func:`choose_short_check`; rule written 2026-12-05 before any candidate ran, after the
+thirty-first, and after reading on the thirtieth stage's rows that on the ten 12-s training pieces where the shipped
+check gives no slope the gyro's error is below the ESP default's on all ten, medians 0.36 and 0.52 deg): a second
+check for the logs too short for the first. Candidates: the shipped check alone; and the shipped check where it gives
+a slope, else a fallback with centred means over :data:`SHORT_CHECK_WINDOWS_S` (0.5 s and 4 s), the slope within
+each of :data:`CHECK_RANGES`, and the thirty-first stage's second condition (the roll rate not the yaw rate). In each
+candidate the ``ax`` check (:func:`roadbank.vehicle.conditions.ax_slope`) takes the same windows as the roll-rate
+check (as shipped: the same band), fallback included, without the second condition. Pieces: the training drives cut
+as the thirtieth stage's, into :data:`SHORT_PIECES_S` (8, 12 and 20 s). For each piece: the default as the command
+line builds it for the piece's fitted car with the roll rate and ``ax`` accepted, with the roll rate alone, and the
+ESP default; a candidate takes the one its checks give. Objective: the thirtieth stage's (mean over the lengths of
+the median raw RMS). Constraint: a candidate that accepts on any piece a wrong roll rate (the thirtieth stage's three:
+negated, the yaw rate in its place, deg/s read as rad/s) or a wrong ``ax`` (negated, in g read as m/s^2, ``ay`` in its
+place) is out. The pitch rate in the roll rate's place is counted and reported but is no constraint: the shipped
+check accepts the negated pitch rate on 4 of the 16 whole drives (the thirty-first stage), so no candidate here can
+guard it, and a map must name the roll axis. The lowest objective wins; ties within :data:`TIE_DEG` go to the shipped
+check, then to the narrower range. Logs on which the shipped check gives a slope (every whole training and
+validation drive) are the same under every candidate. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -395,6 +414,9 @@ from .objective import drive_errors
 CHECK_PIECES_S = (12.0, 20.0)
 CHECK_WINDOWS_S = ((1.0, 10.0), (0.5, 4.0))
 CHECK_RANGES = ((0.5, 2.0), (0.3, 3.0))
+#: the thirty-second stage's pieces (s) and its fallback check's centred-mean windows (s)
+SHORT_PIECES_S = (8.0, 12.0, 20.0)
+SHORT_CHECK_WINDOWS_S = (0.5, 4.0)
 #: the thirty-first stage's second condition: the largest magnitude of the roll rate's correlation with the yaw rate
 CHECK_MAX_CORR = 0.9
 #: the twenty-ninth stage's candidates: the sideslip acceleration ``kinematic-gyro`` takes out of the kinematic estimate
