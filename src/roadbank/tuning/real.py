@@ -378,6 +378,20 @@ check accepts the negated pitch rate on 4 of the 16 whole drives (the thirty-fir
 guard it, and a map must name the roll axis. The lowest objective wins; ties within :data:`TIE_DEG` go to the shipped
 check, then to the narrower range. Logs on which the shipped check gives a slope (every whole training and
 validation drive) are the same under every candidate. Neither the KITTI validation drives nor comma2k19 take part.
+
+The thirty-third stage (:func:`choose_fixed_channels`; rule written 2026-12-05 before any candidate ran, after the
+thirty-second kept the shipped check: every candidate, the shipped one too, accepted a wrong channel on some piece,
+though the fallback's objectives were lower, 0.265 and 0.251 against 0.303 deg): where the log's format itself fixes
+what an optional channel is, there is no map to get wrong. The readers of KITTI's OXTS files and of comma2k19 name the
+roll rate and ``ax`` from the format's documentation (``Signals.fixed``); a user's map (CSV, MDF, CAN, ROS) does not,
+and its channels are judged by the checks as before under every candidate. Candidates for a format's channel:
+``"judged"`` (shipped: used only where its check accepts it); ``"undecided"`` (where its check cannot decide because
+the log has too few samples at speed for the check's band, it is used; a channel whose integral never moves is not);
+``"always"`` (used whatever its check reads). Pieces and rows: the thirty-second stage's (KITTI's OXTS is such a
+format); each candidate takes, per piece, the default with the roll rate and ``ax``, with the roll rate alone, or
+neither, as its rule for the two channels gives. Objective: the thirtieth stage's. No wrong-channel constraint: no
+map is read. The lowest wins; ties within :data:`TIE_DEG` go to ``"judged"``, then ``"undecided"``. Neither the KITTI
+validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -394,6 +408,7 @@ import numpy as np
 from scipy.signal import resample_poly
 
 from .. import vehicle
+from ..constants import G
 from ..vehicle import conditions
 from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
 from ..estimators.gyro import GYRO_CUTOFF_HZ, KinematicGyro, KinematicGyroSmoother
@@ -1179,6 +1194,76 @@ def choose_roll_check_again(logs, pitch_rates, lengths=CHECK_PIECES_S, windows=C
     shipped = (windows[0], ranges[0], False)
     return _check_choice(_check_rows(logs, lengths, windows, pitch_rates), lengths, cands,
                          lambda k: (k != shipped, -k[0][1], k[1][1] - k[1][0], k[2]))
+
+
+def _short_piece(piece, ref, m, pitch_rate) -> tuple:
+    """One piece of the thirty-second stage: ``(errors, checks)``; ``errors`` the raw RMS (deg) of the default built for
+    the piece's fitted car with the roll rate and ``ax`` accepted, with the roll rate alone and with neither (the ESP
+    default); ``checks[windows]`` the ``(roll, ax)`` readings with the two check windows: ``roll`` as
+    :func:`_piece_checks` gives them (with the pitch rate last), ``ax`` the :func:`roadbank.vehicle.conditions.ax_slope`
+    of the ``ax`` as read, negated, in g read as m/s^2 and ``ay`` in its place (two digits)."""
+    cond = vehicle.log_conditions(piece)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        car = vehicle.undescribed_params(piece, cond=cond)
+        ests = [vehicle.for_conditions("kinematic-pif", {**cond, "log_roll_rate": 1.0, "log_ax": ax}, car)
+                for ax in (1.0, None)] + [vehicle.for_conditions("kinematic-pif", conditions.esp_conditions(cond), car)]
+    errors = [_rms_deg(est.run(piece).theta[m], ref[m]) for est in ests]
+    span, vx, moving = conditions._design_part(piece, 5.0)
+    axes = (span.ax, -span.ax, span.ax / G, span.ay)
+    checks = {w: (_piece_checks(piece, w, pitch_rate),
+                  [conditions._two_digits(conditions._slope_on_integral(span.t, vx, a, moving, w)) for a in axes])
+              for w in (conditions.ROLL_CHECK_WINDOWS_S, SHORT_CHECK_WINDOWS_S)}
+    return errors, checks
+
+
+def short_rows(logs, pitch_rates, lengths=SHORT_PIECES_S) -> list:
+    """The thirty-second stage's rows: ``(length s, errors, checks)`` (:func:`_short_piece`) per piece of each length
+    (:func:`check_pieces`) of the KITTI training ``logs`` with their roll rate and ``ax``, ``pitch_rates`` each
+    drive's pitch rate (rad/s, :func:`training_pitch_rates`)."""
+    return [(length, *_short_piece(piece, ref, m, pitch_rates[i][a:b]))
+            for length in lengths for piece, ref, m, (i, a, b) in check_pieces(logs, length)]
+
+
+def _short_readings(checks, fallback) -> tuple[list, list]:
+    """The roll-rate and ``ax`` readings ``([(slope, corr, range)...], [(slope, range)...])`` of a candidate on one
+    piece's ``checks`` (:func:`_short_piece`): the shipped windows' where they give a slope, else (``fallback``, a
+    slope range, or None: no fallback) the short windows' with that range; a fallback roll rate that correlates with
+    the yaw rate by :data:`CHECK_MAX_CORR` or more gives no slope."""
+    rolls, axes = checks[conditions.ROLL_CHECK_WINDOWS_S]
+    short_rolls, short_axes = checks[SHORT_CHECK_WINDOWS_S]
+    shipped = conditions.ROLL_SLOPE_RANGE
+    roll = [(x, c, shipped) if x is not None or fallback is None
+            else ((y if not d >= CHECK_MAX_CORR else None), d, fallback)
+            for (x, c), (y, d) in zip(rolls, short_rolls)]
+    ax = [(x, shipped) if x is not None or fallback is None else (y, fallback) for x, y in zip(axes, short_axes)]
+    return roll, ax
+
+
+def _within(slope, span) -> bool:
+    return slope is not None and span[0] <= slope <= span[1]
+
+
+def choose_short_check(rows, lengths=SHORT_PIECES_S, ranges=CHECK_RANGES) -> tuple:
+    """The thirty-second stage (module docstring) on its ``rows`` (:func:`short_rows`). Returns ``(chosen, {candidate:
+    objective deg}, {candidate: wrong roll-rate or ax channels accepted}, {candidate: pitch rates accepted})``; a
+    candidate is None (the shipped check alone) or the fallback's slope range; where every candidate accepts a wrong
+    channel, the shipped check."""
+    obj, wrong, pitch = {}, {}, {}
+    for cand in (None, *ranges):
+        per_length, wrong[cand], pitch[cand] = {n: [] for n in lengths}, 0, 0
+        for n, errors, checks in rows:
+            roll, ax = _short_readings(checks, cand)
+            use = [_within(x, b) for x, _, b in roll]
+            use_ax = [_within(x, b) for x, b in ax]
+            per_length[n].append(errors[0] if use[0] and use_ax[0] else errors[1] if use[0] else errors[2])
+            wrong[cand] += sum(use[1:4]) + sum(use_ax[1:])
+            pitch[cand] += sum(use[4:])
+        obj[cand] = float(np.mean([np.median(v) for v in per_length.values()]))
+    order = [None, *sorted(ranges, key=lambda b: b[1] - b[0])]
+    allowed = {k: v for k, v in obj.items() if wrong[k] == 0}
+    chosen = lowest_tied(allowed, order.index) if allowed else None
+    return chosen, obj, wrong, pitch
 
 
 def _quiet_by(measure: str):
