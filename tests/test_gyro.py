@@ -471,3 +471,87 @@ def test_the_thirty_first_stage_kept_the_shipped_roll_rate_check():
     for (w, b, corr), n in wrong.items():
         assert obj[(w, b, True)] == obj[(w, b, False)]                  # a real roll rate is never the yaw rate
         assert corr or n > wrong[(w, b, True)]
+
+
+# ------------------------------------------------------------------ short logs and a format's own channels
+@pytest.fixture(scope="module")
+def short_rows():
+    """The thirty-second stage's rows (tuning.real.short_rows): the training drives cut into 8, 12 and 20 s pieces."""
+    from roadbank.tuning import real
+    logs = real.training_logs(DATA, roll_rate=True)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    return real.short_rows(logs, real.training_pitch_rates(DATA))
+
+
+@needs_kitti
+def test_the_thirty_second_stage_kept_the_shipped_check_though_a_fallback_scored_lower(short_rows):
+    """The rule (tuning.real.choose_short_check): a fallback check on short windows would lower the objective, but
+    every candidate, the shipped check too, accepts a wrong roll rate or ax on some piece, so the shipped check
+    stays."""
+    from roadbank.tuning import real
+    chosen, obj, wrong, pitch = real.choose_short_check(short_rows)
+    assert chosen is None
+    assert min(wrong.values()) > 0
+    assert obj[None] > max(obj[b] for b in real.CHECK_RANGES) + real.TIE_DEG
+    assert pitch[None] > 0                       # the pitch rate passes the shipped check too: no constraint
+
+
+@needs_kitti
+def test_the_thirty_third_stage_takes_a_formats_own_channels_as_they_are(short_rows):
+    """The rule (tuning.real.choose_fixed_channels): on short pieces, a format's roll rate and ax used whatever the
+    check reads beats using them where the check cannot decide, which beats judging them, each by more than the
+    tie; the shipped setting is the winner."""
+    from roadbank.tuning import real
+    from roadbank.vehicle import conditions
+    chosen, obj = real.choose_fixed_channels(short_rows)
+    assert chosen == "always" and conditions.TRUST_FIXED_CHANNELS
+    assert obj["judged"] > obj["undecided"] + real.TIE_DEG > obj["always"] + 2 * real.TIE_DEG
+
+
+def _write_csv(path, s):
+    cols = {c: getattr(s, c) for c in s.channels}
+    path.write_text(",".join(cols) + "\n" + "\n".join(",".join(repr(float(c[i])) for c in cols.values())
+                                                     for i in range(len(s))) + "\n")
+
+
+@needs_kitti
+def test_a_short_kitti_log_gets_the_gyro_and_the_same_channels_from_a_csv_are_judged(tmp_path):
+    """A KITTI drive's first 8 s: too short for the roll-rate check (no slope). Read by the KITTI reader its roll
+    rate and ax are the format's own (Signals.fixed) and the default is the gyro filter, corrected for the grade;
+    the same channels written to a CSV and read by the default map are a map's, judged, and the default is the ESP
+    blend; so is the KITTI log with the trust switched off (the stages before the thirty-third)."""
+    from roadbank.io import load_log
+    from roadbank.io.kitti import load_kitti_oxts
+    from roadbank.tuning.real import design_settings
+    from roadbank.vehicle import log_conditions
+    s = load_kitti_oxts(KITTI).signals
+    assert s.fixed == {"p", "ax"}
+    short = s[:int(np.searchsorted(s.t, s.t[0] + 8.0))]
+    assert short.fixed == {"p", "ax"}
+    cond = log_conditions(short)
+    assert cond["log_roll_rate"] == cond["log_ax"] == 1.0
+    est = for_log("kinematic-pif", short)
+    assert isinstance(est, KinematicGyro) and est.grade_window > 0
+    _write_csv(tmp_path / "short.csv", short)
+    csv = load_log(tmp_path / "short.csv").signals
+    assert csv.fixed == frozenset() and csv.p is not None
+    assert log_conditions(csv)["log_roll_rate"] is None
+    assert isinstance(for_log("kinematic-pif", csv), estimators.KinematicPIF)
+    with design_settings(trust_fixed_channels=False):
+        assert log_conditions(short)["log_roll_rate"] is None
+
+
+def test_signals_fixed_names_carried_optional_channels_only():
+    """Signals.fixed: an unknown name is refused; a channel set to None leaves it; slices keep it; a concatenation
+    keeps what every part has."""
+    from roadbank.signals import concat_signals
+    n = 10
+    base = dict(t=np.arange(n) * 0.1, vx=np.full(n, 10.0), ay=np.zeros(n), r=np.zeros(n), delta_f=np.zeros(n))
+    s = Signals(**base, p=np.zeros(n), ax=np.zeros(n), fixed=frozenset({"p", "ax"}))
+    with pytest.raises(ValueError, match="fixed"):
+        Signals(**base, p=np.zeros(n), fixed=frozenset({"ay"}))
+    assert dataclasses.replace(s, p=None).fixed == {"ax"}
+    assert s[2:5].fixed == {"p", "ax"} and s.take(np.array([1, 3])).fixed == {"p", "ax"}
+    later = dataclasses.replace(s, t=s.t + 1.0, fixed=frozenset({"p"}))
+    assert concat_signals([s, later]).fixed == {"p"}

@@ -56,6 +56,13 @@ class Signals:
         pitch positive nose down), when the log has one; None otherwise. The gyro-aided estimators read the
         road's grade from it (:mod:`roadbank.models.attitude`).
 
+    fixed : frozenset of str, optional
+        The optional channels (``"p"``, ``"ax"``) whose axis, sign and unit the log's format itself documents (the
+        readers of KITTI's OXTS files and of comma2k19 set it; a user's channel map does not): the design takes them
+        as they are, without the checks that guard a map's channels (:func:`roadbank.vehicle.log_conditions`).
+        Only channels the log carries stay in it (``dataclasses.replace(s, p=None)`` drops ``"p"``); slices keep
+        it; :func:`concat_signals` keeps what every part has.
+
     NaN / inf samples in ``vx, ay, r, delta_f, p, ax`` are allowed: the estimators hold
     their output there and flag it not valid. The time base itself must be clean.
     """
@@ -67,9 +74,15 @@ class Signals:
     delta_f: np.ndarray
     p: np.ndarray | None = None
     ax: np.ndarray | None = None
+    fixed: frozenset[str] = frozenset()
 
     def __post_init__(self) -> None:
         arrays = {name: _as_1d(name, getattr(self, name)) for name in self.channels}
+        fixed = frozenset(self.fixed)
+        if not fixed <= set(OPTIONAL_CHANNELS):
+            raise ValueError(f"Signals.fixed: {sorted(fixed - set(OPTIONAL_CHANNELS))} not optional channels "
+                             f"(of {', '.join(OPTIONAL_CHANNELS)})")
+        object.__setattr__(self, "fixed", frozenset(c for c in fixed if getattr(self, c) is not None))
         n = len(arrays["t"])
         if n == 0:
             raise ValueError("Signals: empty arrays (no samples)")
@@ -109,7 +122,7 @@ class Signals:
     def take(self, index) -> "Signals":
         """Samples ``index`` (a slice, or an index array in increasing order) of every channel, as a new
         :class:`Signals`."""
-        return Signals(**{c: getattr(self, c)[index] for c in self.channels})
+        return Signals(**{c: getattr(self, c)[index] for c in self.channels}, fixed=self.fixed)
 
     @classmethod
     def from_steering_wheel(cls, t, vx, ay, r, steering_wheel_angle,
@@ -127,7 +140,8 @@ def concat_signals(parts) -> "Signals":
     if len(parts) == 1:
         return parts[0]
     shared = [c for c in parts[0].channels if all(c in p.channels for p in parts)]
-    return Signals(**{c: np.concatenate([getattr(p, c) for p in parts]) for c in shared})
+    return Signals(**{c: np.concatenate([getattr(p, c) for p in parts]) for c in shared},
+                   fixed=frozenset.intersection(*(p.fixed for p in parts)))
 
 
 def interval_rate(dt) -> float:

@@ -240,7 +240,8 @@ class _Logs:
         delta = steering_delta_f(cmap, self.params, [r for r in self.roles if r in out], out)
         try:
             sig = Signals(out["t"], out["speed"], out["lateral_acceleration"], out["yaw_rate"], delta,
-                          **{c: out.get(r) for r, c in OPTIONAL.items()})
+                          **{c: out.get(r) for r, c in OPTIONAL.items()},
+                          fixed=frozenset(c for r, c in OPTIONAL.items() if cmap.fixed_layout and out.get(r) is not None))
         except ValueError as exc:
             raise LogError(f"{p}: {exc}") from None
         pos = {r: out[r] for r in self.gnss}

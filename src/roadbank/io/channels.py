@@ -181,6 +181,9 @@ class ChannelMap:
         warning, not refused (the default map: roadbank's default estimator does not read the
         steering angle, and an IMU or INS log has none); a map the user wrote names columns that
         must be there.
+    fixed_layout : bool
+        The map is a format's own documented layout (KITTI's OXTS files, comma2k19), not a user's: its optional
+        channels are what the format says they are (``Signals.fixed``), with no map to get wrong.
     """
 
     channels: dict[str, ChannelSpec]
@@ -195,6 +198,7 @@ class ChannelMap:
     ros_time: str = "header"
     no_steering: bool = False
     steering_optional: bool = False
+    fixed_layout: bool = False
 
     def __post_init__(self) -> None:
         src = self.source

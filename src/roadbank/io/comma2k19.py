@@ -119,7 +119,7 @@ def channel_map(rate_hz: float = 100.0, max_gap_s: float = 0.5) -> ChannelMap:
     for role, (col, unit, conv) in CHANNELS.items():
         ch[role] = ChannelSpec(role, col, unit, conv)
     return ChannelMap(ch, time_base="uniform", rate_hz=rate_hz, max_gap_s=max_gap_s,
-                      source="comma2k19 processed-log layout")
+                      source="comma2k19 processed-log layout", fixed_layout=True)
 
 
 class SegmentSource:

@@ -194,7 +194,8 @@ def channel_map() -> ChannelMap:
     ch = {"time": ChannelSpec("time", TIME, "s")}
     for role, (name, unit) in ROLES.items():
         ch[role] = ChannelSpec(role, column(name), unit)
-    return ChannelMap(ch, time_base="clock", no_steering=True, source="KITTI raw oxts layout")
+    return ChannelMap(ch, time_base="clock", no_steering=True, source="KITTI raw oxts layout",
+                      fixed_layout=True)
 
 
 def find_drive(path) -> Path:

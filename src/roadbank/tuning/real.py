@@ -789,7 +789,8 @@ def design_settings(**settings):
 
 
 #: the module settings of :mod:`roadbank.vehicle.conditions` that :func:`design_settings` sets
-_DESIGN_SETTINGS = ("QUIET_FLOOR_RATE", "QUIET_FLOOR_SIGNAL", "NOISE_AT_SOURCE", "NOISE_OCTAVE", "NOISE_OCTAVE_TOP")
+_DESIGN_SETTINGS = ("QUIET_FLOOR_RATE", "QUIET_FLOOR_SIGNAL", "NOISE_AT_SOURCE", "NOISE_OCTAVE", "NOISE_OCTAVE_TOP",
+                    "TRUST_FIXED_CHANNELS")
 #: the settings as each stage ran: the eighteenth and nineteenth before the twentieth, the twentieth before the
 #: twenty-first
 _BEFORE_SOURCE = {"noise_at_source": "none", "noise_octave": "none"}
@@ -1134,7 +1135,8 @@ def _check_rows(logs, lengths, windows, pitch_rates=None) -> list:
     rows = []
     for length in lengths:
         for piece, ref, m, (i, a, b) in check_pieces(logs, length):
-            cond = vehicle.log_conditions(piece)
+            with design_settings(trust_fixed_channels=False):       # as the thirtieth and thirty-first ran
+                cond = vehicle.log_conditions(piece)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
                 car = vehicle.undescribed_params(piece, cond=cond)
@@ -1264,6 +1266,29 @@ def choose_short_check(rows, lengths=SHORT_PIECES_S, ranges=CHECK_RANGES) -> tup
     allowed = {k: v for k, v in obj.items() if wrong[k] == 0}
     chosen = lowest_tied(allowed, order.index) if allowed else None
     return chosen, obj, wrong, pitch
+
+
+#: the thirty-third stage's candidates for a format's fixed channel, the shipped first
+FIXED_CHANNEL_RULES = ("judged", "undecided", "always")
+
+
+def choose_fixed_channels(rows, rules=FIXED_CHANNEL_RULES) -> tuple[str, dict]:
+    """The thirty-third stage (module docstring) on the thirty-second's ``rows`` (:func:`short_rows`): ``(chosen rule,
+    {rule: objective deg})``. A piece's channel is used by ``"judged"`` where the shipped check's slope is within
+    :data:`roadbank.vehicle.conditions.ROLL_SLOPE_RANGE`, by ``"undecided"`` also where it gives none (every
+    training channel moves: no slope means too few samples), by ``"always"`` everywhere."""
+    def used(slope, rule):
+        return rule == "always" or (slope is None and rule == "undecided") or _within(slope, conditions.ROLL_SLOPE_RANGE)
+
+    obj = {}
+    for rule in rules:
+        per_length: dict = {}
+        for n, errors, checks in rows:
+            rolls, axes = checks[conditions.ROLL_CHECK_WINDOWS_S]
+            roll, ax = used(rolls[0][0], rule), used(axes[0], rule)
+            per_length.setdefault(n, []).append(errors[0] if roll and ax else errors[1] if roll else errors[2])
+        obj[rule] = float(np.mean([np.median(v) for v in per_length.values()]))
+    return lowest_tied(obj, rules.index), obj
 
 
 def _quiet_by(measure: str):

@@ -60,6 +60,13 @@ ROLL_RATE_SHARE = 0.5
 #: slope (-) of ``vx`` on the integrated ``ax``, band-passed in the same way, within the same range (:func:`ax_slope`).
 ROLL_CHECK_WINDOWS_S = (1.0, 10.0)
 ROLL_SLOPE_RANGE = (0.5, 2.0)
+#: a channel whose meaning the log's format documents (``Signals.fixed``: KITTI's OXTS files, comma2k19) is taken as it
+#: is, whatever its check reads, and reads :data:`FIXED_SLOPE` (the thirty-third stage of :mod:`roadbank.tuning.real`:
+#: on short logs the checks cannot decide or misread a right channel, and no map can be wrong); False: judged as a
+#: map's (the stages before)
+TRUST_FIXED_CHANNELS = True
+#: what a format's own roll rate or ``ax`` reads in :func:`log_conditions`: the slope of a right channel (-)
+FIXED_SLOPE = 1.0
 #: low-passes whose update is limited by default (their ``clip``), given the log's noise densities ``Q_ay`` and ``R``
 #: (:func:`noise_densities`) by :func:`make_estimator`, as a sensor-weighted PIF is
 LIMITED_LOWPASSES = ("kinematic-smoother",)
@@ -131,7 +138,8 @@ def _at_most(noise: float, floor: float) -> float:
 def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
     """What a log tells :func:`make_estimator` about its sensors: ``{"log_rate": Hz,
     "log_ay_noise": m/s^2, "log_r_noise": rad/s, "log_ay_floor": m/s^2, "log_diff_noise": m/s^2, "log_roll_rate": -,
-    "log_ax": -}`` (the last two :func:`roll_rate_slope` and :func:`ax_slope`, None for a log without the channel) — the
+    "log_ax": -}`` (the last two :func:`roll_rate_slope` and :func:`ax_slope`, None for a log without the channel,
+    :data:`FIXED_SLOPE` for a channel its format documents: ``Signals.fixed``, :data:`TRUST_FIXED_CHANNELS`) — the
     sample rate of its time base (:func:`roadbank.signals.sample_rate`), the road noise of its ``ay`` and
     yaw rate on the samples at ``vx >= v_min`` (m/s): what they carry above the vehicle's dynamics band, taken
     as white (:func:`roadbank.signals.road_noise_std`, the noise model of real roads; NaN when
@@ -167,8 +175,17 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
     return {"log_rate": sample_rate(signals.t), "log_ay_noise": float(f"{ay_noise:.2g}"),
             "log_r_noise": float(f"{r_noise:.2g}"), "log_ay_floor": float(f"{ay_floor:.2g}"),
             "log_diff_noise": float(f"{diff_noise:.2g}"),
-            "log_roll_rate": _two_digits(roll_rate_slope(signals, vx, moving)),
-            "log_ax": _two_digits(ax_slope(signals, vx, moving))}
+            "log_roll_rate": _checked(signals, "p", vx, moving, roll_rate_slope),
+            "log_ax": _checked(signals, "ax", vx, moving, ax_slope)}
+
+
+def _checked(signals, name: str, vx, moving, check) -> float | None:
+    """What the log's optional channel ``name`` reads (-, two digits; None without it): :data:`FIXED_SLOPE` for a
+    channel its format documents (``signals.fixed``, while :data:`TRUST_FIXED_CHANNELS`), else its ``check``
+    (:func:`roll_rate_slope` or :func:`ax_slope`) on the design span (speed ``vx`` m/s, its samples ``moving``)."""
+    if TRUST_FIXED_CHANNELS and name in signals.fixed and has_channel(signals, name, moving):
+        return FIXED_SLOPE
+    return _two_digits(check(signals, vx, moving))
 
 
 def esp_conditions(cond: dict) -> dict:
