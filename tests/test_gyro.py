@@ -254,7 +254,8 @@ def test_a_roll_rate_that_does_not_follow_the_roll_in_ay_is_not_used_and_said_so
     from roadbank.fleet.process import design_words
     from roadbank.io.kitti import load_kitti_oxts
     from roadbank.vehicle import design_record, log_conditions
-    s = load_kitti_oxts(KITTI).signals
+    # the channels as a map's: judged (the KITTI reader's own are taken as they are, the thirty-third stage)
+    s = dataclasses.replace(load_kitti_oxts(KITTI).signals, fixed=frozenset())
     assert log_conditions(s)["log_roll_rate"] == pytest.approx(1.0, abs=0.15)
     p = {"negated": -s.p, "yaw rate": s.r, "deg/s read as rad/s": np.degrees(s.p)}[wrong]
     bad = dataclasses.replace(s, p=p)

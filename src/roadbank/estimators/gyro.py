@@ -297,8 +297,8 @@ class KinematicGyro(ScheduledObserver):
         (rad/s) and the longitudinal acceleration ``ax`` (m/s^2; NaN: the roll rate is not corrected for the
         grade, and once an ``ax`` has come, the windows that hold the NaN are not, as in :meth:`run`)."""
         if self.grade.window > 0 and (not np.isnan(ax) or self.grade.started):
-            one = Signals(**{c: np.array([float(v)]) for c, v in
-                             zip(("t", "vx", "ay", "r", "delta_f", "p", "ax"), (t, vx, ay, r, delta_f, p, ax))})
+            t_, vx_, ay_, r_, d_, p_, ax_ = (np.array([float(v)]) for v in (t, vx, ay, r, delta_f, p, ax))
+            one = Signals(t_, vx_, ay_, r_, d_, p_, ax_)
             p = float(self.grade.correct(one).p[0])
         return super().step(t, vx, ay, r, p)
 

@@ -241,7 +241,7 @@ class _Logs:
         try:
             sig = Signals(out["t"], out["speed"], out["lateral_acceleration"], out["yaw_rate"], delta,
                           **{c: out.get(r) for r, c in OPTIONAL.items()},
-                          fixed=frozenset(c for r, c in OPTIONAL.items() if cmap.fixed_layout and out.get(r) is not None))
+                          fixed=frozenset(OPTIONAL.values()) if cmap.fixed_layout else frozenset())
         except ValueError as exc:
             raise LogError(f"{p}: {exc}") from None
         pos = {r: out[r] for r in self.gnss}

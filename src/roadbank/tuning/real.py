@@ -1253,7 +1253,8 @@ def choose_short_check(rows, lengths=SHORT_PIECES_S, ranges=CHECK_RANGES) -> tup
     channel, the shipped check."""
     obj, wrong, pitch = {}, {}, {}
     for cand in (None, *ranges):
-        per_length, wrong[cand], pitch[cand] = {n: [] for n in lengths}, 0, 0
+        per_length: dict[float, list[float]] = {n: [] for n in lengths}
+        wrong[cand], pitch[cand] = 0, 0
         for n, errors, checks in rows:
             roll, ax = _short_readings(checks, cand)
             use = [_within(x, b) for x, _, b in roll]
@@ -1278,7 +1279,8 @@ def choose_fixed_channels(rows, rules=FIXED_CHANNEL_RULES) -> tuple[str, dict]:
     :data:`roadbank.vehicle.conditions.ROLL_SLOPE_RANGE`, by ``"undecided"`` also where it gives none (every
     training channel moves: no slope means too few samples), by ``"always"`` everywhere."""
     def used(slope, rule):
-        return rule == "always" or (slope is None and rule == "undecided") or _within(slope, conditions.ROLL_SLOPE_RANGE)
+        return (rule == "always" or (slope is None and rule == "undecided")
+                or _within(slope, conditions.ROLL_SLOPE_RANGE))
 
     obj = {}
     for rule in rules:
