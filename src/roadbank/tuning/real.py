@@ -419,7 +419,7 @@ from ..sim import SCENARIOS, run_scenario
 from ..sim.params import PlantParams
 from ..signals import Signals, concat_signals, sample_rate
 from ..validation.kitti import KITTI_SCORING
-from ..validation.scoring import masks
+from ..validation.scoring import SHORT_PIECES_S, masks, piece_bounds
 from ..validation.splits import KITTI_TRAINING
 from ..vehicle import load_vehicle
 from .manoeuvres import drive_set
@@ -429,8 +429,8 @@ from .objective import drive_errors
 CHECK_PIECES_S = (12.0, 20.0)
 CHECK_WINDOWS_S = ((1.0, 10.0), (0.5, 4.0))
 CHECK_RANGES = ((0.5, 2.0), (0.3, 3.0))
-#: the thirty-second stage's pieces (s) and its fallback check's centred-mean windows (s)
-SHORT_PIECES_S = (8.0, 12.0, 20.0)
+#: the thirty-second stage's fallback check's centred-mean windows (s); its pieces are the validation's short-log
+#: lengths (:data:`roadbank.validation.scoring.SHORT_PIECES_S`, 8, 12 and 20 s)
 SHORT_CHECK_WINDOWS_S = (0.5, 4.0)
 #: the thirty-first stage's second condition: the largest magnitude of the roll rate's correlation with the yaw rate
 CHECK_MAX_CORR = 0.9
@@ -1106,8 +1106,7 @@ def check_pieces(logs, length: float) -> list:
     with no scored sample left out."""
     out = []
     for i, (s, ref, _) in enumerate(logs):
-        edges = np.searchsorted(s.t, s.t[0] + length * np.arange(int((s.t[-1] - s.t[0]) // length) + 1))
-        for a, b in zip(edges[:-1], edges[1:]):
+        for a, b in piece_bounds(s.t, length):
             piece = s[a:b]
             m = masks(piece.t, piece.vx, KITTI_SCORING)[1]
             if np.any(m):

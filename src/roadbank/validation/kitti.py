@@ -41,7 +41,9 @@ from ..params import VehicleParams
 from ..signals import sample_rate
 from ..vehicle import SensorSpec, car_for_log, log_conditions, noise_densities
 from .comma2k19 import ValidationResult
-from .scoring import VALIDATION_NAMES, Scoring, _rms_deg, hold_invalid, lowpass_t, masks, pooled, run_and_score
+from ..defaults import ESTIMATOR as DEFAULT
+from .scoring import (ESP_DEFAULT, SHORT_PIECES_S, VALIDATION_NAMES, Scoring, _rms_deg, hold_invalid, lowpass_t, masks,
+                      piece_bounds, pooled, run_and_score)
 from .splits import split_of
 
 #: KITTI scoring: no offset fitted (reference and inputs come from one INS frame), the warm-up the
@@ -188,6 +190,7 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
         raise LogError(f"{path}: no sample to score: {len(s)} frames over {s.t[-1] - s.t[0]:.1f} s, speed at most "
                        f"{np.nanmax(s.vx, initial=0.0):.1f} m/s (scored: vx >= {scoring.v_gate:g} m/s after the "
                        f"first {scoring.warmup_s:g} s)")
+    given = params
     # a car not described: the one that fits the drive
     params, design = car_for_log(log.signals, log_conditions(log.signals), params, sensors=sensors)
     run = run_and_score(log.signals, log.reference_roll, names, params, scoring, per_estimator=tuning,
@@ -217,10 +220,51 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     data["ins_doubt"] = ins_doubt(log, scoring.v_gate)
     data["design"] = design
     data["warnings"] = list(log.warnings)
+    if sensitivity:
+        data["pieces"] = short_log_scores(log, [n for n in SHORT_NAMES if n in names], given, scoring, sensors)
     return ValidationResult(scores=run.scores, params=params, t=t, reference=run.reference,
                             estimates=run.estimates, split_time=float(t[first[0]]) if len(first) else float(t[0]),
                             data=data, sensitivity=sens, settings=settings, run=run,
                             label=log.metadata["drive"], dataset="kitti", valid=run.valid)
+
+
+#: the estimators scored on a drive's short pieces (:func:`short_log_scores`): the baselines, the default, and the
+#: default without the roll rate
+SHORT_NAMES = ("kinematic", "kinematic-lp", DEFAULT, ESP_DEFAULT)
+
+
+def short_log_scores(log, names, params: VehicleParams | None, scoring: Scoring, sensors=None) -> dict:
+    """``{length: {name: [raw RMS deg per piece]}}``: each estimator of ``names`` on the consecutive whole pieces of
+    each of :data:`SHORT_PIECES_S` (s) of the drive ``log`` (:func:`~roadbank.validation.scoring.piece_bounds`), each
+    piece read as a log of its own (its design, its fitted car unless ``params`` is given, ``scoring`` within it);
+    pieces with no scored sample left out. What a user with a short log gets."""
+    out: dict = {}
+    for length in SHORT_PIECES_S:
+        rms: dict = {n: [] for n in names}
+        for a, b in piece_bounds(log.signals.t, length):
+            piece = log.signals[a:b]
+            if not masks(piece.t, piece.vx, scoring)[1].any():
+                continue
+            car, _ = car_for_log(piece, log_conditions(piece), params, sensors=sensors)
+            run = run_and_score(piece, log.reference_roll[a:b], names, car, scoring, sensors=sensors)
+            for n in names:
+                rms[n].append(run.scores[n].rms_raw_deg)
+        out[length] = rms
+    return out
+
+
+def _short_split(ds, names) -> dict:
+    """``{length: {"pieces": n, "median_rms_raw_deg": {name: deg}, "default_below_lp": k}}`` over the short pieces of
+    the drives ``ds`` (:func:`short_log_scores`, in ``data["pieces"]``); empty when none has them."""
+    ds = [d for d in ds if "pieces" in d.data]
+    out = {}
+    for length in SHORT_PIECES_S:
+        per = {n: [x for d in ds for x in d.data["pieces"][length].get(n, [])] for n in names}
+        if ds and names and per[names[0]]:
+            pairs = zip(per.get(DEFAULT, []), per.get("kinematic-lp", []))
+            out[length] = {"pieces": len(per[names[0]]), "median_rms_raw_deg": {n: _median(v) for n, v in per.items()},
+                           "default_below_lp": sum(a < b for a, b in pairs)}
+    return out
 
 
 def expand_drives(paths) -> list[Path]:
@@ -384,7 +428,8 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
                                "median_rms_raw_deg": {n: _median([d.scores[n].rms_raw_deg for d in ds])
                                                       for n in names},
                                "median_rms_raw_each_start_deg": {n: _median([d.data["rms_raw_each_start_deg"][n]
-                                                                             for d in ds]) for n in names}}
+                                                                             for d in ds]) for n in names},
+                               "short_logs": _short_split(ds, [n for n in SHORT_NAMES if n in names])}
     return KittiValidation(drives=drives, pooled=pooled([d.run for d in credible], names), errors=errors,
                            settings={"tau": scoring.tau, "warmup_s": scoring.warmup_s,
                                      "v_gate": scoring.v_gate, "fit_fraction": scoring.fit_fraction,

@@ -19,6 +19,27 @@ from .targets import kitti_targets
 _BEST = {"rms raw (deg)": "min", "r raw": "max", "rms smoothed (deg)": "min", "r smoothed": "max", "r causal LP": "max"}
 
 
+def short_log_lines(v: KittiValidation, h: str) -> list[str]:
+    """The "Short logs" section: per split and piece length, the median raw RMS over the drives' short pieces
+    (:func:`roadbank.validation.kitti.short_log_scores`); nothing when no drive has them."""
+    parts = {k: part["short_logs"] for k, part in v.by_split.items() if part.get("short_logs")}
+    if not parts:
+        return []
+    names = list(next(iter(next(iter(parts.values())).values()))["median_rms_raw_deg"])
+    body = [[f"{split} {length:g} s", int(x["pieces"])] + [x["median_rms_raw_deg"][n] for n in names]
+            + [f"{x['default_below_lp']} of {x['pieces']}"]
+            for split, by_length in parts.items() for length, x in by_length.items()]
+    return [f"{h}# Short logs\n",
+            "Many raw drives last 10-30 s. Each credible drive cut into consecutive whole pieces of 8, 12 and 20 s, "
+            "each piece read as a log of its own (its own design and fitted car, the scoring within it), as "
+            "`roadbank estimate` reads a short log: median raw theta RMS (deg) over the pieces, and on how many "
+            f"pieces the default (`{DEFAULT}`) is below `kinematic-lp`. On a piece too short for the roll-rate "
+            "check the format's own roll rate is still used (docs/estimators.md, \"Short logs and a format's own "
+            "channels\").\n",
+            md_table(["split, piece", "pieces"] + [f"{n} (deg)" for n in names] + [f"{DEFAULT} below kinematic-lp"],
+                     body, digits=3, align="lr" + "r" * (len(names) + 1)), ""]
+
+
 def _f(x, nd=3):
     return "n/a" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.{nd}f}"
 
@@ -30,7 +51,7 @@ def _j(x):
 def to_json(v: KittiValidation) -> dict:
     """``{"drives": {drive: {estimator: {...}}}, "pooled": {estimator: {...}}, "errors": [...],
     "excluded": [{"drive", "path", "reason"}], "notes": [...],
-    "splits": {split: {"drives", "median_rms_raw_deg", "median_rms_raw_each_start_deg", "pooled"}},
+    "splits": {split: {"drives", "short_logs", "median_rms_raw_deg", "median_rms_raw_each_start_deg", "pooled"}},
     "flagged": [{"drive", "reason"}], "designs": {drive: design}}`` (``design``:
     :func:`roadbank.vehicle.design_record`; ``excluded``: the drives not read or not scored, ``drive``
     null for a path that holds no KITTI folder; ``notes``: :attr:`KittiValidation.notes`).
@@ -46,6 +67,10 @@ def to_json(v: KittiValidation) -> dict:
                         for n, s in d.scores.items()} for d in v.drives}
     pool = {n: {k: (_j(x) if k != "n" else x) for k, x in p.items()} for n, p in v.pooled.items()}
     splits = {k: {"drives": part["drives"],
+                  "short_logs": {f"{length:g}": {"pieces": x["pieces"], "default_below_lp": x["default_below_lp"],
+                                                 "median_rms_raw_deg": {n: _j(y) for n, y in
+                                                                        x["median_rms_raw_deg"].items()}}
+                                 for length, x in part.get("short_logs", {}).items()},
                   "median_rms_raw_deg": {n: _j(x) for n, x in part["median_rms_raw_deg"].items()},
                   "median_rms_raw_each_start_deg": {n: _j(x)
                                                     for n, x in part["median_rms_raw_each_start_deg"].items()},
@@ -270,6 +295,7 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
                        + [int(p["n"])] for name, p in v.pooled.items()],
                       digits=3, best=_BEST, best_in="column"))
     L.append("\nBest of each score column in bold (smallest RMS, largest r).\n")
+    L += short_log_lines(v, h)
     L += limits_lines(v, h)
     L.append(f"{h}# Method (KITTI)\n")
     L.append("- Reader: `roadbank.io.load_log(drive)` (format `kitti-oxts`, detected from the folder): "

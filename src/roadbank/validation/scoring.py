@@ -49,6 +49,18 @@ ESP_DEFAULT = f"{ESTIMATOR}-esp"
 VALIDATION_NAMES = NAMES + tuple(ESP_LABELS)
 
 
+#: the lengths (s) a drive is cut into for its short-log scores (:func:`piece_bounds`): many raw drives last 10-30 s
+SHORT_PIECES_S = (8.0, 12.0, 20.0)
+
+
+def piece_bounds(t, length: float) -> list[tuple[int, int]]:
+    """Sample bounds ``[a, b)`` of the consecutive whole pieces of ``length`` (s) of a log sampled at ``t`` (s), from
+    its first sample on (the remainder shorter than ``length`` left out)."""
+    t = np.asarray(t, dtype=np.float64)
+    edges = np.searchsorted(t, t[0] + length * np.arange(int((t[-1] - t[0]) // length) + 1))
+    return list(zip(edges[:-1].tolist(), edges[1:].tolist()))
+
+
 @dataclass(frozen=True)
 class Scoring:
     """Settings of the scoring (see the module docstring).
