@@ -556,3 +556,41 @@ def test_signals_fixed_names_carried_optional_channels_only():
     assert s[2:5].fixed == {"p", "ax"} and s.take(np.array([1, 3])).fixed == {"p", "ax"}
     later = dataclasses.replace(s, t=s.t + 1.0, fixed=frozenset({"p"}))
     assert concat_signals([s, later]).fixed == {"p"}
+
+
+@needs_kitti
+def test_estimate_on_a_ten_second_kitti_drive_uses_its_roll_rate(tmp_path):
+    """`roadbank estimate DRIVE -o out.csv` on the first 10 s of a KITTI drive (too short for the roll-rate check):
+    the summary says the default is the gyro filter, corrected for the grade, and the written theta is closer to
+    the INS roll than the default without the roll rate."""
+    import shutil
+
+    import pandas as pd
+    from click.testing import CliRunner
+
+    from roadbank.cli import main
+    from roadbank.io.kitti import load_kitti_oxts
+    from roadbank.validation.kitti import KITTI_SCORING
+    from roadbank.validation.scoring import masks
+    from roadbank.vehicle import for_log, log_conditions
+    drive = tmp_path / "2011_09_26_drive_0070"
+    shutil.copytree(KITTI / "oxts", drive / "oxts")
+    n = 100
+    for f in sorted((drive / "oxts" / "data").iterdir())[n:]:
+        f.unlink()
+    stamps = drive / "oxts" / "timestamps.txt"
+    stamps.write_text("".join(stamps.read_text().splitlines(keepends=True)[:n]))
+    log = load_kitti_oxts(drive)
+    s = log.signals
+    assert len(s) == n and log_conditions(dataclasses.replace(s, fixed=frozenset()))["log_roll_rate"] is None
+    res = CliRunner().invoke(main, ["estimate", str(drive), "-o", str(tmp_path / "out.csv")])
+    assert res.exit_code == 0, res.output
+    assert "kinematic-gyro (the log has a roll rate; corrected for the grade by its ax)" in res.output
+    theta = pd.read_csv(tmp_path / "out.csv")["kinematic-pif.theta"].to_numpy()       # rad
+    m = masks(s.t, s.vx, KITTI_SCORING)[1]
+    esp = for_log("kinematic-pif", dataclasses.replace(s, p=None, ax=None)).run(s).theta
+    assert m.sum() > 30
+
+    def rms(e):
+        return float(np.sqrt(np.mean(e ** 2)))
+    assert rms(theta[m] - log.reference_roll[m]) < 0.8 * rms(esp[m] - log.reference_roll[m])
