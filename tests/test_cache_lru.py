@@ -72,7 +72,13 @@ def _designs_of_one_drive(tmp_path, monkeypatch) -> int:
     from roadbank.validation.kitti import validate_kitti_drive
     stored = []
     real = cache.store
-    monkeypatch.setattr(cache, "store", lambda kind, key, arrays: stored.append(kind) or real(kind, key, arrays))
+
+    def counted(kind, key, arrays):
+        path = real(kind, key, arrays)
+        if path is not None:                                # written (not inside cache.not_stored)
+            stored.append(kind)
+        return path
+    monkeypatch.setattr(cache, "store", counted)
     monkeypatch.setenv("ROADBANK_CACHE_DIR", str(tmp_path / "count"))
     monkeypatch.setattr(base, "_DESIGN_CACHE", {})          # every design made (and stored) here
     validate_kitti_drive(next(KITTI.glob("*/oxts")).parent)
@@ -113,3 +119,16 @@ def test_the_in_process_memo_drops_the_least_recently_used(monkeypatch):
     estimators.make("kinematic-lp", cutoff=0.3)                 # a hit: 0.3 is now the most recent
     estimators.make("kinematic-lp", cutoff=0.6)                 # a fourth: the least recent (0.4) goes
     assert keys[1] not in base._DESIGN_CACHE and keys[0] in base._DESIGN_CACHE and len(base._DESIGN_CACHE) == 3
+
+
+def test_nothing_is_stored_inside_not_stored_and_loads_still_hit(disk):
+    """cache.not_stored: a store inside the block writes no file (None); an entry stored before loads inside it; the
+    block nests, and after it stores write again."""
+    before = cache.store("design", "kept", {"a": np.ones(2)})
+    with cache.not_stored():
+        with cache.not_stored():
+            assert cache.store("design", "inner", {"a": np.zeros(2)}) is None
+        assert cache.store("design", "one-off", {"a": np.zeros(2)}) is None
+        assert cache.load("design", "kept")["a"][0] == 1.0
+    assert {p.name for p in disk.glob("*.npz")} == {before.name}
+    assert cache.store("design", "after", {"a": np.zeros(2)}) is not None

@@ -29,6 +29,7 @@ import hashlib
 import os
 import sys
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -150,10 +151,28 @@ def load(kind: str, key: str) -> dict[str, np.ndarray] | None:
     return arrays
 
 
+#: how many :func:`not_stored` blocks are open in this process: while any is, :func:`store` writes nothing
+_NOT_STORED = 0
+
+
+@contextmanager
+def not_stored():
+    """Within the block, :func:`store` writes nothing (loads still hit): for one-off results, such as the designs of
+    a validation's short pieces (each with its own noise and car), that would push the entries a user reuses out of
+    the cache (:data:`MAX_ENTRIES`)."""
+    global _NOT_STORED
+    _NOT_STORED += 1
+    try:
+        yield
+    finally:
+        _NOT_STORED -= 1
+
+
 def store(kind: str, key: str, arrays: dict[str, np.ndarray]) -> Path | None:
-    """Store ``arrays`` under ``key`` in ``kind`` (atomically); the path, or None if not written."""
+    """Store ``arrays`` under ``key`` in ``kind`` (atomically); the path, or None if not written (inside
+    :func:`not_stored` too)."""
     entry = _entry(kind, key)
-    if entry is None:
+    if entry is None or _NOT_STORED:
         return None
     path, text = entry
     tmp = None

@@ -33,7 +33,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..cache import not_stored
 from ..constants import G
+from ..defaults import ESTIMATOR as DEFAULT
 from ..estimators.pif import SENSOR_R_ESTIMATORS
 from ..io import LogError
 from ..io.kitti import drive_name, find_oxts_dirs, load_kitti_oxts
@@ -41,7 +43,6 @@ from ..params import VehicleParams
 from ..signals import sample_rate
 from ..vehicle import SensorSpec, car_for_log, log_conditions, noise_densities
 from .comma2k19 import ValidationResult
-from ..defaults import ESTIMATOR as DEFAULT
 from .scoring import (ESP_DEFAULT, SHORT_PIECES_S, VALIDATION_NAMES, Scoring, _rms_deg, hold_invalid, lowpass_t, masks,
                       piece_bounds, pooled, run_and_score)
 from .splits import split_of
@@ -237,20 +238,24 @@ def short_log_scores(log, names, params: VehicleParams | None, scoring: Scoring,
     """``{length: {name: [raw RMS deg per piece]}}``: each estimator of ``names`` on the consecutive whole pieces of
     each of :data:`SHORT_PIECES_S` (s) of the drive ``log`` (:func:`~roadbank.validation.scoring.piece_bounds`), each
     piece read as a log of its own (its design, its fitted car unless ``params`` is given, ``scoring`` within it);
-    pieces with no scored sample left out. What a user with a short log gets."""
-    out: dict = {}
-    for length in SHORT_PIECES_S:
-        rms: dict = {n: [] for n in names}
-        for a, b in piece_bounds(log.signals.t, length):
-            piece = log.signals[a:b]
-            if not masks(piece.t, piece.vx, scoring)[1].any():
-                continue
-            car, _ = car_for_log(piece, log_conditions(piece), params, sensors=sensors)
-            run = run_and_score(piece, log.reference_roll[a:b], names, car, scoring, sensors=sensors)
-            for n in names:
-                rms[n].append(run.scores[n].rms_raw_deg)
-        out[length] = rms
-    return out
+    pieces with no scored sample left out. What a user with a short log gets. Their designs (one set per piece) are
+    not written to the design cache (:func:`roadbank.cache.not_stored`): they would fill it."""
+    with not_stored():
+        return {length: _piece_scores(log, length, names, params, scoring, sensors) for length in SHORT_PIECES_S}
+
+
+def _piece_scores(log, length: float, names, params, scoring: Scoring, sensors) -> dict:
+    """:func:`short_log_scores` for one piece ``length`` (s): ``{name: [raw RMS deg per piece]}``."""
+    rms: dict = {n: [] for n in names}
+    for a, b in piece_bounds(log.signals.t, length):
+        piece = log.signals[a:b]
+        if not masks(piece.t, piece.vx, scoring)[1].any():
+            continue
+        car, _ = car_for_log(piece, log_conditions(piece), params, sensors=sensors)
+        run = run_and_score(piece, log.reference_roll[a:b], names, car, scoring, sensors=sensors)
+        for n in names:
+            rms[n].append(run.scores[n].rms_raw_deg)
+    return rms
 
 
 def _short_split(ds, names) -> dict:
