@@ -594,3 +594,42 @@ def test_estimate_on_a_ten_second_kitti_drive_uses_its_roll_rate(tmp_path):
     def rms(e):
         return float(np.sqrt(np.mean(e ** 2)))
     assert rms(theta[m] - log.reference_roll[m]) < 0.8 * rms(esp[m] - log.reference_roll[m])
+
+
+@needs_kitti
+def test_the_thirty_fourth_stage_kept_learning_the_offset_from_the_start():
+    """The rule (tuning.real.choose_gyro_start): holding the offset state after the start helps the drives as read
+    but costs the ones with a gyro offset more; no hold (shipped) wins or ties, and 5 s and 10 s lose by more than
+    the tie."""
+    from roadbank.estimators.gyro import GYRO_START_HOLD_S
+    from roadbank.tuning import real
+    logs = real.training_logs(DATA, roll_rate=True)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, obj = real.choose_gyro_start(logs)
+    assert chosen == GYRO_START_HOLD_S == 0.0
+    assert min(obj[5.0], obj[10.0]) > obj[0.0] + real.TIE_DEG
+
+
+@needs_kitti
+def test_the_start_hold_keeps_the_offset_at_zero_then_learns_and_chunks_are_one_run():
+    """start_hold = 5 s on a KITTI drive: for the first 5 s the estimate is the filter without an offset state (to
+    the one sample's leak, 0.03 deg), after it the offset is learnt; run(), step() and 7-sample chunks agree
+    exactly."""
+    from roadbank.io.kitti import load_kitti_oxts
+    s = load_kitti_oxts(KITTI).signals
+    held = KinematicGyro(start_hold=5.0)
+    h = held.run(s)
+    z = KinematicGyro(bias_tau=0.0).run(s)
+    first = s.t - s.t[0] < 5.0
+    assert np.degrees(np.max(np.abs(h.theta[first] - z.theta[first]))) < 0.03
+    assert np.max(np.abs(h.states["p_offset"][~first])) > 1e-4
+    stepper = KinematicGyro(start_hold=5.0)
+    stepped = [stepper.step(*(float(getattr(s, c)[i]) for c in ("t", "vx", "ay", "r", "delta_f", "p", "ax"))).theta
+               for i in range(len(s))]
+    np.testing.assert_array_equal(stepped, h.theta)
+    chunked = KinematicGyro(start_hold=5.0)
+    parts = [chunked.run(s[i:i + 7], reset=i == 0).theta for i in range(0, len(s), 7)]
+    np.testing.assert_array_equal(np.concatenate(parts), h.theta)
+    with pytest.raises(ValueError, match="start_hold"):
+        KinematicGyro(start_hold=-1.0)

@@ -551,16 +551,29 @@ class Estimator:
         w, theta, phib, phi, valid, xs = self._outputs(n)
         k = self._first_interval(signals.t) if self._auto_rate and self.fixed_dt is None else n
         first = getattr(signals, self.first_input)
-        for a, b in ((0, k), (k, n)):
-            if a == k and k < n:
+        a = 0
+        while a < n:
+            if a == k:
                 self._observe_time(float(signals.t[k]))   # sets the rate (and the detector)
-            if b > a:
-                self._run_fn(self._mem, self._cfg, self._tab, self._work, signals.t[a:b], signals.vx[a:b],
-                             first[a:b], signals.ay[a:b], signals.r[a:b], w[a:b], theta[a:b],
-                             phib[a:b], phi[a:b], valid[a:b], xs[a:b])
+            b = self._segment_end(a, k if a < k else n)
+            self._run_fn(self._mem, self._cfg, self._tab, self._work, signals.t[a:b], signals.vx[a:b],
+                         first[a:b], signals.ay[a:b], signals.r[a:b], w[a:b], theta[a:b],
+                         phib[a:b], phi[a:b], valid[a:b], xs[a:b])
+            self._after_segment()
+            a = b
         states = {name: xs[:, i] for i, name in enumerate(self.state_names)}
         states["phi"] = phi
         return Estimate(self.name, signals.t, w, theta, phib, valid, states, self._settled(signals.t, valid))
+
+    def _segment_end(self, a: int, end: int) -> int:
+        """Where the compiled run that starts at sample ``a`` stops (at most ``end``): :meth:`run` calls the kernel
+        segment by segment and :meth:`_after_segment` after each. Every sample at once here; an estimator that
+        acts between samples (:class:`~roadbank.estimators.gyro.KinematicGyro`'s start) cuts shorter."""
+        return end
+
+    def _after_segment(self) -> None:
+        """What the estimator does to its memory after a segment of :meth:`run` (and a :meth:`step` that calls it):
+        nothing here."""
 
     #: :attr:`settle_time` once read (None: not yet)
     _settle_s: float | None = None

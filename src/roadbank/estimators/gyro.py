@@ -38,6 +38,7 @@ valid.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -67,6 +68,9 @@ GYRO_ORDER = 2
 #: of gravity, where the lateral velocity has less of L_r r; where a log's accelerometer sits is not known
 SIDESLIPS = ("none", "geometry", "quasi-static")
 GYRO_SIDESLIP = "none"
+#: seconds after the log's first usable sample during which the offset state is held at zero (0: learnt from the
+#: start): the thirty-fourth stage of :mod:`roadbank.tuning.real`
+GYRO_START_HOLD_S = 0.0
 
 
 class GradeCarry:
@@ -184,6 +188,11 @@ class KinematicGyro(ScheduledObserver):
     grade_window : float, optional
         Window (s, >= 0) of the pitch that corrects the roll rate for the grade on a log with ``ax`` (module
         docstring); 0: not corrected. Default :data:`GRADE_WINDOW_S`.
+    start_hold : float, optional
+        Seconds (>= 0) after the log's first usable sample during which the offset state is held at zero, so that
+        it does not learn the start's error (the first kinematic sample, taken as the state, is as noisy as any);
+        0: learnt from the start. Only where there is an offset state (order 2, ``bias_tau`` > 0, no sideslip);
+        not after a restart within the log. Default :data:`GYRO_START_HOLD_S`.
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator`; ``v_min`` (m/s) defaults to
         :data:`~roadbank.estimators.kinematic.KINEMATIC_V_MIN`, ``max_gap`` (s) to :data:`GYRO_MAX_GAP_S`.
@@ -201,8 +210,11 @@ class KinematicGyro(ScheduledObserver):
         def design(self) -> GyroDesign: ...     # an instance of design_type
 
     def __init__(self, params=None, *, cutoff=None, bias_tau=None, grade_window=None, order=None, sideslip=None,
-                 **kw):
+                 start_hold=None, **kw):
         self.cutoff = float(GYRO_CUTOFF_HZ if cutoff is None else cutoff)
+        self.start_hold = float(GYRO_START_HOLD_S if start_hold is None else start_hold)
+        if not (np.isfinite(self.start_hold) and self.start_hold >= 0):
+            raise ValueError(f"{self.name}: start_hold must be >= 0 s, got {start_hold}")
         self.bias_tau = float(GYRO_BIAS_TAU_S if bias_tau is None else bias_tau)
         self.order = int(GYRO_ORDER if order is None else order)
         self.sideslip = str(GYRO_SIDESLIP if sideslip is None else sideslip)
@@ -229,10 +241,29 @@ class KinematicGyro(ScheduledObserver):
         return self.grade.window
 
     def reset(self) -> None:
-        """Forget all history, the samples kept for the grade's pitch too."""
+        """Forget all history, the samples kept for the grade's pitch and the start of the hold too."""
         super().reset()
+        self._hold_from = math.nan           # time (s) of the first usable sample: the hold's start
         if hasattr(self, "grade"):           # the base constructor resets before the window is set
             self.grade.reset()
+
+    def _holding(self) -> bool:
+        """Whether the offset state is still (or may yet be) in its hold after the start (``start_hold``)."""
+        return (self.start_hold > 0 and self.state_names[1:2] == ("p_offset",)
+                and not self._mem[L.M_TLAST] - self._hold_from >= self.start_hold)
+
+    def _segment_end(self, a: int, end: int) -> int:
+        """One sample at a time while :meth:`_holding` (each followed by :meth:`_after_segment`), else to ``end``."""
+        return a + 1 if self._holding() else end
+
+    def _after_segment(self) -> None:
+        """Within the hold after the first usable sample, the offset state back to zero."""
+        if not self._holding() or self._mem[L.M_INIT] == 0.0:
+            return
+        if math.isnan(self._hold_from):
+            self._hold_from = float(self._mem[L.M_TLAST])
+        if self._mem[L.M_TLAST] - self._hold_from < self.start_hold:
+            self._mem[L.M_X + 1] = 0.0
 
     def _design_fields(self) -> dict:
         return dict(cutoff=self.cutoff, bias_tau=self.bias_tau, order=self.order, sideslip=self.sideslip)
@@ -300,7 +331,9 @@ class KinematicGyro(ScheduledObserver):
             t_, vx_, ay_, r_, d_, p_, ax_ = (np.array([float(v)]) for v in (t, vx, ay, r, delta_f, p, ax))
             one = Signals(t_, vx_, ay_, r_, d_, p_, ax_)
             p = float(self.grade.correct(one).p[0])
-        return super().step(t, vx, ay, r, p)
+        out = super().step(t, vx, ay, r, p)
+        self._after_segment()
+        return out
 
 
 class KinematicGyroSmoother(KinematicGyro):

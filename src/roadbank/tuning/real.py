@@ -423,7 +423,7 @@ from .. import vehicle
 from ..constants import G
 from ..vehicle import conditions
 from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
-from ..estimators.gyro import GYRO_CUTOFF_HZ, KinematicGyro, KinematicGyroSmoother
+from ..estimators.gyro import GRADE_WINDOW_S, GYRO_CUTOFF_HZ, KinematicGyro, KinematicGyroSmoother
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
@@ -1112,6 +1112,19 @@ def choose_gyro_sideslip(logs, modes=GYRO_SIDESLIPS) -> tuple[str, dict]:
         return lambda signals: KinematicGyro(cars[id(signals.ay)], sideslip=mode)
     obj = {mode: gyro_objective(build(mode), sets) for mode in modes}
     return lowest_tied(obj, modes.index), obj
+
+
+def choose_gyro_start(logs, holds=GYRO_START_HOLDS_S, lengths=SHORT_PIECES_S) -> tuple[float, dict]:
+    """The thirty-fourth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their
+    roll rate and ``ax``). Returns ``(start_hold s, {start_hold: objective deg})``."""
+    sets = gyro_sets(logs)
+    cut = [[[(p, ref, m) for p, ref, m, _ in check_pieces(one, n)] for n in lengths] for one in sets]
+    obj = {}
+    for hold in holds:
+        build = fixed(KinematicGyro(grade_window=GRADE_WINDOW_S, start_hold=hold))
+        obj[hold] = float(np.mean([np.mean([np.median(log_errors(build, part)) for part in [one, *pieces]])
+                                   for one, pieces in zip(sets, cut)]))
+    return lowest_tied(obj, holds.index), obj
 
 
 def check_pieces(logs, length: float) -> list:
