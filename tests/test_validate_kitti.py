@@ -451,3 +451,20 @@ def test_the_short_log_scores_are_what_estimate_gives_on_each_piece_and_the_gyro
                                     rel=1e-9)
     gyro, esp, lp = (np.array(got[n]) for n in names[1:] + names[:1])
     assert np.median(gyro) < np.median(esp) and np.mean(gyro < lp) >= 0.75
+
+
+@needs_kitti
+def test_the_short_log_section_reports_the_medians_of_the_drives_pieces():
+    """validate_kitti with its sensitivity runs: the split's short-log medians are those of its drives' pieces, and
+    the markdown table and the JSON give them."""
+    from roadbank.validation.kitti import SHORT_NAMES, validate_kitti
+    from roadbank.validation.kitti_report import short_log_lines, to_json
+    v = validate_kitti([KITTI / "2011_09_26_drive_0070"], names=list(SHORT_NAMES))
+    pieces = v.drives[0].data["pieces"][8.0]
+    part = v.by_split["validation"]["short_logs"][8.0]
+    assert part["pieces"] == len(pieces["kinematic-pif"]) >= 4
+    for n in SHORT_NAMES:
+        assert part["median_rms_raw_deg"][n] == pytest.approx(float(np.median(pieces[n])), rel=1e-12)
+    row = next(line for line in "\n".join(short_log_lines(v, "##")).splitlines() if line.startswith("| validation 8 s"))
+    assert f"| {part['pieces']} |" in row and f"{part['median_rms_raw_deg']['kinematic-pif']:.3f}" in row
+    assert to_json(v)["splits"]["validation"]["short_logs"]["8"]["pieces"] == part["pieces"]

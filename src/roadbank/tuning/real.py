@@ -1155,6 +1155,17 @@ def _piece_checks(piece, windows, pitch_rate=None) -> list:
              conditions.yaw_correlation(dataclasses.replace(span, p=p), moving)) for p in variants]
 
 
+def _default_errors(piece, ref, m, cond: dict, variants) -> list[float]:
+    """The raw RMS (deg) on ``piece``'s scored samples ``m`` against ``ref`` (rad) of the default as the command line
+    builds it for the piece's fitted car (fitted at its conditions ``cond``), once for each of ``variants`` (the
+    conditions as each candidate reads them)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        car = vehicle.undescribed_params(piece, cond=cond)
+        ests = [vehicle.for_conditions("kinematic-pif", v, car) for v in variants]
+    return [_rms_deg(est.run(piece).theta[m], ref[m]) for est in ests]
+
+
 def _check_rows(logs, lengths, windows, pitch_rates=None) -> list:
     """Per piece of each length (:func:`check_pieces`): ``(length, error of the default with the roll rate accepted,
     error without, {windows: _piece_checks})`` (deg); ``pitch_rates``: each drive's pitch rate (rad/s), or None."""
@@ -1163,12 +1174,8 @@ def _check_rows(logs, lengths, windows, pitch_rates=None) -> list:
         for piece, ref, m, (i, a, b) in check_pieces(logs, length):
             with design_settings(trust_fixed_channels=False):       # as the thirtieth and thirty-first ran
                 cond = vehicle.log_conditions(piece)
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                car = vehicle.undescribed_params(piece, cond=cond)
-                gyro = vehicle.for_conditions("kinematic-pif", {**cond, "log_roll_rate": 1.0}, car)
-                esp = vehicle.for_conditions("kinematic-pif", conditions.esp_conditions(cond), car)
-            errs = [_rms_deg(est.run(piece).theta[m], ref[m]) for est in (gyro, esp)]
+            errs = _default_errors(piece, ref, m, cond,
+                                   [{**cond, "log_roll_rate": 1.0}, conditions.esp_conditions(cond)])
             q = None if pitch_rates is None else pitch_rates[i][a:b]
             rows.append((length, *errs, {w: _piece_checks(piece, w, q) for w in windows}))
     return rows
@@ -1231,12 +1238,8 @@ def _short_piece(piece, ref, m, pitch_rate) -> tuple:
     :func:`_piece_checks` gives them (with the pitch rate last), ``ax`` the :func:`roadbank.vehicle.conditions.ax_slope`
     of the ``ax`` as read, negated, in g read as m/s^2 and ``ay`` in its place (two digits)."""
     cond = vehicle.log_conditions(piece)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        car = vehicle.undescribed_params(piece, cond=cond)
-        ests = [vehicle.for_conditions("kinematic-pif", {**cond, "log_roll_rate": 1.0, "log_ax": ax}, car)
-                for ax in (1.0, None)] + [vehicle.for_conditions("kinematic-pif", conditions.esp_conditions(cond), car)]
-    errors = [_rms_deg(est.run(piece).theta[m], ref[m]) for est in ests]
+    errors = _default_errors(piece, ref, m, cond, [{**cond, "log_roll_rate": 1.0, "log_ax": ax} for ax in (1.0, None)]
+                             + [conditions.esp_conditions(cond)])
     span, vx, moving = conditions._design_part(piece, 5.0)
     axes = (span.ax, -span.ax, span.ax / G, span.ay)
     checks = {w: (_piece_checks(piece, w, pitch_rate),

@@ -25,7 +25,8 @@ def short_log_lines(v: KittiValidation, h: str) -> list[str]:
     parts = {k: part["short_logs"] for k, part in v.by_split.items() if part.get("short_logs")}
     if not parts:
         return []
-    names = list(next(iter(next(iter(parts.values())).values()))["median_rms_raw_deg"])
+    first = next(x for by_length in parts.values() for x in by_length.values())
+    names = list(first["median_rms_raw_deg"])
     body = [[f"{split} {length:g} s", int(x["pieces"])] + [x["median_rms_raw_deg"][n] for n in names]
             + [f"{x['default_below_lp']} of {x['pieces']}"]
             for split, by_length in parts.items() for length, x in by_length.items()]
