@@ -555,25 +555,26 @@ class Estimator:
         while a < n:
             if a == k:
                 self._observe_time(float(signals.t[k]))   # sets the rate (and the detector)
-            b = self._segment_end(a, k if a < k else n)
+            b = self._segment_end(signals, a, k if a < k else n)
             self._run_fn(self._mem, self._cfg, self._tab, self._work, signals.t[a:b], signals.vx[a:b],
                          first[a:b], signals.ay[a:b], signals.r[a:b], w[a:b], theta[a:b],
                          phib[a:b], phi[a:b], valid[a:b], xs[a:b])
-            self._after_segment()
+            self._after_segment(signals, a, b)
             a = b
         states = {name: xs[:, i] for i, name in enumerate(self.state_names)}
         states["phi"] = phi
         return Estimate(self.name, signals.t, w, theta, phib, valid, states, self._settled(signals.t, valid))
 
-    def _segment_end(self, a: int, end: int) -> int:
-        """Where the compiled run that starts at sample ``a`` stops (at most ``end``): :meth:`run` calls the kernel
-        segment by segment and :meth:`_after_segment` after each. Every sample at once here; an estimator that
-        acts between samples (:class:`~roadbank.estimators.gyro.KinematicGyro`'s start) cuts shorter."""
+    def _segment_end(self, signals: Signals, a: int, end: int) -> int:
+        """Where the compiled run over ``signals`` that starts at sample ``a`` stops (at most ``end``): :meth:`run`
+        calls the kernel segment by segment and :meth:`_after_segment` after each. Every sample at once here; an
+        estimator that acts between samples (:class:`~roadbank.estimators.gyro.KinematicGyro`'s start) cuts
+        shorter."""
         return end
 
-    def _after_segment(self) -> None:
-        """What the estimator does to its memory after a segment of :meth:`run` (and a :meth:`step` that calls it):
-        nothing here."""
+    def _after_segment(self, signals: Signals, a: int, b: int) -> None:
+        """What the estimator does to its memory after the samples ``a:b`` of ``signals`` in :meth:`run` (and a
+        :meth:`step` that calls it with its one sample): nothing here."""
 
     #: :attr:`settle_time` once read (None: not yet)
     _settle_s: float | None = None

@@ -49,6 +49,7 @@ from ..params import VehicleParams
 from ..signals import Estimate, Signals, concat_signals
 from . import layout as L
 from .base import DesignInputs, ScheduledObserver, StepResult, Tables
+from .gyro_start import KalmanStart, first_restart, kalman_begin, kalman_next
 from .kinematic import KINEMATIC_V_MIN
 from .kinematic_smoother import both_ways, lookahead_of
 
@@ -71,6 +72,11 @@ GYRO_SIDESLIP = "none"
 #: seconds after the log's first usable sample during which the offset state is held at zero (0: learnt from the
 #: start): the thirty-fourth stage of :mod:`roadbank.tuning.real`
 GYRO_START_HOLD_S = 0.0
+#: seconds after each (re)start during which the state is the start's Kalman filter's
+#: (:mod:`roadbank.estimators.gyro_start`; 0: none), and that filter's prior of the roll rate's offset (rad/s): the
+#: thirty-fifth stage of :mod:`roadbank.tuning.real`
+GYRO_START_SPAN_S = 0.0
+GYRO_START_OFFSET = math.radians(0.3)
 
 
 class GradeCarry:
@@ -193,6 +199,14 @@ class KinematicGyro(ScheduledObserver):
         it does not learn the start's error (the first kinematic sample, taken as the state, is as noisy as any);
         0: learnt from the start. Only where there is an offset state (order 2, ``bias_tau`` > 0, no sideslip);
         not after a restart within the log. Default :data:`GYRO_START_HOLD_S`.
+    start_span : float, optional
+        Seconds (>= 0) after each (re)start during which the state after each sample is that of the Kalman filter
+        whose steady state is this filter (:mod:`roadbank.estimators.gyro_start`: it weighs the first samples as
+        the few they are); each sample's output is this filter's step from the previous such state. 0: none. Where
+        ``start_hold`` applies, not with it. Default :data:`GYRO_START_SPAN_S`.
+    start_offset : float, optional
+        That Kalman filter's prior standard deviation (rad/s, > 0) of the roll rate's offset. Default
+        :data:`GYRO_START_OFFSET`.
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator`; ``v_min`` (m/s) defaults to
         :data:`~roadbank.estimators.kinematic.KINEMATIC_V_MIN`, ``max_gap`` (s) to :data:`GYRO_MAX_GAP_S`.
@@ -210,11 +224,19 @@ class KinematicGyro(ScheduledObserver):
         def design(self) -> GyroDesign: ...     # an instance of design_type
 
     def __init__(self, params=None, *, cutoff=None, bias_tau=None, grade_window=None, order=None, sideslip=None,
-                 start_hold=None, **kw):
+                 start_hold=None, start_span=None, start_offset=None, **kw):
         self.cutoff = float(GYRO_CUTOFF_HZ if cutoff is None else cutoff)
         self.start_hold = float(GYRO_START_HOLD_S if start_hold is None else start_hold)
         if not (np.isfinite(self.start_hold) and self.start_hold >= 0):
             raise ValueError(f"{self.name}: start_hold must be >= 0 s, got {start_hold}")
+        self.start_span = float(GYRO_START_SPAN_S if start_span is None else start_span)
+        if not (np.isfinite(self.start_span) and self.start_span >= 0):
+            raise ValueError(f"{self.name}: start_span must be >= 0 s, got {start_span}")
+        self.start_offset = float(GYRO_START_OFFSET if start_offset is None else start_offset)
+        if not (np.isfinite(self.start_offset) and self.start_offset > 0):
+            raise ValueError(f"{self.name}: start_offset must be > 0 rad/s, got {start_offset}")
+        if self.start_span > 0 and self.start_hold > 0:
+            raise ValueError(f"{self.name}: start_hold and start_span are two starts; give one")
         self.bias_tau = float(GYRO_BIAS_TAU_S if bias_tau is None else bias_tau)
         self.order = int(GYRO_ORDER if order is None else order)
         self.sideslip = str(GYRO_SIDESLIP if sideslip is None else sideslip)
@@ -244,6 +266,8 @@ class KinematicGyro(ScheduledObserver):
         """Forget all history, the samples kept for the grade's pitch and the start of the hold too."""
         super().reset()
         self._hold_from = math.nan           # time (s) of the first usable sample: the hold's start
+        self._kalman: KalmanStart | None = None          # the start's Kalman filter while it runs
+        self._before = (0.0, math.nan)       # the memory's (M_INIT, M_TLAST) before the segment
         if hasattr(self, "grade"):           # the base constructor resets before the window is set
             self.grade.reset()
 
@@ -252,11 +276,33 @@ class KinematicGyro(ScheduledObserver):
         return (self.start_hold > 0 and self.state_names[1:2] == ("p_offset",)
                 and not self._mem[L.M_TLAST] - self._hold_from >= self.start_hold)
 
-    def _segment_end(self, a: int, end: int) -> int:
-        """One sample at a time while :meth:`_holding` (each followed by :meth:`_after_segment`), else to ``end``."""
-        return a + 1 if self._holding() else end
+    def _starts(self) -> bool:
+        """Whether (re)starts run the start's Kalman filter (``start_span`` > 0 where there is an offset state)."""
+        return self.start_span > 0 and self.state_names[1:2] == ("p_offset",)
 
-    def _after_segment(self) -> None:
+    def _segment_end(self, signals: Signals, a: int, end: int) -> int:
+        """One sample at a time while :meth:`_holding` or the start's Kalman filter runs (each followed by
+        :meth:`_after_segment`); else, with ``start_span``, up to the next (re)start
+        (:func:`~roadbank.estimators.gyro_start.first_restart`), the (re)start alone; else to ``end``."""
+        self._before = (float(self._mem[L.M_INIT]), float(self._mem[L.M_TLAST]))
+        if self._holding() or self._kalman is not None:
+            return a + 1
+        if not self._starts():
+            return end
+        cut = a + first_restart(signals.t[a:end], signals.vx[a:end], (signals.p[a:end], signals.ay[a:end],
+                                                                      signals.r[a:end]),
+                                self.v_min, self.max_gap, self._before[0] > 0, self._before[1])
+        return a + 1 if cut == a else cut
+
+    def _after_segment(self, signals: Signals, a: int, b: int) -> None:
+        """Within the hold after the first usable sample, the offset state back to zero; after one sample with
+        ``start_span``, the state the start's Kalman filter's."""
+        if b - a == 1 and self._starts():
+            self._kalman_sample(float(signals.t[a]), float(signals.vx[a]), float(signals.p[a]),
+                                float(signals.ay[a]), float(signals.r[a]))
+        self._hold_offset()
+
+    def _hold_offset(self) -> None:
         """Within the hold after the first usable sample, the offset state back to zero."""
         if not self._holding() or self._mem[L.M_INIT] == 0.0:
             return
@@ -264,6 +310,23 @@ class KinematicGyro(ScheduledObserver):
             self._hold_from = float(self._mem[L.M_TLAST])
         if self._mem[L.M_TLAST] - self._hold_from < self.start_hold:
             self._mem[L.M_X + 1] = 0.0
+
+    def _kalman_sample(self, t: float, vx: float, p: float, ay: float, r: float) -> None:
+        """After the kernel has taken the sample (time s, vx m/s, grade-corrected p rad/s, ay m/s^2, r rad/s): at a
+        (re)start the start's Kalman filter begins, within ``start_span`` of it it takes the sample, and the state is
+        set to its; a sample the kernel did not use changes nothing."""
+        mem, (init, last) = self._mem, self._before
+        if not (mem[L.M_TLAST] == t and (init == 0.0 or t > last)):
+            return
+        k = (ay - vx * r) / self.params.g
+        if init == 0.0 or t - last > self.max_gap:
+            kf = kalman_begin(t, k, p, self.start_offset)
+        elif self._kalman is not None:
+            kf = kalman_next(self._kalman, t, k, p, self.cutoff, self.bias_tau)
+        else:
+            return
+        mem[L.M_X], mem[L.M_X + 1] = kf.x, kf.b
+        self._kalman = kf if t - kf.t0 < self.start_span else None
 
     def _design_fields(self) -> dict:
         return dict(cutoff=self.cutoff, bias_tau=self.bias_tau, order=self.order, sideslip=self.sideslip)
@@ -331,8 +394,11 @@ class KinematicGyro(ScheduledObserver):
             t_, vx_, ay_, r_, d_, p_, ax_ = (np.array([float(v)]) for v in (t, vx, ay, r, delta_f, p, ax))
             one = Signals(t_, vx_, ay_, r_, d_, p_, ax_)
             p = float(self.grade.correct(one).p[0])
+        self._before = (float(self._mem[L.M_INIT]), float(self._mem[L.M_TLAST]))
         out = super().step(t, vx, ay, r, p)
-        self._after_segment()
+        if self._starts():
+            self._kalman_sample(float(t), float(vx), float(p), float(ay), float(r))
+        self._hold_offset()
         return out
 
 
