@@ -62,6 +62,12 @@ class Signals:
         as they are, without the checks that guard a map's channels (:func:`roadbank.vehicle.log_conditions`).
         Only channels the log carries stay in it (``dataclasses.replace(s, p=None)`` drops ``"p"``); slices keep
         it; :func:`concat_signals` keeps what every part has.
+    unbiased : frozenset of str, optional
+        The optional channels whose source documents them as free of offset: an INS's outputs, corrected by its
+        own Kalman filter (the reader of KITTI's OXTS files sets it: its RT3003 applies its gyro and accelerometer
+        bias corrections to what it outputs); a phone's raw gyro or a user's channel map does not. The gyro-aided
+        default reads such a roll rate with its own constants
+        (:data:`roadbank.estimators.gyro.UNBIASED_GYRO_CUTOFF_HZ`). Kept, dropped, sliced and joined as ``fixed``.
 
     NaN / inf samples in ``vx, ay, r, delta_f, p, ax`` are allowed: the estimators hold
     their output there and flag it not valid. The time base itself must be clean.
@@ -75,14 +81,16 @@ class Signals:
     p: np.ndarray | None = None
     ax: np.ndarray | None = None
     fixed: frozenset[str] = frozenset()
+    unbiased: frozenset[str] = frozenset()
 
     def __post_init__(self) -> None:
         arrays = {name: _as_1d(name, getattr(self, name)) for name in self.channels}
-        fixed = frozenset(self.fixed)
-        if not fixed <= set(OPTIONAL_CHANNELS):
-            raise ValueError(f"Signals.fixed: {sorted(fixed - set(OPTIONAL_CHANNELS))} not optional channels "
-                             f"(of {', '.join(OPTIONAL_CHANNELS)})")
-        object.__setattr__(self, "fixed", frozenset(c for c in fixed if getattr(self, c) is not None))
+        for mark in ("fixed", "unbiased"):
+            marked = frozenset(getattr(self, mark))
+            if not marked <= set(OPTIONAL_CHANNELS):
+                raise ValueError(f"Signals.{mark}: {sorted(marked - set(OPTIONAL_CHANNELS))} not optional channels "
+                                 f"(of {', '.join(OPTIONAL_CHANNELS)})")
+            object.__setattr__(self, mark, frozenset(c for c in marked if getattr(self, c) is not None))
         n = len(arrays["t"])
         if n == 0:
             raise ValueError("Signals: empty arrays (no samples)")
@@ -122,7 +130,7 @@ class Signals:
     def take(self, index) -> "Signals":
         """Samples ``index`` (a slice, or an index array in increasing order) of every channel, as a new
         :class:`Signals`."""
-        return Signals(**{c: getattr(self, c)[index] for c in self.channels}, fixed=self.fixed)
+        return Signals(**{c: getattr(self, c)[index] for c in self.channels}, fixed=self.fixed, unbiased=self.unbiased)
 
     @classmethod
     def from_steering_wheel(cls, t, vx, ay, r, steering_wheel_angle,
@@ -141,7 +149,8 @@ def concat_signals(parts) -> "Signals":
         return parts[0]
     shared = [c for c in parts[0].channels if all(c in p.channels for p in parts)]
     return Signals(**{c: np.concatenate([getattr(p, c) for p in parts]) for c in shared},
-                   fixed=frozenset.intersection(*(p.fixed for p in parts)))
+                   fixed=frozenset.intersection(*(p.fixed for p in parts)),
+                   unbiased=frozenset.intersection(*(p.unbiased for p in parts)))
 
 
 def interval_rate(dt) -> float:

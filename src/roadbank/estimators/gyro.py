@@ -77,6 +77,10 @@ GYRO_START_HOLD_S = 0.0
 #: thirty-fifth stage of :mod:`roadbank.tuning.real`
 GYRO_START_SPAN_S = 0.0
 GYRO_START_OFFSET = math.radians(0.3)
+#: the cut-off (Hz) and offset time constant (s) of the gyro-aided default for a roll rate whose source documents it
+#: as free of offset (``Signals.unbiased``: an INS's outputs): the thirty-sixth stage of :mod:`roadbank.tuning.real`
+UNBIASED_GYRO_CUTOFF_HZ = 0.07
+UNBIASED_GYRO_BIAS_TAU_S = 40.0
 
 
 class GradeCarry:

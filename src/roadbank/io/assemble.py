@@ -241,7 +241,8 @@ class _Logs:
         try:
             sig = Signals(out["t"], out["speed"], out["lateral_acceleration"], out["yaw_rate"], delta,
                           **{c: out.get(r) for r, c in OPTIONAL.items()},
-                          fixed=frozenset(OPTIONAL.values()) if cmap.fixed_layout else frozenset())
+                          fixed=frozenset(OPTIONAL.values()) if cmap.fixed_layout else frozenset(),
+                          unbiased=cmap.unbiased)
         except ValueError as exc:
             raise LogError(f"{p}: {exc}") from None
         pos = {r: out[r] for r in self.gnss}

@@ -184,6 +184,9 @@ class ChannelMap:
     fixed_layout : bool
         The map is a format's own documented layout (KITTI's OXTS files, comma2k19), not a user's: its optional
         channels are what the format says they are (``Signals.fixed``), with no map to get wrong.
+    unbiased : frozenset of str
+        The optional channels (``"p"``, ``"ax"``) that the format documents as free of offset (an INS's outputs,
+        corrected by its own Kalman filter: KITTI's OXTS files): ``Signals.unbiased``.
     """
 
     channels: dict[str, ChannelSpec]
@@ -199,6 +202,7 @@ class ChannelMap:
     no_steering: bool = False
     steering_optional: bool = False
     fixed_layout: bool = False
+    unbiased: frozenset[str] = frozenset()
 
     def __post_init__(self) -> None:
         src = self.source

@@ -190,12 +190,14 @@ def column(name: str) -> str:
 
 
 def channel_map() -> ChannelMap:
-    """The fixed channel map of a KITTI drive: SI and ISO 8855 as stored, no steering, the frames' own clock."""
+    """The fixed channel map of a KITTI drive: SI and ISO 8855 as stored, no steering, the frames' own clock; its
+    roll rate and ``ax`` free of offset (``Signals.unbiased``: the RT3003 INS applies its Kalman filter's gyro and
+    accelerometer bias corrections to the rates and accelerations it outputs, its manual)."""
     ch = {"time": ChannelSpec("time", TIME, "s")}
     for role, (name, unit) in ROLES.items():
         ch[role] = ChannelSpec(role, column(name), unit)
     return ChannelMap(ch, time_base="clock", no_steering=True, source="KITTI raw oxts layout",
-                      fixed_layout=True)
+                      fixed_layout=True, unbiased=frozenset({"p", "ax"}))
 
 
 def find_drive(path) -> Path:

@@ -138,8 +138,10 @@ def _at_most(noise: float, floor: float) -> float:
 def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
     """What a log tells :func:`make_estimator` about its sensors: ``{"log_rate": Hz,
     "log_ay_noise": m/s^2, "log_r_noise": rad/s, "log_ay_floor": m/s^2, "log_diff_noise": m/s^2, "log_roll_rate": -,
-    "log_ax": -}`` (the last two :func:`roll_rate_slope` and :func:`ax_slope`, None for a log without the channel,
-    :data:`FIXED_SLOPE` for a channel its format documents: ``Signals.fixed``, :data:`TRUST_FIXED_CHANNELS`) — the
+    "log_ax": -, "log_gyro_unbiased": 1 or None}`` (``log_roll_rate`` and ``log_ax`` :func:`roll_rate_slope` and
+    :func:`ax_slope`, None for a log without the channel, :data:`FIXED_SLOPE` for a channel its format documents:
+    ``Signals.fixed``, :data:`TRUST_FIXED_CHANNELS`; ``log_gyro_unbiased`` 1 where the log's roll rate is documented
+    free of offset, ``Signals.unbiased``) — the
     sample rate of its time base (:func:`roadbank.signals.sample_rate`), the road noise of its ``ay`` and
     yaw rate on the samples at ``vx >= v_min`` (m/s): what they carry above the vehicle's dynamics band, taken
     as white (:func:`roadbank.signals.road_noise_std`, the noise model of real roads; NaN when
@@ -176,7 +178,8 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
             "log_r_noise": float(f"{r_noise:.2g}"), "log_ay_floor": float(f"{ay_floor:.2g}"),
             "log_diff_noise": float(f"{diff_noise:.2g}"),
             "log_roll_rate": _checked(signals, "p", vx, moving, roll_rate_slope),
-            "log_ax": _checked(signals, "ax", vx, moving, ax_slope)}
+            "log_ax": _checked(signals, "ax", vx, moving, ax_slope),
+            "log_gyro_unbiased": 1.0 if "p" in signals.unbiased and has_channel(signals, "p", moving) else None}
 
 
 def _checked(signals, name: str, vx, moving, check) -> float | None:
@@ -191,7 +194,7 @@ def _checked(signals, name: str, vx, moving, check) -> float | None:
 def esp_conditions(cond: dict) -> dict:
     """The log's conditions ``cond`` (:func:`log_conditions`) as for the same log without its roll rate and ``ax``:
     what the estimators of its ESP channels alone are built for."""
-    return {**cond, "log_roll_rate": None, "log_ax": None}
+    return {**cond, "log_roll_rate": None, "log_ax": None, "log_gyro_unbiased": None}
 
 
 def _two_digits(x: float | None) -> float | None:
@@ -427,7 +430,7 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
                    log_rate: float | None = None, log_ay_noise: float | None = None,
                    log_r_noise: float | None = None, log_ay_floor: float | None = None,
                    log_diff_noise: float | None = None, log_roll_rate: float | None = None,
-                   log_ax: float | None = None, **options):
+                   log_ax: float | None = None, log_gyro_unbiased: float | None = None, **options):
     """``estimators.make(name, params, **options)`` for a log sampled at ``log_rate`` by ``sensors``.
 
     A default-tuned PIF (:func:`roadbank.estimators.pif.with_sensor_noise`) gets the weights
@@ -468,6 +471,10 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         How the log's longitudinal acceleration follows its speed (:func:`ax_slope`; None or NaN: it has none). Where
         it does (:func:`roll_rate_usable`), that gyro-aided filter corrects the roll rate for the grade (its
         ``grade_window``, :data:`roadbank.estimators.gyro.GRADE_WINDOW_S`); where not, it does not.
+    log_gyro_unbiased : float, optional
+        1 (truthy) where the log's roll rate is documented free of offset (``Signals.unbiased``): that gyro-aided
+        filter takes :data:`roadbank.estimators.gyro.UNBIASED_GYRO_CUTOFF_HZ` and ``UNBIASED_GYRO_BIAS_TAU_S`` (the
+        thirty-sixth stage of :mod:`roadbank.tuning.real`), unless the options give a ``cutoff`` or ``bias_tau``.
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
@@ -500,6 +507,9 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
             name, options = GYRO_MODELS[name], {"roll": roll, "grade_window": window,
                                                 **{k: v for k, v in options.items()
                                                    if k in estimators.base.ESTIMATOR_OPTIONS}}
+            if log_gyro_unbiased:
+                options = {"cutoff": estimators.gyro.UNBIASED_GYRO_CUTOFF_HZ,
+                           "bias_tau": estimators.gyro.UNBIASED_GYRO_BIAS_TAU_S, **options}
         elif lead_samples is not None:
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
             if log_diff_noise is not None and math.isfinite(log_diff_noise) and log_diff_noise > 0:

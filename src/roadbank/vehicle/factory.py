@@ -129,7 +129,8 @@ def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | Non
     where the log carries a roll rate: how it follows the roll in ``ay`` (``log_roll_rate``,
     :func:`~roadbank.vehicle.conditions.roll_rate_slope`; where usable, the default on a loud log is the gyro-aided
     filter); ``ax`` (-) where it carries a longitudinal acceleration: how it follows the speed (``log_ax``,
-    :func:`~roadbank.vehicle.conditions.ax_slope`; where usable, that filter corrects the roll rate for the grade)."""
+    :func:`~roadbank.vehicle.conditions.ax_slope`; where usable, that filter corrects the roll rate for the grade);
+    ``roll_rate_unbiased`` (True) where that roll rate is documented free of offset (``log_gyro_unbiased``)."""
     sensors = sensors or SensorSpec()
     noise, floor = cond.get("log_ay_noise"), cond.get("log_ay_floor")
     ratio = quiet_noise_ratio(sensors, cond.get("log_rate"), noise, floor)
@@ -141,6 +142,8 @@ def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | Non
     for key, name in (("log_roll_rate", "roll_rate"), ("log_ax", "ax")):
         if cond.get(key) is not None:
             record[name] = cond[key]
+    if cond.get("log_gyro_unbiased"):
+        record["roll_rate_unbiased"] = True
     return record
 
 
