@@ -108,13 +108,14 @@ lateral_acceleration = { column = "LatAcc", unit = "m/s^2" }
 yaw_rate = { column = "YawRate", unit = "rad/s" }
 """
 #: the drive's roll rate and longitudinal acceleration, for a map that reads them
-IMU = ('roll_rate = { column = "RollRate", unit = "deg/s" }\n'
-       'longitudinal_acceleration = { column = "LongAcc", unit = "g" }\n')
+IMU = ('roll_rate = { column = "RollRate", unit = "deg/s", unbiased = true }\n'
+       'longitudinal_acceleration = { column = "LongAcc", unit = "g", unbiased = true }\n')
 
 
 def test_map_without_steering_reads_and_estimates_as_the_kitti_drive(tmp_path):
     """A hand-written map with no steering channel is valid: the log reads with the steering angle NaN and
-    the other channels as the drive stores them (the roll rate given in deg/s, in rad/s; ax in g, in m/s^2);
+    the other channels as the drive stores them (the roll rate given in deg/s, in rad/s; ax in g, in m/s^2; both
+    marked ``unbiased`` as the KITTI reader marks its INS's channels);
     `roadbank estimate` gives
     the drive's own estimate with the default estimator, and an estimator that reads the steering angle the same
     summary (no valid sample)."""
@@ -254,7 +255,8 @@ def test_mph_log_guessed_and_estimated_as_the_drive(tmp_path, name):
     assert (guessed["longitudinal_acceleration"].column, guessed["longitudinal_acceleration"].unit) == ("LongAcc", "g")
     _, got = _estimate([str(log_csv), "--channels", str(m), "-o", str(tmp_path / "us_out.csv")])
     si_csv = write_table(tmp_path / "si.csv", _columns(name, "m/s", steering=True))
-    (tmp_path / "si.toml").write_text(HAND_MAP + IMU + 'steering_wheel_angle = { column = "SWA", unit = "deg" }\n')
+    as_guessed = IMU.replace(", unbiased = true", "")          # a guessed map does not say so
+    (tmp_path / "si.toml").write_text(HAND_MAP + as_guessed + 'steering_wheel_angle = { column = "SWA", unit = "deg" }\n')
     _, want = _estimate([str(si_csv), "--channels", str(tmp_path / "si.toml"), "-o", str(tmp_path / "si_out.csv")])
     np.testing.assert_allclose(got["kinematic-pif.theta"], want["kinematic-pif.theta"], rtol=1e-9, atol=1e-12)
 

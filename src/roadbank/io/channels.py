@@ -277,7 +277,7 @@ def default_channel_map() -> ChannelMap:
 
 _TOP_KEYS = {"convention", "steering_ratio", "resample", "channels", "truth_prefix", "dbc", "ros_time"}
 _RESAMPLE_KEYS = {"time_base", "rate_hz", "max_gap_s"}
-_CHANNEL_KEYS = {"column", "unit", "convention", "invert", "message", "signal", "topic", "field"}
+_CHANNEL_KEYS = {"column", "unit", "convention", "invert", "message", "signal", "topic", "field", "unbiased"}
 
 
 def _convention(value) -> str | None:
@@ -328,7 +328,7 @@ def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
     chans = d.get("channels")
     if not isinstance(chans, dict) or not chans:
         raise LogError(f"{source}: missing [channels] table")
-    specs = {}
+    specs, unbiased = {}, set()
     for role, entry in chans.items():
         if role not in ROLES:
             raise LogError(f"{source}: unknown channel role '{role}' (known: {', '.join(ROLES)})")
@@ -346,6 +346,11 @@ def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
             raise channel_error(source, role, column,
                                 f"no 'unit' (SI would be '{units.SI_UNIT[ROLES[role][0]]}'; "
                                 "state it explicitly)")
+        if entry.get("unbiased", False) is not False:
+            if role not in OPTIONAL or entry["unbiased"] is not True:
+                raise channel_error(source, role, column, "'unbiased = true' is for the roll rate and the "
+                                    "longitudinal acceleration of an INS whose outputs are free of offset")
+            unbiased.add(OPTIONAL[role])
         opt = {k: (None if entry.get(k) is None else str(entry[k])) for k in ("message", "signal", "topic")}
         specs[role] = ChannelSpec(role, column, str(entry["unit"]), _convention(entry.get("convention")),
                                   bool(entry.get("invert", False)), msg_field=(
@@ -370,6 +375,7 @@ def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
             dbc=None if d.get("dbc") is None else str(d["dbc"]),
             ros_time=str(d.get("ros_time", "header")),
             no_steering=not any(r in specs for r in STEERING),
+            unbiased=frozenset(unbiased),
         )
     except (TypeError, ValueError) as exc:
         if isinstance(exc, LogError):

@@ -432,6 +432,16 @@ read, whole and cut into the thirty-second stage's pieces (8, 12, 20 s, each fro
 the four lengths of the median raw RMS. The lowest wins; ties within :data:`TIE_DEG` go to the shipped pair, then to
 the longer ``bias_tau`` (an offset state guards against a source that is wrong about itself), then to the higher
 cut-off. ``kinematic-gyro-smoother`` takes the result. Neither the KITTI validation drives nor comma2k19 take part.
+
+The thirty-seventh stage (:func:`choose_unbiased_start`; rule written 2026-12-05 before any candidate ran, after the
+thirty-sixth chose 0.07 Hz and 40 s for such a roll rate, and after a test on the first 10 s of validation drive 0070
+showed that filter keeping most of a 0.8 deg start error through those 10 s, 0.41 deg against the ESP default's 0.26):
+the start of the filter for a roll rate documented free of offset. Candidates: none (shipped); the thirty-fifth
+stage's Kalman start with ``start_span`` 2 T_b (80 s) and the offset's prior ``start_offset`` in
+:data:`UNBIASED_START_OFFSETS_DEG` (0.03, 0.1, 0.3 deg/s). Estimator: ``kinematic-gyro`` with the thirty-sixth
+stage's constants and the grade window. Set, pieces and objective: the thirty-sixth stage's (the training drives as
+read, whole and in 8, 12, 20 s pieces). The lowest wins; ties within :data:`TIE_DEG` go to none, then to the smaller
+prior. ``kinematic-gyro-smoother`` takes the result. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -451,7 +461,8 @@ from .. import vehicle
 from ..constants import G
 from ..vehicle import conditions
 from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
-from ..estimators.gyro import GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, KinematicGyro, KinematicGyroSmoother
+from ..estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, UNBIASED_GYRO_BIAS_TAU_S,
+                               UNBIASED_GYRO_CUTOFF_HZ, KinematicGyro, KinematicGyroSmoother)
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
@@ -494,6 +505,8 @@ GYRO_START_HOLDS_S = (0.0, 2.0, 5.0, 10.0)
 #: offset (deg/s)
 GYRO_START_SPAN_CANDIDATE_S = 20.0
 GYRO_START_OFFSETS_DEG = (0.03, 0.1, 0.3, 1.0)
+#: the thirty-seventh stage's candidate priors (deg/s) of the start's Kalman filter for an unbiased roll rate
+UNBIASED_START_OFFSETS_DEG = (0.03, 0.1, 0.3)
 #: candidate cut-offs (Hz) and feed-forward gains (-)
 CUTOFFS_HZ = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.8)
 KAPPAS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4)
@@ -1185,6 +1198,20 @@ def choose_unbiased_gyro(logs, cutoffs=GYRO_CUTOFFS_HZ, bias_taus=GYRO_BIAS_TAUS
            for fc in cutoffs for bt in bias_taus}
     shipped = (GYRO_CUTOFF_HZ, GYRO_BIAS_TAU_S)
     return lowest_tied(obj, lambda key: (key != shipped, -key[1], -key[0])), obj
+
+
+def choose_unbiased_start(logs, offsets=UNBIASED_START_OFFSETS_DEG, lengths=SHORT_PIECES_S) -> tuple:
+    """The thirty-seventh stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their
+    roll rate and ``ax``). Returns ``(start_offset deg/s or None for no Kalman start, {start_offset or None:
+    objective deg})``."""
+    parts = [logs] + [[(p, ref, m) for p, ref, m, _ in check_pieces(logs, n)] for n in lengths]
+    base = dict(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S, grade_window=GRADE_WINDOW_S)
+    obj = {}
+    for off in (None, *offsets):
+        opts = {} if off is None else {"start_span": 2.0 * UNBIASED_GYRO_BIAS_TAU_S, "start_offset": math.radians(off)}
+        build = fixed(KinematicGyro(**base, **opts))
+        obj[off] = float(np.mean([np.median(log_errors(build, part)) for part in parts]))
+    return lowest_tied(obj, list(obj).index), obj
 
 
 def check_pieces(logs, length: float) -> list:
