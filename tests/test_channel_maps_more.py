@@ -9,6 +9,7 @@ estimate. Where the data cannot decide, the guess must not claim to be sure.
 
 from __future__ import annotations
 
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -256,7 +257,8 @@ def test_mph_log_guessed_and_estimated_as_the_drive(tmp_path, name):
     _, got = _estimate([str(log_csv), "--channels", str(m), "-o", str(tmp_path / "us_out.csv")])
     si_csv = write_table(tmp_path / "si.csv", _columns(name, "m/s", steering=True))
     as_guessed = IMU.replace(", unbiased = true", "")          # a guessed map does not say so
-    (tmp_path / "si.toml").write_text(HAND_MAP + as_guessed + 'steering_wheel_angle = { column = "SWA", unit = "deg" }\n')
+    swa = 'steering_wheel_angle = { column = "SWA", unit = "deg" }\n'
+    (tmp_path / "si.toml").write_text(HAND_MAP + as_guessed + swa)
     _, want = _estimate([str(si_csv), "--channels", str(tmp_path / "si.toml"), "-o", str(tmp_path / "si_out.csv")])
     np.testing.assert_allclose(got["kinematic-pif.theta"], want["kinematic-pif.theta"], rtol=1e-9, atol=1e-12)
 
@@ -294,3 +296,16 @@ def test_a_mirrored_convention_is_assumed_iso_and_said_so(tmp_path):
     np.testing.assert_allclose(back.r, want.r, rtol=1e-12, atol=1e-12)
     kin = 2.7 * want.r / np.maximum(want.vx, 2.0)
     assert np.corrcoef(back.delta_f, kin)[0, 1] > 0.99
+
+
+def test_a_map_says_which_channels_are_unbiased_and_refuses_it_elsewhere():
+    """``unbiased = true`` on the roll rate or ax of a hand-written map marks them (``ChannelMap.unbiased``, hence
+    ``Signals.unbiased``); on a required channel, or with another value, it is an error naming the channel."""
+    cmap = channel_map_from_dict(tomllib.loads(HAND_MAP + IMU), "m.toml")
+    assert cmap.unbiased == {"p", "ax"}
+    plain = channel_map_from_dict(tomllib.loads(HAND_MAP + IMU.replace(", unbiased = true", "")), "m.toml")
+    assert plain.unbiased == frozenset()
+    for bad in (HAND_MAP.replace('unit = "m/s^2" }', 'unit = "m/s^2", unbiased = true }'),
+                HAND_MAP + IMU.replace("unbiased = true", 'unbiased = "yes"')):
+        with pytest.raises(LogError, match="unbiased"):
+            channel_map_from_dict(tomllib.loads(bad), "m.toml")

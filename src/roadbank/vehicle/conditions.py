@@ -474,7 +474,7 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     log_gyro_unbiased : float, optional
         1 (truthy) where the log's roll rate is documented free of offset (``Signals.unbiased``): that gyro-aided
         filter takes :data:`roadbank.estimators.gyro.UNBIASED_GYRO_CUTOFF_HZ` and ``UNBIASED_GYRO_BIAS_TAU_S`` (the
-        thirty-sixth stage of :mod:`roadbank.tuning.real`), unless the options give a ``cutoff`` or ``bias_tau``.
+        thirty-sixth stage of :mod:`roadbank.tuning.real`).
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
