@@ -40,7 +40,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -293,8 +293,8 @@ class KinematicGyro(ScheduledObserver):
             return a + 1
         if not self._starts():
             return end
-        cut = a + first_restart(signals.t[a:end], signals.vx[a:end], (signals.p[a:end], signals.ay[a:end],
-                                                                      signals.r[a:end]),
+        p = cast(np.ndarray, signals.p)              # run() has refused a log without one
+        cut = a + first_restart(signals.t[a:end], signals.vx[a:end], (p[a:end], signals.ay[a:end], signals.r[a:end]),
                                 self.v_min, self.max_gap, self._before[0] > 0, self._before[1])
         return a + 1 if cut == a else cut
 
@@ -302,7 +302,7 @@ class KinematicGyro(ScheduledObserver):
         """Within the hold after the first usable sample, the offset state back to zero; after one sample with
         ``start_span``, the state the start's Kalman filter's."""
         if b - a == 1 and self._starts():
-            self._kalman_sample(float(signals.t[a]), float(signals.vx[a]), float(signals.p[a]),
+            self._kalman_sample(float(signals.t[a]), float(signals.vx[a]), float(cast(np.ndarray, signals.p)[a]),
                                 float(signals.ay[a]), float(signals.r[a]))
         self._hold_offset()
 
