@@ -17,7 +17,7 @@ from scipy import signal as ss
 
 from roadbank import Signals
 from roadbank import estimators as E
-from roadbank.estimators.settle import SETTLE_SHARE, SETTLE_STEP_S, settled_flags, settling_time
+from roadbank.estimators.settle import SETTLE_SHARE, SETTLE_STEP_S, settled_flags, settling_time, step_settling_time
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 
@@ -162,3 +162,23 @@ def test_the_c_header_gives_the_settling_time(tmp_path):
     m = re.search(r"#define ROADBANK_KINEMATIC_LP_SETTLE_S \(?([-+0-9.eE]+)", header)
     assert m is not None, header[:2000]
     assert float(m.group(1)) == pytest.approx(est.settle_time, rel=1e-12)
+
+
+def test_a_slow_mode_of_small_share_settles_where_its_modes_say():
+    """kinematic-gyro for an unbiased roll rate (0.07 Hz, T_b 40 s: poles -0.41 and -0.027 1/s, the slow one with
+    about 9 % of the kinematic estimate's step): its step settles where the sum of its two modes (eigen-decomposition,
+    read every 10 ms over 1000 s) last leaves 5 % of the final value, in about 5.5 s; the search stops on the
+    Lyapunov bound long before the state itself is gone (it returned inf with a 120 s horizon before)."""
+    from roadbank.estimators.gyro import KinematicGyro, gyro_observer
+    F, G, H, D = gyro_observer(KinematicGyro(cutoff=0.07, bias_tau=40.0).design, 10.0)
+    g, h = G[:, 1], H.ravel()
+    lam, V = np.linalg.eig(F)
+    x = np.linalg.solve(F, g)
+    c = (h @ V) * np.linalg.solve(V, x)
+    t = np.arange(1, 100001) * 0.01
+    e = np.real(np.exp(np.outer(t, lam)) @ c)
+    final = D[0, 1] - h @ x
+    over = np.flatnonzero(np.abs(e) > 0.05 * abs(final))
+    truth = t[over[-1]] if over.size else 0.0
+    got = step_settling_time(F, g, h, D[0, 1])
+    assert got == pytest.approx(truth, abs=0.011) and 4.0 < got < 8.0
