@@ -150,8 +150,9 @@ def test_an_ax_that_does_not_follow_the_speed_leaves_the_roll_rate_uncorrected_a
     from roadbank.fleet.process import design_words
     from roadbank.io.kitti import load_kitti_oxts
     from roadbank.vehicle import design_record, for_log, log_conditions
-    # the channels as a map's: judged (the KITTI reader's own are taken as they are, the thirty-third stage)
-    s = dataclasses.replace(load_kitti_oxts(KITTI).signals, fixed=frozenset())
+    # the channels as a map's: judged (the KITTI reader's own are taken as they are, the thirty-third stage), and
+    # not said to be free of offset
+    s = dataclasses.replace(load_kitti_oxts(KITTI).signals, fixed=frozenset(), unbiased=frozenset())
     assert log_conditions(s)["log_ax"] == pytest.approx(1.0, abs=0.1)
     assert for_log("kinematic-pif", s).grade_window == GRADE_WINDOW_S
     bad = dataclasses.replace(s, ax={"negated": -s.ax, "g read as m/s^2": s.ax / G}[wrong])

@@ -256,8 +256,9 @@ def test_a_roll_rate_that_does_not_follow_the_roll_in_ay_is_not_used_and_said_so
     from roadbank.fleet.process import design_words
     from roadbank.io.kitti import load_kitti_oxts
     from roadbank.vehicle import design_record, log_conditions
-    # the channels as a map's: judged (the KITTI reader's own are taken as they are, the thirty-third stage)
-    s = dataclasses.replace(load_kitti_oxts(KITTI).signals, fixed=frozenset())
+    # the channels as a map's: judged (the KITTI reader's own are taken as they are, the thirty-third stage), and
+    # not said to be free of offset
+    s = dataclasses.replace(load_kitti_oxts(KITTI).signals, fixed=frozenset(), unbiased=frozenset())
     assert log_conditions(s)["log_roll_rate"] == pytest.approx(1.0, abs=0.15)
     p = {"negated": -s.p, "yaw rate": s.r, "deg/s read as rad/s": np.degrees(s.p)}[wrong]
     bad = dataclasses.replace(s, p=p)
@@ -586,7 +587,8 @@ def test_estimate_on_a_ten_second_kitti_drive_uses_its_roll_rate(tmp_path):
     assert s.unbiased == {"p", "ax"}
     res = CliRunner().invoke(main, ["estimate", str(drive), "-o", str(tmp_path / "out.csv")])
     assert res.exit_code == 0, res.output
-    assert "kinematic-gyro (the log has a roll rate; corrected for the grade by its ax)" in res.output
+    assert ("kinematic-gyro (the log has a roll rate, free of offset (an INS's); corrected for the grade by its ax)"
+            in res.output)
     theta = pd.read_csv(tmp_path / "out.csv")["kinematic-pif.theta"].to_numpy()       # rad
     est = for_log("kinematic-pif", s)
     assert (est.cutoff, est.bias_tau) == (UNBIASED_GYRO_CUTOFF_HZ, UNBIASED_GYRO_BIAS_TAU_S)

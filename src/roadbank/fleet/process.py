@@ -125,7 +125,8 @@ def design_words(design: dict, estimator: str) -> str:
     gyro = roll_rate_usable(slope)
     if estimator in QUIET_MODELS:
         grade = "; corrected for the grade by its ax" if roll_rate_usable(ax) else ""
-        loud = f"{GYRO_MODELS[estimator]} (the log has a roll rate{grade})" if gyro else "the low-pass blend"
+        free = ", free of offset (an INS's)" if design.get("roll_rate_unbiased") else ""
+        loud = f"{GYRO_MODELS[estimator]} (the log has a roll rate{free}{grade})" if gyro else "the low-pass blend"
         words += f", so {estimator} is {QUIET_MODELS[estimator] if design['quiet'] else loud}"
     lo, hi = ROLL_SLOPE_RANGE
     if slope is not None and not gyro:
