@@ -59,6 +59,9 @@ GYRO_BIAS_TAU_S = 10.0
 #: the window (s) of the pitch that corrects the roll rate for the grade (0: not corrected): the rule of
 #: :mod:`roadbank.tuning.real`
 GRADE_WINDOW_S = 4.0
+#: before the log has lasted that window, the span (s) after which the pitch averages from the log's first sample
+#: (``inf``: no correction until the window has passed): the thirty-eighth stage of :mod:`roadbank.tuning.real`
+GRADE_FIRST_SPAN_S = math.inf
 #: the gap (s) between usable samples after which ``kinematic-gyro`` starts again (a stop shorter than it is held
 #: through, the state kept: a car at rest keeps its roll): the twenty-seventh stage of :mod:`roadbank.tuning.real`
 GYRO_MAX_GAP_S = 10.0
@@ -86,10 +89,11 @@ UNBIASED_GYRO_BIAS_TAU_S = 40.0
 class GradeCarry:
     """The roll rate of a log corrected for its grade (:func:`roadbank.models.attitude.euler_roll_rate`), chunk by
     chunk: :func:`~roadbank.models.attitude.grade_pitch` over ``window`` s (0: no correction) continues across
-    chunks with the last window of samples kept, so a log in chunks gets what one run gets. ``g`` (m/s^2)."""
+    chunks with the last window of samples kept, so a log in chunks gets what one run gets. ``g`` (m/s^2);
+    ``first_span`` (s) as :func:`~roadbank.models.attitude.grade_pitch`'s."""
 
-    def __init__(self, window: float, g: float):
-        self.window, self.g = float(window), float(g)
+    def __init__(self, window: float, g: float, first_span: float = math.inf):
+        self.window, self.g, self.first_span = float(window), float(g), float(first_span)
         self.reset()
 
     def reset(self) -> None:
@@ -113,7 +117,7 @@ class GradeCarry:
             t, vx, ax = (np.concatenate([a, b]) for a, b in zip(tail, (t, vx, ax)))
             start = tail[3]
         area = running_area(t, vx, ax, start)
-        pitch = grade_pitch(t, vx, ax, self.window, self.g, area)[len(t) - len(s):]
+        pitch = grade_pitch(t, vx, ax, self.window, self.g, area, self.first_span)[len(t) - len(s):]
         n = len(s) if advance is None else advance
         if n:
             end = len(t) - len(s) + n
@@ -198,6 +202,10 @@ class KinematicGyro(ScheduledObserver):
     grade_window : float, optional
         Window (s, >= 0) of the pitch that corrects the roll rate for the grade on a log with ``ax`` (module
         docstring); 0: not corrected. Default :data:`GRADE_WINDOW_S`.
+    grade_first_span : float, optional
+        Before the log has lasted ``grade_window``, the span (s, > 0) after which the pitch averages from the log's
+        first sample (``inf``: the roll rate is not corrected until the window has passed). Default
+        :data:`GRADE_FIRST_SPAN_S`.
     start_hold : float, optional
         Seconds (>= 0) after the log's first usable sample during which the offset state is held at zero, so that
         it does not learn the start's error (the first kinematic sample, taken as the state, is as noisy as any);
@@ -228,7 +236,7 @@ class KinematicGyro(ScheduledObserver):
         def design(self) -> GyroDesign: ...     # an instance of design_type
 
     def __init__(self, params=None, *, cutoff=None, bias_tau=None, grade_window=None, order=None, sideslip=None,
-                 start_hold=None, start_span=None, start_offset=None, **kw):
+                 start_hold=None, start_span=None, start_offset=None, grade_first_span=None, **kw):
         self.cutoff = float(GYRO_CUTOFF_HZ if cutoff is None else cutoff)
         self.start_hold = float(GYRO_START_HOLD_S if start_hold is None else start_hold)
         if not (np.isfinite(self.start_hold) and self.start_hold >= 0):
@@ -255,11 +263,14 @@ class KinematicGyro(ScheduledObserver):
             raise ValueError(f"{self.name}: bias_tau must be >= 0 s, got {bias_tau}")
         if not (np.isfinite(window) and window >= 0):
             raise ValueError(f"{self.name}: grade_window must be >= 0 s, got {grade_window}")
+        first_span = float(GRADE_FIRST_SPAN_S if grade_first_span is None else grade_first_span)
+        if not first_span > 0:
+            raise ValueError(f"{self.name}: grade_first_span must be > 0 s, got {grade_first_span}")
         self.state_names = (("w", "c1", "c2", "c3") if self.order == 4 else
                             ("w", "p_offset") if self.bias_tau > 0 and self.sideslip == "none" else
                             ("z", "beta") if self.bias_tau > 0 else ("w",) if self.sideslip == "none" else ("z",))
         super().__init__(params, **{"max_gap": GYRO_MAX_GAP_S, **kw})
-        self.grade = GradeCarry(window, self.params.g)
+        self.grade = GradeCarry(window, self.params.g, first_span)
 
     @property
     def grade_window(self) -> float:

@@ -23,6 +23,8 @@ compensates it too (to first order).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..constants import G
@@ -45,7 +47,7 @@ def running_area(t, vx, ax, start: tuple[float, float] = (0.0, 0.0)) -> tuple[np
     return area, nbad
 
 
-def grade_pitch(t, vx, ax, window: float, g: float = G, area=None) -> np.ndarray:
+def grade_pitch(t, vx, ax, window: float, g: float = G, area=None, first_span: float = math.inf) -> np.ndarray:
     r"""The pitch (rad, positive nose down) from the speed and the longitudinal accelerometer, causal (module
     docstring).
 
@@ -63,19 +65,22 @@ def grade_pitch(t, vx, ax, window: float, g: float = G, area=None) -> np.ndarray
         Gravity (m/s^2).
     area : tuple of arrays, optional
         :func:`running_area` of these samples (default: from 0 at the first).
+    first_span : float, optional
+        Before the log (its first sample here) has lasted ``window``, the span (s, > 0) after which the estimate
+        averages from the first sample instead (a window growing to ``window``); ``inf`` (default): none.
 
     Returns
     -------
     array (rad)
-        NaN where the log has not yet lasted ``window``, where a non-finite ``vx`` or ``ax`` lies in the window
-        (its ends included) or where the reading is steeper than :data:`MAX_SIN_PITCH`.
+        NaN where the log has not yet lasted ``window`` (or ``first_span``), where a non-finite ``vx`` or ``ax`` lies
+        in the window (its ends included) or where the reading is steeper than :data:`MAX_SIN_PITCH`.
     """
     t, vx, ax = (np.asarray(a, dtype=np.float64) for a in (t, vx, ax))
     area, nbad = running_area(t, vx, ax) if area is None else area
     bad = ~(np.isfinite(vx) & np.isfinite(ax))
     start = np.searchsorted(t, t - window, side="right") - 1     # the last sample at least the window back
-    ok = start >= 0
-    m = np.where(ok, start, 0)
+    ok = (start >= 0) | (t - t[0] >= first_span)                 # else: from the first sample, once first_span in
+    m = np.where(start >= 0, start, 0)
     with np.errstate(invalid="ignore", divide="ignore"):
         s = (vx - vx[m] - (area - area[m])) / (g * (t - t[m]))
     ok &= (nbad - nbad[m] == 0) & ~bad & ~bad[m] & (np.abs(s) <= MAX_SIN_PITCH)

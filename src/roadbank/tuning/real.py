@@ -442,6 +442,19 @@ stage's Kalman start with ``start_span`` 2 T_b (80 s) and the offset's prior ``s
 stage's constants and the grade window. Set, pieces and objective: the thirty-sixth stage's (the training drives as
 read, whole and in 8, 12, 20 s pieces). The lowest wins; ties within :data:`TIE_DEG` go to none, then to the smaller
 prior. ``kinematic-gyro-smoother`` takes the result. Neither the KITTI validation drives nor comma2k19 take part.
+
+The thirty-eighth stage (:func:`choose_grade_start`; rule written 2026-12-05 before any candidate ran, after the
+thirty-seventh, and after reading on the training drives that two of them start turning out of a steep place (0064:
+pitch 5.3 deg, yaw rate -0.48 rad/s; 0034), where the integrated roll rate leaves the INS roll by 3.9 and 2.4 deg in
+5-10 s, and that the INS's own pitch in :math:`p + r \tan\vartheta` removes it (0.05 and -0.08 deg), while the
+shipped correction does not start before its 4 s window has passed and then lags): the pitch window and its start.
+Candidates: ``grade_window`` :math:`W` in (1, 2, 4 s) and ``grade_first_span`` :math:`S` (before the log has lasted
+:math:`W`, the pitch averages from the log's first sample once :math:`S` has passed) in (none, 0.5, 1, 2 s) with
+:math:`S < W`: nine, the shipped (4 s, none) among them. Objective: the mean of the thirty-fourth stage's objective
+(the shipped ``kinematic-gyro`` constants on its three sets, whole and in pieces) and the thirty-sixth stage's (the
+unbiased constants on the training drives as read, whole and in pieces). The lowest wins; ties within
+:data:`TIE_DEG` go to the shipped pair, then to the longer window, then to the longer first span. Both filters and
+``kinematic-gyro-smoother`` take the result. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -507,6 +520,9 @@ GYRO_START_SPAN_CANDIDATE_S = 20.0
 GYRO_START_OFFSETS_DEG = (0.03, 0.1, 0.3, 1.0)
 #: the thirty-seventh stage's candidate priors (deg/s) of the start's Kalman filter for an unbiased roll rate
 UNBIASED_START_OFFSETS_DEG = (0.03, 0.1, 0.3)
+#: the thirty-eighth stage's candidate pitch windows (s) and first spans (s; inf: none)
+GRADE_START_WINDOWS_S = (1.0, 2.0, 4.0)
+GRADE_FIRST_SPANS_S = (math.inf, 0.5, 1.0, 2.0)
 #: candidate cut-offs (Hz) and feed-forward gains (-)
 CUTOFFS_HZ = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.8)
 KAPPAS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4)
@@ -1212,6 +1228,25 @@ def choose_unbiased_start(logs, offsets=UNBIASED_START_OFFSETS_DEG, lengths=SHOR
         build = fixed(KinematicGyro(**base, **opts))
         obj[off] = float(np.mean([np.median(log_errors(build, part)) for part in parts]))
     return lowest_tied(obj, list(obj).index), obj
+
+
+def choose_grade_start(logs, windows=GRADE_START_WINDOWS_S, spans=GRADE_FIRST_SPANS_S, lengths=SHORT_PIECES_S):
+    """The thirty-eighth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their
+    roll rate and ``ax``). Returns ``((grade_window s, grade_first_span s), {(window, span): objective deg})``."""
+    sets = gyro_sets(logs)
+    cut = [[[(p, ref, m) for p, ref, m, _ in check_pieces(one, n)] for n in lengths] for one in sets]
+    as_read = [sets[0], *cut[0]]
+    unbiased = dict(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S)
+    obj = {}
+    for w in windows:
+        for first in (f for f in spans if f < w):
+            grade = dict(grade_window=w, grade_first_span=first)
+            shipped = fixed(KinematicGyro(**grade))
+            general = np.mean([np.mean([np.median(log_errors(shipped, part)) for part in [one, *pieces]])
+                               for one, pieces in zip(sets, cut)])
+            free = fixed(KinematicGyro(**unbiased, **grade))
+            obj[(w, first)] = float(0.5 * (general + np.mean([np.median(log_errors(free, part)) for part in as_read])))
+    return lowest_tied(obj, lambda key: (key != (GRADE_WINDOW_S, math.inf), -key[0], -key[1])), obj
 
 
 def check_pieces(logs, length: float) -> list:
