@@ -1239,7 +1239,7 @@ def choose_grade_start(logs, windows=GRADE_START_WINDOWS_S, spans=GRADE_FIRST_SP
     unbiased = dict(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S)
     obj = {}
     for w in windows:
-        for first in (f for f in spans if f < w):
+        for first in (f for f in spans if f < w or f == math.inf):      # none, and every first span below W
             grade = dict(grade_window=w, grade_first_span=first)
             shipped = fixed(KinematicGyro(**grade))
             general = np.mean([np.mean([np.median(log_errors(shipped, part)) for part in [one, *pieces]])
