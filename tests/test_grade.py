@@ -220,3 +220,33 @@ def test_step_with_gaps_in_ax_gives_what_run_gives():
     stepped = [est.step(*(float(getattr(s, c)[i]) for c in ("t", "vx", "ay", "r", "delta_f", "p", "ax"))).theta
                for i in range(len(s))]
     np.testing.assert_array_equal(stepped, whole)
+
+
+def test_a_first_span_reads_the_pitch_from_the_first_sample_before_the_window_has_passed():
+    """The steady 5 % grade of the first test, the window 4 s and the first span 1 s: from 1 s on the pitch is read
+    exactly from the log's first sample (the window growing to 4 s), before 1 s NaN; after 4 s as without it."""
+    rate, window = 50.0, 4.0
+    t = np.arange(500) / rate
+    pitch = math.atan(0.05)
+    vx, ax = 10.0 + t, np.full(len(t), 1.0 - G * math.sin(pitch))
+    got = grade_pitch(t, vx, ax, window, first_span=1.0)
+    early = t < 1.0
+    assert np.all(np.isnan(got[early]))
+    np.testing.assert_allclose(got[~early], pitch, rtol=0, atol=1e-12)
+    full = t >= window
+    np.testing.assert_array_equal(got[full], grade_pitch(t, vx, ax, window)[full])
+
+
+def test_step_and_chunks_give_what_one_run_gives_with_a_first_span():
+    """As the test above, with the first span (the pitch from the first sample kept across chunks)."""
+    s, _ = _circle_on_a_plane(6.0, 0.1, rate=20.0, duration=30.0)
+    whole = KinematicGyro(grade_first_span=0.5).run(s).theta
+    assert np.max(np.abs(whole - KinematicGyro(grade_first_span=math.inf).run(s).theta)) > 0
+    est = KinematicGyro(grade_first_span=0.5)
+    stepped = [est.step(*(float(getattr(s, c)[i]) for c in ("t", "vx", "ay", "r", "delta_f", "p", "ax"))).theta
+               for i in range(len(s))]
+    np.testing.assert_array_equal(stepped, whole)
+    chunks = np.concatenate([est.run(s[a:a + 13], reset=(a == 0)).theta for a in range(0, len(s), 13)])
+    np.testing.assert_array_equal(chunks, whole)
+    with pytest.raises(ValueError, match="grade_first_span"):
+        KinematicGyro(grade_first_span=0.0)

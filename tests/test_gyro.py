@@ -598,11 +598,11 @@ def test_estimate_on_a_ten_second_kitti_drive_uses_its_roll_rate(tmp_path):
 @needs_kitti
 def test_on_ten_second_pieces_of_the_shared_drives_the_roll_rate_beats_the_esp_default():
     """The two shared KITTI drives cut into 10 s pieces, each read as a log of its own: the default (the gyro
-    filter for the INS's roll rate) is closer to the INS roll than the default without the roll rate on 11 of the
-    12 pieces and in median by more than half. The exception, the first piece of 0070, starts at 0.7 m/s turning
-    out of a standstill: there the integrated roll rate leaves the INS roll by 3.5 deg in 4 s (the yaw rate through
-    the pitch of the start), and the 0.07 Hz filter keeps that longer than the ESP default's low-pass (0.42 against
-    0.25 deg)."""
+    filter for the INS's roll rate) is closer to the INS roll than the default without the roll rate on all 12
+    pieces and in median by more than half. The first piece of 0070 starts at 0.7 m/s turning out of a standstill,
+    where the integrated roll rate leaves the INS roll by 3.5 deg in 4 s (the yaw rate through the pitch of the
+    start): before the grade's pitch read from the log's first 2 s (the thirty-eighth stage) the 0.07 Hz filter kept
+    that, 0.42 deg against the ESP default's 0.25; now 0.10."""
     from roadbank.io.kitti import load_kitti_oxts
     from roadbank.validation.kitti import KITTI_SCORING
     from roadbank.validation.scoring import masks, piece_bounds
@@ -621,7 +621,7 @@ def test_on_ten_second_pieces_of_the_shared_drives_the_roll_rate_beats_the_esp_d
             errs.append([np.sqrt(np.mean((x[m] - ref[m]) ** 2)) for x in (gyro, esp)])
     errs = np.array(errs)
     assert len(errs) == 12
-    assert np.sum(errs[:, 0] < errs[:, 1]) == 11
+    assert np.sum(errs[:, 0] < errs[:, 1]) == 12
     assert np.median(errs[:, 0]) < 0.5 * np.median(errs[:, 1])
 
 
@@ -705,6 +705,23 @@ def test_an_unbiased_roll_rate_is_marked_kept_and_designed_for():
     assert (est.cutoff, est.bias_tau) == (UNBIASED_GYRO_CUTOFF_HZ, UNBIASED_GYRO_BIAS_TAU_S)
     plain = make_estimator("kinematic-pif", **{**loud, "log_gyro_unbiased": None})
     assert (plain.cutoff, plain.bias_tau) == (GYRO_CUTOFF_HZ, GYRO_BIAS_TAU_S)
+
+
+@needs_kitti
+def test_the_thirty_eighth_stage_reads_the_pitch_from_the_first_two_seconds():
+    """The rule (tuning.real.choose_grade_start): the lowest is 2 s with the first span 0.5 s; the 4 s window with
+    the first span 2 s is within the tie of it and wins it (the longer window, then the longer span), while the
+    shipped pair (4 s, none) is not within the tie; every first span beats no first span at the same window."""
+    from roadbank.estimators.gyro import GRADE_FIRST_SPAN_S, GRADE_WINDOW_S
+    from roadbank.tuning import real
+    logs = real.training_logs(DATA, roll_rate=True)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, obj = real.choose_grade_start(logs)
+    assert chosen == (GRADE_WINDOW_S, GRADE_FIRST_SPAN_S) == (4.0, 2.0)
+    best = min(obj.values())
+    assert obj[(2.0, 0.5)] == best and obj[chosen] <= best + real.TIE_DEG < obj[(4.0, math.inf)]
+    assert all(v < obj[(w, math.inf)] for (w, f), v in obj.items() if f < math.inf)
 
 
 @needs_kitti

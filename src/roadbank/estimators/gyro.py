@@ -61,7 +61,7 @@ GYRO_BIAS_TAU_S = 10.0
 GRADE_WINDOW_S = 4.0
 #: before the log has lasted that window, the span (s) after which the pitch averages from the log's first sample
 #: (``inf``: no correction until the window has passed): the thirty-eighth stage of :mod:`roadbank.tuning.real`
-GRADE_FIRST_SPAN_S = math.inf
+GRADE_FIRST_SPAN_S = 2.0
 #: the gap (s) between usable samples after which ``kinematic-gyro`` starts again (a stop shorter than it is held
 #: through, the state kept: a car at rest keeps its roll): the twenty-seventh stage of :mod:`roadbank.tuning.real`
 GYRO_MAX_GAP_S = 10.0

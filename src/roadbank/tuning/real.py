@@ -523,6 +523,8 @@ UNBIASED_START_OFFSETS_DEG = (0.03, 0.1, 0.3)
 #: the thirty-eighth stage's candidate pitch windows (s) and first spans (s; inf: none)
 GRADE_START_WINDOWS_S = (1.0, 2.0, 4.0)
 GRADE_FIRST_SPANS_S = (math.inf, 0.5, 1.0, 2.0)
+#: how the stages before the thirty-eighth ran ``kinematic-gyro``: no pitch before the grade window had passed
+BEFORE_38 = {"grade_first_span": math.inf}
 #: candidate cut-offs (Hz) and feed-forward gains (-)
 CUTOFFS_HZ = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.8)
 KAPPAS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4)
@@ -1136,7 +1138,8 @@ def choose_grade(logs, windows=GRADE_WINDOWS_S) -> tuple[float, dict]:
     """The twenty-sixth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
     rate and ``ax``). Returns ``(window s, {window: objective deg})``."""
     sets = gyro_sets(logs)
-    obj = {w: gyro_objective(fixed(KinematicGyro(grade_window=w, max_gap=1.0)), sets) for w in windows}   # as it ran
+    # as it ran: a restart after 1 s
+    obj = {w: gyro_objective(fixed(KinematicGyro(grade_window=w, max_gap=1.0, **BEFORE_38)), sets) for w in windows}
     return lowest_tied(obj, lambda w: (w > 0, -w)), obj
 
 
@@ -1144,7 +1147,7 @@ def choose_gyro_stops(logs, v_mins=GYRO_V_MINS, max_gaps=GYRO_MAX_GAPS) -> tuple
     """The twenty-seventh stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their
     roll rate and ``ax``). Returns ``((v_min m/s, max_gap s), {(v_min, max_gap): objective deg})``."""
     sets = gyro_sets(logs)
-    obj = {(v, gap): gyro_objective(fixed(KinematicGyro(v_min=v, max_gap=gap)), sets)
+    obj = {(v, gap): gyro_objective(fixed(KinematicGyro(v_min=v, max_gap=gap, **BEFORE_38)), sets)
            for v, gap in itertools.product(v_mins, max_gaps)}
     return lowest_tied(obj, lambda k: (k != (v_mins[0], max_gaps[0]), -k[0], k[1])), obj
 
@@ -1155,7 +1158,7 @@ def choose_gyro_order(logs, cutoffs=GYRO_ORDER4_CUTOFFS_HZ) -> tuple[tuple[int, 
     sets = gyro_sets(logs)
     shipped = (2, GYRO_CUTOFF_HZ)
     cands = [shipped] + [(4, fc) for fc in cutoffs]
-    obj = {(o, fc): gyro_objective(fixed(KinematicGyro(order=o, cutoff=fc)), sets) for o, fc in cands}
+    obj = {(o, fc): gyro_objective(fixed(KinematicGyro(order=o, cutoff=fc, **BEFORE_38)), sets) for o, fc in cands}
     return lowest_tied(obj, lambda k: (k != shipped, k[1])), obj
 
 
@@ -1170,7 +1173,7 @@ def choose_gyro_sideslip(logs, modes=GYRO_SIDESLIPS) -> tuple[str, dict]:
             cars[id(s.ay)] = vehicle.undescribed_params(s)
 
     def build(mode):
-        return lambda signals: KinematicGyro(cars[id(signals.ay)], sideslip=mode)
+        return lambda signals: KinematicGyro(cars[id(signals.ay)], sideslip=mode, **BEFORE_38)
     obj = {mode: gyro_objective(build(mode), sets) for mode in modes}
     return lowest_tied(obj, modes.index), obj
 
@@ -1182,7 +1185,7 @@ def choose_gyro_start(logs, holds=GYRO_START_HOLDS_S, lengths=SHORT_PIECES_S) ->
     cut = [[[(p, ref, m) for p, ref, m, _ in check_pieces(one, n)] for n in lengths] for one in sets]
     obj = {}
     for hold in holds:
-        build = fixed(KinematicGyro(grade_window=GRADE_WINDOW_S, start_hold=hold))
+        build = fixed(KinematicGyro(grade_window=GRADE_WINDOW_S, start_hold=hold, **BEFORE_38))
         obj[hold] = float(np.mean([np.mean([np.median(log_errors(build, part)) for part in [one, *pieces]])
                                    for one, pieces in zip(sets, cut)]))
     return lowest_tied(obj, holds.index), obj
@@ -1197,7 +1200,7 @@ def choose_gyro_kalman_start(logs, offsets=GYRO_START_OFFSETS_DEG, lengths=SHORT
     obj = {}
     for off in (None, *offsets):
         opts = {} if off is None else {"start_span": GYRO_START_SPAN_CANDIDATE_S, "start_offset": math.radians(off)}
-        build = fixed(KinematicGyro(grade_window=GRADE_WINDOW_S, **opts))
+        build = fixed(KinematicGyro(grade_window=GRADE_WINDOW_S, **opts, **BEFORE_38))
         obj[off] = float(np.mean([np.mean([np.median(log_errors(build, part)) for part in [one, *pieces]])
                                   for one, pieces in zip(sets, cut)]))
     keys = list(obj)
@@ -1208,7 +1211,7 @@ def choose_unbiased_gyro(logs, cutoffs=GYRO_CUTOFFS_HZ, bias_taus=GYRO_BIAS_TAUS
     """The thirty-sixth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their
     roll rate and ``ax``). Returns ``((cutoff Hz, bias_tau s), {(cutoff, bias_tau): objective deg})``."""
     parts = [logs] + [[(p, ref, m) for p, ref, m, _ in check_pieces(logs, n)] for n in lengths]
-    obj = {(fc, bt): float(np.mean([np.median(log_errors(fixed(KinematicGyro(cutoff=fc, bias_tau=bt,
+    obj = {(fc, bt): float(np.mean([np.median(log_errors(fixed(KinematicGyro(cutoff=fc, bias_tau=bt, **BEFORE_38,
                                                                               grade_window=GRADE_WINDOW_S)), part))
                                     for part in parts]))
            for fc in cutoffs for bt in bias_taus}
@@ -1225,7 +1228,7 @@ def choose_unbiased_start(logs, offsets=UNBIASED_START_OFFSETS_DEG, lengths=SHOR
     obj = {}
     for off in (None, *offsets):
         opts = {} if off is None else {"start_span": 2.0 * UNBIASED_GYRO_BIAS_TAU_S, "start_offset": math.radians(off)}
-        build = fixed(KinematicGyro(**base, **opts))
+        build = fixed(KinematicGyro(**base, **opts, **BEFORE_38))
         obj[off] = float(np.mean([np.median(log_errors(build, part)) for part in parts]))
     return lowest_tied(obj, list(obj).index), obj
 
