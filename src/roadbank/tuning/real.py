@@ -483,7 +483,7 @@ from ..sim import SCENARIOS, run_scenario
 from ..sim.params import PlantParams
 from ..signals import Signals, concat_signals, sample_rate
 from ..validation.kitti import KITTI_SCORING
-from ..validation.scoring import SHORT_PIECES_S, masks, piece_bounds
+from ..validation.scoring import SHORT_PIECES_S, masks, scored_pieces
 from ..validation.splits import KITTI_TRAINING
 from ..vehicle import load_vehicle
 from .manoeuvres import drive_set
@@ -1181,13 +1181,10 @@ def choose_gyro_sideslip(logs, modes=GYRO_SIDESLIPS) -> tuple[str, dict]:
 def choose_gyro_start(logs, holds=GYRO_START_HOLDS_S, lengths=SHORT_PIECES_S) -> tuple[float, dict]:
     """The thirty-fourth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their
     roll rate and ``ax``). Returns ``(start_hold s, {start_hold: objective deg})``."""
-    sets = gyro_sets(logs)
-    cut = [[[(p, ref, m) for p, ref, m, _ in check_pieces(one, n)] for n in lengths] for one in sets]
-    obj = {}
-    for hold in holds:
-        build = fixed(KinematicGyro(grade_window=GRADE_WINDOW_S, start_hold=hold, **BEFORE_38))
-        obj[hold] = float(np.mean([np.mean([np.median(log_errors(build, part)) for part in [one, *pieces]])
-                                   for one, pieces in zip(sets, cut)]))
+    cut = [whole_and_pieces(one, lengths) for one in gyro_sets(logs)]
+    obj = {hold: float(np.mean([lengths_objective(fixed(KinematicGyro(grade_window=GRADE_WINDOW_S, start_hold=hold,
+                                                                      **BEFORE_38)), parts) for parts in cut]))
+           for hold in holds}
     return lowest_tied(obj, holds.index), obj
 
 
@@ -1195,25 +1192,21 @@ def choose_gyro_kalman_start(logs, offsets=GYRO_START_OFFSETS_DEG, lengths=SHORT
     """The thirty-fifth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their
     roll rate and ``ax``). Returns ``(start_offset deg/s or None for no Kalman start, {start_offset or None:
     objective deg})``."""
-    sets = gyro_sets(logs)
-    cut = [[[(p, ref, m) for p, ref, m, _ in check_pieces(one, n)] for n in lengths] for one in sets]
+    cut = [whole_and_pieces(one, lengths) for one in gyro_sets(logs)]
     obj = {}
     for off in (None, *offsets):
         opts = {} if off is None else {"start_span": GYRO_START_SPAN_CANDIDATE_S, "start_offset": math.radians(off)}
         build = fixed(KinematicGyro(grade_window=GRADE_WINDOW_S, **opts, **BEFORE_38))
-        obj[off] = float(np.mean([np.mean([np.median(log_errors(build, part)) for part in [one, *pieces]])
-                                  for one, pieces in zip(sets, cut)]))
-    keys = list(obj)
-    return lowest_tied(obj, keys.index), obj
+        obj[off] = float(np.mean([lengths_objective(build, parts) for parts in cut]))
+    return lowest_tied(obj, list(obj).index), obj
 
 
 def choose_unbiased_gyro(logs, cutoffs=GYRO_CUTOFFS_HZ, bias_taus=GYRO_BIAS_TAUS, lengths=SHORT_PIECES_S) -> tuple:
     """The thirty-sixth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their
     roll rate and ``ax``). Returns ``((cutoff Hz, bias_tau s), {(cutoff, bias_tau): objective deg})``."""
-    parts = [logs] + [[(p, ref, m) for p, ref, m, _ in check_pieces(logs, n)] for n in lengths]
-    obj = {(fc, bt): float(np.mean([np.median(log_errors(fixed(KinematicGyro(cutoff=fc, bias_tau=bt, **BEFORE_38,
-                                                                              grade_window=GRADE_WINDOW_S)), part))
-                                    for part in parts]))
+    parts = whole_and_pieces(logs, lengths)
+    obj = {(fc, bt): lengths_objective(fixed(KinematicGyro(cutoff=fc, bias_tau=bt, grade_window=GRADE_WINDOW_S,
+                                                           **BEFORE_38)), parts)
            for fc in cutoffs for bt in bias_taus}
     shipped = (GYRO_CUTOFF_HZ, GYRO_BIAS_TAU_S)
     return lowest_tied(obj, lambda key: (key != shipped, -key[1], -key[0])), obj
@@ -1223,47 +1216,49 @@ def choose_unbiased_start(logs, offsets=UNBIASED_START_OFFSETS_DEG, lengths=SHOR
     """The thirty-seventh stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their
     roll rate and ``ax``). Returns ``(start_offset deg/s or None for no Kalman start, {start_offset or None:
     objective deg})``."""
-    parts = [logs] + [[(p, ref, m) for p, ref, m, _ in check_pieces(logs, n)] for n in lengths]
+    parts = whole_and_pieces(logs, lengths)
     base = dict(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S, grade_window=GRADE_WINDOW_S)
     obj = {}
     for off in (None, *offsets):
         opts = {} if off is None else {"start_span": 2.0 * UNBIASED_GYRO_BIAS_TAU_S, "start_offset": math.radians(off)}
-        build = fixed(KinematicGyro(**base, **opts, **BEFORE_38))
-        obj[off] = float(np.mean([np.median(log_errors(build, part)) for part in parts]))
+        obj[off] = lengths_objective(fixed(KinematicGyro(**base, **opts, **BEFORE_38)), parts)
     return lowest_tied(obj, list(obj).index), obj
 
 
 def choose_grade_start(logs, windows=GRADE_START_WINDOWS_S, spans=GRADE_FIRST_SPANS_S, lengths=SHORT_PIECES_S):
     """The thirty-eighth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their
     roll rate and ``ax``). Returns ``((grade_window s, grade_first_span s), {(window, span): objective deg})``."""
-    sets = gyro_sets(logs)
-    cut = [[[(p, ref, m) for p, ref, m, _ in check_pieces(one, n)] for n in lengths] for one in sets]
-    as_read = [sets[0], *cut[0]]
+    cut = [whole_and_pieces(one, lengths) for one in gyro_sets(logs)]
     unbiased = dict(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S)
     obj = {}
     for w in windows:
         for first in (f for f in spans if f < w or f == math.inf):      # none, and every first span below W
             grade = dict(grade_window=w, grade_first_span=first)
-            shipped = fixed(KinematicGyro(**grade))
-            general = np.mean([np.mean([np.median(log_errors(shipped, part)) for part in [one, *pieces]])
-                               for one, pieces in zip(sets, cut)])
-            free = fixed(KinematicGyro(**unbiased, **grade))
-            obj[(w, first)] = float(0.5 * (general + np.mean([np.median(log_errors(free, part)) for part in as_read])))
+            general = np.mean([lengths_objective(fixed(KinematicGyro(**grade)), parts) for parts in cut])
+            free = lengths_objective(fixed(KinematicGyro(**unbiased, **grade)), cut[0])    # the drives as read
+            obj[(w, first)] = float(0.5 * (general + free))
     return lowest_tied(obj, lambda key: (key != (GRADE_WINDOW_S, math.inf), -key[0], -key[1])), obj
+
+
+def whole_and_pieces(logs, lengths=SHORT_PIECES_S) -> list:
+    """``[logs, pieces...]``: ``logs`` (:func:`training_logs`) whole, then cut into each of ``lengths`` (s) by
+    :func:`check_pieces`, each piece ``(signals, reference roll rad, scored mask)``: the parts of
+    :func:`lengths_objective`."""
+    return [logs] + [[(p, ref, m) for p, ref, m, _ in check_pieces(logs, n)] for n in lengths]
+
+
+def lengths_objective(build, parts) -> float:
+    """The mean over ``parts`` (:func:`whole_and_pieces`) of the median raw RMS (deg) of the estimator
+    ``build(signals)`` makes: the objective of the thirty-fourth to thirty-eighth stages, per set."""
+    return float(np.mean([np.median(log_errors(build, part)) for part in parts]))
 
 
 def check_pieces(logs, length: float) -> list:
     """``logs`` (:func:`training_logs`) cut into consecutive whole pieces of ``length`` (s), each ``(signals, reference
     roll rad, scored mask, (drive index, first sample, end sample))`` with the KITTI scoring within the piece; pieces
     with no scored sample left out."""
-    out = []
-    for i, (s, ref, _) in enumerate(logs):
-        for a, b in piece_bounds(s.t, length):
-            piece = s[a:b]
-            m = masks(piece.t, piece.vx, KITTI_SCORING)[1]
-            if np.any(m):
-                out.append((piece, ref[a:b], m, (i, a, b)))
-    return out
+    return [(piece, ref[a:b], m, (i, a, b)) for i, (s, ref, _) in enumerate(logs)
+            for a, b, piece, m in scored_pieces(s, length, KITTI_SCORING)]
 
 
 def _piece_checks(piece, windows, pitch_rate=None) -> list:

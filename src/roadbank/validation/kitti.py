@@ -44,7 +44,7 @@ from ..signals import sample_rate
 from ..vehicle import SensorSpec, car_for_log, log_conditions, noise_densities
 from .comma2k19 import ValidationResult
 from .scoring import (ESP_DEFAULT, SHORT_PIECES_S, VALIDATION_NAMES, Scoring, _rms_deg, hold_invalid, lowpass_t, masks,
-                      piece_bounds, pooled, run_and_score)
+                      pooled, run_and_score, scored_pieces)
 from .splits import split_of
 
 #: KITTI scoring: no offset fitted (reference and inputs come from one INS frame), the warm-up the
@@ -247,10 +247,7 @@ def short_log_scores(log, names, params: VehicleParams | None, scoring: Scoring,
 def _piece_scores(log, length: float, names, params, scoring: Scoring, sensors) -> dict:
     """:func:`short_log_scores` for one piece ``length`` (s): ``{name: [raw RMS deg per piece]}``."""
     rms: dict = {n: [] for n in names}
-    for a, b in piece_bounds(log.signals.t, length):
-        piece = log.signals[a:b]
-        if not masks(piece.t, piece.vx, scoring)[1].any():
-            continue
+    for a, b, piece, _ in scored_pieces(log.signals, length, scoring):
         car, _ = car_for_log(piece, log_conditions(piece), params, sensors=sensors)
         run = run_and_score(piece, log.reference_roll[a:b], names, car, scoring, sensors=sensors)
         for n in names:

@@ -274,6 +274,19 @@ def masks(t: np.ndarray, vx: np.ndarray, scoring: Scoring) -> tuple[np.ndarray, 
     return fit, keep & ~fit
 
 
+def scored_pieces(signals, length: float, scoring: Scoring) -> list[tuple[int, int, object, np.ndarray]]:
+    """``(a, b, piece, scored)`` of each consecutive whole piece of ``length`` (s) of the log ``signals``
+    (:func:`piece_bounds`) that has a sample ``scoring`` scores within it: its bounds, the piece (``signals[a:b]``)
+    and its scored mask (:func:`masks`, read within the piece)."""
+    out = []
+    for a, b in piece_bounds(signals.t, length):
+        piece = signals[a:b]
+        scored = masks(piece.t, piece.vx, scoring)[1]
+        if scored.any():
+            out.append((a, b, piece, scored))
+    return out
+
+
 def score(t, theta, phi_b, valid, ref, fit, scored, scoring: Scoring, max_lag_s: float = 1.0,
           grid: TimeGrid | None = None) -> Score:
     """Score one estimate (rad) against the reference roll (rad) on the given masks.
