@@ -15,7 +15,7 @@ from .params import VehicleParams
 
 CHANNELS = ("t", "vx", "ay", "r", "delta_f")
 #: optional channels: present in a log that has them, None otherwise
-OPTIONAL_CHANNELS = ("p", "ax")
+OPTIONAL_CHANNELS = ("p", "ax", "q")
 
 
 def _as_1d(name: str, a) -> np.ndarray:
@@ -55,9 +55,12 @@ class Signals:
         Measured longitudinal acceleration (specific force, positive forward: ``vx' - g sin(pitch)`` with the
         pitch positive nose down), when the log has one; None otherwise. The gyro-aided estimators read the
         road's grade from it (:mod:`roadbank.models.attitude`).
+    q : array (rad/s), optional
+        Pitch rate (rotation about the left axis, positive nose down), when the log has a pitch-rate gyro; None
+        otherwise. With ``ax``, the gyro-aided estimators read the pitch from both (:mod:`roadbank.estimators.pitch`).
 
     fixed : frozenset of str, optional
-        The optional channels (``"p"``, ``"ax"``) whose axis, sign and unit the log's format itself documents (the
+        The optional channels (``"p"``, ``"ax"``, ``"q"``) whose axis, sign and unit the log's format itself documents (the
         readers of KITTI's OXTS files and of comma2k19 set it; a user's channel map does not): the design takes them
         as they are, without the checks that guard a map's channels (:func:`roadbank.vehicle.log_conditions`).
         Only channels the log carries stay in it (``dataclasses.replace(s, p=None)`` drops ``"p"``); slices keep
@@ -69,7 +72,7 @@ class Signals:
         default reads such a roll rate with its own constants
         (:data:`roadbank.estimators.gyro.UNBIASED_GYRO_CUTOFF_HZ`). Kept, dropped, sliced and joined as ``fixed``.
 
-    NaN / inf samples in ``vx, ay, r, delta_f, p, ax`` are allowed: the estimators hold
+    NaN / inf samples in ``vx, ay, r, delta_f, p, ax, q`` are allowed: the estimators hold
     their output there and flag it not valid. The time base itself must be clean.
     """
 
@@ -80,6 +83,7 @@ class Signals:
     delta_f: np.ndarray
     p: np.ndarray | None = None
     ax: np.ndarray | None = None
+    q: np.ndarray | None = None
     fixed: frozenset[str] = frozenset()
     unbiased: frozenset[str] = frozenset()
 

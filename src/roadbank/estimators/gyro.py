@@ -52,6 +52,7 @@ from .base import DesignInputs, ScheduledObserver, StepResult, Tables
 from .gyro_start import KalmanStart, first_restart, kalman_begin, kalman_next
 from .kinematic import KINEMATIC_V_MIN
 from .kinematic_smoother import both_ways, lookahead_of
+from .pitch import PitchObserver
 
 #: ``kinematic-gyro``'s cut-off (Hz) and offset time constant (s): the rule of :mod:`roadbank.tuning.real`
 GYRO_CUTOFF_HZ = 0.15
@@ -62,6 +63,11 @@ GRADE_WINDOW_S = 4.0
 #: before the log has lasted that window, the span (s) after which the pitch averages from the log's first sample
 #: (``inf``: no correction until the window has passed): the thirty-eighth stage of :mod:`roadbank.tuning.real`
 GRADE_FIRST_SPAN_S = 2.0
+#: the bandwidth (rad/s) of the pitch observer that gives the grade's pitch on a log with a pitch rate
+#: (:mod:`roadbank.estimators.pitch`; 0: the pitch rate not read, the window's pitch) and its start ((bandwidth rad/s,
+#: span s) or None): the thirty-ninth stage of :mod:`roadbank.tuning.real`
+PITCH_BANDWIDTH = 0.0
+PITCH_START: tuple[float, float] | None = None
 #: the gap (s) between usable samples after which ``kinematic-gyro`` starts again (a stop shorter than it is held
 #: through, the state kept: a car at rest keeps its roll): the twenty-seventh stage of :mod:`roadbank.tuning.real`
 GYRO_MAX_GAP_S = 10.0
@@ -84,33 +90,47 @@ GYRO_START_OFFSET = math.radians(0.3)
 #: as free of offset (``Signals.unbiased``: an INS's outputs): the thirty-sixth stage of :mod:`roadbank.tuning.real`
 UNBIASED_GYRO_CUTOFF_HZ = 0.07
 UNBIASED_GYRO_BIAS_TAU_S = 40.0
+#: the bandwidth (rad/s) of the pitch observer where the pitch rate's source documents it as free of offset
+#: (``Signals.unbiased``; :data:`PITCH_BANDWIDTH` elsewhere): the thirty-ninth stage of :mod:`roadbank.tuning.real`
+UNBIASED_PITCH_BANDWIDTH = 0.5
 
 
 class GradeCarry:
     """The roll rate of a log corrected for its grade (:func:`roadbank.models.attitude.euler_roll_rate`), chunk by
     chunk: :func:`~roadbank.models.attitude.grade_pitch` over ``window`` s (0: no correction) continues across
     chunks with the last window of samples kept, so a log in chunks gets what one run gets. ``g`` (m/s^2);
-    ``first_span`` (s) as :func:`~roadbank.models.attitude.grade_pitch`'s."""
+    ``first_span`` (s) as :func:`~roadbank.models.attitude.grade_pitch`'s. Given a ``pitch`` observer
+    (:class:`~roadbank.estimators.pitch.PitchObserver`), a log with a pitch rate ``q`` takes the pitch from it
+    instead (its state carried across chunks); the window serves logs without one."""
 
-    def __init__(self, window: float, g: float, first_span: float = math.inf):
+    def __init__(self, window: float, g: float, first_span: float = math.inf, pitch: PitchObserver | None = None):
         self.window, self.g, self.first_span = float(window), float(g), float(first_span)
+        self.pitch = pitch
         self.reset()
 
     def reset(self) -> None:
         """Forget the samples kept: the next chunk starts a log."""
         #: the last window's (t, vx, ax) and the running area and count at its first sample
         self._tail: tuple | None = None
+        self._observed = False               # whether the pitch observer has taken a chunk
+        if self.pitch is not None:
+            self.pitch.reset()
 
     @property
     def started(self) -> bool:
         """Whether samples are kept from an earlier chunk."""
-        return self._tail is not None
+        return self._tail is not None or self._observed
 
     def correct(self, s: Signals, advance: int | None = None) -> Signals:
-        """``s`` with its roll rate corrected (rad/s) and no ``ax`` (what the filter reads); the samples kept move
-        on by the first ``advance`` of ``s`` (default all; a lookahead's samples are corrected, not kept)."""
+        """``s`` with its roll rate corrected (rad/s) and neither ``ax`` nor ``q`` (what the filter reads); the
+        samples kept move on by the first ``advance`` of ``s`` (default all; a lookahead's samples are corrected,
+        not kept)."""
         if s.ax is None or s.p is None or self.window <= 0:
-            return dataclasses.replace(s, ax=None)
+            return dataclasses.replace(s, ax=None, q=None)
+        if self.pitch is not None and s.q is not None:
+            self._observed = True
+            pitch = self.pitch.pitch(s.t, s.vx, s.ax, s.q, s.ay, s.r, advance)
+            return dataclasses.replace(s, p=euler_roll_rate(s.p, s.r, pitch), ax=None, q=None)
         t, vx, ax, start = s.t, s.vx, s.ax, (0.0, 0.0)
         tail = self._tail
         if tail is not None and tail[0][-1] < t[0]:
@@ -124,7 +144,7 @@ class GradeCarry:
             first = max(int(np.searchsorted(t[:end], t[end - 1] - self.window, side="right")) - 1, 0)
             self._tail = (t[first:end].copy(), vx[first:end].copy(), ax[first:end].copy(),
                           (float(area[0][first]), float(area[1][first])))
-        return dataclasses.replace(s, p=euler_roll_rate(s.p, s.r, pitch), ax=None)
+        return dataclasses.replace(s, p=euler_roll_rate(s.p, s.r, pitch), ax=None, q=None)
 
 
 @dataclass(frozen=True)
@@ -206,6 +226,12 @@ class KinematicGyro(ScheduledObserver):
         Before the log has lasted ``grade_window``, the span (s, > 0) after which the pitch averages from the log's
         first sample (``inf``: the roll rate is not corrected until the window has passed). Default
         :data:`GRADE_FIRST_SPAN_S`.
+    pitch_bandwidth : float, optional
+        On a log with a pitch rate (:attr:`roadbank.Signals.q`) and ``ax``, the bandwidth (rad/s, >= 0) of the
+        observer that gives the pitch in place of the window's (:class:`~roadbank.estimators.pitch.PitchObserver`);
+        0: the pitch rate is not read. Default :data:`PITCH_BANDWIDTH`.
+    pitch_start : tuple of float, optional
+        That observer's faster start, ``(bandwidth rad/s, span s)``; None: none. Default :data:`PITCH_START`.
     start_hold : float, optional
         Seconds (>= 0) after the log's first usable sample during which the offset state is held at zero, so that
         it does not learn the start's error (the first kinematic sample, taken as the state, is as noisy as any);
@@ -236,7 +262,8 @@ class KinematicGyro(ScheduledObserver):
         def design(self) -> GyroDesign: ...     # an instance of design_type
 
     def __init__(self, params=None, *, cutoff=None, bias_tau=None, grade_window=None, order=None, sideslip=None,
-                 start_hold=None, start_span=None, start_offset=None, grade_first_span=None, **kw):
+                 start_hold=None, start_span=None, start_offset=None, grade_first_span=None, pitch_bandwidth=None,
+                 pitch_start=(), **kw):
         self.cutoff = float(GYRO_CUTOFF_HZ if cutoff is None else cutoff)
         self.start_hold = float(GYRO_START_HOLD_S if start_hold is None else start_hold)
         if not (np.isfinite(self.start_hold) and self.start_hold >= 0):
@@ -269,8 +296,14 @@ class KinematicGyro(ScheduledObserver):
         self.state_names = (("w", "c1", "c2", "c3") if self.order == 4 else
                             ("w", "p_offset") if self.bias_tau > 0 and self.sideslip == "none" else
                             ("z", "beta") if self.bias_tau > 0 else ("w",) if self.sideslip == "none" else ("z",))
+        self.pitch_bandwidth = float(PITCH_BANDWIDTH if pitch_bandwidth is None else pitch_bandwidth)
+        if not (np.isfinite(self.pitch_bandwidth) and self.pitch_bandwidth >= 0):
+            raise ValueError(f"{self.name}: pitch_bandwidth must be >= 0 rad/s, got {pitch_bandwidth}")
+        self.pitch_start = PITCH_START if pitch_start == () else pitch_start
         super().__init__(params, **{"max_gap": GYRO_MAX_GAP_S, **kw})
-        self.grade = GradeCarry(window, self.params.g, first_span)
+        observer = (PitchObserver(self.pitch_bandwidth, self.params.g, self.pitch_start)
+                    if self.pitch_bandwidth > 0 else None)
+        self.grade = GradeCarry(window, self.params.g, first_span, observer)
 
     @property
     def grade_window(self) -> float:
@@ -401,13 +434,14 @@ class KinematicGyro(ScheduledObserver):
         return super().run(self._corrected(signals, reset), reset=False, lookahead=lookahead)
 
     def step(self, t: float, vx: float, ay: float, r: float, delta_f: float = float("nan"),
-             p: float = float("nan"), ax: float = float("nan")) -> StepResult:
+             p: float = float("nan"), ax: float = float("nan"), q: float | None = None) -> StepResult:
         """One sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), the unused delta_f (rad), the roll rate ``p``
-        (rad/s) and the longitudinal acceleration ``ax`` (m/s^2; NaN: the roll rate is not corrected for the
-        grade, and once an ``ax`` has come, the windows that hold the NaN are not, as in :meth:`run`)."""
+        (rad/s), the longitudinal acceleration ``ax`` (m/s^2; NaN: the roll rate is not corrected for the
+        grade, and once an ``ax`` has come, the windows that hold the NaN are not, as in :meth:`run`) and the pitch
+        rate ``q`` (rad/s; None: the log has none, the window's pitch)."""
         if self.grade.window > 0 and (not np.isnan(ax) or self.grade.started):
             t_, vx_, ay_, r_, d_, p_, ax_ = (np.array([float(v)]) for v in (t, vx, ay, r, delta_f, p, ax))
-            one = Signals(t_, vx_, ay_, r_, d_, p_, ax_)
+            one = Signals(t_, vx_, ay_, r_, d_, p_, ax_, None if q is None else np.array([float(q)]))
             p = float(self.grade.correct(one).p[0])
         self._before = (float(self._mem[L.M_INIT]), float(self._mem[L.M_TLAST]))
         out = super().step(t, vx, ay, r, p)

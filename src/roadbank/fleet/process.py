@@ -124,7 +124,8 @@ def design_words(design: dict, estimator: str) -> str:
     slope, ax = design.get("roll_rate"), design.get("ax")
     gyro = roll_rate_usable(slope)
     if estimator in QUIET_MODELS:
-        grade = "; corrected for the grade by its ax" if roll_rate_usable(ax) else ""
+        pitch = " and pitch rate" if roll_rate_usable(design.get("pitch_rate")) else ""
+        grade = f"; corrected for the grade by its ax{pitch}" if roll_rate_usable(ax) else ""
         free = ", free of offset (an INS's)" if design.get("roll_rate_unbiased") else ""
         loud = f"{GYRO_MODELS[estimator]} (the log has a roll rate{free}{grade})" if gyro else "the low-pass blend"
         words += f", so {estimator} is {QUIET_MODELS[estimator] if design['quiet'] else loud}"
@@ -135,6 +136,10 @@ def design_words(design: dict, estimator: str) -> str:
     if gyro and ax is not None and not roll_rate_usable(ax):
         words += (f"; its ax does not follow its speed (slope {ax:.2g}, not {lo:g}-{hi:g}: another axis, sign or "
                   "unit?), so the roll rate is not corrected for the grade")
+    q = design.get("pitch_rate")
+    if gyro and roll_rate_usable(ax) and q is not None and not roll_rate_usable(q):
+        words += (f"; its pitch rate does not follow the pitch in its ax (slope {q:.2g}, not {lo:g}-{hi:g}: another "
+                  "axis, sign or unit?), so the grade's pitch comes from its ax alone")
     if design.get("source"):
         words += f"; written faster than their sensor, noise read at the sensor's rate: {design['source']}"
     return words

@@ -111,7 +111,9 @@ def select_roles(p, cmap: ChannelMap, have: set, names) -> list[str]:
 #: what a log read without an optional channel loses (the end of :func:`optional_notes`' warning)
 OPTIONAL_LOSS = {"roll_rate": "a roll rate (the gyro-aided estimators give no valid sample)",
                  "longitudinal_acceleration": "a longitudinal acceleration (the gyro-aided estimators do not "
-                                              "correct the roll rate for the grade)"}
+                                              "correct the roll rate for the grade)",
+                 "pitch_rate": "a pitch rate (the gyro-aided estimators read the grade's pitch from the longitudinal "
+                               "acceleration alone)"}
 
 
 def optional_notes(p, cmap: ChannelMap, roles: list[str]) -> list[str]:

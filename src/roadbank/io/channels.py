@@ -35,6 +35,9 @@ roll_rate                   rad/s, deg/s         none (rotation about x; optiona
                                                  the gyro-aided estimators read it)
 longitudinal_acceleration   m/s^2, g             none (x axis; optional: the gyro-aided
                                                  estimators read the grade from it)
+pitch_rate                  rad/s, deg/s         flipped (rotation about y; optional:
+                                                 with the longitudinal acceleration,
+                                                 the grade's pitch without lag)
 reference_roll              rad, deg             none (rotation about x: right
                                                  side down in FRD = left side up
                                                  in ISO)
@@ -55,7 +58,7 @@ angle is used when its column exists in the file); a map with neither describes 
 one (an IMU or INS log): it is read with the steering angle absent (``delta_f`` NaN), as a KITTI
 drive is (:attr:`ChannelMap.no_steering`), which the default estimator does not read. ``invert = true``
 flips a channel's sign on top of the convention, for sensors whose sign is odd. ``unbiased = true`` on
-``roll_rate`` or ``longitudinal_acceleration`` says the channel is an INS's output whose offset its own Kalman filter
+``roll_rate``, ``longitudinal_acceleration`` or ``pitch_rate`` says the channel is an INS's output whose offset its own Kalman filter
 has removed (:attr:`ChannelMap.unbiased`, ``Signals.unbiased``); on any other channel it is an error.
 All conversion to SI and ISO 8855 happens here, at the edge; inside roadbank
 everything is SI/ISO.
@@ -87,6 +90,7 @@ ROLES: dict[str, tuple[str, str | None]] = {
     "yaw_rate": ("angular_rate", "z"),
     "roll_rate": ("angular_rate", "x"),
     "longitudinal_acceleration": ("acceleration", "x"),
+    "pitch_rate": ("angular_rate", "y"),
     "steering_wheel_angle": ("angle", "z"),
     "road_wheel_angle": ("angle", "z"),
     "reference_roll": ("angle", "x"),
@@ -98,7 +102,7 @@ ROLES: dict[str, tuple[str, str | None]] = {
 }
 REQUIRED = ("time", "speed", "lateral_acceleration", "yaw_rate")
 #: optional roles read when the file has their column -> the :class:`~roadbank.signals.Signals` channel they fill
-OPTIONAL = {"roll_rate": "p", "longitudinal_acceleration": "ax"}
+OPTIONAL = {"roll_rate": "p", "longitudinal_acceleration": "ax", "pitch_rate": "q"}
 STEERING = ("road_wheel_angle", "steering_wheel_angle")
 CONVENTIONS = ("ISO", "FRD")
 #: other spellings of the body-axis conventions: ROS REP-103 bodies are FLU (= ISO 8855);
@@ -273,6 +277,7 @@ def default_channel_map() -> ChannelMap:
         "steering_wheel_angle": ChannelSpec("steering_wheel_angle", "steering_wheel_angle", "rad"),
         "roll_rate": ChannelSpec("roll_rate", "p", "rad/s"),
         "longitudinal_acceleration": ChannelSpec("longitudinal_acceleration", "ax", "m/s^2"),
+        "pitch_rate": ChannelSpec("pitch_rate", "q", "rad/s"),
     }
     return ChannelMap(ch, truth_prefix="true_", source="default channel map", steering_optional=True)
 
@@ -350,8 +355,9 @@ def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
                                 "state it explicitly)")
         if entry.get("unbiased", False) is not False:
             if role not in OPTIONAL or entry["unbiased"] is not True:
-                raise channel_error(source, role, column, "'unbiased = true' is for the roll rate and the "
-                                    "longitudinal acceleration of an INS whose outputs are free of offset")
+                raise channel_error(source, role, column, "'unbiased = true' is for the roll rate, the "
+                                    "longitudinal acceleration and the pitch rate of an INS whose outputs are free "
+                                    "of offset")
             unbiased.add(OPTIONAL[role])
         opt = {k: (None if entry.get(k) is None else str(entry[k])) for k in ("message", "signal", "topic")}
         specs[role] = ChannelSpec(role, column, str(entry["unit"]), _convention(entry.get("convention")),

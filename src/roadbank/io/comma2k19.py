@@ -107,6 +107,7 @@ CHANNELS = {
     "yaw_rate": ("processed_log/IMU/gyro[2]", "rad/s", "FRD"),
     "roll_rate": ("processed_log/IMU/gyro[0]", "rad/s", "FRD"),
     "longitudinal_acceleration": ("processed_log/IMU/accelerometer[0]", "m/s^2", "FRD"),
+    "pitch_rate": ("processed_log/IMU/gyro[1]", "rad/s", "FRD"),
     "steering_wheel_angle": ("processed_log/CAN/steering_angle", "deg", "ISO"),   # left already positive
     "reference_roll": ("global_pose (roll)", "rad", "ISO"),
 }
@@ -170,6 +171,7 @@ class SegmentSource:
             col["yaw_rate"]: (gyr_t, gyr[:, 2]),
             col["roll_rate"]: (gyr_t, gyr[:, 0]),
             col["longitudinal_acceleration"]: (acc_t, acc[:, 0]),
+            col["pitch_rate"]: (gyr_t, gyr[:, 1]),
             col["steering_wheel_angle"]: (arr["steering_angle"][0], arr["steering_angle"][1][:, 0]),
             col["reference_roll"]: (ft, pose_roll(pos, quat)),
             "lat_deg": (ft, np.degrees(lat)),

@@ -55,12 +55,15 @@ NAMES = {
     "road_wheel_angle": ("deltaf", "delta", "roadwheelangle", "wheelangle", "rwa", "frontwheelangle"),
     "roll_rate": ("p", "rollrate", "rollrt", "wx", "gyrox", "omegax", "rollvel", "rollvelocity", "phidot",
                   "angularvelocityx", "rx"),
+    "pitch_rate": ("q", "pitchrate", "pitchrt", "wy", "gyroy", "omegay", "pitchvel", "pitchvelocity", "thetadot",
+                   "angularvelocityy", "ry"),
     "longitudinal_acceleration": ("ax", "accx", "longacc", "lonacc", "longaccel", "lngacc", "longitudinalacceleration",
                                   "longitudinalaccel", "accelx", "alon", "alng", "accelerationx", "longg"),
 }
 #: above this 99th percentile of its magnitude a roll rate is not in rad/s (roads roll the body at 0.01-0.2 rad/s)
 #: and a longitudinal acceleration not in g (braking and grades: 0.05-0.4 g)
-OPTIONAL_RANGE = {"roll_rate": ("rad/s", "deg/s", 0.5), "longitudinal_acceleration": ("g", "m/s^2", 0.6)}
+OPTIONAL_RANGE = {"roll_rate": ("rad/s", "deg/s", 0.5), "longitudinal_acceleration": ("g", "m/s^2", 0.6),
+                  "pitch_rate": ("rad/s", "deg/s", 0.5)}
 #: unit hints found in a column name (after the role's spelling) -> unit
 UNIT_HINTS = {"kmh": "km/h", "kph": "km/h", "mph": "mph", "mps": "m/s", "ms2": "m/s^2", "mss": "m/s^2",
               "degps": "deg/s", "degs": "deg/s", "dps": "deg/s", "rads": "rad/s", "radps": "rad/s",

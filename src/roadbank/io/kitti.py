@@ -69,10 +69,10 @@ COLUMNS = {"lat": 0, "lon": 1, "roll": 3, "vf": 8, "vl": 9, "ax": 11, "ay": 12, 
 TIME = "timestamps.txt"
 #: the channels a drive gives (oxts column -> stored unit); their column names: :func:`column`
 ROLES = {"speed": ("vf", "m/s"), "lateral_acceleration": ("ay", "m/s^2"), "yaw_rate": ("wz", "rad/s"),
-         "roll_rate": ("wx", "rad/s"), "longitudinal_acceleration": ("ax", "m/s^2"),
+         "roll_rate": ("wx", "rad/s"), "longitudinal_acceleration": ("ax", "m/s^2"), "pitch_rate": ("wy", "rad/s"),
          "reference_roll": ("roll", "rad")}
 #: columns carried into ``Log.extra`` as they are (name -> oxts column); on the frames' own clock
-CARRIED = {"lat_deg": "lat", "lon_deg": "lon", "vl_mps": "vl", "wy_radps": "wy"}
+CARRIED = {"lat_deg": "lat", "lon_deg": "lon", "vl_mps": "vl"}
 
 _STAMP = re.compile(r"^(\d{4}-\d{2}-\d{2}) (\d{2}:\d{2}:\d{2})(?:\.(\d{1,9}))?$")
 _FRAME = re.compile(r"^(\d+)\.txt$")
@@ -191,13 +191,13 @@ def column(name: str) -> str:
 
 def channel_map() -> ChannelMap:
     """The fixed channel map of a KITTI drive: SI and ISO 8855 as stored, no steering, the frames' own clock; its
-    roll rate and ``ax`` free of offset (``Signals.unbiased``: the RT3003 INS applies its Kalman filter's gyro and
+    roll rate, ``ax`` and pitch rate free of offset (``Signals.unbiased``: the RT3003 INS applies its Kalman filter's gyro and
     accelerometer bias corrections to the rates and accelerations it outputs, its manual)."""
     ch = {"time": ChannelSpec("time", TIME, "s")}
     for role, (name, unit) in ROLES.items():
         ch[role] = ChannelSpec(role, column(name), unit)
     return ChannelMap(ch, time_base="clock", no_steering=True, source="KITTI raw oxts layout",
-                      fixed_layout=True, unbiased=frozenset({"p", "ax"}))
+                      fixed_layout=True, unbiased=frozenset({"p", "ax", "q"}))
 
 
 def find_drive(path) -> Path:
@@ -292,7 +292,7 @@ def load_kitti_oxts(path):
     Log
         ``signals``: t (s from the first frame), vx (m/s), ay (m/s^2), r (rad/s),
         delta_f NaN; ``reference_roll`` (rad, ISO); ``extra``: ``lat_deg``,
-        ``lon_deg`` (deg), ``vl_mps`` (m/s, leftward speed), ``wy_radps`` (rad/s, pitch rate); ``metadata``: dataset,
+        ``lon_deg`` (deg), ``vl_mps`` (m/s, leftward speed); ``metadata``: dataset,
         drive, time_origin (UTC), dropped_frames, frames.
 
     Raises

@@ -20,7 +20,7 @@ from .errors import channel_text
 #: included), lateral acceleration (m/s^2: 3 g, beyond the tyres' grip with any bank and roll; an ESP
 #: sensor's range is about 2 g) and yaw rate (rad/s: 5, beyond a spin; an ESP sensor's range is 1.7-2.6)
 LIMITS = {"speed": (-30.0, 120.0), "lateral_acceleration": (-3.0 * G, 3.0 * G), "yaw_rate": (-5.0, 5.0),
-          "roll_rate": (-5.0, 5.0), "longitudinal_acceleration": (-3.0 * G, 3.0 * G)}
+          "roll_rate": (-5.0, 5.0), "pitch_rate": (-5.0, 5.0), "longitudinal_acceleration": (-3.0 * G, 3.0 * G)}
 
 
 class Dropouts:

@@ -19,6 +19,15 @@ is below 0.01 m/s^2 in normal driving), so over a window :math:`[t - W, t]`
 a causal mean of :math:`(\dot v_x - a_x)/g` that needs no derivative of the speed. A mount tilted about y adds
 the same angle to :math:`\hat\vartheta` as it moves :math:`r` into the measured roll rate, so the correction
 compensates it too (to first order).
+
+A log with a pitch-rate gyro as well gives the pitch without the window's lag: the Euler pitch changes at
+
+.. math::
+    \dot\vartheta = q \cos\theta - r \sin\theta
+
+(:func:`euler_pitch_rate`; the roll :math:`\theta` there can be the kinematic one, :func:`kinematic_roll`: its
+noise is integrated and so averages out), which an observer fuses with the accelerometer's slow reading
+(:mod:`roadbank.estimators.pitch`).
 """
 
 from __future__ import annotations
@@ -29,7 +38,7 @@ import numpy as np
 
 from ..constants import G
 
-__all__ = ["MAX_SIN_PITCH", "running_area", "grade_pitch", "euler_roll_rate"]
+__all__ = ["MAX_SIN_PITCH", "running_area", "grade_pitch", "euler_roll_rate", "euler_pitch_rate", "kinematic_roll"]
 
 #: the sine of the steepest pitch :func:`grade_pitch` reports (20 deg; a steeper reading is a fault, not a road)
 MAX_SIN_PITCH = 0.34
@@ -96,3 +105,20 @@ def euler_roll_rate(p, r, pitch) -> np.ndarray:
     with np.errstate(invalid="ignore"):
         lean = r * np.tan(pitch)
     return np.where(np.isfinite(lean), p + lean, p)
+
+
+def euler_pitch_rate(q, r, roll) -> np.ndarray:
+    r"""The rate of the pitch angle (rad/s, positive nose down) from the body pitch rate ``q`` and yaw rate ``r``
+    (rad/s) and the roll angle (rad, positive left side up): :math:`q \cos\theta - r \sin\theta` (module
+    docstring)."""
+    q, r, roll = (np.asarray(a, dtype=np.float64) for a in (q, r, roll))
+    return q * np.cos(roll) - r * np.sin(roll)
+
+
+def kinematic_roll(vx, ay, r, g: float = G) -> np.ndarray:
+    r"""The kinematic roll (rad): :math:`\arcsin((a_y - v_x r)/g)`, the argument clipped to [-1, 1]; ``vx`` (m/s),
+    ``ay`` (m/s^2), ``r`` (rad/s), ``g`` (m/s^2). It carries the sideslip acceleration and the road's vibration; for
+    :func:`euler_pitch_rate` that is enough."""
+    vx, ay, r = (np.asarray(a, dtype=np.float64) for a in (vx, ay, r))
+    with np.errstate(invalid="ignore"):
+        return np.arcsin(np.clip((ay - vx * r) / g, -1.0, 1.0))

@@ -475,6 +475,17 @@ three sets, and the thirty-sixth stage's, the unbiased constants on the drives a
 within :data:`TIE_DEG` go to the shipped pitch, then to the use for an unbiased pitch rate only, then to no start,
 then to the lower bandwidth. Both filters and ``kinematic-gyro-smoother`` take the result. Neither the KITTI
 validation drives nor comma2k19 take part; the stages before run on drives without their pitch rate, as they ran.
+
+The fortieth stage (:func:`choose_pitch_start`; rule written 2026-12-06 before any of its candidates ran on it, after
+the thirty-ninth chose 0.5 rad/s without a start for an unbiased pitch rate, and after a test on validation drive 0070
+failed with that choice: the drive pulls away turning hard (0.66 rad/s) on a 3 deg grade, and the observer, started
+at zero pitch, needs about 5 s to reach the pitch its accelerometer shows, which the window's first span (the
+thirty-eighth stage) reads in 2 s; the thirty-ninth stage's training objective had the 3 s start within 0.0002 deg
+of none): the observer's start. A zero pitch is a guess, not a reading. Candidates: ``pitch_start`` in
+:data:`PITCH_START_CANDIDATES` (none; 3 rad/s for 3 s; 3 rad/s for 6 s; 6 rad/s for 3 s), the observer at
+:data:`~roadbank.estimators.gyro.UNBIASED_PITCH_BANDWIDTH` for an unbiased pitch rate. Sets and objective: the
+thirty-ninth stage's. The lowest wins; ties within :data:`TIE_DEG` go to a start over none (the reason above), then to
+the shorter span, then to the lower start bandwidth. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -549,6 +560,8 @@ BEFORE_38 = {"grade_first_span": math.inf}
 #: s) of a faster start; None: none)
 PITCH_BANDWIDTHS = (0.5, 1.0, 2.0)
 PITCH_STARTS = (None, (3.0, 3.0))
+#: the fortieth stage's candidate starts of the pitch observer ((bandwidth rad/s, span s); None: none)
+PITCH_START_CANDIDATES = (None, (3.0, 3.0), (3.0, 6.0), (6.0, 3.0))
 #: candidate cut-offs (Hz) and feed-forward gains (-)
 CUTOFFS_HZ = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.8)
 KAPPAS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4)
@@ -660,17 +673,19 @@ def _pick(cands: dict) -> tuple[float, float]:
     return lowest_tied(cands, lambda fk: (fk[1], fk[0]))
 
 
-def training_logs(data_dir, scoring=KITTI_SCORING, roll_rate: bool = False):
+def training_logs(data_dir, scoring=KITTI_SCORING, roll_rate: bool = False, pitch_rate: bool = False):
     """``(signals, reference roll rad, scored mask)`` of each KITTI training drive found under ``data_dir``
     (the mask of ``scoring``, default :data:`~roadbank.validation.kitti.KITTI_SCORING`). Without ``roll_rate`` the
-    signals are the ESP channels alone (``p`` None): the stages before the twenty-fourth read none, and ran so."""
+    signals are the ESP channels alone (``p`` None): the stages before the twenty-fourth read none, and ran so;
+    without ``pitch_rate`` they have no ``q``: the stages before the thirty-ninth read none."""
     out = []
     for name in KITTI_TRAINING:
         found = [p for p in Path(data_dir).glob(f"*/{name}") if p.is_dir()]
         if not found:
             continue
         log = load_kitti_oxts(found[0])
-        out.append((log.signals, log.reference_roll, masks(log.signals.t, log.signals.vx, scoring)[1]))
+        s = log.signals if pitch_rate else dataclasses.replace(log.signals, q=None)
+        out.append((s, log.reference_roll, masks(s.t, s.vx, scoring)[1]))
     return out if roll_rate else without_roll_rate(out)
 
 
@@ -1119,10 +1134,11 @@ def smoother_clip_candidates() -> dict:
 
 def gyro_sets(logs, offset_deg: float | None = None) -> list[list]:
     """The twenty-fourth stage's real sets: ``logs`` (:func:`training_logs`) as read, and with a constant roll-rate
-    offset of +``offset_deg`` and of -``offset_deg`` (deg/s; default :data:`GYRO_OFFSET_DEG`) added to ``p``."""
+    offset of +``offset_deg`` and of -``offset_deg`` (deg/s; default :data:`GYRO_OFFSET_DEG`) added to ``p`` (and to
+    ``q`` where the logs have one, the thirty-ninth stage's)."""
     off = math.radians(GYRO_OFFSET_DEG if offset_deg is None else offset_deg)
-    return [logs] + [[(dataclasses.replace(s, p=s.p + sign * off), ref, m) for s, ref, m in logs]
-                     for sign in (1.0, -1.0)]
+    return [logs] + [[(dataclasses.replace(s, p=s.p + sign * off, q=None if s.q is None else s.q + sign * off), ref, m)
+                      for s, ref, m in logs] for sign in (1.0, -1.0)]
 
 
 def without_roll_rate(logs) -> list:
@@ -1264,6 +1280,27 @@ def choose_grade_start(logs, windows=GRADE_START_WINDOWS_S, spans=GRADE_FIRST_SP
     return lowest_tied(obj, lambda key: (key != (GRADE_WINDOW_S, math.inf), -key[0], -key[1])), obj
 
 
+def choose_pitch_rate(logs, bandwidths=PITCH_BANDWIDTHS, starts=PITCH_STARTS, lengths=SHORT_PIECES_S):
+    """The thirty-ninth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their
+    roll rate, ``ax`` and pitch rate). Returns ``(key, {key: objective deg})``, a key ``("window",)`` (the shipped
+    pitch) or ``(use, bandwidth rad/s, start)`` with ``use`` ``"unbiased"`` or ``"always"``."""
+    cut = [whole_and_pieces(one, lengths) for one in gyro_sets(logs)]
+    unbiased = dict(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S)
+
+    def general(**pitch) -> float:
+        return float(np.mean([lengths_objective(fixed(KinematicGyro(**pitch)), parts) for parts in cut]))
+
+    shipped = general(pitch_bandwidth=0.0)
+    obj = {("window",): 0.5 * (shipped + lengths_objective(fixed(KinematicGyro(**unbiased, pitch_bandwidth=0.0)),
+                                                              cut[0]))}
+    for w, start in itertools.product(bandwidths, starts):
+        pitch = dict(pitch_bandwidth=w, pitch_start=start)
+        free = lengths_objective(fixed(KinematicGyro(**unbiased, **pitch)), cut[0])      # the drives as read
+        obj[("unbiased", w, start)] = float(0.5 * (shipped + free))
+        obj[("always", w, start)] = float(0.5 * (general(**pitch) + free))
+    return lowest_tied(obj, lambda k: (k != ("window",), k[0] != "unbiased", k[2] is not None, k[1])), obj
+
+
 def whole_and_pieces(logs, lengths=SHORT_PIECES_S) -> list:
     """``[logs, pieces...]``: ``logs`` (:func:`training_logs`) whole, then cut into each of ``lengths`` (s) by
     :func:`check_pieces`, each piece ``(signals, reference roll rad, scored mask)``: the parts of
@@ -1359,7 +1396,7 @@ def choose_roll_check(logs, lengths=CHECK_PIECES_S, windows=CHECK_WINDOWS_S, ran
 
 def training_pitch_rates(data_dir) -> list:
     """The INS's pitch rate (rad/s) of each KITTI training drive under ``data_dir``, in :func:`training_logs`' order."""
-    return [load_kitti_oxts(found[0]).extra["wy_radps"] for name in KITTI_TRAINING
+    return [load_kitti_oxts(found[0]).signals.q for name in KITTI_TRAINING
             if (found := [p for p in Path(data_dir).glob(f"*/{name}") if p.is_dir()])]
 
 

@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from ..constants import G
+from ..models.attitude import euler_pitch_rate, kinematic_roll
 from ..params import VehicleParams
 from ..signals import (DYNAMICS_BAND_HZ, diff_noise_std, noise_band_hz, road_noise_floor_std, road_noise_std,
                        sample_rate, source_step)
@@ -24,7 +25,7 @@ from .sensors import SensorSpec
 
 __all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "QUIET_FILTER", "QUIET_MODELS", "GYRO_FILTER",
            "GYRO_MODELS", "design_span", "has_design_span", "log_conditions", "noise_densities", "is_quiet",
-           "quiet_noise_ratio", "roll_rate_slope", "roll_rate_usable", "ax_slope", "esp_conditions", "make_estimator"]
+           "quiet_noise_ratio", "roll_rate_slope", "roll_rate_usable", "ax_slope", "pitch_rate_slope", "esp_conditions", "make_estimator"]
 
 
 #: seconds of driving (``vx >= v_min``) at the start of a log on which :func:`log_conditions` measures it (s)
@@ -138,10 +139,11 @@ def _at_most(noise: float, floor: float) -> float:
 def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
     """What a log tells :func:`make_estimator` about its sensors: ``{"log_rate": Hz,
     "log_ay_noise": m/s^2, "log_r_noise": rad/s, "log_ay_floor": m/s^2, "log_diff_noise": m/s^2, "log_roll_rate": -,
-    "log_ax": -, "log_gyro_unbiased": 1 or None}`` (``log_roll_rate`` and ``log_ax`` :func:`roll_rate_slope` and
-    :func:`ax_slope`, None for a log without the channel, :data:`FIXED_SLOPE` for a channel its format documents:
-    ``Signals.fixed``, :data:`TRUST_FIXED_CHANNELS`; ``log_gyro_unbiased`` 1 where the log's roll rate is documented
-    free of offset, ``Signals.unbiased``) — the
+    "log_ax": -, "log_gyro_unbiased": 1 or None, "log_pitch_rate": -}`` (``log_roll_rate``, ``log_ax`` and
+    ``log_pitch_rate`` :func:`roll_rate_slope`, :func:`ax_slope` and :func:`pitch_rate_slope`, None for a log without
+    the channel (and for a pitch rate not documented free of offset), :data:`FIXED_SLOPE` for a channel its format
+    documents: ``Signals.fixed``, :data:`TRUST_FIXED_CHANNELS`; ``log_gyro_unbiased`` 1 where the log's roll rate is
+    documented free of offset, ``Signals.unbiased``) — the
     sample rate of its time base (:func:`roadbank.signals.sample_rate`), the road noise of its ``ay`` and
     yaw rate on the samples at ``vx >= v_min`` (m/s): what they carry above the vehicle's dynamics band, taken
     as white (:func:`roadbank.signals.road_noise_std`, the noise model of real roads; NaN when
@@ -179,7 +181,9 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
             "log_diff_noise": float(f"{diff_noise:.2g}"),
             "log_roll_rate": _checked(signals, "p", vx, moving, roll_rate_slope),
             "log_ax": _checked(signals, "ax", vx, moving, ax_slope),
-            "log_gyro_unbiased": 1.0 if "p" in signals.unbiased and has_channel(signals, "p", moving) else None}
+            "log_gyro_unbiased": 1.0 if "p" in signals.unbiased and has_channel(signals, "p", moving) else None,
+            "log_pitch_rate": (_checked(signals, "q", vx, moving, pitch_rate_slope) if "q" in signals.unbiased
+                               else None)}
 
 
 def _checked(signals, name: str, vx, moving, check) -> float | None:
@@ -194,7 +198,7 @@ def _checked(signals, name: str, vx, moving, check) -> float | None:
 def esp_conditions(cond: dict) -> dict:
     """The log's conditions ``cond`` (:func:`log_conditions`) as for the same log without its roll rate and ``ax``:
     what the estimators of its ESP channels alone are built for."""
-    return {**cond, "log_roll_rate": None, "log_ax": None, "log_gyro_unbiased": None}
+    return {**cond, "log_roll_rate": None, "log_ax": None, "log_gyro_unbiased": None, "log_pitch_rate": None}
 
 
 def _two_digits(x: float | None) -> float | None:
@@ -246,6 +250,26 @@ def ax_slope(signals, vx, moving) -> float | None:
     return _slope_on_integral(signals.t, vx, signals.ax, moving)
 
 
+def pitch_rate_slope(signals, vx, moving) -> float | None:
+    r"""How the log's pitch rate follows the pitch that its ``ax`` and speed show: the slope (-) of
+    :math:`(v_x - \int a_x)/g` (s) on the integral of the pitch from the integrated rate of the Euler pitch
+    (:func:`roadbank.models.attitude.euler_pitch_rate` with the kinematic roll), band-passed and read as
+    :func:`roll_rate_slope`; 1 for a gyro about the car's left axis. None without a pitch rate or ``ax``
+    (:func:`has_channel`) or as there."""
+    if not (has_channel(signals, "q", moving) and has_channel(signals, "ax", moving)):
+        return None
+    t = np.asarray(signals.t, dtype=np.float64)
+    level = (vx - _running_integral(t, signals.ax)) / G
+    rate = euler_pitch_rate(signals.q, signals.r, kinematic_roll(vx, signals.ay, signals.r))
+    return _slope_on_integral(t, level, _running_integral(t, rate), moving)
+
+
+def _running_integral(t, x) -> np.ndarray:
+    """The running trapezoidal integral of ``x`` over the times ``t`` (s), non-finite samples as 0, from 0."""
+    x = np.asarray(x, dtype=np.float64)
+    return np.concatenate([[0.0], np.cumsum(0.5 * np.nan_to_num(x[1:] + x[:-1]) * np.diff(t))])
+
+
 def _slope_on_integral(t, level, rate, moving, windows=ROLL_CHECK_WINDOWS_S) -> float | None:
     """The least-squares slope of ``level`` on the time integral of ``rate`` (trapezoidal, non-finite samples as
     0), both band-passed by centred means over ``windows`` (s; the shorter less the longer) and read on the samples
@@ -254,7 +278,7 @@ def _slope_on_integral(t, level, rate, moving, windows=ROLL_CHECK_WINDOWS_S) -> 
     t = np.asarray(t, dtype=np.float64)
     level, rate = np.asarray(level, np.float64), np.asarray(rate, np.float64)
     short, long = (max(int(round(w * sample_rate(t))), 1) for w in windows)
-    area = np.concatenate([[0.0], np.cumsum(0.5 * np.nan_to_num(rate[1:] + rate[:-1]) * np.diff(t))])
+    area = _running_integral(t, rate)
     band = [_centred_mean(x, short) - _centred_mean(x, long) for x in (np.nan_to_num(level), area)]
     inner = np.zeros(len(t), dtype=bool)
     inner[long // 2:len(t) - long // 2] = True
@@ -430,7 +454,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
                    log_rate: float | None = None, log_ay_noise: float | None = None,
                    log_r_noise: float | None = None, log_ay_floor: float | None = None,
                    log_diff_noise: float | None = None, log_roll_rate: float | None = None,
-                   log_ax: float | None = None, log_gyro_unbiased: float | None = None, **options):
+                   log_ax: float | None = None, log_gyro_unbiased: float | None = None,
+                   log_pitch_rate: float | None = None, **options):
     """``estimators.make(name, params, **options)`` for a log sampled at ``log_rate`` by ``sensors``.
 
     A default-tuned PIF (:func:`roadbank.estimators.pif.with_sensor_noise`) gets the weights
@@ -475,6 +500,11 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         1 (truthy) where the log's roll rate is documented free of offset (``Signals.unbiased``): that gyro-aided
         filter takes :data:`roadbank.estimators.gyro.UNBIASED_GYRO_CUTOFF_HZ` and ``UNBIASED_GYRO_BIAS_TAU_S`` (the
         thirty-sixth stage of :mod:`roadbank.tuning.real`).
+    log_pitch_rate : float, optional
+        How the log's pitch rate, documented free of offset, follows the pitch its ``ax`` shows
+        (:func:`pitch_rate_slope`; None: it has none, or one not so documented). Where it does
+        (:func:`roll_rate_usable`) and the grade is corrected, that filter reads the pitch from the pitch rate
+        (``pitch_bandwidth`` :data:`roadbank.estimators.gyro.UNBIASED_PITCH_BANDWIDTH`, the thirty-ninth stage).
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
@@ -510,6 +540,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
             if log_gyro_unbiased:
                 options = {"cutoff": estimators.gyro.UNBIASED_GYRO_CUTOFF_HZ,
                            "bias_tau": estimators.gyro.UNBIASED_GYRO_BIAS_TAU_S, **options}
+            if window > 0 and roll_rate_usable(log_pitch_rate):
+                options = {"pitch_bandwidth": estimators.gyro.UNBIASED_PITCH_BANDWIDTH, **options}
         elif lead_samples is not None:
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
             if log_diff_noise is not None and math.isfinite(log_diff_noise) and log_diff_noise > 0:

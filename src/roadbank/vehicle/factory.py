@@ -130,7 +130,10 @@ def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | Non
     :func:`~roadbank.vehicle.conditions.roll_rate_slope`; where usable, the default on a loud log is the gyro-aided
     filter); ``ax`` (-) where it carries a longitudinal acceleration: how it follows the speed (``log_ax``,
     :func:`~roadbank.vehicle.conditions.ax_slope`; where usable, that filter corrects the roll rate for the grade);
-    ``roll_rate_unbiased`` (True) where that roll rate is documented free of offset (``log_gyro_unbiased``)."""
+    ``roll_rate_unbiased`` (True) where that roll rate is documented free of offset (``log_gyro_unbiased``);
+    ``pitch_rate`` (-) where it carries a pitch rate documented free of offset: how it follows the pitch
+    (``log_pitch_rate``, :func:`~roadbank.vehicle.conditions.pitch_rate_slope`; where usable, that filter's pitch
+    comes from it)."""
     sensors = sensors or SensorSpec()
     noise, floor = cond.get("log_ay_noise"), cond.get("log_ay_floor")
     ratio = quiet_noise_ratio(sensors, cond.get("log_rate"), noise, floor)
@@ -139,7 +142,7 @@ def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | Non
               "ay_noise": noise, "ay_floor": floor, "ay_floor_ratio": float(f"{ratio:.3g}")}
     if sources:
         record["source"] = ", ".join(f"{ch} {hz:.3g} Hz" for ch, hz in sources.items())
-    for key, name in (("log_roll_rate", "roll_rate"), ("log_ax", "ax")):
+    for key, name in (("log_roll_rate", "roll_rate"), ("log_ax", "ax"), ("log_pitch_rate", "pitch_rate")):
         if cond.get(key) is not None:
             record[name] = cond[key]
     if cond.get("log_gyro_unbiased"):

@@ -176,7 +176,7 @@ class Vehicle:
     def make(self, estimator_name: str, *, log_rate: float | None = None, log_ay_noise: float | None = None,
              log_r_noise: float | None = None, log_ay_floor: float | None = None,
              log_diff_noise: float | None = None, log_roll_rate: float | None = None, log_ax: float | None = None,
-             log_gyro_unbiased: float | None = None, **overrides):
+             log_gyro_unbiased: float | None = None, log_pitch_rate: float | None = None, **overrides):
         """Build an estimator for this car: its params, sensors and ``[tuning.<name>]`` options.
 
         :func:`make_estimator` ``(name, self.params, sensors=self.sensors, log_rate=log_rate,
@@ -194,7 +194,8 @@ class Vehicle:
         the kinematic acceleration relative to ``log_diff_noise`` (m/s^2), and a loud log with a roll rate
         (``log_roll_rate``) gets the gyro-aided filter (:data:`~roadbank.vehicle.conditions.GYRO_FILTER`), corrected
         for the grade where its longitudinal acceleration follows its speed (``log_ax``), with its own constants
-        where that roll rate is documented free of offset (``log_gyro_unbiased``).
+        where that roll rate is documented free of offset (``log_gyro_unbiased``), its pitch from the pitch rate where
+        one documented free of offset follows the pitch (``log_pitch_rate``).
         """
         from ..estimators import TUNED_AS
         # an estimator tuned as itself looks up None: no table
@@ -203,7 +204,7 @@ class Vehicle:
         return make_estimator(estimator_name, self.params, sensors=self.sensors, log_rate=log_rate,
                               log_ay_noise=log_ay_noise, log_r_noise=log_r_noise, log_ay_floor=log_ay_floor,
                               log_diff_noise=log_diff_noise, log_roll_rate=log_roll_rate, log_ax=log_ax,
-                              log_gyro_unbiased=log_gyro_unbiased,
+                              log_gyro_unbiased=log_gyro_unbiased, log_pitch_rate=log_pitch_rate,
                               **{**tuning, **overrides})
 
     @property

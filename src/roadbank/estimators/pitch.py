@@ -1,0 +1,80 @@
+r"""The pitch from a pitch-rate gyro: an observer of the speed and the pitch.
+
+The longitudinal accelerometer reads :math:`a_x = \dot v_x - g \sin\vartheta` (:mod:`roadbank.models.attitude`), so
+the speed that :math:`a_x` and a pitch :math:`\hat\vartheta` predict drifts from the measured one when
+:math:`\hat\vartheta` is wrong. The observer corrects its pitch by that drift and integrates the pitch rate between
+(:func:`roadbank.models.attitude.euler_pitch_rate`, with the kinematic roll):
+
+.. math::
+    \dot{\hat v} = a_x + g \sin\hat\vartheta + k_1 (v_x - \hat v), \qquad
+    \dot{\hat\vartheta} = q \cos\phi_k - r \sin\phi_k + k_2 (v_x - \hat v),
+    \qquad k_1 = 2 \zeta \omega, \quad k_2 = \omega^2 / g
+
+Linearised, the error of :math:`(\hat v, \hat\vartheta)` has the characteristic polynomial :math:`s^2 + 2\zeta\omega s
++ \omega^2`: the pitch rate carries the fast changes, the accelerometer and the speed the slow ones, with no window's
+lag. A constant offset :math:`b` of the pitch rate leaves :math:`2\zeta b / \omega` in the pitch. It starts at
+:math:`\hat v = v_x`, :math:`\hat\vartheta = 0` on the log's first usable sample, optionally with a faster bandwidth
+for a first span. :math:`\omega`, the start and where it is used were chosen by a written rule on training data
+(the thirty-ninth stage of :mod:`roadbank.tuning.real`). The recursion is compiled
+(:mod:`roadbank.estimators.kernels.attitude`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..constants import G
+from ..models.attitude import euler_pitch_rate, kinematic_roll
+from .kernels.attitude import C_GAP, C_G, C_TSTART, C_W, C_WSTART, C_ZETA, N_CFG, N_MEM, pitch_run
+
+#: the observer's damping (-)
+PITCH_ZETA = 0.7
+#: the longest gap (s) between usable samples across which the speed state is kept (after it, it restarts at the
+#: measured speed; the pitch is kept)
+PITCH_MAX_GAP_S = 1.0
+
+
+class PitchObserver:
+    """The pitch (rad, positive nose down) of a log with ``ax`` and a pitch rate ``q``, chunk by chunk (module
+    docstring).
+
+    Parameters
+    ----------
+    bandwidth : float
+        :math:`\\omega` (rad/s, > 0).
+    g : float, optional
+        Gravity (m/s^2).
+    start : tuple of float, optional
+        ``(bandwidth rad/s, span s)``: the bandwidth for the first ``span`` s after the first usable sample; None:
+        ``bandwidth`` throughout.
+    """
+
+    def __init__(self, bandwidth: float, g: float = G, start: tuple[float, float] | None = None):
+        w = float(bandwidth)
+        ws, span = (w, 0.0) if start is None else (float(start[0]), float(start[1]))
+        if not (math.isfinite(w) and w > 0 and math.isfinite(ws) and ws > 0 and span >= 0):
+            raise ValueError(f"pitch observer: bandwidths must be > 0 rad/s and the start's span >= 0 s, got "
+                             f"{bandwidth}, {start}")
+        self.bandwidth, self.start = w, start
+        self._cfg = np.zeros(N_CFG)
+        self._cfg[[C_W, C_ZETA, C_G, C_WSTART, C_TSTART, C_GAP]] = w, PITCH_ZETA, float(g), ws, span, PITCH_MAX_GAP_S
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the state: the next chunk starts a log."""
+        self._mem = np.zeros(N_MEM)
+
+    def pitch(self, t, vx, ax, q, ay, r, advance: int | None = None) -> np.ndarray:
+        """The pitch (rad; NaN at a sample with a non-finite input) at each sample of t (s), vx (m/s), ax (m/s^2),
+        q (rad/s), ay (m/s^2), r (rad/s); the state moves on by the first ``advance`` samples (default all: the
+        later ones, a lookahead, are estimated from a copy)."""
+        t, vx, ax = (np.ascontiguousarray(a, dtype=np.float64) for a in (t, vx, ax))
+        rate = np.ascontiguousarray(euler_pitch_rate(q, r, kinematic_roll(vx, ay, r, self._cfg[C_G])))
+        out = np.empty(len(t))
+        n = len(t) if advance is None else int(advance)
+        pitch_run(self._mem, self._cfg, t[:n], vx[:n], ax[:n], rate[:n], out[:n])
+        if n < len(t):
+            pitch_run(self._mem.copy(), self._cfg, t[n:], vx[n:], ax[n:], rate[n:], out[n:])
+        return out
