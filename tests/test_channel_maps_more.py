@@ -62,12 +62,12 @@ def _columns(name: str, unit: str = "m/s", speed_col: str = "VehSpd", steering: 
              mirrored: bool = False) -> dict:
     """The drive as a logger with its own names writes it: the speed in ``unit``; optionally a steering-wheel angle
     in deg (the kinematic one, ratio 16, wheelbase 2.7 m); ``mirrored``: ay, yaw rate and steering positive right.
-    The INS's roll rate in deg/s (the same about the forward axis in either convention) and its longitudinal
-    acceleration in g."""
+    The INS's roll rate in deg/s (the same about the forward axis in either convention), its longitudinal
+    acceleration in g and its pitch rate in deg/s (``mirrored``: positive nose up, as about a right axis)."""
     s = _signals(name).signals
     sign = -1.0 if mirrored else 1.0
     cols = {"timestamp": s.t, speed_col: s.vx / TO_SI[unit], "LatAcc": sign * s.ay, "YawRate": sign * s.r,
-            "RollRate": np.degrees(s.p), "LongAcc": s.ax / G}
+            "RollRate": np.degrees(s.p), "LongAcc": s.ax / G, "PitchRate": sign * np.degrees(s.q)}
     if steering:
         cols["SWA"] = sign * np.degrees(16.0 * 2.7 * s.r / np.maximum(s.vx, 2.0))
     return cols
@@ -110,13 +110,14 @@ yaw_rate = { column = "YawRate", unit = "rad/s" }
 """
 #: the drive's roll rate and longitudinal acceleration, for a map that reads them
 IMU = ('roll_rate = { column = "RollRate", unit = "deg/s", unbiased = true }\n'
-       'longitudinal_acceleration = { column = "LongAcc", unit = "g", unbiased = true }\n')
+       'longitudinal_acceleration = { column = "LongAcc", unit = "g", unbiased = true }\n'
+       'pitch_rate = { column = "PitchRate", unit = "deg/s", unbiased = true }\n')
 
 
 def test_map_without_steering_reads_and_estimates_as_the_kitti_drive(tmp_path):
     """A hand-written map with no steering channel is valid: the log reads with the steering angle NaN and
-    the other channels as the drive stores them (the roll rate given in deg/s, in rad/s; ax in g, in m/s^2; both
-    marked ``unbiased`` as the KITTI reader marks its INS's channels);
+    the other channels as the drive stores them (the roll and pitch rates given in deg/s, in rad/s; ax in g, in
+    m/s^2; all marked ``unbiased`` as the KITTI reader marks its INS's channels);
     `roadbank estimate` gives
     the drive's own estimate with the default estimator, and an estimator that reads the steering angle the same
     summary (no valid sample)."""
@@ -128,7 +129,7 @@ def test_map_without_steering_reads_and_estimates_as_the_kitti_drive(tmp_path):
     assert cmap.no_steering
     got, want = load_log(log_csv, channels=cmap), _signals(name)
     assert np.isnan(got.signals.delta_f).all()
-    for k in ("t", "vx", "ay", "r", "p", "ax"):
+    for k in ("t", "vx", "ay", "r", "p", "ax", "q"):
         np.testing.assert_allclose(getattr(got.signals, k), getattr(want.signals, k), rtol=1e-12, atol=1e-12)
     out_csv, theta_csv = _estimate([str(log_csv), "--channels", str(tmp_path / "map.toml"),
                                     "-o", str(tmp_path / "csv_out.csv")])
@@ -299,10 +300,10 @@ def test_a_mirrored_convention_is_assumed_iso_and_said_so(tmp_path):
 
 
 def test_a_map_says_which_channels_are_unbiased_and_refuses_it_elsewhere():
-    """``unbiased = true`` on the roll rate or ax of a hand-written map marks them (``ChannelMap.unbiased``, hence
+    """``unbiased = true`` on the roll rate, ax or pitch rate of a hand-written map marks them (``ChannelMap.unbiased``, hence
     ``Signals.unbiased``); on a required channel, or with another value, it is an error naming the channel."""
     cmap = channel_map_from_dict(tomllib.loads(HAND_MAP + IMU), "m.toml")
-    assert cmap.unbiased == {"p", "ax"}
+    assert cmap.unbiased == {"p", "ax", "q"}
     plain = channel_map_from_dict(tomllib.loads(HAND_MAP + IMU.replace(", unbiased = true", "")), "m.toml")
     assert plain.unbiased == frozenset()
     for bad in (HAND_MAP.replace('unit = "m/s^2" }', 'unit = "m/s^2", unbiased = true }'),

@@ -530,9 +530,9 @@ def test_a_short_kitti_log_gets_the_gyro_and_the_same_channels_from_a_csv_are_ju
     from roadbank.tuning.real import design_settings
     from roadbank.vehicle import log_conditions
     s = load_kitti_oxts(KITTI).signals
-    assert s.fixed == {"p", "ax"}
+    assert s.fixed == {"p", "ax", "q"}
     short = s[:int(np.searchsorted(s.t, s.t[0] + 8.0))]
-    assert short.fixed == {"p", "ax"}
+    assert short.fixed == {"p", "ax", "q"}
     cond = log_conditions(short)
     assert cond["log_roll_rate"] == cond["log_ax"] == 1.0
     est = for_log("kinematic-pif", short)
@@ -584,11 +584,11 @@ def test_estimate_on_a_ten_second_kitti_drive_uses_its_roll_rate(tmp_path):
     log = load_kitti_oxts(drive)
     s = log.signals
     assert len(s) == n and log_conditions(dataclasses.replace(s, fixed=frozenset()))["log_roll_rate"] is None
-    assert s.unbiased == {"p", "ax"}
+    assert s.unbiased == {"p", "ax", "q"}
     res = CliRunner().invoke(main, ["estimate", str(drive), "-o", str(tmp_path / "out.csv")])
     assert res.exit_code == 0, res.output
-    assert ("kinematic-gyro (the log has a roll rate, free of offset (an INS's); corrected for the grade by its ax)"
-            in res.output)
+    assert ("kinematic-gyro (the log has a roll rate, free of offset (an INS's); corrected for the grade by its ax and "
+            "pitch rate)" in res.output)
     theta = pd.read_csv(tmp_path / "out.csv")["kinematic-pif.theta"].to_numpy()       # rad
     est = for_log("kinematic-pif", s)
     assert (est.cutoff, est.bias_tau) == (UNBIASED_GYRO_CUTOFF_HZ, UNBIASED_GYRO_BIAS_TAU_S)

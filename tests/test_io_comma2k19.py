@@ -123,8 +123,8 @@ def test_real_segment_is_the_documented_mapping_on_the_common_grid():
 @needs_data
 def test_damaged_stamps_are_repaired_as_in_any_log(tmp_path):
     """Two gyro samples with their stamps swapped: the time-stamp repair of every format puts them back
-    in order, flags them not valid and says so, naming the file and the channel. The gyro gives two channels
-    on its one clock (yaw and roll rate), each repaired and named."""
+    in order, flags them not valid and says so, naming the file and the channel. The gyro gives three channels
+    on its one clock (yaw, roll and pitch rate), each repaired and named."""
     import shutil
     seg = tmp_path / "seg"
     shutil.copytree(SEGMENT, seg)
@@ -134,8 +134,8 @@ def test_damaged_stamps_are_repaired_as_in_any_log(tmp_path):
     with open(f, "wb") as fh:
         np.save(fh, t)
     log = load_log(seg)
-    assert log.time_repairs["swapped"] == 2 and log.time_repairs["flagged"] == 4
-    for role, axis in (("yaw_rate", 2), ("roll_rate", 0)):
+    assert log.time_repairs["swapped"] == 3 and log.time_repairs["flagged"] == 6
+    for role, axis in (("yaw_rate", 2), ("roll_rate", 0), ("pitch_rate", 1)):
         assert any(f"channel '{role}' (column 'processed_log/IMU/gyro[{axis}]'): time stamps repaired: 1 swapped "
                    "pair" in w for w in log.warnings)
     assert len(log) == len(load_log(SEGMENT))

@@ -178,3 +178,36 @@ def test_the_thirty_ninth_stage_reads_the_pitch_from_an_unbiased_pitch_rate():
     assert obj[("always", 0.5, (3.0, 3.0))] == best
     assert obj[chosen] <= best + real.TIE_DEG < obj[("window",)]
     assert all(v < obj[("window",)] for k, v in obj.items() if k[1:2] == (0.5,))
+
+
+@needs_kitti
+def test_the_fortieth_stage_starts_the_observer_at_three_radians_per_second_for_three_seconds():
+    """The rule (tuning.real.choose_pitch_start): none is the lowest, the 3 rad/s start for 3 s within the tie of it
+    and chosen by the tie order (a start over none: a zero pitch is a guess), the 6 s span outside the tie."""
+    from roadbank.estimators.gyro import UNBIASED_PITCH_START
+    from roadbank.tuning import real
+    logs = real.training_logs(DATA, roll_rate=True, pitch_rate=True)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, obj = real.choose_pitch_start(logs)
+    assert chosen == UNBIASED_PITCH_START == (3.0, 3.0)
+    best = min(obj.values())
+    assert obj[None] == best and obj[chosen] <= best + real.TIE_DEG < obj[(3.0, 6.0)]
+
+
+@needs_kitti
+def test_a_drive_that_pulls_away_turning_on_a_grade_keeps_its_start():
+    """Validation drive 0070 pulls away turning at 0.66 rad/s on a 3 deg grade: with the observer started at zero
+    pitch, its first 10 s scored (vx >= 5 m/s after 5 s) leave the INS roll by more than twice what they leave with
+    the fortieth stage's start."""
+    from roadbank.estimators.gyro import UNBIASED_GYRO_BIAS_TAU_S, UNBIASED_GYRO_CUTOFF_HZ, UNBIASED_PITCH_START
+    from roadbank.io.kitti import load_kitti_oxts
+    log = load_kitti_oxts(KITTI)
+    s, ref = log.signals, log.reference_roll
+    m = (s.vx >= 5) & (s.t >= s.t[0] + 5) & (s.t < s.t[0] + 15)
+
+    def rms(start):
+        est = KinematicGyro(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S,
+                            pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=start)
+        return float(np.degrees(np.sqrt(np.mean((est.run(s).theta[m] - ref[m]) ** 2))))
+    assert rms(None) > 2 * rms(UNBIASED_PITCH_START)

@@ -132,7 +132,7 @@ def test_estimate_says_what_each_log_was_designed_for(tmp_path, suv_drives):
         text = CliRunner().invoke(main, ["estimate", str(kitti), "-o", str(tmp_path / "k.csv")])
         assert "sedan (fitted to the log)" in text.stderr
         assert ("loud, so kinematic-pif is kinematic-gyro (the log has a roll rate, free of offset (an INS's); "
-                "corrected for the grade by its ax)" in text.stderr)
+                "corrected for the grade by its ax and pitch rate)" in text.stderr)
 
 
 @pytest.mark.slow

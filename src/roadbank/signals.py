@@ -60,9 +60,9 @@ class Signals:
         otherwise. With ``ax``, the gyro-aided estimators read the pitch from both (:mod:`roadbank.estimators.pitch`).
 
     fixed : frozenset of str, optional
-        The optional channels (``"p"``, ``"ax"``, ``"q"``) whose axis, sign and unit the log's format itself documents (the
-        readers of KITTI's OXTS files and of comma2k19 set it; a user's channel map does not): the design takes them
-        as they are, without the checks that guard a map's channels (:func:`roadbank.vehicle.log_conditions`).
+        The optional channels (``"p"``, ``"ax"``, ``"q"``) whose axis, sign and unit the log's format itself documents
+        (the readers of KITTI's OXTS files and of comma2k19 set it; a user's channel map does not): the design takes
+        them as they are, without the checks that guard a map's channels (:func:`roadbank.vehicle.log_conditions`).
         Only channels the log carries stay in it (``dataclasses.replace(s, p=None)`` drops ``"p"``); slices keep
         it; :func:`concat_signals` keeps what every part has.
     unbiased : frozenset of str, optional

@@ -58,8 +58,9 @@ angle is used when its column exists in the file); a map with neither describes 
 one (an IMU or INS log): it is read with the steering angle absent (``delta_f`` NaN), as a KITTI
 drive is (:attr:`ChannelMap.no_steering`), which the default estimator does not read. ``invert = true``
 flips a channel's sign on top of the convention, for sensors whose sign is odd. ``unbiased = true`` on
-``roll_rate``, ``longitudinal_acceleration`` or ``pitch_rate`` says the channel is an INS's output whose offset its own Kalman filter
-has removed (:attr:`ChannelMap.unbiased`, ``Signals.unbiased``); on any other channel it is an error.
+``roll_rate``, ``longitudinal_acceleration`` or ``pitch_rate`` says the channel is an INS's output whose offset its
+own Kalman filter has removed (:attr:`ChannelMap.unbiased`, ``Signals.unbiased``); on any other channel it is an
+error.
 All conversion to SI and ISO 8855 happens here, at the edge; inside roadbank
 everything is SI/ISO.
 

@@ -191,8 +191,8 @@ def column(name: str) -> str:
 
 def channel_map() -> ChannelMap:
     """The fixed channel map of a KITTI drive: SI and ISO 8855 as stored, no steering, the frames' own clock; its
-    roll rate, ``ax`` and pitch rate free of offset (``Signals.unbiased``: the RT3003 INS applies its Kalman filter's gyro and
-    accelerometer bias corrections to the rates and accelerations it outputs, its manual)."""
+    roll rate, ``ax`` and pitch rate free of offset (``Signals.unbiased``: the RT3003 INS applies its Kalman filter's
+    gyro and accelerometer bias corrections to the rates and accelerations it outputs, its manual)."""
     ch = {"time": ChannelSpec("time", TIME, "s")}
     for role, (name, unit) in ROLES.items():
         ch[role] = ChannelSpec(role, column(name), unit)

@@ -506,6 +506,7 @@ from ..constants import G
 from ..vehicle import conditions
 from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
 from ..estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, UNBIASED_GYRO_BIAS_TAU_S,
+                              UNBIASED_PITCH_BANDWIDTH,
                                UNBIASED_GYRO_CUTOFF_HZ, KinematicGyro, KinematicGyroSmoother)
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
@@ -1299,6 +1300,19 @@ def choose_pitch_rate(logs, bandwidths=PITCH_BANDWIDTHS, starts=PITCH_STARTS, le
         obj[("unbiased", w, start)] = float(0.5 * (shipped + free))
         obj[("always", w, start)] = float(0.5 * (general(**pitch) + free))
     return lowest_tied(obj, lambda k: (k != ("window",), k[0] != "unbiased", k[2] is not None, k[1])), obj
+
+
+def choose_pitch_start(logs, starts=PITCH_START_CANDIDATES, lengths=SHORT_PIECES_S):
+    """The fortieth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate, ``ax`` and pitch rate). Returns ``(start, {start: objective deg})``, a start ``(bandwidth rad/s, span s)`` or
+    None."""
+    cut = [whole_and_pieces(one, lengths) for one in gyro_sets(logs)]
+    unbiased = dict(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S)
+    shipped = float(np.mean([lengths_objective(fixed(KinematicGyro(pitch_bandwidth=0.0)), parts) for parts in cut]))
+    obj = {st: float(0.5 * (shipped + lengths_objective(
+        fixed(KinematicGyro(**unbiased, pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=st)), cut[0])))
+        for st in starts}
+    return lowest_tied(obj, lambda st: (st is None, () if st is None else (st[1], st[0]))), obj
 
 
 def whole_and_pieces(logs, lengths=SHORT_PIECES_S) -> list:

@@ -25,7 +25,8 @@ from .sensors import SensorSpec
 
 __all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "QUIET_FILTER", "QUIET_MODELS", "GYRO_FILTER",
            "GYRO_MODELS", "design_span", "has_design_span", "log_conditions", "noise_densities", "is_quiet",
-           "quiet_noise_ratio", "roll_rate_slope", "roll_rate_usable", "ax_slope", "pitch_rate_slope", "esp_conditions", "make_estimator"]
+           "quiet_noise_ratio", "roll_rate_slope", "roll_rate_usable", "ax_slope", "pitch_rate_slope", "esp_conditions",
+           "make_estimator"]
 
 
 #: seconds of driving (``vx >= v_min``) at the start of a log on which :func:`log_conditions` measures it (s)
@@ -504,7 +505,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         How the log's pitch rate, documented free of offset, follows the pitch its ``ax`` shows
         (:func:`pitch_rate_slope`; None: it has none, or one not so documented). Where it does
         (:func:`roll_rate_usable`) and the grade is corrected, that filter reads the pitch from the pitch rate
-        (``pitch_bandwidth`` :data:`roadbank.estimators.gyro.UNBIASED_PITCH_BANDWIDTH`, the thirty-ninth stage).
+        (``pitch_bandwidth`` :data:`roadbank.estimators.gyro.UNBIASED_PITCH_BANDWIDTH` and ``pitch_start``
+        ``UNBIASED_PITCH_START``, the thirty-ninth and fortieth stages).
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
@@ -541,7 +543,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
                 options = {"cutoff": estimators.gyro.UNBIASED_GYRO_CUTOFF_HZ,
                            "bias_tau": estimators.gyro.UNBIASED_GYRO_BIAS_TAU_S, **options}
             if window > 0 and roll_rate_usable(log_pitch_rate):
-                options = {"pitch_bandwidth": estimators.gyro.UNBIASED_PITCH_BANDWIDTH, **options}
+                options = {"pitch_bandwidth": estimators.gyro.UNBIASED_PITCH_BANDWIDTH,
+                           "pitch_start": estimators.gyro.UNBIASED_PITCH_START, **options}
         elif lead_samples is not None:
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
             if log_diff_noise is not None and math.isfinite(log_diff_noise) and log_diff_noise > 0:
