@@ -104,6 +104,15 @@ e.inner.run(s); e.inner.step(0.0, 20.0, 0.5, 0.01, 0.002)   # the inner (lpv) ke
 def work():
     e.correct(s); e.reset(); e.step(0.0, 20.0, 0.5, 0.01, 0.002)
 """,
+    "attitude": """
+import numpy as np
+from roadbank.estimators.pitch import PitchObserver
+n = 60
+t, z = np.arange(n) * 0.01, np.zeros(n)
+obs = PitchObserver(0.5, start=(3.0, 3.0))
+def work():
+    obs.reset(); obs.pitch(t, np.full(n, 20.0), z, z, z, z)
+""",
     "smooth": """
 import numpy as np
 from roadbank import Signals, estimators

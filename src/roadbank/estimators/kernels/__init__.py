@@ -10,7 +10,9 @@ its offset functions, compiled). One module per family, over shared parts:
 * :mod:`.lpv` — the one observer update (:func:`~.lpv.observer_update`, with
   :func:`~.lpv.fixed3` its three-state fixed-rate form) and the ``lpv`` family;
 * :mod:`.adaptive`, :mod:`.gated`, :mod:`.dfc`, :mod:`.riccati`, :mod:`.smoother`;
-* :mod:`.offsets` — the online sensor-offset learner that corrects an estimator's inputs.
+* :mod:`.offsets` — the online sensor-offset learner that corrects an estimator's inputs;
+* :mod:`.attitude` — the pitch observer that corrects the gyro-aided filter's roll rate for the grade
+  (:mod:`roadbank.estimators.pitch`).
 
 The families:
 
