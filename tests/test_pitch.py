@@ -211,3 +211,23 @@ def test_a_drive_that_pulls_away_turning_on_a_grade_keeps_its_start():
                             pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=start)
         return float(np.degrees(np.sqrt(np.mean((est.run(s).theta[m] - ref[m]) ** 2))))
     assert rms(None) > 2 * rms(UNBIASED_PITCH_START)
+
+
+def test_a_column_named_like_a_pitch_rate_is_guessed_as_one_never_unbiased():
+    """``roadbank channels``' guess: ``PitchRate`` in deg/s by its range (99th percentile above 0.5), ``gyro_y`` in
+    rad/s; the map it writes reads back with the pitch rate and without ``unbiased``."""
+    import tomllib
+
+    from roadbank.io.channels import channel_map_from_dict
+    from roadbank.io.guess import channel_map_toml, guess_channels
+    n = 500
+    t = np.arange(n) / 50.0
+    r = 0.2 * np.sin(t)
+    data = {"time": t, "speed": np.full(n, 15.0), "lat_acc": 15.0 * r, "yaw_rate": r,
+            "PitchRate": 3.0 * np.sin(2 * t), "gyro_y": 0.05 * np.sin(2 * t)}
+    for col, unit in (("PitchRate", "deg/s"), ("gyro_y", "rad/s")):
+        names = ["time", "speed", "lat_acc", "yaw_rate", col]
+        got = {g.role: g for g in guess_channels(names, {k: data[k] for k in names})}
+        assert got["pitch_rate"].column == col and got["pitch_rate"].unit == unit
+        cmap = channel_map_from_dict(tomllib.loads(channel_map_toml(list(got.values()), "test")), "m.toml")
+        assert "pitch_rate" in cmap.channels and cmap.unbiased == frozenset()
