@@ -231,3 +231,19 @@ def test_a_column_named_like_a_pitch_rate_is_guessed_as_one_never_unbiased():
         assert got["pitch_rate"].column == col and got["pitch_rate"].unit == unit
         cmap = channel_map_from_dict(tomllib.loads(channel_map_toml(list(got.values()), "test")), "m.toml")
         assert "pitch_rate" in cmap.channels and cmap.unbiased == frozenset()
+
+
+def test_a_pitch_steeper_than_a_road_is_a_fault_and_leaves_the_roll_rate_uncorrected():
+    """An ``ax`` that reads 0.5 g at rest (a fault: 30 deg) drives the observer past MAX_SIN_PITCH: NaN there, and the
+    gyro filter reads p as measured there."""
+    n = 400
+    t = np.arange(n) / 20.0
+    z = np.zeros(n)
+    got = PitchObserver(0.5).pitch(t, z, np.full(n, -0.5 * G), z, z, z)
+    assert np.isnan(got[-1]) and np.isfinite(got[0])
+    s = Signals(t, np.full(n, 10.0), z, np.full(n, 0.1), np.full(n, np.nan), p=np.full(n, 0.01),
+                ax=np.full(n, -0.5 * G), q=z)
+    read = KinematicGyro(pitch_bandwidth=0.5).grade.correct(s).p
+    late = t > 10.0
+    np.testing.assert_array_equal(read[late], s.p[late])
+    assert np.all(read[1:20] != s.p[1:20])          # corrected while the pitch was still a road's

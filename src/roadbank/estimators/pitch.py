@@ -26,7 +26,7 @@ import math
 import numpy as np
 
 from ..constants import G
-from ..models.attitude import euler_pitch_rate, kinematic_roll
+from ..models.attitude import MAX_SIN_PITCH, euler_pitch_rate, kinematic_roll
 from .kernels.attitude import C_GAP, C_G, C_TSTART, C_W, C_WSTART, C_ZETA, N_CFG, N_MEM, pitch_run
 
 #: the observer's damping (-)
@@ -67,9 +67,10 @@ class PitchObserver:
         self._mem = np.zeros(N_MEM)
 
     def pitch(self, t, vx, ax, q, ay, r, advance: int | None = None) -> np.ndarray:
-        """The pitch (rad; NaN at a sample with a non-finite input) at each sample of t (s), vx (m/s), ax (m/s^2),
-        q (rad/s), ay (m/s^2), r (rad/s); the state moves on by the first ``advance`` samples (default all: the
-        later ones, a lookahead, are estimated from a copy)."""
+        """The pitch (rad; NaN at a sample with a non-finite input, or steeper than
+        :data:`~roadbank.models.attitude.MAX_SIN_PITCH`: the roll rate is then not corrected) at each sample of t (s),
+        vx (m/s), ax (m/s^2), q (rad/s), ay (m/s^2), r (rad/s); the state moves on by the first ``advance`` samples
+        (default all: the later ones, a lookahead, are estimated from a copy)."""
         t, vx, ax = (np.ascontiguousarray(a, dtype=np.float64) for a in (t, vx, ax))
         rate = np.ascontiguousarray(euler_pitch_rate(q, r, kinematic_roll(vx, ay, r, self._cfg[C_G])))
         out = np.empty(len(t))
@@ -77,4 +78,5 @@ class PitchObserver:
         pitch_run(self._mem, self._cfg, t[:n], vx[:n], ax[:n], rate[:n], out[:n])
         if n < len(t):
             pitch_run(self._mem.copy(), self._cfg, t[n:], vx[n:], ax[n:], rate[n:], out[n:])
+        out[np.abs(np.sin(out)) > MAX_SIN_PITCH] = np.nan       # steeper than a road: a fault, not a pitch
         return out
