@@ -301,7 +301,8 @@ def test_a_mirrored_convention_is_assumed_iso_and_said_so(tmp_path):
 
 def test_a_map_says_which_channels_are_unbiased_and_refuses_it_elsewhere():
     """``unbiased = true`` on the roll rate, ax or pitch rate of a hand-written map marks them
-    (``ChannelMap.unbiased``, hence ``Signals.unbiased``); on a required channel, or with another value, it is an error naming the channel."""
+    (``ChannelMap.unbiased``, hence ``Signals.unbiased``); on a required channel, or with another value, it is an
+    error naming the channel."""
     cmap = channel_map_from_dict(tomllib.loads(HAND_MAP + IMU), "m.toml")
     assert cmap.unbiased == {"p", "ax", "q"}
     plain = channel_map_from_dict(tomllib.loads(HAND_MAP + IMU.replace(", unbiased = true", "")), "m.toml")
