@@ -247,3 +247,20 @@ def test_a_pitch_steeper_than_a_road_is_a_fault_and_leaves_the_roll_rate_uncorre
     late = t > 10.0
     np.testing.assert_array_equal(read[late], s.p[late])
     assert np.all(read[1:20] != s.p[1:20])          # corrected while the pitch was still a road's
+
+
+@needs_kitti
+def test_the_offline_smoother_in_chunks_with_the_rest_as_lookahead_is_the_one_run_with_the_observer():
+    """roadbank map's chunks: each chunk with the rest of the log as lookahead gives the one run, the observer's
+    state moving on by each chunk alone (its lookahead estimated from a copy)."""
+    from roadbank.estimators import KinematicGyroSmoother
+    from roadbank.estimators.gyro import UNBIASED_PITCH_START
+    from roadbank.io.kitti import load_kitti_oxts
+    s = load_kitti_oxts(KITTI).signals
+    est = KinematicGyroSmoother(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=UNBIASED_PITCH_START)
+    whole = est.run(s).w
+    assert np.max(np.abs(whole - KinematicGyroSmoother().run(s).w)) > 1e-5       # the observer's pitch is read
+    est.reset()
+    parts = [est.run(s[a:a + 100], reset=False, lookahead=s[a + 100:] if a + 100 < len(s) else None).w.copy()
+             for a in range(0, len(s), 100)]
+    np.testing.assert_allclose(np.concatenate(parts), whole, rtol=0, atol=1e-10)
