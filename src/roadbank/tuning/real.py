@@ -486,6 +486,13 @@ of none): the observer's start. A zero pitch is a guess, not a reading. Candidat
 :data:`~roadbank.estimators.gyro.UNBIASED_PITCH_BANDWIDTH` for an unbiased pitch rate. Sets and objective: the
 thirty-ninth stage's. The lowest wins; ties within :data:`TIE_DEG` go to a start over none (the reason above), then to
 the shorter span, then to the lower start bandwidth. Neither the KITTI validation drives nor comma2k19 take part.
+
+The forty-first stage (:func:`choose_pitch_bandwidth`; rule written 2026-12-06 before any of its candidates ran,
+after the thirty-ninth chose the lowest bandwidth of its grid, 0.5 rad/s, whose edge it is): the observer's bandwidth
+below that edge. Candidates: :data:`PITCH_BANDWIDTH_CANDIDATES` (0.25, 0.35, 0.5 rad/s), each with the fortieth
+stage's start, for an unbiased pitch rate. Sets and objective: the thirty-ninth stage's. The lowest wins; ties within
+:data:`TIE_DEG` go to the shipped 0.5 rad/s, then to the higher bandwidth. Neither the KITTI validation drives nor
+comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -563,6 +570,8 @@ PITCH_BANDWIDTHS = (0.5, 1.0, 2.0)
 PITCH_STARTS = (None, (3.0, 3.0))
 #: the fortieth stage's candidate starts of the pitch observer ((bandwidth rad/s, span s); None: none)
 PITCH_START_CANDIDATES = (None, (3.0, 3.0), (3.0, 6.0), (6.0, 3.0))
+#: the forty-first stage's candidate bandwidths (rad/s) of the pitch observer
+PITCH_BANDWIDTH_CANDIDATES = (0.25, 0.35, 0.5)
 #: candidate cut-offs (Hz) and feed-forward gains (-)
 CUTOFFS_HZ = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.8)
 KAPPAS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4)
