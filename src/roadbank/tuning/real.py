@@ -513,7 +513,7 @@ from ..constants import G
 from ..vehicle import conditions
 from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
 from ..estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, UNBIASED_GYRO_BIAS_TAU_S,
-                              UNBIASED_PITCH_BANDWIDTH,
+                              UNBIASED_PITCH_START,
                                UNBIASED_GYRO_CUTOFF_HZ, KinematicGyro, KinematicGyroSmoother)
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
@@ -1311,17 +1311,32 @@ def choose_pitch_rate(logs, bandwidths=PITCH_BANDWIDTHS, starts=PITCH_STARTS, le
     return lowest_tied(obj, lambda k: (k != ("window",), k[0] != "unbiased", k[2] is not None, k[1])), obj
 
 
+def unbiased_pitch_objectives(logs, candidates: dict, lengths=SHORT_PIECES_S) -> dict:
+    """``{key: objective deg}`` of the fortieth and forty-first stages: for each of ``candidates`` (key -> the
+    ``KinematicGyro`` pitch options of the observer for an unbiased pitch rate), the thirty-ninth stage's objective:
+    the mean of the window's objective on the thirty-fourth stage's sets (a pitch rate with an offset is not read) and
+    the unbiased filter's with those options on the training ``logs`` as read, each whole and in pieces."""
+    cut = [whole_and_pieces(one, lengths) for one in gyro_sets(logs)]
+    unbiased = dict(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S)
+    shipped = float(np.mean([lengths_objective(fixed(KinematicGyro(pitch_bandwidth=0.0)), parts) for parts in cut]))
+    return {key: float(0.5 * (shipped + lengths_objective(fixed(KinematicGyro(**unbiased, **pitch)), cut[0])))
+            for key, pitch in candidates.items()}
+
+
 def choose_pitch_start(logs, starts=PITCH_START_CANDIDATES, lengths=SHORT_PIECES_S):
     """The fortieth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
     rate, ``ax`` and pitch rate). Returns ``(start, {start: objective deg})``, a start ``(bandwidth rad/s, span s)`` or
     None."""
-    cut = [whole_and_pieces(one, lengths) for one in gyro_sets(logs)]
-    unbiased = dict(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S)
-    shipped = float(np.mean([lengths_objective(fixed(KinematicGyro(pitch_bandwidth=0.0)), parts) for parts in cut]))
-    obj = {st: float(0.5 * (shipped + lengths_objective(
-        fixed(KinematicGyro(**unbiased, pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=st)), cut[0])))
-        for st in starts}
+    obj = unbiased_pitch_objectives(logs, {st: dict(pitch_bandwidth=0.5, pitch_start=st) for st in starts}, lengths)
     return lowest_tied(obj, lambda st: (st is None, () if st is None else (st[1], st[0]))), obj
+
+
+def choose_pitch_bandwidth(logs, bandwidths=PITCH_BANDWIDTH_CANDIDATES, lengths=SHORT_PIECES_S):
+    """The forty-first stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate, ``ax`` and pitch rate). Returns ``(bandwidth rad/s, {bandwidth: objective deg})``."""
+    obj = unbiased_pitch_objectives(
+        logs, {w: dict(pitch_bandwidth=w, pitch_start=UNBIASED_PITCH_START) for w in bandwidths}, lengths)
+    return lowest_tied(obj, lambda w: (w != 0.5, -w)), obj
 
 
 def whole_and_pieces(logs, lengths=SHORT_PIECES_S) -> list:
