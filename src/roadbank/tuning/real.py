@@ -493,6 +493,17 @@ below that edge. Candidates: :data:`PITCH_BANDWIDTH_CANDIDATES` (0.25, 0.35, 0.5
 stage's start, for an unbiased pitch rate. Sets and objective: the thirty-ninth stage's. The lowest wins; ties within
 :data:`TIE_DEG` go to the shipped 0.5 rad/s, then to the higher bandwidth. Neither the KITTI validation drives nor
 comma2k19 take part.
+
+The forty-second stage (:func:`choose_biased_pitch_rate`; rule written 2026-12-06 before any of its candidates ran,
+after the forty-first): a pitch rate not documented free of offset (a MEMS gyro: a phone, an IMU). A constant offset
+``b`` of it leaves :math:`2\zeta b/\omega` in the observer's pitch (0.84 deg for 0.3 deg/s at 0.5 rad/s; a phone's
+1 deg/s, 2.8 deg), so the thirty-ninth stage read none. Candidates: none read (shipped); the observer with the
+fortieth stage's start and an offset state learnt in ``T_q`` (:data:`PITCH_OFFSET_TAUS`: none, 20, 60 s; the error's
+characteristic polynomial :math:`(s + 1/T_q)(s^2 + 2\zeta\omega s + \omega^2)`), for a pitch rate with an offset
+only (an unbiased one keeps the shipped observer). Sets and objective: the thirty-ninth stage's, its offset sets
+carrying +-0.3 deg/s on ``q`` as on ``p`` and now also +-1 deg/s on ``q`` alone (a phone's), the mean over the five
+general sets. The lowest wins; ties within :data:`TIE_DEG` go to none read, then to the longer ``T_q``. Neither the
+KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -572,6 +583,10 @@ PITCH_STARTS = (None, (3.0, 3.0))
 PITCH_START_CANDIDATES = (None, (3.0, 3.0), (3.0, 6.0), (6.0, 3.0))
 #: the forty-first stage's candidate bandwidths (rad/s) of the pitch observer
 PITCH_BANDWIDTH_CANDIDATES = (0.25, 0.35, 0.5)
+#: the forty-second stage's candidate offset time constants (s) of a pitch rate with an offset (None: no offset
+#: state) and the offsets (deg/s) of its extra sets, on q alone
+PITCH_OFFSET_TAUS = (None, 20.0, 60.0)
+PITCH_PHONE_OFFSET_DEG = 1.0
 #: candidate cut-offs (Hz) and feed-forward gains (-)
 CUTOFFS_HZ = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.8)
 KAPPAS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4)
