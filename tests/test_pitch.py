@@ -278,3 +278,30 @@ def test_the_forty_first_stage_keeps_the_bandwidth_below_the_grid_edge_within_th
     assert chosen == UNBIASED_PITCH_BANDWIDTH == 0.5
     assert min(obj.values()) == obj[0.25] and obj[0.5] <= obj[0.25] + real.TIE_DEG
     assert obj[0.25] < obj[0.35] < obj[0.5]
+
+
+def test_with_an_offset_state_a_constant_offset_of_the_pitch_rate_is_learnt_and_leaves_no_pitch():
+    """The same straight, level drive with q = b: with T_q = 20 s the offset state converges to b and the pitch to 0
+    (the error's poles (s + 1/T_q)(s^2 + 2 zeta omega s + omega^2): after 10 T_q, e^-10 of the start's error)."""
+    n, rate, b = 10000, 50.0, math.radians(0.3)
+    t = np.arange(n) / rate
+    z = np.zeros(n)
+    obs = PitchObserver(0.5, offset_tau=20.0)
+    got = obs.pitch(t, np.full(n, 20.0), z, np.full(n, b), z, z)
+    assert obs.offset == pytest.approx(b, rel=1e-3) and abs(got[-1]) < 1e-3 * b
+    with pytest.raises(ValueError, match="offset_tau"):
+        PitchObserver(0.5, offset_tau=0.0)
+
+
+@needs_kitti
+def test_the_forty_second_stage_reads_no_pitch_rate_with_an_offset():
+    """The rule (tuning.real.choose_biased_pitch_rate): on the five general sets (+-0.3 deg/s on p and q, +-1 deg/s on
+    q alone) not reading a pitch rate with an offset is the lowest; the offset state (20 s) beats the observer
+    without one."""
+    from roadbank.tuning import real
+    logs = real.training_logs(DATA, roll_rate=True, pitch_rate=True)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, obj = real.choose_biased_pitch_rate(logs)
+    assert chosen == "none" and min(obj.values()) == obj["none"]
+    assert obj[20.0] < obj[60.0] < obj[None]

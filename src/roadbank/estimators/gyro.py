@@ -234,6 +234,9 @@ class KinematicGyro(ScheduledObserver):
         0: the pitch rate is not read. Default :data:`PITCH_BANDWIDTH`.
     pitch_start : tuple of float, optional
         That observer's faster start, ``(bandwidth rad/s, span s)``; None: none. Default :data:`PITCH_START`.
+    pitch_offset_tau : float, optional
+        That observer's offset state of the pitch rate, learnt in that time constant (s, > 0); None (default): none
+        (a pitch rate free of offset).
     start_hold : float, optional
         Seconds (>= 0) after the log's first usable sample during which the offset state is held at zero, so that
         it does not learn the start's error (the first kinematic sample, taken as the state, is as noisy as any);
@@ -265,7 +268,7 @@ class KinematicGyro(ScheduledObserver):
 
     def __init__(self, params=None, *, cutoff=None, bias_tau=None, grade_window=None, order=None, sideslip=None,
                  start_hold=None, start_span=None, start_offset=None, grade_first_span=None, pitch_bandwidth=None,
-                 pitch_start=(), **kw):
+                 pitch_start=(), pitch_offset_tau=None, **kw):
         self.cutoff = float(GYRO_CUTOFF_HZ if cutoff is None else cutoff)
         self.start_hold = float(GYRO_START_HOLD_S if start_hold is None else start_hold)
         if not (np.isfinite(self.start_hold) and self.start_hold >= 0):
@@ -303,7 +306,8 @@ class KinematicGyro(ScheduledObserver):
             raise ValueError(f"{self.name}: pitch_bandwidth must be >= 0 rad/s, got {pitch_bandwidth}")
         self.pitch_start = PITCH_START if pitch_start == () else pitch_start
         super().__init__(params, **{"max_gap": GYRO_MAX_GAP_S, **kw})
-        observer = (PitchObserver(self.pitch_bandwidth, self.params.g, self.pitch_start)
+        self.pitch_offset_tau = pitch_offset_tau
+        observer = (PitchObserver(self.pitch_bandwidth, self.params.g, self.pitch_start, pitch_offset_tau)
                     if self.pitch_bandwidth > 0 else None)
         self.grade = GradeCarry(window, self.params.g, first_span, observer)
 

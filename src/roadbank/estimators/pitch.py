@@ -27,7 +27,7 @@ import numpy as np
 
 from ..constants import G
 from ..models.attitude import MAX_SIN_PITCH, euler_pitch_rate, kinematic_roll
-from .kernels.attitude import C_GAP, C_G, C_TSTART, C_W, C_WSTART, C_ZETA, N_CFG, N_MEM, pitch_run
+from .kernels.attitude import C_GAP, C_G, C_TQ, C_TSTART, C_W, C_WSTART, C_ZETA, M_B, N_CFG, N_MEM, pitch_run
 
 #: the observer's damping (-)
 PITCH_ZETA = 0.7
@@ -37,30 +37,44 @@ PITCH_MAX_GAP_S = 1.0
 
 
 class PitchObserver:
-    """The pitch (rad, positive nose down) of a log with ``ax`` and a pitch rate ``q``, chunk by chunk (module
+    r"""The pitch (rad, positive nose down) of a log with ``ax`` and a pitch rate ``q``, chunk by chunk (module
     docstring).
 
     Parameters
     ----------
     bandwidth : float
-        :math:`\\omega` (rad/s, > 0).
+        :math:`\omega` (rad/s, > 0).
     g : float, optional
         Gravity (m/s^2).
     start : tuple of float, optional
         ``(bandwidth rad/s, span s)``: the bandwidth for the first ``span`` s after the first usable sample; None:
         ``bandwidth`` throughout.
+    offset_tau : float, optional
+        :math:`T_q` (s, > 0): the pitch rate's offset is a state, learnt with that time constant (the error's poles at
+        :math:`(s + 1/T_q)(s^2 + 2\zeta\omega s + \omega^2)`; :mod:`roadbank.estimators.kernels.attitude`); None: no
+        offset state.
     """
 
-    def __init__(self, bandwidth: float, g: float = G, start: tuple[float, float] | None = None):
+    def __init__(self, bandwidth: float, g: float = G, start: tuple[float, float] | None = None,
+                 offset_tau: float | None = None):
         w = float(bandwidth)
         ws, span = (w, 0.0) if start is None else (float(start[0]), float(start[1]))
+        tq = 0.0 if offset_tau is None else float(offset_tau)
         if not (math.isfinite(w) and w > 0 and math.isfinite(ws) and ws > 0 and span >= 0):
             raise ValueError(f"pitch observer: bandwidths must be > 0 rad/s and the start's span >= 0 s, got "
                              f"{bandwidth}, {start}")
-        self.bandwidth, self.start = w, start
+        if not (math.isfinite(tq) and (offset_tau is None or tq > 0)):
+            raise ValueError(f"pitch observer: offset_tau must be > 0 s or None, got {offset_tau}")
+        self.bandwidth, self.start, self.offset_tau = w, start, offset_tau
         self._cfg = np.zeros(N_CFG)
-        self._cfg[[C_W, C_ZETA, C_G, C_WSTART, C_TSTART, C_GAP]] = w, PITCH_ZETA, float(g), ws, span, PITCH_MAX_GAP_S
+        self._cfg[[C_W, C_ZETA, C_G, C_WSTART, C_TSTART, C_GAP, C_TQ]] = (w, PITCH_ZETA, float(g), ws, span,
+                                                                          PITCH_MAX_GAP_S, tq)
         self.reset()
+
+    @property
+    def offset(self) -> float:
+        """The pitch rate's offset learnt so far (rad/s; 0 without an offset state)."""
+        return float(self._mem[M_B])
 
     def reset(self) -> None:
         """Forget the state: the next chunk starts a log."""

@@ -524,7 +524,7 @@ from ..constants import G
 from ..vehicle import conditions
 from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
 from ..estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, UNBIASED_GYRO_BIAS_TAU_S,
-                              UNBIASED_PITCH_START,
+                              UNBIASED_PITCH_BANDWIDTH, UNBIASED_PITCH_START,
                                UNBIASED_GYRO_CUTOFF_HZ, KinematicGyro, KinematicGyroSmoother)
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
@@ -1352,6 +1352,28 @@ def choose_pitch_bandwidth(logs, bandwidths=PITCH_BANDWIDTH_CANDIDATES, lengths=
     obj = unbiased_pitch_objectives(
         logs, {w: dict(pitch_bandwidth=w, pitch_start=UNBIASED_PITCH_START) for w in bandwidths}, lengths)
     return lowest_tied(obj, lambda w: (w != 0.5, -w)), obj
+
+
+def choose_biased_pitch_rate(logs, taus=PITCH_OFFSET_TAUS, lengths=SHORT_PIECES_S):
+    """The forty-second stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate, ``ax`` and pitch rate). Returns ``(key, {key: objective deg})``, a key ``"none"`` (a pitch rate with an
+    offset not read) or ``T_q`` (s; None: the observer without an offset state)."""
+    phone = math.radians(PITCH_PHONE_OFFSET_DEG)
+    sets = gyro_sets(logs) + [[(dataclasses.replace(s, q=s.q + sign * phone), ref, m) for s, ref, m in logs]
+                              for sign in (1.0, -1.0)]
+    cut = [whole_and_pieces(one, lengths) for one in sets]
+    unbiased = dict(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S)
+    free = lengths_objective(fixed(KinematicGyro(**unbiased, pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH,
+                                                 pitch_start=UNBIASED_PITCH_START)), cut[0])
+
+    def general(**pitch) -> float:
+        return float(np.mean([lengths_objective(fixed(KinematicGyro(**pitch)), parts) for parts in cut]))
+
+    obj = {"none": 0.5 * (general(pitch_bandwidth=0.0) + free)}
+    for tq in taus:
+        obj[tq] = 0.5 * (general(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=UNBIASED_PITCH_START,
+                                 pitch_offset_tau=tq) + free)
+    return lowest_tied(obj, lambda k: (k != "none", -(k or 0.0) if k != "none" else 0.0)), obj
 
 
 def whole_and_pieces(logs, lengths=SHORT_PIECES_S) -> list:
