@@ -14,9 +14,9 @@ at :math:`(s + 1/T_q)(s^2 + 2\zeta\omega s + \omega^2)` (:math:`k_1 = 2\zeta\ome
 interval is one backward (implicit) Euler step, :math:`\sin` linearised about the previous pitch; the offset
 substituted, a 2x2 linear solve: stable at any step (a 1 Hz log with a 3 rad/s observer does not diverge). The state
 ``mem`` (:data:`M_V`, :data:`M_PITCH`, :data:`M_B`, :data:`M_TLAST`, :data:`M_TFIRST`, :data:`M_INIT`) carries over
-between calls, so a log in chunks gets what one call gets. A sample with a non-finite input is skipped (its output NaN, the state kept); after a gap longer than
-``max_gap`` the speed state restarts at the measured speed and the pitch and offset are kept. Units: t (s), vx (m/s), ax
-(m/s^2), rates (rad/s), g (m/s^2), pitch (rad, positive nose down).
+between calls, so a log in chunks gets what one call gets. A sample with a non-finite input is skipped (its output
+NaN, the state kept); after a gap longer than ``max_gap`` the speed state restarts at the measured speed and the pitch
+and offset are kept. Units: t (s), vx (m/s), ax (m/s^2), rates (rad/s), g (m/s^2), pitch (rad, positive nose down).
 """
 
 from __future__ import annotations
