@@ -1310,19 +1310,13 @@ def choose_pitch_rate(logs, bandwidths=PITCH_BANDWIDTHS, starts=PITCH_STARTS, le
     roll rate, ``ax`` and pitch rate). Returns ``(key, {key: objective deg})``, a key ``("window",)`` (the shipped
     pitch) or ``(use, bandwidth rad/s, start)`` with ``use`` ``"unbiased"`` or ``"always"``."""
     cut = [whole_and_pieces(one, lengths) for one in gyro_sets(logs)]
-    unbiased = dict(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S)
-
-    def general(**pitch) -> float:
-        return float(np.mean([lengths_objective(fixed(KinematicGyro(**pitch)), parts) for parts in cut]))
-
-    shipped = general(pitch_bandwidth=0.0)
-    obj = {("window",): 0.5 * (shipped + lengths_objective(fixed(KinematicGyro(**unbiased, pitch_bandwidth=0.0)),
-                                                              cut[0]))}
+    shipped = sets_objective(cut, pitch_bandwidth=0.0)
+    obj = {("window",): 0.5 * (shipped + sets_objective(cut[:1], **_UNBIASED_GYRO, pitch_bandwidth=0.0))}
     for w, start in itertools.product(bandwidths, starts):
         pitch = dict(pitch_bandwidth=w, pitch_start=start)
-        free = lengths_objective(fixed(KinematicGyro(**unbiased, **pitch)), cut[0])      # the drives as read
-        obj[("unbiased", w, start)] = float(0.5 * (shipped + free))
-        obj[("always", w, start)] = float(0.5 * (general(**pitch) + free))
+        free = sets_objective(cut[:1], **_UNBIASED_GYRO, **pitch)                      # the drives as read
+        obj[("unbiased", w, start)] = 0.5 * (shipped + free)
+        obj[("always", w, start)] = 0.5 * (sets_objective(cut, **pitch) + free)
     return lowest_tied(obj, lambda k: (k != ("window",), k[0] != "unbiased", k[2] is not None, k[1])), obj
 
 
@@ -1332,9 +1326,8 @@ def unbiased_pitch_objectives(logs, candidates: dict, lengths=SHORT_PIECES_S) ->
     the mean of the window's objective on the thirty-fourth stage's sets (a pitch rate with an offset is not read) and
     the unbiased filter's with those options on the training ``logs`` as read, each whole and in pieces."""
     cut = [whole_and_pieces(one, lengths) for one in gyro_sets(logs)]
-    unbiased = dict(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S)
-    shipped = float(np.mean([lengths_objective(fixed(KinematicGyro(pitch_bandwidth=0.0)), parts) for parts in cut]))
-    return {key: float(0.5 * (shipped + lengths_objective(fixed(KinematicGyro(**unbiased, **pitch)), cut[0])))
+    shipped = sets_objective(cut, pitch_bandwidth=0.0)
+    return {key: 0.5 * (shipped + sets_objective(cut[:1], **_UNBIASED_GYRO, **pitch))
             for key, pitch in candidates.items()}
 
 
@@ -1362,18 +1355,23 @@ def choose_biased_pitch_rate(logs, taus=PITCH_OFFSET_TAUS, lengths=SHORT_PIECES_
     sets = gyro_sets(logs) + [[(dataclasses.replace(s, q=s.q + sign * phone), ref, m) for s, ref, m in logs]
                               for sign in (1.0, -1.0)]
     cut = [whole_and_pieces(one, lengths) for one in sets]
-    unbiased = dict(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S)
-    free = lengths_objective(fixed(KinematicGyro(**unbiased, pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH,
-                                                 pitch_start=UNBIASED_PITCH_START)), cut[0])
-
-    def general(**pitch) -> float:
-        return float(np.mean([lengths_objective(fixed(KinematicGyro(**pitch)), parts) for parts in cut]))
-
-    obj = {"none": 0.5 * (general(pitch_bandwidth=0.0) + free)}
+    observer = dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=UNBIASED_PITCH_START)
+    free = sets_objective(cut[:1], **_UNBIASED_GYRO, **observer)
+    obj = {"none": 0.5 * (sets_objective(cut, pitch_bandwidth=0.0) + free)}
     for tq in taus:
-        obj[tq] = 0.5 * (general(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=UNBIASED_PITCH_START,
-                                 pitch_offset_tau=tq) + free)
+        obj[tq] = 0.5 * (sets_objective(cut, **observer, pitch_offset_tau=tq) + free)
     return lowest_tied(obj, lambda k: (k != "none", -(k or 0.0) if k != "none" else 0.0)), obj
+
+
+#: the constants of the gyro-aided filter for a roll rate free of offset (the thirty-sixth stage's), as the later
+#: stages build it
+_UNBIASED_GYRO = {"cutoff": UNBIASED_GYRO_CUTOFF_HZ, "bias_tau": UNBIASED_GYRO_BIAS_TAU_S}
+
+
+def sets_objective(cut, **options) -> float:
+    """The mean over ``cut`` (sets, each cut by :func:`whole_and_pieces`) of :func:`lengths_objective` of
+    ``KinematicGyro(**options)`` (deg): the thirty-ninth to forty-second stages' parts."""
+    return float(np.mean([lengths_objective(fixed(KinematicGyro(**options)), parts) for parts in cut]))
 
 
 def whole_and_pieces(logs, lengths=SHORT_PIECES_S) -> list:
