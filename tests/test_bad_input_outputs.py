@@ -253,3 +253,13 @@ def test_export_from_a_log_without_driving_warns(tmp_path):
     # no word on the design (the reader's own warnings, as estimate prints them, may be there: a.csv's yaw
     # rate is constant 0)
     assert res.exit_code == 0 and "warning: --log" not in res.output and "fitted to a.csv" in res.output
+
+
+def test_a_folder_inside_a_log_names_the_log_to_give():
+    """``oxts/data`` of a drive (its frames, no log of their own) given for the drive: the one-line error names the
+    folder that is the log; the drive itself reads."""
+    _drive(Path.cwd(), "d1")
+    res = _run(["estimate", "d1/oxts/data", "-e", "kinematic", "-o", "o.csv"], Path.cwd())
+    assert res.exit_code == 1
+    assert "error: no logs found in d1/oxts/data (parts of the log d1/oxts: give that folder)" in res.output
+    assert _run(["estimate", "d1", "-e", "kinematic", "-o", "o.csv"], Path.cwd()).exit_code == 0

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -51,6 +52,7 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
     failure of that one log (:func:`roadbank.io.files.not_found`), the others are read.
     """
     from ..fleet import expand_logs
+    from ..fleet.run import enclosing_log
     from ..io import LogError, read_channel_map
     from ..io.files import not_found
 
@@ -74,6 +76,9 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
     if not kept:
         what = "no logs found" if not paths else "no logs left to read"
         hint = " (--format reads a log whose suffix is not its format's)" if paths and fmt is None else ""
+        inside = sorted({os.path.relpath(e) for a in logs if (e := enclosing_log(Path(a))) is not None})
+        if inside:              # a part of a log given for the log: name the log
+            hint = f" (parts of the log {', '.join(inside)}: give that folder)"
         click.echo(f"error: {what} in {', '.join(map(str, logs))}{hint}", err=True)
         sys.exit(1)
     return cmap, kept

@@ -52,6 +52,15 @@ def _is_log_dir(p: Path) -> bool:
     return fmt != "kitti-oxts" or find_oxts_dirs(p) in ([p], [p / "oxts"])
 
 
+def enclosing_log(p: Path, levels: int = 3) -> Path | None:
+    """The log directory (a comma2k19 segment, a ROS 2 bag, a KITTI drive) that ``p`` lies inside, up to ``levels``
+    folders up (``processed_log/`` of a segment, ``oxts/data/`` of a drive); None if none."""
+    for parent in list(Path(p).resolve().parents)[:levels]:
+        if _is_log_dir(parent):
+            return parent
+    return None
+
+
 def _is_log_file(p: Path) -> bool:
     """A file a folder contributes: a log suffix (:data:`LOG_SUFFIXES`), not an output of ``estimate``."""
     return p.suffix.lower() in LOG_SUFFIXES and not is_own_output(p)
