@@ -12,10 +12,12 @@ the speed that :math:`a_x` and a pitch :math:`\hat\vartheta` predict drifts from
 
 Linearised, the error of :math:`(\hat v, \hat\vartheta)` has the characteristic polynomial :math:`s^2 + 2\zeta\omega s
 + \omega^2`: the pitch rate carries the fast changes, the accelerometer and the speed the slow ones, with no window's
-lag. A constant offset :math:`b` of the pitch rate leaves :math:`2\zeta b / \omega` in the pitch. It starts at
-:math:`\hat v = v_x`, :math:`\hat\vartheta = 0` on the log's first usable sample, optionally with a faster bandwidth
-for a first span. :math:`\omega`, the start and where it is used were chosen by a written rule on training data
-(the thirty-ninth stage of :mod:`roadbank.tuning.real`). The recursion is compiled
+lag. A constant offset :math:`b` of the pitch rate leaves :math:`2\zeta b / \omega` in the pitch, unless the
+observer learns it as a third state (``offset_tau``: the error's poles then at :math:`(s + 1/T_q)(s^2 + 2\zeta\omega
+s + \omega^2)`). It starts at :math:`\hat v = v_x`, :math:`\hat\vartheta = 0` on the log's first usable sample,
+optionally with a faster bandwidth for a first span. :math:`\omega`, the start and where it is used were chosen by
+written rules on training data (the thirty-ninth to forty-second stages of :mod:`roadbank.tuning.real`: 0.5 rad/s,
+3 rad/s for the first 3 s, only for a pitch rate documented free of offset). The recursion is compiled
 (:mod:`roadbank.estimators.kernels.attitude`).
 """
 
