@@ -504,6 +504,15 @@ only (an unbiased one keeps the shipped observer). Sets and objective: the thirt
 carrying +-0.3 deg/s on ``q`` as on ``p`` and now also +-1 deg/s on ``q`` alone (a phone's), the mean over the five
 general sets. The lowest wins; ties within :data:`TIE_DEG` go to none read, then to the longer ``T_q``. Neither the
 KITTI validation drives nor comma2k19 take part.
+
+The forty-third stage (:func:`choose_unbiased_gyro_again`; rule written 2026-12-06 before any of its candidates ran,
+after the forty-second): the thirty-sixth stage's constants for an unbiased roll rate were chosen with the window's
+pitch; with the observer's, the roll rate's grade error is smaller and a lower cut-off may pay. Candidates: the
+cut-offs :data:`UNBIASED_CUTOFFS_AGAIN_HZ` (0.03, 0.05, 0.07, 0.1 Hz) x offset time constants
+:data:`UNBIASED_TAUS_AGAIN_S` (20, 40, 80 s), the shipped pair among them, each with the observer as shipped.
+Objective: the thirty-sixth stage's (the training drives as read, whole and in 8, 12, 20 s pieces; the mean over the
+four lengths of the median raw RMS). The lowest wins; ties within :data:`TIE_DEG` go to the shipped pair, then to the
+longer time constant, then to the higher cut-off. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -587,6 +596,9 @@ PITCH_BANDWIDTH_CANDIDATES = (0.25, 0.35, 0.5)
 #: state) and the offsets (deg/s) of its extra sets, on q alone
 PITCH_OFFSET_TAUS = (None, 20.0, 60.0)
 PITCH_PHONE_OFFSET_DEG = 1.0
+#: the forty-third stage's candidate cut-offs (Hz) and offset time constants (s) of the unbiased roll rate's filter
+UNBIASED_CUTOFFS_AGAIN_HZ = (0.03, 0.05, 0.07, 0.1)
+UNBIASED_TAUS_AGAIN_S = (20.0, 40.0, 80.0)
 #: candidate cut-offs (Hz) and feed-forward gains (-)
 CUTOFFS_HZ = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.8)
 KAPPAS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4)
