@@ -305,3 +305,20 @@ def test_the_forty_second_stage_reads_no_pitch_rate_with_an_offset():
     chosen, obj = real.choose_biased_pitch_rate(logs)
     assert chosen == "none" and min(obj.values()) == obj["none"]
     assert obj[20.0] < obj[60.0] < obj[None]
+
+
+@needs_kitti
+def test_the_forty_third_stage_lowers_the_unbiased_cut_off_with_the_observers_pitch():
+    """The rule (tuning.real.choose_unbiased_gyro_again): with the observer's pitch, 0.05 Hz and 40 s are the lowest,
+    below the thirty-sixth stage's 0.07 Hz by more than the tie; every 0.05 Hz pair beats every 0.07 Hz pair but one
+    and 0.03 Hz is worse than both (not the grid's edge)."""
+    from roadbank.estimators.gyro import UNBIASED_GYRO_BIAS_TAU_S, UNBIASED_GYRO_CUTOFF_HZ
+    from roadbank.tuning import real
+    logs = real.training_logs(DATA, roll_rate=True, pitch_rate=True)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, obj = real.choose_unbiased_gyro_again(logs)
+    assert chosen == (UNBIASED_GYRO_CUTOFF_HZ, UNBIASED_GYRO_BIAS_TAU_S) == (0.05, 40.0)
+    assert obj[chosen] == min(obj.values()) and obj[chosen] + real.TIE_DEG < obj[(0.07, 40.0)]
+    assert max(obj[(0.05, bt)] for bt in (20.0, 40.0, 80.0)) < min(obj[(0.07, bt)] for bt in (20.0, 40.0))
+    assert min(obj[(0.03, bt)] for bt in (20.0, 40.0, 80.0)) > max(obj[(0.07, bt)] for bt in (20.0, 40.0, 80.0))

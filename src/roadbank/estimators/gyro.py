@@ -88,7 +88,8 @@ GYRO_START_SPAN_S = 0.0
 GYRO_START_OFFSET = math.radians(0.3)
 #: the cut-off (Hz) and offset time constant (s) of the gyro-aided default for a roll rate whose source documents it
 #: as free of offset (``Signals.unbiased``: an INS's outputs): the thirty-sixth stage of :mod:`roadbank.tuning.real`
-UNBIASED_GYRO_CUTOFF_HZ = 0.07
+#: (0.07 Hz, 40 s), the cut-off chosen again by the forty-third with the pitch observer's grade
+UNBIASED_GYRO_CUTOFF_HZ = 0.05
 UNBIASED_GYRO_BIAS_TAU_S = 40.0
 #: the bandwidth (rad/s) of the pitch observer where the pitch rate's source documents it as free of offset
 #: (``Signals.unbiased``; :data:`PITCH_BANDWIDTH` elsewhere): the thirty-ninth stage of :mod:`roadbank.tuning.real`

@@ -532,9 +532,8 @@ from .. import vehicle
 from ..constants import G
 from ..vehicle import conditions
 from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
-from ..estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, UNBIASED_GYRO_BIAS_TAU_S,
-                              UNBIASED_PITCH_BANDWIDTH, UNBIASED_PITCH_START,
-                               UNBIASED_GYRO_CUTOFF_HZ, KinematicGyro, KinematicGyroSmoother)
+from ..estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, UNBIASED_PITCH_BANDWIDTH,
+                               UNBIASED_PITCH_START, KinematicGyro, KinematicGyroSmoother)
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
@@ -599,6 +598,9 @@ PITCH_PHONE_OFFSET_DEG = 1.0
 #: the forty-third stage's candidate cut-offs (Hz) and offset time constants (s) of the unbiased roll rate's filter
 UNBIASED_CUTOFFS_AGAIN_HZ = (0.03, 0.05, 0.07, 0.1)
 UNBIASED_TAUS_AGAIN_S = (20.0, 40.0, 80.0)
+#: the thirty-sixth stage's constants of the gyro-aided filter for a roll rate free of offset (cut-off Hz, offset time
+#: constant s), as the thirty-seventh to forty-third stages ran it (the forty-third chose anew)
+UNBIASED_36 = {"cutoff": 0.07, "bias_tau": 40.0}
 #: candidate cut-offs (Hz) and feed-forward gains (-)
 CUTOFFS_HZ = (0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.5, 0.6, 0.8)
 KAPPAS = (0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4)
@@ -1294,10 +1296,10 @@ def choose_unbiased_start(logs, offsets=UNBIASED_START_OFFSETS_DEG, lengths=SHOR
     roll rate and ``ax``). Returns ``(start_offset deg/s or None for no Kalman start, {start_offset or None:
     objective deg})``."""
     parts = whole_and_pieces(logs, lengths)
-    base = dict(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S, grade_window=GRADE_WINDOW_S)
+    base = dict(**UNBIASED_36, grade_window=GRADE_WINDOW_S)
     obj = {}
     for off in (None, *offsets):
-        opts = {} if off is None else {"start_span": 2.0 * UNBIASED_GYRO_BIAS_TAU_S, "start_offset": math.radians(off)}
+        opts = {} if off is None else {"start_span": 2.0 * UNBIASED_36["bias_tau"], "start_offset": math.radians(off)}
         obj[off] = lengths_objective(fixed(KinematicGyro(**base, **opts, **BEFORE_38)), parts)
     return lowest_tied(obj, list(obj).index), obj
 
@@ -1306,7 +1308,7 @@ def choose_grade_start(logs, windows=GRADE_START_WINDOWS_S, spans=GRADE_FIRST_SP
     """The thirty-eighth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their
     roll rate and ``ax``). Returns ``((grade_window s, grade_first_span s), {(window, span): objective deg})``."""
     cut = [whole_and_pieces(one, lengths) for one in gyro_sets(logs)]
-    unbiased = dict(cutoff=UNBIASED_GYRO_CUTOFF_HZ, bias_tau=UNBIASED_GYRO_BIAS_TAU_S)
+    unbiased = UNBIASED_36
     obj = {}
     for w in windows:
         for first in (f for f in spans if f < w or f == math.inf):      # none, and every first span below W
@@ -1323,10 +1325,10 @@ def choose_pitch_rate(logs, bandwidths=PITCH_BANDWIDTHS, starts=PITCH_STARTS, le
     pitch) or ``(use, bandwidth rad/s, start)`` with ``use`` ``"unbiased"`` or ``"always"``."""
     cut = [whole_and_pieces(one, lengths) for one in gyro_sets(logs)]
     shipped = sets_objective(cut, pitch_bandwidth=0.0)
-    obj = {("window",): 0.5 * (shipped + sets_objective(cut[:1], **_UNBIASED_GYRO, pitch_bandwidth=0.0))}
+    obj = {("window",): 0.5 * (shipped + sets_objective(cut[:1], **UNBIASED_36, pitch_bandwidth=0.0))}
     for w, start in itertools.product(bandwidths, starts):
         pitch = dict(pitch_bandwidth=w, pitch_start=start)
-        free = sets_objective(cut[:1], **_UNBIASED_GYRO, **pitch)                      # the drives as read
+        free = sets_objective(cut[:1], **UNBIASED_36, **pitch)                      # the drives as read
         obj[("unbiased", w, start)] = 0.5 * (shipped + free)
         obj[("always", w, start)] = 0.5 * (sets_objective(cut, **pitch) + free)
     return lowest_tied(obj, lambda k: (k != ("window",), k[0] != "unbiased", k[2] is not None, k[1])), obj
@@ -1339,7 +1341,7 @@ def unbiased_pitch_objectives(logs, candidates: dict, lengths=SHORT_PIECES_S) ->
     the unbiased filter's with those options on the training ``logs`` as read, each whole and in pieces."""
     cut = [whole_and_pieces(one, lengths) for one in gyro_sets(logs)]
     shipped = sets_objective(cut, pitch_bandwidth=0.0)
-    return {key: 0.5 * (shipped + sets_objective(cut[:1], **_UNBIASED_GYRO, **pitch))
+    return {key: 0.5 * (shipped + sets_objective(cut[:1], **UNBIASED_36, **pitch))
             for key, pitch in candidates.items()}
 
 
@@ -1368,16 +1370,22 @@ def choose_biased_pitch_rate(logs, taus=PITCH_OFFSET_TAUS, lengths=SHORT_PIECES_
                               for sign in (1.0, -1.0)]
     cut = [whole_and_pieces(one, lengths) for one in sets]
     observer = dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=UNBIASED_PITCH_START)
-    free = sets_objective(cut[:1], **_UNBIASED_GYRO, **observer)
+    free = sets_objective(cut[:1], **UNBIASED_36, **observer)
     obj = {"none": 0.5 * (sets_objective(cut, pitch_bandwidth=0.0) + free)}
     for tq in taus:
         obj[tq] = 0.5 * (sets_objective(cut, **observer, pitch_offset_tau=tq) + free)
     return lowest_tied(obj, lambda k: (k != "none", -(k or 0.0) if k != "none" else 0.0)), obj
 
 
-#: the constants of the gyro-aided filter for a roll rate free of offset (the thirty-sixth stage's), as the later
-#: stages build it
-_UNBIASED_GYRO = {"cutoff": UNBIASED_GYRO_CUTOFF_HZ, "bias_tau": UNBIASED_GYRO_BIAS_TAU_S}
+def choose_unbiased_gyro_again(logs, cutoffs=UNBIASED_CUTOFFS_AGAIN_HZ, taus=UNBIASED_TAUS_AGAIN_S,
+                               lengths=SHORT_PIECES_S):
+    """The forty-third stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate, ``ax`` and pitch rate). Returns ``((cutoff Hz, bias_tau s), {(cutoff, bias_tau): objective deg})``."""
+    cut = [whole_and_pieces(logs, lengths)]
+    observer = dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=UNBIASED_PITCH_START)
+    obj = {(fc, bt): sets_objective(cut, cutoff=fc, bias_tau=bt, **observer) for fc in cutoffs for bt in taus}
+    shipped = (UNBIASED_36["cutoff"], UNBIASED_36["bias_tau"])
+    return lowest_tied(obj, lambda k: (k != shipped, -k[1], -k[0])), obj
 
 
 def sets_objective(cut, **options) -> float:
