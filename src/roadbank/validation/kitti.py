@@ -34,11 +34,11 @@ from pathlib import Path
 import numpy as np
 
 from ..cache import not_stored
-from ..constants import G
 from ..defaults import ESTIMATOR as DEFAULT
 from ..estimators.pif import SENSOR_R_ESTIMATORS
 from ..io import LogError
 from ..io.kitti import drive_name, find_oxts_dirs, load_kitti_oxts
+from ..models.attitude import kinematic_roll
 from ..params import VehicleParams
 from ..signals import sample_rate
 from ..vehicle import SensorSpec, car_for_log, log_conditions, noise_densities
@@ -109,7 +109,7 @@ class KittiValidation:
 def kinematic_residual(signals, ref, mask, taus) -> dict:
     """RMS (deg) over ``mask`` of kinematic theta minus ``ref`` (rad), after a zero-phase low-pass of each
     tau (s; 0 = none)."""
-    kin = np.arcsin(np.clip((signals.ay - signals.vx * signals.r) / G, -1.0, 1.0))
+    kin = kinematic_roll(signals.vx, signals.ay, signals.r)
     e = hold_invalid(kin - ref)
     out = {}
     for tau in taus:
