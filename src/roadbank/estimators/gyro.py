@@ -115,14 +115,13 @@ class GradeCarry:
         """Forget the samples kept: the next chunk starts a log."""
         #: the last window's (t, vx, ax) and the running area and count at its first sample
         self._tail: tuple | None = None
-        self._observed = False               # whether the pitch observer has taken a chunk
         if self.pitch is not None:
             self.pitch.reset()
 
     @property
     def started(self) -> bool:
-        """Whether samples are kept from an earlier chunk."""
-        return self._tail is not None or self._observed
+        """Whether samples are kept from an earlier chunk (or the pitch observer has started)."""
+        return self._tail is not None or (self.pitch is not None and self.pitch.started)
 
     def correct(self, s: Signals, advance: int | None = None) -> Signals:
         """``s`` with its roll rate corrected (rad/s) and neither ``ax`` nor ``q`` (what the filter reads); the
@@ -131,7 +130,6 @@ class GradeCarry:
         if s.ax is None or s.p is None or self.window <= 0:
             return dataclasses.replace(s, ax=None, q=None)
         if self.pitch is not None and s.q is not None:
-            self._observed = True
             pitch = self.pitch.pitch(s.t, s.vx, s.ax, s.q, s.ay, s.r, advance)
             return dataclasses.replace(s, p=euler_roll_rate(s.p, s.r, pitch), ax=None, q=None)
         t, vx, ax, start = s.t, s.vx, s.ax, (0.0, 0.0)

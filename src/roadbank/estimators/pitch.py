@@ -29,7 +29,8 @@ import numpy as np
 
 from ..constants import G
 from ..models.attitude import MAX_SIN_PITCH, euler_pitch_rate, kinematic_roll
-from .kernels.attitude import C_GAP, C_G, C_TQ, C_TSTART, C_W, C_WSTART, C_ZETA, M_B, N_CFG, N_MEM, pitch_run
+from .kernels.attitude import (C_GAP, C_G, C_TQ, C_TSTART, C_W, C_WSTART, C_ZETA, M_B, M_INIT, N_CFG, N_MEM,
+                               pitch_run)
 
 #: the observer's damping (-)
 PITCH_ZETA = 0.7
@@ -77,6 +78,11 @@ class PitchObserver:
     def offset(self) -> float:
         """The pitch rate's offset learnt so far (rad/s; 0 without an offset state)."""
         return float(self._mem[M_B])
+
+    @property
+    def started(self) -> bool:
+        """Whether a usable sample has started the observer (its state carries over to the next chunk)."""
+        return bool(self._mem[M_INIT] > 0.0)
 
     def reset(self) -> None:
         """Forget the state: the next chunk starts a log."""
