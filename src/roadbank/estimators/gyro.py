@@ -68,6 +68,8 @@ GRADE_FIRST_SPAN_S = 2.0
 #: span s) or None): the thirty-ninth stage of :mod:`roadbank.tuning.real`
 PITCH_BANDWIDTH = 0.0
 PITCH_START: tuple[float, float] | None = None
+#: its anchored start's span (s; None: none): the forty-fourth stage
+PITCH_ANCHOR: float | None = None
 #: the gap (s) between usable samples after which ``kinematic-gyro`` starts again (a stop shorter than it is held
 #: through, the state kept: a car at rest keeps its roll): the twenty-seventh stage of :mod:`roadbank.tuning.real`
 GYRO_MAX_GAP_S = 10.0
@@ -236,6 +238,9 @@ class KinematicGyro(ScheduledObserver):
     pitch_offset_tau : float, optional
         That observer's offset state of the pitch rate, learnt in that time constant (s, > 0); None (default): none
         (a pitch rate free of offset).
+    pitch_anchor : float, optional
+        That observer's anchored start's span (s, > 0; :class:`~roadbank.estimators.pitch.PitchObserver`'s
+        ``anchor``); None: none. Default :data:`PITCH_ANCHOR`.
     start_hold : float, optional
         Seconds (>= 0) after the log's first usable sample during which the offset state is held at zero, so that
         it does not learn the start's error (the first kinematic sample, taken as the state, is as noisy as any);
@@ -267,7 +272,7 @@ class KinematicGyro(ScheduledObserver):
 
     def __init__(self, params=None, *, cutoff=None, bias_tau=None, grade_window=None, order=None, sideslip=None,
                  start_hold=None, start_span=None, start_offset=None, grade_first_span=None, pitch_bandwidth=None,
-                 pitch_start=(), pitch_offset_tau=None, **kw):
+                 pitch_start=(), pitch_offset_tau=None, pitch_anchor=(), **kw):
         self.cutoff = float(GYRO_CUTOFF_HZ if cutoff is None else cutoff)
         self.start_hold = float(GYRO_START_HOLD_S if start_hold is None else start_hold)
         if not (np.isfinite(self.start_hold) and self.start_hold >= 0):
@@ -306,8 +311,9 @@ class KinematicGyro(ScheduledObserver):
         self.pitch_start = PITCH_START if pitch_start == () else pitch_start
         super().__init__(params, **{"max_gap": GYRO_MAX_GAP_S, **kw})
         self.pitch_offset_tau = pitch_offset_tau
-        observer = (PitchObserver(self.pitch_bandwidth, self.params.g, self.pitch_start, pitch_offset_tau)
-                    if self.pitch_bandwidth > 0 else None)
+        self.pitch_anchor = PITCH_ANCHOR if pitch_anchor == () else pitch_anchor
+        observer = (PitchObserver(self.pitch_bandwidth, self.params.g, self.pitch_start, pitch_offset_tau,
+                                  self.pitch_anchor) if self.pitch_bandwidth > 0 else None)
         self.grade = GradeCarry(window, self.params.g, first_span, observer)
 
     @property

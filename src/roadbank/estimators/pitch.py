@@ -29,14 +29,18 @@ import numpy as np
 
 from ..constants import G
 from ..models.attitude import MAX_SIN_PITCH, euler_pitch_rate, kinematic_roll
-from .kernels.attitude import (C_GAP, C_G, C_TQ, C_TSTART, C_W, C_WSTART, C_ZETA, M_B, M_INIT, N_CFG, N_MEM,
-                               pitch_run)
+from .kernels.attitude import (C_ANCHOR, C_GAP, C_G, C_PRIOR, C_TQ, C_TSTART, C_W, C_WSTART, C_ZETA, M_B, M_INIT,
+                               N_CFG, N_MEM, pitch_run)
 
 #: the observer's damping (-)
 PITCH_ZETA = 0.7
 #: the longest gap (s) between usable samples across which the speed state is kept (after it, it restarts at the
 #: measured speed; the pitch is kept)
 PITCH_MAX_GAP_S = 1.0
+#: the anchored start's prior (stated, not tuned): the first pitch's standard deviation (rad; a road's grade) and the
+#: speed's noise (m/s)
+ANCHOR_GRADE_SD = math.radians(3.0)
+ANCHOR_SPEED_SD = 0.05
 
 
 class PitchObserver:
@@ -56,10 +60,16 @@ class PitchObserver:
         :math:`T_q` (s, > 0): the pitch rate's offset is a state, learnt with that time constant (the error's poles at
         :math:`(s + 1/T_q)(s^2 + 2\zeta\omega s + \omega^2)`; :mod:`roadbank.estimators.kernels.attitude`); None: no
         offset state.
+    anchor : float, optional
+        The anchored start's span (s, > 0): for that long after the first usable sample the pitch is the first pitch
+        that, with the pitch rate integrated since, explains the speed gained beyond ``ax``'s integral (least squares
+        over the samples so far, prior :data:`ANCHOR_GRADE_SD`, :data:`ANCHOR_SPEED_SD`;
+        :mod:`roadbank.estimators.kernels.attitude`); the observer goes on from it. None: the observer from a zero
+        pitch.
     """
 
     def __init__(self, bandwidth: float, g: float = G, start: tuple[float, float] | None = None,
-                 offset_tau: float | None = None):
+                 offset_tau: float | None = None, anchor: float | None = None):
         w = float(bandwidth)
         ws, span = (w, 0.0) if start is None else (float(start[0]), float(start[1]))
         tq = 0.0 if offset_tau is None else float(offset_tau)
@@ -68,10 +78,13 @@ class PitchObserver:
                              f"{bandwidth}, {start}")
         if not (math.isfinite(tq) and (offset_tau is None or tq > 0)):
             raise ValueError(f"pitch observer: offset_tau must be > 0 s or None, got {offset_tau}")
-        self.bandwidth, self.start, self.offset_tau = w, start, offset_tau
+        span_a = 0.0 if anchor is None else float(anchor)
+        if not (math.isfinite(span_a) and (anchor is None or span_a > 0)):
+            raise ValueError(f"pitch observer: anchor must be > 0 s or None, got {anchor}")
+        self.bandwidth, self.start, self.offset_tau, self.anchor = w, start, offset_tau, anchor
         self._cfg = np.zeros(N_CFG)
-        self._cfg[[C_W, C_ZETA, C_G, C_WSTART, C_TSTART, C_GAP, C_TQ]] = (w, PITCH_ZETA, float(g), ws, span,
-                                                                          PITCH_MAX_GAP_S, tq)
+        self._cfg[[C_W, C_ZETA, C_G, C_WSTART, C_TSTART, C_GAP, C_TQ, C_ANCHOR, C_PRIOR]] = (
+            w, PITCH_ZETA, float(g), ws, span, PITCH_MAX_GAP_S, tq, span_a, (ANCHOR_SPEED_SD / ANCHOR_GRADE_SD) ** 2)
         self.reset()
 
     @property

@@ -525,8 +525,9 @@ least squares on every sample so far (:math:`\vartheta_0` with a prior: a grade 
 noise of 0.05 m/s, stated not tuned) and gives :math:`\vartheta_0 + \int\dot\vartheta_q` for the first ``span``
 s; the observer goes on from there. Candidates: the shipped start (3 rad/s for 3 s from a zero pitch); the anchored
 start over :data:`PITCH_ANCHOR_SPANS_S` (1, 2, 3 s) with no faster start after it; the anchored start over 1 s with
-the shipped 3 rad/s until 3 s. Sets and objective: the fortieth stage's. The lowest wins; ties within :data:`TIE_DEG`
-go to the shipped start, then to the shorter span. Neither the KITTI validation drives nor comma2k19 take part.
+the shipped 3 rad/s until 3 s. Sets and objective: the fortieth stage's, with the unbiased roll rate's constants as
+shipped since the forty-third stage (0.05 Hz, 40 s). The lowest wins; ties within :data:`TIE_DEG`
+go to the shipped start, then to the shorter span, then to no faster start after it. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -546,8 +547,9 @@ from .. import vehicle
 from ..constants import G
 from ..vehicle import conditions
 from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
-from ..estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, UNBIASED_PITCH_BANDWIDTH,
-                               UNBIASED_PITCH_START, KinematicGyro, KinematicGyroSmoother)
+from ..estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, UNBIASED_GYRO_BIAS_TAU_S,
+                               UNBIASED_GYRO_CUTOFF_HZ, UNBIASED_PITCH_BANDWIDTH, UNBIASED_PITCH_START, KinematicGyro,
+                               KinematicGyroSmoother)
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
@@ -1350,14 +1352,16 @@ def choose_pitch_rate(logs, bandwidths=PITCH_BANDWIDTHS, starts=PITCH_STARTS, le
     return lowest_tied(obj, lambda k: (k != ("window",), k[0] != "unbiased", k[2] is not None, k[1])), obj
 
 
-def unbiased_pitch_objectives(logs, candidates: dict, lengths=SHORT_PIECES_S) -> dict:
+def unbiased_pitch_objectives(logs, candidates: dict, lengths=SHORT_PIECES_S, unbiased=None) -> dict:
     """``{key: objective deg}`` of the fortieth and forty-first stages: for each of ``candidates`` (key -> the
     ``KinematicGyro`` pitch options of the observer for an unbiased pitch rate), the thirty-ninth stage's objective:
     the mean of the window's objective on the thirty-fourth stage's sets (a pitch rate with an offset is not read) and
-    the unbiased filter's with those options on the training ``logs`` as read, each whole and in pieces."""
+    the unbiased filter's with those options on the training ``logs`` as read, each whole and in pieces (its cut-off
+    and offset time constant ``unbiased``, default :data:`UNBIASED_36`, as those stages ran)."""
     cut = [whole_and_pieces(one, lengths) for one in gyro_sets(logs)]
     shipped = sets_objective(cut, pitch_bandwidth=0.0)
-    return {key: 0.5 * (shipped + sets_objective(cut[:1], **UNBIASED_36, **pitch))
+    unbiased = UNBIASED_36 if unbiased is None else unbiased
+    return {key: 0.5 * (shipped + sets_objective(cut[:1], **unbiased, **pitch))
             for key, pitch in candidates.items()}
 
 
@@ -1375,6 +1379,17 @@ def choose_pitch_bandwidth(logs, bandwidths=PITCH_BANDWIDTH_CANDIDATES, lengths=
     obj = unbiased_pitch_objectives(
         logs, {w: dict(pitch_bandwidth=w, pitch_start=UNBIASED_PITCH_START) for w in bandwidths}, lengths)
     return lowest_tied(obj, lambda w: (w != 0.5, -w)), obj
+
+
+def choose_pitch_anchor(logs, spans=PITCH_ANCHOR_SPANS_S, lengths=SHORT_PIECES_S):
+    """The forty-fourth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate, ``ax`` and pitch rate). Returns ``(key, {key: objective deg})``, a key ``(anchor span s or None, start)``
+    of the observer (``start`` as ``pitch_start``)."""
+    keys = [(None, UNBIASED_PITCH_START)] + [(a, None) for a in spans] + [(spans[0], UNBIASED_PITCH_START)]
+    obj = unbiased_pitch_objectives(
+        logs, {k: dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_anchor=k[0], pitch_start=k[1]) for k in keys},
+        lengths, {"cutoff": UNBIASED_GYRO_CUTOFF_HZ, "bias_tau": UNBIASED_GYRO_BIAS_TAU_S})
+    return lowest_tied(obj, lambda k: (k[0] is not None, k[0] or 0.0, k[1] is not None)), obj
 
 
 def choose_biased_pitch_rate(logs, taus=PITCH_OFFSET_TAUS, lengths=SHORT_PIECES_S):
