@@ -548,8 +548,7 @@ from ..constants import G
 from ..vehicle import conditions
 from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
 from ..estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, UNBIASED_GYRO_BIAS_TAU_S,
-                               UNBIASED_GYRO_CUTOFF_HZ, UNBIASED_PITCH_BANDWIDTH, UNBIASED_PITCH_START, KinematicGyro,
-                               KinematicGyroSmoother)
+                               UNBIASED_GYRO_CUTOFF_HZ, UNBIASED_PITCH_BANDWIDTH, KinematicGyro, KinematicGyroSmoother)
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
@@ -616,6 +615,9 @@ UNBIASED_CUTOFFS_AGAIN_HZ = (0.03, 0.05, 0.07, 0.1)
 UNBIASED_TAUS_AGAIN_S = (20.0, 40.0, 80.0)
 #: the forty-fourth stage's candidate spans (s) of the pitch observer's anchored start
 PITCH_ANCHOR_SPANS_S = (1.0, 2.0, 3.0)
+#: the fortieth stage's start of the pitch observer for an unbiased pitch rate, as the forty-first to forty-fourth
+#: stages ran it (the forty-fourth replaced it by the anchored start)
+START_40 = (3.0, 3.0)
 #: the thirty-sixth stage's constants of the gyro-aided filter for a roll rate free of offset (cut-off Hz, offset time
 #: constant s), as the thirty-seventh to forty-third stages ran it (the forty-third chose anew)
 UNBIASED_36 = {"cutoff": 0.07, "bias_tau": 40.0}
@@ -1377,7 +1379,7 @@ def choose_pitch_bandwidth(logs, bandwidths=PITCH_BANDWIDTH_CANDIDATES, lengths=
     """The forty-first stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
     rate, ``ax`` and pitch rate). Returns ``(bandwidth rad/s, {bandwidth: objective deg})``."""
     obj = unbiased_pitch_objectives(
-        logs, {w: dict(pitch_bandwidth=w, pitch_start=UNBIASED_PITCH_START) for w in bandwidths}, lengths)
+        logs, {w: dict(pitch_bandwidth=w, pitch_start=START_40) for w in bandwidths}, lengths)
     return lowest_tied(obj, lambda w: (w != 0.5, -w)), obj
 
 
@@ -1385,7 +1387,7 @@ def choose_pitch_anchor(logs, spans=PITCH_ANCHOR_SPANS_S, lengths=SHORT_PIECES_S
     """The forty-fourth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
     rate, ``ax`` and pitch rate). Returns ``(key, {key: objective deg})``, a key ``(anchor span s or None, start)``
     of the observer (``start`` as ``pitch_start``)."""
-    keys = [(None, UNBIASED_PITCH_START)] + [(a, None) for a in spans] + [(spans[0], UNBIASED_PITCH_START)]
+    keys = [(None, START_40)] + [(a, None) for a in spans] + [(spans[0], START_40)]
     obj = unbiased_pitch_objectives(
         logs, {k: dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_anchor=k[0], pitch_start=k[1]) for k in keys},
         lengths, {"cutoff": UNBIASED_GYRO_CUTOFF_HZ, "bias_tau": UNBIASED_GYRO_BIAS_TAU_S})
@@ -1400,7 +1402,7 @@ def choose_biased_pitch_rate(logs, taus=PITCH_OFFSET_TAUS, lengths=SHORT_PIECES_
     sets = gyro_sets(logs) + [[(dataclasses.replace(s, q=s.q + sign * phone), ref, m) for s, ref, m in logs]
                               for sign in (1.0, -1.0)]
     cut = [whole_and_pieces(one, lengths) for one in sets]
-    observer = dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=UNBIASED_PITCH_START)
+    observer = dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=START_40)
     free = sets_objective(cut[:1], **UNBIASED_36, **observer)
     obj = {"none": 0.5 * (sets_objective(cut, pitch_bandwidth=0.0) + free)}
     for tq in taus:
@@ -1413,7 +1415,7 @@ def choose_unbiased_gyro_again(logs, cutoffs=UNBIASED_CUTOFFS_AGAIN_HZ, taus=UNB
     """The forty-third stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
     rate, ``ax`` and pitch rate). Returns ``((cutoff Hz, bias_tau s), {(cutoff, bias_tau): objective deg})``."""
     cut = [whole_and_pieces(logs, lengths)]
-    observer = dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=UNBIASED_PITCH_START)
+    observer = dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=START_40)
     obj = {(fc, bt): sets_objective(cut, cutoff=fc, bias_tau=bt, **observer) for fc in cutoffs for bt in taus}
     shipped = (UNBIASED_36["cutoff"], UNBIASED_36["bias_tau"])
     return lowest_tied(obj, lambda k: (k != shipped, -k[1], -k[0])), obj

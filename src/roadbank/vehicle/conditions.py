@@ -505,8 +505,9 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         How the log's pitch rate, documented free of offset, follows the pitch its ``ax`` shows
         (:func:`pitch_rate_slope`; None: it has none, or one not so documented). Where it does
         (:func:`roll_rate_usable`) and the grade is corrected, that filter reads the pitch from the pitch rate
-        (``pitch_bandwidth`` :data:`roadbank.estimators.gyro.UNBIASED_PITCH_BANDWIDTH` and ``pitch_start``
-        ``UNBIASED_PITCH_START``, the thirty-ninth and fortieth stages).
+        (``pitch_bandwidth`` :data:`roadbank.estimators.gyro.UNBIASED_PITCH_BANDWIDTH`, ``pitch_start``
+        ``UNBIASED_PITCH_START`` and ``pitch_anchor`` ``UNBIASED_PITCH_ANCHOR``, the thirty-ninth, fortieth and
+        forty-fourth stages).
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
@@ -544,7 +545,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
                            "bias_tau": estimators.gyro.UNBIASED_GYRO_BIAS_TAU_S, **options}
             if window > 0 and roll_rate_usable(log_pitch_rate):
                 options = {"pitch_bandwidth": estimators.gyro.UNBIASED_PITCH_BANDWIDTH,
-                           "pitch_start": estimators.gyro.UNBIASED_PITCH_START, **options}
+                           "pitch_start": estimators.gyro.UNBIASED_PITCH_START,
+                           "pitch_anchor": estimators.gyro.UNBIASED_PITCH_ANCHOR, **options}
         elif lead_samples is not None:
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
             if log_diff_noise is not None and math.isfinite(log_diff_noise) and log_diff_noise > 0:

@@ -15,11 +15,11 @@ interval is one backward (implicit) Euler step, :math:`\sin` linearised about th
 substituted, a 2x2 linear solve: stable at any step (a 1 Hz log with a 3 rad/s observer does not diverge).
 
 With an anchored start (``cfg[C_ANCHOR]`` s > 0), the first pitch is not a guess: for that span from the first sample,
-:math:`v_x(t) = v_0 + A(t) + g (\vartheta_0 \tau + S(t))`, with :math:`\tau` the time since the first sample,
-:math:`A = \int a_x`, :math:`Q = \int \dot\vartheta_q`, :math:`S = \int Q` (trapezoids), is fitted for
-:math:`(v_0, \vartheta_0)` by least squares over every sample so far, :math:`\vartheta_0` shrunk to zero by the prior
-weight ``cfg[C_PRIOR]`` (:math:`\sigma_v^2/\sigma_\vartheta^2`, (m/s)^2 per rad^2); the pitch is :math:`\hat\vartheta_0
-+ Q` and the speed state the fitted speed, from which the observer goes on (a gap longer than ``max_gap`` ends the
+:math:`v_x(t) = v_0 + A(t) + g (\sin\vartheta_0 \, \tau + S(t))` (the sine linearised about the first pitch),
+with :math:`\tau` the time since the first sample, :math:`A = \int a_x`, :math:`Q = \int \dot\vartheta_q`,
+:math:`S = \int Q` (trapezoids), is fitted for :math:`(v_0, \sin\vartheta_0)` by least squares over every sample so
+far, :math:`\sin\vartheta_0` shrunk to zero by the prior weight ``cfg[C_PRIOR]`` (:math:`\sigma_v^2/\sigma_\vartheta^2`,
+(m/s)^2 per rad^2); the pitch is :math:`\hat\vartheta_0 + Q` and the speed state the fitted speed, from which the observer goes on (a gap longer than ``max_gap`` ends the
 span). The state ``mem`` (:data:`M_V`, :data:`M_PITCH`, :data:`M_B`, :data:`M_TLAST`, :data:`M_TFIRST`,
 :data:`M_INIT`, and the anchored start's integrals and sums) carries over between calls, so a log in chunks gets what
 one call gets. A sample with a non-finite input is skipped (its output
@@ -108,8 +108,8 @@ def anchor_step(mem, cfg, ti, v, a, q, h):
     n = mem[M_N]
     sxx = g * g * (mem[M_STT] - mem[M_ST] * mem[M_ST] / n)
     sxy = g * (mem[M_STY] - mem[M_ST] * mem[M_SY] / n)
-    th0 = sxy / (sxx + cfg[C_PRIOR])
-    v0 = (mem[M_SY] - g * th0 * mem[M_ST]) / n
-    mem[M_PITCH] = th0 + q_new
-    mem[M_V] = v0 + mem[M_A] + g * (th0 * tau + mem[M_S])
+    s0 = sxy / (sxx + cfg[C_PRIOR])
+    v0 = (mem[M_SY] - g * s0 * mem[M_ST]) / n
+    mem[M_PITCH] = math.asin(min(max(s0, -1.0), 1.0)) + q_new
+    mem[M_V] = v0 + mem[M_A] + g * (s0 * tau + mem[M_S])
     return mem[M_PITCH]
