@@ -515,19 +515,19 @@ four lengths of the median raw RMS). The lowest wins; ties within :data:`TIE_DEG
 longer time constant, then to the higher cut-off. Neither the KITTI validation drives nor comma2k19 take part.
 
 The forty-fourth stage (:func:`choose_pitch_anchor`; rule written 2026-12-06 before any of its candidates ran, after
-reading on the training drives, with scratch code, that the observer as shipped is 1-2.5 deg off the INS's pitch in
-its first 2 s where a drive starts on a grade (0064, 0034, 0087: 5.3, -3.1, 2.1 deg), and that the INS's pitch put
-into the observer's first sample takes 0064 from 0.308 to 0.235 deg and the 8 s pieces' median from 0.166 to 0.158):
-the observer's start. Its first pitch is a guess (zero); the speed, ``ax`` and the pitch rate of the first seconds
-fix it: integrated, :math:`v_x(t) = v_0 + \int a_x + g (\vartheta_0 \tau + \int\!\!\int \dot\vartheta_q)` with
-:math:`\tau` the time since the first sample, linear in :math:`(v_0, \vartheta_0)`. The anchored start fits them by
-least squares on every sample so far (:math:`\vartheta_0` with a prior: a grade of 3 deg standard deviation, a speed
-noise of 0.05 m/s, stated not tuned) and gives :math:`\vartheta_0 + \int\dot\vartheta_q` for the first ``span``
-s; the observer goes on from there. Candidates: the shipped start (3 rad/s for 3 s from a zero pitch); the anchored
-start over :data:`PITCH_ANCHOR_SPANS_S` (1, 2, 3 s) with no faster start after it; the anchored start over 1 s with
-the shipped 3 rad/s until 3 s. Sets and objective: the fortieth stage's, with the unbiased roll rate's constants as
-shipped since the forty-third stage (0.05 Hz, 40 s). The lowest wins; ties within :data:`TIE_DEG`
-go to the shipped start, then to the shorter span, then to no faster start after it. Neither the KITTI validation drives nor comma2k19 take part.
+reading on the training drives, with scratch code, that the observer as shipped is 1-2.5 deg off the INS's pitch in its
+first 2 s where a drive starts on a grade (0064, 0034, 0087: 5.3, -3.1, 2.1 deg), and that the INS's pitch put into the
+observer's first sample takes 0064 from 0.308 to 0.235 deg and the 8 s pieces' median from 0.166 to 0.158): the
+observer's start. Its first pitch is a guess (zero); the speed, ``ax`` and the pitch rate of the first seconds fix it:
+integrated, :math:`v_x(t) = v_0 + \int a_x + g (\vartheta_0 \tau + \int\!\!\int \dot\vartheta_q)` with :math:`\tau` the
+time since the first sample, linear in :math:`(v_0, \vartheta_0)`. The anchored start fits them by least squares on
+every sample so far (:math:`\vartheta_0` with a prior: a grade of 3 deg standard deviation, a speed noise of 0.05 m/s,
+stated not tuned) and gives :math:`\vartheta_0 + \int\dot\vartheta_q` for the first ``span`` s; the observer goes on
+from there. Candidates: the shipped start (3 rad/s for 3 s from a zero pitch); the anchored start over
+:data:`PITCH_ANCHOR_SPANS_S` (1, 2, 3 s) with no faster start after it; the anchored start over 1 s with the shipped 3
+rad/s until 3 s. Sets and objective: the fortieth stage's, with the unbiased roll rate's constants as shipped since the
+forty-third stage (0.05 Hz, 40 s). The lowest wins; ties within :data:`TIE_DEG` go to the shipped start, then to the
+shorter span, then to no faster start after it. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations

@@ -15,14 +15,14 @@ interval is one backward (implicit) Euler step, :math:`\sin` linearised about th
 substituted, a 2x2 linear solve: stable at any step (a 1 Hz log with a 3 rad/s observer does not diverge).
 
 With an anchored start (``cfg[C_ANCHOR]`` s > 0), the first pitch is not a guess: for that span from the first sample,
-:math:`v_x(t) = v_0 + A(t) + g (\sin\vartheta_0 \, \tau + S(t))` (the sine linearised about the first pitch),
-with :math:`\tau` the time since the first sample, :math:`A = \int a_x`, :math:`Q = \int \dot\vartheta_q`,
-:math:`S = \int Q` (trapezoids), is fitted for :math:`(v_0, \sin\vartheta_0)` by least squares over every sample so
-far, :math:`\sin\vartheta_0` shrunk to zero by the prior weight ``cfg[C_PRIOR]`` (:math:`\sigma_v^2/\sigma_\vartheta^2`,
-(m/s)^2 per rad^2); the pitch is :math:`\hat\vartheta_0 + Q` and the speed state the fitted speed, from which the observer goes on (a gap longer than ``max_gap`` ends the
-span). The state ``mem`` (:data:`M_V`, :data:`M_PITCH`, :data:`M_B`, :data:`M_TLAST`, :data:`M_TFIRST`,
-:data:`M_INIT`, and the anchored start's integrals and sums) carries over between calls, so a log in chunks gets what
-one call gets. A sample with a non-finite input is skipped (its output
+:math:`v_x(t) = v_0 + A(t) + g (\sin\vartheta_0 \, \tau + S(t))` (the sine linearised about the first pitch), with
+:math:`\tau` the time since the first sample, :math:`A = \int a_x`, :math:`Q = \int \dot\vartheta_q`, :math:`S = \int Q`
+(trapezoids), is fitted for :math:`(v_0, \sin\vartheta_0)` by least squares over every sample so far,
+:math:`\sin\vartheta_0` shrunk to zero by the prior weight ``cfg[C_PRIOR]`` (:math:`\sigma_v^2/\sigma_\vartheta^2`,
+(m/s)^2 per rad^2); the pitch is :math:`\hat\vartheta_0 + Q` and the speed state the fitted speed, from which the
+observer goes on (a gap longer than ``max_gap`` ends the span). The state ``mem`` (:data:`M_V`, :data:`M_PITCH`,
+:data:`M_B`, :data:`M_TLAST`, :data:`M_TFIRST`, :data:`M_INIT`, and the anchored start's integrals and sums) carries
+over between calls, so a log in chunks gets what one call gets. A sample with a non-finite input is skipped (its output
 NaN, the state kept); after a gap longer than ``max_gap`` the speed state restarts at the measured speed and the pitch
 and offset are kept. Units: t (s), vx (m/s), ax (m/s^2), rates (rad/s), g (m/s^2), pitch (rad, positive nose down).
 """
