@@ -15,10 +15,12 @@ Linearised, the error of :math:`(\hat v, \hat\vartheta)` has the characteristic 
 lag. A constant offset :math:`b` of the pitch rate leaves :math:`2\zeta b / \omega` in the pitch, unless the
 observer learns it as a third state (``offset_tau``: the error's poles then at :math:`(s + 1/T_q)(s^2 + 2\zeta\omega
 s + \omega^2)`). It starts at :math:`\hat v = v_x`, :math:`\hat\vartheta = 0` on the log's first usable sample,
-optionally with a faster bandwidth for a first span. :math:`\omega`, the start and where it is used were chosen by
-written rules on training data (the thirty-ninth to forty-second stages of :mod:`roadbank.tuning.real`: 0.5 rad/s,
-3 rad/s for the first 3 s, only for a pitch rate documented free of offset). The recursion is compiled
-(:mod:`roadbank.estimators.kernels.attitude`).
+optionally with a faster bandwidth for a first span, or anchored: for a first span the pitch is the first pitch that,
+with the pitch rate integrated since, explains the speed gained beyond :math:`a_x`'s integral (least squares over the
+samples so far, with a prior), and the observer goes on from it. :math:`\omega`, the start and where it is used were
+chosen by written rules on training data (the thirty-ninth to forty-fourth stages of :mod:`roadbank.tuning.real`:
+0.5 rad/s, anchored for the first second, only for a pitch rate documented free of offset). The recursion is
+compiled (:mod:`roadbank.estimators.kernels.attitude`).
 """
 
 from __future__ import annotations
