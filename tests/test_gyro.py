@@ -241,12 +241,6 @@ def test_the_twenty_eighth_stage_kept_order_two_on_the_training_drives():
     assert min(v for k, v in obj.items() if k[0] == 4) > obj[chosen] + real.TIE_DEG
 
 
-def test_the_c_export_refuses_the_gyro_filter_with_the_reason():
-    from roadbank.export import NotExportable, export_c
-    with pytest.raises(NotExportable, match="roll rate"):
-        export_c(KinematicGyro(), "unused-dir", rate=100.0)
-
-
 @needs_kitti
 @pytest.mark.parametrize("wrong", ["negated", "yaw rate", "deg/s read as rad/s"])
 def test_a_roll_rate_that_does_not_follow_the_roll_in_ay_is_not_used_and_said_so(wrong):

@@ -64,6 +64,12 @@ def export():
               help="A recorded drive of the car (any format `roadbank estimate` reads): the module is designed "
                    "for its conditions as `roadbank estimate` designs for it (the road noise of its first minute "
                    "of driving, quiet or loud, the running noise's reference; its sample rate unless --rate).")
+@click.option("--roll-rate", "roll_rate", is_flag=True,
+              help="With --log: design as `roadbank estimate` does for a log with a roll rate: where the log's "
+                   "roll rate is usable and its ay loud, kinematic-pif is the gyro-aided filter, whose module reads "
+                   "the roll rate in place of the steering angle and corrects it for the grade "
+                   "(<prefix>_roll_rate, from ax and, where the log's pitch rate is an INS's, the pitch rate). "
+                   "Without it the module reads the ESP channels (a log's roll rate is not used).")
 @click.option("--channels", "channels", type=click.Path(path_type=Path), default=None,
               help="Channel map (TOML) of --log, as for `roadbank estimate` (only with --log).")
 @click.option("--format", "fmt", default=None, help="Format of --log (default: from its suffix; only with --log).")
@@ -71,12 +77,14 @@ def export():
               help="Output directory (created if missing).")
 def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: str | None,
                  v_step: float | None, v_max: float | None, module_name: str | None, fixed_rate: bool | None,
-                 online_offsets: bool, log: Path | None, channels: Path | None, fmt: str | None, output: Path):
+                 online_offsets: bool, log: Path | None, roll_rate: bool, channels: Path | None, fmt: str | None,
+                 output: Path):
     """Write roadbank_<estimator>.h/.c (C99, no malloc, tables in flash) and its README.
 
     \b
     roadbank export c --vehicle car.toml -e pif-modified --rate 100 -o ecu/
     roadbank export c -e kinematic-pif --log drive.parquet --rate 100 -o ecu/
+    roadbank export c -e kinematic-pif --log drive.parquet --roll-rate -o ecu/
     """
     from .. import estimators
     from ..export import NotExportable, export_c
@@ -87,7 +95,7 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
         raise click.BadParameter(f"unknown estimator '{name}' (choose from {', '.join(estimators.NAMES)})",
                                  param_hint="--estimator")
     if log is None:
-        for given, option in ((channels, "--channels"), (fmt, "--format")):
+        for given, option in ((channels, "--channels"), (fmt, "--format"), (roll_rate or None, "--roll-rate")):
             if given is not None:       # would be ignored: a design without a log reads no channel map
                 raise click.UsageError(f"{option} describes --log, which is not given (a design for a recorded "
                                        f"drive: --log drive.csv {option} ...)")
@@ -114,8 +122,10 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
     try:      # designed for the target's rate (and the log's conditions), as every command designs
         from ..vehicle import for_conditions
         from ..vehicle.conditions import esp_conditions
-        # the C step reads the ESP channels: a roll rate in the log does not choose the gyro-aided filter here
-        est = for_conditions(name, {**esp_conditions(cond), "log_rate": rate}, params, vehicle=vehicle, **overrides)
+        # without --roll-rate the C step reads the ESP channels: a roll rate in the log does not choose the
+        # gyro-aided filter
+        est = for_conditions(name, {**(cond if roll_rate else esp_conditions(cond)), "log_rate": rate}, params,
+                             vehicle=vehicle, **overrides)
     except (ValueError, TypeError, NoStabilisingSolution) as exc:
         raise click.ClickException(f"{name}: cannot design for vehicle {car_name!r}: {exc}") from None
     if online_offsets:
@@ -124,7 +134,8 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
         res = export_c(est, output, rate=rate, float32=float32, module_name=module_name, discrete=fixed_rate)
     except NotExportable as exc:
         from ..vehicle.conditions import QUIET_FILTER
-        quiet = name == "kinematic-pif" and not isinstance(getattr(est, "inner", est), estimators.KinematicPIF)
+        inner = getattr(est, "inner", est)
+        quiet = name == "kinematic-pif" and not isinstance(inner, (estimators.KinematicPIF, estimators.KinematicGyro))
         why = str(exc).split("not exportable: ", 1)[-1]
         raise click.ClickException(f"{name}: the log is quiet, so {name} is {QUIET_FILTER} for it, not exportable: "
                                    f"{why}" if quiet else str(exc)) from None
@@ -133,13 +144,26 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
     except OSError as exc:
         raise click.ClickException(f"cannot write into {output}: {exc.strerror or exc}") from None
     d = res.design
+    if roll_rate and d.first_input != "p":
+        click.echo(f"warning: --log {log}: the module reads the ESP channels: the log's roll rate is not used "
+                   "(none, one that does not follow the roll in ay, or a quiet log)", err=True)
     click.echo(f"{name} for {car_name} ({'float32' if float32 else 'float64'}, {rate:g} Hz"
                f"{'' if res.design.discrete is None else ' with fixed-rate tables'}, "
-               f"{d.n} observer states, roll {est.roll}): tables {res.table_bytes} bytes "
+               f"{d.n} observer states, roll {est.roll}{_gyro_words(d)}): tables {res.table_bytes} bytes "
                f"({d.ng} speeds x {d.nk}{'' if d.discrete is None else f' + {d.n * d.n + 6 * d.n}'}), "
                f"fingerprint {d.fingerprint()}")
     for path in (res.header, res.source, res.readme):
         click.echo(f"  {path}")
+
+
+def _gyro_words(d) -> str:
+    """What the summary line says of a gyro-aided module (its first input the roll rate, its grade correction)."""
+    if d.first_input != "p":
+        return ""
+    if d.grade is None:
+        return ", reads the roll rate"
+    return (", reads the roll rate, corrected for the grade by "
+            + ("ax and the pitch rate" if d.grade["observer"] is not None else "ax"))
 
 
 def _log_design(log: Path | None, channels: Path | None, fmt: str | None, vehicle) -> tuple[dict, object, str | None]:

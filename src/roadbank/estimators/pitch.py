@@ -90,6 +90,11 @@ class PitchObserver:
         self.reset()
 
     @property
+    def cfg(self) -> np.ndarray:
+        """The settings as the compiled kernel reads them (a copy; :mod:`roadbank.estimators.kernels.attitude`)."""
+        return self._cfg.copy()
+
+    @property
     def offset(self) -> float:
         """The pitch rate's offset learnt so far (rad/s; 0 without an offset state)."""
         return float(self._mem[M_B])

@@ -24,6 +24,7 @@ from ..estimators.offsets import OnlineOffsets
 from .build import CompilerError, build_driver, compile_c
 from .ccode import generate
 from .design import ExportDesign, NotExportable, check_exportable, export_design
+from .grade_c import add_grade
 from .loader import CModule
 from .offsets_c import add_offsets
 
@@ -83,9 +84,15 @@ def export_c(est, out_dir, *, rate: float, float32: bool = False, module_name: s
     if isinstance(est, OnlineOffsets):       # the estimator behind the online offset learner
         learner, est = est._ocfg, est.inner
     design = export_design(est, rate, module_name, discrete=discrete)
+    if learner is not None and design.first_input != "delta_f":
+        raise NotExportable(f"{design.name}: not exportable with the online offset learner: the learner corrects "
+                            "the yaw rate and the steering angle for the ESP filters; the gyro-aided filter learns "
+                            "its roll rate's offset itself")
     files = generate(design, float32=float32)
     if learner is not None:
         files = add_offsets(files, f"roadbank_{design.ident}", learner, float32)
+    if design.grade is not None:
+        files = add_grade(files, f"roadbank_{design.ident}", design.grade, rate, float32)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = {}

@@ -122,6 +122,30 @@ double rbh_bench(long n, const {real} *t, const {real} *vx, const {real} *ay, co
     }}
     return acc;
 }}
+
+#if defined({P}_GRADE_CAP) || defined({P}_GRADE_OBSERVER)
+#include <stdlib.h>
+/* the grade-corrected roll rate of n samples (the module's {p}_roll_rate); 0 if no memory */
+int rbh_roll_rates(long n, const double *t, const double *vx, const double *ay, const double *r,
+                   const double *p, const double *ax, const double *q, double *out);
+
+int rbh_roll_rates(long n, const double *t, const double *vx, const double *ay, const double *r,
+                   const double *p, const double *ax, const double *q, double *out)
+{{
+    long k;
+    {p}_grade *g = malloc(sizeof *g);
+    if (g == NULL) {{
+        return 0;
+    }}
+    {p}_grade_init(g);
+    for (k = 0; k < n; ++k) {{
+        out[k] = (double){p}_roll_rate(g, t[k], ({real})vx[k], ({real})ay[k], ({real})r[k], ({real})p[k],
+                                        ({real})ax[k], ({real})q[k]);
+    }}
+    free(g);
+    return 1;
+}}
+#endif
 """
 
 _DRIVER = """\
@@ -213,7 +237,7 @@ static void run_{ident}(long n, const double *in, double *out, unsigned char *va
 
 def harness_source(prefix: str) -> str:
     """C source of the ctypes harness of the module ``prefix`` (e.g. ``roadbank_pif_modified``)."""
-    return _HARNESS.format(p=prefix, real=f"{prefix}_real")
+    return _HARNESS.format(p=prefix, P=prefix.upper(), real=f"{prefix}_real")
 
 
 def driver_source(prefixes: dict[str, str]) -> str:

@@ -80,7 +80,7 @@ _HEADER = Template("""\
  *
  * Units (SI, ISO 8855 axes: x forward, y left, z up): t and dt in s, vx in m/s,
  * ay in m/s^2 (positive to the left), r in rad/s (positive turning left),
- * delta_f = front road-wheel angle in rad; angles out in rad, bank and roll
+ * ${u0_units}; angles out in rad, bank and roll
  * positive = left side up.
  */
 #ifndef ${P}_H
@@ -108,7 +108,7 @@ typedef struct {
     int initialised;         /* 0 until the first valid sample (then 1) */
     double t_last;           /* s, time of the last valid sample (${p}_step) */
     ${real} since_valid;     /* s, time since the last valid sample (${p}_step_dt) */
-    ${real} eta[3];          /* inputs of the last valid sample: delta_f, ay, r (masked) */
+    ${real} eta[3];          /* inputs of the last valid sample: ${u0}, ay, r (masked) */
 ${x_member}${z_member}${gate_member}    ${real} ay_last;         /* m/s^2, ay of the last valid sample (roll model) */
     ${real} w;               /* held outputs of the last valid sample */
     ${real} theta;
@@ -135,13 +135,13 @@ void ${p}_init(${state} *s);
  * valid sample the state restarts at the observer equilibrium for the current
  * inputs. valid = 0 also flags an implausible estimate |theta| > ${max_angle_deg} deg. */
 int ${p}_step(${state} *s, double t, ${real} vx, ${real} ay, ${real} r,
-    ${real} delta_f, ${output} *out);
+    ${real} ${u0}, ${output} *out);
 
 /* The same with the time since the previous call, dt (s), instead of absolute time
  * (for targets without a double-precision clock). Use one of the two step functions
  * per state. A non-finite dt makes the sample unusable and is not accumulated. */
 int ${p}_step_dt(${state} *s, ${real} dt, ${real} vx, ${real} ay, ${real} r,
-    ${real} delta_f, ${output} *out);
+    ${real} ${u0}, ${output} *out);
 
 #ifdef __cplusplus
 }
@@ -163,7 +163,7 @@ ${provenance} *
  * Algorithm (the lpv kernel of roadbank.estimators.kernels; the update loops are
  * generated from roadbank.estimators.update_spec, the description the kernels follow):
  * the observer xi' = F(vx) xi + G(vx) eta, w = H(vx) xi + D(vx) eta,
- * eta = [delta_f, ay, r], with F, G, H, D interpolated linearly on a speed grid,
+ * eta = [${u0}, ay, r], with F, G, H, D interpolated linearly on a speed grid,
  * advanced by the trapezoidal rule in substeps of at most ${sub_lit} s with eta
  * interpolated linearly between the samples${fixed_note}. C99; no dynamic memory, no
  * recursion, no mutable global data; every loop has a compile-time bound.
@@ -205,7 +205,7 @@ enum {
 #define RB_GAP (${gap})     /* s, longest gap before a restart */
 #define RB_WMAX (${wmax})    /* sin(max_angle) */
 #define RB_ROLL_D (${roll_d})  /* rad per m/s^2: phi = D ay + H z */
-static const int RB_USES[3] = {${uses}};  /* reads delta_f, ay, r */
+static const int RB_USES[3] = {${uses}};  /* reads ${u0}, ay, r */
 ${roll_tables}
 /* Gain schedule: row k holds the observer at vx = RB_V0 + k RB_DV, row-major
  * F (${n}x${n}) | G (${n}x3) | H (${n}) | D (3) | J (${n}x3), J = -F^-1 G. */
@@ -296,30 +296,30 @@ ${init_x}${init_z}${init_gate}${init_noise}    s->ay_last = 0.0_R;
     s->phi = 0.0_R;
 }
 
-int ${p}_step(state_t *s, double t, real_t vx, real_t ay, real_t r, real_t delta_f, output_t *out)
+int ${p}_step(state_t *s, double t, real_t vx, real_t ay, real_t r, real_t ${u0}, output_t *out)
 {
     int ok = 0;
-    if (isfinite(t) && (!s->initialised || t > s->t_last) && rb_inputs_ok(vx, ay, r, delta_f)) {
+    if (isfinite(t) && (!s->initialised || t > s->t_last) && rb_inputs_ok(vx, ay, r, ${u0})) {
         int restart = !s->initialised || (t - s->t_last) > (double)RB_GAP;
         real_t dt = restart ? 0.0_R : (real_t)(t - s->t_last);
 ${fixed_t}        s->initialised = 1;
         s->t_last = t;
-        ok = rb_update(s, restart, fixed, dt, vx, ay, r, delta_f);
+        ok = rb_update(s, restart, fixed, dt, vx, ay, r, ${u0});
     }
     return rb_output(s, ok, out);
 }
 
-int ${p}_step_dt(state_t *s, real_t dt, real_t vx, real_t ay, real_t r, real_t delta_f, output_t *out)
+int ${p}_step_dt(state_t *s, real_t dt, real_t vx, real_t ay, real_t r, real_t ${u0}, output_t *out)
 {
     int ok = 0;
     if (isfinite(dt)) {
         s->since_valid += dt;
-        if ((!s->initialised || s->since_valid > 0.0_R) && rb_inputs_ok(vx, ay, r, delta_f)) {
+        if ((!s->initialised || s->since_valid > 0.0_R) && rb_inputs_ok(vx, ay, r, ${u0})) {
             int restart = !s->initialised || s->since_valid > RB_GAP;
             real_t h = restart ? 0.0_R : s->since_valid;
 ${fixed_dt}            s->initialised = 1;
             s->since_valid = 0.0_R;
-            ok = rb_update(s, restart, fixed, h, vx, ay, r, delta_f);
+            ok = rb_update(s, restart, fixed, h, vx, ay, r, ${u0});
         }
     }
     return rb_output(s, ok, out);
@@ -821,6 +821,15 @@ def _short(v) -> str:
     return re.sub(r"\s+", "", repr(v)) if not isinstance(v, str) else v
 
 
+def _first_input(d: ExportDesign, prefix: str) -> dict:
+    """The name (``u0``) and the units line (``u0_units``) of the observer's first input: the steering angle, or
+    the gyro-aided filter's roll rate (of the module ``prefix``)."""
+    if d.first_input == "p":
+        grade = f",\n * for a module with the grade correction the rate {prefix}_roll_rate() returns" if d.grade else ""
+        return {"u0": "p", "u0_units": f"p = roll rate in rad/s (positive rolling left side up){grade}"}
+    return {"u0": "delta_f", "u0_units": "delta_f = front road-wheel angle in rad"}
+
+
 def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
     """Generate the module: ``{file name: text}`` for the header, the source and the README."""
     names = _names(d)
@@ -834,7 +843,7 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
         rows.append(f"    /* vx = {d.v0 + k * d.dv:.2f} m/s */\n    {{{body}}}")
     common = dict(names, name=d.name, version=__version__, fingerprint=d.fingerprint(),
                   precision="float32" if float32 else "float64", rate=f"{d.rate:g}",
-                  n=d.n, nr=d.nr)
+                  n=d.n, nr=d.nr, **_first_input(d, names["p"]))
     state_list = f": {', '.join(d.state_names)}" if d.state_names and len(d.state_names) == d.n else ""
     header = _HEADER.substitute(
         common, ctype="float" if float32 else "double", state_list=state_list,

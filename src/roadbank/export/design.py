@@ -18,7 +18,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..estimators.base import Estimator
+from ..estimators.gyro import GradeCarry
 from ..estimators.layout import C_LIM, DT_REL_TOL, gated_block, limit_block, lpv_row
+from ..models.attitude import MAX_SIN_PITCH
 
 #: the constants of a gated module (:attr:`ExportDesign.gate`) and of a limited low-pass
 #: (:attr:`ExportDesign.limit`), in the fingerprint's order
@@ -110,6 +112,13 @@ class ExportDesign:
     #: none) and ``ref`` ((m/s^2)^2), ``nlp`` (its states, :func:`~roadbank.estimators.kernels.sample.noise_update`)
     #: and ``ts`` (s; the limit's shorter ratio, 0: none); None without a limit
     limit: dict | None = None
+    #: the observer's first input: ``"delta_f"`` (the steering angle), or ``"p"`` (the gyro-aided filter's roll rate)
+    first_input: str = "delta_f"
+    #: the gyro-aided filter's grade correction (:class:`~roadbank.estimators.gyro.GradeCarry`): ``window`` and
+    #: ``first_span`` (s; inf: none), ``g`` (m/s^2), ``max_sin`` (-, :data:`~roadbank.models.attitude.MAX_SIN_PITCH`)
+    #: and ``observer`` (the pitch observer's ``cfg``, :mod:`roadbank.estimators.kernels.attitude`; None: the
+    #: window's pitch); None without a correction
+    grade: dict | None = None
 
     @property
     def running_noise(self) -> bool:
@@ -168,7 +177,11 @@ class ExportDesign:
                                                                    "Gam1_r", "dt")]),
                   *([] if self.gate is None else
                     [np.asarray(self.gate[k], float) for k in GATE_KEYS]),
-                  *([] if self.limit is None else [np.asarray(self.limit[k], float) for k in LIMIT_KEYS])):
+                  *([] if self.limit is None else [np.asarray(self.limit[k], float) for k in LIMIT_KEYS]),
+                  *([] if self.first_input == "delta_f" else [np.array([1.0])]),
+                  *([] if self.grade is None else
+                    [np.array([self.grade[k] for k in ("window", "first_span", "g", "max_sin")], float),
+                     np.zeros(0) if self.grade["observer"] is None else np.asarray(self.grade["observer"], float)])):
             h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
         return h.hexdigest()[:16]
 
@@ -195,11 +208,10 @@ def check_exportable(est) -> None:
         why = _NOT_LPV_REASON.get(kernel, f"its runtime is the {kernel!r} kernel, not a "
                                           "speed-scheduled linear observer")
         raise NotExportable(f"{est.name}: not exportable: {why}")
-    if getattr(est, "first_input", "delta_f") != "delta_f":
-        raise NotExportable(f"{est.name}: not exportable: it is the gyro-aided filter {type(est).__name__}, which "
-                            f"reads the roll rate ({est.first_input}) where the C step takes the steering angle; the C "
-                            "interface has no roll-rate input yet (export an ESP log's default, or name an ESP "
-                            "estimator)")
+    if getattr(est, "start_hold", 0.0) > 0 or getattr(est, "start_span", 0.0) > 0:
+        raise NotExportable(f"{est.name}: not exportable with start_hold or start_span: those starts of the "
+                            "offset state run in Python around the kernel, not in the C step (the defaults have "
+                            "neither)")
 
 
 def export_design(est, rate: float, module_name: str | None = None, *,
@@ -276,7 +288,8 @@ def export_design(est, rate: float, module_name: str | None = None, *,
         max_substep=float(est.max_substep), max_gap=float(est.max_gap),
         max_angle=float(est.max_angle), wmax=float(np.sin(est.max_angle)), rate=float(rate),
         state_names=tuple(getattr(est, "state_names", ())), provenance=provenance, settle_s=float(est.settle_time),
-        discrete=disc, dt_tol=dt_tol, gate=_gate(est, n, nr), limit=_limit(est))
+        discrete=disc, dt_tol=dt_tol, gate=_gate(est, n, nr), limit=_limit(est),
+        first_input=str(getattr(est, "first_input", "delta_f")), grade=_grade(est))
 
 
 def _gate(est, n: int, nr: int) -> dict | None:
@@ -287,6 +300,15 @@ def _gate(est, n: int, nr: int) -> dict | None:
     cfg = est._cfg
     return {"HF": np.array(cfg[b.HF:b.TF], float), "tf": float(cfg[b.TF]), "tau": float(cfg[b.TAU]),
             "on": float(cfg[b.ON]), "span": float(cfg[b.SPAN])}
+
+
+def _grade(est) -> dict | None:
+    """The gyro-aided filter's grade correction (:attr:`ExportDesign.grade`; None without one)."""
+    carry = getattr(est, "grade", None)
+    if not isinstance(carry, GradeCarry) or carry.window <= 0:
+        return None
+    return {"window": carry.window, "first_span": carry.first_span, "g": carry.g, "max_sin": MAX_SIN_PITCH,
+            "observer": None if carry.pitch is None else np.array(carry.pitch.cfg, float)}
 
 
 def _limit(est) -> dict | None:

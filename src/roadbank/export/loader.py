@@ -67,6 +67,11 @@ class CModule:
         real_p = ctypes.POINTER(ctypes.c_float if self.float32 else ctypes.c_double)
         lib.rbh_bench.argtypes = [ctypes.c_long, real_p, real_p, real_p, real_p, real_p, ctypes.c_long]
         lib.rbh_bench.restype = _D
+        #: whether the module has the gyro-aided filter's grade correction (``<prefix>_roll_rate``)
+        self.has_grade = hasattr(lib, "rbh_roll_rates")
+        if self.has_grade:
+            lib.rbh_roll_rates.argtypes = [ctypes.c_long] + [_P] * 8
+            lib.rbh_roll_rates.restype = ctypes.c_int
         self._lib = lib
         self.state_size = int(lib.rbh_state_size())
         self._state = np.zeros(self.state_size // 8 + 2)     # 8-byte aligned, owned here
@@ -103,6 +108,18 @@ class CModule:
                           out.ctypes.data_as(_P), valid.ctypes.data_as(_PB))
         return {"w": out[:, 0].copy(), "theta": out[:, 1].copy(), "phi_b": out[:, 2].copy(),
                 "phi": out[:, 3].copy(), "valid": valid.astype(bool)}
+
+    def roll_rates(self, t, vx, ay, r, p, ax, q) -> np.ndarray:
+        """The roll rate (rad/s) ``<prefix>_roll_rate()`` gives for each sample, from a fresh grade state: time (s),
+        vx (m/s), ay (m/s^2), r (rad/s), p (rad/s), ax (m/s^2), q (rad/s; NaN where there is none). Only for a module
+        with the grade correction (:attr:`has_grade`)."""
+        if not self.has_grade:
+            raise ValueError(f"{self.prefix}: the module has no grade correction (no {self.prefix}_roll_rate)")
+        cols = [np.ascontiguousarray(a, dtype=np.float64) for a in (t, vx, ay, r, p, ax, q)]
+        out = np.empty(len(cols[0]))
+        if not self._lib.rbh_roll_rates(len(out), *(c.ctypes.data_as(_P) for c in cols), out.ctypes.data_as(_P)):
+            raise MemoryError(f"{self.prefix}: no memory for the grade state")
+        return out
 
     def bench_ns(self, t, vx, ay, r, delta_f, *, min_samples: int = 200_000, repeats: int = 5) -> float:
         """C step cost (ns/sample, best of ``repeats``) of ``<prefix>_step_dt()`` over the log."""

@@ -11,7 +11,11 @@ def readme(d: ExportDesign, names: dict, float32: bool) -> str:
     """Markdown description of the generated module ``names['p']`` (interface, units, footprint)."""
     p, real, state, output = names["p"], names["real"], names["state"], names["output"]
     ctype = "float" if float32 else "double"
-    used = [c for c, u in zip(("delta_f", "ay", "r"), d.uses) if u]
+    u0 = "p" if d.first_input == "p" else "delta_f"
+    u0_desc = ("`p` roll rate (rad/s, positive rolling left side up; with the grade correction below, the rate\n"
+               f"`{p}_roll_rate()` returns)" if u0 == "p" else
+               "`delta_f` front road-wheel angle (rad, = steering-wheel angle / steering ratio)")
+    used = [c for c, u in zip((u0, "ay", "r"), d.uses) if u]
     tab = d.table_bytes(float32)
     fixed = "" if d.discrete is None else (
         f"- Fixed-rate tables for {d.rate:g} Hz: a sample {1.0 / d.rate:g} s after the last valid one "
@@ -38,7 +42,7 @@ static {state} est;                 /* one per estimator instance */
 
 {p}_init(&est);                     /* also: reset */
 /* every sample (t in s, SI units, ISO 8855 axes): */
-if ({p}_step(&est, t, vx, ay, r, delta_f, &out)) {{
+if ({p}_step(&est, t, vx, ay, r, {u0}, &out)) {{
     use(out.phi_b);                 /* road bank angle, rad */
 }}
 ```
@@ -46,12 +50,12 @@ if ({p}_step(&est, t, vx, ay, r, delta_f, &out)) {{
 | function | what it does |
 |---|---|
 | `void {p}_init({state} *s)` | initialise or reset: the next valid sample (re)starts the estimator |
-| `int {p}_step(s, double t, vx, ay, r, delta_f, {output} *out)` | one sample at absolute time `t` (s); returns `valid`; `out` may be NULL |
-| `int {p}_step_dt(s, dt, vx, ay, r, delta_f, {output} *out)` | the same with `dt` (s) = time since the previous call instead of `t` |
+| `int {p}_step(s, double t, vx, ay, r, {u0}, {output} *out)` | one sample at absolute time `t` (s); returns `valid`; `out` may be NULL |
+| `int {p}_step_dt(s, dt, vx, ay, r, {u0}, {output} *out)` | the same with `dt` (s) = time since the previous call instead of `t` |
 
 Inputs (`{real}`): `vx` longitudinal speed (m/s), `ay` lateral acceleration measured by the
 ESP sensor (m/s^2, positive to the left), `r` yaw rate (rad/s, positive turning left),
-`delta_f` front road-wheel angle (rad, = steering-wheel angle / steering ratio). This
+{u0_desc}. This
 estimator reads {', '.join(used)}; the other inputs are ignored (NaN allowed).
 
 Outputs (`{output}`): `w` = sin(theta); `theta` (rad) = bank + body roll; `phi_b` (rad) the
@@ -84,7 +88,7 @@ Sample handling (identical to roadbank's Python `Estimator.step()`):
 
 Observer with {d.n} states{(' (' + ', '.join(d.state_names) + ')') if d.state_names else ''}
 scheduled on speed: `xi' = F(vx) xi + G(vx) eta`, `w = H(vx) xi + D(vx) eta`,
-`eta = [delta_f, ay, r]`, tabulated every {d.dv:g} m/s from {d.v0:g} m/s ({d.ng} speeds; clamped
+`eta = [{u0}, ay, r]`, tabulated every {d.dv:g} m/s from {d.v0:g} m/s ({d.ng} speeds; clamped
 beyond), interpolated linearly and discretised per sample by the trapezoidal rule. Roll
 separation: {'dynamic second-order roll model' if d.nr else 'static roll gain ' + f'{d.roll_D:.6g} rad per m/s^2'}.
 {_gate_text(d)}{_limit_text(d)}Estimator: `{d.provenance.get('estimator', d.name)}`. See roadbank's docs/embedded.md

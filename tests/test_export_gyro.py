@@ -1,0 +1,163 @@
+"""The gyro-aided filter exported to C (roadbank.export with a KinematicGyro; the grade correction of
+roadbank.export.grade_c): the C module's corrected roll rate and estimate against the Python estimator's on the same
+samples (the independent implementation being roadbank's own kernels and numpy, which the C must reproduce), on a
+synthetic drive with faults and on the shared KITTI drive, and the command line."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from roadbank.cli import main
+from roadbank.constants import G
+from roadbank.estimators.gyro import KinematicGyro
+from roadbank.export import CModule, NotExportable, export_c
+from roadbank.models.attitude import grade_pitch
+from roadbank.signals import Signals
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+KITTI = DATA / "kitti-oxts" / "2011_09_26_drive_0070"
+needs_kitti = pytest.mark.skipif(not KITTI.is_dir(), reason=f"shared KITTI data not found at {KITTI}")
+TOL64 = 1e-9          # rad, rad/s
+
+
+def _drive(rate: float = 50.0, duration: float = 90.0, seed: int = 0) -> Signals:
+    """A drive on a road that climbs and falls (pitch to 4 deg) and banks (to 3 deg) while the car weaves, with an
+    INS-like roll rate (the roll's rate plus r tan(pitch)), ax (the speed's rate less g sin(pitch)) and pitch rate;
+    jittered time stamps, a standstill at the start, NaN samples in ax, q, p and vx, a 1.5 s and a 12 s gap."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, duration, 1.0 / rate)
+    t = t + rng.uniform(-0.2, 0.2, len(t)) / rate
+    keep = ~(((t > 30.0) & (t < 31.5)) | ((t > 60.0) & (t < 72.0)))
+    t = t[keep]
+    vx = np.clip(2.0 * t, 0.0, 1.0) * (12.0 + 4.0 * np.sin(2 * np.pi * t / 40.0))
+    pitch = np.radians(4.0) * np.sin(2 * np.pi * t / 35.0)
+    bank = np.radians(3.0) * np.sin(2 * np.pi * t / 23.0)
+    r = 0.15 * np.sin(2 * np.pi * t / 9.0)
+    ay = vx * r + G * np.sin(bank) + rng.normal(0.0, 0.1, len(t))
+    ax = np.gradient(vx, t) - G * np.sin(pitch) + rng.normal(0.0, 0.05, len(t))
+    q = np.gradient(pitch, t)
+    p = np.gradient(bank, t) - r * np.tan(pitch) + math.radians(0.2)
+    for x, at in ((ax, [40, 700]), (q, [900]), (p, [1300]), (vx, [1700])):
+        x[at] = np.nan
+    return Signals(t, vx, ay, r, np.full(len(t), np.nan), p=p, ax=ax, q=q)
+
+
+def _export(est, tmp_path, rate: float, float32: bool = False) -> CModule:
+    res = export_c(est, tmp_path / ("f32" if float32 else "f64"), rate=rate, float32=float32)
+    return CModule(res.source, tmp_path / ("f32" if float32 else "f64"))
+
+
+def _c_run(mod: CModule, s: Signals, use_dt: bool = False) -> tuple[np.ndarray, dict]:
+    q = s.q if s.q is not None else np.full(len(s), np.nan)
+    rate = mod.roll_rates(s.t, s.vx, s.ay, s.r, s.p, s.ax, q)
+    return rate, mod.run(s.t, s.vx, s.ay, s.r, rate, use_dt=use_dt)
+
+
+GRADES = {"window": dict(grade_window=4.0, grade_first_span=2.0),
+          "observer": dict(grade_window=4.0, pitch_bandwidth=0.5, pitch_anchor=1.0, cutoff=0.05, bias_tau=40.0),
+          "observer with a start and an offset state": dict(grade_window=4.0, pitch_bandwidth=0.5,
+                                                            pitch_start=(3.0, 3.0), pitch_offset_tau=20.0)}
+
+
+@pytest.mark.parametrize("grade", list(GRADES))
+def test_the_c_module_corrects_the_roll_rate_and_estimates_as_the_python_filter(grade, tmp_path):
+    """The corrected roll rate of <prefix>_roll_rate equals GradeCarry.correct's (NaN where it is, the faults and
+    gaps included) and the C step on it equals KinematicGyro.run to 1e-9 rad (valid flags identical), through both
+    entry points."""
+    s = _drive()
+    est = KinematicGyro(**GRADES[grade])
+    if grade == "window":
+        s = dataclasses.replace(s, q=None)
+    ref = est.run(s)
+    est.grade.reset()
+    py_rate = est.grade.correct(s).p
+    mod = _export(est, tmp_path, 1.0 / est.fixed_dt)
+    assert mod.has_grade
+    rate, c = _c_run(mod, s)
+    np.testing.assert_array_equal(np.isnan(rate), np.isnan(py_rate))
+    assert np.nanmax(np.abs(rate - py_rate)) <= TOL64
+    assert np.nanmax(np.abs(rate - s.p)) > 1e-3              # the correction acts
+    np.testing.assert_array_equal(c["valid"], ref.valid)
+    assert np.max(np.abs(c["theta"] - ref.theta)) <= TOL64 and np.max(np.abs(c["phi_b"] - ref.phi_b)) <= TOL64
+    _, c_dt = _c_run(mod, s, use_dt=True)
+    assert np.max(np.abs(c_dt["theta"][c_dt["valid"]] - ref.theta[ref.valid])) <= TOL64
+
+
+def test_a_float32_module_stays_within_a_thousandth_of_a_degree(tmp_path):
+    s = _drive()
+    est = KinematicGyro(**GRADES["observer"])
+    ref = est.run(s)
+    _, c = _c_run(_export(est, tmp_path, 1.0 / est.fixed_dt, float32=True), s)
+    ok = ref.valid & c["valid"]
+    assert ok.mean() > 0.9
+    assert np.degrees(np.max(np.abs(c["phi_b"][ok] - ref.phi_b[ok]))) < 1e-3
+
+
+def test_samples_denser_than_the_module_rate_shorten_the_window_to_the_ring(tmp_path):
+    """Exported for 10 Hz (a ring of 2 x 4 s x 10 Hz + 8 = 88 samples) and fed at 100 Hz: once the log has lasted the
+    first span (2 s), the pitch is grade_pitch's over the 87 intervals the ring holds (0.87 s), as documented."""
+    n = 1500
+    t = np.arange(n) / 100.0
+    vx = 10.0 + np.sin(t)
+    ax = np.cos(t) - G * np.sin(np.radians(3.0) * np.sin(t / 3.0))
+    r = np.full(n, 0.1)
+    s = Signals(t, vx, vx * r, r, np.full(n, np.nan), p=np.zeros(n), ax=ax)
+    est = KinematicGyro(grade_window=4.0, grade_first_span=2.0, sample_rate=None)
+    mod = _export(est, tmp_path, 10.0)
+    rate = mod.roll_rates(t, vx, s.ay, r, s.p, ax, np.full(n, np.nan))
+    short = grade_pitch(t, vx, ax, 0.87 - 1e-9, est.params.g)     # the last sample 0.87 s back
+    late = t >= 2.0
+    np.testing.assert_allclose(rate[late], r[late] * np.tan(short[late]), rtol=0, atol=1e-12)
+
+
+def test_the_online_offset_learner_and_the_python_starts_are_refused_with_the_reason(tmp_path):
+    from roadbank.estimators import with_online_offsets
+    with pytest.raises(NotExportable, match="learns its roll rate's offset itself"):
+        export_c(with_online_offsets(KinematicGyro()), tmp_path, rate=100.0)
+    with pytest.raises(NotExportable, match="start_hold or start_span"):
+        export_c(KinematicGyro(start_span=3.0), tmp_path, rate=100.0)
+
+
+@needs_kitti
+def test_the_default_of_a_kitti_drive_exports_with_the_pitch_observer_and_runs_as_in_python(tmp_path):
+    """roadbank's default for 0070 (the gyro filter with the INS's constants, the observer's pitch and its anchored
+    start), exported at the rate it runs at: the C module gives the Python estimate to 1e-9 rad."""
+    from roadbank.io.kitti import load_kitti_oxts
+    from roadbank.vehicle import for_log
+    s = load_kitti_oxts(KITTI).signals
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        est = for_log("kinematic-pif", s)
+    ref = est.run(s)
+    assert isinstance(est, KinematicGyro) and est.grade.pitch is not None
+    _, c = _c_run(_export(est, tmp_path, 1.0 / est.fixed_dt), s)
+    np.testing.assert_array_equal(c["valid"], ref.valid)
+    assert np.max(np.abs(c["theta"] - ref.theta)) <= TOL64
+
+
+@needs_kitti
+def test_export_c_with_roll_rate_designs_the_gyro_module_for_the_log(tmp_path):
+    runner = CliRunner()
+    res = runner.invoke(main, ["export", "c", "-e", "kinematic-pif", "--log", str(KITTI), "--roll-rate",
+                               "-o", str(tmp_path / "g")])
+    assert res.exit_code == 0, res.output
+    assert "reads the roll rate, corrected for the grade by ax and the pitch rate" in res.output
+    header = (tmp_path / "g" / "roadbank_kinematic_pif.h").read_text()
+    assert "roadbank_kinematic_pif_roll_rate(" in header and "real_t r, roadbank_kinematic_pif_real p," not in header
+    assert "roadbank_kinematic_pif_real r,\n    roadbank_kinematic_pif_real p, roadbank_kinematic_pif_output" in header
+    esp = runner.invoke(main, ["export", "c", "-e", "kinematic-pif", "--log", str(KITTI), "-o", str(tmp_path / "e")])
+    assert esp.exit_code == 0 and "roll rate" not in esp.output
+    assert "_roll_rate(" not in (tmp_path / "e" / "roadbank_kinematic_pif.h").read_text()
+    both = runner.invoke(main, ["export", "c", "-e", "kinematic-pif", "--log", str(KITTI), "--roll-rate",
+                                "--online-offsets", "-o", str(tmp_path / "o")])
+    assert both.exit_code == 1 and "Traceback" not in both.output
+    assert "learns its roll rate's offset itself" in both.output
+    alone = runner.invoke(main, ["export", "c", "-e", "kinematic-pif", "--roll-rate", "-o", str(tmp_path / "n")])
+    assert alone.exit_code == 2 and "--roll-rate describes --log" in alone.output
