@@ -61,7 +61,9 @@ def export_c(est, out_dir, *, rate: float, float32: bool = False, module_name: s
         A designed estimator on the ``lpv`` kernel (its tables are exported as they are), or
         one behind the online offset learner (:func:`roadbank.estimators.with_online_offsets`):
         the module then also has ``<prefix>_offsets_*`` and ``<prefix>_step_learning``
-        (:mod:`.offsets_c`).
+        (:mod:`.offsets_c`). The gyro-aided filter (:class:`~roadbank.estimators.gyro.KinematicGyro`) reads the
+        roll rate as its first input and, with a grade correction, has ``<prefix>_grade_*`` and
+        ``<prefix>_roll_rate`` (:mod:`.grade_c`).
     out_dir : path
         Output directory (created if missing).
     rate : float
@@ -84,15 +86,13 @@ def export_c(est, out_dir, *, rate: float, float32: bool = False, module_name: s
     if isinstance(est, OnlineOffsets):       # the estimator behind the online offset learner
         learner, est = est._ocfg, est.inner
     design = export_design(est, rate, module_name, discrete=discrete)
-    if learner is not None and design.first_input != "delta_f":
-        raise NotExportable(f"{design.name}: not exportable with the online offset learner: the learner corrects "
-                            "the yaw rate and the steering angle for the ESP filters; the gyro-aided filter learns "
-                            "its roll rate's offset itself")
+    prefix = f"roadbank_{design.ident}"
     files = generate(design, float32=float32)
-    if learner is not None:
-        files = add_offsets(files, f"roadbank_{design.ident}", learner, float32)
     if design.grade is not None:
-        files = add_grade(files, f"roadbank_{design.ident}", design.grade, rate, float32)
+        files = add_grade(files, prefix, design.grade, rate, float32)
+    if learner is not None:
+        inputs = "delta_f" if design.first_input == "delta_f" else "p" if design.grade is None else "grade"
+        files = add_offsets(files, prefix, learner, float32, inputs)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = {}

@@ -886,3 +886,21 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
     return {f"{p}.h": _fix_literals(header, float32),
             f"{p}.c": _fix_literals(source, float32),
             f"README_{p}.md": readme(d, names, float32)}
+
+
+def add_part(files: dict[str, str], prefix: str, head: str, src: str, readme: str, what: str) -> dict[str, str]:
+    """The generated module ``files`` (:func:`generate`) with a part added: ``head`` to its header (before the closing
+    guard), ``src`` to its source (at the end), ``readme`` to its README; ``what`` names the part in the error of a
+    header without that guard."""
+    out = dict(files)
+    h = out[f"{prefix}.h"]
+    tail = "\n#ifdef __cplusplus\n}\n#endif\n"
+    at = h.rfind(tail)
+    if at < 0:
+        raise ValueError(f"{prefix}.h: no closing block to add {what} before")
+    out[f"{prefix}.h"] = h[:at] + head + h[at:]
+    out[f"{prefix}.c"] = out[f"{prefix}.c"] + src
+    name = f"README_{prefix}.md"
+    if name in out:
+        out[name] += readme
+    return out

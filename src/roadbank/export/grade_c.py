@@ -20,7 +20,7 @@ from string import Template
 import numpy as np
 
 from ..estimators.kernels import attitude as K
-from .ccode import _fix_literals, real_literal
+from .ccode import _fix_literals, add_part, real_literal
 
 _WINDOW_HEADER = Template("""
 /* ---- the roll rate corrected for the road's grade (roadbank.estimators.gyro.GradeCarry) --------
@@ -379,15 +379,5 @@ def add_grade(files: dict[str, str], prefix: str, grade: dict, rate: float, floa
     """The generated module ``files`` (:func:`roadbank.export.ccode.generate`) with the grade correction added to its
     header (before the closing guard), source (at the end) and README."""
     head, src, readme = grade_parts(prefix, grade, rate, float32)
-    out = dict(files)
-    h = out[f"{prefix}.h"]
-    tail = "\n#ifdef __cplusplus\n}\n#endif\n"
-    at = h.rfind(tail)
-    if at < 0:
-        raise ValueError(f"{prefix}.h: no closing block to add the grade correction before")
-    out[f"{prefix}.h"] = h[:at] + _fix_literals(head, float32) + h[at:]
-    out[f"{prefix}.c"] = out[f"{prefix}.c"] + _fix_literals(src, float32)
-    name = f"README_{prefix}.md"
-    if name in out:
-        out[name] += readme
-    return out
+    return add_part(files, prefix, _fix_literals(head, float32), _fix_literals(src, float32), readme,
+                    "the grade correction")

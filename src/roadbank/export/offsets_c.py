@@ -16,7 +16,7 @@ from string import Template
 import numpy as np
 
 from ..estimators.kernels import offsets as K
-from .ccode import _fix_literals, real_literal
+from .ccode import _fix_literals, add_part, real_literal
 
 _HEADER = Template("""
 /* ---- online sensor offsets (roadbank.estimators.offsets) --------------------------------
@@ -60,11 +60,26 @@ void ${p}_offsets_init(${p}_offsets *o);
 /* Learn from one sample at time t (s) and write the corrected channels into *out (not NULL). */
 void ${p}_offsets_step(${p}_offsets *o, double t, ${real} vx, ${real} ay, ${real} r, ${real} delta_f,
     ${p}_offsets_output *out);
+${learning}""")
 
+_LEARNING_DECL = {
+    "delta_f": """
 /* The learner, then ${p}_step on the corrected sample. *oo may be NULL. Returns valid. */
 int ${p}_step_learning(${p}_state *s, ${p}_offsets *o, double t, ${real} vx, ${real} ay, ${real} r,
     ${real} delta_f, ${p}_output *out, ${p}_offsets_output *oo);
-""")
+""",
+    "p": """
+/* The learner (delta_f read by it only), then ${p}_step on the corrected sample with the roll rate p
+ * (rad/s) as its first input. *oo may be NULL. Returns valid. */
+int ${p}_step_learning(${p}_state *s, ${p}_offsets *o, double t, ${real} vx, ${real} ay, ${real} r,
+    ${real} delta_f, ${real} p, ${p}_output *out, ${p}_offsets_output *oo);
+""",
+    "grade": """
+/* The learner (delta_f read by it only), then ${p}_roll_rate on the corrected yaw rate and ay, then
+ * ${p}_step on the corrected sample with that roll rate as its first input. *oo may be NULL. Returns valid. */
+int ${p}_step_learning(${p}_state *s, ${p}_offsets *o, ${p}_grade *g, double t, ${real} vx, ${real} ay,
+    ${real} r, ${real} delta_f, ${real} p, ${real} ax, ${real} q, ${p}_output *out, ${p}_offsets_output *oo);
+"""}
 
 _SOURCE = Template("""
 /* ---- online sensor offsets: the operations of roadbank.estimators.kernels.offsets --------- */
@@ -258,7 +273,10 @@ void ${p}_offsets_step(offsets_t *o, double t, real_t vx, real_t ay, real_t r, r
     out->delta_learnt = o->e_str_d >= RBO_NSTR ? 1 : 0;
 }
 
-int ${p}_step_learning(state_t *s, offsets_t *o, double t, real_t vx, real_t ay, real_t r, real_t delta_f,
+${learning}""")
+
+_LEARNING_DEF = {
+    "delta_f": """int ${p}_step_learning(state_t *s, offsets_t *o, double t, real_t vx, real_t ay, real_t r, real_t delta_f,
                        output_t *out, offsets_output_t *oo)
 {
     offsets_output_t tmp;
@@ -266,7 +284,25 @@ int ${p}_step_learning(state_t *s, offsets_t *o, double t, real_t vx, real_t ay,
     ${p}_offsets_step(o, t, vx, ay, r, delta_f, q);
     return ${p}_step(s, t, vx, q->ay, q->r, q->delta_f, out);
 }
-""")
+""",
+    "p": """int ${p}_step_learning(state_t *s, offsets_t *o, double t, real_t vx, real_t ay, real_t r, real_t delta_f,
+                       real_t p, output_t *out, offsets_output_t *oo)
+{
+    offsets_output_t tmp;
+    offsets_output_t *c = oo != 0 ? oo : &tmp;
+    ${p}_offsets_step(o, t, vx, ay, r, delta_f, c);
+    return ${p}_step(s, t, vx, c->ay, c->r, p, out);
+}
+""",
+    "grade": """int ${p}_step_learning(state_t *s, offsets_t *o, ${p}_grade *g, double t, real_t vx, real_t ay, real_t r,
+                       real_t delta_f, real_t p, real_t ax, real_t q, output_t *out, offsets_output_t *oo)
+{
+    offsets_output_t tmp;
+    offsets_output_t *c = oo != 0 ? oo : &tmp;
+    ${p}_offsets_step(o, t, vx, ay, r, delta_f, c);
+    return ${p}_step(s, t, vx, c->ay, c->r, ${p}_roll_rate(g, t, vx, c->ay, c->r, p, ax, q), out);
+}
+"""}
 
 #: the C constant of each kernel setting
 _CONSTS = {"VSTOP": K.C_VSTOP, "TSTOP": K.C_TSTOP, "TAUSTOP": K.C_TAUSTOP, "NSTOP": K.C_NSTOP,
@@ -276,33 +312,31 @@ _CONSTS = {"VSTOP": K.C_VSTOP, "TSTOP": K.C_TSTOP, "TAUSTOP": K.C_TAUSTOP, "NSTO
            "DMAX": K.C_DMAX, "AYOFF": K.C_AYOFF, "GAP": K.C_GAP}
 
 
-def offsets_parts(prefix: str, cfg: np.ndarray, float32: bool) -> tuple[str, str]:
+def offsets_parts(prefix: str, cfg: np.ndarray, float32: bool, inputs: str = "delta_f") -> tuple[str, str]:
     """``(header part, source part)`` of the learner with the kernel settings ``cfg``
-    (:meth:`roadbank.estimators.offsets.OffsetSettings.cfg`) for the module ``prefix``."""
+    (:meth:`roadbank.estimators.offsets.OffsetSettings.cfg`) for the module ``prefix``; ``inputs``: what its
+    ``_step_learning`` gives the step as its first input: ``"delta_f"`` (the corrected steering angle), ``"p"`` (a
+    roll rate) or ``"grade"`` (a roll rate through the module's ``_roll_rate``, :mod:`.grade_c`)."""
     real = f"{prefix}_real"
     header = _HEADER.substitute(p=prefix, real=real, vstop=f"{cfg[K.C_VSTOP]:g}", tstop=f"{cfg[K.C_TSTOP]:g}",
                                 trail=f"{cfg[K.C_TRAIL]:g}", trail2=f"{2 * cfg[K.C_TRAIL]:g}",
-                                ayoff=f"{cfg[K.C_AYOFF]:g}")
-    source = _SOURCE.substitute(p=prefix, **{k: real_literal(cfg[i], float32) for k, i in _CONSTS.items()})
+                                ayoff=f"{cfg[K.C_AYOFF]:g}",
+                                learning=Template(_LEARNING_DECL[inputs]).substitute(p=prefix, real=real))
+    source = _SOURCE.substitute(p=prefix, learning=Template(_LEARNING_DEF[inputs]).substitute(p=prefix),
+                                **{k: real_literal(cfg[i], float32) for k, i in _CONSTS.items()})
     return header, source
 
 
-def add_offsets(files: dict[str, str], prefix: str, cfg: np.ndarray, float32: bool) -> dict[str, str]:
+def add_offsets(files: dict[str, str], prefix: str, cfg: np.ndarray, float32: bool,
+                inputs: str = "delta_f") -> dict[str, str]:
     """The generated module ``files`` (:func:`roadbank.export.ccode.generate`) with the learner
-    added to its header (before the closing guard) and source (at the end)."""
-    head, src = offsets_parts(prefix, cfg, float32)
-    out = dict(files)
-    h = out[f"{prefix}.h"]
-    tail = "\n#ifdef __cplusplus\n}\n#endif\n"
-    at = h.rfind(tail)
-    if at < 0:
-        raise ValueError(f"{prefix}.h: no closing block to add the offset learner before")
-    out[f"{prefix}.h"] = h[:at] + _fix_literals(head, float32) + h[at:]
-    out[f"{prefix}.c"] = out[f"{prefix}.c"] + _fix_literals(src, float32)
-    readme = f"README_{prefix}.md"
-    if readme in out:
-        out[readme] += README.format(p=prefix)
-    return out
+    added to its header (before the closing guard), source (at the end) and README (``inputs`` as
+    :func:`offsets_parts`'s)."""
+    head, src = offsets_parts(prefix, cfg, float32, inputs)
+    gyro = "" if inputs == "delta_f" else README_GYRO.format(
+        p=prefix, more=", the grade state `&grade`, `ax` and `q`" if inputs == "grade" else "")
+    return add_part(files, prefix, _fix_literals(head, float32), _fix_literals(src, float32),
+                    README.format(p=prefix) + gyro, "the offset learner")
 
 
 README = """
@@ -316,4 +350,10 @@ driving once the yaw-rate offset is learnt; the lateral accelerometer's offset i
 (it reads like road bank), a known one is subtracted. `offsets.r_learnt` and
 `offsets.delta_learnt` say whether each offset has enough evidence yet; `out.valid` is the
 estimator's own flag. The same operations as roadbank's `with_online_offsets(...).step()`.
+"""
+
+README_GYRO = """
+This module is the gyro-aided filter: `{p}_step_learning` also takes the roll rate `p` (rad/s){more}, after
+`delta_f`; the learner reads `delta_f` (the steering angle), the filter the roll rate (with the yaw rate and `ay`
+the learner corrected), as roadbank's `with_online_offsets(kinematic-gyro).step(t, vx, ay, r, delta_f, p=, ax=, q=)`.
 """
