@@ -276,7 +276,8 @@ void ${p}_offsets_step(offsets_t *o, double t, real_t vx, real_t ay, real_t r, r
 ${learning}""")
 
 _LEARNING_DEF = {
-    "delta_f": """int ${p}_step_learning(state_t *s, offsets_t *o, double t, real_t vx, real_t ay, real_t r, real_t delta_f,
+    "delta_f": """\
+int ${p}_step_learning(state_t *s, offsets_t *o, double t, real_t vx, real_t ay, real_t r, real_t delta_f,
                        output_t *out, offsets_output_t *oo)
 {
     offsets_output_t tmp;
@@ -285,7 +286,8 @@ _LEARNING_DEF = {
     return ${p}_step(s, t, vx, q->ay, q->r, q->delta_f, out);
 }
 """,
-    "p": """int ${p}_step_learning(state_t *s, offsets_t *o, double t, real_t vx, real_t ay, real_t r, real_t delta_f,
+    "p": """\
+int ${p}_step_learning(state_t *s, offsets_t *o, double t, real_t vx, real_t ay, real_t r, real_t delta_f,
                        real_t p, output_t *out, offsets_output_t *oo)
 {
     offsets_output_t tmp;
@@ -294,7 +296,8 @@ _LEARNING_DEF = {
     return ${p}_step(s, t, vx, c->ay, c->r, p, out);
 }
 """,
-    "grade": """int ${p}_step_learning(state_t *s, offsets_t *o, ${p}_grade *g, double t, real_t vx, real_t ay, real_t r,
+    "grade": """\
+int ${p}_step_learning(state_t *s, offsets_t *o, ${p}_grade *g, double t, real_t vx, real_t ay, real_t r,
                        real_t delta_f, real_t p, real_t ax, real_t q, output_t *out, offsets_output_t *oo)
 {
     offsets_output_t tmp;
