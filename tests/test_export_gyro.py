@@ -213,8 +213,24 @@ def test_export_c_with_roll_rate_designs_the_gyro_module_for_the_log(tmp_path):
     assert res.exit_code == 0, res.output
     assert "reads the roll rate, corrected for the grade by ax and the pitch rate" in res.output
     header = (tmp_path / "g" / "roadbank_kinematic_pif.h").read_text()
-    assert "roadbank_kinematic_pif_roll_rate(" in header and "real_t r, roadbank_kinematic_pif_real p," not in header
-    assert "roadbank_kinematic_pif_real r,\n    roadbank_kinematic_pif_real p, roadbank_kinematic_pif_output" in header
+    assert "roadbank_kinematic_pif_roll_rate(" in header
+    # the module of the estimator roadbank estimate builds for the log (for_log), at the log's rate
+    from roadbank.io import load_log
+    from roadbank.vehicle import for_log, log_conditions
+    s = load_log(KITTI).signals
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        est = for_log("kinematic-pif", s)
+    assert (tmp_path / "g" / "roadbank_kinematic_pif.c").read_text() == \
+        export_c(est, tmp_path / "py", rate=log_conditions(s)["log_rate"]).source.read_text()
+    # a log without a roll rate: the ESP module, and a warning that says so
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    pq.write_table(pa.table({"t": s.t, "vx": s.vx, "ay": s.ay, "r": s.r}), tmp_path / "esp.parquet")
+    plain = runner.invoke(main, ["export", "c", "-e", "kinematic-pif", "--log", str(tmp_path / "esp.parquet"),
+                                 "--roll-rate", "-o", str(tmp_path / "p")])
+    assert plain.exit_code == 0 and "the log's roll rate is not used" in plain.output
+    assert "_roll_rate(" not in (tmp_path / "p" / "roadbank_kinematic_pif.h").read_text()
     esp = runner.invoke(main, ["export", "c", "-e", "kinematic-pif", "--log", str(KITTI), "-o", str(tmp_path / "e")])
     assert esp.exit_code == 0 and "roll rate" not in esp.output
     assert "_roll_rate(" not in (tmp_path / "e" / "roadbank_kinematic_pif.h").read_text()

@@ -115,6 +115,10 @@ class GradeCarry:
         self.pitch = pitch
         self.reset()
 
+    def __repr__(self) -> str:
+        return (f"GradeCarry(window={self.window!r}, g={self.g!r}, first_span={self.first_span!r}, "
+                f"pitch={self.pitch!r})")
+
     def reset(self) -> None:
         """Forget the samples kept: the next chunk starts a log."""
         #: the last window's (t, vx, ax) and the running area and count at its first sample

@@ -89,6 +89,10 @@ class PitchObserver:
             w, PITCH_ZETA, float(g), ws, span, PITCH_MAX_GAP_S, tq, span_a, (ANCHOR_SPEED_SD / ANCHOR_GRADE_SD) ** 2)
         self.reset()
 
+    def __repr__(self) -> str:
+        return (f"PitchObserver(bandwidth={self.bandwidth!r}, g={float(self._cfg[C_G])!r}, start={self.start!r}, "
+                f"offset_tau={self.offset_tau!r}, anchor={self.anchor!r})")
+
     @property
     def cfg(self) -> np.ndarray:
         """The settings as the compiled kernel reads them (a copy; :mod:`roadbank.estimators.kernels.attitude`)."""
