@@ -528,6 +528,17 @@ from there. Candidates: the shipped start (3 rad/s for 3 s from a zero pitch); t
 rad/s until 3 s. Sets and objective: the fortieth stage's, with the unbiased roll rate's constants as shipped since the
 forty-third stage (0.05 Hz, 40 s). The lowest wins; ties within :data:`TIE_DEG` go to the shipped start, then to the
 shorter span, then to no faster start after it. Neither the KITTI validation drives nor comma2k19 take part.
+
+The forty-fifth stage (:func:`choose_unbiased_after_anchor`; rule written 2026-12-06 before any of its candidates ran,
+after the forty-fourth chose the anchored start): the observer's first seconds were what a slow observer and a low
+cut-off paid for (the forty-first stage had 0.25 rad/s the lowest, within the tie of 0.5, with the 3 rad/s start; the
+forty-third traded 0070's start for the rest); with the first pitch fitted, both may be chosen again, together.
+Candidates: the observer's bandwidth in :data:`ANCHORED_BANDWIDTHS` (0.25, 0.35, 0.5 rad/s) x the unbiased roll rate's
+cut-off in :data:`ANCHORED_CUTOFFS_HZ` (0.03, 0.05, 0.07 Hz), the offset time constant 40 s and the anchored start as
+shipped: nine, the shipped pair (0.5 rad/s, 0.05 Hz) among them. Objective: the thirty-sixth stage's (the training
+drives as read, whole and in 8, 12, 20 s pieces; the mean over the four lengths of the median raw RMS), as the
+forty-third's. The lowest wins; ties within :data:`TIE_DEG` go to the shipped pair, then to the higher bandwidth, then
+to the higher cut-off. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -615,6 +626,10 @@ UNBIASED_CUTOFFS_AGAIN_HZ = (0.03, 0.05, 0.07, 0.1)
 UNBIASED_TAUS_AGAIN_S = (20.0, 40.0, 80.0)
 #: the forty-fourth stage's candidate spans (s) of the pitch observer's anchored start
 PITCH_ANCHOR_SPANS_S = (1.0, 2.0, 3.0)
+#: the forty-fifth stage's candidate bandwidths (rad/s) of the pitch observer and cut-offs (Hz) of the unbiased roll
+#: rate's filter
+ANCHORED_BANDWIDTHS = (0.25, 0.35, 0.5)
+ANCHORED_CUTOFFS_HZ = (0.03, 0.05, 0.07)
 #: the fortieth stage's start of the pitch observer for an unbiased pitch rate, as the forty-first to forty-fourth
 #: stages ran it (the forty-fourth replaced it by the anchored start)
 START_40 = (3.0, 3.0)
