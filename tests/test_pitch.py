@@ -173,7 +173,7 @@ def test_the_thirty_ninth_stage_reads_the_pitch_from_an_unbiased_pitch_rate():
     if len(logs) < 8:
         pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
     chosen, obj = real.choose_pitch_rate(logs)
-    assert chosen == ("unbiased", UNBIASED_PITCH_BANDWIDTH, None) == ("unbiased", 0.5, None)
+    assert chosen == ("unbiased", real.BANDWIDTH_39, None) == ("unbiased", 0.5, None)
     best = min(obj.values())
     assert obj[("always", 0.5, (3.0, 3.0))] == best
     assert obj[chosen] <= best + real.TIE_DEG < obj[("window",)]
@@ -278,7 +278,7 @@ def test_the_forty_first_stage_keeps_the_bandwidth_below_the_grid_edge_within_th
     if len(logs) < 8:
         pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
     chosen, obj = real.choose_pitch_bandwidth(logs)
-    assert chosen == UNBIASED_PITCH_BANDWIDTH == 0.5
+    assert chosen == real.BANDWIDTH_39 == 0.5
     assert min(obj.values()) == obj[0.25] and obj[0.5] <= obj[0.25] + real.TIE_DEG
     assert obj[0.25] < obj[0.35] < obj[0.5]
 
@@ -386,3 +386,20 @@ def test_the_forty_fourth_stage_anchors_the_start_for_one_second():
     chosen, obj = real.choose_pitch_anchor(logs)
     assert chosen == (UNBIASED_PITCH_ANCHOR, UNBIASED_PITCH_START) == (1.0, None)
     assert min(obj.values()) == obj[chosen] < obj[(None, real.START_40)] - real.TIE_DEG
+
+
+@needs_kitti
+def test_the_forty_fifth_stage_slows_the_observer_with_the_anchored_start():
+    """The rule (tuning.real.choose_unbiased_after_anchor): 0.35 rad/s with the 0.05 Hz cut-off is the lowest, the
+    shipped 0.5 rad/s outside its tie, 0.25 rad/s within it (the tie order takes the higher bandwidth); at every
+    bandwidth 0.05 Hz beats 0.03 and 0.07 Hz."""
+    from roadbank.estimators.gyro import UNBIASED_GYRO_CUTOFF_HZ
+    from roadbank.tuning import real
+    logs = real.training_logs(DATA, roll_rate=True, pitch_rate=True)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, obj = real.choose_unbiased_after_anchor(logs)
+    assert chosen == (UNBIASED_PITCH_BANDWIDTH, UNBIASED_GYRO_CUTOFF_HZ) == (0.35, 0.05)
+    best = min(obj.values())
+    assert obj[chosen] == best and obj[(0.25, 0.05)] <= best + real.TIE_DEG < obj[(0.5, 0.05)]
+    assert all(obj[(w, 0.05)] < min(obj[(w, 0.03)], obj[(w, 0.07)]) for w in real.ANCHORED_BANDWIDTHS)

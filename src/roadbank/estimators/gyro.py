@@ -95,7 +95,8 @@ UNBIASED_GYRO_CUTOFF_HZ = 0.05
 UNBIASED_GYRO_BIAS_TAU_S = 40.0
 #: the bandwidth (rad/s) of the pitch observer where the pitch rate's source documents it as free of offset
 #: (``Signals.unbiased``; :data:`PITCH_BANDWIDTH` elsewhere): the thirty-ninth stage of :mod:`roadbank.tuning.real`
-UNBIASED_PITCH_BANDWIDTH = 0.5
+#: (0.5), chosen again with the anchored start by the forty-fifth (0.35)
+UNBIASED_PITCH_BANDWIDTH = 0.35
 #: its faster start, (bandwidth rad/s, span s) or None (the fortieth stage chose 3 rad/s for 3 s), and its anchored
 #: start's span (s; :class:`~roadbank.estimators.pitch.PitchObserver`'s ``anchor``): the forty-fourth stage
 UNBIASED_PITCH_START: tuple[float, float] | None = None

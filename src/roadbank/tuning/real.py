@@ -559,7 +559,8 @@ from ..constants import G
 from ..vehicle import conditions
 from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
 from ..estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, UNBIASED_GYRO_BIAS_TAU_S,
-                               UNBIASED_GYRO_CUTOFF_HZ, UNBIASED_PITCH_BANDWIDTH, KinematicGyro, KinematicGyroSmoother)
+                               UNBIASED_GYRO_CUTOFF_HZ, UNBIASED_PITCH_ANCHOR, UNBIASED_PITCH_START, KinematicGyro,
+                               KinematicGyroSmoother)
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
@@ -630,6 +631,9 @@ PITCH_ANCHOR_SPANS_S = (1.0, 2.0, 3.0)
 #: rate's filter
 ANCHORED_BANDWIDTHS = (0.25, 0.35, 0.5)
 ANCHORED_CUTOFFS_HZ = (0.03, 0.05, 0.07)
+#: the thirty-ninth stage's bandwidth (rad/s) of the pitch observer for an unbiased pitch rate, as the fortieth to
+#: forty-fourth stages ran it (the forty-fifth chose anew)
+BANDWIDTH_39 = 0.5
 #: the fortieth stage's start of the pitch observer for an unbiased pitch rate, as the forty-first to forty-fourth
 #: stages ran it (the forty-fourth replaced it by the anchored start)
 START_40 = (3.0, 3.0)
@@ -1404,7 +1408,7 @@ def choose_pitch_anchor(logs, spans=PITCH_ANCHOR_SPANS_S, lengths=SHORT_PIECES_S
     of the observer (``start`` as ``pitch_start``)."""
     keys = [(None, START_40)] + [(a, None) for a in spans] + [(spans[0], START_40)]
     obj = unbiased_pitch_objectives(
-        logs, {k: dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_anchor=k[0], pitch_start=k[1]) for k in keys},
+        logs, {k: dict(pitch_bandwidth=BANDWIDTH_39, pitch_anchor=k[0], pitch_start=k[1]) for k in keys},
         lengths, {"cutoff": UNBIASED_GYRO_CUTOFF_HZ, "bias_tau": UNBIASED_GYRO_BIAS_TAU_S})
     return lowest_tied(obj, lambda k: (k[0] is not None, k[0] or 0.0, k[1] is not None)), obj
 
@@ -1417,7 +1421,7 @@ def choose_biased_pitch_rate(logs, taus=PITCH_OFFSET_TAUS, lengths=SHORT_PIECES_
     sets = gyro_sets(logs) + [[(dataclasses.replace(s, q=s.q + sign * phone), ref, m) for s, ref, m in logs]
                               for sign in (1.0, -1.0)]
     cut = [whole_and_pieces(one, lengths) for one in sets]
-    observer = dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=START_40)
+    observer = dict(pitch_bandwidth=BANDWIDTH_39, pitch_start=START_40)
     free = sets_objective(cut[:1], **UNBIASED_36, **observer)
     obj = {"none": 0.5 * (sets_objective(cut, pitch_bandwidth=0.0) + free)}
     for tq in taus:
@@ -1430,10 +1434,22 @@ def choose_unbiased_gyro_again(logs, cutoffs=UNBIASED_CUTOFFS_AGAIN_HZ, taus=UNB
     """The forty-third stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
     rate, ``ax`` and pitch rate). Returns ``((cutoff Hz, bias_tau s), {(cutoff, bias_tau): objective deg})``."""
     cut = [whole_and_pieces(logs, lengths)]
-    observer = dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=START_40)
+    observer = dict(pitch_bandwidth=BANDWIDTH_39, pitch_start=START_40)
     obj = {(fc, bt): sets_objective(cut, cutoff=fc, bias_tau=bt, **observer) for fc in cutoffs for bt in taus}
     shipped = (UNBIASED_36["cutoff"], UNBIASED_36["bias_tau"])
     return lowest_tied(obj, lambda k: (k != shipped, -k[1], -k[0])), obj
+
+
+def choose_unbiased_after_anchor(logs, bandwidths=ANCHORED_BANDWIDTHS, cutoffs=ANCHORED_CUTOFFS_HZ,
+                                 lengths=SHORT_PIECES_S):
+    """The forty-fifth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate, ``ax`` and pitch rate). Returns ``((bandwidth rad/s, cutoff Hz), {(bandwidth, cutoff): objective deg})``."""
+    cut = [whole_and_pieces(logs, lengths)]
+    start = dict(pitch_start=UNBIASED_PITCH_START, pitch_anchor=UNBIASED_PITCH_ANCHOR)
+    obj = {(w, fc): sets_objective(cut, cutoff=fc, bias_tau=UNBIASED_GYRO_BIAS_TAU_S, pitch_bandwidth=w, **start)
+           for w in bandwidths for fc in cutoffs}
+    shipped = (0.5, 0.05)
+    return lowest_tied(obj, lambda k: (k != shipped, -k[0], -k[1])), obj
 
 
 def sets_objective(cut, **options) -> float:
