@@ -18,8 +18,8 @@ s + \omega^2)`). It starts at :math:`\hat v = v_x`, :math:`\hat\vartheta = 0` on
 optionally with a faster bandwidth for a first span, or anchored: for a first span the pitch is the first pitch that,
 with the pitch rate integrated since, explains the speed gained beyond :math:`a_x`'s integral (least squares over the
 samples so far, with a prior), and the observer goes on from it. :math:`\omega`, the start and where it is used were
-chosen by written rules on training data (the thirty-ninth to forty-fourth stages of :mod:`roadbank.tuning.real`:
-0.5 rad/s, anchored for the first second, only for a pitch rate documented free of offset). The recursion is
+chosen by written rules on training data (the thirty-ninth to forty-fifth stages of :mod:`roadbank.tuning.real`:
+0.35 rad/s, anchored for the first second, only for a pitch rate documented free of offset). The recursion is
 compiled (:mod:`roadbank.estimators.kernels.attitude`).
 """
 
