@@ -506,8 +506,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         (:func:`pitch_rate_slope`; None: it has none, or one not so documented). Where it does
         (:func:`roll_rate_usable`) and the grade is corrected, that filter reads the pitch from the pitch rate
         (``pitch_bandwidth`` :data:`roadbank.estimators.gyro.UNBIASED_PITCH_BANDWIDTH`, ``pitch_start``
-        ``UNBIASED_PITCH_START`` and ``pitch_anchor`` ``UNBIASED_PITCH_ANCHOR``, the thirty-ninth, fortieth and
-        forty-fourth stages).
+        ``UNBIASED_PITCH_START`` and ``pitch_anchor`` ``UNBIASED_PITCH_ANCHOR``, the thirty-ninth to forty-fifth
+        stages).
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
