@@ -403,3 +403,19 @@ def test_the_forty_fifth_stage_slows_the_observer_with_the_anchored_start():
     best = min(obj.values())
     assert obj[chosen] == best and obj[(0.25, 0.05)] <= best + real.TIE_DEG < obj[(0.5, 0.05)]
     assert all(obj[(w, 0.05)] < min(obj[(w, 0.03)], obj[(w, 0.07)]) for w in real.ANCHORED_BANDWIDTHS)
+
+
+@needs_kitti
+def test_the_forty_sixth_stage_keeps_the_offset_state_of_the_unbiased_roll_rate():
+    """The rule (tuning.real.choose_unbiased_offset_again): whole drives alone would drop the offset state, but with
+    the pieces the shipped 0.05 Hz / 40 s is the lowest of the twelve, no offset state worse by more than the tie at
+    every cut-off but 0.07 Hz."""
+    from roadbank.estimators.gyro import UNBIASED_GYRO_BIAS_TAU_S, UNBIASED_GYRO_CUTOFF_HZ
+    from roadbank.tuning import real
+    logs = real.training_logs(DATA, roll_rate=True, pitch_rate=True)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, obj = real.choose_unbiased_offset_again(logs)
+    assert chosen == (UNBIASED_GYRO_CUTOFF_HZ, UNBIASED_GYRO_BIAS_TAU_S) == (0.05, 40.0)
+    assert obj[chosen] == min(obj.values())
+    assert all(obj[(fc, 0.0)] > obj[(fc, 40.0)] + real.TIE_DEG for fc in (0.03, 0.05))

@@ -572,8 +572,8 @@ from ..constants import G
 from ..vehicle import conditions
 from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
 from ..estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, UNBIASED_GYRO_BIAS_TAU_S,
-                               UNBIASED_GYRO_CUTOFF_HZ, UNBIASED_PITCH_ANCHOR, UNBIASED_PITCH_START, KinematicGyro,
-                               KinematicGyroSmoother)
+                               UNBIASED_GYRO_CUTOFF_HZ, UNBIASED_PITCH_ANCHOR, UNBIASED_PITCH_BANDWIDTH,
+                               UNBIASED_PITCH_START, KinematicGyro, KinematicGyroSmoother)
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
@@ -1465,6 +1465,18 @@ def choose_unbiased_after_anchor(logs, bandwidths=ANCHORED_BANDWIDTHS, cutoffs=A
            for w in bandwidths for fc in cutoffs}
     shipped = (0.5, 0.05)
     return lowest_tied(obj, lambda k: (k != shipped, -k[0], -k[1])), obj
+
+
+def choose_unbiased_offset_again(logs, taus=ANCHORED_BIAS_TAUS_S, cutoffs=ANCHORED_CUTOFFS_HZ,
+                                 lengths=SHORT_PIECES_S):
+    """The forty-sixth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate, ``ax`` and pitch rate). Returns ``((cutoff Hz, bias_tau s), {(cutoff, bias_tau): objective deg})``."""
+    cut = [whole_and_pieces(logs, lengths)]
+    observer = dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=UNBIASED_PITCH_START,
+                    pitch_anchor=UNBIASED_PITCH_ANCHOR)
+    obj = {(fc, bt): sets_objective(cut, cutoff=fc, bias_tau=bt, **observer) for fc in cutoffs for bt in taus}
+    shipped = (0.05, 40.0)
+    return lowest_tied(obj, lambda k: (k != shipped, -k[1], -k[0])), obj
 
 
 def sets_objective(cut, **options) -> float:
