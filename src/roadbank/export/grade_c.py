@@ -351,13 +351,16 @@ def grade_parts(prefix: str, grade: dict, rate: float, float32: bool) -> tuple[s
     obs = grade["observer"]
     if obs is None:
         first = grade["first_span"]
+        cap = _cap(grade, rate)
         head = _WINDOW_HEADER.substitute(names, window=f"{grade['window']:g}", first=f"{first:g}",
                                          maxsin=f"{maxsin:g}", window_lit=lit(grade["window"]),
-                                         cap=_cap(grade, rate))
+                                         cap=cap)
         src = _WINDOW_SOURCE.substitute(names, tan=tan, lean=_LEAN, window=lit(grade["window"]),
                                         first=lit(first if math.isfinite(first) else 1e300), g=lit(grade["g"]),
                                         maxsin=lit(maxsin))
-        how = f"from the speed and `ax` over the last {grade['window']:g} s"
+        nbytes = 48 + cap * (8 + 8 + 8 + (4 if float32 else 8) + 1)
+        how = (f"from the speed and `ax` over the last {grade['window']:g} s (the state keeps {cap} samples, about "
+               f"{nbytes / 1024:.1f} KiB of RAM)")
     else:
         cfg = np.asarray(obs, dtype=np.float64)
         w, ws, ts, tq, anchor = (float(cfg[i]) for i in (K.C_W, K.C_WSTART, K.C_TSTART, K.C_TQ, K.C_ANCHOR))
