@@ -552,6 +552,16 @@ pieces; the mean over the four lengths of the median raw RMS). The lowest wins; 
 shipped pair, then to the longer offset time constant (none last: an offset state guards against a source that is wrong
 about itself, as the thirty-sixth stage's order has it), then to the higher cut-off. Neither the KITTI validation drives
 nor comma2k19 take part.
+
+The forty-seventh stage (:func:`choose_biased_pitch_rate_again`; rule written 2026-12-06 before any of its candidates
+ran, after the forty-sixth): the forty-second stage found a pitch rate with an offset (a MEMS gyro's: a phone's, an
+ECU's) better not read, with the observer started at a zero pitch; with the anchored start and the slower observer the
+question is open again. Candidates and sets as the forty-second stage's (not read, shipped; the observer with an offset
+state in ``T_q`` of :data:`PITCH_OFFSET_TAUS`: none, 20, 60 s; the five general sets, +-0.3 deg/s on ``q`` as on ``p``
+and +-1 deg/s on ``q`` alone), the observer as shipped since the forty-fifth stage (0.35 rad/s, anchored for 1 s) and
+the unbiased filter's constants as shipped (0.05 Hz, 40 s) in the objective's part for the drives as read. The lowest
+wins; ties within :data:`TIE_DEG` go to not read, then to the longer ``T_q``. Neither the KITTI validation drives nor
+comma2k19 take part.
 """
 
 from __future__ import annotations
