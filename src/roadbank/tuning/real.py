@@ -1438,20 +1438,31 @@ def choose_pitch_anchor(logs, spans=PITCH_ANCHOR_SPANS_S, lengths=SHORT_PIECES_S
     return lowest_tied(obj, lambda k: (k[0] is not None, k[0] or 0.0, k[1] is not None)), obj
 
 
-def choose_biased_pitch_rate(logs, taus=PITCH_OFFSET_TAUS, lengths=SHORT_PIECES_S):
+def choose_biased_pitch_rate(logs, taus=PITCH_OFFSET_TAUS, lengths=SHORT_PIECES_S, observer=None, unbiased=None):
     """The forty-second stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
     rate, ``ax`` and pitch rate). Returns ``(key, {key: objective deg})``, a key ``"none"`` (a pitch rate with an
-    offset not read) or ``T_q`` (s; None: the observer without an offset state)."""
+    offset not read) or ``T_q`` (s; None: the observer without an offset state). ``observer`` (``KinematicGyro``'s
+    pitch options) and ``unbiased`` (its cut-off and offset time constant for the drives as read): as that stage ran
+    (default), or the forty-seventh's (:func:`choose_biased_pitch_rate_again`)."""
     phone = math.radians(PITCH_PHONE_OFFSET_DEG)
     sets = gyro_sets(logs) + [[(dataclasses.replace(s, q=s.q + sign * phone), ref, m) for s, ref, m in logs]
                               for sign in (1.0, -1.0)]
     cut = [whole_and_pieces(one, lengths) for one in sets]
-    observer = dict(pitch_bandwidth=BANDWIDTH_39, pitch_start=START_40)
-    free = sets_objective(cut[:1], **UNBIASED_36, **observer)
+    observer = dict(pitch_bandwidth=BANDWIDTH_39, pitch_start=START_40) if observer is None else observer
+    free = sets_objective(cut[:1], **(UNBIASED_36 if unbiased is None else unbiased), **observer)
     obj = {"none": 0.5 * (sets_objective(cut, pitch_bandwidth=0.0) + free)}
     for tq in taus:
         obj[tq] = 0.5 * (sets_objective(cut, **observer, pitch_offset_tau=tq) + free)
     return lowest_tied(obj, lambda k: (k != "none", -(k or 0.0) if k != "none" else 0.0)), obj
+
+
+def choose_biased_pitch_rate_again(logs, taus=PITCH_OFFSET_TAUS, lengths=SHORT_PIECES_S):
+    """The forty-seventh stage (module docstring): :func:`choose_biased_pitch_rate` with the observer and the unbiased
+    filter's constants as shipped."""
+    observer = dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=UNBIASED_PITCH_START,
+                    pitch_anchor=UNBIASED_PITCH_ANCHOR)
+    return choose_biased_pitch_rate(logs, taus, lengths, observer,
+                                    {"cutoff": UNBIASED_GYRO_CUTOFF_HZ, "bias_tau": UNBIASED_GYRO_BIAS_TAU_S})
 
 
 def choose_unbiased_gyro_again(logs, cutoffs=UNBIASED_CUTOFFS_AGAIN_HZ, taus=UNBIASED_TAUS_AGAIN_S,
