@@ -101,6 +101,11 @@ UNBIASED_PITCH_BANDWIDTH = 0.35
 #: start's span (s; :class:`~roadbank.estimators.pitch.PitchObserver`'s ``anchor``): the forty-fourth stage
 UNBIASED_PITCH_START: tuple[float, float] | None = None
 UNBIASED_PITCH_ANCHOR = 1.0
+#: those constants as :class:`KinematicGyro`'s options: the roll rate's filter and the pitch observer, each for a source
+#: that documents it as free of offset (what the default reads such a log with, and the later stages' shipped state)
+UNBIASED_GYRO = {"cutoff": UNBIASED_GYRO_CUTOFF_HZ, "bias_tau": UNBIASED_GYRO_BIAS_TAU_S}
+UNBIASED_PITCH = {"pitch_bandwidth": UNBIASED_PITCH_BANDWIDTH, "pitch_start": UNBIASED_PITCH_START,
+                  "pitch_anchor": UNBIASED_PITCH_ANCHOR}
 
 
 class GradeCarry:

@@ -581,9 +581,8 @@ from .. import vehicle
 from ..constants import G
 from ..vehicle import conditions
 from ..estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
-from ..estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, UNBIASED_GYRO_BIAS_TAU_S,
-                               UNBIASED_GYRO_CUTOFF_HZ, UNBIASED_PITCH_ANCHOR, UNBIASED_PITCH_BANDWIDTH,
-                               UNBIASED_PITCH_START, KinematicGyro, KinematicGyroSmoother)
+from ..estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, UNBIASED_GYRO, UNBIASED_PITCH,
+                               KinematicGyro, KinematicGyroSmoother)
 from ..estimators.kinematic_smoother import KinematicSmoother
 from ..estimators.lowpass import KinematicLowPass
 from ..io.kitti import load_kitti_oxts
@@ -1434,7 +1433,7 @@ def choose_pitch_anchor(logs, spans=PITCH_ANCHOR_SPANS_S, lengths=SHORT_PIECES_S
     keys = [(None, START_40)] + [(a, None) for a in spans] + [(spans[0], START_40)]
     obj = unbiased_pitch_objectives(
         logs, {k: dict(pitch_bandwidth=BANDWIDTH_39, pitch_anchor=k[0], pitch_start=k[1]) for k in keys},
-        lengths, {"cutoff": UNBIASED_GYRO_CUTOFF_HZ, "bias_tau": UNBIASED_GYRO_BIAS_TAU_S})
+        lengths, UNBIASED_GYRO)
     return lowest_tied(obj, lambda k: (k[0] is not None, k[0] or 0.0, k[1] is not None)), obj
 
 
@@ -1459,10 +1458,7 @@ def choose_biased_pitch_rate(logs, taus=PITCH_OFFSET_TAUS, lengths=SHORT_PIECES_
 def choose_biased_pitch_rate_again(logs, taus=PITCH_OFFSET_TAUS, lengths=SHORT_PIECES_S):
     """The forty-seventh stage (module docstring): :func:`choose_biased_pitch_rate` with the observer and the unbiased
     filter's constants as shipped."""
-    observer = dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=UNBIASED_PITCH_START,
-                    pitch_anchor=UNBIASED_PITCH_ANCHOR)
-    return choose_biased_pitch_rate(logs, taus, lengths, observer,
-                                    {"cutoff": UNBIASED_GYRO_CUTOFF_HZ, "bias_tau": UNBIASED_GYRO_BIAS_TAU_S})
+    return choose_biased_pitch_rate(logs, taus, lengths, UNBIASED_PITCH, UNBIASED_GYRO)
 
 
 def choose_unbiased_gyro_again(logs, cutoffs=UNBIASED_CUTOFFS_AGAIN_HZ, taus=UNBIASED_TAUS_AGAIN_S,
@@ -1481,8 +1477,7 @@ def choose_unbiased_after_anchor(logs, bandwidths=ANCHORED_BANDWIDTHS, cutoffs=A
     """The forty-fifth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
     rate, ``ax`` and pitch rate). Returns ``((bandwidth rad/s, cutoff Hz), {(bandwidth, cutoff): objective deg})``."""
     cut = [whole_and_pieces(logs, lengths)]
-    start = dict(pitch_start=UNBIASED_PITCH_START, pitch_anchor=UNBIASED_PITCH_ANCHOR)
-    obj = {(w, fc): sets_objective(cut, cutoff=fc, bias_tau=UNBIASED_GYRO_BIAS_TAU_S, pitch_bandwidth=w, **start)
+    obj = {(w, fc): sets_objective(cut, **{**UNBIASED_GYRO, **UNBIASED_PITCH, "cutoff": fc, "pitch_bandwidth": w})
            for w in bandwidths for fc in cutoffs}
     shipped = (0.5, 0.05)
     return lowest_tied(obj, lambda k: (k != shipped, -k[0], -k[1])), obj
@@ -1493,9 +1488,7 @@ def choose_unbiased_offset_again(logs, taus=ANCHORED_BIAS_TAUS_S, cutoffs=ANCHOR
     """The forty-sixth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
     rate, ``ax`` and pitch rate). Returns ``((cutoff Hz, bias_tau s), {(cutoff, bias_tau): objective deg})``."""
     cut = [whole_and_pieces(logs, lengths)]
-    observer = dict(pitch_bandwidth=UNBIASED_PITCH_BANDWIDTH, pitch_start=UNBIASED_PITCH_START,
-                    pitch_anchor=UNBIASED_PITCH_ANCHOR)
-    obj = {(fc, bt): sets_objective(cut, cutoff=fc, bias_tau=bt, **observer) for fc in cutoffs for bt in taus}
+    obj = {(fc, bt): sets_objective(cut, cutoff=fc, bias_tau=bt, **UNBIASED_PITCH) for fc in cutoffs for bt in taus}
     shipped = (0.05, 40.0)
     return lowest_tied(obj, lambda k: (k != shipped, -k[1], -k[0])), obj
 

@@ -541,12 +541,9 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
                                                 **{k: v for k, v in options.items()
                                                    if k in estimators.base.ESTIMATOR_OPTIONS}}
             if log_gyro_unbiased:
-                options = {"cutoff": estimators.gyro.UNBIASED_GYRO_CUTOFF_HZ,
-                           "bias_tau": estimators.gyro.UNBIASED_GYRO_BIAS_TAU_S, **options}
+                options = {**estimators.gyro.UNBIASED_GYRO, **options}
             if window > 0 and roll_rate_usable(log_pitch_rate):
-                options = {"pitch_bandwidth": estimators.gyro.UNBIASED_PITCH_BANDWIDTH,
-                           "pitch_start": estimators.gyro.UNBIASED_PITCH_START,
-                           "pitch_anchor": estimators.gyro.UNBIASED_PITCH_ANCHOR, **options}
+                options = {**estimators.gyro.UNBIASED_PITCH, **options}
         elif lead_samples is not None:
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
             if log_diff_noise is not None and math.isfinite(log_diff_noise) and log_diff_noise > 0:
