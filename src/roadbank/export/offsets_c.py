@@ -62,24 +62,11 @@ void ${p}_offsets_step(${p}_offsets *o, double t, ${real} vx, ${real} ay, ${real
     ${p}_offsets_output *out);
 ${learning}""")
 
-_LEARNING_DECL = {
-    "delta_f": """
-/* The learner, then ${p}_step on the corrected sample. *oo may be NULL. Returns valid. */
-int ${p}_step_learning(${p}_state *s, ${p}_offsets *o, double t, ${real} vx, ${real} ay, ${real} r,
-    ${real} delta_f, ${p}_output *out, ${p}_offsets_output *oo);
-""",
-    "p": """
-/* The learner (delta_f read by it only), then ${p}_step on the corrected sample with the roll rate p
- * (rad/s) as its first input. *oo may be NULL. Returns valid. */
-int ${p}_step_learning(${p}_state *s, ${p}_offsets *o, double t, ${real} vx, ${real} ay, ${real} r,
-    ${real} delta_f, ${real} p, ${p}_output *out, ${p}_offsets_output *oo);
-""",
-    "grade": """
-/* The learner (delta_f read by it only), then ${p}_roll_rate on the corrected yaw rate and ay, then
- * ${p}_step on the corrected sample with that roll rate as its first input. *oo may be NULL. Returns valid. */
-int ${p}_step_learning(${p}_state *s, ${p}_offsets *o, ${p}_grade *g, double t, ${real} vx, ${real} ay,
-    ${real} r, ${real} delta_f, ${real} p, ${real} ax, ${real} q, ${p}_output *out, ${p}_offsets_output *oo);
-"""}
+_LEARNING_DECL = """
+/* ${what} *oo may be NULL. Returns valid. */
+int ${p}_step_learning(${p}_state *s, ${p}_offsets *o, ${grade}double t, ${real} vx, ${real} ay, ${real} r,
+    ${real} delta_f${more}, ${p}_output *out, ${p}_offsets_output *oo);
+"""
 
 _SOURCE = Template("""
 /* ---- online sensor offsets: the operations of roadbank.estimators.kernels.offsets --------- */
@@ -275,37 +262,39 @@ void ${p}_offsets_step(offsets_t *o, double t, real_t vx, real_t ay, real_t r, r
 
 ${learning}""")
 
-_LEARNING_DEF = {
-    "delta_f": """\
-int ${p}_step_learning(state_t *s, offsets_t *o, double t, real_t vx, real_t ay, real_t r, real_t delta_f,
-                       output_t *out, offsets_output_t *oo)
-{
-    offsets_output_t tmp;
-    offsets_output_t *q = oo != 0 ? oo : &tmp;
-    ${p}_offsets_step(o, t, vx, ay, r, delta_f, q);
-    return ${p}_step(s, t, vx, q->ay, q->r, q->delta_f, out);
-}
-""",
-    "p": """\
-int ${p}_step_learning(state_t *s, offsets_t *o, double t, real_t vx, real_t ay, real_t r, real_t delta_f,
-                       real_t p, output_t *out, offsets_output_t *oo)
+_LEARNING_DEF = """\
+int ${p}_step_learning(state_t *s, offsets_t *o, ${grade}double t, real_t vx, real_t ay, real_t r,
+                       real_t delta_f${more}, output_t *out, offsets_output_t *oo)
 {
     offsets_output_t tmp;
     offsets_output_t *c = oo != 0 ? oo : &tmp;
     ${p}_offsets_step(o, t, vx, ay, r, delta_f, c);
-    return ${p}_step(s, t, vx, c->ay, c->r, p, out);
+    return ${p}_step(s, t, vx, c->ay, c->r, ${first}, out);
 }
-""",
-    "grade": """\
-int ${p}_step_learning(state_t *s, offsets_t *o, ${p}_grade *g, double t, real_t vx, real_t ay, real_t r,
-                       real_t delta_f, real_t p, real_t ax, real_t q, output_t *out, offsets_output_t *oo)
-{
-    offsets_output_t tmp;
-    offsets_output_t *c = oo != 0 ? oo : &tmp;
-    ${p}_offsets_step(o, t, vx, ay, r, delta_f, c);
-    return ${p}_step(s, t, vx, c->ay, c->r, ${p}_roll_rate(g, t, vx, c->ay, c->r, p, ax, q), out);
+"""
+
+#: ``_step_learning`` per first input of the step (:func:`offsets_parts`' ``inputs``): what its comment says, the
+#: grade state it takes, the inputs after ``delta_f`` and what it gives the step as its first input
+_LEARNING = {
+    "delta_f": ("The learner, then ${p}_step on the corrected sample.", "", (), "c->delta_f"),
+    "p": ("The learner (delta_f read by it only), then ${p}_step on the corrected sample with the roll rate p\n"
+          " * (rad/s) as its first input.", "", ("p",), "p"),
+    "grade": ("The learner (delta_f read by it only), then ${p}_roll_rate on the corrected yaw rate and ay, then\n"
+              " * ${p}_step on the corrected sample with that roll rate as its first input.", "${p}_grade *g, ",
+              ("p", "ax", "q"), "${p}_roll_rate(g, t, vx, c->ay, c->r, p, ax, q)"),
 }
-"""}
+
+
+def _learning(inputs: str, prefix: str, real: str) -> tuple[str, str]:
+    """``(declaration, definition)`` of ``_step_learning`` for ``inputs`` (:data:`_LEARNING`) of the module
+    ``prefix`` whose real type is ``real``."""
+    what, grade, more, first = (Template(x).substitute(p=prefix) if isinstance(x, str) else x
+                                for x in _LEARNING[inputs])
+    decl = Template(_LEARNING_DECL).substitute(p=prefix, real=real, what=what, grade=grade,
+                                               more="".join(f", {real} {m}" for m in more))
+    body = Template(_LEARNING_DEF).substitute(p=prefix, grade=grade, first=first,
+                                              more="".join(f", real_t {m}" for m in more))
+    return decl, body
 
 #: the C constant of each kernel setting
 _CONSTS = {"VSTOP": K.C_VSTOP, "TSTOP": K.C_TSTOP, "TAUSTOP": K.C_TAUSTOP, "NSTOP": K.C_NSTOP,
@@ -321,11 +310,12 @@ def offsets_parts(prefix: str, cfg: np.ndarray, float32: bool, inputs: str = "de
     ``_step_learning`` gives the step as its first input: ``"delta_f"`` (the corrected steering angle), ``"p"`` (a
     roll rate) or ``"grade"`` (a roll rate through the module's ``_roll_rate``, :mod:`.grade_c`)."""
     real = f"{prefix}_real"
+    decl, body = _learning(inputs, prefix, real)
     header = _HEADER.substitute(p=prefix, real=real, vstop=f"{cfg[K.C_VSTOP]:g}", tstop=f"{cfg[K.C_TSTOP]:g}",
                                 trail=f"{cfg[K.C_TRAIL]:g}", trail2=f"{2 * cfg[K.C_TRAIL]:g}",
                                 ayoff=f"{cfg[K.C_AYOFF]:g}",
-                                learning=Template(_LEARNING_DECL[inputs]).substitute(p=prefix, real=real))
-    source = _SOURCE.substitute(p=prefix, learning=Template(_LEARNING_DEF[inputs]).substitute(p=prefix),
+                                learning=decl)
+    source = _SOURCE.substitute(p=prefix, learning=body,
                                 **{k: real_literal(cfg[i], float32) for k, i in _CONSTS.items()})
     return header, source
 
