@@ -342,11 +342,14 @@ def test_estimate_runs_a_gyro_estimator_by_name_and_names_a_log_without_a_roll_r
 
 
 @needs_kitti
-def test_the_car_is_fitted_on_the_esp_default_whatever_the_roll_rate(monkeypatch):
+def test_the_car_is_fitted_on_the_esp_default_unless_the_default_reads_the_roll_rate(monkeypatch):
     """design_car fits the car for the estimators that model it: the default it runs per candidate car is the ESP
-    one even where the log has a roll rate (the gyro filter has no car, so every car would tie)."""
+    one even where the log has a roll rate (the gyro filter has no car, so every car would tie); where the default
+    itself reads the roll rate (a loud log) it runs nothing and keeps the static car, which the fit on the same
+    drive without its roll rate also keeps; a quiet log with a roll rate is still fitted, on its ESP channels."""
+    from roadbank import defaults
     from roadbank.io.kitti import load_kitti_oxts
-    from roadbank.vehicle import design_car, factory
+    from roadbank.vehicle import car_for_log, default_reads_roll_rate, design_car, factory, log_conditions
     s = load_kitti_oxts(KITTI).signals
     seen = []
     real = factory.make_estimator
@@ -355,9 +358,19 @@ def test_the_car_is_fitted_on_the_esp_default_whatever_the_roll_rate(monkeypatch
         seen.append(kw.get("log_roll_rate"))
         return real(name, params, **kw)
     monkeypatch.setattr(factory, "make_estimator", spy)
-    with_p = design_car(s)
+    cond = log_conditions(s)
+    assert default_reads_roll_rate(cond)
+    assert design_car(s) == defaults.VEHICLE and seen == []
+    assert car_for_log(s, cond)[1]["car_from"] == factory.NOT_FITTED
+    assert design_car(dataclasses.replace(s, p=None)) == defaults.VEHICLE
     assert len(seen) == 4 and all(v is None for v in seen)
-    assert with_p == design_car(dataclasses.replace(s, p=None))
+    # the same drive read as quiet (a data sheet as loud as the log): fitted on its ESP channels, roll rate left out
+    quiet = {**cond, "log_ay_noise": 1e-4, "log_ay_floor": 1e-4}
+    assert not default_reads_roll_rate(quiet)
+    seen.clear()
+    design_car(s, cond=quiet)
+    assert len(seen) == 4 and all(v is None for v in seen)
+    assert car_for_log(s, quiet)[1]["car_from"] == factory.FITTED
 
 
 @needs_kitti

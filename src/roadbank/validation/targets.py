@@ -26,6 +26,7 @@ import math
 from ..defaults import ESTIMATOR as DEFAULT
 from ..estimators import NAMES, OFFLINE
 from ..evaluation.targets import Target
+from ..vehicle.factory import FITTED, NOT_FITTED
 from .kitti import below_kinematic
 from .scoring import ESP_DEFAULT
 
@@ -47,7 +48,7 @@ def kitti_targets(v) -> list[Target]:
     if DEFAULT not in med or "kinematic" not in med:
         return []
     drives = [d for d in v.drives if d.label in part["drives"]]
-    undescribed = all(d.data.get("design", {}).get("car_from") == "fitted to the log" for d in drives)
+    undescribed = all(d.data.get("design", {}).get("car_from") in (FITTED, NOT_FITTED) for d in drives)
     data = f"KITTI validation drives ({len(drives)}), " + ("no vehicle file" if undescribed else "car given")
     below, scored = below_kinematic(drives, DEFAULT)
     out = []

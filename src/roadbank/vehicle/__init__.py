@@ -55,7 +55,7 @@ table of units the log readers use too.
 from __future__ import annotations
 
 from ..units import SI_UNIT, UNITS, parse_quantity
-from .conditions import (DESIGN_MAX_S, DESIGN_SPAN_S, QUIET_FILTER, QUIET_RATIO, design_span,
+from .conditions import (DESIGN_MAX_S, DESIGN_SPAN_S, QUIET_FILTER, QUIET_RATIO, default_reads_roll_rate, design_span,
                          has_design_span, is_quiet, log_conditions, make_estimator, noise_densities)
 from .errors import VehicleFileError
 from .factory import (CAR_MARGIN, UNDESCRIBED_CARS, bank_band_power, car_for_log, design_car, design_record,
@@ -73,4 +73,4 @@ __all__ = ["Vehicle", "SensorSpec", "VehicleFileError", "load_vehicle", "builtin
            "has_design_span", "log_conditions", "noise_densities", "QUIET_RATIO",
            "QUIET_FILTER", "is_quiet", "make_estimator", "for_conditions", "for_log", "undescribed_car",
            "undescribed_params", "UNDESCRIBED_CARS", "CAR_MARGIN", "design_car", "design_record", "car_for_log",
-           "bank_band_power"]
+           "bank_band_power", "default_reads_roll_rate"]

@@ -25,8 +25,8 @@ from .sensors import SensorSpec
 
 __all__ = ["DESIGN_SPAN_S", "DESIGN_MAX_S", "QUIET_RATIO", "QUIET_FILTER", "QUIET_MODELS", "GYRO_FILTER",
            "GYRO_MODELS", "design_span", "has_design_span", "log_conditions", "noise_densities", "is_quiet",
-           "quiet_noise_ratio", "roll_rate_slope", "roll_rate_usable", "ax_slope", "pitch_rate_slope", "esp_conditions",
-           "make_estimator"]
+           "quiet_noise_ratio", "roll_rate_slope", "roll_rate_usable", "default_reads_roll_rate", "ax_slope",
+           "pitch_rate_slope", "esp_conditions", "make_estimator"]
 
 
 #: seconds of driving (``vx >= v_min``) at the start of a log on which :func:`log_conditions` measures it (s)
@@ -304,6 +304,15 @@ def roll_rate_usable(slope: float | None) -> bool:
     has a roll rate that the default may use: within :data:`ROLL_SLOPE_RANGE`. The same for :func:`ax_slope`
     (``log_ax``)."""
     return slope is not None and ROLL_SLOPE_RANGE[0] <= slope <= ROLL_SLOPE_RANGE[1]
+
+
+def default_reads_roll_rate(cond: dict, sensors: SensorSpec | None = None) -> bool:
+    """Whether the default (:data:`roadbank.defaults.ESTIMATOR`, ``kinematic-pif``) built for a log's conditions
+    ``cond`` (:func:`log_conditions`) with ``sensors`` (default the data sheet's) is :data:`GYRO_FILTER`: a loud log
+    (not :func:`is_quiet`) whose roll rate is usable (:func:`roll_rate_usable`). That filter has no car model."""
+    quiet = is_quiet(sensors if sensors is not None else SensorSpec(), cond.get("log_rate"), cond.get("log_ay_noise"),
+                     QUIET_RATIO, cond.get("log_ay_floor"))
+    return not quiet and roll_rate_usable(cond.get("log_roll_rate"))
 
 
 def _octave_top(t) -> float:
