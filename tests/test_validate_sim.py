@@ -13,7 +13,8 @@ from roadbank.cli import main
 from roadbank.tuning import drive_set
 from roadbank.tuning.objective import drive_errors
 from roadbank.tuning.real import SIM_CARS
-from roadbank.tuning.simulated import MODES, score_simulated, summarise, to_json
+from roadbank.tuning.manoeuvres import PERTURBATIONS, VALIDATION_CAR_CHANGES
+from roadbank.tuning.simulated import ERROR_SOURCES, MODES, error_sources, score_simulated, summarise, to_json
 from roadbank.vehicle import for_log, load_vehicle
 
 NAMES = ("kinematic-pif", "pif-modified")
@@ -23,6 +24,11 @@ N = 3
 @pytest.fixture(scope="module")
 def scores():
     return score_simulated(NAMES, n=N)
+
+
+@pytest.fixture(scope="module")
+def sources():
+    return error_sources(n=N)
 
 
 @pytest.fixture(scope="module")
@@ -82,15 +88,47 @@ def test_the_target_verdict():
     assert not summarise([0.31, 0.31, 0.31]).meets_target
 
 
-def test_cli_json_has_the_numbers_of_the_function(scores):
+def test_cli_json_has_the_numbers_of_the_function(scores, sources):
     res = CliRunner().invoke(main, ["validate", "sim", "-e", ",".join(NAMES), "-n", str(N), "--json"])
     assert res.exit_code == 0, res.output
     got = json.loads(res.stdout)
-    assert got == json.loads(json.dumps(to_json(scores)))
+    assert got == json.loads(json.dumps(to_json(scores, sources)))
+    assert set(got["error_sources"]) == set(ERROR_SOURCES)
     pif = got["estimators"]["pif-modified"]
     assert pif["known"]["cars"]["van"]["median_deg"] == scores.summary("pif-modified", "known", "van").median_deg
     assert pif["undescribed"]["all"]["p95_deg"] == scores.summary("pif-modified", "undescribed").p95_deg
     assert got["default"] == "kinematic-pif" and not pif["offline"]
+
+
+def test_a_held_perturbation_is_drawn_then_set_to_the_data_sheet(van_drives):
+    """nominal=...: the same drives (road, friction, every other draw, the noise) with the named perturbations at
+    the design value."""
+    v, drives = van_drives
+    held = drive_set("validation", N, 0, v.params, nominal=("roll-stiffness", "misalignment"))
+    for d, h in zip(drives, held):
+        assert h.road == d.road and h.car["kroll_scale"] == 1.0 and h.car["misalign_deg"] == 0.0
+        assert {k: x for k, x in h.car.items() if k not in ("kroll_scale", "misalign_deg")} == \
+            {k: x for k, x in d.car.items() if k not in ("kroll_scale", "misalign_deg")}
+        assert d.car["kroll_scale"] != 1.0 and np.array_equal(h.signals.t, d.signals.t)
+    every = drive_set("validation", 1, 0, v.params, nominal=tuple(PERTURBATIONS))[0].car
+    assert "tyre_Cy" not in every and all(every[k] == 1.0 for k in ("cf_scale", "cr_scale", "mass_scale",
+                                                                       "iz_scale", "kroll_scale"))
+    assert set(VALIDATION_CAR_CHANGES) <= set(PERTURBATIONS)
+    with pytest.raises(ValueError, match="unknown perturbation"):
+        drive_set("validation", 1, 0, v.params, nominal=("tyre-pressure",))
+
+
+def test_error_sources_score_the_held_sets(sources):
+    """Each group's summary is the default, car known, on the set with that group held, scored as the set is."""
+    from roadbank.tuning.real import per_log
+    assert set(sources) == set(ERROR_SOURCES)
+    label = "the roll stiffness"
+    errs = []
+    for car in SIM_CARS:
+        v = load_vehicle(car)
+        errs += [drive_errors(per_log("kinematic-pif", vehicle=v)(d.signals), [d])[0][0]
+                 for d in drive_set("validation", N, 0, v.params, nominal=ERROR_SOURCES[label])]
+    assert sources[label] == summarise(errs) and sources[label].n == N * len(SIM_CARS)
 
 
 def test_cli_writes_the_document(scores, tmp_path):
@@ -113,6 +151,9 @@ def test_cli_writes_the_document(scores, tmp_path):
     pooled = scores.summary("kinematic-pif", "known")
     verdict = "met" if pooled.median_deg <= 0.30 and pooled.p95_deg <= 0.65 else "not met"
     assert f"| all cars | {pooled.median_deg:.3f} | {pooled.p95_deg:.3f} | {verdict} |" in text
+    assert "## Where the error comes from" in text and "| the roll stiffness |" in text
+    res = CliRunner().invoke(main, ["validate", "sim", "-e", "pif-modified", "-n", "1", "--no-sources"])
+    assert res.exit_code == 0 and "Where the error comes from" not in res.stdout
 
 
 def test_cli_marks_an_offline_estimator():

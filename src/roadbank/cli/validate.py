@@ -334,11 +334,11 @@ def all_(ctx, data_dir, output, no_jitter, as_json, workers, scheduler):
         sys.exit(1)
 
 
-def _sim_command(names, drives: int | None, seed: int, output) -> str:
+def _sim_command(names, drives: int | None, seed: int, output, sources: bool = True) -> str:
     """The ``roadbank validate sim`` command line of these options (the defaults left out)."""
     return ("roadbank validate sim" + ("" if names is None else f" -e {names}")
             + ("" if drives is None else f" -n {drives}") + ("" if seed == 0 else f" --seed {seed}")
-            + ("" if output is None else f" -o {output}"))
+            + ("" if sources else " --no-sources") + ("" if output is None else f" -o {output}"))
 
 
 @validate.command("sim")
@@ -349,28 +349,34 @@ def _sim_command(names, drives: int | None, seed: int, output) -> str:
 @click.option("-n", "--drives", type=click.IntRange(min=1), default=None,
               help="Drives per car. Default: as many as roadbank tune's validation set (40).")
 @click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of the drive set.")
+@click.option("--sources/--no-sources", default=True, show_default=True,
+              help="Also score the default, car known, on the same drives with groups of the plant's perturbations "
+                   "held at the data sheet (where its error comes from; about 6 s per group for 40 drives per car).")
 @click.option("--json", "as_json", is_flag=True,
-              help='Print {"estimators": {name: {"known" | "undescribed": {"cars", "all", "families"}}}, ...} '
-                   "(deg) on stdout.")
+              help='Print {"estimators": {name: {"known" | "undescribed": {"cars", "all", "families"}}}, '
+                   '"error_sources": {...}, ...} (deg) on stdout.')
 @click.option("-o", "--output", type=click.Path(path_type=Path), default=None, callback=checked_output(),
               help="Write the markdown document here (e.g. docs/sim-validation.md; .html: a self-contained page).")
-def sim(names, drives, seed, as_json, output):
+def sim(names, drives, seed, sources, as_json, output):
     """Score the estimators on the simulated validation set of every shipped car (roadbank tune's
     validation drives), built with the car known (as with --vehicle CAR) and with the car not
     described (no --vehicle). Without --json or -o the document is printed.
 
     Regenerate docs/sim-validation.md with: roadbank validate sim -o docs/sim-validation.md
     """
-    from ..tuning.simulated import DEFAULT_NAMES, score_simulated, to_json
+    from .. import estimators
+    from ..tuning.simulated import DEFAULT_NAMES, error_sources, score_simulated, to_json
     from ..tuning.simulated_report import markdown
 
     sel = list(DEFAULT_NAMES) if names is None else _names(names)
-    scores = score_simulated(sel, seed=seed) if drives is None else score_simulated(sel, n=drives, seed=seed)
+    size = {} if drives is None else {"n": drives}
+    scores = score_simulated(sel, seed=seed, **size)
+    found = error_sources(seed=seed, **size) if sources and estimators.DEFAULT in sel else None
     if output is not None:
         output.parent.mkdir(parents=True, exist_ok=True)
-        write_document(output, markdown(scores, command=_sim_command(names, drives, seed, output)))
+        write_document(output, markdown(scores, _sim_command(names, drives, seed, output, sources), found))
         click.echo(f"wrote {output}", err=True)
     if as_json:
-        click.echo(json.dumps(to_json(scores), indent=2))
+        click.echo(json.dumps(to_json(scores, found), indent=2))
     elif output is None:
-        click.echo(markdown(scores, command=_sim_command(names, drives, seed, None)))
+        click.echo(markdown(scores, _sim_command(names, drives, seed, None, sources), found))

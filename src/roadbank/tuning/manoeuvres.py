@@ -29,6 +29,9 @@ accelerometer yaw misalignment U(-2, 2) deg (read ``ay cos a + ax sin a``). The 
 cars also change what training never does (:data:`VALIDATION_CAR_CHANGES`): tyre shape
 (``Cy``, ``Ey``), yaw inertia x U(0.8, 1.2), roll stiffness x U(0.75, 1.25).
 
+A perturbation may be held at the design value (``nominal``, names of :data:`PERTURBATIONS`): drawn as always (the
+random stream and every other draw stay the same), then not applied; what an error owes to each one.
+
 Seeds: drive ``k`` of a set uses ``numpy.random.default_rng([seed, SET_ID[kind], k])``, so
 training (``SET_ID = 0``) and validation (``1``) never share a random stream, and a set is the
 same for the same ``(seed, kind, k)`` whatever its size.
@@ -52,6 +55,12 @@ TRAIN_ROADS = ("bank-step", "superelevated-curve", "lane-change", "tyre-limit")
 VALIDATION_ROADS = ("banked-lane-weave", "hairpin", "reverse-curves", "tyre-limit-banked")
 #: plant changes only the validation cars get
 VALIDATION_CAR_CHANGES = ("tyre-shape", "yaw-inertia", "roll-stiffness")
+#: the plant perturbations by name: the drive's ``car`` keys each sets (held at the design value: a scale 1, a
+#: misalignment 0; the tyre shape's keys removed); the last three are :data:`VALIDATION_CAR_CHANGES`
+PERTURBATIONS: dict[str, dict[str, float | None]] = {
+    "front-stiffness": {"cf_scale": 1.0}, "rear-stiffness": {"cr_scale": 1.0}, "mass": {"mass_scale": 1.0},
+    "misalignment": {"misalign_deg": 0.0}, "tyre-shape": {"tyre_Cy": None, "tyre_Ey": None},
+    "yaw-inertia": {"iz_scale": 1.0}, "roll-stiffness": {"kroll_scale": 1.0}}
 #: random-stream id of each set
 SET_ID = {"train": 0, "validation": 1}
 
@@ -224,6 +233,29 @@ def _car(rng, kind: str) -> dict:
     return car
 
 
+def held(car: dict, nominal) -> dict:
+    """The drawn plant changes ``car`` with the perturbations named in ``nominal`` (:data:`PERTURBATIONS`) at the
+    design value: a scale 1, a misalignment 0 deg, the tyre shape the design's (its keys removed).
+
+    Raises
+    ------
+    ValueError
+        A name that is not a perturbation.
+    """
+    bad = [k for k in nominal if k not in PERTURBATIONS]
+    if bad:
+        raise ValueError(f"unknown perturbation(s) {bad}; known: {', '.join(PERTURBATIONS)}")
+    out = dict(car)
+    for name in nominal:
+        for key, value in PERTURBATIONS[name].items():
+            if key in out:
+                if value is None:
+                    del out[key]
+                else:
+                    out[key] = value
+    return out
+
+
 def _plant_and_sensors(car: dict, mu: float, plant, sensors):
     v = plant.vehicle
     k = car["mass_scale"]
@@ -241,8 +273,9 @@ def _plant_and_sensors(car: dict, mu: float, plant, sensors):
 
 # ---- sets --------------------------------------------------------------------------------------
 
-def draw_drive(kind: str, index: int, seed: int, params, plant, sensors) -> Drive:
-    """Draw and simulate drive ``index`` of the ``kind`` set.
+def draw_drive(kind: str, index: int, seed: int, params, plant, sensors, nominal=()) -> Drive:
+    """Draw and simulate drive ``index`` of the ``kind`` set, the perturbations named in ``nominal`` held at the
+    design value (:func:`held`).
 
     Parameters
     ----------
@@ -261,7 +294,7 @@ def draw_drive(kind: str, index: int, seed: int, params, plant, sensors) -> Driv
     rng = np.random.default_rng([int(seed), SET_ID[kind], int(index)])
     roads = TRAIN_ROADS if kind == "train" else VALIDATION_ROADS
     road = roads[index % len(roads)]
-    car = _car(rng, kind)
+    car = held(_car(rng, kind), nominal)
     limit = road in _NEEDS_CAR
     mu = _uniform(rng, 0.5, 1.0) if limit else _uniform(rng, 0.7, 1.0)
     car["mu"] = mu
@@ -271,15 +304,16 @@ def draw_drive(kind: str, index: int, seed: int, params, plant, sensors) -> Driv
     return Drive(kind, int(index), road, car, sim.signals, sim.truth.phi_b)
 
 
-def drive_set(kind: str, n: int, seed: int = 0, params=None, plant=None, sensors=None) -> list[Drive]:
+def drive_set(kind: str, n: int, seed: int = 0, params=None, plant=None, sensors=None, nominal=()) -> list[Drive]:
     """``n`` drives of the ``kind`` set (road families cycle, see the module docstring).
 
     ``params`` (default: the paper's SUV), ``plant`` (default ``PlantParams(vehicle=params)``),
-    ``sensors`` (default ``SensorConfig()``, the paper's ESP sensors) describe the car.
+    ``sensors`` (default ``SensorConfig()``, the paper's ESP sensors) describe the car; ``nominal``: names of
+    :data:`PERTURBATIONS` held at the design value (the same drives otherwise).
     """
     params = params or VehicleParams()
     plant = plant or PlantParams(vehicle=params)
     sensors = sensors or SensorConfig()
     if n < 1:
         raise ValueError(f"a drive set needs n >= 1 drives, got {n}")
-    return [draw_drive(kind, k, seed, params, plant, sensors) for k in range(int(n))]
+    return [draw_drive(kind, k, seed, params, plant, sensors, nominal) for k in range(int(n))]

@@ -24,7 +24,7 @@ import numpy as np
 from .. import estimators
 from ..evaluation.targets import Target
 from ..vehicle import load_vehicle
-from .manoeuvres import drive_set
+from .manoeuvres import PERTURBATIONS, VALIDATION_CAR_CHANGES, drive_set
 from .objective import drive_errors
 from .pipeline import DEFAULT_VALIDATION
 from .real import SIM_CARS, per_log
@@ -38,6 +38,12 @@ TARGET_P95_DEG = 0.65
 #: the set the targets were first stated on: ``roadbank tune``'s validation set (seed 0) of the paper's SUV
 TARGET_CAR = "suv-paper"
 TARGET_DRIVES = DEFAULT_VALIDATION
+#: the groups of plant perturbations (:data:`roadbank.tuning.manoeuvres.PERTURBATIONS`) that :func:`error_sources`
+#: holds at the design value, by label
+ERROR_SOURCES = {"the roll stiffness": ("roll-stiffness",),
+                 "the tyre stiffnesses (Cf, Cr)": ("front-stiffness", "rear-stiffness"),
+                 "the changes only validation draws (tyre shape, yaw inertia, roll stiffness)": VALIDATION_CAR_CHANGES,
+                 "every perturbation": tuple(PERTURBATIONS)}
 #: the estimators ``roadbank validate sim`` scores when none are named
 DEFAULT_NAMES = ("kinematic-pif", "kinematic-lp", "pif-modified", "pif-adaptive", "pif-gated", "pif-smoother",
                  "kinematic-smoother")
@@ -132,14 +138,33 @@ def score_simulated(names, cars=SIM_CARS, n: int = DEFAULT_VALIDATION, seed: int
     return SimulatedScores(names, tuple(cars), int(n), int(seed), roads, errors)
 
 
+def error_sources(name: str = estimators.DEFAULT, cars=SIM_CARS, n: int = DEFAULT_VALIDATION, seed: int = 0,
+                  groups=None) -> dict:
+    """What the error of ``name`` with the car known owes to the plant's perturbations: the validation set of
+    :func:`score_simulated` (the same drives: roads, drivers, noise) with each group of ``groups`` (label -> names of
+    :data:`~roadbank.tuning.manoeuvres.PERTURBATIONS`; default :data:`ERROR_SOURCES`) held at the design value.
+    Returns ``{label: Summary}`` of the per-drive bank RMS error (deg) pooled over ``cars``."""
+    out = {}
+    for label, nominal in (ERROR_SOURCES if groups is None else groups).items():
+        errs = []
+        for car in cars:
+            v = load_vehicle(car)
+            build = per_log(name, vehicle=v)
+            errs += [drive_errors(build(d.signals), [d])[0][0]
+                     for d in drive_set("validation", n, seed, v.params, nominal=nominal)]
+        out[label] = summarise(errs)
+    return out
+
+
 def _summary_json(s: Summary) -> dict:
     return {"median_deg": s.median_deg, "p95_deg": s.p95_deg, "n": s.n}
 
 
-def to_json(scores: SimulatedScores) -> dict:
+def to_json(scores: SimulatedScores, sources: dict | None = None) -> dict:
     """The summaries of ``scores`` as plain data (deg): per estimator and mode, ``"cars"`` (each
     car), ``"all"`` (pooled) and ``"families"`` (median per road family, pooled over the cars);
-    the targets and the default estimator."""
+    the targets and the default estimator; with ``sources`` (:func:`error_sources` of the default) its
+    ``"error_sources"`` (label -> pooled summary)."""
     out: dict = {"n": scores.n, "seed": scores.seed, "cars": list(scores.cars), "default": estimators.DEFAULT,
                  "targets": {"median_deg": TARGET_MEDIAN_DEG, "p95_deg": TARGET_P95_DEG}, "estimators": {}}
     for nm in scores.names:
@@ -149,6 +174,8 @@ def to_json(scores: SimulatedScores) -> dict:
                            "all": _summary_json(scores.summary(nm, mode)),
                            "families": {r: scores.family_median(nm, mode, r) for r in scores.families()}}
         out["estimators"][nm] = entry
+    if sources:
+        out["error_sources"] = {label: _summary_json(s) for label, s in sources.items()}
     return out
 
 
