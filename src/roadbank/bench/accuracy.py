@@ -121,7 +121,9 @@ def accuracy_markdown(out: dict) -> list[str]:
     return targets_markdown([Target(**t) for t in out["targets"]]) + notes + ([""] if notes else []) + [
         "Not timed" + (f" ({took})" if took else "") + f". The same verdicts as `roadbank validate all` "
         f"(docs/real-data.md{data}), `roadbank validate sim` (docs/sim-validation.md) and the campaign report "
-        "(docs/campaign.md); measured medians and percentiles in deg."]
+        "(docs/campaign.md); measured medians and percentiles in deg. What the simulated targets owe to each "
+        "perturbation of the plant: docs/sim-validation.md (\"Where the error comes from\") and docs/campaign.md "
+        "(\"What the 1 deg goal needs\")."]
 
 
 SECTION = Section("accuracy", "The default's accuracy targets", accuracy, accuracy_markdown)
