@@ -398,7 +398,7 @@ def test_the_blend_runs_through_a_stop_instead_of_starting_again():
 def test_the_rules_tie_break_ignores_float_rounding(monkeypatch):
     """choose_by_roads: real medians within TIE_DEG tie, the simulated median decides, and simulated medians
     equal but for float rounding (1e-16) leave the choice to the candidates' order, not to the rounding."""
-    from roadbank.tuning import real as R
+    from roadbank.tuning.real import esp as R       # the stage's module: where choose_by_roads finds objective
 
     table = {("a", "real"): 0.4000, ("b", "real"): 0.4005, ("c", "real"): 0.5,
              ("a", "sim"): 0.3 + 1e-16, ("b", "sim"): 0.3, ("c", "sim"): 0.1}
