@@ -135,3 +135,27 @@ def test_accuracy_section_without_data_says_what_it_did_not_run():
     assert out["targets"] == [] and len(out["notes"]) == 3
     assert "--data DIR" in out["notes"][0] and all("full suite only" in n for n in out["notes"][1:])
     assert "Not timed." in "\n".join(accuracy_markdown(out))
+
+
+@pytest.mark.slow
+def test_a_users_first_estimate_compiles_then_loads_from_the_caches(tmp_path):
+    """roadbank.bench.first_run: the plain command in a fresh process with empty caches, then again with them
+    filled; the first compiles (the kernels its default runs), so it takes longer; a log the command refuses is a
+    reason, not a crash; the table shows what was measured."""
+    from roadbank.bench.first_run import SECTION, first_estimate, first_run, first_run_markdown
+    from roadbank.fleet.bench import write_long_log
+
+    log = tmp_path / "short.parquet"
+    write_long_log(log, 20.0 / 3600.0)
+    out = first_estimate(log)
+    assert 0 < out["warm_s"] < out["cold_s"], out
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,vx\n0,1\n")
+    refused = first_estimate(bad)
+    assert refused["reason"].startswith("cold run failed") and "bad.csv" in refused["reason"]
+    text = "\n".join(first_run_markdown({"cases": [{"case": "short", **out}, {"case": "bad", **refused}],
+                                         "data": False}))
+    assert f"| short | {out['cold_s']:.1f} | {out['warm_s']:.1f} | {out['cold_s'] - out['warm_s']:.1f} |" in text
+    assert "| bad |" in text and "n/a: cold run failed" in text and "--data" in text
+    assert "not run with --tiny" in first_run({"size": "tiny"})["reason"]
+    assert SECTION.name == "first_run"
