@@ -15,16 +15,13 @@ ESP channels alone (written to Parquet: ``t, vx, ay, r``; the default is then th
 from __future__ import annotations
 
 import os
-import subprocess
-import sys
 import tempfile
-import time
 from pathlib import Path
 
 from ..fleet.bench import write_long_log
 from ..io.kitti import load_kitti_oxts
 from ..report.markdown import md_table
-from .suite import Section
+from .suite import Section, timed_command
 
 #: the KITTI drive the section reads under ``--data`` (a validation drive of the shared data), by folder name
 KITTI_DRIVE = "2011_09_26_drive_0028"
@@ -32,31 +29,16 @@ KITTI_DRIVE = "2011_09_26_drive_0028"
 SYNTHETIC_MIN = 10.0
 
 
-def _timed(log: Path, out: Path, env: dict, timeout: float) -> tuple[float | None, str]:
-    """Wall time (s) of ``roadbank estimate log -o out`` in a new process with ``env``; (None, reason) on failure."""
-    t0 = time.perf_counter()
-    try:
-        proc = subprocess.run([sys.executable, "-m", "roadbank.cli", "estimate", str(log), "-o", str(out)],
-                              capture_output=True, text=True, env=env, timeout=timeout)
-    except subprocess.TimeoutExpired:
-        return None, f"over {timeout:.0f} s"
-    wall = time.perf_counter() - t0
-    if proc.returncode != 0:        # the line that names the log and its problem, else the last one
-        lines = (proc.stderr or proc.stdout).strip().splitlines() or ["?"]
-        return None, next((ln for ln in lines if str(log) in ln), lines[-1])
-    return wall, ""
-
-
 def first_estimate(log: Path, timeout: float = 600.0) -> dict:
     """``{"cold_s", "warm_s"}`` (s) of ``roadbank estimate log`` with empty caches, then with them filled
     (module docstring); ``{"reason": ...}`` where a run failed."""
     with tempfile.TemporaryDirectory(prefix="roadbank-first-") as tmp:
         env = dict(os.environ, NUMBA_CACHE_DIR=str(Path(tmp) / "numba"), ROADBANK_CACHE_DIR=str(Path(tmp) / "design"))
-        out = Path(tmp) / "out.csv"
-        cold, why = _timed(log, out, env, timeout)
+        args = ["estimate", log, "-o", Path(tmp) / "out.csv"]
+        cold, why = timed_command(args, timeout, env, about=str(log))
         if cold is None:
             return {"reason": f"cold run failed: {why}"}
-        warm, why = _timed(log, out, env, timeout)
+        warm, why = timed_command(args, timeout, env, about=str(log))
         if warm is None:
             return {"reason": f"warm run failed: {why}"}
     return {"cold_s": cold, "warm_s": warm}

@@ -419,21 +419,28 @@ def commonroad_peer(duration: float, vx0: float = 60 / 3.6) -> dict:
 # reproduce and cold start (fresh processes)
 # --------------------------------------------------------------------------
 
-def _timed_reproduce(outdir: Path, timeout: float, env=None):
-    """Run ``roadbank reproduce -o outdir`` in a fresh process: ``(wall s, None)`` or ``(None, reason)``."""
-    cmd = [sys.executable, "-m", "roadbank.cli", "reproduce", "-o", str(outdir)]
-    if env is None:   # the user's environment, as `roadbank reproduce` would see it
-        env = dict(os.environ)
+def timed_command(args, timeout: float, env=None, about: str | None = None):
+    """Run ``roadbank *args`` (``python -m roadbank.cli``) in a fresh process with ``env`` (default the user's
+    environment): ``(wall s, None)``, or ``(None, reason)`` where it exceeded ``timeout`` (s) or failed. A failure's
+    reason quotes the last line of its output that contains ``about`` (e.g. the log's path), else its last line."""
+    cmd = [sys.executable, "-m", "roadbank.cli", *map(str, args)]
     t0 = time.perf_counter()
     try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
+                              env=dict(os.environ) if env is None else env)
     except subprocess.TimeoutExpired:
-        return None, f"roadbank reproduce exceeded {timeout:.0f} s"
+        return None, f"roadbank {args[0]} exceeded {timeout:.0f} s"
     wall = time.perf_counter() - t0
     if proc.returncode != 0:
-        tail = (proc.stderr or proc.stdout).strip().splitlines()[-1:] or ["?"]
-        return None, f"roadbank reproduce failed (exit {proc.returncode}): {tail[0]}"
+        lines = (proc.stderr or proc.stdout).strip().splitlines() or ["?"]
+        line = next((ln for ln in reversed(lines) if about and about in ln), lines[-1])
+        return None, f"roadbank {args[0]} failed (exit {proc.returncode}): {line}"
     return wall, None
+
+
+def _timed_reproduce(outdir: Path, timeout: float, env=None):
+    """Run ``roadbank reproduce -o outdir`` in a fresh process: ``(wall s, None)`` or ``(None, reason)``."""
+    return timed_command(["reproduce", "-o", outdir], timeout, env)
 
 
 def reproduce_bench(timeout: float = 900.0, warm_runs: int = 2) -> dict:
