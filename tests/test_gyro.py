@@ -371,6 +371,12 @@ def test_the_car_is_fitted_on_the_esp_default_unless_the_default_reads_the_roll_
     design_car(s, cond=quiet)
     assert len(seen) == 4 and all(v is None for v in seen)
     assert car_for_log(s, quiet)[1]["car_from"] == factory.FITTED
+    # the predicate is the default's own branch: what make_estimator builds for the same conditions
+    from roadbank.estimators import KinematicGyro
+    from roadbank.vehicle import for_conditions
+    for c in (cond, quiet, {**cond, "log_roll_rate": None}):
+        built = for_conditions("kinematic-pif", c, factory.undescribed_params())
+        assert isinstance(getattr(built, "inner", built), KinematicGyro) == default_reads_roll_rate(c)
 
 
 @needs_kitti
