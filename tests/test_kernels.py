@@ -62,21 +62,89 @@ def _mixed_log():
     return Signals(t, vx, ay, r, 2.6 * ay / vx ** 2)
 
 
+#: keyword options of the estimators built under another name in the kernel tests
+_BUILT = {"riccati": ("pif-modified", {"variant": "riccati"}),
+          "kinematic-lp-limited": ("kinematic-lp", {"clip": 2.0, "bank_rate": 0.01, "Q_ay": 0.01, "R": 1e-5})}
+
+
+def _make(name, **kw):
+    from roadbank import estimators
+    base, extra = _BUILT.get(name, (name, {}))
+    return estimators.make(base, **extra, **kw)
+
+
 @pytest.mark.parametrize("name", ["kinematic", "dfc", "uio", "pio-original", "pio-modified", "pif-modified",
-                                  "pif-original", "kalman", "pif-rate", "pif-adaptive", "riccati"])
+                                  "pif-original", "kalman", "pif-rate", "pif-adaptive", "riccati", "pif-gated",
+                                  "kinematic-pif", "kinematic-lp-limited"])
 @pytest.mark.parametrize("roll", ["static", "dynamic"])
 def test_run_equals_step_bit_for_bit(name, roll):
     """The batch kernels (including the fixed-rate batch loop) and the per-sample step are the same
-    arithmetic: identical outputs, for every estimator and roll model, across path switches."""
-    from roadbank import estimators
-    kw = {"variant": "riccati"} if name == "riccati" else {}
-    make = lambda: estimators.make("pif-modified" if name == "riccati" else name, roll=roll, **kw)   # noqa: E731
+    arithmetic: identical outputs, for every estimator and roll model, across path switches, the kernel variants
+    of a limited low-pass included."""
+    make = lambda: _make(name, roll=roll)   # noqa: E731
     s = _mixed_log()
     batch = make().run(s)
     est = make()
     out = [est.step(s.t[k], s.vx[k], s.ay[k], s.r[k], s.delta_f[k]) for k in range(len(s))]
     for field in ("w", "theta", "phi_b", "valid"):
         assert np.array_equal(getattr(batch, field), [getattr(o, field) for o in out]), field
+
+
+@pytest.mark.parametrize("name", ["kinematic", "kinematic-lp", "kinematic-ff", "kinematic-lp-limited", "uio",
+                                  "pio-modified", "pif-modified", "kalman", "pif-gated", "kinematic-pif",
+                                  "pif-adaptive", "dfc", "riccati"])
+def test_each_estimator_runs_the_kernel_variant_of_its_settings(name):
+    """The kernel variant an estimator calls (:func:`roadbank.estimators.kernels.entries`) is the one its settings
+    array asks for: a limited one exactly where ``cfg[C_LIM] > 0``, the three-state batch loop exactly for a
+    three-state ``lpv`` observer."""
+    from roadbank.estimators import kernels as K
+    from roadbank.estimators.layout import C_LIM, C_N
+    est = _make(name, sample_rate=100.0)
+    limited = est._cfg[C_LIM] > 0
+    assert (est._run_fn in (K.lpv_limited_run, K.gated_limited_run)) == limited
+    assert (est._step_fn in (K.lpv_limited_step, K.gated_limited_step)) == limited
+    assert (est._run_fn is K.lpv3_run) == (est.kernel == "lpv" and est._cfg[C_N] == 3 and not limited)
+    assert (est._run_fn, est._step_fn) == K.entries(est.kernel, limited, est._cfg[C_N] == 3)
+
+
+def test_three_state_batch_loop_equals_the_plain_loop():
+    """``lpv3_run`` (fixed-rate samples in the three-state batch loop) and ``lpv_run`` (every sample through
+    ``lpv_step``) give the same outputs to the bit on a log that switches paths."""
+    from roadbank.estimators import kernels as K
+    s = _mixed_log()
+    batch = _make("pif-modified", roll="dynamic", sample_rate=100.0)
+    plain = _make("pif-modified", roll="dynamic", sample_rate=100.0)
+    assert batch._run_fn is K.lpv3_run
+    plain._run_fn = K.lpv_run
+    a, b = batch.run(s), plain.run(s)
+    for field in ("w", "theta", "phi_b", "valid"):
+        assert np.array_equal(getattr(a, field), getattr(b, field)), field
+
+
+_COMPILED_BY_KINEMATIC = """
+import numpy as np
+from roadbank import Signals, estimators
+from roadbank.estimators.kernels import lpv, sample
+n = 50
+s = Signals(np.arange(n) * 0.01, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, np.nan))
+estimators.make("kinematic").run(s)
+print(bool(lpv.lpv_step.signatures), bool(lpv.lpv3_fixed_run.signatures), bool(sample.limited_ay.signatures),
+      bool(sample.noise_update.signatures))
+"""
+
+
+def test_a_plain_observer_compiles_neither_the_limit_nor_the_batch_loop(tmp_path):
+    """A fresh process (empty numba cache) that runs the kinematic estimate (an ``lpv`` observer without a
+    limit) compiles ``lpv_step`` but neither the limited low-pass's helpers nor the three-state batch loop: the
+    variants keep that code out of its first run."""
+    import os
+    import subprocess
+    import sys
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+    out = subprocess.run([sys.executable, "-c", _COMPILED_BY_KINEMATIC], capture_output=True, text=True, env=env,
+                         timeout=300, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.split() == ["True", "False", "False", "False"]
 
 
 @njit(cache=False)
