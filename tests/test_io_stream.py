@@ -186,3 +186,42 @@ def test_arrow_conversion_equals_pyarrow_array(n):
     rng = np.random.default_rng(n)
     for v in (rng.normal(size=n), rng.integers(-5, 5, n), rng.random(n) > 0.5, rng.normal(size=2 * n)[::2]):
         assert _to_arrow(v).equals(pa.array(v)), v.dtype
+
+
+def test_pauses_are_left_out_of_the_uniform_grid():
+    """A stretch longer than PAUSE_S with no sample of any channel is left out of the grid: the grid is the full
+    grid's points outside it (counted analytically), built without the full grid's memory."""
+    from roadbank.io.resample import PAUSE_S, grid_indices, pauses, uniform_grid
+    a = np.concatenate([np.arange(0.0, 10.0, 0.01), 1e9 + np.arange(0.0, 5.0, 0.01)])
+    b = np.concatenate([np.arange(0.0, 10.0, 0.1), [200.0], 1e9 + np.arange(0.0, 5.0, 0.1)])
+    gaps = pauses([a, b])                            # 9.99 .. 200 and 200 .. 1e9: each longer than PAUSE_S
+    assert gaps.shape == (2, 2) and np.all(np.diff(gaps, axis=1) > PAUSE_S)
+    grid = uniform_grid(0.0, 1e9 + 4.99, 100.0, gaps)
+    assert len(grid) == 1000 + 1 + 500               # 0 .. 9.99, the one sample at 200, 1e9 .. 1e9 + 4.99
+    assert np.allclose(grid[-500:] - 1e9, np.arange(500) / 100.0, atol=1e-6)
+    assert np.isclose(grid[1000], 200.0)
+    assert len(pauses([a[:1000], b[:100]])) == 0     # no pause: the grid is the full one
+    assert np.array_equal(grid_indices(0.0, 100.0, 3, 50), np.arange(3, 50))
+
+
+def test_a_logger_pause_costs_no_rows(tmp_path):
+    """A mixed-rate table (resampled onto a uniform grid) with a one-day pause: the log keeps its 2 x 20 s of rows,
+    not a day of NaN rows, whole or streamed, and a warning names the file and the pause."""
+    series = _mixed_rate_series()
+    t = np.unique(np.concatenate([s[0] for s in series.values()]))
+    cols = {"t": t}
+    for name, (ts, v) in series.items():
+        col = np.full(len(t), np.nan)
+        col[np.searchsorted(t, ts)] = v
+        cols[name] = col
+    half = len(t) // 2
+    cols["t"] = np.where(np.arange(len(t)) >= half, t + 86400.0, t)
+    p = tmp_path / "paused.parquet"
+    pq.write_table(pa.table(cols), p)
+    (tmp_path / "m.toml").write_text(MAP.format(extra=""))
+    full = load_log(p, channels=tmp_path / "m.toml")
+    assert len(full.signals.t) < 1.05 * (t[-1] - t[0]) * 100
+    assert np.max(np.diff(full.signals.t)) > 86000.0
+    assert any("paused.parquet" in w and "no channel has a sample for 864" in w for w in full.warnings)
+    for chunk in (50, 777):
+        _assert_same(list(stream_log(p, channels=tmp_path / "m.toml", chunk_rows=chunk)), full)

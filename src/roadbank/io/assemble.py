@@ -450,7 +450,7 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
             for k in rs.done:
                 rs.finish(k)
         out = _emit(p, rs)
-        logs.warnings += rate_notes(p, rs.take_notes(), {r: cmap.channels[r].column for r in roles}, cmap.max_gap_s)
+        logs.warnings += resampler_notes(p, rs, {r: cmap.channels[r].column for r in roles}, cmap.max_gap_s)
         yield from logs.add(out, fix.take_counts())
     logs.warnings += drops.warnings()
     yield from logs.finish({})
@@ -538,10 +538,20 @@ def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
             elif ends:
                 rs.finish(r)
         out = _emit(p, rs)
-        logs.warnings += rate_notes(p, rs.take_notes(), col, cmap.max_gap_s)
+        logs.warnings += resampler_notes(p, rs, col, cmap.max_gap_s)
         yield from logs.add(out, counts())
     logs.warnings += drops.warnings()
     yield from logs.finish(counts())
+
+
+def resampler_notes(p, rs: StreamResampler, columns: dict, max_gap_s: float) -> list[str]:
+    """The resampler's warnings since the last call: :func:`rate_notes` and the pauses its grid left out."""
+    out = rate_notes(p, rs.take_notes(), columns, max_gap_s)
+    for a, b in rs.take_pauses():
+        out.append(f"{p}: no channel has a sample for {b - a:.6g} s (from t = {a:.6g} to {b:.6g} s: a pause of the "
+                   f"logger or a wrong time stamp): the resampled log leaves that time out (no rows) and the "
+                   f"estimators start again after it")
+    return out
 
 
 def rate_notes(p, notes, columns: dict, max_gap_s: float) -> list[str]:

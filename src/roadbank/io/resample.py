@@ -89,10 +89,38 @@ def no_overlap(starts: dict, ends: dict) -> LogError:
                     f"but '{early}' ends at {ends[early]:.3f} s")
 
 
-def uniform_grid(t0: float, t1: float, rate_hz: float) -> np.ndarray:
-    """Uniform grid t0, t0 + 1/rate, ... not beyond t1 (tolerance 1e-9 s)."""
+#: a stretch longer than this (s) in which no channel that spans the base has a sample is a pause of the logger
+#: (or a wrong time stamp): the uniform grid leaves it out, whose rows would all be NaN (:func:`pauses`)
+PAUSE_S = 60.0
+
+
+def pauses(times, pause_s: float = PAUSE_S) -> np.ndarray:
+    """The pauses of a log: ``(k, 2)`` array of the open intervals ``(a, b)`` (s) longer than ``pause_s`` in which
+    none of the arrays of sample times ``times`` (each sorted) has a sample."""
+    t = np.unique(np.concatenate([np.asarray(x, dtype=np.float64) for x in times] or [np.zeros(0)]))
+    i = np.flatnonzero(np.diff(t) > pause_s)
+    return np.column_stack([t[i], t[i + 1]])
+
+
+def grid_indices(t0: float, rate_hz: float, k0: int, k1: int, gaps=()) -> np.ndarray:
+    """The indices ``k0 <= k < k1`` of the uniform grid ``t0 + k / rate_hz`` (s) outside the open intervals
+    ``gaps`` (:func:`pauses`), built piece by piece: a pause of days costs no memory."""
+    pieces, k = [], k0
+    for a, b in gaps:
+        ka = int(np.floor((a - t0) * rate_hz + 1e-9)) + 1          # first index after a
+        kb = int(np.ceil((b - t0) * rate_hz - 1e-9))                # first index at or after b
+        if kb <= k or ka >= k1:
+            continue
+        pieces.append(np.arange(k, max(k, ka)))
+        k = kb
+    pieces.append(np.arange(k, max(k, k1)))
+    return np.concatenate(pieces)
+
+
+def uniform_grid(t0: float, t1: float, rate_hz: float, gaps=()) -> np.ndarray:
+    """Uniform grid t0, t0 + 1/rate, ... not beyond t1 (tolerance 1e-9 s), outside the ``gaps`` (:func:`pauses`)."""
     n = int(np.floor((t1 - t0) * rate_hz + 1e-9)) + 1
-    return t0 + np.arange(n) / rate_hz
+    return t0 + grid_indices(t0, rate_hz, 0, n, gaps) / rate_hz
 
 
 def interpolate(t: np.ndarray, v: np.ndarray, t_new: np.ndarray, max_gap_s: float) -> np.ndarray:
@@ -161,7 +189,7 @@ def common_time_base(series: dict[str, tuple[np.ndarray, np.ndarray]], time_base
                 return np.asarray(shared_clock, dtype=np.float64)
         time_base = "uniform"
     if time_base == "uniform":
-        return uniform_grid(t0, t1, rate_hz)
+        return uniform_grid(t0, t1, rate_hz, pauses([clean_series(t, v)[0] for t, v in series.values()]))
     if time_base not in series:
         raise LogError(f"resample.time_base '{time_base}' is not one of the log's channels "
                        f"({', '.join(series)})")
@@ -227,6 +255,9 @@ class StreamResampler:
         self.long_step = dict.fromkeys(self.steps, False)       # a step above max_gap_s seen before the period
         #: (role, sample period, bridged gap or None), s, for roles sampled slower than max_gap_s
         self.notes: list[tuple[str, float, float | None]] = []
+        #: the pauses (s) the uniform grid left out (:func:`pauses`), for the reader's warning
+        self.paused: list[tuple[float, float]] = []
+        self._pauses_told = 0
         self.t0 = None       # grid start: latest first valid sample of the span roles
         self.k_next = 0      # next uniform grid index
         self.t_next = -np.inf   # role time base: next time not emitted yet
@@ -307,6 +338,11 @@ class StreamResampler:
         notes, self.notes = self.notes, []
         return notes
 
+    def take_pauses(self) -> list[tuple[float, float]]:
+        """The pauses (s) left out of the grid since the last call (:attr:`paused`)."""
+        new, self._pauses_told = self.paused[self._pauses_told:], len(self.paused)
+        return new
+
     def buffered(self) -> int:
         """Samples held in the buffers (for memory checks)."""
         return sum(len(x) for x in self.t.values()) + len(self.clock)
@@ -359,8 +395,12 @@ class StreamResampler:
             k_end = int(np.floor((ready - self.t0) * self.rate + 1e-9)) + 1 if np.isfinite(ready) else self.k_next
             if k_end <= self.k_next:
                 return None
-            grid = self.t0 + np.arange(self.k_next, k_end) / self.rate
+            gaps = pauses([self.t[k] for k in self.roles if not self._as_is(k)])
+            self.paused += [pair for pair in map(tuple, gaps) if pair not in self.paused]
+            grid = self.t0 + grid_indices(self.t0, self.rate, self.k_next, k_end, gaps) / self.rate
             self.k_next = k_end
+            if len(grid) == 0:
+                return None
         else:
             tb = self.t[self.time_base]
             grid = tb[(tb >= max(self.t0, self.t_next)) & (tb <= ready)]
