@@ -8,6 +8,9 @@ import os
 # loaded 2-core machine it made each gain-schedule design 10-20x slower. As the CLI does.
 for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
+# the command line's last-resort one-line message hides a bug's traceback from a user; the tests want the bug itself
+# (tests/test_cli_safety_net.py checks the message with it unset)
+os.environ["ROADBANK_TRACEBACK"] = "1"
 
 from pathlib import Path  # noqa: E402
 

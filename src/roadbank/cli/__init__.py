@@ -15,8 +15,12 @@ runtime.configure()
 
 import importlib  # noqa: E402
 import importlib.util  # noqa: E402
+import os  # noqa: E402
 
 import click  # noqa: E402
+
+#: set (to anything but "" or "0") to let an unexpected error out with its traceback instead of the one-line message
+TRACEBACK_ENV = "ROADBANK_TRACEBACK"
 
 #: sub-command name -> "module:function" inside roadbank.cli
 COMMANDS = {
@@ -47,12 +51,38 @@ class _LazyGroup(click.Group):
         module = spec.split(":")[0]
         return spec if importlib.util.find_spec(f"roadbank.cli.{module}") is not None else None
 
+    def invoke(self, ctx):
+        """Run the sub-command; an error that no reader or command turned into its own message ends in one line
+        (exit code 1), never a traceback: a file the system refuses (``OSError``: named with the system's reason),
+        memory that ran out, or a bug (its type and text, with how to see the traceback: :data:`TRACEBACK_ENV`)."""
+        try:
+            return super().invoke(ctx)
+        except (click.exceptions.Exit, click.ClickException, click.Abort):
+            raise
+        except Exception as exc:
+            if os.environ.get(TRACEBACK_ENV, "") not in ("", "0"):
+                raise
+            click.echo(f"error: {unexpected(exc)}", err=True)
+            ctx.exit(1)
+
     def get_command(self, ctx, name):
         spec = self._spec(name)
         if spec is None:
             return None
         module, attr = spec.split(":")
         return getattr(importlib.import_module(f"roadbank.cli.{module}"), attr)
+
+
+def unexpected(exc: BaseException) -> str:
+    """The one-line message for an error that reached the command line unhandled (:meth:`_LazyGroup.invoke`)."""
+    if isinstance(exc, OSError):
+        where = f"{exc.filename}: " if exc.filename else ""
+        return f"{where}{exc.strerror or exc}"
+    if isinstance(exc, MemoryError):
+        return ("out of memory (a log too large for this machine, or one whose time stamps span far more than its "
+                "samples; --chunk-rows reads a long log in pieces)")
+    return (f"unexpected {type(exc).__name__}: {exc} -- a bug in roadbank; please report it with the command "
+            f"(set {TRACEBACK_ENV}=1 to see where it happened)")
 
 
 @click.group(cls=_LazyGroup)

@@ -25,7 +25,10 @@ def not_a_log(path: Path, fmt: str | None) -> str | None:
     """
     from ..io import LogError, detect_format
 
-    if not path.is_file():
+    try:
+        if not path.is_file():
+            return None
+    except OSError:             # cannot be looked at: the reader says so
         return None
     suffix = path.suffix.lower()
     try:
@@ -54,7 +57,7 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
     from ..fleet import expand_logs
     from ..fleet.run import enclosing_log
     from ..io import LogError, read_channel_map
-    from ..io.files import not_found
+    from ..io.files import not_found, present
 
     cmap = None
     if channels is not None:
@@ -63,8 +66,13 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
         except LogError as exc:
             click.echo(f"error: {exc}", err=True)
             sys.exit(1)
-    paths = expand_logs(logs)
-    if paths and not any(p.exists() for p in paths):
+    left_out: list = []
+    paths = expand_logs(logs, left_out)
+    if left_out:
+        shown = ", ".join(map(str, left_out[:3])) + (f" and {len(left_out) - 3} more" if len(left_out) > 3 else "")
+        click.echo(f"note: {len(left_out)} file(s) named as roadbank's own outputs (summary.csv, *.bank.csv, "
+                   f"*.bank.parquet) left out: {shown} (give such a file by its name to read it as a log)", err=True)
+    if paths and not any(present(p) for p in paths):
         raise click.BadParameter("; ".join(str(not_found(p)) for p in paths), param_hint="LOGS")
     kept = []
     for p in paths:

@@ -30,6 +30,7 @@ import numpy as np
 from ..defaults import ESTIMATOR as DEFAULT
 from ..io import detect_format, read_channel_map
 from ..io.errors import LogError
+from ..io.files import present
 from ..io.kitti import broken_drive, drive_name, find_oxts_dirs, is_oxts_dir
 from ..io.stream import stream_log
 from ..io.writers import output_problem, write_error
@@ -72,26 +73,45 @@ def is_own_output(p: Path) -> bool:
     return p.name.endswith((".bank.csv", ".bank.parquet")) or p.name == SUMMARY
 
 
-def _logs_in(d: Path) -> list[Path]:
+def _logs_in(d: Path, seen: set | None = None, left_out: list | None = None) -> list[Path]:
     """Every log the directory ``d`` holds, ``d`` not being one log itself: its log files, its log
     sub-directories (comma2k19 segments, ROS 2 bags, KITTI drives; a drive short of a file too, to be
     reported) and the logs of its other sub-directories, recursively.
 
     A folder whose only log is one readable KITTI drive (a KITTI date folder) is that log: ``[d]``,
-    named after the drive (:func:`output_names`), as :func:`~roadbank.io.load_log` reads it.
+    named after the drive (:func:`output_names`), as :func:`~roadbank.io.load_log` reads it. A folder that
+    cannot be listed is returned as a log, for the reader to report (:func:`roadbank.io.files.must_exist`);
+    a folder reached again through a link (``seen``: the resolved folders so far) is not listed twice. Files
+    named as ``estimate``'s outputs are appended to ``left_out`` (:func:`is_own_output`).
     """
+    seen = set() if seen is None else seen
+    try:
+        real = d.resolve()
+        if real in seen:
+            return []
+        seen.add(real)
+        entries = sorted(d.iterdir())
+    except OSError:
+        return [d]
     out: list[Path] = []
-    for c in sorted(d.iterdir()):
-        if c.is_dir():
-            out += [c] if _is_log_dir(c) or broken_drive(c) else _logs_in(c)
+    for c in entries:
+        try:
+            folder = c.is_dir()
+        except OSError:             # in a folder that can be listed, not searched: the reader says so
+            out.append(c)
+            continue
+        if folder:
+            out += [c] if _is_log_dir(c) or broken_drive(c) else _logs_in(c, seen, left_out)
         elif _is_log_file(c):
             out.append(c)
+        elif left_out is not None and is_own_output(c):
+            left_out.append(c)
     if len(out) == 1 and out[0].parent == d and is_oxts_dir(out[0] / "oxts"):
         return [d]
     return out
 
 
-def expand_logs(args) -> list[Path]:
+def expand_logs(args, left_out: list | None = None) -> list[Path]:
     """Log paths from command-line arguments: files, log directories, directories of logs, glob patterns.
 
     A directory that is not itself a log (comma2k19 segment, ROS 2 bag, KITTI drive or its ``oxts/``
@@ -101,17 +121,22 @@ def expand_logs(args) -> list[Path]:
     stays that one log. A KITTI drive short of a file (:func:`~roadbank.io.kitti.broken_drive`)
     counts as a log, to be reported. A pattern with ``*``, ``?`` or ``[`` that is not an existing
     path is expanded (``**`` recursive), each directory it matches as if given; of the files it matches, those named
-    as ``estimate``'s own outputs (:func:`is_own_output`) are left out, as a folder leaves them out. Sorted, unique.
+    as ``estimate``'s own outputs (:func:`is_own_output`) are left out, as a folder leaves them out, and appended to
+    ``left_out`` when it is given (for the caller to say so). A folder reached twice through links is listed once.
+    Sorted, unique.
     """
     out: list[Path] = []
+    seen: set = set()
     for a in args:
         p = Path(a)
-        pattern = not p.exists() and any(ch in str(a) for ch in "*?[")
+        pattern = not present(p) and any(ch in str(a) for ch in "*?[")
         found = [Path(x) for x in sorted(glob.glob(str(a), recursive=True))] if pattern else [p]
         for q in found:
             if pattern and q.is_file() and is_own_output(q):
+                if left_out is not None:
+                    left_out.append(q)
                 continue
-            out += _logs_in(q) if q.is_dir() and not _is_log_dir(q) and not broken_drive(q) else [q]
+            out += _logs_in(q, seen, left_out) if q.is_dir() and not _is_log_dir(q) and not broken_drive(q) else [q]
     return sorted(dict.fromkeys(out))
 
 
@@ -123,7 +148,10 @@ def _estimate_batch(jobs, estimators, kw) -> list[LogSummary]:
 
 def _stem(p: Path) -> str:
     """A log's name: a file's stem, a directory's name; a folder holding one KITTI drive: the drive's."""
-    if p.is_file():
+    try:
+        if p.is_file():
+            return p.stem
+    except OSError:             # cannot be looked at (the reader says so): named as a file
         return p.stem
     found = find_oxts_dirs(p)
     return drive_name(found[0]) if len(found) == 1 and found[0] not in (p, p / "oxts") else p.name

@@ -79,8 +79,11 @@ _FRAME = re.compile(r"^(\d+)\.txt$")
 
 
 def is_oxts_dir(p: Path) -> bool:
-    """True if ``p`` is an ``oxts`` folder (``timestamps.txt`` and ``data/``)."""
-    return (p / "timestamps.txt").is_file() and (p / "data").is_dir()
+    """True if ``p`` is an ``oxts`` folder (``timestamps.txt`` and ``data/``); False where it cannot be searched."""
+    try:
+        return (p / "timestamps.txt").is_file() and (p / "data").is_dir()
+    except OSError:
+        return False
 
 
 def find_oxts_dirs(path, broken: bool = False) -> list[Path]:
@@ -91,16 +94,19 @@ def find_oxts_dirs(path, broken: bool = False) -> list[Path]:
     rather than to pass over). Returns a sorted list (empty if there is none).
     """
     p = Path(path)
-    if not p.is_dir():
-        return []
 
     def found(d: Path) -> bool:
         return is_oxts_dir(d) or (broken and d.name == "oxts" and _kitti_like(d))
-    if found(p):
-        return [p]
-    if found(p / "oxts"):
-        return [p / "oxts"]
-    return sorted(d / "oxts" for d in p.iterdir() if d.is_dir() and found(d / "oxts"))
+    try:
+        if not p.is_dir():
+            return []
+        if found(p):
+            return [p]
+        if found(p / "oxts"):
+            return [p / "oxts"]
+        return sorted(d / "oxts" for d in p.iterdir() if d.is_dir() and found(d / "oxts"))
+    except OSError:             # a folder that cannot be listed holds no drive we can read (the reader says why)
+        return []
 
 
 def _kitti_like(oxts: Path) -> bool:

@@ -229,10 +229,7 @@ def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTabl
             rows.append((lineno, row))
     except csv.Error as exc:
         raise LogError(f"{p}: corrupt CSV ({exc})") from None
-    named = [h for h in header if h]            # unnamed columns (a row ending in ",,") are never read
-    if len(set(named)) != len(named):
-        dup = sorted({h for h in named if named.count(h) > 1})
-        raise LogError(f"{p}: duplicate column name(s) {dup} in the header")
+    unique_names(p, [h for h in header if h], "in the header")   # unnamed columns (",,") are never read
     if not rows:
         raise LogError(f"{p}: no data rows after the header")
     linenos = [ln for ln, _ in rows]
@@ -253,8 +250,12 @@ def read_parquet(path, wanted: dict[str, str], prefix: str | None = None) -> Raw
     try:
         pf = pq.ParquetFile(p)
         schema = pf.schema_arrow
-        names = list(schema.names)
-        cols = [c for c in names if c in wanted or (prefix and c.startswith(prefix))]
+    except (pa.ArrowException, OSError, ValueError) as exc:
+        raise LogError(f"{p}: not a readable Parquet file (truncated or corrupt?): {exc}") from None
+    names = list(schema.names)
+    unique_names(p, names, "in the schema")
+    cols = [c for c in names if c in wanted or (prefix and c.startswith(prefix))]
+    try:
         table = pf.read(columns=cols)
     except (pa.ArrowException, OSError, ValueError) as exc:
         raise LogError(f"{p}: not a readable Parquet file (truncated or corrupt?): {exc}") from None
@@ -264,6 +265,14 @@ def read_parquet(path, wanted: dict[str, str], prefix: str | None = None) -> Raw
             for c in cols}
     return RawTable(names, data, metadata=parquet_metadata(schema), row_label="row",
                     rownums=range(table.num_rows), time_typed=time_typed(schema))
+
+
+def unique_names(p, names, where: str) -> None:
+    """A :class:`LogError` naming the file ``p`` and the column names that ``names`` holds twice (``where``: ``"in
+    the header"``, ``"in the schema"``): which of the two is the channel cannot be told."""
+    if len(set(names)) != len(names):
+        dup = sorted({h for h in names if names.count(h) > 1})
+        raise LogError(f"{p}: duplicate column name(s) {dup} {where}")
 
 
 def time_typed(schema) -> dict[str, str]:

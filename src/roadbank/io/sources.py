@@ -95,6 +95,7 @@ class ParquetBatches:
         if pf.metadata.num_rows == 0:
             raise LogError(f"{path}: no data rows")
         self.names = list(pf.schema_arrow.names)
+        readers.unique_names(path, self.names, "in the schema")
         self.metadata = readers.parquet_metadata(pf.schema_arrow)
         self.time_typed = readers.time_typed(pf.schema_arrow)
 
