@@ -117,3 +117,24 @@ def test_a_parquet_schema_with_a_name_twice_is_refused_naming_it(tmp_path, frame
         load_log(p)
     res = _run("channels", p, "-o", tmp_path / "m.toml")
     assert res.exit_code == 1 and "duplicate column name(s) ['r']" in res.output and "Traceback" not in res.output
+
+
+def test_a_map_flag_or_ratio_that_is_not_one_is_refused():
+    """``invert = "false"`` (a string, which Python reads as true) and a steering ratio no road vehicle has are
+    refused naming the map, the channel or key, and the value; a boolean and a plausible ratio are read."""
+    from roadbank.io.channels import channel_map_from_dict
+    base = {"time": {"column": "t", "unit": "s"}, "speed": {"column": "vx", "unit": "m/s"},
+            "lateral_acceleration": {"column": "ay", "unit": "m/s^2"}, "yaw_rate": {"column": "r", "unit": "rad/s"}}
+    with pytest.raises(LogError, match="m.toml: channel 'yaw_rate' \\(column 'r'\\): 'invert' must be true or false"):
+        channel_map_from_dict({"channels": {**base, "yaw_rate": {"column": "r", "unit": "rad/s", "invert": "false"}}},
+                              "m.toml")
+    assert channel_map_from_dict({"channels": {**base, "yaw_rate": {"column": "r", "unit": "rad/s", "invert": True}}},
+                                 "m.toml").channels["yaw_rate"].invert is True
+    with pytest.raises(LogError, match="m.toml: steering_ratio = 1e\\+06 is outside a road vehicle's 5-30"):
+        channel_map_from_dict({"channels": base, "steering_ratio": 1e6}, "m.toml")
+    assert channel_map_from_dict({"channels": base, "steering_ratio": 14.5}, "m.toml").steering_ratio == 14.5
+
+
+def test_a_steering_ratio_option_outside_a_road_vehicle_is_a_usage_error(tmp_path, folder):
+    res = _run("estimate", folder / "good.csv", "--steering-ratio", "1e300", "-o", tmp_path / "o.csv")
+    assert res.exit_code == 2 and "outside a road vehicle's 5-30" in res.output and not (tmp_path / "o.csv").exists()

@@ -11,3 +11,7 @@ from __future__ import annotations
 #: Standard gravity used throughout roadbank (m/s^2). The DFC gain checks in
 #: tests/test_models.py (Haw0 = 4.4647 at 22.2 m/s) use 9.81.
 G = 9.81
+
+#: Plausible steering ratio of a road vehicle (steering-wheel angle per road-wheel angle, -): a vehicle file, a
+#: channel map's ``steering_ratio`` and ``--steering-ratio`` outside it are refused (a unit or typing mistake).
+STEERING_RATIO_RANGE = (5.0, 30.0)

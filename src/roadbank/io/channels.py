@@ -80,6 +80,7 @@ from typing import cast
 
 import numpy as np
 
+from ..constants import STEERING_RATIO_RANGE
 from . import units
 from .errors import LogError, channel_error, channel_text
 
@@ -360,9 +361,13 @@ def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
                                     "longitudinal acceleration and the pitch rate of an INS whose outputs are free "
                                     "of offset")
             unbiased.add(OPTIONAL[role])
+        invert = entry.get("invert", False)
+        if not isinstance(invert, bool):         # "false" (a string) would read as true
+            raise channel_error(source, role, column, f"'invert' must be true or false (a TOML boolean, no quotes), "
+                                f"got {invert!r}")
         opt = {k: (None if entry.get(k) is None else str(entry[k])) for k in ("message", "signal", "topic")}
         specs[role] = ChannelSpec(role, column, str(entry["unit"]), _convention(entry.get("convention")),
-                                  bool(entry.get("invert", False)), msg_field=(
+                                  invert, msg_field=(
                                       None if entry.get("field") is None else str(entry["field"])), **opt)
     rs = d.get("resample", {})
     if not isinstance(rs, dict):
@@ -370,12 +375,16 @@ def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
     bad = set(rs) - _RESAMPLE_KEYS
     if bad:
         raise LogError(f"{source}: [resample]: unknown key(s) {sorted(bad)} (known: {sorted(_RESAMPLE_KEYS)})")
+    ratio = None if d.get("steering_ratio") is None else _number(source, "steering_ratio", d["steering_ratio"])
+    lo, hi = STEERING_RATIO_RANGE
+    if ratio is not None and np.isfinite(ratio) and ratio > 0 and not lo <= ratio <= hi:   # else ChannelMap's own
+        raise LogError(f"{source}: steering_ratio = {ratio:g} is outside a road vehicle's {lo:g}-{hi:g} "
+                       "(steering-wheel angle per road-wheel angle, -)")
     try:
         return ChannelMap(
             specs,
             convention=cast(str, _convention(d.get("convention", "ISO"))),   # a default is given: never None
-            steering_ratio=None if d.get("steering_ratio") is None else _number(source, "steering_ratio",
-                                                                                d["steering_ratio"]),
+            steering_ratio=ratio,
             time_base=str(rs.get("time_base", "auto")),
             rate_hz=_number(source, "resample.rate_hz", rs.get("rate_hz", 100.0)),
             max_gap_s=_number(source, "resample.max_gap_s", rs.get("max_gap_s", 0.5)),

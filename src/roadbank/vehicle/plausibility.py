@@ -14,7 +14,7 @@ import difflib
 import inspect
 import math
 
-from ..constants import G
+from ..constants import G, STEERING_RATIO_RANGE
 from ..units import SI_UNIT, parse_quantity
 from .errors import VehicleFileError
 from .tomltext import fmt_value, is_scalar, toml_type
@@ -36,7 +36,7 @@ PLAUSIBLE: dict[str, tuple[str, tuple[float, float] | None]] = {
     "Lr": ("length", (0.5, 3.0)),
     "Cf": ("cornering stiffness", (10e3, 1.5e6)),
     "Cr": ("cornering stiffness", (10e3, 1.5e6)),
-    "steering_ratio": ("dimensionless", (5.0, 30.0)),
+    "steering_ratio": ("dimensionless", STEERING_RATIO_RANGE),
     "h_cg": ("length", (0.2, 1.6)),
     "h_roll": ("length", (0.0, 1.6)),
     "ms": ("mass", (400.0, 5000.0)),
