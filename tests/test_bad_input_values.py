@@ -290,3 +290,38 @@ def test_the_whole_log_checks_say_nothing_on_the_simulated_drives():
     for drives in sets + train + loud_sets(train):
         for d in drives:
             assert check_consistency(d.signals) == []
+
+
+@pytest.mark.skipif(not KITTI_DRIVES, reason="../shared/data/kitti-oxts* not present")
+@pytest.mark.parametrize("factor, unit, at_least", [(3.6, "km/h", 5), (1.0, None, 0)])
+def test_a_speed_in_kmh_read_as_ms_is_warned_about_where_the_car_turns(factor, unit, at_least):
+    """A speed in km/h read as m/s scales vx r by 3.6: ay is then about 0.28 times vx r, as on a steep banked track,
+    and what is left of ay reads as banks of 35-40 deg, beyond the paper's 30 deg track. Where a drive then has
+    enough turning samples (5 of the 16: these drives turn gently), the speed is warned about naming the unit (never
+    refused: a steeper track reads alike); the drives as recorded get no such warning (nor do the simulated drives,
+    test_the_whole_log_checks_say_nothing_on_the_simulated_drives, and the paper's scenarios,
+    tests/test_faults_units.py)."""
+    from roadbank.io import check_consistency
+    from roadbank.io.kitti import load_kitti_oxts
+
+    warned = 0
+    for drive in KITTI_DRIVES:
+        s = load_kitti_oxts(drive).signals
+        said = [w for w in check_consistency(Signals(s.t, s.vx * factor, s.ay, s.r, s.delta_f), drive.name)
+                if "reads like a speed in" in w]
+        if said:
+            warned += 1
+            assert unit is not None and drive.name in said[0], said       # km/h, or "km/h or mph" where both fit
+            assert f"a speed in {unit}" in said[0] and "declared as m/s" in said[0], said
+    assert warned >= at_least if unit else warned == 0
+
+
+def test_a_speed_in_mph_read_as_ms_is_warned_about_on_a_turning_drive(scurve):
+    """The S-curve (hard turns) with its speed in mph read as m/s: ay is 0.49 times vx r and what is left reads as
+    56 deg of bank: warned naming mph; the S-curve as simulated: no warning."""
+    from roadbank.io import check_consistency
+
+    s = scurve.signals
+    mph = check_consistency(Signals(s.t, s.vx / 0.44704, s.ay, s.r, s.delta_f), "scurve")
+    assert any("a speed in mph declared as m/s" in w for w in mph), mph
+    assert not [w for w in check_consistency(s, "scurve") if "reads like a speed" in w]

@@ -80,6 +80,18 @@ UNIT_SCALES = (
 #: factor brings the slope into :data:`SLOPE_FIXED`
 SLOPE_PLAUSIBLE = (0.04, 2.5)
 SLOPE_FIXED = (0.7, 1.4)
+#: a slope (-) of ``ay`` on ``vx r`` over the turning samples below this, that a speed unit's factor
+#: (:data:`SPEED_SCALES`) brings into :data:`SLOPE_FIXED`, with a tilt beyond :data:`SPEED_TILT` is warned about
+#: (:func:`speed_warnings`): a speed in km/h or mph declared m/s reads so, as does a steep banked track (the paper's,
+#: 0.18-0.74), so never refused
+SLOPE_SPEED_WARN = 0.6
+#: ... the 95th percentile of ``|ay - vx r|`` over those samples (m/s^2; ``g sin`` of the bank and roll it implies)
+#: above which: ``g sin 32 deg``, beyond the steepest of the paper's track lanes (30 deg: its lane change reads 4.9
+#: m/s^2 with a slope of 0.30) and of ``roadbank tune``'s simulated drives (whose slopes below 0.6 reach at most 2.3
+#: m/s^2); a speed in km/h read as m/s on KITTI drives 5.6-6.2 m/s^2 (35-39 deg), in mph on the S-curve 8.1 (56 deg)
+SPEED_TILT = G * math.sin(math.radians(32.0))
+#: the speed read over the true one (-) for a speed in km/h or in mph (or knots) declared m/s
+SPEED_SCALES = (("km/h", 3.6), ("mph", 1 / 0.44704))
 #: the correlation of ``ay`` with ``vx r`` over every moving sample from which their slope is read (the shared
 #: KITTI drives 0.44-0.98; a straight drive's is its noise's)
 CORR_MIN = 0.6
@@ -241,6 +253,22 @@ def _slope_warnings(k: float, n: int, what: str, source, named) -> list[str]:
     return []
 
 
+def speed_warnings(k: float, tilt: float, n: int, source, named) -> list[str]:
+    """The warning for a speed that reads like km/h or mph declared as m/s: the slope ``k`` (-) of ``ay`` on ``vx r``
+    over ``n`` turning samples below :data:`SLOPE_SPEED_WARN` and brought into :data:`SLOPE_FIXED` by a unit of
+    :data:`SPEED_SCALES`, with the 95th percentile ``tilt`` (m/s^2) of ``|ay - vx r|`` there above
+    :data:`SPEED_TILT` (a bank no public road has)."""
+    fits = [u for u, f in SPEED_SCALES if SLOPE_FIXED[0] <= k * f <= SLOPE_FIXED[1]]
+    if not (fits and SLOPE_PLAUSIBLE[0] <= k < SLOPE_SPEED_WARN and tilt > SPEED_TILT):
+        return []
+    deg = math.degrees(math.asin(min(tilt / G, 1.0)))
+    return [f"{source}: channel {named(('speed',))}: ay is only {k:.2f} times vx r over {n} turning samples (0.76-1.35 "
+            f"on the real roads the project has), and what is left of ay reads as banks of {deg:.0f} deg (95th "
+            f"percentile): it reads like a speed in {' or '.join(fits)} declared as m/s, unless the car turned on a "
+            "steep banked track. A channel map states the speed's unit (`roadbank channels LOG -o map.toml` guesses "
+            "it)"]
+
+
 def _residual(vx, ay, r) -> tuple[float, int, np.ndarray]:
     """Median ``|ay - vx r|`` (m/s^2) over the turning samples, their count and their mask."""
     sel = turning(vx, ay, r)
@@ -300,7 +328,9 @@ def check_balance(vx, ay, r, source="signals", columns: dict | None = None) -> l
         return gentle_warnings(gentle_sums(vx, ay, r), source, columns)
     named = _namer(columns)
     if res <= LIMIT:
-        return _slope_warnings(_slope(vx, ay, r, sel), n, "turning", source, named)
+        k = _slope(vx, ay, r, sel)
+        tilt = float(np.percentile(np.abs(ay[sel] - vx[sel] * r[sel]), 95))
+        return _slope_warnings(k, n, "turning", source, named) + speed_warnings(k, tilt, n, source, named)
     for roles, text, fix in CANDIDATES:
         fres, fn, _ = _residual(*fix(vx, ay, r))
         if fn >= MIN_SAMPLES and fres <= FIXED:
