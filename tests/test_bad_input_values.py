@@ -325,3 +325,16 @@ def test_a_speed_in_mph_read_as_ms_is_warned_about_on_a_turning_drive(scurve):
     mph = check_consistency(Signals(s.t, s.vx / 0.44704, s.ay, s.r, s.delta_f), "scurve")
     assert any("a speed in mph declared as m/s" in w for w in mph), mph
     assert not [w for w in check_consistency(s, "scurve") if "reads like a speed" in w]
+
+
+@pytest.mark.skipif(not KITTI_0070.is_dir(), reason="../shared/data/kitti-oxts not present")
+def test_a_stuck_speed_is_warned_about():
+    """Drive 0070 with its speed held at 15 m/s throughout (a stuck signal; the estimate was tens of degrees off
+    without a word): warned naming the channel and the value; as recorded: no such warning."""
+    from roadbank.io import check_consistency
+    from roadbank.io.kitti import load_kitti_oxts
+
+    s = load_kitti_oxts(KITTI_0070).signals
+    stuck = check_consistency(Signals(s.t, np.full_like(s.vx, 15.0), s.ay, s.r, s.delta_f), "0070")
+    assert any("channel 'speed': constant at 15 m/s" in w and "stuck or held" in w for w in stuck), stuck
+    assert not [w for w in check_consistency(s, "0070") if "stuck" in w]

@@ -19,7 +19,9 @@ mistakes that keep the balance's residual small are named:
 
 * a dead channel: ``ay`` or the yaw rate exactly constant over :data:`MIN_SAMPLES` moving samples. Refused
   where the other channel shows turning (its standard deviation above :data:`DEAD_EVIDENCE`); otherwise only
-  warned (a yaw rate quantised coarsely on a straight road can hold one value).
+  warned (a yaw rate quantised coarsely on a straight road can hold one value). A speed exactly constant while ``ay``
+  varies (standard deviation above :data:`DEAD_EVIDENCE`) is warned about: a stuck or held speed signal, unless the
+  log was made at one exact speed (a synthetic one).
 * a unit that scales ``vx r`` (:data:`UNIT_SCALES`): where ``ay`` and ``vx r`` move together (correlation over
   every moving sample at least :data:`CORR_MIN`), the slope of ``ay`` on ``vx r`` is 0.35-1.6 on the real and
   simulated logs the project has. A slope above :data:`SLOPE_PLAUSIBLE` (``vx r`` several times too small: a
@@ -122,12 +124,13 @@ def moving(vx, ay, r, v_min: float = MOVING) -> np.ndarray:
 class Sums:
     """What :func:`log_verdict` reads of a log, summed chunk by chunk (``+``): over the moving samples
     (:func:`moving`) with ``a = vx r`` (m/s^2) and ``ay`` (m/s^2), ``moments = (n, sum a, sum ay, sum a^2, sum ay^2,
-    sum a ay)`` and ``ranges = (min ay, max ay, min r, max r)`` (m/s^2, rad/s); ``gentle`` is :func:`gentle_sums`;
+    sum a ay)`` and ``ranges = (min ay, max ay, min r, max r, min vx, max vx)`` (m/s^2, rad/s, m/s); ``gentle`` is
+    :func:`gentle_sums`;
     ``motion`` counts the samples in motion and those reversing (:func:`reversing_warnings`)."""
 
     gentle: tuple = (0.0, 0.0, 0)
     moments: tuple = (0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    ranges: tuple = (math.inf, -math.inf, math.inf, -math.inf)
+    ranges: tuple = (math.inf, -math.inf, math.inf, -math.inf, math.inf, -math.inf)
     #: ``(samples in motion, those of them reversing)``: finite ``|vx| >=`` :data:`MOVING`, and ``vx <= -MOVING``
     motion: tuple = (0, 0)
 
@@ -138,8 +141,9 @@ class Sums:
         sel = moving(vx, ay, r)
         a, y, w = vx[sel] * r[sel], ay[sel], r[sel]
         moments = (int(sel.sum()), float(a.sum()), float(y.sum()), float(a @ a), float(y @ y), float(a @ y))
-        ranges = ((float(y.min()), float(y.max()), float(w.min()), float(w.max())) if sel.any()
-                  else cls.ranges)
+        v = vx[sel]
+        ranges = ((float(y.min()), float(y.max()), float(w.min()), float(w.max()), float(v.min()), float(v.max()))
+                  if sel.any() else cls.ranges)
         with np.errstate(invalid="ignore"):
             motion = (int(np.count_nonzero(np.abs(vx) >= MOVING)), int(np.count_nonzero(vx <= -MOVING)))
         return cls(gentle_sums(vx, ay, r), moments, ranges, motion)
@@ -148,7 +152,8 @@ class Sums:
         lo = lambda i: min(self.ranges[i], other.ranges[i])      # noqa: E731
         hi = lambda i: max(self.ranges[i], other.ranges[i])      # noqa: E731
         return Sums(tuple(x + y for x, y in zip(self.gentle, other.gentle)),
-                    tuple(x + y for x, y in zip(self.moments, other.moments)), (lo(0), hi(1), lo(2), hi(3)),
+                    tuple(x + y for x, y in zip(self.moments, other.moments)),
+                    (lo(0), hi(1), lo(2), hi(3), lo(4), hi(5)),
                     tuple(x + y for x, y in zip(self.motion, other.motion)))
 
 
@@ -202,8 +207,13 @@ def _dead_channels(ranges: tuple, n: int, std_a: float, std_ay: float, source, n
     standard deviations (m/s^2) of ``vx r`` (``std_a``) and ``ay`` (``std_ay``) there: warnings, or LogError where the
     other channel shows turning."""
     out = []
+    lo, hi = ranges[4:6]
+    if lo == hi and std_ay > DEAD_EVIDENCE:      # never refused: a simulated or synthetic log may hold its speed
+        out.append(f"{source}: channel {named(('speed',))}: constant at {lo + 0.0:.6g} m/s over {n} moving samples "
+                   f"while ay varies by {std_ay:.2f} m/s^2 (standard deviation): a stuck or held speed signal, unless "
+                   "the log was made at one exact speed")
     for role, (lo, hi), unit, other, std in (("lateral_acceleration", ranges[:2], "m/s^2", "vx r", std_a),
-                                             ("yaw_rate", ranges[2:], "rad/s", "ay", std_ay)):
+                                             ("yaw_rate", ranges[2:4], "rad/s", "ay", std_ay)):
         if lo != hi:
             continue
         text = f"{source}: channel {named((role,))}: constant at {lo + 0.0:.6g} {unit} over {n} moving samples"
