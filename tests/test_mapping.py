@@ -317,3 +317,20 @@ def _drive_with_positions(tmp_path, scenario: str, seed: int):
     pq.write_table(pa.table(dict(res.table(), lat=lat, lon=lon)), tmp_path / "drive.parquet")
     (tmp_path / "m.toml").write_text(MAP_TOML)
     return res, lat, lon
+
+
+def test_a_log_that_adds_nothing_to_the_map_is_named(tmp_path):
+    """A log whose position never moves (a receiver that froze) is read but gives no cell: the map is made of the
+    other log, and the command names the frozen one instead of counting it among the mapped ones in silence."""
+    t = np.arange(600) * 0.01
+    cols = {"t": t, "vx": np.full(600, 20.0), "ay": np.full(600, 0.5), "r": np.zeros(600), "delta_f": np.zeros(600)}
+    proj = LocalProjection(48.0, 11.0)
+    lat, lon = proj.to_latlon(np.zeros(600), 20.0 * t)
+    pq.write_table(pa.table(dict(cols, lat=lat, lon=lon)), tmp_path / "gps.parquet")
+    pq.write_table(pa.table(dict(cols, lat=np.full(600, lat[0]), lon=np.full(600, lon[0]))), tmp_path / "froze.parquet")
+    (tmp_path / "m.toml").write_text(MAP_TOML)
+    r = CliRunner().invoke(main, ["map", str(tmp_path), "--channels", str(tmp_path / "m.toml"), "-e", "kinematic",
+                                  "-o", str(tmp_path / "out" / "map.parquet")])
+    assert r.exit_code == 0, r.output
+    assert "froze.parquet: read, but none of its estimates is in the map" in r.output
+    assert "of 2 log(s), 1 of them adding none" in r.output and "gps.parquet: read" not in r.output

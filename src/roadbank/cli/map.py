@@ -106,10 +106,16 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
     except OSError as exc:          # names the file and what was written before it
         click.echo(f"error: {exc}", err=True)
         sys.exit(1)
+    empty = [r for r in recs if r.status == "ok" and r.mapped == 0]
+    for r in empty:             # read, but no cell got a sample of it: said, not passed over
+        click.echo(f"warning: {r.log}: read, but none of its estimates is in the map (no settled estimate at a "
+                   "position: a position that never moves or jumps, a log too short to settle, or no driving at "
+                   "5 m/s or more)", err=True)
     tab = bmap.table()
     mapped = sum(r.mapped for r in recs)
-    click.echo(f"{len(tab['ix'])} cell(s) x sector from {mapped} settled estimate(s) of "
-               f"{len(recs) - len(failed)} log(s); bank {tab['bank_mean_deg'].min():.1f} .. "
+    shown = f"{len(recs) - len(failed)} log(s)" + (f", {len(empty)} of them adding none" if empty else "")
+    click.echo(f"{len(tab['ix'])} cell(s) x sector from {mapped} settled estimate(s) of {shown}; "
+               f"bank {tab['bank_mean_deg'].min():.1f} .. "
                f"{tab['bank_mean_deg'].max():.1f} deg; origin {bmap.projection.lat0_deg:.5f}, "
                f"{bmap.projection.lon0_deg:.5f}; cell {bmap.cell_m:g} m")
     for f in files:
