@@ -139,3 +139,23 @@ def test_damaged_stamps_are_repaired_as_in_any_log(tmp_path):
         assert any(f"channel '{role}' (column 'processed_log/IMU/gyro[{axis}]'): time stamps repaired: 1 swapped "
                    "pair" in w for w in log.warnings)
     assert len(log) == len(load_log(SEGMENT))
+
+
+def test_a_file_that_is_not_one_real_array_is_refused_naming_it(tmp_path):
+    """An .npz archive saved under a segment's .npy name (np.load returns an archive, not an array) and complex
+    values are refused naming the segment and the file, not read into a conversion error without a file."""
+    from roadbank.io.comma2k19 import _load
+
+    (tmp_path / "processed_log" / "CAN" / "speed").mkdir(parents=True)
+    f = tmp_path / "processed_log" / "CAN" / "speed" / "value"
+    with open(f, "wb") as fh:
+        np.savez(fh, a=np.arange(3.0))
+    with pytest.raises(LogError, match="'processed_log/CAN/speed/value' is not one array .* NpzFile"):
+        _load(tmp_path, "processed_log/CAN/speed/value")
+    with open(f, "wb") as fh:
+        np.save(fh, np.arange(3.0) + 1j)
+    with pytest.raises(LogError, match="'processed_log/CAN/speed/value' holds complex128 values, not real numbers"):
+        _load(tmp_path, "processed_log/CAN/speed/value")
+    with open(f, "wb") as fh:
+        np.save(fh, np.arange(3, dtype=np.int8))
+    assert _load(tmp_path, "processed_log/CAN/speed/value").tolist() == [0, 1, 2]

@@ -65,15 +65,22 @@ def _load(path: Path, rel: str) -> np.ndarray:
     if not f.exists():
         raise LogError(f"{path}: comma2k19 file '{rel}' is missing")
     try:
-        return np.load(f, allow_pickle=False)
+        arr = np.load(f, allow_pickle=False)
     except Exception as exc:  # truncated / not an npy array
         raise LogError(f"{path}: comma2k19 file '{rel}' is unreadable ({exc})") from None
+    if not isinstance(arr, np.ndarray):             # an .npz archive loads as one, lazily
+        raise LogError(f"{path}: comma2k19 file '{rel}' is not one array (.npy) but {type(arr).__name__} (an .npz "
+                       "archive?)")
+    if arr.dtype.kind not in "biuf":                # complex, text, dates: not a measured quantity
+        raise LogError(f"{path}: comma2k19 file '{rel}' holds {arr.dtype} values, not real numbers")
+    return arr
 
 
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     """Rotation matrices (n, 3, 3) from quaternions [w, x, y, z] (Hamilton; normalised first)."""
     q = np.asarray(q, dtype=np.float64)
-    q = q / np.linalg.norm(q, axis=1, keepdims=True)
+    with np.errstate(invalid="ignore", divide="ignore"):        # a zero quaternion gives NaN: no roll there
+        q = q / np.linalg.norm(q, axis=1, keepdims=True)
     w, x, y, z = q.T
     R = np.empty((len(q), 3, 3))
     R[:, 0, 0] = 1 - 2 * (y * y + z * z)
