@@ -195,3 +195,17 @@ def test_streamed_drive_reads_frames_chunk_by_chunk(tmp_path):
         for c in stream_log(drive, chunk_rows=5):
             got.append(c)
     assert sum(len(c) for c in got) <= 15              # the chunks before the bad frame's
+
+
+@pytest.mark.skipif(not (KITTI / "2011_09_26_drive_0070").is_dir(), reason="../shared/data/kitti-oxts not present")
+def test_a_channel_map_given_for_a_drive_is_said_to_be_unused(tmp_path):
+    """A KITTI drive is read with its format's own channels: a channel map given with it is not used, and the
+    reader says so instead of passing over it; without one, no such warning."""
+    drive = KITTI / "2011_09_26_drive_0070"
+    m = tmp_path / "m.toml"
+    m.write_text('[channels]\ntime = { column = "t", unit = "s" }\nspeed = { column = "v", unit = "km/h" }\n'
+                 'lateral_acceleration = { column = "a", unit = "m/s^2" }\n'
+                 'yaw_rate = { column = "w", unit = "rad/s" }\n')
+    said = [w for w in load_log(drive, channels=m).warnings if "the channel map is not used" in w]
+    assert len(said) == 1 and "kitti-oxts" in said[0] and drive.name in said[0]
+    assert not [w for w in load_log(drive).warnings if "channel map" in w]

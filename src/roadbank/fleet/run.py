@@ -357,7 +357,8 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
     output_format : {"parquet", "csv"}
     workers : int
         1: in this process, one log after another. More: that many worker processes on this
-        machine (:class:`roadbank.fleet.cluster.OnProcesses`).
+        machine (:class:`roadbank.fleet.cluster.OnProcesses`), at most one per log to run (a worker
+        without a log would only cost its start).
     scheduler : str, optional
         Address of a running Dask scheduler (``tcp://host:8786``); overrides ``workers``.
     resume : bool
@@ -410,9 +411,10 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
         if on_result is not None:
             on_result(s)
 
+    workers = min(int(workers), max(len(jobs), 1))
     t0 = time.perf_counter()
     try:
-        if scheduler is None and int(workers) <= 1:
+        if scheduler is None and workers <= 1:
             c0 = time.process_time()
             for p, out, meta, png in jobs:
                 finish(estimate_log(p, out, estimators, metadata=meta, plot=png, **kw))

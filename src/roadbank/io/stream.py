@@ -55,9 +55,13 @@ def log_chunks(path, channels: ChannelMap | str | Path | None = None, format: st
         raise LogError(f"{p}: unknown format '{fmt}' (known: {', '.join(FORMATS)})")
     params = params or VehicleParams()
     rows = chunk_rows if fmt in STREAMED else None
+    note = []
     if fmt in DATASET_FORMATS:
         src = open_layout(p, fmt, params, rows)
         cmap = src.channel_map
+        if channels is not None:          # said, not passed over: the user may think it applies
+            note = [f"{p}: the channel map is not used: a {fmt} log is read with its format's own channels, units "
+                    "and axes"]
     else:
         cmap = channels if isinstance(channels, ChannelMap) else (
             read_channel_map(channels) if channels is not None else default_channel_map())
@@ -65,7 +69,9 @@ def log_chunks(path, channels: ChannelMap | str | Path | None = None, format: st
             fmt = "mdf4-can"                  # an MDF4 file with a DBC: bus logging
         src = open_source(p, fmt, cmap, rows)
     try:
-        yield from assemble(src, cmap, params, fmt)
+        for log in assemble(src, cmap, params, fmt):
+            log.warnings, note = note + log.warnings, []
+            yield log
     finally:
         src.close()
 
