@@ -79,8 +79,8 @@ def _make(name, **kw):
 @pytest.mark.parametrize("roll", ["static", "dynamic"])
 def test_run_equals_step_bit_for_bit(name, roll):
     """The batch kernels (including the fixed-rate batch loop) and the per-sample step are the same
-    arithmetic: identical outputs, for every estimator and roll model, across path switches, the kernel variants
-    of a limited low-pass included."""
+    arithmetic: identical outputs, for every estimator and roll model, across path switches, limited low-passes
+    included."""
     make = lambda: _make(name, roll=roll)   # noqa: E731
     s = _mixed_log()
     batch = make().run(s)
@@ -93,18 +93,16 @@ def test_run_equals_step_bit_for_bit(name, roll):
 @pytest.mark.parametrize("name", ["kinematic", "kinematic-lp", "kinematic-ff", "kinematic-lp-limited", "uio",
                                   "pio-modified", "pif-modified", "kalman", "pif-gated", "kinematic-pif",
                                   "pif-adaptive", "dfc", "riccati"])
-def test_each_estimator_runs_the_kernel_variant_of_its_settings(name):
-    """The kernel variant an estimator calls (:func:`roadbank.estimators.kernels.entries`) is the one its settings
-    array asks for: a limited one exactly where ``cfg[C_LIM] > 0``, the three-state batch loop exactly for a
-    three-state ``lpv`` observer."""
+def test_each_estimator_runs_the_batch_kernel_of_its_size(name):
+    """The batch kernel an estimator calls (:func:`roadbank.estimators.kernels.entries`) is the three-state loop's
+    (``lpv3_run``) exactly for a three-state ``lpv`` observer whose roll model has 0 or 2 states, and its family's
+    otherwise."""
     from roadbank.estimators import kernels as K
-    from roadbank.estimators.layout import C_LIM, C_N
+    from roadbank.estimators.layout import C_N, C_NR
     est = _make(name, sample_rate=100.0)
-    limited = est._cfg[C_LIM] > 0
-    assert (est._run_fn in (K.lpv_limited_run, K.gated_limited_run)) == limited
-    assert (est._step_fn in (K.lpv_limited_step, K.gated_limited_step)) == limited
-    assert (est._run_fn is K.lpv3_run) == (est.kernel == "lpv" and est._cfg[C_N] == 3 and not limited)
-    assert (est._run_fn, est._step_fn) == K.entries(est.kernel, limited, est._cfg[C_N] == 3)
+    three = est.kernel == "lpv" and est._cfg[C_N] == 3 and est._cfg[C_NR] in (0, 2)
+    assert (est._run_fn is K.lpv3_run) == three
+    assert (est._run_fn, est._step_fn) == K.ENTRIES["lpv3" if three else est.kernel]
 
 
 def test_three_state_batch_loop_equals_the_plain_loop():
@@ -124,19 +122,18 @@ def test_three_state_batch_loop_equals_the_plain_loop():
 _COMPILED_BY_KINEMATIC = """
 import numpy as np
 from roadbank import Signals, estimators
-from roadbank.estimators.kernels import lpv, sample
+from roadbank.estimators.kernels import lpv
 n = 50
 s = Signals(np.arange(n) * 0.01, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, np.nan))
 estimators.make("kinematic").run(s)
-print(bool(lpv.lpv_step.signatures), bool(lpv.lpv3_fixed_run.signatures), bool(sample.limited_ay.signatures),
-      bool(sample.noise_update.signatures))
+print(bool(lpv.lpv_step.signatures), bool(lpv.lpv_run.signatures), bool(lpv.lpv3_fixed_run.signatures))
 """
 
 
-def test_a_plain_observer_compiles_neither_the_limit_nor_the_batch_loop(tmp_path):
-    """A fresh process (empty numba cache) that runs the kinematic estimate (an ``lpv`` observer without a
-    limit) compiles ``lpv_step`` but neither the limited low-pass's helpers nor the three-state batch loop: the
-    variants keep that code out of its first run."""
+def test_an_observer_of_another_size_does_not_compile_the_three_state_loop(tmp_path):
+    """A fresh process (empty numba cache) that runs the kinematic estimate (an ``lpv`` observer without states)
+    compiles ``lpv_step`` and ``lpv_run`` but not the three-state batch loop: the variant keeps that code out of
+    its first run."""
     import os
     import subprocess
     import sys
@@ -144,7 +141,7 @@ def test_a_plain_observer_compiles_neither_the_limit_nor_the_batch_loop(tmp_path
     out = subprocess.run([sys.executable, "-c", _COMPILED_BY_KINEMATIC], capture_output=True, text=True, env=env,
                          timeout=300, cwd=tmp_path)
     assert out.returncode == 0, out.stderr[-2000:]
-    assert out.stdout.split() == ["True", "False", "False", "False"]
+    assert out.stdout.split() == ["True", "True", "False"]
 
 
 @njit(cache=False)

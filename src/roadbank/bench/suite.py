@@ -496,9 +496,8 @@ est.reset(); est.step(0.0, 20.0, 0.0, 0.0, 0.0)
 t5 = time.perf_counter()
 est.step(0.01, 20.0, 0.0, 0.0, 0.0)
 t6 = time.perf_counter()
-loaded = sorted(k for k in (f"{f}_{s}" for f in ("lpv", "dfc", "riccati", "adaptive", "gated")
-                for s in ("run", "step"))
-                if getattr(getattr(K, k), "signatures", None))   # riccati_step is Python (runs riccati_run)
+loaded = sorted({getattr(f, "py_func", f).__name__ for pair in K.ENTRIES.values() for f in pair
+                 if getattr(f, "signatures", None)})   # riccati_step, gated_step are Python (they run the run)
 print(json.dumps({"import_s": t1 - t0, "design_s": t2 - t1, "first_run_s": t3 - t2,
                   "second_run_s": t4 - t3, "first_step_s": t5 - t4, "second_step_s": t6 - t5,
                   "kernels_loaded": loaded}))

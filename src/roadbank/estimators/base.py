@@ -217,8 +217,7 @@ class Estimator:
         self._inputs = self.design_type(params=self.params, v_min=self.v_min, v_step=self.v_step,
                                         v_max=self.v_max, **self._design_fields())
         self._tab_cont, self._nstate, self._extra = self._designed()
-        self._run_fn, self._step_fn = K.entries(self.kernel, self.limited,
-                                                batch3=self._nstate == 3 and self._roll[0].shape[0] in (0, 2))
+        self._run_fn, self._step_fn = K.entries(self.kernel, self._nstate == 3 and self._roll[0].shape[0] in (0, 2))
         self._work = np.zeros(L.work_size(self._nstate))
         self._buffers = OutputBuffers()     # the last run()'s output arrays, reused when dropped
         self.fixed_dt: float | None = None

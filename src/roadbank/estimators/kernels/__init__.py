@@ -19,8 +19,7 @@ The families:
 * ``lpv``  — linear observers with a speed-scheduled table (kinematic, UIO,
   PIO, steady-state PIF, Kalman): :math:`\xi' = F(v_x)\xi + G(v_x)\eta`,
   :math:`w = H(v_x)\xi + D(v_x)\eta` with :math:`\eta = [\delta_f, a_y, r]`.
-  Variants (:func:`entries`): ``lpv3_run`` for three states (the batch loop), ``lpv_limited_*`` for a
-  limited low-pass.
+  Variant (:func:`entries`): ``lpv3_run`` for three states (the batch loop).
 * ``riccati`` — the PIF with the time-varying Riccati ODE (paper eq 43).
 * ``dfc`` — dynamic filter compensation (nonlinear gate + low-pass).
 * ``adaptive`` — linear observers scheduled on speed *and* excitation
@@ -94,14 +93,13 @@ one function each (``riccati_step`` and ``gated_step`` are Python that run ``ric
 less time, 3.2 s instead of 4.0 when this was measured, at about 8 us per Python ``step()`` call instead of
 1.2-1.6, the dispatch of fifteen arrays), the general
 path has no per-dimension special cases, and ``lpv_step`` is compiled once and called
-(not inlined) by ``lpv_run``, ``lpv3_run`` and ``gated_run`` (``lpv_limited_step`` by
-``lpv_limited_run`` and ``gated_limited_run``). Code that only some estimators run is in variants
-of a family chosen in Python (:func:`entries`), not behind a test of ``cfg``: the limited low-pass
-(``*_limited_*``) and the three-state batch loop (``lpv3_run``). Their bodies are written once, as
-inlined helpers taking the variant as a constant that numba prunes before typing, so a first run
-compiles only what its estimator runs (the gyro-aided default on a KITTI drive: 7.4 s instead of 9.1
-when this was measured, the same output to the bit). The kernels' disk cache is checked against
-all of the package's files and the layout at once (:mod:`._jit`).
+(not inlined) by ``lpv_run``, ``lpv3_run`` and ``gated_run``. The three-state batch loop is a variant
+chosen in Python (:func:`entries`: ``lpv3_run``), its body written once as an inlined helper taking the
+variant as a constant that numba prunes before typing, so an observer of another size (the gyro-aided
+default, two states) never compiles it: its first run on a KITTI drive 8.0 s instead of 9.1 when this was
+measured, the same output to the bit. (A variant for the limited low-pass too saved another 0.7 s there but
+cost the first ``roadbank reproduce``, which runs both, 4 s: not kept.) The kernels' disk cache is checked
+against all of the package's files and the layout at once (:mod:`._jit`).
 
 **Calling convention** (every family): ``<family>_step(mem, cfg, tab, work, t, vx, d, ay, r)``
 returns ``(w, theta, phi_b, valid)``; ``<family>_run(mem, cfg, tab, work, t, vx, d, ay, r,
@@ -120,40 +118,28 @@ from __future__ import annotations
 from ..layout import DT_REL_TOL
 from .adaptive import adaptive_run, adaptive_step
 from .dfc import dfc_run, dfc_step
-from .gated import gated_limited_run, gated_limited_step, gated_run, gated_step
-from .lpv import lpv3_run, lpv_limited_run, lpv_limited_step, lpv_run, lpv_step, observer_update
+from .gated import gated_run, gated_step
+from .lpv import lpv3_run, lpv_run, lpv_step, observer_update
 from .riccati import riccati_run, riccati_step
 from .sample import ASIN_POLY_MAX, asin_fast
 from .smoother import smooth_backward
 
-__all__ = ["ASIN_POLY_MAX", "DT_REL_TOL", "adaptive_run", "adaptive_step", "asin_fast", "dfc_run", "dfc_step",
-           "ENTRIES", "entries", "gated_limited_run", "gated_limited_step", "gated_run", "gated_step", "lpv3_run",
-           "lpv_limited_run", "lpv_limited_step", "lpv_run", "lpv_step", "observer_update", "riccati_run",
-           "riccati_step", "smooth_backward"]
+__all__ = ["ASIN_POLY_MAX", "DT_REL_TOL", "ENTRIES", "adaptive_run", "adaptive_step", "asin_fast", "dfc_run",
+           "dfc_step", "entries", "gated_run", "gated_step", "lpv3_run", "lpv_run", "lpv_step", "observer_update",
+           "riccati_run", "riccati_step", "smooth_backward"]
 
 #: the ``(run, step)`` kernels by family and variant (:func:`entries`)
 ENTRIES = {
-    "lpv": (lpv_run, lpv_step), "lpv3": (lpv3_run, lpv_step), "lpv_limited": (lpv_limited_run, lpv_limited_step),
-    "gated": (gated_run, gated_step), "gated_limited": (gated_limited_run, gated_limited_step),
+    "lpv": (lpv_run, lpv_step), "lpv3": (lpv3_run, lpv_step), "gated": (gated_run, gated_step),
     "adaptive": (adaptive_run, adaptive_step), "dfc": (dfc_run, dfc_step), "riccati": (riccati_run, riccati_step),
 }
 
 
-def entries(family: str, limited: bool = False, batch3: bool = False):
-    """The ``(run, step)`` kernels of an estimator of ``family`` (``"lpv"``, ``"gated"``, ...).
-
-    ``limited``: its first observer is a limited low-pass (``cfg[C_LIM] > 0``; the ``lpv`` and ``gated``
-    families only); ``batch3``: a three-state ``lpv`` observer whose roll model has 0 or 2 states, whose batch run
-    takes its fixed-rate samples through the three-state loop (:func:`lpv3_run`). Each variant compiles only the
-    code it runs, so that a user's first run compiles what its estimator needs (compile time, above).
-    """
-    if limited:
-        key = f"{family}_limited"
-    elif family == "lpv" and batch3:
-        key = "lpv3"
-    else:
-        key = family
+def entries(family: str, batch3: bool = False):
+    """The ``(run, step)`` kernels of an estimator of ``family`` (``"lpv"``, ``"gated"``, ...); ``batch3``: a
+    three-state ``lpv`` observer whose roll model has 0 or 2 states, whose batch run takes its fixed-rate samples
+    through the three-state loop (:func:`lpv3_run`; any other ``lpv`` observer never compiles that loop)."""
+    key = "lpv3" if (family == "lpv" and batch3) else family
     if key not in ENTRIES:
-        raise ValueError(f"no {key!r} kernels (families: lpv, gated, adaptive, dfc, riccati; a limited low-pass in "
-                         f"lpv and gated only)")
+        raise ValueError(f"no {family!r} kernels (families: lpv, gated, adaptive, dfc, riccati)")
     return ENTRIES[key]

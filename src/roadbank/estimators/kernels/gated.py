@@ -7,15 +7,15 @@ import math
 import numpy as np
 from numba import njit
 
-from ..layout import (C_GAP, C_N, C_NR, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, gate_states,
+from ..layout import (C_GAP, C_LIM, C_N, C_NR, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, gate_states,
                       gated_block)
 from ._jit import ENTRY, HELPER
-from .lpv import lpv_limited_step, lpv_step
+from .lpv import lpv_step
 from .sample import output, sample_valid, step_by_run, store
 
 
 @njit(inline="always", **HELPER)
-def gated_sample(mem, cfg, tab, work, t, vx, d, ay, r, limited):
+def gated_sample(mem, cfg, tab, work, t, vx, d, ay, r):
     r"""One sample of two stacked observers whose outputs are blended by a gate; returns
     ``(w, theta, phi_b, valid)``. Inlined into :func:`gated_run`, the family's one compiled function
     (:func:`gated_step` runs it on one-sample arrays, as ``riccati_step`` does), so that numba
@@ -34,21 +34,18 @@ def gated_sample(mem, cfg, tab, work, t, vx, d, ay, r, limited):
     e^{-\Delta t/\tau})(g_k - g)`. At a (re)start ``r_f = r``, ``g = 0``. Output
     :math:`w = w_s + g (w_f - w_s)`, :math:`\theta = \arcsin w`, :math:`\phi_b = \theta - \phi`.
     ``r_f`` and ``g`` in ``mem`` (:func:`~roadbank.estimators.layout.gate_states`). With a limit
-    (``limited``, a constant of the caller: ``kinematic-pif``'s low-pass) the first observer reads
+    (``kinematic-pif``'s low-pass) the first observer reads
     :func:`~roadbank.estimators.kernels.sample.limited_ay` in the steering's input slot, which neither
-    observer of that pair reads otherwise (:func:`~roadbank.estimators.kernels.lpv.lpv_limited_step` computes it;
+    observer of that pair reads otherwise (:func:`~roadbank.estimators.kernels.lpv.lpv_step` computes it;
     the validity test here reads ``ay`` in that slot, finite exactly where the limited one is); the second
     reads ``ay``.
     """
     # validity as lpv_step sees the sample: a limited low-pass's slot holds ay limited, finite where ay is
-    if not sample_valid(mem, cfg, t, vx, ay if limited else d, ay, r):
+    if not sample_valid(mem, cfg, t, vx, ay if cfg[C_LIM] > 0.0 else d, ay, r):
         return mem[M_W], mem[M_THETA], mem[M_PHIB], False
     restart = mem[M_INIT] == 0.0 or (t - mem[M_TLAST]) > cfg[C_GAP]
     dt = t - mem[M_TLAST]
-    if limited:
-        lpv_limited_step(mem, cfg, tab, work, t, vx, d, ay, r)
-    else:
-        lpv_step(mem, cfg, tab, work, t, vx, d, ay, r)
+    lpv_step(mem, cfg, tab, work, t, vx, d, ay, r)
     n = np.int64(cfg[C_N])
     nr = np.int64(cfg[C_NR])
     gb = gated_block(n, nr)
@@ -74,34 +71,16 @@ def gated_sample(mem, cfg, tab, work, t, vx, d, ay, r, limited):
     return w, mem[M_THETA], mem[M_PHIB], ok
 
 
-@njit(inline="always", **HELPER)
-def gated_loop(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x,
-               limited):
+@njit(**ENTRY)
+def gated_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
+              out_x):
     """:func:`gated_sample` over every sample."""
     n = np.int64(cfg[C_N])
     for k in range(t.shape[0]):
-        ok = gated_sample(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k], limited)[3]
+        ok = gated_sample(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
         store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
-
-
-@njit(**ENTRY)
-def gated_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x):
-    """:func:`gated_sample` over every sample, the first observer without a limit."""
-    gated_loop(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x, False)
-
-
-@njit(**ENTRY)
-def gated_limited_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
-                      out_x):
-    """:func:`gated_sample` over every sample, the first observer a limited low-pass."""
-    gated_loop(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x, True)
 
 
 def gated_step(mem, cfg, tab, work, t, vx, d, ay, r):
     """One sample of :func:`gated_run`; returns ``(w, theta, phi_b, valid)`` (Python: :func:`step_by_run`)."""
     return step_by_run(gated_run, mem, cfg, tab, work, t, vx, d, ay, r)
-
-
-def gated_limited_step(mem, cfg, tab, work, t, vx, d, ay, r):
-    """One sample of :func:`gated_limited_run` (Python: :func:`step_by_run`)."""
-    return step_by_run(gated_limited_run, mem, cfg, tab, work, t, vx, d, ay, r)

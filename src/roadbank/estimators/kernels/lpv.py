@@ -2,14 +2,13 @@
 
 The observer update of a sample (:func:`observer_update`: restart at the equilibrium, fixed-rate
 map or trapezoidal step, then the output ``w = H xi + D eta``) is written once and serves the
-per-sample step (:func:`lpv_sample`, compiled as :func:`lpv_step` and, for a limited low-pass,
-:func:`lpv_limited_step`), the batch runs (:func:`lpv_loop`: :func:`lpv_run`, :func:`lpv_limited_run`
-and :func:`lpv3_run`, whose samples off the three-state fixed-rate loop go through :func:`lpv_step`)
-and the families built on it (``adaptive``, ``gated``). The variants differ in constants that numba
-prunes before typing (``limited``, ``batch3``), so each compiles only the code it runs. A three-state
-observer's fixed-rate map is :func:`fixed3` in the step and in the batch loop (:func:`lpv3_fixed_run`)
-alike, so ``run()`` and ``step()`` are the same arithmetic by construction. The order of their sums is
-the update description of :mod:`roadbank.estimators.update_spec` (from which the exported C is
+per-sample step (:func:`lpv_step`), the batch runs (:func:`lpv_loop`: :func:`lpv_run`, and :func:`lpv3_run`
+for a three-state observer, whose samples off the three-state fixed-rate loop go through :func:`lpv_step`)
+and the families built on it (``adaptive``, ``gated``). The two batch runs differ in a constant that numba
+prunes before typing (``batch3``), so an observer of another size never compiles the three-state loop. A
+three-state observer's fixed-rate map is :func:`fixed3` in the step and in the batch loop
+(:func:`lpv3_fixed_run`) alike, so ``run()`` and ``step()`` are the same arithmetic by construction. The order
+of their sums is the update description of :mod:`roadbank.estimators.update_spec` (from which the exported C is
 generated); tests/test_update_spec.py checks these kernels against it bit for bit.
 """
 
@@ -20,7 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..layout import (C_DTFIX, C_DTOL, C_DV, C_GAP, C_N, C_NG, C_NR, C_SUB, C_USE, C_V0, C_VMIN, C_WMAX, M_AY,
+from ..layout import (C_DTFIX, C_DTOL, C_DV, C_GAP, C_LIM, C_N, C_NG, C_NR, C_SUB, C_USE, C_V0, C_VMIN, C_WMAX, M_AY,
                       M_ETA, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, NETA, batch3_block, lpv_row,
                       roll_states)
 from ._jit import ENTRY, HELPER
@@ -102,21 +101,19 @@ def fixed3(ri, a, p0, p1, p2, u0, u1, u2, x0, x1, x2):
     return x0, x1, x2, w
 
 
-@njit(inline="always", **HELPER)
-def lpv_sample(mem, cfg, tab, work, t, vx, d, ay, r, limited):
+@njit(**ENTRY)
+def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     """One sample of a scheduled linear observer: returns ``(w, theta, phi_b, valid)``.
 
     ``tab`` rows as :func:`roadbank.estimators.layout.lpv_row`: continuous
     ``F, G, H, D, J``, then (when ``cfg[C_DTFIX] > 0``) the fixed-rate
     ``Phi, Gam0, Gam1`` (and for three states the batch block, :func:`fixed3`).
     ``work`` (:func:`~roadbank.estimators.layout.work_size` floats) receives the
-    interpolated row at the same offsets, then scratch. ``limited`` is a constant of the caller (True
-    exactly where ``cfg[C_LIM] > 0``): a limited low-pass reads
+    interpolated row at the same offsets, then scratch. A limited low-pass (``cfg[C_LIM] > 0``) reads
     :func:`~roadbank.estimators.kernels.sample.limited_ay` in the steering's slot, then updates its running
-    noise (:func:`~roadbank.estimators.kernels.sample.noise_update`). numba drops the branches of the other
-    value before typing them, so a kernel without a limit never compiles the limit's code.
+    noise (:func:`~roadbank.estimators.kernels.sample.noise_update`).
     """
-    if limited:
+    if cfg[C_LIM] > 0.0:
         d = limited_ay(mem, cfg, t, vx, ay, r)
     if not sample_valid(mem, cfg, t, vx, d, ay, r):
         return mem[M_W], mem[M_THETA], mem[M_PHIB], False
@@ -125,10 +122,8 @@ def lpv_sample(mem, cfg, tab, work, t, vx, d, ay, r, limited):
     row = lpv_row(n)
     eta = (d if cfg[C_USE] > 0 else 0.0, ay if cfg[C_USE + 1] > 0 else 0.0, r if cfg[C_USE + 2] > 0 else 0.0)
     dt, restart, fixed = begin(mem, cfg, t)
-    rho = 1.0
-    if limited:
-        rho = noise_update(mem, cfg, vx, ay, r, dt, restart)
-    if fixed and n == 3 and not limited:
+    rho = noise_update(mem, cfg, vx, ay, r, dt, restart) if cfg[C_LIM] > 0.0 else 1.0
+    if fixed and n == 3 and cfg[C_LIM] == 0.0:
         x0, x1, x2, w = fixed3(tab[i], a, mem[M_ETA], mem[M_ETA + 1], mem[M_ETA + 2], eta[0], eta[1], eta[2],
                                mem[M_X], mem[M_X + 1], mem[M_X + 2])
         mem[M_X] = x0
@@ -146,23 +141,10 @@ def lpv_sample(mem, cfg, tab, work, t, vx, d, ay, r, limited):
         x0 = mem[M_X]
         x1 = mem[M_X + 1] if n > 1 else 0.0
         w = observer_update(mem, cfg, work, n, eta, dt, restart, fixed)
-        if limited:
-            if rho != 1.0:          # a limited low-pass following its running noise
-                w = scale_update(mem, cfg, work, row.H, x0, x1, rho, w)
+        if rho != 1.0:          # a limited low-pass following its running noise
+            w = scale_update(mem, cfg, work, row.H, x0, x1, rho, w)
     ok = finish(mem, cfg, w, ay, dt, restart, fixed)
     return mem[M_W], mem[M_THETA], mem[M_PHIB], ok
-
-
-@njit(**ENTRY)
-def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
-    """:func:`lpv_sample` of an observer without a limit (``cfg[C_LIM] == 0``)."""
-    return lpv_sample(mem, cfg, tab, work, t, vx, d, ay, r, False)
-
-
-@njit(**ENTRY)
-def lpv_limited_step(mem, cfg, tab, work, t, vx, d, ay, r):
-    """:func:`lpv_sample` of a limited low-pass (``cfg[C_LIM] > 0``)."""
-    return lpv_sample(mem, cfg, tab, work, t, vx, d, ay, r, True)
 
 
 @njit(**HELPER)
@@ -289,26 +271,23 @@ def lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, o
 
 
 @njit(inline="always", **HELPER)
-def lpv_loop(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x, limited,
-             batch3):
-    """:func:`lpv_step` (or :func:`lpv_limited_step`, ``limited``) over every sample; with ``batch3`` the runs of
-    samples on the fixed-rate path of a three-state observer go through :func:`lpv3_fixed_run`. ``limited`` and
-    ``batch3`` are constants of the caller, so each batch kernel compiles only the code it runs."""
+def lpv_loop(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x, batch3):
+    """:func:`lpv_step` over every sample; with ``batch3`` (a constant of the caller, so that each batch kernel
+    compiles only the code it runs) the runs of samples on the fixed-rate path of a three-state observer go through
+    :func:`lpv3_fixed_run`."""
     n = np.int64(cfg[C_N])
     nr = np.int64(cfg[C_NR])
     N = t.shape[0]
     k = np.int64(0)              # not a literal: one compiled lpv3_fixed_run
     while k < N:
         if batch3:
-            if n == 3 and (nr == 0 or nr == 2) and cfg[C_DTFIX] > 0.0 and mem[M_INIT] > 0.0:
+            if (n == 3 and (nr == 0 or nr == 2) and cfg[C_DTFIX] > 0.0 and cfg[C_LIM] == 0.0
+                    and mem[M_INIT] > 0.0):
                 k = lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
                                    out_x, k)
                 if k >= N:
                     break
-        if limited:
-            ok = lpv_limited_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
-        else:
-            ok = lpv_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
+        ok = lpv_step(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]
         store(mem, k, n, ok, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
         k += 1
 
@@ -316,17 +295,11 @@ def lpv_loop(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, o
 @njit(**ENTRY)
 def lpv_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x):
     """Batch version of :func:`lpv_step` (same arithmetic, sample by sample)."""
-    lpv_loop(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x, False, False)
+    lpv_loop(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x, False)
 
 
 @njit(**ENTRY)
 def lpv3_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x):
     """:func:`lpv_run` of a three-state observer (roll model of 0 or 2 states): the runs of samples on the
     fixed-rate path go through :func:`lpv3_fixed_run`, every other sample through :func:`lpv_step`."""
-    lpv_loop(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x, False, True)
-
-
-@njit(**ENTRY)
-def lpv_limited_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x):
-    """Batch version of :func:`lpv_limited_step` (same arithmetic, sample by sample)."""
-    lpv_loop(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x, True, False)
+    lpv_loop(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid, out_x, True)
