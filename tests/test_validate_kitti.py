@@ -429,6 +429,15 @@ def test_piece_bounds_are_consecutive_whole_pieces_from_the_first_sample():
     assert piece_bounds(t, 30.0) == []
 
 
+def test_piece_bounds_across_a_gap_of_a_year_list_only_pieces_with_samples():
+    """A drive whose time stamps jump by a year (a logger's clock; 3.15e7 s is a whole number of 8 s pieces): the
+    pieces before and after the jump that hold samples (the one cut by the jump too, as any piece with a gap), none
+    of the ~4 million empty ones between (scoring them raised "Signals: empty arrays")."""
+    from roadbank.validation.scoring import piece_bounds
+    t = np.concatenate([np.arange(300) * 0.1, 3.15e7 + np.arange(300) * 0.1])
+    assert piece_bounds(t, 8.0) == [(0, 80), (80, 160), (160, 240), (240, 300), (300, 380), (380, 460), (460, 540)]
+
+
 @needs_kitti
 def test_the_short_log_scores_are_what_estimate_gives_on_each_piece_and_the_gyro_wins_there():
     """Drive 0070 cut into 8 s pieces: each piece's score is the CLI's estimator (vehicle.for_log on the piece as a

@@ -55,10 +55,18 @@ SHORT_PIECES_S = (8.0, 12.0, 20.0)
 
 def piece_bounds(t, length: float) -> list[tuple[int, int]]:
     """Sample bounds ``[a, b)`` of the consecutive whole pieces of ``length`` (s) of a log sampled at ``t`` (s), from
-    its first sample on (the remainder shorter than ``length`` left out)."""
+    its first sample on (the remainder shorter than ``length`` left out), those that hold a sample: a gap in the time
+    stamps longer than a piece leaves pieces without one, which are not listed (nor made: a gap of a year costs
+    nothing)."""
     t = np.asarray(t, dtype=np.float64)
-    edges = np.searchsorted(t, t[0] + length * np.arange(int((t[-1] - t[0]) // length) + 1))
-    return list(zip(edges[:-1].tolist(), edges[1:].tolist()))
+    whole = int((t[-1] - t[0]) // length)
+    # the pieces that may hold a sample, with their neighbours (the edges are t[0] + length j, as always)
+    j = np.unique(np.floor((t - t[0]) / length).astype(np.int64))
+    j = np.unique(np.concatenate([j - 1, j, j + 1]))
+    j = j[(j >= 0) & (j < whole)]
+    a = np.searchsorted(t, t[0] + length * j)
+    b = np.searchsorted(t, t[0] + length * (j + 1))
+    return [(int(x), int(y)) for x, y in zip(a, b) if y > x]
 
 
 @dataclass(frozen=True)
