@@ -112,8 +112,8 @@ def design_words(design: dict, estimator: str) -> str:
         return ""
     noise, floor, ratio = design["ay_noise"], design["ay_floor"], design["ay_floor_ratio"]
     if not math.isfinite(noise) and not math.isfinite(floor):
-        heard = ("ay noise not measured (too little driving at 5 m/s or more in the log's first minute): designed "
-                 "for the data sheet's noise, not known to be quiet")
+        heard = ("ay noise not measured (too little unbroken driving at 5 m/s or more in the log's first minute: "
+                 "stops, dropouts and gaps break it): designed for the data sheet's noise, not known to be quiet")
     elif not math.isfinite(floor):
         heard = (f"ay noise {noise:.2g} m/s^2 ({ratio:.2g} x the data sheet; its floor not measured: no stretch of "
                  f"driving long enough): {'quiet' if design['quiet'] else 'loud'}")
