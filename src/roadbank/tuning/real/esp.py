@@ -256,6 +256,7 @@ import math
 import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.signal import resample_poly
@@ -640,6 +641,17 @@ def choose_by_roads(builds: dict, logs, sim_sets) -> tuple:
     return min(tied, key=lambda k: (round(sim[k] / EQUAL_DEG), round(real[k] / EQUAL_DEG))), real, sim
 
 
+#: the stages of :func:`kinematic_pif_candidates` over one setting: stage -> (the setting, its candidates, the
+#: settings as they were before that stage)
+_ONE_SETTING: dict[int, tuple[str, tuple, dict[str, Any]]] = {
+    3: ("quiet_ratio", QUIET_RATIOS, {"quiet_filter": "pif-modified", **_NO_LEAD}),
+    4: ("quiet_filter", QUIET_FILTERS, _NO_LEAD), 5: ("v_min", V_MINS, _NO_LEAD),
+    6: ("lead_samples", LEADS_SAMPLES, _STATIC_CAR), 8: ("car_margin", CAR_MARGINS, _LINEAR),
+    10: ("clip", CLIPS, _DESIGN_NOISE), 12: ("noise_tau", NOISE_TAUS, _ONE_RATIO),
+    13: ("limit_tau", LIMIT_TAUS, _TIME_RATE), 14: ("bank_speed_exp", BANK_SPEED_EXPS, {}),
+}
+
+
 def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kappa: float | None = None) -> dict:
     """``{key: build}`` of ``kinematic-pif`` candidates for :func:`choose_by_roads` (module docstring).
 
@@ -666,25 +678,9 @@ def kinematic_pif_candidates(stage: int, bank_rate_deg: float | None = None, kap
     if stage == 1:
         return {(b, k): per_log("kinematic-pif", bank_rate=float(np.radians(b)), kappa=k, quiet_ratio=0.0,
                                 **_NO_LEAD) for b in BANK_RATES_DEG for k in KAPPAS}
-    if stage == 3:
-        return {q: per_log("kinematic-pif", quiet_ratio=q, quiet_filter="pif-modified", **_NO_LEAD)
-                for q in QUIET_RATIOS}
-    if stage == 4:
-        return {f: per_log("kinematic-pif", quiet_filter=f, **_NO_LEAD) for f in QUIET_FILTERS}
-    if stage == 5:
-        return {v: per_log("kinematic-pif", v_min=v, **_NO_LEAD) for v in V_MINS}
-    if stage == 6:
-        return {n: per_log("kinematic-pif", lead_samples=n, **_STATIC_CAR) for n in LEADS_SAMPLES}
-    if stage == 8:
-        return {m: per_log("kinematic-pif", car_margin=m, **_LINEAR) for m in CAR_MARGINS}
-    if stage == 10:
-        return {c: per_log("kinematic-pif", clip=c, **_DESIGN_NOISE) for c in CLIPS}
-    if stage == 12:
-        return {tau: per_log("kinematic-pif", noise_tau=tau, **_ONE_RATIO) for tau in NOISE_TAUS}
-    if stage == 13:
-        return {tau: per_log("kinematic-pif", limit_tau=tau, **_TIME_RATE) for tau in LIMIT_TAUS}
-    if stage == 14:
-        return {p: per_log("kinematic-pif", bank_speed_exp=p) for p in BANK_SPEED_EXPS}
+    if stage in _ONE_SETTING:
+        key, values, before = _ONE_SETTING[stage]
+        return {v: per_log("kinematic-pif", **{key: v}, **before) for v in values}
     if stage != 2 or bank_rate_deg is None or kappa is None:
         raise ValueError("kinematic_pif_candidates: stage 1, 3, 4, 5, 6, 8, 10, 12, 13 or 14, or stage 2 with the "
                          "first stage's bank rate and kappa")
