@@ -97,6 +97,9 @@ SPEED_SCALES = (("km/h", 3.6), ("mph", 1 / 0.44704))
 #: the correlation of ``ay`` with ``vx r`` over every moving sample from which their slope is read (the shared
 #: KITTI drives 0.44-0.98; a straight drive's is its noise's)
 CORR_MIN = 0.6
+#: a sum of squared deviations below this fraction of the sum of squares (-) is rounding: the channel is
+#: constant (summed in float64 over up to 1e9 samples, the rounding stays below 1e-6 of it)
+VAR_ROUNDING = 1e-6
 #: the lowest speed (m/s) of the samples the whole log's checks read: low, so that a speed read 3.6 times too small
 #: (m/s declared km/h) still leaves a city drive's turns in
 MOVING = 1.0
@@ -180,7 +183,8 @@ def log_verdict(sums: Sums, decided: bool, source="signals", columns: dict | Non
         # sums of squared deviations of vx r and ay from their means, and of their products
         va, vy, cov = max(saa - sa * sa / n, 0.0), max(syy - sy * sy / n, 0.0), say - sa * sy / n
         out = _dead_channels(sums.ranges, n, math.sqrt(va / n), math.sqrt(vy / n), source, named)
-        if va > 0 and vy > 0:
+        # a channel constant over the log leaves only the rounding of the sums (about n eps saa): no variance
+        if va > VAR_ROUNDING * saa and vy > VAR_ROUNDING * syy:
             corr, k = cov / math.sqrt(va * vy), cov / va
             if corr >= CORR_MIN:
                 _unit_error(k, f"{n} moving samples (correlation {corr:.2f})", source, named)
