@@ -338,3 +338,90 @@ def test_a_stuck_speed_is_warned_about():
     stuck = check_consistency(Signals(s.t, np.full_like(s.vx, 15.0), s.ay, s.r, s.delta_f), "0070")
     assert any("channel 'speed': constant at 15 m/s" in w and "stuck or held" in w for w in stuck), stuck
     assert not [w for w in check_consistency(s, "0070") if "stuck" in w]
+
+
+def _zero_runs_by_hand(v, jump):
+    """The rule of :func:`roadbank.io.limits.zero_runs` sample by sample, for one whole array."""
+    out = np.zeros(len(v), bool)
+    i = 0
+    while i < len(v):
+        if v[i] != 0.0:
+            i += 1
+            continue
+        j = i
+        while j < len(v) and v[j] == 0.0:
+            j += 1
+        a = v[i - 1] if i > 0 else np.nan
+        b = v[j] if j < len(v) else a
+        if abs(a) > jump and abs(b) > jump and np.sign(a) == np.sign(b):
+            out[i:j] = True
+        i = j
+    return out
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_zero_runs_follow_the_rule_whole_and_in_chunks(seed):
+    """Runs of exact zeros entered and left beyond the jump with one sign, against the rule written sample by
+    sample; fed in chunks (the state carried from chunk to chunk) the same wherever no run meets a chunk's end."""
+    from roadbank.io.limits import zero_runs
+    rng = np.random.default_rng(seed)
+    v = rng.choice([-3.0, -0.5, 0.5, 3.0, np.nan], 2000) * rng.uniform(0.5, 1.5, 2000)
+    v[rng.random(2000) < 0.3] = 0.0
+    want = _zero_runs_by_hand(v, 1.0)
+    got, _ = zero_runs(v, np.nan, 1.0)
+    assert np.array_equal(got, want) and 20 < want.sum() < 200
+    cuts = [k for k in range(100, 2000, 137) if v[k - 1] != 0.0]       # no run meets these chunk ends
+    before, parts = np.nan, []
+    for a, b in zip([0] + cuts, cuts + [2000]):
+        m, before = zero_runs(v[a:b], before, 1.0)
+        parts.append(m)
+    assert np.array_equal(np.concatenate(parts), want)
+    m1, b1 = zero_runs(np.array([2.0, 0.0, 0.0]), np.nan, 1.0)      # a run at a chunk's end: its entry decides
+    m2, _ = zero_runs(np.array([0.0, 2.5]), b1, 1.0)                # ... and is carried to the next chunk
+    assert m1.tolist() == [False, True, True] and b1 == 2.0 and m2.tolist() == [True, False]
+
+
+def test_dropouts_written_as_zero_are_dropouts(tmp_path, scurve):
+    """A logger that writes 0 for a missing frame (10 % of the samples of ay and of the yaw rate, drawn apart): in
+    the turns a yaw rate of 0 reads as a bank of tens of degrees. Those zeros are NaN, said per channel with the
+    file, the count and the first time, and the estimate stays near the clean log's; the clean log and one whose
+    zeros are real (the yaw rate near 0 on the straights) say nothing."""
+    rng = np.random.default_rng(1)
+    n = len(scurve.signals.t)
+    rows = {"ay": rng.random(n) < 0.1, "r": rng.random(n) < 0.1}
+
+    def zeros(column):
+        def put(x):
+            x[rows[column]] = 0.0
+            return x
+        return put
+    clean = load_log(_csv(tmp_path, scurve, "clean.csv"))
+    bad = load_log(_csv(tmp_path, scurve, "zeros.csv", ay=zeros("ay"), r=zeros("r")))
+    w = [x for x in bad.warnings if "exactly 0" in x]
+    assert len(w) == 2 and all("zeros.csv" in x and "read as dropouts" in x for x in w), w
+    assert any("channel 'yaw_rate' (column 'r')" in x for x in w) and any("(column 'ay')" in x for x in w)
+    s = clean.signals
+    for field, jump in (("r", 0.02), ("ay", 1.0)):
+        dropped = np.isnan(getattr(bad.signals, field))
+        far = rows[field] & (np.abs(getattr(s, field)) > 2 * jump)
+        far[1:] &= ~rows[field][:-1]                 # (a run's neighbours are the samples around it, not around one)
+        far[:-1] &= ~rows[field][1:]
+        assert far.sum() > 20 and np.all(dropped[far]) and not np.any(dropped[~rows[field]]), field
+    read_as = np.degrees(np.where(rows["r"], s.ay, s.ay - s.vx * s.r) / 9.80665)
+    assert np.max(np.abs(read_as - np.degrees((s.ay - s.vx * s.r) / 9.80665))) > 15     # what the zeros read as
+    as_zero = Signals(s.t, s.vx, np.where(rows["ay"], 0.0, s.ay), np.where(rows["r"], 0.0, s.r), s.delta_f)
+    a, b, c = (for_log("kinematic-pif", x).run(x) for x in (s, bad.signals, as_zero))
+    ok = b.valid & a.valid
+    rms = [np.degrees(np.sqrt(np.mean((a.theta - x.theta)[ok] ** 2))) for x in (b, c)]
+    assert ok.mean() > 0.8 and rms[0] < 0.25 and rms[1] > 4 * rms[0], rms      # 0.16 deg; the zeros read: 1.25
+    assert np.degrees(np.max(np.abs(a.theta - b.theta)[ok])) < 1.0                 # 0.79; the zeros read: 5.0
+    assert not [x for x in clean.warnings if "exactly 0" in x]
+    straight = load_log(_csv(tmp_path, scurve, "straight.csv", r=lambda x: np.where(np.abs(x) < 0.01, 0.0, x)))
+    assert not [x for x in straight.warnings if "exactly 0" in x]
+
+
+@pytest.mark.skipif(not KITTI_DRIVES, reason="../shared/data/kitti-oxts* not present")
+def test_no_real_drive_has_a_dropout_written_as_zero():
+    """The 16 shared KITTI drives, read as a user reads them, hold no sample the zero rule takes."""
+    for drive in KITTI_DRIVES:
+        assert not [w for w in load_log(drive).warnings if "exactly 0" in w], drive.name
