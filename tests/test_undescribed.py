@@ -204,3 +204,24 @@ def test_the_design_span_of_the_design_span_is_itself():
         assert design_span(s[:n]) == n
         np.testing.assert_equal(log_conditions(s[:n]), log_conditions(s))      # NaN where not measured
         assert design_car(s, cond=log_conditions(s)) == design_car(s)
+
+
+def test_a_gap_counts_as_neither_driving_nor_time_of_the_log():
+    """A stray first time stamp a day before the log (a logger's clock not yet set) made the first interval 'a
+    day of driving': the noise was then read on that one sample and the design fell back to the data sheet. A gap
+    longer than MAX_GAP_S counts as no time, so the span and the conditions are those of the log without the
+    stray sample; a dropout of 5 s while driving is no driving (the span ends 5 s later)."""
+    from roadbank.constants import MAX_GAP_S
+
+    s = run_scenario("s-curve", "nominal", seed=0).signals
+    stray = Signals(np.concatenate(([s.t[0] - 86400.0], s.t)), *(np.concatenate(([x[0]], x))
+                                                                  for x in (s.vx, s.ay, s.r, s.delta_f)))
+    assert design_span(stray) == design_span(s) + 1
+    np.testing.assert_equal(log_conditions(stray), log_conditions(s))
+    t = np.arange(0.0, 120.0, 0.01)
+    drive = Signals(t, np.full_like(t, 15.0), 0.1 * np.sin(t), 0.01 * np.cos(t), np.zeros_like(t))
+    assert 5.0 > MAX_GAP_S and abs(t[design_span(drive) - 1] - 60.0) < 0.02
+    dropped = Signals(np.where(t > 30.0, t + 5.0, t), drive.vx, drive.ay, drive.r, drive.delta_f)
+    assert abs(dropped.t[design_span(dropped) - 1] - 65.0) < 0.03       # 60 s of driving and the gap
+    parked = Signals(t * 10.0, np.full_like(t, 1.0), drive.ay, drive.r, drive.delta_f)    # 0.1 s steps: time
+    assert parked.t[design_span(parked) - 1] == pytest.approx(600.0, abs=0.1)             # limit, as before

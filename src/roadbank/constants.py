@@ -15,3 +15,7 @@ G = 9.81
 #: Plausible steering ratio of a road vehicle (steering-wheel angle per road-wheel angle, -): a vehicle file, a
 #: channel map's ``steering_ratio`` and ``--steering-ratio`` outside it are refused (a unit or typing mistake).
 STEERING_RATIO_RANGE = (5.0, 30.0)
+
+#: Longest interval (s) between two samples the estimators integrate over; after a longer one they start again from
+#: the next sample (the default ``max_gap`` of every estimator), and the noise design counts it as no time.
+MAX_GAP_S = 1.0

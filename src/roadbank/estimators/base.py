@@ -20,6 +20,7 @@ import numpy as np
 import numpy.typing as npt
 
 from .. import cache
+from ..constants import MAX_GAP_S
 from ..models.bicycle import augment, disturbance_output, modified_model, original_model
 from ..models.roll import roll_state_space
 from ..params import VehicleParams
@@ -191,7 +192,7 @@ class Estimator:
     default_v_min: float = 5.0
 
     def __init__(self, params: VehicleParams | None = None, *, v_min: float | None = None,
-                 roll: str = "static", max_substep: float = 0.02, max_gap: float = 1.0,
+                 roll: str = "static", max_substep: float = 0.02, max_gap: float = MAX_GAP_S,
                  max_angle: float = np.deg2rad(60.0), v_step: float = V_GRID_STEP,
                  v_max: float = V_GRID_MAX, sample_rate: float | str | None = "auto"):
         self.params = params if params is not None else VehicleParams()

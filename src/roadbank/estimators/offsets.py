@@ -57,6 +57,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..constants import MAX_GAP_S
 from ..models.bicycle import understeer_gradient
 from ..params import VehicleParams
 from ..signals import Estimate, Signals
@@ -125,7 +126,7 @@ class OffsetSettings:
     r_limit: float = math.radians(5.0)
     delta_limit: float = math.radians(5.0)
     ay_offset: float = 0.0
-    max_gap: float = 1.0
+    max_gap: float = MAX_GAP_S
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):

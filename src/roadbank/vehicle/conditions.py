@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from ..constants import G
+from ..constants import MAX_GAP_S, G
 from ..models.attitude import euler_pitch_rate, kinematic_roll
 from ..params import VehicleParams
 from ..signals import (DYNAMICS_BAND_HZ, diff_noise_std, noise_band_hz, road_noise_floor_std, road_noise_std,
@@ -84,15 +84,20 @@ def design_span(signals, v_min: float = 5.0) -> int:
     which :data:`DESIGN_SPAN_S` seconds of driving (``vx >= v_min``, m/s; each moving sample counts
     the interval before it) have passed, or :data:`DESIGN_MAX_S` seconds of the log; all of a
     shorter log. A log that starts at a standstill (ignition on, the car parked) is measured on
-    its first minute of driving, not on the idle."""
+    its first minute of driving, not on the idle. An interval longer than :data:`~roadbank.constants.MAX_GAP_S`
+    (a dropout, a pause of the logger, a stray first time stamp) is a gap the estimators start again after: it
+    counts as neither driving nor time of the log."""
     t = np.asarray(signals.t, dtype=np.float64)
     if len(t) < 2:
         return len(t)
     with np.errstate(invalid="ignore"):
         moving = np.asarray(signals.vx, dtype=np.float64)[1:] >= v_min
-    driven = np.cumsum(np.where(moving, np.diff(t), 0.0))
+        dt = np.diff(t)
+        gaps = np.where(dt > MAX_GAP_S, dt, 0.0)
+    driven = np.cumsum(np.where(moving, dt - gaps, 0.0))
+    closed = t - np.concatenate(([0.0], np.cumsum(gaps)))       # the time with the gaps closed (t where none is)
     n = min(int(np.searchsorted(driven, DESIGN_SPAN_S, side="left")) + 2,
-            int(np.searchsorted(t, t[0] + DESIGN_MAX_S, side="right")))
+            int(np.searchsorted(closed, t[0] + DESIGN_MAX_S, side="right")))
     return min(n, len(t))
 
 
