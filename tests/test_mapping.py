@@ -334,3 +334,54 @@ def test_a_log_that_adds_nothing_to_the_map_is_named(tmp_path):
     assert r.exit_code == 0, r.output
     assert "froze.parquet: read, but none of its estimates is in the map" in r.output
     assert "of 2 log(s), 1 of them adding none" in r.output and "gps.parquet: read" not in r.output
+
+
+def test_fixes_that_jump_farther_than_a_car_drives_are_left_out(tmp_path):
+    """A receiver's glitches (five single fixes 3 km off, one second of fixes 10 000 km off) put those samples'
+    estimates into cells the car never drove through. They are left out and said once, naming the position
+    channels, the count and the first; the map is the clean log's cells with fewer samples: those left out and the
+    course's 25 samples either side of each run of them. Fed in chunks the same fixes are left out."""
+    from roadbank.mapping.geo import PositionJumps
+
+    res, lat, lon = _drive_with_positions(tmp_path, "track-lane1", seed=2)
+    clean, _ = map_logs([tmp_path / "drive.parquet"], "kinematic", channels=tmp_path / "m.toml", origin=(48.0, 11.0))
+    glat, glon = lat.copy(), lon.copy()
+    singles = [300, 700, 701 + 5, 900, 1200]
+    glat[singles] += 0.03                                       # 3.3 km north
+    stretch = slice(1000, 1100)                                  # 1 s at 100 Hz
+    glat[stretch], glon[stretch] = -40.0, 150.0
+    pq.write_table(pa.table(dict(res.table(), lat=glat, lon=glon)), tmp_path / "drive.parquet")
+    bmap, recs = map_logs([tmp_path / "drive.parquet"], "kinematic", channels=tmp_path / "m.toml",
+                          origin=(48.0, 11.0))
+    assert recs[0].status == "ok", recs[0].error
+    said = [w for w in recs[0].warnings if "jump farther than a car can drive" in w]
+    assert len(said) == 1 and "105 fix(es)" in said[0] and "channels 'latitude' (column 'lat')" in said[0], said
+    assert f"t = {res.signals.t[300]:.3f} s" in said[0]
+    got, want = bmap.table(), clean.table()
+    cells = lambda tab: {(x, y, s): c for x, y, s, c in zip(tab["ix"], tab["iy"], tab["sector"], tab["count"])}  # noqa
+    g, w = cells(got), cells(want)
+    assert set(g) <= set(w) and all(0 <= w[k] - g[k] for k in g) and sum(w.values()) - sum(g.values()) <= 105 + 6 * 50
+    t = res.signals.t
+    whole = PositionJumps().add(t, glat, glon)[0]
+    parts, jumps = [], PositionJumps()
+    for a, b in ((0, 250), (250, 1001), (1001, 1050), (1050, len(t))):
+        parts.append(jumps.add(t[a:b], glat[a:b], glon[a:b])[0])
+    np.testing.assert_array_equal(np.isnan(np.concatenate(parts)), np.isnan(whole))
+    assert np.isnan(whole).sum() == 105 and jumps.count == 105
+
+
+def test_a_wrong_track_before_the_true_one_gives_way_after_the_relock_time():
+    """A receiver whose first fixes are elsewhere (a stale position before the first real fix): the true track's
+    fixes are left out for RELOCK_S, then kept; a receiver whose fixes scatter by 10 m (white) keeps every fix."""
+    from roadbank.mapping.geo import RELOCK_S, PositionJumps
+
+    t = np.arange(0.0, 10.0, 0.1)
+    proj = LocalProjection(48.0, 11.0)
+    lat, lon = proj.to_latlon(np.random.default_rng(0).normal(0.0, 5.0, t.size), 20.0 * t)
+    lat[:5] += 1.0                                               # 111 km off for the first 0.5 s
+    kept = np.isfinite(PositionJumps().add(t, lat, lon)[0])
+    first_true = np.argmax(t >= 0.5)
+    assert kept[:5].all() and not kept[first_true:first_true + int(RELOCK_S / 0.1)].any()
+    assert kept[first_true + int(RELOCK_S / 0.1) + 1:].all()
+    noisy = proj.to_latlon(np.random.default_rng(1).normal(0.0, 10.0, t.size), 20.0 * t)     # white, 10 m
+    assert np.isfinite(PositionJumps().add(t, *noisy)[0]).all()

@@ -18,7 +18,7 @@ from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..io.writers import write_error
 from ..params import VehicleParams
 from ..vehicle import DESIGN_MAX_S, Vehicle, for_conditions, has_design_span, log_conditions, undescribed_params
-from .geo import CourseStream, LocalProjection
+from .geo import CourseStream, LocalProjection, PositionJumps
 from .grid import BankMap
 
 
@@ -68,22 +68,36 @@ class FixCount:
         set's own: ``lat_deg``/``lon_deg``)."""
         if self.fix:
             return None
-        roles = gnss_roles(cmap) if cmap is not None else []
-        cols = {r: cmap.channels[r].column for r in roles} if cmap is not None else {}
-        lat, lon = ("latitude", "longitude") if "latitude" in roles else ("lat_deg", "lon_deg")
+        roles, cols, lat, lon = _position_channels(cmap)
         if roles and lat not in roles:      # ECEF: one position from three channels
-            names = ", ".join(f"'{r}' (column '{c}')" for r, c in cols.items())
-            return f"{path}: channels {names}: no finite position in the whole log: no fix, not mapped"
+            return f"{path}: {position_names(cmap)}: no finite position in the whole log: no fix, not mapped"
         missing = [r for r, seen in ((lat, self.lat), (lon, self.lon)) if not seen]
         for_role = {lat: "latitude", lon: "longitude"}
         if missing:
             return "; ".join(channel_text(path, r, cols.get(r), f"no finite {for_role[r]} in the whole log "
                                           "(all missing): no position, not mapped") for r in missing)
-        names = f"channels '{lat}' (column '{cols.get(lat, lat)}') and '{lon}' (column '{cols.get(lon, lon)}')"
+        names = position_names(cmap)
         if self.zero:
             return (f"{path}: {names}: no GNSS fix in the whole log (every position is missing or exactly 0, 0, "
                     "which a receiver without a fix logs): not mapped")
         return f"{path}: {names}: never both finite at one sample: no position, not mapped"
+
+
+def _position_channels(cmap: ChannelMap | None) -> tuple[list, dict, str, str]:
+    """The position roles of ``cmap`` (``latitude``/``longitude`` or ``ecef_x/y/z``; none for a data set's own),
+    their columns, and the names of the latitude and longitude (a data set's: ``lat_deg``/``lon_deg``)."""
+    roles = gnss_roles(cmap) if cmap is not None else []
+    cols = {r: cmap.channels[r].column for r in roles} if cmap is not None else {}
+    lat, lon = ("latitude", "longitude") if "latitude" in roles else ("lat_deg", "lon_deg")
+    return roles, cols, lat, lon
+
+
+def position_names(cmap: ChannelMap | None) -> str:
+    """``channels '<role>' (column '<column>') and ...``: how a message names a log's position channels."""
+    roles, cols, lat, lon = _position_channels(cmap)
+    if roles and lat not in roles:
+        return "channels " + ", ".join(f"'{r}' (column '{c}')" for r, c in cols.items())
+    return f"channels '{lat}' (column '{cols.get(lat, lat)}') and '{lon}' (column '{cols.get(lon, lon)}')"
 
 
 def _origin(lat, lon) -> LocalProjection | None:
@@ -151,7 +165,7 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
     params = s.vehicle.params if s.vehicle is not None else s.params
     rec, first, part = MappedLog(str(path)), None, None
     track = CourseStream()       # the course of each sample over the whole log, not its chunk
-    seen, cmap = FixCount(), None
+    seen, cmap, jumps = FixCount(), None, PositionJumps()
 
     def add(crs, arrays):
         if part is not None and len(crs):
@@ -168,6 +182,7 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
             cmap = chunk.channel_map
             rec.warnings += chunk.warnings
             lat, lon = seen.add(chunk.extra["lat_deg"], chunk.extra["lon_deg"])   # 0, 0: no fix, NaN
+            lat, lon = jumps.add(chunk.signals.t, lat, lon)                          # a receiver's glitch: NaN
             first = first or _origin(lat, lon)
             plane = projection or first
             if part is None and plane is not None:
@@ -183,6 +198,8 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
         why = seen.problem(path, cmap)
         if why is not None:
             raise LogError(why)
+        if jumps.problem() is not None:
+            rec.warnings.append(f"{path}: {position_names(cmap)}: {jumps.problem()}")
     except (LogError, ValueError, OSError) as exc:
         rec.status, rec.error = "error", str(exc)
     except Exception as exc:  # never a traceback for one bad file

@@ -104,3 +104,88 @@ class CourseStream:
         keep = max(0, end - self.k)
         self._buf, self._ctx = [a[keep:] for a in b], end - keep
         return crs, out
+
+
+#: a fix farther from the track before it than a car drives at this speed (m/s, the speed limit of
+#: :data:`roadbank.io.limits.LIMITS`) ...
+JUMP_SPEED = 120.0
+#: ... plus this (m, a fix's error in a street canyon) is a jump of the receiver, not of the car
+JUMP_SLACK = 50.0
+#: fixes that jump together and then stay consistent with each other for this long (s) are the track again
+#: (the jump was the track before them: a wrong first fix, a datum changed mid-log)
+RELOCK_S = 2.0
+
+
+def _distance(lat1, lon1, lat2, lon2):
+    """Distance (m) between positions (deg) on the sphere (equirectangular about their mean latitude; within 0.1 %
+    up to 50 km, and always far above :data:`JUMP_SLACK` for a jump of more than that)."""
+    c = np.cos(np.radians(0.5 * (lat1 + lat2)))
+    return EARTH_RADIUS * np.hypot(np.radians(lat2 - lat1), c * np.radians(lon2 - lon1))
+
+
+class PositionJumps:
+    """The fixes of a log that jump farther than a car can drive, chunk by chunk (:meth:`add`): a fix more than
+    :data:`JUMP_SPEED` times the time since the last fix kept, plus :data:`JUMP_SLACK`, away from it is left out
+    (NaN) and counted, unless it and the fixes after it stay consistent with each other for :data:`RELOCK_S`: from
+    then on they are the track. A GNSS receiver's glitch (a multipath fix kilometres off, a fix of another
+    position) would otherwise put the estimates of those samples into cells the car never drove through."""
+
+    def __init__(self) -> None:
+        self.last: tuple | None = None          # (t s, lat deg, lon deg) of the last fix kept
+        self.other: tuple | None = None         # the fixes left out since: (t of the first, t, lat, lon) of the last
+        self.count = 0
+        self.first: tuple | None = None         # (t s, distance m, time s) of the first jump
+
+    def add(self, t, lat_deg, lon_deg) -> tuple[np.ndarray, np.ndarray]:
+        """Positions (deg, NaN: no fix) at times ``t`` (s) with the jumps NaN."""
+        t, lat, lon = (np.asarray(x, dtype=np.float64) for x in (t, lat_deg, lon_deg))
+        idx = np.flatnonzero(np.isfinite(lat) & np.isfinite(lon))
+        if not len(idx):
+            return lat, lon
+        ft, fa, fo = t[idx], lat[idx], lon[idx]
+        if self.other is None:        # the usual log: every step within reach, checked at once
+            pt = np.concatenate(([self.last[0]], ft)) if self.last else ft
+            pa = np.concatenate(([self.last[1]], fa)) if self.last else fa
+            po = np.concatenate(([self.last[2]], fo)) if self.last else fo
+            with np.errstate(invalid="ignore"):
+                ok = _distance(pa[:-1], po[:-1], pa[1:], po[1:]) <= JUMP_SPEED * np.abs(np.diff(pt)) + JUMP_SLACK
+            if ok.all():
+                self.last = (ft[-1], fa[-1], fo[-1])
+                return lat, lon
+        keep = np.array([self._one(*x) for x in zip(ft, fa, fo)])
+        if keep.all():
+            return lat, lon
+        gone = idx[~keep]
+        lat, lon = lat.copy(), lon.copy()
+        lat[gone] = lon[gone] = np.nan
+        return lat, lon
+
+    def _one(self, t: float, lat: float, lon: float) -> bool:
+        """Whether the fix at ``t`` (s) is kept (sample by sample, where a chunk holds a jump)."""
+        if self.last is None or self._near(self.last, t, lat, lon):
+            self.last, self.other = (t, lat, lon), None
+            return True
+        if self.other is not None and self._near(self.other[1:], t, lat, lon):
+            if t - self.other[0] >= RELOCK_S:
+                self.last, self.other = (t, lat, lon), None
+                return True
+            self.other = (self.other[0], t, lat, lon)
+        else:
+            self.other = (t, t, lat, lon)
+        self.count += 1
+        if self.first is None:
+            self.first = (t, float(_distance(self.last[1], self.last[2], lat, lon)), t - self.last[0])
+        return False
+
+    @staticmethod
+    def _near(fix: tuple, t: float, lat: float, lon: float) -> bool:
+        return bool(_distance(fix[1], fix[2], lat, lon) <= JUMP_SPEED * abs(t - fix[0]) + JUMP_SLACK)
+
+    def problem(self) -> str | None:
+        """What the jumps left out (``None`` if none), to follow the file and the position channels' names."""
+        if self.first is None:
+            return None
+        t, d, dt = self.first
+        return (f"{self.count} fix(es) jump farther than a car can drive ({JUMP_SPEED:g} m/s and {JUMP_SLACK:g} m) "
+                f"from the track before them, the first at t = {t:.3f} s ({d / 1000:.3g} km in {dt:.3g} s): a "
+                f"receiver's glitch, left out of the map")
