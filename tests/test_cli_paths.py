@@ -105,13 +105,34 @@ def test_an_existing_directory_that_cannot_be_written_is_named_so(tmp_path, monk
     assert output_problem(new, directory=True).startswith(f"cannot create directory '{new}'")
 
 
-def test_a_decimal_comma_is_named_by_estimate_and_channels(tmp_path, drive):
-    """A spreadsheet's export with ';' and decimal commas: both commands say so (exit 1), naming the file, the
-    column and the line, where channels said before that no column was named like a time."""
-    eu = tmp_path / "eu.csv"
+def test_a_decimal_comma_is_read_where_the_fields_are_not_separated_by_commas(tmp_path, drive):
+    """A spreadsheet's export with ';' (or tabs) and decimal commas is read with its decimal comma, said once naming
+    the file and the columns: the estimate is that of the same table written with '.', and channels maps it. Where
+    the comma cannot be told from a thousands separator (a column that also holds a decimal point) or the fields are
+    comma-separated (a quoted field), estimate refuses it naming the file, the column, the line and the decimal
+    comma (channels leaves such a column out, as any column that is not numbers)."""
+    plain, eu, tab = tmp_path / "plain.csv", tmp_path / "eu.csv", tmp_path / "tab.tsv"
+    drive.to_csv(plain, index=False, float_format="%.9g")
     drive.to_csv(eu, sep=";", decimal=",", index=False, float_format="%.9g")
-    for cmd in (["estimate", str(eu), "-o", str(tmp_path / "x.csv")],
-                ["channels", str(eu), "-o", str(tmp_path / "m.toml")]):
-        res = CliRunner().invoke(main, cmd)
-        assert res.exit_code == 1 and "eu.csv" in res.output and "looks like a decimal comma" in res.output, res.output
-        assert "line 3" in res.output and "Traceback" not in res.output
+    drive.to_csv(tab, sep="\t", decimal=",", index=False, float_format="%.9g")
+    assert "0,01" in eu.read_text()
+    want = _estimate(plain, "-o", tmp_path / "plain.out.csv")
+    assert want.exit_code == 0, want.output
+    for log, sep in ((eu, "';'"), (tab, "tabs")):
+        res = _estimate(log, "--format", "csv", "-o", tmp_path / f"{log.stem}.out.csv")
+        assert res.exit_code == 0, res.output
+        said = [ln for ln in res.output.splitlines() if "decimal mark" in ln]
+        assert len(said) == 1 and log.name in said[0] and "'t', 'vx', 'ay', 'r'" in said[0] and sep in said[0], said
+        np.testing.assert_array_equal(_theta(tmp_path / f"{log.stem}.out.csv"), _theta(tmp_path / "plain.out.csv"))
+    res = CliRunner().invoke(main, ["channels", str(eu), "-o", str(tmp_path / "m.toml")])
+    assert res.exit_code == 0 and (tmp_path / "m.toml").exists(), res.output
+    lines = eu.read_text().splitlines()
+    lines[2] = lines[2].replace(",", ".", 1)                  # one value of line 3 with a point: ambiguous
+    mixed = tmp_path / "mixed.csv"
+    mixed.write_text("\n".join(lines) + "\n")
+    quoted = tmp_path / "quoted.csv"
+    quoted.write_text("t,vx,ay,r\n" + "".join(f'{k / 100:g},20,"0,5",0.02\n' for k in range(300)))
+    for log, line in ((mixed, "line 4"), (quoted, "line 2")):       # (the first field that is not a number)
+        res = _estimate(log, "-o", tmp_path / "x.csv")
+        assert res.exit_code == 1 and log.name in res.output and "looks like a decimal comma" in res.output, res.output
+        assert line in res.output and "Traceback" not in res.output

@@ -92,16 +92,39 @@ def _parse_floats(path, col: str, label: str, values, row_label: str, rownums) -
 
 #: a number written with a decimal comma (``-0,25``, ``1,5e-3``), which ``float()`` does not read
 _DECIMAL_COMMA = re.compile(r"[+-]?\d*,\d+([eE][+-]?\d+)?")
+#: a whole number (``12``, ``-3e2``): the same with either decimal mark
+_WHOLE = re.compile(r"[+-]?\d+([eE][+-]?\d+)?")
 
 
-def _text_floats(path, column: str, label: str, values: list[str], row_label: str, rownums) -> np.ndarray:
+def _text_floats(path, column: str, label: str, values: list[str], row_label: str, rownums,
+                 decimal_comma: bool = False) -> tuple[np.ndarray, bool]:
     """:func:`_parse_floats` of text fields, converted by numpy in one call where every field is a number
     (numpy parses a text field as ``float()`` does); else field by field, for the missing-value tokens and
-    the error naming the first bad field."""
+    the error naming the first bad field. With ``decimal_comma`` (a file whose fields are not separated by commas)
+    a column whose numbers are all written with a decimal comma (:func:`_decimal_comma_column`) is read with it.
+    Returns the values and whether the decimal comma was read."""
     try:
-        return np.array(values, dtype=np.float64)
+        return np.array(values, dtype=np.float64), False
     except ValueError:
-        return _parse_floats(path, column, label, values, row_label, rownums)
+        pass
+    if decimal_comma and _decimal_comma_column(values):
+        return _text_floats(path, column, label, [v.replace(",", ".") for v in values], row_label, rownums)[0], True
+    return _parse_floats(path, column, label, values, row_label, rownums), False
+
+
+def _decimal_comma_column(values: list[str]) -> bool:
+    """Whether a column's fields are numbers with a decimal comma (``-0,25``; a whole number, ``12``, reads alike
+    either way), at least one of them with the comma, besides missing-value tokens: no field has a decimal
+    point, so no field's comma can be a thousands separator of a number written with a point."""
+    seen = False
+    for v in values:
+        s = v.strip()
+        if s.lower() in MISSING or _WHOLE.fullmatch(s):
+            continue
+        if not _DECIMAL_COMMA.fullmatch(s):
+            return False
+        seen = True
+    return seen
 
 
 def _plain_csv(p: Path, lines: list[str], delim: str, wanted: dict[str, str], prefix: str | None,
@@ -234,10 +257,16 @@ def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTabl
         raise LogError(f"{p}: no data rows after the header")
     linenos = [ln for ln, _ in rows]
     cols = [c for c in header if c in wanted or (prefix and c.startswith(prefix))]
-    data = {}
+    data, commas = {}, []
     for c in cols:
         j = header.index(c)
-        data[c] = _text_floats(p, c, column_label(wanted, c), [row[j] for _, row in rows], "line", linenos)
+        data[c], comma = _text_floats(p, c, column_label(wanted, c), [row[j] for _, row in rows], "line", linenos,
+                                      decimal_comma=delim != ",")
+        if comma:
+            commas.append(c)
+    if commas:
+        warnings.append(f"{p}: column(s) {', '.join(repr(c) for c in commas)} read with ',' as the decimal mark (the "
+                        f"file separates its fields with {'tabs' if delim == chr(9) else repr(delim)})")
     return RawTable(header, data, row_label="line", rownums=linenos, warnings=warnings)
 
 
