@@ -11,7 +11,8 @@ from .options import checked_output
 
 
 def read_columns(path: Path, fmt: str):
-    """``(names, data, times)`` of every numeric column of a CSV, Parquet or MDF4 log (as stored).
+    """``(names, data, times, units)`` of every numeric column of a CSV, Parquet or MDF4 log (as stored; ``units``:
+    those the file states, a CSV's units row).
 
     Columns that are not numbers (a gear as text, a comment) are left out. LogError for a file
     that cannot be read, and for one whose every column fails to read as numbers (the first column's reason:
@@ -39,7 +40,7 @@ def read_columns(path: Path, fmt: str):
         if not data and why:
             raise why[0] from None
     times = dict(raw.times) if raw is not None else {}
-    return names, data, times
+    return names, data, times, (dict(raw.units) if raw is not None else {})
 
 
 @click.command()
@@ -77,11 +78,11 @@ def channels(log, output, fmt):
         fmt = fmt or detect_format(log)
         if fmt not in ("csv", "parquet", "mdf4"):
             raise LogError(f"{log}: guessing a channel map works on CSV, Parquet and MDF4 logs, not {fmt}")
-        names, data, times = read_columns(log, fmt)
+        names, data, times, stated = read_columns(log, fmt)
     except LogError as exc:
         click.echo(f"error: {exc}", err=True)
         sys.exit(1)
-    guesses = guess_channels(names, data, times if fmt == "mdf4" else None)
+    guesses = guess_channels(names, data, times if fmt == "mdf4" else None, stated)
     output.parent.mkdir(parents=True, exist_ok=True)
     output.write_text(channel_map_toml(guesses, log.name))
     width = max(len(g.role) for g in guesses)

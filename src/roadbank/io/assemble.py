@@ -46,7 +46,7 @@ import numpy as np
 from ..params import VehicleParams
 from ..signals import Signals, concat_signals, road_wheel_angle
 from . import units
-from .channels import OPTIONAL, STEERING, ChannelMap, check_plausible
+from .channels import OPTIONAL, STEERING, ChannelMap, check_plausible, default_channel_map
 from .limits import Dropouts
 from .consistency import MIN_SAMPLES, Sums, check_balance, log_verdict, turning, usable
 from .errors import LogError, channel_error, channel_text
@@ -157,6 +157,38 @@ def own_time_unit(p, cmap: ChannelMap, time_typed: dict[str, str]) -> tuple[Chan
     note = channel_text(p, "time", spec.column, f"the map's unit '{spec.unit}' is ignored: the column is {typed}, "
                         "which carries its own unit (read in s)")
     return replace(cmap, channels={**cmap.channels, "time": replace(spec, unit="s")}), [note]
+
+
+def stated_units(p, cmap: ChannelMap, stated: dict[str, str]) -> tuple[ChannelMap, list[str]]:
+    """The map to read a table with where the file states its columns' units (``stated``: column -> unit, a CSV's
+    units row), with what it says of them. The default map's units are assumptions, so a unit the file states for
+    one of its columns replaces the default's (said where they differ). A map the user wrote is kept, and a stated
+    unit that differs from its declared one is warned about. A stated unit that is not one of the channel's kind
+    (``-``, ``Nm`` under a speed) is said and the map's kept."""
+    default = cmap.source == default_channel_map().source
+    channels, notes = dict(cmap.channels), []
+    for role, spec in cmap.channels.items():
+        unit = stated.get(spec.column)
+        if unit is None or units.normalise_unit(unit) == units.normalise_unit(spec.unit):
+            continue
+        try:
+            same = units.factor(spec.kind, unit) == units.factor(spec.kind, spec.unit)
+        except ValueError:
+            notes.append(channel_text(p, role, spec.column, f"the file's units row says '{unit}', not a unit of its "
+                                      f"kind ({units.dimension_of_kind(spec.kind)}): read in '{spec.unit}', the "
+                                      "map's"))
+            continue
+        if same:
+            continue
+        if default:
+            channels[role] = replace(spec, unit=unit)
+            notes.append(channel_text(p, role, spec.column, f"read in '{unit}', as the file's units row says (the "
+                                      f"default channel map assumes '{spec.unit}')"))
+        else:
+            notes.append(channel_text(p, role, spec.column, f"the file's units row says '{unit}', the channel map "
+                                      f"'{spec.unit}': read in '{spec.unit}', the map's (if the row is right, fix "
+                                      "the map)"))
+    return (replace(cmap, channels=channels) if channels != cmap.channels else cmap), notes
 
 
 def steering_delta_f(cmap: ChannelMap, params: VehicleParams, roles: list[str], values: dict) -> np.ndarray:
@@ -388,6 +420,8 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     if "time" not in cmap.channels:
         raise LogError(f"{cmap.source}: channel map has no 'time' channel (required for {fmt})")
     cmap, note = own_time_unit(p, cmap, src.time_typed)
+    cmap, said = stated_units(p, cmap, src.units)
+    note += said
     tspec = cmap.channels["time"]
     if tspec.column not in names:
         raise missing_column(p, "time", tspec.column, names)

@@ -140,6 +140,7 @@ class SegmentSource:
     whole = True
     row_label = "sample"
     time_typed: dict[str, str] = {}      # NumPy arrays of seconds: no column's type carries a time unit
+    units: dict[str, str] = {}           # the data set's units are its reader's
 
     def __init__(self, path, params: VehicleParams | None = None, rate_hz: float = 100.0,
                  max_gap_s: float = 0.5):

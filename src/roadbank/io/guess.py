@@ -38,8 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .channels import OPTIONAL, STEERING
-from .units import FACTORS
+from .channels import OPTIONAL, ROLES, STEERING
+from .units import FACTORS, normalise_unit
 
 #: role -> name spellings (normalised: lower case, letters and digits only)
 NAMES = {
@@ -202,7 +202,8 @@ def _range_units(role: str, v: np.ndarray) -> list[str]:
     return []
 
 
-def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | None = None) -> list[Guess]:
+def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | None = None,
+                   stated: dict[str, str] | None = None) -> list[Guess]:
     """Guess the roadbank channels of a log with columns ``names`` and numeric ``data`` (column -> array).
 
     Parameters
@@ -214,6 +215,9 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
     times : dict column -> array (s), optional
         Per-channel time stamps (MDF4): no ``time`` role is guessed then, and the physics checks
         interpolate onto the yaw rate's stamps.
+    stated : dict column -> str, optional
+        The units the file states (a CSV's units row): where one is a unit of the role's kind it stands for the
+        column's unit as a unit in its name does, and wins over one (:func:`stated_hint`).
 
     Returns
     -------
@@ -235,6 +239,7 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
             col = extra([c for c in pool if c not in used]) if extra is not None else None
         if col is not None:
             used.add(col)
+            hint = stated_hint(role, (stated or {}).get(col)) or hint
         return col, score, hint
 
     hints = {}
@@ -278,7 +283,20 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
     for role in OPTIONAL:
         col, score, hint = pick(role, numeric)
         optional.append(_optional(role, col, score, hint, series))
-    return [out[k] for k in roles] + [out_steer] + [g for g in optional if g is not None]
+    guesses = [out[k] for k in roles] + [out_steer] + [g for g in optional if g is not None]
+    for g in guesses:        # a unit the file states is the one that counted as the name's
+        if g.column is not None and stated_hint(g.role, (stated or {}).get(g.column)) is not None:
+            g.reason = g.reason.replace("unit in the name", "unit in the file's units row")
+    return guesses
+
+
+def stated_hint(role: str, unit: str | None) -> str | None:
+    """The unit a file states for a column of ``role`` (``unit`` as written, None if none), spelled as a channel map
+    declares it, where it is one of the role's kind (:data:`roadbank.units.FACTORS`); else None."""
+    if unit is None:
+        return None
+    u = normalise_unit(unit)
+    return u if u in FACTORS[ROLES[role][0]] else None
 
 
 def _optional(role: str, col, score: int, hint, series) -> Guess | None:

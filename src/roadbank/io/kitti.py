@@ -231,6 +231,7 @@ class DriveSource:
     shared_clock = True
     row_label = "frame"
     time_typed: dict[str, str] = {}      # text files: no column's type carries a time unit
+    units: dict[str, str] = {}           # the data set's units are its reader's
 
     def __init__(self, path, chunk_rows: int | None = None):
         oxts = find_drive(path)

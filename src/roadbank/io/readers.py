@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..units import reads_as_number
+from ..units import FACTORS, normalise_unit, reads_as_number
 from .errors import LogError
 from .files import existing_nonempty, must_exist, open_mdf
 from .formats import CAN_FORMATS as CAN_FORMATS
@@ -131,8 +131,9 @@ def _plain_csv(p: Path, lines: list[str], delim: str, wanted: dict[str, str], pr
                first: int = 1) -> RawTable | None:
     """:func:`read_csv`'s result for a plain file, parsed by numpy in C; None for any other file.
 
-    ``lines`` start with the header, which is line ``first`` of the file (after the comment lines
-    before it, :func:`_header_index`).
+    ``lines`` start with the header; ``lines[k]`` (``k >= 1``) is line ``first + k`` of the file (the header is line
+    ``first`` after the comment lines before it, :func:`_header_index`, or the line before a units row,
+    :func:`_units_row`, that ``lines`` leave out).
 
     Plain: no quotes after the header, no blank line, every line with the header's number of
     fields, distinct names, at least one data row, and every field of the columns read a number
@@ -179,6 +180,23 @@ def _drop_unfinished_line(p: Path, text: str, lines: list[str], skip: int, delim
     return [f"{p}: line {skip + len(lines) + 1} was left out: it has no final newline, so it may have been cut "
             f"off while the log was written (it ends {cut.strip()[-40:]!r}): if the file is complete, end it with "
             "a newline"]
+
+
+def _units_row(line: str, delim: str, n_fields: int) -> list[str] | None:
+    """The units of a units row (the line under the header of many loggers' and tools' exports: ``s;km/h;m/s^2``,
+    ``[s],[km/h],[deg/s]``), one per field with brackets and blanks stripped; None for any other line. A units row
+    has the header's number of fields, none of them a number, and at least one a unit a channel map may declare
+    (:data:`roadbank.units.FACTORS`)."""
+    try:
+        fields = next(csv.reader([line], delimiter=delim))
+    except (csv.Error, StopIteration):
+        return None
+    if len(fields) != n_fields or any(f.strip() and reads_as_number(f) for f in fields):
+        return None
+    units = [f.strip().strip("[]()").strip() for f in fields]
+    if not any(normalise_unit(u) in table for u in units if u for table in FACTORS.values()):
+        return None
+    return units
 
 
 def _is_comment(line: str) -> bool:
@@ -232,15 +250,20 @@ def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTabl
     if skip and all(reads_as_number(f) for f in header_line.split(delim)):
         raise LogError(f"{p}: no header line: line {skip + 1} ({header_line.strip()[:40]!r}) holds numbers, not "
                        "column names (the lines before it are blank or comments starting with '#')")
-    fast = _plain_csv(p, lines, delim, wanted, prefix, first=skip + 1)
+    units = _units_row(lines[1], delim, header_line.count(delim) + 1) if len(lines) > 1 else None
+    if units is not None:
+        del lines[1]                    # the line numbers below count it
+    first = skip + 1 + (units is not None)      # the line number of lines[k] is first + k for k >= 1
+    fast = _plain_csv(p, lines, delim, wanted, prefix, first=first)
     if fast is not None:
         fast.warnings = warnings
+        fast.units = _named_units(fast.names, units)
         return fast
     reader = csv.reader(lines, delimiter=delim)
     try:
         header = [h.strip() for h in next(reader)]
         rows = []
-        for lineno, row in enumerate(reader, start=skip + 2):
+        for lineno, row in enumerate(reader, start=first + 1):
             if not row or not "".join(row).strip():
                 continue
             if len(row) != len(header):
@@ -267,7 +290,13 @@ def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTabl
     if commas:
         warnings.append(f"{p}: column(s) {', '.join(repr(c) for c in commas)} read with ',' as the decimal mark (the "
                         f"file separates its fields with {'tabs' if delim == chr(9) else repr(delim)})")
-    return RawTable(header, data, row_label="line", rownums=linenos, warnings=warnings)
+    return RawTable(header, data, row_label="line", rownums=linenos, warnings=warnings,
+                    units=_named_units(header, units))
+
+
+def _named_units(names: list[str], units: list[str] | None) -> dict[str, str]:
+    """Column -> unit of a units row (:func:`_units_row`; the columns it leaves blank left out)."""
+    return {c: u for c, u in zip(names, units) if c and u} if units is not None else {}
 
 
 def read_parquet(path, wanted: dict[str, str], prefix: str | None = None) -> RawTable:

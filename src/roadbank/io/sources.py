@@ -16,8 +16,10 @@ Every source has ``path``, ``names`` (the columns), ``metadata``, ``warnings``, 
 itself (column -> the longest gap, s, interpolated across), which go into :attr:`Log.extra` as they
 are, and ``time_typed``: the columns whose type carries its own time unit
 (:attr:`~roadbank.io.types.RawTable.time_typed`: Arrow timestamps and durations; empty for the other
-formats). The data sets with a fixed layout (:mod:`roadbank.io.kitti`, :mod:`roadbank.io.comma2k19`) also
-bring their ``channel_map``: which column is which channel, in which unit and sign convention.
+formats), and ``units``: the units the file states for its columns (a CSV's units row,
+:attr:`~roadbank.io.types.RawTable.units`; empty for the other formats). The data sets with a fixed layout
+(:mod:`roadbank.io.kitti`, :mod:`roadbank.io.comma2k19`) also bring their ``channel_map``: which column is which
+channel, in which unit and sign convention.
 
 Read whole (``chunk_rows=None``) a source gives one chunk: the whole file (the readers of
 :mod:`roadbank.io.readers`, :mod:`roadbank.io.can`, :mod:`roadbank.io.ros`). Streamed, Parquet is read
@@ -57,6 +59,7 @@ class WholeSource:
         self.whole = True
         self.carried: dict[str, float] = {}
         self.time_typed = dict(table.time_typed)
+        self.units = dict(table.units)
 
     def close(self) -> None:
         """Nothing to close: the file was read when the source was opened."""
@@ -98,6 +101,7 @@ class ParquetBatches:
         readers.unique_names(path, self.names, "in the schema")
         self.metadata = readers.parquet_metadata(pf.schema_arrow)
         self.time_typed = readers.time_typed(pf.schema_arrow)
+        self.units: dict[str, str] = {}      # a Parquet schema states no unit roadbank reads
 
     def close(self) -> None:
         """Nothing to close: each pass opens the file for itself."""
@@ -145,6 +149,7 @@ class Mdf4Windows:
     whole = False
     carried: dict[str, float] = {}
     time_typed: dict[str, str] = {}      # MDF4 masters are seconds: no channel's type carries a time unit
+    units: dict[str, str] = {}           # (read by a table's assembly only)
 
     def __init__(self, path: Path, chunk_rows: int):
         self.path = path

@@ -38,6 +38,9 @@ class RawTable:
         ``duration``, read as s), with that type, e.g. ``"timestamp[us]"``.
     warnings : list of str
         Suspicious but usable things the reader found (a CSV's last line left out as cut off).
+    units : dict name -> str
+        The unit the file itself states for a column, as written (a CSV's units row under its header); empty
+        where it states none (:func:`roadbank.io.assemble.stated_units` reads them).
     """
 
     names: list[str]
@@ -48,6 +51,7 @@ class RawTable:
     rownums: object = None
     time_typed: dict[str, str] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+    units: dict[str, str] = field(default_factory=dict)
 
 
 @dataclass

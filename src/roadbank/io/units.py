@@ -8,6 +8,6 @@ from __future__ import annotations
 
 from ..constants import G as G_UNIT
 from ..units import CHANNEL_SI_UNIT as SI_UNIT
-from ..units import FACTORS, factor, normalise_unit
+from ..units import FACTORS, dimension_of_kind, factor, normalise_unit
 
-__all__ = ["FACTORS", "SI_UNIT", "G_UNIT", "factor", "normalise_unit"]
+__all__ = ["FACTORS", "SI_UNIT", "G_UNIT", "dimension_of_kind", "factor", "normalise_unit"]

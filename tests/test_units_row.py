@@ -1,0 +1,108 @@
+"""A CSV export with a units row under its header (CANape, CANoe, INCA, DEWESoft and spreadsheets write one): read
+in the units it states where the channel map is roadbank's default, named where a user's map says otherwise, and
+guessed from by ``roadbank channels``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from click.testing import CliRunner
+
+from roadbank.cli import main
+from roadbank.io import load_log
+from roadbank.io.readers import read_csv
+from roadbank.sim import run_scenario
+
+G = 9.81
+
+
+@pytest.fixture(scope="module")
+def drive():
+    return run_scenario("s-curve").signals
+
+
+def _write(path, df: pd.DataFrame, units: str, sep: str = ",", decimal: str = "."):
+    lines = df.to_csv(index=False, sep=sep, decimal=decimal, float_format="%.10g").splitlines()
+    path.write_text("\n".join([lines[0], units] + lines[1:]) + "\n")
+    return path
+
+
+def _theta(path) -> np.ndarray:
+    return pd.read_csv(path)["kinematic-pif.theta"].to_numpy()
+
+
+def test_the_default_map_reads_the_units_the_row_states(tmp_path, drive):
+    """t, vx, ay, r in s, km/h, g and deg/s with a units row: the estimate is that of the same log in SI (within
+    the rounding of the written digits), each replaced unit said once; an SI units row says nothing."""
+    si = pd.DataFrame({"t": drive.t, "vx": drive.vx, "ay": drive.ay, "r": drive.r})
+    si.to_csv(tmp_path / "si.csv", index=False, float_format="%.10g")
+    other = pd.DataFrame({"t": drive.t, "vx": drive.vx * 3.6, "ay": drive.ay / G, "r": np.degrees(drive.r)})
+    _write(tmp_path / "kmh.csv", other, "[s],[km/h],[g],[deg/s]")
+    _write(tmp_path / "same.csv", si, "s,m/s,m/s^2,rad/s")
+    runs = {}
+    for name in ("si", "kmh", "same"):
+        res = CliRunner().invoke(main, ["estimate", str(tmp_path / f"{name}.csv"), "-o",
+                                        str(tmp_path / f"{name}.o.csv")])
+        assert res.exit_code == 0, res.output
+        runs[name] = (res.output, _theta(tmp_path / f"{name}.o.csv"))
+    np.testing.assert_array_equal(runs["same"][1], runs["si"][1])
+    np.testing.assert_allclose(runs["kmh"][1], runs["si"][1], rtol=0, atol=1e-8)
+    said = [ln for ln in runs["kmh"][0].splitlines() if "as the file's units row says" in ln]
+    assert len(said) == 3 and all("kmh.csv" in ln for ln in said), said
+    assert any("channel 'speed' (column 'vx'): read in 'km/h'" in ln and "assumes 'm/s'" in ln for ln in said)
+    assert "units row" not in runs["same"][0]
+
+
+def test_line_numbers_count_the_units_row_and_a_row_that_is_not_units_is_data(tmp_path, drive):
+    """The units row is line 2: a bad value on the file's line 6 is named as line 6, read whole or by the fast path;
+    a second header line of words without a unit (a description) is data, refused as not a number."""
+    df = pd.DataFrame({"t": drive.t[:50], "vx": drive.vx[:50], "ay": drive.ay[:50], "r": drive.r[:50]})
+    path = _write(tmp_path / "bad.csv", df, "s,m/s,m/s^2,rad/s")
+    lines = path.read_text().splitlines()
+    assert read_csv(path, {"t": "time"}).rownums[:2] == [3, 4]
+    assert read_csv(path, {"t": "time"}).units == {"t": "s", "vx": "m/s", "ay": "m/s^2", "r": "rad/s"}
+    lines[5] = lines[5].replace(lines[5].split(",")[2], "oops", 1)
+    path.write_text("\n".join(lines) + "\n")
+    res = CliRunner().invoke(main, ["estimate", str(path), "-o", str(tmp_path / "x.csv")])
+    assert res.exit_code == 1 and "non-numeric value 'oops' at line 6" in res.output, res.output
+    words = _write(tmp_path / "words.csv", df, "time,vehicle speed,lateral acceleration,yaw rate")
+    assert read_csv(words, {}).units == {}
+    res = CliRunner().invoke(main, ["estimate", str(words), "-o", str(tmp_path / "y.csv")])
+    assert res.exit_code == 1 and "non-numeric value 'time' at line 2" in res.output, res.output
+
+
+def test_a_users_map_wins_and_a_different_row_is_named(tmp_path, drive):
+    """A channel map the user wrote declares m/s where the row says km/h: read in m/s, with a warning naming both;
+    a row unit of another kind (deg under the speed) is said and the map's kept."""
+    df = pd.DataFrame({"time": drive.t, "speed": drive.vx, "acc": drive.ay, "yaw": drive.r})
+    _write(tmp_path / "log.csv", df, "s,km/h,m/s^2,rad/s")
+    _write(tmp_path / "kind.csv", df, "s,deg,m/s^2,rad/s")
+    (tmp_path / "m.toml").write_text('[channels]\ntime = { column = "time", unit = "s" }\n'
+                                     'speed = { column = "speed", unit = "m/s" }\n'
+                                     'lateral_acceleration = { column = "acc", unit = "m/s^2" }\n'
+                                     'yaw_rate = { column = "yaw", unit = "rad/s" }\n')
+    for name, words in (("log", "the file's units row says 'km/h', the channel map 'm/s': read in 'm/s'"),
+                        ("kind", "the file's units row says 'deg', not a unit of its kind (speed): read in 'm/s'")):
+        log = load_log(tmp_path / f"{name}.csv", channels=tmp_path / "m.toml")
+        np.testing.assert_allclose(log.signals.vx, drive.vx, rtol=1e-9)
+        said = [w for w in log.warnings if "units row" in w]
+        assert len(said) == 1 and words in said[0] and "channel 'speed' (column 'speed')" in said[0], said
+
+
+def test_channels_guesses_from_the_units_row_of_a_tools_export(tmp_path, drive):
+    """A tool's export (';', decimal commas, a units row with degree signs, names without units): the guessed map
+    takes the row's units, says so, and reads the log as the same log in SI."""
+    df = pd.DataFrame({"Time": drive.t, "VehSpd": drive.vx * 3.6, "LatAcc": drive.ay / G,
+                       "YawRate": np.degrees(drive.r), "SteerAngle": np.degrees(drive.delta_f * 16.0)})
+    path = _write(tmp_path / "export.csv", df, "[s];[km/h];[g];[°/s];[°]", sep=";", decimal=",")
+    res = CliRunner().invoke(main, ["channels", str(path), "-o", str(tmp_path / "m.toml")])
+    assert res.exit_code == 0, res.output
+    for role, unit in (("speed", "km/h"), ("lateral_acceleration", "g"), ("yaw_rate", "deg/s"),
+                       ("steering_wheel_angle", "deg")):
+        line = next(ln for ln in res.output.splitlines() if ln.startswith(role))
+        assert f" in {unit}" in line and "high" in line, line
+    assert "unit in the file's units row" in res.output
+    log = load_log(path, channels=tmp_path / "m.toml")
+    np.testing.assert_allclose(log.signals.vx, drive.vx, rtol=1e-9)
+    np.testing.assert_allclose(log.signals.r, drive.r, rtol=1e-8, atol=1e-12)
