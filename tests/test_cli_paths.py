@@ -136,3 +136,32 @@ def test_a_decimal_comma_is_read_where_the_fields_are_not_separated_by_commas(tm
         res = _estimate(log, "-o", tmp_path / "x.csv")
         assert res.exit_code == 1 and log.name in res.output and "looks like a decimal comma" in res.output, res.output
         assert line in res.output and "Traceback" not in res.output
+
+
+@pytest.mark.parametrize("fmt, zone, offset_s", [("%Y-%m-%d %H:%M:%S.%f", "", 0.0), ("%Y-%m-%dT%H:%M:%S.%f", "Z", 0.0),
+                                                  ("%Y-%m-%dT%H:%M:%S.%f", "+01:00", -3600.0)])
+def test_a_time_column_of_iso_date_times_is_read_as_seconds(tmp_path, drive, fmt, zone, offset_s):
+    """A logger's or spreadsheet's time stamps as ISO 8601 text (local or UTC, with an offset): read as seconds
+    since the epoch (UTC, the offset applied, as the standard library's datetime reads them), the estimate that of
+    the same log with its time in seconds; channels maps it; a date that is none (month 13) is refused naming the
+    line."""
+    from datetime import datetime, timedelta, timezone
+
+    t0 = datetime(2026, 12, 6, 10, 0, 0, tzinfo=timezone.utc)
+    stamps = [(t0 + timedelta(seconds=float(x))).strftime(fmt)[:-3] + zone for x in drive["t"]]
+    iso = drive.assign(t=stamps)
+    iso.to_csv(tmp_path / "iso.csv", index=False)
+    drive.to_csv(tmp_path / "plain.csv", index=False, float_format="%.9g")
+    for name in ("iso", "plain"):
+        res = _estimate(tmp_path / f"{name}.csv", "-o", tmp_path / f"{name}.out.csv")
+        assert res.exit_code == 0, res.output
+    got = pd.read_csv(tmp_path / "iso.out.csv")
+    np.testing.assert_allclose(got["t"].to_numpy(), t0.timestamp() + offset_s + drive["t"].to_numpy(), rtol=0,
+                               atol=1e-6)
+    np.testing.assert_allclose(got["kinematic-pif.theta"], _theta(tmp_path / "plain.out.csv"), rtol=0, atol=1e-6)
+    res = CliRunner().invoke(main, ["channels", str(tmp_path / "iso.csv"), "-o", str(tmp_path / "m.toml")])
+    assert res.exit_code == 0 and "time " in res.output and "'t' in s" in res.output, res.output
+    stamps[3] = stamps[3].replace("2026-12-06", "2026-13-06")
+    drive.assign(t=stamps).to_csv(tmp_path / "bad.csv", index=False)
+    res = _estimate(tmp_path / "bad.csv", "-o", tmp_path / "x.csv")
+    assert res.exit_code == 1 and "line 5" in res.output and "2026-13-06" in res.output, res.output

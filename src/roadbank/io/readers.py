@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import math
 import re
+import warnings as _warnings
 from pathlib import Path
 
 import numpy as np
@@ -90,6 +91,9 @@ def _parse_floats(path, col: str, label: str, values, row_label: str, rownums) -
     return out
 
 
+#: what a CSV column of date-times is, as :attr:`RawTable.time_typed` names its type (read as s since the epoch)
+DATE_TIME_TEXT = "ISO 8601 date-time text"
+
 #: a number written with a decimal comma (``-0,25``, ``1,5e-3``), which ``float()`` does not read
 _DECIMAL_COMMA = re.compile(r"[+-]?\d*,\d+([eE][+-]?\d+)?")
 #: a whole number (``12``, ``-3e2``): the same with either decimal mark
@@ -97,19 +101,59 @@ _WHOLE = re.compile(r"[+-]?\d+([eE][+-]?\d+)?")
 
 
 def _text_floats(path, column: str, label: str, values: list[str], row_label: str, rownums,
-                 decimal_comma: bool = False) -> tuple[np.ndarray, bool]:
+                 decimal_comma: bool = False) -> tuple[np.ndarray, str | None]:
     """:func:`_parse_floats` of text fields, converted by numpy in one call where every field is a number
     (numpy parses a text field as ``float()`` does); else field by field, for the missing-value tokens and
-    the error naming the first bad field. With ``decimal_comma`` (a file whose fields are not separated by commas)
-    a column whose numbers are all written with a decimal comma (:func:`_decimal_comma_column`) is read with it.
-    Returns the values and whether the decimal comma was read."""
+    the error naming the first bad field. A column of ISO 8601 date-times (:func:`_date_time_seconds`) is read as
+    seconds since the epoch. With ``decimal_comma`` (a file whose fields are not separated by commas) a column
+    whose numbers are all written with a decimal comma (:func:`_decimal_comma_column`) is read with it.
+    Returns the values and how they were read where it was not as plain numbers: ``"date-time"``,
+    ``"decimal comma"``, else None."""
     try:
-        return np.array(values, dtype=np.float64), False
+        return np.array(values, dtype=np.float64), None
     except ValueError:
         pass
+    seconds = _date_time_seconds(path, label, values, row_label, rownums)
+    if seconds is not None:
+        return seconds, "date-time"
     if decimal_comma and _decimal_comma_column(values):
-        return _text_floats(path, column, label, [v.replace(",", ".") for v in values], row_label, rownums)[0], True
-    return _parse_floats(path, column, label, values, row_label, rownums), False
+        fixed = [v.replace(",", ".") for v in values]
+        return _text_floats(path, column, label, fixed, row_label, rownums)[0], "decimal comma"
+    return _parse_floats(path, column, label, values, row_label, rownums), None
+
+
+#: an ISO 8601 date and time (``2026-12-06 10:00:00.010``, ``2026-12-06T10:00:00Z``, ``...+01:00``), as a logger
+#: or a spreadsheet writes its time stamps
+_DATE_TIME = re.compile(r"\d{4}-\d{2}-\d{2}[T ]\d{2}:\d{2}(:\d{2}(\.\d+)?)?(Z|[+-]\d{2}:?\d{2})?")
+
+
+def _date_time_seconds(path, label: str, values: list[str], row_label: str, rownums) -> np.ndarray | None:
+    """Seconds (float64) since the epoch, UTC, of a column of ISO 8601 date-times (:data:`_DATE_TIME`; a time
+    zone's offset applied, none: taken as UTC), missing-value tokens NaN; None unless every other field is written
+    as one; a :class:`LogError` naming the first that is no date and time (month 13). The nanoseconds are split into
+    whole seconds and the rest before converting, as for an Arrow timestamp."""
+    fields = [v.strip() for v in values]
+    stamps = [f for f in fields if f.lower() not in MISSING]
+    if not stamps or not all(_DATE_TIME.fullmatch(f) for f in stamps):
+        return None
+    text = [f if f.lower() not in MISSING else "NaT" for f in fields]
+    with _warnings.catch_warnings():
+        _warnings.simplefilter("ignore", UserWarning)     # numpy's note on a time zone it converts
+        try:
+            ns = np.array(text, dtype="datetime64[ns]")
+        except ValueError:
+            for i, f in enumerate(text):
+                try:
+                    np.datetime64(f, "ns")
+                except ValueError:
+                    raise LogError(f"{path}: {label}: {f!r} at {row_label} {rownums[i]} is no date and time (the "
+                                   "column holds ISO 8601 date-times)") from None
+            raise
+    missing = np.isnat(ns)
+    whole, rest = np.divmod(ns.astype(np.int64), 10**9)
+    out = whole.astype(np.float64) + rest / 1e9
+    out[missing] = math.nan
+    return out
 
 
 def _decimal_comma_column(values: list[str]) -> bool:
@@ -280,18 +324,20 @@ def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTabl
         raise LogError(f"{p}: no data rows after the header")
     linenos = [ln for ln, _ in rows]
     cols = [c for c in header if c in wanted or (prefix and c.startswith(prefix))]
-    data, commas = {}, []
+    data, commas, dated = {}, [], {}
     for c in cols:
         j = header.index(c)
-        data[c], comma = _text_floats(p, c, column_label(wanted, c), [row[j] for _, row in rows], "line", linenos,
-                                      decimal_comma=delim != ",")
-        if comma:
+        data[c], how = _text_floats(p, c, column_label(wanted, c), [row[j] for _, row in rows], "line", linenos,
+                                    decimal_comma=delim != ",")
+        if how == "decimal comma":
             commas.append(c)
+        elif how == "date-time":
+            dated[c] = DATE_TIME_TEXT
     if commas:
         warnings.append(f"{p}: column(s) {', '.join(repr(c) for c in commas)} read with ',' as the decimal mark (the "
                         f"file separates its fields with {'tabs' if delim == chr(9) else repr(delim)})")
     return RawTable(header, data, row_label="line", rownums=linenos, warnings=warnings,
-                    units=_named_units(header, units))
+                    units=_named_units(header, units), time_typed=dated)
 
 
 def _named_units(names: list[str], units: list[str] | None) -> dict[str, str]:
