@@ -48,10 +48,10 @@ def test_the_default_map_reads_the_units_the_row_states(tmp_path, drive):
         runs[name] = (res.output, _theta(tmp_path / f"{name}.o.csv"))
     np.testing.assert_array_equal(runs["same"][1], runs["si"][1])
     np.testing.assert_allclose(runs["kmh"][1], runs["si"][1], rtol=0, atol=1e-8)
-    said = [ln for ln in runs["kmh"][0].splitlines() if "as the file's units row says" in ln]
+    said = [ln for ln in runs["kmh"][0].splitlines() if "the unit the file states" in ln]
     assert len(said) == 3 and all("kmh.csv" in ln for ln in said), said
     assert any("channel 'speed' (column 'vx'): read in 'km/h'" in ln and "assumes 'm/s'" in ln for ln in said)
-    assert "units row" not in runs["same"][0]
+    assert "the file states" not in runs["same"][0] and "the unit the file states" not in runs["same"][0]
 
 
 def test_line_numbers_count_the_units_row_and_a_row_that_is_not_units_is_data(tmp_path, drive):
@@ -82,11 +82,11 @@ def test_a_users_map_wins_and_a_different_row_is_named(tmp_path, drive):
                                      'speed = { column = "speed", unit = "m/s" }\n'
                                      'lateral_acceleration = { column = "acc", unit = "m/s^2" }\n'
                                      'yaw_rate = { column = "yaw", unit = "rad/s" }\n')
-    for name, words in (("log", "the file's units row says 'km/h', the channel map 'm/s': read in 'm/s'"),
-                        ("kind", "the file's units row says 'deg', not a unit of its kind (speed): read in 'm/s'")):
+    for name, words in (("log", "the file states 'km/h', the channel map 'm/s': read in 'm/s'"),
+                        ("kind", "the file states 'deg', not a unit of its kind (speed): read in 'm/s'")):
         log = load_log(tmp_path / f"{name}.csv", channels=tmp_path / "m.toml")
         np.testing.assert_allclose(log.signals.vx, drive.vx, rtol=1e-9)
-        said = [w for w in log.warnings if "units row" in w]
+        said = [w for w in log.warnings if "the file states" in w]
         assert len(said) == 1 and words in said[0] and "channel 'speed' (column 'speed')" in said[0], said
 
 
@@ -102,7 +102,31 @@ def test_channels_guesses_from_the_units_row_of_a_tools_export(tmp_path, drive):
                        ("steering_wheel_angle", "deg")):
         line = next(ln for ln in res.output.splitlines() if ln.startswith(role))
         assert f" in {unit}" in line and "high" in line, line
-    assert "unit in the file's units row" in res.output
+    assert "unit the file states" in res.output
     log = load_log(path, channels=tmp_path / "m.toml")
     np.testing.assert_allclose(log.signals.vx, drive.vx, rtol=1e-9)
     np.testing.assert_allclose(log.signals.r, drive.r, rtol=1e-8, atol=1e-12)
+
+
+@pytest.mark.parametrize("chunk_rows", [None, 300])
+def test_an_mdf4_channels_own_unit_is_read_whole_or_streamed(tmp_path, drive, chunk_rows):
+    """MDF4 channels named as roadbank's default map names them, in km/h, g and deg/s by their own units: read in
+    those units, whole or streamed, each said once; channels guesses them as stated."""
+    asammdf = pytest.importorskip("asammdf", reason="asammdf (the mdf extra) is not installed")
+    from roadbank.io.stream import stream_log
+
+    mdf = asammdf.MDF(version="4.10")
+    mdf.append([asammdf.Signal(drive.vx * 3.6, drive.t, name="vx", unit="km/h"),
+                asammdf.Signal(drive.ay / G, drive.t, name="ay", unit="g"),
+                asammdf.Signal(np.degrees(drive.r), drive.t, name="r", unit="°/s")])
+    path = tmp_path / "log.mf4"
+    mdf.save(path, overwrite=True)
+    logs = [load_log(path)] if chunk_rows is None else list(stream_log(path, chunk_rows=chunk_rows))
+    vx = np.concatenate([log.signals.vx for log in logs])
+    t = np.concatenate([log.signals.t for log in logs])
+    np.testing.assert_allclose(vx, np.interp(t, drive.t, drive.vx), rtol=1e-9)
+    said = [w for log in logs for w in log.warnings if "the unit the file states" in w]
+    assert len(said) == 3 and any("(column 'r'): read in '°/s'" in w for w in said), said
+    if chunk_rows is None:
+        res = CliRunner().invoke(main, ["channels", str(path), "-o", str(tmp_path / "m.toml")])
+        assert res.exit_code == 0 and "'vx' in km/h" in res.output and "'r' in deg/s" in res.output, res.output

@@ -160,11 +160,11 @@ def own_time_unit(p, cmap: ChannelMap, time_typed: dict[str, str]) -> tuple[Chan
 
 
 def stated_units(p, cmap: ChannelMap, stated: dict[str, str]) -> tuple[ChannelMap, list[str]]:
-    """The map to read a table with where the file states its columns' units (``stated``: column -> unit, a CSV's
-    units row), with what it says of them. The default map's units are assumptions, so a unit the file states for
-    one of its columns replaces the default's (said where they differ). A map the user wrote is kept, and a stated
-    unit that differs from its declared one is warned about. A stated unit that is not one of the channel's kind
-    (``-``, ``Nm`` under a speed) is said and the map's kept."""
+    """The map to read a log with where the file states its columns' units (``stated``: column -> unit, a CSV's
+    units row, an MDF4 channel's unit), with what it says of them. The default map's units are assumptions, so a
+    unit the file states for one of its columns replaces the default's (said where they differ). A map the user
+    wrote is kept, and a stated unit that differs from its declared one is warned about. A stated unit that is not
+    one of the channel's kind (``-``, ``Nm`` under a speed) is said and the map's kept."""
     default = cmap.source == default_channel_map().source
     channels, notes = dict(cmap.channels), []
     for role, spec in cmap.channels.items():
@@ -174,7 +174,7 @@ def stated_units(p, cmap: ChannelMap, stated: dict[str, str]) -> tuple[ChannelMa
         try:
             same = units.factor(spec.kind, unit) == units.factor(spec.kind, spec.unit)
         except ValueError:
-            notes.append(channel_text(p, role, spec.column, f"the file's units row says '{unit}', not a unit of its "
+            notes.append(channel_text(p, role, spec.column, f"the file states '{unit}', not a unit of its "
                                       f"kind ({units.dimension_of_kind(spec.kind)}): read in '{spec.unit}', the "
                                       "map's"))
             continue
@@ -182,11 +182,11 @@ def stated_units(p, cmap: ChannelMap, stated: dict[str, str]) -> tuple[ChannelMa
             continue
         if default:
             channels[role] = replace(spec, unit=unit)
-            notes.append(channel_text(p, role, spec.column, f"read in '{unit}', as the file's units row says (the "
+            notes.append(channel_text(p, role, spec.column, f"read in '{unit}', the unit the file states (the "
                                       f"default channel map assumes '{spec.unit}')"))
         else:
-            notes.append(channel_text(p, role, spec.column, f"the file's units row says '{unit}', the channel map "
-                                      f"'{spec.unit}': read in '{spec.unit}', the map's (if the row is right, fix "
+            notes.append(channel_text(p, role, spec.column, f"the file states '{unit}', the channel map "
+                                      f"'{spec.unit}': read in '{spec.unit}', the map's (if the file is right, fix "
                                       "the map)"))
     return (replace(cmap, channels=channels) if channels != cmap.channels else cmap), notes
 
@@ -516,6 +516,7 @@ def _table_rows(src, cmap, roles, wanted, prefix):
 def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     """Channels that each carry their own clock (MDF4, raw CAN, ROS)."""
     p = src.path
+    cmap, stated = stated_units(p, cmap, src.units)
     tb = _time_base(p, cmap, roles, table=False)
     carried = dict(src.carried)
     rs = StreamResampler(roles, {**dict.fromkeys(gnss, GNSS_MAX_GAP_S), **carried},
@@ -527,7 +528,7 @@ def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     finite = dict.fromkeys(roles, False)
     checked = dict.fromkeys(roles, False)
     logs = _Logs(p, fmt, cmap, params, roles, gnss, [], src.metadata, carried)
-    logs.warnings += src.warnings
+    logs.warnings += src.warnings + stated
     drops = Dropouts(p, {r: col[r] for r in roles})
 
     def counts() -> dict:

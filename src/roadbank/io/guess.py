@@ -216,8 +216,8 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
         Per-channel time stamps (MDF4): no ``time`` role is guessed then, and the physics checks
         interpolate onto the yaw rate's stamps.
     stated : dict column -> str, optional
-        The units the file states (a CSV's units row): where one is a unit of the role's kind it stands for the
-        column's unit as a unit in its name does, and wins over one (:func:`stated_hint`).
+        The units the file states (a CSV's units row, an MDF4 channel's unit): where one is a unit of the role's
+        kind it stands for the column's unit as a unit in its name does, and wins over one (:func:`stated_hint`).
 
     Returns
     -------
@@ -286,7 +286,7 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
     guesses = [out[k] for k in roles] + [out_steer] + [g for g in optional if g is not None]
     for g in guesses:        # a unit the file states is the one that counted as the name's
         if g.column is not None and stated_hint(g.role, (stated or {}).get(g.column)) is not None:
-            g.reason = g.reason.replace("unit in the name", "unit in the file's units row")
+            g.reason = g.reason.replace("unit in the name", "unit the file states")
     return guesses
 
 

@@ -470,6 +470,7 @@ def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTab
     try:
         names = [n for n in mdf.channels_db if n not in ("time", "t")] if hasattr(mdf, "channels_db") else []
         data, times = {}, {}
+        units = mdf_units(mdf, names)
         for c in names:
             if c in wanted or (prefix and c.startswith(prefix)):
                 try:
@@ -486,7 +487,21 @@ def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTab
             meta["comment"] = str(comment)
     finally:
         mdf.close()
-    return RawTable(names, data, times=times, metadata=meta, row_label="sample", rownums=None)
+    return RawTable(names, data, times=times, metadata=meta, row_label="sample", rownums=None, units=units)
+
+
+def mdf_units(mdf, names: list[str]) -> dict[str, str]:
+    """Channel -> the unit an open MDF file states for it (its channel block's, as written), for the channels of
+    ``names`` held in one channel group (a name in several groups is read by none) with a unit; metadata only."""
+    out = {}
+    for n in names:
+        where = mdf.channels_db.get(n, ())
+        if len(where) == 1:
+            group, index = where[0]
+            unit = str(getattr(mdf.groups[group].channels[index], "unit", "") or "").strip()
+            if unit:
+                out[n] = unit
+    return out
 
 
 def mdf_floats(p, c: str, label: str, samples, row0: int = 0) -> np.ndarray:

@@ -16,7 +16,7 @@ Every source has ``path``, ``names`` (the columns), ``metadata``, ``warnings``, 
 itself (column -> the longest gap, s, interpolated across), which go into :attr:`Log.extra` as they
 are, and ``time_typed``: the columns whose type carries its own time unit
 (:attr:`~roadbank.io.types.RawTable.time_typed`: Arrow timestamps and durations; empty for the other
-formats), and ``units``: the units the file states for its columns (a CSV's units row,
+formats), and ``units``: the units the file states for its columns (a CSV's units row, an MDF4 channel's unit:
 :attr:`~roadbank.io.types.RawTable.units`; empty for the other formats). The data sets with a fixed layout
 (:mod:`roadbank.io.kitti`, :mod:`roadbank.io.comma2k19`) also bring their ``channel_map``: which column is which
 channel, in which unit and sign convention.
@@ -149,7 +149,6 @@ class Mdf4Windows:
     whole = False
     carried: dict[str, float] = {}
     time_typed: dict[str, str] = {}      # MDF4 masters are seconds: no channel's type carries a time unit
-    units: dict[str, str] = {}           # (read by a table's assembly only)
 
     def __init__(self, path: Path, chunk_rows: int):
         self.path = path
@@ -161,6 +160,7 @@ class Mdf4Windows:
             self.fh.close()
             raise
         self.names = [n for n in self.mdf.channels_db if n not in ("time", "t")]
+        self.units = readers.mdf_units(self.mdf, self.names)
         self.chunk = max(1, int(chunk_rows))
         rec = max((int(g.channel_group.samples_byte_nr) + int(g.channel_group.invalidation_bytes_nr)
                    for g in self.mdf.groups), default=8)

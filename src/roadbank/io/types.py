@@ -39,8 +39,8 @@ class RawTable:
     warnings : list of str
         Suspicious but usable things the reader found (a CSV's last line left out as cut off).
     units : dict name -> str
-        The unit the file itself states for a column, as written (a CSV's units row under its header); empty
-        where it states none (:func:`roadbank.io.assemble.stated_units` reads them).
+        The unit the file itself states for a column, as written (a CSV's units row under its header, an MDF4
+        channel's unit); empty where it states none (:func:`roadbank.io.assemble.stated_units` reads them).
     """
 
     names: list[str]
