@@ -217,3 +217,20 @@ def test_stream_is_the_whole_log(fmt, logs):
     for k in ("t", "vx", "ay", "r", "delta_f"):
         np.testing.assert_array_equal(getattr(chunks[0].signals, k), getattr(whole.signals, k), err_msg=k)
     assert chunks[0].warnings == whole.warnings and chunks[0].time_repairs == whole.time_repairs
+
+
+def test_a_map_unit_other_than_the_dbcs_is_named(logs):
+    """The DBC states km/h for VehSpd; a map declaring mph for it (a slip the unit checks cannot see: 80 read as mph
+    is a plausible speed) is read as the map says (a user's map wins) and warned about naming both units; the map
+    that agrees with the DBC says nothing of units."""
+    d, files = logs
+    (d / "mph.toml").write_text(MAP.format(ratio=16.0).replace('signal = "VehSpd", unit = "km/h"',
+                                                               'signal = "VehSpd", unit = "mph"'))
+    good = load_log(files["blf"], channels=d / "car.toml")
+    assert not [w for w in good.warnings if "the file states" in w]
+    bad = load_log(files["blf"], channels=d / "mph.toml")
+    said = [w for w in bad.warnings if "the file states" in w]
+    assert len(said) == 1 and "the file states 'km/h', the channel map 'mph': read in 'mph'" in said[0], said
+    assert "channel 'speed'" in said[0] and "drive.blf" in said[0]
+    np.testing.assert_allclose(np.nanmedian(bad.signals.vx) / np.nanmedian(good.signals.vx), 0.44704 * 3.6,
+                               rtol=1e-6)

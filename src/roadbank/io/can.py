@@ -205,7 +205,8 @@ def read_can(path, cmap, fmt: str) -> tuple[RawTable, list[str]]:
     -------
     table : RawTable
         ``data`` / ``times`` keyed by each channel's column (``message.signal``),
-        physical values in the DBC's units (the map's ``unit`` converts them).
+        physical values in the DBC's units (the map's ``unit`` converts them); ``units`` the DBC's unit of each
+        signal that states one (a map declaring another is warned about, :func:`roadbank.io.assemble.stated_units`).
     warnings : list of str
         E.g. frames of ids the DBC does not know (skipped).
 
@@ -234,7 +235,7 @@ def read_can(path, cmap, fmt: str) -> tuple[RawTable, list[str]]:
     frames = read_frames(p, fmt)
     known = {m.frame_id for m in db.messages}
     unknown = np.unique(frames.ids[~np.isin(frames.ids, list(known))])
-    data, times, warns = {}, {}, []
+    data, times, warns, units = {}, {}, [], {}
     for fid, (msg, specs) in wanted.items():
         idx = np.flatnonzero(frames.ids == fid)
         if len(idx) == 0:
@@ -261,6 +262,9 @@ def read_can(path, cmap, fmt: str) -> tuple[RawTable, list[str]]:
                     vals[n][k] = float(v)
         tt = frames.t[idx]
         for role, spec in specs:
+            unit = str(msg.get_signal_by_name(spec.signal).unit or "").strip()
+            if unit:
+                units[spec.column] = unit
             v = vals[spec.signal]
             have = np.isfinite(v)
             if not have.any():
@@ -272,4 +276,5 @@ def read_can(path, cmap, fmt: str) -> tuple[RawTable, list[str]]:
         n = int(np.isin(frames.ids, unknown).sum())
         warns.append(f"{p}: {n} frame(s) with {len(unknown)} id(s) not in the DBC skipped "
                      f"({', '.join(f'0x{i:X}' for i in unknown[:10])})")
-    return RawTable(sorted(data), data, times=times, metadata={"dbc": str(cmap.dbc)}, row_label="frame"), warns
+    return RawTable(sorted(data), data, times=times, metadata={"dbc": str(cmap.dbc)}, row_label="frame",
+                    units=units), warns
