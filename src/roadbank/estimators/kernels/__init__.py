@@ -77,7 +77,7 @@ Compile time (a fresh process with an empty cache compiles each family in a few
 seconds; ``python -m roadbank.bench.cold``): every function is compiled once as a
 normal numba function (no ``fastmath``; LLVM inlines the small helpers marked
 ``forceinline``), except the layout's offset functions and the steps shared between
-families or paths (:func:`~.lpv.observer_update`, :func:`~.lpv.fixed3`,
+families or paths (:func:`~.lpv.observer_update`, :func:`~.lpv.fixed3`, :func:`~.linalg.tustin`,
 :func:`~.sample.output`, :func:`~.sample.roll_map`, :func:`~.sample.roll_fixed2`), which
 numba inlines into their callers (``inline="always"``: no compiled function of their own,
 whose optimisation every caller would repeat), and in one specialisation only: no literal

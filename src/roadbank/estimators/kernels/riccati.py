@@ -55,7 +55,8 @@ def riccati_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib
     for k in range(t.shape[0]):
         vxk = vx[k]
         if not sample_valid(mem, cfg, t[k], vxk, d[k], ay[k], r[k]):
-            store(mem, k, n, False, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
+            # a bool, not the literal False: one compiled store, the one below
+            store(mem, k, n, np.bool_(False), out_w, out_theta, out_phib, out_phi, out_valid, out_x)
             continue
         i, a = grid(cfg, vxk)
         i1 = i + 1 if i + 1 < tab.shape[0] else tab.shape[0] - 1
