@@ -98,7 +98,12 @@ chosen in Python (:func:`entries`: ``lpv3_run``), its body written once as an in
 variant as a constant that numba prunes before typing, so an observer of another size (the gyro-aided
 default, two states) never compiles it: its first run on a KITTI drive 8.0 s instead of 9.1 when this was
 measured, the same output to the bit. (A variant for the limited low-pass too saved another 0.7 s there but
-cost the first ``roadbank reproduce``, which runs both, 4 s: not kept.) The kernels' disk cache is checked
+cost the first ``roadbank reproduce``, which runs both, 4 s: not kept.) LLVM optimises the per-sample step and
+the general path for size (:func:`._jit.optimise_for_size`: ``lpv_step``, ``gated_run``, ``riccati_run``, the LU),
+not the fixed-rate batch loop: their loops over a few states are then not vectorised nor unrolled, which only cost
+compile time (CPU s of the first calls, median of five: lpv 5.6 -> 4.3, gated 4.9 -> 4.0, riccati 4.8 -> 3.6; the
+general path about a third faster per sample, the fixed-rate batch loop and ``step()`` unchanged, the same output
+to the bit). The kernels' disk cache is checked
 against all of the package's files and the layout at once (:mod:`._jit`).
 
 **Calling convention** (every family): ``<family>_step(mem, cfg, tab, work, t, vx, d, ay, r)``

@@ -7,13 +7,14 @@ import math
 import numpy as np
 from numba import njit
 
-from ._jit import HELPER
+from ._jit import HELPER, optimise_for_size
 
 @njit(**HELPER)
 def lu_factor(M, o, piv, op, n):
     """LU factorisation with partial pivoting, in place, of the row-major ``n x n`` matrix stored in
     ``M[o:o + n*n]``; the pivot rows go to ``piv[op:op + n]`` (as floats). A zero pivot leaves its
     column unreduced (the solve then gives inf/NaN)."""
+    optimise_for_size()
     for k in range(n):
         p = k
         big = abs(M[o + k * n + k])
@@ -41,6 +42,7 @@ def lu_factor(M, o, piv, op, n):
 def lu_solve(M, o, piv, op, b, ob, n):
     """Solve ``A x = b`` in place in ``b[ob:ob + n]`` with the factors of :func:`lu_factor`
     (``M[o:]``, pivots ``piv[op:]``)."""
+    optimise_for_size()
     for k in range(n):
         p = np.int64(piv[op + k])
         if p != k:

@@ -9,7 +9,7 @@ from numba import njit
 
 from ..layout import (C_N, C_NR, C_P, C_SUB, C_USE, M_ETA, M_X, NETA, riccati_block, riccati_p, riccati_row,
                       riccati_work)
-from ._jit import ENTRY
+from ._jit import ENTRY, optimise_for_size
 from .linalg import lu_factor, lu_solve, tustin
 from .sample import begin, finish, grid, sample_valid, step_by_run, store
 
@@ -40,6 +40,7 @@ def riccati_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib
     code of the family (:func:`riccati_step` runs it on one-sample arrays), which halves
     the family's compile time; the variant is not latency-critical (about 2 us per sample).
     """
+    optimise_for_size()
     n = np.int64(cfg[C_N])
     p = np.int64(cfg[C_P])
     nr = np.int64(cfg[C_NR])
