@@ -46,7 +46,7 @@ sample:
 The fixed offsets are plain integers, which numba folds into the compiled code as
 constants; the helpers below compute the variable-size blocks from the state
 dimensions and are the same functions in Python and in compiled code
-(``register_jitable``, inlined into each kernel): the kernels call them (``row = lpv_row(n)``, then
+(inlined by numba into each kernel, :func:`_compiled`): the kernels call them (``row = lpv_row(n)``, then
 ``work[row.H + p]``), Python builds the arrays with them, and the generated C
 (:mod:`roadbank.export.ccode`) takes its offsets from them, so no offset is
 written down twice. Blocks are stored row-major.
@@ -58,9 +58,23 @@ from typing import NamedTuple
 
 from numba.extending import register_jitable
 
-#: the helpers below are plain Python functions that compiled code can call too; numba inlines
-#: them into the calling kernel (no compiled function of their own: no compile time of their own)
-_compiled = register_jitable(inline="always")
+_overload = register_jitable(inline="always")
+
+
+def _compiled(fn):
+    """The helpers below: plain Python functions that compiled code can call too, inlined into the calling kernel
+    with no compiled function of their own.
+
+    numba's untyped inlining pass (before typing) inlines a callee that carries jit options with
+    ``inline="always"`` (``targetoptions``) and its Python function (``py_func``), as an ``njit(inline="always")``
+    function does, while Python still calls the plain function. ``register_jitable`` alone (the typing fallback,
+    kept) would compile each helper on its own to type the call, about 0.03-0.07 s per helper and kernel family
+    (``python -m roadbank.bench.cold``).
+    """
+    fn = _overload(fn)
+    fn.__dict__.update(targetoptions={"inline": "always"}, py_func=fn)
+    return fn
+
 
 #: number of inputs ``eta = [delta_f, ay, r]``
 NETA = 3

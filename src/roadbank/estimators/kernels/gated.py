@@ -9,7 +9,7 @@ from numba import njit
 
 from ..layout import (C_GAP, C_LIM, C_N, C_NR, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, gate_states,
                       gated_block)
-from ._jit import ENTRY, HELPER
+from ._jit import ENTRY, HELPER, optimise_for_size
 from .lpv import lpv_step
 from .sample import output, sample_valid, step_by_run, store
 
@@ -75,6 +75,7 @@ def gated_sample(mem, cfg, tab, work, t, vx, d, ay, r):
 def gated_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib, out_phi, out_valid,
               out_x):
     """:func:`gated_sample` over every sample."""
+    optimise_for_size()
     n = np.int64(cfg[C_N])
     for k in range(t.shape[0]):
         ok = gated_sample(mem, cfg, tab, work, t[k], vx[k], d[k], ay[k], r[k])[3]

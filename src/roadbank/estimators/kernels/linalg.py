@@ -7,13 +7,14 @@ import math
 import numpy as np
 from numba import njit
 
-from ._jit import HELPER
+from ._jit import HELPER, optimise_for_size
 
 @njit(**HELPER)
 def lu_factor(M, o, piv, op, n):
     """LU factorisation with partial pivoting, in place, of the row-major ``n x n`` matrix stored in
     ``M[o:o + n*n]``; the pivot rows go to ``piv[op:op + n]`` (as floats). A zero pivot leaves its
     column unreduced (the solve then gives inf/NaN)."""
+    optimise_for_size()
     for k in range(n):
         p = k
         big = abs(M[o + k * n + k])
@@ -41,6 +42,7 @@ def lu_factor(M, o, piv, op, n):
 def lu_solve(M, o, piv, op, b, ob, n):
     """Solve ``A x = b`` in place in ``b[ob:ob + n]`` with the factors of :func:`lu_factor`
     (``M[o:]``, pivots ``piv[op:]``)."""
+    optimise_for_size()
     for k in range(n):
         p = np.int64(piv[op + k])
         if p != k:
@@ -59,7 +61,7 @@ def lu_solve(M, o, piv, op, b, ob, n):
         b[ob + i] = s / M[o + i * n + i]
 
 
-@njit(**HELPER)
+@njit(inline="always", **HELPER)
 def tustin(x, ox, n, A, oF, oG, m, E0, oe0, E1, oe1, dt, max_sub, W, oM):
     """Advance ``x' = F x + G e`` over ``dt`` (s) by the trapezoidal rule in substeps of at most
     ``max_sub`` (s), ``e`` linear in time from ``e0`` to ``e1`` (the general path of the ``lpv``,
@@ -68,6 +70,8 @@ def tustin(x, ox, n, A, oF, oG, m, E0, oe0, E1, oe1, dt, max_sub, W, oM):
     State ``x[ox:ox+n]``; ``F`` (n x n) at ``A[oF:]`` and ``G`` (n x m) at
     ``A[oG:]``, row-major; inputs ``e0``/``e1`` at ``E0[oe0:]``/``E1[oe1:]``;
     scratch ``W[oM:]`` of ``n*n + 2n`` floats (matrix ``I - h/2 F``, pivots, right-hand side).
+    Inlined by numba into its callers (one call in each kernel): no compiled function of its own, which
+    each kernel family compiled and optimised again inside its kernel (about 0.3 s per family).
     """
     if n == 0:
         return

@@ -22,7 +22,7 @@ from numba import njit
 from ..layout import (C_DTFIX, C_DTOL, C_DV, C_GAP, C_LIM, C_N, C_NG, C_NR, C_SUB, C_USE, C_V0, C_VMIN, C_WMAX, M_AY,
                       M_ETA, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, NETA, batch3_block, lpv_row,
                       roll_states)
-from ._jit import ENTRY, HELPER
+from ._jit import ENTRY, HELPER, optimise_for_size
 from .linalg import tustin
 from .sample import (ROLL0, ROLL2, angles, begin, finish, grid, interp, limited_ay, noise_update, roll_fixed2, roll_map,
                      sample_valid, scale_update, store)
@@ -113,6 +113,7 @@ def lpv_step(mem, cfg, tab, work, t, vx, d, ay, r):
     :func:`~roadbank.estimators.kernels.sample.limited_ay` in the steering's slot, then updates its running
     noise (:func:`~roadbank.estimators.kernels.sample.noise_update`).
     """
+    optimise_for_size()
     if cfg[C_LIM] > 0.0:
         d = limited_ay(mem, cfg, t, vx, ay, r)
     if not sample_valid(mem, cfg, t, vx, d, ay, r):

@@ -9,7 +9,7 @@ from numba import njit
 
 from ..layout import (C_N, C_NR, C_P, C_SUB, C_USE, M_ETA, M_X, NETA, riccati_block, riccati_p, riccati_row,
                       riccati_work)
-from ._jit import ENTRY
+from ._jit import ENTRY, optimise_for_size
 from .linalg import lu_factor, lu_solve, tustin
 from .sample import begin, finish, grid, sample_valid, step_by_run, store
 
@@ -40,6 +40,7 @@ def riccati_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib
     code of the family (:func:`riccati_step` runs it on one-sample arrays), which halves
     the family's compile time; the variant is not latency-critical (about 2 us per sample).
     """
+    optimise_for_size()
     n = np.int64(cfg[C_N])
     p = np.int64(cfg[C_P])
     nr = np.int64(cfg[C_NR])
@@ -55,7 +56,8 @@ def riccati_run(mem, cfg, tab, work, t, vx, d, ay, r, out_w, out_theta, out_phib
     for k in range(t.shape[0]):
         vxk = vx[k]
         if not sample_valid(mem, cfg, t[k], vxk, d[k], ay[k], r[k]):
-            store(mem, k, n, False, out_w, out_theta, out_phib, out_phi, out_valid, out_x)
+            # a bool, not the literal False: one compiled store, the one below
+            store(mem, k, n, np.bool_(False), out_w, out_theta, out_phib, out_phi, out_valid, out_x)
             continue
         i, a = grid(cfg, vxk)
         i1 = i + 1 if i + 1 < tab.shape[0] else tab.shape[0] - 1
