@@ -130,3 +130,14 @@ def test_an_mdf4_channels_own_unit_is_read_whole_or_streamed(tmp_path, drive, ch
     if chunk_rows is None:
         res = CliRunner().invoke(main, ["channels", str(path), "-o", str(tmp_path / "m.toml")])
         assert res.exit_code == 0 and "'vx' in km/h" in res.output and "'r' in deg/s" in res.output, res.output
+
+
+@pytest.mark.parametrize("kind, spelling, canonical", [
+    ("speed", "m/sec", "m/s"), ("speed", "KPH", "kph"), ("acceleration", "m/s/s", "m/s^2"),
+    ("acceleration", "m s-2", "m/s^2"), ("acceleration", "m/s²", "m/s^2"), ("angular_rate", "dps", "deg/s"),
+    ("angular_rate", "°/sec", "deg/s"), ("angle", "°", "deg"), ("time", "µs", "us")])
+def test_the_spellings_tools_write_are_units(kind, spelling, canonical):
+    """Units as tools and units rows spell them read as the channel map's own spelling, with its factor."""
+    from roadbank.units import FACTORS, factor, normalise_unit
+
+    assert normalise_unit(spelling) == canonical and factor(kind, spelling) == FACTORS[kind][canonical]

@@ -139,7 +139,8 @@ CHANNEL_SI_UNIT = {kind: SI_UNIT[dimension_of_kind(kind)] for kind in FACTORS}
 _CHANNEL_ALIASES = {"sec": "s", "second": "s", "seconds": "s", "kmh": "km/h", "km/hr": "km/h",
                     "mps": "m/s", "degree": "deg", "degrees": "deg", "radian": "rad", "radians": "rad",
                     "deg/sec": "deg/s", "rad/sec": "rad/s", "°": "deg", "°/s": "deg/s",
-                    "ms^-2": "m/s^2", "m/s²": "m/s^2", "µs": "us"}
+                    "ms^-2": "m/s^2", "m/s²": "m/s^2", "µs": "us", "m/sec": "m/s", "m/s/s": "m/s^2",
+                    "m/sec^2": "m/s^2", "ms-2": "m/s^2", "dps": "deg/s", "°/sec": "deg/s"}
 
 
 def normalise_unit(unit: str) -> str:
