@@ -144,9 +144,8 @@ class PositionJumps:
             return lat, lon
         ft, fa, fo = t[idx], lat[idx], lon[idx]
         if self.other is None:        # the usual log: every step within reach, checked at once
-            pt = np.concatenate(([self.last[0]], ft)) if self.last else ft
-            pa = np.concatenate(([self.last[1]], fa)) if self.last else fa
-            po = np.concatenate(([self.last[2]], fo)) if self.last else fo
+            pts = np.column_stack((ft, fa, fo))
+            pt, pa, po = (np.vstack(([self.last], pts)) if self.last else pts).T
             with np.errstate(invalid="ignore"):
                 ok = _distance(pa[:-1], po[:-1], pa[1:], po[1:]) <= JUMP_SPEED * np.abs(np.diff(pt)) + JUMP_SLACK
             if ok.all():
