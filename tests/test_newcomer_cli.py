@@ -107,3 +107,18 @@ def test_folder_of_kitti_drives(tmp_path):
     assert f"{len(drives)} log(s) written, 0 failed" in res.output
     for d in drives:
         assert (tmp_path / "k" / f"{d.name}.bank.parquet").is_file()
+
+
+def test_a_spreadsheet_is_skipped_with_what_to_do(tmp_path):
+    """An Excel or LibreOffice file among the logs: skipped, saying to save it as CSV (which roadbank reads with
+    ';', decimal commas and a units row); the CSV beside it is estimated."""
+    d = tmp_path / "logs"
+    d.mkdir()
+    _log(d / "a.csv")
+    (d / "drive.xlsx").write_bytes(b"PK\x03\x04 not really a workbook")
+    res = CliRunner().invoke(main, ["estimate", str(d / "a.csv"), str(d / "drive.xlsx"), "-e", "kinematic",
+                                    "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    assert f"skipped {d / 'drive.xlsx'} (not a log of a known format: suffix '.xlsx' (a spreadsheet: save it as " \
+           "CSV;" in res.output, res.output
+    assert "1 log(s) written, 0 failed" in res.output

@@ -17,6 +17,12 @@ NOT_LOG_SUFFIXES = {".md", ".rst", ".pdf", ".png", ".jpg", ".jpeg", ".gif", ".sv
 _OWN_SUFFIX = ("parquet", "mdf4", "blf", "asc", "trc", "rosbag1", "mcap")
 
 
+#: a spreadsheet's own files, which roadbank does not read, and what to do with one
+SPREADSHEET_SUFFIXES = (".xlsx", ".xls", ".xlsm", ".ods", ".numbers")
+SPREADSHEET_HINT = (" (a spreadsheet: save it as CSV; ';' separators, decimal commas and a units row under the "
+                    "header are read)")
+
+
 def not_a_log(path: Path, fmt: str | None) -> str | None:
     """Why ``path`` is not a log to read with ``fmt`` (None: the format from its suffix), or None if it may be.
 
@@ -36,7 +42,8 @@ def not_a_log(path: Path, fmt: str | None) -> str | None:
     except LogError:
         detected = None
     if fmt is None:
-        return None if detected else f"not a log of a known format: suffix '{path.suffix}'"
+        hint = SPREADSHEET_HINT if suffix in SPREADSHEET_SUFFIXES else ""
+        return None if detected else f"not a log of a known format: suffix '{path.suffix}'{hint}"
     if suffix in NOT_LOG_SUFFIXES or (detected in _OWN_SUFFIX and detected != fmt
                                       and {detected, fmt} not in ({"mdf4", "mdf4-can"}, {"mcap", "rosbag2"})):
         return f"not a {fmt} log"
