@@ -10,7 +10,7 @@ import pytest
 from click.testing import CliRunner
 
 from roadbank.cli import main
-from roadbank.io import load_log
+from roadbank.io import LogError, load_log
 from roadbank.io.readers import read_csv
 from roadbank.sim import run_scenario
 
@@ -141,3 +141,42 @@ def test_the_spellings_tools_write_are_units(kind, spelling, canonical):
     from roadbank.units import FACTORS, factor, normalise_unit
 
     assert normalise_unit(spelling) == canonical and factor(kind, spelling) == FACTORS[kind][canonical]
+
+
+def test_a_recorders_preamble_before_the_header_is_left_out(tmp_path, drive):
+    """Lines a recorder writes before the table (``Recorder: DEWE-43``, a blank line, ``Date;06.12.2026``): read as a
+    preamble, said once with the lines, the estimate that of the file without them. A header short of a name (three
+    names over four fields) is not taken for one: refused as before, naming the line."""
+    df = pd.DataFrame({"t": drive.t, "vx": drive.vx, "ay": drive.ay, "r": drive.r})
+    df.to_csv(tmp_path / "plain.csv", index=False, float_format="%.10g")
+    table = (tmp_path / "plain.csv").read_text()
+    (tmp_path / "pre.csv").write_text("Recorder: DEWE-43\n\nDate;06.12.2026\n" + table)
+    for name in ("plain", "pre"):
+        res = CliRunner().invoke(main, ["estimate", str(tmp_path / f"{name}.csv"), "-o",
+                                        str(tmp_path / f"{name}.o.csv")])
+        assert res.exit_code == 0, res.output
+    said = [ln for ln in res.output.splitlines() if "preamble" in ln]
+    assert len(said) == 1 and "lines 1-3 before the header (line 4)" in said[0] and "'Recorder: DEWE-43'" in said[0]
+    np.testing.assert_array_equal(_theta(tmp_path / "pre.o.csv"), _theta(tmp_path / "plain.o.csv"))
+    short = table.replace("t,vx,ay,r", "t,vx,ay", 1)
+    (tmp_path / "short.csv").write_text(short)
+    res = CliRunner().invoke(main, ["estimate", str(tmp_path / "short.csv"), "-o", str(tmp_path / "s.o.csv")])
+    assert res.exit_code == 1 and "line 2 has 4 field(s) but the header has 3" in res.output, res.output
+
+
+def test_a_windows_export_is_read_as_windows_1252(tmp_path, drive):
+    """A tool's export written in Windows-1252 (the degree sign of its units row one byte, 0xB0): read, said once;
+    a file with a NUL byte is still no text."""
+    df = pd.DataFrame({"Time": drive.t, "VehSpd": drive.vx * 3.6, "LatAcc": drive.ay, "YawRate": np.degrees(drive.r)})
+    utf8 = _write(tmp_path / "utf8.csv", df, "s;km/h;m/s²;°/s", sep=";", decimal=",")
+    cp = tmp_path / "cp1252.csv"
+    cp.write_bytes(utf8.read_text(encoding="utf-8").encode("cp1252"))
+    assert b"\xb0/s" in cp.read_bytes()
+    got, want = (read_csv(f, {"VehSpd": "speed", "YawRate": "yaw_rate"}) for f in (cp, utf8))
+    assert got.units == want.units == {"Time": "s", "VehSpd": "km/h", "LatAcc": "m/s²", "YawRate": "°/s"}
+    np.testing.assert_array_equal(got.data["YawRate"], want.data["YawRate"])
+    assert [w for w in got.warnings if "read as Windows-1252" in w and "0xB2" in w]
+    binary = tmp_path / "binary.csv"
+    binary.write_bytes(b"t,vx\n0,\xff\x00\n")
+    with pytest.raises(LogError, match="not a text"):
+        read_csv(binary, {"t": "time"})

@@ -243,6 +243,92 @@ def _units_row(line: str, delim: str, n_fields: int) -> list[str] | None:
     return units
 
 
+def _read_text(p: Path) -> tuple[str, list[str]]:
+    """The text of a CSV file and what was said of its encoding: UTF-8 (a byte-order mark dropped), else Windows-1252
+    (what a Windows tool writes: a degree sign in a units row is one byte, 0xB0), said in a warning; a file with a
+    NUL byte is no text (:class:`LogError`), as is one neither encoding reads."""
+    try:
+        raw = p.read_bytes()
+    except FileNotFoundError:
+        raise LogError(f"{p}: file not found") from None
+    except OSError as exc:
+        raise LogError(f"{p}: cannot read ({exc.strerror})") from None
+    try:
+        return raw.decode("utf-8-sig"), []
+    except UnicodeDecodeError as exc:
+        bad = exc
+    if b"\0" not in raw:
+        try:
+            return raw.decode("cp1252"), [f"{p}: not UTF-8 (byte 0x{raw[bad.start]:02X} at {bad.start}): read as "
+                                          "Windows-1252, as a Windows tool writes it"]
+        except UnicodeDecodeError:
+            pass
+    raise LogError(f"{p}: not a text (UTF-8) CSV file ({bad.reason} at byte {bad.start})")
+
+
+#: a CSV's header comes within this many lines after a preamble (:func:`_after_preamble`)
+PREAMBLE_MAX_LINES = 50
+
+
+def _after_preamble(p, lines: list[str], k: int) -> tuple[int, list[str]]:
+    """Index of a CSV's header where ``lines[k]`` opens a preamble (a recorder's, a tool's: ``Recorder: DEWE-43``,
+    ``Date: 06.12.2026``), and what is said of it; ``(k, [])`` for a file whose line ``k`` is its header.
+
+    A header is a line of names whose next line (after a units row, :func:`_units_row`) has as many fields, most of
+    them numbers: line ``k`` when it is one; else the first such line within :data:`PREAMBLE_MAX_LINES` whose number
+    of fields no line before it has (a preamble is not shaped like the table). Anything else is left to the reader's
+    own errors."""
+    if _opens_table(lines, k):
+        return k, []
+    for j in range(k + 1, min(len(lines), k + PREAMBLE_MAX_LINES)):
+        if not _opens_table(lines, j):
+            continue
+        n = _fields(lines[j])
+        if any(_fields(ln) == n for ln in lines[k:j] if ln.strip()):
+            return k, []
+        first = next(ln.strip() for ln in lines[k:j] if ln.strip())
+        return j, [f"{p}: lines {k + 1}-{j} before the header (line {j + 1}) read as a preamble, not data "
+                   f"(they start {first[:40]!r})"]
+    return k, []
+
+
+def _split(line: str, delim: str | None = None) -> list[str]:
+    """The fields of one line (quotes read as the CSV reader reads them) by ``delim``, or by its most frequent
+    delimiter (``,`` ``;`` or tab); [] for a line the CSV reader cannot read."""
+    delim = delim or max((",", ";", "\t"), key=line.count)
+    try:
+        return next(csv.reader([line], delimiter=delim), [])
+    except csv.Error:
+        return []
+
+
+def _fields(line: str) -> int:
+    """The number of fields of a line (:func:`_split`)."""
+    return len(_split(line))
+
+
+def _opens_table(lines: list[str], j: int) -> bool:
+    """Whether line ``j`` reads as a header (:func:`_after_preamble`): two fields or more, not all numbers, and the
+    next line after a units row as many fields, more than half of them numbers."""
+    if j + 1 >= len(lines):
+        return False
+    delim = max((",", ";", "\t"), key=lines[j].count)
+    head = _split(lines[j], delim)
+    n = len(head)
+    if n < 2 or all(_number_like(f) for f in head):
+        return False
+    nxt = j + 1 + (j + 2 < len(lines) and _units_row(lines[j + 1], delim, n) is not None)
+    fields = _split(lines[nxt], delim) if nxt < len(lines) else []
+    return len(fields) == n and 2 * sum(_number_like(f) for f in fields) > n
+
+
+def _number_like(field: str) -> bool:
+    """A field that holds a number as a log writes one: ``float()``'s, a decimal comma, a date-time, or missing."""
+    f = field.strip()
+    return (reads_as_number(f) or f.lower() in MISSING or _DECIMAL_COMMA.fullmatch(f) is not None
+            or _DATE_TIME.fullmatch(f) is not None)
+
+
 def _is_comment(line: str) -> bool:
     """A comment line: ``#`` after optional whitespace or byte-order mark."""
     return line.lstrip(" \t\ufeff").startswith("#")
@@ -272,25 +358,19 @@ def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTabl
         Also convert every column whose name starts with it.
     """
     p = Path(path)
-    try:
-        with open(p, newline="", encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except FileNotFoundError:
-        raise LogError(f"{p}: file not found") from None
-    except UnicodeDecodeError as exc:
-        raise LogError(f"{p}: not a text (UTF-8) CSV file ({exc.reason} at byte {exc.start})") from None
-    except OSError as exc:
-        raise LogError(f"{p}: cannot read ({exc.strerror})") from None
+    text, warnings = _read_text(p)
     if not text.strip():
         raise LogError(f"{p}: file is empty")
     lines = text.splitlines()
     skip = _header_index(lines)         # comment lines before the header
     if skip == len(lines):
         raise LogError(f"{p}: no header line (every line is blank or a comment starting with '#')")
+    skip, preamble = _after_preamble(p, lines, skip)
+    warnings += preamble
     lines = lines[skip:]
     header_line = lines[0]
     delim = max((",", ";", "\t"), key=header_line.count)
-    warnings = _drop_unfinished_line(p, text, lines, skip, delim)
+    warnings += _drop_unfinished_line(p, text, lines, skip, delim)
     if skip and all(reads_as_number(f) for f in header_line.split(delim)):
         raise LogError(f"{p}: no header line: line {skip + 1} ({header_line.strip()[:40]!r}) holds numbers, not "
                        "column names (the lines before it are blank or comments starting with '#')")
