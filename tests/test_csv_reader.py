@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from roadbank.io import LogError
-from roadbank.io.readers import _plain_csv, read_csv
+from roadbank.io.csvtable import _plain_csv, read_csv
 
 
 def _values(rng, n):
