@@ -159,3 +159,23 @@ def test_a_users_first_estimate_compiles_then_loads_from_the_caches(tmp_path):
     assert "| bad |" in text and "n/a: cold run failed" in text and "--data" in text
     assert "not run with --tiny" in first_run({"size": "tiny"})["reason"]
     assert SECTION.name == "first_run"
+
+
+def test_cold_compile_keeps_the_median_run_of_each_family(monkeypatch):
+    """Each family probed ``repeats`` times, the families in turn; the run kept is the median one (the lower middle
+    of an even count), every run's time listed; a failed run stands for its family."""
+    from roadbank.bench import cold
+
+    times = {"a": iter([5.0, 3.0, 4.0]), "b": iter([1.0, 2.0, 9.0, 7.0]), "c": iter([1.0, None, 2.0])}
+    order = []
+
+    def fake(family):
+        order.append(family)
+        v = next(times[family])
+        return {"cold_compile_s": v, "cpu_first_s": v} if v is not None else {"cold_compile_s": None, "reason": "x"}
+    monkeypatch.setattr(cold, "probe_family", fake)
+    out = cold.cold_compile(["a", "c"], repeats=3)
+    assert order == ["a", "c"] * 3
+    assert out["a"]["cold_compile_s"] == 4.0 and out["a"]["runs"] == [5.0, 3.0, 4.0]
+    assert out["c"] == {"cold_compile_s": None, "reason": "x"}
+    assert cold.cold_compile(["b"], repeats=4)["b"]["cold_compile_s"] == 2.0

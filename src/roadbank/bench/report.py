@@ -150,12 +150,15 @@ def markdown(res: dict, command: str) -> str:
         lines += [f"Cold start: {cs.get('reason')}", ""]
     if res.get("cold_compile"):
         lines += ["## Compile time per kernel family (fresh process, empty `NUMBA_CACHE_DIR`)", "",
-                  md_table(["family", "compile, s (wall)", "CPU s of the first calls", "numba compile events, s"],
-                           [[f, v["cold_compile_s"], v["cpu_first_s"], v.get("numba_compile_event_s")]
-                            if v.get("cold_compile_s") is not None else [f, f"n/a: {v.get('reason')}", None, None]
-                            for f, v in res["cold_compile"].items()], align="lrrr")]
+                  md_table(["family", "compile, s (wall, median)", "every run, s", "CPU s of the first calls",
+                            "numba compile events, s"],
+                           [[f, v["cold_compile_s"], ", ".join(_fmt(x) for x in v.get("runs", [])),
+                             v["cpu_first_s"], v.get("numba_compile_event_s")]
+                            if v.get("cold_compile_s") is not None else [f, f"n/a: {v.get('reason')}", None, None, None]
+                            for f, v in res["cold_compile"].items()], align="lrrrr")]
         lines += ["", "Each family's probe (`roadbank.bench.cold.FAMILY_PROBES`) runs what a user's first "
-                  "run compiles: compile = wall time of the first calls minus the same calls repeated.", ""]
+                  "run compiles: compile = wall time of the first calls minus the same calls repeated; each family "
+                  "in several fresh processes, the families in turn, the median run's figures given.", ""]
     for sec in _suite.SECTIONS:
         out = res.get(sec.name)
         if out is None:

@@ -80,7 +80,7 @@ def register_section(section: Section) -> None:
 #: run sizes: log duration (s), repeats, filterpy samples, step calls, CommonRoad seconds
 SIZES = {
     "full": dict(log_s=3600.0, repeats=5, riccati_s=600.0, peer_n=30000, step_n=50000,
-                 cr_s=25.0, plant_repeats=5, reproduce=True, cold=True, compile=True),
+                 cr_s=25.0, plant_repeats=5, reproduce=True, cold=True, compile=True, compile_repeats=3),
     "quick": dict(log_s=3600.0, repeats=3, riccati_s=60.0, peer_n=3000, step_n=20000,
                   cr_s=25.0, plant_repeats=3, reproduce=False, cold=True, compile=False),
     "tiny": dict(log_s=10.0, repeats=1, riccati_s=10.0, peer_n=300, step_n=300,
@@ -630,8 +630,9 @@ def run_suite(size: str = "full", progress=None, options: dict | None = None) ->
         say("cold start (fresh processes)")
         res["cold_start"] = cold_start(compile_=size == "full")
     if cfg["compile"]:
-        say(f"cold compile per kernel family ({', '.join(FAMILY_PROBES)}; fresh processes, empty cache)")
-        cc = cold_compile()
+        say(f"cold compile per kernel family ({', '.join(FAMILY_PROBES)}; fresh processes, empty cache, "
+            f"{cfg['compile_repeats']} each)")
+        cc = cold_compile(repeats=cfg["compile_repeats"])
         res["cold_compile"] = cc
         res["cold_compile_s"] = {f: v.get("cold_compile_s") for f, v in cc.items()}
         vals = [v for v in res["cold_compile_s"].values() if v is not None]
