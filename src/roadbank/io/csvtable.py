@@ -176,24 +176,31 @@ def _units_row(line: str, delim: str, n_fields: int) -> list[str] | None:
 def _read_text(p: Path) -> tuple[str, list[str]]:
     """The text of a CSV file and what was said of its encoding: UTF-8 (a byte-order mark dropped), else Windows-1252
     (what a Windows tool writes: a degree sign in a units row is one byte, 0xB0), said in a warning; a file with a
-    NUL byte is no text (:class:`LogError`), as is one neither encoding reads."""
+    NUL byte is no text (:class:`LogError`), as is one neither encoding reads. A UTF-8 file is decoded as it is read
+    (no copy of its bytes)."""
     try:
-        raw = p.read_bytes()
+        with open(p, newline="", encoding="utf-8-sig") as fh:
+            return fh.read(), []
     except FileNotFoundError:
         raise LogError(f"{p}: file not found") from None
+    except UnicodeDecodeError:
+        pass
     except OSError as exc:
         raise LogError(f"{p}: cannot read ({exc.strerror})") from None
+    raw = p.read_bytes()
     try:
-        return raw.decode("utf-8-sig"), []
-    except UnicodeDecodeError as exc:
+        raw.decode("utf-8-sig")
+        bad = None
+    except UnicodeDecodeError as exc:        # where in the file (the reader's own error counts from its buffer)
         bad = exc
-    if b"\0" not in raw:
+    if bad is not None and b"\0" not in raw:
         try:
             return raw.decode("cp1252"), [f"{p}: not UTF-8 (byte 0x{raw[bad.start]:02X} at {bad.start}): read as "
                                           "Windows-1252, as a Windows tool writes it"]
         except UnicodeDecodeError:
             pass
-    raise LogError(f"{p}: not a text (UTF-8) CSV file ({bad.reason} at byte {bad.start})")
+    where = f" ({bad.reason} at byte {bad.start})" if bad is not None else ""
+    raise LogError(f"{p}: not a text (UTF-8) CSV file{where}")
 
 
 #: a CSV's header comes within this many lines after a preamble (:func:`_after_preamble`)
