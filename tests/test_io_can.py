@@ -234,3 +234,23 @@ def test_a_map_unit_other_than_the_dbcs_is_named(logs):
     assert "channel 'speed'" in said[0] and "drive.blf" in said[0]
     np.testing.assert_allclose(np.nanmedian(bad.signals.vx) / np.nanmedian(good.signals.vx), 0.44704 * 3.6,
                                rtol=1e-6)
+
+
+def test_an_asc_line_cut_in_the_middle_is_said(logs, tmp_path):
+    """python-can passes over an ASC line cut in the middle without a word; the frames it could not read are
+    counted against the lines that start like frames and said, the others read. The whole file says nothing."""
+    d, files = logs
+    cmap = read_channel_map(d / "car.toml")
+    _, warns = read_can(files["asc"], cmap, "asc")
+    assert not [w for w in warns if "start like CAN frames" in w], warns
+    lines = files["asc"].read_text().splitlines()
+    k = next(i for i, ln in enumerate(lines) if " 130 " in ln and i > len(lines) // 2)
+    lines[k] = lines[k][:lines[k].index(" 130 ") + 4]                  # time, channel, id: then cut
+    cut = tmp_path / "cut.asc"
+    cut.write_text("\n".join(lines) + "\n")
+    (tmp_path / "car.dbc").write_text((d / "car.dbc").read_text())
+    whole, _ = read_can(files["asc"], cmap, "asc")
+    table, warns = read_can(cut, cmap, "asc")
+    said = [w for w in warns if "start like CAN frames" in w]
+    assert len(said) == 1 and "1 line(s)" in said[0] and "cut.asc" in said[0], warns
+    assert len(table.data["0x130.YawRate"]) == len(whole.data["0x130.YawRate"]) - 1

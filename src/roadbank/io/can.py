@@ -19,7 +19,8 @@ cantools); MDF4 bus logging also needs ``mdf`` (asammdf).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import re
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -50,11 +51,14 @@ class Frames:
         Arbitration ids (11 or 29 bit, without the extended flag).
     data : list of bytes
         Payloads.
+    warnings : list of str
+        What the reading left out and said (an ASC line that could not be read).
     """
 
     t: np.ndarray
     ids: np.ndarray
     data: list
+    warnings: list = field(default_factory=list)
 
 
 def _check_text_complete(p: Path, fmt: str) -> None:
@@ -97,9 +101,11 @@ def read_frames(path, fmt: str) -> Frames:
     t: list[float] = []
     ids: list[int] = []
     data: list[bytes] = []
+    frames = 0           # every frame python-can gave but error frames (remote frames counted)
     try:
         reader = readers[fmt](str(p))
         for m in reader:
+            frames += not m.is_error_frame
             if m.is_error_frame or m.is_remote_frame:
                 continue
             if m.dlc is not None and len(m.data) != m.dlc and not m.is_fd:
@@ -120,7 +126,24 @@ def read_frames(path, fmt: str) -> Frames:
                            f"{len(t)} of {reader.object_count} objects)")
     if not t:
         raise LogError(f"{p}: no CAN data frames in the file")
-    return Frames(np.asarray(t, dtype=np.float64), np.asarray(ids, dtype=np.int64), data)
+    warnings = _unread_asc_lines(p, frames) if fmt == "asc" else []
+    return Frames(np.asarray(t, dtype=np.float64), np.asarray(ids, dtype=np.int64), data, warnings)
+
+
+#: an ASC line that starts as a CAN frame does: time, channel, identifier (hex, ``x`` for an extended one) and then
+#: the rest or the line's end; or a CAN FD frame's ``CANFD`` line. Error frames, statistics and events do not
+_ASC_FRAME = re.compile(rb"^\s*\d+(\.\d+)?\s+(\d+\s+[0-9A-Fa-f]+x?(\s|$)|CANFD\s)")
+
+
+def _unread_asc_lines(p: Path, frames: int) -> list[str]:
+    """The warning for lines of an ASC file that start like CAN frames but python-can did not read (a line cut in
+    the middle: python-can passes over it without a word), given the ``frames`` it read (error frames apart)."""
+    with open(p, "rb") as fh:
+        shaped = sum(1 for line in fh if _ASC_FRAME.match(line))
+    if shaped <= frames:
+        return []
+    return [f"{p}: {shaped - frames} line(s) that start like CAN frames could not be read (cut or corrupt lines), "
+            f"left out: their samples are dropouts"]
 
 
 def _read_mdf4_frames(p: Path) -> Frames:
@@ -235,7 +258,7 @@ def read_can(path, cmap, fmt: str) -> tuple[RawTable, list[str]]:
     frames = read_frames(p, fmt)
     known = {m.frame_id for m in db.messages}
     unknown = np.unique(frames.ids[~np.isin(frames.ids, list(known))])
-    data, times, warns, units = {}, {}, [], {}
+    data, times, warns, units = {}, {}, list(frames.warnings), {}
     for fid, (msg, specs) in wanted.items():
         idx = np.flatnonzero(frames.ids == fid)
         if len(idx) == 0:
