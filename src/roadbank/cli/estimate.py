@@ -9,8 +9,8 @@ from pathlib import Path
 
 import click
 
-from ..constants import STEERING_RATIO_RANGE
 from ..defaults import ESTIMATOR as DEFAULT
+from ..io.channels import steering_ratio_problem
 from ..io.errors import LogError
 from ..io.readers import FORMATS
 from .inputs import channel_map_and_logs, check_output
@@ -127,10 +127,9 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     # (roadbank.vehicle.design_car, in estimate_log); a steering ratio alone keeps the static car
     params = vehicle.params if vehicle is not None else None
     if steering_ratio is not None:
-        lo, hi = STEERING_RATIO_RANGE
-        if not lo <= steering_ratio <= hi:
-            raise click.BadParameter(f"{steering_ratio:g} is outside a road vehicle's {lo:g}-{hi:g} (steering-wheel "
-                                     "angle per road-wheel angle, -)", param_hint="--steering-ratio")
+        why = steering_ratio_problem(steering_ratio)
+        if why is not None:
+            raise click.BadParameter(why, param_hint="--steering-ratio")
         try:
             params = (params or undescribed_params()).replace(steering_ratio=steering_ratio)
         except ValueError as exc:

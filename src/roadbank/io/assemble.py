@@ -46,7 +46,7 @@ import numpy as np
 from ..params import VehicleParams
 from ..signals import Signals, concat_signals, road_wheel_angle
 from . import units
-from .channels import OPTIONAL, STEERING, ChannelMap, check_plausible, default_channel_map
+from .channels import DEFAULT_MAP_SOURCE, OPTIONAL, STEERING, ChannelMap, check_plausible
 from .limits import Dropouts
 from .consistency import MIN_SAMPLES, Sums, check_balance, log_verdict, turning, usable
 from .errors import LogError, channel_error, channel_text
@@ -119,7 +119,7 @@ OPTIONAL_LOSS = {"roll_rate": "a roll rate (the gyro-aided estimators give no va
 def optional_notes(p, cmap: ChannelMap, roles: list[str]) -> list[str]:
     """The warnings for a file read without an optional column its map names (the default map's ``p`` and ``ax``
     are not said: most logs have neither); ``[]`` otherwise."""
-    if cmap.source == "default channel map":
+    if cmap.source == DEFAULT_MAP_SOURCE:
         return []
     return [channel_text(p, r, cmap.channels[r].column, f"column not found in the file, so the log is read without "
                          f"{OPTIONAL_LOSS[r]}") for r in OPTIONAL if r in cmap.channels and r not in roles]
@@ -165,11 +165,11 @@ def stated_units(p, cmap: ChannelMap, stated: dict[str, str]) -> tuple[ChannelMa
     unit the file states for one of its columns replaces the default's (said where they differ). A map the user
     wrote is kept, and a stated unit that differs from its declared one is warned about. A stated unit that is not
     one of the channel's kind (``-``, ``Nm`` under a speed) is said and the map's kept."""
-    default = cmap.source == default_channel_map().source
+    default = cmap.source == DEFAULT_MAP_SOURCE
     channels, notes = dict(cmap.channels), []
     for role, spec in cmap.channels.items():
         unit = stated.get(spec.column)
-        if unit is None or units.normalise_unit(unit) == units.normalise_unit(spec.unit):
+        if unit is None:
             continue
         try:
             same = units.factor(spec.kind, unit) == units.factor(spec.kind, spec.unit)

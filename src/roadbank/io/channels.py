@@ -268,6 +268,18 @@ class ChannelMap:
         return np.asarray(values, dtype=np.float64) * (f * s)
 
 
+#: the :attr:`ChannelMap.source` of :func:`default_channel_map`: the map a log is read with when the user gave none
+DEFAULT_MAP_SOURCE = "default channel map"
+
+
+def steering_ratio_problem(ratio: float) -> str | None:
+    """Why a steering ratio (steering-wheel angle per road-wheel angle, -) is no road vehicle's: outside
+    :data:`roadbank.constants.STEERING_RATIO_RANGE` (a unit or typing mistake); None for one within it."""
+    lo, hi = STEERING_RATIO_RANGE
+    return None if lo <= ratio <= hi else (f"{ratio:g} is outside a road vehicle's {lo:g}-{hi:g} (steering-wheel "
+                                           "angle per road-wheel angle, -)")
+
+
 def default_channel_map() -> ChannelMap:
     """roadbank's own columns (as written by ``roadbank simulate``): SI, ISO 8855."""
     ch = {
@@ -281,7 +293,7 @@ def default_channel_map() -> ChannelMap:
         "longitudinal_acceleration": ChannelSpec("longitudinal_acceleration", "ax", "m/s^2"),
         "pitch_rate": ChannelSpec("pitch_rate", "q", "rad/s"),
     }
-    return ChannelMap(ch, truth_prefix="true_", source="default channel map", steering_optional=True)
+    return ChannelMap(ch, truth_prefix="true_", source=DEFAULT_MAP_SOURCE, steering_optional=True)
 
 
 _TOP_KEYS = {"convention", "steering_ratio", "resample", "channels", "truth_prefix", "dbc", "ros_time"}
@@ -376,10 +388,9 @@ def channel_map_from_dict(d: dict, source: str = "<map>") -> ChannelMap:
     if bad:
         raise LogError(f"{source}: [resample]: unknown key(s) {sorted(bad)} (known: {sorted(_RESAMPLE_KEYS)})")
     ratio = None if d.get("steering_ratio") is None else _number(source, "steering_ratio", d["steering_ratio"])
-    lo, hi = STEERING_RATIO_RANGE
-    if ratio is not None and np.isfinite(ratio) and ratio > 0 and not lo <= ratio <= hi:   # else ChannelMap's own
-        raise LogError(f"{source}: steering_ratio = {ratio:g} is outside a road vehicle's {lo:g}-{hi:g} "
-                       "(steering-wheel angle per road-wheel angle, -)")
+    why = steering_ratio_problem(ratio) if ratio is not None and np.isfinite(ratio) and ratio > 0 else None
+    if why is not None:                                 # (not finite or not positive: ChannelMap's own message)
+        raise LogError(f"{source}: steering_ratio = {why}")
     try:
         return ChannelMap(
             specs,

@@ -229,10 +229,15 @@ def _after_preamble(p, lines: list[str], k: int) -> tuple[int, list[str]]:
     return k, []
 
 
+def _delimiter(line: str) -> str:
+    """A line's most frequent delimiter: ``,`` ``;`` or tab (a header's is the file's)."""
+    return max((",", ";", "\t"), key=line.count)
+
+
 def _split(line: str, delim: str | None = None) -> list[str]:
-    """The fields of one line (quotes read as the CSV reader reads them) by ``delim``, or by its most frequent
-    delimiter (``,`` ``;`` or tab); [] for a line the CSV reader cannot read."""
-    delim = delim or max((",", ";", "\t"), key=line.count)
+    """The fields of one line (quotes read as the CSV reader reads them) by ``delim``, or by its own
+    :func:`_delimiter`; [] for a line the CSV reader cannot read."""
+    delim = delim or _delimiter(line)
     try:
         return next(csv.reader([line], delimiter=delim), [])
     except csv.Error:
@@ -249,7 +254,7 @@ def _opens_table(lines: list[str], j: int) -> bool:
     next line after a units row as many fields, more than half of them numbers."""
     if j + 1 >= len(lines):
         return False
-    delim = max((",", ";", "\t"), key=lines[j].count)
+    delim = _delimiter(lines[j])
     head = _split(lines[j], delim)
     n = len(head)
     if n < 2 or all(_number_like(f) for f in head):
@@ -306,7 +311,7 @@ def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTabl
     warnings += preamble
     lines = lines[skip:]
     header_line = lines[0]
-    delim = max((",", ";", "\t"), key=header_line.count)
+    delim = _delimiter(header_line)
     warnings += _drop_unfinished_line(p, text, lines, skip, delim)
     if skip and all(reads_as_number(f) for f in header_line.split(delim)):
         raise LogError(f"{p}: no header line: line {skip + 1} ({header_line.strip()[:40]!r}) holds numbers, not "

@@ -229,6 +229,7 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
     """
     numeric = [c for c in names if c in data and np.isfinite(data[c]).any()]
     used: set[str] = set()
+    from_file: set[str] = set()        # the columns whose unit hint is one the file states
     out: dict[str, Guess] = {}
 
     def pick(role, pool, extra=None):
@@ -239,7 +240,10 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
             col = extra([c for c in pool if c not in used]) if extra is not None else None
         if col is not None:
             used.add(col)
-            hint = stated_hint(role, (stated or {}).get(col)) or hint
+            said = stated_hint(role, (stated or {}).get(col))
+            if said is not None:
+                hint = said
+                from_file.add(col)
         return col, score, hint
 
     hints = {}
@@ -285,7 +289,7 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
         optional.append(_optional(role, col, score, hint, series))
     guesses = [out[k] for k in roles] + [out_steer] + [g for g in optional if g is not None]
     for g in guesses:        # a unit the file states is the one that counted as the name's
-        if g.column is not None and stated_hint(g.role, (stated or {}).get(g.column)) is not None:
+        if g.column in from_file:
             g.reason = g.reason.replace("unit in the name", "unit the file states")
     return guesses
 

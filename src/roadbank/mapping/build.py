@@ -198,8 +198,9 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
         why = seen.problem(path, cmap)
         if why is not None:
             raise LogError(why)
-        if jumps.problem() is not None:
-            rec.warnings.append(f"{path}: {position_names(cmap)}: {jumps.problem()}")
+        jumped = jumps.problem()
+        if jumped is not None:
+            rec.warnings.append(f"{path}: {position_names(cmap)}: {jumped}")
     except (LogError, ValueError, OSError) as exc:
         rec.status, rec.error = "error", str(exc)
     except Exception as exc:  # never a traceback for one bad file
