@@ -179,3 +179,16 @@ def test_cold_compile_keeps_the_median_run_of_each_family(monkeypatch):
     assert out["a"]["cold_compile_s"] == 4.0 and out["a"]["runs"] == [5.0, 3.0, 4.0]
     assert out["c"] == {"cold_compile_s": None, "reason": "x"}
     assert cold.cold_compile(["b"], repeats=4)["b"]["cold_compile_s"] == 2.0
+
+
+def test_filterpy_ratio_is_the_median_of_rounds_paired_with_the_pif():
+    pytest.importorskip("filterpy")
+    from roadbank import estimators
+    from roadbank.bench.suite import filterpy_peer
+    log = synthetic_log(10.0)
+    peer = filterpy_peer(log, 300, estimators.make("pif-modified"), rounds=3)
+    assert len(peer["peer_rounds_ns"]) == 3 and len(peer["ratios"]) == 3
+    assert peer["ratio"] == sorted(peer["ratios"])[1]
+    assert peer["peer_ns_per_sample"] == sorted(peer["peer_rounds_ns"])[1]
+    alone = filterpy_peer(log, 300)            # no estimator: the peer's time alone, no ratio
+    assert "ratio" not in alone and alone["peer_ns_per_sample"] > 0

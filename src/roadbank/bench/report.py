@@ -8,6 +8,7 @@ from ..report.markdown import Markdown, md_table
 from . import suite as _suite
 from .suite import RATE_HZ, TARGETS
 
+
 def _fmt(v, nd=1):
     if v is None:
         return "n/a"
@@ -16,6 +17,11 @@ def _fmt(v, nd=1):
     if abs(v) >= 1000:
         return f"{v:,.0f}"
     return f"{v:.{nd}f}"
+
+
+def _rounds(xs) -> str:
+    """Each round's value, comma separated."""
+    return ", ".join(_fmt(x) for x in xs) if xs else "n/a"
 
 
 def _met(res, key):
@@ -106,7 +112,11 @@ def markdown(res: dict, command: str) -> str:
               f"- filterpy `KalmanFilter`: the modified augmented model (states vy, r, w; input ay; "
               f"output r), ZOH/Van Loan discretisation per grid speed (0.25 m/s), Table 4 weights, "
               f"`predict(u=ay)` / `update(r)` per sample in a Python loop, measured on the first "
-              f"{fp.get('samples', 'n/a')} samples of the log and reported per sample. RMS difference "
+              f"{fp.get('samples', 'n/a')} samples of the log and reported per sample: the median of "
+              f"{len(fp.get('peer_rounds_ns') or [])} rounds ({_rounds(fp.get('peer_rounds_ns'))} ns/sample), each "
+              f"followed at once by one PIF `run()` on the whole log; the ratio is the median of the rounds' "
+              f"ratios ({_rounds(fp.get('ratios'))}x), so that both meet the same minutes of a shared machine. "
+              f"RMS difference "
               f"of its w from roadbank's PIF: {_fmt(fp.get('rms_w_difference_vs_pif'), 4)} "
               f"(a Kalman gain is not the H-infinity gain, so they are close, not equal).",
               f"- CommonRoad `vehicle_dynamics_mb` (vehicle 2) with `scipy.integrate.odeint`, "
