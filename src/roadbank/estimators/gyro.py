@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
+from ..constants import MAX_GAP_S
 from ..models.attitude import euler_roll_rate, grade_pitch, running_area
 from ..params import VehicleParams
 from ..signals import Estimate, Signals, concat_signals
@@ -73,6 +74,13 @@ PITCH_ANCHOR: float | None = None
 #: the gap (s) between usable samples after which ``kinematic-gyro`` starts again (a stop shorter than it is held
 #: through, the state kept: a car at rest keeps its roll): the twenty-seventh stage of :mod:`roadbank.tuning.real`
 GYRO_MAX_GAP_S = 10.0
+#: what ``kinematic-gyro`` does across an interval of the log longer than :data:`~roadbank.constants.MAX_GAP_S` (no
+#: samples: a logger's dropout) and at most its ``max_gap`` (:func:`gap_time`): ``"trapezoid"`` (the roll rate taken
+#: linear between the samples either side, as across any interval), ``"hold"`` (the state and the grade's pitch carried
+#: over, as if the interval were the one before it) or ``"restart"``; the forty-eighth stage of
+#: :mod:`roadbank.tuning.real`
+LOG_GAPS = ("trapezoid", "hold", "restart")
+GYRO_LOG_GAPS = "trapezoid"
 #: the order of ``kinematic-gyro``'s complementary filter (2, or 4: :func:`gyro_observer`): the twenty-eighth stage
 GYRO_ORDER = 2
 #: the sideslip acceleration it takes out of the kinematic estimate (:func:`sideslip_per_eta`): the twenty-ninth stage
@@ -106,6 +114,41 @@ UNBIASED_PITCH_ANCHOR = 1.0
 UNBIASED_GYRO = {"cutoff": UNBIASED_GYRO_CUTOFF_HZ, "bias_tau": UNBIASED_GYRO_BIAS_TAU_S}
 UNBIASED_PITCH = {"pitch_bandwidth": UNBIASED_PITCH_BANDWIDTH, "pitch_start": UNBIASED_PITCH_START,
                   "pitch_anchor": UNBIASED_PITCH_ANCHOR}
+
+
+def gap_time(t: np.ndarray, carry: tuple[float, float, float], lo: float, hi: float,
+             mode: str) -> tuple[np.ndarray, tuple[float, float, float]]:
+    r"""The time stamps (s) that ``kinematic-gyro`` reads for the log's ``t`` (s), and the carry at its end.
+
+    An interval between consecutive samples longer than ``lo`` and at most ``hi`` (s) is a gap in the log: no roll
+    rate was read across it. ``mode`` (:data:`LOG_GAPS`) ``"trapezoid"``: ``t`` as it is; ``"hold"``: every later
+    stamp moves earlier so that the gap becomes the last interval of at most ``lo`` before it (the filter, its offset
+    and the grade's pitch go on as if no time had passed); ``"restart"``: every later stamp moves ``hi`` later, so the
+    filter starts again after the gap. ``carry`` = (the last finite stamp before ``t``, the shift so far, the last
+    interval of at most ``lo``; NaN where none): ``(nan, 0.0, nan)`` at a log's start, then what the call returned,
+    so that a log read in pieces reads the stamps read whole. Non-finite stamps are kept and step over nothing.
+    """
+    last, shift, step = carry
+    t = np.asarray(t, dtype=float)
+    n = len(t)
+    fin = np.isfinite(t)
+    if not n or mode == "trapezoid":
+        return t, (float(t[fin][-1]) if fin.any() else last, shift, step)
+    known = np.maximum.accumulate(np.where(fin, np.arange(n), -1))       # the last finite stamp up to each sample
+    filled = np.where(known >= 0, t[np.maximum(known, 0)], last)
+    d = t - np.concatenate([[last], filled[:-1]])
+    with np.errstate(invalid="ignore"):
+        gap = (d > lo) & (d <= hi)
+        ok = (d > 0) & (d <= lo)
+    before = np.maximum.accumulate(np.where(ok, np.arange(n), -1))       # the last ordinary interval up to each sample
+    extra = np.zeros(n)
+    for k in np.flatnonzero(gap):
+        j = before[k - 1] if k > 0 else -1
+        prior = d[j] if j >= 0 else (step if math.isfinite(step) else lo)
+        extra[k] = d[k] - prior if mode == "hold" else -hi
+    shifts = shift + np.cumsum(extra)
+    end_step = d[before[-1]] if before[-1] >= 0 else step
+    return t - shifts, (float(filled[-1]), float(shifts[-1]), float(end_step))
 
 
 class GradeCarry:
@@ -266,6 +309,9 @@ class KinematicGyro(ScheduledObserver):
     start_offset : float, optional
         That Kalman filter's prior standard deviation (rad/s, > 0) of the roll rate's offset. Default
         :data:`GYRO_START_OFFSET`.
+    log_gaps : str, optional
+        Across an interval of the log longer than :data:`~roadbank.constants.MAX_GAP_S` and at most ``max_gap`` (no
+        samples), one of :data:`LOG_GAPS` (:func:`gap_time`). Default :data:`GYRO_LOG_GAPS`.
     **kw
         Common options of :class:`~roadbank.estimators.base.Estimator`; ``v_min`` (m/s) defaults to
         :data:`~roadbank.estimators.kinematic.KINEMATIC_V_MIN`, ``max_gap`` (s) to :data:`GYRO_MAX_GAP_S`.
@@ -284,7 +330,10 @@ class KinematicGyro(ScheduledObserver):
 
     def __init__(self, params=None, *, cutoff=None, bias_tau=None, grade_window=None, order=None, sideslip=None,
                  start_hold=None, start_span=None, start_offset=None, grade_first_span=None, pitch_bandwidth=None,
-                 pitch_start=(), pitch_offset_tau=None, pitch_anchor=(), **kw):
+                 pitch_start=(), pitch_offset_tau=None, pitch_anchor=(), log_gaps=None, **kw):
+        self.log_gaps = str(GYRO_LOG_GAPS if log_gaps is None else log_gaps)
+        if self.log_gaps not in LOG_GAPS:
+            raise ValueError(f"{self.name}: log_gaps must be one of {LOG_GAPS}, got {log_gaps!r}")
         self.cutoff = float(GYRO_CUTOFF_HZ if cutoff is None else cutoff)
         self.start_hold = float(GYRO_START_HOLD_S if start_hold is None else start_hold)
         if not (np.isfinite(self.start_hold) and self.start_hold >= 0):
@@ -339,6 +388,7 @@ class KinematicGyro(ScheduledObserver):
         self._hold_from = math.nan           # time (s) of the first usable sample: the hold's start
         self._kalman: KalmanStart | None = None          # the start's Kalman filter while it runs
         self._before = (0.0, math.nan)       # the memory's (M_INIT, M_TLAST) before the segment
+        self._gaps = (math.nan, 0.0, math.nan)   # gap_time's carry: the time stamps read across the log's gaps
         if hasattr(self, "grade"):           # the base constructor resets before the window is set
             self.grade.reset()
 
@@ -444,17 +494,28 @@ class KinematicGyro(ScheduledObserver):
                              "estimator)")
         if reset:
             self.reset()
+        carry = self._gaps
+        signals = self._read_time(signals)
         if lookahead is None:
             return self.grade.correct(signals)
-        n = len(signals)
-        both = self.grade.correct(concat_signals([signals, lookahead]), advance=n)
+        n, ahead = len(signals), self._gaps
+        self._gaps = carry
+        both = self.grade.correct(concat_signals([signals, self._read_time(lookahead)]), advance=n)
+        self._gaps = ahead                  # the lookahead's samples come again in the next piece
         return both[:n], both[n:]
+
+    def _read_time(self, s: Signals) -> Signals:
+        """``s`` with the time stamps the filter reads (:func:`gap_time`, carried on from the last piece)."""
+        t, self._gaps = gap_time(s.t, self._gaps, MAX_GAP_S, self.max_gap, self.log_gaps)
+        return s if t is s.t else dataclasses.replace(s, t=t)
 
     def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
         """:meth:`Estimator.run <roadbank.estimators.base.Estimator.run>` of a log with a roll rate
         (:attr:`roadbank.Signals.p`, rad/s; corrected for the grade where the log has ``ax``, module docstring);
         ValueError for a log without one."""
-        return super().run(self._corrected(signals, reset), reset=False, lookahead=lookahead)
+        est = super().run(self._corrected(signals, reset), reset=False, lookahead=lookahead)
+        est.t = signals.t
+        return est
 
     def step(self, t: float, vx: float, ay: float, r: float, delta_f: float = float("nan"),
              p: float = float("nan"), ax: float = float("nan"), q: float | None = None) -> StepResult:
@@ -462,6 +523,8 @@ class KinematicGyro(ScheduledObserver):
         (rad/s), the longitudinal acceleration ``ax`` (m/s^2; NaN: the roll rate is not corrected for the
         grade, and once an ``ax`` has come, the windows that hold the NaN are not, as in :meth:`run`) and the pitch
         rate ``q`` (rad/s; None: the log has none, the window's pitch)."""
+        t_read, self._gaps = gap_time(np.array([float(t)]), self._gaps, MAX_GAP_S, self.max_gap, self.log_gaps)
+        t = float(t_read[0])
         if self.grade.window > 0 and (not np.isnan(ax) or self.grade.started):
             t_, vx_, ay_, r_, d_, p_, ax_ = (np.array([float(v)]) for v in (t, vx, ay, r, delta_f, p, ax))
             one = Signals(t_, vx_, ay_, r_, d_, p_, ax_, None if q is None else np.array([float(q)]))
@@ -519,4 +582,6 @@ class KinematicGyroSmoother(KinematicGyro):
             s = self._corrected(signals, reset)
         else:
             s, lookahead = self._corrected(signals, reset, lookahead)
-        return both_ways(self, ScheduledObserver.run(self, s, reset=False), s, lookahead, reset)
+        est = both_ways(self, ScheduledObserver.run(self, s, reset=False), s, lookahead, reset)
+        est.t = signals.t
+        return est

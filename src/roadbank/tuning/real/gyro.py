@@ -1,5 +1,5 @@
 r"""The stages of :mod:`roadbank.tuning.real` on the roll-rate filter ``kinematic-gyro`` (the twenty-fourth, -fifth,
--seventh to -ninth, thirty-fourth to -seventh, forty-third and forty-sixth).
+-seventh to -ninth, thirty-fourth to -seventh, forty-third, forty-sixth and forty-eighth).
 
 The twenty-fourth stage (:func:`choose_gyro`; rule written 2026-12-05 before any candidate ran) is for a log that
 carries a roll rate (:attr:`roadbank.Signals.p`: an INS, a phone, a six-axis IMU), which no stage before read. It
@@ -131,6 +131,26 @@ pieces; the mean over the four lengths of the median raw RMS). The lowest wins; 
 shipped pair, then to the longer offset time constant (none last: an offset state guards against a source that is wrong
 about itself, as the thirty-sixth stage's order has it), then to the higher cut-off. Neither the KITTI validation drives
 nor comma2k19 take part.
+
+The forty-eighth stage (:func:`choose_log_gaps`; rule written 2026-12-06 before any of its candidates ran on training
+data, and after an exploratory test of bad input had shown, on copies of validation drive 2011_10_03_drive_0047 with
+the time stamps after frame 400 moved 1.5-8 s later or 50 frames removed, the default jumping by 0.3-0.7 deg at the gap
+and a scratch comparison of the three candidates on those copies had been seen: hold best there, restart worst with
+frames removed): what ``kinematic-gyro`` does across an interval of the log longer than
+:data:`~roadbank.constants.MAX_GAP_S` (1 s) and at most its ``max_gap`` (10 s), where no sample, so no roll rate, was
+read. Candidates (:data:`~roadbank.estimators.gyro.LOG_GAPS`): ``"trapezoid"`` (shipped: the roll rate taken linear
+between the samples either side, as across any interval), ``"hold"`` (the state and the grade's pitch carried over,
+as if the gap were one ordinary interval), ``"restart"`` (the filter starts again after the gap). Sets
+(:func:`gap_sets`): the KITTI training drives with samples removed while driving: gaps of each length in
+:data:`GAP_LENGTHS_S` (2 and 5 s), one starting at each of the scored samples at 25, 50 and 75 % of the drive's
+scored samples (a gap that would start inside an earlier one is left out); each as read (an INS's roll rate, free of
+offset) and with a constant roll-rate offset of +:data:`GYRO_OFFSET_DEG` and -:data:`GYRO_OFFSET_DEG` deg/s added (no
+longer documented free of offset: a MEMS gyro's). Estimator: the default as ``roadbank estimate`` builds it for each
+log (``kinematic-pif``, which is ``kinematic-gyro`` on these loud logs with a roll rate), with the candidate's
+``log_gaps``. Objective: the mean over the six sets of the median raw RMS on the scored samples left. The lowest wins;
+ties within :data:`TIE_DEG` go to ``"trapezoid"``, then ``"hold"``. The training drives as read have no interval
+longer than 1 s, so every candidate gives them what it gave before. ``kinematic-gyro-smoother`` takes the result.
+Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -143,8 +163,8 @@ import warnings
 import numpy as np
 
 from ... import vehicle
-from ...estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, UNBIASED_PITCH, KinematicGyro,
-                               KinematicGyroSmoother)
+from ...estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, LOG_GAPS, UNBIASED_PITCH,
+                               KinematicGyro, KinematicGyroSmoother)
 from ...validation.scoring import SHORT_PIECES_S
 from .common import (BANDWIDTH_39, BEFORE_38, START_40, UNBIASED_36, fixed, lengths_objective, log_errors, lowest_tied,
                      per_log, whole_and_pieces, without_roll_rate)
@@ -173,6 +193,9 @@ UNBIASED_START_OFFSETS_DEG = (0.03, 0.1, 0.3)
 #: the forty-third stage's candidate cut-offs (Hz) and offset time constants (s) of the unbiased roll rate's filter
 UNBIASED_CUTOFFS_AGAIN_HZ = (0.03, 0.05, 0.07, 0.1)
 UNBIASED_TAUS_AGAIN_S = (20.0, 40.0, 80.0)
+#: the forty-eighth stage's gap lengths (s) and where in a drive's scored samples each gap starts (fractions)
+GAP_LENGTHS_S = (2.0, 5.0)
+GAP_PLACES = (0.25, 0.5, 0.75)
 #: the forty-fifth and forty-sixth stages' candidate cut-offs (Hz) of the unbiased roll rate's filter
 ANCHORED_CUTOFFS_HZ = (0.03, 0.05, 0.07)
 #: the forty-sixth stage's candidate offset time constants (s; 0: no offset state) of the unbiased roll rate's filter
@@ -323,3 +346,48 @@ def sets_objective(cut, **options) -> float:
     """The mean over ``cut`` (sets, each cut by :func:`whole_and_pieces`) of :func:`lengths_objective` of
     ``KinematicGyro(**options)`` (deg): the thirty-ninth to forty-second stages' parts."""
     return float(np.mean([lengths_objective(fixed(KinematicGyro(**options)), parts) for parts in cut]))
+
+
+def with_gaps(s, ref, m, length: float, places=GAP_PLACES) -> tuple:
+    """``(signals, reference roll, scored mask)`` of one training drive with samples removed: a gap of ``length`` s
+    starting at each scored sample at ``places`` (fractions of its scored samples), one that would start inside an
+    earlier gap left out (the forty-eighth stage)."""
+    scored = np.flatnonzero(m)
+    keep = np.ones(len(s), dtype=bool)
+    end = -math.inf
+    for frac in places:
+        k = scored[int(frac * (len(scored) - 1))]
+        if s.t[k] < end:
+            continue
+        end = s.t[k] + length
+        keep &= ~((s.t >= s.t[k]) & (s.t < end))
+    return s[keep], ref[keep], m[keep]
+
+
+def gap_sets(logs, lengths=GAP_LENGTHS_S) -> list[list]:
+    """The forty-eighth stage's sets (module docstring): for each gap length, the drives with their gaps, as read and
+    with the roll-rate offset of :func:`gyro_sets` (those no longer marked free of offset)."""
+    out = []
+    for length in lengths:
+        cut = [with_gaps(s, ref, m, length) for s, ref, m in logs]
+        as_read, *offset = gyro_sets(cut)
+        out += [as_read] + [[(dataclasses.replace(s, unbiased=frozenset()), ref, m) for s, ref, m in one]
+                            for one in offset]
+    return out
+
+
+def choose_log_gaps(logs, modes=LOG_GAPS) -> tuple[str, dict]:
+    """The forty-eighth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate, ``ax`` and pitch rate). Returns ``(mode, {mode: objective deg})``."""
+    sets = gap_sets(logs)
+    default = per_log("kinematic-pif")
+
+    def build(mode):
+        def one(signals):
+            est = default(signals)
+            if isinstance(est, KinematicGyro):
+                est.log_gaps = mode
+            return est
+        return one
+    obj = {mode: gyro_objective(build(mode), sets) for mode in modes}
+    return lowest_tied(obj, list(modes).index), obj
