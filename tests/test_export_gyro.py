@@ -60,10 +60,14 @@ def _c_run(mod: CModule, s: Signals, use_dt: bool = False) -> tuple[np.ndarray, 
     return rate, mod.run(s.t, s.vx, s.ay, s.r, rate, use_dt=use_dt)
 
 
-GRADES = {"window": dict(grade_window=4.0, grade_first_span=2.0),
-          "observer": dict(grade_window=4.0, pitch_bandwidth=0.5, pitch_anchor=1.0, cutoff=0.05, bias_tau=40.0),
+# the module takes the roll rate linear across a gap of the log, as log_gaps="trapezoid" does (its README says so;
+# the drive has a 1.5 s gap)
+GRADES = {"window": dict(grade_window=4.0, grade_first_span=2.0, log_gaps="trapezoid"),
+          "observer": dict(grade_window=4.0, pitch_bandwidth=0.5, pitch_anchor=1.0, cutoff=0.05, bias_tau=40.0,
+                           log_gaps="trapezoid"),
           "observer with a start and an offset state": dict(grade_window=4.0, pitch_bandwidth=0.5,
-                                                            pitch_start=(3.0, 3.0), pitch_offset_tau=20.0)}
+                                                            pitch_start=(3.0, 3.0), pitch_offset_tau=20.0,
+                                                            log_gaps="trapezoid")}
 
 
 @pytest.mark.parametrize("grade", list(GRADES))
@@ -109,7 +113,7 @@ def test_samples_denser_than_the_module_rate_shorten_the_window_to_the_ring(tmp_
     ax = np.cos(t) - G * np.sin(np.radians(3.0) * np.sin(t / 3.0))
     r = np.full(n, 0.1)
     s = Signals(t, vx, vx * r, r, np.full(n, np.nan), p=np.zeros(n), ax=ax)
-    est = KinematicGyro(grade_window=4.0, grade_first_span=2.0, sample_rate=None)
+    est = KinematicGyro(grade_window=4.0, grade_first_span=2.0, sample_rate=None, log_gaps="trapezoid")
     mod = _export(est, tmp_path, 10.0)
     rate = mod.roll_rates(t, vx, s.ay, r, s.p, ax, np.full(n, np.nan))
     short = grade_pitch(t, vx, ax, 0.87 - 1e-9, est.params.g)     # the last sample 0.87 s back

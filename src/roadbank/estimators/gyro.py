@@ -80,7 +80,7 @@ GYRO_MAX_GAP_S = 10.0
 #: over, as if the interval were the one before it) or ``"restart"``; the forty-eighth stage of
 #: :mod:`roadbank.tuning.real`
 LOG_GAPS = ("trapezoid", "hold", "restart")
-GYRO_LOG_GAPS = "trapezoid"
+GYRO_LOG_GAPS = "hold"
 #: the order of ``kinematic-gyro``'s complementary filter (2, or 4: :func:`gyro_observer`): the twenty-eighth stage
 GYRO_ORDER = 2
 #: the sideslip acceleration it takes out of the kinematic estimate (:func:`sideslip_per_eta`): the twenty-ninth stage

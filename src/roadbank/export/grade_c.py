@@ -332,7 +332,11 @@ This module is the gyro-aided filter: its first input is a roll rate (rad/s), no
 graded road the roll angle's rate is `p + r tan(pitch)`; `{p}_roll_rate(&grade, t, vx, ay, r, p, ax, q)`
 (state `{p}_grade`, `{p}_grade_init`) reads the pitch {how} and returns that rate: call it on every
 sample, in time order, then `{p}_step(&state, t, vx, ay, r, rate, &out)`. The same operations as roadbank's
-`GradeCarry` before the filter's kernel (`KinematicGyro.run`/`step`).
+`GradeCarry` before the filter's kernel (`KinematicGyro.run`/`step`). Across an interval of 1-10 s between
+samples (a logger's dropout in a replayed log; an ECU's task has none) the module takes the roll rate linear
+between the samples either side, as roadbank's `log_gaps="trapezoid"`; roadbank's filter holds its state across such
+a gap by default (`roadbank.estimators.gyro.gap_time`): to replay such a log as it does, give both calls the time
+stamps `gap_time(t, (nan, 0, nan), 1.0, 10.0, "hold")` returns.
 """
 
 

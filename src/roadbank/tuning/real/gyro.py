@@ -361,7 +361,8 @@ def with_gaps(s, ref, m, length: float, places=GAP_PLACES) -> tuple:
             continue
         end = s.t[k] + length
         keep &= ~((s.t >= s.t[k]) & (s.t < end))
-    return s[keep], ref[keep], m[keep]
+    kept = dataclasses.replace(s, **{c: getattr(s, c)[keep] for c in s.channels})
+    return kept, ref[keep], m[keep]
 
 
 def gap_sets(logs, lengths=GAP_LENGTHS_S) -> list[list]:
