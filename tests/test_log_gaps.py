@@ -106,3 +106,16 @@ def test_the_forty_eighth_stage_chose_the_hold_on_the_training_drives():
     assert obj["hold"] < obj["trapezoid"] - 0.05 and obj["hold"] < obj["restart"]
     assert max(float(np.max(np.diff(s.t))) for s, _, _ in logs) < MAX_GAP_S
     assert np.median(log_errors(per_log("kinematic-pif"), logs)) < 0.2
+
+
+@pytest.mark.parametrize("gap", [30.0, 120.0])
+def test_the_roll_rate_check_holds_its_integral_across_a_gap(gap):
+    """A log whose clock pauses for ``gap`` s with a roll rate that follows its roll: the check of the roll rate reads
+    the same slope as without the pause (before, the rate integrated across the gap made it 0.004-0.4, and a healthy
+    gyro was called another axis, sign or unit)."""
+    from roadbank.vehicle.conditions import ROLL_SLOPE_RANGE, roll_rate_slope
+    s = _uniform_drive(1200)
+    paused = dataclasses.replace(s, t=np.where(np.arange(len(s)) >= 600, s.t + gap, s.t))
+    moving = np.ones(len(s), dtype=bool)
+    a, b = roll_rate_slope(s, s.vx, moving), roll_rate_slope(paused, paused.vx, moving)
+    assert ROLL_SLOPE_RANGE[0] < a < ROLL_SLOPE_RANGE[1] and b == pytest.approx(a, rel=0.05)

@@ -271,9 +271,11 @@ def pitch_rate_slope(signals, vx, moving) -> float | None:
 
 
 def _running_integral(t, x) -> np.ndarray:
-    """The running trapezoidal integral of ``x`` over the times ``t`` (s), non-finite samples as 0, from 0."""
+    """The running trapezoidal integral of ``x`` over the times ``t`` (s), non-finite samples as 0, from 0; held
+    across an interval longer than :data:`~roadbank.constants.MAX_GAP_S` (a gap in the log: no rate was read)."""
     x = np.asarray(x, dtype=np.float64)
-    return np.concatenate([[0.0], np.cumsum(0.5 * np.nan_to_num(x[1:] + x[:-1]) * np.diff(t))])
+    dt = np.diff(t)
+    return np.concatenate([[0.0], np.cumsum(0.5 * np.nan_to_num(x[1:] + x[:-1]) * np.where(dt > MAX_GAP_S, 0.0, dt))])
 
 
 def _slope_on_integral(t, level, rate, moving, windows=ROLL_CHECK_WINDOWS_S) -> float | None:
