@@ -122,3 +122,13 @@ def test_a_spreadsheet_is_skipped_with_what_to_do(tmp_path):
     assert f"skipped {d / 'drive.xlsx'} (not a log of a known format: suffix '.xlsx' (a spreadsheet: save it as " \
            "CSV;" in res.output, res.output
     assert "1 log(s) written, 0 failed" in res.output
+
+
+@pytest.mark.parametrize("args, words", [(["--chunk-rows", "1"], "--chunk-rows"),
+                                         (["--chunk-rows", "0"], "--chunk-rows"),
+                                         (["-e", ""], "no estimator named"), (["-e", " , "], "no estimator named")])
+def test_an_option_without_sense_is_a_usage_error_before_any_log_is_read(tmp_path, args, words):
+    log = _log(tmp_path / "one.csv")
+    res = CliRunner().invoke(main, ["estimate", str(log), "-o", str(tmp_path / "o.csv"), *args])
+    assert res.exit_code == 2 and words in res.output, res.output
+    assert not (tmp_path / "o.csv").exists()

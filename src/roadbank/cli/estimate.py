@@ -29,6 +29,8 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
 
     names: list[str] = []
     for v in values:
+        if not v.strip(", "):
+            raise click.BadParameter(f"no estimator named in {v!r}", param_hint="--estimators")
         for n in (x.strip() for x in v.split(",")):
             if not n:
                 continue
@@ -79,7 +81,7 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
 @scheduler_option("Run on the Dask scheduler at ADDR (tcp://host:8786) instead of local worker processes.")
 @click.option("--resume", is_flag=True,
               help="Skip logs the output directory's summary.csv lists as finished (failed ones are retried).")
-@click.option("--chunk-rows", type=int, default=None,
+@click.option("--chunk-rows", type=click.IntRange(min=2), default=None,
               help="Rows per streamed chunk (Parquet, MDF4); default 20000.")
 @click.option("--json", "as_json", is_flag=True,
               help="Print the summary as one JSON object on stdout (per log: status, duration, time-stamp "
@@ -109,7 +111,9 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     KITTI drives gives each drive. Time stamps a logger duplicated, swapped or
     sent back are repaired (samples reordered or dropped, the ones next to a
     repair flagged not valid) and counted in the summary; a log with no
-    increasing time base is refused (docs/io.md). Output columns
+    increasing time base is refused, and so is a KITTI drive whose
+    timestamps.txt is out of order (its frames are numbered: the line is
+    named; docs/io.md). Output columns
     are SI (rad); the summary is in degrees, one row per log and estimator, and a
     line per log (on stderr; the design column of summary.csv, design in --json)
     says what it was designed for: the car (without --vehicle the shipped one
