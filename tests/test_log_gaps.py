@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from roadbank.constants import MAX_GAP_S
-from roadbank.estimators.gyro import GYRO_LOG_GAPS, LOG_GAPS, KinematicGyro, gap_time
+from roadbank.estimators.gyro import GYRO_LOG_GAPS, LOG_GAPS, KinematicGyro, gap_stamp, gap_time
 from roadbank.signals import Signals
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
@@ -36,6 +36,13 @@ def test_gap_time_in_pieces_and_across_a_missing_stamp_reads_what_it_reads_whole
         part, carry = gap_time(t[a:a + 2], carry, 1.0, 10.0, "hold")
         parts.append(part)
     assert np.array_equal(np.concatenate(parts), whole, equal_nan=True)
+    for mode in LOG_GAPS:                     # step()'s one-sample form reads the same stamps
+        read, end = gap_time(t, START, 1.0, 10.0, mode)
+        carry, one = START, []
+        for x in t:
+            y, carry = gap_stamp(float(x), carry, 1.0, 10.0, mode)
+            one.append(y)
+        assert np.array_equal(one, read, equal_nan=True) and carry[:2] == end[:2], mode
     # the gap after the NaN stamp is measured from the last finite one; the interval before it 0.2 s (0.1 -> 0.3
     # spans the NaN), the last ordinary interval 0.1 s
     assert whole[4] == pytest.approx(0.5) and whole[-2] == pytest.approx(0.8)
@@ -119,3 +126,20 @@ def test_the_roll_rate_check_holds_its_integral_across_a_gap(gap):
     moving = np.ones(len(s), dtype=bool)
     a, b = roll_rate_slope(s, s.vx, moving), roll_rate_slope(paused, paused.vx, moving)
     assert ROLL_SLOPE_RANGE[0] < a < ROLL_SLOPE_RANGE[1] and b == pytest.approx(a, rel=0.05)
+
+
+def test_the_smoother_with_the_rest_of_the_log_as_lookahead_gives_the_whole_run_across_a_gap():
+    """``kinematic-gyro-smoother`` run on the first part with every later sample as its lookahead gives what one run
+    over the whole log gives there: the lookahead's stamps are read on from the part's end, the gaps held."""
+    from roadbank.estimators.gyro import KinematicGyroSmoother
+    s = _uniform_drive(600)
+    s = dataclasses.replace(s, ax=np.full(len(s), -9.81 * math.sin(math.radians(3.0))))    # on a 3 deg grade
+    t = s.t.copy()
+    t[100:] += 3.0           # a gap in the part: its shift carries on into the lookahead
+    t[250:] += 4.0
+    s = dataclasses.replace(s, t=t)
+    whole = KinematicGyroSmoother().run(s).theta
+    part = KinematicGyroSmoother().run(s[:200], lookahead=s[200:]).theta
+    assert np.max(np.abs(part - whole[:200])) < 1e-9
+    read, ahead = KinematicGyroSmoother()._corrected(s[:200], True, s[200:])     # the stamps the passes read
+    assert np.array_equal(np.concatenate([read.t, ahead.t]), gap_time(s.t, START, MAX_GAP_S, 10.0, "hold")[0])

@@ -146,9 +146,25 @@ def gap_time(t: np.ndarray, carry: tuple[float, float, float], lo: float, hi: fl
         j = before[k - 1] if k > 0 else -1
         prior = d[j] if j >= 0 else (step if math.isfinite(step) else lo)
         extra[k] = d[k] - prior if mode == "hold" else -hi
-    shifts = shift + np.cumsum(extra)
+    shifts = np.cumsum(np.concatenate([[shift], extra]))[1:]        # in order, as gap_stamp adds them
     end_step = d[before[-1]] if before[-1] >= 0 else step
     return t - shifts, (float(filled[-1]), float(shifts[-1]), float(end_step))
+
+
+def gap_stamp(t: float, carry: tuple[float, float, float], lo: float, hi: float,
+              mode: str) -> tuple[float, tuple[float, float, float]]:
+    """:func:`gap_time` of one sample (``step()``'s, without arrays): the stamp (s) read for ``t`` (s) and the carry;
+    the same numbers as :func:`gap_time` over the samples one by one."""
+    last, shift, step = carry
+    if not math.isfinite(t):
+        return t - shift, carry
+    if mode != "trapezoid":
+        d = t - last
+        if lo < d <= hi:
+            shift += d - (step if math.isfinite(step) else lo) if mode == "hold" else -hi
+        elif 0.0 < d <= lo:
+            step = d
+    return t - shift, (t, shift, step)
 
 
 class GradeCarry:
@@ -494,14 +510,12 @@ class KinematicGyro(ScheduledObserver):
                              "estimator)")
         if reset:
             self.reset()
-        carry = self._gaps
         signals = self._read_time(signals)
         if lookahead is None:
             return self.grade.correct(signals)
-        n, ahead = len(signals), self._gaps
-        self._gaps = carry
+        n, end = len(signals), self._gaps
         both = self.grade.correct(concat_signals([signals, self._read_time(lookahead)]), advance=n)
-        self._gaps = ahead                  # the lookahead's samples come again in the next piece
+        self._gaps = end                    # the lookahead's samples come again in the next piece
         return both[:n], both[n:]
 
     def _read_time(self, s: Signals) -> Signals:
@@ -523,8 +537,7 @@ class KinematicGyro(ScheduledObserver):
         (rad/s), the longitudinal acceleration ``ax`` (m/s^2; NaN: the roll rate is not corrected for the
         grade, and once an ``ax`` has come, the windows that hold the NaN are not, as in :meth:`run`) and the pitch
         rate ``q`` (rad/s; None: the log has none, the window's pitch)."""
-        t_read, self._gaps = gap_time(np.array([float(t)]), self._gaps, MAX_GAP_S, self.max_gap, self.log_gaps)
-        t = float(t_read[0])
+        t, self._gaps = gap_stamp(float(t), self._gaps, MAX_GAP_S, self.max_gap, self.log_gaps)
         if self.grade.window > 0 and (not np.isnan(ax) or self.grade.started):
             t_, vx_, ay_, r_, d_, p_, ax_ = (np.array([float(v)]) for v in (t, vx, ay, r, delta_f, p, ax))
             one = Signals(t_, vx_, ay_, r_, d_, p_, ax_, None if q is None else np.array([float(q)]))
