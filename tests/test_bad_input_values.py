@@ -340,6 +340,27 @@ def test_a_stuck_speed_is_warned_about():
     assert not [w for w in check_consistency(s, "0070") if "stuck" in w]
 
 
+@pytest.mark.skipif(not KITTI_0070.is_dir(), reason="../shared/data/kitti-oxts not present")
+def test_a_dead_roll_rate_is_warned_about_and_left_out(tmp_path):
+    """Drive 0070 written as a CSV whose roll-rate column holds 0 throughout (a disconnected gyro): the default leaves
+    it out (before, without a word: the summary only said "the low-pass blend"); now the reading warns naming the
+    channel and its column. As recorded: no such warning, and the default reads the roll rate."""
+    import pandas as pd
+    from roadbank.io.kitti import load_kitti_oxts
+    from roadbank.vehicle.conditions import default_reads_roll_rate
+
+    s = load_kitti_oxts(KITTI_0070).signals
+    frame = pd.DataFrame({"t": s.t, "vx": s.vx, "ay": s.ay, "r": s.r, "p": s.p})
+    frame.to_csv(tmp_path / "ok.csv", index=False)
+    frame.assign(p=0.0).to_csv(tmp_path / "dead.csv", index=False)
+    dead, ok = load_log(tmp_path / "dead.csv"), load_log(tmp_path / "ok.csv")
+    said = [w for w in dead.warnings if "channel 'roll_rate' (column 'p'): constant at 0 rad/s" in w]
+    assert said and "dead or disconnected gyro" in said[0], dead.warnings
+    assert not default_reads_roll_rate(log_conditions(dead.signals))
+    assert not [w for w in ok.warnings if "roll_rate" in w]
+    assert default_reads_roll_rate(log_conditions(ok.signals))
+
+
 def _zero_runs_by_hand(v, jump):
     """The rule of :func:`roadbank.io.limits.zero_runs` sample by sample, for one whole array."""
     out = np.zeros(len(v), bool)

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .constants import MAX_GAP_S
 from .params import VehicleParams
 
 CHANNELS = ("t", "vx", "ay", "r", "delta_f")
@@ -194,6 +195,37 @@ def spread_rate(t, windows: int = 64, width: int = 64) -> float:
         return sample_rate(t)
     k = (np.linspace(0, n - width, windows).astype(np.int64)[:, None] + np.arange(width)).ravel()
     return interval_rate(t[k + 1] - t[k])
+
+
+def running_integral(t, x) -> np.ndarray:
+    """The running trapezoidal integral of ``x`` over the times ``t`` (s; ``x`` in its unit, the integral in its
+    unit times s), non-finite samples as 0, from 0; held across an interval longer than
+    :data:`~roadbank.constants.MAX_GAP_S` (a gap in the log: no rate was read)."""
+    t, x = np.asarray(t, dtype=np.float64), np.asarray(x, dtype=np.float64)
+    dt = np.diff(t)
+    return np.concatenate([[0.0], np.cumsum(0.5 * np.nan_to_num(x[1:] + x[:-1]) * np.where(dt > MAX_GAP_S, 0.0, dt))])
+
+
+def centred_mean(x, n: int) -> np.ndarray:
+    """The mean of ``x`` over ``n`` samples centred on each (the window shortened at the ends)."""
+    c = np.concatenate([[0.0], np.cumsum(np.asarray(x, dtype=np.float64))])
+    i = np.arange(len(c) - 1)
+    lo, hi = np.maximum(i - n // 2, 0), np.minimum(i - n // 2 + n, len(c) - 1)
+    return (c[hi] - c[lo]) / (hi - lo)
+
+
+def band_windows(t, windows_s: tuple[float, float]) -> tuple[int, int]:
+    """The two windows ``windows_s`` (s; shorter, longer) of :func:`band_pass` in samples of the time base ``t``
+    (s), at its :func:`sample_rate`; at least 1."""
+    rate = sample_rate(t)
+    return tuple(max(int(round(w * rate)), 1) for w in windows_s)  # type: ignore[return-value]
+
+
+def band_pass(x, windows: tuple[int, int]) -> np.ndarray:
+    """``x`` band-passed without phase by centred means (:func:`centred_mean`) over ``windows`` samples: the shorter
+    less the longer (1 s and 10 s: about 0.05-0.5 Hz). Non-finite samples as 0."""
+    x = np.nan_to_num(np.asarray(x, dtype=np.float64))
+    return centred_mean(x, windows[0]) - centred_mean(x, windows[1])
 
 
 #: fewest sample triples :func:`white_noise_std` measures from

@@ -48,7 +48,8 @@ from ..signals import Signals, concat_signals, road_wheel_angle
 from . import units
 from .channels import DEFAULT_MAP_SOURCE, OPTIONAL, STEERING, ChannelMap, check_plausible
 from .limits import Dropouts
-from .consistency import MIN_SAMPLES, Sums, check_balance, log_verdict, turning, usable
+from .consistency import (MIN_SAMPLES, SCALE_SPAN_S, Sums, check_balance, log_verdict, speed_scale_error,
+                          speed_scales, turning, usable)
 from .errors import LogError, channel_error, channel_text
 from .geodesy import ecef_to_latlon
 from .repair import FLAGGED_ROLES, ChunkRepair, instants, interleaved_period
@@ -261,7 +262,7 @@ class _Logs:
         self.counts: dict = {}             # repair counts for the next log
         self.pending: Log | None = None
         self.n = 0                         # samples given so far
-        self.balance = _Balance(p, {r: cmap.channels[r].column for r in roles[:3]})
+        self.balance = _Balance(p, {r: cmap.channels[r].column for r in [*roles[:3], *({"roll_rate"} & set(roles))]})
 
     def add(self, out, counts: dict) -> Iterator[Log]:
         """The log of one :meth:`StreamResampler.emit` output (nothing for None), with the repair
@@ -315,12 +316,17 @@ class _Balance:
         self.turning = 0
         self.sums = Sums()                  # consistency.Sums so far
         self.decided = False
+        self.span: list[Signals] | None = []    # the log's first SCALE_SPAN_S, until the speed's scale is read
 
     def add(self, sig: Signals) -> list[str]:
         """The check's warnings once it is decided with ``sig`` (SI), [] before and after;
         LogError as :func:`~roadbank.io.consistency.check_consistency`."""
         vx, ay, r = (np.asarray(a, dtype=np.float64) for a in (sig.vx, sig.ay, sig.r))
-        self.sums = self.sums + Sums.of(vx, ay, r)
+        self.sums = self.sums + Sums.of(vx, ay, r, sig.p)
+        if self.span is not None and (sig.p is not None or sig.ax is not None):
+            self.span.append(sig)
+            if sig.t[-1] > self.span[0].t[0] + SCALE_SPAN_S:
+                self._scale()
         if self.decided:
             return []
         keep = usable(vx, ay, r)
@@ -337,7 +343,16 @@ class _Balance:
         """At the end of the log: the checks of the whole log (:func:`~roadbank.io.consistency.log_verdict`: a dead
         channel, a unit that scales ``vx r``, and where it never had :data:`~roadbank.io.consistency.MIN_SAMPLES`
         turning samples, the slope warnings of its gentle turns); LogError for a refusal."""
+        self._scale()
         return log_verdict(self.sums, self.decided, self.p, self.columns)
+
+    def _scale(self) -> None:
+        """The speed's scale on the log's first :data:`~roadbank.io.consistency.SCALE_SPAN_S` (once; LogError for a
+        speed read in another unit: :func:`~roadbank.io.consistency.speed_scale_error`)."""
+        if self.span:
+            s = concat_signals(self.span)
+            speed_scale_error(speed_scales(s.t, s.vx, s.ay, s.r, s.p, s.ax), self.p, self.columns)
+        self.span = None
 
 
 class _Period:

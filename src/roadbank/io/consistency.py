@@ -22,12 +22,19 @@ mistakes that keep the balance's residual small are named:
   warned (a yaw rate quantised coarsely on a straight road can hold one value). A speed exactly constant while ``ay``
   varies (standard deviation above :data:`DEAD_EVIDENCE`) is warned about: a stuck or held speed signal, unless the
   log was made at one exact speed (a synthetic one).
+* a roll rate exactly constant over :data:`MIN_SAMPLES` moving samples: warned (:func:`dead_roll_rate`).
 * a unit that scales ``vx r`` (:data:`UNIT_SCALES`): where ``ay`` and ``vx r`` move together (correlation over
   every moving sample at least :data:`CORR_MIN`), the slope of ``ay`` on ``vx r`` is 0.35-1.6 on the real and
   simulated logs the project has. A slope above :data:`SLOPE_PLAUSIBLE` (``vx r`` several times too small: a
   yaw rate in rad/s declared deg/s, a speed in m/s declared km/h or mph) or about 1/57 (a yaw rate in deg/s
   declared rad/s) that one unit's factor brings into :data:`SLOPE_FIXED` is refused naming the channel; the
   turning samples cannot show them where ``vx r`` is too small to turn.
+
+The speed's scale is read on its own where the log carries a roll rate or a longitudinal acceleration
+(:func:`speed_scales`, on its first :data:`SCALE_SPAN_S`): those measure the car's motion without the speed, so a
+speed in km/h or mph declared m/s, which ``ay`` and ``vx r`` alone cannot tell from a banked road (a simulated drive
+through banked curves has ``ay`` 0.35 times ``vx r``, as a speed in mph would), is refused naming the unit
+(:func:`speed_scale_error`).
 
 The slope of the turning samples (or the gentle ones) names the same units. A slope between 0.04 and 0.4 is
 not read for a unit: roads bank their curves, so ``ay`` stays well below ``vx r`` in step with it (a simulated
@@ -43,6 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..constants import G
+from ..signals import band_pass, band_windows, running_integral
 from .errors import LogError
 
 LIMIT = 0.8 * G          #: median |ay - vx r| above this (m/s^2) is physically impossible
@@ -109,6 +117,33 @@ MOVING = 1.0
 DEAD_EVIDENCE = 0.4
 
 
+#: the first seconds of a log (s) on which :func:`speed_scales` reads the speed's scale
+SCALE_SPAN_S = 300.0
+#: the band (s: centred means, the shorter less the longer) in which :func:`speed_scales` compares the channels:
+#: about 0.05-0.5 Hz, where a road's bank moves little against the car's turns and speed changes
+SCALE_WINDOWS_S = (1.0, 10.0)
+#: :func:`speed_scales` reads the roll rate only where ``vx r`` moves in the band (root mean square, m/s^2; the
+#: 16 KITTI drives 0.02-0.6), the roll rate's gain on the roll of ``ay`` is that of a roll gyro (-: the 16 KITTI
+#: drives 0.71-1.56) and the fit explains this share of the band's ``ay - vx r`` (-: those drives 0.36-0.91 as
+#: recorded, a pitch or yaw rate in the roll rate's place 0.0-0.52)
+SCALE_MIN_TURN, SCALE_ROLL_GAIN, SCALE_MIN_FIT = 0.05, (0.5, 2.0), 0.3
+#: ... and ``ax`` only where the speed moves in the band (root mean square, m/s; the 16 KITTI drives 0.14-1.38) and
+#: follows the integrated ``ax`` with this correlation (-: those drives 0.87-1.00; the two below 0.95 read 0.57 and
+#: 0.95, so that one in km/h would read as mph)
+SCALE_MIN_SPEED, SCALE_MIN_CORR = 0.1, 0.95
+#: the speed read over the true one (-) for each unit a speed declared m/s may be in; a channel's reading of it
+#: names a unit within :data:`SCALE_FIT` of its factor (the 16 KITTI drives as recorded, on their first 300 s: roll
+#: rate 0.88-1.09, ax 0.90-0.99 where read; so their speed in mph read as m/s 1.97-2.44 and 2.0-2.2, in km/h 3.2-3.9
+#: and 3.2-3.6)
+SCALE_UNITS = (("m/s", 1.0), ("mph", 1 / 0.44704), ("km/h", 3.6))
+SCALE_FIT = (0.8, 1.25)
+#: what each reading is called in a message
+SCALE_EVIDENCE = {"roll_rate": "by its roll rate the speed reads {c:.2f} times too large (ay - vx r matches the roll "
+                               "rate's roll only with vx / {c:.2f})",
+                  "longitudinal_acceleration": "by its ax the speed reads {c:.2f} times too large (it changes {c:.2f} "
+                                               "times the integrated ax)"}
+
+
 def turning(vx, ay, r, above: float = TURN) -> np.ndarray:
     """Mask of the samples the check reads: finite ``ay`` and ``vx r``, ``|vx r| > above`` (m/s^2, default
     :data:`TURN`), ``vx >= 5`` m/s."""
@@ -136,10 +171,14 @@ class Sums:
     ranges: tuple = (math.inf, -math.inf, math.inf, -math.inf, math.inf, -math.inf)
     #: ``(samples in motion, those of them reversing)``: finite ``|vx| >=`` :data:`MOVING`, and ``vx <= -MOVING``
     motion: tuple = (0, 0)
+    #: ``(count, min, max)`` of the roll rate (rad/s) over the moving samples where it is finite (a log without one:
+    #: no count)
+    roll_rate: tuple = (0, math.inf, -math.inf)
 
     @classmethod
-    def of(cls, vx, ay, r) -> Sums:
-        """The sums of one chunk: ``vx`` (m/s), ``ay`` (m/s^2), ``r`` (rad/s)."""
+    def of(cls, vx, ay, r, p=None) -> Sums:
+        """The sums of one chunk: ``vx`` (m/s), ``ay`` (m/s^2), ``r`` and the roll rate ``p`` (rad/s; None: the log
+        has none)."""
         vx, ay, r = (np.asarray(x, dtype=np.float64) for x in (vx, ay, r))
         sel = moving(vx, ay, r)
         a, y, w = vx[sel] * r[sel], ay[sel], r[sel]
@@ -149,15 +188,21 @@ class Sums:
                   if sel.any() else cls.ranges)
         with np.errstate(invalid="ignore"):
             motion = (int(np.count_nonzero(np.abs(vx) >= MOVING)), int(np.count_nonzero(vx <= -MOVING)))
-        return cls(gentle_sums(vx, ay, r), moments, ranges, motion)
+        roll = cls.roll_rate
+        if p is not None:
+            q = np.asarray(p, dtype=np.float64)[sel]
+            q = q[np.isfinite(q)]
+            roll = (len(q), float(q.min()), float(q.max())) if len(q) else roll
+        return cls(gentle_sums(vx, ay, r), moments, ranges, motion, roll)
 
     def __add__(self, other: Sums) -> Sums:
         lo = lambda i: min(self.ranges[i], other.ranges[i])      # noqa: E731
         hi = lambda i: max(self.ranges[i], other.ranges[i])      # noqa: E731
+        (n, a, b), (m, c, d) = self.roll_rate, other.roll_rate
         return Sums(tuple(x + y for x, y in zip(self.gentle, other.gentle)),
                     tuple(x + y for x, y in zip(self.moments, other.moments)),
                     (lo(0), hi(1), lo(2), hi(3), lo(4), hi(5)),
-                    tuple(x + y for x, y in zip(self.motion, other.motion)))
+                    tuple(x + y for x, y in zip(self.motion, other.motion)), (n + m, min(a, c), max(b, d)))
 
 
 def _unit_error(k: float, what: str, source, named) -> None:
@@ -188,7 +233,7 @@ def log_verdict(sums: Sums, decided: bool, source="signals", columns: dict | Non
             corr, k = cov / math.sqrt(va * vy), cov / va
             if corr >= CORR_MIN:
                 _unit_error(k, f"{n} moving samples (correlation {corr:.2f})", source, named)
-    out += reversing_warnings(sums.motion, source, named)
+    out += reversing_warnings(sums.motion, source, named) + dead_roll_rate(sums.roll_rate, source, columns)
     return out + ([] if decided else gentle_warnings(sums.gentle, source, columns))
 
 
@@ -204,6 +249,18 @@ def reversing_warnings(motion: tuple, source, named) -> list[str]:
     return [f"{source}: channel {named(('speed',))}: negative on {back} of the {moving_n} samples in motion "
             f"(|speed| >= {MOVING:g} m/s): the estimate is not valid while reversing (if the car drove forward, "
             "the speed's sign is inverted: give it `invert = true` in a channel map)"]
+
+
+def dead_roll_rate(roll_rate: tuple, source, columns: dict | None = None) -> list[str]:
+    """A warning for a roll rate exactly constant over at least :data:`MIN_SAMPLES` moving samples (``roll_rate``:
+    :attr:`Sums.roll_rate`): a dead or disconnected gyro, which the default leaves out (it reads a roll rate only
+    where it follows the roll in ``ay``) without a word otherwise."""
+    n, lo, hi = roll_rate
+    if n < MIN_SAMPLES or lo != hi:
+        return []
+    return [f"{source}: channel {_namer(columns)(('roll_rate',))}: constant at {lo + 0.0:.6g} rad/s over {n} moving "
+            "samples: a dead or disconnected gyro, which the estimate leaves out (it reads a roll rate only where it "
+            "follows the roll in ay)"]
 
 
 def _dead_channels(ranges: tuple, n: int, std_a: float, std_ay: float, source, named) -> list[str]:
@@ -325,12 +382,14 @@ def check_consistency(signals, source="signals", columns: dict | None = None) ->
     ------
     LogError
         When the log is inconsistent and one correction (unit or sign of one
-        channel) makes it consistent; the message names that channel.
+        channel) makes it consistent, or its roll rate or ``ax`` reads its speed's unit
+        (:func:`speed_scale_error`); the message names that channel.
     """
     vx, ay, r = (np.asarray(a, float) for a in (signals.vx, signals.ay, signals.r))
+    speed_scale_error(speed_scales(signals.t, vx, ay, r, signals.p, signals.ax), source, columns)
     decided = int(turning(vx, ay, r).sum()) >= MIN_SAMPLES
     out = check_balance(vx, ay, r, source, columns) if decided else []
-    return out + log_verdict(Sums.of(vx, ay, r), decided, source, columns)
+    return out + log_verdict(Sums.of(vx, ay, r, signals.p), decided, source, columns)
 
 
 def check_balance(vx, ay, r, source="signals", columns: dict | None = None) -> list[str]:
@@ -354,3 +413,66 @@ def check_balance(vx, ay, r, source="signals", columns: dict | None = None) -> l
     return [f"{source}: ay, vx and yaw rate do not balance (median |ay - vx r| = {res:.1f} m/s^2 over "
             f"{n} turning samples, more than 0.8 g): check the units and sign conventions of "
             "'speed', 'lateral_acceleration' and 'yaw_rate'"]
+
+
+def speed_scales(t, vx, ay, r, p=None, ax=None) -> dict[str, float]:
+    """The speed read over the true one (-), from each channel of the log that measures the car's motion without it,
+    on the samples of its first :data:`SCALE_SPAN_S` moving forward (:func:`moving`), band-passed over
+    :data:`SCALE_WINDOWS_S` (:func:`~roadbank.signals.band_pass`): ``t`` (s), ``vx`` (m/s), ``ay`` (m/s^2), ``r`` and
+    the roll rate ``p`` (rad/s), ``ax`` (m/s^2); None for a channel the log does not carry.
+
+    * ``"roll_rate"``: with the speed read ``c`` times too large, ``ay - vx r = g phi + (1/c - 1) vx r`` (``phi`` the
+      roll and bank, ``dvy/dt`` aside); the least-squares fit of the band's ``ay - vx r`` on ``g`` times the integrated
+      roll rate and on ``vx r`` gives ``alpha g phi + beta vx r`` and ``c = 1 / (1 + beta)``. The bank of the road
+      is in the roll rate's integral, so a banked curve does not read as a scale. Read where ``vx r`` moves in the
+      band (:data:`SCALE_MIN_TURN`), ``alpha`` is a roll gyro's (:data:`SCALE_ROLL_GAIN`) and the fit explains
+      :data:`SCALE_MIN_FIT` of it.
+    * ``"longitudinal_acceleration"``: the least-squares slope of the band's speed on the integrated ``ax`` (the
+      grade's slow part falls out of the band), where the speed moves (:data:`SCALE_MIN_SPEED`) and follows it
+      (:data:`SCALE_MIN_CORR`).
+
+    Returns ``{reading: c}`` for the readings made (empty when none can be)."""
+    t, vx, ay, r = (np.asarray(x, dtype=np.float64) for x in (t, vx, ay, r))
+    span = np.isfinite(t) & (t <= t[0] + SCALE_SPAN_S) if len(t) else np.zeros(0, bool)
+    n = int(np.count_nonzero(span))
+    t, vx, ay, r = t[:n], vx[:n], ay[:n], r[:n]
+    out: dict[str, float] = {}
+    if n < 3:
+        return out
+    windows = band_windows(t, SCALE_WINDOWS_S)
+    use = moving(vx, ay, r)
+    use[:windows[1] // 2] = False
+    use[n - windows[1] // 2:] = False
+    if np.count_nonzero(use) < windows[1] // 10 + 2:
+        return out
+    with np.errstate(invalid="ignore", over="ignore"):
+        a = band_pass(vx * r, windows)[use]
+        if p is not None and np.sqrt(np.mean(a * a)) >= SCALE_MIN_TURN:
+            level = band_pass(ay - vx * r, windows)[use]
+            roll = G * band_pass(running_integral(t, np.asarray(p, dtype=np.float64)[:n]), windows)[use]
+            (alpha, beta), *_ = np.linalg.lstsq(np.c_[roll, a], level, rcond=None)
+            explained = 1.0 - float(np.sum((level - alpha * roll - beta * a) ** 2)) / max(float(level @ level), 1e-300)
+            if SCALE_ROLL_GAIN[0] <= alpha <= SCALE_ROLL_GAIN[1] and explained >= SCALE_MIN_FIT and 1.0 + beta > 0:
+                out["roll_rate"] = float(1.0 / (1.0 + beta))
+        if ax is not None:
+            v = band_pass(vx, windows)[use]
+            i = band_pass(running_integral(t, np.asarray(ax, dtype=np.float64)[:n]), windows)[use]
+            vv, ii = float(v @ v), float(i @ i)
+            if ii > 0 and np.sqrt(vv / len(v)) >= SCALE_MIN_SPEED and float(v @ i) / np.sqrt(vv * ii) >= SCALE_MIN_CORR:
+                out["longitudinal_acceleration"] = float(v @ i) / ii
+    return out
+
+
+def speed_scale_error(scales: dict[str, float], source="signals", columns: dict | None = None) -> None:
+    """LogError naming the speed's unit where the readings ``scales`` (:func:`speed_scales`) name one unit of
+    :data:`SCALE_UNITS` other than m/s (a reading names the units within :data:`SCALE_FIT` of their factor) and none
+    names another: the speed is then in that unit, declared m/s. Nothing otherwise."""
+    votes = {name: {u for u, f in SCALE_UNITS if SCALE_FIT[0] <= c / f <= SCALE_FIT[1]} for name, c in scales.items()}
+    named = set().union(*votes.values()) if votes else set()
+    if len(named) != 1 or named == {"m/s"}:
+        return
+    unit = named.pop()
+    said = " and ".join(SCALE_EVIDENCE[name].format(c=scales[name]) for name in scales if votes[name])
+    raise LogError(f"{source}: channel {_namer(columns)(('speed',))}: speed looks like {unit} declared as m/s: "
+                   f"{said}; fix the unit in the channel map (if the speed is right, the roll rate or ax is not: "
+                   "leave it out of the map)")

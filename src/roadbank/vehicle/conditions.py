@@ -16,8 +16,8 @@ import numpy as np
 from ..constants import MAX_GAP_S, G
 from ..models.attitude import euler_pitch_rate, kinematic_roll
 from ..params import VehicleParams
-from ..signals import (DYNAMICS_BAND_HZ, diff_noise_std, noise_band_hz, road_noise_floor_std, road_noise_std,
-                       sample_rate, source_step)
+from ..signals import (DYNAMICS_BAND_HZ, band_pass, band_windows, diff_noise_std, noise_band_hz, road_noise_floor_std,
+                       road_noise_std, running_integral, sample_rate, source_step)
 from .sensors import SensorSpec
 
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
@@ -265,17 +265,9 @@ def pitch_rate_slope(signals, vx, moving) -> float | None:
     if not (has_channel(signals, "q", moving) and has_channel(signals, "ax", moving)):
         return None
     t = np.asarray(signals.t, dtype=np.float64)
-    level = (vx - _running_integral(t, signals.ax)) / G
+    level = (vx - running_integral(t, signals.ax)) / G
     rate = euler_pitch_rate(signals.q, signals.r, kinematic_roll(vx, signals.ay, signals.r))
-    return _slope_on_integral(t, level, _running_integral(t, rate), moving)
-
-
-def _running_integral(t, x) -> np.ndarray:
-    """The running trapezoidal integral of ``x`` over the times ``t`` (s), non-finite samples as 0, from 0; held
-    across an interval longer than :data:`~roadbank.constants.MAX_GAP_S` (a gap in the log: no rate was read)."""
-    x = np.asarray(x, dtype=np.float64)
-    dt = np.diff(t)
-    return np.concatenate([[0.0], np.cumsum(0.5 * np.nan_to_num(x[1:] + x[:-1]) * np.where(dt > MAX_GAP_S, 0.0, dt))])
+    return _slope_on_integral(t, level, running_integral(t, rate), moving)
 
 
 def _slope_on_integral(t, level, rate, moving, windows=ROLL_CHECK_WINDOWS_S) -> float | None:
@@ -284,10 +276,9 @@ def _slope_on_integral(t, level, rate, moving, windows=ROLL_CHECK_WINDOWS_S) -> 
     ``moving`` away from the ends where ``level`` is finite; None with too few (a tenth of the longer window's) or an
     integral that never moves in the band."""
     t = np.asarray(t, dtype=np.float64)
-    level, rate = np.asarray(level, np.float64), np.asarray(rate, np.float64)
-    short, long = (max(int(round(w * sample_rate(t))), 1) for w in windows)
-    area = _running_integral(t, rate)
-    band = [_centred_mean(x, short) - _centred_mean(x, long) for x in (np.nan_to_num(level), area)]
+    level = np.asarray(level, np.float64)
+    short, long = band_windows(t, windows)
+    band = [band_pass(x, (short, long)) for x in (level, running_integral(t, rate))]
     inner = np.zeros(len(t), dtype=bool)
     inner[long // 2:len(t) - long // 2] = True
     use = inner & moving & np.isfinite(level)
@@ -296,14 +287,6 @@ def _slope_on_integral(t, level, rate, moving, windows=ROLL_CHECK_WINDOWS_S) -> 
     lb, ab = band[0][use], band[1][use]
     den = float(np.dot(ab, ab))
     return float(np.dot(lb, ab) / den) if den > 0 else None
-
-
-def _centred_mean(x: np.ndarray, n: int) -> np.ndarray:
-    """The mean of ``x`` over ``n`` samples centred on each (the window shortened at the ends)."""
-    c = np.concatenate([[0.0], np.cumsum(x)])
-    i = np.arange(len(x))
-    lo, hi = np.maximum(i - n // 2, 0), np.minimum(i - n // 2 + n, len(x))
-    return (c[hi] - c[lo]) / (hi - lo)
 
 
 def roll_rate_usable(slope: float | None) -> bool:
