@@ -159,3 +159,67 @@ def test_a_file_that_is_not_one_real_array_is_refused_naming_it(tmp_path):
     with open(f, "wb") as fh:
         np.save(fh, np.arange(3, dtype=np.int8))
     assert _load(tmp_path, "processed_log/CAN/speed/value").tolist() == [0, 1, 2]
+
+
+@needs_data
+def test_a_segment_without_its_pose_or_steering_is_read_without_them(tmp_path):
+    """The pose is the reference, not a channel the estimate reads; the steering angle is read only by the
+    original-model filters. A segment without ``global_pose/`` (before: refused whole) is read with the same signals,
+    no reference roll and no positions, and a warning naming the folder and what is lost; one without the steering
+    angle reads it as NaN, saying so; the estimate of the default on both is the full segment's to the bit where the
+    steering is not read, and within its samples where the online offsets read it."""
+    import shutil
+
+    from roadbank import estimators
+
+    full = load_log(SEGMENT)
+    no_pose, no_steer = tmp_path / "no_pose", tmp_path / "no_steer"
+    shutil.copytree(SEGMENT, no_pose)
+    shutil.rmtree(no_pose / "global_pose")
+    shutil.copytree(SEGMENT, no_steer)
+    shutil.rmtree(no_steer / "processed_log/CAN/steering_angle")
+
+    log = load_log(no_pose)
+    assert log.reference_roll is None and "lat_deg" not in log.extra
+    assert any("'global_pose' is missing" in w and "no reference roll" in w for w in log.warnings), log.warnings
+    # the pose's 20 Hz frames bound the common time span of the full segment: the rest lies within it
+    inner = (log.signals.t >= full.signals.t[0]) & (log.signals.t <= full.signals.t[-1])
+    assert np.array_equal(log.signals.t[inner], full.signals.t)
+    assert np.array_equal(log.signals.ay[inner], full.signals.ay)
+
+    log = load_log(no_steer)
+    assert np.isnan(log.signals.delta_f).all() and log.reference_roll is not None
+    assert any("steering_angle' is missing" in w and "steering angle is NaN" in w for w in log.warnings)
+    est = estimators.make("kinematic-gyro")
+    assert np.isfinite(est.run(log.signals).theta).mean() > 0.9
+
+
+@needs_data
+def test_a_pose_without_a_fix_is_not_read_as_a_roll_in_degrees(tmp_path):
+    """Positions all at the Earth's centre (a receiver without a fix writes zeros): before, the roll of such a pose
+    was refused as a reference roll "probably in deg"; now the frames off the Earth have no roll, and with none left
+    the segment is read without its pose, saying why. The second half of the frames without a fix: the log is the
+    full segment's first half, its reference the full pose's roll there."""
+    import shutil
+
+    seg = tmp_path / "seg"
+    shutil.copytree(SEGMENT, seg)
+    f = seg / "global_pose" / "frame_positions"
+    pos = np.load(f, allow_pickle=False)
+    with open(f, "wb") as fh:
+        np.save(fh, np.zeros_like(pos))
+    log = load_log(seg)
+    assert log.reference_roll is None
+    assert any("no frame of the" in w and "on the Earth" in w and "without a fix" in w for w in log.warnings)
+
+    half = pos.copy()
+    half[len(pos) // 2:] = 0.0
+    with open(f, "wb") as fh:
+        np.save(fh, half)
+    log, full = load_log(seg), load_log(SEGMENT)
+    assert any(f"{len(pos) - len(pos) // 2} of the {len(pos)} frames are not on the Earth" in w for w in log.warnings)
+    # every channel, the reference too, bounds the log's common time span (as the full pose bounds the full log's)
+    n = len(log)
+    assert 0.45 < n / len(full) < 0.55
+    assert np.array_equal(log.signals.t, full.signals.t[:n]) and np.array_equal(log.signals.ay, full.signals.ay[:n])
+    assert np.array_equal(log.reference_roll, full.reference_roll[:n])

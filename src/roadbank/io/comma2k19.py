@@ -10,6 +10,9 @@ suffix (read with ``allow_pickle=False``)::
     processed_log/CAN/steering_angle/{t,value}  steering-wheel angle, deg
     global_pose/frame_times, frame_positions (ECEF, m), frame_orientations (quaternion w,x,y,z)
 
+The steering angle and the pose are optional (a warning says what a segment read without them loses: the pose is
+the reference roll and the positions); pose frames whose position is not on the Earth (no fix) have neither.
+
 Mapping to roadbank (SI, ISO 8855):
 
 * ``ay = -accel[:, 1]``, ``r = -gyro[:, 2]``, roll rate ``p = gyro[:, 0]``, ``ax = accel[:, 0]``
@@ -107,6 +110,18 @@ def pose_roll(pos_ecef: np.ndarray, quat_wxyz: np.ndarray) -> np.ndarray:
     return np.arctan2(g[:, 1], g[:, 2])
 
 
+#: what a segment read without its steering angle loses (the rest of the warning)
+OPTIONAL_FILES = {"steering_angle": "the steering angle is NaN (the default estimator and the modified-model "
+                                    "filters do not read it, the original-model ones, uio, dfc and kalman give no "
+                                    "valid sample)"}
+#: the pose's folder, and what a segment read without it (or without a fix) loses
+POSE = "global_pose"
+POSE_LOSS = ("no reference roll (the estimate is not scored) and no positions (roadbank map has nothing to place "
+             "it at)")
+#: distances (m) from the Earth's centre of a position on the ground: the WGS-84 polar radius less 1 km to its
+#: equatorial radius plus 10 km
+EARTH_RADII_M = (6_356_752.0 - 1_000.0, 6_378_137.0 + 10_000.0)
+
 #: the channels of a segment: role -> (column, stored unit, axis convention)
 CHANNELS = {
     "speed": ("processed_log/CAN/speed", "m/s", "ISO"),
@@ -120,14 +135,17 @@ CHANNELS = {
 }
 
 
-def channel_map(rate_hz: float = 100.0, max_gap_s: float = 0.5) -> ChannelMap:
+def channel_map(rate_hz: float = 100.0, max_gap_s: float = 0.5, roles=tuple(CHANNELS)) -> ChannelMap:
     """The fixed channel map of a comma2k19 segment: stored units and axes, a uniform grid at ``rate_hz``
-    (Hz), gaps longer than ``max_gap_s`` (s) not bridged; the steering ratio is the car's."""
+    (Hz), gaps longer than ``max_gap_s`` (s) not bridged; the steering ratio is the car's. ``roles``: those of
+    :data:`CHANNELS` the segment has (a segment without steering or pose has neither in its map)."""
     ch = {"time": ChannelSpec("time", "t", "s")}      # (each channel has its own clock: not read)
-    for role, (col, unit, conv) in CHANNELS.items():
+    for role in roles:
+        col, unit, conv = CHANNELS[role]
         ch[role] = ChannelSpec(role, col, unit, conv)
     return ChannelMap(ch, time_base="uniform", rate_hz=rate_hz, max_gap_s=max_gap_s,
-                      source="comma2k19 processed-log layout", fixed_layout=True)
+                      source="comma2k19 processed-log layout", fixed_layout=True,
+                      no_steering="steering_wheel_angle" not in roles)
 
 
 class SegmentSource:
@@ -149,7 +167,12 @@ class SegmentSource:
             raise LogError(f"{p}: not a comma2k19 segment directory")
         params = params or VehicleParams()
         arr = {}
+        self.warnings: list[str] = []
         for key, rel in FILES.items():
+            if key in OPTIONAL_FILES and not (p / rel).exists():
+                self.warnings.append(f"{p}: comma2k19 '{rel}' is missing, so the log is read without it: "
+                                     f"{OPTIONAL_FILES[key]}")
+                continue
             t = np.asarray(_load(p, rel + "/t"), dtype=np.float64).reshape(-1)
             v = np.asarray(_load(p, rel + "/value"), dtype=np.float64)
             shape = v.shape
@@ -165,13 +188,6 @@ class SegmentSource:
             arr[key] = (t, v)
         acc_t, acc = arr["accelerometer"]
         gyr_t, gyr = arr["gyro"]
-        ft = np.asarray(_load(p, "global_pose/frame_times"), dtype=np.float64).reshape(-1)
-        pos = np.asarray(_load(p, "global_pose/frame_positions"), dtype=np.float64)
-        quat = np.asarray(_load(p, "global_pose/frame_orientations"), dtype=np.float64)
-        if not (len(ft) == len(pos) == len(quat)) or pos.shape[1:] != (3,) or quat.shape[1:] != (4,):
-            raise LogError(f"{p}: comma2k19 global_pose arrays have inconsistent shapes "
-                           f"{ft.shape}, {pos.shape}, {quat.shape}")
-        lat, lon = ecef_to_latlon(pos)
         col = {role: c for role, (c, _, _) in CHANNELS.items()}
         series = {
             col["speed"]: (arr["speed"][0], arr["speed"][1][:, 0]),
@@ -180,20 +196,50 @@ class SegmentSource:
             col["roll_rate"]: (gyr_t, gyr[:, 0]),
             col["longitudinal_acceleration"]: (acc_t, acc[:, 0]),
             col["pitch_rate"]: (gyr_t, gyr[:, 1]),
-            col["steering_wheel_angle"]: (arr["steering_angle"][0], arr["steering_angle"][1][:, 0]),
-            col["reference_roll"]: (ft, pose_roll(pos, quat)),
-            "lat_deg": (ft, np.degrees(lat)),
-            "lon_deg": (ft, np.degrees(lon)),
         }
+        if "steering_angle" in arr:
+            series[col["steering_wheel_angle"]] = (arr["steering_angle"][0], arr["steering_angle"][1][:, 0])
+        pose = self._pose(p)
+        if pose is not None:
+            ft, pos, quat = pose
+            lat, lon = ecef_to_latlon(pos)
+            series.update({col["reference_roll"]: (ft, pose_roll(pos, quat)),
+                           "lat_deg": (ft, np.degrees(lat)), "lon_deg": (ft, np.degrees(lon))})
         self.path = p
         self.times = {c: t for c, (t, _) in series.items()}
         self.data = {c: v for c, (_, v) in series.items()}
         self.names = list(series)
-        self.channel_map = channel_map(rate_hz, max_gap_s)
-        self.carried = {"lat_deg": max_gap_s, "lon_deg": max_gap_s}
-        self.warnings: list[str] = []
+        self.channel_map = channel_map(rate_hz, max_gap_s, [r for r, (c, _, _) in CHANNELS.items() if c in series])
+        self.carried = {"lat_deg": max_gap_s, "lon_deg": max_gap_s} if pose is not None else {}
         self.metadata = {"dataset": "comma2k19", "steering_ratio": str(params.steering_ratio),
                          "time_origin": "boot time (s)"}
+
+    def _pose(self, p: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """The segment's pose frames ``(times (s), ECEF positions (m), quaternions w, x, y, z)``, the positions NaN
+        where they are not on the Earth (:data:`EARTH_RADII_M`: no fix); None, with a warning, where ``global_pose/``
+        is missing or has no frame on the Earth. LogError for arrays unreadable or of inconsistent shapes."""
+        if not (p / POSE).exists():
+            self.warnings.append(f"{p}: comma2k19 '{POSE}' is missing, so the log is read without it: {POSE_LOSS}")
+            return None
+        ft = np.asarray(_load(p, f"{POSE}/frame_times"), dtype=np.float64).reshape(-1)
+        pos = np.asarray(_load(p, f"{POSE}/frame_positions"), dtype=np.float64)
+        quat = np.asarray(_load(p, f"{POSE}/frame_orientations"), dtype=np.float64)
+        if not (len(ft) == len(pos) == len(quat)) or pos.shape[1:] != (3,) or quat.shape[1:] != (4,):
+            raise LogError(f"{p}: comma2k19 global_pose arrays have inconsistent shapes "
+                           f"{ft.shape}, {pos.shape}, {quat.shape}")
+        radius = np.linalg.norm(pos, axis=1)
+        on_earth = (radius >= EARTH_RADII_M[0]) & (radius <= EARTH_RADII_M[1])
+        if not on_earth.any():
+            self.warnings.append(f"{p}: comma2k19 '{POSE}/frame_positions': no frame of the {len(pos)} is on the "
+                                 f"Earth (distance from its centre {EARTH_RADII_M[0] / 1e3:.0f}-"
+                                 f"{EARTH_RADII_M[1] / 1e3:.0f} km: a pose without a fix), so the log is read "
+                                 f"without the pose: {POSE_LOSS}")
+            return None
+        if not on_earth.all():
+            self.warnings.append(f"{p}: comma2k19 '{POSE}/frame_positions': {np.count_nonzero(~on_earth)} of the "
+                                 f"{len(pos)} frames are not on the Earth (no fix): no reference roll or position "
+                                 "there")
+        return ft, np.where(on_earth[:, None], pos, np.nan), quat
 
     def close(self) -> None:
         """Nothing to close: the arrays were read when the source was opened."""
