@@ -78,6 +78,22 @@ def test_missing_frame_is_dropped_and_counted(tmp_path):
     assert any("0000000003.txt" in w and "dropped" in w for w in log.warnings)
 
 
+@pytest.mark.parametrize("kept", [14, 29])
+def test_a_last_frame_cut_off_is_left_out(tmp_path, kept):
+    """The last frame file cut off while the drive was written (14 or 29 of its 30 fields, the last one mid-number):
+    left out with a warning naming it, as a CSV's cut last line is (before: the whole drive refused); the other
+    frames are read as they are. A frame inside the drive with too few fields is still refused
+    (test_malformed_drive_names_file_and_line)."""
+    drive = write_drive(tmp_path, n=8)
+    last = drive / "oxts" / "data" / "0000000007.txt"
+    last.write_text(" ".join(last.read_text().split()[:kept])[:-2])          # the last number cut mid-way
+    log = load_log(drive)
+    assert len(log) == 7 and log.metadata["dropped_frames"] == "1"
+    np.testing.assert_allclose(log.signals.vx, 0.08 + np.arange(7) / 1000.0)
+    assert any("0000000007.txt: the last frame holds" in w and f"{kept} of its 30 fields" in w and "left out" in w
+               for w in log.warnings), log.warnings
+
+
 def _wrong_fields(d):
     (d / "oxts/data/0000000002.txt").write_text(" ".join(["1.0"] * 29) + "\n")
 

@@ -190,6 +190,20 @@ def parse_frame(path) -> np.ndarray:
     return out
 
 
+def _cut_last_frame(frames: dict[int, Path]) -> str | None:
+    """Where the last frame file of ``frames`` (frame number -> file) holds one line of fewer than :data:`N_FIELDS`
+    fields (cut off while the drive was written, as a CSV's last line may be), it is taken out of ``frames`` and the
+    warning saying so returned; None otherwise (any other damage is :func:`parse_frame`'s error when it is read)."""
+    if not frames:
+        return None
+    last = max(frames)
+    lines = [s for s in frames[last].read_text(errors="replace").splitlines() if s.strip()]
+    if len(lines) != 1 or len(lines[0].split()) >= N_FIELDS:
+        return None
+    return (f"{frames.pop(last)}: the last frame holds {len(lines[0].split())} of its {N_FIELDS} fields (cut off "
+            "while written): left out")
+
+
 def column(name: str) -> str:
     """The column name of oxts field ``name`` in messages, e.g. ``"vf (column 8)"``."""
     return f"{name} (column {COLUMNS[name]})"
@@ -246,6 +260,7 @@ class DriveSource:
                 raise LogError(f"{f}: frame {k} has no time stamp ({oxts / 'timestamps.txt'} has "
                                f"{len(stamps)} lines)")
             frames[k] = f
+        cut = _cut_last_frame(frames)
         keep = np.array(sorted(frames), dtype=np.int64)
         dropped = len(stamps) - len(keep)
         if len(keep) < 2:
@@ -260,7 +275,9 @@ class DriveSource:
         # (never interpolated: on the frames' clock; the gap would apply on another time base)
         self.carried = dict.fromkeys(CARRIED, self.channel_map.max_gap_s)
         self.warnings = []
-        if dropped:
+        if cut:
+            self.warnings.append(cut)
+        elif dropped:
             missing = sorted(set(range(len(stamps))) - set(keep.tolist()))
             self.warnings.append(f"{oxts / 'data'}: {dropped} frame file(s) missing from the numbering "
                                  f"(first: {missing[0]:010d}.txt): dropped, the others keep their time stamps")
