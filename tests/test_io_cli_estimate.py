@@ -68,3 +68,33 @@ def test_batch_all_good_exit_zero(tmp_path):
 def test_unknown_estimator_is_usage_error(tmp_path):
     res = CliRunner().invoke(main, ["estimate", "x.csv", "-e", "nope", "-o", str(tmp_path / "o.csv")])
     assert res.exit_code == 2 and "unknown estimator" in res.output
+
+
+def test_the_summary_tells_logs_of_one_name_apart_and_keeps_its_columns(tmp_path):
+    """Two logs named ``log.parquet`` in two folders (one day's and another's) with the longest-named estimators:
+    the table and the design lines name each by as many folders as tell them apart (before: both ``log.parquet``),
+    and every row's columns line up with the header's (before: ``kinematic-smoother`` pushed its row one column
+    right)."""
+    from roadbank.cli.estimate import log_names
+
+    assert log_names(["/x/day1/log.csv", "/x/day2/log.csv", "/y/a.csv", "/z/day1/log.csv"]) == [
+        "x/day1/log.csv", "day2/log.csv", "a.csv", "z/day1/log.csv"]
+    assert log_names(["/a.csv", "/a.csv"]) == ["/a.csv", "/a.csv"]       # the same file twice: nothing tells
+    logs = []
+    for day in ("day1", "day2"):
+        (tmp_path / day).mkdir()
+        logs.append(tmp_path / day / "log.parquet")
+        pq.write_table(pa.table(_sim_table(2000)), logs[-1])
+    res = CliRunner().invoke(main, ["estimate", *map(str, logs), "-e", "kinematic,kinematic-smoother",
+                                    "-o", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    lines = res.output.splitlines()
+    head = next(i for i, x in enumerate(lines) if x.startswith("log "))
+    rows = lines[head + 2:head + 6]
+    assert [r.split()[0] for r in rows[::2]] == ["day1/log.parquet", "day2/log.parquet"], rows
+    end = lines[head].index("duration") + len("duration") - 1
+    for r in rows:          # the duration ends under the header's "duration", "valid" under "valid"
+        assert r[end] == "s" and r[end + 1] == " ", (lines[head], r)
+        assert r[:lines[head].index("valid") + 5].endswith("%"), (lines[head], r)
+    assert sum(x.startswith("designed for day1/log.parquet") for x in lines) == 1
+    assert sum(x.startswith("designed for day2/log.parquet") for x in lines) == 1

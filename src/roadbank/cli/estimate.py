@@ -237,17 +237,33 @@ def repairs_text(repairs: dict) -> str:
     return text + (f"; {n} sample(s) flagged not valid" if n else "") if text or n else ""
 
 
+def log_names(paths) -> list[str]:
+    """Short names of the logs ``paths`` for the summary: each file's name, with as many of its folders before it as
+    tell it from another log of the same name (``day1/log.csv``, ``day2/log.csv``); at most 32 characters, the end
+    kept."""
+    parts = [Path(p).parts for p in paths]
+    depth = [1] * len(parts)
+    while True:
+        names = [Path(*q[-d:]).as_posix() for q, d in zip(parts, depth)]
+        clash = {n for n in names if names.count(n) > 1}
+        grow = [i for i, n in enumerate(names) if n in clash and depth[i] < len(parts[i])]
+        if not grow:
+            return [n[-32:] for n in names]
+        for i in grow:
+            depth[i] += 1
+
+
 def summary_table(summaries, estimators) -> str:
     """Plain-text table: per log and estimator the duration, valid share and bank mean/min/max (deg),
     or the log's error; then the time-stamp repairs of each log that needed any."""
     if isinstance(estimators, str):
         estimators = [estimators]
-    head = (f"{'log':<32} {'estimator':<16} {'duration':>9} {'valid':>6} {'bank mean':>9} {'min':>7} {'max':>7}"
+    width = max([16, *map(len, estimators)])
+    head = (f"{'log':<32} {'estimator':<{width}} {'duration':>9} {'valid':>6} {'bank mean':>9} {'min':>7} {'max':>7}"
             "  (deg)")
     lines = [head, "-" * len(head)]
     notes = []
-    for s in summaries:
-        name = Path(s.log).name[-32:]
+    for s, name in zip(summaries, log_names([s.log for s in summaries])):
         if s.status != "ok":
             lines.append(f"{name:<32} ERROR {s.error[:150]}")
             continue
@@ -255,7 +271,7 @@ def summary_table(summaries, estimators) -> str:
                                              ("valid_share", "bank_mean_deg", "bank_min_deg", "bank_max_deg")}}
         for k, est in enumerate(e for e in estimators if e in per):
             st = per[est]
-            lines.append(f"{name if k == 0 else '':<32} {est:<16} {s.duration_s:>8.1f}s "
+            lines.append(f"{name if k == 0 else '':<32} {est:<{width}} {s.duration_s:>8.1f}s "
                          f"{100 * st['valid_share']:>5.1f}% {st['bank_mean_deg']:>9.2f} "
                          f"{st['bank_min_deg']:>7.2f} {st['bank_max_deg']:>7.2f}")
         text = repairs_text(s.time_repairs)
@@ -269,8 +285,8 @@ def design_lines(summaries) -> list[str]:
     (:func:`roadbank.fleet.process.design_words`)."""
     from ..fleet.process import design_words
 
-    return [f"designed for {Path(s.log).name[-32:]}: {design_words(s.design, s.estimator)}"
-            for s in summaries if s.design]
+    return [f"designed for {name}: {design_words(s.design, s.estimator)}"
+            for s, name in zip(summaries, log_names([s.log for s in summaries])) if s.design]
 
 
 def _finite(x):
