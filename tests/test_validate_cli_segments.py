@@ -137,6 +137,7 @@ def test_validate_all_names_a_bad_segment_and_scores_the_others(tmp_path):
     report = json.loads(res.stdout)
     assert list(report["comma2k19"]) == ["good"]
     assert len(report["errors"]) == 1 and "nopose" in report["errors"][0] and "global_pose" in report["errors"][0]
+    assert "nothing to score: no reference roll" in report["errors"][0]   # read (the pose is optional), not scored
     assert "error: " in res.stderr and "global_pose" in res.stderr
     # one segment scored: the one-segment layout, its figure next to the report
     assert out.with_suffix(".png").is_file() and "## comma2k19 (phone IMU" in out.read_text()

@@ -24,7 +24,8 @@ from typing import Any
 import numpy as np
 
 from .. import estimators
-from ..io.comma2k19 import load_comma2k19
+from ..io.comma2k19 import POSE, load_comma2k19
+from ..io.errors import LogError
 from ..params import VehicleParams
 from ..vehicle import undescribed_params
 from .scoring import (VALIDATION_NAMES, Score, Scored, Scoring, hold_invalid, lowpass, pearson_r, run_and_score,
@@ -158,6 +159,9 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     names = list(names or VALIDATION_NAMES)
     scoring = Scoring(tau=tau, warmup_s=warmup_s, fit_fraction=fit_fraction)
     log = load_comma2k19(path, params=params)
+    if log.reference_roll is None:
+        raise LogError(f"{path}: nothing to score: no reference roll ('{POSE}' missing, or none of its frames has a "
+                       "fix)")
     s, ref = log.signals, hold_invalid(log.reference_roll)
     t = s.t
     dt = float(np.median(np.diff(t)))
