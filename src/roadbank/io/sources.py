@@ -23,8 +23,9 @@ channel, in which unit and sign convention.
 
 Read whole (``chunk_rows=None``) a source gives one chunk: the whole file (the readers of
 :mod:`roadbank.io.readers`, :mod:`roadbank.io.can`, :mod:`roadbank.io.ros`). Streamed, Parquet is read
-in record batches, MDF4 in windows of records per channel group and a KITTI drive in frames, so
-memory stays bounded by the chunk size; the other formats are read whole either way.
+in record batches, MDF4 in windows of records per channel group, a KITTI drive in frames and a CSV file in
+blocks of lines (:class:`~roadbank.io.csvtable.CsvLines`; one separated by ``;`` or tabs, not UTF-8 or short is
+read whole), so memory stays bounded by the chunk size; the other formats are read whole either way.
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ from ..params import VehicleParams
 from . import readers
 from .channels import ChannelMap
 from .comma2k19 import SegmentSource
+from .csvtable import CsvLines
 from .errors import LogError
 from .fields import column_label, unique_names
 from .files import open_mdf
@@ -246,7 +248,8 @@ def open_layout(p: Path, fmt: str, params: VehicleParams, chunk_rows: int | None
 
 def open_source(p: Path, fmt: str, cmap: ChannelMap, chunk_rows: int | None = None):
     """The source of file ``p`` in format ``fmt`` (CSV, Parquet, MDF4, raw CAN, ROS), read whole
-    (``chunk_rows=None``) or streamed (Parquet, MDF4 without a DBC) in chunks of ``chunk_rows``."""
+    (``chunk_rows=None``) or streamed (Parquet, MDF4 without a DBC, CSV where :meth:`CsvLines.open` can) in chunks
+    of ``chunk_rows``."""
     if fmt in CAN_FORMATS:
         from .can import read_can
         table, warns = read_can(p, cmap, fmt)
@@ -260,4 +263,7 @@ def open_source(p: Path, fmt: str, cmap: ChannelMap, chunk_rows: int | None = No
     if chunk_rows is not None and fmt == "mdf4":
         return Mdf4Windows(p, chunk_rows)
     wanted = {spec.column: role for role, spec in cmap.channels.items()}
+    lines = CsvLines.open(p, chunk_rows, wanted, cmap.truth_prefix) if chunk_rows is not None and fmt == "csv" else None
+    if lines is not None:
+        return lines
     return WholeSource(p, readers.READERS[fmt](p, wanted, cmap.truth_prefix), shared_clock=fmt != "mdf4")

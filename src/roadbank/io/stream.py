@@ -1,10 +1,11 @@
 """Long logs in bounded memory: :func:`stream_log` yields a log as consecutive chunks.
 
 Parquet files are read in record batches, MDF4 files in windows of ``chunk_rows``
-records per channel group and KITTI drives ``chunk_rows`` frames at a time
+records per channel group, KITTI drives ``chunk_rows`` frames and CSV files ``chunk_rows`` lines at a time
 (:mod:`roadbank.io.sources`), so memory stays bounded by the chunk size whatever the log's
-length. Other formats (CSV, raw CAN, ROS bags, comma2k19 segments) are read whole and go
-through the same assembler in one chunk.
+length. Other formats (raw CAN, ROS bags, comma2k19 segments), and CSV files that
+:class:`~roadbank.io.csvtable.CsvLines` does not stream (separated by ``;`` or tabs, not UTF-8, short), are read
+whole and go through the same assembler in one chunk.
 
 Each chunk is a :class:`~roadbank.io.Log` whose signals continue the previous chunk's;
 feeding them to ``Estimator.run(chunk.signals, reset=False)`` gives the same numbers as
@@ -40,7 +41,7 @@ from .types import Log
 #: (memory vs per-chunk overhead: each 10 000 rows cost about 3.5 MiB of peak memory, docs/io.md)
 CHUNK_ROWS = 20_000
 #: the formats read in chunks (the others are read whole, one chunk)
-STREAMED = ("parquet", "mdf4", "kitti-oxts")
+STREAMED = ("parquet", "mdf4", "kitti-oxts", "csv")
 
 
 def log_chunks(path, channels: ChannelMap | str | Path | None = None, format: str | None = None,
