@@ -103,6 +103,22 @@ def test_builtin_sections_c_step_and_long_log_on_a_tiny_run():
     assert "full suite only" in long_log({"size": "tiny"})["reason"]
 
 
+def test_the_long_log_table_gives_the_csv_streamed_and_whole():
+    """The long-log section's table has the CSV rows: the streamed peak beside the whole read's, as measured."""
+    from roadbank.bench.sections import long_log_markdown
+
+    out = {"hours": 24.0, "samples": 8640000, "peak_rss_mb": 262.0, "baseline_rss_mb": 199.0, "samples_per_s": 1.5e6,
+           "estimator": "kinematic-pif", "met": {"peak_rss_mb": True, "samples_per_s": True},
+           "csv": {"hours": 3.0, "file_mb": 73.2, "samples": 1080000, "stream_peak_rss_mb": 238.0,
+                   "stream_run_s": 4.44, "whole_peak_rss_mb": 524.0, "whole_run_s": 2.98}}
+    text = "\n".join(long_log_markdown(out))
+    assert "| peak RSS, streamed 3 h CSV log (73 MiB, 1080000 lines) | 238 MiB |" in text
+    assert "| the same CSV read whole (`load_log`, then one run) | 524 MiB |" in text
+    assert "| its time streamed / read whole | 4.4 / 3.0 s |" in text
+    del out["csv"]
+    assert "CSV log (" not in "\n".join(long_log_markdown(out))
+
+
 def test_bench_data_option_reaches_the_accuracy_section(tmp_path):
     # the folder given reaches the section's settings; one that does not exist is refused
     from roadbank.bench import SECTIONS
