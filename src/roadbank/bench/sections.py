@@ -106,7 +106,8 @@ def long_log_markdown(out: dict) -> list[str]:
     if csv:
         rows += [[f"peak RSS, streamed {csv['hours']:g} h CSV log ({csv['file_mb']:.0f} MiB, {csv['samples']} lines)",
                   f"{csv['stream_peak_rss_mb']:.0f} MiB", "", ""],
-                 ["the same CSV read whole (`load_log`, then one run)", f"{csv['whole_peak_rss_mb']:.0f} MiB", "", ""],
+                 [Markdown("the same CSV read whole (`load_log`, then one run)"), f"{csv['whole_peak_rss_mb']:.0f} MiB",
+                  "", ""],
                  ["its time streamed / read whole", f"{csv['stream_run_s']:.1f} / {csv['whole_run_s']:.1f} s", "", ""]]
     return [md_table(["what", "value", "target", "met?"], rows, align="lrrl"),
             "", f"{out['samples']} samples, `{out['estimator']}` (what `roadbank estimate` runs), "
