@@ -52,7 +52,14 @@ VARIANTS = {
     "date-times": lambda: [HEADER] + _rows(time=lambda k: f"2026-12-06 10:{k // 6000:02d}:{(k // 100) % 60:02d}."
                                                       f"{k % 100:02d}0"),
     "quoted fields": lambda: [HEADER] + [f'"{x.split(",")[0]}",{x.split(",", 1)[1]}' for x in _rows()],
+    "times of day past midnight": lambda: [HEADER] + _rows(time=_clock),
 }
+
+
+def _clock(k: int) -> str:
+    """Line ``k``'s time of day, 100 Hz from 23:59:50 (past midnight after 10 s)."""
+    t = (86_390.0 + k / 100) % 86_400.0
+    return f"{int(t // 3600):02d}:{int(t % 3600 // 60):02d}:{t % 60:05.2f}"
 
 
 @pytest.mark.parametrize("chunk", [7, 500])
@@ -132,3 +139,22 @@ def test_what_is_read_whole(tmp_path, monkeypatch, case):
         monkeypatch.setattr(csvtable, "CSV_WHOLE_BYTES", p.stat().st_size)
     cmap = default_channel_map()
     assert isinstance(open_source(p, "csv", cmap, 7), WholeSource)
+
+
+def test_times_of_day_are_seconds_from_the_first_midnight(tmp_path):
+    """Independent truth: the same drive with its time column written as seconds (86 390.00, 86 390.01, ... past
+    86 400) and as times of day (23:59:50.00 ... 00:00:04.99): the same signals, read whole and streamed; a time of
+    day that is none (24:00:01) is refused naming its line."""
+    numbers = _write(tmp_path, [HEADER] + _rows(time=lambda k: f"{86_390.0 + k / 100:.2f}"), name="s.csv")
+    clock = _write(tmp_path, [HEADER] + _rows(time=_clock), name="clock.csv")
+    want = load_log(numbers)
+    for got in (load_log(clock), list(stream_log(clock, chunk_rows=500))):
+        chunks = got if isinstance(got, list) else [got]
+        for k in ("t", "ay"):
+            np.testing.assert_allclose(np.concatenate([getattr(c.signals, k) for c in chunks]),
+                                       getattr(want.signals, k), rtol=0, atol=1e-9, err_msg=k)
+    assert want.signals.t[-1] > 86_400.0
+    lines = [HEADER] + _rows(time=_clock)
+    lines[700] = "24:00:01," + lines[700].split(",", 1)[1]
+    with pytest.raises(LogError, match="'24:00:01' at line 701 is no time of day"):
+        load_log(_write(tmp_path, lines, name="bad.csv"))

@@ -28,6 +28,13 @@ from .types import RawChunk, RawTable
 
 #: what a CSV column of date-times is, as :attr:`RawTable.time_typed` names its type (read as s since the epoch)
 DATE_TIME_TEXT = "ISO 8601 date-time text"
+#: what a CSV column of times of day is (read as s since the first stamp's midnight: :func:`unwrap_days`)
+TIME_OF_DAY_TEXT = "time-of-day text (hh:mm:ss)"
+#: a time of day as a logger writes it without its date: ``10:00:00.010`` (hours, minutes, seconds and a fraction)
+_TIME_OF_DAY = re.compile(r"(\d{1,2}):(\d{2}):(\d{2}(?:\.\d*)?)")
+#: a step back of a time of day by more than this (s) is midnight passed: the stamps after it are the next day's
+MIDNIGHT_STEP_S = 43_200.0
+DAY_S = 86_400.0
 
 
 #: a whole number (``12``, ``-3e2``): the same with either decimal mark
@@ -39,10 +46,11 @@ def _text_floats(path, column: str, label: str, values: list[str], row_label: st
     """:func:`parse_floats` of text fields, converted by numpy in one call where every field is a number
     (numpy parses a text field as ``float()`` does); else field by field, for the missing-value tokens and
     the error naming the first bad field. A column of ISO 8601 date-times (:func:`_date_time_seconds`) is read as
-    seconds since the epoch. With ``decimal_comma`` (a file whose fields are not separated by commas) a column
-    whose numbers are all written with a decimal comma (:func:`_decimal_comma_column`) is read with it.
+    seconds since the epoch, one of times of day (:func:`_time_of_day_seconds`) as seconds since midnight. With
+    ``decimal_comma`` (a file whose fields are not separated by commas) a column whose numbers are all written with
+    a decimal comma (:func:`_decimal_comma_column`) is read with it.
     Returns the values and how they were read where it was not as plain numbers: ``"date-time"``,
-    ``"decimal comma"``, else None."""
+    ``"time of day"``, ``"decimal comma"``, else None."""
     try:
         return np.array(values, dtype=np.float64), None
     except ValueError:
@@ -50,6 +58,9 @@ def _text_floats(path, column: str, label: str, values: list[str], row_label: st
     seconds = _date_time_seconds(path, label, values, row_label, rownums)
     if seconds is not None:
         return seconds, "date-time"
+    seconds = _time_of_day_seconds(path, label, values, row_label, rownums)
+    if seconds is not None:
+        return seconds, "time of day"
     if decimal_comma and _decimal_comma_column(values):
         fixed = [v.replace(",", ".") for v in values]
         return _text_floats(path, column, label, fixed, row_label, rownums)[0], "decimal comma"
@@ -88,6 +99,44 @@ def _date_time_seconds(path, label: str, values: list[str], row_label: str, rown
     out = whole.astype(np.float64) + rest / 1e9
     out[missing] = math.nan
     return out
+
+
+def _time_of_day_seconds(path, label: str, values: list[str], row_label: str, rownums) -> np.ndarray | None:
+    """Seconds since midnight (float64) of a column of times of day (:data:`_TIME_OF_DAY`: ``10:00:00.010``, as a
+    logger writes them without the date), missing-value tokens NaN; None unless every other field is written as one;
+    a :class:`LogError` naming the first that is no time of day (``25:00:00``). The days are not counted here
+    (:func:`unwrap_days`)."""
+    fields = [v.strip() for v in values]
+    out = np.full(len(fields), math.nan)
+    for i, f in enumerate(fields):
+        if f.lower() in MISSING:
+            continue
+        m = _TIME_OF_DAY.fullmatch(f)
+        if m is None:
+            return None
+        h, mi, sec = int(m[1]), int(m[2]), float(m[3])
+        if h > 23 or mi > 59 or sec >= 60.0:
+            raise LogError(f"{path}: {label}: {f!r} at {row_label} {rownums[i]} is no time of day (the column holds "
+                           "times of day, hh:mm:ss)")
+        out[i] = 3600.0 * h + 60.0 * mi + sec
+    return out if np.isfinite(out).any() else None
+
+
+def unwrap_days(seconds: np.ndarray, last: float | None = None) -> tuple[np.ndarray, float | None]:
+    """Times of day (s since midnight, NaN missing) as seconds since the first one's midnight: a day (:data:`DAY_S`)
+    added after each step back of more than :data:`MIDNIGHT_STEP_S` between consecutive finite stamps (a log that
+    runs past midnight). ``last``: the finite stamp before these, as returned for the lines before (None: none).
+    Returns the stamps and the last finite one."""
+    ok = np.isfinite(seconds)
+    v = seconds[ok]
+    if not v.size:
+        return seconds, last
+    base = 0.0 if last is None else DAY_S * math.floor(last / DAY_S)
+    ref = v[0] if last is None else last - base
+    back = np.diff(np.concatenate([[ref], v])) < -MIDNIGHT_STEP_S
+    out = seconds.copy()
+    out[ok] = v + base + DAY_S * np.cumsum(back)
+    return out, float(out[ok][-1])
 
 
 def _decimal_comma_column(values: list[str]) -> bool:
@@ -284,10 +333,11 @@ def _opens_table(lines: list[str], j: int) -> bool:
 
 
 def _number_like(field: str) -> bool:
-    """A field that holds a number as a log writes one: ``float()``'s, a decimal comma, a date-time, or missing."""
+    """A field that holds a number as a log writes one: ``float()``'s, a decimal comma, a date-time, a time of day,
+    or missing."""
     f = field.strip()
     return (reads_as_number(f) or f.lower() in MISSING or DECIMAL_COMMA.fullmatch(f) is not None
-            or _DATE_TIME.fullmatch(f) is not None)
+            or _DATE_TIME.fullmatch(f) is not None or _TIME_OF_DAY.fullmatch(f) is not None)
 
 
 def _is_comment(line: str) -> bool:
@@ -326,7 +376,15 @@ def read_csv(path, wanted: dict[str, str], prefix: str | None = None) -> RawTabl
     warnings += layout.warnings + _drop_unfinished_line(p, text, lines, layout.skip, layout.delim)
     if layout.units is not None:
         del lines[1]                    # the line numbers below count it
-    return _table(p, lines, layout, wanted, prefix, warnings)
+    table = _table(p, lines, layout, wanted, prefix, warnings)
+    for c in _times_of_day(table):
+        table.data[c] = unwrap_days(table.data[c])[0]
+    return table
+
+
+def _times_of_day(table: RawTable) -> list[str]:
+    """The columns of ``table`` read as times of day (:data:`TIME_OF_DAY_TEXT`)."""
+    return [c for c, kind in table.time_typed.items() if kind == TIME_OF_DAY_TEXT]
 
 
 @dataclass(frozen=True)
@@ -406,6 +464,8 @@ def _table(p: Path, lines: list[str], layout: _Layout, wanted: dict[str, str], p
             commas.append(c)
         elif how == "date-time":
             dated[c] = DATE_TIME_TEXT
+        elif how == "time of day":
+            dated[c] = TIME_OF_DAY_TEXT
     if commas:
         sep = "tabs" if delim == "\t" else repr(delim)
         warnings = warnings + [f"{p}: column(s) {', '.join(repr(c) for c in commas)} read with ',' as the decimal "
@@ -531,6 +591,7 @@ class CsvLines:
         p, layout = self.path, self.layout
         end = self.scan.lines - self.cut           # lines of the file read: 1 .. end
         lineno = layout.first                      # the line number of the line before the block
+        before: dict[str, float | None] = {}       # a column of times of day: its last stamp so far
         with open(p, encoding="utf-8-sig", newline=None) as fh:
             lines = itertools.islice(fh, layout.first, end)
             while True:
@@ -538,6 +599,8 @@ class CsvLines:
                 block = "".join(itertools.islice(lines, self.chunk_rows)).splitlines()
                 tab = _table(p, [self.header] + block, layout, wanted, prefix, [], first=lineno, rows_needed=False)
                 self._same_kinds(tab, lineno)
+                for c in _times_of_day(tab):
+                    tab.data[c], before[c] = unwrap_days(tab.data[c], before.get(c))
                 lineno += len(block)
                 last = lineno >= end
                 yield RawChunk(tab.data, rownums=np.asarray(tab.rownums, dtype=np.int64), last=last)
@@ -545,10 +608,11 @@ class CsvLines:
                     return
 
     def _same_kinds(self, tab: RawTable, lineno: int) -> None:
-        """LogError where a block reads a column as date-times that the head read as numbers, or the other way (read
-        whole, such a column is refused as holding both)."""
+        """LogError where a block reads a column as date-times or times of day that the head read as numbers, or
+        the other way (read whole, such a column is refused as holding both)."""
         for c in tab.data:
-            if (c in tab.time_typed) != (c in self.time_typed) and np.isfinite(tab.data[c]).any():
-                kind = "date-times" if c in self.time_typed else "numbers"
+            if tab.time_typed.get(c) != self.time_typed.get(c) and np.isfinite(tab.data[c]).any():
+                kind = {DATE_TIME_TEXT: "date-times", TIME_OF_DAY_TEXT: "times of day"}.get(self.time_typed.get(c),
+                                                                                            "numbers")
                 raise LogError(f"{self.path}: column '{c}' holds {kind} in its first lines but not in lines "
                                f"{lineno + 1}-{lineno + len(tab.data[c])}")
