@@ -433,12 +433,11 @@ def speed_scales(t, vx, ay, r, p=None, ax=None) -> dict[str, float]:
 
     Returns ``{reading: c}`` for the readings made (empty when none can be)."""
     t, vx, ay, r = (np.asarray(x, dtype=np.float64) for x in (t, vx, ay, r))
-    span = np.isfinite(t) & (t <= t[0] + SCALE_SPAN_S) if len(t) else np.zeros(0, bool)
-    n = int(np.count_nonzero(span))
-    t, vx, ay, r = t[:n], vx[:n], ay[:n], r[:n]
     out: dict[str, float] = {}
+    n = int(np.searchsorted(t, t[0] + SCALE_SPAN_S, side="right")) if len(t) else 0    # (t increases)
     if n < 3:
         return out
+    t, vx, ay, r = t[:n], vx[:n], ay[:n], r[:n]
     windows = band_windows(t, SCALE_WINDOWS_S)
     use = moving(vx, ay, r)
     use[:windows[1] // 2] = False

@@ -612,7 +612,7 @@ class CsvLines:
         the other way (read whole, such a column is refused as holding both)."""
         for c in tab.data:
             if tab.time_typed.get(c) != self.time_typed.get(c) and np.isfinite(tab.data[c]).any():
-                kind = {DATE_TIME_TEXT: "date-times", TIME_OF_DAY_TEXT: "times of day"}.get(self.time_typed.get(c),
+                kind = {DATE_TIME_TEXT: "date-times", TIME_OF_DAY_TEXT: "times of day"}.get(self.time_typed.get(c, ""),
                                                                                             "numbers")
                 raise LogError(f"{self.path}: column '{c}' holds {kind} in its first lines but not in lines "
                                f"{lineno + 1}-{lineno + len(tab.data[c])}")
