@@ -760,3 +760,30 @@ def test_the_start_hold_keeps_the_offset_at_zero_then_learns_and_chunks_are_one_
     np.testing.assert_array_equal(np.concatenate(parts), h.theta)
     with pytest.raises(ValueError, match="start_hold"):
         KinematicGyro(start_hold=-1.0)
+
+
+@pytest.mark.parametrize("slope, said", [(0.019, "it reads like deg/s declared as rad/s"),
+                                         (55.0, "it reads like rad/s declared as deg/s"),
+                                         (-1.1, "it reads like the opposite sign, which invert = true"),
+                                         (-0.027, "another axis, sign or unit?")])
+def test_a_roll_rate_left_out_is_said_with_its_likely_mistake(slope, said):
+    """The design line names the usual mistake whose check slope the log's roll rate has (within the usable range's
+    factor of 2 of it: 1/57 for deg/s declared rad/s, 57 the other way, -1 for a flipped sign), else the usual
+    suspects (a pitch rate in its place reads -0.027 on a KITTI drive)."""
+    from roadbank.fleet.process import design_words
+
+    design = {"car": "sedan", "car_from": "fitted to the log", "quiet": False, "ay_noise": 0.08, "ay_floor": 0.06,
+              "ay_floor_ratio": 3.5, "roll_rate": slope}
+    words = design_words(design, "kinematic-pif")
+    assert f"its roll rate does not follow the roll in its ay (slope {slope:.2g}, not 0.5-2: {said}" in words, words
+    assert words.endswith("so it is not used")
+
+
+def test_an_ax_left_out_is_said_with_its_likely_mistake():
+    """ax in g declared m/s^2 reads its check slope 9.8 (the speed changes 9.8 times its integral): said so."""
+    from roadbank.fleet.process import design_words
+
+    design = {"car": "sedan", "car_from": "-", "quiet": False, "ay_noise": 0.08, "ay_floor": 0.06,
+              "ay_floor_ratio": 3.5, "roll_rate": 1.0, "ax": 9.7}
+    assert "its ax does not follow its speed (slope 9.7, not 0.5-2: it reads like g declared as m/s^2)" in \
+        design_words(design, "kinematic-pif")

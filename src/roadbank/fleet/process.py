@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ..constants import G as G_UNIT
 from ..defaults import ESTIMATOR as DEFAULT
 from ..estimators import OFFLINE, with_online_offsets
 from ..io import LogError
@@ -129,20 +130,36 @@ def design_words(design: dict, estimator: str) -> str:
         free = ", free of offset (an INS's)" if design.get("roll_rate_unbiased") else ""
         loud = f"{GYRO_MODELS[estimator]} (the log has a roll rate{free}{grade})" if gyro else "the low-pass blend"
         words += f", so {estimator} is {QUIET_MODELS[estimator] if design['quiet'] else loud}"
-    lo, hi = ROLL_SLOPE_RANGE
     if slope is not None and not gyro:
-        words += (f"; its roll rate does not follow the roll in its ay (slope {slope:.2g}, not {lo:g}-{hi:g}: another "
-                  "axis, sign or unit?), so it is not used")
+        words += f"; its roll rate does not follow the roll in its ay ({_off(slope, RATE_MISTAKES)}), so it is not used"
     if gyro and ax is not None and not roll_rate_usable(ax):
-        words += (f"; its ax does not follow its speed (slope {ax:.2g}, not {lo:g}-{hi:g}: another axis, sign or "
-                  "unit?), so the roll rate is not corrected for the grade")
+        words += (f"; its ax does not follow its speed ({_off(ax, AX_MISTAKES)}), so the roll rate is not corrected "
+                  "for the grade")
     q = design.get("pitch_rate")
     if gyro and roll_rate_usable(ax) and q is not None and not roll_rate_usable(q):
-        words += (f"; its pitch rate does not follow the pitch in its ax (slope {q:.2g}, not {lo:g}-{hi:g}: another "
-                  "axis, sign or unit?), so the grade's pitch comes from its ax alone")
+        words += (f"; its pitch rate does not follow the pitch in its ax ({_off(q, RATE_MISTAKES)}), so the grade's "
+                  "pitch comes from its ax alone")
     if design.get("source"):
         words += f"; written faster than their sensor, noise read at the sensor's rate: {design['source']}"
     return words
+
+
+#: what a roll or pitch rate's check slope (:func:`~roadbank.vehicle.conditions.roll_rate_slope`: 1 for a right
+#: channel) reads for a usual mistake: (the slope it gives, the mistake)
+RATE_MISTAKES = ((math.pi / 180, "deg/s declared as rad/s"), (180 / math.pi, "rad/s declared as deg/s"),
+                 (-1.0, "the opposite sign, which invert = true in a channel map turns"))
+#: ... and ``ax``'s (:func:`~roadbank.vehicle.conditions.ax_slope`)
+AX_MISTAKES = ((G_UNIT, "g declared as m/s^2"), (1 / G_UNIT, "m/s^2 declared as g"),
+               (-1.0, "the opposite sign, which invert = true in a channel map turns"))
+
+
+def _off(slope: float, mistakes) -> str:
+    """Words for a check slope outside :data:`~roadbank.vehicle.conditions.ROLL_SLOPE_RANGE`: the slope, and the
+    mistake of ``mistakes`` whose slope it is within that range's factors (0.5-2) of, else the usual suspects."""
+    lo, hi = ROLL_SLOPE_RANGE
+    named = [what for k, what in mistakes if lo <= slope / k <= hi]
+    return f"slope {slope:.2g}, not {lo:g}-{hi:g}: " + (f"it reads like {named[0]}" if named else
+                                                        "another axis, sign or unit?")
 
 
 class _BankStats:
