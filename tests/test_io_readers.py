@@ -298,6 +298,22 @@ def test_text_in_parquet_string_column(tmp_path):
         load_log(p)
 
 
+@pytest.mark.parametrize("stamp, kinds", [("2026-12-06 10:00:00.010", "date-times"), ("10:00:00.010", "times of day")])
+@pytest.mark.parametrize("chunk_rows", [None, 4])
+def test_time_stamps_as_text_in_parquet_say_how_to_store_them(tmp_path, stamp, kinds, chunk_rows):
+    """A Parquet time column of date-times or times of day written as text (not a timestamp): refused naming the
+    channel, the column, what it holds and how to store it (before: "non-numeric value" only), whole and streamed."""
+    from roadbank.io.stream import stream_log
+
+    cols = {k: list(v) for k, v in _sim_columns(10).items()}
+    cols["t"] = [None, " "] + [stamp] * 8
+    p = tmp_path / "s.parquet"
+    pq.write_table(pa.table(cols), p)
+    with pytest.raises(LogError, match=rf"channel 'time' \(column 't'\): holds {kinds} as text \('{stamp}', Arrow "
+                                       r"type string\), which a Parquet log stores as a timestamp column"):
+        load_log(p) if chunk_rows is None else list(stream_log(p, chunk_rows=chunk_rows))
+
+
 def test_blank_values_are_missing_samples_not_errors(tmp_path):
     p = _good_csv(tmp_path)
     lines = p.read_text().splitlines()

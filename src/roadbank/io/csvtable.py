@@ -139,6 +139,13 @@ def unwrap_days(seconds: np.ndarray, last: float | None = None) -> tuple[np.ndar
     return out, float(out[ok][-1])
 
 
+def time_text(field: str) -> str | None:
+    """What a text field holds if it is a time stamp written as text: ``"date-time"`` (ISO 8601) or
+    ``"time of day"`` (hh:mm:ss), else None."""
+    f = field.strip()
+    return "date-time" if _DATE_TIME.fullmatch(f) else "time of day" if _TIME_OF_DAY.fullmatch(f) else None
+
+
 def _decimal_comma_column(values: list[str]) -> bool:
     """Whether a column's fields are numbers with a decimal comma (``-0,25``; a whole number, ``12``, reads alike
     either way), at least one of them with the comma, besides missing-value tokens: no field has a decimal

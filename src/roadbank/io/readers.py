@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from .csvtable import read_csv
+from .csvtable import read_csv, time_text
 from .errors import LogError
 from .fields import column_label, not_numbers, parse_floats, unique_names
 from .files import existing_nonempty, must_exist, open_mdf
@@ -150,7 +150,15 @@ def arrow_column_floats(p, c: str, label: str, col, row0: int = 0, flag: bool = 
     if pa.types.is_integer(t) or pa.types.is_floating(t) or pa.types.is_boolean(t) or pa.types.is_decimal(t):
         return _to_float_numpy(col)
     if pa.types.is_string(t) or pa.types.is_large_string(t):
-        return parse_floats(p, c, label, col.to_pylist(), "row", range(row0, row0 + len(col)))
+        values = col.to_pylist()
+        first = next((v for v in values if v is not None and v.strip()), "")
+        kind = time_text(first)
+        if kind is not None:
+            kinds = {"date-time": "date-times", "time of day": "times of day"}[kind]
+            raise LogError(f"{p}: {label}: holds {kinds} as text ({first.strip()!r}, Arrow type {t}), which a Parquet "
+                           "log stores as a timestamp column (pandas: df[col] = pd.to_datetime(df[col]), for a time of "
+                           "day with its date); a CSV export of it is read as it is")
+        return parse_floats(p, c, label, values, "row", range(row0, row0 + len(col)))
     raise LogError(f"{p}: {label}: unsupported column type {t} (need numbers, timestamp or duration)")
 
 
