@@ -478,3 +478,20 @@ def test_cli_writes_the_module_and_refuses_dfc(tmp_path):
 def test_measure_c_step_ns_times_the_compiled_step():
     ns = measure_c_step_ns(BUILT["pif-modified"], repeats=1, min_samples=20_000)
     assert 0.5 < ns < 1e5
+
+
+@pytest.mark.parametrize("args, said", [(["--v-step", "1e-4"], "more than 4000"),
+                                        (["--v-max", "inf"], "both finite"), (["--v-max", "nan"], "both finite")])
+def test_a_schedule_too_fine_or_endless_is_refused_before_the_design(tmp_path, args, said):
+    """A speed grid of 950 000 speeds (--v-step 1e-4 m/s: gigabytes and minutes before) and an infinite or NaN last
+    speed (an OverflowError before) are refused naming the limit, with no output and no traceback; the library says
+    the same (estimators.make)."""
+    from roadbank import estimators
+    from roadbank.cli import main
+
+    res = CliRunner().invoke(main, ["export", "c", *args, "-o", str(tmp_path / "out")])
+    assert res.exit_code != 0 and said in res.output and "Traceback" not in res.output, res.output
+    assert not (tmp_path / "out").exists()
+    option = {"--v-step": "v_step", "--v-max": "v_max"}[args[0]]
+    with pytest.raises(ValueError, match=said):
+        estimators.make("pif-modified", **{option: float(args[1])})

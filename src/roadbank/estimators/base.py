@@ -35,6 +35,9 @@ from .synthesis import NoStabilisingSolution, using_reference_solvers
 #: Default speed grid of the gain schedules (m/s): v_min .. V_GRID_MAX.
 V_GRID_MAX = 100.0
 V_GRID_STEP = 0.25
+#: the most speeds a schedule's grid may have (``(v_max - v_min) / v_step``; the default 0.25 m/s to 100 m/s: 400): each
+#: is a table row and a design, so 0.0001 m/s took gigabytes and minutes before it was refused
+MAX_GRID_SPEEDS = 4000
 #: speeds (m/s) of the grid at which :attr:`Estimator.settle_time` is read: at most this many, spread from the lowest
 #: to :data:`SETTLE_V_MAX` (a car's road speeds; the grid reaches further so that no speed falls off it)
 SETTLE_SPEEDS = 8
@@ -202,9 +205,13 @@ class Estimator:
         for label, v in (("v_min", v_min), ("max_substep", max_substep), ("max_gap", max_gap)):
             if not np.isfinite(v) or v <= 0:
                 raise ValueError(f"{self.name}: {label} must be > 0, got {v}")
-        if not (v_max > v_min and 0 < v_step <= v_max - v_min):
-            raise ValueError(f"{self.name}: need v_min < v_max (got {v_min}, {v_max} m/s) and "
+        if not (np.isfinite(v_max) and v_max > v_min and 0 < v_step <= v_max - v_min):
+            raise ValueError(f"{self.name}: need v_min < v_max, both finite (got {v_min}, {v_max} m/s), and "
                              f"0 < v_step <= v_max - v_min (got {v_step} m/s)")
+        if (v_max - v_min) / v_step > MAX_GRID_SPEEDS:
+            raise ValueError(f"{self.name}: v_step {v_step:g} m/s gives {(v_max - v_min) / v_step:.0f} grid speeds "
+                             f"from {v_min:g} to {v_max:g} m/s, more than {MAX_GRID_SPEEDS} (a table of each, and "
+                             f"its design); use a v_step of at least {(v_max - v_min) / MAX_GRID_SPEEDS:.3g} m/s")
         self.v_step, self.v_max = float(v_step), float(v_max)
         self.v_min = float(v_min)
         self.roll = roll
