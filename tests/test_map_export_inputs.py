@@ -134,6 +134,20 @@ def test_map_cli_names_the_unmapped_log_and_fails_when_none_is_usable(logs, tmp_
     assert "no log could be mapped (2 not mapped" in res.stderr and "no GNSS fix" in res.stderr
 
 
+def test_a_log_given_twice_is_mapped_once(logs, tmp_path):
+    """The same log by its name and through a link to it: mapped once, saying so (before: every cell counted its
+    samples twice, "of 2 log(s)"); the map is the log's alone."""
+    link = tmp_path / "again.csv"
+    link.symlink_to(logs / "good.csv")
+    out = tmp_path / "m.parquet"
+    res = CliRunner().invoke(main, ["map", str(logs / "good.csv"), str(link), "--channels", str(logs / "ll.toml"),
+                                    "-e", "kinematic", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "given again (the same log): read once" in res.stderr and "of 1 log(s)" in res.stdout
+    alone, _ = map_logs([logs / "good.csv"], channels=logs / "ll.toml", estimator="kinematic")
+    np.testing.assert_array_equal(pq.read_table(out)["count"].to_numpy(), np.asarray(alone.table()["count"]))
+
+
 def test_map_names_a_missing_path(tmp_path):
     """Before: 'cannot tell the format from the suffix ''' for a folder name that does not exist. No path given
     exists: a usage error (exit code 2), as for estimate and identify (tests/test_cli_inputs_missing.py)."""

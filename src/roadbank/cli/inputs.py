@@ -99,6 +99,22 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
     return cmap, kept
 
 
+def once_each(paths: list) -> list:
+    """``paths`` with each log kept once where several name the same file or folder (a link to it, ``a/../a``): the
+    first, each other said on stderr. For commands that add the logs up (``map``: a log read twice would count its
+    samples twice in each cell)."""
+    seen: dict = {}
+    kept = []
+    for p in paths:
+        key = os.path.realpath(p)
+        if key in seen:
+            click.echo(f"warning: {p} is {seen[key]} given again (the same log): read once", err=True)
+            continue
+        seen[key] = p
+        kept.append(p)
+    return kept
+
+
 def check_output(path, option: str, directory: bool = False) -> None:
     """Exit with a one-line error (exit code 1) if ``path``, given as ``option``, cannot be written as a file
     (``directory``: created as a directory), e.g. ``error: -o: cannot write 'a.csv/o.csv': 'a.csv' is a file,
