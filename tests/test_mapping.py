@@ -385,3 +385,15 @@ def test_a_wrong_track_before_the_true_one_gives_way_after_the_relock_time():
     assert kept[first_true + int(RELOCK_S / 0.1) + 1:].all()
     noisy = proj.to_latlon(np.random.default_rng(1).normal(0.0, 10.0, t.size), 20.0 * t)     # white, 10 m
     assert np.isfinite(PositionJumps().add(t, *noisy)[0]).all()
+
+
+@pytest.mark.parametrize("args, said", [(["--cell", "1e9"], "'--cell'"), (["--cell", "0"], "'--cell'"),
+                                        (["--sectors", "100000"], "'--sectors'")])
+def test_grid_options_out_of_range_are_usage_errors(tmp_path, args, said):
+    """A 1e9 m cell (its centre at latitude 4534 deg before), a 0 m one (refused after the mapping had begun) and
+    100 000 heading sectors: usage errors naming the option before any log is read; the library refuses them too."""
+    res = CliRunner().invoke(main, ["map", str(tmp_path), "-o", str(tmp_path / "m.parquet"), *args])
+    assert res.exit_code == 2 and said in res.output and "mapping" not in res.output, res.output
+    with pytest.raises(ValueError):
+        BankMap(LocalProjection(48.0, 8.0), **({"cell_m": float(args[1])} if args[0] == "--cell"
+                                               else {"sectors": int(args[1])}))

@@ -10,6 +10,7 @@ import click
 
 from ..defaults import MAP_ESTIMATOR
 from ..io.readers import FORMATS
+from ..mapping.grid import CELL_RANGE_M, SECTOR_RANGE
 from .inputs import channel_map_and_logs, check_output, once_each
 from .options import vehicle_option
 from .parallel import pool_options, start_pool
@@ -39,8 +40,9 @@ def _origin(ctx, param, value):
               help="Estimator whose settled bank estimates are mapped (default: the offline kinematic smoother, "
                    "pif-smoother on a quiet log, kinematic-gyro-smoother on a loud one with a roll rate, as a map is "
                    "made after the drives; docs/estimators.md).")
-@click.option("--cell", "cell_m", type=float, default=10.0, show_default=True, help="Cell edge (m).")
-@click.option("--sectors", type=int, default=4, show_default=True,
+@click.option("--cell", "cell_m", type=click.FloatRange(*CELL_RANGE_M), default=10.0, show_default=True,
+              help="Cell edge (m).")
+@click.option("--sectors", type=click.IntRange(*SECTOR_RANGE), default=4, show_default=True,
               help="Heading sectors per cell (the bank's sign depends on the direction of travel); 1 = none.")
 @click.option("--origin", callback=_origin, default=None, metavar="LAT,LON",
               help="Origin of the map's plane (deg); default: the first fix rounded to 0.01 deg.")

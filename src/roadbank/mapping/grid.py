@@ -31,6 +31,13 @@ MAP_COLUMNS = ("ix", "iy", "sector", "lat_deg", "lon_deg", "heading_deg", "count
                "bank_mean_deg", "bank_std_deg", "bank_min_deg", "bank_max_deg")
 
 
+#: the cell sizes (m) a map may have: finer than a GNSS fix is no use, and a local projection holds a few tens of km
+#: (a 1e9 m cell put its centre at latitude 4534 deg)
+CELL_RANGE_M = (0.1, 10_000.0)
+#: heading sectors per cell: 1 (none) to 10 deg each
+SECTOR_RANGE = (1, 36)
+
+
 @dataclass
 class BankMap:
     """Running per-cell statistics of the road bank (see the module doc).
@@ -52,10 +59,11 @@ class BankMap:
     _logs: dict = field(default_factory=dict, repr=False)    # (ix, iy, s) -> set of log ids
 
     def __post_init__(self):
-        if not (self.cell_m > 0 and math.isfinite(self.cell_m)):
-            raise ValueError(f"cell size must be > 0 m, got {self.cell_m}")
-        if int(self.sectors) < 1:
-            raise ValueError(f"sectors must be >= 1, got {self.sectors}")
+        lo, hi = CELL_RANGE_M
+        if not lo <= self.cell_m <= hi:
+            raise ValueError(f"cell size must be {lo:g}-{hi:g} m, got {self.cell_m}")
+        if not SECTOR_RANGE[0] <= int(self.sectors) <= SECTOR_RANGE[1]:
+            raise ValueError(f"sectors must be {SECTOR_RANGE[0]}-{SECTOR_RANGE[1]}, got {self.sectors}")
         self.sectors = int(self.sectors)
 
     def add(self, lat_deg, lon_deg, phi_b, valid, log_id=0, course_rad=None) -> int:
