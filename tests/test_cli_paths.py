@@ -165,3 +165,18 @@ def test_a_time_column_of_iso_date_times_is_read_as_seconds(tmp_path, drive, fmt
     drive.assign(t=stamps).to_csv(tmp_path / "bad.csv", index=False)
     res = _estimate(tmp_path / "bad.csv", "-o", tmp_path / "x.csv")
     assert res.exit_code == 1 and "line 5" in res.output and "2026-13-06" in res.output, res.output
+
+
+@pytest.mark.parametrize("args", [["estimate", "LOG", "-o", ""], ["reproduce", "-o", ""], ["map", "LOG", "-o", ""],
+                                  ["estimate", "", "-o", "OUT"], ["validate", "kitti", ""],
+                                  ["simulate", "s-curve", "-o", " "]])
+def test_an_empty_path_is_a_usage_error(tmp_path, monkeypatch, args):
+    """An empty path (``-o "$OUT"`` with OUT unset) is a usage error naming the option; before, ``-o ""`` wrote into
+    the current folder (estimate its outputs, reproduce its report) and an empty LOGS read every log there."""
+    monkeypatch.chdir(tmp_path)
+    log = tmp_path / "log.csv"
+    log.write_text("t,vx,ay,r\n0,10,0,0\n0.1,10,0,0\n")
+    args = [str(log) if a == "LOG" else str(tmp_path / "out.csv") if a == "OUT" else a for a in args]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 2 and "an empty path" in res.output, res.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["log.csv"]

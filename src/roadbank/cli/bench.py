@@ -9,11 +9,11 @@ from pathlib import Path
 
 import click
 
-from .options import checked_output
+from .options import PathOption, checked_output
 
 
 @click.command()
-@click.option("-o", "--output", type=click.Path(path_type=Path), default=None, callback=checked_output(),
+@click.option("-o", "--output", type=PathOption(path_type=Path), default=None, callback=checked_output(),
               help="Write the report here: markdown (e.g. docs/benchmarks.md), or a self-contained page for .html.")
 @click.option("--quick", is_flag=True, help="Shorter repeats and peers; finishes within 45 s (no reproduce).")
 @click.option("--tiny", is_flag=True, help="A 10 s log, for tests: checks the runner, not the speed.")
@@ -21,7 +21,7 @@ from .options import checked_output
 @click.option("--fleet-logs", type=click.IntRange(min=0), default=0, show_default=True, metavar="N",
               help="Also run a fleet at scale: N Parquet logs of 10 min at 100 Hz end to end on 1 and 2 "
                    "workers (written to a temporary folder, about 1 MB a log; 0: not run).")
-@click.option("--data", type=click.Path(exists=True, file_okay=False, path_type=Path), default=None, metavar="DIR",
+@click.option("--data", type=PathOption(exists=True, file_okay=False, path_type=Path), default=None, metavar="DIR",
               help="Also score the default's targets on the real data sets under DIR (e.g. ../shared/data: KITTI "
                    "drives, comma2k19 segments), as `roadbank validate all` does; not timed.")
 def bench(output, quick, tiny, as_json, fleet_logs, data):

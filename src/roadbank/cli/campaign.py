@@ -13,13 +13,13 @@ from pathlib import Path
 
 import click
 
-from .options import SEED, checked_output, vehicle_option
+from .options import PathOption, SEED, checked_output, vehicle_option
 from .parallel import scheduler_option
 
 
 @click.command()
 @click.option("--runs", "-n", type=click.IntRange(min=1), required=True, help="Number of runs.")
-@click.option("--output", "-o", "outdir", required=True, type=click.Path(file_okay=False, path_type=Path),
+@click.option("--output", "-o", "outdir", required=True, type=PathOption(file_okay=False, path_type=Path),
               callback=checked_output(directory=True), help="Campaign directory (created).")
 @scheduler_option("Dask scheduler address (tcp://host:8786 or host:8786). Default: a local cluster.",
                   metavar="ADDRESS")

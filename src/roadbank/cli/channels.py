@@ -7,7 +7,7 @@ from pathlib import Path
 
 import click
 
-from .options import checked_output
+from .options import PathOption, checked_output
 
 
 def read_columns(path: Path, fmt: str):
@@ -44,8 +44,8 @@ def read_columns(path: Path, fmt: str):
 
 
 @click.command()
-@click.argument("log", type=click.Path(exists=True, path_type=Path))
-@click.option("-o", "--output", required=True, type=click.Path(path_type=Path), callback=checked_output(),
+@click.argument("log", type=PathOption(exists=True, path_type=Path))
+@click.option("-o", "--output", required=True, type=PathOption(path_type=Path), callback=checked_output(),
               help="The channel map to write (.toml), for `roadbank estimate LOG --channels map.toml`.")
 @click.option("--format", "fmt", type=click.Choice(["csv", "parquet", "mdf4"]), default=None,
               help="Input format. Default: from the file suffix.")

@@ -14,7 +14,7 @@ from ..io.channels import steering_ratio_problem
 from ..io.errors import LogError
 from ..io.readers import FORMATS
 from .inputs import channel_map_and_logs, check_output
-from .options import vehicle_option
+from .options import PathOption, vehicle_option
 from .parallel import scheduler_option
 
 
@@ -46,8 +46,8 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
 
 
 @click.command()
-@click.argument("logs", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option("--channels", "channels", type=click.Path(path_type=Path), default=None,
+@click.argument("logs", nargs=-1, required=True, type=PathOption(path_type=Path))
+@click.option("--channels", "channels", type=PathOption(path_type=Path), default=None,
               help="Channel map (TOML). Default: roadbank's own columns (roadbank simulate files).")
 @click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default=None,
               help="Input format. Default: from the file suffix or the directory layout (docs/io.md).")
@@ -58,12 +58,12 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
                                       "log pif-adaptive; on a loud log with a roll rate kinematic-gyro (README). "
                                       "pif-modified is roadbank's default tuning of the paper's filter; "
                                       "pif-paper the same filter with the paper's Table 4 weights.")
-@click.option("-o", "--output", required=True, type=click.Path(),
+@click.option("-o", "--output", required=True, type=PathOption(),
               help="Output .csv/.parquet for one log; a directory for several, or for one log a path ending "
                    "in '/' (created if missing).")
 @click.option("--output-format", type=click.Choice(["csv", "parquet"]), default="parquet", show_default=True,
               help="Table format of the files written into an output directory.")
-@click.option("--plot", type=click.Path(path_type=Path), default=None,
+@click.option("--plot", type=PathOption(path_type=Path), default=None,
               help="PNG of theta, phi_b and their error against the log's truth or reference roll "
                    "(deg) vs time, flagged spans shaded; for several logs, a directory of PNGs.")
 @click.option("--steering-ratio", type=float, default=None,

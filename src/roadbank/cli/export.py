@@ -14,7 +14,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .options import vehicle_option
+from .options import PathOption, vehicle_option
 
 
 def _rate(ctx, param, value):
@@ -60,7 +60,7 @@ def export():
 @click.option("--online-offsets", "online_offsets", is_flag=True,
               help="Add the online sensor-offset learner (<prefix>_step_learning: yaw-rate offset at "
                    "standstill, steering offset on straights).")
-@click.option("--log", "log", type=click.Path(path_type=Path), default=None,
+@click.option("--log", "log", type=PathOption(path_type=Path), default=None,
               help="A recorded drive of the car (any format `roadbank estimate` reads): the module is designed "
                    "for its conditions as `roadbank estimate` designs for it (the road noise of its first minute "
                    "of driving, quiet or loud, the running noise's reference; its sample rate unless --rate).")
@@ -70,10 +70,10 @@ def export():
                    "the roll rate in place of the steering angle and corrects it for the grade "
                    "(<prefix>_roll_rate, from ax and, where the log's pitch rate is an INS's, the pitch rate). "
                    "Without it the module reads the ESP channels (a log's roll rate is not used).")
-@click.option("--channels", "channels", type=click.Path(path_type=Path), default=None,
+@click.option("--channels", "channels", type=PathOption(path_type=Path), default=None,
               help="Channel map (TOML) of --log, as for `roadbank estimate` (only with --log).")
 @click.option("--format", "fmt", default=None, help="Format of --log (default: from its suffix; only with --log).")
-@click.option("--output", "-o", required=True, type=click.Path(file_okay=False, path_type=Path),
+@click.option("--output", "-o", required=True, type=PathOption(file_okay=False, path_type=Path),
               help="Output directory (created if missing).")
 def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: str | None,
                  v_step: float | None, v_max: float | None, module_name: str | None, fixed_rate: bool | None,

@@ -10,7 +10,7 @@ from pathlib import Path
 import click
 
 from ..constants import G
-from .options import FiniteRange, checked_output, vehicle_option
+from .options import FiniteRange, PathOption, checked_output, vehicle_option
 
 #: ``--ay-max`` (m/s^2): above the corner threshold (``IdentifySettings.corner_ay``, 1 m/s^2; a lower linear
 #: range leaves no corner) and at most 1 g (beyond it no tyre is linear)
@@ -62,13 +62,13 @@ def result_json(result, failed) -> dict:
 
 
 @click.command()
-@click.argument("logs", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.argument("logs", nargs=-1, required=True, type=PathOption(path_type=Path))
 @vehicle_option("Its m, Iz, Lf, Lr and roll data are taken as known; the output starts from it.")
-@click.option("--channels", "channels", type=click.Path(path_type=Path), default=None,
+@click.option("--channels", "channels", type=PathOption(path_type=Path), default=None,
               help="Channel map (TOML), as for `roadbank estimate`.")
 @click.option("--format", "fmt", default=None,
               help="Input format (csv, parquet, mdf4, comma2k19, ...). Default: from the file suffix.")
-@click.option("-o", "--output", required=True, type=click.Path(path_type=Path),
+@click.option("-o", "--output", required=True, type=PathOption(path_type=Path),
               callback=checked_output(suffixes=(".toml",), what="identify writes a vehicle file"),
               help="Vehicle file (.toml) to write: the base car with the identified Cf, Cr and an "
                    "[identified] table.")

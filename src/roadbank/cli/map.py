@@ -12,7 +12,7 @@ from ..defaults import MAP_ESTIMATOR
 from ..io.readers import FORMATS
 from ..mapping.grid import CELL_RANGE_M, SECTOR_RANGE
 from .inputs import channel_map_and_logs, check_output, once_each
-from .options import vehicle_option
+from .options import PathOption, vehicle_option
 from .parallel import pool_options, start_pool
 
 
@@ -27,12 +27,12 @@ def _origin(ctx, param, value):
 
 
 @click.command(name="map")
-@click.argument("logs", nargs=-1, required=True, type=click.Path(path_type=Path))
-@click.option("-o", "--output", required=True, type=click.Path(path_type=Path),
+@click.argument("logs", nargs=-1, required=True, type=PathOption(path_type=Path))
+@click.option("-o", "--output", required=True, type=PathOption(path_type=Path),
               help="The map table (.parquet): one row per cell and heading sector.")
-@click.option("--geojson", type=click.Path(path_type=Path), default=None, help="Also write the cells as GeoJSON.")
-@click.option("--png", type=click.Path(path_type=Path), default=None, help="Also draw the map (PNG).")
-@click.option("--channels", type=click.Path(path_type=Path), default=None,
+@click.option("--geojson", type=PathOption(path_type=Path), default=None, help="Also write the cells as GeoJSON.")
+@click.option("--png", type=PathOption(path_type=Path), default=None, help="Also draw the map (PNG).")
+@click.option("--channels", type=PathOption(path_type=Path), default=None,
               help="Channel map (TOML) with 'latitude' and 'longitude' channels (docs/io.md).")
 @click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default=None,
               help="Input format (default: from the suffix / directory layout).")

@@ -77,6 +77,16 @@ class FiniteRange(click.FloatRange):
 SEED = click.IntRange(0, 2**32 - 1)
 
 
+class PathOption(click.Path):
+    """A path given on the command line (:class:`click.Path`), never an empty one: ``-o "$OUT"`` with ``OUT`` unset
+    wrote into the current folder, and an empty log path read every log there."""
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and not value.strip():
+            self.fail("an empty path (an unset shell variable?): give a file or folder", param, ctx)
+        return super().convert(value, param, ctx)
+
+
 def output_path_problem(path, *, directory: bool = False, suffixes: tuple[str, ...] = (),
                         next_to: tuple[str, ...] = (), what: str = "") -> str | None:
     """Why ``path`` cannot be an output, as far as can be told before the work; None if it can be.

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from .options import SEED, checked_output, vehicle_option
+from .options import PathOption, SEED, checked_output, vehicle_option
 
 
 def _split(values):
@@ -47,7 +47,7 @@ class _CellProgress:
 
 
 @click.command()
-@click.option("-o", "--outdir", type=click.Path(file_okay=False, path_type=Path), required=True,
+@click.option("-o", "--outdir", type=PathOption(file_okay=False, path_type=Path), required=True,
               callback=checked_output(directory=True),
               help="Output folder for figures, tables and the report.")
 @click.option("--scenarios", multiple=True,
@@ -58,7 +58,7 @@ class _CellProgress:
                    "is roadbank's default tuning, pif-paper the paper's Table 4 (the claims' PIF).")
 @click.option("--jobs", "-j", type=click.IntRange(min=1), default=None, help="Parallel processes (default: all cores).")
 @click.option("--seed", type=SEED, default=0, show_default=True, help="Sensor-noise seed.")
-@click.option("--docs", "docs_results", type=click.Path(dir_okay=False, path_type=Path), default=None,
+@click.option("--docs", "docs_results", type=PathOption(dir_okay=False, path_type=Path), default=None,
               callback=checked_output(),
               help="Also write the tables to this markdown file (e.g. docs/results.md).")
 @vehicle_option("The paper's scenarios and conditions with this car as plant (and its sensors) and as "

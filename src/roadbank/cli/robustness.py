@@ -6,11 +6,11 @@ from pathlib import Path
 
 import click
 
-from .options import checked_output
+from .options import PathOption, checked_output
 
 
 @click.command()
-@click.option("--output", "-o", required=True, type=click.Path(dir_okay=False, path_type=Path),
+@click.option("--output", "-o", required=True, type=PathOption(dir_okay=False, path_type=Path),
               callback=checked_output(next_to=(".csv",)),
               help="Report to write: markdown (e.g. docs/robustness.md) or, ending in .html, a "
                    "self-contained HTML page; a .csv with the same stem is written too.")

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import click
 
-from .options import SEED, checked_output, vehicle_option
+from .options import PathOption, SEED, checked_output, vehicle_option
 
 FORMATS = (".parquet", ".csv")
 
@@ -50,7 +50,7 @@ def write_result(result, path: Path, vehicle: str | None = None) -> None:
 @click.option("--condition", "-c", default="nominal", show_default=True,
               help="Plant/sensor condition: nominal, low-mu, misaligned, cf120, cf50, cf150.")
 @click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of the sensor noise.")
-@click.option("--output", "-o", required=True, type=click.Path(dir_okay=False, path_type=Path),
+@click.option("--output", "-o", required=True, type=PathOption(dir_okay=False, path_type=Path),
               callback=checked_output(),
               help="Output file, .parquet or .csv.")
 @vehicle_option("The simulated car (plant: its parameters and [plant] table; sensors: its [sensors]).")

@@ -15,13 +15,13 @@ from pathlib import Path
 
 import click
 
-from .options import SEED, checked_output, vehicle_option
+from .options import PathOption, SEED, checked_output, vehicle_option
 from .parallel import scheduler_option
 
 
 @click.command()
 @vehicle_option("Its parameters design the estimators; its sensors and plant data shape the drives.")
-@click.option("-o", "--output", "out", required=True, type=click.Path(dir_okay=False, path_type=Path),
+@click.option("-o", "--output", "out", required=True, type=PathOption(dir_okay=False, path_type=Path),
               callback=checked_output(suffixes=(".toml",), what="tune writes a vehicle file"),
               help="Vehicle file to write, .toml (the input car plus the tuned [tuning] and [scores] tables); "
                    "checked before the tuning starts (its folder is created if missing).")

@@ -10,7 +10,7 @@ from pathlib import Path
 import click
 
 from ..report.html import write_document
-from .options import SEED, checked_output, vehicle_option
+from .options import PathOption, SEED, checked_output, vehicle_option
 from .parallel import pool_options, start_pool
 
 _VEHICLE = vehicle_option("The estimators are designed for this car: its parameters and [tuning] tables.",
@@ -131,11 +131,11 @@ _FLAGS = {"output": "-o", "names": "-e", "no_sensitivity": "--no-sensitivity", "
 
 
 @validate.command("comma2k19")
-@click.argument("path", type=click.Path(path_type=Path))
+@click.argument("path", type=PathOption(path_type=Path))
 @click.option("--json", "as_json", is_flag=True,
               help='Print {estimator: {"r", "rms_deg", "offset_deg"}} on stdout; when PATH is a folder holding '
                    'segments {"segments": {segment: {estimator: ...}}, "errors": [...], "notes": [...]}.')
-@click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
+@click.option("-o", "--output", type=PathOption(path_type=Path), default=None,
               callback=checked_output(next_to=(".png",)),
               help="Write the markdown report here (e.g. docs/real-data.md; .html: a self-contained page) "
                    "and a PNG next to it (one per segment).")
@@ -203,10 +203,10 @@ def _write_kitti_figures(v, output: Path) -> dict:
 
 
 @validate.command("kitti")
-@click.argument("paths", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.argument("paths", nargs=-1, required=True, type=PathOption(path_type=Path))
 @click.option("--json", "as_json", is_flag=True,
               help='Print {"drives": {drive: {estimator: scores}}, "pooled": {...}, "errors": [...]} on stdout.')
-@click.option("-o", "--output", type=click.Path(path_type=Path), default=None, callback=checked_output(),
+@click.option("-o", "--output", type=PathOption(path_type=Path), default=None, callback=checked_output(),
               help="Write the markdown report (KITTI section; .html: a self-contained page) here and one "
                    "PNG per drive next to it.")
 @_ESTIMATORS
@@ -261,8 +261,8 @@ def kitti(ctx, paths, as_json, output, names, no_sensitivity, vehicle, workers, 
 
 
 @validate.command("all")
-@click.argument("data_dir", type=click.Path(path_type=Path, exists=True, file_okay=False))
-@click.option("-o", "--output", type=click.Path(path_type=Path), required=True,
+@click.argument("data_dir", type=PathOption(path_type=Path, exists=True, file_okay=False))
+@click.option("-o", "--output", type=PathOption(path_type=Path), required=True,
               callback=checked_output(next_to=(".png",)),
               help="The combined report (e.g. docs/real-data.md; .html: a self-contained page); figures "
                    "are written next to it.")
@@ -355,7 +355,7 @@ def _sim_command(names, drives: int | None, seed: int, output, sources: bool = T
 @click.option("--json", "as_json", is_flag=True,
               help='Print {"estimators": {name: {"known" | "undescribed": {"cars", "all", "families"}}}, '
                    '"error_sources": {...}, ...} (deg) on stdout.')
-@click.option("-o", "--output", type=click.Path(path_type=Path), default=None, callback=checked_output(),
+@click.option("-o", "--output", type=PathOption(path_type=Path), default=None, callback=checked_output(),
               help="Write the markdown document here (e.g. docs/sim-validation.md; .html: a self-contained page).")
 def sim(names, drives, seed, sources, as_json, output):
     """Score the estimators on the simulated validation set of every shipped car (roadbank tune's
