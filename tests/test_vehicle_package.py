@@ -207,3 +207,19 @@ def test_make_estimator_designs_with_the_rule():
     R, Q_ay = noise_densities(car, 20.0, log_ay_noise=0.4)
     assert est.R[0, 0] == pytest.approx(R, rel=1e-12) and est.Q_ay == pytest.approx(Q_ay, rel=1e-12)
     assert np.isfinite(est.R).all()
+
+
+def test_an_oversteering_car_is_refused_naming_its_critical_speed(tmp_path):
+    """Cf 1.5 MN/rad with Cr 10 kN/rad, each plausible alone: the linear bicycle model diverges above 6.4 m/s (its
+    critical speed, by hand: 2.7 sqrt(1.5e6 1e4 / (1500 (1.2 1.5e6 - 1.5 1e4))) = 6.39 m/s), and simulate drove it
+    into a spin as a success. Refused on loading, naming the keys and the speed; the shipped cars understeer."""
+    from roadbank.vehicle import VehicleFileError, load_vehicle
+
+    f = tmp_path / "over.toml"
+    f.write_text("[vehicle]\nm = 1500\nIz = 2500\nLf = 1.2\nLr = 1.5\nCf = 1500000\nCr = 10000\n")
+    with pytest.raises(VehicleFileError, match=r"\[vehicle\] Cf, Cr, Lf, Lr, m: the car oversteers .* unstable above "
+                                               r"6\.39 m/s"):
+        load_vehicle(f)
+    for car in ("suv-paper", "sedan", "compact", "van"):
+        v = load_vehicle(car).params
+        assert v.Lf * v.Cf < v.Lr * v.Cr, car

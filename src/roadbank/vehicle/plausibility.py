@@ -52,6 +52,9 @@ PLAUSIBLE: dict[str, tuple[str, tuple[float, float] | None]] = {
 }
 #: plausible wheelbase Lf + Lr (m)
 WHEELBASE_RANGE = (1.8, 4.5)
+#: the lowest speed (m/s, 180 km/h) at which a vehicle file's car may become unstable by oversteer
+#: (:func:`check_critical_speed`); the shipped cars understeer
+MIN_CRITICAL_SPEED = 50.0
 
 #: [sensors] keys: dimension, plausible range (SI)
 SENSOR_FIELDS: dict[str, tuple[str, tuple[float, float] | None]] = {
@@ -326,6 +329,7 @@ def check_document(doc: dict, source: str) -> None:
     if not WHEELBASE_RANGE[0] <= L <= WHEELBASE_RANGE[1]:
         raise VehicleFileError(f"{source}: [vehicle] Lf + Lr = {L:.6g} m: wheelbase outside the plausible "
                                f"range {WHEELBASE_RANGE[0]:g} .. {WHEELBASE_RANGE[1]:g} m")
+    check_critical_speed(source, veh)
     for key, (dim, rng) in SENSOR_FIELDS.items():
         checked_value(source, "sensors", key, doc["sensors"][key], dim, rng)
     for key, value in doc["plant"].items():
@@ -335,6 +339,23 @@ def check_document(doc: dict, source: str) -> None:
     for table in ("tuning", "scores", "identified"):
         for sub, values in doc[table].items():
             check_table_entry(source, table, sub, values)
+
+
+def check_critical_speed(source: str, veh: dict) -> None:
+    r"""VehicleFileError for a car whose linear bicycle model oversteers so much that it is unstable below
+    :data:`MIN_CRITICAL_SPEED`: with :math:`L_f C_f > L_r C_r` the yaw motion diverges above
+    :math:`v_c = L \sqrt{C_f C_r / (m (L_f C_f - L_r C_r))}` (SI values of ``veh``, the ``[vehicle]`` table). Each
+    value may be plausible alone (Cf 1.5 MN/rad with Cr 10 kN/rad: 6.4 m/s); road cars understeer."""
+    margin = veh["Lf"] * veh["Cf"] - veh["Lr"] * veh["Cr"]
+    if margin <= 0:
+        return
+    L = veh["Lf"] + veh["Lr"]
+    v_crit = L * math.sqrt(veh["Cf"] * veh["Cr"] / (veh["m"] * margin))
+    if v_crit < MIN_CRITICAL_SPEED:
+        raise VehicleFileError(f"{source}: [vehicle] Cf, Cr, Lf, Lr, m: the car oversteers (Lf Cf = "
+                               f"{veh['Lf'] * veh['Cf']:.4g} > Lr Cr = {veh['Lr'] * veh['Cr']:.4g} N m/rad) and is "
+                               f"unstable above {v_crit:.3g} m/s ({3.6 * v_crit:.0f} km/h); a road car understeers: "
+                               "check the cornering stiffnesses and the axle distances (front and rear swapped?)")
 
 
 def check_table_entry(source: str, table: str, sub: str, values) -> None:
