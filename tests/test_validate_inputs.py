@@ -172,3 +172,16 @@ def test_command_line_shows_the_options_given():
                        [("-o", Path("r.md")), ("-e", "kinematic-pif"), ("--no-sensitivity", True), ("--json", False),
                         ("--vehicle", None), ("--workers", 2)])
     assert cmd == "roadbank validate kitti 'my drives' b -o r.md -e kinematic-pif --no-sensitivity --workers 2"
+
+
+@pytest.mark.skipif(not KITTI.is_dir(), reason=f"KITTI drives absent at {KITTI}")
+def test_validate_kitti_finds_drives_at_any_depth(tmp_path):
+    """A folder with one drive in it and another a level further down (links to the shared drives): both scored,
+    as ``validate all`` and ``estimate`` find them (before: the deeper one was passed over without a word)."""
+    (tmp_path / "nest" / "a").mkdir(parents=True)
+    (tmp_path / "nest" / "d47").symlink_to(KITTI / "2011_10_03_drive_0047")
+    (tmp_path / "nest" / "a" / "d70").symlink_to(KITTI / "2011_09_26_drive_0070")
+    res = CliRunner().invoke(main, ["validate", "kitti", str(tmp_path / "nest"), "--json", "--no-sensitivity",
+                                    "-e", "kinematic-pif"])
+    assert res.exit_code == 0, res.output
+    assert sorted(json.loads(res.stdout)["drives"]) == ["d47", "d70"]

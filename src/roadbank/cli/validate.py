@@ -71,6 +71,27 @@ def _segments_under(path: Path) -> tuple[list[Path], list[str], bool]:
     return segments, found["notes"] + notes, False
 
 
+def _drives_under(paths) -> tuple[list[Path], list[str]]:
+    """The KITTI drives of ``validate kitti PATHS`` and the notes on finding them: a path that is a drive (or its
+    ``oxts`` folder) as given; a folder of drives, the drives at any depth under it, as ``validate all`` finds them
+    (before: only those directly in it, the others passed over without a word); a path with none, as given (reading
+    it says why)."""
+    from ..io.kitti import find_oxts_dirs
+    from ..validation.document import find_datasets
+
+    drives: list[Path] = []
+    notes: list[str] = []
+    for p in paths:
+        drive = find_oxts_dirs(p, broken=True) in ([p], [p / "oxts"])
+        found = find_datasets(p) if p.is_dir() and not drive else None
+        if found is None or not found["kitti"]:
+            drives.append(p)
+        else:
+            drives += found["kitti"]
+            notes += found["notes"]
+    return drives, notes
+
+
 def _run_segments(pool, segments, **kwargs) -> tuple[list, list[str]]:
     """Every segment validated, one pool task each: ``(results, errors)``, each error naming its segment
     (the others still scored); results named apart (:func:`roadbank.validation.comma2k19.named_apart`)."""
@@ -229,11 +250,12 @@ def kitti(ctx, paths, as_json, output, names, no_sensitivity, vehicle, workers, 
     from ..validation.kitti_report import drive_png, markdown, to_json
 
     sel = _names(names)
+    drives, found = _drives_under(paths)
     with contextlib.ExitStack() as stack:
         pool = start_pool(stack, workers, scheduler)
-        v = validate_kitti(paths, names=sel, sensitivity=not no_sensitivity, pool=pool,
+        v = validate_kitti(drives, names=sel, sensitivity=not no_sensitivity, pool=pool,
                            figure=None if output is None else drive_png, **_car(vehicle))
-    _warn(v.notes)
+    _warn(found + v.notes)
     for e in v.errors:
         click.echo(f"error: {e}", err=True)
     if not v.drives:
