@@ -180,3 +180,22 @@ def test_an_empty_path_is_a_usage_error(tmp_path, monkeypatch, args):
     res = CliRunner().invoke(main, args)
     assert res.exit_code == 2 and "an empty path" in res.output, res.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["log.csv"]
+
+
+@pytest.mark.parametrize("command, keys", [(["validate", "kitti", "EMPTY"], {"drives", "errors", "notes"}),
+                                           (["validate", "comma2k19", "EMPTY"], {"segments", "errors", "notes"}),
+                                           (["identify", "BAD", "-o", "OUT"], {"quantities", "logs", "error"})])
+def test_json_is_printed_when_every_input_fails(tmp_path, command, keys):
+    """--json with nothing read: exit 1 and a JSON object on stdout with the command's keys, nothing scored and the
+    reasons (before: an empty stdout, while estimate --json printed one)."""
+    import json
+
+    (tmp_path / "empty").mkdir()
+    (tmp_path / "bad.csv").write_text("")
+    args = [str(tmp_path / "empty") if a == "EMPTY" else str(tmp_path / "bad.csv") if a == "BAD"
+            else str(tmp_path / "id.toml") if a == "OUT" else a for a in command]
+    res = CliRunner().invoke(main, [*args, "--json"])
+    assert res.exit_code == 1, res.output
+    out = json.loads(res.stdout)
+    assert set(out) == keys, out
+    assert str(tmp_path) in json.dumps(out)            # the reason names the input

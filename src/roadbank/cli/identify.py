@@ -6,6 +6,7 @@ import json
 import math
 import sys
 from pathlib import Path
+from typing import NoReturn
 
 import click
 
@@ -59,6 +60,16 @@ def result_json(result, failed) -> dict:
                   "seconds": {k: float(v) for k, v in r.seconds.items()}, "n_corners": r.n_corners}
                  for r in result.logs] + [{"source": str(p), "used": False, "problem": why} for p, why in failed],
     }
+
+
+def _stop(error: str, as_json: bool, failed) -> NoReturn:
+    """Exit 1 with ``error`` on stderr and, with ``--json``, the summary's keys on stdout (nothing identified; the
+    logs not read or not used, with why), so that a script reads JSON whatever happened."""
+    click.echo(f"error: {error}", err=True)
+    if as_json:
+        click.echo(json.dumps({"quantities": {}, "logs": [{"source": str(p), "used": False, "problem": why}
+                                                          for p, why in failed], "error": error}, indent=2))
+    sys.exit(1)
 
 
 @click.command()
@@ -117,18 +128,16 @@ def identify(logs, vehicle, channels, fmt, output, straight_bank, ay_max, as_jso
         for w in log.warnings:
             click.echo(f"warning: {w}", err=True)
     if not loaded:
-        click.echo("error: no log could be read; nothing identified", err=True)
-        sys.exit(1)
+        _stop("no log could be read; nothing identified", as_json, failed)
     try:
         result = run_identify(loaded, params, settings)
     except Exception as exc:  # never a traceback from the command line
-        click.echo(f"error: identification failed: {type(exc).__name__}: {exc}", err=True)
-        sys.exit(1)
+        _stop(f"identification failed: {type(exc).__name__}: {exc}", as_json, failed)
     if not any(r.used for r in result.logs):
         for r in result.logs:
             click.echo(f"NOT USED {r.source}: {r.problem}", err=True)
-        click.echo("error: no usable log; nothing identified", err=True)
-        sys.exit(1)
+        failed += [(r.source, r.problem) for r in result.logs]
+        _stop("no usable log; nothing identified", as_json, failed)
     if as_json:
         click.echo(json.dumps(result_json(result, failed), indent=2))
         for name, why in result.refusals().items():

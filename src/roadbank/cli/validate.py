@@ -187,6 +187,8 @@ def comma2k19(ctx, path, as_json, output, names, no_sensitivity, vehicle, worker
     if not results:
         if not single:
             click.echo(f"error: {path}: no comma2k19 segment could be read", err=True)
+        if as_json:             # what a script reads: the same keys, nothing scored
+            click.echo(json.dumps({"segments": {}, "errors": errors, "notes": notes}, indent=2))
         sys.exit(1)
     if output is not None:
         figs = _segment_figures(results, output)
@@ -260,6 +262,8 @@ def kitti(ctx, paths, as_json, output, names, no_sensitivity, vehicle, workers, 
         click.echo(f"error: {e}", err=True)
     if not v.drives:
         click.echo("error: no KITTI drive could be read", err=True)
+        if as_json:             # what a script reads: the same keys, nothing scored
+            click.echo(json.dumps({"drives": {}, "errors": v.errors, "notes": found + v.notes}, indent=2))
         sys.exit(1)
     if output is not None:
         figs = _write_kitti_figures(v, output)
