@@ -250,3 +250,16 @@ def test_export_c_refuses_log_options_without_a_log(option, tmp_path):
     res = CliRunner().invoke(main, ["export", "c", "-e", "kinematic", *opt, "-o", str(tmp_path / "c")])
     assert res.exit_code == 2 and f"{option[0]} describes --log, which is not given" in res.output
     assert not (tmp_path / "c").exists()
+
+
+def test_a_log_far_from_the_maps_origin_is_warned_about(logs, tmp_path):
+    """The same drive moved 1.5 deg of latitude (about 167 km) north, after the drive at the origin: mapped, with a
+    warning naming it and its distance (its flat cells are distorted beyond 50 km); the drive at the origin gets
+    none. Before: mapped without a word."""
+    cols = {k: v for k, v in _drive().items() if k != "delta_f"}
+    far = _csv(tmp_path / "far.csv", {**cols, "latitude": cols["latitude"] + 1.5})
+    bmap, recs = map_logs([logs / "good.csv", far], channels=logs / "ll.toml", estimator="kinematic")
+    assert [r.status for r in recs] == ["ok", "ok"] and recs[1].mapped > 500
+    assert not [w for w in recs[0].warnings if "from the map's origin" in w]
+    said = [w for w in recs[1].warnings if "from the map's origin" in w]
+    assert said and said[0].startswith(f"{far}: positions up to 16") and "beyond 50 km" in said[0], recs[1].warnings

@@ -35,6 +35,11 @@ class MappedLog:
     warnings: list[str] = field(default_factory=list)
 
 
+#: a fix farther than this (m) from the map's origin is warned about: the local projection's scale error is below
+#: 0.1 % within it (:mod:`roadbank.mapping.geo`)
+FAR_M = 50_000.0
+
+
 def fixes(lat_deg, lon_deg) -> tuple[np.ndarray, np.ndarray]:
     """Positions (deg) with those that are no fix NaN: a latitude or longitude that is not finite, and exactly
     0, 0 (what a GNSS receiver without a fix logs; no road there), both of the pair."""
@@ -164,6 +169,7 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
     correct = (lambda x: x) if s.vehicle is None else s.vehicle.correct
     params = s.vehicle.params if s.vehicle is not None else s.params
     rec, first, part = MappedLog(str(path)), None, None
+    far = 0.0                    # the farthest fix from the map's origin (m)
     track = CourseStream()       # the course of each sample over the whole log, not its chunk
     seen, cmap, jumps = FixCount(), None, PositionJumps()
 
@@ -193,8 +199,16 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
             out = est.run(correct(chunk.signals), reset=(k == 0), lookahead=None if nxt is None else correct(nxt))
             rec.samples += len(out.t)
             if part is not None:
-                add(*track.push(*part.projection.to_en(lat, lon), lat, lon, out.phi_b, out.settled))
+                east, north = part.projection.to_en(lat, lon)
+                with np.errstate(invalid="ignore"):
+                    far = max(far, float(np.nanmax(np.hypot(east, north), initial=0.0)))
+                add(*track.push(east, north, lat, lon, out.phi_b, out.settled))
         add(*track.finish())
+        if far > FAR_M and part is not None:
+            rec.warnings.append(f"{path}: positions up to {far / 1e3:,.0f} km from the map's origin "
+                                f"({part.projection.lat0_deg:.5f}, {part.projection.lon0_deg:.5f}): beyond "
+                                f"{FAR_M / 1e3:g} km its flat cells are distorted (their scale off by more than "
+                                "0.1 %); map each region apart, or give --origin near it")
         why = seen.problem(path, cmap)
         if why is not None:
             raise LogError(why)
