@@ -263,3 +263,22 @@ def test_a_log_far_from_the_maps_origin_is_warned_about(logs, tmp_path):
     assert not [w for w in recs[0].warnings if "from the map's origin" in w]
     said = [w for w in recs[1].warnings if "from the map's origin" in w]
     assert said and said[0].startswith(f"{far}: positions up to 16") and "beyond 50 km" in said[0], recs[1].warnings
+
+
+def test_positions_in_radians_declared_degrees_are_refused(logs, tmp_path):
+    """The drive's latitude and longitude written in radians under a map that says degrees: each position is
+    plausible (0.84 deg, 0.2 deg), but they move about 1/57 as far as the speed drives: refused naming the channels
+    and the ratio (before: mapped as a few cells near 0.84 N, 0.2 E). The drive in degrees moves as far as it drives."""
+    import math
+
+    from roadbank.mapping.geo import TrackScale
+
+    cols = {k: v for k, v in _drive().items() if k != "delta_f"}
+    rad = _csv(tmp_path / "rad.csv", {**cols, "latitude": np.radians(cols["latitude"]),
+                                      "longitude": np.radians(cols["longitude"])})
+    _, (rec,) = map_logs([rad], channels=logs / "ll.toml", estimator="kinematic")
+    assert rec.status == "error" and "channels 'latitude' (column 'latitude') and 'longitude'" in rec.error
+    assert "times as far as the speed drives" in rec.error and "not degrees?" in rec.error, rec.error
+    good = TrackScale()
+    good.add(cols["t"], cols["latitude"], cols["longitude"], cols["vx"])
+    assert good.driven > 200.0 and math.isclose(good.moved / good.driven, 1.0, rel_tol=0.05)

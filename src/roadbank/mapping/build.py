@@ -18,7 +18,7 @@ from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..io.writers import write_error
 from ..params import VehicleParams
 from ..vehicle import DESIGN_MAX_S, Vehicle, for_conditions, has_design_span, log_conditions, undescribed_params
-from .geo import CourseStream, LocalProjection, PositionJumps
+from .geo import CourseStream, LocalProjection, PositionJumps, TrackScale
 from .grid import BankMap
 
 
@@ -171,7 +171,7 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
     rec, first, part = MappedLog(str(path)), None, None
     far = 0.0                    # the farthest fix from the map's origin (m)
     track = CourseStream()       # the course of each sample over the whole log, not its chunk
-    seen, cmap, jumps = FixCount(), None, PositionJumps()
+    seen, cmap, jumps, scale = FixCount(), None, PositionJumps(), TrackScale()
 
     def add(crs, arrays):
         if part is not None and len(crs):
@@ -189,6 +189,7 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
             rec.warnings += chunk.warnings
             lat, lon = seen.add(chunk.extra["lat_deg"], chunk.extra["lon_deg"])   # 0, 0: no fix, NaN
             lat, lon = jumps.add(chunk.signals.t, lat, lon)                          # a receiver's glitch: NaN
+            scale.add(chunk.signals.t, lat, lon, chunk.signals.vx)
             first = first or _origin(lat, lon)
             plane = projection or first
             if part is None and plane is not None:
@@ -212,6 +213,9 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
         why = seen.problem(path, cmap)
         if why is not None:
             raise LogError(why)
+        off = scale.problem()
+        if off is not None:
+            raise LogError(f"{path}: {position_names(cmap)}: {off}")
         jumped = jumps.problem()
         if jumped is not None:
             rec.warnings.append(f"{path}: {position_names(cmap)}: {jumped}")

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..constants import MAX_GAP_S
+
 #: WGS-84 mean Earth radius (m)
 EARTH_RADIUS = 6_371_008.8
 
@@ -188,3 +190,51 @@ class PositionJumps:
         return (f"{self.count} fix(es) jump farther than a car can drive ({JUMP_SPEED:g} m/s and {JUMP_SLACK:g} m) "
                 f"from the track before them, the first at t = {t:.3f} s ({d / 1000:.3g} km in {dt:.3g} s): a "
                 f"receiver's glitch, left out of the map")
+
+
+#: the distance a log's fixes move over the one its speed drives (-) outside which the positions are refused as in
+#: another unit (:class:`TrackScale`; radians declared as degrees move 1/57 as far; the 16 KITTI drives and the
+#: comma2k19 segment 0.997-1.011), once the speed has driven :data:`TRACK_MIN_M` (m) between fixes (those drives
+#: 246-2207 m)
+TRACK_SCALE_RANGE = (0.2, 5.0)
+TRACK_MIN_M = 200.0
+
+
+class TrackScale:
+    """The distance a log's fixes move against the one its speed drives between them, chunk by chunk (:meth:`add`):
+    a latitude and longitude in radians, or scaled by 1e7 (an integer format), declared as degrees pass every check of
+    one position but move 1/57 (or 1e7) times as far as the car."""
+
+    def __init__(self) -> None:
+        self.last: tuple | None = None      # (t s, lat deg, lon deg, vx m/s) of the last fix
+        self.moved = 0.0                    # m, by the fixes
+        self.driven = 0.0                   # m, by the speed (trapezoid) over the same intervals
+
+    def add(self, t, lat_deg, lon_deg, vx) -> None:
+        """Fixes (deg, NaN: none) and speed (m/s) at times ``t`` (s); intervals longer than
+        :data:`~roadbank.constants.MAX_GAP_S` or with a speed that is not finite are not counted."""
+        t, lat, lon, v = (np.asarray(x, dtype=np.float64) for x in (t, lat_deg, lon_deg, vx))
+        ok = np.isfinite(lat) & np.isfinite(lon) & np.isfinite(v)
+        pts = np.column_stack((t[ok], lat[ok], lon[ok], v[ok]))
+        if self.last is not None:
+            pts = np.vstack(([self.last], pts))
+        if len(pts) < 2:
+            self.last = tuple(pts[-1]) if len(pts) else self.last
+            return
+        pt, pa, po, pv = pts.T
+        dt = np.diff(pt)
+        use = (dt > 0) & (dt <= MAX_GAP_S)
+        self.moved += float(np.sum(_distance(pa[:-1], po[:-1], pa[1:], po[1:])[use]))
+        self.driven += float(np.sum((0.5 * np.abs(pv[:-1] + pv[1:]) * dt)[use]))
+        self.last = tuple(pts[-1])
+
+    def problem(self) -> str | None:
+        """What is wrong with the positions' scale (their channel names go before it), or None: too little driven
+        to tell, or within :data:`TRACK_SCALE_RANGE`."""
+        if self.driven < TRACK_MIN_M:
+            return None
+        k = self.moved / self.driven
+        if TRACK_SCALE_RANGE[0] <= k <= TRACK_SCALE_RANGE[1]:
+            return None
+        return (f"the positions move {k:.3g} times as far as the speed drives ({self.moved / 1e3:.3g} km against "
+                f"{self.driven / 1e3:.3g} km): not degrees? (radians read as degrees move 1/57 as far)")
