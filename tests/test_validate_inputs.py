@@ -185,3 +185,16 @@ def test_validate_kitti_finds_drives_at_any_depth(tmp_path):
                                     "-e", "kinematic-pif"])
     assert res.exit_code == 0, res.output
     assert sorted(json.loads(res.stdout)["drives"]) == ["d47", "d70"]
+
+
+@pytest.mark.parametrize("kind, path, said", [("kitti", "nonexist", "nonexist: not found (no such file or folder)"),
+                                              ("comma2k19", "nonexist", "nonexist: not found (no such file or folder)"),
+                                              ("comma2k19", "plain", "plain: not a comma2k19 segment (a folder "
+                                                                     "holding processed_log/ and global_pose/)")])
+def test_a_path_that_is_none_is_named_for_what_it_is(tmp_path, kind, path, said):
+    """A mistyped path is "not found" (before: "not a KITTI raw drive", "not a comma2k19 segment directory"); a
+    folder holding no segment is not a segment (before: a file in it "is missing")."""
+    (tmp_path / "plain").mkdir()
+    (tmp_path / "plain" / "notes.txt").write_text("x")
+    res = CliRunner().invoke(main, ["validate", kind, str(tmp_path / path)])
+    assert res.exit_code == 1 and f"{tmp_path / said}" in res.stderr, res.output

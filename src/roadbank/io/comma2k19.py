@@ -49,6 +49,7 @@ from ..params import VehicleParams
 from .assemble import read_whole
 from .channels import ChannelMap, ChannelSpec
 from .errors import LogError
+from .files import not_found, present
 from .geodesy import ecef_to_latlon, ellipsoid_down_ecef
 from .types import RawChunk
 
@@ -163,8 +164,10 @@ class SegmentSource:
     def __init__(self, path, params: VehicleParams | None = None, rate_hz: float = 100.0,
                  max_gap_s: float = 0.5):
         p = Path(path)
-        if not p.is_dir():
-            raise LogError(f"{p}: not a comma2k19 segment directory")
+        if not present(p):
+            raise not_found(p)
+        if not p.is_dir() or not (p / "processed_log").is_dir():
+            raise LogError(f"{p}: not a comma2k19 segment (a folder holding processed_log/ and global_pose/)")
         params = params or VehicleParams()
         arr = {}
         self.warnings: list[str] = []

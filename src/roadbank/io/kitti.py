@@ -59,6 +59,7 @@ from ..params import VehicleParams
 from .assemble import read_whole
 from .channels import ChannelMap, ChannelSpec
 from .errors import LogError
+from .files import not_found, present
 from .types import RawChunk
 
 #: fields per oxts frame (dataformat.txt)
@@ -224,6 +225,8 @@ def find_drive(path) -> Path:
     """The one ``oxts`` folder at ``path`` (see :func:`find_oxts_dirs`); LogError for none or several."""
     p = Path(path)
     found = find_oxts_dirs(p)
+    if not found and not present(p):
+        raise not_found(p)
     if not found:
         raise LogError(broken_drive(p) or f"{p}: not a KITTI raw drive (no oxts/timestamps.txt and oxts/data/)")
     if len(found) > 1:
