@@ -101,7 +101,9 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
         click.echo(f"error: no log could be mapped ({len(failed)} not mapped, see above): nothing to map", err=True)
         sys.exit(1)
     if bmap is None or len(bmap) == 0:
-        click.echo("error: no settled bank estimate with a position: nothing to map", err=True)
+        click.echo(f"error: no settled bank estimate with a position: nothing to map (`roadbank estimate LOG -e "
+                   f"{estimator}` shows its valid and settled samples: an estimator that reads the steering angle "
+                   "gives none on a log without one, and pio-original never settles)", err=True)
         sys.exit(1)
     try:
         files = write_outputs(bmap, output, geojson, png, {"estimator": estimator,
