@@ -223,3 +223,16 @@ def test_an_oversteering_car_is_refused_naming_its_critical_speed(tmp_path):
     for car in ("suv-paper", "sedan", "compact", "van"):
         v = load_vehicle(car).params
         assert v.Lf * v.Cf < v.Lr * v.Cr, car
+
+
+def test_a_zero_process_noise_is_named_not_th(tmp_path):
+    """[tuning.pif-modified] Q = 0: the Kalman design (th = 0) has no positive definite solution; the message says the
+    process noise must be positive definite (before: "lower th", which the user never set and cannot lower)."""
+    from roadbank.vehicle import VehicleFileError, load_vehicle
+
+    f = tmp_path / "q0.toml"
+    f.write_text("[vehicle]\nm = 1500\nIz = 2500\nLf = 1.2\nLr = 1.5\nCf = 80000\nCr = 100000\n"
+                 "[tuning.pif-modified]\nQ = 0\n")
+    with pytest.raises((VehicleFileError, ValueError), match=r"W \(Q\) must be positive definite") as err:
+        load_vehicle(f).check()
+    assert "lower th" not in str(err.value)

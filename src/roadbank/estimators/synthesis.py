@@ -81,10 +81,12 @@ def game_are(A: np.ndarray, C: np.ndarray, Lw: np.ndarray, W: np.ndarray, R: np.
     Rinv = np.linalg.inv(R)
     eig_p = np.linalg.eigvalsh(P)
     if not np.all(np.isfinite(P)) or eig_p.min() <= 0:
+        why = ("the H-infinity bound 1/th is not achievable; lower th." if th > 0 else
+               "with th = 0 (the Kalman filter) the process noise W leaves a state unexcited: W (Q) must be "
+               "positive definite, not zero in a direction.")
         raise NoStabilisingSolution(
             f"H-infinity Riccati solution is not positive definite for th={th} {where} "
-            f"(smallest eigenvalue {eig_p.min():.3g}): the H-infinity bound 1/th is not achievable; "
-            "lower th.")
+            f"(smallest eigenvalue {eig_p.min():.3g}): {why}")
     filt = A - P @ C.T @ Rinv @ C
     game = A - P @ (C.T @ Rinv @ C - th * Lw.T @ S @ Lw)
     for label, M in (("filter", filt), ("game closed loop", game)):
