@@ -199,3 +199,16 @@ def test_json_is_printed_when_every_input_fails(tmp_path, command, keys):
     out = json.loads(res.stdout)
     assert set(out) == keys, out
     assert str(tmp_path) in json.dumps(out)            # the reason names the input
+
+
+@pytest.mark.parametrize("inside, folder", [("report.md", True), ("figures", False)])
+def test_reproduce_checks_what_it_writes_inside_its_folder_first(tmp_path, inside, folder):
+    """report.md a folder, or figures a file, in the output folder: a usage error naming it before the study runs
+    (before: the study ran, then "Is a directory" or a cryptic "File exists")."""
+    out = tmp_path / "rep"
+    out.mkdir()
+    (out / inside).mkdir() if folder else (out / inside).write_text("")
+    res = CliRunner().invoke(main, ["reproduce", "-o", str(out), "--scenarios", "const-bank",
+                                    "--estimators", "kinematic"])
+    assert res.exit_code == 2 and "cannot " in res.output and str(out / inside) in res.output, res.output
+    assert sorted(p.name for p in out.iterdir()) == [inside]

@@ -397,3 +397,12 @@ def test_grid_options_out_of_range_are_usage_errors(tmp_path, args, said):
     with pytest.raises(ValueError):
         BankMap(LocalProjection(48.0, 8.0), **({"cell_m": float(args[1])} if args[0] == "--cell"
                                                else {"sectors": int(args[1])}))
+
+
+def test_a_png_that_is_not_png_is_refused_before_the_map(tmp_path):
+    """--png mp.txt: a usage error before any log is read (before: the map table was written, then the figure
+    failed with exit 1)."""
+    res = CliRunner().invoke(main, ["map", str(tmp_path), "-o", str(tmp_path / "m.parquet"),
+                                    "--png", str(tmp_path / "mp.txt")])
+    assert res.exit_code == 2 and "must end in .png" in res.output, res.output
+    assert not (tmp_path / "m.parquet").exists()

@@ -76,6 +76,8 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
                                  param_hint="--estimator")
     if output.suffix.lower() not in (".parquet", ".pq"):
         raise click.BadParameter("the map table must end in .parquet", param_hint="-o")
+    if png is not None and png.suffix.lower() != ".png":       # the figure's format follows its suffix
+        raise click.BadParameter(f"'{png}' must end in .png", param_hint="--png")
     for path, option in ((output, "-o"), (geojson, "--geojson"), (png, "--png")):
         if path is not None:        # before the work, not after it
             check_output(path, option)

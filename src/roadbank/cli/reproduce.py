@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from .options import PathOption, SEED, checked_output, vehicle_option
+from .options import PathOption, SEED, checked_output, output_path_problem, vehicle_option
 
 
 def _split(values):
@@ -80,6 +80,11 @@ def reproduce(outdir, scenarios, names, jobs, seed, docs_results, vehicle):
         check_estimators(names)
     except ValueError as exc:
         raise click.BadParameter(str(exc)) from None
+    for inner, folder in ((outdir / "report.md", False), (outdir / "metrics.csv", False),
+                          (outdir / "metrics.parquet", False), (outdir / "figures", True)):
+        why = output_path_problem(inner, directory=folder)      # what is written inside, before the work
+        if why:
+            raise click.BadParameter(why, param_hint="-o")
     try:
         outdir.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
