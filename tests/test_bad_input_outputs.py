@@ -125,12 +125,14 @@ def test_plot_that_cannot_be_drawn_is_not_a_failed_log(tmp_path):
     assert (tmp_path / "o.csv").is_file()
 
 
-def test_map_file_that_fails_says_what_was_written(tmp_path):
+def test_map_figure_of_another_format_is_refused_before_the_work(tmp_path):
+    """--png m.xyz: refused before any log is read, nothing written (before: the map table was written, then the
+    figure failed, saying what had been written; a failure after the work still says so,
+    test_bank_map_files_that_cannot_be_written_name_the_path)."""
     _drive(tmp_path, "k1")
     res = _run(["map", "k1", "-o", "m.parquet", "--png", "m.xyz"], tmp_path)
-    assert res.exit_code == 1
-    assert "error: cannot write 'm.xyz'" in res.output and "(m.parquet written)" in res.output
-    assert (tmp_path / "m.parquet").is_file()
+    assert res.exit_code == 2 and "'m.xyz' must end in .png" in res.output, res.output
+    assert not (tmp_path / "m.parquet").exists()
 
 
 def test_bank_map_files_that_cannot_be_written_name_the_path(tmp_path):
