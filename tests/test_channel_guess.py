@@ -46,6 +46,19 @@ def test_name_spellings(name, role, hint):
     assert name_match("speed" if role != "speed" else "yaw_rate", name)[0] == 0
 
 
+@pytest.mark.parametrize("name, role", [("Geschwindigkeit", "speed"), ("Querbeschleunigung", "lateral_acceleration"),
+                                        ("Gierrate", "yaw_rate"), ("Lenkradwinkel", "steering_wheel_angle"),
+                                        ("Längsbeschleunigung", "longitudinal_acceleration"),
+                                        ("Laengsbeschleunigung", "longitudinal_acceleration"),
+                                        ("Wankrate", "roll_rate"), ("Nickrate", "pitch_rate"),
+                                        ("Vitesse", "speed"), ("Vitesse de lacet", "yaw_rate"),
+                                        ("Accélération latérale", "lateral_acceleration"),
+                                        ("Angle volant", "steering_wheel_angle")])
+def test_german_and_french_names(name, role):
+    """A German or French export's names (before: only 'Zeit' was known, the rest left for the user to map)."""
+    assert name_match(role, name)[0] == 2, name
+
+
 @pytest.mark.parametrize("steer", ["swa", "road-wheel"])
 def test_guessed_map_reads_the_original_signals(tmp_path, drive, steer):
     orig = tmp_path / "orig.csv"

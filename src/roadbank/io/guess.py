@@ -34,6 +34,7 @@ import itertools
 import math
 import re
 import textwrap
+import unicodedata
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,20 +46,27 @@ from .units import FACTORS, normalise_unit
 NAMES = {
     "time": ("t", "time", "timestamp", "times", "ts", "timest", "zeit", "timesec", "stamp", "logtime"),
     "speed": ("vx", "v", "speed", "vehspd", "vehiclespeed", "velocity", "vel", "spd", "vspeed", "vehspeed",
-              "speedx", "velx", "vlgt", "groundspeed", "vehiclevelocity"),
+              "speedx", "velx", "vlgt", "groundspeed", "vehiclevelocity",
+              # German (an umlaut reads as its vowel, or written ae, oe, ue), French (accents dropped)
+              "geschwindigkeit", "fahrzeuggeschwindigkeit", "vfzg", "vitesse", "vitessevehicule"),
     "lateral_acceleration": ("ay", "accy", "latacc", "lataccel", "lateralacceleration", "lateralaccel",
-                             "accely", "ay1", "alat", "aylat", "accelerationy", "latg"),
+                             "accely", "ay1", "alat", "aylat", "accelerationy", "latg",
+                             "querbeschleunigung", "querbeschl", "aquer", "accelerationlaterale", "acclat"),
     "yaw_rate": ("r", "yawrate", "yawrt", "wz", "gyroz", "omegaz", "yawvel", "yawvelocity", "psidot",
-                 "angularvelocityz", "rz"),
+                 "angularvelocityz", "rz", "gierrate", "giergeschwindigkeit", "vitessedelacet", "vitesselacet",
+                 "lacet"),
     "steering_wheel_angle": ("swa", "steerangle", "steeringangle", "steeringwheelangle", "steer", "swangle",
-                             "strwhlang", "steeringwheel", "stwangle", "steerwheelangle", "handwheelangle"),
+                             "strwhlang", "steeringwheel", "stwangle", "steerwheelangle", "handwheelangle",
+                             "lenkradwinkel", "lenkwinkel", "anglevolant", "angledevolant"),
     "road_wheel_angle": ("deltaf", "delta", "roadwheelangle", "wheelangle", "rwa", "frontwheelangle"),
     "roll_rate": ("p", "rollrate", "rollrt", "wx", "gyrox", "omegax", "rollvel", "rollvelocity", "phidot",
-                  "angularvelocityx", "rx"),
+                  "angularvelocityx", "rx", "wankrate", "wankgeschwindigkeit", "vitessederoulis", "roulis"),
     "pitch_rate": ("q", "pitchrate", "pitchrt", "wy", "gyroy", "omegay", "pitchvel", "pitchvelocity", "thetadot",
-                   "angularvelocityy", "ry"),
+                   "angularvelocityy", "ry", "nickrate", "nickgeschwindigkeit", "vitessedetangage", "tangage"),
     "longitudinal_acceleration": ("ax", "accx", "longacc", "lonacc", "longaccel", "lngacc", "longitudinalacceleration",
-                                  "longitudinalaccel", "accelx", "alon", "alng", "accelerationx", "longg"),
+                                  "longitudinalaccel", "accelx", "alon", "alng", "accelerationx", "longg",
+                                  "laengsbeschleunigung", "langsbeschleunigung", "alaengs",
+                                  "accelerationlongitudinale", "acclong"),
 }
 #: above this 99th percentile of its magnitude a roll rate is not in rad/s (roads roll the body at 0.01-0.2 rad/s)
 #: and a longitudinal acceleration not in g (braking and grades: 0.05-0.4 g)
@@ -100,7 +108,10 @@ CONVENTION_NOTE = ("the sign convention cannot be told from the data and is assu
 
 
 def _norm(name: str) -> str:
-    return re.sub(r"[^a-z0-9]", "", name.lower())
+    """A column name as :data:`NAMES` spells it: lower case, letters and digits only, accents dropped (``é`` ->
+    ``e``, ``ä`` -> ``a``)."""
+    bare = unicodedata.normalize("NFKD", name).encode("ascii", "ignore").decode()
+    return re.sub(r"[^a-z0-9]", "", bare.lower())
 
 
 def _tokens(name: str) -> list[str]:
