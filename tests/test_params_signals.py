@@ -49,3 +49,17 @@ def test_road_wheel_angle_uses_steering_ratio():
     assert road_wheel_angle(np.deg2rad(160.0), p) == pytest.approx(np.deg2rad(10.0))
     s = Signals.from_steering_wheel([0.0], [20.0], [0.0], [0.0], [np.deg2rad(32.0)], p)
     assert s.delta_f[0] == pytest.approx(np.deg2rad(2.0))
+
+
+def test_a_log_without_a_steering_angle_is_given_as_none():
+    """``Signals(t, vx, ay, r, None)``: the steering angle NaN throughout, as a KITTI drive is read (before: "mismatched
+    lengths ... delta_f: 1"); the default estimator runs on it as on the same log with a NaN column."""
+    from roadbank import estimators
+
+    t = np.arange(300) * 0.01
+    vx, ay, r = np.full(300, 20.0), 0.2 * np.sin(t), 0.01 * np.sin(t)
+    s = Signals(t, vx, ay, r, None)
+    assert s.delta_f.shape == (300,) and np.isnan(s.delta_f).all()
+    same = Signals(t, vx, ay, r, np.full(300, np.nan))
+    est = estimators.make("kinematic-pif")
+    np.testing.assert_array_equal(est.run(s).theta, est.run(same).theta)

@@ -45,9 +45,10 @@ class Signals:
         Measured lateral acceleration (specific force), positive to the left.
     r : array (rad/s)
         Yaw rate, positive turning left.
-    delta_f : array (rad)
+    delta_f : array (rad) or None
         Front road-wheel angle, positive to the left. Use
-        :meth:`from_steering_wheel` when the log holds the steering-wheel angle.
+        :meth:`from_steering_wheel` when the log holds the steering-wheel angle. None: the log has none (NaN
+        throughout, as a KITTI drive is read; the default estimator does not read it).
     p : array (rad/s), optional
         Roll rate (rotation about the forward axis, positive left side up), when the log has a
         roll-rate gyro (an INS, a phone, a six-axis IMU); None for an ESP log without one. Only
@@ -89,6 +90,8 @@ class Signals:
     unbiased: frozenset[str] = frozenset()
 
     def __post_init__(self) -> None:
+        if self.delta_f is None:        # a log without a steering angle (a KITTI drive's): NaN, as its readers give
+            object.__setattr__(self, "delta_f", np.full(np.size(self.t), math.nan))
         arrays = {name: _as_1d(name, getattr(self, name)) for name in self.channels}
         for mark in ("fixed", "unbiased"):
             marked = frozenset(getattr(self, mark))
