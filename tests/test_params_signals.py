@@ -63,3 +63,12 @@ def test_a_log_without_a_steering_angle_is_given_as_none():
     same = Signals(t, vx, ay, r, np.full(300, np.nan))
     est = estimators.make("kinematic-pif")
     np.testing.assert_array_equal(est.run(s).theta, est.run(same).theta)
+
+
+def test_for_log_wants_signals():
+    """``for_log(name, a_tuple)``: a TypeError saying what it expects, as ``run()`` gives (before: an AttributeError
+    on ``.t`` deep in the design)."""
+    from roadbank.vehicle import for_log
+
+    with pytest.raises(TypeError, match=r"for_log\(\) expects a roadbank.Signals, got tuple"):
+        for_log("kinematic-pif", (np.arange(3.0), np.ones(3)))

@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import defaults
 from ..params import VehicleParams
-from ..signals import sample_rate
+from ..signals import Signals, sample_rate
 from .conditions import (default_reads_roll_rate, design_span, esp_conditions, is_quiet, log_conditions,
                          make_estimator, quiet_noise_ratio, source_rates)
 from .file import load_vehicle
@@ -196,6 +196,8 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
     by default it adds the online offset learner
     (``with_online_offsets(for_log(name, s), est.params).run(s)``), which differs after a standstill.
     """
+    if not isinstance(signals, Signals):
+        raise TypeError(f"for_log() expects a roadbank.Signals, got {type(signals).__name__}")
     cond = log_conditions(signals)
     if params is None and vehicle is None:
         params = undescribed_params(signals, cond=cond)
