@@ -158,3 +158,30 @@ def test_times_of_day_are_seconds_from_the_first_midnight(tmp_path):
     lines[700] = "24:00:01," + lines[700].split(",", 1)[1]
     with pytest.raises(LogError, match="'24:00:01' at line 701 is no time of day"):
         load_log(_write(tmp_path, lines, name="bad.csv"))
+
+
+@pytest.mark.parametrize("block", [7, 16, 64, 1 << 20])
+def test_the_byte_pass_counts_lines_as_splitlines(tmp_path, monkeypatch, block):
+    """Independent truth, str.splitlines: the byte pass's line count, last line and final break agree on files
+    whose blocks end anywhere (mid-line, between CR and LF, in a two-byte character), with LF, CRLF and CR ends,
+    with and without a final break."""
+    rng = np.random.default_rng(block)
+    monkeypatch.setattr(csvtable, "SCAN_BYTES", block)
+    checked = 0
+    for case in range(40):
+        n = int(rng.integers(3, 40))
+        lines = ["é" * int(rng.integers(0, 3)) + "x" * int(rng.integers(0, 30)) for _ in range(n)]
+        newline = ["\n", "\r\n", "\r"][case % 3]
+        text = newline.join(lines) + (newline if case % 2 else "")
+        p = tmp_path / f"f{case}.csv"
+        p.write_bytes(text.encode())
+        got = csvtable._scan(p)
+        want = text.splitlines()
+        if got is None:             # only where the last two blocks hold no whole line
+            data = p.read_bytes()
+            last = (len(data) - 1) // block * block             # where the last block starts
+            assert len(data[max(last - block, 0):].decode("utf-8", "replace").splitlines()) < 2
+            continue
+        assert (got.lines, got.last, got.ends_newline) == (len(want), want[-1], text.endswith(("\n", "\r"))), case
+        checked += 1
+    assert checked >= (30 if block >= 64 else 5)

@@ -10,12 +10,12 @@ cannot be read is a :class:`~roadbank.io.errors.LogError` naming the file, the c
 from __future__ import annotations
 
 import codecs
-from collections.abc import Iterator
 import csv
 import itertools
 import math
 import re
 import warnings as _warnings
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -515,8 +515,8 @@ class _Scan:
 def _scan(p: Path) -> _Scan | None:
     """One pass over the bytes of ``p``, :data:`SCAN_BYTES` at a time: its lines, and whether it ends with a line
     break; None for a file that is not UTF-8, holds a NUL byte or a line break other than ``\\n``, ``\\r`` and
-    ``\\r\\n`` (:data:`_ODD_BREAKS`), or whose last line is longer than a block (such a file is read whole, as
-    :func:`read_csv` reads it)."""
+    ``\\r\\n`` (:data:`_ODD_BREAKS`), or whose last two blocks hold fewer than two lines (its last line may have begun
+    before them; such a file is read whole, as :func:`read_csv` reads it)."""
     decoder = codecs.getincrementaldecoder("utf-8-sig")()
     breaks, prev_cr, tail = 0, False, b""
     try:
@@ -529,13 +529,13 @@ def _scan(p: Path) -> _Scan | None:
                 # \r\n is one break, also where a block ends between the two
                 joined = prev_cr and block[:1] == b"\n"
                 breaks += block.count(b"\n") + block.count(b"\r") - block.count(b"\r\n") - joined
-                prev_cr, tail = block.endswith(b"\r"), block
+                prev_cr, tail = block.endswith(b"\r"), tail[-SCAN_BYTES:] + block     # the last two blocks
             decoder.decode(b"", final=True)
     except (UnicodeDecodeError, OSError):
         return None
     ends = tail.endswith((b"\n", b"\r"))
     text = tail.decode("utf-8", errors="replace").splitlines()
-    if not text or (len(text) == 1 and len(tail) == SCAN_BYTES):
+    if len(text) < 2:          # the last line may have begun before the last two blocks
         return None
     return _Scan(breaks + (not ends), ends, text[-1])
 
