@@ -109,6 +109,10 @@ UNBIASED_PITCH_BANDWIDTH = 0.35
 #: start's span (s; :class:`~roadbank.estimators.pitch.PitchObserver`'s ``anchor``): the forty-fourth stage
 UNBIASED_PITCH_START: tuple[float, float] | None = None
 UNBIASED_PITCH_ANCHOR = 1.0
+#: how :class:`KinematicGyroSmoother` combines its two passes where one has not settled (``"average"``: the mean, as
+#: everywhere; ``"settled"``: the settled pass alone): the forty-ninth stage of :mod:`roadbank.tuning.real`
+SMOOTHER_PASSES = ("average", "settled")
+GYRO_SMOOTHER_PASSES = "average"
 #: those constants as :class:`KinematicGyro`'s options: the roll rate's filter and the pitch observer, each for a source
 #: that documents it as free of offset (what the default reads such a log with, and the later stages' shipped state)
 UNBIASED_GYRO = {"cutoff": UNBIASED_GYRO_CUTOFF_HZ, "bias_tau": UNBIASED_GYRO_BIAS_TAU_S}
@@ -556,7 +560,9 @@ class KinematicGyroSmoother(KinematicGyro):
     (:func:`roadbank.estimators.kinematic_smoother.both_ways`, as ``kinematic-smoother`` does with the low-pass). Each
     pass has no lag between the kinematic estimate and the gyro; the average also cancels what each pass's offset
     loop and cross-over leave in phase. Parameters as :class:`KinematicGyro` but ``sideslip`` (not built offline);
-    ``step()`` is the forward pass's. Not for an ECU: no C export.
+    ``passes`` (:data:`SMOOTHER_PASSES`, default :data:`GYRO_SMOOTHER_PASSES`): ``"average"`` the two passes wherever
+    both are valid, settled where the forward pass has; ``"settled"`` where only one pass has settled since its
+    (re)start that pass alone, settled where either has. ``step()`` is the forward pass's. Not for an ECU: no C export.
     """
 
     name = "kinematic-gyro-smoother"
@@ -566,10 +572,13 @@ class KinematicGyroSmoother(KinematicGyro):
     forward_filter = "kinematic-gyro"
 
     def __init__(self, params=None, *, cutoff=None, bias_tau=None, grade_window=None, order=None, sideslip=None,
-                 **kw):
+                 passes=None, **kw):
         if sideslip not in (None, "none"):
             raise ValueError(f"{self.name}: no sideslip option (its backward pass would take the derivative's "
                              "opposite; the causal kinematic-gyro has it)")
+        self.passes = GYRO_SMOOTHER_PASSES if passes is None else passes
+        if self.passes not in SMOOTHER_PASSES:
+            raise ValueError(f"{self.name}: passes must be one of {SMOOTHER_PASSES}, got {passes!r}")
         super().__init__(params, cutoff=cutoff, bias_tau=bias_tau, grade_window=grade_window, order=order, **kw)
         # the same design in reversed time, on the forward pass's fixed rate (as kinematic-smoother's); it reads
         # the roll rate as the forward pass has corrected it

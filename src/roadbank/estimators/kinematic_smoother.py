@@ -134,6 +134,11 @@ def both_ways(est, fwd: Estimate, signals: Signals, lookahead: Signals | None, r
     wb, valid_b = back.w[::-1][:n], back.valid[::-1][:n]
     both = fwd.valid & valid_b
     w = np.where(both, 0.5 * (fwd.w + wb), 0.0)
+    settled = fwd.settled
+    if getattr(est, "passes", "average") == "settled":      # where one pass has settled and the other not: that one
+        settled_b = back.settled[::-1][:n]
+        w = np.where(both & fwd.settled & ~settled_b, fwd.w, np.where(both & settled_b & ~fwd.settled, wb, w))
+        settled = fwd.settled | settled_b
     last = np.maximum.accumulate(np.where(both, np.arange(n), -1))
     held = ~both & (last >= 0)
     w[held] = w[last[held]]                   # held where a pass does not use the sample, 0 before the first
@@ -147,4 +152,4 @@ def both_ways(est, fwd: Estimate, signals: Signals, lookahead: Signals | None, r
     valid = both & (np.abs(w) <= np.sin(est.max_angle))
     first = est.state_names[0]
     states = {first: fwd.states[first].copy(), f"{first}_backward": wb.copy(), "phi": phi}
-    return Estimate(est.name, fwd.t, w, theta, theta - phi, valid, states, valid & fwd.settled)
+    return Estimate(est.name, fwd.t, w, theta, theta - phi, valid, states, valid & settled)

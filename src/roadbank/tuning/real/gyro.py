@@ -151,6 +151,20 @@ log (``kinematic-pif``, which is ``kinematic-gyro`` on these loud logs with a ro
 ties within :data:`TIE_DEG` go to ``"trapezoid"``, then ``"hold"``. The training drives as read have no interval
 longer than 1 s, so every candidate gives them what it gave before. ``kinematic-gyro-smoother`` takes the result.
 Neither the KITTI validation drives nor comma2k19 take part.
+
+The forty-ninth stage (:func:`choose_smoother_passes`; rule written 2026-12-06 before any of its candidates ran, after
+an exploratory test had shown ``roadbank map`` keeping 129 of validation drive 2011_09_26_drive_0070's 420 samples, the
+gyro-aided smoother settling 26.9 s after a start, and the unsettled samples after 5 s there no further from the INS
+roll than the settled ones): how ``kinematic-gyro-smoother`` (``roadbank map``'s default on a loud log with a roll
+rate) combines its two passes where one has settled since its (re)start and the other has not. Candidates
+(:data:`~roadbank.estimators.gyro.SMOOTHER_PASSES`): ``"average"`` (shipped: the mean wherever both are valid) and
+``"settled"`` (the settled pass alone there; the mean elsewhere). Sets: the twenty-fourth stage's (:func:`gyro_sets`:
+the training drives as read and with +-:data:`GYRO_OFFSET_DEG` deg/s). Estimator: the map's default as ``roadbank map``
+builds it for each log (``kinematic-smoother``, which is ``kinematic-gyro-smoother`` on these logs) with the
+candidate's ``passes``. Objective: the twenty-fourth stage's (the mean over the three sets of the median raw RMS).
+The lowest wins; ties within :data:`TIE_DEG` go to ``"average"``. The share of valid samples that count as settled
+(what the map keeps) is reported, not judged. Pieces of 8-20 s are not a set: both passes are unsettled throughout
+them, where the candidates agree. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -163,8 +177,8 @@ import warnings
 import numpy as np
 
 from ... import vehicle
-from ...estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, LOG_GAPS, UNBIASED_PITCH,
-                               KinematicGyro, KinematicGyroSmoother)
+from ...estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, LOG_GAPS, SMOOTHER_PASSES,
+                               UNBIASED_PITCH, KinematicGyro, KinematicGyroSmoother)
 from ...validation.scoring import SHORT_PIECES_S
 from .common import (BANDWIDTH_39, BEFORE_38, START_40, UNBIASED_36, fixed, lengths_objective, log_errors, lowest_tied,
                      per_log, whole_and_pieces, without_roll_rate)
@@ -392,3 +406,25 @@ def choose_log_gaps(logs, modes=LOG_GAPS) -> tuple[str, dict]:
         return one
     obj = {mode: gyro_objective(build(mode), sets) for mode in modes}
     return lowest_tied(obj, list(modes).index), obj
+
+
+def choose_smoother_passes(logs, modes=SMOOTHER_PASSES) -> tuple[str, dict, dict]:
+    """The forty-ninth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate, ``ax`` and pitch rate). Returns ``(mode, {mode: objective deg}, {mode: share of the valid samples settled})``
+    (the share over every drive of the three sets, reported, not judged)."""
+    sets = gyro_sets(logs)
+    default = per_log("kinematic-smoother")
+
+    def build(mode):
+        def one(signals):
+            est = default(signals)
+            if isinstance(est, KinematicGyroSmoother):
+                est.passes = mode
+            return est
+        return one
+
+    def settled_share(mode) -> float:
+        runs = [build(mode)(s).run(s) for one in sets for s, _, _ in one]
+        return float(sum(int(e.settled.sum()) for e in runs) / max(sum(int(e.valid.sum()) for e in runs), 1))
+    obj = {mode: gyro_objective(build(mode), sets) for mode in modes}
+    return lowest_tied(obj, list(modes).index), obj, {mode: settled_share(mode) for mode in modes}
