@@ -787,3 +787,26 @@ def test_an_ax_left_out_is_said_with_its_likely_mistake():
               "ay_floor_ratio": 3.5, "roll_rate": 1.0, "ax": 9.7}
     assert "its ax does not follow its speed (slope 9.7, not 0.5-2: it reads like g declared as m/s^2)" in \
         design_words(design, "kinematic-pif")
+
+
+@pytest.mark.slow
+def test_the_forty_ninth_stage_kept_the_mean_of_the_passes():
+    """The rule (tuning.real.choose_smoother_passes) on the KITTI training drives: the mean of the smoother's passes
+    (shipped) beats the settled pass alone (0.2245 against 0.2668 deg), though the latter counts 95 % of the valid
+    samples settled against 72 %; the two options give the same estimate where no pass has settled."""
+    from roadbank.estimators.gyro import GYRO_SMOOTHER_PASSES, KinematicGyroSmoother
+    from roadbank.tuning import real
+
+    data = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+    logs = real.training_logs(data, roll_rate=True, pitch_rate=True) if data.is_dir() else []
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {data}")
+    chosen, obj, share = real.choose_smoother_passes(logs)
+    assert chosen == GYRO_SMOOTHER_PASSES == "average"
+    assert obj["average"] < obj["settled"] - 0.02 and share["settled"] > share["average"] + 0.1
+    s = logs[0][0]
+    a, b = (KinematicGyroSmoother(passes=m).run(s) for m in ("average", "settled"))
+    assert not (a.settled & ~b.settled).any() and b.settled.sum() > a.settled.sum()
+    # where neither pass has settled (nor one alone: b's flag) both options give the mean
+    np.testing.assert_array_equal(a.w[b.valid & ~b.settled], b.w[b.valid & ~b.settled])
+    assert not np.array_equal(a.w, b.w)
