@@ -114,6 +114,11 @@ UNBIASED_PITCH_ANCHOR = 1.0
 #: mean (0.2245 against 0.2668 deg on the training drives)
 SMOOTHER_PASSES = ("average", "settled")
 GYRO_SMOOTHER_PASSES = "average"
+#: which of its samples :class:`KinematicGyroSmoother` counts as settled (what ``roadbank map`` keeps): where the
+#: forward pass has settled since its (re)start, or where either pass has: the fiftieth stage of
+#: :mod:`roadbank.tuning.real`
+SMOOTHER_SETTLED = ("forward", "either")
+GYRO_SMOOTHER_SETTLED = "forward"
 #: those constants as :class:`KinematicGyro`'s options: the roll rate's filter and the pitch observer, each for a source
 #: that documents it as free of offset (what the default reads such a log with, and the later stages' shipped state)
 UNBIASED_GYRO = {"cutoff": UNBIASED_GYRO_CUTOFF_HZ, "bias_tau": UNBIASED_GYRO_BIAS_TAU_S}
@@ -563,7 +568,9 @@ class KinematicGyroSmoother(KinematicGyro):
     loop and cross-over leave in phase. Parameters as :class:`KinematicGyro` but ``sideslip`` (not built offline);
     ``passes`` (:data:`SMOOTHER_PASSES`, default :data:`GYRO_SMOOTHER_PASSES`): ``"average"`` the two passes wherever
     both are valid, settled where the forward pass has; ``"settled"`` where only one pass has settled since its
-    (re)start that pass alone, settled where either has. ``step()`` is the forward pass's. Not for an ECU: no C export.
+    (re)start that pass alone, settled where either has. ``settled_by`` (:data:`SMOOTHER_SETTLED`, default
+    :data:`GYRO_SMOOTHER_SETTLED`): the samples that count as settled with ``"average"``, where the forward pass has
+    (``"forward"``) or where either has (``"either"``). ``step()`` is the forward pass's. Not for an ECU: no C export.
     """
 
     name = "kinematic-gyro-smoother"
@@ -573,13 +580,16 @@ class KinematicGyroSmoother(KinematicGyro):
     forward_filter = "kinematic-gyro"
 
     def __init__(self, params=None, *, cutoff=None, bias_tau=None, grade_window=None, order=None, sideslip=None,
-                 passes=None, **kw):
+                 passes=None, settled_by=None, **kw):
         if sideslip not in (None, "none"):
             raise ValueError(f"{self.name}: no sideslip option (its backward pass would take the derivative's "
                              "opposite; the causal kinematic-gyro has it)")
         self.passes = GYRO_SMOOTHER_PASSES if passes is None else passes
         if self.passes not in SMOOTHER_PASSES:
             raise ValueError(f"{self.name}: passes must be one of {SMOOTHER_PASSES}, got {passes!r}")
+        self.settled_by = GYRO_SMOOTHER_SETTLED if settled_by is None else settled_by
+        if self.settled_by not in SMOOTHER_SETTLED:
+            raise ValueError(f"{self.name}: settled_by must be one of {SMOOTHER_SETTLED}, got {settled_by!r}")
         super().__init__(params, cutoff=cutoff, bias_tau=bias_tau, grade_window=grade_window, order=order, **kw)
         # the same design in reversed time, on the forward pass's fixed rate (as kinematic-smoother's); it reads
         # the roll rate as the forward pass has corrected it

@@ -169,6 +169,16 @@ them, where the candidates agree. Neither the KITTI validation drives nor comma2
 unsettled as one of them is, stays closer to the INS roll than the settled pass alone (each pass's lag and offset loop
 leave a phase error that the mean cancels), so ``"average"`` stays. Whether ``roadbank map`` should keep the mean's
 samples where either pass has settled (a question of the flag, not of the estimate) is not decided here.
+
+The fiftieth stage (:func:`choose_smoother_settled`; rule written 2026-12-06 after the forty-ninth had run, before any
+of its candidates ran): which samples of ``kinematic-gyro-smoother`` count as settled, the samples ``roadbank map``
+keeps. Candidates (:data:`~roadbank.estimators.gyro.SMOOTHER_SETTLED`): ``"forward"`` (shipped: where the forward pass
+has settled since its (re)start) and ``"either"`` (where either pass has); the estimate the mean of the passes in both
+(the forty-ninth stage). Sets, estimator and build: the forty-ninth stage's. For each candidate and set: the raw RMS of
+each drive's scored samples that the candidate counts settled (a drive with none left out), the median over the
+drives; the candidate's objective the mean over the three sets; the share of the scored samples it keeps is reported.
+``"either"`` wins where its objective is at most ``"forward"``'s plus :data:`TIE_DEG` (it keeps more of each drive for
+no more error); else ``"forward"`` stays. Neither the KITTI validation drives nor comma2k19 take part.
 """
 
 from __future__ import annotations
@@ -182,10 +192,10 @@ import numpy as np
 
 from ... import vehicle
 from ...estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, LOG_GAPS, SMOOTHER_PASSES,
-                               UNBIASED_PITCH, KinematicGyro, KinematicGyroSmoother)
+                               SMOOTHER_SETTLED, UNBIASED_PITCH, KinematicGyro, KinematicGyroSmoother)
 from ...validation.scoring import SHORT_PIECES_S
-from .common import (BANDWIDTH_39, BEFORE_38, START_40, UNBIASED_36, fixed, lengths_objective, log_errors, lowest_tied,
-                     per_log, whole_and_pieces, without_roll_rate)
+from .common import (BANDWIDTH_39, BEFORE_38, START_40, TIE_DEG, UNBIASED_36, fixed, lengths_objective, log_errors,
+                     lowest_tied, per_log, rms_deg, whole_and_pieces, without_roll_rate)
 
 
 #: the twenty-ninth stage's candidates: the sideslip acceleration ``kinematic-gyro`` takes out of the kinematic estimate
@@ -432,3 +442,29 @@ def choose_smoother_passes(logs, modes=SMOOTHER_PASSES) -> tuple[str, dict, dict
         return float(sum(int(e.settled.sum()) for e in runs) / max(sum(int(e.valid.sum()) for e in runs), 1))
     obj = {mode: gyro_objective(build(mode), sets) for mode in modes}
     return lowest_tied(obj, list(modes).index), obj, {mode: settled_share(mode) for mode in modes}
+
+
+def choose_smoother_settled(logs, modes=SMOOTHER_SETTLED) -> tuple[str, dict, dict]:
+    """The fiftieth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
+    rate, ``ax`` and pitch rate). Returns ``(mode, {mode: objective deg}, {mode: share of the scored samples
+    kept})``."""
+    sets = gyro_sets(logs)
+    default = per_log("kinematic-smoother")
+    obj, kept = {}, {}
+    for mode in modes:
+        medians, n_kept, n_scored = [], 0, 0
+        for one in sets:
+            rms = []
+            for s, ref, m in one:
+                est = default(s)
+                if isinstance(est, KinematicGyroSmoother):
+                    est.settled_by = mode
+                out = est.run(s)
+                use = m & out.settled
+                n_kept, n_scored = n_kept + int(use.sum()), n_scored + int(m.sum())
+                if use.any():
+                    rms.append(rms_deg(out.theta[use], ref[use]))
+            medians.append(float(np.median(rms)))
+        obj[mode], kept[mode] = float(np.mean(medians)), n_kept / max(n_scored, 1)
+    first, other = modes
+    return (other if obj[other] <= obj[first] + TIE_DEG else first), obj, kept
