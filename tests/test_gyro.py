@@ -810,3 +810,20 @@ def test_the_forty_ninth_stage_kept_the_mean_of_the_passes():
     # where neither pass has settled (nor one alone: b's flag) both options give the mean
     np.testing.assert_array_equal(a.w[b.valid & ~b.settled], b.w[b.valid & ~b.settled])
     assert not np.array_equal(a.w, b.w)
+
+
+@pytest.mark.slow
+def test_the_fiftieth_stage_kept_the_forward_passs_settled_flag():
+    """The rule (tuning.real.choose_smoother_settled) on the KITTI training drives: the samples the forward pass has
+    not settled on, which "either" adds (95 % of the scored samples kept against 74 %), are worse: the shipped flag
+    stays, with a lower error on what it keeps (0.1928 against 0.2364 deg)."""
+    from roadbank.estimators.gyro import GYRO_SMOOTHER_SETTLED
+    from roadbank.tuning import real
+
+    data = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+    logs = real.training_logs(data, roll_rate=True, pitch_rate=True) if data.is_dir() else []
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {data}")
+    chosen, obj, kept = real.choose_smoother_settled(logs)
+    assert chosen == GYRO_SMOOTHER_SETTLED == "forward"
+    assert obj["forward"] < obj["either"] - 0.02 and kept["either"] > kept["forward"] + 0.1

@@ -116,7 +116,8 @@ SMOOTHER_PASSES = ("average", "settled")
 GYRO_SMOOTHER_PASSES = "average"
 #: which of its samples :class:`KinematicGyroSmoother` counts as settled (what ``roadbank map`` keeps): where the
 #: forward pass has settled since its (re)start, or where either pass has: the fiftieth stage of
-#: :mod:`roadbank.tuning.real`
+#: :mod:`roadbank.tuning.real` kept the forward pass's (0.1928 deg on 74 % of the training drives' scored samples,
+#: either pass's 0.2364 on 95 %)
 SMOOTHER_SETTLED = ("forward", "either")
 GYRO_SMOOTHER_SETTLED = "forward"
 #: those constants as :class:`KinematicGyro`'s options: the roll rate's filter and the pitch observer, each for a source

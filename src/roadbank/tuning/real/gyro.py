@@ -178,7 +178,9 @@ has settled since its (re)start) and ``"either"`` (where either pass has); the e
 each drive's scored samples that the candidate counts settled (a drive with none left out), the median over the
 drives; the candidate's objective the mean over the three sets; the share of the scored samples it keeps is reported.
 ``"either"`` wins where its objective is at most ``"forward"``'s plus :data:`TIE_DEG` (it keeps more of each drive for
-no more error); else ``"forward"`` stays. Neither the KITTI validation drives nor comma2k19 take part.
+no more error); else ``"forward"`` stays. Neither the KITTI validation drives nor comma2k19 take part. It ran once:
+``"forward"`` 0.1928 deg on 74 % of the scored samples, ``"either"`` 0.2364 deg on 95 %: the samples the forward pass
+has not settled on are worse on the training drives (the mean carries half of its start), so ``"forward"`` stays.
 """
 
 from __future__ import annotations
