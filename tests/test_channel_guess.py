@@ -126,3 +126,23 @@ def test_an_imu_logs_roll_rate_and_longitudinal_acceleration_are_guessed_by_name
     np.testing.assert_allclose(got.ax, ax, rtol=1e-9, atol=1e-9)
     roles = [g.role for g in guess_channels(list(_foreign(drive)), _foreign(drive))]
     assert "roll_rate" not in roles and "longitudinal_acceleration" not in roles
+
+
+def test_a_gnss_position_is_guessed_for_the_map(tmp_path, drive):
+    """Columns named lat / lon (degrees) go into the guessed map as latitude and longitude (before: never proposed,
+    so every map user wrote them by hand); the map reads them as the positions. Values no degree can have (a scaled
+    integer) are not proposed; LongAcc is the longitudinal acceleration, not a longitude."""
+    from roadbank.io.guess import channel_map_toml, guess_channels
+
+    n = len(drive["t"])
+    cols = {**_foreign(drive), "lat": 48.1 + 1e-5 * np.arange(n), "lon": 11.5 + 1e-5 * np.arange(n),
+            "LongAcc": np.zeros(n)}
+    g = {x.role: x for x in guess_channels(list(cols), cols)}
+    assert (g["latitude"].column, g["latitude"].unit) == ("lat", "deg")
+    assert (g["longitude"].column, g["longitude"].unit) == ("lon", "deg")
+    assert g["longitudinal_acceleration"].column == "LongAcc"
+    (tmp_path / "map.toml").write_text(channel_map_toml(list(g.values()), "x.csv"))
+    cmap = read_channel_map(tmp_path / "map.toml")
+    assert cmap.channels["latitude"].column == "lat" and cmap.channels["longitude"].unit == "deg"
+    scaled = {**cols, "lat": cols["lat"] * 1e7, "lon": cols["lon"] * 1e7}
+    assert not {"latitude", "longitude"} & {x.role for x in guess_channels(list(scaled), scaled)}

@@ -67,7 +67,13 @@ NAMES = {
                                   "longitudinalaccel", "accelx", "alon", "alng", "accelerationx", "longg",
                                   "laengsbeschleunigung", "langsbeschleunigung", "alaengs",
                                   "accelerationlongitudinale", "acclong"),
+    # a GNSS position, for `roadbank map`
+    "latitude": ("lat", "latitude", "gpslat", "gnsslat", "latdeg", "poslat", "breite", "breitengrad"),
+    "longitude": ("lon", "lng", "longitude", "gpslon", "gnsslon", "londeg", "poslon", "laengengrad", "langengrad"),
 }
+#: the GNSS roles :func:`guess_channels` looks for by name (for ``roadbank map``), and the largest magnitude (deg) of
+#: each on the Earth
+POSITION_LIMITS_DEG = {"latitude": 90.0, "longitude": 180.0}
 #: above this 99th percentile of its magnitude a roll rate is not in rad/s (roads roll the body at 0.01-0.2 rad/s)
 #: and a longitudinal acceleration not in g (braking and grades: 0.05-0.4 g)
 OPTIONAL_RANGE = {"roll_rate": ("rad/s", "deg/s", 0.5), "longitudinal_acceleration": ("g", "m/s^2", 0.6),
@@ -298,7 +304,11 @@ def guess_channels(names: list[str], data: dict[str, np.ndarray], times: dict | 
     for role in OPTIONAL:
         col, score, hint = pick(role, numeric)
         optional.append(_optional(role, col, score, hint, series))
-    guesses = [out[k] for k in roles] + [out_steer] + [g for g in optional if g is not None]
+    positions = []
+    for role in POSITION_LIMITS_DEG:
+        col, score, _ = pick(role, numeric)
+        positions.append(_position(role, col, score, series))
+    guesses = [out[k] for k in roles] + [out_steer] + [g for g in optional + positions if g is not None]
     for g in guesses:        # a unit the file states is the one that counted as the name's
         if g.column in from_file:
             g.reason = g.reason.replace("unit in the name", "unit the file states")
@@ -331,6 +341,19 @@ def _optional(role: str, col, score: int, hint, series) -> Guess | None:
         unit, why = small, f"name; no values to judge the unit by: {small} assumed"
     return Guess(role, col, unit, False, "medium", f"{why}; optional, sign not checked here: the default uses it "
                  "only where it follows the ESP channels")
+
+
+def _position(role: str, col, score: int, series) -> Guess | None:
+    """The guess of a GNSS ``role`` (latitude, longitude) for the column ``col`` named like it (``score`` of
+    :func:`name_match`): in deg, where its values lie within the Earth's (:data:`POSITION_LIMITS_DEG`); None when no
+    column is named like it or its values cannot be degrees (a scaled integer: say it by hand)."""
+    if col is None or score == 0:
+        return None
+    a = np.abs(_finite(series(col)))
+    if len(a) and float(a.max()) > POSITION_LIMITS_DEG[role]:
+        return None
+    return Guess(role, col, "deg", False, "medium", "name, range within the Earth's; in degrees (`roadbank map` "
+                 "refuses positions that move far less or more than the speed drives, as radians read as degrees do)")
 
 
 @dataclass(frozen=True)
