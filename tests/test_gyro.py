@@ -827,3 +827,14 @@ def test_the_fiftieth_stage_kept_the_forward_passs_settled_flag():
     chosen, obj, kept = real.choose_smoother_settled(logs)
     assert chosen == GYRO_SMOOTHER_SETTLED == "forward"
     assert obj["forward"] < obj["either"] - 0.02 and kept["either"] > kept["forward"] + 0.1
+
+
+def test_a_data_sheet_without_ay_noise_is_said_so():
+    """A vehicle file whose [sensors] ay_noise is 0 makes the log's noise infinitely many times the data sheet's: the
+    design line says the data sheet gives none (before: "(inf x the data sheet)")."""
+    from roadbank.fleet.process import design_words
+
+    design = {"car": "sedan", "car_from": "vehicle file", "quiet": False, "ay_noise": 0.08, "ay_floor": 0.06,
+              "ay_floor_ratio": math.inf}
+    words = design_words(design, "kinematic-pif")
+    assert "(the data sheet gives no ay noise)" in words and "inf" not in words

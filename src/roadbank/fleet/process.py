@@ -104,6 +104,12 @@ def design_text(design: dict) -> str:
     return "; ".join(f"{k}={v}" for k, v in design.items())
 
 
+def _times(ratio: float) -> str:
+    """The log's ``ay`` noise against the data sheet's, in words: ``"3.5 x the data sheet"``; a data sheet that gives
+    no noise (a vehicle file's ``ay_noise = 0``) said so rather than as infinitely many times."""
+    return f"{ratio:.2g} x the data sheet" if math.isfinite(ratio) else "the data sheet gives no ay noise"
+
+
 def design_words(design: dict, estimator: str) -> str:
     """:attr:`LogSummary.design` in words, for the estimator ``estimator`` ('' when empty): the car, the
     ``ay`` noise and floor (m/s^2; what was not measured is said so, and what the design took instead), the channels
@@ -116,10 +122,10 @@ def design_words(design: dict, estimator: str) -> str:
         heard = ("ay noise not measured (too little unbroken driving at 5 m/s or more in the log's first minute: "
                  "stops, dropouts and gaps break it): designed for the data sheet's noise, not known to be quiet")
     elif not math.isfinite(floor):
-        heard = (f"ay noise {noise:.2g} m/s^2 ({ratio:.2g} x the data sheet; its floor not measured: no stretch of "
+        heard = (f"ay noise {noise:.2g} m/s^2 ({_times(ratio)}; its floor not measured: no stretch of "
                  f"driving long enough): {'quiet' if design['quiet'] else 'loud'}")
     else:
-        heard = (f"ay noise {noise:.2g} m/s^2, floor {floor:.2g} ({ratio:.2g} x the data sheet): "
+        heard = (f"ay noise {noise:.2g} m/s^2, floor {floor:.2g} ({_times(ratio)}): "
                  f"{'quiet' if design['quiet'] else 'loud'}")
     words = f"{design['car']} ({design['car_from']}); {heard}"
     slope, ax = design.get("roll_rate"), design.get("ax")
