@@ -789,6 +789,18 @@ def test_an_ax_left_out_is_said_with_its_likely_mistake():
         design_words(design, "kinematic-pif")
 
 
+def _training_drives() -> list:
+    """The eight KITTI training drives with their roll rate, ax and pitch rate
+    (:func:`roadbank.tuning.real.training_logs`); the test skipped where they are not all under ../shared/data."""
+    from roadbank.tuning import real
+
+    data = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+    logs = real.training_logs(data, roll_rate=True, pitch_rate=True) if data.is_dir() else []
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {data}")
+    return logs
+
+
 @pytest.mark.slow
 def test_the_forty_ninth_stage_kept_the_mean_of_the_passes():
     """The rule (tuning.real.choose_smoother_passes) on the KITTI training drives: the mean of the smoother's passes
@@ -797,10 +809,7 @@ def test_the_forty_ninth_stage_kept_the_mean_of_the_passes():
     from roadbank.estimators.gyro import GYRO_SMOOTHER_PASSES, KinematicGyroSmoother
     from roadbank.tuning import real
 
-    data = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
-    logs = real.training_logs(data, roll_rate=True, pitch_rate=True) if data.is_dir() else []
-    if len(logs) < 8:
-        pytest.skip(f"the eight KITTI training drives are not all under {data}")
+    logs = _training_drives()
     chosen, obj, share = real.choose_smoother_passes(logs)
     assert chosen == GYRO_SMOOTHER_PASSES == "average"
     assert obj["average"] < obj["settled"] - 0.02 and share["settled"] > share["average"] + 0.1
@@ -820,11 +829,7 @@ def test_the_fiftieth_stage_kept_the_forward_passs_settled_flag():
     from roadbank.estimators.gyro import GYRO_SMOOTHER_SETTLED
     from roadbank.tuning import real
 
-    data = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
-    logs = real.training_logs(data, roll_rate=True, pitch_rate=True) if data.is_dir() else []
-    if len(logs) < 8:
-        pytest.skip(f"the eight KITTI training drives are not all under {data}")
-    chosen, obj, kept = real.choose_smoother_settled(logs)
+    chosen, obj, kept = real.choose_smoother_settled(_training_drives())
     assert chosen == GYRO_SMOOTHER_SETTLED == "forward"
     assert obj["forward"] < obj["either"] - 0.02 and kept["either"] > kept["forward"] + 0.1
 

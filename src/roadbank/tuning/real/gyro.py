@@ -411,17 +411,22 @@ def choose_log_gaps(logs, modes=LOG_GAPS) -> tuple[str, dict]:
     """The forty-eighth stage (module docstring) on the KITTI training ``logs`` (:func:`training_logs` with their roll
     rate, ``ax`` and pitch rate). Returns ``(mode, {mode: objective deg})``."""
     sets = gap_sets(logs)
-    default = per_log("kinematic-pif")
-
-    def build(mode):
-        def one(signals):
-            est = default(signals)
-            if isinstance(est, KinematicGyro):
-                est.log_gaps = mode
-            return est
-        return one
-    obj = {mode: gyro_objective(build(mode), sets) for mode in modes}
+    obj = {mode: gyro_objective(per_log_with("kinematic-pif", KinematicGyro, log_gaps=mode), sets) for mode in modes}
     return lowest_tied(obj, list(modes).index), obj
+
+
+def per_log_with(name: str, cls, **options):
+    """``build``: ``name`` designed for each log as the command line does (:func:`per_log`), with ``options`` set on
+    it where it is a ``cls`` (the candidate of a stage: the default is that class on the logs with a roll rate)."""
+    default = per_log(name)
+
+    def one(signals):
+        est = default(signals)
+        if isinstance(est, cls):
+            for key, value in options.items():
+                setattr(est, key, value)
+        return est
+    return one
 
 
 def choose_smoother_passes(logs, modes=SMOOTHER_PASSES) -> tuple[str, dict, dict]:
@@ -429,15 +434,9 @@ def choose_smoother_passes(logs, modes=SMOOTHER_PASSES) -> tuple[str, dict, dict
     rate, ``ax`` and pitch rate). Returns ``(mode, {mode: objective deg}, {mode: share of the valid samples settled})``
     (the share over every drive of the three sets, reported, not judged)."""
     sets = gyro_sets(logs)
-    default = per_log("kinematic-smoother")
 
     def build(mode):
-        def one(signals):
-            est = default(signals)
-            if isinstance(est, KinematicGyroSmoother):
-                est.passes = mode
-            return est
-        return one
+        return per_log_with("kinematic-smoother", KinematicGyroSmoother, passes=mode)
 
     def settled_share(mode) -> float:
         runs = [build(mode)(s).run(s) for one in sets for s, _, _ in one]
@@ -451,17 +450,14 @@ def choose_smoother_settled(logs, modes=SMOOTHER_SETTLED) -> tuple[str, dict, di
     rate, ``ax`` and pitch rate). Returns ``(mode, {mode: objective deg}, {mode: share of the scored samples
     kept})``."""
     sets = gyro_sets(logs)
-    default = per_log("kinematic-smoother")
     obj, kept = {}, {}
     for mode in modes:
+        build = per_log_with("kinematic-smoother", KinematicGyroSmoother, settled_by=mode)
         medians, n_kept, n_scored = [], 0, 0
         for one in sets:
             rms = []
             for s, ref, m in one:
-                est = default(s)
-                if isinstance(est, KinematicGyroSmoother):
-                    est.settled_by = mode
-                out = est.run(s)
+                out = build(s).run(s)
                 use = m & out.settled
                 n_kept, n_scored = n_kept + int(use.sum()), n_scored + int(m.sum())
                 if use.any():
