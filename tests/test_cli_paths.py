@@ -201,7 +201,7 @@ def test_json_is_printed_when_every_input_fails(tmp_path, command, keys):
     assert str(tmp_path) in json.dumps(out)            # the reason names the input
 
 
-@pytest.mark.parametrize("inside, folder", [("report.md", True), ("figures", False)])
+@pytest.mark.parametrize("inside, folder", [("report.md", True), ("report.html", True), ("figures", False)])
 def test_reproduce_checks_what_it_writes_inside_its_folder_first(tmp_path, inside, folder):
     """report.md a folder, or figures a file, in the output folder: a usage error naming it before the study runs
     (before: the study ran, then "Is a directory" or a cryptic "File exists")."""

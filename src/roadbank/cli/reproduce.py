@@ -80,8 +80,8 @@ def reproduce(outdir, scenarios, names, jobs, seed, docs_results, vehicle):
         check_estimators(names)
     except ValueError as exc:
         raise click.BadParameter(str(exc)) from None
-    for inner, folder in ((outdir / "report.md", False), (outdir / "metrics.csv", False),
-                          (outdir / "metrics.parquet", False), (outdir / "figures", True)):
+    files = ("report.md", "report.html", "metrics.csv", "metrics.parquet")
+    for inner, folder in [(outdir / f, False) for f in files] + [(outdir / "figures", True)]:
         why = output_path_problem(inner, directory=folder)      # what is written inside, before the work
         if why:
             raise click.BadParameter(why, param_hint="-o")
