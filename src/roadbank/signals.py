@@ -231,6 +231,28 @@ def band_pass(x, windows: tuple[int, int]) -> np.ndarray:
     return centred_mean(x, windows[0]) - centred_mean(x, windows[1])
 
 
+def band_inner(mask, windows: tuple[int, int]) -> np.ndarray | None:
+    """The samples of ``mask`` (bool array) at least half the longer of ``windows`` (samples) from either end, where
+    :func:`band_pass` has its full windows; None where fewer than a tenth of that window (plus two) are left."""
+    use = np.array(mask, dtype=bool)
+    use[:windows[1] // 2] = False
+    use[len(use) - windows[1] // 2:] = False
+    return use if np.count_nonzero(use) >= windows[1] // 10 + 2 else None
+
+
+def integral_band_fit(t, level, rate, use, windows: tuple[int, int]) -> tuple[float, float, float] | None:
+    """How ``level`` follows the time integral of ``rate`` (:func:`running_integral`; ``t`` s), both band-passed over
+    ``windows`` (:func:`band_pass`) and read on the samples ``use`` (:func:`band_inner`): ``(least-squares slope of
+    level on the integral, their correlation, the band-passed level's root mean square)`` in their units; None where
+    the integral never moves in the band."""
+    lb = band_pass(level, windows)[use]
+    ab = band_pass(running_integral(t, rate), windows)[use]
+    ll, aa, la = float(lb @ lb), float(ab @ ab), float(lb @ ab)
+    if not aa > 0:
+        return None
+    return la / aa, (la / math.sqrt(ll * aa) if ll > 0 else 0.0), math.sqrt(ll / len(lb))
+
+
 #: fewest sample triples :func:`white_noise_std` measures from
 MIN_NOISE_TRIPLES = 100
 

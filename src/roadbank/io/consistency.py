@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..constants import G
-from ..signals import band_pass, band_windows, running_integral
+from ..signals import band_inner, band_pass, band_windows, integral_band_fit, running_integral
 from .errors import LogError
 
 LIMIT = 0.8 * G          #: median |ay - vx r| above this (m/s^2) is physically impossible
@@ -439,10 +439,8 @@ def speed_scales(t, vx, ay, r, p=None, ax=None) -> dict[str, float]:
         return out
     t, vx, ay, r = t[:n], vx[:n], ay[:n], r[:n]
     windows = band_windows(t, SCALE_WINDOWS_S)
-    use = moving(vx, ay, r)
-    use[:windows[1] // 2] = False
-    use[n - windows[1] // 2:] = False
-    if np.count_nonzero(use) < windows[1] // 10 + 2:
+    use = band_inner(moving(vx, ay, r), windows)
+    if use is None:
         return out
     with np.errstate(invalid="ignore", over="ignore"):
         a = band_pass(vx * r, windows)[use]
@@ -453,12 +451,9 @@ def speed_scales(t, vx, ay, r, p=None, ax=None) -> dict[str, float]:
             explained = 1.0 - float(np.sum((level - alpha * roll - beta * a) ** 2)) / max(float(level @ level), 1e-300)
             if SCALE_ROLL_GAIN[0] <= alpha <= SCALE_ROLL_GAIN[1] and explained >= SCALE_MIN_FIT and 1.0 + beta > 0:
                 out["roll_rate"] = float(1.0 / (1.0 + beta))
-        if ax is not None:
-            v = band_pass(vx, windows)[use]
-            i = band_pass(running_integral(t, np.asarray(ax, dtype=np.float64)[:n]), windows)[use]
-            vv, ii = float(v @ v), float(i @ i)
-            if ii > 0 and np.sqrt(vv / len(v)) >= SCALE_MIN_SPEED and float(v @ i) / np.sqrt(vv * ii) >= SCALE_MIN_CORR:
-                out["longitudinal_acceleration"] = float(v @ i) / ii
+        fit = None if ax is None else integral_band_fit(t, vx, np.asarray(ax, dtype=np.float64)[:n], use, windows)
+        if fit is not None and fit[2] >= SCALE_MIN_SPEED and fit[1] >= SCALE_MIN_CORR:
+            out["longitudinal_acceleration"] = fit[0]
     return out
 
 

@@ -16,8 +16,8 @@ import numpy as np
 from ..constants import MAX_GAP_S, G
 from ..models.attitude import euler_pitch_rate, kinematic_roll
 from ..params import VehicleParams
-from ..signals import (DYNAMICS_BAND_HZ, band_pass, band_windows, diff_noise_std, noise_band_hz, road_noise_floor_std,
-                       road_noise_std, running_integral, sample_rate, source_step)
+from ..signals import (DYNAMICS_BAND_HZ, band_inner, band_windows, diff_noise_std, integral_band_fit, noise_band_hz,
+                       road_noise_floor_std, road_noise_std, running_integral, sample_rate, source_step)
 from .sensors import SensorSpec
 
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
@@ -277,16 +277,10 @@ def _slope_on_integral(t, level, rate, moving, windows=ROLL_CHECK_WINDOWS_S) -> 
     integral that never moves in the band."""
     t = np.asarray(t, dtype=np.float64)
     level = np.asarray(level, np.float64)
-    short, long = band_windows(t, windows)
-    band = [band_pass(x, (short, long)) for x in (level, running_integral(t, rate))]
-    inner = np.zeros(len(t), dtype=bool)
-    inner[long // 2:len(t) - long // 2] = True
-    use = inner & moving & np.isfinite(level)
-    if np.count_nonzero(use) < long // 10 + 2:
-        return None
-    lb, ab = band[0][use], band[1][use]
-    den = float(np.dot(ab, ab))
-    return float(np.dot(lb, ab) / den) if den > 0 else None
+    in_samples = band_windows(t, windows)
+    use = band_inner(moving & np.isfinite(level), in_samples)
+    fit = None if use is None else integral_band_fit(t, level, rate, use, in_samples)
+    return None if fit is None else fit[0]
 
 
 def roll_rate_usable(slope: float | None) -> bool:
