@@ -135,10 +135,10 @@ def both_ways(est, fwd: Estimate, signals: Signals, lookahead: Signals | None, r
     both = fwd.valid & valid_b
     w = np.where(both, 0.5 * (fwd.w + wb), 0.0)
     settled_b = back.settled[::-1][:n]
-    if getattr(est, "passes", "average") == "settled":      # where one pass has settled and the other not: that one
+    alone = getattr(est, "passes", "average") == "settled"   # where one pass has settled and the other not: that one
+    if alone:
         w = np.where(both & fwd.settled & ~settled_b, fwd.w, np.where(both & settled_b & ~fwd.settled, wb, w))
-    either = getattr(est, "passes", "average") == "settled" or getattr(est, "settled_by", "forward") == "either"
-    settled = fwd.settled | settled_b if either else fwd.settled
+    settled = fwd.settled | settled_b if alone or getattr(est, "settled_by", "forward") == "either" else fwd.settled
     last = np.maximum.accumulate(np.where(both, np.arange(n), -1))
     held = ~both & (last >= 0)
     w[held] = w[last[held]]                   # held where a pass does not use the sample, 0 before the first
