@@ -16,7 +16,7 @@ from click.testing import CliRunner
 
 from roadbank.cli import main
 from roadbank.validation.comma2k19 import named_apart, unique_segments
-from roadbank.validation.document import find_datasets
+from roadbank.validation.datasets import find_datasets
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 SEGMENT = DATA / "comma2k19-example"

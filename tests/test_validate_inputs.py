@@ -16,7 +16,8 @@ from click.testing import CliRunner
 
 from roadbank.cli import main
 from roadbank.validation.comma2k19 import segment_name, validate_comma2k19
-from roadbank.validation.document import command_line, find_datasets, real_data_markdown
+from roadbank.validation.datasets import find_datasets
+from roadbank.validation.document import command_line, real_data_markdown
 from roadbank.validation.kitti import unique_drives, validate_kitti
 from roadbank.validation.kitti_report import markdown as kitti_markdown
 from roadbank.validation.kitti_report import to_json

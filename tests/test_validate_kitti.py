@@ -242,7 +242,7 @@ def test_10hz_jitter_against_100hz_on_the_truth():
 
 # ---------------------------------------------------------------- the combined report
 def test_find_datasets_layouts(tmp_path):
-    from roadbank.validation.document import find_datasets
+    from roadbank.validation.datasets import find_datasets
 
     (tmp_path / "seg" / "processed_log").mkdir(parents=True)
     for drive in ("kitti/2011_01_01_drive_0001_sync", "kitti/2011_01_01_drive_0002_sync"):

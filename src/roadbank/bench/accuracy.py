@@ -29,7 +29,7 @@ def _real(data) -> tuple[list, list]:
     """The real-data targets on the data sets under ``data``, as ``roadbank validate all`` reads them (every KITTI
     drive, every comma2k19 segment, each once), and notes on what could not be judged."""
     from ..validation.comma2k19 import comma2k19_outcome, named_apart, unique_segments
-    from ..validation.document import find_datasets
+    from ..validation.datasets import find_datasets
     from ..validation.kitti import validate_kitti
     from ..validation.scoring import ESP_DEFAULT
     from ..validation.targets import CAUSAL, comma_targets, kitti_targets

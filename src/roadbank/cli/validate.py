@@ -62,34 +62,13 @@ def _segments_under(path: Path) -> tuple[list[Path], list[str], bool]:
     """The comma2k19 segments of ``validate comma2k19 PATH``, the notes on finding them, and whether PATH
     is one segment (or holds none: reading it then says what is missing)."""
     from ..validation.comma2k19 import unique_segments
-    from ..validation.document import find_datasets
+    from ..validation.datasets import find_datasets
 
     found = find_datasets(path) if path.is_dir() else {"comma2k19": [], "notes": []}
     if found["comma2k19"] in ([], [path]):
         return [path], found["notes"], True
     segments, notes = unique_segments(found["comma2k19"])
     return segments, found["notes"] + notes, False
-
-
-def _drives_under(paths) -> tuple[list[Path], list[str]]:
-    """The KITTI drives of ``validate kitti PATHS`` and the notes on finding them: a path that is a drive (or its
-    ``oxts`` folder) as given; a folder of drives, the drives at any depth under it, as ``validate all`` finds them
-    (before: only those directly in it, the others passed over without a word); a path with none, as given (reading
-    it says why)."""
-    from ..io.kitti import find_oxts_dirs
-    from ..validation.document import find_datasets
-
-    drives: list[Path] = []
-    notes: list[str] = []
-    for p in paths:
-        drive = find_oxts_dirs(p, broken=True) in ([p], [p / "oxts"])
-        found = find_datasets(p) if p.is_dir() and not drive else None
-        if found is None or not found["kitti"]:
-            drives.append(p)
-        else:
-            drives += found["kitti"]
-            notes += found["notes"]
-    return drives, notes
 
 
 def _run_segments(pool, segments, **kwargs) -> tuple[list, list[str]]:
@@ -242,7 +221,7 @@ def _write_kitti_figures(v, output: Path) -> dict:
 def kitti(ctx, paths, as_json, output, names, no_sensitivity, vehicle, workers, scheduler):
     """Score every estimator against the INS roll of KITTI raw drives.
 
-    PATHS: drive folders (holding oxts/), oxts folders, or folders holding drive folders.
+    PATHS: drive folders (holding oxts/), oxts folders, or folders holding drive folders (at any depth).
     A drive that cannot be read is reported and the others are still scored (exit code 1 then); a drive
     reached twice is scored once, with a warning. With --workers or --scheduler each drive is one task;
     the report is the same as in one process.
@@ -252,18 +231,17 @@ def kitti(ctx, paths, as_json, output, names, no_sensitivity, vehicle, workers, 
     from ..validation.kitti_report import drive_png, markdown, to_json
 
     sel = _names(names)
-    drives, found = _drives_under(paths)
     with contextlib.ExitStack() as stack:
         pool = start_pool(stack, workers, scheduler)
-        v = validate_kitti(drives, names=sel, sensitivity=not no_sensitivity, pool=pool,
+        v = validate_kitti(paths, names=sel, sensitivity=not no_sensitivity, pool=pool,
                            figure=None if output is None else drive_png, **_car(vehicle))
-    _warn(found + v.notes)
+    _warn(v.notes)
     for e in v.errors:
         click.echo(f"error: {e}", err=True)
     if not v.drives:
         click.echo("error: no KITTI drive could be read", err=True)
         if as_json:             # what a script reads: the same keys, nothing scored
-            click.echo(json.dumps({"drives": {}, "errors": v.errors, "notes": found + v.notes}, indent=2))
+            click.echo(json.dumps({"drives": {}, "errors": v.errors, "notes": v.notes}, indent=2))
         sys.exit(1)
     if output is not None:
         figs = _write_kitti_figures(v, output)
@@ -310,7 +288,8 @@ def all_(ctx, data_dir, output, no_jitter, as_json, workers, scheduler):
     """
     from ..validation import to_json
     from ..validation.comma2k19 import comma2k19_outcome, unique_segments
-    from ..validation.document import command_line, find_datasets, real_data_markdown
+    from ..validation.datasets import find_datasets
+    from ..validation.document import command_line, real_data_markdown
     from ..validation.jitter import jitter_study
     from ..validation.kitti import validate_kitti
     from ..validation.kitti_report import drive_png

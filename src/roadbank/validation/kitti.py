@@ -43,6 +43,7 @@ from ..params import VehicleParams
 from ..signals import sample_rate
 from ..vehicle import SensorSpec, car_for_log, log_conditions, noise_densities
 from .comma2k19 import ValidationResult
+from .datasets import find_datasets
 from .scoring import (ESP_DEFAULT, SHORT_PIECES_S, VALIDATION_NAMES, Scoring, _rms_deg, hold_invalid, lowpass_t, masks,
                       pooled, run_and_score, scored_pieces)
 from .splits import split_of
@@ -271,26 +272,29 @@ def _short_split(ds, names) -> dict:
 
 def expand_drives(paths) -> list[Path]:
     """Each path as given when it is one drive (a drive folder or its ``oxts`` folder), else every drive
-    folder under it (a folder holding drive folders).
+    folder under it at any depth (:func:`roadbank.validation.datasets.find_datasets`, as ``validate all`` finds
+    them; a drive a level further down was passed over before).
 
     A drive folder whose ``oxts`` folder lacks ``timestamps.txt`` or ``data/``
     (:func:`roadbank.io.kitti.find_oxts_dirs` with ``broken=True``) is listed too, so that reading it
     reports what is missing rather than passing it over; a path with no KITTI folder at all is kept as
     given (reading it says so).
     """
-    return [d for _, d in _expanded(paths)]
+    return [d for _, d in _expanded(paths)[0]]
 
 
-def _expanded(paths) -> list[tuple[Path, Path]]:
-    """``(path given, drive path)`` of each drive of :func:`expand_drives`."""
-    out = []
+def _expanded(paths) -> tuple[list[tuple[Path, Path]], list[str]]:
+    """``(path given, drive path)`` of each drive of :func:`expand_drives`, and the search's notes (a folder that
+    could not be listed, folders too deep)."""
+    out, notes = [], []
     for p in map(Path, paths):
-        found = sorted(set(find_oxts_dirs(p)) | set(find_oxts_dirs(p, broken=True)))
-        if not found or found in ([p], [p / "oxts"]):
+        found = None if find_oxts_dirs(p, broken=True) in ([p], [p / "oxts"]) or not p.is_dir() else find_datasets(p)
+        if found is None or not found["kitti"]:
             out.append((p, p))
         else:
-            out += [(p, d.parent if d.name == "oxts" else d) for d in found]
-    return out
+            out += [(p, d) for d in found["kitti"]]
+            notes += found["notes"]
+    return out, notes
 
 
 def _same_folder(path: Path) -> Path:
@@ -324,8 +328,8 @@ def unique_drives(paths) -> tuple[list[Path], list[str]]:
         One per drive left out, naming it and how it was reached both times.
     """
     kept: dict[Path, tuple[Path, Path]] = {}
-    notes = []
-    for given, p in _expanded(paths):
+    expanded, notes = _expanded(paths)
+    for given, p in expanded:
         key = _same_folder(p)
         label = _drive_label(p)
         if key in kept:
