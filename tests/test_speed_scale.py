@@ -65,7 +65,7 @@ def test_the_scale_of_a_synthetic_log_is_read_exactly():
     assert (ay @ (vx * r)) / ((vx * r) @ (vx * r)) == pytest.approx(0.5, abs=0.05)
 
 
-@pytest.mark.skipif(not KITTI_DRIVES, reason="../shared/data/kitti-oxts* not present")
+@pytest.mark.skipif(len(KITTI_DRIVES) < 16, reason="the 16 KITTI drives of ../shared/data/kitti-oxts* not present")
 @pytest.mark.parametrize("factor, unit", UNITS)
 def test_every_kitti_drive_is_read_in_its_unit(factor, unit):
     """The 16 KITTI drives (their INS's roll rate and ax in the place of a channel map's): as recorded no speed unit is
@@ -73,15 +73,17 @@ def test_every_kitti_drive_is_read_in_its_unit(factor, unit):
     drive, ax on those where it follows the speed closely (14 of 16), and the two together never name another."""
     from roadbank.io.kitti import load_kitti_oxts
 
-    by_ax = 0
+    named = [0, 0, 0]           # drives on which the roll rate alone, both, ax alone name the unit
     for drive in KITTI_DRIVES:
         s = load_kitti_oxts(drive).signals
-        assert _refused_unit(_scaled(s, factor, ax=False)) == unit, drive.name
-        assert _refused_unit(_scaled(s, factor)) == unit, drive.name
-        alone = _refused_unit(_scaled(s, factor, p=False))
-        assert alone in (unit, None), (drive.name, alone)
-        by_ax += alone == unit
-    assert by_ax >= (14 if unit else len(KITTI_DRIVES))
+        readings = [_refused_unit(_scaled(s, factor, **kw)) for kw in ({"ax": False}, {}, {"p": False})]
+        assert all(x in (unit, None) for x in readings), (drive.name, readings)     # never another unit
+        named = [n + (x == unit) for n, x in zip(named, readings)]
+    # the 16 shared drives: the roll rate names the unit on all 16, ax on 14 (a drive added to the folder may turn
+    # too little to be read: the counts are of the 16)
+    everyone = len(KITTI_DRIVES)
+    assert named[0] >= (16 if unit else everyone) and named[1] >= (16 if unit else everyone)
+    assert named[2] >= (14 if unit else everyone)
 
 
 @pytest.mark.skipif(not KITTI_DRIVES, reason="../shared/data/kitti-oxts* not present")
