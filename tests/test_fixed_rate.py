@@ -111,6 +111,28 @@ def test_rate_is_detected_and_step_equals_run():
     assert not np.array_equal(batch.w, general.w)          # the fixed-rate path was used
 
 
+@pytest.mark.parametrize("late", [0, 1, 2, 300])
+def test_rate_found_late_in_a_chunk_equals_step(late):
+    """A log read in chunks whose first chunk is one sample (no interval yet) and whose second starts with ``late``
+    samples no later than that one: run() sets the rate where step() does (it reads only the first two times of
+    a chunk), and the outputs equal step()'s sample for sample."""
+    s = _uniform_log()
+    t0 = 10.0
+    first = Signals([t0], s.vx[:1], s.ay[:1], s.r[:1], s.delta_f[:1])
+    t = t0 + 0.01 * (np.arange(len(s)) - late)
+    rest = Signals(t, s.vx, s.ay, s.r, s.delta_f)
+    est = E.make("pif-modified")
+    est.run(first)
+    batch = est.run(rest, reset=False)
+    other = E.make("pif-modified")
+    other.step(t0, s.vx[0], s.ay[0], s.r[0], s.delta_f[0])
+    out = [other.step(t[k], s.vx[k], s.ay[k], s.r[k], s.delta_f[k]) for k in range(len(s))]
+    assert est.fixed_dt == other.fixed_dt == pytest.approx(0.01, rel=1e-9)
+    assert np.array_equal(batch.w, [o.w for o in out])
+    assert np.array_equal(batch.valid, [o.valid for o in out])
+    assert not batch.valid[:late + 1].any() and batch.valid[late + 1:].all()
+
+
 def test_jittered_samples_take_the_general_path():
     s = _uniform_log(seed=2)
     rng = np.random.default_rng(3)

@@ -165,8 +165,11 @@ def estimator_cases() -> list[tuple[str, str, dict]]:
 
 
 def time_batch(est, signals, repeats: int) -> dict:
-    """Warm batch timing of ``est.run(signals)``: median and best (ns/sample)."""
-    est.run(signals[:10])  # make sure the kernel is loaded
+    """Warm batch timing of ``est.run(signals)``: median and best (ns/sample).
+
+    Steady: an untimed run first loads the kernel and leaves output arrays of the log's length that each timed run
+    writes into again (``Estimator._outputs``, as in a loop over logs); :func:`time_batch_kept` times fresh memory."""
+    est.run(signals)
     walls, cpus = [], []
     for _ in range(repeats):
         c0 = time.thread_time()
@@ -315,8 +318,8 @@ def filterpy_peer(signals, n_samples: int, est=None, rounds: int = 1) -> dict:
     log's step (``R_d = R/dt``); per sample the matrices of the nearest grid
     speed are assigned, then ``predict(u=ay)`` and ``update(r)``. Measured on the
     first ``n_samples`` samples and reported per sample: the median of ``rounds`` runs.
-    With ``est`` (a built estimator), each round also times ``est.run(signals)`` right after the
-    filterpy loop, so that both meet the same state of a shared machine; ``ratio`` is the median
+    With ``est`` (a built estimator), each round also times a steady ``est.run(signals)`` (:func:`time_batch`)
+    right after the filterpy loop, so that both meet the same state of a shared machine; ``ratio`` is the median
     over the rounds of filterpy's ns/sample over ``est``'s in the same round (``ratios``: each round's).
     """
     try:
