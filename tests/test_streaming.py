@@ -76,3 +76,19 @@ def test_reset_restarts():
     a = est.run(s)
     b = est.run(s)              # run() resets by default
     assert np.array_equal(a.w, b.w)
+
+
+@pytest.mark.parametrize("build_one", [lambda: E.make("pif-modified"), lambda: E.make("kinematic-gyro"),
+                                       lambda: E.with_online_offsets(E.make("pif-modified"))],
+                         ids=["pif-modified", "kinematic-gyro", "online-offsets"])
+def test_step_with_arrays_says_it_takes_one_sample(build_one):
+    """step() given arrays (a whole log) or None is told to take one number per channel, or run() for arrays; the
+    estimator's state is untouched, so the next sample is processed as if the call had not been made."""
+    est, clean = build_one(), build_one()
+    est.step(0.0, 20.0, 0.5, 0.02, 0.0, **({"p": 0.0} if est.name == "kinematic-gyro" else {}))
+    clean.step(0.0, 20.0, 0.5, 0.02, 0.0, **({"p": 0.0} if clean.name == "kinematic-gyro" else {}))
+    for bad in (np.arange(3.0), None):
+        with pytest.raises(TypeError, match=r"step\(\) takes one sample.*run\(Signals"):
+            est.step(0.01, 20.0, bad, 0.02, 0.0)
+    extra = {"p": 0.001} if est.name == "kinematic-gyro" else {}
+    assert est.step(0.01, 20.0, 0.5, 0.02, 0.0, **extra) == clean.step(0.01, 20.0, 0.5, 0.02, 0.0, **extra)

@@ -520,11 +520,14 @@ class Estimator:
         """
         # One compiled call returns the outputs (no numpy scalar reads afterwards);
         # float() keeps numpy scalars / ints from triggering a new compilation.
+        try:
+            t, vx, delta_f, ay, r = float(t), float(vx), float(delta_f), float(ay), float(r)
+        except TypeError as exc:                        # an array, None: not one sample (the state untouched)
+            raise not_one_sample(self.name, exc) from None
         if self._auto_rate and self.fixed_dt is None:
-            self._observe_time(float(t))
-        return _new_result(StepResult, self._step_fn(self._mem, self._cfg, self._tab, self._work,
-                                                      float(t), float(vx), float(delta_f), float(ay),
-                                                      float(r)))
+            self._observe_time(t)
+        out = self._step_fn(self._mem, self._cfg, self._tab, self._work, t, vx, delta_f, ay, r)
+        return _new_result(StepResult, out)
 
     def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
         """Estimate over a whole log.
@@ -653,6 +656,20 @@ class Estimator:
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.name!r} v_min={self.v_min} roll={self.roll!r}>"
+
+
+def not_one_sample(name: str, exc: Exception) -> TypeError:
+    """The error of a ``step()`` given something else than one number per channel (an array, None)."""
+    return TypeError(f"{name}.step() takes one sample, a number per channel: t (s), vx (m/s), ay (m/s^2), r (rad/s), "
+                     f"delta_f (rad) ({exc}); run(Signals(...)) takes arrays")
+
+
+def sample_floats(name: str, *values) -> tuple[float, ...]:
+    """``values`` of one ``step()`` sample as floats, or :func:`not_one_sample`'s error."""
+    try:
+        return tuple(float(v) for v in values)
+    except TypeError as exc:
+        raise not_one_sample(name, exc) from None
 
 
 def batch3_rows(d: dict) -> np.ndarray:

@@ -49,7 +49,7 @@ from ..models.attitude import euler_roll_rate, grade_pitch, running_area
 from ..params import VehicleParams
 from ..signals import Estimate, Signals, concat_signals
 from . import layout as L
-from .base import DesignInputs, ScheduledObserver, StepResult, Tables
+from .base import DesignInputs, ScheduledObserver, StepResult, Tables, sample_floats
 from .gyro_start import KalmanStart, first_restart, kalman_begin, kalman_next
 from .kinematic import KINEMATIC_V_MIN
 from .kinematic_smoother import both_ways, lookahead_of
@@ -548,7 +548,8 @@ class KinematicGyro(ScheduledObserver):
         (rad/s), the longitudinal acceleration ``ax`` (m/s^2; NaN: the roll rate is not corrected for the
         grade, and once an ``ax`` has come, the windows that hold the NaN are not, as in :meth:`run`) and the pitch
         rate ``q`` (rad/s; None: the log has none, the window's pitch)."""
-        t, self._gaps = gap_stamp(float(t), self._gaps, MAX_GAP_S, self.max_gap, self.log_gaps)
+        t, vx, ay, r, delta_f, p, ax = sample_floats(self.name, t, vx, ay, r, delta_f, p, ax)
+        t, self._gaps = gap_stamp(t, self._gaps, MAX_GAP_S, self.max_gap, self.log_gaps)
         if self.grade.window > 0 and (not np.isnan(ax) or self.grade.started):
             t_, vx_, ay_, r_, d_, p_, ax_ = (np.array([float(v)]) for v in (t, vx, ay, r, delta_f, p, ax))
             one = Signals(t_, vx_, ay_, r_, d_, p_, ax_, None if q is None else np.array([float(q)]))

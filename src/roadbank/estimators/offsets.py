@@ -62,7 +62,7 @@ from ..models.bicycle import understeer_gradient
 from ..params import VehicleParams
 from ..signals import Estimate, Signals
 from .kernels import offsets as K
-from .base import Estimator, StepResult
+from .base import Estimator, StepResult, sample_floats
 
 
 @dataclass(frozen=True)
@@ -252,7 +252,7 @@ class OnlineOffsets:
         reads as they are (``p``, the roll rate in rad/s, of :data:`roadbank.estimators.GYRO`); the inner
         estimator's result for the corrected sample."""
         o = self._oout
-        K.offsets_step(self._omem, self._ocfg, float(t), float(vx), float(delta_f), float(ay), float(r), o)
+        K.offsets_step(self._omem, self._ocfg, *sample_floats(self.name, t, vx, delta_f, ay, r), o)
         return self.inner.step(t, vx, o[K.O_AY], o[K.O_R], o[K.O_D], **more)
 
     def __repr__(self) -> str:
