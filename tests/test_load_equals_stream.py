@@ -444,3 +444,31 @@ def test_clock_time_base_needs_a_table(tmp_path):
     (tmp_path / "m.toml").write_text(CLOCK_MAP)
     with pytest.raises(LogError, match=r"log\.mf4: resample\.time_base 'clock' needs a table"):
         load_log(p, channels=tmp_path / "m.toml")
+
+
+@pytest.mark.parametrize("version", ["4.10", "3.30"])
+def test_mdf_invalidation_bits_are_dropouts_whole_and_streamed(tmp_path, version):
+    """Samples an MDF4 file flags invalid (invalidation bits) hold garbage: read as missing (NaN at their time
+    stamps, bridged as any short dropout, the same whole and streamed), never as data. MDF 3 (no invalidation
+    bits) streams as it reads whole (it failed on a missing block field)."""
+    pytest.importorskip("asammdf")
+    from asammdf import MDF, Signal
+    t = np.arange(1000) / 100.0
+    r = 0.03 * np.cos(t)
+    bad = np.zeros(t.size, dtype=bool)
+    if version.startswith("4"):
+        bad[400:406] = True
+        r[bad] = 32.767                     # what a sensor's "invalid" raw value decodes to
+    mdf = MDF(version=version)
+    mdf.append([Signal(15.0 + np.sin(t), t, name="vx"), Signal(0.5 * np.sin(t), t, name="ay"),
+                Signal(r, t, name="r", invalidation_bits=bad if bad.any() else None),
+                Signal(0.01 * t, t, name="delta_f"), Signal(0.0 * t, t, name="roll")])
+    p = tmp_path / ("log.mf4" if version.startswith("4") else "log.mdf")
+    mdf.save(p)
+    (tmp_path / "m.toml").write_text(MDF_MAP.format(tb="uniform", rate=100.0, gap=0.5))
+    whole, _ = assert_stream_equals_load(p, 61, channels=tmp_path / "m.toml")
+    s = whole.signals
+    assert np.nanmax(np.abs(s.r)) < 0.031                       # the garbage never read ...
+    at = np.isin(np.round(s.t, 6), np.round(t[bad], 6))
+    assert at.sum() == bad.sum()
+    np.testing.assert_allclose(s.r[at], 0.03 * np.cos(s.t[at]), atol=3e-5)   # ... a short dropout, bridged

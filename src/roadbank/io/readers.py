@@ -177,10 +177,10 @@ def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTab
         for c in names:
             if c in wanted or (prefix and c.startswith(prefix)):
                 try:
-                    sig = mdf.get(c)
+                    sig = mdf.get(c, ignore_invalidation_bits=True)
                 except Exception as exc:
                     raise LogError(f"{p}: {column_label(wanted, c)}: cannot read ({exc})") from None
-                data[c] = mdf_floats(p, c, column_label(wanted, c), sig.samples)
+                data[c] = mdf_signal_floats(p, c, column_label(wanted, c), sig)
                 times[c] = np.asarray(sig.timestamps, dtype=np.float64)
                 if len(data[c]) == 0:
                     raise LogError(f"{p}: {column_label(wanted, c)}: no samples")
@@ -215,6 +215,17 @@ def mdf_floats(p, c: str, label: str, samples, row0: int = 0) -> np.ndarray:
         s = parse_floats(p, c, label, [x.decode() if isinstance(x, bytes) else x for x in s],
                           "sample", range(row0, row0 + len(s)))
     return np.asarray(s, dtype=np.float64)
+
+
+def mdf_signal_floats(p, c: str, label: str, sig, row0: int = 0) -> np.ndarray:
+    """An asammdf ``Signal`` of channel ``c`` read with its invalidation bits -> float64 (:func:`mdf_floats`), NaN
+    where the file flags a sample invalid: a dropout, at its time stamp, as a whole read and a streamed one see it."""
+    v = mdf_floats(p, c, label, sig.samples, row0)
+    bits = getattr(sig, "invalidation_bits", None)
+    if bits is None:
+        return v
+    bad = np.asarray(bits, dtype=bool)
+    return np.where(bad, np.nan, v) if bad.any() else v
 
 
 READERS = {"csv": read_csv, "parquet": read_parquet, "mdf4": read_mdf4}

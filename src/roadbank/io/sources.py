@@ -165,8 +165,8 @@ class Mdf4Windows:
         self.names = [n for n in self.mdf.channels_db if n not in ("time", "t")]
         self.units = readers.mdf_units(self.mdf, self.names)
         self.chunk = max(1, int(chunk_rows))
-        rec = max((int(g.channel_group.samples_byte_nr) + int(g.channel_group.invalidation_bytes_nr)
-                   for g in self.mdf.groups), default=8)
+        rec = max((int(g.channel_group.samples_byte_nr) + int(getattr(g.channel_group, "invalidation_bytes_nr", 0))
+                   for g in self.mdf.groups), default=8)        # (MDF 3 has no invalidation bytes)
         self.mdf.configure(read_fragment_size=self.chunk * max(rec, 8))   # read buffer: one window
         self.metadata = {}
         comment = getattr(getattr(self.mdf, "header", None), "comment", None)
@@ -204,7 +204,7 @@ class Mdf4Windows:
         got = None
         for k, sig in zip(keys, sigs):
             tv = (np.asarray(sig.timestamps, dtype=np.float64),
-                  readers.mdf_floats(self.path, k, self.wanted[k][2], sig.samples, start))
+                  readers.mdf_signal_floats(self.path, k, self.wanted[k][2], sig, start))
             if k == name:
                 got = tv
             else:
