@@ -472,3 +472,28 @@ def test_mdf_invalidation_bits_are_dropouts_whole_and_streamed(tmp_path, version
     at = np.isin(np.round(s.t, 6), np.round(t[bad], 6))
     assert at.sum() == bad.sum()
     np.testing.assert_allclose(s.r[at], 0.03 * np.cos(s.t[at]), atol=3e-5)   # ... a short dropout, bridged
+
+
+@pytest.mark.parametrize("fmt", ["parquet", "mdf4"])
+@pytest.mark.parametrize("at", [99, 100, 101])
+def test_stamp_repeated_across_a_chunk_boundary(tmp_path, fmt, at):
+    """A stamp repeated as the first sample of a chunk (the chunk before it ending cleanly): both samples flagged,
+    as in the whole file's repair, whatever the chunking (the first of the pair had been passed on unflagged)."""
+    t = np.arange(1000) / 100.0
+    t[at] = t[at - 1]
+    cols = {"t": t, "vx": 15.0 + np.sin(t), "ay": 0.5 * np.sin(t), "r": 0.03 * np.cos(t), "delta_f": 0.01 * t,
+            "roll": 0.0 * t}
+    if fmt == "parquet":
+        p = tmp_path / "log.parquet"
+        pq.write_table(pa.table(cols), p)
+    else:
+        pytest.importorskip("asammdf")
+        from asammdf import MDF, Signal
+        mdf = MDF(version="4.10")
+        mdf.append([Signal(v, t, name=k) for k, v in cols.items() if k != "t"])
+        p = tmp_path / "log.mf4"
+        mdf.save(p)
+    (tmp_path / "m.toml").write_text(MAP.format(tb="uniform", rate=100.0, gap=0.5))
+    whole, _ = assert_stream_equals_load(p, 50, channels=tmp_path / "m.toml", more=("reference_roll",))
+    assert whole.time_repairs["duplicate"] >= 1
+    assert whole.time_repairs["flagged"] >= 1

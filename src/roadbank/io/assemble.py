@@ -538,7 +538,7 @@ def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
                          "uniform" if tb == "auto" else tb, cmap.rate_hz, cmap.max_gap_s)
     read = roles + gnss + list(carried)
     col = {r: cmap.channels[r].column for r in roles + gnss} | {c: c for c in carried}
-    fixes = {r: ChunkRepair(p, col[r], r, "sample") for r in read}
+    fixes = {r: ChunkRepair(p, col[r], r, "sample", hold_last=True) for r in read}
     rows = dict.fromkeys(read, 0)
     finite = dict.fromkeys(roles, False)
     checked = dict.fromkeys(roles, False)

@@ -93,8 +93,11 @@ class ChunkRepair:
     it; the warning of the first chunk that needed a repair is given once.
     """
 
-    def __init__(self, source, column: str, label: str, row_label: str = "row"):
+    def __init__(self, source, column: str, label: str, row_label: str = "row", hold_last: bool = False):
         self.source, self.column, self.label, self.row_label = source, column, label, row_label
+        #: hold back the last row of every chunk, also of one that ends cleanly: the next chunk may open with
+        #: a repeat of its stamp, which flags both samples (a table's rows are held so by :func:`instants`)
+        self.hold_last = hold_last
         self.after: float | None = None
         #: (rownums, t, {name: array}) rows waiting for the next chunk
         self.held: tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]] | None = None
@@ -126,8 +129,9 @@ class ChunkRepair:
         self.carry = False
         # the dropped part after a clock restart is final: no later stamp brings it back
         after_restart = bool(rep.restarts) and (not len(rep.keep) or int(rep.keep.max()) < rep.restarts[-1])
-        if not last and not after_restart and _odd_tail(t, rep):
-            cut = max(n - HOLD_ROWS, 0)
+        odd = not last and not after_restart and _odd_tail(t, rep)
+        if odd or (not last and not after_restart and self.hold_last and n):
+            cut = max(n - (HOLD_ROWS if odd else 1), 0)
             late = np.flatnonzero(rep.keep >= cut)
             c0 = min(cut, int(rep.keep[late[0]:].min())) if len(late) else cut
             self.carry = bool(0 < c0 < n and rep.kind[c0 - 1] in (MISSING, OUT_OF_ORDER))
