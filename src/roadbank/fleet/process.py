@@ -137,7 +137,8 @@ def design_words(design: dict, estimator: str) -> str:
         loud = f"{GYRO_MODELS[estimator]} (the log has a roll rate{free}{grade})" if gyro else "the low-pass blend"
         words += f", so {estimator} is {QUIET_MODELS[estimator] if design['quiet'] else loud}"
     if slope is not None and not gyro:
-        words += f"; its roll rate does not follow the roll in its ay ({_off(slope, RATE_MISTAKES)}), so it is not used"
+        words += (f"; its roll rate does not follow the roll in its ay ({_off(slope, ROLL_RATE_MISTAKES)}), so it is "
+                  "not used")
     if gyro and ax is not None and not roll_rate_usable(ax):
         words += (f"; its ax does not follow its speed ({_off(ax, AX_MISTAKES)}), so the roll rate is not corrected "
                   "for the grade")
@@ -154,6 +155,11 @@ def design_words(design: dict, estimator: str) -> str:
 #: channel) reads for a usual mistake: (the slope it gives, the mistake)
 RATE_MISTAKES = ((math.pi / 180, "deg/s declared as rad/s"), (180 / math.pi, "rad/s declared as deg/s"),
                  (-1.0, "the opposite sign, which invert = true in a channel map turns"))
+#: ... a roll rate's: it reads the same in ISO and FRD, so an opposite sign may be ay's and the yaw rate's instead
+ROLL_RATE_MISTAKES = RATE_MISTAKES[:2] + (
+    (-1.0, "the opposite sign: either the roll rate's (invert = true on it in a channel map) or ay's and the yaw "
+           "rate's (FRD declared as ISO, an upside-down sensor: convention = \"FRD\"), which mirrors the bank; a roll "
+           "rate reads the same in both conventions, so check ay's sign in a left turn"),)
 #: ... and ``ax``'s (:func:`~roadbank.vehicle.conditions.ax_slope`)
 AX_MISTAKES = ((G_UNIT, "g declared as m/s^2"), (1 / G_UNIT, "m/s^2 declared as g"),
                (-1.0, "the opposite sign, which invert = true in a channel map turns"))
