@@ -766,7 +766,8 @@ def test_the_start_hold_keeps_the_offset_at_zero_then_learns_and_chunks_are_one_
                                          (55.0, "it reads like rad/s declared as deg/s"),
                                          (-1.1, "it reads like the opposite sign: either the roll rate's (invert = "
                                                 "true on it in a channel map) or ay's and the yaw rate's (FRD"),
-                                         (-0.027, "another axis, sign or unit?")])
+                                         (-0.027, "another axis, sign or unit of the roll rate, or an ay from "
+                                                  "another axis")])
 def test_a_roll_rate_left_out_is_said_with_its_likely_mistake(slope, said):
     """The design line names the usual mistake whose check slope the log's roll rate has (within the usable range's
     factor of 2 of it: 1/57 for deg/s declared rad/s, 57 the other way, -1 for a flipped sign), else the usual

@@ -137,8 +137,8 @@ def design_words(design: dict, estimator: str) -> str:
         loud = f"{GYRO_MODELS[estimator]} (the log has a roll rate{free}{grade})" if gyro else "the low-pass blend"
         words += f", so {estimator} is {QUIET_MODELS[estimator] if design['quiet'] else loud}"
     if slope is not None and not gyro:
-        words += (f"; its roll rate does not follow the roll in its ay ({_off(slope, ROLL_RATE_MISTAKES)}), so it is "
-                  "not used")
+        off = _off(slope, ROLL_RATE_MISTAKES, ROLL_SUSPECTS)
+        words += f"; its roll rate does not follow the roll in its ay ({off}), so it is not used"
     if gyro and ax is not None and not roll_rate_usable(ax):
         words += (f"; its ax does not follow its speed ({_off(ax, AX_MISTAKES)}), so the roll rate is not corrected "
                   "for the grade")
@@ -160,18 +160,20 @@ ROLL_RATE_MISTAKES = RATE_MISTAKES[:2] + (
     (-1.0, "the opposite sign: either the roll rate's (invert = true on it in a channel map) or ay's and the yaw "
            "rate's (FRD declared as ISO, an upside-down sensor: convention = \"FRD\"), which mirrors the bank; a roll "
            "rate reads the same in both conventions, so check ay's sign in a left turn"),)
+#: what a roll rate's check names where no usual mistake fits: either channel may be the wrong one
+ROLL_SUSPECTS = ("another axis, sign or unit of the roll rate, or an ay from another axis (a sensor mounted turned "
+                 "in the car reads its ax there)?")
 #: ... and ``ax``'s (:func:`~roadbank.vehicle.conditions.ax_slope`)
 AX_MISTAKES = ((G_UNIT, "g declared as m/s^2"), (1 / G_UNIT, "m/s^2 declared as g"),
                (-1.0, "the opposite sign, which invert = true in a channel map turns"))
 
 
-def _off(slope: float, mistakes) -> str:
+def _off(slope: float, mistakes, suspects: str = "another axis, sign or unit?") -> str:
     """Words for a check slope outside :data:`~roadbank.vehicle.conditions.ROLL_SLOPE_RANGE`: the slope, and the
-    mistake of ``mistakes`` whose slope it is within that range's factors (0.5-2) of, else the usual suspects."""
+    mistake of ``mistakes`` whose slope it is within that range's factors (0.5-2) of, else the usual ``suspects``."""
     lo, hi = ROLL_SLOPE_RANGE
     named = [what for k, what in mistakes if lo <= slope / k <= hi]
-    return f"slope {slope:.2g}, not {lo:g}-{hi:g}: " + (f"it reads like {named[0]}" if named else
-                                                        "another axis, sign or unit?")
+    return f"slope {slope:.2g}, not {lo:g}-{hi:g}: " + (f"it reads like {named[0]}" if named else suspects)
 
 
 class _BankStats:
