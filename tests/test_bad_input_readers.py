@@ -244,6 +244,27 @@ def test_time_unit_hint_names_the_unit_that_fits(tmp_path, scale, unit):
         load_log(p, channels=tmp_path / "ns.toml")
 
 
+@pytest.mark.parametrize("scale, unit", [(1e3, "ms"), (1e9, "ns")])
+@pytest.mark.parametrize("streamed", [False, True])
+def test_mdf_master_in_another_unit_names_it(tmp_path, scale, unit, streamed):
+    """An MDF4 master written in ms or ns (read as seconds): the channel and the unit that fits are named, whole
+    and streamed (it was "fewer than 2 samples on the common time base")."""
+    pytest.importorskip("asammdf")
+    from asammdf import MDF, Signal
+
+    from roadbank.io.stream import stream_log
+    n = 300
+    t = np.arange(n) * DT * scale
+    mdf = MDF(version="4.10")
+    mdf.append([Signal(np.asarray(v), t, name=k) for k, v in _signals(n).items()])
+    p = tmp_path / "master.mf4"
+    mdf.save(p)
+    with pytest.raises(LogError, match=rf"master\.mf4: channel '(lateral_acceleration|yaw_rate)' \(column '\w+'\): "
+                                       rf"its time stamps: median sample period .* \(is the unit {unit}\? that gives a "
+                                       r"period of 0\.01\d* s\)"):
+        list(stream_log(p, chunk_rows=50)) if streamed else load_log(p)
+
+
 # ------------------------------------------------------------------ row 9: comma2k19 messages
 def _save(path, arr):
     path.parent.mkdir(parents=True, exist_ok=True)

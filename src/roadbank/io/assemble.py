@@ -46,7 +46,7 @@ import numpy as np
 from ..params import VehicleParams
 from ..signals import Signals, concat_signals, road_wheel_angle
 from . import units
-from .channels import DEFAULT_MAP_SOURCE, OPTIONAL, STEERING, ChannelMap, check_plausible
+from .channels import DEFAULT_MAP_SOURCE, OPTIONAL, STEERING, ChannelMap, check_period, check_plausible
 from .limits import Dropouts
 from .consistency import (MIN_SAMPLES, SCALE_SPAN_S, Sums, check_balance, log_verdict, speed_scale_error,
                           speed_scales, turning, usable)
@@ -62,6 +62,9 @@ from .types import Log
 GNSS_MAX_GAP_S = 2.0
 #: time stamps the sample-period check of a table's time column gathers before it decides
 PERIOD_STAMPS = 100
+#: the roles whose own clock (MDF4, CAN, ROS) is checked for a sample period in another unit: noisy channels, sampled
+#: steadily (a steering angle or a speed may be logged only when it changes)
+CLOCKED_ROLES = ("lateral_acceleration", "yaw_rate")
 
 
 def missing_column(p, role: str, column: str | None, names,
@@ -356,12 +359,13 @@ class _Balance:
 
 
 class _Period:
-    """The sample-period check of a table's time column on the start of the log: its stamps gathered
-    chunk by chunk until there are :data:`PERIOD_STAMPS` (a log read whole: all of them), then
-    :func:`~roadbank.io.channels.check_plausible` once."""
+    """The sample-period check of a table's time column (or of a channel's own clock: ``role``, ``column`` and
+    ``unit`` those of the stamps, ``what`` opening the message) on the start of the log: its stamps gathered chunk by
+    chunk until there are :data:`PERIOD_STAMPS` (a log read whole: all of them), then
+    :func:`~roadbank.io.channels.check_period` once."""
 
-    def __init__(self, p, spec):
-        self.p, self.spec = p, spec
+    def __init__(self, p, role: str, column: str, unit: str, what: str = ""):
+        self.p, self.role, self.column, self.unit, self.what = p, role, column, unit, what
         self.parts: list[np.ndarray] = []
         self.n = 0
         self.decided = False
@@ -375,7 +379,7 @@ class _Period:
         self.n += len(t)
         if self.n >= PERIOD_STAMPS or last:
             self.decided = True
-            check_plausible(self.p, "time", self.spec.column, self.spec.unit, None, np.concatenate(self.parts))
+            check_period(self.p, self.role, self.column, self.unit, np.concatenate(self.parts), self.what)
             self.parts = []
 
 
@@ -453,7 +457,7 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     logs = _Logs(p, fmt, cmap, params, roles, gnss, truth_cols, src.metadata, carried)
     logs.warnings += src.warnings + note
     finite = dict.fromkeys(roles, False)
-    period = _Period(p, tspec)
+    period = _Period(p, "time", tspec.column, tspec.unit)
     drops = Dropouts(p, {r: cmap.channels[r].column for r in roles})
     rs = None
     empty: list[str] = []       # a steering role without a finite value in the whole log
@@ -545,6 +549,8 @@ def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     logs = _Logs(p, fmt, cmap, params, roles, gnss, [], src.metadata, carried)
     logs.warnings += src.warnings + stated
     drops = Dropouts(p, {r: col[r] for r in roles})
+    # the clocks of the channels that never pause (noise): a master in ms or ns is named before any resampling
+    periods = {r: _Period(p, r, col[r], "s", "its time stamps: ") for r in CLOCKED_ROLES if r in roles}
 
     def counts() -> dict:
         total: dict = {}
@@ -568,6 +574,8 @@ def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
             if t is not None:
                 v = got["v"] if r in carried else cmap.to_si_iso(r, got["v"])
                 if r in roles:               # (a position or carried channel: repaired, neither flagged nor checked)
+                    if r in periods:
+                        periods[r].add(t, ends)
                     logs.warnings += w
                     if r in FLAGGED_ROLES:
                         v[flagged] = np.nan

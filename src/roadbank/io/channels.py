@@ -452,6 +452,22 @@ def _time_unit_hint(dt_si: float, declared_unit: str) -> str:
     return f" (is the unit {unit}? that gives a period of {fits[unit]:g} s)"
 
 
+def check_period(source, role: str, column: str, declared_unit: str, t_si: np.ndarray, what: str = "") -> None:
+    """LogError naming the channel where the median step of its time stamps ``t_si`` (s, read with the
+    ``declared_unit``) is no ESP log's sample period (above 1 s, or below 10 us), with the unit that would make it one;
+    ``what`` opens the message (whose stamps: a channel on its own clock)."""
+    v = t_si[np.isfinite(t_si)]
+    if len(v) <= 2:
+        return
+    dt = float(np.median(np.diff(v)))
+    if dt > 1.0:
+        raise channel_error(source, role, column, f"{what}median sample period {dt:g} s with unit '{declared_unit}': "
+                            f"implausible for an ESP log{_time_unit_hint(dt, declared_unit)}")
+    if 0 < dt < 1e-5:
+        raise channel_error(source, role, column, f"{what}median sample period {dt:g} s with unit '{declared_unit}' "
+                            f"(> 100 kHz): implausible{_time_unit_hint(dt, declared_unit)}")
+
+
 def check_plausible(source, role: str, column: str, declared_unit: str,
                     t_si: np.ndarray | None, v_si: np.ndarray) -> list[str]:
     """Catch units that are obviously wrong, after conversion to SI.
@@ -463,16 +479,7 @@ def check_plausible(source, role: str, column: str, declared_unit: str,
     warn: list[str] = []
     v = v_si[np.isfinite(v_si)]
     if role == "time":
-        if len(v) > 2:
-            dt = float(np.median(np.diff(v)))
-            if dt > 1.0:
-                raise channel_error(source, role, column,
-                                    f"median sample period {dt:g} s with unit '{declared_unit}': "
-                                    f"implausible for an ESP log{_time_unit_hint(dt, declared_unit)}")
-            if 0 < dt < 1e-5:
-                raise channel_error(source, role, column,
-                                    f"median sample period {dt:g} s with unit '{declared_unit}' "
-                                    f"(> 100 kHz): implausible{_time_unit_hint(dt, declared_unit)}")
+        check_period(source, role, column, declared_unit, v)
         return warn
     if len(v) == 0:
         return warn
