@@ -254,3 +254,13 @@ def test_an_asc_line_cut_in_the_middle_is_said(logs, tmp_path):
     said = [w for w in warns if "start like CAN frames" in w]
     assert len(said) == 1 and "1 line(s)" in said[0] and "cut.asc" in said[0], warns
     assert len(table.data["0x130.YawRate"]) == len(whole.data["0x130.YawRate"]) - 1
+
+
+def test_mdf4_bus_log_without_a_dbc_says_how_to_read_it(logs):
+    """An MDF4 bus log (raw CAN frames) read without a channel map: the error says it holds CAN frames that a map
+    with a DBC decodes (it listed the frame columns only)."""
+    from roadbank.io import LogError
+    _, files = logs
+    with pytest.raises(LogError, match=r"\.mf4: channel 'speed' .*: it is an MDF4 bus log \(raw CAN frames, "
+                                       r"CAN_DataFrame\), read with a DBC: give a channel map with dbc = "):
+        load_log(files["mdf4-can"])
