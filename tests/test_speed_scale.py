@@ -159,3 +159,44 @@ def test_the_span_read_is_the_logs_first_and_the_same_in_pieces(tmp_path, mph_fi
                 read()
         else:
             read()
+
+
+@pytest.mark.skipif(not KITTI_DRIVES, reason="../shared/data/kitti-oxts* not present")
+def test_a_lateral_channel_that_reads_the_forward_axis_is_refused_and_real_drives_are_not():
+    """An IMU turned by 90 deg in the car: its 'ay' is the car's -ax, which follows the speed's changes, not the turns
+    (a bank that changes makes ay follow vx r as loosely, so the balance checks cannot tell). Refused naming the
+    channel, whole and in pieces, on every KITTI drive whose speed changes; none of the drives as recorded is."""
+    from roadbank.io.consistency import lateral_axis_error
+    from roadbank.io.kitti import load_kitti_oxts
+
+    refused = 0
+    for drive in KITTI_DRIVES:
+        s = load_kitti_oxts(drive).signals
+        check_consistency(s)                                  # as recorded: nothing refused
+        turned = Signals(s.t, s.vx, -s.ax, s.r, s.delta_f)
+        try:
+            lateral_axis_error(turned.t, turned.vx, turned.ay, turned.r, "turned.csv")
+        except LogError as exc:
+            assert "channel 'lateral_acceleration': it follows the speed's changes" in str(exc)
+            assert "forward axis" in str(exc)
+            refused += 1
+    assert refused >= len(KITTI_DRIVES) - 2, refused     # two drives' ax follows the speed loosely (docs)
+
+
+@pytest.mark.skipif(not KITTI_DRIVES, reason="../shared/data/kitti-oxts* not present")
+@pytest.mark.parametrize("chunk_rows", [None, 7])
+def test_estimate_refuses_a_turned_imu_and_keeps_the_other_logs(tmp_path, chunk_rows):
+    """``roadbank estimate`` on drive 0047 written with its ay column holding -ax (a turned IMU) beside the drive as
+    recorded: the first fails naming the file and the column, the second is written."""
+    from roadbank.io.kitti import load_kitti_oxts
+
+    s = load_kitti_oxts(DATA / "kitti-oxts" / "2011_10_03_drive_0047").signals
+    good = _csv(tmp_path, s, "ok", 1.0)
+    bad = tmp_path / "turned.csv"
+    pd.DataFrame({"t": s.t, "vx": s.vx, "ay": -s.ax, "r": s.r}).to_csv(bad, index=False)
+    args = ["estimate", str(bad), str(good), "-o", str(tmp_path / "out")]
+    res = CliRunner().invoke(main, args + (["--chunk-rows", str(chunk_rows)] if chunk_rows else []))
+    assert res.exit_code == 1 and "Traceback" not in res.output, res.output
+    said = [line for line in res.output.splitlines() if "turned.csv" in line and "FAILED" in line]
+    assert said and "channel 'lateral_acceleration' (column 'ay'): it follows the speed's changes" in said[0]
+    assert sorted(f.name for f in (tmp_path / "out").iterdir()) == ["ok.bank.parquet", "summary.csv"]

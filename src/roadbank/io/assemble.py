@@ -48,8 +48,8 @@ from ..signals import Signals, concat_signals, road_wheel_angle
 from . import units
 from .channels import DEFAULT_MAP_SOURCE, OPTIONAL, STEERING, ChannelMap, check_period, check_plausible
 from .limits import Dropouts
-from .consistency import (MIN_SAMPLES, SCALE_SPAN_S, Sums, check_balance, log_verdict, speed_scale_error,
-                          speed_scales, turning, usable)
+from .consistency import (MIN_SAMPLES, SCALE_SPAN_S, Sums, check_balance, lateral_axis_error, log_verdict,
+                          speed_scale_error, speed_scales, turning, usable)
 from .errors import LogError, channel_error, channel_text
 from .geodesy import ecef_to_latlon
 from .repair import FLAGGED_ROLES, ChunkRepair, instants, interleaved_period
@@ -324,14 +324,14 @@ class _Balance:
         self.turning = 0
         self.sums = Sums()                  # consistency.Sums so far
         self.decided = False
-        self.span: list[Signals] | None = []    # the log's first SCALE_SPAN_S, until the speed's scale is read
+        self.span: list[Signals] | None = []    # the first SCALE_SPAN_S, until ay's axis and the speed's scale are read
 
     def add(self, sig: Signals) -> list[str]:
         """The check's warnings once it is decided with ``sig`` (SI), [] before and after;
         LogError as :func:`~roadbank.io.consistency.check_consistency`."""
         vx, ay, r = (np.asarray(a, dtype=np.float64) for a in (sig.vx, sig.ay, sig.r))
         self.sums = self.sums + Sums.of(vx, ay, r, sig.p)
-        if self.span is not None and (sig.p is not None or sig.ax is not None):
+        if self.span is not None:
             self.span.append(sig)
             if sig.t[-1] > self.span[0].t[0] + SCALE_SPAN_S:
                 self._scale()
@@ -355,10 +355,12 @@ class _Balance:
         return log_verdict(self.sums, self.decided, self.p, self.columns)
 
     def _scale(self) -> None:
-        """The speed's scale on the log's first :data:`~roadbank.io.consistency.SCALE_SPAN_S` (once; LogError for a
-        speed read in another unit: :func:`~roadbank.io.consistency.speed_scale_error`)."""
+        """The speed's scale and ay's axis on the log's first :data:`~roadbank.io.consistency.SCALE_SPAN_S` (once;
+        LogError for an ay that reads the forward axis, :func:`~roadbank.io.consistency.lateral_axis_error`, or a speed
+        read in another unit, :func:`~roadbank.io.consistency.speed_scale_error`)."""
         if self.span:
             s = concat_signals(self.span)
+            lateral_axis_error(s.t, s.vx, s.ay, s.r, self.p, self.columns)
             speed_scale_error(speed_scales(s.t, s.vx, s.ay, s.r, s.p, s.ax), self.p, self.columns)
         self.span = None
 
