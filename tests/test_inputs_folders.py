@@ -173,10 +173,42 @@ def test_a_folder_that_is_one_drive_is_one_log_as_before(tmp_path, form):
     _check_drive(tmp_path / "one.parquet", D0070)
     res = _run("estimate", given, "-e", "kinematic", "-o", f"{tmp_path / 'out'}/")
     assert res.exit_code == 0, res.output
-    name = "oxts.bank.parquet" if form == "oxts" else f"{D0070.name}.bank.parquet"    # a folder's own name, or
-    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [name, "summary.csv"]   # the one drive's
+    name = f"{D0070.name}.bank.parquet"               # the drive's name, whichever of its folders was given
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [name, "summary.csv"]
     assert _summary(tmp_path / "out")[name]["log"] == str(given)
     _check_drive(tmp_path / "out" / name, D0070)
+
+
+@needs_data
+def test_a_drive_given_as_its_folder_and_its_oxts_folder_is_one_log(tmp_path):
+    """A drive given twice, as its folder and as its ``oxts/`` folder: written once under the drive's name, the second
+    said on stderr (it was written twice, once as oxts.bank.parquet, and mapped twice)."""
+    res = _run("estimate", D0070, D0070 / "oxts", _csv(tmp_path / "a.csv", 0.02), "-e", "kinematic",
+               "-o", tmp_path / "out")
+    assert res.exit_code == 0, res.output
+    assert f"{D0070 / 'oxts'} is {D0070} given again (the same log): read once" in res.output
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [f"{D0070.name}.bank.parquet", "a.bank.parquet",
+                                                                    "summary.csv"]
+
+
+def test_a_link_loop_or_an_unreadable_file_fails_alone(tmp_path, monkeypatch):
+    """In a folder of logs, a link to itself and a file that cannot be read each fail as that log, named, and the
+    other log is written (the loop stopped the whole run with a RuntimeError; the unreadable file was skipped as
+    'not a log of a known format' and counted nowhere)."""
+    import roadbank.io.files as files
+
+    d = tmp_path / "logs"
+    d.mkdir()
+    _csv(d / "good.csv", 0.02)
+    (d / "loop.csv").symlink_to("loop.csv")
+    locked = _csv(d / "locked.csv", 0.02)
+    real_access = files.os.access
+    monkeypatch.setattr(files.os, "access", lambda p, mode: False if Path(p) == locked else real_access(p, mode))
+    res = _run("estimate", d, "-e", "kinematic", "-o", tmp_path / "out")
+    assert res.exit_code == 1, res.output
+    assert "loop.csv: cannot be read" in res.output and "locked.csv: a file that cannot be read" in res.output
+    assert "skipped" not in res.output and "1 log(s) written, 2 failed" in res.output
+    assert (tmp_path / "out" / "good.bank.parquet").is_file()
 
 
 # ------------------------------------------------------------------ CSV: comment lines before the header

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -221,8 +222,8 @@ def _check_not_an_input(paths, output: Path, batch: bool, output_format: str) ->
     from ..fleet.run import output_names
 
     outs = ([output / n for n in output_names(paths, output_format).values()] if batch else [output])
-    inputs = {p.resolve() for p in paths}
-    clash = [o for o in outs if o.resolve() in inputs]
+    inputs = {os.path.realpath(p) for p in paths}       # (never raises: a link loop is a log the reader refuses)
+    clash = [o for o in outs if os.path.realpath(o) in inputs]
     if clash:
         raise click.BadParameter(f"the output '{clash[0]}' is one of the input logs: writing it would overwrite the "
                                  "log; give another -o", param_hint="-o")

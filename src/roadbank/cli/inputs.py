@@ -30,11 +30,13 @@ def not_a_log(path: Path, fmt: str | None) -> str | None:
     name the problem).
     """
     from ..io import LogError, detect_format
+    from ..io.files import must_exist
 
     try:
         if not path.is_file():
             return None
-    except OSError:             # cannot be looked at: the reader says so
+        must_exist(path)
+    except (OSError, LogError):  # cannot be looked at or read: the reader says so, as that log's failure
         return None
     suffix = path.suffix.lower()
     try:
@@ -54,9 +56,9 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
     """``(ChannelMap or None, [Path])`` from ``--channels`` and the LOGS arguments (files, directories, globs).
 
     A folder gives every log it holds: each KITTI drive, comma2k19 segment and log file
-    (:func:`roadbank.fleet.expand_logs`, the one rule). Files that are not logs of ``fmt`` (or of a format
-    known from their suffix) -- a README.md a glob picked up -- are skipped, each with a one-line
-    message. A bad channel map or no log found is a one-line error (exit code 1), never a traceback. When
+    (:func:`roadbank.fleet.expand_logs`, the one rule), each log once (:func:`once_each`). Files that are not logs of
+    ``fmt`` (or of a format known from their suffix) -- a README.md a glob picked up -- are skipped, each with a
+    one-line message. A bad channel map or no log found is a one-line error (exit code 1), never a traceback. When
     no path given exists (a mistyped name), that is a usage error naming each (exit code 2): its format
     is not guessed from a suffix it may not have. A missing path among existing ones is the reader's
     failure of that one log (:func:`roadbank.io.files.not_found`), the others are read.
@@ -82,7 +84,7 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
     if paths and not any(present(p) for p in paths):
         raise click.BadParameter("; ".join(str(not_found(p)) for p in paths), param_hint="LOGS")
     kept = []
-    for p in paths:
+    for p in once_each(paths):
         why = not_a_log(p, fmt)
         if why is None:
             kept.append(p)
@@ -100,13 +102,16 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
 
 
 def once_each(paths: list) -> list:
-    """``paths`` with each log kept once where several name the same file or folder (a link to it, ``a/../a``): the
-    first, each other said on stderr. For commands that add the logs up (``map``: a log read twice would count its
-    samples twice in each cell)."""
+    """``paths`` with each log kept once where several name the same file or folder (a link to it, ``a/../a``, a
+    KITTI drive and its ``oxts/`` folder: :func:`roadbank.fleet.run.log_identity`): the first, each other said on
+    stderr. A log read twice would count its samples twice in each cell of a map, and be written twice by
+    ``estimate``."""
+    from ..fleet.run import log_identity
+
     seen: dict = {}
     kept = []
     for p in paths:
-        key = os.path.realpath(p)
+        key = log_identity(Path(p))
         if key in seen:
             click.echo(f"warning: {p} is {seen[key]} given again (the same log): read once", err=True)
             continue

@@ -11,7 +11,7 @@ import click
 from ..defaults import MAP_ESTIMATOR
 from ..io.readers import FORMATS
 from ..mapping.grid import CELL_RANGE_M, SECTOR_RANGE
-from .inputs import channel_map_and_logs, check_output, once_each
+from .inputs import channel_map_and_logs, check_output
 from .options import PathOption, vehicle_option
 from .parallel import pool_options, start_pool
 
@@ -82,7 +82,6 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
         if path is not None:        # before the work, not after it
             check_output(path, option)
     cmap, paths = channel_map_and_logs(channels, logs, fmt)
-    paths = once_each(paths)
     try:
         with contextlib.ExitStack() as stack:
             pool = start_pool(stack, workers, scheduler)

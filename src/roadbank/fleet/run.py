@@ -20,6 +20,7 @@ import csv
 import glob
 import io
 import math
+import os
 import tempfile
 import time
 from dataclasses import dataclass, field
@@ -140,6 +141,19 @@ def expand_logs(args, left_out: list | None = None) -> list[Path]:
     return sorted(dict.fromkeys(out))
 
 
+def log_identity(p: Path) -> str:
+    """What a log path reads, as one string for telling two paths of one log apart: its real path, and for a KITTI
+    drive given as its folder, its ``oxts/`` folder or a folder holding only it, the real path of that ``oxts/``."""
+    try:
+        if p.is_dir():
+            found = find_oxts_dirs(p)
+            if len(found) == 1:
+                return os.path.realpath(found[0])
+    except OSError:             # cannot be looked at: its path is all there is
+        pass
+    return os.path.realpath(p)
+
+
 def _estimate_batch(jobs, estimators, kw) -> list[LogSummary]:
     """:func:`estimate_log` on each job ``(path, output, metadata, plot)`` in turn, in one worker
     (its estimator designs and compiled kernels serve them all); a bad log costs only its own row."""
@@ -147,14 +161,15 @@ def _estimate_batch(jobs, estimators, kw) -> list[LogSummary]:
 
 
 def _stem(p: Path) -> str:
-    """A log's name: a file's stem, a directory's name; a folder holding one KITTI drive: the drive's."""
+    """A log's name: a file's stem, a directory's name; a KITTI drive (its folder, its ``oxts/`` folder or a folder
+    holding only it): the drive's."""
     try:
         if p.is_file():
             return p.stem
     except OSError:             # cannot be looked at (the reader says so): named as a file
         return p.stem
     found = find_oxts_dirs(p)
-    return drive_name(found[0]) if len(found) == 1 and found[0] not in (p, p / "oxts") else p.name
+    return drive_name(found[0]) if len(found) == 1 else p.name
 
 
 def output_names(paths: list[Path], suffix: str) -> dict[Path, str]:
