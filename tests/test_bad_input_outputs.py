@@ -187,8 +187,8 @@ def test_resume_drops_a_cut_last_row_and_starts_new_rows_on_a_new_line(tmp_path)
     with open(summary, newline="") as fh:
         table = list(csv.DictReader(fh))
     assert all(len(r) == len(table[0]) and None not in r for r in table)        # every row whole
-    assert [r["log"] for r in table] == ["a.csv", "b.csv", "empty.csv", "c.csv", "empty.csv"]
-    assert table[3]["status"] == "ok" and table[4]["status"] == "error" and "file is empty" in table[4]["error"]
+    assert [r["log"] for r in table] == ["a.csv", "b.csv", "empty.csv", "c.csv"]     # one row per log, its latest
+    assert table[3]["status"] == "ok" and table[2]["status"] == "error" and "file is empty" in table[2]["error"]
 
 
 # ------------------------------------------------------------------ row 7: broken KITTI drives in a fleet
@@ -229,7 +229,8 @@ def test_one_drive_in_a_folder_is_named_after_the_drive(tmp_path):
     _drive(tmp_path / "fleet" / "b", "k_good", n=40)
     res = _run(["estimate", "fleet", "-e", "kinematic", "-o", "out/"], tmp_path)
     assert res.exit_code == 0, res.output
-    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["k_good.bank.parquet", "summary.csv"]
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["k_good.bank.parquet", "settings.json",
+                                                                    "summary.csv"]
     res = _run(["estimate", "fleet/b", "-e", "kinematic", "-o", "one.csv"], tmp_path)    # still one log, one file
     assert res.exit_code == 0 and (tmp_path / "one.csv").is_file()
 

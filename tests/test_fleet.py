@@ -8,7 +8,6 @@ once across an interruption and a resume).
 
 from __future__ import annotations
 
-import csv
 import math
 from pathlib import Path
 
@@ -21,6 +20,7 @@ from click.testing import CliRunner
 from roadbank.cli import main
 from roadbank.fleet import expand_logs, run_fleet
 from roadbank.fleet.run import read_summary
+from roadbank.io import LogError
 
 N_LOGS = 200
 EST = ("kinematic",)
@@ -112,14 +112,8 @@ def test_200_logs_one_bad_never_stops_others_and_resume(fleet, tmp_path):
     ok_before = sum(1 for p in seen if Path(p) not in bad)
     assert len(res.skipped) == ok_before                       # finished logs are not redone
     assert len(res.summaries) == N_LOGS - ok_before            # the rest, and the failed ones again
-    # the first run's error rows stay; the retried bad logs add a row each: keep the latest per log
-    rows = read_summary(out)
-    latest = {r["log"]: r for r in rows}
-    assert len(latest) == N_LOGS
-    with open(out / "summary.csv", "w", newline="") as fh:        # compact, then check every row
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(latest.values())
+    # the retried bad logs' rows replace the first run's: one row per log, its latest
+    assert len(read_summary(out)) == N_LOGS
     _check_outputs(out, paths, bad)
     assert not list(out.glob("*.partial"))
 
@@ -164,3 +158,60 @@ def test_long_log_benchmark_measures_the_child_alone(tmp_path):
     # CPU of the run itself (one thread): more than nothing, not more than its wall time allows
     assert 0 < res["run_cpu_s"] <= 1.2 * res["run_s"] + 0.05
     assert res["samples_per_cpu_s"] == pytest.approx(n / res["run_cpu_s"])
+
+
+def _write(p: Path, bank: float) -> Path:
+    p.parent.mkdir(parents=True, exist_ok=True)
+    pq.write_table(pa.table(_table(300, bank)), p)
+    return p
+
+
+def _mean_theta(f) -> float:
+    return float(np.mean(pq.read_table(f).column("kinematic.theta").to_numpy()))
+
+
+def test_resume_keeps_each_logs_output_name_when_logs_are_added(tmp_path):
+    """Two logs of one name, then a third of that name sorting first, added before a resume: the new log takes a name
+    no log had, and the two results written before are untouched (the names followed the sorted list of logs, so the
+    new log overwrote another's result, and summary.csv pointed two logs at one file)."""
+    d, out = tmp_path / "logs", tmp_path / "out"
+    b, c = _write(d / "b" / "same.parquet", 0.01), _write(d / "c" / "same.parquet", 0.02)
+    run_fleet(expand_logs([d]), out, EST)
+    first = {r["log"]: r["output"] for r in read_summary(out)}
+    a = _write(d / "a" / "same.parquet", 0.03)
+    res = run_fleet(expand_logs([d]), out, EST, resume=True)
+    assert sorted(res.skipped) == sorted([str(b), str(c)]) and [s.log for s in res.summaries] == [str(a)]
+    rows = {r["log"]: r["output"] for r in read_summary(out)}
+    assert {k: rows[k] for k in first} == first and len(set(rows.values())) == 3
+    for log, bank in ((b, 0.01), (c, 0.02), (a, 0.03)):
+        assert _mean_theta(rows[str(log)]) == pytest.approx(bank, abs=1e-9)
+
+
+def test_resume_with_other_settings_is_refused_and_the_same_ones_resume(tmp_path):
+    """A resume with other estimators or another output format is refused naming what changed (it skipped every log
+    and left tables of the first settings: no CSV written, no new estimator's columns); the same settings resume,
+    a run without --resume starts again with the new ones."""
+    d, out = tmp_path / "logs", tmp_path / "out"
+    _write(d / "x.parquet", 0.01)
+    run_fleet(expand_logs([d]), out, EST)
+    with pytest.raises(LogError, match=r"its logs were estimated with other settings \(estimators: kinematic then, "
+                                        r"pif-modified now\): --resume would mix them"):
+        run_fleet(expand_logs([d]), out, ("pif-modified",), resume=True)
+    with pytest.raises(LogError, match=r"output format: parquet then, csv now"):
+        run_fleet(expand_logs([d]), out, EST, output_format="csv", resume=True)
+    assert len(run_fleet(expand_logs([d]), out, EST, resume=True).skipped) == 1
+    res = run_fleet(expand_logs([d]), out, ("pif-modified",))
+    assert [s.status for s in res.summaries] == ["ok"]
+    res = CliRunner().invoke(main, ["estimate", str(d), "-e", "kinematic", "-o", str(out), "--resume"])
+    assert res.exit_code == 1 and "Traceback" not in res.output and "other settings" in res.output, res.output
+
+
+def test_a_log_known_by_another_spelling_of_its_path_is_not_redone(tmp_path, monkeypatch):
+    """Resuming with the logs given by absolute paths after relative ones: each log is known by what it reads, so
+    nothing is estimated again and summary.csv keeps one row per log."""
+    monkeypatch.chdir(tmp_path)
+    _write(tmp_path / "logs" / "x.parquet", 0.01)
+    run_fleet(expand_logs(["logs"]), tmp_path / "out", EST)
+    res = run_fleet(expand_logs([str(tmp_path / "logs")]), tmp_path / "out", EST, resume=True)
+    assert res.summaries == [] and len(res.skipped) == 1
+    assert len(read_summary(tmp_path / "out")) == 1

@@ -89,7 +89,7 @@ def test_a_drive_beside_a_csv_does_not_hide_it(tmp_path):
     assert "2 log(s) written, 0 failed" in res.output
     out = tmp_path / "out"
     assert sorted(p.name for p in out.iterdir()) == [f"{D0070.name}.bank.parquet", "drive_b.bank.parquet",
-                                                    "summary.csv"]
+                                                    "settings.json", "summary.csv"]
     rows = _summary(out)
     assert {r["status"] for r in rows.values()} == {"ok"}
     assert rows["drive_b.bank.parquet"]["log"] == str(fleet / "drive_b.csv")
@@ -125,7 +125,8 @@ def test_a_drive_beside_a_comma2k19_segment(tmp_path):
     res = _run("estimate", fleet, "-e", "kinematic", "-o", f"{tmp_path / 'out'}/")
     assert res.exit_code == 0 and "2 log(s) written, 0 failed" in res.output, res.output
     out = tmp_path / "out"
-    assert sorted(p.name for p in out.iterdir()) == [f"{D0070.name}.bank.parquet", "seg.bank.parquet", "summary.csv"]
+    assert sorted(p.name for p in out.iterdir()) == [f"{D0070.name}.bank.parquet", "seg.bank.parquet", "settings.json",
+                                                     "summary.csv"]
     _check_drive(out / f"{D0070.name}.bank.parquet", D0070)
     # the segment's table is the one the segment given alone gives
     res = _run("estimate", SEGMENT, "-e", "kinematic", "-o", tmp_path / "alone.parquet")
@@ -174,7 +175,7 @@ def test_a_folder_that_is_one_drive_is_one_log_as_before(tmp_path, form):
     res = _run("estimate", given, "-e", "kinematic", "-o", f"{tmp_path / 'out'}/")
     assert res.exit_code == 0, res.output
     name = f"{D0070.name}.bank.parquet"               # the drive's name, whichever of its folders was given
-    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [name, "summary.csv"]
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [name, "settings.json", "summary.csv"]
     assert _summary(tmp_path / "out")[name]["log"] == str(given)
     _check_drive(tmp_path / "out" / name, D0070)
 
@@ -188,7 +189,7 @@ def test_a_drive_given_as_its_folder_and_its_oxts_folder_is_one_log(tmp_path):
     assert res.exit_code == 0, res.output
     assert f"{D0070 / 'oxts'} is {D0070} given again (the same log): read once" in res.output
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [f"{D0070.name}.bank.parquet", "a.bank.parquet",
-                                                                    "summary.csv"]
+                                                                    "settings.json", "summary.csv"]
 
 
 def test_a_link_loop_or_an_unreadable_file_fails_alone(tmp_path, monkeypatch):

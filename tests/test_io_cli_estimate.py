@@ -48,7 +48,8 @@ def test_batch_bad_file_reported_and_others_written(tmp_path):
     assert "broken.parquet" in res.output and "not a readable Parquet file" in res.output
     assert "Traceback" not in res.output
     # the results of the good logs, and the summary table (one row per log, the bad one with its error)
-    assert sorted(p.name for p in outdir.iterdir()) == ["a.bank.parquet", "b.bank.parquet", "summary.csv"]
+    assert sorted(p.name for p in outdir.iterdir()) == ["a.bank.parquet", "b.bank.parquet", "settings.json",
+                                                        "summary.csv"]
     rows = {Path(r["log"]).name: r for r in csv.DictReader(open(outdir / "summary.csv"))}
     assert rows["broken.parquet"]["status"] == "error" and "not a readable Parquet" in rows["broken.parquet"]["error"]
     assert rows["a.parquet"]["status"] == "ok" and rows["a.parquet"]["estimator"] == "kinematic"

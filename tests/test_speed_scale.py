@@ -138,7 +138,7 @@ def test_estimate_refuses_a_speed_in_mph_and_keeps_the_other_logs(tmp_path, chun
     assert said and "channel 'speed' (column 'vx'): speed looks like mph declared as m/s" in said[0], res.output
     assert "roll rate" in said[0]
     written = sorted(f.name for f in (tmp_path / "out").iterdir())
-    assert written == ["ok.bank.parquet", "summary.csv"], written
+    assert written == ["ok.bank.parquet", "settings.json", "summary.csv"], written
     with pytest.raises(LogError, match="mph declared as m/s"):
         load_log(bad)
 
@@ -199,4 +199,4 @@ def test_estimate_refuses_a_turned_imu_and_keeps_the_other_logs(tmp_path, chunk_
     assert res.exit_code == 1 and "Traceback" not in res.output, res.output
     said = [line for line in res.output.splitlines() if "turned.csv" in line and "FAILED" in line]
     assert said and "channel 'lateral_acceleration' (column 'ay'): it follows the speed's changes" in said[0]
-    assert sorted(f.name for f in (tmp_path / "out").iterdir()) == ["ok.bank.parquet", "summary.csv"]
+    assert sorted(f.name for f in (tmp_path / "out").iterdir()) == ["ok.bank.parquet", "settings.json", "summary.csv"]

@@ -160,7 +160,7 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
                                  f"give a directory, e.g. '{output.with_suffix('')}/' (or '{output}/' to call it so)",
                                  param_hint="-o")
     check_output(output, "-o", directory=batch)
-    _check_not_an_input(paths, output, batch, output_format)
+    _check_not_an_input(paths, output, batch, output_format, resume)
     if plot is not None:
         check_output(plot, "--plot", directory=batch)
     try:
@@ -215,13 +215,17 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     sys.exit(1 if failures or unplotted else 0)
 
 
-def _check_not_an_input(paths, output: Path, batch: bool, output_format: str) -> None:
+def _check_not_an_input(paths, output: Path, batch: bool, output_format: str, resume: bool) -> None:
     """Exit with a usage error (exit code 2) before anything is read if an output file would be one of the input
     logs ``paths``: ``-o`` itself for one log, ``-o``/<name> for each log of a batch
     (:func:`roadbank.fleet.run.output_names`)."""
-    from ..fleet.run import output_names
+    from ..fleet.run import fleet_output_names
 
-    outs = ([output / n for n in output_names(paths, output_format).values()] if batch else [output])
+    try:
+        names = fleet_output_names(paths, output, output_format, resume) if batch else {}
+    except LogError:            # a summary.csv that is not one: the run says so
+        names = fleet_output_names(paths, output, output_format, False)
+    outs = [output / n for n in names.values()] if batch else [output]
     inputs = {os.path.realpath(p) for p in paths}       # (never raises: a link loop is a log the reader refuses)
     clash = [o for o in outs if os.path.realpath(o) in inputs]
     if clash:

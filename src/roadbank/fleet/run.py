@@ -6,19 +6,28 @@ Layout of an output directory::
     OUTDIR/summary.csv           one row per finished log (LogSummary columns), appended and
                                  flushed the moment the log finishes
 
+    OUTDIR/settings.json         what every log was estimated with (estimators, formats, channel
+                                 map, car): a resume with other settings is refused
+
 ``resume=True`` reads ``summary.csv`` and skips every log whose row says
 ``ok`` and whose output file exists; logs that failed are tried again (a fixed
 file then goes through). A last row cut off mid-line (the run was killed while
 writing it) is dropped from the file and its log estimated again; a summary that
-is not one (not UTF-8 text, no header) is a :class:`LogError` naming it. A log's
-output name depends only on the sorted list of logs, so it is the same on every resume.
+is not one (not UTF-8 text, no header) is a :class:`LogError` naming it. A log keeps
+the output name its summary row gives, and a log new to the folder takes a name no
+other log has had (:func:`fleet_output_names`), so logs added between two calls never
+overwrite another's result. After a resumed call ``summary.csv`` holds one row per log,
+its latest. A log is known again by what it reads (:func:`log_identity`), whether given
+by a relative or an absolute path.
 """
 
 from __future__ import annotations
 
 import csv
 import glob
+import hashlib
 import io
+import json
 import math
 import os
 import tempfile
@@ -40,6 +49,8 @@ from .cluster import open_pool
 from .process import SUMMARY_COLUMNS, LogSummary, estimate_log
 
 SUMMARY = "summary.csv"
+#: the settings of the logs in an output directory (:func:`check_settings`)
+SETTINGS = "settings.json"
 #: suffixes of log files picked up when a directory is given
 LOG_SUFFIXES = {".csv", ".parquet", ".pq", ".mf4", ".mdf", ".blf", ".asc", ".trc", ".log", ".bag", ".mcap"}
 
@@ -172,11 +183,17 @@ def _stem(p: Path) -> str:
     return drive_name(found[0]) if len(found) == 1 else p.name
 
 
-def output_names(paths: list[Path], suffix: str) -> dict[Path, str]:
-    """``<stem>.bank.<suffix>`` per log, made unique in the order of ``paths``."""
-    used: set[str] = set()
+def output_names(paths: list[Path], suffix: str, given: dict[str, str] | None = None) -> dict[Path, str]:
+    """``<stem>.bank.<suffix>`` per log, made unique in the order of ``paths``; a log whose :func:`log_identity` has a
+    name in ``given`` (an earlier call's, :func:`fleet_output_names`) keeps it, and no other log takes one of those."""
+    given = given or {}
+    used: set[str] = {name.split(".bank.")[0] for name in given.values()}      # stems taken
     names = {}
     for p in paths:
+        had = given.get(log_identity(p)) if given else None
+        if had is not None and had.endswith(f".bank.{suffix}"):
+            names[p] = had
+            continue
         stem = _stem(p)
         s, k = stem, 1
         while s in used:
@@ -219,6 +236,79 @@ def _parse_summary(f: Path) -> tuple[list[str], list[dict], int | None]:
         rows.pop()
         cut = len("".join(lines[:ends[-2]]).encode("utf-8"))
     return rows[0], [dict(zip(rows[0], r)) for r in rows[1:]], cut
+
+
+def fleet_output_names(paths: list[Path], outdir, suffix: str, resume: bool) -> dict[Path, str]:
+    """The output file names of ``paths`` in ``outdir``: :func:`output_names`, resuming with the names that its
+    ``summary.csv`` gives the logs it lists."""
+    given = {}
+    for row in read_summary(outdir) if resume else []:
+        if row.get("output"):
+            given[log_identity(Path(row["log"]))] = Path(row["output"]).name
+    return output_names(paths, suffix, given)
+
+
+def fleet_settings(estimators, output_format: str, format: str | None, channels, params, vehicle,
+                   online_offsets: bool) -> dict[str, str]:
+    """What a fleet's logs are estimated with, as :data:`SETTINGS` records it: the estimators, the output and log
+    formats, whether offsets are learnt online, and a digest of the channel map, the car parameters and the vehicle
+    file (their text would not fit a message)."""
+    def digest(text: str) -> str:
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+    return {"estimators": ",".join(estimators), "output format": output_format, "log format": format or "by suffix",
+            "online offsets": str(bool(online_offsets)),
+            "channel map": "none" if channels is None else digest(repr(channels)),
+            "car parameters": "default" if params is None else digest(repr(params)),
+            "vehicle file": "none" if vehicle is None else digest(vehicle.dumps())}
+
+
+def check_settings(outdir: Path, settings: dict[str, str], resume: bool) -> None:
+    """Record ``settings`` (:func:`fleet_settings`) in ``outdir``'s :data:`SETTINGS`; resuming, a LogError first where
+    that file records others (the folder would mix results of two settings; a folder without the file, written
+    before it was kept, is taken as it is)."""
+    f = outdir / SETTINGS
+    if resume and f.exists():
+        try:
+            old = json.loads(f.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, ValueError) as exc:
+            raise LogError(f"{f}: not readable ({exc}); delete it to resume with the settings given now") from None
+        changed = [k for k in settings if k in old and old[k] != settings[k]]
+        if changed:
+            said = "; ".join(f"{k}: {old[k]} then, {settings[k]} now" if k in ("estimators", "output format",
+                                                                                 "log format", "online offsets")
+                             else f"{k} changed" for k in changed)
+            raise LogError(f"{outdir}: its logs were estimated with other settings ({said}): --resume would mix "
+                           "them; resume with the same settings, run without --resume to estimate every log again, "
+                           "or give another -o")
+    try:
+        tmp = f.with_name(f.name + ".partial")
+        tmp.write_text(json.dumps(settings, indent=1) + "\n", encoding="utf-8")
+        os.replace(tmp, f)
+    except OSError as exc:
+        raise write_error(f, exc) from None
+
+
+def compact_summary(outdir) -> None:
+    """Rewrite ``OUTDIR/summary.csv`` with one row per log, its latest, in the order logs first appear (a resumed
+    call appends a row for each log it runs again)."""
+    f = Path(outdir) / SUMMARY
+    if not f.exists():
+        return
+    columns, rows, _ = _parse_summary(f)
+    latest: dict[str, dict] = {}
+    for row in rows:
+        latest[log_identity(Path(row["log"]))] = row      # (a key keeps its first place)
+    if len(latest) == len(rows):
+        return
+    tmp = f.with_name(f.name + ".partial")
+    try:
+        with open(tmp, "w", newline="") as fh:
+            w = csv.DictWriter(fh, fieldnames=columns, extrasaction="ignore")
+            w.writeheader()
+            w.writerows(latest.values())
+        os.replace(tmp, f)
+    except OSError as exc:
+        raise write_error(f, exc) from None
 
 
 def read_summary(outdir) -> list[dict]:
@@ -404,14 +494,18 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
     if channels is not None and not hasattr(channels, "channels"):
         channels = read_channel_map(channels)
     paths = [Path(p) for p in logs]
-    names = output_names(paths, output_format)
+    check_settings(outdir, fleet_settings(estimators, output_format, format, channels, params, vehicle,
+                                          online_offsets), resume)
+    names = fleet_output_names(paths, outdir, output_format, resume)
     done = set()
     if resume:
         for row in read_summary(outdir):
             if row.get("status") == "ok" and row.get("output") and Path(row["output"]).exists():
-                done.add(row["log"])
-    todo = [p for p in paths if str(p) not in done]
-    result = FleetResult(skipped=[str(p) for p in paths if str(p) in done])
+                done.add(log_identity(Path(row["log"])))
+            else:
+                done.discard(log_identity(Path(row["log"])))    # its latest row failed
+    todo = [p for p in paths if log_identity(p) not in done]
+    result = FleetResult(skipped=[str(p) for p in paths if log_identity(p) in done])
     summary = _SummaryFile(outdir, resume)
     result.notes += summary.notes
     jobs = [(p, outdir / names[p], dict(metadata or {}, source=str(p)),
@@ -439,6 +533,8 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
     finally:
         summary.close()
         result.wall_s = time.perf_counter() - t0 - result.startup_s
+        if resume:
+            compact_summary(outdir)
     return result
 
 
