@@ -28,6 +28,7 @@ import contextlib
 import ctypes
 import ctypes.util
 import os
+import signal
 from collections.abc import Iterator
 
 #: allocations below this many bytes come from the heap, not from their own mapping (glibc ``M_MMAP_THRESHOLD``)
@@ -36,6 +37,8 @@ MMAP_THRESHOLD = 32 * 2**20
 TRIM_THRESHOLD = 256 * 2**20
 #: glibc's ``mallopt`` parameter numbers (malloc.h)
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
+#: Linux ``prctl`` option: the signal a process gets when its parent ends (:func:`end_with_parent`)
+_PR_SET_PDEATHSIG = 1
 #: the environment variables that set the BLAS libraries' thread counts (read when numpy loads)
 BLAS_THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 #: the environment variables by which a user sets those two himself
@@ -67,6 +70,19 @@ def one_blas_thread_in_children() -> Iterator[None]:
     finally:
         for var in added:
             os.environ.pop(var, None)
+
+
+def end_with_parent() -> bool:
+    """Have the kernel send this process SIGTERM when the process that started it ends (Linux
+    ``prctl(PR_SET_PDEATHSIG)``): a pool worker then never outlives a command that was killed (SIGTERM, SIGKILL)
+    before it could stop its pool. Returns whether it was set (False without Linux's prctl)."""
+    try:
+        prctl = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").prctl
+    except (OSError, AttributeError):
+        return False
+    prctl.argtypes, prctl.restype = (ctypes.c_int, ctypes.c_ulong, ctypes.c_ulong, ctypes.c_ulong,
+                                     ctypes.c_ulong), ctypes.c_int
+    return prctl(_PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0) == 0
 
 
 def keep_freed_memory() -> bool:

@@ -30,6 +30,7 @@ import math
 import multiprocessing
 import multiprocessing.util
 import os
+import signal
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -189,6 +190,8 @@ def _warm_worker(warm) -> None:
     """A pool process's initializer: ``warm`` (``(fn, *args)`` or None) once, its failure left to the
     tasks (they report it against their logs); the process will end by :func:`_quick_exit`."""
     multiprocessing.util.Finalize(None, _quick_exit, exitpriority=-1000)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)    # Ctrl-C is the command's to handle: it stops the pool
+    runtime.end_with_parent()         # and a command killed before it could leaves no worker behind
     runtime.keep_freed_memory()       # a fresh process, like the parent once it has run a few logs
     if warm is not None:
         try:
@@ -223,9 +226,13 @@ class OnProcesses:
         with runtime.one_blas_thread_in_children():
             ex = ProcessPoolExecutor(n, mp_context=multiprocessing.get_context("spawn"), initializer=_warm_worker,
                                      initargs=(self._warm,))
-            # every worker started and warmed up before the first task: each takes a short wait
-            for f in [ex.submit(time.sleep, 0.2) for _ in range(n)]:
-                f.result()
+            try:
+                # every worker started and warmed up before the first task: each takes a short wait
+                for f in [ex.submit(time.sleep, 0.2) for _ in range(n)]:
+                    f.result()
+            except BaseException:         # Ctrl-C while they start
+                _terminate(ex)
+                raise
         return ex
 
     def batches(self, paths) -> list[list[int]]:
@@ -275,6 +282,26 @@ class OnProcesses:
     def close(self) -> None:
         self._ex.shutdown(wait=True, cancel_futures=True)
 
+    def abort(self) -> None:
+        """Stop now (Ctrl-C, an error in the client): the workers ended mid-task, the tasks not started dropped."""
+        _terminate(self._ex)
+
+
+def _terminate(ex: ProcessPoolExecutor, wait_s: float = 10.0) -> None:
+    """End the pool ``ex`` at once: its worker processes sent SIGTERM (they ignore SIGINT, :func:`_warm_worker`),
+    waited for up to ``wait_s`` seconds, then killed; its queued tasks cancelled."""
+    procs = list((getattr(ex, "_processes", None) or {}).values())
+    for p in procs:
+        with contextlib.suppress(Exception):
+            p.terminate()
+    ex.shutdown(wait=False, cancel_futures=True)
+    for p in procs:
+        with contextlib.suppress(Exception):
+            p.join(wait_s)
+            if p.is_alive():
+                p.kill()
+                p.join(wait_s)
+
 
 @contextlib.contextmanager
 def open_pool(workers: int = 1, scheduler: str | None = None, connect_timeout: float = 20.0, warm=None):
@@ -306,8 +333,10 @@ def open_pool(workers: int = 1, scheduler: str | None = None, connect_timeout: f
         pool = OnProcesses(int(workers), warm)
         try:
             yield pool
-        finally:
-            pool.close()
+        except BaseException:         # Ctrl-C, an error in the client: stop at once, no worker left waiting
+            pool.abort()
+            raise
+        pool.close()
         return
     from ..campaign.execute import dask_session
 
