@@ -215,3 +215,17 @@ def test_a_log_known_by_another_spelling_of_its_path_is_not_redone(tmp_path, mon
     res = run_fleet(expand_logs([str(tmp_path / "logs")]), tmp_path / "out", EST, resume=True)
     assert res.summaries == [] and len(res.skipped) == 1
     assert len(read_summary(tmp_path / "out")) == 1
+
+
+def test_logs_with_names_too_long_for_an_output_name_are_written_apart(tmp_path):
+    """Two logs of 240-character names that differ only at the end (and one with a 3-byte character there): each is
+    written under a name cut to fit a file name with a digest that keeps them apart (the output's temporary name
+    exceeded the 255 bytes a file name may have: '[Errno 36] File name too long', on every resume too)."""
+    d = tmp_path / "logs"
+    for stem in ("L" * 239 + "A", "L" * 239 + "B", "L" * 230 + "\u20ac" * 4):
+        _write(d / f"{stem}.parquet", 0.01)
+    res = run_fleet(expand_logs([d]), tmp_path / "out", EST)
+    assert [s.status for s in res.summaries] == ["ok"] * 3, [s.error for s in res.summaries]
+    names = [Path(s.output).name for s in res.summaries]
+    assert len(set(names)) == 3 and all(len(n.encode()) + len(".partial") <= 255 for n in names)
+    assert all(n.startswith("L" * 150) for n in names)

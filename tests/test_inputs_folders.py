@@ -316,3 +316,16 @@ def test_comments_elsewhere_get_true_messages(tmp_path):
     p.write_text("# nothing\n\n# here\n")
     with pytest.raises(LogError, match="no header line"):
         load_log(p)
+
+
+def test_a_pattern_or_a_folder_that_gives_no_log_is_said(tmp_path, monkeypatch):
+    """Among inputs that give logs, a pattern that matches no file and a folder without logs are each said in a note
+    (they were passed over without a word); the other logs are written."""
+    monkeypatch.chdir(tmp_path)
+    _csv(tmp_path / "a.csv", 0.02)
+    (tmp_path / "empty").mkdir()
+    res = _run("estimate", "nomatch*.csv", "empty", "a.csv", "-e", "kinematic", "-o", "out/")
+    assert res.exit_code == 0, res.output
+    assert "note: nomatch*.csv: the pattern matches no file" in res.output
+    assert "note: empty: a folder without logs" in res.output
+    assert (tmp_path / "out" / "a.bank.parquet").is_file()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import glob
 import os
 import sys
 from pathlib import Path
@@ -83,6 +84,10 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
                    f"*.bank.parquet) left out: {shown} (give such a file by its name to read it as a log)", err=True)
     if paths and not any(present(p) for p in paths):
         raise click.BadParameter("; ".join(str(not_found(p)) for p in paths), param_hint="LOGS")
+    for a in logs if paths else ():          # (nothing at all is the error below)
+        empty = _gives_nothing(a, paths)
+        if empty:
+            click.echo(f"note: {a}: {empty}", err=True)
     kept = []
     for p in once_each(paths):
         why = not_a_log(p, fmt)
@@ -99,6 +104,23 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
         click.echo(f"error: {what} in {', '.join(map(str, logs))}{hint}", err=True)
         sys.exit(1)
     return cmap, kept
+
+
+def _gives_nothing(arg, paths: list) -> str | None:
+    """Why the LOGS argument ``arg`` added no log to ``paths`` (a pattern that matches no file, a folder without
+    logs), or None where it added one or is a path the readers report."""
+    from ..io.files import present
+
+    p, text = Path(arg), str(arg)
+    if not present(p) and any(ch in text for ch in "*?["):
+        return None if glob.glob(text, recursive=True) else "the pattern matches no file"
+    try:
+        folder = p.is_dir()
+    except OSError:
+        return None
+    if folder and not any(q == p or p in q.parents for q in map(Path, paths)):
+        return "a folder without logs"
+    return None
 
 
 def once_each(paths: list) -> list:

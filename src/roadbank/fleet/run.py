@@ -49,6 +49,9 @@ from .cluster import open_pool
 from .process import SUMMARY_COLUMNS, LogSummary, estimate_log
 
 SUMMARY = "summary.csv"
+#: the longest log name (bytes) in an output file's name: with ``-<n>.bank.parquet.partial`` it stays below the 255
+#: bytes a file name may have
+MAX_STEM_BYTES = 200
 #: the settings of the logs in an output directory (:func:`check_settings`)
 SETTINGS = "settings.json"
 #: suffixes of log files picked up when a directory is given
@@ -173,14 +176,24 @@ def _estimate_batch(jobs, estimators, kw) -> list[LogSummary]:
 
 def _stem(p: Path) -> str:
     """A log's name: a file's stem, a directory's name; a KITTI drive (its folder, its ``oxts/`` folder or a folder
-    holding only it): the drive's."""
+    holding only it): the drive's; cut to :data:`MAX_STEM_BYTES` (:func:`_short`)."""
     try:
         if p.is_file():
-            return p.stem
+            return _short(p.stem)
     except OSError:             # cannot be looked at (the reader says so): named as a file
-        return p.stem
+        return _short(p.stem)
     found = find_oxts_dirs(p)
-    return drive_name(found[0]) if len(found) == 1 else p.name
+    return _short(drive_name(found[0]) if len(found) == 1 else p.name)
+
+
+def _short(stem: str) -> str:
+    """``stem`` as it is up to :data:`MAX_STEM_BYTES` bytes (UTF-8); a longer one cut there, less room for ``~`` and 8
+    hex digits of its digest, so that two long names that share their start stay apart."""
+    raw = stem.encode("utf-8", "surrogateescape")
+    if len(raw) <= MAX_STEM_BYTES:
+        return stem
+    head = raw[:MAX_STEM_BYTES - 9].decode("utf-8", "ignore")      # (a character cut in two is left out)
+    return f"{head}~{hashlib.sha256(raw).hexdigest()[:8]}"
 
 
 def output_names(paths: list[Path], suffix: str, given: dict[str, str] | None = None) -> dict[Path, str]:
