@@ -265,6 +265,33 @@ def test_mdf_master_in_another_unit_names_it(tmp_path, scale, unit, streamed):
         list(stream_log(p, chunk_rows=50)) if streamed else load_log(p)
 
 
+def test_mdf_channel_in_two_groups_is_named_whole_streamed_and_by_channels(tmp_path):
+    """An MDF4 file with its yaw rate 'r' in two channel groups: reading it whole or streamed names the channel and
+    its groups alike, and `roadbank channels` says why it proposes no yaw rate (it said 'no column named like it')."""
+    pytest.importorskip("asammdf")
+    from asammdf import MDF, Signal
+    from click.testing import CliRunner
+
+    from roadbank.cli import main
+    from roadbank.io.stream import stream_log
+    n = 300
+    t = np.arange(n) * DT
+    sig = _signals(n)
+    mdf = MDF(version="4.10")
+    mdf.append([Signal(np.asarray(v), t, name=k) for k, v in sig.items()])
+    mdf.append([Signal(np.asarray(sig["r"]), t + 0.005, name="r")])
+    p = tmp_path / "two.mf4"
+    mdf.save(p)
+    said = r"two\.mf4: channel 'yaw_rate' \(column 'r'\): cannot read channel 'r': it is in 2 channel groups \[0, 1\]"
+    with pytest.raises(LogError, match=said):
+        load_log(p)
+    with pytest.raises(LogError, match=said):
+        list(stream_log(p, chunk_rows=50))
+    res = CliRunner().invoke(main, ["channels", str(p), "-o", str(tmp_path / "m.toml")])
+    assert "note: column 'r' not read, so not proposed: " in res.output
+    assert "it is in 2 channel groups [0, 1]" in res.output and "Traceback" not in res.output
+
+
 # ------------------------------------------------------------------ row 9: comma2k19 messages
 def _save(path, arr):
     path.parent.mkdir(parents=True, exist_ok=True)

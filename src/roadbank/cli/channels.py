@@ -11,12 +11,12 @@ from .options import PathOption, checked_output
 
 
 def read_columns(path: Path, fmt: str):
-    """``(names, data, times, units)`` of every numeric column of a CSV, Parquet or MDF4 log (as stored; ``units``:
-    those the file states, a CSV's units row).
+    """``(names, data, times, units, unread)`` of every numeric column of a CSV, Parquet or MDF4 log (as stored;
+    ``units``: those the file states, a CSV's units row; ``unread``: column -> why it could not be read).
 
-    Columns that are not numbers (a gear as text, a comment) are left out. LogError for a file
-    that cannot be read, and for one whose every column fails to read as numbers (the first column's reason:
-    e.g. numbers with a decimal comma).
+    Columns that cannot be read as numbers (a gear as text, a comment, an MDF4 name in two channel groups) are left
+    out, each with its reason in ``unread``. LogError for a file that cannot be read, and for one whose every column
+    fails to read as numbers (the first column's reason: e.g. numbers with a decimal comma).
     """
     from ..io import LogError, readers
 
@@ -24,6 +24,7 @@ def read_columns(path: Path, fmt: str):
         raise LogError(f"{path}: guessing a channel map works on CSV, Parquet and MDF4 logs, not {fmt}")
     reader = readers.READERS[fmt]
     names = reader(path, {}).names
+    unread: dict[str, str] = {}
     try:
         raw = reader(path, {n: n for n in names})
         data = raw.data
@@ -34,13 +35,14 @@ def read_columns(path: Path, fmt: str):
                 got = reader(path, {n: n})
             except LogError as exc:
                 why.append(exc)
+                unread[n] = str(exc)
                 continue
             data.update(got.data)
             raw = got
         if not data and why:
             raise why[0] from None
     times = dict(raw.times) if raw is not None else {}
-    return names, data, times, (dict(raw.units) if raw is not None else {})
+    return names, data, times, (dict(raw.units) if raw is not None else {}), unread
 
 
 @click.command()
@@ -78,7 +80,7 @@ def channels(log, output, fmt):
         fmt = fmt or detect_format(log)
         if fmt not in ("csv", "parquet", "mdf4"):
             raise LogError(f"{log}: guessing a channel map works on CSV, Parquet and MDF4 logs, not {fmt}")
-        names, data, times, stated = read_columns(log, fmt)
+        names, data, times, stated, unread = read_columns(log, fmt)
     except LogError as exc:
         click.echo(f"error: {exc}", err=True)
         sys.exit(1)
@@ -95,6 +97,8 @@ def channels(log, output, fmt):
             sign = ", inverted" if g.invert else ""
             click.echo(f"{g.role:<{width}}  <- {g.column!r} in {g.unit}{sign}   {g.confidence}: {g.reason}")
     click.echo(f"{'convention':<{width}}  {CONVENTION_NOTE}")
+    for name, why in unread.items():          # a channel named like a role may be among them
+        click.echo(f"note: column {name!r} not read, so not proposed: {why}", err=True)
     click.echo(f"wrote {output}", err=True)
     if any(g.column is None and g.role not in STEERING for g in guesses):
         click.echo(f"error: not every required channel was found: fill in {output} by hand", err=True)

@@ -176,6 +176,10 @@ def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTab
         units = mdf_units(mdf, names)
         for c in names:
             if c in wanted or (prefix and c.startswith(prefix)):
+                groups = sorted(g for g, _ in mdf.channels_db.get(c, ()))
+                if len(groups) > 1:         # as the streamed reader says it (sources.Mdf4Windows)
+                    raise LogError(f"{p}: {column_label(wanted, c)}: cannot read channel '{c}': it is in "
+                                   f"{len(groups)} channel groups {groups}")
                 try:
                     sig = mdf.get(c, ignore_invalidation_bits=True)
                 except Exception as exc:
