@@ -72,17 +72,22 @@ def one_blas_thread_in_children() -> Iterator[None]:
             os.environ.pop(var, None)
 
 
-def end_with_parent() -> bool:
+def end_with_parent(parent_pid: int | None = None) -> bool:
     """Have the kernel send this process SIGTERM when the process that started it ends (Linux
     ``prctl(PR_SET_PDEATHSIG)``): a pool worker then never outlives a command that was killed (SIGTERM, SIGKILL)
-    before it could stop its pool. Returns whether it was set (False without Linux's prctl)."""
+    before it could stop its pool. ``parent_pid``: the parent's process id, to end at once where the parent ended
+    before this call (the kernel would never send the signal then). Returns whether it was set (False without
+    Linux's prctl)."""
     try:
         prctl = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").prctl
     except (OSError, AttributeError):
         return False
     prctl.argtypes, prctl.restype = (ctypes.c_int, ctypes.c_ulong, ctypes.c_ulong, ctypes.c_ulong,
                                      ctypes.c_ulong), ctypes.c_int
-    return prctl(_PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0) == 0
+    done = prctl(_PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0) == 0
+    if done and parent_pid is not None and os.getppid() != parent_pid:
+        os.kill(os.getpid(), signal.SIGTERM)
+    return done
 
 
 def keep_freed_memory() -> bool:

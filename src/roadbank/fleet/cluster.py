@@ -191,7 +191,8 @@ def _warm_worker(warm) -> None:
     tasks (they report it against their logs); the process will end by :func:`_quick_exit`."""
     multiprocessing.util.Finalize(None, _quick_exit, exitpriority=-1000)
     signal.signal(signal.SIGINT, signal.SIG_IGN)    # Ctrl-C is the command's to handle: it stops the pool
-    runtime.end_with_parent()         # and a command killed before it could leaves no worker behind
+    parent = multiprocessing.parent_process()
+    runtime.end_with_parent(None if parent is None else parent.pid)    # a command killed leaves no worker behind
     runtime.keep_freed_memory()       # a fresh process, like the parent once it has run a few logs
     if warm is not None:
         try:
