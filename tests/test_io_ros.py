@@ -232,3 +232,22 @@ def test_stream_is_the_whole_log(kind, bags):
     for k in ("t", "vx", "ay", "r", "delta_f"):
         np.testing.assert_array_equal(getattr(chunks[0].signals, k), getattr(whole.signals, k), err_msg=k)
     np.testing.assert_array_equal(chunks[0].extra["lat_deg"], whole.extra["lat_deg"])
+
+
+def test_zero_header_stamps_are_read_at_recording_time_and_said(run, tmp_path):
+    """An IMU driver that never stamps its headers (sec = nanosec = 0): its messages are read at their recording time,
+    as before, and a warning names the topic and the count (it was silent)."""
+    ts = get_typestore(Stores.ROS2_HUMBLE)
+    msgs = _messages(run, ts, False, frd=False)
+    zero = ts.types["builtin_interfaces/msg/Time"](sec=0, nanosec=0)
+    for topic, _, _, m in msgs:
+        if topic == "/imu/data":
+            m.header.stamp = zero
+    p = tmp_path / "unstamped.mcap"
+    _write_plain_mcap(p, msgs, ts)
+    (tmp_path / "m.toml").write_text(MAP.format(conv="FLU", speed_topic="/twist", speed_field="twist.linear.x"))
+    log = load_log(p, channels=tmp_path / "m.toml")
+    n = sum(1 for topic, *_ in msgs if topic == "/imu/data")
+    said = [w for w in log.warnings if "topic '/imu/data'" in w]
+    assert said and f"{n} message(s) with a zero header stamp, read at their recording time" in said[0], log.warnings
+    assert abs(log.signals.t[0] - T0) < 1e-6 and np.allclose(np.diff(log.signals.t), 0.01, atol=1e-6)

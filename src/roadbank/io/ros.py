@@ -111,6 +111,7 @@ def read_ros(path, cmap, fmt: str) -> tuple[RawTable, list[str]]:
     stamps: dict[str, list[float]] = {spec.column: [] for specs in by_topic.values() for _, spec in specs}
     warns: list[str] = []
     dropped_nofix = 0
+    unstamped: dict[str, int] = {}      # topic -> messages whose header stamp is zero
     try:
         with AnyReader([p], default_typestore=get_typestore(Stores.ROS2_HUMBLE)) as reader:
             have = {c.topic: c.msgtype for c in reader.connections}
@@ -125,6 +126,8 @@ def read_ros(path, cmap, fmt: str) -> tuple[RawTable, list[str]]:
                 msg = reader.deserialize(raw, con.msgtype)
                 st = _stamp(msg) if cmap.ros_time == "header" else None
                 t = st if st is not None and st > 0 else t_log * 1e-9
+                if st is not None and not st > 0:       # a header never stamped: the recording time instead
+                    unstamped[con.topic] = unstamped.get(con.topic, 0) + 1
                 status = getattr(getattr(msg, "status", None), "status", None)
                 if isinstance(status, int) and status < 0:      # NavSatFix without a fix
                     dropped_nofix += 1
@@ -161,4 +164,7 @@ def read_ros(path, cmap, fmt: str) -> tuple[RawTable, list[str]]:
             data[spec.column], times[spec.column] = v[order], ts[order]
     if dropped_nofix:
         warns.append(f"{p}: {dropped_nofix} message(s) with status < 0 (no GNSS fix) skipped")
+    for topic, n in unstamped.items():
+        warns.append(f"{p}: topic '{topic}': {n} message(s) with a zero header stamp, read at their recording time "
+                     "instead (ros_time = \"log\" in the channel map reads every message so: one clock for all)")
     return RawTable(sorted(data), data, times=times, metadata={"format": fmt}, row_label="message"), warns
