@@ -176,3 +176,17 @@ def test_outputs_that_can_be_written(tmp_path):
     assert output_path_problem(tmp_path / "old", directory=True) is None
     assert output_path_problem(tmp_path / "T.TOML", suffixes=(".toml",)) is None
     assert output_path_problem(tmp_path / "old", directory=False) is not None
+
+
+@pytest.mark.parametrize("command", [["estimate", "log.csv", "-o", "out/"], ["map", "log.csv", "-o", "m.parquet"],
+                                     ["validate", "kitti", "drives"], ["validate", "comma2k19", "seg"],
+                                     ["validate", "all", "data", "-o", "r.md"]])
+def test_workers_and_scheduler_together_are_a_usage_error(tmp_path, monkeypatch, command):
+    """--workers N with --scheduler ADDR: a usage error naming both, before any input is looked at (--workers was
+    ignored in silence)."""
+    for name in ("drives", "seg", "data"):
+        (tmp_path / name).mkdir()
+    (tmp_path / "log.csv").write_text("t,vx,ay,r\n0,20,0,0\n0.01,20,0,0\n")
+    res = _run(command + ["--workers", "2", "--scheduler", "tcp://127.0.0.1:1"], tmp_path, monkeypatch)
+    _usage_error(res, "give --workers N", "--scheduler ADDR", "not both")
+    assert not (tmp_path / "out").exists() and not (tmp_path / "m.parquet").exists()

@@ -16,7 +16,7 @@ from ..io.errors import LogError
 from ..io.readers import FORMATS
 from .inputs import channel_map_and_logs, check_output
 from .options import PathOption, vehicle_option
-from .parallel import scheduler_option
+from .parallel import one_pool, scheduler_option
 
 
 #: how the removed offsets are printed (Signals channel -> text)
@@ -87,6 +87,7 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
 @click.option("--json", "as_json", is_flag=True,
               help="Print the summary as one JSON object on stdout (per log: status, duration, time-stamp "
                    "repairs, and valid share and bank mean/min/max of every estimator) instead of the table.")
+@one_pool
 def estimate(logs, channels, fmt, est_names, output, output_format, plot, steering_ratio, vehicle,
              online_offsets, workers, scheduler, resume, chunk_rows, as_json):
     """Estimate the road bank angle on recorded LOGS and write t, theta, phi_b, valid per estimator.

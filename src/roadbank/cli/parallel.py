@@ -8,6 +8,8 @@ when the command connects.
 
 from __future__ import annotations
 
+import functools
+
 import re
 import sys
 
@@ -83,11 +85,23 @@ def scheduler_option(help_text: str = "Run on the Dask scheduler at ADDR (tcp://
     return click.option("--scheduler", default=None, metavar=metavar, callback=scheduler_address, help=help_text)
 
 
+def one_pool(f):
+    """Decorator of a command with ``--workers`` and ``--scheduler``: both given is a usage error (exit code 2) before
+    any work (``--workers`` was ignored in silence: the scheduler's workers run the tasks)."""
+    @functools.wraps(f)
+    def checked(*args, **kwargs):
+        if kwargs.get("scheduler") is not None and (kwargs.get("workers") or 1) != 1:
+            raise click.UsageError("give --workers N (processes on this machine) or --scheduler ADDR (the scheduler's "
+                                   "workers run the tasks), not both")
+        return f(*args, **kwargs)
+    return checked
+
+
 def pool_options(what: str, note: str = ""):
     """The two options, for a command whose ``what`` ("Drives", "Logs") run in parallel; ``note``
-    ends the help of ``--workers``."""
+    ends the help of ``--workers``; both given is a usage error (:func:`one_pool`)."""
     def deco(f):
-        f = scheduler_option()(f)
+        f = scheduler_option()(one_pool(f))
         return click.option("--workers", type=int, default=1, show_default=True, callback=_at_least_one,
                             help=f"{what} in parallel on N worker processes on this machine "
                                  "(1: in this process)." + (f" {note}" if note else ""))(f)
