@@ -61,6 +61,19 @@ def test_an_unhandled_error_is_one_line_naming_the_file(tmp_path, folder, monkey
     assert isinstance(_run("estimate", folder, "-o", tmp_path / "out").exception, ValueError)
 
 
+def test_ctrl_c_ends_with_the_shells_code_for_it(tmp_path, folder, monkeypatch):
+    """Ctrl-C in a command ends with exit code 130 (128 + SIGINT) and one line, told apart from a failed log (1) and
+    a usage error (2); it was click's 'Aborted!' with 1."""
+    import roadbank.fleet
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(roadbank.fleet, "estimate_log", interrupted)
+    res = _run("estimate", folder / "good.csv", "-o", tmp_path / "out.csv")
+    assert res.exit_code == 130 and res.output.strip() == "interrupted (Ctrl-C)", res.output
+
+
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no FIFOs on this system")
 def test_a_fifo_is_refused_not_waited_on(tmp_path, folder):
     """A FIFO named like a log, in a folder and given by name: refused at once (the batch's exit code 1: a log

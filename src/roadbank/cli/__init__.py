@@ -21,6 +21,9 @@ import click  # noqa: E402
 
 #: set (to anything but "" or "0") to let an unexpected error out with its traceback instead of the one-line message
 TRACEBACK_ENV = "ROADBANK_TRACEBACK"
+#: the exit code of a command stopped by Ctrl-C (128 + SIGINT, as shells report it); 0 is success, 1 a failed log or
+#: a one-line error, 2 a usage error
+EXIT_INTERRUPTED = 130
 
 #: sub-command name -> "module:function" inside roadbank.cli
 COMMANDS = {
@@ -54,11 +57,15 @@ class _LazyGroup(click.Group):
     def invoke(self, ctx):
         """Run the sub-command; an error that no reader or command turned into its own message ends in one line
         (exit code 1), never a traceback: a file the system refuses (``OSError``: named with the system's reason),
-        memory that ran out, or a bug (its type and text, with how to see the traceback: :data:`TRACEBACK_ENV`)."""
+        memory that ran out, or a bug (its type and text, with how to see the traceback: :data:`TRACEBACK_ENV`).
+        Ctrl-C ends with :data:`EXIT_INTERRUPTED`."""
         try:
             return super().invoke(ctx)
         except (click.exceptions.Exit, click.ClickException, click.Abort):
             raise
+        except KeyboardInterrupt:           # Ctrl-C: the shell's code for it, told apart from a failed log
+            click.echo("\ninterrupted (Ctrl-C)", err=True)
+            ctx.exit(EXIT_INTERRUPTED)
         except Exception as exc:
             if os.environ.get(TRACEBACK_ENV, "") not in ("", "0"):
                 raise
