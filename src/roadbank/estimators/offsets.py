@@ -18,18 +18,21 @@ Straight driving
     low-passed :math:`|a_y|`, :math:`|\delta_f - b_\delta|` and :math:`|r - b_r|` below
     ``straight_ay``, ``straight_delta``, ``straight_r``; low yaw acceleration and steering
     rate; all of it for longer than ``straight_settle``) the linear single-track model holds
-    in its steady state on a flat road:
+    in its steady state, its understeer term on the tyres' lateral force, which the accelerometer measures (the
+    low-passed :math:`a_y`, less ``ay_offset``) whatever the road's cross slope:
 
-    .. math:: r = \frac{v_x\,\delta_f}{L + K_{us} v_x^2}
+    .. math:: \delta_f = \frac{L\,r}{v_x} + K_{us}\,a_y
 
-    (:math:`K_{us}` the understeer gradient of the car's parameters,
+    (on a flat road in a steady turn :math:`a_y = v_x r`: :math:`r = v_x \delta_f / (L + K_{us} v_x^2)`; on a crowned
+    straight the car steers into the slope without yawing, which that flat-road form read as a yaw rate: the
+    fifty-first stage, docs/estimators.md; :math:`K_{us}` the understeer gradient of the car's parameters,
     :func:`roadbank.models.bicycle.understeer_gradient`). Until a standstill has taught the
     yaw-rate offset, straight driving teaches it against this kinematic yaw rate (the same
     running mean, time constant ``tau_straight``; slower evidence: it is flagged learnt after
     ``min_straight`` s). Once the standstill has taught it, straight driving teaches the
     steering offset instead, against the steering angle the corrected yaw rate needs. The two
     are never learnt from the same relation at once: on a straight at one speed only the
-    combination :math:`b_r - v_x b_\delta / (L + K_{us} v_x^2)` is observable, so the
+    combination :math:`b_r - v_x b_\delta / L` is observable, so the
     steering offset waits for the standstill. Without a steering angle (NaN) straight driving
     teaches nothing: a yaw-rate offset cannot be told from a gentle curve there.
 Lateral accelerometer

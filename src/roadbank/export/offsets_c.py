@@ -233,15 +233,15 @@ void ${p}_offsets_step(offsets_t *o, double t, real_t vx, real_t ay, real_t r, r
                 o->t_str = 0.0_R;
             }
             if (straight && o->t_str > RBO_TSTR) {
-                const real_t den = RBO_L + RBO_KUS * vx * vx;
+                const real_t under = RBO_KUS * (af - RBO_AYOFF);   /* delta_f = L r / vx + K_us a_y */
                 real_t e;
                 if (o->e_stop < RBO_NSTOP) {
-                    const real_t r_kin = vx * (d - o->b_d) / den;
+                    const real_t r_kin = vx * (d - o->b_d - under) / RBO_L;
                     e = o->e_str_r + dt;
                     o->e_str_r = e;
                     o->b_r = rbo_clamp(o->b_r + dt / rbo_min(e, RBO_TAUSTR) * (r - r_kin - o->b_r), RBO_RMAX);
                 } else {
-                    const real_t d_kin = den * (r - o->b_r) / vx;
+                    const real_t d_kin = RBO_L * (r - o->b_r) / vx + under;
                     e = o->e_str_d + dt;
                     o->e_str_d = e;
                     o->b_d = rbo_clamp(o->b_d + dt / rbo_min(e, RBO_TAUSTR) * (d - d_kin - o->b_d), RBO_DMAX);

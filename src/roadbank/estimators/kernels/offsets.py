@@ -140,17 +140,19 @@ def offsets_step(mem, cfg, t, vx, d, ay, r, out):
             else:
                 mem[M_TSTR] = 0.0
             if straight and mem[M_TSTR] > cfg[C_TSTR]:
-                den = cfg[C_L] + cfg[C_KUS] * vx * vx
+                # the steady single-track model, the understeer term on the tyres' lateral force that the
+                # accelerometer measures (a crowned road's too): delta_f = L r / vx + K_us a_y
+                under = cfg[C_KUS] * (af - cfg[C_AYOFF])
                 if mem[M_ESTOP] < cfg[C_NSTOP]:
                     # no standstill yet: the yaw rate from the steering angle's kinematic one
-                    r_kin = vx * (d - mem[M_BD]) / den
+                    r_kin = vx * (d - mem[M_BD] - under) / cfg[C_L]
                     e = mem[M_ESTRR] + dt
                     mem[M_ESTRR] = e
                     mem[M_BR] = _clamp(mem[M_BR] + dt / min(e, cfg[C_TAUSTR]) * (r - r_kin - mem[M_BR]),
                                        cfg[C_RMAX])
                 else:
                     # yaw rate learnt at standstill: the steering angle from the corrected yaw rate
-                    d_kin = den * (r - mem[M_BR]) / vx
+                    d_kin = cfg[C_L] * (r - mem[M_BR]) / vx + under
                     e = mem[M_ESTRD] + dt
                     mem[M_ESTRD] = e
                     mem[M_BD] = _clamp(mem[M_BD] + dt / min(e, cfg[C_TAUSTR]) * (d - d_kin - mem[M_BD]),
