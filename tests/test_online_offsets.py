@@ -311,3 +311,18 @@ def test_a_crowned_road_teaches_no_yaw_rate_offset(crown, bias_dps):
     e = E.with_online_offsets(E.make("kinematic"), params=car.params).run(sim.signals)
     assert e.states["r_offset_learnt"][-1] == 1.0
     assert abs(math.degrees(e.states["r_offset"][-1]) - bias_dps) < 0.15, math.degrees(e.states["r_offset"][-1])
+
+
+def test_a_steering_channel_that_never_changes_teaches_nothing():
+    """A steering column holding one value (a logger writing 0 for a signal it does not have) is no evidence: on a
+    banked straight, where the relation with the measured ay would ask for a steer into the slope, nothing is learnt
+    and the inputs pass unchanged; once the column moves, straight driving teaches again."""
+    n = 3000
+    t = np.arange(n) * 0.01
+    ay = np.full(n, 9.81 * math.sin(0.01))
+    sig = Signals(t, np.full(n, 20.0), ay, np.zeros(n), np.zeros(n))
+    e = E.with_online_offsets(E.make("kinematic")).run(sig)
+    assert not e.states["r_offset_learnt"].any() and not np.any(e.states["r_offset"])
+    np.testing.assert_array_equal(e.theta, E.make("kinematic").run(sig).theta)
+    wiggle = Signals(t, np.full(n, 20.0), ay, np.zeros(n), 1e-6 * np.sin(t))
+    assert E.with_online_offsets(E.make("kinematic")).run(wiggle).states["r_offset_learnt"][-1] == 1.0

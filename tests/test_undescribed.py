@@ -181,10 +181,11 @@ def test_the_design_line_says_what_was_not_measured_and_what_the_design_took(tmp
     assert "nan" not in line and "not measured" in line and "the data sheet's noise" in line, line
     base = {"car": "sedan", "car_from": "fitted to the log", "quiet": False}
     words = design_words({**base, "ay_noise": 0.21, "ay_floor": math.nan, "ay_floor_ratio": 40.0}, "kinematic-pif")
-    assert "nan" not in words and "0.21 m/s^2 (40 x the data sheet; its floor not measured" in words, words
+    assert "nan" not in words, words
+    assert "0.21 m/s^2 (40 x the data sheet's noise density; its floor not measured" in words, words
     words = design_words({**base, "ay_noise": 0.1, "ay_floor": 0.085, "ay_floor_ratio": 6.6}, "kinematic-pif")
-    assert words == ("sedan (fitted to the log); ay noise 0.1 m/s^2, floor 0.085 (6.6 x the data sheet): loud, so "
-                     "kinematic-pif is the low-pass blend")
+    assert words == ("sedan (fitted to the log); ay noise 0.1 m/s^2, floor 0.085 (6.6 x the data sheet's noise "
+                     "density): loud, so kinematic-pif is the low-pass blend")
 
 
 def test_the_design_span_of_the_design_span_is_itself():

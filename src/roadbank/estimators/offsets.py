@@ -33,8 +33,9 @@ Straight driving
     steering offset instead, against the steering angle the corrected yaw rate needs. The two
     are never learnt from the same relation at once: on a straight at one speed only the
     combination :math:`b_r - v_x b_\delta / L` is observable, so the
-    steering offset waits for the standstill. Without a steering angle (NaN) straight driving
-    teaches nothing: a yaw-rate offset cannot be told from a gentle curve there.
+    steering offset waits for the standstill. Without a steering angle (NaN), or with one that has never changed
+    (a logger's zeros for a signal it lacks), straight driving teaches nothing: a yaw-rate offset cannot be told from
+    a gentle curve there.
 Lateral accelerometer
     Not learnt. At standstill and on a straight, an accelerometer offset enters ``ay``
     exactly as the road's bank does (:math:`g \sin\phi_b + b_{a_y}`), so any online estimate

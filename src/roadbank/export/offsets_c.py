@@ -27,6 +27,7 @@ _HEADER = Template("""
 typedef struct {
     int initialised;      /* 0 until the first sample with a usable time */
     int filtered;         /* 1 once the straight-driving low-passes have started */
+    int steer_moved;      /* 1 once the steering angle has changed (one that never does tells nothing) */
     double t_last;        /* s, last usable time stamp */
     double a_t;           /* s, time of the stop's newest snapshot */
     ${real} b_r;          /* rad/s, yaw-rate offset */
@@ -146,6 +147,7 @@ void ${p}_offsets_init(offsets_t *o)
 {
     o->initialised = 0;
     o->filtered = 0;
+    o->steer_moved = 0;
     o->t_last = 0.0;
     o->a_t = 0.0;
     o->b_r = 0.0_R;
@@ -217,6 +219,9 @@ void ${p}_offsets_step(offsets_t *o, double t, real_t vx, real_t ay, real_t r, r
         } else if (dt > 0.0_R) {
             const real_t a = dt / (RBO_TAUF + dt);
             const real_t rf = o->rf + a * (r - o->rf);
+            if (d != o->df) {
+                o->steer_moved = 1;
+            }
             const real_t df = o->df + a * (d - o->df);
             const real_t af = o->af + a * (ay - o->af);
             const real_t rdot = (rf - o->rf) / dt;
@@ -232,7 +237,7 @@ void ${p}_offsets_step(offsets_t *o, double t, real_t vx, real_t ay, real_t r, r
             } else {
                 o->t_str = 0.0_R;
             }
-            if (straight && o->t_str > RBO_TSTR) {
+            if (straight && o->t_str > RBO_TSTR && o->steer_moved) {
                 const real_t under = RBO_KUS * (af - RBO_AYOFF);   /* delta_f = L r / vx + K_us a_y */
                 real_t e;
                 if (o->e_stop < RBO_NSTOP) {

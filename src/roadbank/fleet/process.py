@@ -105,9 +105,12 @@ def design_text(design: dict) -> str:
 
 
 def _times(ratio: float) -> str:
-    """The log's ``ay`` noise against the data sheet's, in words: ``"3.5 x the data sheet"``; a data sheet that gives
-    no noise (a vehicle file's ``ay_noise = 0``) said so rather than as infinitely many times."""
-    return f"{ratio:.2g} x the data sheet" if math.isfinite(ratio) else "the data sheet gives no ay noise"
+    """The log's ``ay`` noise against the data sheet's, in words: ``"3.5 x the data sheet's noise density"`` (a ratio
+    of power densities, (m/s^2)^2/Hz, as :data:`~roadbank.vehicle.QUIET_RATIO` reads it: the standard deviations
+    beside it are in the ratio's square root); a data sheet that gives no noise (a vehicle file's ``ay_noise = 0``)
+    said so rather than as infinitely many times."""
+    return (f"{ratio:.2g} x the data sheet's noise density" if math.isfinite(ratio)
+            else "the data sheet gives no ay noise")
 
 
 def design_words(design: dict, estimator: str) -> str:

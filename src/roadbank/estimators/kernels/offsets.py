@@ -26,9 +26,9 @@ from ._jit import ENTRY, INLINE
 # ---- mem: state --------------------------------------------------------------------------
 # committed yaw-rate offset and evidence; the running stop: r dt summed, its evidence, the
 # snapshots A (newest) and B (at least C_TRAIL old) of those sums, A's time, the offset and
-# evidence committed before the stop
+# evidence committed before the stop; whether the steering angle has ever changed
 (M_BR, M_BD, M_ESTOP, M_ESTRR, M_ESTRD, M_TSTOP, M_TSTR, M_TLAST, M_INIT, M_RF, M_DF, M_AF,
- M_FINIT, M_SSUM, M_SE, M_ASUM, M_AE, M_AT, M_BSUM, M_BE, M_BR0, N_MEM) = range(22)
+ M_FINIT, M_SSUM, M_SE, M_ASUM, M_AE, M_AT, M_BSUM, M_BE, M_BR0, M_DMOVED, N_MEM) = range(23)
 # ---- out: one sample ---------------------------------------------------------------------
 (O_R, O_AY, O_D, O_BR, O_BD, O_RLEARNT, O_DLEARNT, N_OUT) = range(8)
 
@@ -123,6 +123,8 @@ def offsets_step(mem, cfg, t, vx, d, ay, r, out):
             mem[M_FINIT] = 1.0
             mem[M_TSTR] = 0.0
         elif dt > 0.0:
+            if d != mem[M_DF]:                   # a steering channel that never changes (zeros) tells nothing
+                mem[M_DMOVED] = 1.0
             a = dt / (cfg[C_TAUF] + dt)
             rf = mem[M_RF] + a * (r - mem[M_RF])
             df = mem[M_DF] + a * (d - mem[M_DF])
@@ -139,7 +141,7 @@ def offsets_step(mem, cfg, t, vx, d, ay, r, out):
                 mem[M_TSTR] += dt
             else:
                 mem[M_TSTR] = 0.0
-            if straight and mem[M_TSTR] > cfg[C_TSTR]:
+            if straight and mem[M_TSTR] > cfg[C_TSTR] and mem[M_DMOVED] != 0.0:
                 # the steady single-track model, the understeer term on the tyres' lateral force that the
                 # accelerometer measures (a crowned road's too): delta_f = L r / vx + K_us a_y
                 under = cfg[C_KUS] * (af - cfg[C_AYOFF])
