@@ -24,6 +24,8 @@ from roadbank.sim.standstill import with_standstill
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 BIAS = math.radians(0.5)                   # yaw-rate offset, rad/s
 STILL = 3.0                                # s of standstill before the drives
+#: straight-driving evidence turned on (off by default: the fifty-second stage)
+STRAIGHT = OffsetSettings(straight_ay=0.3)
 
 
 def _sensors(r_bias=BIAS, swa_bias=0.0):
@@ -60,7 +62,8 @@ def test_a_standstill_teaches_the_yaw_rate_offset_and_removes_its_bank_error(nam
 
 def test_without_a_standstill_the_flag_waits_for_straight_driving():
     sim = run(TURN_THEN_STRAIGHT, sensors=_sensors(), seed=5)
-    est = E.with_online_offsets(E.make("pif-modified"))
+    assert not E.with_online_offsets(E.make("pif-modified")).run(sim.signals).states["r_offset_learnt"].any()
+    est = E.with_online_offsets(E.make("pif-modified"), settings=STRAIGHT)   # (off by default)
     e = est.run(sim.signals)
     t, flag = sim.signals.t, e.states["r_offset_learnt"]
     s = est.settings
@@ -76,7 +79,7 @@ def test_after_a_standstill_straight_driving_teaches_the_steering_offset():
     swa_bias = math.radians(3.0)
     sim = with_standstill(run(TURN_THEN_STRAIGHT, sensors=_sensors(swa_bias=swa_bias), seed=6),
                           TURN_THEN_STRAIGHT, STILL)
-    est = E.with_online_offsets(E.make("pif-modified"))
+    est = E.with_online_offsets(E.make("pif-modified"), settings=STRAIGHT)
     e = est.run(sim.signals)
     truth = swa_bias / est.params.steering_ratio             # road-wheel angle, rad
     assert e.states["delta_offset_learnt"][-1] == 1.0
@@ -217,10 +220,10 @@ def test_the_c_export_learns_the_offsets_as_step_does(tmp_path, float32, name):
     if name == "kinematic-pif":
         t, vx, ay, r, _ = _hard_offsets_log()
         ref = 0.25 * diff_noise_std(ay - vx * r) ** 2
-        est = E.with_online_offsets(E.make(name, Q_ay=1e-3, noise_ref=ref, noise_tau=5.0))
+        est = E.with_online_offsets(E.make(name, Q_ay=1e-3, noise_ref=ref, noise_tau=5.0), settings=STRAIGHT)
         assert est.inner.noise_tau == 5.0
     else:
-        est = E.with_online_offsets(E.make(name))
+        est = E.with_online_offsets(E.make(name), settings=STRAIGHT)
     res = export_c(est, tmp_path, rate=100.0, float32=float32)
     p = res.source.stem
     assert f"{p}_step_learning" in res.header.read_text() and "Online sensor offsets" in res.readme.read_text()
@@ -308,7 +311,8 @@ def test_a_crowned_road_teaches_no_yaw_rate_offset(crown, bias_dps):
     sensors = sensors.replace(yaw_rate=dataclasses.replace(sensors.yaw_rate, bias=math.radians(bias_dps)))
     spec = drives.DriveSpec(crown=math.atan(crown), superelevation=0.06)
     sim = run(drives.mixed_drive(seed=201, spec=spec), plant=car.to_plant(), sensors=sensors, seed=201)
-    e = E.with_online_offsets(E.make("kinematic"), params=car.params).run(sim.signals)
+    assert not E.with_online_offsets(E.make("kinematic"), params=car.params).run(sim.signals).states["r_offset"].any()
+    e = E.with_online_offsets(E.make("kinematic"), params=car.params, settings=STRAIGHT).run(sim.signals)
     assert e.states["r_offset_learnt"][-1] == 1.0
     assert abs(math.degrees(e.states["r_offset"][-1]) - bias_dps) < 0.15, math.degrees(e.states["r_offset"][-1])
 
@@ -321,8 +325,9 @@ def test_a_steering_channel_that_never_changes_teaches_nothing():
     t = np.arange(n) * 0.01
     ay = np.full(n, 9.81 * math.sin(0.01))
     sig = Signals(t, np.full(n, 20.0), ay, np.zeros(n), np.zeros(n))
-    e = E.with_online_offsets(E.make("kinematic")).run(sig)
+    e = E.with_online_offsets(E.make("kinematic"), settings=STRAIGHT).run(sig)
     assert not e.states["r_offset_learnt"].any() and not np.any(e.states["r_offset"])
     np.testing.assert_array_equal(e.theta, E.make("kinematic").run(sig).theta)
     wiggle = Signals(t, np.full(n, 20.0), ay, np.zeros(n), 1e-6 * np.sin(t))
-    assert E.with_online_offsets(E.make("kinematic")).run(wiggle).states["r_offset_learnt"][-1] == 1.0
+    learnt = E.with_online_offsets(E.make("kinematic"), settings=STRAIGHT).run(wiggle).states["r_offset_learnt"]
+    assert learnt[-1] == 1.0

@@ -14,7 +14,10 @@ Standstill
     in a tight turn yaws before its speed says it moves. Samples with
     :math:`|r - b_r| \ge` ``stop_r_max`` (a turntable, a ferry) teach nothing.
 Straight driving
-    With a steering angle, while the car drives straight and steadily (``vx >= v_straight``;
+    Off by default (``straight_ay`` 0): a crowned road and an accelerometer offset both put a constant ``ay`` on a
+    straight that does not yaw, and no relation of these channels tells them apart (the fifty-second stage,
+    docs/estimators.md). Turned on (``straight_ay`` > 0), with a steering angle, while the car drives straight and
+    steadily (``vx >= v_straight``;
     low-passed :math:`|a_y|`, :math:`|\delta_f - b_\delta|` and :math:`|r - b_r|` below
     ``straight_ay``, ``straight_delta``, ``straight_r``; low yaw acceleration and steering
     rate; all of it for longer than ``straight_settle``) the linear single-track model holds
@@ -92,7 +95,10 @@ class OffsetSettings:
         Lowest speed of straight-driving evidence (m/s).
     straight_ay, straight_delta, straight_r : float
         Largest low-passed ``|ay|`` (m/s^2), ``|delta_f - b_delta|`` (rad) and ``|r - b_r|``
-        (rad/s) of straight driving.
+        (rad/s) of straight driving. ``straight_ay`` 0 (the default) turns straight-driving evidence off: a crowned
+        road and an accelerometer offset both put a constant ``ay`` on a straight that does not yaw, and no relation
+        tells them apart (the fifty-second stage, docs/estimators.md); 0.3 m/s^2 turns it on, for a log whose
+        accelerometer offset is known (``ay_offset``).
     straight_r_dot, straight_delta_dot : float
         Largest low-passed yaw acceleration (rad/s^2) and steering rate (rad/s).
     straight_settle : float
@@ -118,7 +124,7 @@ class OffsetSettings:
     stop_r_max: float = math.radians(3.0)
     stop_trail: float = 0.5
     v_straight: float = 5.0
-    straight_ay: float = 0.3
+    straight_ay: float = 0.0
     straight_delta: float = math.radians(0.5)
     straight_r: float = math.radians(2.0)
     straight_r_dot: float = math.radians(1.0)
