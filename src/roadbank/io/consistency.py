@@ -215,7 +215,8 @@ def _unit_error(k: float, what: str, source, named) -> None:
     if fits:
         roles = tuple(dict.fromkeys(r for rs, _ in fits for r in rs))
         raise LogError(f"{source}: channel {named(roles)}: {' or '.join(t for _, t in fits)}: ay is {k:.3g} times "
-                       f"vx r over {what} (about 1 on a road); fix the unit in the channel map")
+                       f"vx r over {what} (about 1 on a road); fix the unit in the channel map (or the file's units "
+                       "row)")
 
 
 def log_verdict(sums: Sums, decided: bool, source="signals", columns: dict | None = None) -> list[str]:
@@ -513,5 +514,5 @@ def speed_scale_error(scales: dict[str, float], source="signals", columns: dict 
     unit = named.pop()
     said = " and ".join(SCALE_EVIDENCE[name].format(c=scales[name]) for name in scales if votes[name])
     raise LogError(f"{source}: channel {_namer(columns)(('speed',))}: speed looks like {unit} declared as m/s: "
-                   f"{said}; fix the unit in the channel map (if the speed is right, the roll rate or ax is not: "
-                   "leave it out of the map)")
+                   f"{said}; fix the unit in the channel map or the file's units row (if the speed is right, the "
+                   "roll rate or ax is not: leave it out of the map)")
