@@ -21,9 +21,10 @@ from .ccode import _fix_literals, add_part, real_literal
 _HEADER = Template("""
 /* ---- online sensor offsets (roadbank.estimators.offsets) --------------------------------
  * Yaw-rate offset learnt at standstill (|vx| < ${vstop} m/s for > ${tstop} s; the last
- * ${trail}-${trail2} s of each stop not used), else from straight driving against the steering
- * angle's kinematic yaw rate; the steering offset from straight driving once the yaw-rate
- * offset has a standstill; the ay offset is not learnt (given: ${ayoff} m/s^2). */
+ * ${trail}-${trail2} s of each stop not used), else (where straight-driving evidence is on: a
+ * straight's largest |ay| above 0) from straight driving against the steering angle's kinematic
+ * yaw rate; the steering offset from straight driving once the yaw-rate offset has a
+ * standstill; the ay offset is not learnt (given: ${ayoff} m/s^2). */
 typedef struct {
     int initialised;      /* 0 until the first sample with a usable time */
     int filtered;         /* 1 once the straight-driving low-passes have started */
