@@ -75,8 +75,9 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
                              "model-based ones are designed for the shipped sedan's parameters (README)",
                 none_if_absent=True)
 @click.option("--online-offsets/--no-online-offsets", default=True, show_default=True,
-              help="Learn the yaw-rate offset at standstill (and with a steering angle on straights, then the "
-                   "steering offset) while the log runs, and remove it before the estimators.")
+              help="Learn the yaw-rate offset at standstill while the log runs, and remove it before the "
+                   "estimators (straights teach nothing: a road's crown and an accelerometer offset look alike "
+                   "there; docs/estimators.md).")
 @click.option("--workers", type=int, default=1, show_default=True,
               help="Logs in parallel on N worker processes on this machine (1: in this process).")
 @scheduler_option("Run on the Dask scheduler at ADDR (tcp://host:8786) instead of local worker processes.")

@@ -59,7 +59,7 @@ def export():
                    "estimator's name). Two tunings of one estimator in one program need two names.")
 @click.option("--online-offsets", "online_offsets", is_flag=True,
               help="Add the online sensor-offset learner (<prefix>_step_learning: yaw-rate offset at "
-                   "standstill, steering offset on straights).")
+                   "standstill; on straights only with straight_ay set, see docs/estimators.md).")
 @click.option("--log", "log", type=PathOption(path_type=Path), default=None,
               help="A recorded drive of the car (any format `roadbank estimate` reads): the module is designed "
                    "for its conditions as `roadbank estimate` designs for it (the road noise of its first minute "
