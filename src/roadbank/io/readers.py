@@ -176,10 +176,7 @@ def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTab
         units = mdf_units(mdf, names)
         for c in names:
             if c in wanted or (prefix and c.startswith(prefix)):
-                groups = sorted(g for g, _ in mdf.channels_db.get(c, ()))
-                if len(groups) > 1:         # as the streamed reader says it (sources.Mdf4Windows)
-                    raise LogError(f"{p}: {column_label(wanted, c)}: cannot read channel '{c}': it is in "
-                                   f"{len(groups)} channel groups {groups}")
+                mdf_place(mdf, p, c, column_label(wanted, c))      # one channel group, as the streamed reader
                 try:
                     sig = mdf.get(c, ignore_invalidation_bits=True)
                 except Exception as exc:
@@ -209,6 +206,17 @@ def mdf_units(mdf, names: list[str]) -> dict[str, str]:
             if unit:
                 out[n] = unit
     return out
+
+
+def mdf_place(mdf, p, c: str, label: str) -> tuple[int, int]:
+    """``(group, index)`` of the channel ``c`` in the open MDF file ``mdf`` (of file ``p``); LogError naming it (its
+    ``label``) where it is not in the file or in several channel groups (which one would be read is not said)."""
+    where = mdf.channels_db.get(c, ())
+    if len(where) != 1:
+        what = "not in the file" if not where else f"in {len(where)} channel groups {sorted(g for g, _ in where)}"
+        raise LogError(f"{p}: {label}: cannot read channel '{c}': it is {what}")
+    group, index = where[0]
+    return int(group), int(index)
 
 
 def mdf_floats(p, c: str, label: str, samples, row0: int = 0) -> np.ndarray:

@@ -177,13 +177,9 @@ class Mdf4Windows:
         self.waiting: dict = {}      # column -> [(t, v)] read along with another channel of its group
 
     def _want(self, name: str, label: str) -> None:
-        where = self.mdf.whereis(name)
-        if len(where) != 1:
-            what = "not in the file" if not where else f"in {len(where)} channel groups {sorted(g for g, _ in where)}"
-            raise LogError(f"{self.path}: {label}: cannot read channel '{name}': it is {what}")
-        group, index = where[0]
-        self.wanted[name] = (int(group), int(index), label)
-        self.offset.setdefault(int(group), 0)
+        group, index = readers.mdf_place(self.mdf, self.path, name, label)
+        self.wanted[name] = (group, index, label)
+        self.offset.setdefault(group, 0)
 
     def _read(self, name):
         """Next window of channel ``name``: (t, v), or None when exhausted."""
