@@ -419,6 +419,21 @@ def check_balance(vx, ay, r, source="signals", columns: dict | None = None) -> l
             "'speed', 'lateral_acceleration' and 'yaw_rate'"]
 
 
+def _scale_span(t, vx, ay, r):
+    """``((t, vx, ay, r), windows, use)``: the channels (s, m/s, m/s^2, rad/s) over the log's first
+    :data:`SCALE_SPAN_S`, the band's windows (:data:`SCALE_WINDOWS_S`, :func:`~roadbank.signals.band_windows`) and
+    the samples moving forward inside it (:func:`~roadbank.signals.band_inner`) that :func:`speed_scales` and
+    :func:`lateral_axis_error` read; None where there are too few."""
+    t, vx, ay, r = (np.asarray(x, dtype=np.float64) for x in (t, vx, ay, r))
+    n = int(np.searchsorted(t, t[0] + SCALE_SPAN_S, side="right")) if len(t) else 0    # (t increases)
+    if n < 3:
+        return None
+    t, vx, ay, r = t[:n], vx[:n], ay[:n], r[:n]
+    windows = band_windows(t, SCALE_WINDOWS_S)
+    use = band_inner(moving(vx, ay, r), windows)
+    return None if use is None else ((t, vx, ay, r), windows, use)
+
+
 def speed_scales(t, vx, ay, r, p=None, ax=None) -> dict[str, float]:
     """The speed read over the true one (-), from each channel of the log that measures the car's motion without it,
     on the samples of its first :data:`SCALE_SPAN_S` moving forward (:func:`moving`), band-passed over
@@ -436,16 +451,12 @@ def speed_scales(t, vx, ay, r, p=None, ax=None) -> dict[str, float]:
       (:data:`SCALE_MIN_CORR`).
 
     Returns ``{reading: c}`` for the readings made (empty when none can be)."""
-    t, vx, ay, r = (np.asarray(x, dtype=np.float64) for x in (t, vx, ay, r))
     out: dict[str, float] = {}
-    n = int(np.searchsorted(t, t[0] + SCALE_SPAN_S, side="right")) if len(t) else 0    # (t increases)
-    if n < 3:
+    span = _scale_span(t, vx, ay, r)
+    if span is None:
         return out
-    t, vx, ay, r = t[:n], vx[:n], ay[:n], r[:n]
-    windows = band_windows(t, SCALE_WINDOWS_S)
-    use = band_inner(moving(vx, ay, r), windows)
-    if use is None:
-        return out
+    (t, vx, ay, r), windows, use = span
+    n = len(t)
     with np.errstate(invalid="ignore", over="ignore"):
         a = band_pass(vx * r, windows)[use]
         if p is not None and np.sqrt(np.mean(a * a)) >= SCALE_MIN_TURN:
@@ -478,15 +489,10 @@ def lateral_axis_error(t, vx, ay, r, source="signals", columns: dict | None = No
     with ``-ax`` in ``ay``'s place (a turned IMU) -0.87 to -1.00 and -0.53 to 0.46. A car sliding down a steep bank at
     low friction (the simulator's const-bank and track-lane1 on mu 0.3) changes its speed with its ``ay`` too
     (correlation -0.95, -0.99), but its ``ay`` follows ``vx r`` (1.00, 0.71)."""
-    t, vx, ay, r = (np.asarray(x, dtype=np.float64) for x in (t, vx, ay, r))
-    n = int(np.searchsorted(t, t[0] + SCALE_SPAN_S, side="right")) if len(t) else 0
-    if n < 3:
+    span = _scale_span(t, vx, ay, r)
+    if span is None:
         return
-    t, vx, ay, r = t[:n], vx[:n], ay[:n], r[:n]
-    windows = band_windows(t, SCALE_WINDOWS_S)
-    use = band_inner(moving(vx, ay, r), windows)
-    if use is None:
-        return
+    (t, vx, ay, r), windows, use = span
     with np.errstate(invalid="ignore", over="ignore"):
         fit = integral_band_fit(t, vx, ay, use, windows)
         if fit is None or fit[2] < SCALE_MIN_SPEED or abs(fit[1]) < SCALE_MIN_CORR or not 0.5 <= abs(fit[0]) <= 2.0:
