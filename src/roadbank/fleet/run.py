@@ -254,11 +254,12 @@ def _parse_summary(f: Path) -> tuple[list[str], list[dict], int | None]:
 def fleet_output_names(paths: list[Path], outdir, suffix: str, resume: bool) -> dict[Path, str]:
     """The output file names of ``paths`` in ``outdir``: :func:`output_names`, resuming with the names that its
     ``summary.csv`` gives the logs it lists."""
-    given = {}
-    for row in read_summary(outdir) if resume else []:
-        if row.get("output"):
-            given[log_identity(Path(row["log"]))] = Path(row["output"]).name
-    return output_names(paths, suffix, given)
+    return output_names(paths, suffix, _given_names(read_summary(outdir) if resume else []))
+
+
+def _given_names(rows: list[dict]) -> dict[str, str]:
+    """:func:`log_identity` -> output file name of the summary rows ``rows`` that have an output."""
+    return {log_identity(Path(row["log"])): Path(row["output"]).name for row in rows if row.get("output")}
 
 
 def fleet_settings(estimators, output_format: str, format: str | None, channels, params, vehicle,
@@ -509,16 +510,17 @@ def run_fleet(logs, outdir, estimators=(DEFAULT,), *, channels=None, format: str
     paths = [Path(p) for p in logs]
     check_settings(outdir, fleet_settings(estimators, output_format, format, channels, params, vehicle,
                                           online_offsets), resume)
-    names = fleet_output_names(paths, outdir, output_format, resume)
+    rows = read_summary(outdir) if resume else []
+    names = output_names(paths, output_format, _given_names(rows))
     done = set()
-    if resume:
-        for row in read_summary(outdir):
-            if row.get("status") == "ok" and row.get("output") and Path(row["output"]).exists():
-                done.add(log_identity(Path(row["log"])))
-            else:
-                done.discard(log_identity(Path(row["log"])))    # its latest row failed
-    todo = [p for p in paths if log_identity(p) not in done]
-    result = FleetResult(skipped=[str(p) for p in paths if log_identity(p) in done])
+    for row in rows:
+        if row.get("status") == "ok" and row.get("output") and Path(row["output"]).exists():
+            done.add(log_identity(Path(row["log"])))
+        else:
+            done.discard(log_identity(Path(row["log"])))    # its latest row failed
+    finished = {p for p in paths if log_identity(p) in done} if done else set()
+    todo = [p for p in paths if p not in finished]
+    result = FleetResult(skipped=[str(p) for p in paths if p in finished])
     summary = _SummaryFile(outdir, resume)
     result.notes += summary.notes
     jobs = [(p, outdir / names[p], dict(metadata or {}, source=str(p)),
