@@ -25,6 +25,7 @@ An explicit setting of the user (environment variable) wins.
 from __future__ import annotations
 
 import contextlib
+import functools
 import ctypes
 import ctypes.util
 import os
@@ -72,6 +73,12 @@ def one_blas_thread_in_children() -> Iterator[None]:
             os.environ.pop(var, None)
 
 
+@functools.cache
+def _libc() -> ctypes.CDLL:
+    """The C library, loaded once (``find_library`` runs ``ldconfig``); OSError where there is none to load."""
+    return ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+
+
 def end_with_parent(parent_pid: int | None = None) -> bool:
     """Have the kernel send this process SIGTERM when the process that started it ends (Linux
     ``prctl(PR_SET_PDEATHSIG)``): a pool worker then never outlives a command that was killed (SIGTERM, SIGKILL)
@@ -79,7 +86,7 @@ def end_with_parent(parent_pid: int | None = None) -> bool:
     before this call (the kernel would never send the signal then). Returns whether it was set (False without
     Linux's prctl)."""
     try:
-        prctl = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").prctl
+        prctl = _libc().prctl
     except (OSError, AttributeError):
         return False
     prctl.argtypes, prctl.restype = (ctypes.c_int, ctypes.c_ulong, ctypes.c_ulong, ctypes.c_ulong,
@@ -97,7 +104,7 @@ def keep_freed_memory() -> bool:
     if any(v in os.environ for v in _MALLOC_ENV):
         return False
     try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        libc = _libc()
         mallopt = libc.mallopt
     except (OSError, AttributeError):     # not glibc (macOS, Windows, musl without mallopt)
         return False
