@@ -161,7 +161,7 @@ def test_the_span_read_is_the_logs_first_and_the_same_in_pieces(tmp_path, mph_fi
             read()
 
 
-@pytest.mark.skipif(not KITTI_DRIVES, reason="../shared/data/kitti-oxts* not present")
+@pytest.mark.skipif(len(KITTI_DRIVES) < 16, reason="the 16 KITTI drives of ../shared/data/kitti-oxts* not present")
 def test_a_lateral_channel_that_reads_the_forward_axis_is_refused_and_real_drives_are_not():
     """An IMU turned by 90 deg in the car: its 'ay' is the car's -ax, which follows the speed's changes, not the turns
     (a bank that changes makes ay follow vx r as loosely, so the balance checks cannot tell). Refused naming the
@@ -180,7 +180,8 @@ def test_a_lateral_channel_that_reads_the_forward_axis_is_refused_and_real_drive
             assert "channel 'lateral_acceleration': it follows the speed's changes" in str(exc)
             assert "forward axis" in str(exc)
             refused += 1
-    assert refused >= len(KITTI_DRIVES) - 2, refused     # two drives' ax follows the speed loosely (docs)
+    assert refused >= 14, refused     # 14 of the 16 shared drives (two follow the speed loosely: docs); more drives
+    #                                   in the folder can only add to it
 
 
 @pytest.mark.skipif(not KITTI_DRIVES, reason="../shared/data/kitti-oxts* not present")
