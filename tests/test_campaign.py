@@ -213,3 +213,25 @@ def test_missing_dask_gives_an_install_hint(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "distributed", None)
     with pytest.raises(DaskMissing, match=r"roadbank\[campaign\]"):
         run_campaign(tmp_path / "c", 2)
+
+
+@pytest.mark.slow
+def test_a_scheduler_without_workers_is_said_once_and_the_wait_goes_on_when_one_joins():
+    """All workers dead (here: none started): the tasks wait, which is Dask's way (a worker may join), but the
+    user is told once why nothing moves; a worker that joins then finishes them."""
+    distributed = pytest.importorskip("distributed")
+    from roadbank.campaign.execute import completed
+
+    lines: list[str] = []
+    with distributed.LocalCluster(n_workers=0, threads_per_worker=1, processes=False,
+                                  dashboard_address=":0") as cluster, distributed.Client(cluster) as client:
+        futures = {client.submit(abs, -k, pure=False): k for k in range(3)}
+
+        def say(line):
+            lines.append(line)
+            cluster.scale(1)                                   # a worker comes: the wait ends
+
+        done = [f.result() for f in completed(client, futures, patience_s=0.5, say=say)]
+    assert sorted(done) == [0, 1, 2]
+    assert len(lines) == 1, lines
+    assert "no worker" in lines[0] and "3 task(s)" in lines[0] and "Ctrl-C" in lines[0]

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import sys
 import time
 from dataclasses import dataclass, field
 
@@ -126,6 +127,41 @@ def dask_session(scheduler: str | None, workers: int, connect_timeout: float = 2
             cluster.close()
 
 
+#: seconds the scheduler may go without any worker while tasks wait before the wait is said (once per such spell)
+NO_WORKER_PATIENCE_S = 30.0
+#: seconds between two looks for finished tasks (the client's latency only; the workers never wait for it)
+_POLL_S = 0.05
+
+
+def _say(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
+
+
+def completed(client, futures, patience_s: float = NO_WORKER_PATIENCE_S, say=_say):
+    """``futures`` as they finish (as ``distributed.as_completed``). A scheduler left without workers (all of
+    them died, or none was started) holds its tasks until one joins; while that lasts ``patience_s`` seconds
+    (s), ``say`` gets one line saying so and how to go on, then again only after a worker has come and gone."""
+    ac = _distributed().as_completed(list(futures))
+    alone_since, said, next_look = None, False, 0.0
+    while not ac.is_empty():
+        if ac.has_ready():
+            yield from ac.next_batch(block=False)
+            continue
+        time.sleep(_POLL_S)
+        now = time.monotonic()
+        if now < next_look:
+            continue
+        next_look = now + 1.0
+        if client.nthreads():
+            alone_since, said = None, False
+        elif alone_since is None:
+            alone_since = now
+        elif not said and now - alone_since >= patience_s:
+            said = True
+            say(f"the Dask scheduler has had no worker for {now - alone_since:.0f} s and {ac.count()} task(s) "
+                f"wait for one: start workers (dask worker ADDRESS), or stop with Ctrl-C (stored results stay)")
+
+
 def settings_of(runs: int, seed: int, options: RunOptions) -> dict:
     """The campaign settings recorded in ``campaign.json`` (``runs`` may grow on resume)."""
     return {"runs": int(runs), "seed": int(seed), "options": options.as_dict(),
@@ -185,7 +221,7 @@ def run_campaign(outdir, runs: int, *, seed: int = 0, options: RunOptions | None
     if scheduler is None and workers < 1:
         raise ValueError("workers must be >= 1")
     options = options or RunOptions()
-    dd = _distributed()
+    _distributed()              # DaskMissing before anything else
     store.check_settings(outdir, settings_of(runs, seed, options), resume)
     done_ids = store.stored_run_ids(outdir) if resume else set()
     todo = [i for i in range(runs) if i not in done_ids]
@@ -204,7 +240,7 @@ def run_campaign(outdir, runs: int, *, seed: int = 0, options: RunOptions | None
                 specs = [sampler(i, seed) for i in ids]
                 fut = client.submit(run_batch, specs, options, pure=False)
                 futures[fut] = ids
-            for fut in dd.as_completed(list(futures)):
+            for fut in completed(client, futures):
                 ids = futures.pop(fut)
                 rows = fut.result()
                 path = store.write_part(outdir, rows, f"{ids[0]:07d}")

@@ -154,8 +154,9 @@ class OnDask:
         return fut
 
     def as_completed(self, tasks):
-        from distributed import as_completed
-        yield from as_completed(list(tasks))
+        from ..campaign.execute import completed
+
+        yield from completed(self.client, tasks)
 
     def cpu_seconds(self) -> dict:
         """CPU seconds each worker process has used so far (``time.process_time`` there), by
