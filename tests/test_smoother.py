@@ -109,6 +109,8 @@ def test_chunks_with_the_next_one_as_lookahead_equal_one_run():
     w = np.concatenate([p.w for p in parts])
     assert np.max(np.abs(w - whole.w)) < 1e-10
     np.testing.assert_array_equal(np.concatenate([p.valid for p in parts]), whole.valid)
+    # the settled flags too: the pass over the lookahead must not advance their clock
+    np.testing.assert_array_equal(np.concatenate([p.settled for p in parts]), whole.settled)
     plain = E.make("pif-smoother")
     alone = np.concatenate([plain.run(c, reset=(k == 0)).w for k, c in enumerate(chunks)])
     assert np.max(np.abs(alone - whole.w)) > 1e-3

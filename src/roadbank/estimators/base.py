@@ -166,8 +166,9 @@ class Estimator:
         the general trapezoidal path. ``"auto"``: the first positive interval
         between time stamps after a reset sets the rate, by the rule of
         :func:`roadbank.signals.interval_rate` (same rule in :meth:`run` and
-        :meth:`step`, so both give identical numbers), kept until
-        :meth:`set_sample_rate` changes it. ``None``: general path only.
+        :meth:`step`, so both give identical numbers), kept until the next
+        :meth:`reset`; :meth:`set_sample_rate` fixes a rate instead (no more
+        detection). ``None``: general path only.
     v_step, v_max : float, default 0.25, 100 m/s
         Spacing and end of the speed grid of the gain schedules; above ``v_max``
         the gains of ``v_max`` are held. A coarse, short grid designs faster
@@ -439,9 +440,18 @@ class Estimator:
         """Use the fixed-rate path for samples ``1/rate`` seconds apart (Hz); ``None`` switches it off.
 
         Builds (or takes from the cache) :meth:`discrete_tables`. Does not
-        reset the state. Only the :data:`FIXED_RATE_KERNELS` have a fixed-rate path; for the
+        reset the state. Ends the automatic detection of ``sample_rate="auto"``: the rate set here stays
+        over resets. Only the :data:`FIXED_RATE_KERNELS` have a fixed-rate path; for the
         others this records nothing.
         """
+        self._auto_rate = self._detect = False
+        self._use_rate(rate)
+
+    def _use_rate(self, rate: float | None) -> None:
+        """:meth:`set_sample_rate` without ending the detection (the detector's own call); a rate already in use
+        costs nothing (a reset's detection finds the last log's rate again)."""
+        if rate is not None and self.fixed_dt is not None and rate > 0 and self.fixed_dt == 1.0 / float(rate):
+            return
         if rate is None or self.kernel not in FIXED_RATE_KERNELS:
             self.fixed_dt = None
             self._tab = self._tab_cont
@@ -465,7 +475,8 @@ class Estimator:
         if not math.isfinite(t):
             return
         if t > self._det_t:                     # False while _det_t is NaN
-            self.set_sample_rate(interval_rate(t - self._det_t))
+            self._use_rate(interval_rate(t - self._det_t))
+            self._detect = False
         self._det_t = t
 
     def _first_interval(self, t: np.ndarray) -> int:
@@ -506,7 +517,19 @@ class Estimator:
         self._mem = np.zeros(L.mem_size(self._nstate, self._roll[0].shape[0]))
         self._initial_memory(self._mem)
         self._det_t = math.nan     # automatic rate detector (sample_rate="auto"): last finite time
+        self._detect = self._auto_rate      # whether the next positive interval sets the rate
         self._settle_last = (math.nan, math.nan)   # settle.settled_flags' carry: last valid time, last restart
+
+    def _carried(self) -> tuple:
+        """What one :meth:`run` hands the next (``reset=False``): the memory (a copy), the rate
+        detector, the rate's tables and the settling flags' carry; :meth:`_carry_on` puts it back (an offline
+        estimator's pass over its lookahead leaves no trace)."""
+        return (self._mem.copy(), self._det_t, self._detect, self.fixed_dt, self._tab, self._cfg, self._settle_last)
+
+    def _carry_on(self, carried: tuple) -> None:
+        """Back to what :meth:`_carried` returned."""
+        self._mem[:] = carried[0]
+        self._det_t, self._detect, self.fixed_dt, self._tab, self._cfg, self._settle_last = carried[1:]
 
     def step(self, t: float, vx: float, ay: float, r: float, delta_f: float = float("nan")) -> StepResult:
         """Process one sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), delta_f (rad).
@@ -524,7 +547,7 @@ class Estimator:
             t, vx, delta_f, ay, r = float(t), float(vx), float(delta_f), float(ay), float(r)
         except TypeError as exc:                        # an array, None: not one sample (the state untouched)
             raise not_one_sample(self.name, exc) from None
-        if self._auto_rate and self.fixed_dt is None:
+        if self._detect:
             self._observe_time(t)
         out = self._step_fn(self._mem, self._cfg, self._tab, self._work, t, vx, delta_f, ay, r)
         return _new_result(StepResult, out)
@@ -563,7 +586,7 @@ class Estimator:
             self.reset()
         n = len(signals)
         w, theta, phib, phi, valid, xs = self._outputs(n)
-        k = self._first_interval(signals.t) if self._auto_rate and self.fixed_dt is None else n
+        k = self._first_interval(signals.t) if self._detect else n
         first = getattr(signals, self.first_input)
         a = 0
         while a < n:

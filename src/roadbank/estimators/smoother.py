@@ -160,11 +160,9 @@ class PIFSmoother(PIF):
             end = (ref[-1] if ref.size else -np.inf) + self.lookahead_s
             m = np.flatnonzero(lookahead.t > end)
             ahead = lookahead[:m[0] + 1] if m.size else lookahead
-            # the forward pass over the lookahead must leave no trace: state, rate detector, tables
-            saved = (self._mem.copy(), self._det_t, self.fixed_dt, self._tab, self._cfg)
+            saved = self._carried()     # the forward pass over the lookahead must leave no trace
             parts.append((ahead, super().run(ahead, reset=False)))
-            self._mem[:] = saved[0]
-            self._det_t, self.fixed_dt, self._tab, self._cfg = saved[1:]
+            self._carry_on(saved)
         xs, valid = self._backward(parts)
         xs, valid = xs[:n], valid[:n]
         w = xs[:, 2].copy()
