@@ -133,6 +133,8 @@ def test_a_log_without_a_roll_rate_is_refused_with_the_reason():
     s = Signals(np.arange(10) * 0.01, np.full(10, 20.0), np.zeros(10), np.zeros(10), np.zeros(10))
     with pytest.raises(ValueError, match="no roll rate"):
         KinematicGyro().run(s)
+    with pytest.raises(ValueError, match=r"step\(\) needs the roll rate"):   # it had returned invalid, silently
+        KinematicGyro().step(0.0, 20.0, 0.0, 0.0)
     assert "kinematic-gyro" in estimators.GYRO and "kinematic-gyro" not in estimators.NAMES
     with pytest.raises(ValueError, match="cutoff"):
         KinematicGyro(cutoff=0.0)
@@ -845,3 +847,44 @@ def test_a_data_sheet_without_ay_noise_is_said_so():
               "ay_floor_ratio": math.inf}
     words = design_words(design, "kinematic-pif")
     assert "(the data sheet gives no ay noise)" in words and "inf" not in words
+
+
+@needs_kitti
+def test_one_streaming_loop_serves_every_estimator_and_a_stale_stamp_or_bad_time_changes_nothing_after_it():
+    """The README's loop, every channel given: what ``for_log`` returns on a KITTI drive (the roll-rate filter, with
+    the grade correction from ax and q) gives what run() gives; another estimator ignores p, ax, q. A sample stamped
+    5 s back, or with a NaN / inf time, is held (invalid) and the samples after it come out as without it (the stale
+    stamp had moved the gap bookkeeping and restarted the grade's window: up to 0.33 deg for 18 s; the bad time with
+    ax raised)."""
+    from roadbank.io import load_log
+
+    s = load_log(KITTI).signals
+    assert s.p is not None and s.ax is not None
+    q = s.q if s.q is not None else np.full(len(s), np.nan)
+
+    def stream(est, bad=None):
+        out = []
+        for k in range(len(s)):
+            kw = dict(p=s.p[k], ax=s.ax[k], q=None if s.q is None else q[k])
+            out.append(est.step(s.t[k], s.vx[k], s.ay[k], s.r[k], s.delta_f[k], **kw))
+            if bad is not None and k == 200:
+                held = est.step(bad(s.t[k]), s.vx[k], s.ay[k], s.r[k], s.delta_f[k], **kw)
+                assert not held.valid
+        return np.array([o.theta for o in out]), np.array([o.valid for o in out])
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        est = for_log("kinematic-pif", s)
+        assert isinstance(est, KinematicGyro)
+        whole = est.run(s)
+        est.reset()
+        theta, valid = stream(est)
+        np.testing.assert_array_equal(theta, whole.theta)
+        np.testing.assert_array_equal(valid, whole.valid)
+        for bad in (lambda t: t - 5.0, lambda t: math.nan, lambda t: math.inf):
+            est.reset()
+            np.testing.assert_array_equal(stream(est, bad)[0], whole.theta)
+        pif = estimators.make("pif-modified")
+        plain = [pif.step(s.t[k], s.vx[k], s.ay[k], s.r[k], s.delta_f[k]).theta for k in range(len(s))]
+        pif.reset()
+        np.testing.assert_array_equal(stream(pif)[0], plain)

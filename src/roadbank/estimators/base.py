@@ -531,8 +531,12 @@ class Estimator:
         self._mem[:] = carried[0]
         self._det_t, self._detect, self.fixed_dt, self._tab, self._cfg, self._settle_last = carried[1:]
 
-    def step(self, t: float, vx: float, ay: float, r: float, delta_f: float = float("nan")) -> StepResult:
-        """Process one sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), delta_f (rad).
+    def step(self, t: float, vx: float, ay: float, r: float, delta_f: float = float("nan"),
+             p: float | None = None, ax: float | None = None, q: float | None = None) -> StepResult:
+        """Process one sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), delta_f (rad); the roll rate ``p``
+        (rad/s), ``ax`` (m/s^2) and pitch rate ``q`` (rad/s), which the roll-rate estimators
+        (:data:`roadbank.estimators.GYRO`) read, are ignored here, so that one loop that gives every channel it has
+        serves whichever estimator :func:`~roadbank.estimators.for_log` returns.
 
         Returns the estimate after this sample. An unusable sample (NaN/inf,
         ``vx < v_min``, time not after the last valid sample) leaves the state

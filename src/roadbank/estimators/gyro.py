@@ -167,7 +167,7 @@ def gap_stamp(t: float, carry: tuple[float, float, float], lo: float, hi: float,
     """:func:`gap_time` of one sample (``step()``'s, without arrays): the stamp (s) read for ``t`` (s) and the carry;
     the same numbers as :func:`gap_time` over the samples one by one."""
     last, shift, step = carry
-    if not math.isfinite(t):
+    if not math.isfinite(t) or t <= last:       # a stamp not after the last one: the filter holds it, nothing moves
         return t - shift, carry
     if mode != "trapezoid":
         d = t - last
@@ -176,6 +176,10 @@ def gap_stamp(t: float, carry: tuple[float, float, float], lo: float, hi: float,
         elif 0.0 < d <= lo:
             step = d
     return t - shift, (t, shift, step)
+
+
+_FUSES = ("this estimator fuses the roll-rate gyro with the kinematic estimate (map a 'roll_rate' channel, or choose "
+          "another estimator)")
 
 
 class GradeCarry:
@@ -416,6 +420,7 @@ class KinematicGyro(ScheduledObserver):
         self._kalman: KalmanStart | None = None          # the start's Kalman filter while it runs
         self._before = (0.0, math.nan)       # the memory's (M_INIT, M_TLAST) before the segment
         self._gaps = (math.nan, 0.0, math.nan)   # gap_time's carry: the time stamps read across the log's gaps
+        self._grade_t = -math.inf            # step(): the time of the last sample the grade's window took
         if hasattr(self, "grade"):           # the base constructor resets before the window is set
             self.grade.reset()
 
@@ -516,9 +521,7 @@ class KinematicGyro(ScheduledObserver):
         if not isinstance(signals, Signals):
             raise TypeError("run() expects a roadbank.Signals")
         if signals.p is None:
-            raise ValueError(f"{self.name}: the log has no roll rate (Signals.p); this estimator fuses the roll-rate "
-                             "gyro with the kinematic estimate (map a 'roll_rate' channel, or choose another "
-                             "estimator)")
+            raise ValueError(f"{self.name}: the log has no roll rate (Signals.p); {_FUSES}")
         if reset:
             self.reset()
         signals = self._read_time(signals)
@@ -543,17 +546,24 @@ class KinematicGyro(ScheduledObserver):
         return est
 
     def step(self, t: float, vx: float, ay: float, r: float, delta_f: float = float("nan"),
-             p: float = float("nan"), ax: float = float("nan"), q: float | None = None) -> StepResult:
+             p: float | None = None, ax: float | None = None, q: float | None = None) -> StepResult:
         """One sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), the unused delta_f (rad), the roll rate ``p``
-        (rad/s), the longitudinal acceleration ``ax`` (m/s^2; NaN: the roll rate is not corrected for the
-        grade, and once an ``ax`` has come, the windows that hold the NaN are not, as in :meth:`run`) and the pitch
-        rate ``q`` (rad/s; None: the log has none, the window's pitch)."""
-        t, vx, ay, r, delta_f, p, ax = sample_floats(self.name, t, vx, ay, r, delta_f, p, ax)
+        (rad/s; required: NaN for a sample without one), the longitudinal acceleration ``ax`` (m/s^2; None or NaN:
+        the roll rate is not corrected for the grade, and once an ``ax`` has come, the windows that hold the NaN are
+        not, as in :meth:`run`) and the pitch rate ``q`` (rad/s; None: the log has none, the window's pitch). Give
+        every one the log has: :meth:`run` reads them all, and with them both give the same numbers."""
+        if p is None:
+            raise ValueError(f"{self.name}: step() needs the roll rate, step(t, vx, ay, r, delta_f, p=p, ax=ax, q=q) "
+                             f"(rad/s, m/s^2, rad/s); {_FUSES}")
+        t, vx, ay, r, delta_f, p, ax = sample_floats(self.name, t, vx, ay, r, delta_f, p,
+                                                     math.nan if ax is None else ax)
         t, self._gaps = gap_stamp(t, self._gaps, MAX_GAP_S, self.max_gap, self.log_gaps)
-        if self.grade.window > 0 and (not np.isnan(ax) or self.grade.started):
+        # the grade's window takes samples in time order only (a stamp not after the last one is held anyway)
+        if self._grade_t < t < math.inf and self.grade.window > 0 and (not np.isnan(ax) or self.grade.started):
             t_, vx_, ay_, r_, d_, p_, ax_ = (np.array([float(v)]) for v in (t, vx, ay, r, delta_f, p, ax))
             one = Signals(t_, vx_, ay_, r_, d_, p_, ax_, None if q is None else np.array([float(q)]))
             p = float(self.grade.correct(one).p[0])
+            self._grade_t = t
         self._before = (float(self._mem[L.M_INIT]), float(self._mem[L.M_TLAST]))
         out = super().step(t, vx, ay, r, p)
         if self._starts():

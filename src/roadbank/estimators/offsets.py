@@ -259,7 +259,8 @@ class OnlineOffsets:
     def step(self, t: float, vx: float, ay: float, r: float, delta_f: float = float("nan"),
              **more: float) -> StepResult:
         """One sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), delta_f (rad), and ``more`` the inner estimator
-        reads as they are (``p``, the roll rate in rad/s, of :data:`roadbank.estimators.GYRO`); the inner
+        reads as they are (``p``, ``ax``, ``q``: the roll rate in rad/s, m/s^2, the pitch rate in rad/s, of
+        :data:`roadbank.estimators.GYRO`; ignored by the others); the inner
         estimator's result for the corrected sample."""
         o = self._oout
         K.offsets_step(self._omem, self._ocfg, *sample_floats(self.name, t, vx, delta_f, ay, r), o)
