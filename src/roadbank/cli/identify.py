@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import sys
 from pathlib import Path
 from typing import NoReturn
@@ -16,6 +17,8 @@ from .options import FiniteRange, PathOption, checked_output, vehicle_option
 #: ``--ay-max`` (m/s^2): above the corner threshold (``IdentifySettings.corner_ay``, 1 m/s^2; a lower linear
 #: range leaves no corner) and at most 1 g (beyond it no tyre is linear)
 AY_MAX_RANGE = (1.0, 10.0)
+#: the end of the description of a file ``roadbank identify`` writes (an earlier run's is replaced, not added to)
+IDENTIFIED_BY = " identified from logs by roadbank identify"
 #: ``--straight-bank`` (deg): below ``IdentifySettings``' limit of 20 deg in magnitude
 STRAIGHT_BANK_RANGE = (-20.0, 20.0)
 
@@ -153,10 +156,13 @@ def identify(logs, vehicle, channels, fmt, output, straight_bank, ay_max, as_jso
         click.echo("error: nothing could be identified from these logs; no file written", err=True)
         sys.exit(1)
     used = [str(r.source) for r in result.logs if r.used]
-    what = "Cf, Cr" if "Cf" in identified and "Cr" in identified else "nothing of the [vehicle] table"
+    parts = (["Cf, Cr"] if "Cf" in identified and "Cr" in identified else []) + \
+        (["k_roll (from the roll gain)"] if result.params.k_roll != vehicle.params.k_roll else [])
+    what = " and ".join(parts) or "nothing of the [vehicle] table"
+    base = re.sub(f"; [^;]*{IDENTIFIED_BY}$", "", vehicle.description or vehicle.name)    # an earlier run's words
     out = vehicle.replace(
         name=output.stem, params=result.params,
-        description=f"{vehicle.description or vehicle.name}; {what} identified from logs by roadbank identify",
+        description=f"{base}; {what}{IDENTIFIED_BY}",
         sources=(*vehicle.sources, f"roadbank identify on {len(used)} log(s): {', '.join(used)}"),
     ).with_identified(identified)
     try:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..models.roll import steady_roll_gain
+from ..models.roll import roll_stiffness_for_gain, steady_roll_gain
 from ..params import VehicleParams
 from .offsets import Offsets, straight_offsets
 from .prepare import to_grid
@@ -135,7 +135,8 @@ def identify(logs, params: VehicleParams | None = None, settings: IdentifySettin
     -------
     IdentificationResult
         Every quantity with its value and standard uncertainty, or the reason it
-        was refused; a report per log; ``params`` with the identified Cf, Cr.
+        was refused; a report per log; ``params`` with the identified Cf, Cr and the roll stiffness that gives
+        the identified roll gain.
     """
     p = params or VehicleParams()
     s = settings or IdentifySettings()
@@ -179,4 +180,7 @@ def identify(logs, params: VehicleParams | None = None, settings: IdentifySettin
     out_p = p
     if quantities["Cf"].ok and quantities["Cr"].ok:
         out_p = p.replace(Cf=quantities["Cf"].value, Cr=quantities["Cr"].value)  # type: ignore[arg-type]
+    rg = quantities.get("roll_gain")
+    if rg is not None and rg.ok and rg.value > 0 and p.ms * p.h_roll > 0:  # type: ignore[operator]
+        out_p = out_p.replace(k_roll=roll_stiffness_for_gain(p, rg.value))  # type: ignore[arg-type]
     return IdentificationResult(quantities, reports, out_p)

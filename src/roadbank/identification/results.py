@@ -92,7 +92,8 @@ class IdentificationResult:
     logs : list of LogReport
     params : VehicleParams
         The base parameters with ``Cf``, ``Cr`` replaced by the identified
-        values where both were identified.
+        values where both were identified, and ``k_roll`` (N m/rad) by the one that gives the identified
+        roll gain (``ms``, ``h_roll`` kept).
     """
 
     quantities: dict

@@ -27,6 +27,12 @@ def steady_roll_gain(p: VehicleParams) -> float:
     return p.ms * p.h_roll / (p.k_roll - p.ms * p.g * p.h_roll)
 
 
+def roll_stiffness_for_gain(p: VehicleParams, gain: float) -> float:
+    """The roll stiffness ``k_roll`` (N m/rad) that gives ``p`` the static roll gain ``gain`` (rad per m/s^2): the
+    inverse of :func:`steady_roll_gain`, the sprung mass and roll-centre height kept."""
+    return p.ms * p.h_roll * (1.0 / gain + p.g)
+
+
 def roll_state_space(p: VehicleParams, model: str = "static"):
     r"""Roll model as a linear system ``z' = F z + G ay``, ``phi = H z + D ay``.
 
