@@ -264,3 +264,11 @@ def test_comma2k19_near_straight_highway_refuses_stiffness():
     assert q["yaw_rate_offset"].ok and q["yaw_rate_offset"].std < math.radians(0.05)
     assert q["ay_offset"].ok and q["ay_offset"].std < 0.05
     assert not q["roll_gain"].ok  # a roll reference is there, but no cornering
+
+
+def test_the_vehicle_file_knows_every_quantity_identify_writes():
+    from roadbank.identification.identify import ORDER
+    from roadbank.vehicle.plausibility import IDENTIFIED_OFFSETS, IDENTIFIED_QUANTITIES
+
+    assert ORDER == IDENTIFIED_QUANTITIES
+    assert set(IDENTIFIED_OFFSETS) <= set(ORDER)

@@ -71,7 +71,9 @@ def test_a_vehicle_built_in_code_gets_the_offset_checks():
         Vehicle().with_identified({"yaw_rate_offset": {"value": 3.0, "std": 0.0, "unit": "rad/s"}})
     # a plausible one passes, and a quantity that is not an offset stays free-form
     Vehicle().with_identified({"yaw_rate_offset": {"value": 0.01, "std": 1e-4, "unit": "rad/s"},
-                               "r_offset": {"value": 1e6}})
+                               "lap_time": {"value": 1e6}})
+    with pytest.raises(VehicleFileError, match=r"\[identified\.r_offset\]: not an offset roadbank removes"):
+        Vehicle().with_identified({"r_offset": {"value": 0.01}})
 
 
 # ---- [sensors] messages: one prefix ---------------------------------------------------------------

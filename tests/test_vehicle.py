@@ -41,7 +41,7 @@ def rich_vehicle():
     v = v.with_tuning("pif-original", {"R": [0.307, 0.0035]})
     v = v.with_identified({"Cr": {"value": 105123.456789, "std": 2.5e3, "unit": "N/rad",
                                   "note": "quasi-steady cornering", "logs": ["a.csv", "b dir/c.parquet"]},
-                           "r_offset": {"value": -0.0012, "std": 1e-4, "unit": "rad/s", "ok": True}})
+                           "lap_time": {"value": -0.0012, "std": 1e-4, "unit": "s", "ok": True}})
     return v.with_sensors(r_bias=0.001).replace(description="round trip\nwith a newline",
                                                 sources=("a", "b [1]"))
 
@@ -73,7 +73,7 @@ def test_copies_and_make_merge_tuning(rich_vehicle):
     w = v.with_params(Cr=2e5)
     assert w.params == v.params.replace(Cr=2e5) and v.params.Cr != 2e5
     assert v.with_identified({"Cr": {"value": 1.0}}).identified["Cr"] == {"value": 1.0}
-    assert "r_offset" in v.with_identified({"Cr": {"value": 1.0}}).identified
+    assert "lap_time" in v.with_identified({"Cr": {"value": 1.0}}).identified
 
 
 @pytest.mark.parametrize("name,options", [
@@ -245,6 +245,10 @@ BAD = [
     ("nested tuning", TABLE1 + "[tuning.kalman.sub]\nx = 1\n", ["[tuning.kalman] sub", "got a table"]),
     ("nested scores", TABLE1 + "[scores.kalman.sub]\nx = 1\n", ["[scores.kalman] sub", "got a table"]),
     ("identified not a table", TABLE1 + "[identified]\nCr = 5\n", ["[identified.Cr]", "must be a table"]),
+    ("identified offset typo", TABLE1 + "[identified.yaw_rate_ofset]\nvalue = 0.01\n",
+     ["[identified.yaw_rate_ofset]", "not an offset roadbank removes", "did you mean 'yaw_rate_offset'"]),
+    ("identified offset name", TABLE1 + "[identified.r_offset]\nvalue = 0.01\n",
+     ["[identified.r_offset]", "not an offset roadbank removes", "yaw_rate_offset"]),
 ]
 
 

@@ -22,7 +22,8 @@ from .tomltext import fmt_value, is_scalar, toml_type
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
 # them: loading a car (load_vehicle, --vehicle) loads neither
 
-__all__ = ["PLAUSIBLE", "WHEELBASE_RANGE", "SENSOR_FIELDS", "PLANT_FIELDS", "IDENTIFIED_OFFSETS", "checked_value",
+__all__ = ["PLAUSIBLE", "WHEELBASE_RANGE", "SENSOR_FIELDS", "PLANT_FIELDS", "IDENTIFIED_OFFSETS",
+           "IDENTIFIED_QUANTITIES", "checked_value",
            "check_document", "check_identified_offset", "check_table_entry", "check_tuning", "check_tuning_value",
            "check_free_table", "estimator_options", "estimator_option_defaults", "unknown_key"]
 
@@ -104,6 +105,13 @@ IDENTIFIED_OFFSETS: dict[str, tuple[str, float, str]] = {
     "ay_offset": ("m/s^2", 2.0, "lateral-acceleration sensor offset"),
     "steering_offset": ("rad", 0.1, "steering offset (road-wheel angle)"),
 }
+
+
+#: the ``[identified.<quantity>]`` tables ``roadbank identify`` writes (its ``ORDER``). Other tables are the user's
+#: own notes, kept as they are, except a name that reads as an offset (``..._offset``, or close to one of
+#: :data:`IDENTIFIED_OFFSETS`): a typo there (``yaw_rate_ofset``, ``r_offset``) would leave the offset on every
+#: sample, in silence
+IDENTIFIED_QUANTITIES = ("Cf", "Cr", "Kus", "steering_offset", "yaw_rate_offset", "ay_offset", "roll_gain")
 
 
 def check_identified_offset(source: str, quantity: str, entry) -> None:
@@ -358,12 +366,23 @@ def check_critical_speed(source: str, veh: dict) -> None:
                                "check the cornering stiffnesses and the axle distances (front and rear swapped?)")
 
 
+def _reads_as_offset(name: str) -> bool:
+    """Whether an ``[identified.<name>]`` table's name reads as a sensor offset (see :data:`IDENTIFIED_QUANTITIES`)."""
+    low = name.lower()
+    return low.endswith(("offset", "ofset", "offs")) or bool(difflib.get_close_matches(low, list(IDENTIFIED_OFFSETS),
+                                                                                       n=1, cutoff=0.8))
+
+
 def check_table_entry(source: str, table: str, sub: str, values) -> None:
     """One ``[tuning.<sub>]``, ``[scores.<sub>]`` or ``[identified.<sub>]`` table, by the check of its kind:
-    :func:`check_tuning`, or :func:`check_free_table` and for a sensor offset :func:`check_identified_offset`."""
+    :func:`check_tuning`, or :func:`check_free_table` (an ``identified`` one that reads as an offset must be one of
+    :data:`IDENTIFIED_OFFSETS`) and for a sensor offset :func:`check_identified_offset`."""
     if table == "tuning":
         check_tuning(source, sub, values)
         return
+    if table == "identified" and sub not in IDENTIFIED_QUANTITIES and _reads_as_offset(sub):
+        raise VehicleFileError(f"{source}: [identified.{sub}]: not an offset roadbank removes: "
+                               f"{unknown_key(sub, IDENTIFIED_OFFSETS, 'offset')}")
     check_free_table(source, table, sub, values)
     if table == "identified" and sub in IDENTIFIED_OFFSETS:
         check_identified_offset(source, sub, values)
