@@ -50,7 +50,7 @@ def scenarios():
 def hard_log(scenarios, *, nan_time=True, v_min=5.0):
     """bank-lane-change with a 2.5 s gap, a slow stretch (below ``v_min``, m/s: the estimator's), speeds
     at and beyond the grid's ends, an implausible lateral acceleration, NaN/inf inputs, a repeated and
-    a backward time stamp and irregular steps up to 45 ms (several substeps)."""
+    a backward time stamp, samples beyond a car's limits and irregular steps up to 45 ms (several substeps)."""
     t, vx, ay, r, d = (a.copy() for a in scenarios["bank-lane-change"])
     n = len(t)
     t[400:] += 2.5
@@ -60,8 +60,9 @@ def hard_log(scenarios, *, nan_time=True, v_min=5.0):
     d[950:960] = np.nan
     vx[1000] = np.nan
     vx[720:740] = v_min                                # exactly v_min: the first grid speed
-    vx[740:760] = 130.0                                # beyond the grid: clamped schedule
-    ay[1020:1040] = 40.0                               # |w| > sin(max_angle): flagged implausible
+    vx[740:760] = 110.0                                # beyond the grid: clamped schedule
+    ay[1020:1040] = 25.0                               # |w| > sin(max_angle): flagged implausible
+    ay[1060], r[1070], vx[1080] = 655.35, 1e20, 1e4    # glitches beyond a car's limits: held as NaN is
     t[1100] = t[1099]
     t[1200] = t[1150]
     if nan_time:

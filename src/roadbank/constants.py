@@ -12,6 +12,14 @@ from __future__ import annotations
 #: tests/test_models.py (Haw0 = 4.4647 at 22.2 m/s) use 9.81.
 G = 9.81
 
+#: Largest magnitude a passenger car's lateral acceleration (m/s^2; 3 g, beyond the tyres' grip with any bank and
+#: roll; an ESP sensor's range is about 2 g), yaw rate (rad/s; 5, beyond a spin; an ESP sensor's range is 1.7-2.6) and
+#: speed (m/s) can have: a sample beyond them is a glitch (a CAN value of all ones, a bit error), which the log
+#: readers read as a dropout and every estimator, in Python and in C, holds as it holds a NaN.
+AY_MAX = 3.0 * G
+YAW_RATE_MAX = 5.0
+SPEED_MAX = 120.0
+
 #: Plausible steering ratio of a road vehicle (steering-wheel angle per road-wheel angle, -): a vehicle file, a
 #: channel map's ``steering_ratio`` and ``--steering-ratio`` outside it are refused (a unit or typing mistake).
 STEERING_RATIO_RANGE = (5.0, 30.0)

@@ -28,6 +28,7 @@ from string import Template
 import numpy as np
 
 from .. import __version__
+from ..constants import AY_MAX, SPEED_MAX, YAW_RATE_MAX
 from ..estimators.kernels.sample import NOISE_HUBER, NOISE_RATIO_MAX, NOISE_RATIO_MIN
 from ..estimators.layout import NETA, lpv_row
 from ..estimators.update_spec import FIXED, GENERAL, OUTPUT, PATHS, RESTART, Sum, block_shape, row_ranges
@@ -201,6 +202,10 @@ enum {
 #define RB_DV (${dv})       /* m/s, grid spacing */
 #define RB_INV_DV (${inv_dv})   /* 1/m/s, 1 / RB_DV (the kernels' grid_point) */
 #define RB_VMIN (${vmin})     /* m/s */
+/* a car's limits (roadbank.constants): a sample beyond them is a glitch, held as a NaN is */
+#define RB_VX_MAX (${vx_max})     /* m/s */
+#define RB_AY_MAX (${ay_max})     /* m/s^2 */
+#define RB_R_MAX (${r_max})     /* rad/s */
 #define RB_SUB (${sub})     /* s, longest substep */
 #define RB_GAP (${gap})     /* s, longest gap before a restart */
 #define RB_WMAX (${wmax})    /* sin(max_angle) */
@@ -231,10 +236,11 @@ ${finish_phi}${finish_store}    wc = w > -1.0_R ? w : -1.0_R;
 
 static int rb_inputs_ok(real_t vx, real_t ay, real_t r, real_t d)
 {
-    if (!isfinite(vx) || vx < RB_VMIN) {
+    if (!(vx >= RB_VMIN && vx <= RB_VX_MAX)) {        /* false for NaN too */
         return 0;
     }
-    if ((RB_USES[0] && !isfinite(d)) || (RB_USES[1] && !isfinite(ay)) || (RB_USES[2] && !isfinite(r))) {
+    if ((RB_USES[0] && !isfinite(d)) || (RB_USES[1] && !(RB_FABS(ay) <= RB_AY_MAX))
+            || (RB_USES[2] && !(RB_FABS(r) <= RB_R_MAX))) {
         return 0;
     }
     return 1;
@@ -871,7 +877,7 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
         of=row.F, og=row.G, oh=row.H, od=row.D, oj=row.J, ophi=row.Phi, ogam0=row.Gam0, ogam1=row.Gam1,
         nrow=row.end if d.discrete is not None else row.cont,
         v0=lit(d.v0), dv=lit(d.dv), inv_dv=lit(1.0 / d.dv), vmin=lit(d.v_min), sub=lit(d.max_substep),
-        gap=lit(d.max_gap),
+        vx_max=lit(SPEED_MAX), ay_max=lit(AY_MAX), r_max=lit(YAW_RATE_MAX), gap=lit(d.max_gap),
         wmax=lit(d.wmax), roll_d=lit(d.roll_D), uses=", ".join(str(int(u)) for u in d.uses),
         table=",\n".join(rows),
         nsub_fn=_NSUB if (d.n > 0 or d.nr > 0) else "",

@@ -168,9 +168,9 @@ void ${p}_offsets_step(offsets_t *o, double t, real_t vx, real_t ay, real_t r, r
 {
     real_t dt = 0.0_R;
     const int ok_t = isfinite(t) && (!o->initialised || t > o->t_last);
-    const int fin_v = isfinite(vx);
-    const int fin_r = isfinite(r);
-    const int fin_a = isfinite(ay);
+    const int fin_v = RB_FABS(vx) <= RB_VX_MAX;      /* within a car's limits (false for NaN) */
+    const int fin_r = RB_FABS(r) <= RB_R_MAX;
+    const int fin_a = RB_FABS(ay) <= RB_AY_MAX;
     const int fin_d = isfinite(d);
     if (ok_t) {
         if (o->initialised) {

@@ -23,14 +23,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..constants import G
+from ..constants import AY_MAX, SPEED_MAX, YAW_RATE_MAX, G
 from .errors import channel_text
 
 #: (lowest, highest) value of each channel role a passenger car can have (SI): speed (m/s; reversing
 #: included), lateral acceleration (m/s^2: 3 g, beyond the tyres' grip with any bank and roll; an ESP
 #: sensor's range is about 2 g) and yaw rate (rad/s: 5, beyond a spin; an ESP sensor's range is 1.7-2.6)
-LIMITS = {"speed": (-30.0, 120.0), "lateral_acceleration": (-3.0 * G, 3.0 * G), "yaw_rate": (-5.0, 5.0),
-          "roll_rate": (-5.0, 5.0), "pitch_rate": (-5.0, 5.0), "longitudinal_acceleration": (-3.0 * G, 3.0 * G)}
+LIMITS = {"speed": (-30.0, SPEED_MAX), "lateral_acceleration": (-AY_MAX, AY_MAX),
+          "yaw_rate": (-YAW_RATE_MAX, YAW_RATE_MAX), "roll_rate": (-5.0, 5.0), "pitch_rate": (-5.0, 5.0),
+          "longitudinal_acceleration": (-3.0 * G, 3.0 * G)}
 #: per channel role (SI): a run of exact zeros between two samples beyond this of the same sign is a dropout
 #: written as 0. Speed 2 m/s (wheel-speed sensors read 0 only below about 0.5 m/s), ``ay`` 1 m/s^2 (6 deg of bank;
 #: above road vibration's usual samples), yaw rate 0.02 rad/s (1.1 deg/s, well above a gyro's noise)

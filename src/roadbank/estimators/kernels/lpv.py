@@ -19,6 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ...constants import AY_MAX, SPEED_MAX, YAW_RATE_MAX
 from ..layout import (C_DTFIX, C_DTOL, C_DV, C_GAP, C_LIM, C_N, C_NG, C_NR, C_SUB, C_USE, C_V0, C_VMIN, C_WMAX, M_AY,
                       M_ETA, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, NETA, batch3_block, lpv_row,
                       roll_states)
@@ -208,10 +209,10 @@ def lpv3_fixed_run(mem, cfg, tab, t, vx, d, ay, r, out_w, out_theta, out_phib, o
             ak = ay[ku]
             rk = r[ku]
             # sample_valid, then begin's restart and fixed-interval tests
-            if not (math.isfinite(tk) and math.isfinite(vk)) or vk < vmin:
+            if not (math.isfinite(tk) and vmin <= vk <= SPEED_MAX):
                 break
-            if (use_d and not math.isfinite(dk)) or (use_ay and not math.isfinite(ak)) \
-                    or (use_r and not math.isfinite(rk)):
+            if (use_d and not math.isfinite(dk)) or (use_ay and not abs(ak) <= AY_MAX) \
+                    or (use_r and not abs(rk) <= YAW_RATE_MAX):
                 break
             if tk <= tlast:
                 break

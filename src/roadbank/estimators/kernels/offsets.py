@@ -18,6 +18,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ...constants import AY_MAX, SPEED_MAX, YAW_RATE_MAX
 from ._jit import ENTRY, INLINE
 
 # ---- cfg: settings -----------------------------------------------------------------------
@@ -90,9 +91,9 @@ def offsets_step(mem, cfg, t, vx, d, ay, r, out):
             mem[M_FINIT] = 0.0
         mem[M_TLAST] = t
         mem[M_INIT] = 1.0
-    fin_v = math.isfinite(vx)
-    fin_r = math.isfinite(r)
-    fin_a = math.isfinite(ay)
+    fin_v = abs(vx) <= SPEED_MAX              # within a car's limits (False for NaN): a glitch teaches nothing
+    fin_r = abs(r) <= YAW_RATE_MAX
+    fin_a = abs(ay) <= AY_MAX
     fin_d = math.isfinite(d)
     # ---- standstill: the yaw rate must be zero --------------------------------------------
     if ok_t and fin_v and fin_r:

@@ -9,6 +9,7 @@ from fractions import Fraction
 import numpy as np
 from numba import njit
 
+from ...constants import AY_MAX, SPEED_MAX, YAW_RATE_MAX
 from ..layout import (C_DTFIX, C_DTOL, C_DV, C_GAP, C_LIM, C_N, C_NG, C_NR, C_SUB, C_USE, C_V0, C_VMIN, C_WMAX,
                       M_AY, M_INIT, M_PHI, M_PHIB, M_THETA, M_TLAST, M_W, M_X, limit_block, limit_states, roll_block,
                       roll_states)
@@ -111,15 +112,16 @@ def interp(tab, i, a, lo, hi, row):
 
 @njit(**INLINE)
 def sample_valid(mem, cfg, t, vx, d, ay, r):
-    """Whether the sample is used: finite time after the last valid one, finite ``vx >= v_min``,
-    finite inputs where used."""
-    if not (math.isfinite(t) and math.isfinite(vx)) or vx < cfg[C_VMIN]:
+    """Whether the sample is used: finite time after the last valid one, ``v_min <= vx <= SPEED_MAX``, finite inputs
+    where used, ``ay`` and ``r`` within a car's limits (:data:`roadbank.constants.AY_MAX`, ``YAW_RATE_MAX``: a glitch
+    beyond them is held as a NaN is; the comparisons are False for NaN too)."""
+    if not (math.isfinite(t) and cfg[C_VMIN] <= vx <= SPEED_MAX):
         return False
     if cfg[C_USE] > 0 and not math.isfinite(d):
         return False
-    if cfg[C_USE + 1] > 0 and not math.isfinite(ay):
+    if cfg[C_USE + 1] > 0 and not abs(ay) <= AY_MAX:
         return False
-    if cfg[C_USE + 2] > 0 and not math.isfinite(r):
+    if cfg[C_USE + 2] > 0 and not abs(r) <= YAW_RATE_MAX:
         return False
     if mem[M_INIT] > 0 and t <= mem[M_TLAST]:
         return False
