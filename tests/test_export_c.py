@@ -496,3 +496,21 @@ def test_a_schedule_too_fine_or_endless_is_refused_before_the_design(tmp_path, a
     option = {"--v-step": "v_step", "--v-max": "v_max"}[args[0]]
     with pytest.raises(ValueError, match=said):
         estimators.make("pif-modified", **{option: float(args[1])})
+
+
+@pytest.mark.parametrize("name", ["pif-modified", "kinematic-pif"])
+def test_a_vehicle_files_offsets_are_taken_off_the_measured_channels(name, scenarios, tmp_path):
+    """`export c --vehicle car.toml` with identified offsets: both step functions take the measured channels and
+    remove the offsets as `roadbank estimate --vehicle` does (the module had left them out, 1.29 deg from estimate);
+    the fingerprint tells the modules apart."""
+    off = {"r": 0.004, "ay": 0.12, "delta_f": -0.01}
+    est = BUILT[name]
+    plain = export_c(est, tmp_path / "plain", rate=100.0)
+    res = export_c(est, tmp_path / "filed", rate=100.0, offsets=off)
+    assert plain.design.fingerprint() != res.design.fingerprint()
+    mod = CModule(res.source, tmp_path / "filed")
+    for use_dt in (False, True):
+        cols = hard_log(scenarios, nan_time=not use_dt, v_min=est.v_min)
+        t, vx, ay, r, d = cols
+        seen = (t, vx, ay - off["ay"], r - off["r"], d - off["delta_f"])
+        assert_same(python_steps(est, seen), mod.run(*cols, use_dt=use_dt), TOL64, TOL64, f"{name} dt={use_dt}")

@@ -159,10 +159,12 @@ int h_run(long n, const double *t, const double *vx, const double *ay, const dou
 """
 
 
-def test_with_the_online_offset_learner_the_module_steps_as_with_online_offsets(tmp_path):
+@pytest.mark.parametrize("filed", [False, True])
+def test_with_the_online_offset_learner_the_module_steps_as_with_online_offsets(tmp_path, filed):
     """A drive that starts with 4 s at standstill, its yaw rate off by 0.5 deg/s: <prefix>_step_learning (the
     learner, the grade correction on the corrected yaw rate, the filter) equals
-    with_online_offsets(KinematicGyro(...)).step() to 1e-9 rad, and the learnt offset is the drawn one."""
+    with_online_offsets(KinematicGyro(...)).step() to 1e-9 rad, and the learnt offset is the drawn one. With a vehicle
+    file's offsets (``filed``) the module takes the measured channels and removes them first, as estimate does."""
     import ctypes
 
     from roadbank.estimators import with_online_offsets
@@ -173,9 +175,11 @@ def test_with_the_online_offset_learner_the_module_steps_as_with_online_offsets(
     bias = math.radians(0.5)
     s = dataclasses.replace(s, vx=vx, r=np.where(stand, 0.0, s.r) + bias, delta_f=np.zeros(len(s)))
     est = with_online_offsets(KinematicGyro(**GRADES["observer"]))
-    py = [est.step(*(float(getattr(s, c)[k]) for c in ("t", "vx", "ay", "r", "delta_f")),
+    off = {"r": 0.003, "ay": 0.05, "delta_f": 0.0} if filed else {}
+    seen = dataclasses.replace(s, ay=s.ay - off.get("ay", 0.0), r=s.r - off.get("r", 0.0))
+    py = [est.step(*(float(getattr(seen, c)[k]) for c in ("t", "vx", "ay", "r", "delta_f")),
                    p=float(s.p[k]), ax=float(s.ax[k]), q=float(s.q[k])) for k in range(len(s))]
-    res = export_c(est, tmp_path, rate=1.0 / est.inner.fixed_dt)       # the rate step() took from the log
+    res = export_c(est, tmp_path, rate=1.0 / est.inner.fixed_dt, offsets=off)    # the rate step() took from the log
     p = res.source.stem
     harness = tmp_path / "h.c"
     harness.write_text(_LEARNING_HARNESS.format(p=p))
@@ -188,7 +192,8 @@ def test_with_the_online_offset_learner_the_module_steps_as_with_online_offsets(
     assert lib.h_run(ctypes.c_long(len(s)), *(c.ctypes.data_as(ptr) for c in cols), out.ctypes.data_as(ptr))
     np.testing.assert_array_equal(out[:, 2], [o.valid for o in py])
     np.testing.assert_allclose(out[:, 0], [o.theta for o in py], rtol=0, atol=TOL64)
-    assert est.offsets["r_learnt"] and est.offsets["r"] == pytest.approx(bias, abs=math.radians(0.02))
+    assert est.offsets["r_learnt"] and est.offsets["r"] == pytest.approx(bias - off.get("r", 0.0),
+                                                                         abs=math.radians(0.02))
     assert out[-1, 3] == pytest.approx(est.offsets["r"], abs=1e-12)
 
 

@@ -206,11 +206,17 @@ def _hard_offsets_log():
     return cols
 
 
+FILE_OFFSETS = {"r": 0.004, "ay": 0.03, "delta_f": -0.002}      # a vehicle file's identified ones (SI)
+
+
 @pytest.mark.parametrize("float32", [False, True])
 @pytest.mark.parametrize("name", ["pif-modified", "kinematic-pif"])
-def test_the_c_export_learns_the_offsets_as_step_does(tmp_path, float32, name):
+@pytest.mark.parametrize("filed", [False, True])
+def test_the_c_export_learns_the_offsets_as_step_does(tmp_path, float32, name, filed):
     """The module's learner equals step()'s; for kinematic-pif with its low-pass following a running noise
-    estimate (a reference a quarter of the log's, so that it moves), the two together."""
+    estimate (a reference a quarter of the log's, so that it moves), the two together. With a vehicle file's
+    identified offsets (``filed``) the module takes the measured channels and removes them first, as
+    ``roadbank estimate --vehicle`` does before the learner (the export had left them out: 1.29 deg apart)."""
     import ctypes
 
     from roadbank.export import export_c
@@ -224,7 +230,7 @@ def test_the_c_export_learns_the_offsets_as_step_does(tmp_path, float32, name):
         assert est.inner.noise_tau == 5.0
     else:
         est = E.with_online_offsets(E.make(name), settings=STRAIGHT)
-    res = export_c(est, tmp_path, rate=100.0, float32=float32)
+    res = export_c(est, tmp_path, rate=100.0, float32=float32, offsets=FILE_OFFSETS if filed else None)
     p = res.source.stem
     assert f"{p}_step_learning" in res.header.read_text() and "Online sensor offsets" in res.readme.read_text()
     harness = tmp_path / "h.c"
@@ -238,7 +244,10 @@ def test_the_c_export_learns_the_offsets_as_step_does(tmp_path, float32, name):
     lib.h_run(ctypes.c_long(n), *(c.ctypes.data_as(ptr) for c in cols), out.ctypes.data_as(ptr))
     est.reset()
     py = []
-    for x in zip(*cols):
+    off = FILE_OFFSETS if filed else {}
+    seen = [cols[0], cols[1], cols[2] - off.get("ay", 0.0), cols[3] - off.get("r", 0.0),
+            cols[4] - off.get("delta_f", 0.0)]
+    for x in zip(*seen):
         s = est.step(*x)
         o = est.offsets
         py.append((s.phi_b, s.theta, s.valid, o["r"], o["delta_f"], o["r_learnt"], o["delta_f_learnt"]))
@@ -265,7 +274,7 @@ def test_cli_export_with_online_offsets(tmp_path):
     assert res.exit_code == 0, res.output
     assert "roadbank_kinematic_step_learning" in (tmp_path / "roadbank_kinematic.h").read_text()
     res = CliRunner().invoke(main, ["export", "c", "-e", "kinematic", "-o", str(tmp_path / "plain")])
-    assert "offsets" not in (tmp_path / "plain" / "roadbank_kinematic.h").read_text()
+    assert "_offsets_" not in (tmp_path / "plain" / "roadbank_kinematic.h").read_text()      # no learner
 
 
 def test_roadbank_estimate_learns_the_offset_by_default(tmp_path):

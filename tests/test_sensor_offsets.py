@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import math
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -91,6 +92,20 @@ def test_estimate_with_the_identified_file_removes_the_offsets(drive):
     # this drive has no standstill and no long straight: online learning has nothing to learn from
     for name in NAMES:
         assert rms["learnt"][name] == pytest.approx(rms["none"][name], abs=1e-9), (name, rms)
+
+
+def test_export_c_with_the_identified_file_takes_the_offsets_off_in_c(drive, tmp_path):
+    """`roadbank export c --vehicle car.toml` says what it removes, as estimate does, and the module holds the file's
+    offsets (tests/test_export_c.py checks the numbers against step())."""
+    _, _, _, car_path, _ = drive
+    off = Vehicle.from_toml(car_path).sensor_offsets
+    res = CliRunner().invoke(main, ["export", "c", "--vehicle", str(car_path), "-e", "pif-modified", "--rate", "100",
+                                    "-o", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    assert "removing the sensor offsets identified in the vehicle file" in res.output
+    src = (tmp_path / "roadbank_pif_modified.c").read_text()
+    got = {name: float(re.search(rf"#define RB_OFF_{name} \(([^)]*)\)", src).group(1)) for name in ("R", "AY", "D")}
+    assert got == pytest.approx({"R": off["r"], "AY": off["ay"], "D": off["delta_f"]}, rel=1e-12)
 
 
 def test_correct_subtracts_exactly_and_only_what_was_identified():

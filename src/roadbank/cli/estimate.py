@@ -15,16 +15,11 @@ from ..io.channels import steering_ratio_problem
 from ..io.errors import LogError
 from ..io.readers import FORMATS
 from .inputs import channel_map_and_logs, check_output
-from .options import PathOption, vehicle_option
+from .options import PathOption, vehicle_offsets, vehicle_option
 from .parallel import one_pool, scheduler_option
 
 
 #: how the removed offsets are printed (Signals channel -> text)
-_OFFSET_TEXT = {"r": lambda v: f"yaw rate {math.degrees(v):+.3f} deg/s",
-                "ay": lambda v: f"ay {v:+.3f} m/s^2",
-                "delta_f": lambda v: f"steering {math.degrees(v):+.3f} deg (road wheel)"}
-
-
 def _parse_estimators(values: tuple[str, ...]) -> list[str]:
     from .. import estimators
 
@@ -165,13 +160,7 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     _check_not_an_input(paths, output, batch, output_format, resume)
     if plot is not None:
         check_output(plot, "--plot", directory=batch)
-    try:
-        offsets = vehicle.sensor_offsets if vehicle is not None else {}
-    except ValueError as exc:
-        raise click.BadParameter(str(exc), param_hint="--vehicle") from None
-    if offsets:
-        click.echo("removing the sensor offsets identified in the vehicle file from every log: "
-                   + ", ".join(_OFFSET_TEXT[c](v) for c, v in offsets.items()), err=True)
+    vehicle_offsets(vehicle, "every log")
     meta = {"estimators": ",".join(names),
             "steering_ratio": str(cmap.steering_ratio if cmap and cmap.steering_ratio
                                   else (params or undescribed_params()).steering_ratio)}

@@ -14,7 +14,7 @@ from pathlib import Path
 import click
 import numpy as np
 
-from .options import PathOption, vehicle_option
+from .options import PathOption, vehicle_offsets, vehicle_option
 
 
 def _rate(ctx, param, value):
@@ -131,7 +131,8 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
     if online_offsets:
         est = estimators.with_online_offsets(est)
     try:
-        res = export_c(est, output, rate=rate, float32=float32, module_name=module_name, discrete=fixed_rate)
+        res = export_c(est, output, rate=rate, float32=float32, module_name=module_name, discrete=fixed_rate,
+                       offsets=vehicle_offsets(vehicle, "the measured channels in every C function that takes them"))
     except NotExportable as exc:
         from ..vehicle.conditions import QUIET_FILTER
         inner = getattr(est, "inner", est)
@@ -151,7 +152,7 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
                f"{'' if res.design.discrete is None else ' with fixed-rate tables'}, "
                f"{d.n} observer states, roll {est.roll}{_gyro_words(d)}): tables {res.table_bytes} bytes "
                f"({d.ng} speeds x {d.nk}{'' if d.discrete is None else f' + {d.n * d.n + 6 * d.n}'}), "
-               f"fingerprint {d.fingerprint()}")
+               f"fingerprint {d.fingerprint(float32)}")
     for path in (res.header, res.source, res.readme):
         click.echo(f"  {path}")
 

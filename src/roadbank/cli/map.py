@@ -12,7 +12,7 @@ from ..defaults import MAP_ESTIMATOR
 from ..io.readers import FORMATS
 from ..mapping.grid import CELL_RANGE_M, SECTOR_RANGE
 from .inputs import channel_map_and_logs, check_output
-from .options import PathOption, vehicle_option
+from .options import PathOption, vehicle_offsets, vehicle_option
 from .parallel import pool_options, start_pool
 
 
@@ -82,6 +82,7 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
         if path is not None:        # before the work, not after it
             check_output(path, option)
     cmap, paths = channel_map_and_logs(channels, logs, fmt)
+    vehicle_offsets(vehicle, "every log")
     try:
         with contextlib.ExitStack() as stack:
             pool = start_pool(stack, workers, scheduler)

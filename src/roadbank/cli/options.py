@@ -59,6 +59,22 @@ def vehicle_option(help_extra: str = "", *, default_help: str = "the paper's SUV
                         callback=_to_vehicle, none_if_absent=none_if_absent, help=text)
 
 
+def vehicle_offsets(vehicle, removed_from: str) -> dict[str, float]:
+    """The sensor offsets identified in ``vehicle``'s file (``{channel: SI value}``, empty without a vehicle or
+    offsets), said on stderr with what they are ``removed_from`` ("every log", "the measured channels in C"); a
+    malformed one is a usage error of ``--vehicle``."""
+    from ..vehicle.file import describe_offsets
+
+    try:
+        offsets = vehicle.sensor_offsets if vehicle is not None else {}
+    except ValueError as exc:
+        raise click.BadParameter(str(exc), param_hint="--vehicle") from None
+    if offsets:
+        click.echo(f"removing the sensor offsets identified in the vehicle file from {removed_from}: "
+                   f"{describe_offsets(offsets)}", err=True)
+    return offsets
+
+
 class FiniteRange(click.FloatRange):
     """:class:`click.FloatRange` that also refuses NaN (which compares false with both bounds and would pass).
 

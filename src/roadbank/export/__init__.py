@@ -13,7 +13,9 @@ that kernel) exports; the others raise :class:`NotExportable` saying why.
 
 from __future__ import annotations
 
+import dataclasses
 import tempfile
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -52,7 +54,7 @@ class ExportResult:
 
 
 def export_c(est, out_dir, *, rate: float, float32: bool = False, module_name: str | None = None,
-             discrete: bool | None = None) -> ExportResult:
+             discrete: bool | None = None, offsets: Mapping[str, float] | None = None) -> ExportResult:
     """Write ``roadbank_<name>.h/.c`` and ``README_roadbank_<name>.md`` of ``est`` into ``out_dir``.
 
     Parameters
@@ -76,6 +78,10 @@ def export_c(est, out_dir, *, rate: float, float32: bool = False, module_name: s
     discrete : bool or None
         Add the fixed-rate tables for ``rate``; None: as the estimator runs in Python
         (see :func:`export_design`).
+    offsets : mapping, optional
+        Sensor offsets to take off the measured channels in every function that takes them (measured minus true,
+        SI): ``{"r": rad/s, "ay": m/s^2, "delta_f": rad}``, as ``roadbank estimate --vehicle`` removes a vehicle
+        file's identified offsets (:attr:`roadbank.vehicle.Vehicle.sensor_offsets`); default none.
 
     Raises
     ------
@@ -85,7 +91,8 @@ def export_c(est, out_dir, *, rate: float, float32: bool = False, module_name: s
     learner = None
     if isinstance(est, OnlineOffsets):       # the estimator behind the online offset learner
         learner, est = est._ocfg, est.inner
-    design = export_design(est, rate, module_name, discrete=discrete)
+    design = dataclasses.replace(export_design(est, rate, module_name, discrete=discrete),
+                                 offsets={k: float(v) for k, v in (offsets or {}).items()}, learner=learner)
     prefix = f"roadbank_{design.ident}"
     files = generate(design, float32=float32)
     if design.grade is not None:

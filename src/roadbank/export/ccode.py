@@ -129,10 +129,13 @@ typedef struct {
 /* Initialise or reset a state: the next valid sample (re)starts the estimator. */
 void ${p}_init(${state} *s);
 
-/* One sample at absolute time t (s). Returns valid (1/0); writes *out if out != NULL.
+/* One sample at absolute time t (s) of the channels as measured: the vehicle file's identified
+ * sensor offsets, if the module was generated with any (README), are taken off first.
+ * Returns valid (1/0); writes *out if out != NULL.
  * A sample is not used (state untouched, last outputs repeated, valid = 0) when t is
- * not finite or not later than the last valid sample, vx is not finite or below
- * ${P}_V_MIN, or a used input is not finite. After more than ${gap_lit} s without a
+ * not finite or not later than the last valid sample, vx is not finite, below
+ * ${P}_V_MIN or above 120 m/s, a used input is not finite, or |ay| > 3 g or |r| > 5 rad/s
+ * (a glitch beyond a car's limits). After more than ${gap_lit} s without a
  * valid sample the state restarts at the observer equilibrium for the current
  * inputs. valid = 0 also flags an implausible estimate |theta| > ${max_angle_deg} deg. */
 int ${p}_step(${state} *s, double t, ${real} vx, ${real} ay, ${real} r,
@@ -173,6 +176,10 @@ ${provenance} *
 
 #include <math.h>
 
+#if defined(__FAST_MATH__)
+#error "roadbank: -ffast-math / -Ofast compile isfinite() away, and a NaN sample would then be used: build without"
+#endif
+
 typedef ${real} real_t;
 typedef ${state} state_t;
 typedef ${output} output_t;
@@ -206,6 +213,11 @@ enum {
 #define RB_VX_MAX (${vx_max})     /* m/s */
 #define RB_AY_MAX (${ay_max})     /* m/s^2 */
 #define RB_R_MAX (${r_max})     /* rad/s */
+/* the vehicle file's identified sensor offsets (measured minus true; `roadbank estimate --vehicle` removes them
+ * too), taken off the measured channels by every function that takes them */
+#define RB_OFF_R (${off_r})     /* rad/s */
+#define RB_OFF_AY (${off_ay})     /* m/s^2 */
+#define RB_OFF_D (${off_d})     /* rad, front road-wheel angle */
 #define RB_SUB (${sub})     /* s, longest substep */
 #define RB_GAP (${gap})     /* s, longest gap before a restart */
 #define RB_WMAX (${wmax})    /* sin(max_angle) */
@@ -302,7 +314,8 @@ ${init_x}${init_z}${init_gate}${init_noise}    s->ay_last = 0.0_R;
     s->phi = 0.0_R;
 }
 
-int ${p}_step(state_t *s, double t, real_t vx, real_t ay, real_t r, real_t ${u0}, output_t *out)
+/* One sample of channels already corrected for the offsets (${p}_step's, or the learner's). */
+static int rb_step(state_t *s, double t, real_t vx, real_t ay, real_t r, real_t ${u0}, output_t *out)
 {
     int ok = 0;
     if (isfinite(t) && (!s->initialised || t > s->t_last) && rb_inputs_ok(vx, ay, r, ${u0})) {
@@ -315,9 +328,16 @@ ${fixed_t}        s->initialised = 1;
     return rb_output(s, ok, out);
 }
 
+int ${p}_step(state_t *s, double t, real_t vx, real_t ay, real_t r, real_t ${u0}, output_t *out)
+{
+    return rb_step(s, t, vx, ay - RB_OFF_AY, r - RB_OFF_R, ${u0}${u0_off}, out);
+}
+
 int ${p}_step_dt(state_t *s, real_t dt, real_t vx, real_t ay, real_t r, real_t ${u0}, output_t *out)
 {
     int ok = 0;
+    ay -= RB_OFF_AY;
+    r -= RB_OFF_R;${u0_off_dt}
     if (isfinite(dt)) {
         s->since_valid += dt;
         if ((!s->initialised || s->since_valid > 0.0_R) && rb_inputs_ok(vx, ay, r, ${u0})) {
@@ -847,7 +867,8 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
     for k in range(d.ng):
         body = _array(d.table[k], float32, 4, "     ")
         rows.append(f"    /* vx = {d.v0 + k * d.dv:.2f} m/s */\n    {{{body}}}")
-    common = dict(names, name=d.name, version=__version__, fingerprint=d.fingerprint(),
+    offsets = d.offsets
+    common = dict(names, name=d.name, version=__version__, fingerprint=d.fingerprint(float32),
                   precision="float32" if float32 else "float64", rate=f"{d.rate:g}",
                   n=d.n, nr=d.nr, **_first_input(d, names["p"]))
     state_list = f": {', '.join(d.state_names)}" if d.state_names and len(d.state_names) == d.n else ""
@@ -878,6 +899,9 @@ def generate(d: ExportDesign, float32: bool = False) -> dict[str, str]:
         nrow=row.end if d.discrete is not None else row.cont,
         v0=lit(d.v0), dv=lit(d.dv), inv_dv=lit(1.0 / d.dv), vmin=lit(d.v_min), sub=lit(d.max_substep),
         vx_max=lit(SPEED_MAX), ay_max=lit(AY_MAX), r_max=lit(YAW_RATE_MAX), gap=lit(d.max_gap),
+        off_r=lit(offsets.get("r", 0.0)), off_ay=lit(offsets.get("ay", 0.0)), off_d=lit(offsets.get("delta_f", 0.0)),
+        u0_off=" - RB_OFF_D" if d.first_input == "delta_f" else "",
+        u0_off_dt="\n    delta_f -= RB_OFF_D;" if d.first_input == "delta_f" else "",
         wmax=lit(d.wmax), roll_d=lit(d.roll_D), uses=", ".join(str(int(u)) for u in d.uses),
         table=",\n".join(rows),
         nsub_fn=_NSUB if (d.n > 0 or d.nr > 0) else "",

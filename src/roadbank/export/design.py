@@ -119,6 +119,12 @@ class ExportDesign:
     #: and ``observer`` (the pitch observer's ``cfg``, :mod:`roadbank.estimators.kernels.attitude`; None: the
     #: window's pitch); None without a correction
     grade: dict | None = None
+    #: the vehicle file's identified sensor offsets the module takes off the measured channels (measured minus true,
+    #: SI): ``{"r": rad/s, "ay": m/s^2, "delta_f": rad}``, those the file has (:attr:`roadbank.vehicle.Vehicle.
+    #: sensor_offsets`, what ``roadbank estimate --vehicle`` removes)
+    offsets: dict = field(default_factory=dict)
+    #: the online offset learner's ``cfg`` (:mod:`roadbank.estimators.kernels.offsets`) or None without one
+    learner: np.ndarray | None = None
 
     @property
     def running_noise(self) -> bool:
@@ -166,8 +172,10 @@ class ExportDesign:
             size = -(-size // align) * align + nbytes
         return -(-size // 8) * 8
 
-    def fingerprint(self) -> str:
-        """SHA-256 (first 16 hex digits) of the tables and constants: identifies a design."""
+    def fingerprint(self, float32: bool = False) -> str:
+        """SHA-256 (first 16 hex digits) of the tables and constants, the offsets, the learner's settings and the
+        precision (``float32``): identifies a generated module (a design without offsets, learner or float32 keeps
+        the fingerprint it had before they counted)."""
         h = hashlib.sha256()
         for a in (self.table, self.roll_F, self.roll_G, self.roll_H, self.roll_J,
                   np.array([self.roll_D, self.v0, self.dv, self.v_min, self.max_substep,
@@ -181,7 +189,11 @@ class ExportDesign:
                   *([] if self.first_input == "delta_f" else [np.array([1.0])]),
                   *([] if self.grade is None else
                     [np.array([self.grade[k] for k in ("window", "first_span", "g", "max_sin")], float),
-                     np.zeros(0) if self.grade["observer"] is None else np.asarray(self.grade["observer"], float)])):
+                     np.zeros(0) if self.grade["observer"] is None else np.asarray(self.grade["observer"], float)]),
+                  *([] if not any(self.offsets.values()) else
+                    [np.array([self.offsets.get(k, 0.0) for k in ("r", "ay", "delta_f")], float)]),
+                  *([] if self.learner is None else [np.array([2.0]), np.asarray(self.learner, float)]),
+                  *([np.array([32.0])] if float32 else [])):
             h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
         return h.hexdigest()[:16]
 

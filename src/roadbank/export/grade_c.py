@@ -109,7 +109,16 @@ void ${p}_grade_init(grade_t *g)
     g->a_last = 0.0_R;
 }
 
+/* The vehicle file's identified offsets (RB_OFF_*) are taken off the measured ay and r first; the learner's path
+ * (already corrected) calls rbg_roll_rate. */
+static real_t rbg_roll_rate(grade_t *g, double t, real_t vx, real_t ay, real_t r, real_t p, real_t ax, real_t q);
+
 real_t ${p}_roll_rate(grade_t *g, double t, real_t vx, real_t ay, real_t r, real_t p, real_t ax, real_t q)
+{
+    return rbg_roll_rate(g, t, vx, ay - RB_OFF_AY, r - RB_OFF_R, p, ax, q);
+}
+
+static real_t rbg_roll_rate(grade_t *g, double t, real_t vx, real_t ay, real_t r, real_t p, real_t ax, real_t q)
 {
     unsigned char bad;
     real_t a;
@@ -304,7 +313,16 @@ static double rbg_pitch(double *mem, double ti, double v, double a, double q)
     return mem[RBG_PITCH];
 }
 
+/* The vehicle file's identified offsets (RB_OFF_*) are taken off the measured ay and r first; the learner's path
+ * (already corrected) calls rbg_roll_rate. */
+static real_t rbg_roll_rate(grade_t *g, double t, real_t vx, real_t ay, real_t r, real_t p, real_t ax, real_t q);
+
 real_t ${p}_roll_rate(grade_t *g, double t, real_t vx, real_t ay, real_t r, real_t p, real_t ax, real_t q)
+{
+    return rbg_roll_rate(g, t, vx, ay - RB_OFF_AY, r - RB_OFF_R, p, ax, q);
+}
+
+static real_t rbg_roll_rate(grade_t *g, double t, real_t vx, real_t ay, real_t r, real_t p, real_t ax, real_t q)
 {
     double k;
     double rate;

@@ -168,6 +168,9 @@ void ${p}_offsets_step(offsets_t *o, double t, real_t vx, real_t ay, real_t r, r
 {
     real_t dt = 0.0_R;
     const int ok_t = isfinite(t) && (!o->initialised || t > o->t_last);
+    ay -= RB_OFF_AY;                         /* the vehicle file's offsets first, as ${p}_step takes them */
+    r -= RB_OFF_R;
+    d -= RB_OFF_D;
     const int fin_v = RB_FABS(vx) <= RB_VX_MAX;      /* within a car's limits (false for NaN) */
     const int fin_r = RB_FABS(r) <= RB_R_MAX;
     const int fin_a = RB_FABS(ay) <= RB_AY_MAX;
@@ -275,7 +278,7 @@ int ${p}_step_learning(state_t *s, offsets_t *o, ${grade}double t, real_t vx, re
     offsets_output_t tmp;
     offsets_output_t *c = oo != 0 ? oo : &tmp;
     ${p}_offsets_step(o, t, vx, ay, r, delta_f, c);
-    return ${p}_step(s, t, vx, c->ay, c->r, ${first}, out);
+    return rb_step(s, t, vx, c->ay, c->r, ${first}, out);
 }
 """
 
@@ -287,7 +290,7 @@ _LEARNING = {
           " * (rad/s) as its first input.", "", ("p",), "p"),
     "grade": ("The learner (delta_f read by it only), then ${p}_roll_rate on the corrected yaw rate and ay, then\n"
               " * ${p}_step on the corrected sample with that roll rate as its first input.", "${p}_grade *g, ",
-              ("p", "ax", "q"), "${p}_roll_rate(g, t, vx, c->ay, c->r, p, ax, q)"),
+              ("p", "ax", "q"), "rbg_roll_rate(g, t, vx, c->ay, c->r, p, ax, q)"),
 }
 
 
