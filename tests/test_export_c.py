@@ -514,3 +514,17 @@ def test_a_vehicle_files_offsets_are_taken_off_the_measured_channels(name, scena
         t, vx, ay, r, d = cols
         seen = (t, vx, ay - off["ay"], r - off["r"], d - off["delta_f"])
         assert_same(python_steps(est, seen), mod.run(*cols, use_dt=use_dt), TOL64, TOL64, f"{name} dt={use_dt}")
+
+
+def test_the_fingerprint_tells_learners_and_precisions_apart(tmp_path):
+    """The header's fingerprint traces a build to what generated it: the learner and its settings, the precision
+    (it had been one string for all of them)."""
+    from roadbank.estimators import OffsetSettings, with_online_offsets
+
+    est = BUILT["pif-modified"]
+    prints = [export_c(e, tmp_path / str(k), rate=100.0, float32=f32).design.fingerprint(f32)
+              for k, (e, f32) in enumerate([(est, False), (est, True), (with_online_offsets(est), False),
+                                            (with_online_offsets(est, settings=OffsetSettings(straight_ay=0.3)),
+                                             False)])]
+    assert len(set(prints)) == 4, prints
+    assert prints[0] == export_design(est, 100.0).fingerprint()       # a plain module keeps its old fingerprint
