@@ -248,6 +248,16 @@ def test_export_c_with_roll_rate_designs_the_gyro_module_for_the_log(tmp_path):
     assert both.exit_code == 0, both.output
     header = (tmp_path / "o" / "roadbank_kinematic_pif.h").read_text()
     assert "roadbank_kinematic_pif_grade *g, double t" in header      # _step_learning takes the grade state
+    # every name estimate takes means the same filter here (kinematic-gyro, pif-paper had been "unknown")
+    gyro = runner.invoke(main, ["export", "c", "-e", "kinematic-gyro", "--log", str(KITTI), "--roll-rate",
+                                "-o", str(tmp_path / "k")])
+    assert gyro.exit_code == 0, gyro.output
+    assert "_roll_rate(" in (tmp_path / "k" / "roadbank_kinematic_gyro.h").read_text()
+    paper = runner.invoke(main, ["export", "c", "-e", "pif-paper", "-o", str(tmp_path / "pp")])
+    assert paper.exit_code == 0, paper.output
+    model = runner.invoke(main, ["export", "c", "-e", "pif-modified", "--log", str(KITTI), "--roll-rate",
+                                 "-o", str(tmp_path / "pm")])
+    assert model.exit_code == 0 and "pif-modified reads none" in model.output, model.output
     alone = runner.invoke(main, ["export", "c", "-e", "kinematic-pif", "--roll-rate", "-o", str(tmp_path / "n")])
     assert alone.exit_code == 2 and "--roll-rate describes --log" in alone.output
 

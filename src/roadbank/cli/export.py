@@ -91,8 +91,9 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
     from ..export.design import RATE_RANGE_HZ
     from ..estimators import NoStabilisingSolution
 
-    if name not in estimators.NAMES:
-        raise click.BadParameter(f"unknown estimator '{name}' (choose from {', '.join(estimators.NAMES)})",
+    known = estimators.NAMES + estimators.PRESETS + estimators.GYRO      # what estimate takes, each the same filter
+    if name not in known:
+        raise click.BadParameter(f"unknown estimator '{name}' (choose from {', '.join(known)})",
                                  param_hint="--estimator")
     if log is None:
         for given, option in ((channels, "--channels"), (fmt, "--format"), (roll_rate or None, "--roll-rate")):
@@ -146,8 +147,10 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
         raise click.ClickException(f"cannot write into {output}: {exc.strerror or exc}") from None
     d = res.design
     if roll_rate and d.first_input != "p":
+        why = ("none, one that does not follow the roll in ay, or a quiet log" if name in ("kinematic-pif",)
+               + estimators.GYRO else f"{name} reads none; kinematic-pif and kinematic-gyro do")
         click.echo(f"warning: --log {log}: the module reads the ESP channels: the log's roll rate is not used "
-                   "(none, one that does not follow the roll in ay, or a quiet log)", err=True)
+                   f"({why})", err=True)
     click.echo(f"{name} for {car_name} ({'float32' if float32 else 'float64'}, {rate:g} Hz"
                f"{'' if res.design.discrete is None else ' with fixed-rate tables'}, "
                f"{d.n} observer states, roll {est.roll}{_gyro_words(d)}): tables {res.table_bytes} bytes "
