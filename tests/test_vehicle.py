@@ -263,6 +263,17 @@ def test_malformed_file_names_file_and_key(text, needles):
     assert "\n" not in msg
 
 
+def test_a_tuned_th_adapts_to_the_sensor_but_one_far_too_large_is_an_error():
+    """[tuning.pif-modified] with th and no R (as roadbank tune writes it): halved to the sensor's solvable one, but
+    not below th/1000 (a th of 1e12 had become th = 0, the Kalman filter, in silence)."""
+    car = load_vehicle(None)
+    sane = car.with_tuning("pif-modified", {"th": 4.0 * car.make("pif-modified").th})
+    sane.check()
+    assert 0.0 < sane.make("pif-modified").th
+    with pytest.raises(VehicleFileError, match=r"\[tuning\.pif-modified\] .*th = 1e\+12 .*far too large"):
+        car.with_tuning("pif-modified", {"th": 1e12}).check()
+
+
 def test_missing_file_and_unknown_name():
     with pytest.raises(VehicleFileError, match=r"nope\.toml: no such vehicle file"):
         load_vehicle("nope.toml")

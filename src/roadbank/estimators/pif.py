@@ -161,21 +161,28 @@ class PIFDesign(DesignInputs):
         return np.diag(np.asarray(self.R, dtype=float))
 
 
-def solvable_th(design: PIFDesign, tables_of):
+def solvable_th(design: PIFDesign, tables_of, to_zero: bool = True):
     """``tables_of(d)`` of the first design ``d`` with a stabilising solution, from ``design`` on
     with ``th`` halved each time (below ``th/1000``: 0, the Kalman filter, always solvable).
 
     A default ``th`` adapts so to the car and the sensor. ``tables_of`` raises
     :class:`NoStabilisingSolution` for a design without one; the last such error is raised when
-    even ``th = 0`` has none.
+    even ``th = 0`` has none. ``to_zero=False`` (a ``th`` the user gave, e.g. a ``[tuning]`` table's): below
+    ``th/1000`` it raises instead, naming the ``th`` (a value a thousand times too large had become the
+    Kalman filter, in silence).
     """
     floor = design.th / 1000.0
+    given = design.th
     while True:
         try:
             return tables_of(design)
-        except NoStabilisingSolution:
+        except NoStabilisingSolution as exc:
             if design.th == 0.0:
                 raise
+            if design.th <= floor and not to_zero:
+                raise NoStabilisingSolution(f"th = {given:g} has no stabilising solution down to th/1000 "
+                                            f"({design.th:g}) for this sensor and rate: far too large ({exc})"
+                                            ) from None
             design = replace(design, th=design.th / 2.0 if design.th > floor else 0.0)
 
 
@@ -238,6 +245,7 @@ class PIF(ScheduledObserver):
         if "roll" in preset:
             kw.setdefault("roll", preset["roll"])
         auto_th = (tuning == "default" and th is None) if adapt_th is None else bool(adapt_th)
+        self._th_given = th is not None
         Q, R, S, th, P0 = (preset[k] if v is None else v
                            for k, v in (("Q", Q), ("R", R), ("S", S), ("th", th), ("P0", P0)))
         self.model = model
@@ -267,7 +275,7 @@ class PIF(ScheduledObserver):
             return super()._designed()
         # the default th adapts to the car and the sensor: halved until the Riccati equation is
         # solvable at every speed
-        return solvable_th(self.design, self._tables_of)
+        return solvable_th(self.design, self._tables_of, to_zero=not self._th_given)
 
     def riccati_solution(self, vx: float) -> np.ndarray:
         """Stabilising solution ``P`` of the algebraic Riccati equation (eq 44) at ``vx`` (m/s).
