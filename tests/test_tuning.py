@@ -256,3 +256,39 @@ def test_search_space_starts_at_the_estimators_default(name):
         x[i] += 0.1
         moved = {k for k, v in space.options(x).items() if v != space.options(x0)[k]}
         assert len(moved) == 1, (space.labels[i], moved)
+
+
+COUPE = """[vehicle]
+m = "1550 kg"
+Iz = "2600 kg m^2"
+Lf = "1.45 m"
+Lr = "1.25 m"
+Cf = "95 kN/rad"
+Cr = "160 kN/rad"
+steering_ratio = 13
+h_cg = "0.48 m"
+h_roll = "0.38 m"
+"""
+
+
+def test_drives_on_which_the_car_lost_control_are_left_out_and_said(sets, tmp_path):
+    """A sporty car (1.3 deg/g) whose track lane change spins: simulate warns (it had exited 0 without a word at 13 deg
+    of sideslip), and tuning leaves such drives out of both sets and says how many (they had driven the objective:
+    5-15 deg RMS drives among 0.5 deg ones)."""
+    import dataclasses
+
+    train, _ = sets
+    assert all(d.max_sideslip_deg < 5.0 and not d.lost_control for d in train)      # a sane car's drives
+    spun = dataclasses.replace(train[0], max_sideslip_deg=13.0)
+    out = pipeline.TuningOutcome()
+    assert pipeline._in_control([spun, *train[1:]], "train", out) == train[1:]
+    assert out.left_out == {"train": 1}
+    with pytest.raises(ValueError, match="lost control"):
+        pipeline._in_control([spun], "validation", out)
+    car = tmp_path / "coupe.toml"
+    car.write_text(COUPE)
+    res = CliRunner().invoke(main, ["simulate", "track-lane-change", "--vehicle", str(car), "-o",
+                                    str(tmp_path / "c.parquet")])
+    assert res.exit_code == 0 and "lost control" in res.output, res.output
+    res = CliRunner().invoke(main, ["simulate", "track-lane-change", "-o", str(tmp_path / "suv.parquet")])
+    assert res.exit_code == 0 and "lost control" not in res.output

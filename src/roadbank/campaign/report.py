@@ -26,7 +26,7 @@ from ..defaults import ESTIMATOR as DEFAULT
 from ..evaluation.targets import Target
 from ..report.html import write_document
 from ..report.markdown import md_table
-from ..sim.scenarios import DT_DEFAULT
+from ..sim.scenarios import DT_DEFAULT, LOST_CONTROL_DEG
 from .runner import FAIL_RMS_DEG
 
 #: bins of the parameter cells (edges)
@@ -113,7 +113,7 @@ def scenario_table(df):
     return t[names].reset_index()
 
 
-def lost_control(df, beta_deg: float = 10.0) -> int:
+def lost_control(df, beta_deg: float = LOST_CONTROL_DEG) -> int:
     """Runs in which the plant itself lost control (max sideslip above ``beta_deg``)."""
     runs = df.drop_duplicates("run_id")
     return int((runs["max_beta_deg"] > beta_deg).sum())

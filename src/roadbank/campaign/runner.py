@@ -172,9 +172,7 @@ def run_one(spec: RunSpec, options: RunOptions = RunOptions()) -> list[dict]:
     tr, sig = sim.truth, sim.signals
     k0 = len(sig) - n_drive                         # first sample of the drive
     still = float(sig.t[k0] - sig.t[0])
-    with np.errstate(all="ignore"):
-        beta = np.degrees(np.abs(np.arctan2(tr.vy, np.abs(tr.vx))))
-    extra = {"max_beta_deg": float(np.nanmax(beta[k0:])), "min_vx": float(np.nanmin(tr.vx[k0:])),
+    extra = {"max_beta_deg": tr.max_sideslip_deg(k0), "min_vx": float(np.nanmin(tr.vx[k0:])),
              "duration_s": float(sig.t[-1] - sig.t[k0]), "sim_s": sim_s, "standstill_s": still, **setup}
     true_r_offset = sensors.yaw_rate.bias
     rows = []

@@ -58,7 +58,7 @@ def simulate(scenario: str, condition: str, seed: int, output: Path, vehicle) ->
     """Simulate SCENARIO (the paper's const-bank, bank-lane-change, s-curve, track-lane1,
     track-lane-change; or identification-drive, the test-track drive `roadbank identify`
     needs, docs/identification.md) and write the sensor signals and the truth."""
-    from ..sim.scenarios import CONDITIONS, DRIVES, SCENARIOS
+    from ..sim.scenarios import CONDITIONS, DRIVES, LOST_CONTROL_DEG, SCENARIOS
 
     if scenario not in SCENARIOS and scenario not in DRIVES:
         raise click.BadParameter(f"unknown scenario '{scenario}' (choose from {', '.join((*SCENARIOS, *DRIVES))})",
@@ -78,3 +78,8 @@ def simulate(scenario: str, condition: str, seed: int, output: Path, vehicle) ->
         raise click.ClickException(f"cannot write {output}: {exc.strerror or exc}") from None
     click.echo(f"{scenario} [{condition}, seed {seed}, {vehicle.name}]: {len(result.signals)} samples "
                f"({result.signals.t[-1]:.1f} s) -> {output}")
+    beta = result.truth.max_sideslip_deg()
+    if beta > LOST_CONTROL_DEG:
+        click.echo(f"warning: the car lost control on this drive (sideslip up to {beta:.0f} deg, above "
+                   f"{LOST_CONTROL_DEG:g}; the manoeuvre is beyond this car's grip): no estimator's model holds "
+                   "there", err=True)

@@ -71,7 +71,7 @@ def tune(vehicle, out, budget, seed, names, jobs, scheduler, train_drives, valid
                 seed=seed, n_train=train_drives or pipeline.DEFAULT_TRAIN,
                 n_validation=validation_drives or pipeline.DEFAULT_VALIDATION, jobs=jobs, scheduler=scheduler,
                 current=dict(vehicle.tuning), progress=progress)
-    except (ConnectionError, RuntimeError) as exc:
+    except (ConnectionError, RuntimeError, ValueError) as exc:
         raise click.ClickException(str(exc)) from None
     tuned = vehicle
     for name in chosen:
@@ -88,4 +88,8 @@ def tune(vehicle, out, budget, seed, names, jobs, scheduler, train_drives, valid
     for name, s in sorted(outcome.validation.items(), key=lambda kv: kv[1].median_rms):
         mark = " (tuned)" if name in chosen else ""
         click.echo(f"{name + mark:24s} {s.median_rms:10.3f} {s.p95_rms:8.3f} {s.mean_max:9.3f}")
+    if any(outcome.left_out.values()):
+        click.echo(f"\nnote: left out {outcome.left_out['train']} training and {outcome.left_out['validation']} "
+                   "validation drive(s) on which the simulated car lost control (sideslip above 10 deg: the "
+                   "drawn tyres and friction beyond its grip); no estimator's model holds there", err=True)
     click.echo(f"\nwrote {out} ({time.perf_counter() - t0:.0f} s)")

@@ -144,6 +144,11 @@ def drive_scenario(name: str) -> Scenario:
     raise ValueError(f"unknown drive {name!r}; known: {', '.join(DRIVES)}")
 
 
+#: sideslip (deg) beyond which a simulated car has lost control (spun, slid): its drive is reported apart (campaign)
+#: or left out (tuning), as no estimator's model holds there
+LOST_CONTROL_DEG = 10.0
+
+
 @dataclass
 class Truth:
     """True quantities on the sensor time base (SI; angles rad).
@@ -178,6 +183,13 @@ class Truth:
     condition: str = ""
     seed: int = 0
     plant: PlantParams | None = None
+
+    def max_sideslip_deg(self, start: int = 0) -> float:
+        """Largest sideslip angle ``|atan2(vy, |vx|)|`` (deg) from sample ``start`` on (NaN where none); above
+        :data:`LOST_CONTROL_DEG` the car has lost control, which no estimator's model describes."""
+        with np.errstate(all="ignore"):
+            beta = np.degrees(np.abs(np.arctan2(self.vy[start:], np.abs(self.vx[start:]))))
+        return float(np.nanmax(beta)) if np.isfinite(beta).any() else math.nan
 
 
 @dataclass

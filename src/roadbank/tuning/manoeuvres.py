@@ -49,6 +49,7 @@ from ..params import VehicleParams
 from ..signals import Signals
 from ..sim import Driver, PlantParams, Scenario, SensorConfig, flat_road, run, straight_road
 from ..sim.road import Road, two_lane_road
+from ..sim.scenarios import LOST_CONTROL_DEG
 
 #: road families of each set (disjoint by construction)
 TRAIN_ROADS = ("bank-step", "superelevated-curve", "lane-change", "tyre-limit")
@@ -85,6 +86,9 @@ class Drive:
         What the estimators read (SI, ISO 8855).
     phi_b : ndarray
         True road bank at the signal samples (rad).
+    max_sideslip_deg : float
+        The plant's largest sideslip (deg): above :data:`roadbank.sim.scenarios.LOST_CONTROL_DEG` the car lost
+        control (a sporty car drawn with soft front tyres oversteers), and tuning leaves the drive out.
     """
 
     kind: str
@@ -93,6 +97,12 @@ class Drive:
     car: dict
     signals: Signals
     phi_b: np.ndarray
+    max_sideslip_deg: float = 0.0
+
+    @property
+    def lost_control(self) -> bool:
+        """Whether the car lost control on this drive (see :attr:`max_sideslip_deg`)."""
+        return self.max_sideslip_deg > LOST_CONTROL_DEG
 
 
 def _uniform(rng, lo, hi):
@@ -301,7 +311,7 @@ def draw_drive(kind: str, index: int, seed: int, params, plant, sensors, nominal
     scenario = _NEEDS_CAR[road](rng, params, mu) if limit else _ROADS[road](rng)
     p, s = _plant_and_sensors(car, mu, plant, sensors)
     sim = run(scenario, p, s, seed=int(rng.integers(0, 2**31 - 1)))
-    return Drive(kind, int(index), road, car, sim.signals, sim.truth.phi_b)
+    return Drive(kind, int(index), road, car, sim.signals, sim.truth.phi_b, sim.truth.max_sideslip_deg())
 
 
 def drive_set(kind: str, n: int, seed: int = 0, params=None, plant=None, sensors=None, nominal=()) -> list[Drive]:

@@ -13,6 +13,7 @@ from .. import estimators
 from ..estimators.pif import SENSOR_R_ESTIMATORS
 from ..params import VehicleParams
 from ..sim import PlantParams, SensorConfig
+from ..sim.scenarios import LOST_CONTROL_DEG
 from .manoeuvres import drive_set
 from .objective import score_set
 from .optimise import DaskMapper, LocalMapper, register_drives, tune_estimator
@@ -41,12 +42,17 @@ class TuningOutcome:
         defaults, ``pif-modified (Table 4)``) -> :class:`~.objective.SetScores` on validation.
     seconds : float
         Wall time of the whole run.
+    left_out : dict
+        ``{"train": k, "validation": m}``: drives left out of both sets because the simulated car lost control
+        (:attr:`~.manoeuvres.Drive.lost_control`; a car that oversteers with the drawn tyres), whose errors say
+        nothing of an estimator and had driven the objective.
     """
 
     options: dict = field(default_factory=dict)
     scores: dict = field(default_factory=dict)
     validation: dict = field(default_factory=dict)
     seconds: float = 0.0
+    left_out: dict = field(default_factory=dict)
 
 
 def written_options(name: str, options: dict) -> dict:
@@ -57,6 +63,17 @@ def written_options(name: str, options: dict) -> dict:
     if name in SENSOR_R_ESTIMATORS:
         return {k: v for k, v in options.items() if k not in ("R", "Q_ay")}
     return dict(options)
+
+
+def _in_control(drives: list, kind: str, out: "TuningOutcome") -> list:
+    """The ``drives`` on which the car kept control; how many were left out recorded in ``out.left_out``. A
+    ValueError when none is left (the car is not drivable as described)."""
+    kept = [d for d in drives if not d.lost_control]
+    out.left_out[kind] = len(drives) - len(kept)
+    if not kept:
+        raise ValueError(f"the car lost control (sideslip above {LOST_CONTROL_DEG:g} deg) on every {kind} drive: "
+                         "check its tyres and geometry (an understeer gradient below 0 spins)")
+    return kept
 
 
 def tune_car(params=None, plant=None, sensors=None, *, names=TUNABLE, budget: int = DEFAULT_BUDGET,
@@ -112,7 +129,7 @@ def tune_car(params=None, plant=None, sensors=None, *, names=TUNABLE, budget: in
     # drawn; a LocalMapper forks on entering, after register_drives (its workers inherit the drives)
     mapper = DaskMapper(scheduler, step) if scheduler else LocalMapper(jobs, step)
     report("training set", 0, n_train)
-    train = drive_set("train", n_train, seed, params, plant, sensors)
+    train = _in_control(drive_set("train", n_train, seed, params, plant, sensors), "train", out)
     key = f"train-{seed}-{n_train}"
     register_drives(key, train)
     with mapper:
@@ -122,7 +139,7 @@ def tune_car(params=None, plant=None, sensors=None, *, names=TUNABLE, budget: in
             results[name] = tune_estimator(search_space(name, sensors), params, key, budget=budget,
                                            seed=seed, mapper=mapper)
     report("validation set", 0, n_validation)
-    valid = drive_set("validation", n_validation, seed, params, plant, sensors)
+    valid = _in_control(drive_set("validation", n_validation, seed, params, plant, sensors), "validation", out)
     for name, res in results.items():
         tuned = score_set(estimators.make(name, params, **res.options), valid)
         before = score_set(estimators.make(name, params, **current.get(name, {})), valid)
