@@ -272,3 +272,15 @@ def test_the_vehicle_file_knows_every_quantity_identify_writes():
 
     assert ORDER == IDENTIFIED_QUANTITIES
     assert set(IDENTIFIED_OFFSETS) <= set(ORDER)
+
+
+def test_a_copy_of_a_log_adds_no_evidence(drive, result):
+    """The same samples under another name are not used again (four copies of a one-corner log had passed the
+    three-corner minimum and shrunk every uncertainty by about 2)."""
+    case, log, _ = drive
+    copy = Log(signals=log.signals, reference_roll=log.reference_roll, source=Path("copy.parquet"))
+    res = identify([log, copy], case.params, IdentifySettings(straight_bank=CROWN))
+    assert [r.used for r in res.logs] == [True, False]
+    assert "the same samples as" in res.logs[1].problem
+    for name, q in result.quantities.items():
+        assert res.quantities[name].value == q.value and res.quantities[name].std == q.std, name

@@ -11,6 +11,7 @@ is refused with the reason, never guessed.
 
 from __future__ import annotations
 
+import hashlib
 from pathlib import Path
 
 import numpy as np
@@ -117,6 +118,14 @@ def _merge_refusal(straights: Quantity, regression: Quantity) -> Quantity:
     return refused(straights.name, straights.unit, f"{straights.refused}; {regression.refused}")
 
 
+def _samples_digest(sig) -> str:
+    """SHA-256 of a log's time base and ESP channels (the bytes of ``t, vx, ay, r, delta_f``)."""
+    h = hashlib.sha256()
+    for a in (sig.t, sig.vx, sig.ay, sig.r, sig.delta_f):
+        h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+    return h.hexdigest()
+
+
 def identify(logs, params: VehicleParams | None = None, settings: IdentifySettings | None = None
              ) -> IdentificationResult:
     """Identify a car's parameters and sensor offsets from driving logs.
@@ -141,6 +150,7 @@ def identify(logs, params: VehicleParams | None = None, settings: IdentifySettin
     p = params or VehicleParams()
     s = settings or IdentifySettings()
     reports, segs = [], []
+    seen: dict[str, Path] = {}        # digest of a log's samples -> the first log that had them
     for log in logs:
         source = Path(getattr(log, "source", "") or "")
         sig = log.signals
@@ -148,6 +158,11 @@ def identify(logs, params: VehicleParams | None = None, settings: IdentifySettin
         if missing:
             reports.append(LogReport(source, False, missing))
             continue
+        digest = _samples_digest(sig)
+        if digest in seen:      # a copy is no new evidence: counted twice it passes the corner minimum
+            reports.append(LogReport(source, False, f"the same samples as {seen[digest]}: a copy adds no evidence"))
+            continue
+        seen[digest] = source
         try:
             seg = segment(to_grid(sig.t, sig.vx, sig.ay, sig.r, sig.delta_f, log.reference_roll), s)
         except Exception as exc:  # one log that cannot be analysed never loses the others
