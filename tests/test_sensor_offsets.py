@@ -178,3 +178,16 @@ def test_the_default_pif_reads_a_yaw_rate_bias_as_a_bank_of_vx_b_over_g():
     w0 = est.run(base).w[-1]
     w1 = est.run(biased).w[-1]
     assert w1 - w0 == pytest.approx(-vx * b / est.params.g, rel=1e-3)
+
+
+def test_the_library_takes_a_vehicle_files_path_as_the_vehicle(drive, tmp_path):
+    """fleet.estimate_log and mapping.map_logs take vehicle= as a path or a name, as --vehicle does (a path had
+    failed with AttributeError: 'str' object has no attribute 'correct')."""
+    from roadbank.fleet import estimate_log
+
+    _, log, _, car_path, _ = drive
+    by_path = estimate_log(log, tmp_path / "p.csv", vehicle=str(car_path))
+    by_object = estimate_log(log, tmp_path / "o.csv", vehicle=Vehicle.from_toml(car_path))
+    assert by_path.status == "ok", by_path.error
+    assert (tmp_path / "p.csv").read_text() == (tmp_path / "o.csv").read_text()
+    assert by_object.status == "ok"

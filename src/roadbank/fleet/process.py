@@ -16,7 +16,7 @@ from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..io.timebase import add_counts
 from ..io.writers import TableWriter, estimate_table, write_error
 from ..signals import Estimate
-from ..vehicle import (DESIGN_MAX_S, car_for_log, for_conditions, has_design_span, log_conditions,
+from ..vehicle import (DESIGN_MAX_S, car_for_log, for_conditions, has_design_span, load_vehicle, log_conditions,
                        undescribed_params)
 from ..vehicle.conditions import GYRO_MODELS, QUIET_MODELS, ROLL_SLOPE_RANGE, roll_rate_usable
 
@@ -270,7 +270,7 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
         Estimator names (:data:`roadbank.estimators.NAMES`); the first one is summarised.
     channels, format, params
         As for :func:`roadbank.io.load_log`.
-    vehicle : roadbank.vehicle.Vehicle, optional
+    vehicle : roadbank.vehicle.Vehicle, str or Path, optional
         Builds the estimators (its parameters, sensors and tuning) and supplies ``params``.
         The estimators are built on the first chunk, for the log's sample rate and ``ay``
         noise (:func:`roadbank.vehicle.make_estimator` with
@@ -306,6 +306,7 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
     writer = None
     try:
         if vehicle is not None:
+            vehicle = load_vehicle(vehicle)         # a Vehicle, a built-in car's name or a vehicle file's path
             params = vehicle.params
         keep = keep or plot is not None
         stats = [_BankStats() for _ in names]

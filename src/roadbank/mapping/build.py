@@ -17,7 +17,8 @@ from ..io.files import must_exist
 from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..io.writers import write_error
 from ..params import VehicleParams
-from ..vehicle import DESIGN_MAX_S, Vehicle, for_conditions, has_design_span, log_conditions, undescribed_params
+from ..vehicle import (DESIGN_MAX_S, Vehicle, for_conditions, has_design_span, load_vehicle, log_conditions,
+                       undescribed_params)
 from .geo import CourseStream, LocalProjection, PositionJumps, TrackScale
 from .grid import BankMap
 
@@ -323,6 +324,7 @@ def map_logs(logs, estimator: str = MAP_ESTIMATOR, *, channels=None, format: str
         None if no log gave a position. A bad log is reported in its MappedLog, adds nothing to
         the map and never stops the others.
     """
+    vehicle = None if vehicle is None else load_vehicle(vehicle)   # a Vehicle, a built-in name or a file's path
     settings = MapSettings(estimator, channels, format, params, vehicle, cell_m, sectors, chunk_rows)
     paths = list(logs)
     fixed = LocalProjection(*origin) if origin is not None else None
