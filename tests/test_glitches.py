@@ -12,6 +12,7 @@ import pytest
 
 from roadbank import estimators
 from roadbank.constants import AY_MAX, SPEED_MAX, YAW_RATE_MAX
+from roadbank.estimators.base import NoSteeringWarning
 from roadbank.signals import Signals
 from roadbank.sim.scenarios import run_scenario
 
@@ -49,3 +50,17 @@ def test_a_glitch_beyond_the_limits_is_held_as_a_nan(name, drive):
     assert not glitched.valid[[i for i, _ in spikes.values()]].any()
     np.testing.assert_array_equal(learnt.theta, learnt_nan.theta)
     assert np.all(np.isfinite(glitched.theta)) and np.max(np.abs(np.degrees(glitched.phi_b[glitched.valid]))) < 30
+
+
+@pytest.mark.parametrize("name", [n for n in CAUSAL if estimators.make(n).uses[0]])
+def test_an_estimator_that_reads_the_steering_says_so_on_a_log_without_one(name, drive):
+    """dfc, uio, kalman, the original-model observers on a log without a steering angle: every sample invalid, and
+    now a warning that says why (it had been silent: theta 0 everywhere for a caller that ignores valid)."""
+    s = drive
+    no_steer = Signals(s.t, s.vx, s.ay, s.r, np.full(len(s), np.nan))
+    with pytest.warns(NoSteeringWarning, match="no steering angle"):
+        e = estimators.make(name).run(no_steer)
+    assert not e.valid.any()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")          # with a steering angle: no such warning
+        estimators.make(name).run(s)

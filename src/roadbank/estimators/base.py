@@ -106,6 +106,10 @@ def frozen_array(a: npt.ArrayLike) -> Any:
     return float(a) if a.ndim == 0 else tuple(frozen_array(x) for x in a)
 
 
+class NoSteeringWarning(RuntimeWarning):
+    """An estimator that reads the steering angle ran on a log without one (every sample invalid)."""
+
+
 class Tables(NamedTuple):
     """What a design builds: ``tab`` (grid points, k) float64, ``nstate`` the number of observer
     states, ``extra`` the estimator's further cfg floats (layout: :mod:`roadbank.estimators.layout`)."""
@@ -255,6 +259,14 @@ class Estimator:
                           "signals) designs for the log's rate and road noise, as `roadbank estimate` does",
                           RuntimeWarning, stacklevel=3)
             self.sheet_rate = None
+
+    def _check_steering(self, delta_f) -> None:
+        """Warn when this estimator reads the steering angle and the log has none (``delta_f`` all NaN, rad): every
+        sample is then held and flagged invalid, which a caller averaging without ``valid`` would read as 0 deg."""
+        if self.uses[0] and self.first_input == "delta_f" and len(delta_f) and not np.isfinite(delta_f).any():
+            warnings.warn(f"{self.name}: the log has no steering angle (Signals.delta_f all NaN) and this estimator "
+                          "reads it: every sample is held and flagged invalid (kinematic-pif, pif-modified and the "
+                          "kinematic family need none)", NoSteeringWarning, stacklevel=3)
 
     @property
     def design(self) -> DesignInputs:
@@ -587,6 +599,7 @@ class Estimator:
         if self.sheet_rate is not None:
             self._check_log_rate(signals.t)
         if reset:
+            self._check_steering(signals.delta_f)
             self.reset()
         n = len(signals)
         w, theta, phib, phi, valid, xs = self._outputs(n)
