@@ -107,6 +107,12 @@ def test_rate_is_detected_and_step_equals_run():
     out = [other.step(s.t[k], s.vx[k], s.ay[k], s.r[k], s.delta_f[k]) for k in range(len(s))]
     assert np.array_equal(batch.w, [o.w for o in out])
     assert np.array_equal(batch.phi_b, [o.phi_b for o in out])
+    assert np.array_equal(batch.settled, [o.settled for o in out]) and not out[0].settled and out[-1].settled
+    # steps, then a run that continues them: one clock for the settled flags (it had restarted at the run)
+    third = E.make("pif-modified", roll="dynamic")
+    head = [third.step(s.t[k], s.vx[k], s.ay[k], s.r[k], s.delta_f[k]).settled for k in range(50)]
+    rest = third.run(s[50:], reset=False)
+    assert np.array_equal(np.concatenate([head, rest.settled]), batch.settled)
     general = E.make("pif-modified", roll="dynamic", sample_rate=None).run(s)
     assert not np.array_equal(batch.w, general.w)          # the fixed-rate path was used
 

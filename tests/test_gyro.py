@@ -870,7 +870,7 @@ def test_one_streaming_loop_serves_every_estimator_and_a_stale_stamp_or_bad_time
             if bad is not None and k == 200:
                 held = est.step(bad(s.t[k]), s.vx[k], s.ay[k], s.r[k], s.delta_f[k], **kw)
                 assert not held.valid
-        return np.array([o.theta for o in out]), np.array([o.valid for o in out])
+        return np.array([o.theta for o in out]), np.array([o.valid for o in out]), np.array([o.settled for o in out])
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -878,9 +878,10 @@ def test_one_streaming_loop_serves_every_estimator_and_a_stale_stamp_or_bad_time
         assert isinstance(est, KinematicGyro)
         whole = est.run(s)
         est.reset()
-        theta, valid = stream(est)
+        theta, valid, settled = stream(est)
         np.testing.assert_array_equal(theta, whole.theta)
         np.testing.assert_array_equal(valid, whole.valid)
+        np.testing.assert_array_equal(settled, whole.settled)
         for bad in (lambda t: t - 5.0, lambda t: math.nan, lambda t: math.inf):
             est.reset()
             np.testing.assert_array_equal(stream(est, bad)[0], whole.theta)
