@@ -88,16 +88,6 @@ def step_settling_time(F, g, H, d: float, share: float = SETTLE_SHARE, horizon: 
     return math.inf
 
 
-def settled_step(t: float, valid: bool, settle_s: float, max_gap: float,
-                 last: tuple[float, float]) -> tuple[bool, tuple[float, float]]:
-    """:func:`settled_flags` of one sample (``step()``'s): whether the sample at ``t`` (s) has settled, and the carry
-    ``last`` after it (the same numbers as the array function over the samples one by one)."""
-    if not valid:
-        return False, last
-    since = last[1] if t - last[0] <= max_gap else t                   # NaN last: the first sample, a restart
-    return t >= since + settle_s, (t, since)
-
-
 def settled_flags(t, valid, settle_s: float, max_gap: float, last: tuple[float, float] = (math.nan, math.nan)):
     """Which samples have settled: ``valid`` and at least ``settle_s`` seconds after the estimator's last
     (re)start, the first valid sample or the first whose valid predecessor is more than ``max_gap`` seconds
