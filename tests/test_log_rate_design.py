@@ -65,6 +65,15 @@ def test_an_estimator_warns_of_a_log_far_from_its_data_sheet_rate_once():
         warnings.simplefilter("error")
         est.run(s)                                                  # once
         estimators.make("pif-modified").run(Signals(t / 10, s.vx, s.ay, s.r, s.delta_f))   # 100 Hz: none
+    stepped = estimators.make("pif-modified")                     # step() says it too, at its first interval
+    with pytest.warns(RuntimeWarning, match="sampled at 10 Hz"):
+        for k in range(3):
+            stepped.step(t[k], 15.0, 0.0, 0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        stepped.reset()
+        for k in range(3):
+            stepped.step(t[k], 15.0, 0.0, 0.0)                      # once
 
 
 @pytest.mark.parametrize("name", ["pif-modified", "pif-rate", "pif-adaptive"])

@@ -253,13 +253,15 @@ class Estimator:
         """Warn (once) when a log's rate is far from :attr:`sheet_rate`: the weights then do not
         describe its sensors (:func:`roadbank.vehicle.for_log` designs for the log). The rate is read from an even
         sample of the log's intervals (:func:`roadbank.signals.spread_rate`): every ``run`` pays for it."""
-        rate = spread_rate(t)
-        # sheet_rate is set: the caller checks
-        if np.isfinite(rate) and abs(rate / self.sheet_rate - 1.0) > 0.25:  # type: ignore[operator]
+        self._warn_rate(spread_rate(t), 4)
+
+    def _warn_rate(self, rate: float, stacklevel: int) -> None:
+        """The warning of :meth:`_check_log_rate` for samples at ``rate`` (Hz), once (``sheet_rate`` set to None)."""
+        if self.sheet_rate is not None and np.isfinite(rate) and abs(rate / self.sheet_rate - 1.0) > 0.25:
             warnings.warn(f"{self.name}: its weights are the data sheet's {self.sheet_rate:.0f} Hz sensor's, "
                           f"this log is sampled at {rate:.3g} Hz; roadbank.vehicle.for_log({self.name!r}, "
                           "signals) designs for the log's rate and road noise, as `roadbank estimate` does",
-                          RuntimeWarning, stacklevel=3)
+                          RuntimeWarning, stacklevel=stacklevel)
             self.sheet_rate = None
 
     def _check_steering(self, delta_f) -> None:
@@ -489,7 +491,9 @@ class Estimator:
         if not math.isfinite(t):
             return
         if t > self._det_t:                     # False while _det_t is NaN
-            self._use_rate(interval_rate(t - self._det_t))
+            rate = interval_rate(t - self._det_t)
+            self._warn_rate(rate, 4)            # step()'s samples (run() has warned already, from the whole log)
+            self._use_rate(rate)
             self._detect = False
         self._det_t = t
 
@@ -759,6 +763,7 @@ class ScheduledObserver(Estimator):
     kernel = "lpv"
 
     def observer(self, vx: float):  # pragma: no cover - abstract
+        """``(F, G, H, D)`` of the observer at the speed ``vx`` (m/s): ``F`` (1/s), inputs ``[delta_f, ay, r]``."""
         raise NotImplementedError
 
     def _grid_design(self):
@@ -774,7 +779,7 @@ class ScheduledObserver(Estimator):
         return scheduled_tables(self.observer, self.design.vgrid)
 
     def error_dynamics(self, vx: float) -> np.ndarray:
-        """Continuous-time matrix ``F(vx)`` (1/s) governing the estimation error."""
+        """Continuous-time matrix ``F(vx)`` (1/s) governing the estimation error at the speed ``vx`` (m/s)."""
         return self.observer(vx)[0]
 
 

@@ -33,4 +33,5 @@ class Kinematic(ScheduledObserver):
     default_v_min = KINEMATIC_V_MIN
 
     def observer(self, vx: float):
+        """``(F, G, H, D)`` of the kinematic estimate at ``vx`` (m/s): no states, ``w = (ay - vx r) / g``."""
         return kinematic_observer(self.design, vx)

@@ -321,7 +321,7 @@ class PIF(ScheduledObserver):
         return A - Kg @ C, B + Kg @ Dy, Lw, np.zeros((1, 3))
 
     def observer(self, vx: float):
-        """``(F, G, H, D)`` of the steady-state filter at ``vx`` (see ScheduledObserver)."""
+        """``(F, G, H, D)`` of the steady-state filter at ``vx`` (m/s; see ScheduledObserver)."""
         return self._observer(self.design_model(vx), vx)
 
     def _builds_as_pif(self) -> bool:

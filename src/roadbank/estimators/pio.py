@@ -102,6 +102,7 @@ class PIO(ScheduledObserver):
         return pio_gain(self.design, model, vx)
 
     def observer(self, vx: float):
+        """``(F, G, H, D)`` of the observer at ``vx`` (m/s; see ScheduledObserver)."""
         model = augmented_design_model(self.design.params, vx, self.design.model)
         A, B, C, Dy, Lw, _ = model
         Kg = self._gain(model, vx)
