@@ -172,3 +172,11 @@ def reads_as_number(text: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+def describe_offsets(offsets) -> str:
+    """Sensor offsets by channel (a mapping, :attr:`roadbank.vehicle.Vehicle.sensor_offsets`, SI: ``r`` rad/s, ``ay``
+    m/s^2, ``delta_f`` rad) in words and display units, e.g. ``"yaw rate +0.500 deg/s, ay +0.150 m/s^2"``."""
+    words = {"r": lambda v: f"yaw rate {math.degrees(v):+.3f} deg/s", "ay": lambda v: f"ay {v:+.3f} m/s^2",
+             "delta_f": lambda v: f"steering {math.degrees(v):+.3f} deg (road wheel)"}
+    return ", ".join(words[c](v) for c, v in offsets.items())

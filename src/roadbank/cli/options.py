@@ -63,7 +63,7 @@ def vehicle_offsets(vehicle, removed_from: str) -> dict[str, float]:
     """The sensor offsets identified in ``vehicle``'s file (``{channel: SI value}``, empty without a vehicle or
     offsets), said on stderr with what they are ``removed_from`` ("every log", "the measured channels in C"); a
     malformed one is a usage error of ``--vehicle``."""
-    from ..vehicle.file import describe_offsets
+    from ..units import describe_offsets
 
     try:
         offsets = vehicle.sensor_offsets if vehicle is not None else {}

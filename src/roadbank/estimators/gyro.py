@@ -552,11 +552,11 @@ class KinematicGyro(ScheduledObserver):
         the roll rate is not corrected for the grade, and once an ``ax`` has come, the windows that hold the NaN are
         not, as in :meth:`run`) and the pitch rate ``q`` (rad/s; None: the log has none, the window's pitch). Give
         every one the log has: :meth:`run` reads them all, and with them both give the same numbers."""
+        t, vx, ay, r, delta_f = sample_floats(self.name, t, vx, ay, r, delta_f)     # arrays: one sample, said first
         if p is None:
             raise ValueError(f"{self.name}: step() needs the roll rate, step(t, vx, ay, r, delta_f, p=p, ax=ax, q=q) "
                              f"(rad/s, m/s^2, rad/s); {_FUSES}")
-        t, vx, ay, r, delta_f, p, ax = sample_floats(self.name, t, vx, ay, r, delta_f, p,
-                                                     math.nan if ax is None else ax)
+        p, ax = sample_floats(self.name, p, math.nan if ax is None else ax)
         t, self._gaps = gap_stamp(t, self._gaps, MAX_GAP_S, self.max_gap, self.log_gaps)
         # the grade's window takes samples in time order only (a stamp not after the last one is held anyway)
         if self._grade_t < t < math.inf and self.grade.window > 0 and (not np.isnan(ax) or self.grade.started):

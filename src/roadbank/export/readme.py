@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..vehicle.file import describe_offsets
+from ..units import describe_offsets
 from .design import ExportDesign
 
 

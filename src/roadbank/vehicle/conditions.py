@@ -132,6 +132,12 @@ NOISE_AT_SOURCE_CHOICES = ("none", "floor", "all")
 NOISE_OCTAVE = "all"
 #: the values :data:`NOISE_OCTAVE` may take
 NOISE_OCTAVES = ("none", "fast", "all")
+#: whether the blend's gate (``kinematic-pif``) filters the yaw rate over at least its source's interval where a
+#: logger wrote the yaw rate faster than its sensor (``log_r_source``, Hz; a held yaw rate's steps otherwise read as
+#: yaw accelerations). The fifty-third stage of :mod:`roadbank.tuning.real` chooses it
+GATE_AT_SOURCE = False
+#: the values :data:`GATE_AT_SOURCE` may take
+GATE_AT_SOURCE_CHOICES = (False, True)
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
 #: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it
 NOISE_OCTAVE_TOP = 1.5
@@ -182,7 +188,9 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
     with np.errstate(invalid="ignore"):
         diff_noise = diff_noise_std(np.asarray(signals.ay, np.float64) - vx * np.asarray(signals.r, np.float64), moving)
     # two significant digits: logs of one car and road share a design (the design cache)
-    return {"log_rate": sample_rate(signals.t), "log_ay_noise": float(f"{ay_noise:.2g}"),
+    rate = sample_rate(signals.t)
+    source = {"log_r_source": float(f"{rate / k_r:.3g}")} if GATE_AT_SOURCE and k_r > 1 else {}
+    return {**source, "log_rate": rate, "log_ay_noise": float(f"{ay_noise:.2g}"),
             "log_r_noise": float(f"{r_noise:.2g}"), "log_ay_floor": float(f"{ay_floor:.2g}"),
             "log_diff_noise": float(f"{diff_noise:.2g}"),
             "log_roll_rate": _checked(signals, "p", vx, moving, roll_rate_slope),
@@ -449,7 +457,7 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
                    log_r_noise: float | None = None, log_ay_floor: float | None = None,
                    log_diff_noise: float | None = None, log_roll_rate: float | None = None,
                    log_ax: float | None = None, log_gyro_unbiased: float | None = None,
-                   log_pitch_rate: float | None = None, **options):
+                   log_pitch_rate: float | None = None, log_r_source: float | None = None, **options):
     """``estimators.make(name, params, **options)`` for a log sampled at ``log_rate`` by ``sensors``.
 
     A default-tuned PIF (:func:`roadbank.estimators.pif.with_sensor_noise`) gets the weights
@@ -501,6 +509,9 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         (``pitch_bandwidth`` :data:`roadbank.estimators.gyro.UNBIASED_PITCH_BANDWIDTH`, ``pitch_start``
         ``UNBIASED_PITCH_START`` and ``pitch_anchor`` ``UNBIASED_PITCH_ANCHOR``, the thirty-ninth to forty-fifth
         stages).
+    log_r_source : float, optional
+        The rate (Hz) of the yaw rate's sensor where a logger wrote it faster (:data:`GATE_AT_SOURCE`): the blend's
+        gate then filters the yaw rate over at least that sensor's interval (``gate_tf``), unless given.
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
@@ -539,6 +550,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
                 options = {**estimators.gyro.UNBIASED_PITCH, **options}
         elif lead_samples is not None:
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
+            if log_r_source is not None and log_r_source > 0:
+                options.setdefault("gate_tf", max(estimators.gated.GATED_TUNING["gate_tf"], 1.0 / log_r_source))
             if log_diff_noise is not None and math.isfinite(log_diff_noise) and log_diff_noise > 0:
                 options.setdefault("noise_ref", log_diff_noise ** 2)
     if sensors.r_variance > 0:

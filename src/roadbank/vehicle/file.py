@@ -49,14 +49,6 @@ OFFSET_CHANNELS = {"yaw_rate_offset": ("r", "rad/s"), "ay_offset": ("ay", "m/s^2
                    "steering_offset": ("delta_f", "rad")}
 
 
-def describe_offsets(offsets: Mapping[str, float]) -> str:
-    """Sensor offsets by channel (:attr:`Vehicle.sensor_offsets`, SI) in words and display units, e.g. ``"yaw rate
-    +0.500 deg/s, ay +0.150 m/s^2"``."""
-    words = {"r": lambda v: f"yaw rate {math.degrees(v):+.3f} deg/s", "ay": lambda v: f"ay {v:+.3f} m/s^2",
-             "delta_f": lambda v: f"steering {math.degrees(v):+.3f} deg (road wheel)"}
-    return ", ".join(words[c](v) for c, v in offsets.items())
-
-
 def _py(v):
     """numpy scalars/arrays and tuples -> Python scalars and lists (what TOML holds)."""
     if hasattr(v, "tolist") and not isinstance(v, (str, bytes)):  # numpy scalar or array

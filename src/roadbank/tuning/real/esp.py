@@ -266,6 +266,7 @@ from ...vehicle import conditions
 from ...estimators.gated import KINEMATIC_PIF_BANK_RATE, KINEMATIC_PIF_GATE, KINEMATIC_PIF_KAPPA
 from ...estimators.kinematic_smoother import KinematicSmoother
 from ...estimators.lowpass import KinematicLowPass
+from ...estimators.offsets import with_online_offsets
 from ...sim import SCENARIOS, run_scenario
 from ...sim.params import PlantParams
 from ...signals import Signals, concat_signals, sample_rate
@@ -346,6 +347,13 @@ NOISE_OCTAVE_TOPS = (2.0, 1.5, 3.0, 4.0)
 RESAMPLE_FACTOR = 10
 #: the rate (Hz) of the eighteenth stage's interpolated KITTI training drives
 UPSAMPLED_RATE_HZ = 100.0
+#: the rates (Hz) at which the fifty-third stage writes each KITTI training drive holding every frame
+HELD_RATES_HZ = (50.0, 100.0)
+#: the fifty-third stage's rule: B ships if its median is below A's by more than this (deg) ...
+GATE_SOURCE_GAIN_DEG = 0.005
+#: ... and it is worse than A by more than this (deg) on at most :data:`GATE_SOURCE_WORSE_LOGS` logs
+GATE_SOURCE_WORSE_DEG = 0.02
+GATE_SOURCE_WORSE_LOGS = 4
 #: the stages before the fourteenth took the bank-rate prior as a rate in time
 _TIME_RATE = {"bank_speed_exp": 0.0}
 #: the stages before the twelfth ran on the design span's noise throughout
@@ -530,7 +538,7 @@ def design_settings(**settings):
 
 #: the module settings of :mod:`roadbank.vehicle.conditions` that :func:`design_settings` sets
 _DESIGN_SETTINGS = ("QUIET_FLOOR_RATE", "QUIET_FLOOR_SIGNAL", "NOISE_AT_SOURCE", "NOISE_OCTAVE", "NOISE_OCTAVE_TOP",
-                    "TRUST_FIXED_CHANNELS")
+                    "TRUST_FIXED_CHANNELS", "GATE_AT_SOURCE")
 #: the settings as each stage ran: the eighteenth and nineteenth before the twentieth, the twentieth before the
 #: twenty-first
 _BEFORE_SOURCE = {"noise_at_source": "none", "noise_octave": "none"}
@@ -599,6 +607,41 @@ def resampled_logs(logs, factor: int = RESAMPLE_FACTOR, scoring=KITTI_SCORING) -
                           for c in ("vx", "ay", "r", "delta_f")))
         out.append((up, np.interp(t, s.t, ref), masks(up.t, up.vx, scoring)[1]))
     return out
+
+
+def held_logs(logs, rate: float, scoring=KITTI_SCORING) -> list:
+    """``logs`` (:func:`training_logs`) as a logger that writes its channels onto a ``rate`` (Hz) grid by holding each
+    frame writes them: every channel the last frame's value at or before each grid time, the grid from the first frame
+    on; the reference roll (rad) linear in time (the truth at the grid time); the scored samples recomputed with
+    ``scoring``."""
+    out = []
+    for s, ref, _ in logs:
+        t = s.t[0] + np.arange(int(np.floor((s.t[-1] - s.t[0]) * rate)) + 1) / rate
+        last = np.searchsorted(s.t, t, side="right") - 1
+        up = Signals(t, *(np.asarray(getattr(s, c))[last] for c in ("vx", "ay", "r", "delta_f")))
+        out.append((up, np.interp(t, s.t, ref), masks(up.t, up.vx, scoring)[1]))
+    return out
+
+
+def choose_gate_at_source(logs, forms) -> tuple:
+    """The fifty-third stage (docs/estimators.md): ``kinematic-pif`` as ``roadbank estimate`` runs it (designed for
+    each log, behind the online offset learner) with :data:`roadbank.vehicle.conditions.GATE_AT_SOURCE` False (A, as
+    shipped before) and True (B), on ``forms`` (the KITTI training drives written held and interpolated: a list of
+    logs). Returns ``(chosen, {choice: raw RMS per log (deg)})``. ``logs`` (the drives as recorded) must give the same
+    outputs under both (their yaw rate is at its sensor's rate): a ValueError where they do not."""
+    def build(choice):
+        at = _with_settings(gate_at_source=choice)
+        return lambda s: with_online_offsets(at(s))
+
+    for s, _, _ in logs:
+        a, b = (build(c)(s).run(s).theta for c in (False, True))
+        if not np.array_equal(a, b):
+            raise ValueError("a log at its sensors' rate got another design: the stage's guard fails")
+    errs = {c: log_errors(build(c), forms) for c in (False, True)}
+    a, b = np.array(errs[False]), np.array(errs[True])
+    ships = (np.median(b) < np.median(a) - GATE_SOURCE_GAIN_DEG
+             and int(np.sum(b > a + GATE_SOURCE_WORSE_DEG)) <= GATE_SOURCE_WORSE_LOGS)
+    return bool(ships), errs
 
 
 def choose_noise_octave(logs, up, resampled, sim_sets, choices=NOISE_OCTAVES) -> tuple:
