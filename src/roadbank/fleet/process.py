@@ -150,7 +150,8 @@ def design_words(design: dict, estimator: str) -> str:
         words += (f"; its pitch rate does not follow the pitch in its ax ({_off(q, RATE_MISTAKES)}), so the grade's "
                   "pitch comes from its ax alone")
     if design.get("source"):
-        words += f"; written faster than their sensor, noise read at the sensor's rate: {design['source']}"
+        words += (f"; written faster than their sensor, noise (and the gate's yaw rate, where r is so written) read at "
+                  f"the sensor's rate: {design['source']}")
     return words
 
 

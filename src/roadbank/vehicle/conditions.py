@@ -135,7 +135,7 @@ NOISE_OCTAVES = ("none", "fast", "all")
 #: whether the blend's gate (``kinematic-pif``) filters the yaw rate over at least its source's interval where a
 #: logger wrote the yaw rate faster than its sensor (``log_r_source``, Hz; a held yaw rate's steps otherwise read as
 #: yaw accelerations). The fifty-third stage of :mod:`roadbank.tuning.real` chooses it
-GATE_AT_SOURCE = False
+GATE_AT_SOURCE = True
 #: the values :data:`GATE_AT_SOURCE` may take
 GATE_AT_SOURCE_CHOICES = (False, True)
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
