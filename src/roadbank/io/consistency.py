@@ -12,7 +12,9 @@ alone looks plausible (60 km/h read as 60 m/s passes the per-channel check).
 correction restores the balance. A log that never turns hard (fewer than :data:`MIN_SAMPLES` samples
 above :data:`TURN`, as every shared KITTI drive) is still read for the slope of ``ay`` on ``vx r`` over
 its gentle turns (above :data:`GENTLE_TURN`): an ``ay`` in g or a flipped sign is warned about there
-too. Driving straight (``vx r`` near 0) shows nothing: then no conclusion is drawn.
+too, and a speed in km/h or mph where what is left of ``ay`` reads as banks of more than 15 deg root mean square
+(:data:`GENTLE_SPEED_TILT`); with too few gentle turns, the slope over every moving sample names an ``ay`` in g.
+Driving straight (``vx r`` near 0) shows nothing: then no conclusion is drawn.
 
 Over the whole log (:class:`Sums`, added chunk by chunk, read at its end by :func:`log_verdict`), two more
 mistakes that keep the balance's residual small are named:
@@ -103,6 +105,12 @@ SLOPE_SPEED_WARN = 0.6
 SPEED_TILT = G * math.sin(math.radians(32.0))
 #: the speed read over the true one (-) for a speed in km/h or in mph (or knots) declared m/s
 SPEED_SCALES = (("km/h", 3.6), ("mph", 1 / 0.44704))
+#: :data:`SPEED_TILT`'s part for a log that never turns hard: the root mean square of ``|ay - vx r|`` (m/s^2) over the
+#: gently turning samples, above which (``g sin 15 deg``: a bank no public road keeps through its turns)
+#: :func:`gentle_warnings` warns of a speed unit. The 16 KITTI drives as recorded read 0.22-0.53 (0.85 on one with a
+#: single sample), their speed in km/h 1.47-4.81, in mph 0.92-2.80; the paper's bank-lane-change (14 deg bank steps)
+#: 1.62-1.69 with a slope of 0.39-0.49, as a speed in mph would read: so it is not warned about
+GENTLE_SPEED_TILT = G * math.sin(math.radians(15.0))
 #: the correlation of ``ay`` with ``vx r`` over every moving sample from which their slope is read (the shared
 #: KITTI drives 0.44-0.98; a straight drive's is its noise's)
 CORR_MIN = 0.6
@@ -167,7 +175,7 @@ class Sums:
     :func:`gentle_sums`;
     ``motion`` counts the samples in motion and those reversing (:func:`reversing_warnings`)."""
 
-    gentle: tuple = (0.0, 0.0, 0)
+    gentle: tuple = (0.0, 0.0, 0, 0.0)
     moments: tuple = (0, 0.0, 0.0, 0.0, 0.0, 0.0)
     ranges: tuple = (math.inf, -math.inf, math.inf, -math.inf, math.inf, -math.inf)
     #: ``(samples in motion, those of them reversing)``: finite ``|vx| >=`` :data:`MOVING`, and ``vx <= -MOVING``
@@ -235,6 +243,8 @@ def log_verdict(sums: Sums, decided: bool, source="signals", columns: dict | Non
             corr, k = cov / math.sqrt(va * vy), cov / va
             if corr >= CORR_MIN:
                 _unit_error(k, f"{n} moving samples (correlation {corr:.2f})", source, named)
+                if not decided and sums.gentle[2] < MIN_GENTLE:     # too few turns for the gentle slope: g, a sign
+                    out = out + _slope_warnings(k, n, "moving", source, named)
     out += reversing_warnings(sums.motion, source, named) + dead_roll_rate(sums.roll_rate, source, columns)
     return out + ([] if decided else gentle_warnings(sums.gentle, source, columns))
 
@@ -287,21 +297,28 @@ def _dead_channels(ranges: tuple, n: int, std_a: float, std_ay: float, source, n
     return out
 
 
-def gentle_sums(vx, ay, r) -> tuple[float, float, int]:
-    """``(sum ay vx r, sum (vx r)^2, count)`` over the gently turning samples (``|vx r| >`` :data:`GENTLE_TURN`;
-    ``vx`` m/s, ``ay`` m/s^2, ``r`` rad/s): the slope of :func:`gentle_warnings`, summed chunk by chunk."""
+def gentle_sums(vx, ay, r) -> tuple[float, float, int, float]:
+    """``(sum ay vx r, sum (vx r)^2, count, sum (ay - vx r)^2)`` over the gently turning samples (``|vx r| >``
+    :data:`GENTLE_TURN`; ``vx`` m/s, ``ay`` m/s^2, ``r`` rad/s): the slope and tilt of :func:`gentle_warnings`,
+    summed chunk by chunk."""
     sel = turning(vx, ay, r, GENTLE_TURN)
     a = vx[sel] * r[sel]
-    return float(np.sum(ay[sel] * a)), float(np.sum(a * a)), int(sel.sum())
+    return float(np.sum(ay[sel] * a)), float(np.sum(a * a)), int(sel.sum()), float(np.sum((ay[sel] - a) ** 2))
 
 
 def gentle_warnings(sums, source="signals", columns: dict | None = None) -> list[str]:
     """The slope warnings of :func:`check_balance` from :func:`gentle_sums` (added over the log's chunks), for a log
-    with fewer than :data:`MIN_SAMPLES` turning samples; nothing below :data:`MIN_GENTLE` gently turning ones."""
-    say, saa, n = sums
+    with fewer than :data:`MIN_SAMPLES` turning samples: a unit or sign (:func:`_slope_warnings`), and a speed that
+    reads like km/h or mph where what is left of ``ay`` has the root mean square of a bank no road has
+    (:data:`GENTLE_SPEED_TILT`; a KITTI drive whose speed is in km/h had run silent to 45 deg of bank); nothing
+    below :data:`MIN_GENTLE` gently turning ones."""
+    say, saa, n, sres = sums
     if n < MIN_GENTLE:
         return []
-    return _slope_warnings(say / saa, n, "gently turning", source, _namer(columns))
+    named = _namer(columns)
+    k, tilt = say / saa, math.sqrt(sres / n)
+    return (_slope_warnings(k, n, "gently turning", source, named)
+            + speed_warnings(k, tilt, n, source, named, "gently turning", GENTLE_SPEED_TILT, "root mean square"))
 
 
 def _namer(columns: dict | None):
@@ -326,20 +343,20 @@ def _slope_warnings(k: float, n: int, what: str, source, named) -> list[str]:
     return []
 
 
-def speed_warnings(k: float, tilt: float, n: int, source, named) -> list[str]:
+def speed_warnings(k: float, tilt: float, n: int, source, named, what: str = "turning",
+                   limit: float = SPEED_TILT, tilt_is: str = "95th percentile") -> list[str]:
     """The warning for a speed that reads like km/h or mph declared as m/s: the slope ``k`` (-) of ``ay`` on ``vx r``
-    over ``n`` turning samples below :data:`SLOPE_SPEED_WARN` and brought into :data:`SLOPE_FIXED` by a unit of
-    :data:`SPEED_SCALES`, with the 95th percentile ``tilt`` (m/s^2) of ``|ay - vx r|`` there above
-    :data:`SPEED_TILT` (a bank no public road has)."""
+    over ``n`` samples (``what``: which) below :data:`SLOPE_SPEED_WARN` and brought into :data:`SLOPE_FIXED` by a
+    unit of :data:`SPEED_SCALES`, with ``tilt`` (m/s^2; ``tilt_is`` says which statistic of ``|ay - vx r|`` there)
+    above ``limit`` (default :data:`SPEED_TILT`, a 95th percentile: a bank no public road has)."""
     fits = [u for u, f in SPEED_SCALES if SLOPE_FIXED[0] <= k * f <= SLOPE_FIXED[1]]
-    if not (fits and SLOPE_PLAUSIBLE[0] <= k < SLOPE_SPEED_WARN and tilt > SPEED_TILT):
+    if not (fits and SLOPE_PLAUSIBLE[0] <= k < SLOPE_SPEED_WARN and tilt > limit):
         return []
     deg = math.degrees(math.asin(min(tilt / G, 1.0)))
-    return [f"{source}: channel {named(('speed',))}: ay is only {k:.2f} times vx r over {n} turning samples (0.76-1.35 "
-            f"on the real roads the project has), and what is left of ay reads as banks of {deg:.0f} deg (95th "
-            f"percentile): it reads like a speed in {' or '.join(fits)} declared as m/s, unless the car turned on a "
-            "steep banked track. A channel map states the speed's unit (`roadbank channels LOG -o map.toml` guesses "
-            "it)"]
+    return [f"{source}: channel {named(('speed',))}: ay is only {k:.2f} times vx r over {n} {what} samples (0.76-1.35 "
+            f"on the real roads the project has), and what is left of ay reads as banks of {deg:.0f} deg ({tilt_is}): "
+            f"it reads like a speed in {' or '.join(fits)} declared as m/s, unless the car turned on a steep banked "
+            "track. A channel map states the speed's unit (`roadbank channels LOG -o map.toml` guesses it)"]
 
 
 def _residual(vx, ay, r) -> tuple[float, int, np.ndarray]:
