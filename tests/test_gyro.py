@@ -889,3 +889,21 @@ def test_one_streaming_loop_serves_every_estimator_and_a_stale_stamp_or_bad_time
         plain = [pif.step(s.t[k], s.vx[k], s.ay[k], s.r[k], s.delta_f[k]).theta for k in range(len(s))]
         pif.reset()
         np.testing.assert_array_equal(stream(pif)[0], plain)
+
+
+@pytest.mark.skipif(len(list(DATA.glob("kitti-oxts*/20*"))) < 16, reason="the 16 shared KITTI drives not found")
+def test_a_log_in_frd_declared_iso_is_refused_by_its_pitch_rate_and_an_inverted_roll_rate_is_not():
+    """A roll rate reads the same in ISO and FRD, so its opposite sign may be its own or ay's and the yaw rate's (FRD
+    declared ISO: the bank mirrored, which had run with exit 0). The pitch rate flips with FRD and not with an inverted
+    roll rate: on the 16 KITTI drives read as a channel map's (nothing trusted), FRD is refused on every one, a roll
+    rate inverted alone on none (its design drops it, as before), and the drives as recorded pass."""
+    from roadbank.io import LogError
+    from roadbank.io.kitti import load_kitti_oxts
+    from roadbank.vehicle import log_conditions
+
+    for drive in sorted(DATA.glob("kitti-oxts*/20*")):
+        s = dataclasses.replace(load_kitti_oxts(drive).signals, fixed=frozenset(), unbiased=frozenset())
+        assert log_conditions(s)["log_roll_rate"] == pytest.approx(1.0, abs=0.6), drive.name
+        assert log_conditions(dataclasses.replace(s, p=-s.p))["log_roll_rate"] < 0, drive.name
+        with pytest.raises(LogError, match="reads as FRD declared as ISO 8855.*convention = \"FRD\""):
+            log_conditions(dataclasses.replace(s, ay=-s.ay, r=-s.r, q=-s.q))

@@ -18,6 +18,7 @@ from ..models.attitude import euler_pitch_rate, kinematic_roll
 from ..params import VehicleParams
 from ..signals import (DYNAMICS_BAND_HZ, band_inner, band_windows, diff_noise_std, integral_band_fit, noise_band_hz,
                        road_noise_floor_std, road_noise_std, running_integral, sample_rate, source_step)
+from ..io.errors import LogError
 from .sensors import SensorSpec
 
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
@@ -69,6 +70,12 @@ ROLL_SLOPE_RANGE = (0.5, 2.0)
 TRUST_FIXED_CHANNELS = True
 #: what a format's own roll rate or ``ax`` reads in :func:`log_conditions`: the slope of a right channel (-)
 FIXED_SLOPE = 1.0
+#: a roll rate whose check slope reads the opposite sign (:data:`ROLL_SLOPE_RANGE` mirrored) may be inverted alone
+#: or belong to a log in the FRD convention declared ISO (ay and the yaw and pitch rates flipped; a roll rate reads the
+#: same in both): the pitch rate tells them apart. Its check slope (:func:`pitch_rate_slope`) below this (-) reads as
+#: FRD, and the log is refused (:func:`frd_error`): the 16 KITTI drives as recorded read 0.56-1.08, with ay, the yaw
+#: rate and the pitch rate flipped -1.12-0.13 (the kinematic roll in the Euler pitch rate flips too)
+FRD_PITCH_MAX = 0.35
 #: low-passes whose update is limited by default (their ``clip``), given the log's noise densities ``Q_ay`` and ``R``
 #: (:func:`noise_densities`) by :func:`make_estimator`, as a sensor-weighted PIF is
 LIMITED_LOWPASSES = ("kinematic-smoother",)
@@ -193,11 +200,29 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
     return {**source, "log_rate": rate, "log_ay_noise": float(f"{ay_noise:.2g}"),
             "log_r_noise": float(f"{r_noise:.2g}"), "log_ay_floor": float(f"{ay_floor:.2g}"),
             "log_diff_noise": float(f"{diff_noise:.2g}"),
-            "log_roll_rate": _checked(signals, "p", vx, moving, roll_rate_slope),
+            "log_roll_rate": frd_error(signals, vx, moving, _checked(signals, "p", vx, moving, roll_rate_slope)),
             "log_ax": _checked(signals, "ax", vx, moving, ax_slope),
             "log_gyro_unbiased": 1.0 if "p" in signals.unbiased and has_channel(signals, "p", moving) else None,
             "log_pitch_rate": (_checked(signals, "q", vx, moving, pitch_rate_slope) if "q" in signals.unbiased
                                else None)}
+
+
+def frd_error(signals, vx, moving, roll: float | None) -> float | None:
+    """``roll`` (the roll rate's check slope, -), or LogError where it reads the opposite sign and the pitch rate's
+    check slope is below :data:`FRD_PITCH_MAX`: a log in the FRD convention declared ISO, whose bank would come out
+    mirrored (``vx`` m/s and ``moving`` as :func:`roll_rate_slope`'s)."""
+    lo, hi = ROLL_SLOPE_RANGE
+    if roll is None or not -hi <= roll <= -lo:
+        return roll
+    pitch = pitch_rate_slope(signals, vx, moving)
+    if pitch is None or pitch >= FRD_PITCH_MAX:
+        return roll
+    raise LogError(f"the log reads as FRD declared as ISO 8855: its roll rate follows the roll in its ay with the "
+                   f"opposite sign (check slope {roll:.2f}) and its pitch rate does not follow the pitch of its ax "
+                   f"(slope {pitch:.2f}; 0.56-1.08 on real drives in ISO): ay and the yaw and pitch rates are "
+                   "positive the other way, and the bank would come out mirrored. Give convention = \"FRD\" in a "
+                   "channel map (`roadbank channels LOG -o map.toml`), or, if ay is right (positive in a left turn), "
+                   "invert = true on the roll rate alone")
 
 
 def _checked(signals, name: str, vx, moving, check) -> float | None:
