@@ -163,7 +163,8 @@ RATE_MISTAKES = ((math.pi / 180, "deg/s declared as rad/s"), (180 / math.pi, "ra
 ROLL_RATE_MISTAKES = RATE_MISTAKES[:2] + (
     (-1.0, "the opposite sign: either the roll rate's (invert = true on it in a channel map) or ay's and the yaw "
            "rate's (FRD declared as ISO, an upside-down sensor: convention = \"FRD\"), which mirrors the bank; a roll "
-           "rate reads the same in both conventions, so check ay's sign in a left turn"),)
+           "rate reads the same in both conventions, so check ay's sign in a left turn (a pitch rate and ax would "
+           "tell: with them, FRD is refused)"),)
 #: what a roll rate's check names where no usual mistake fits: either channel may be the wrong one
 ROLL_SUSPECTS = ("another axis, sign or unit of the roll rate, or an ay from another axis (a sensor mounted turned "
                  "in the car reads its ax there)?")
