@@ -554,10 +554,11 @@ class Estimator:
         """Process one sample: time (s), vx (m/s), ay (m/s^2), r (rad/s), delta_f (rad); the roll rate ``p``
         (rad/s), ``ax`` (m/s^2) and pitch rate ``q`` (rad/s), which the roll-rate estimators
         (:data:`roadbank.estimators.GYRO`) read, are ignored here, so that one loop that gives every channel it has
-        serves whichever estimator :func:`~roadbank.estimators.for_log` returns.
+        serves whichever estimator :func:`roadbank.vehicle.for_log` returns.
 
         Returns the estimate after this sample. An unusable sample (NaN/inf,
-        ``vx < v_min``, time not after the last valid sample) leaves the state
+        ``vx < v_min``, beyond a car's limits (:data:`roadbank.constants.AY_MAX`, ``YAW_RATE_MAX``, ``SPEED_MAX``),
+        time not after the last valid sample) leaves the state
         unchanged and returns the held outputs with ``valid=False``. An output
         beyond ``max_angle`` (the model has failed, e.g. a saturated front tyre in
         an original-model observer; ``|w| > 1`` has no angle and theta is clipped
