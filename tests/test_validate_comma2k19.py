@@ -62,3 +62,38 @@ def test_validate_missing_path_is_clean_error(tmp_path):
     res = CliRunner().invoke(main, ["validate", "comma2k19", str(tmp_path / "nope")])
     assert res.exit_code == 1
     assert "error:" in res.output and "Traceback" not in res.output
+
+
+def _cut_copy(src: Path, dst: Path, seconds: float, drop_steering: bool = False) -> Path:
+    """A copy of the segment ``src`` with every timed array of processed_log/ kept to its first ``seconds`` (s) and
+    the pose whole; without its steering-angle files where ``drop_steering``."""
+    import shutil
+
+    shutil.copytree(src, dst)
+    for tfile in (dst / "processed_log").rglob("t"):
+        t = np.load(tfile, allow_pickle=False)
+        keep = t < t[0] + seconds
+        value = np.load(tfile.parent / "value", allow_pickle=False)
+        for name, a in (("t", t), ("value", value)):
+            with open(tfile.parent / name, "wb") as fh:
+                np.save(fh, a[keep])
+    if drop_steering:
+        shutil.rmtree(dst / "processed_log" / "CAN" / "steering_angle")
+    return dst
+
+
+@needs_data
+def test_a_segment_with_nothing_to_score_is_named_and_the_others_scored(tmp_path):
+    """A 5 s segment (nothing moves after the warm-up) among good ones: named with the reason, the others scored (it
+    had stopped the whole run with "unexpected IndexError ... a bug"); a segment without its steering file is scored
+    (validate read that optional file directly: a bare Errno 2)."""
+    route = tmp_path / "route"
+    route.mkdir()
+    _cut_copy(SEGMENT, route / "0", 5.0)
+    _cut_copy(SEGMENT, route / "1", 1e9, drop_steering=True)
+    res = CliRunner().invoke(main, ["validate", "comma2k19", str(route), "--json", "--no-sensitivity",
+                                    "-o", str(tmp_path / "out.md")])
+    assert "Traceback" not in res.output and "a bug" not in res.output, res.output
+    assert "nothing to score" in res.output and "Errno" not in res.output
+    assert res.exit_code == 1                             # one segment could not be scored: said, the other written
+    assert (tmp_path / "out.md").exists()

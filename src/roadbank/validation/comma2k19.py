@@ -171,13 +171,18 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     scores, smoothed = run.scores, run.estimates
     m_fit, m_sc = run.fit, run.scored
     m_all = m_fit | m_sc
+    if not (m_fit.any() and m_sc.any()):        # a short, slow or standing segment: nothing to fit or to score
+        raise LogError(f"{path}: nothing to score: {np.count_nonzero(m_fit)} samples to fit the offset on and "
+                       f"{np.count_nonzero(m_sc)} to score (moving at >= the scoring speed after the {warmup_s:g} s "
+                       f"warm-up, the first {fit_fraction:g} of them fitting; {t[-1] - t[0]:.1f} s read)")
     i_split = int(np.flatnonzero(m_sc)[0])
 
     # ------------------------------------------------------------ data limits
     acc_t = np.load(Path(path) / "processed_log/IMU/accelerometer/t", allow_pickle=False)
     acc = np.load(Path(path) / "processed_log/IMU/accelerometer/value", allow_pickle=False)
     gyr = np.load(Path(path) / "processed_log/IMU/gyro/value", allow_pickle=False)
-    steer = np.load(Path(path) / "processed_log/CAN/steering_angle/value", allow_pickle=False)
+    steer_file = Path(path) / "processed_log/CAN/steering_angle/value"     # optional, as for the reader
+    steer = np.load(steer_file, allow_pickle=False) if steer_file.exists() else np.zeros(0)
 
     def quantum(x):
         d = np.abs(np.diff(np.unique(np.round(x, 12))))
