@@ -143,3 +143,57 @@ def test_the_smoother_with_the_rest_of_the_log_as_lookahead_gives_the_whole_run_
     assert np.max(np.abs(part - whole[:200])) < 1e-9
     read, ahead = KinematicGyroSmoother()._corrected(s[:200], True, s[200:])     # the stamps the passes read
     assert np.array_equal(np.concatenate([read.t, ahead.t]), gap_time(s.t, START, MAX_GAP_S, 10.0, "hold")[0])
+
+
+def test_unusable_samples_as_a_gap_step_and_pieces_give_one_run():
+    """``gaps_of = "usable"`` (the fifty-fourth stage's candidate B): rows without a speed inside a piece, across a
+    piece's edge and at the log's start are a gap as missing rows are; step(), pieces of 37 samples and one run agree
+    bit for bit, the rows held and flagged invalid, and the samples after the gap differ from the rows' reading."""
+    from roadbank.estimators.gyro import GYRO_GAPS_OF
+
+    rng = np.random.default_rng(4)
+    n = 600
+    t = np.arange(n) * 0.1
+    vx = 15.0 + np.sin(t / 7.0)
+    r = 0.05 * np.sin(t / 3.0)
+    roll = np.radians(2.0) * np.sin(t / 11.0)
+    ay = vx * r + 9.81 * np.sin(roll) + 0.05 * rng.standard_normal(n)
+    p = np.gradient(roll, t) + 0.002 * rng.standard_normal(n)
+    vx[0:3] = np.nan
+    vx[120:170] = np.nan                                  # 5 s without a speed, the IMU on
+    vx[292:300] = np.nan                                  # across the edge of the pieces at 296
+    s = Signals(t, vx, ay, r, np.full(n, np.nan), p=p)
+    out = {}
+    for mode in ("rows", "usable"):
+        est = KinematicGyro()
+        est.gaps_of = mode
+        whole = est.run(s)
+        est.reset()
+        stepped = [est.step(t[k], vx[k], ay[k], r[k], p=p[k]) for k in range(n)]
+        pieces = np.concatenate([est.run(s.take(slice(a, min(a + 37, n))), reset=(a == 0)).theta
+                                 for a in range(0, n, 37)])
+        np.testing.assert_array_equal([o.theta for o in stepped], whole.theta)
+        np.testing.assert_array_equal([o.valid for o in stepped], whole.valid)
+        np.testing.assert_array_equal(pieces, whole.theta)
+        assert not whole.valid[120:170].any()
+        out[mode] = whole.theta
+    assert GYRO_GAPS_OF == "rows"
+    assert not np.array_equal(out["rows"][170:200], out["usable"][170:200])
+    np.testing.assert_array_equal(out["rows"][:120], out["usable"][:120])
+
+
+@pytest.mark.slow
+def test_the_fifty_fourth_stage_keeps_the_rows_stamps():
+    """The rule (tuning.real.choose_gap_samples): B lowers the speed dropouts' median (0.2514 -> 0.2308) but raises
+    the drives' as recorded by more than 0.005 (0.1658 -> 0.1823: their stops below v_min read as gaps), so A stays."""
+    from roadbank.tuning import real
+    from roadbank.tuning.real.gyro import choose_gap_samples
+    if not DATA.is_dir():
+        pytest.skip(f"no real data under {DATA}")
+    logs = real.training_logs(DATA, roll_rate=True, pitch_rate=True)
+    if len(logs) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    chosen, errs = choose_gap_samples(logs)
+    assert chosen == "rows"
+    (a1, a2), (b1, b2) = errs["rows"], errs["usable"]
+    assert np.median(b2) < np.median(a2) - 0.005 and np.median(b1) > np.median(a1) + 0.005

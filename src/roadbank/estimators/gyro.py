@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
-from ..constants import MAX_GAP_S
+from ..constants import AY_MAX, MAX_GAP_S, SPEED_MAX, YAW_RATE_MAX
 from ..models.attitude import euler_roll_rate, grade_pitch, running_area
 from ..params import VehicleParams
 from ..signals import Estimate, Signals, concat_signals
@@ -81,6 +81,20 @@ GYRO_MAX_GAP_S = 10.0
 #: :mod:`roadbank.tuning.real`
 LOG_GAPS = ("trapezoid", "hold", "restart")
 GYRO_LOG_GAPS = "hold"
+#: whose time stamps that rule reads: ``"rows"`` (the log's, every row) or ``"usable"`` (those of the samples the filter
+#: can use, :func:`usable_samples`: a stretch of rows without a speed, a stop below ``v_min``, is then a gap as missing
+#: rows are); the fifty-fourth stage of :mod:`roadbank.tuning.real`
+GAPS_OF = ("rows", "usable")
+GYRO_GAPS_OF = "rows"
+
+
+def usable_samples(s: Signals, v_min: float) -> np.ndarray:
+    """Which samples of ``s`` the filter can use, as its kernel judges a sample's inputs (the time's order aside):
+    finite time, speed from ``v_min`` (m/s) to :data:`~roadbank.constants.SPEED_MAX`, a finite roll rate, ``ay`` and
+    yaw rate within a car's limits."""
+    with np.errstate(invalid="ignore"):
+        return (np.isfinite(s.t) & (s.vx >= v_min) & (s.vx <= SPEED_MAX) & np.isfinite(cast(np.ndarray, s.p))
+                & (np.abs(s.ay) <= AY_MAX) & (np.abs(s.r) <= YAW_RATE_MAX))
 #: the order of ``kinematic-gyro``'s complementary filter (2, or 4: :func:`gyro_observer`): the twenty-eighth stage
 GYRO_ORDER = 2
 #: the sideslip acceleration it takes out of the kinematic estimate (:func:`sideslip_per_eta`): the twenty-ninth stage
@@ -363,6 +377,7 @@ class KinematicGyro(ScheduledObserver):
                  start_hold=None, start_span=None, start_offset=None, grade_first_span=None, pitch_bandwidth=None,
                  pitch_start=(), pitch_offset_tau=None, pitch_anchor=(), log_gaps=None, **kw):
         self.log_gaps = str(GYRO_LOG_GAPS if log_gaps is None else log_gaps)
+        self.gaps_of = GYRO_GAPS_OF         # whose stamps the gap rule reads (GAPS_OF; a stage sets it)
         if self.log_gaps not in LOG_GAPS:
             raise ValueError(f"{self.name}: log_gaps must be one of {LOG_GAPS}, got {log_gaps!r}")
         self.cutoff = float(GYRO_CUTOFF_HZ if cutoff is None else cutoff)
@@ -526,16 +541,47 @@ class KinematicGyro(ScheduledObserver):
             self.reset()
         signals = self._read_time(signals)
         if lookahead is None:
-            return self.grade.correct(signals)
+            return self._graded(signals)
         n, end = len(signals), self._gaps
-        both = self.grade.correct(concat_signals([signals, self._read_time(lookahead)]), advance=n)
+        both = self._graded(concat_signals([signals, self._read_time(lookahead)]), advance=n)
         self._gaps = end                    # the lookahead's samples come again in the next piece
         return both[:n], both[n:]
 
+    def _graded(self, s: Signals, advance: int | None = None) -> Signals:
+        """:meth:`GradeCarry.correct` of ``s``; with ``gaps_of`` ``"usable"`` of its usable samples alone (an unusable
+        one's roll rate, which the filter holds through, left as it is), as :meth:`step` feeds the grade."""
+        use = usable_samples(s, self.v_min) if self.gaps_of == "usable" else None
+        if use is None or use.all():
+            return self.grade.correct(s, advance)
+        if not use.any():
+            return dataclasses.replace(s, ax=None, q=None)
+        k = None if advance is None else int(np.count_nonzero(use[:advance]))
+        part = self.grade.correct(s.take(np.flatnonzero(use)), k)
+        p = np.array(s.p, dtype=np.float64)
+        p[use] = part.p
+        return dataclasses.replace(s, p=p, ax=None, q=None)
+
     def _read_time(self, s: Signals) -> Signals:
-        """``s`` with the time stamps the filter reads (:func:`gap_time`, carried on from the last piece)."""
-        t, self._gaps = gap_time(s.t, self._gaps, MAX_GAP_S, self.max_gap, self.log_gaps)
-        return s if t is s.t else dataclasses.replace(s, t=t)
+        """``s`` with the time stamps the filter reads (:func:`gap_time`, carried on from the last piece; with
+        ``gaps_of`` ``"usable"`` read on the usable samples' stamps, the others' moved with their neighbours)."""
+        use = usable_samples(s, self.v_min) if self.gaps_of == "usable" else None
+        if use is None or use.all():
+            t, self._gaps = gap_time(s.t, self._gaps, MAX_GAP_S, self.max_gap, self.log_gaps)
+            return s if t is s.t else dataclasses.replace(s, t=t)
+        last, shift0 = self._gaps[0], self._gaps[1]
+        tu, self._gaps = gap_time(s.t[use], self._gaps, MAX_GAP_S, self.max_gap, self.log_gaps)
+        if not use.any():
+            return dataclasses.replace(s, t=s.t - shift0)
+        # an unusable sample keeps its place between the usable ones around it (their stamps moved; the last one
+        # before this piece read at its stamp less the shift then), its own held by the filter anyway
+        xs, ys = s.t[use], tu
+        if math.isfinite(last):
+            xs, ys = np.concatenate([[last], xs]), np.concatenate([[last - shift0], ys])
+        t = np.interp(s.t, xs, ys)
+        before, after = s.t < xs[0], s.t > xs[-1]
+        t[before] = s.t[before] - shift0
+        t[after] = s.t[after] - (xs[-1] - ys[-1])
+        return dataclasses.replace(s, t=t)
 
     def run(self, signals: Signals, *, reset: bool = True, lookahead: Signals | None = None) -> Estimate:
         """:meth:`Estimator.run <roadbank.estimators.base.Estimator.run>` of a log with a roll rate
@@ -557,9 +603,13 @@ class KinematicGyro(ScheduledObserver):
             raise ValueError(f"{self.name}: step() needs the roll rate, step(t, vx, ay, r, delta_f, p=p, ax=ax, q=q) "
                              f"(rad/s, m/s^2, rad/s); {_FUSES}")
         p, ax = sample_floats(self.name, p, math.nan if ax is None else ax)
-        t, self._gaps = gap_stamp(t, self._gaps, MAX_GAP_S, self.max_gap, self.log_gaps)
+        one = (self.gaps_of != "usable" or (self.v_min <= vx <= SPEED_MAX and math.isfinite(p)
+                                            and abs(ay) <= AY_MAX and abs(r) <= YAW_RATE_MAX))
+        t, self._gaps = (gap_stamp(t, self._gaps, MAX_GAP_S, self.max_gap, self.log_gaps) if one
+                         else (t - self._gaps[1], self._gaps))      # an unusable sample: held, as if absent
         # the grade's window takes samples in time order only (a stamp not after the last one is held anyway)
-        if self._grade_t < t < math.inf and self.grade.window > 0 and (not np.isnan(ax) or self.grade.started):
+        if one and self._grade_t < t < math.inf and self.grade.window > 0 and (not np.isnan(ax) or
+                                                                              self.grade.started):
             t_, vx_, ay_, r_, d_, p_, ax_ = (np.array([float(v)]) for v in (t, vx, ay, r, delta_f, p, ax))
             one = Signals(t_, vx_, ay_, r_, d_, p_, ax_, None if q is None else np.array([float(q)]))
             p = float(self.grade.correct(one).p[0])

@@ -193,8 +193,9 @@ import warnings
 import numpy as np
 
 from ... import vehicle
-from ...estimators.gyro import (GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, LOG_GAPS, SMOOTHER_PASSES,
+from ...estimators.gyro import (GAPS_OF, GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_CUTOFF_HZ, LOG_GAPS, SMOOTHER_PASSES,
                                SMOOTHER_SETTLED, UNBIASED_PITCH, KinematicGyro, KinematicGyroSmoother)
+from ...estimators.offsets import with_online_offsets
 from ...validation.scoring import SHORT_PIECES_S
 from .common import (BANDWIDTH_39, BEFORE_38, START_40, TIE_DEG, UNBIASED_36, fixed, lengths_objective, log_errors,
                      lowest_tied, per_log, rms_deg, whole_and_pieces, without_roll_rate)
@@ -427,6 +428,44 @@ def per_log_with(name: str, cls, **options):
                 setattr(est, key, value)
         return est
     return one
+
+
+#: the fifty-fourth stage's speed dropouts: lengths (s) and where they start (fractions of the scored samples)
+DROPOUT_LENGTHS_S = (0.7, 2.0, 5.0, 9.0)
+DROPOUT_PLACES = (0.3, 0.6)
+#: its rule (deg): B ships if it lowers the dropouts' median by more than this and raises the drives' by at most it
+GAPS_OF_GAIN_DEG = 0.005
+
+
+def speed_dropout_logs(logs, lengths=DROPOUT_LENGTHS_S, places=DROPOUT_PLACES) -> list:
+    """The fifty-fourth stage's set (2): each of ``logs`` (:func:`training_logs` with their roll rate) with its speed
+    missing (NaN, the rows kept: the IMU logs on) for each of ``lengths`` (s) from each of ``places`` (fractions of its
+    scored samples), one dropout per log; the scored mask recomputed (a sample without a speed is not scored)."""
+    out = []
+    for s, ref, m in logs:
+        scored = np.flatnonzero(m)
+        for length in lengths:
+            for frac in places:
+                t0 = s.t[scored[int(frac * (len(scored) - 1))]]
+                vx = np.where((s.t >= t0) & (s.t < t0 + length), np.nan, s.vx)
+                out.append((dataclasses.replace(s, vx=vx), ref, m & np.isfinite(vx)))
+    return out
+
+
+def choose_gap_samples(logs) -> tuple:
+    """The fifty-fourth stage (docs/estimators.md) on the KITTI training ``logs`` (:func:`training_logs` with their
+    roll rate, ``ax`` and pitch rate): ``kinematic-pif`` as ``roadbank estimate`` builds it, behind the online offset
+    learner, with ``gaps_of`` ``"rows"`` (A) and ``"usable"`` (B). Returns ``(chosen, {choice: (raw RMS per drive as
+    recorded, per dropout log) (deg)})``."""
+    dropouts = speed_dropout_logs(logs)
+    errs = {}
+    for choice in GAPS_OF:
+        build = per_log_with("kinematic-pif", KinematicGyro, gaps_of=choice)
+        learnt = lambda sig, b=build: with_online_offsets(b(sig))      # noqa: E731
+        errs[choice] = (log_errors(learnt, logs), log_errors(learnt, dropouts))
+    (a1, a2), (b1, b2) = errs["rows"], errs["usable"]
+    ships = (np.median(b2) < np.median(a2) - GAPS_OF_GAIN_DEG and np.median(b1) <= np.median(a1) + GAPS_OF_GAIN_DEG)
+    return ("usable" if ships else "rows"), errs
 
 
 def choose_smoother_passes(logs, modes=SMOOTHER_PASSES) -> tuple[str, dict, dict]:
