@@ -603,13 +603,13 @@ class KinematicGyro(ScheduledObserver):
             raise ValueError(f"{self.name}: step() needs the roll rate, step(t, vx, ay, r, delta_f, p=p, ax=ax, q=q) "
                              f"(rad/s, m/s^2, rad/s); {_FUSES}")
         p, ax = sample_floats(self.name, p, math.nan if ax is None else ax)
-        one = (self.gaps_of != "usable" or (self.v_min <= vx <= SPEED_MAX and math.isfinite(p)
-                                            and abs(ay) <= AY_MAX and abs(r) <= YAW_RATE_MAX))
-        t, self._gaps = (gap_stamp(t, self._gaps, MAX_GAP_S, self.max_gap, self.log_gaps) if one
+        counts = (self.gaps_of != "usable" or (self.v_min <= vx <= SPEED_MAX and math.isfinite(p)    # usable_samples
+                                               and abs(ay) <= AY_MAX and abs(r) <= YAW_RATE_MAX))
+        t, self._gaps = (gap_stamp(t, self._gaps, MAX_GAP_S, self.max_gap, self.log_gaps) if counts
                          else (t - self._gaps[1], self._gaps))      # an unusable sample: held, as if absent
         # the grade's window takes samples in time order only (a stamp not after the last one is held anyway)
-        if one and self._grade_t < t < math.inf and self.grade.window > 0 and (not np.isnan(ax) or
-                                                                              self.grade.started):
+        if counts and self._grade_t < t < math.inf and self.grade.window > 0 and (not np.isnan(ax) or
+                                                                                 self.grade.started):
             t_, vx_, ay_, r_, d_, p_, ax_ = (np.array([float(v)]) for v in (t, vx, ay, r, delta_f, p, ax))
             one = Signals(t_, vx_, ay_, r_, d_, p_, ax_, None if q is None else np.array([float(q)]))
             p = float(self.grade.correct(one).p[0])
