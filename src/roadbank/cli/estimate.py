@@ -19,7 +19,6 @@ from .options import PathOption, vehicle_offsets, vehicle_option
 from .parallel import one_pool, scheduler_option
 
 
-#: how the removed offsets are printed (Signals channel -> text)
 def _parse_estimators(values: tuple[str, ...]) -> list[str]:
     from .. import estimators
 

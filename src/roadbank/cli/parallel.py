@@ -9,7 +9,6 @@ when the command connects.
 from __future__ import annotations
 
 import functools
-
 import re
 import sys
 

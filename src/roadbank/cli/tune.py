@@ -41,6 +41,7 @@ from .parallel import scheduler_option
               help="Drives in the validation set (40).")
 def tune(vehicle, out, budget, seed, names, jobs, scheduler, train_drives, validation_drives):
     """Tune the estimators for a car (--vehicle) and write the result to a vehicle file."""
+    from ..sim.scenarios import LOST_CONTROL_DEG
     from ..tuning import pipeline
     from ..tuning.spaces import ON_REQUEST, TUNABLE
 
@@ -90,6 +91,7 @@ def tune(vehicle, out, budget, seed, names, jobs, scheduler, train_drives, valid
         click.echo(f"{name + mark:24s} {s.median_rms:10.3f} {s.p95_rms:8.3f} {s.mean_max:9.3f}")
     if any(outcome.left_out.values()):
         click.echo(f"\nnote: left out {outcome.left_out['train']} training and {outcome.left_out['validation']} "
-                   "validation drive(s) on which the simulated car lost control (sideslip above 10 deg: the "
-                   "drawn tyres and friction beyond its grip); no estimator's model holds there", err=True)
+                   "validation drive(s) on which the simulated car lost control (sideslip above "
+                   f"{LOST_CONTROL_DEG:g} deg: the drawn tyres and friction beyond its grip); no estimator's model "
+                   "holds there", err=True)
     click.echo(f"\nwrote {out} ({time.perf_counter() - t0:.0f} s)")

@@ -504,13 +504,18 @@ def choose_gate_filter(logs, sim_sets, tfs=GATE_TFS) -> tuple:
     return choose_loud_gate(logs, sim_sets, {tf: per_log("kinematic-pif", gate_tf=tf) for tf in tfs})
 
 
+def _grid(t: np.ndarray, rate: float) -> np.ndarray:
+    """A uniform time base (s) at ``rate`` (Hz) from the first of the stamps ``t`` (s) to at most their last."""
+    return t[0] + np.arange(int(np.floor((t[-1] - t[0]) * rate)) + 1) / rate
+
+
 def upsampled_logs(logs, rate: float = UPSAMPLED_RATE_HZ, scoring=KITTI_SCORING) -> list:
     """``logs`` (:func:`training_logs`) as a logger that interpolates its channels onto a common ``rate`` (Hz) grid
     writes them: every channel and the reference roll (rad) linear in time between the samples, the grid from the
     first sample on; the scored samples recomputed on the grid with ``scoring``."""
     out = []
     for s, ref, _ in logs:
-        t = s.t[0] + np.arange(int(np.floor((s.t[-1] - s.t[0]) * rate)) + 1) / rate
+        t = _grid(s.t, rate)
         up = Signals(t, *(np.interp(t, s.t, getattr(s, c)) for c in ("vx", "ay", "r", "delta_f")))
         out.append((up, np.interp(t, s.t, ref), masks(up.t, up.vx, scoring)[1]))
     return out
@@ -601,7 +606,7 @@ def resampled_logs(logs, factor: int = RESAMPLE_FACTOR, scoring=KITTI_SCORING) -
     out = []
     for s, ref, _ in logs:
         rate = sample_rate(s.t)
-        base = s.t[0] + np.arange(int(np.floor((s.t[-1] - s.t[0]) * rate)) + 1) / rate
+        base = _grid(s.t, rate)
         t = s.t[0] + np.arange(base.size * factor) / (rate * factor)
         up = Signals(t, *(resample_poly(np.interp(base, s.t, getattr(s, c)), factor, 1)
                           for c in ("vx", "ay", "r", "delta_f")))
@@ -616,9 +621,9 @@ def held_logs(logs, rate: float, scoring=KITTI_SCORING) -> list:
     ``scoring``."""
     out = []
     for s, ref, _ in logs:
-        t = s.t[0] + np.arange(int(np.floor((s.t[-1] - s.t[0]) * rate)) + 1) / rate
+        t = _grid(s.t, rate)
         last = np.searchsorted(s.t, t, side="right") - 1
-        up = Signals(t, *(np.asarray(getattr(s, c))[last] for c in ("vx", "ay", "r", "delta_f")))
+        up = Signals(t, s.vx[last], s.ay[last], s.r[last], np.asarray(s.delta_f)[last])
         out.append((up, np.interp(t, s.t, ref), masks(up.t, up.vx, scoring)[1]))
     return out
 
