@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -20,7 +21,7 @@ from roadbank.identification.quantisation import mean_bias_bound
 from roadbank.sim.drives import DriveSpec
 from roadbank.io import Log
 from roadbank.io.writers import write_table
-from roadbank.sim import Driver, Scenario, run, straight_road
+from roadbank.sim import Driver, Scenario, SensorConfig, run, straight_road
 from roadbank.vehicle import Vehicle, load_vehicle
 
 CROWN = 0.02  # 2 % cross slope on the straights
@@ -284,3 +285,34 @@ def test_a_copy_of_a_log_adds_no_evidence(drive, result):
     assert "the same samples as" in res.logs[1].problem
     for name, q in result.quantities.items():
         assert res.quantities[name].value == q.value and res.quantities[name].std == q.std, name
+
+
+NOISY_GYRO = math.radians(0.7)  # white yaw-rate noise (rad/s std at 100 Hz) that once broke every corner
+
+
+def _yaw_noise(std: float) -> SensorConfig:
+    """The default ESP cluster (100 Hz) with ``std`` (rad/s) of white noise on the yaw rate."""
+    sens = SensorConfig()
+    return sens.replace(yaw_rate=dataclasses.replace(sens.yaw_rate, noise_std=std))
+
+
+def _corners(log: Log) -> int:
+    """The quasi-steady corners ``identify`` reports for ``log`` (few bootstrap replicates: only the count)."""
+    return identify([log], settings=IdentifySettings(n_boot=20)).logs[0].n_corners
+
+
+def test_a_noisy_yaw_rate_finds_the_same_corners():
+    """The simulator drives 10 constant-radius corners; a gyro with 0.7 deg/s of white noise (the count read 0
+    with the yaw acceleration of the 2 Hz low-pass, whose noise is near the 0.02 rad/s^2 steadiness limit) sees
+    the same 10 as the ESP gyro."""
+    quiet, _ = simulate_case(SimCase(drive=DriveSpec(n_corners=10), seed=1, with_roll=False))
+    noisy, _ = simulate_case(SimCase(drive=DriveSpec(n_corners=10), seed=1, with_roll=False,
+                                     sensors=_yaw_noise(NOISY_GYRO)))
+    assert np.std(noisy.signals.r - quiet.signals.r) > 0.8 * NOISY_GYRO  # the noise is there
+    assert _corners(quiet) == _corners(noisy) == 10
+
+
+def test_a_noisy_yaw_rate_on_a_straight_makes_no_corner():
+    res = run(Scenario("straight", straight_road(), Driver(speed=25.0, path=((0.0,), (0.0,))), 90.0),
+              sensors=_yaw_noise(NOISY_GYRO), seed=4)
+    assert _corners(Log(signals=res.signals, source=Path("straight"))) == 0

@@ -6,7 +6,10 @@ straight driving, quasi-steady cornering and the samples the stiffness
 regression may use (linear range, no hard acceleration or braking, away from
 the filter's start-up at the ends). Offsets of the sensors are not known yet
 here, so straights and corners are found relative to the most common yaw rate
-and lateral acceleration of the log (the straight-ahead values).
+and lateral acceleration of the log (the straight-ahead values). A corner's
+steady yaw rate is read from the yaw rate low-passed at ``1 / corner_min``: the
+yaw acceleration of the ``f_cut`` low-pass carries enough of a noisy gyro's
+noise to break every corner into pieces shorter than ``corner_min``.
 """
 
 from __future__ import annotations
@@ -121,8 +124,11 @@ def segment(grid: Grid, s: IdentifySettings) -> Segmented:
         calm = np.abs(p.vxdot_f) <= s.ax_max
         p.straight = _hold(inner & calm & (np.abs(p.r_f - r0) < s.straight_r)
                            & (np.abs(p.ay_f - a0) < s.straight_ay), int(round(s.straight_min * fs)))
+        # the yaw rate's trend over a corner's shortest duration: white gyro noise of 0.7 deg/s at 100 Hz
+        # spreads rdot_f by about 0.016 rad/s^2 (near corner_rdot, 0.02), this by about 0.002
+        rdot_c = derivative(lowpass(p.r, fs, 1.0 / s.corner_min), fs)
         steady = (inner & calm & (np.abs(p.ay_f - a0) >= s.corner_ay) & (np.abs(p.ay_f) <= s.ay_max)
-                  & (np.abs(p.rdot_f) < s.corner_rdot))
+                  & (np.abs(rdot_c) < s.corner_rdot))
         p.corner = _hold(steady, int(round(s.corner_min * fs)))
         n_corners += len(runs(p.corner))
         # the filter spreads a short excursion beyond ay_max over about 1/f_cut: keep clear of it

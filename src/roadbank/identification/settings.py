@@ -44,7 +44,8 @@ class IdentifySettings:
     corner_ay : float
         A quasi-steady corner: |ay| of at least this (m/s^2), default 1 ...
     corner_rdot : float
-        ... with |yaw acceleration| below this (rad/s^2), default 0.02 ...
+        ... with |yaw acceleration| below this (rad/s^2; of the yaw rate low-passed at
+        ``1 / corner_min`` Hz, so gyro noise does not break a corner), default 0.02 ...
     corner_min : float
         ... for at least this long (s). Default 2.
     min_corners : int
