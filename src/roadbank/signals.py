@@ -444,6 +444,33 @@ def source_step(x, valid=None) -> int:
     return max(1, int(round(float(mid)))) if q3 - q1 <= SOURCE_SPREAD * mid else 1
 
 
+#: share (-) of a log's moving rows that must repeat the row before (:func:`held_copies`) for it to be read as a
+#: logger's copies of slower frames (:func:`is_held`): a 10 Hz sensor held onto a 20 Hz grid repeats half its rows, a
+#: log at its sensors' rate almost none (a noisy channel seldom repeats to the last bit while the car moves)
+HELD_SHARE = 0.5
+
+
+def held_copies(s: "Signals", before: tuple[float, ...] | None = None) -> np.ndarray:
+    """Which rows of ``s`` repeat the row before in ``ay`` (m/s^2), the yaw rate (rad/s) and, where ``s`` has one, the
+    roll rate (rad/s), to the last bit: a logger that writes a slower sensor onto a faster grid by holding its frames
+    writes such copies. ``before``: those channels of the row before ``s``'s first (a log read in pieces; None: the
+    first row repeats nothing). A NaN repeats nothing."""
+    chans = [s.ay, s.r] + ([s.p] if s.p is not None else [])
+    same = np.ones(len(s), dtype=bool)
+    for i, x in enumerate(chans):
+        x = np.asarray(x, dtype=np.float64)
+        first = math.nan if before is None or i >= len(before) else before[i]
+        same &= x == np.concatenate([[first], x[:-1]])
+    return same
+
+
+def is_held(copies: np.ndarray, moving: np.ndarray) -> bool:
+    """Whether a log whose repeated rows are ``copies`` (:func:`held_copies`) was written by holding a slower sensor's
+    frames: at least :data:`HELD_SHARE` of its ``moving`` rows (bool array) repeat the row before."""
+    moving = np.asarray(moving, dtype=bool)
+    return bool(moving.any() and copies[moving].mean() >= HELD_SHARE)
+
+
 #: the Huber limit of :func:`diff_noise_std` (squared standard deviations), as the kernels' running estimate's
 #: (:data:`roadbank.estimators.kernels.sample.NOISE_HUBER`)
 DIFF_NOISE_HUBER = 9.0

@@ -124,8 +124,10 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
         from ..vehicle import for_conditions
         from ..vehicle.conditions import esp_conditions
         # without --roll-rate the C step reads the ESP channels: a roll rate in the log does not choose the
-        # gyro-aided filter
-        est = for_conditions(name, {**(cond if roll_rate else esp_conditions(cond)), "log_rate": rate}, params,
+        # gyro-aided filter; an ECU's task runs at its sensors' rate (a held log's conditions are read at it), so the
+        # C step takes every sample
+        est = for_conditions(name, {**(cond if roll_rate else esp_conditions(cond)), "log_rate": rate,
+                                    "log_held": None}, params,
                              vehicle=vehicle, **overrides)
     except (ValueError, TypeError, NoStabilisingSolution) as exc:
         raise click.ClickException(f"{name}: cannot design for vehicle {car_name!r}: {exc}") from None

@@ -25,6 +25,7 @@ from .base import Estimator, StepResult
 from .dfc import DFC
 from .gated import KinematicPIF, PIFGated
 from .gyro import KinematicGyro, KinematicGyroSmoother
+from .held import AtSource
 from .kalman import Kalman
 from .kinematic import Kinematic
 from .kinematic_smoother import KinematicSmoother
@@ -113,4 +114,5 @@ __all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "Estima
            "NoStabilisingSolution", "GYRO", "KinematicGyro", "KinematicGyroSmoother",
            "Kinematic", "KinematicLowPass", "KinematicFeedForward", "KinematicPIF", "DFC",
            "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
-           "Kalman", "KinematicSmoother", "with_online_offsets", "OnlineOffsets", "OffsetSettings"]
+           "Kalman", "KinematicSmoother", "with_online_offsets", "OnlineOffsets", "OffsetSettings",
+           "AtSource"]

@@ -70,6 +70,7 @@ from ..params import VehicleParams
 from ..signals import Estimate, Signals
 from .kernels import offsets as K
 from .base import Estimator, StepResult, sample_floats
+from .held import AtSource
 
 
 @dataclass(frozen=True)
@@ -271,8 +272,10 @@ class OnlineOffsets:
 
 
 def with_online_offsets(est: Estimator, params: VehicleParams | None = None,
-                        settings: OffsetSettings | None = None) -> OnlineOffsets:
-    """``est`` behind the online offset learner (:class:`OnlineOffsets`).
+                        settings: OffsetSettings | None = None) -> OnlineOffsets | AtSource:
+    """``est`` behind the online offset learner (:class:`OnlineOffsets`); an estimator that reads a held log at its
+    source's rate (:class:`~roadbank.estimators.held.AtSource`) keeps doing so, the learner behind it (it learns
+    from the rows taken, whose values the learner's corrections would otherwise make look new).
 
     Parameters
     ----------
@@ -284,4 +287,6 @@ def with_online_offsets(est: Estimator, params: VehicleParams | None = None,
     settings : OffsetSettings, optional
         The learner's rules (default :class:`OffsetSettings()`).
     """
+    if isinstance(est, AtSource):
+        return AtSource(OnlineOffsets(est.inner, params, settings))
     return OnlineOffsets(est, params, settings)

@@ -116,7 +116,8 @@ def _times(ratio: float) -> str:
 def design_words(design: dict, estimator: str) -> str:
     """:attr:`LogSummary.design` in words, for the estimator ``estimator`` ('' when empty): the car, the
     ``ay`` noise and floor (m/s^2; what was not measured is said so, and what the design took instead), the channels
-    written faster than their sensor (their noise read at the source's rate), and for an estimator that changes on a
+    written faster than their sensor (their noise read at the source's rate; a log that holds its sensors' frames read
+    at their rate), and for an estimator that changes on a
     quiet log what it is."""
     if not design:
         return ""
@@ -149,6 +150,9 @@ def design_words(design: dict, estimator: str) -> str:
     if gyro and roll_rate_usable(ax) and q is not None and not roll_rate_usable(q):
         words += (f"; its pitch rate does not follow the pitch in its ax ({_off(q, RATE_MISTAKES)}), so the grade's "
                   "pitch comes from its ax alone")
+    if design.get("held"):
+        words += (f"; written by holding its sensors' frames, read at their rate, {design['held']:.3g} Hz (the rows "
+                  "that repeat a frame left out, their outputs the frame's)")
     if design.get("source"):
         words += (f"; written faster than their sensor, noise (and the gate's yaw rate, where r is so written) read at "
                   f"the sensor's rate: {design['source']}")

@@ -17,7 +17,8 @@ from ..constants import MAX_GAP_S, G
 from ..models.attitude import euler_pitch_rate, kinematic_roll
 from ..params import VehicleParams
 from ..signals import (DYNAMICS_BAND_HZ, band_inner, band_windows, diff_noise_std, integral_band_fit, noise_band_hz,
-                       road_noise_floor_std, road_noise_std, running_integral, sample_rate, source_step)
+                       held_copies, is_held, road_noise_floor_std, road_noise_std, running_integral, sample_rate,
+                       source_step)
 from ..io.errors import LogError
 from .sensors import SensorSpec
 
@@ -145,6 +146,12 @@ NOISE_OCTAVES = ("none", "fast", "all")
 GATE_AT_SOURCE = True
 #: the values :data:`GATE_AT_SOURCE` may take
 GATE_AT_SOURCE_CHOICES = (False, True)
+#: whether a log written by holding a slower sensor's frames (:func:`roadbank.signals.is_held`) is read at its
+#: source's rate: designed for the rows that bring new values and run on them alone (``log_held``,
+#: :class:`roadbank.estimators.AtSource`). The fifty-fifth stage of :mod:`roadbank.tuning.real` chooses it
+READ_AT_SOURCE = True
+#: the values :data:`READ_AT_SOURCE` may take
+READ_AT_SOURCE_CHOICES = (False, True)
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
 #: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it
 NOISE_OCTAVE_TOP = 1.5
@@ -180,6 +187,9 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
     read (:func:`_octave_top`: just above the dynamics band, taken as the whole band's).
     """
     signals, vx, moving = _design_part(signals, v_min)
+    held = _held_rows(signals, moving)
+    if held is not None:            # the rows that bring new values: the log as its sensors wrote it
+        signals, vx, moving = signals.take(held), vx[held], moving[held]
     steps = _source_steps(signals, moving)
     k_quiet = steps["ay"]
     k_ay = k_quiet if NOISE_AT_SOURCE == "all" else 1
@@ -197,6 +207,8 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
     # two significant digits: logs of one car and road share a design (the design cache)
     rate = sample_rate(signals.t)
     source = {"log_r_source": float(f"{rate / k_r:.3g}")} if GATE_AT_SOURCE and k_r > 1 else {}
+    if held is not None:
+        source["log_held"] = 1.0
     return {**source, "log_rate": rate, "log_ay_noise": float(f"{ay_noise:.2g}"),
             "log_r_noise": float(f"{r_noise:.2g}"), "log_ay_floor": float(f"{ay_floor:.2g}"),
             "log_diff_noise": float(f"{diff_noise:.2g}"),
@@ -205,6 +217,17 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
             "log_gyro_unbiased": 1.0 if "p" in signals.unbiased and has_channel(signals, "p", moving) else None,
             "log_pitch_rate": (_checked(signals, "q", vx, moving, pitch_rate_slope) if "q" in signals.unbiased
                                else None)}
+
+
+def _held_rows(signals, moving) -> np.ndarray | None:
+    """The rows of ``signals`` that bring new values (indices), where :data:`READ_AT_SOURCE` and the log was written
+    by holding a slower sensor's frames (:func:`roadbank.signals.is_held` on its ``moving`` rows); else None."""
+    if READ_AT_SOURCE not in READ_AT_SOURCE_CHOICES:
+        raise ValueError(f"READ_AT_SOURCE must be one of {READ_AT_SOURCE_CHOICES}, got {READ_AT_SOURCE!r}")
+    if not READ_AT_SOURCE:
+        return None
+    copies = held_copies(signals)
+    return np.flatnonzero(~copies) if is_held(copies, moving) else None
 
 
 def frd_error(signals, vx, moving, roll: float | None) -> float | None:
@@ -482,7 +505,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
                    log_r_noise: float | None = None, log_ay_floor: float | None = None,
                    log_diff_noise: float | None = None, log_roll_rate: float | None = None,
                    log_ax: float | None = None, log_gyro_unbiased: float | None = None,
-                   log_pitch_rate: float | None = None, log_r_source: float | None = None, **options):
+                   log_pitch_rate: float | None = None, log_r_source: float | None = None,
+                   log_held: float | None = None, **options):
     """``estimators.make(name, params, **options)`` for a log sampled at ``log_rate`` by ``sensors``.
 
     A default-tuned PIF (:func:`roadbank.estimators.pif.with_sensor_noise`) gets the weights
@@ -537,6 +561,10 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     log_r_source : float, optional
         The rate (Hz) of the yaw rate's sensor where a logger wrote it faster (:data:`GATE_AT_SOURCE`): the blend's
         gate then filters the yaw rate over at least that sensor's interval (``gate_tf``), unless given.
+    log_held : float, optional
+        1 (truthy) where the log was written by holding a slower sensor's frames (:data:`READ_AT_SOURCE`; the other
+        conditions then read on the rows that bring new values): the estimator reads those rows alone
+        (:class:`roadbank.estimators.AtSource`).
     **options
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
@@ -586,4 +614,4 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
             options = {"Q_ay": Q_ay, "R": R, **options}
     est = estimators.make(name, params, **options)
     est.name = label
-    return est
+    return estimators.AtSource(est) if log_held else est

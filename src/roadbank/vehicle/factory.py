@@ -133,7 +133,8 @@ def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | Non
     (-, :func:`~roadbank.vehicle.conditions.quiet_noise_ratio`: what ``quiet`` compares with
     :data:`~roadbank.vehicle.QUIET_RATIO`; NaN when not measured); where ``sources``
     (:func:`~roadbank.vehicle.conditions.source_rates`) names channels written faster than their sensor,
-    ``source`` says which and at what rate their noise was read (e.g. ``"ay 10 Hz, r 10 Hz"``); ``roll_rate`` (-)
+    ``source`` says which and at what rate their noise was read (e.g. ``"ay 10 Hz, r 10 Hz"``), unless the log was
+    written by holding its sensors' frames (``log_held``): then ``held``, the rate (Hz) it is read at; ``roll_rate`` (-)
     where the log carries a roll rate: how it follows the roll in ``ay`` (``log_roll_rate``,
     :func:`~roadbank.vehicle.conditions.roll_rate_slope`; where usable, the default on a loud log is the gyro-aided
     filter); ``ax`` (-) where it carries a longitudinal acceleration: how it follows the speed (``log_ax``,
@@ -148,7 +149,9 @@ def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | Non
     record = {"car": car, "car_from": car_from, "quiet": bool(is_quiet(sensors, cond.get("log_rate"), noise,
                                                                        log_ay_floor=floor)),
               "ay_noise": noise, "ay_floor": floor, "ay_floor_ratio": float(f"{ratio:.3g}")}
-    if sources:
+    if cond.get("log_held"):        # read at its sensors' rate, where the noise was read too
+        record["held"] = float(f"{cond['log_rate']:.3g}")
+    elif sources:
         record["source"] = ", ".join(f"{ch} {hz:.3g} Hz" for ch, hz in sources.items())
     for key, name in (("log_roll_rate", "roll_rate"), ("log_ax", "ax"), ("log_pitch_rate", "pitch_rate")):
         if cond.get(key) is not None:

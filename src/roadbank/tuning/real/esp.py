@@ -354,6 +354,12 @@ GATE_SOURCE_GAIN_DEG = 0.005
 #: ... and it is worse than A by more than this (deg) on at most :data:`GATE_SOURCE_WORSE_LOGS` logs
 GATE_SOURCE_WORSE_DEG = 0.02
 GATE_SOURCE_WORSE_LOGS = 4
+#: the fifty-fifth stage's rule (docs/estimators.md): B ships if its median over the ESP forms is below A's by more
+#: than this (deg), its median over the gyro-aided forms not above A's by more than it ...
+READ_SOURCE_GAIN_DEG = 0.005
+#: ... and it is worse than A by more than this (deg) on at most :data:`READ_SOURCE_WORSE_LOGS` of all the logs
+READ_SOURCE_WORSE_DEG = 0.02
+READ_SOURCE_WORSE_LOGS = 4
 #: the stages before the fourteenth took the bank-rate prior as a rate in time
 _TIME_RATE = {"bank_speed_exp": 0.0}
 #: the stages before the twelfth ran on the design span's noise throughout
@@ -543,7 +549,7 @@ def design_settings(**settings):
 
 #: the module settings of :mod:`roadbank.vehicle.conditions` that :func:`design_settings` sets
 _DESIGN_SETTINGS = ("QUIET_FLOOR_RATE", "QUIET_FLOOR_SIGNAL", "NOISE_AT_SOURCE", "NOISE_OCTAVE", "NOISE_OCTAVE_TOP",
-                    "TRUST_FIXED_CHANNELS", "GATE_AT_SOURCE")
+                    "TRUST_FIXED_CHANNELS", "GATE_AT_SOURCE", "READ_AT_SOURCE")
 #: the settings as each stage ran: the eighteenth and nineteenth before the twentieth, the twentieth before the
 #: twenty-first
 _BEFORE_SOURCE = {"noise_at_source": "none", "noise_octave": "none"}
@@ -616,14 +622,15 @@ def resampled_logs(logs, factor: int = RESAMPLE_FACTOR, scoring=KITTI_SCORING) -
 
 def held_logs(logs, rate: float, scoring=KITTI_SCORING) -> list:
     """``logs`` (:func:`training_logs`) as a logger that writes its channels onto a ``rate`` (Hz) grid by holding each
-    frame writes them: every channel the last frame's value at or before each grid time, the grid from the first frame
-    on; the reference roll (rad) linear in time (the truth at the grid time); the scored samples recomputed with
-    ``scoring``."""
+    frame writes them: every channel (the roll rate, ``ax`` and pitch rate too where the log has them) the last
+    frame's value at or before each grid time, the grid from the first frame on; the reference roll (rad) linear in
+    time (the truth at the grid time); the scored samples recomputed with ``scoring``."""
     out = []
     for s, ref, _ in logs:
         t = _grid(s.t, rate)
         last = np.searchsorted(s.t, t, side="right") - 1
-        up = Signals(t, s.vx[last], s.ay[last], s.r[last], np.asarray(s.delta_f)[last])
+        up = Signals(**{c: t if c == "t" else getattr(s, c)[last] for c in s.channels}, fixed=s.fixed,
+                     unbiased=s.unbiased)
         out.append((up, np.interp(t, s.t, ref), masks(up.t, up.vx, scoring)[1]))
     return out
 
@@ -646,6 +653,29 @@ def choose_gate_at_source(logs, forms) -> tuple:
     a, b = np.array(errs[False]), np.array(errs[True])
     ships = (np.median(b) < np.median(a) - GATE_SOURCE_GAIN_DEG
              and int(np.sum(b > a + GATE_SOURCE_WORSE_DEG)) <= GATE_SOURCE_WORSE_LOGS)
+    return bool(ships), errs
+
+
+def choose_read_at_source(esp_logs, gyro_logs, esp_forms, gyro_forms) -> tuple:
+    """The fifty-fifth stage (docs/estimators.md): ``kinematic-pif`` as ``roadbank estimate`` runs it (designed for
+    each log, behind the online offset learner) with :data:`roadbank.vehicle.conditions.READ_AT_SOURCE` False (A, as
+    shipped before) and True (B), on the KITTI training drives written held (:func:`held_logs`) with their ESP
+    channels alone (``esp_forms``) and with their roll rate, ``ax`` and pitch rate (``gyro_forms``). Returns
+    ``(chosen, {choice: (raw RMS per ESP form, per gyro form) (deg)})``. The drives as recorded (``esp_logs``,
+    ``gyro_logs``) must give the same outputs under both (none repeats its rows): a ValueError where they do not."""
+    def build(choice):
+        at = _with_settings(read_at_source=choice)
+        return lambda s: with_online_offsets(at(s))
+
+    for s, _, _ in esp_logs + gyro_logs:
+        a, b = (build(c)(s).run(s).theta for c in (False, True))
+        if not np.array_equal(a, b):
+            raise ValueError("a log at its sensors' rate was read otherwise: the stage's guard fails")
+    errs = {c: (log_errors(build(c), esp_forms), log_errors(build(c), gyro_forms)) for c in (False, True)}
+    (a1, a2), (b1, b2) = errs[False], errs[True]
+    worse = int(np.sum(np.array(b1 + b2) > np.array(a1 + a2) + READ_SOURCE_WORSE_DEG))
+    ships = (np.median(b1) < np.median(a1) - READ_SOURCE_GAIN_DEG
+             and np.median(b2) <= np.median(a2) + READ_SOURCE_GAIN_DEG and worse <= READ_SOURCE_WORSE_LOGS)
     return bool(ships), errs
 
 
