@@ -11,6 +11,7 @@ from roadbank.estimators.pif import R_ESP, R_TABLE4_DEG_UNITS, TABLE4, yaw_rate_
 from roadbank.tuning import (INFEASIBLE, TRAIN_ROADS, VALIDATION_ROADS, Objective, drive_set, register_drives,
                              score_set, search_space, tune_estimator)
 from roadbank.tuning import pipeline
+from roadbank.tuning.optimise import SEARCH_V_STEP
 
 P = VehicleParams()
 
@@ -292,3 +293,24 @@ def test_drives_on_which_the_car_lost_control_are_left_out_and_said(sets, tmp_pa
     assert res.exit_code == 0 and "lost control" in res.output, res.output
     res = CliRunner().invoke(main, ["simulate", "track-lane-change", "-o", str(tmp_path / "suv.parquet")])
     assert res.exit_code == 0 and "lost control" not in res.output
+
+
+@pytest.mark.parametrize("name", ["dfc", "pif-modified", "pif-rate"])
+@pytest.mark.parametrize("budget", [5, 7, 24])
+def test_the_objective_is_called_at_most_budget_times(sets, monkeypatch, name, budget):
+    """The start point is one of the budget's evaluations (it was evaluated on its own and again in the
+    first population: budget + 1 calls, and budgets below a population were overrun)."""
+    calls = []
+    real = Objective.__call__
+    monkeypatch.setattr(Objective, "__call__", lambda self, x: calls.append(np.array(x)) or real(self, x))
+    space = search_space(name)
+    res = tune_estimator(space, P, "test-train", budget=budget, seed=2)
+    assert 0 < len(calls) <= budget and res.evaluations == len(calls)
+    assert sum(np.allclose(x, space.start(), rtol=1e-9, atol=1e-12) for x in calls) == 1   # the start, once
+    searched = Objective(space, P, "test-train", (("v_step", SEARCH_V_STEP),))
+    assert res.start_objective == pytest.approx(searched(space.start()))
+
+
+def test_a_budget_below_the_smallest_population_is_refused(sets):
+    with pytest.raises(ValueError, match="budget must be >= 5"):
+        tune_estimator(search_space("dfc"), P, "test-train", budget=4)

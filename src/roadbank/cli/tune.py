@@ -25,8 +25,9 @@ from .parallel import scheduler_option
               callback=checked_output(suffixes=(".toml",), what="tune writes a vehicle file"),
               help="Vehicle file to write, .toml (the input car plus the tuned [tuning] and [scores] tables); "
                    "checked before the tuning starts (its folder is created if missing).")
-@click.option("--budget", type=click.IntRange(min=1), default=None,
-              help="Objective evaluations per estimator (default 240: about 1 min on 2 cores).")
+@click.option("--budget", type=click.IntRange(min=5), default=None,   # min: tuning.optimise.MIN_POPULATION
+              help="Objective evaluations per estimator, at most, the start point included (default 240: "
+                   "about 1 min on 2 cores; at least 5, the smallest population of the optimiser).")
 @click.option("--seed", type=SEED, default=0, show_default=True,
               help="Seed of the drive sets and the optimiser (same seed, same result).")
 @click.option("--estimators", "names", default="", help="Comma-separated estimators to tune "

@@ -40,6 +40,8 @@ INFEASIBLE = 1e3
 SEARCH_V_STEP = 2.0
 #: roll models tried at the optimum (the estimators' ``roll`` option)
 ROLL_CHOICES = ("static", "dynamic")
+#: smallest population of scipy's differential evolution (members), hence the smallest budget
+MIN_POPULATION = 5
 
 #: drive sets by key, in every process that evaluates objectives (see the module docstring)
 _DRIVES: dict = {}
@@ -139,7 +141,8 @@ class TuneResult:
     start_objective : float
         Objective of the starting point (the current default), deg.
     evaluations : int
-        Objective evaluations spent.
+        Objective evaluations of the search, the start point included: at most the budget. The
+        optimum's scoring on the full grid with each roll model (:data:`ROLL_CHOICES`) comes on top.
     seconds : float
     """
 
@@ -165,17 +168,20 @@ def _feasible_design(space: SearchSpace, params, x, x0, tries: int = 12):
 
 
 def population_plan(budget: int, ndim: int) -> tuple[int, int]:
-    """``(popsize, maxiter)`` of differential evolution for about ``budget`` evaluations.
+    """``(popsize, maxiter)`` of differential evolution for at most ``budget`` evaluations (counts).
 
-    The population has ``popsize * ndim`` members (at least 8); it is evaluated once at the
-    start and once per generation, so the evaluations are ``popsize * ndim * (maxiter + 1)``.
+    The population has ``max(5, popsize * ndim)`` members (``6 * ndim``, at least 8, when the
+    budget allows); it is evaluated once at the start (the start point is one of its members) and
+    once per generation, so the evaluations are ``members * (maxiter + 1)``, at most ``budget``.
+    A budget below the smallest population (``max(5, ndim)``) raises ValueError.
     """
-    if budget < 1:
-        raise ValueError(f"budget must be >= 1 evaluation, got {budget}")
-    pop = min(max(8, 6 * ndim), max(budget, 5))
-    popsize = max(1, math.ceil(pop / ndim))
-    pop = popsize * ndim
-    return popsize, max(0, budget // pop - 1)
+    smallest = max(MIN_POPULATION, ndim)
+    if budget < smallest:
+        raise ValueError(f"budget must be >= {smallest} evaluations (the smallest population of differential "
+                         f"evolution over {ndim} weights), got {budget}")
+    popsize = max(1, min(max(8, 6 * ndim), budget) // ndim)
+    pop = max(MIN_POPULATION, popsize * ndim)
+    return popsize, budget // pop - 1
 
 
 def tune_estimator(space: SearchSpace, params, key: str, *, budget: int, seed: int = 0,
@@ -190,7 +196,7 @@ def tune_estimator(space: SearchSpace, params, key: str, *, budget: int, seed: i
     key : str
         Key of the training drives (:func:`register_drives`, in every worker).
     budget : int
-        About this many objective evaluations (:func:`population_plan`).
+        At most this many objective evaluations, the start point included (:func:`population_plan`).
     seed : int
         Seed of the optimiser.
     mapper : callable ``(func, iterable) -> list``
@@ -202,18 +208,26 @@ def tune_estimator(space: SearchSpace, params, key: str, *, budget: int, seed: i
     t0 = time.perf_counter()
     objective = Objective(space, params, key, (("v_step", SEARCH_V_STEP),))
     x0 = space.start() if x0 is None else np.clip(np.asarray(x0, float), *np.array(space.bounds).T)
-    start_value = objective(x0)
     popsize, maxiter = population_plan(budget, len(x0))
-    n_evals = [1]
+    n_evals = [0]
+    start = [math.nan]   # the start point's objective, read off the first population (x0 is a member)
 
     def counted(func, iterable):
         items = list(iterable)
+        out = list(mapper(func, items))
+        if n_evals[0] == 0:
+            at_x0 = [v for xi, v in zip(items, out) if np.allclose(xi, x0, rtol=1e-9, atol=1e-12)]
+            start[0] = at_x0[0] if at_x0 else math.nan
         n_evals[0] += len(items)
-        return mapper(func, items)
+        return out
 
     res = differential_evolution(objective, space.bounds, seed=seed, popsize=popsize, maxiter=maxiter,
                                  tol=0.0, atol=0.0, polish=False, init="latinhypercube", x0=x0,
                                  updating="deferred", workers=counted)
+    start_value = start[0]
+    if math.isnan(start_value):  # not met in the population (scipy puts x0 there): evaluated on its own
+        start_value = objective(x0)
+        n_evals[0] += 1
     x = np.asarray(res.x) if res.fun <= start_value else x0
     x = _feasible_design(space, params, x, x0)
     # the roll model that separates body roll from theta (a choice, not a weight): keep the
@@ -222,7 +236,6 @@ def tune_estimator(space: SearchSpace, params, key: str, *, budget: int, seed: i
     for roll in ROLL_CHOICES:
         options = {**space.options(x), "roll": roll}
         scores = score_set(estimators.make(space.name, params, **options), _DRIVES[key])
-        n_evals[0] += 1
         if best is None or scores.objective < best[1].objective:
             best = (options, scores)
     # ROLL_CHOICES is not empty: best is set

@@ -16,10 +16,10 @@ from ..sim import PlantParams, SensorConfig
 from ..sim.scenarios import LOST_CONTROL_DEG
 from .manoeuvres import drive_set
 from .objective import score_set
-from .optimise import DaskMapper, LocalMapper, register_drives, tune_estimator
+from .optimise import DaskMapper, LocalMapper, population_plan, register_drives, tune_estimator
 from .spaces import TUNABLE, search_space
 
-#: default objective evaluations per estimator (``roadbank tune --budget``)
+#: default objective evaluations per estimator, the start point included (``roadbank tune --budget``)
 DEFAULT_BUDGET = 240
 #: default sizes of the sets (drives of 20 s)
 DEFAULT_TRAIN = 48
@@ -92,7 +92,7 @@ def tune_car(params=None, plant=None, sensors=None, *, names=TUNABLE, budget: in
         Its sensors (default the paper's ESP sensors).
     names : estimators to tune (:data:`~.spaces.TUNABLE`).
     budget : int
-        Objective evaluations per estimator.
+        Objective evaluations per estimator, at most (the start point included; at least 5).
     seed : int
         Seed of the sets and the optimiser: the same seed gives the same result.
     n_train, n_validation : int
@@ -113,7 +113,8 @@ def tune_car(params=None, plant=None, sensors=None, *, names=TUNABLE, budget: in
     sensors = sensors or SensorConfig()
     current = current or {}
     for name in names:
-        search_space(name)                    # unknown / untunable names fail before any work
+        # unknown / untunable names and a budget below the smallest population fail before any work
+        population_plan(budget, len(search_space(name).start()))
     report = progress or (lambda stage, done, total: None)
 
     total = budget * len(names)
