@@ -122,3 +122,17 @@ def test_the_design_reads_a_held_log_at_its_sources_rate(monkeypatch):
     assert "log_held" not in own and not isinstance(for_log("kinematic-pif", s), E.AtSource)
     monkeypatch.setattr(conditions, "READ_AT_SOURCE", False)
     assert log_conditions(s) == own and "log_held" not in log_conditions(h)
+
+
+@pytest.mark.parametrize("name", ["kinematic-smoother", "kinematic-gyro-smoother"])
+def test_an_offline_estimator_in_pieces_with_its_lookahead_gives_the_run(name):
+    """As roadbank map runs it: chunks, each with the samples after it as lookahead (copies among them too)."""
+    h, _ = _held(_source(1200, seed=1), 100.0)
+    whole = E.AtSource(E.make(name)).run(h)
+    est = E.AtSource(E.make(name))
+    parts = []
+    for a in range(0, len(h), 997):
+        piece = h[a:a + 997]
+        ahead = np.flatnonzero((h.t > piece.t[-1]) & (h.t <= piece.t[-1] + est.lookahead_s))
+        parts.append(est.run(piece, reset=(a == 0), lookahead=h.take(ahead) if ahead.size else None))
+    np.testing.assert_allclose(np.concatenate([p.theta for p in parts]), whole.theta, rtol=0, atol=1e-9)

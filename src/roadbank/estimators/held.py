@@ -76,7 +76,9 @@ class AtSource:
         kw = {}
         if lookahead is not None:
             last = self._key_of(signals, taken[-1]) if taken.size else self._key
-            kw["lookahead"] = lookahead.take(np.flatnonzero(~held_copies(lookahead, last)))
+            new = np.flatnonzero(~held_copies(lookahead, last))
+            if new.size:            # (a lookahead of copies alone brings nothing)
+                kw["lookahead"] = lookahead.take(new)
         part = self.inner.run(signals.take(taken), reset=False, **kw) if taken.size else None
         # row j's outputs: those of the last row taken at or before j (-1: the last row of the piece before)
         at = np.maximum.accumulate(np.where(copies, -1, np.arange(len(signals))))
