@@ -136,3 +136,24 @@ def test_an_offline_estimator_in_pieces_with_its_lookahead_gives_the_run(name):
         ahead = np.flatnonzero((h.t > piece.t[-1]) & (h.t <= piece.t[-1] + est.lookahead_s))
         parts.append(est.run(piece, reset=(a == 0), lookahead=h.take(ahead) if ahead.size else None))
     np.testing.assert_allclose(np.concatenate([p.theta for p in parts]), whole.theta, rtol=0, atol=1e-9)
+
+
+def test_the_plain_command_reads_a_held_csv_at_its_sources_rate(tmp_path):
+    """`roadbank estimate LOG -o out.csv` on a CSV a logger wrote at 100 Hz from 10 Hz frames: the design line says
+    so, every row is written, and a row that repeats a frame repeats its output."""
+    import pandas as pd
+    from click.testing import CliRunner
+
+    from roadbank.cli import main
+
+    h, _ = _held(_source(1200, seed=1), 100.0)
+    log = tmp_path / "held.csv"
+    pd.DataFrame({"t": h.t, "vx": h.vx, "ay": h.ay, "r": h.r}).to_csv(log, index=False)
+    out = tmp_path / "out.csv"
+    res = CliRunner().invoke(main, ["estimate", str(log), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "written by holding its sensors' frames, read at their rate, 10 Hz" in res.output
+    theta = pd.read_csv(out)["kinematic-pif.theta"].to_numpy()
+    copies = held_copies(Signals(h.t, h.vx, h.ay, h.r, h.delta_f))
+    assert len(theta) == len(h) and np.array_equal(theta[1:][copies[1:]], theta[:-1][copies[1:]])
+    assert np.count_nonzero(np.diff(theta)[~copies[1:]]) > 0.8 * np.count_nonzero(~copies[1:])
