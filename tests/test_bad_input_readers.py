@@ -316,12 +316,14 @@ def test_comma2k19_empty_array_and_imu_shape_are_named(tmp_path):
     seg = _segment(tmp_path / "c_speed_empty", speed_n=0)
     with pytest.raises(LogError) as err:
         load_log(seg)
-    assert str(err.value) == f"{seg}: comma2k19 'processed_log/CAN/speed': no samples (t and value are empty)"
+    assert str(err.value) == (f"{seg}: channel 'speed': comma2k19 'processed_log/CAN/speed': no samples (t and value "
+                              "are empty)")
     seg = _segment(tmp_path / "c_gyro_1d", gyro_shape=(100,))
     with pytest.raises(LogError) as err:
         load_log(seg)
-    assert str(err.value) == (f"{seg}: comma2k19 'processed_log/IMU/gyro/value': IMU array of shape (100,), "
-                              "need (n, 3) (forward, right, down)")
+    assert str(err.value) == (f"{seg}: channels 'yaw_rate', 'roll_rate', 'pitch_rate': comma2k19 "
+                              "'processed_log/IMU/gyro/value': IMU array of shape (100,), need (n, 3) (forward, right, "
+                              "down)")
 
 
 # ------------------------------------------------------------------ row 10: a truncated MDF4 file

@@ -51,6 +51,7 @@ from .channels import ChannelMap, ChannelSpec
 from .errors import LogError
 from .files import not_found, present
 from .geodesy import ecef_to_latlon, ellipsoid_down_ecef
+from .timebase import stretch_order
 from .types import RawChunk
 
 __all__ = ["FILES", "SegmentSource", "channel_map", "ecef_to_latlon", "ellipsoid_down_ecef", "load_comma2k19",
@@ -64,20 +65,28 @@ FILES = {
 }
 
 
-def _load(path: Path, rel: str) -> np.ndarray:
+def _load(path: Path, rel: str, who: str = "") -> np.ndarray:
+    """The array of file ``rel`` of segment ``path``; LogError naming the file (after ``who``: the channels it
+    carries, :func:`_whose`) where it is missing, unreadable, not one array or not of real numbers."""
     f = path / rel
-    if not f.exists():
-        raise LogError(f"{path}: comma2k19 file '{rel}' is missing")
+    if not present(f):
+        raise LogError(f"{path}: {who}comma2k19 file '{rel}' is missing")
     try:
         arr = np.load(f, allow_pickle=False)
-    except Exception as exc:  # truncated / not an npy array
-        raise LogError(f"{path}: comma2k19 file '{rel}' is unreadable ({exc})") from None
+    except Exception as exc:  # truncated / not an npy array / a folder / no permission
+        raise LogError(f"{path}: {who}comma2k19 file '{rel}' is unreadable ({exc})") from None
     if not isinstance(arr, np.ndarray):             # an .npz archive loads as one, lazily
-        raise LogError(f"{path}: comma2k19 file '{rel}' is not one array (.npy) but {type(arr).__name__} (an .npz "
-                       "archive?)")
+        raise LogError(f"{path}: {who}comma2k19 file '{rel}' is not one array (.npy) but {type(arr).__name__} (an "
+                       ".npz archive?)")
     if arr.dtype.kind not in "biuf":                # complex, text, dates: not a measured quantity
-        raise LogError(f"{path}: comma2k19 file '{rel}' holds {arr.dtype} values, not real numbers")
+        raise LogError(f"{path}: {who}comma2k19 file '{rel}' holds {arr.dtype} values, not real numbers")
     return arr
+
+
+def _whose(roles) -> str:
+    """How a message names the channels a file carries: ``"channel 'speed': "``, ``"channels 'a', 'b': "``."""
+    roles = list(roles)
+    return f"channel{'s' if len(roles) > 1 else ''} {', '.join(repr(r) for r in roles)}: " if roles else ""
 
 
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:
@@ -136,6 +145,10 @@ CHANNELS = {
 }
 
 
+#: the roles each file of :data:`FILES` carries (for messages)
+FILE_ROLES = {key: [r for r, (c, _, _) in CHANNELS.items() if c.split("[")[0] == rel] for key, rel in FILES.items()}
+
+
 def channel_map(rate_hz: float = 100.0, max_gap_s: float = 0.5, roles=tuple(CHANNELS)) -> ChannelMap:
     """The fixed channel map of a comma2k19 segment: stored units and axes, a uniform grid at ``rate_hz``
     (Hz), gaps longer than ``max_gap_s`` (s) not bridged; the steering ratio is the car's. ``roles``: those of
@@ -152,8 +165,10 @@ def channel_map(rate_hz: float = 100.0, max_gap_s: float = 0.5, roles=tuple(CHAN
 class SegmentSource:
     """One comma2k19 segment as a channel source (:mod:`roadbank.io.sources`), read whole: the channels
     of :data:`CHANNELS` (stored values, each with its own time stamps, s) and the pose position as
-    ``lat_deg`` / ``lon_deg`` (deg, carried into ``Log.extra``). Opening it reads every array (LogError
-    naming the file for one missing, unreadable or of the wrong shape)."""
+    ``lat_deg`` / ``lon_deg`` (deg, carried into ``Log.extra``). Opening it reads every array: LogError naming
+    the file, its channels and the problem for one missing, unreadable or of the wrong shape (an optional one,
+    steering angle or pose, may be missing as a whole, with a warning). Stretches of rows written out of their
+    place are sorted back into time order, with a warning (:func:`~roadbank.io.timebase.stretch_order`)."""
 
     shared_clock = False
     whole = True
@@ -172,23 +187,11 @@ class SegmentSource:
         arr = {}
         self.warnings: list[str] = []
         for key, rel in FILES.items():
-            if key in OPTIONAL_FILES and not (p / rel).exists():
+            if key in OPTIONAL_FILES and not present(p / rel):
                 self.warnings.append(f"{p}: comma2k19 '{rel}' is missing, so the log is read without it: "
                                      f"{OPTIONAL_FILES[key]}")
                 continue
-            t = np.asarray(_load(p, rel + "/t"), dtype=np.float64).reshape(-1)
-            v = np.asarray(_load(p, rel + "/value"), dtype=np.float64)
-            shape = v.shape
-            if v.ndim == 1:
-                v = v[:, None]
-            if len(t) == 0 and len(v) == 0:
-                raise LogError(f"{p}: comma2k19 '{rel}': no samples (t and value are empty)")
-            if len(t) != len(v):
-                raise LogError(f"{p}: comma2k19 '{rel}': {len(t)} time stamps (t) but {len(v)} values (value)")
-            if key in ("accelerometer", "gyro") and (v.ndim != 2 or v.shape[1] != 3):
-                raise LogError(f"{p}: comma2k19 '{rel}/value': IMU array of shape {shape}, need (n, 3) "
-                               "(forward, right, down)")
-            arr[key] = (t, v)
+            arr[key] = self._timed(p, key, rel)
         acc_t, acc = arr["accelerometer"]
         gyr_t, gyr = arr["gyro"]
         col = {role: c for role, (c, _, _) in CHANNELS.items()}
@@ -217,19 +220,54 @@ class SegmentSource:
         self.metadata = {"dataset": "comma2k19", "steering_ratio": str(params.steering_ratio),
                          "time_origin": "boot time (s)"}
 
+    def _timed(self, p: Path, key: str, rel: str) -> tuple[np.ndarray, np.ndarray]:
+        """File ``rel`` (``key`` of :data:`FILES`) as ``(t (s), values (n, k))``: its rows in time order where
+        stretches of them were written out of their place (:meth:`_in_order`). LogError naming the file, the
+        channels it carries and the problem for parts missing or unreadable, no samples, lengths or shapes that
+        do not match."""
+        who = _whose(FILE_ROLES[key])
+        t = np.asarray(_load(p, rel + "/t", who), dtype=np.float64).reshape(-1)
+        v = np.asarray(_load(p, rel + "/value", who), dtype=np.float64)
+        shape = v.shape
+        head = f"{p}: {who}comma2k19 '{rel}"
+        if v.ndim == 1:
+            v = v[:, None]
+        if v.ndim != 2:
+            raise LogError(f"{head}/value': an array of shape {shape}, not one row of values per time stamp")
+        if len(t) == 0 and len(v) == 0:
+            raise LogError(f"{head}': no samples (t and value are empty)")
+        if len(t) != len(v):
+            raise LogError(f"{head}': {len(t)} time stamps (t) but {len(v)} values (value)")
+        if key in ("accelerometer", "gyro") and v.shape[1] != 3:
+            raise LogError(f"{head}/value': IMU array of shape {shape}, need (n, 3) (forward, right, down)")
+        t, (v,) = self._in_order(p, who, rel, t, [v])
+        return t, v
+
+    def _in_order(self, p: Path, who: str, rel: str, t: np.ndarray,
+                  values: list[np.ndarray]) -> tuple[np.ndarray, list[np.ndarray]]:
+        """Stamps ``t`` (s) and the arrays of ``values`` (row for row) with stretches of rows written out of their
+        place sorted back into time order (:func:`~roadbank.io.timebase.stretch_order`: never two parts of the
+        clock mixed), said once in :attr:`warnings`; as they are otherwise."""
+        found = stretch_order(t)
+        if found is None:
+            return t, values
+        order, moved = found
+        out = order != np.arange(len(t))
+        span = t[out][np.isfinite(t[out])]
+        self.warnings.append(f"{p}: {who}comma2k19 '{rel}': {moved} of {len(t)} rows out of time order (stretches "
+                             f"of rows written out of their place, from {span.min():.3f} to {span.max():.3f} s, "
+                             "none overlapping another in time): sorted by time, each row's values with its "
+                             "stamp")
+        return t[order], [a[order] for a in values]
+
     def _pose(self, p: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """The segment's pose frames ``(times (s), ECEF positions (m), quaternions w, x, y, z)``, the positions NaN
         where they are not on the Earth (:data:`EARTH_RADII_M`: no fix); None, with a warning, where ``global_pose/``
         is missing or has no frame on the Earth. LogError for arrays unreadable or of inconsistent shapes."""
-        if not (p / POSE).exists():
+        if not present(p / POSE):
             self.warnings.append(f"{p}: comma2k19 '{POSE}' is missing, so the log is read without it: {POSE_LOSS}")
             return None
-        ft = np.asarray(_load(p, f"{POSE}/frame_times"), dtype=np.float64).reshape(-1)
-        pos = np.asarray(_load(p, f"{POSE}/frame_positions"), dtype=np.float64)
-        quat = np.asarray(_load(p, f"{POSE}/frame_orientations"), dtype=np.float64)
-        if not (len(ft) == len(pos) == len(quat)) or pos.shape[1:] != (3,) or quat.shape[1:] != (4,):
-            raise LogError(f"{p}: comma2k19 global_pose arrays have inconsistent shapes "
-                           f"{ft.shape}, {pos.shape}, {quat.shape}")
+        ft, pos, quat = self._pose_arrays(p)
         radius = np.linalg.norm(pos, axis=1)
         on_earth = (radius >= EARTH_RADII_M[0]) & (radius <= EARTH_RADII_M[1])
         if not on_earth.any():
@@ -243,6 +281,21 @@ class SegmentSource:
                                  f"{len(pos)} frames are not on the Earth (no fix): no reference roll or position "
                                  "there")
         return ft, np.where(on_earth[:, None], pos, np.nan), quat
+
+    def _pose_arrays(self, p: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``global_pose/``'s frame times (s), ECEF positions (m) and quaternions, in time order
+        (:meth:`_in_order`); LogError naming the file and the problem where one is missing or unreadable or their
+        shapes do not match."""
+        who = _whose(["reference_roll"])
+        ft = np.asarray(_load(p, f"{POSE}/frame_times", who), dtype=np.float64).reshape(-1)
+        pos = np.asarray(_load(p, f"{POSE}/frame_positions", who), dtype=np.float64)
+        quat = np.asarray(_load(p, f"{POSE}/frame_orientations", who), dtype=np.float64)
+        if not (len(ft) == len(pos) == len(quat)) or pos.shape[1:] != (3,) or quat.shape[1:] != (4,):
+            raise LogError(f"{p}: {who}comma2k19 {POSE} arrays have inconsistent shapes (frame_times "
+                           f"{ft.shape}, frame_positions {pos.shape}, frame_orientations {quat.shape}; need (n,), "
+                           "(n, 3), (n, 4))")
+        ft, (pos, quat) = self._in_order(p, who, POSE, ft, [pos, quat])
+        return ft, pos, quat
 
     def close(self) -> None:
         """Nothing to close: the arrays were read when the source was opened."""

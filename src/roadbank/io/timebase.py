@@ -395,6 +395,67 @@ def _in_longest_run(t: np.ndarray) -> np.ndarray:
     return keep
 
 
+def stretch_order(t) -> tuple[np.ndarray, int] | None:
+    """The order that puts stretches of rows written out of their place back in time order, where that
+    mixes no two parts of the clock; None where there is nothing to move or no such order.
+
+    The stamps ``t`` (s) are cut into increasing runs: at every step that does not go forward, and at
+    every forward step longer than :data:`GAP_PERIODS` sample periods (the median forward step), so a
+    block of rows written before the rows that come before it in time is a run of its own. Runs whose
+    time spans overlap (or touch: a repeated stamp) are one stretch, kept in file order: a swapped pair,
+    a repeated stamp or a clock that steps back (the samples after it overlap those before it in time)
+    stay for :func:`repair_time`, which never interleaves two parts of a drive. The stretches, which
+    then cover disjoint spans of time, are put in the order of their times (a stable sort).
+
+    The order is refused (None) if it would open a forward step longer than :data:`GAP_PERIODS`
+    periods between two rows that are not neighbours in the file: the moved rows would not fill a
+    hole but stand apart from the others (a clock reset to an earlier time, which :func:`repair_time`
+    names a restart). Rows without a finite stamp stay after the finite row before them in the file.
+
+    Parameters
+    ----------
+    t : array (s)
+        Time stamps in file order.
+
+    Returns
+    -------
+    (order, moved) or None
+        ``order``: indices of the rows in their new order (``t[order]``), ``moved``: rows whose place
+        changed; None where every row stays.
+    """
+    t = np.asarray(t, dtype=np.float64).reshape(-1)
+    n = len(t)
+    fin = np.flatnonzero(np.isfinite(t))
+    tf = t[fin]
+    d = np.diff(tf)
+    if len(tf) < 3 or np.all(d > 0) or not np.any(d > 0):
+        return None
+    period = float(np.median(d[d > 0]))
+    cut = np.flatnonzero((d <= 0) | (d > GAP_PERIODS * period)) + 1
+    starts = np.concatenate(([0], cut))
+    ends = np.concatenate((cut, [len(tf)]))             # (exclusive)
+    lo, hi = tf[starts], tf[ends - 1]
+    by_start = np.argsort(lo, kind="stable")
+    reach = np.maximum.accumulate(hi[by_start])
+    opens = np.concatenate(([True], lo[by_start][1:] > reach[:-1]))     # a run past every span before it
+    stretch = np.empty(len(starts), dtype=np.int64)
+    stretch[by_start] = np.cumsum(opens) - 1            # stretches numbered in time order
+    row_stretch = np.repeat(stretch, ends - starts)
+    new = np.argsort(row_stretch, kind="stable")        # (positions among the finite rows)
+    if np.array_equal(new, np.arange(len(tf))):
+        return None
+    long = np.flatnonzero(np.diff(tf[new]) > GAP_PERIODS * period)
+    if np.any(new[long + 1] != new[long] + 1):
+        return None
+    # every row follows its finite row before it in the file (a leading row without one, the first finite row)
+    last_finite = np.maximum.accumulate(np.where(np.isfinite(t), np.arange(n), -1))
+    last_finite[last_finite < 0] = fin[0]
+    key = np.empty(n, dtype=np.int64)
+    key[fin] = np.argsort(new)                          # each finite row's new place
+    order = np.argsort(key[last_finite], kind="stable")
+    return order, int(np.count_nonzero(order != np.arange(n)))
+
+
 def describe(counts: dict) -> str:
     """``counts`` in words, e.g. ``"2 duplicate stamps dropped, 1 swapped pair reordered"`` ('' if none)."""
     text = {"missing": ("missing stamp", "dropped"), "duplicate": ("duplicate stamp", "dropped"),
