@@ -8,8 +8,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from click.testing import CliRunner
 
-from roadbank.io import load_log
+from roadbank.cli import main
+from roadbank.io import LogError, load_log
 from roadbank.io.timebase import repair_time, stretch_order
 
 SEGMENT = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "comma2k19-example"
@@ -111,3 +113,111 @@ def test_imu_rows_written_in_reversed_blocks_are_sorted_back(tmp_path):
         assert len(said) == 1, log.warnings
         assert f"{moved} of {n} rows out of time order" in said[0] and "sorted by time" in said[0]
     assert "channels 'yaw_rate', 'roll_rate', 'pitch_rate'" in next(w for w in log.warnings if IMU[1] in w)
+
+
+def _no_steering(tmp_path: Path):
+    seg = _copy(tmp_path, "no_steering")
+    shutil.rmtree(seg / STEERING)
+    return load_log(seg)
+
+
+@needs_data
+@pytest.mark.parametrize("damage, problem", [
+    ("empty", "no samples (t and value are empty)"),
+    ("short", "4974 time stamps (t) but 4964 values (value)"),
+    ("cut", "comma2k19 file 'processed_log/CAN/steering_angle/value' is unreadable"),
+    ("no_t", "comma2k19 file 'processed_log/CAN/steering_angle/t' is missing"),
+    ("columns", "'processed_log/CAN/steering_angle/value': an array of shape (4974, 2), need (n,) or (n, 1)"),
+    ("one_stamp", "no increasing time base"),
+])
+@needs_data
+def test_a_broken_steering_file_is_read_as_a_missing_one(tmp_path, damage, problem):
+    """The steering angle is optional: a segment without it is read (its delta_f NaN). One whose steering file is
+    there but broken (empty, values fewer than the stamps, cut off, its t missing, two columns, every stamp the
+    same) had refused the whole segment; now it is read as the segment without it, with a warning naming the file,
+    the channel and the problem."""
+    seg = _copy(tmp_path, damage)
+    t, v = seg / STEERING / "t", seg / STEERING / "value"
+    if damage == "empty":
+        _save(t, np.zeros(0))
+        _save(v, np.zeros(0))
+    elif damage == "short":
+        _save(v, _load(v)[:-10])
+    elif damage == "cut":
+        v.write_bytes(v.read_bytes()[:-100])
+    elif damage == "no_t":
+        t.unlink()
+    elif damage == "columns":
+        _save(v, np.stack([_load(v)] * 2, axis=1))
+    else:
+        _save(t, np.full(len(_load(t)), 46410.0))
+    log = load_log(seg)
+    _same_log(log, _no_steering(tmp_path))
+    assert np.isnan(log.signals.delta_f).all()
+    said = [w for w in log.warnings if STEERING in w]
+    assert len(said) == 1 and problem in said[0] and "channel 'steering_wheel_angle'" in said[0], log.warnings
+    assert "read without it" in said[0] and "steering angle is NaN" in said[0]
+
+
+@needs_data
+def test_a_broken_pose_is_read_as_a_missing_one(tmp_path):
+    """The pose is the reference, not an input: positions cut off while written are read as a segment without the
+    pose (no reference roll, no positions), saying which file and why; before, the segment was refused."""
+    seg = _copy(tmp_path, "pose_cut")
+    f = seg / "global_pose" / "frame_positions"
+    f.write_bytes(f.read_bytes()[:-200])
+    log = load_log(seg)
+    no_pose = _copy(tmp_path, "no_pose")
+    shutil.rmtree(no_pose / "global_pose")
+    _same_log(log, load_log(no_pose))
+    said = [w for w in log.warnings if "global_pose" in w]
+    assert len(said) == 1 and "'global_pose/frame_positions' is unreadable" in said[0], log.warnings
+    assert "read without the pose" in said[0] and "no reference roll" in said[0]
+
+
+@needs_data
+@pytest.mark.parametrize("rel, damage, channel", [
+    ("processed_log/CAN/speed", "short", "channel 'speed'"),
+    ("processed_log/IMU/gyro", "empty", "channels 'yaw_rate', 'roll_rate', 'pitch_rate'"),
+    ("processed_log/IMU/accelerometer", "cut", "channels 'lateral_acceleration', 'longitudinal_acceleration'"),
+])
+@needs_data
+def test_a_broken_required_file_refuses_the_segment_naming_it(tmp_path, rel, damage, channel):
+    """The speed and the IMU are inputs: a broken one still refuses the segment, with an error naming the segment,
+    the channels, the file and the problem, and on the command line no traceback."""
+    seg = _copy(tmp_path, "seg")
+    t, v = seg / rel / "t", seg / rel / "value"
+    if damage == "short":
+        _save(v, _load(v)[:-10])
+        problem = "time stamps (t) but"
+    elif damage == "empty":
+        _save(t, np.zeros(0))
+        _save(v, np.zeros((0, 3)))
+        problem = "no samples"
+    else:
+        t.write_bytes(t.read_bytes()[:-100])
+        problem = f"file '{rel}/t' is unreadable"
+    with pytest.raises(LogError) as err:
+        load_log(seg)
+    text = str(err.value)
+    assert text.startswith(f"{seg}: {channel}: comma2k19 ") and rel in text and problem in text, text
+    res = CliRunner().invoke(main, ["estimate", str(seg), "-o", str(tmp_path / "x.csv")])
+    assert res.exit_code != 0 and "Traceback" not in res.output and problem in res.output, res.output
+
+
+@needs_data
+def test_validate_reads_a_segment_with_a_broken_steering_file(tmp_path):
+    """validate reads the steering's resolution for its data limits: a cut-off steering file (read by the reader as a
+    missing one) had failed the segment there with numpy's message and no file named; now the segment is scored as
+    the segment without its steering file."""
+    from roadbank.validation.comma2k19 import validate_comma2k19
+
+    seg = _copy(tmp_path, "cut")
+    v = seg / STEERING / "value"
+    v.write_bytes(v.read_bytes()[:-100])
+    no_steer = _copy(tmp_path, "no_steering")
+    shutil.rmtree(no_steer / STEERING)
+    got = validate_comma2k19(seg, names=["kinematic"], sensitivity=False)
+    want = validate_comma2k19(no_steer, names=["kinematic"], sensitivity=False)
+    assert got.scores["kinematic"] == want.scores["kinematic"]
+    assert np.isfinite(got.scores["kinematic"].r) and np.isnan(got.data["steer_quantum_deg"])

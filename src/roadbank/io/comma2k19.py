@@ -51,7 +51,7 @@ from .channels import ChannelMap, ChannelSpec
 from .errors import LogError
 from .files import not_found, present
 from .geodesy import ecef_to_latlon, ellipsoid_down_ecef
-from .timebase import stretch_order
+from .timebase import UnrepairableTime, repair_time, stretch_order
 from .types import RawChunk
 
 __all__ = ["FILES", "SegmentSource", "channel_map", "ecef_to_latlon", "ellipsoid_down_ecef", "load_comma2k19",
@@ -147,6 +147,8 @@ CHANNELS = {
 
 #: the roles each file of :data:`FILES` carries (for messages)
 FILE_ROLES = {key: [r for r, (c, _, _) in CHANNELS.items() if c.split("[")[0] == rel] for key, rel in FILES.items()}
+#: the files whose value is one number per time stamp (the others: the IMU's three axes)
+SCALAR_FILES = ("speed", "steering_angle")
 
 
 def channel_map(rate_hz: float = 100.0, max_gap_s: float = 0.5, roles=tuple(CHANNELS)) -> ChannelMap:
@@ -166,9 +168,10 @@ class SegmentSource:
     """One comma2k19 segment as a channel source (:mod:`roadbank.io.sources`), read whole: the channels
     of :data:`CHANNELS` (stored values, each with its own time stamps, s) and the pose position as
     ``lat_deg`` / ``lon_deg`` (deg, carried into ``Log.extra``). Opening it reads every array: LogError naming
-    the file, its channels and the problem for one missing, unreadable or of the wrong shape (an optional one,
-    steering angle or pose, may be missing as a whole, with a warning). Stretches of rows written out of their
-    place are sorted back into time order, with a warning (:func:`~roadbank.io.timebase.stretch_order`)."""
+    the file, its channels and the problem for a required one (speed, IMU) missing, unreadable or of the wrong
+    shape; an optional one (steering angle, pose) so broken is read as missing, with a warning saying why.
+    Stretches of rows written out of their place are sorted back into time order, with a warning
+    (:func:`~roadbank.io.timebase.stretch_order`)."""
 
     shared_clock = False
     whole = True
@@ -191,7 +194,12 @@ class SegmentSource:
                 self.warnings.append(f"{p}: comma2k19 '{rel}' is missing, so the log is read without it: "
                                      f"{OPTIONAL_FILES[key]}")
                 continue
-            arr[key] = self._timed(p, key, rel)
+            try:
+                arr[key] = self._timed(p, key, rel)
+            except LogError as exc:
+                if key not in OPTIONAL_FILES:
+                    raise
+                self.warnings.append(f"{exc}, so the log is read without it: {OPTIONAL_FILES[key]}")
         acc_t, acc = arr["accelerometer"]
         gyr_t, gyr = arr["gyro"]
         col = {role: c for role, (c, _, _) in CHANNELS.items()}
@@ -224,7 +232,8 @@ class SegmentSource:
         """File ``rel`` (``key`` of :data:`FILES`) as ``(t (s), values (n, k))``: its rows in time order where
         stretches of them were written out of their place (:meth:`_in_order`). LogError naming the file, the
         channels it carries and the problem for parts missing or unreadable, no samples, lengths or shapes that
-        do not match."""
+        do not match, and (an optional file, which is then read as missing) time stamps that cannot be
+        repaired."""
         who = _whose(FILE_ROLES[key])
         t = np.asarray(_load(p, rel + "/t", who), dtype=np.float64).reshape(-1)
         v = np.asarray(_load(p, rel + "/value", who), dtype=np.float64)
@@ -238,9 +247,14 @@ class SegmentSource:
             raise LogError(f"{head}': no samples (t and value are empty)")
         if len(t) != len(v):
             raise LogError(f"{head}': {len(t)} time stamps (t) but {len(v)} values (value)")
-        if key in ("accelerometer", "gyro") and v.shape[1] != 3:
+        if key not in SCALAR_FILES and v.shape[1] != 3:
             raise LogError(f"{head}/value': IMU array of shape {shape}, need (n, 3) (forward, right, down)")
+        if key in SCALAR_FILES and v.shape[1] != 1:
+            raise LogError(f"{head}/value': an array of shape {shape}, need (n,) or (n, 1): one value per time "
+                           "stamp")
         t, (v,) = self._in_order(p, who, rel, t, [v])
+        if key in OPTIONAL_FILES:
+            _repairable(head + "/t'", t)
         return t, v
 
     def _in_order(self, p: Path, who: str, rel: str, t: np.ndarray,
@@ -263,11 +277,16 @@ class SegmentSource:
     def _pose(self, p: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """The segment's pose frames ``(times (s), ECEF positions (m), quaternions w, x, y, z)``, the positions NaN
         where they are not on the Earth (:data:`EARTH_RADII_M`: no fix); None, with a warning, where ``global_pose/``
-        is missing or has no frame on the Earth. LogError for arrays unreadable or of inconsistent shapes."""
+        is missing, broken (a file missing or unreadable, arrays of inconsistent shapes, frame times that cannot be
+        repaired: read as missing, the warning naming the file and the problem) or has no frame on the Earth."""
         if not present(p / POSE):
             self.warnings.append(f"{p}: comma2k19 '{POSE}' is missing, so the log is read without it: {POSE_LOSS}")
             return None
-        ft, pos, quat = self._pose_arrays(p)
+        try:
+            ft, pos, quat = self._pose_arrays(p)
+        except LogError as exc:
+            self.warnings.append(f"{exc}, so the log is read without the pose: {POSE_LOSS}")
+            return None
         radius = np.linalg.norm(pos, axis=1)
         on_earth = (radius >= EARTH_RADII_M[0]) & (radius <= EARTH_RADII_M[1])
         if not on_earth.any():
@@ -284,8 +303,8 @@ class SegmentSource:
 
     def _pose_arrays(self, p: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``global_pose/``'s frame times (s), ECEF positions (m) and quaternions, in time order
-        (:meth:`_in_order`); LogError naming the file and the problem where one is missing or unreadable or their
-        shapes do not match."""
+        (:meth:`_in_order`); LogError naming the file and the problem where one is missing or unreadable, their
+        shapes do not match or the frame times cannot be repaired."""
         who = _whose(["reference_roll"])
         ft = np.asarray(_load(p, f"{POSE}/frame_times", who), dtype=np.float64).reshape(-1)
         pos = np.asarray(_load(p, f"{POSE}/frame_positions", who), dtype=np.float64)
@@ -295,6 +314,7 @@ class SegmentSource:
                            f"{ft.shape}, frame_positions {pos.shape}, frame_orientations {quat.shape}; need (n,), "
                            "(n, 3), (n, 4))")
         ft, (pos, quat) = self._in_order(p, who, POSE, ft, [pos, quat])
+        _repairable(f"{p}: {who}comma2k19 '{POSE}/frame_times'", ft)
         return ft, pos, quat
 
     def close(self) -> None:
@@ -304,6 +324,15 @@ class SegmentSource:
         """The one chunk: every channel whole, with its time stamps (``wanted`` and ``prefix`` are not
         used: the layout is fixed)."""
         yield RawChunk(dict(self.data), times=dict(self.times), done=tuple(self.data))
+
+
+def _repairable(head: str, t: np.ndarray) -> None:
+    """LogError ``<head>: <why>`` where the stamps ``t`` (s) hold no increasing time base
+    (:func:`~roadbank.io.timebase.repair_time`): an optional file is then read as missing."""
+    try:
+        repair_time(t)
+    except UnrepairableTime as exc:
+        raise LogError(f"{head}: {exc}") from None
 
 
 def load_comma2k19(path, params: VehicleParams | None = None, rate_hz: float = 100.0,

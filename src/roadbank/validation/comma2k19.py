@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from .. import estimators
-from ..io.comma2k19 import POSE, load_comma2k19
+from ..io.comma2k19 import CHANNELS, POSE, SegmentSource, load_comma2k19
 from ..io.errors import LogError
 from ..params import VehicleParams
 from ..vehicle import undescribed_params
@@ -178,11 +178,12 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     i_split = int(np.flatnonzero(m_sc)[0])
 
     # ------------------------------------------------------------ data limits
-    acc_t = np.load(Path(path) / "processed_log/IMU/accelerometer/t", allow_pickle=False)
-    acc = np.load(Path(path) / "processed_log/IMU/accelerometer/value", allow_pickle=False)
-    gyr = np.load(Path(path) / "processed_log/IMU/gyro/value", allow_pickle=False)
-    steer_file = Path(path) / "processed_log/CAN/steering_angle/value"     # optional, as for the reader
-    steer = np.load(steer_file, allow_pickle=False) if steer_file.exists() else np.zeros(0)
+    # the raw samples as the reader holds them: rows in time order, a broken or missing steering file left out
+    raw = SegmentSource(path, params)
+    acc_t = raw.times[CHANNELS["lateral_acceleration"][0]]
+    acc_y = raw.data[CHANNELS["lateral_acceleration"][0]]
+    gyr_z = raw.data[CHANNELS["yaw_rate"][0]]
+    steer = raw.data.get(CHANNELS["steering_wheel_angle"][0], np.zeros(0))
 
     def quantum(x):
         d = np.abs(np.diff(np.unique(np.round(x, 12))))
@@ -225,8 +226,8 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
         "signal_ay_equiv_std": float(params.g * np.sin(ref_sig)),
         "vx_r_std": float(np.nanstd(s.vx * s.r)),
         "kin_residual_rms_deg": float(np.degrees(np.sqrt(np.mean(resid ** 2)))),
-        "accel_quantum": quantum(acc[:, 1]),
-        "gyro_quantum": quantum(gyr[:, 2]),
+        "accel_quantum": quantum(acc_y),
+        "gyro_quantum": quantum(gyr_z),
         "steer_quantum_deg": quantum(steer),
         "accel_rate_hz": float(1.0 / np.median(np.diff(acc_t))),
         "kin_tau_sweep": tau_sweep,
