@@ -157,3 +157,27 @@ def test_the_plain_command_reads_a_held_csv_at_its_sources_rate(tmp_path):
     copies = held_copies(Signals(h.t, h.vx, h.ay, h.r, h.delta_f))
     assert len(theta) == len(h) and np.array_equal(theta[1:][copies[1:]], theta[:-1][copies[1:]])
     assert np.count_nonzero(np.diff(theta)[~copies[1:]]) > 0.8 * np.count_nonzero(~copies[1:])
+
+
+@pytest.mark.parametrize("noise", [1.0, 0.5, 0.2])
+def test_a_quantised_sensor_at_its_own_rate_is_not_held(noise):
+    """The simulator's 100 Hz ESP channels are quantised (ay 0.005 g, yaw rate 0.3 deg/s): with less noise than the
+    data sheet's (the campaign draws 0.5-2 times it) a quarter to nearly all of the rows repeat the one before, at
+    random; that is no logger's hold, and the log is read whole."""
+    import dataclasses
+
+    from roadbank.sim import sensors as S
+    from roadbank.sim.scenarios import run_scenario
+
+    cfg = S.SensorConfig()
+    cfg = dataclasses.replace(cfg, yaw_rate=dataclasses.replace(cfg.yaw_rate, noise_std=cfg.yaw_rate.noise_std * noise),
+                              ay=dataclasses.replace(cfg.ay, noise_std=cfg.ay.noise_std * noise))
+    s = run_scenario("const-bank", sensors=cfg).signals
+    copies = held_copies(s)
+    assert copies[s.vx > 5].mean() > (0.9 if noise == 0.2 else 0.2)
+    assert not is_held(copies, s.vx > 5)
+    assert "log_held" not in log_conditions(s)
+    # the same drive's 10 Hz frames held onto a 100 Hz grid are (with a tenth of the noise they repeat each other
+    # too, 99.8 % of the rows: there the hold and the sensor's own repeats cannot be told apart, nor need they be)
+    h, _ = _held(s.take(np.arange(0, len(s), 10)), 100.0)
+    assert is_held(held_copies(h), h.vx > 5) == (noise >= 0.5)
