@@ -14,6 +14,8 @@ from roadbank.cli import main
 from roadbank.estimators.pif import TUNINGS
 from roadbank.evaluation.compare import usable_samples
 from roadbank.evaluation.metrics import error_metrics
+from roadbank.export.design import export_design
+from roadbank.io.writers import estimate_table, write_table
 from roadbank.sim import run_scenario
 
 
@@ -94,3 +96,27 @@ def test_estimate_accepts_pif_paper_and_names_its_columns(tmp_path):
     got = table.column("pif-paper.phi_b").to_numpy()
     assert np.allclose(got, want, atol=1e-9, equal_nan=True)
     assert not np.allclose(got, table.column("pif-modified.phi_b").to_numpy(), atol=1e-4, equal_nan=True)
+
+
+def test_a_named_tuning_other_than_its_own_is_in_the_name(tmp_path):
+    """``make("pif-modified", tuning="paper-deg")`` was named ``pif-modified``: written next to the default its
+    columns took the default's names and one of the two estimates was lost."""
+    default, deg = estimators.make("pif-modified"), estimators.make("pif-modified", tuning="paper-deg")
+    assert (default.name, deg.name) == ("pif-modified", "pif-modified[paper-deg]")
+    assert deg.R[0, 0] == TUNINGS["paper-deg"]["R"]                       # the filter is the tuning asked for
+    assert estimators.make("pif-original", tuning="paper-deg").name == "pif-original[paper-deg]"
+    assert estimators.make("pif-gated", tuning="paper").name == "pif-gated[paper]"
+    # its own tuning named, or none, leaves the name alone
+    assert estimators.make("pif-modified", tuning="default").name == "pif-modified"
+    assert estimators.make("pif-original", tuning="paper").name == "pif-original"
+    assert estimators.make("pif-paper", tuning="paper").name == "pif-paper"
+    # both estimates keep their own columns in one table, each holding its own estimate
+    sim = run_scenario("const-bank", "low-mu")
+    runs = [e.run(sim.signals) for e in (default, deg)]
+    cols = pacsv.read_csv(write_table(tmp_path / "bank.csv", estimate_table(sim.signals.t, runs)))
+    for e in runs:
+        got = cols.column(f"{e.name}.phi_b").to_numpy(zero_copy_only=False)
+        assert np.allclose(got, e.phi_b, atol=1e-9, equal_nan=True)
+    assert not np.allclose(runs[0].phi_b, runs[1].phi_b, atol=1e-4, equal_nan=True)
+    # a C export of it gets an identifier from the name
+    assert export_design(deg, 100.0).ident == "pif_modified_paper_deg"

@@ -10,7 +10,9 @@
 ``pif-smoother`` and ``kinematic-smoother``); ``make(name, params, **tuning)`` builds one,
 :func:`roadbank.vehicle.for_log` builds one for a log as the command line does.
 ``PRESETS`` are further names ``make`` accepts: ``pif-paper`` is ``pif-modified`` with the paper's
-Table 4 weights (``pif-modified`` itself is roadbank's default tuning).
+Table 4 weights (``pif-modified`` itself is roadbank's default tuning). A named tuning other than the
+estimator's own shows in its name, so in its outputs' columns: ``make("pif-modified", tuning="paper-deg")``
+is ``pif-modified[paper-deg]``.
 Each has ``run(signals) -> Estimate``, ``step(t, vx, ay, r, delta_f)`` and ``reset()``.
 """
 
@@ -87,13 +89,17 @@ TUNED_AS = {"pif-smoother": "pif-modified", "pif-gated": "pif-modified", "kinema
 
 #: sample rate (Hz) of the data sheet's sensors that ``make`` designs the sensor-weighted PIFs for
 SHEET_RATE_HZ = 100.0
+#: the named tuning (``tuning=``) an estimator has when none is given, where that is not ``"default"``
+OWN_TUNING = {"pif-original": "paper", "pif-paper": "paper"}
 
 
 def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
     """Build the estimator ``name`` (one of :data:`NAMES`, :data:`PRESETS` or :data:`GYRO`) for ``params``.
 
     ``tuning`` are the estimator's keyword options (see each class) plus the
-    common ones ``v_min`` (m/s), ``roll``, ``max_substep`` (s), ``max_gap`` (s).
+    common ones ``v_min`` (m/s), ``roll``, ``max_substep`` (s), ``max_gap`` (s). A named tuning
+    (``tuning="paper-deg"``) other than the estimator's own (:data:`OWN_TUNING`) is added to its
+    ``name`` in brackets, ``"pif-modified[paper-deg]"``: the name its estimates and their columns carry.
     """
     try:
         factory = _FACTORIES[name]
@@ -103,7 +109,10 @@ def make(name: str, params: VehicleParams | None = None, **tuning) -> Estimator:
         est = factory(params, **tuning)
     except TypeError as exc:
         raise ValueError(f"{name}: bad tuning option ({exc})") from None
-    if name in PRESETS:
+    named = tuning.get("tuning")
+    if named is not None and named != OWN_TUNING.get(name, "default"):
+        est.name = f"{name}[{named}]"      # two tunings of one filter must not share their output columns
+    elif name in PRESETS:
         est.name = name            # its outputs' columns say which tuning made them
     if name in SENSOR_R_ESTIMATORS and "R" not in tuning and tuning.get("tuning", "default") == "default":
         est.sheet_rate = SHEET_RATE_HZ      # designed for the data sheet's sensor at its own rate
