@@ -221,3 +221,31 @@ def test_validate_reads_a_segment_with_a_broken_steering_file(tmp_path):
     want = validate_comma2k19(no_steer, names=["kinematic"], sensitivity=False)
     assert got.scores["kinematic"] == want.scores["kinematic"]
     assert np.isfinite(got.scores["kinematic"].r) and np.isnan(got.data["steer_quantum_deg"])
+
+
+@needs_data
+def test_a_clock_that_steps_back_keeps_the_longer_stretch_and_names_what_is_dropped(tmp_path):
+    """Every IMU stamp from row 3000 on 0.4 s earlier (the clock stepped back once and ran on): the rows after the
+    step overlap those before it in time, so sorting would interleave two parts of the drive. The longer stretch
+    (rows 3000-6255, 32.6 s) is kept, the other dropped, and each IMU channel's warning names its file, the step,
+    the rows and seconds kept and those dropped. The log equals the segment whose IMU files hold only the rows
+    after the first kept one (the first is flagged not valid: the sample after a dropped one)."""
+    stepped, kept = _copy(tmp_path, "stepped"), _copy(tmp_path, "kept")
+    for rel in IMU:
+        t = _load(SEGMENT / rel / "t")
+        t[3000:] -= 0.4
+        _save(stepped / rel / "t", t)
+        _save(kept / rel / "t", t[3001:])
+        _save(kept / rel / "value", _load(SEGMENT / rel / "value")[3001:])
+    log = load_log(stepped)
+    _same_log(log, load_log(kept))
+    t = _load(stepped / IMU[1] / "t")
+    dropped = f"the rest dropped: sample 0 to sample 2999 ({t[0]:.3f} to {t[2999]:.3f} s)"
+    for role, column in (("lateral_acceleration", "processed_log/IMU/accelerometer[1]"),
+                         ("yaw_rate", "processed_log/IMU/gyro[2]"), ("roll_rate", "processed_log/IMU/gyro[0]")):
+        said = [w for w in log.warnings if f"channel '{role}' (column '{column}')" in w]
+        assert len(said) == 1, log.warnings
+        assert f"clock restarts at sample 3000 (from {t[2999]:.3f} s back to {t[3000]:.3f} s)" in said[0]
+        assert f"only the longest is kept: sample 3000 to sample 6255 ({t[3000]:.3f} to {t[-1]:.3f} s)" in said[0]
+        assert dropped in said[0]
+    assert not any("sorted by time" in w for w in log.warnings)

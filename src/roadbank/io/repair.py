@@ -63,8 +63,10 @@ def repair_stamps(source, column: str, t: np.ndarray, label: str = "time", after
 
 
 def _restart_note(t: np.ndarray, rep: TimeRepair, row) -> str:
-    """`` -- the logger's clock restarts at <row> (...): ... kept <rows> (...)`` for a repair that kept
-    one part of a drive whose clock restarts (``row(i)`` names input sample ``i``); '' for none."""
+    """`` -- the logger's clock restarts at <row> (...): ... kept <rows> (...), dropped <rows> (...)`` for a repair
+    that kept one part of a drive whose clock restarts (``row(i)`` names input sample ``i``): the restart, the part
+    kept and the parts dropped before and after it, each with its rows and the span of its stamps (s); '' for
+    none."""
     if not rep.restarts or not len(rep.keep):
         return ""
     j = rep.restarts[0]
@@ -72,8 +74,14 @@ def _restart_note(t: np.ndarray, rep: TimeRepair, row) -> str:
     back = f"from {before[-1]:.3f} s back to {t[j]:.3f} s" if len(before) else f"back to {t[j]:.3f} s"
     more = f" (and {len(rep.restarts) - 1} more time(s))" if len(rep.restarts) > 1 else ""
     k0, k1 = int(rep.keep[0]), int(rep.keep[-1])
+    dropped = []
+    for a, b in ((0, k0), (k1 + 1, len(t))):
+        stamps = t[a:b][np.isfinite(t[a:b])]
+        if len(stamps):
+            dropped.append(f"{row(a)} to {row(b - 1)} ({stamps.min():.3f} to {stamps.max():.3f} s)")
+    gone = f", the rest dropped: {' and '.join(dropped)}" if dropped else ""
     return (f" -- the logger's clock restarts at {row(j)} ({back}){more}: the parts are not spliced, only the "
-            f"longest is kept: {row(k0)} to {row(k1)} ({t[k0]:.3f} to {t[k1]:.3f} s)")
+            f"longest is kept: {row(k0)} to {row(k1)} ({t[k0]:.3f} to {t[k1]:.3f} s){gone}")
 
 
 def repair_counts(rep: TimeRepair) -> dict:
