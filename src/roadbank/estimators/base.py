@@ -144,6 +144,22 @@ def speed_grid(v_min: float, v_max: float = V_GRID_MAX, step: float = V_GRID_STE
     return v_min + step * np.arange(n)
 
 
+class Wrapper:
+    """An estimator in front of another, ``inner`` (the online offset learner, the reading of a held log): its name
+    and every attribute it does not have are the inner estimator's."""
+
+    inner: "Estimator"
+
+    def __getattr__(self, name):
+        if name == "inner":          # not yet set (copy/pickle): no recursion
+            raise AttributeError(name)
+        return getattr(self.inner, name)
+
+    @property
+    def name(self) -> str:
+        return self.inner.name
+
+
 class Estimator:
     """Base class of all bank-angle estimators.
 

@@ -17,10 +17,10 @@ import math
 import numpy as np
 
 from ..signals import Estimate, Signals, held_copies
-from .base import StepResult
+from .base import StepResult, Wrapper
 
 
-class AtSource:
+class AtSource(Wrapper):
     """``inner`` reading only the rows of a log that bring new values (module docstring).
 
     Parameters
@@ -40,19 +40,6 @@ class AtSource:
             raise TypeError("AtSource expects a roadbank estimator")
         self.inner = inner
         self._forget()
-
-    def __getattr__(self, name):
-        if name == "inner":          # not yet set (copy/pickle): no recursion
-            raise AttributeError(name)
-        return getattr(self.inner, name)
-
-    @property
-    def name(self) -> str:
-        return self.inner.name
-
-    @name.setter
-    def name(self, value: str) -> None:
-        self.inner.name = value
 
     def _forget(self) -> None:
         self._key: tuple[float, ...] | None = None         # ay, r (, p) of the last row taken

@@ -69,7 +69,7 @@ from ..models.bicycle import understeer_gradient
 from ..params import VehicleParams
 from ..signals import Estimate, Signals
 from .kernels import offsets as K
-from .base import Estimator, StepResult, sample_floats
+from .base import Estimator, StepResult, Wrapper, sample_floats
 from .held import AtSource
 
 
@@ -162,7 +162,7 @@ class OffsetSettings:
         return c
 
 
-class OnlineOffsets:
+class OnlineOffsets(Wrapper):
     """An estimator whose inputs are corrected by the online offset learner (module docstring).
 
     Parameters
@@ -193,15 +193,6 @@ class OnlineOffsets:
         self._ocfg = self.settings.cfg(self.offset_params)
         self._omem = K.new_memory()
         self._oout = np.zeros(K.N_OUT)
-
-    def __getattr__(self, name):
-        if name == "inner":          # not yet set (copy/pickle): no recursion
-            raise AttributeError(name)
-        return getattr(self.inner, name)
-
-    @property
-    def name(self) -> str:
-        return self.inner.name
 
     def reset(self) -> None:
         """Forget all history of the estimator and of the learner (the offsets too)."""
