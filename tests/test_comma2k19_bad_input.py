@@ -39,14 +39,19 @@ def _save(f: Path, a: np.ndarray) -> None:
         np.save(fh, a)
 
 
-def _same_log(got, want) -> None:
-    """Two logs with the same samples: every signal, the reference roll and the positions, NaN where NaN."""
+def _same_signals(got, want) -> None:
+    """Two logs with the same signals (every channel, NaN where NaN)."""
     for name in ("t", "vx", "ay", "r", "delta_f", "p", "ax", "q"):
         a, b = getattr(got.signals, name), getattr(want.signals, name)
         if b is None:
             assert a is None, name
             continue
         np.testing.assert_allclose(a, b, rtol=0, atol=1e-12, err_msg=name)
+
+
+def _same_log(got, want) -> None:
+    """Two logs with the same samples: every signal, the reference roll and the positions, NaN where NaN."""
+    _same_signals(got, want)
     if want.reference_roll is None:
         assert got.reference_roll is None
     else:
@@ -249,3 +254,59 @@ def test_a_clock_that_steps_back_keeps_the_longer_stretch_and_names_what_is_drop
         assert f"only the longest is kept: sample 3000 to sample 6255 ({t[3000]:.3f} to {t[-1]:.3f} s)" in said[0]
         assert dropped in said[0]
     assert not any("sorted by time" in w for w in log.warnings)
+
+
+def _pose_cut(seg: Path, keep) -> float:
+    """The segment's pose frames where ``keep(frame_times)``; the last frame's time (s)."""
+    ft = _load(seg / "global_pose" / "frame_times")
+    kept = keep(ft)
+    for f in (seg / "global_pose").iterdir():
+        a = _load(f)
+        if len(a) == len(ft):
+            _save(f, a[kept])
+    return float(ft[kept][-1])
+
+
+@needs_data
+def test_a_pose_that_ends_early_leaves_the_log_its_inputs_span(tmp_path):
+    """The last 20 s of pose frames gone: the log had been cut to the pose's 40 s without a word. The reference is no
+    input: the log now spans the inputs (the uniform 100 Hz grid from the latest first to the earliest last stamp of
+    the speed, IMU and steering files), with the clean segment's signals, its reference the clean one's up to the
+    pose's last frame and NaN after, and a warning saying so. roadbank estimate writes the whole span; validate
+    scores the stretch the pose covers, as it scores a segment whose inputs end there too."""
+    seg = _copy(tmp_path, "pose_short")
+    last = _pose_cut(seg, lambda ft: ft < ft[0] + 40.0)
+    log, clean = load_log(seg), load_log(SEGMENT)
+    firsts, lasts = zip(*((_load(SEGMENT / rel / "t")[[0, -1]]) for rel in (*IMU, "processed_log/CAN/speed", STEERING)))
+    grid = max(firsts) + np.arange(int(np.floor((min(lasts) - max(firsts)) * 100 + 1e-9)) + 1) / 100
+    np.testing.assert_allclose(log.signals.t, grid, rtol=0, atol=1e-9)
+    _same_signals(log, clean)
+    covered = log.signals.t <= last
+    assert 0.66 < covered.mean() < 0.67
+    for got, want in ((log.reference_roll, clean.reference_roll), (log.extra["lat_deg"], clean.extra["lat_deg"]),
+                      (log.extra["lon_deg"], clean.extra["lon_deg"])):
+        np.testing.assert_array_equal(got[covered], want[covered])
+        assert np.isnan(got[~covered]).all()
+    said = [w for w in log.warnings if "reference_roll" in w]
+    assert len(said) == 1 and f"covers {grid[0]:.3f} to {log.signals.t[covered][-1]:.3f} s of the log's " \
+        f"{grid[0]:.3f} to {grid[-1]:.3f} s: the reference roll is NaN for the 20.03 s after it" in said[0], said
+
+    out = tmp_path / "estimate.csv"
+    res = CliRunner().invoke(main, ["estimate", str(seg), "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    table = np.genfromtxt(out, delimiter=",", names=True)
+    np.testing.assert_allclose(table["t"], log.signals.t, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(np.isnan(table["reference_roll"]), ~covered)
+
+    from roadbank.validation.comma2k19 import validate_comma2k19
+    ends = _copy(tmp_path, "inputs_end_there")        # the same segment with every input cut 0.05 s after the pose
+    _pose_cut(ends, lambda ft: ft < ft[0] + 40.0)
+    for rel in (*IMU, "processed_log/CAN/speed", STEERING):
+        t = _load(ends / rel / "t")
+        for name in ("t", "value"):
+            _save(ends / rel / name, _load(ends / rel / name)[t < last + 0.05])
+    got = validate_comma2k19(seg, names=["kinematic", "kinematic-pif"], sensitivity=False)
+    want = validate_comma2k19(ends, names=["kinematic", "kinematic-pif"], sensitivity=False)
+    assert got.t[-1] <= last and np.array_equal(got.t, want.t)
+    for name in ("kinematic", "kinematic-pif"):
+        assert got.scores[name] == want.scores[name] and np.isfinite(got.scores[name].r), name

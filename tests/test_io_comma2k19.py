@@ -60,8 +60,13 @@ def test_real_segment_loads_with_iso_signs():
     # means are the negated raw means (interpolation preserves them closely)
     assert np.mean(s.ay) == pytest.approx(-np.mean(acc[:, 1]), abs=0.02)
     assert np.mean(s.r) == pytest.approx(-np.mean(gyr[:, 2]), abs=0.002)
+    # the pose's last frame comes 0.075 s before the inputs' last samples: no reference roll after it (NaN), the
+    # log keeping the inputs' span
+    last_frame = np.load(SEGMENT / "global_pose/frame_times", allow_pickle=False)[-1]
+    np.testing.assert_array_equal(np.isnan(log.reference_roll), s.t > last_frame)
+    assert np.count_nonzero(s.t > last_frame) == 8
     # README: reference roll about 0.4 to 1.8 deg, mean about 1.25 deg
-    ref = np.degrees(log.reference_roll)
+    ref = np.degrees(log.reference_roll[s.t <= last_frame])
     assert 0.3 < ref.min() < 0.5 and 1.7 < ref.max() < 1.9
     assert np.mean(ref) == pytest.approx(1.25, abs=0.1)
     # speed 8-20 m/s, steering: left turn -> positive delta (correlates with ISO yaw rate)
@@ -87,7 +92,8 @@ def test_real_segment_is_the_documented_mapping_on_the_common_grid():
     """The segment read through the assembler equals the mapping of the module docstring computed here
     from the raw arrays with the resampling rules alone (:mod:`roadbank.io.resample`): ``ay = -accel[:, 1]``,
     ``r = -gyro[:, 2]``, the CAN speed, the steering-wheel angle in rad over the steering ratio, the pose
-    roll and position, all on the uniform 100 Hz grid over their overlap, bit for bit."""
+    roll and position, all on the uniform 100 Hz grid over the inputs' overlap (the pose roll, no input, does not
+    bound it: NaN after its last frame), bit for bit."""
     from roadbank.io.comma2k19 import ecef_to_latlon
     from roadbank.io.resample import common_time_base, interpolate, resample
     from roadbank.params import VehicleParams
@@ -107,7 +113,7 @@ def test_real_segment_is_the_documented_mapping_on_the_common_grid():
     for ratio, rate, gap in ((None, 100.0, 0.5), (12.0, 50.0, 0.2)):
         params = VehicleParams() if ratio is None else VehicleParams().replace(steering_ratio=ratio)
         log = load_comma2k19(SEGMENT, params=params, rate_hz=rate, max_gap_s=gap)
-        t = common_time_base(series, "uniform", rate)
+        t = common_time_base({k: v for k, v in series.items() if k != "roll"}, "uniform", rate)
         want = resample(series, t, gap)
         s = log.signals
         np.testing.assert_array_equal(s.t, t)
@@ -182,7 +188,8 @@ def test_a_segment_without_its_pose_or_steering_is_read_without_them(tmp_path):
     log = load_log(no_pose)
     assert log.reference_roll is None and "lat_deg" not in log.extra
     assert any("'global_pose' is missing" in w and "no reference roll" in w for w in log.warnings), log.warnings
-    # the pose's 20 Hz frames bound the common time span of the full segment: the rest lies within it
+    # the pose no longer bounds the log's span (the reference is no input): the same samples with or without it
+    assert np.array_equal(log.signals.t, full.signals.t)
     inner = (log.signals.t >= full.signals.t[0]) & (log.signals.t <= full.signals.t[-1])
     assert np.array_equal(log.signals.t[inner], full.signals.t)
     assert np.array_equal(log.signals.ay[inner], full.signals.ay)
@@ -199,7 +206,8 @@ def test_a_pose_without_a_fix_is_not_read_as_a_roll_in_degrees(tmp_path):
     """Positions all at the Earth's centre (a receiver without a fix writes zeros): before, the roll of such a pose
     was refused as a reference roll "probably in deg"; now the frames off the Earth have no roll, and with none left
     the segment is read without its pose, saying why. The second half of the frames without a fix: the log is the
-    full segment's first half, its reference the full pose's roll there."""
+    full segment (the reference, no input, does not cut it; before, the log was the first half), its reference the
+    full pose's roll up to the last frame with a fix and NaN after it, which a warning says."""
     import shutil
 
     seg = tmp_path / "seg"
@@ -218,8 +226,11 @@ def test_a_pose_without_a_fix_is_not_read_as_a_roll_in_degrees(tmp_path):
         np.save(fh, half)
     log, full = load_log(seg), load_log(SEGMENT)
     assert any(f"{len(pos) - len(pos) // 2} of the {len(pos)} frames are not on the Earth" in w for w in log.warnings)
-    # every channel, the reference too, bounds the log's common time span (as the full pose bounds the full log's)
-    n = len(log)
-    assert 0.45 < n / len(full) < 0.55
-    assert np.array_equal(log.signals.t, full.signals.t[:n]) and np.array_equal(log.signals.ay, full.signals.ay[:n])
-    assert np.array_equal(log.reference_roll, full.reference_roll[:n])
+    assert np.array_equal(log.signals.t, full.signals.t) and np.array_equal(log.signals.ay, full.signals.ay)
+    last_fix = np.load(SEGMENT / "global_pose/frame_times", allow_pickle=False)[len(pos) // 2 - 1]
+    covered = log.signals.t <= last_fix
+    assert 0.45 < covered.mean() < 0.55
+    assert np.array_equal(log.reference_roll[covered], full.reference_roll[covered])
+    assert np.isnan(log.reference_roll[~covered]).all()
+    assert any("channel 'reference_roll'" in w and f"covers 46408.590 to {log.signals.t[covered][-1]:.3f} s of the "
+               "log's 46408.590 to 46468.570 s" in w for w in log.warnings), log.warnings

@@ -14,7 +14,9 @@ segments, whose sources bring their own channel map) comes here from its source
 4. **plausibility** of each channel's values in its declared unit
    (:func:`~roadbank.io.channels.check_plausible`);
 5. **resampling** onto one time base (:class:`~roadbank.io.resample.StreamResampler`; a channel sampled
-   slower than ``max_gap_s`` is bridged (the speed) or warned about: :func:`rate_notes`);
+   slower than ``max_gap_s`` is bridged (the speed) or warned about: :func:`rate_notes`); the span is the
+   inputs' overlap, which the reference roll does not bound (:data:`REFERENCE_ROLES`: NaN where it has no
+   sample, a warning where that leaves more than ``max_gap_s`` of the log's start or end);
 6. **the log**: :class:`~roadbank.Signals`, reference roll, truth, GNSS position, the channels a
    source derives itself (``carried``: KITTI's leftward speed, a data set's position in degrees; into
    :attr:`Log.extra` as they are), the cross-channel consistency check
@@ -60,6 +62,10 @@ from .types import Log
 
 #: GNSS fixes come at 1-20 Hz: a gap up to this long (s) is interpolated across
 GNSS_MAX_GAP_S = 2.0
+#: the roles that do not bound the log's time span (:class:`~roadbank.io.resample.StreamResampler`'s ``loose``):
+#: the reference roll is no estimator's input, so a reference that covers less time than the inputs leaves the log
+#: their span, the reference NaN where it has no sample (said by :meth:`_Logs.finish`)
+REFERENCE_ROLES = ("reference_roll",)
 #: time stamps the sample-period check of a table's time column gathers before it decides
 PERIOD_STAMPS = 100
 #: the roles whose own clock (MDF4, CAN, ROS) is checked for a sample period in another unit: noisy channels, sampled
@@ -270,6 +276,8 @@ class _Logs:
         self.counts: dict = {}             # repair counts for the next log
         self.pending: Log | None = None
         self.n = 0                         # samples given so far
+        self.span: list[float] = []        # the log's first and last base times (s)
+        self.covered: list[float] = []     # ... and those where the reference roll is finite (s)
         self.balance = _Balance(p, {r: cmap.channels[r].column for r in [*roles[:3], *({"roll_rate"} & set(roles))]})
 
     def add(self, out, counts: dict) -> Iterator[Log]:
@@ -297,6 +305,12 @@ class _Logs:
         self.warnings, self.counts = [], {}
         log.warnings += self.balance.add(sig)
         self.n += len(sig)
+        self.span = [self.span[0] if self.span else float(sig.t[0]), float(sig.t[-1])]
+        if log.reference_roll is not None:
+            ok = np.isfinite(log.reference_roll)
+            if ok.any():
+                tk = sig.t[ok]
+                self.covered = [self.covered[0] if self.covered else float(tk[0]), float(tk[-1])]
         if self.pending is not None:
             yield self.pending
         self.pending = log
@@ -307,8 +321,28 @@ class _Logs:
             raise LogError(f"{self.p}: fewer than 2 samples on the common time base")
         assert self.pending is not None        # two samples or more were assembled
         self.pending.time_repairs = add_counts(self.pending.time_repairs, add_counts(self.counts, counts))
-        self.pending.warnings += self.warnings + self.balance.finish()
+        self.pending.warnings += self.warnings + self.balance.finish() + self._coverage()
         yield self.pending
+
+    def _coverage(self) -> list[str]:
+        """The warning for a reference roll that leaves more than ``max_gap_s`` of the log's start or end without a
+        sample (NaN there: the log keeps its inputs' span, :data:`REFERENCE_ROLES`); ``[]`` otherwise."""
+        role = "reference_roll"
+        if role not in self.roles or not self.span:
+            return []
+        col = self.cmap.channels[role].column
+        t0, t1 = self.span
+        if not self.covered:
+            return [channel_text(self.p, role, col, f"no sample within the log's span ({t0:.3f} to {t1:.3f} s): the "
+                                 "reference roll is NaN throughout (nothing to score the estimate against)")]
+        c0, c1 = self.covered
+        if c0 - t0 <= self.cmap.max_gap_s and t1 - c1 <= self.cmap.max_gap_s:
+            return []
+        ends = ((c0 - t0, "before"), (t1 - c1, "after"))
+        where = " and ".join(f"the {d:.2f} s {side} it" for d, side in ends if d > 0)
+        return [channel_text(self.p, role, col, f"covers {c0:.3f} to {c1:.3f} s of the log's {t0:.3f} to {t1:.3f} s: "
+                             f"the reference roll is NaN for {where} (the log keeps the span of its inputs, and an "
+                             "estimate is not scored where it has no reference)")]
 
 
 class _Balance:
@@ -490,7 +524,7 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
             # carried channels: on the clock as they are; on any other base, interpolated with their gap
             aux = {**dict.fromkeys(gnss, GNSS_MAX_GAP_S), **({} if base == "clock" else carried)}
             rs = StreamResampler(roles, aux, base, cmap.rate_hz, cmap.max_gap_s,
-                                 raw=truth_cols + (list(carried) if base == "clock" else []))
+                                 raw=truth_cols + (list(carried) if base == "clock" else []), loose=REFERENCE_ROLES)
         if rs is None:
             if last:
                 raise LogError(f"{p}: fewer than 2 samples on the common time base")
@@ -546,7 +580,7 @@ def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     tb = _time_base(p, cmap, roles, table=False)
     carried = dict(src.carried)
     rs = StreamResampler(roles, {**dict.fromkeys(gnss, GNSS_MAX_GAP_S), **carried},
-                         "uniform" if tb == "auto" else tb, cmap.rate_hz, cmap.max_gap_s)
+                         "uniform" if tb == "auto" else tb, cmap.rate_hz, cmap.max_gap_s, loose=REFERENCE_ROLES)
     read = roles + gnss + list(carried)
     col = {r: cmap.channels[r].column for r in roles + gnss} | {c: c for c in carried}
     fixes = {r: ChunkRepair(p, col[r], r, "sample", hold_last=True) for r in read}

@@ -12,7 +12,8 @@ Rules (also in docs/io.md):
     stay NaN (dropouts the estimators skip). Otherwise as ``"uniform"``.
   - ``"uniform"``: a uniform grid at ``rate_hz`` (default 100 Hz) starting at
     the latest first sample of all channels and ending at or before the
-    earliest last sample -- the overlap of all channels.
+    earliest last sample -- the overlap of all channels (in
+    :class:`StreamResampler`, of those not ``loose``: the reader's reference roll).
   - a role name (e.g. ``"lateral_acceleration"``): that channel's own valid
     sample times inside the overlap.
   - ``"clock"``: a table's own time column as it is, whatever the channels'
@@ -223,6 +224,10 @@ class StreamResampler:
     raw : list of str
         Channels on the table clock interpolated with :func:`numpy.interp` (no gap rule, NaN
         spreads to its neighbours): the truth columns of simulated logs.
+    loose : list of str
+        Roles read as roles (interpolated with ``max_gap_s``, their sample period checked) that do not bound
+        the base's span: NaN on the base where they have no sample (the reference roll, which no estimate
+        reads: a reference that covers less time than the inputs does not cut the log).
 
     Feed chunks with :meth:`add` (any channel, any span, time-ordered per channel), mark exhausted
     channels with :meth:`finish`, collect output with :meth:`emit` (dict name -> array on ``"t"``).
@@ -235,8 +240,9 @@ class StreamResampler:
     period is known, nothing is emitted across a step of it longer than ``max_gap_s``.
     """
 
-    def __init__(self, roles, aux=None, time_base="uniform", rate_hz=100.0, max_gap_s=0.5, raw=()):
+    def __init__(self, roles, aux=None, time_base="uniform", rate_hz=100.0, max_gap_s=0.5, raw=(), loose=()):
         self.roles = list(roles)
+        self.loose = set(loose) & set(self.roles)
         self.aux = dict(aux or {})
         self.raw = list(raw)
         self.time_base = time_base
@@ -330,6 +336,7 @@ class StreamResampler:
         if name == self.time_base:
             raise LogError(f"resample.time_base '{name}': the channel has no finite value")
         self.roles.remove(name)
+        self.loose.discard(name)
         for d in (self.t, self.v, self.first, self.last, self.done, self.gap, self.steps, self.long_step):
             d.pop(name, None)
 
@@ -354,7 +361,7 @@ class StreamResampler:
             if self._as_is(k):
                 continue
             if self.done[k]:
-                if k in self.roles and self.last[k] is not None:
+                if k in self.roles and k not in self.loose and self.last[k] is not None:
                     lim = min(lim, self.last[k])      # a finished channel ends the overlap
                 continue
             if self.last[k] is None:
@@ -362,15 +369,20 @@ class StreamResampler:
             lim = min(lim, self.last[k])
         return lim
 
+    def _spanning(self) -> list[str]:
+        """The roles whose overlap is the base's span (all but the :attr:`loose` ones)."""
+        return [k for k in self.roles if k not in self.loose]
+
     def _check_overlap(self) -> float:
         """End of the overlap of the roles (s), once every role is finished; LogError as :func:`overlap`."""
         for k in self.roles:
             if self.first[k] is None:
                 raise LogError(f"channel '{k}': no valid (finite) samples")
-        t0 = max(self.first[k] for k in self.roles)
-        t1 = min(self.last[k] for k in self.roles)
+        span = self._spanning()
+        t0 = max(self.first[k] for k in span)
+        t1 = min(self.last[k] for k in span)
         if not t1 > t0:
-            raise no_overlap({k: self.first[k] for k in self.roles}, {k: self.last[k] for k in self.roles})
+            raise no_overlap({k: self.first[k] for k in span}, {k: self.last[k] for k in span})
         return t1
 
     def emit(self) -> dict[str, np.ndarray] | None:
@@ -385,7 +397,7 @@ class StreamResampler:
                     raise LogError(f"channel '{k}': no valid (finite) samples")
                 return None
         if self.t0 is None:
-            self.t0 = max(self.first[k] for k in self.roles)
+            self.t0 = max(self.first[k] for k in self._spanning())
         ready = self._ready_until()
         if ready is None:
             return None
@@ -395,7 +407,7 @@ class StreamResampler:
             k_end = int(np.floor((ready - self.t0) * self.rate + 1e-9)) + 1 if np.isfinite(ready) else self.k_next
             if k_end <= self.k_next:
                 return None
-            gaps = pauses([self.t[k] for k in self.roles if not self._as_is(k)])
+            gaps = pauses([self.t[k] for k in self._spanning() if not self._as_is(k)])
             self.paused += [pair for pair in map(tuple, gaps) if pair not in self.paused]
             grid = self.t0 + grid_indices(self.t0, self.rate, self.k_next, k_end, gaps) / self.rate
             self.k_next = k_end

@@ -28,8 +28,8 @@ from ..io.comma2k19 import CHANNELS, POSE, SegmentSource, load_comma2k19
 from ..io.errors import LogError
 from ..params import VehicleParams
 from ..vehicle import undescribed_params
-from .scoring import (VALIDATION_NAMES, Score, Scored, Scoring, hold_invalid, lowpass, pearson_r, run_and_score,
-                      score)
+from .scoring import (VALIDATION_NAMES, Score, Scored, Scoring, covered_span, hold_invalid, lowpass, pearson_r,
+                      reference_covered, run_and_score, score)
 
 __all__ = ["SEDAN", "ValidationResult", "comma2k19_outcome", "named_apart", "segment_name", "unique_segments",
            "validate_comma2k19", "lowpass"]
@@ -162,12 +162,18 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     if log.reference_roll is None:
         raise LogError(f"{path}: nothing to score: no reference roll ('{POSE}' missing, or none of its frames has a "
                        "fix)")
-    s, ref = log.signals, hold_invalid(log.reference_roll)
+    # the stretch the pose covers, as run_and_score reads it (NaN where it has no frame: not scored)
+    ref, covered = reference_covered(log.reference_roll)
+    if not covered.any():
+        raise LogError(f"{path}: nothing to score: the pose has no frame with a fix within the inputs' time span "
+                       f"({log.signals.t[0]:.3f} to {log.signals.t[-1]:.3f} s)")
+    cut = covered_span(covered)
+    s, ref, covered = log.signals[cut], ref[cut], covered[cut]
     t = s.t
     dt = float(np.median(np.diff(t)))
     # a car not described: designed for the one that fits the segment (read with the static one)
     design = undescribed_params(s) if described is None else params
-    run = run_and_score(s, ref, names, design, scoring, per_estimator=tuning, sensors=sensors)
+    run = run_and_score(s, log.reference_roll[cut], names, design, scoring, per_estimator=tuning, sensors=sensors)
     scores, smoothed = run.scores, run.estimates
     m_fit, m_sc = run.fit, run.scored
     m_all = m_fit | m_sc
@@ -217,10 +223,10 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
         "v_median": vmed,
         "duration_s": float(t[-1] - t[0]),
         "speed_range": (float(np.nanmin(s.vx)), float(np.nanmax(s.vx))),
-        "ref_range_deg": (float(np.degrees(ref.min())), float(np.degrees(ref.max()))),
+        "ref_range_deg": (float(np.degrees(ref[covered].min())), float(np.degrees(ref[covered].max()))),
         "ref_std_deg_scored": float(np.degrees(ref_sig)),
         "ref_std_deg_raw_scored": float(np.degrees(np.std(ref[m_sc]))),
-        "ref_highfreq_std_deg": float(np.degrees(np.std(ref - lowpass(ref, 0.2, dt)))),
+        "ref_highfreq_std_deg": float(np.degrees(np.std((ref - lowpass(ref, 0.2, dt))[covered]))),
         "ay_vibration_std": float(np.std((s.ay - box)[inner])),
         "ay_1s_mean_std": float(np.std(box[inner])),
         "signal_ay_equiv_std": float(params.g * np.sin(ref_sig)),
@@ -238,7 +244,7 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
         other = VehicleParams()
         log_other = load_comma2k19(path, params=other)
         # the same masks: the segment's time base and speed do not depend on the car
-        sens["suv"] = run_and_score(log_other.signals, ref, names, other, scoring).scores
+        sens["suv"] = run_and_score(log_other.signals[cut], log.reference_roll[cut], names, other, scoring).scores
         if "pif-modified" in names:
             sens["pif_Q"] = {}
             for Q in (0.01, 0.1, 1.0, 10.0):   # Table 4 weights with Q varied

@@ -10,7 +10,10 @@ fixed before looking at any result and applied to every estimator alike:
    start is the first gated sample of the log or after more than ``max_gap``
    (1 s, the estimators' re-initialisation gap) below the gate. With
    ``from_log_start`` the warm-up is the first ``warmup_s`` of the log, once: every
-   gated sample after it is scored, those after each stop too.
+   gated sample after it is scored, those after each stop too. Samples without a
+   reference (NaN) are not scored, and a log whose reference covers less time than
+   it is run and scored as the log cut to the stretch from the reference's first
+   sample to its last (:func:`covered_span`).
 4. Smoothing: the reference and every estimate (held over not-valid samples) go
    through the same zero-phase first-order low-pass (``tau`` = 2/3 s, the paper's
    reference filter, run forward and backward so it adds no lag of its own).
@@ -204,6 +207,25 @@ def lowpass_t(x: np.ndarray, t: np.ndarray, tau: float, zero_phase: bool = True,
     return y
 
 
+def reference_covered(ref) -> tuple[np.ndarray, np.ndarray]:
+    """``(held, covered)`` of a reference roll (rad): ``held`` the reference with its last value held over the
+    samples without one (NaN) and its first value before its first sample, for smoothing; ``covered`` the mask of
+    the samples that have one, the only ones scored (:func:`masks`)."""
+    covered = np.isfinite(np.asarray(ref, dtype=np.float64))
+    held = hold_invalid(ref)
+    if covered.any() and not covered[0]:
+        first = int(np.argmax(covered))
+        held[:first] = held[first]
+    return held, covered
+
+
+def covered_span(covered: np.ndarray) -> slice:
+    """The samples from the first to the last of the mask ``covered`` (those with a reference,
+    :func:`reference_covered`): the stretch a log is scored on; the whole log where none is covered."""
+    k = np.flatnonzero(covered)
+    return slice(int(k[0]), int(k[-1]) + 1) if len(k) else slice(0, len(covered))
+
+
 def hold_invalid(x: np.ndarray) -> np.ndarray:
     """Hold the last finite value over non-finite samples (the estimators already hold; NaN guard)."""
     x = np.array(x, dtype=np.float64)
@@ -263,8 +285,11 @@ def _rms_deg(e) -> float:
     return float(np.degrees(np.sqrt(np.mean(e ** 2)))) if len(e) else float("nan")
 
 
-def masks(t: np.ndarray, vx: np.ndarray, scoring: Scoring) -> tuple[np.ndarray, np.ndarray]:
-    """``(fit, scored)`` boolean masks of the samples (see the module docstring, steps 2, 3, 5)."""
+def masks(t: np.ndarray, vx: np.ndarray, scoring: Scoring,
+          covered: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``(fit, scored)`` boolean masks of the samples at times ``t`` (s) with speeds ``vx`` (m/s) (see the module
+    docstring, steps 2, 3, 5); ``covered``: the samples that have a reference (:func:`reference_covered`), the
+    others neither fitted nor scored (the warm-up is the estimators' and counts from the speed alone)."""
     gate = np.isfinite(vx) & (vx >= scoring.v_gate)
     if scoring.from_log_start:
         keep = gate & (t - t[0] >= scoring.warmup_s) if len(t) else np.zeros(0, bool)
@@ -277,6 +302,8 @@ def masks(t: np.ndarray, vx: np.ndarray, scoring: Scoring) -> tuple[np.ndarray, 
                 start = t[k]
             last = t[k]
             keep[k] = t[k] - start >= scoring.warmup_s
+    if covered is not None:
+        keep = keep & covered
     idx = np.flatnonzero(keep)
     n_fit = int(scoring.fit_fraction * len(idx))
     fit = np.zeros(len(t), bool)
@@ -376,7 +403,9 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     signals : Signals
         The log (SI, ISO 8855).
     ref : array
-        Reference roll (rad, ISO: left side up) on ``signals.t``.
+        Reference roll (rad, ISO: left side up) on ``signals.t``; NaN where there is none: those samples are
+        not scored, and the estimators run on the log cut to the stretch from its first sample to its last
+        (:func:`covered_span`; the returned ``t``, masks and traces are the stretch's).
     names : sequence of str
         Estimator names, or labels of :data:`ESP_LABELS` (the estimator without the log's roll rate).
     params : VehicleParams
@@ -397,9 +426,12 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
     sample interval), unless ``R`` or another tuning is given (see :func:`log_rate_R`).
     """
     per_estimator = per_estimator or {}
+    ref, covered = reference_covered(ref)
+    cut = covered_span(covered)
+    if cut.stop - cut.start < len(covered):         # the log where the reference has samples
+        signals, ref, covered = signals[cut], ref[cut], covered[cut]
     t = signals.t
-    ref = hold_invalid(ref)
-    fit, scored = masks(t, signals.vx, scoring)
+    fit, scored = masks(t, signals.vx, scoring, covered)
     scores, smooth, raw, flags = {}, {}, {}, {}
     cond = log_conditions(signals)
     grid = TimeGrid.of(t)
