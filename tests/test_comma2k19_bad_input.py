@@ -3,6 +3,7 @@ each read is checked against the clean segment read as it is (or read without th
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
 
@@ -310,3 +311,33 @@ def test_a_pose_that_ends_early_leaves_the_log_its_inputs_span(tmp_path):
     assert got.t[-1] <= last and np.array_equal(got.t, want.t)
     for name in ("kinematic", "kinematic-pif"):
         assert got.scores[name] == want.scores[name] and np.isfinite(got.scores[name].r), name
+
+
+@needs_data
+def test_repair_counts_are_given_channel_by_channel(tmp_path):
+    """Three speed stamps written twice and one gyro pair swapped: Log.time_repairs adds the counts of every channel
+    (the gyro's pair counts once for each of its three channels); time_repairs_by_channel, the command line's summary
+    and its --json say which channel had what (before: '3 duplicate stamps dropped, 3 swapped pairs reordered; 9
+    sample(s) flagged not valid', the speed's and the gyro's added up)."""
+    seg = _copy(tmp_path, "seg")
+    t = _load(seg / "processed_log/CAN/speed/t")
+    t[[100, 200, 300]] = t[[99, 199, 299]]
+    _save(seg / "processed_log/CAN/speed/t", t)
+    t = _load(seg / IMU[1] / "t")
+    t[[2000, 2001]] = t[[2001, 2000]]
+    _save(seg / IMU[1] / "t", t)
+    log = load_log(seg)
+    by = {ch: {k: v for k, v in c.items() if v} for ch, c in log.time_repairs_by_channel.items()}
+    gyro = {"swapped": 1, "flagged": 2}
+    assert by == {"speed": {"duplicate": 3, "flagged": 3}, "yaw_rate": gyro, "roll_rate": gyro, "pitch_rate": gyro,
+                  "lateral_acceleration": {}, "longitudinal_acceleration": {}, "steering_wheel_angle": {},
+                  "reference_roll": {}}
+    assert {k: v for k, v in log.time_repairs.items() if v} == {"duplicate": 3, "swapped": 3, "flagged": 9}
+
+    res = CliRunner().invoke(main, ["estimate", str(seg), "-o", str(tmp_path / "x.csv")])
+    assert res.exit_code == 0, res.output
+    assert ("time stamps repaired in seg: speed: 3 duplicate stamps dropped, 3 sample(s) flagged not valid; each of "
+            "yaw_rate, roll_rate, pitch_rate: 1 swapped pair reordered, 2 sample(s) flagged not valid") in res.output
+    res = CliRunner().invoke(main, ["estimate", str(seg), "-o", str(tmp_path / "x.csv"), "--json"])
+    doc = json.loads(res.stdout)["logs"][0]
+    assert doc["time_repairs_by_channel"] == {k: v for k, v in by.items() if v}

@@ -223,13 +223,26 @@ def _check_not_an_input(paths, output: Path, batch: bool, output_format: str, re
                                  "log; give another -o", param_hint="-o")
 
 
-def repairs_text(repairs: dict) -> str:
-    """The time-stamp repairs of one log in words ('' when there were none)."""
+def repairs_text(repairs: dict, by_channel: dict | None = None) -> str:
+    """The time-stamp repairs of one log in words ('' when there were none): channel by channel where
+    ``by_channel`` (channel -> kind -> int) has them on channels of their own clocks, the channels with the same
+    counts together (``each of yaw_rate, roll_rate, pitch_rate: 735 out-of-order stamps dropped, ...``); a table's
+    one clock (``time``), or a log without ``by_channel``, as the sums of ``repairs``."""
     from ..io.timebase import describe
 
-    text = describe(repairs)
-    n = int(repairs.get("flagged", 0))
-    return text + (f"; {n} sample(s) flagged not valid" if n else "") if text or n else ""
+    def words(counts: dict, sep: str) -> str:
+        text = describe(counts)
+        n = int(counts.get("flagged", 0))
+        return text + (f"{sep}{n} sample(s) flagged not valid" if n else "") if text or n else ""
+
+    groups: dict[str, list[str]] = {}
+    for channel, counts in (by_channel or {}).items():
+        text = words(counts, ", ")
+        if text:
+            groups.setdefault(text, []).append(channel)
+    if not groups or list(groups.values()) == [["time"]]:
+        return words(repairs, "; ")
+    return "; ".join(f"{'each of ' if len(chs) > 1 else ''}{', '.join(chs)}: {text}" for text, chs in groups.items())
 
 
 def log_names(paths) -> list[str]:
@@ -269,7 +282,7 @@ def summary_table(summaries, estimators) -> str:
             lines.append(f"{name if k == 0 else '':<32} {est:<{width}} {s.duration_s:>8.1f}s "
                          f"{100 * st['valid_share']:>5.1f}% {st['bank_mean_deg']:>9.2f} "
                          f"{st['bank_min_deg']:>7.2f} {st['bank_max_deg']:>7.2f}")
-        text = repairs_text(s.time_repairs)
+        text = repairs_text(s.time_repairs, s.time_repairs_by_channel)
         if text:
             notes.append(f"time stamps repaired in {name}: {text}")
     return "\n".join(lines + notes)
@@ -290,7 +303,8 @@ def _finite(x):
 
 def summary_json(summaries, estimators) -> dict:
     """What ``--json`` prints: ``{"estimators": [...], "logs": [...], "written": n, "failed": n}``; per log
-    its status, error, output, samples, duration_s, seconds, warnings (list), time_repairs (kind -> int),
+    its status, error, output, samples, duration_s, seconds, warnings (list), time_repairs (kind -> int, summed over
+    the channels), time_repairs_by_channel (channel -> kind -> int, the channels and kinds with a repair),
     design (:attr:`roadbank.fleet.LogSummary.design`; ``{}`` on error) and per estimator valid_share,
     bank_mean_deg, bank_min_deg, bank_max_deg (null where undefined)."""
     logs = []
@@ -299,6 +313,8 @@ def summary_json(summaries, estimators) -> dict:
                      "samples": s.samples, "duration_s": _finite(s.duration_s), "seconds": round(s.seconds, 3),
                      "warnings": [w for w in s.warnings.split("; ") if w],
                      "time_repairs": {k: int(v) for k, v in s.time_repairs.items()},
+                     "time_repairs_by_channel": {ch: {k: int(v) for k, v in c.items() if v}
+                                                 for ch, c in s.time_repairs_by_channel.items() if any(c.values())},
                      "design": {k: _finite(v) for k, v in s.design.items()},
                      "estimators": {n: {k: _finite(v) for k, v in st.items()} for n, st in s.estimators.items()}})
     failed = sum(s.status != "ok" for s in summaries)

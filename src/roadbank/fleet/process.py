@@ -13,7 +13,7 @@ from ..defaults import ESTIMATOR as DEFAULT
 from ..estimators import OFFLINE, with_online_offsets
 from ..io import LogError
 from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
-from ..io.timebase import add_counts
+from ..io.timebase import add_channel_counts, add_counts
 from ..io.writers import TableWriter, estimate_table, write_error
 from ..signals import Estimate
 from ..vehicle import (DESIGN_MAX_S, car_for_log, for_conditions, has_design_span, load_vehicle, log_conditions,
@@ -59,6 +59,8 @@ class LogSummary:
     time_repairs : dict kind -> int
         What the time-stamp repair did to the log (:attr:`roadbank.io.Log.time_repairs`, summed
         over its chunks); in the summary table as ``kind=n`` pairs, "; "-separated (the non-zero ones).
+    time_repairs_by_channel : dict channel -> dict kind -> int
+        The same channel by channel (:attr:`roadbank.io.Log.time_repairs_by_channel`, summed over the chunks).
     estimators : dict name -> dict
         ``valid_share``, ``bank_mean_deg``, ``bank_min_deg``, ``bank_max_deg`` of every estimator
         asked for (the columns above are those of the first one).
@@ -85,6 +87,7 @@ class LogSummary:
     seconds: float = 0.0
     warnings: str = ""
     time_repairs: dict = field(default_factory=dict)
+    time_repairs_by_channel: dict = field(default_factory=dict)
     estimators: dict = field(default_factory=dict)
     design: dict = field(default_factory=dict)
     kept: object = field(default=None, repr=False, compare=False)
@@ -341,6 +344,8 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
                 span = max((e.lookahead_s for e, n in zip(ests, names) if n in OFFLINE), default=None)
             warns += chunk.warnings
             summary.time_repairs = add_counts(summary.time_repairs, chunk.time_repairs)
+            summary.time_repairs_by_channel = add_channel_counts(summary.time_repairs_by_channel,
+                                                                 chunk.time_repairs_by_channel)
             signals = correct(chunk.signals)
             nxt = None if span is None else chunks.following(span)
             ahead = None if nxt is None else correct(nxt)

@@ -57,7 +57,7 @@ from .geodesy import ecef_to_latlon
 from .repair import FLAGGED_ROLES, ChunkRepair, instants, interleaved_period
 from .resample import BRIDGE_PERIODS, StreamResampler, clean_series
 from .survey import auto_uses_clock
-from .timebase import add_counts
+from .timebase import add_channel_counts, summed
 from .types import Log
 
 #: GNSS fixes come at 1-20 Hz: a gap up to this long (s) is interpolated across
@@ -273,7 +273,7 @@ class _Logs:
         self.roles, self.gnss, self.truth_cols, self.metadata = roles, gnss, truth_cols, metadata
         self.carried = list(carried)
         self.warnings: list[str] = []      # for the next log
-        self.counts: dict = {}             # repair counts for the next log
+        self.counts: dict = {}             # repair counts for the next log, channel -> kind -> int
         self.pending: Log | None = None
         self.n = 0                         # samples given so far
         self.span: list[float] = []        # the log's first and last base times (s)
@@ -282,8 +282,8 @@ class _Logs:
 
     def add(self, out, counts: dict) -> Iterator[Log]:
         """The log of one :meth:`StreamResampler.emit` output (nothing for None), with the repair
-        ``counts`` found since the last log."""
-        self.counts = add_counts(self.counts, counts)
+        ``counts`` found since the last log (channel -> kind -> int)."""
+        self.counts = add_channel_counts(self.counts, counts)
         if out is None or not len(out["t"]):
             return
         p, cmap = self.p, self.cmap
@@ -301,7 +301,8 @@ class _Logs:
         extra.update({c: out[c] for c in self.carried})
         log = Log(signals=sig, reference_roll=out.get("reference_roll"), source=p, format=self.fmt,
                   metadata=dict(self.metadata), truth={c: out[c] for c in self.truth_cols},
-                  warnings=self.warnings, channel_map=cmap, extra=extra, time_repairs=self.counts)
+                  warnings=self.warnings, channel_map=cmap, extra=extra, time_repairs=summed(self.counts),
+                  time_repairs_by_channel=self.counts)
         self.warnings, self.counts = [], {}
         log.warnings += self.balance.add(sig)
         self.n += len(sig)
@@ -316,11 +317,13 @@ class _Logs:
         self.pending = log
 
     def finish(self, counts: dict) -> Iterator[Log]:
-        """The last log, with ``counts`` and the warnings left; LogError if the log is too short."""
+        """The last log, with ``counts`` (channel -> kind -> int) and the warnings left; LogError if the log is too
+        short."""
         if self.n < 2:
             raise LogError(f"{self.p}: fewer than 2 samples on the common time base")
         assert self.pending is not None        # two samples or more were assembled
-        self.pending.time_repairs = add_counts(self.pending.time_repairs, add_counts(self.counts, counts))
+        by_channel = add_channel_counts(self.pending.time_repairs_by_channel, add_channel_counts(self.counts, counts))
+        self.pending.time_repairs, self.pending.time_repairs_by_channel = summed(by_channel), by_channel
         self.pending.warnings += self.warnings + self.balance.finish() + self._coverage()
         yield self.pending
 
@@ -545,7 +548,7 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
                 rs.finish(k)
         out = _emit(p, rs)
         logs.warnings += resampler_notes(p, rs, {r: cmap.channels[r].column for r in roles}, cmap.max_gap_s)
-        yield from logs.add(out, fix.take_counts())
+        yield from logs.add(out, {"time": fix.take_counts()})
     logs.warnings += drops.warnings()
     yield from logs.finish({})
 
@@ -594,10 +597,7 @@ def _channels(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     periods = {r: _Period(p, r, col[r], "s", "its time stamps: ") for r in CLOCKED_ROLES if r in roles}
 
     def counts() -> dict:
-        total: dict = {}
-        for r in roles:
-            total = add_counts(total, fixes[r].take_counts())
-        return total
+        return {r: fixes[r].take_counts() for r in roles}
 
     for chunk in src.chunks({col[r]: r for r in read}):
         for r in read:
@@ -689,12 +689,12 @@ def concat_logs(chunks: list[Log]) -> Log:
 
     repairs: dict = {}
     for c in chunks:
-        repairs = add_counts(repairs, c.time_repairs)
+        repairs = add_channel_counts(repairs, c.time_repairs_by_channel)
     roll = None if first.reference_roll is None else np.concatenate([c.reference_roll for c in chunks])
     return Log(signals=concat_signals([c.signals for c in chunks]), reference_roll=roll, source=first.source,
                format=first.format, metadata=first.metadata, truth=joined(lambda c: c.truth),
                warnings=[w for c in chunks for w in c.warnings], channel_map=first.channel_map,
-               extra=joined(lambda c: c.extra), time_repairs=repairs)
+               extra=joined(lambda c: c.extra), time_repairs=summed(repairs), time_repairs_by_channel=repairs)
 
 
 def read_whole(src, cmap: ChannelMap, params: VehicleParams, fmt: str) -> Log:

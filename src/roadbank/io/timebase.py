@@ -476,3 +476,19 @@ def add_counts(total: dict, more: dict) -> dict:
     for k, v in more.items():
         out[k] = out.get(k, 0) + int(v)
     return out
+
+
+def add_channel_counts(total: dict, more: dict) -> dict:
+    """``total`` with ``more`` added channel by channel, kind by kind (both dicts channel -> kind -> int)."""
+    out = dict(total)
+    for ch, counts in more.items():
+        out[ch] = add_counts(out.get(ch, {}), counts)
+    return out
+
+
+def summed(by_channel: dict) -> dict:
+    """The counts of every channel added up (channel -> kind -> int, to kind -> int)."""
+    total: dict = {}
+    for counts in by_channel.values():
+        total = add_counts(total, counts)
+    return total

@@ -109,6 +109,10 @@ class Log:
         ``missing``, ``duplicate`` or ``out_of_order`` stamps, ``swapped`` pairs reordered,
         ``gaps`` kept, and ``flagged``: samples whose values were set to NaN (the estimators
         flag them not valid). Summed over the channels of a format with per-channel clocks.
+    time_repairs_by_channel : dict channel -> dict kind -> int
+        The same counts channel by channel: the role of each channel with its own clock (``speed``,
+        ``yaw_rate``, ...; the three gyro channels of one file each count its stamps), or ``time`` for
+        a table's clock.
     """
 
     signals: Signals
@@ -121,6 +125,7 @@ class Log:
     channel_map: ChannelMap | None = None
     extra: dict = field(default_factory=dict)
     time_repairs: dict = field(default_factory=dict)
+    time_repairs_by_channel: dict = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.signals)
