@@ -77,6 +77,9 @@ def test_pieces_and_steps_give_the_run():
     parts = [est.run(h[a:a + 37], reset=(a == 0)) for a in range(0, len(h), 37)]
     assert np.array_equal(np.concatenate([p.theta for p in parts]), whole.theta)
     assert np.array_equal(np.concatenate([p.valid for p in parts]), whole.valid)
+    k = int(np.flatnonzero(held_copies(h) & (np.arange(len(h)) > 50))[0])
+    est.run(h[:k])                    # a run, then steps: a copy of its last row repeats its last output
+    assert est.step(h.t[k], h.vx[k], h.ay[k], h.r[k], p=float(np.asarray(h.p)[k])).theta == whole.theta[k - 1]
     est.reset()
     steps = [est.step(h.t[i], h.vx[i], h.ay[i], h.r[i], p=float(np.asarray(h.p)[i])) for i in range(len(h))]
     np.testing.assert_allclose([x.theta for x in steps], whole.theta, rtol=0, atol=1e-12)

@@ -72,9 +72,11 @@ class AtSource(Wrapper):
         pos = np.searchsorted(taken, at)
         rows = self._arrays(part) if part is not None else self._none_taken()
         out = {k: self._spread(k, v, at, pos) for k, v in rows.items()}
-        if taken.size:
+        if taken.size:              # what the next piece, or step(), repeats
             self._key = self._key_of(signals, taken[-1])
             self._rows = {k: v[-1:].copy() for k, v in rows.items()}
+            self._last = StepResult(*(float(rows[k][-1]) for k in ("w", "theta", "phi_b")),
+                                    bool(rows["valid"][-1]), bool(rows["settled"][-1]))
         name = part.name if part is not None else self.name
         states = {k[2:]: v for k, v in out.items() if k.startswith("s:")}
         return Estimate(name, np.asarray(signals.t, dtype=np.float64), out["w"], out["theta"], out["phi_b"],
