@@ -75,7 +75,7 @@ class AtSource(Wrapper):
         if taken.size:              # what the next piece, or step(), repeats
             self._key = self._key_of(signals, taken[-1])
             self._rows = {k: v[-1:].copy() for k, v in rows.items()}
-            self._last = StepResult(*(float(rows[k][-1]) for k in ("w", "theta", "phi_b")),
+            self._last = StepResult(float(rows["w"][-1]), float(rows["theta"][-1]), float(rows["phi_b"][-1]),
                                     bool(rows["valid"][-1]), bool(rows["settled"][-1]))
         name = part.name if part is not None else self.name
         states = {k[2:]: v for k, v in out.items() if k.startswith("s:")}

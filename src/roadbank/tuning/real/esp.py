@@ -641,8 +641,8 @@ def choose_gate_at_source(logs, forms) -> tuple:
     shipped before) and True (B), on ``forms`` (the KITTI training drives written held and interpolated: a list of
     logs). Returns ``(chosen, {choice: raw RMS per log (deg)})``. ``logs`` (the drives as recorded) must give the same
     outputs under both (their yaw rate is at its sensor's rate): a ValueError where they do not."""
-    def build(choice):
-        at = _with_settings(gate_at_source=choice)
+    def build(choice):                  # as the stage ran: before the fifty-fifth read held logs at their source
+        at = _with_settings(gate_at_source=choice, read_at_source=False)
         return lambda s: with_online_offsets(at(s))
 
     for s, _, _ in logs:
