@@ -214,6 +214,15 @@ def test_a_quiet_log_keeps_the_cars_model_with_a_roll_rate():
     est = for_log("kinematic-pif", s)
     assert not isinstance(est, KinematicGyro) and type(est).__name__ == type(estimators.make(QUIET_FILTER)).__name__
     assert GYRO_FILTER == "kinematic-gyro"
+    # and the design line says the roll rate is not read (the fifty-sixth stage kept the car's model there)
+    from roadbank.fleet.process import design_words
+    from roadbank.vehicle import design_record, log_conditions
+    cond = log_conditions(s)
+    words = design_words(design_record(cond, "suv-paper", "fitted to the log"), "kinematic-pif")
+    assert f"so kinematic-pif is {QUIET_FILTER} (its roll rate not read: a quiet log keeps the car's model)" in words
+    plain = design_words(design_record(log_conditions(dataclasses.replace(s, p=None)), "suv-paper",
+                                       "fitted to the log"), "kinematic-pif")
+    assert f"so kinematic-pif is {QUIET_FILTER}" in plain and "not read" not in plain
 
 
 @needs_kitti

@@ -18,7 +18,7 @@ from ..io.writers import TableWriter, estimate_table, write_error
 from ..signals import Estimate
 from ..vehicle import (DESIGN_MAX_S, car_for_log, for_conditions, has_design_span, load_vehicle, log_conditions,
                        undescribed_params)
-from ..vehicle.conditions import GYRO_MODELS, QUIET_MODELS, ROLL_SLOPE_RANGE, roll_rate_usable
+from ..vehicle.conditions import GYRO_MODELS, QUIET_MODELS, ROLL_SLOPE_RANGE, quiet_reads_roll_rate, roll_rate_usable
 
 #: columns of the summary table, in order (see LogSummary)
 SUMMARY_COLUMNS = ("log", "status", "error", "output", "estimator", "samples", "duration_s", "valid_share",
@@ -142,7 +142,9 @@ def design_words(design: dict, estimator: str) -> str:
         grade = f"; corrected for the grade by its ax{pitch}" if roll_rate_usable(ax) else ""
         free = ", free of offset (an INS's)" if design.get("roll_rate_unbiased") else ""
         loud = f"{GYRO_MODELS[estimator]} (the log has a roll rate{free}{grade})" if gyro else "the low-pass blend"
-        words += f", so {estimator} is {QUIET_MODELS[estimator] if design['quiet'] else loud}"
+        model = design["quiet"] and not (gyro and quiet_reads_roll_rate())
+        unread = " (its roll rate not read: a quiet log keeps the car's model)" if model and gyro else ""
+        words += f", so {estimator} is {QUIET_MODELS[estimator] + unread if model else loud}"
     if slope is not None and not gyro:
         off = _off(slope, ROLL_RATE_MISTAKES, ROLL_SUSPECTS)
         words += f"; its roll rate does not follow the roll in its ay ({off}), so it is not used"

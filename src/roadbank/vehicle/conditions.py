@@ -152,6 +152,11 @@ GATE_AT_SOURCE_CHOICES = (False, True)
 READ_AT_SOURCE = True
 #: the values :data:`READ_AT_SOURCE` may take
 READ_AT_SOURCE_CHOICES = (False, True)
+#: whether a usable roll rate makes the default the gyro-aided filter on a quiet log too (False: a quiet log keeps the
+#: car's model whatever its roll rate). The fifty-sixth stage of :mod:`roadbank.tuning.real` chooses it
+QUIET_READS_ROLL_RATE = False
+#: the values :data:`QUIET_READS_ROLL_RATE` may take
+QUIET_READS_ROLL_RATE_CHOICES = (False, True)
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
 #: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it
 NOISE_OCTAVE_TOP = 1.5
@@ -348,11 +353,22 @@ def roll_rate_usable(slope: float | None) -> bool:
 
 def default_reads_roll_rate(cond: dict, sensors: SensorSpec | None = None) -> bool:
     """Whether the default (:data:`roadbank.defaults.ESTIMATOR`, ``kinematic-pif``) built for a log's conditions
-    ``cond`` (:func:`log_conditions`) with ``sensors`` (default the data sheet's) is :data:`GYRO_FILTER`: a loud log
-    (not :func:`is_quiet`) whose roll rate is usable (:func:`roll_rate_usable`). That filter has no car model."""
-    quiet = is_quiet(sensors if sensors is not None else SensorSpec(), cond.get("log_rate"), cond.get("log_ay_noise"),
-                     QUIET_RATIO, cond.get("log_ay_floor"))
-    return not quiet and roll_rate_usable(cond.get("log_roll_rate"))
+    ``cond`` (:func:`log_conditions`) with ``sensors`` (default the data sheet's) is :data:`GYRO_FILTER`: a log whose
+    roll rate is usable (:func:`roll_rate_usable`), loud (not :func:`is_quiet`) or, with :data:`QUIET_READS_ROLL_RATE`,
+    quiet too. That filter has no car model."""
+    if not roll_rate_usable(cond.get("log_roll_rate")):
+        return False
+    return quiet_reads_roll_rate() or not is_quiet(sensors if sensors is not None else SensorSpec(),
+                                                   cond.get("log_rate"), cond.get("log_ay_noise"), QUIET_RATIO,
+                                                   cond.get("log_ay_floor"))
+
+
+def quiet_reads_roll_rate() -> bool:
+    """:data:`QUIET_READS_ROLL_RATE`, checked against its choices."""
+    if QUIET_READS_ROLL_RATE not in QUIET_READS_ROLL_RATE_CHOICES:
+        raise ValueError(f"QUIET_READS_ROLL_RATE must be one of {QUIET_READS_ROLL_RATE_CHOICES}, "
+                         f"got {QUIET_READS_ROLL_RATE!r}")
+    return bool(QUIET_READS_ROLL_RATE)
 
 
 def _octave_top(t) -> float:
@@ -588,9 +604,11 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         lead_samples = (float(options.pop("lead_samples", estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES))
                         if name == "kinematic-pif" else None)        # the blend's option only
         own_gate = any(k in options for k in _GATE_OPTIONS)
-        if not own_gate and is_quiet(sensors, log_rate, log_ay_noise, ratio, log_ay_floor):
+        gyro = roll_rate_usable(log_roll_rate)
+        if not own_gate and not (gyro and quiet_reads_roll_rate()) and is_quiet(sensors, log_rate, log_ay_noise,
+                                                                                ratio, log_ay_floor):
             name, options = quiet_filter, {k: v for k, v in options.items() if k not in _BLEND_OPTIONS}
-        elif not own_gate and roll_rate_usable(log_roll_rate):
+        elif not own_gate and gyro:
             # the default's roll separation (its PIF's tuning chose the roll model) unless the options name one
             roll = estimators.pif.DEFAULT_TUNING["roll"]
             window = estimators.gyro.GRADE_WINDOW_S if roll_rate_usable(log_ax) else 0.0

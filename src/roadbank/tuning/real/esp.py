@@ -268,13 +268,16 @@ from ...estimators.kinematic_smoother import KinematicSmoother
 from ...estimators.lowpass import KinematicLowPass
 from ...estimators.offsets import with_online_offsets
 from ...sim import SCENARIOS, run_scenario
+from ...params import ESP_R_NOISE, ESP_R_RESOLUTION
 from ...sim.params import PlantParams
+from ...sim.sensors import ChannelErrorModel, SensorConfig
+from ..manoeuvres import drive_set
 from ...signals import Signals, concat_signals, sample_rate
 from ...validation.kitti import KITTI_SCORING
 from ...validation.scoring import masks
 from ...vehicle import load_vehicle
-from .common import (EQUAL_DEG, SIM_CARS, TIE_DEG, cars_median, fixed, guarded, log_errors, lowest_tied, objective,
-                     per_log, rms_deg, sim_errors)
+from .common import (EQUAL_DEG, SIM_CARS, SIM_DRIVES, TIE_DEG, cars_median, fixed, guarded, log_errors, lowest_tied,
+                     objective, per_log, rms_deg, sim_errors)
 
 
 #: candidate cut-offs (Hz) and feed-forward gains (-)
@@ -360,6 +363,10 @@ READ_SOURCE_GAIN_DEG = 0.005
 #: ... and it is worse than A by more than this (deg) on at most :data:`READ_SOURCE_WORSE_LOGS` of all the logs
 READ_SOURCE_WORSE_DEG = 0.02
 READ_SOURCE_WORSE_LOGS = 4
+#: the fifty-sixth stage's rule (docs/estimators.md): B ships unless its objective is above A's by more than this (deg)
+QUIET_GYRO_LOSS_DEG = 0.005
+#: the roll-rate offsets (rad/s) of its simulated sets (:func:`gyro_sim_sets`)
+QUIET_GYRO_OFFSETS = (0.0, math.radians(0.3))
 #: the stages before the fourteenth took the bank-rate prior as a rate in time
 _TIME_RATE = {"bank_speed_exp": 0.0}
 #: the stages before the twelfth ran on the design span's noise throughout
@@ -549,7 +556,7 @@ def design_settings(**settings):
 
 #: the module settings of :mod:`roadbank.vehicle.conditions` that :func:`design_settings` sets
 _DESIGN_SETTINGS = ("QUIET_FLOOR_RATE", "QUIET_FLOOR_SIGNAL", "NOISE_AT_SOURCE", "NOISE_OCTAVE", "NOISE_OCTAVE_TOP",
-                    "TRUST_FIXED_CHANNELS", "GATE_AT_SOURCE", "READ_AT_SOURCE")
+                    "TRUST_FIXED_CHANNELS", "GATE_AT_SOURCE", "READ_AT_SOURCE", "QUIET_READS_ROLL_RATE")
 #: the settings as each stage ran: the eighteenth and nineteenth before the twentieth, the twentieth before the
 #: twenty-first
 _BEFORE_SOURCE = {"noise_at_source": "none", "noise_octave": "none"}
@@ -677,6 +684,34 @@ def choose_read_at_source(esp_logs, gyro_logs, esp_forms, gyro_forms) -> tuple:
     ships = (np.median(b1) < np.median(a1) - READ_SOURCE_GAIN_DEG
              and np.median(b2) <= np.median(a2) + READ_SOURCE_GAIN_DEG and worse <= READ_SOURCE_WORSE_LOGS)
     return bool(ships), errs
+
+
+def gyro_sim_sets(offset: float, cars=SIM_CARS, n=SIM_DRIVES) -> list:
+    """``roadbank tune``'s training drives (seed 0) of each car in ``cars`` (:func:`simulated_sets`' drives, every
+    other channel as there) with a roll-rate gyro of the ESP yaw-rate sensor's class added: noise 0.1 deg/s,
+    resolution 0.3 deg/s, offset ``offset`` (rad/s)."""
+    gyro = ChannelErrorModel(noise_std=ESP_R_NOISE, resolution=ESP_R_RESOLUTION, bias=offset)
+    return [drive_set("train", n, 0, load_vehicle(car).params, sensors=SensorConfig(roll_rate=gyro)) for car in cars]
+
+
+def choose_quiet_gyro(kitti_gyro_logs, sim_gyro_sets) -> tuple:
+    """The fifty-sixth stage (docs/estimators.md): ``kinematic-pif`` as ``roadbank estimate`` builds it (designed for
+    each log, behind the online offset learner) with :data:`roadbank.vehicle.conditions.QUIET_READS_ROLL_RATE` False
+    (A, shipped before) and True (B), on ``sim_gyro_sets`` (a list, per roll-rate offset, of :func:`gyro_sim_sets`).
+    Returns ``(chosen, {choice: objective deg}, {choice: [per offset: per car: bank RMS per drive]})``. The KITTI
+    training drives with their roll rate (``kitti_gyro_logs``, loud) must give the same outputs under both: a
+    ValueError where they do not."""
+    def build(choice):
+        at = _with_settings(quiet_reads_roll_rate=choice)
+        return lambda s: with_online_offsets(at(s))
+
+    for s, _, _ in kitti_gyro_logs:
+        a, b = (build(c)(s).run(s).theta for c in (False, True))
+        if not np.array_equal(a, b):
+            raise ValueError("a loud log got another design: the stage's guard fails")
+    errs = {c: [sim_errors(build(c), sets) for sets in sim_gyro_sets] for c in (False, True)}
+    obj = {c: float(np.mean([cars_median(e) for e in errs[c]])) for c in (False, True)}
+    return bool(obj[True] <= obj[False] + QUIET_GYRO_LOSS_DEG), obj, errs
 
 
 def choose_noise_octave(logs, up, resampled, sim_sets, choices=NOISE_OCTAVES) -> tuple:
