@@ -78,7 +78,7 @@ def _parse_estimators(values: tuple[str, ...]) -> list[str]:
 @click.option("--resume", is_flag=True,
               help="Skip logs the output directory's summary.csv lists as finished (failed ones are retried).")
 @click.option("--chunk-rows", type=click.IntRange(min=2), default=None,
-              help="Rows per streamed chunk (Parquet, MDF4); default 20000.")
+              help="Rows per streamed chunk (Parquet, MDF4, and CSV files above 64 MiB); default 20000.")
 @click.option("--json", "as_json", is_flag=True,
               help="Print the summary as one JSON object on stdout (per log: status, duration, time-stamp "
                    "repairs, and valid share and bank mean/min/max of every estimator) instead of the table.")
