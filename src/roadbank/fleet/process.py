@@ -120,8 +120,7 @@ def design_words(design: dict, estimator: str) -> str:
     """:attr:`LogSummary.design` in words, for the estimator ``estimator`` ('' when empty): the car, the
     ``ay`` noise and floor (m/s^2; what was not measured is said so, and what the design took instead), the channels
     written faster than their sensor (their noise read at the source's rate; a log that holds its sensors' frames read
-    at their rate), and for an estimator that changes on a
-    quiet log what it is."""
+    at their rate), and for an estimator that changes on a quiet log what it is."""
     if not design:
         return ""
     noise, floor, ratio = design["ay_noise"], design["ay_floor"], design["ay_floor_ratio"]
