@@ -18,7 +18,8 @@ from ..io.writers import TableWriter, estimate_table, write_error
 from ..signals import Estimate
 from ..vehicle import (DESIGN_MAX_S, car_for_log, for_conditions, has_design_span, load_vehicle, log_conditions,
                        undescribed_params)
-from ..vehicle.conditions import GYRO_MODELS, QUIET_MODELS, ROLL_SLOPE_RANGE, quiet_reads_roll_rate, roll_rate_usable
+from ..vehicle.conditions import (GYRO_MODELS, LOUDER_FACTOR, QUIET_MODELS, ROLL_SLOPE_RANGE, RoadCheck,
+                                  design_ay_floor, quiet_reads_roll_rate, roll_rate_usable)
 
 #: columns of the summary table, in order (see LogSummary)
 SUMMARY_COLUMNS = ("log", "status", "error", "output", "estimator", "samples", "duration_s", "valid_share",
@@ -161,6 +162,22 @@ def design_words(design: dict, estimator: str) -> str:
         words += (f"; written faster than their sensor, noise (and the gate's yaw rate, where r is so written) read at "
                   f"the sensor's rate: {design['source']}")
     return words
+
+
+def louder_warnings(path: str, names, design: dict, loud_s: float, driving_s: float) -> list[str]:
+    """A warning (a list of at most one) where a log designed quiet (``design``: :attr:`LogSummary.design`) reads loud
+    on at least half of its driving (``loud_s`` of ``driving_s`` s, :class:`~roadbank.vehicle.conditions.RoadCheck`):
+    the estimators of ``names`` that keep the car's model there hold it over roads where the low-pass blend does
+    better."""
+    if not (driving_s > 0 and loud_s >= 0.5 * driving_s):
+        return []
+    which = ", ".join(f"{n} is {QUIET_MODELS[n]}" for n in names if n in QUIET_MODELS)
+    unread = ", its roll rate not read" if roll_rate_usable(design.get("roll_rate")) else ""
+    return [f"{path}: designed on its first minute of driving, which reads quiet (so {which}: the car's model"
+            f"{unread}), but {loud_s / 60:.1f} of its {driving_s / 60:.1f} minutes of driving read at least "
+            f"{LOUDER_FACTOR:g} times that ay noise, where the car's model does worse than the low-pass blend (a "
+            "drive onto rougher roads): split the log where the road changes, so that each piece is designed on "
+            "its own first minute"]
 
 
 #: what a roll or pitch rate's check slope (:func:`~roadbank.vehicle.conditions.roll_rate_slope`: 1 for a right
@@ -334,12 +351,15 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
                                       params=params if params is not None else undescribed_params(),
                                       chunk_rows=chunk_rows or CHUNK_ROWS))
         span = None
+        road = None                 # whether a log designed quiet stays so (for the estimators that change there)
         for k, chunk in enumerate(chunks):
             if k == 0:  # designed for the log's own rate and road noise, measured on its first minute of driving
                 lead = chunks.leading(chunk.signals, DESIGN_MAX_S, has_design_span)
                 cond = log_conditions(lead)
                 car, summary.design = car_for_log(lead, cond, params, vehicle)
                 ests = [for_conditions(n, cond, car, vehicle=vehicle) for n in names]
+                if summary.design.get("quiet") and any(n in QUIET_MODELS for n in names):
+                    road = RoadCheck(design_ay_floor(lead))
                 if online_offsets:      # causal ones: a smoother's later samples would see later offsets
                     ests = [e if n in OFFLINE else with_online_offsets(e, car) for e, n in zip(ests, names)]
                 span = max((e.lookahead_s for e, n in zip(ests, names) if n in OFFLINE), default=None)
@@ -348,6 +368,8 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
             summary.time_repairs_by_channel = add_channel_counts(summary.time_repairs_by_channel,
                                                                  chunk.time_repairs_by_channel)
             signals = correct(chunk.signals)
+            if road is not None:
+                road.add(signals)
             nxt = None if span is None else chunks.following(span)
             ahead = None if nxt is None else correct(nxt)
             results = [e.run(signals, reset=(k == 0), lookahead=ahead) for e in ests]
@@ -369,6 +391,8 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
         summary.estimators = {n: st.stats() for n, st in zip(names, stats)}
         if stats:
             warns += unsettled_warnings(str(path), names[0], stats[0], ests[0].settle_time)
+        if road is not None:
+            warns += louder_warnings(str(path), names, summary.design, *road.finish())
         summary.warnings = "; ".join(warns)
         if keep:
             whole = (np.concatenate(kept_t), [concat_estimates(x) for x in kept_est],

@@ -16,9 +16,9 @@ import numpy as np
 from ..constants import MAX_GAP_S, G
 from ..models.attitude import euler_pitch_rate, kinematic_roll
 from ..params import VehicleParams
-from ..signals import (DYNAMICS_BAND_HZ, band_inner, band_windows, diff_noise_std, integral_band_fit, noise_band_hz,
-                       held_copies, is_held, road_noise_floor_std, road_noise_std, running_integral, sample_rate,
-                       source_step)
+from ..signals import (DYNAMICS_BAND_HZ, band_inner, band_windows, concat_signals, diff_noise_std, held_copies,
+                       integral_band_fit, is_held, noise_band_hz, road_noise_floor_std, road_noise_std,
+                       running_integral, sample_rate, source_step)
 from ..io.errors import LogError
 from .sensors import SensorSpec
 
@@ -430,6 +430,79 @@ def _at_source(read, x, t, valid, k: int) -> float:
     if k < 2:
         return read(x, t, valid)
     return math.sqrt(k) * read(np.asarray(x)[::k], np.asarray(t)[::k], np.asarray(valid)[::k])
+
+
+#: how many times the ay noise floor (standard deviation) of the minute a log was designed on a later stretch of its
+#: driving must read for :class:`RoadCheck` to count it as loud: a log designed quiet whose roads turn rough keeps the
+#: car's model (a long drive's test: a smooth first minute, then rough roads, 2.5 times the error of the same drives
+#: designed on their own)
+LOUDER_FACTOR = 3.0
+#: the stretches of log time (s) :class:`RoadCheck` reads, and the driving (s at 5 m/s or more) a stretch needs
+ROAD_CHECK_WINDOW_S = 60.0
+ROAD_CHECK_MIN_S = 30.0
+
+
+def ay_floor_of(signals, v_min: float = 5.0) -> float:
+    """The noise floor (m/s^2) of the ``ay`` of ``signals`` on its samples at ``vx >= v_min`` (m/s), read at the log's
+    own rate in the band the design reads (:func:`_floor`); NaN where too few."""
+    with np.errstate(invalid="ignore"):
+        moving = np.asarray(signals.vx, dtype=np.float64) >= v_min
+    return _floor(np.asarray(signals.ay, dtype=np.float64), np.asarray(signals.t, dtype=np.float64), moving)
+
+
+def design_ay_floor(signals, v_min: float = 5.0) -> float:
+    """:func:`ay_floor_of` (m/s^2) of the part of ``signals`` the design reads (its first :data:`DESIGN_SPAN_S` of
+    driving, :func:`design_span`)."""
+    return ay_floor_of(_design_part(signals, v_min)[0], v_min)
+
+
+class RoadCheck:
+    """Whether a log's roads stay as quiet as the minute it was designed on: fed the log chunk by chunk
+    (:meth:`add`; the same result whatever the chunks), it reads :func:`ay_floor_of` on each stretch of
+    :data:`ROAD_CHECK_WINDOW_S` s of log time with at least :data:`ROAD_CHECK_MIN_S` s of driving, and counts the
+    driving of those louder than :data:`LOUDER_FACTOR` times ``design_floor`` (m/s^2, :func:`ay_floor_of` of the
+    design's minute). :meth:`finish` returns ``(loud s, driving s)``."""
+
+    def __init__(self, design_floor: float, v_min: float = 5.0):
+        self.design_floor, self.v_min = float(design_floor), float(v_min)
+        self._t0 = math.nan
+        self._window = -1
+        self._parts: list = []
+        self.loud_s = self.driving_s = 0.0
+
+    def add(self, signals) -> None:
+        """The log's next chunk (:class:`~roadbank.signals.Signals`)."""
+        t = np.asarray(signals.t, dtype=np.float64)
+        if math.isnan(self._t0) and np.isfinite(t).any():
+            self._t0 = float(t[np.isfinite(t)][0])
+        with np.errstate(invalid="ignore"):
+            w = np.floor((t - self._t0) / ROAD_CHECK_WINDOW_S)
+        w = np.maximum.accumulate(np.where(np.isfinite(w), w, -1.0)).astype(np.int64)   # a NaN stamp: its window
+        for win in np.unique(w):
+            if win != self._window:
+                self._close()
+                self._window = int(win)
+            self._parts.append(signals.take(np.flatnonzero(w == win)))
+
+    def _close(self) -> None:
+        if not self._parts:
+            return
+        part = concat_signals(self._parts)
+        self._parts = []
+        with np.errstate(invalid="ignore"):
+            moving = np.asarray(part.vx, dtype=np.float64) >= self.v_min
+        dt = np.diff(np.asarray(part.t, dtype=np.float64))
+        driving = float(np.nansum(np.where(moving[1:], dt, 0.0)))
+        if driving < ROAD_CHECK_MIN_S:
+            return
+        self.driving_s += driving
+        if ay_floor_of(part, self.v_min) > LOUDER_FACTOR * self.design_floor:
+            self.loud_s += driving
+
+    def finish(self) -> tuple[float, float]:
+        """``(loud s, driving s)`` over the log (after its last chunk)."""
+        self._close()
+        return self.loud_s, self.driving_s
 
 
 def _floor_signal(signals, vx: np.ndarray) -> np.ndarray:

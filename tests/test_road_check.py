@@ -1,0 +1,82 @@
+"""A log designed quiet on its first minute whose roads turn rough is said so (vehicle.conditions.RoadCheck,
+fleet.process.louder_warnings): the truth is how the log was built, a smooth road (a real drive low-passed, with a
+data sheet's noise) before real KITTI roads, against logs whose roads do not change."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from roadbank import Signals
+from roadbank.fleet.process import estimate_log
+from roadbank.io import load_log
+from roadbank.signals import concat_signals
+from roadbank.vehicle.conditions import RoadCheck, design_ay_floor
+
+DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+DRIVES = ("2011_09_26_drive_0036", "2011_09_26_drive_0022", "2011_09_26_drive_0064", "2011_09_30_drive_0034")
+
+
+def _drives() -> list[Signals]:
+    found = [next(iter(DATA.glob(f"*/{d}")), None) for d in DRIVES]
+    if any(f is None for f in found):
+        pytest.skip(f"the KITTI drives {DRIVES} are not all under {DATA}")
+    return [load_log(f).signals for f in found]
+
+
+def _esp(s: Signals, t0: float, smooth: bool = False, seed: int = 0) -> Signals:
+    """The drive's ESP channels from ``t0`` (s) on; ``smooth``: ay and the yaw rate through a 2 s moving mean with
+    0.02 m/s^2 (0.002 rad/s) of white noise, a smooth road on a data sheet's sensors."""
+    ay, r = np.array(s.ay), np.array(s.r)
+    if smooth:
+        rng = np.random.default_rng(seed)
+        k = np.ones(20) / 20.0
+        ay = np.convolve(ay, k, mode="same") + 0.02 * rng.standard_normal(len(ay))
+        r = np.convolve(r, k, mode="same") + 0.002 * rng.standard_normal(len(r))
+    return Signals(s.t - s.t[0] + t0, s.vx, ay, r, np.full(len(s), np.nan))
+
+
+def _stitched(parts: list[tuple[Signals, bool]]) -> Signals:
+    out, t0 = [], 0.0
+    for k, (s, smooth) in enumerate(parts):
+        e = _esp(s, t0, smooth, seed=k)
+        out.append(e)
+        t0 = float(e.t[-1]) + 0.1
+    return concat_signals(out)
+
+
+def _write(s: Signals, path: Path) -> Path:
+    pd.DataFrame({"t": s.t, "vx": s.vx, "ay": s.ay, "r": s.r}).to_parquet(path)
+    return path
+
+
+def test_a_smooth_first_minute_then_rough_roads_is_said(tmp_path):
+    d = _drives()
+    log = _stitched([(d[0], True), (d[1], True)] + [(x, False) for x in d])
+    summary = estimate_log(_write(log, tmp_path / "smooth_then_rough.parquet"), tmp_path / "out.csv")
+    assert summary.status == "ok" and summary.design["quiet"]
+    assert "designed on its first minute of driving, which reads quiet" in summary.warnings
+    assert "split the log where the road changes" in summary.warnings
+    # read in chunks of any size, the check reads the same stretches
+    whole = RoadCheck(design_ay_floor(log))
+    whole.add(log)
+    for rows in (97, 1000):
+        pieces = RoadCheck(design_ay_floor(log))
+        for a in range(0, len(log), rows):
+            pieces.add(log[a:a + rows])
+        assert pieces.finish() == pytest.approx(whole.finish(), rel=1e-12)
+    loud, driving = whole.finish()
+    assert loud >= 0.5 * driving > 0
+
+
+def test_roads_that_stay_as_they_began_are_not_said(tmp_path):
+    d = _drives()
+    smooth = _stitched([(x, True) for x in d])            # smooth throughout: quiet, and stays so
+    summary = estimate_log(_write(smooth, tmp_path / "smooth.parquet"), tmp_path / "out.csv")
+    assert summary.design["quiet"] and "reads quiet" not in summary.warnings
+    rough = _stitched([(x, False) for x in d])            # rough throughout: loud, nothing to check
+    summary = estimate_log(_write(rough, tmp_path / "rough.parquet"), tmp_path / "out2.csv")
+    assert not summary.design["quiet"] and "reads quiet" not in summary.warnings
