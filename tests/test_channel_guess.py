@@ -6,13 +6,15 @@ of roadbank's own; the guessed map must read it back into the original signals.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from click.testing import CliRunner
 
 from roadbank.cli import main
 from roadbank.io import LogError, load_log, read_channel_map
-from roadbank.io.guess import guess_channels, name_match
+from roadbank.io.guess import NAMES, guess_channels, name_match
 from roadbank.io.writers import write_table
 
 SIG = ("t", "vx", "ay", "r", "delta_f")
@@ -146,3 +148,61 @@ def test_a_gnss_position_is_guessed_for_the_map(tmp_path, drive):
     assert cmap.channels["latitude"].column == "lat" and cmap.channels["longitude"].unit == "deg"
     scaled = {**cols, "lat": cols["lat"] * 1e7, "lon": cols["lon"] * 1e7}
     assert not {"latitude", "longitude"} & {x.role for x in guess_channels(list(scaled), scaled)}
+
+
+KITTI_0070 = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "kitti-oxts" / "2011_09_26_drive_0070"
+#: a logger's export names a signal after its CAN message (or device): message, separator, signal (unit in brackets)
+PREFIXED = {"underscore": ("Zeit", "ESP_VehSpeed[km/h]", "ESP_LatAcc", "ESP_YawRate[deg/s]", "IMU_RollRate[deg/s]"),
+            "dot": ("time", "ESP_21.VehSpeed[km/h]", "ESP_21.LatAcc", "ESP_21.YawRate[deg/s]",
+                    "IMU_03.RollRate[deg/s]"),
+            "colon": ("time", "ESP:VehSpd[km/h]", "ESP:LatAcc", "ESP:YawRate[deg/s]", "IMU:RollRate[deg/s]"),
+            "slash": ("time", "CAN1/ESP_21/VehSpd[km/h]", "CAN1/ESP_21/LatAcc", "CAN1/ESP_21/YawRate[deg/s]",
+                      "CAN1/IMU/RollRate[deg/s]"),
+            "space": ("time", "ESP VehSpeed[km/h]", "ESP LatAcc", "ESP YawRate[deg/s]", "IMU RollRate[deg/s]"),
+            "german": ("Zeit", "ESP_Geschwindigkeit[km/h]", "ESP_Querbeschleunigung", "ESP_Gierrate[deg/s]",
+                       "IMU_Wankrate[deg/s]")}
+
+
+@pytest.mark.skipif(not KITTI_0070.is_dir(), reason="../shared/data/kitti-oxts is not here")
+@pytest.mark.parametrize("form", list(PREFIXED))
+def test_names_after_a_message_prefix_are_guessed(tmp_path, form):
+    """KITTI 0070 written as a logger exports it (speed in km/h, yaw and roll rates in deg/s, the unit in brackets),
+    every name after a message prefix (before: time alone found, speed, ay and yaw rate 'not found', exit 1): the
+    guessed map reads the drive back, in SI, to the digits written."""
+    s = load_log(KITTI_0070).signals
+    names = PREFIXED[form]
+    f = tmp_path / "esp.csv"
+    write_table(f, dict(zip(names, (s.t, s.vx * 3.6, s.ay, np.degrees(s.r), np.degrees(s.p)))))
+    m = tmp_path / "map.toml"
+    res = CliRunner().invoke(main, ["channels", str(f), "-o", str(m)])
+    assert res.exit_code == 0, res.output
+    for role, name, unit in [("speed", names[1], "km/h"), ("lateral_acceleration", names[2], "m/s^2"),
+                             ("yaw_rate", names[3], "deg/s"), ("roll_rate", names[4], "deg/s")]:
+        assert f"{role:<21} <- {name!r} in {unit}" in res.output, res.output
+    got = load_log(f, channels=read_channel_map(m)).signals
+    for k in ("t", "vx", "ay", "r", "p"):
+        np.testing.assert_allclose(getattr(got, k), getattr(s, k), rtol=1e-9, atol=1e-12, err_msg=k)
+
+
+@pytest.mark.parametrize("name, role", [("ESP_LatAcc", "lateral_acceleration"),
+                                        ("ESP_21.LatAcc", "lateral_acceleration"), ("ESP_YawRate", "yaw_rate"),
+                                        ("ESP_Querbeschleunigung", "lateral_acceleration"),
+                                        ("IMU_RollRate", "roll_rate"), ("ESP_21.VehSpeed[km/h]", "speed"),
+                                        ("ESP_Gierrate", "yaw_rate"), ("ESP_Geschwindigkeit", "speed"),
+                                        ("IMU_Wankrate", "roll_rate")])
+def test_a_message_prefix_names_one_role(name, role):
+    """A known spelling after a message prefix is that role's and no other's, ranked below the spelling alone."""
+    assert name_match(role, name)[0] == 1, name
+    assert [r for r in NAMES if r != role and name_match(r, name)[0]] == [], name
+
+
+@pytest.mark.parametrize("name, role, today", [("LatAcc_YawRate", "yaw_rate", "lateral_acceleration"),
+                                               ("ay_r", "yaw_rate", None), ("Brake_p", "roll_rate", None),
+                                               ("Engine_Speed", "speed", None), ("Wheel_Speed", "speed", None),
+                                               ("Lenkrad_Geschwindigkeit", "speed", None)])
+def test_a_prefix_that_names_a_signal_itself_is_no_message(name, role, today):
+    """A name whose prefix is a signal too (LatAcc_YawRate could be either), a letter after a prefix (Brake_p: a
+    pressure) or a speed of another part (an engine's, a wheel's, the steering wheel's) gets no role from its end:
+    what its whole name matches stays as it was."""
+    assert name_match(role, name)[0] == 0
+    assert [r for r in NAMES if name_match(r, name)[0]] == ([today] if today else [])

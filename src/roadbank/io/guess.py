@@ -4,7 +4,7 @@ Evidence, per channel:
 
 * **names** -- common spellings (``VehSpd``, ``speed``, ``v``; ``YawRate``, ``wz``, ``gyro_z``;
   ``LatAcc``, ``ay``; ``SteerAngle``, ``SWA``; ``timestamp``, ``time`` ...) and unit hints in
-  them (``_kmh``, ``_mph``, ``_degps``, ``_ms``);
+  them (``_kmh``, ``_mph``, ``_degps``, ``_ms``), also after a CAN message's name (``ESP_21.LatAcc``);
 * **ranges** -- a sample period of 1-100 ms in s, ms, us or ns; speeds above 70 are not m/s;
   |ay| above 1.5 is not g; |yaw rate| above 2 is not rad/s; steering angles above 2 pi are deg;
 * **physics** -- in turns ``ay = vx r`` (steady cornering), which fixes the speed, ay and yaw-rate
@@ -30,6 +30,7 @@ steering channel (:data:`NO_STEERING`).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 import re
@@ -101,6 +102,12 @@ TURN_R, TURN_V = 0.03, 5.0
 MOVING_SHARE, STRONG_TURN = 0.2, 1.0
 #: turning samples needed to read the slope at all
 MIN_TURNS = 20
+#: what separates a CAN message (or a device) from its signal in a logger's column name: ``ESP_21.LatAcc``,
+#: ``ESP_LatAcc``, ``IMU:RollRate``, ``ESP/YawRate``, ``ESP LatAcc`` (only before a unit in brackets: ``[km/h]``)
+PREFIX_SEPARATORS = "_.:/ "
+#: words that put a prefix's signal on another part of the car than its body (``Engine_Speed``, ``Wheel_Speed``,
+#: ``Lenkrad_Geschwindigkeit``: the steering wheel's): such a name is not matched after its prefix
+OTHER_PARTS = ("engine", "motor", "wheel", "whl", "lenk", "gear", "pedal")
 #: what a map without a steering channel means
 NO_STEERING = ("the map has none, and the log is read with the steering angle absent (NaN), as a KITTI drive is: "
                "the default estimator kinematic-pif does not read it; dfc, uio, pio-original, pif-original and "
@@ -156,7 +163,41 @@ class Guess:
 
 def name_match(role: str, name: str) -> tuple[int, str | None]:
     """(score, unit hint) of column ``name`` for ``role``: 2 = a known spelling, 1 = one with a
-    unit or other suffix (``VehSpd_kmh``, ``yaw_rate_dps``), 0 = no match."""
+    unit or other suffix (``VehSpd_kmh``, ``yaw_rate_dps``) or a known spelling after a message prefix
+    (``ESP_21.LatAcc``, ``ESP_YawRate``, ``IMU_RollRate``: :func:`_after_prefix`), 0 = no match."""
+    score, hint = _bare_match(role, name)
+    if score == 0 and (tail := _after_prefix(name)) is not None and tail[0] == role:
+        return 1, tail[1]
+    return score, hint
+
+
+@functools.lru_cache(maxsize=4096)
+def _after_prefix(name: str) -> tuple[str, str | None] | None:
+    """(role, unit hint) of a column ``name`` that is a message prefix, a separator (:data:`PREFIX_SEPARATORS`) and a
+    known spelling of one role (``ESP_21.VehSpeed[km/h]`` -> speed, km/h); None for any other name.
+
+    The shortest prefix whose rest is a spelling counts, and only one that names no role itself (``LatAcc_YawRate``
+    could be either: it stays the ay its start says, as without prefixes) nor another part of the car
+    (:data:`OTHER_PARTS`); the rest must be more than one letter (``Brake_p`` is a pressure) and a spelling of one
+    role only."""
+    head = re.split(r"[\[(]", name, maxsplit=1)[0]
+    for i, ch in enumerate(head):
+        if ch not in PREFIX_SEPARATORS or i == 0:
+            continue
+        prefix, rest = name[:i], name[i + 1:]
+        found = [(role, hint) for role in NAMES for score, hint in [_bare_match(role, rest)] if score == 2]
+        if not found:
+            continue
+        p = _norm(prefix)
+        if (len(found) > 1 or len(_norm(head[i + 1:])) < 2 or any(w in p for w in OTHER_PARTS)
+                or any(_bare_match(role, prefix)[0] for role in NAMES)):
+            return None
+        return found[0]
+    return None
+
+
+def _bare_match(role: str, name: str) -> tuple[int, str | None]:
+    """:func:`name_match` of the whole ``name``, no prefix taken off."""
     n = _norm(name)
     spellings = NAMES[role]
     if n in spellings:
