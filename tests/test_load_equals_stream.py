@@ -431,6 +431,8 @@ def test_clock_time_base_keeps_the_table_clock(tmp_path, chunk):
 
 
 def test_clock_time_base_needs_a_table(tmp_path):
+    """MDF4 channels in two channel groups have no one clock: "clock" refused. (Channels of one group share its
+    stamps, a table's clock: there "clock" keeps them, test_mdf4_of_one_group_is_read_on_its_clock.)"""
     pytest.importorskip("asammdf")
     from asammdf import MDF, Signal
 
@@ -438,7 +440,8 @@ def test_clock_time_base_needs_a_table(tmp_path):
     t = np.arange(500) / 100.0
     mdf = MDF(version="4.10")
     mdf.append([Signal(0.5 * np.sin(t), t, name="ay"), Signal(0.03 * np.cos(t), t, name="r"),
-                Signal(0.01 * t, t, name="delta_f"), Signal(0.0 * t, t, name="roll"), Signal(15.0 + t, t, name="vx")])
+                Signal(0.01 * t, t, name="delta_f"), Signal(0.0 * t, t, name="roll")])
+    mdf.append([Signal(15.0 + t, t, name="vx")])
     p = tmp_path / "log.mf4"
     mdf.save(p)
     (tmp_path / "m.toml").write_text(CLOCK_MAP)

@@ -5,7 +5,8 @@ segments, whose sources bring their own channel map) comes here from its source
 (:mod:`roadbank.io.sources`), whole or in chunks, and goes through the same steps in the same order:
 
 1. **channel selection**: the roles the map names and the file has (:func:`select_roles`);
-2. **time stamps**: the table clock, or each channel's own, repaired chunk by chunk
+2. **time stamps**: the table clock (an MDF4 file's channels that all lie in one channel group share its stamps:
+   read as a table on them, :func:`group_clock`), or each channel's own, repaired chunk by chunk
    (:class:`~roadbank.io.repair.ChunkRepair`); samples next to a repair are set to NaN. A table's rows
    of one instant that carry different channels (a long table) are merged first
    (:func:`~roadbank.io.repair.instants`): one instant, not a repeated stamp;
@@ -48,7 +49,8 @@ import numpy as np
 from ..params import VehicleParams
 from ..signals import Signals, concat_signals, road_wheel_angle
 from . import units
-from .channels import DEFAULT_MAP_SOURCE, OPTIONAL, STEERING, ChannelMap, check_period, check_plausible
+from .channels import (DEFAULT_MAP_SOURCE, OPTIONAL, STEERING, ChannelMap, ChannelSpec, check_period,
+                       check_plausible)
 from .limits import Dropouts
 from .consistency import (MIN_SAMPLES, SCALE_SPAN_S, Sums, check_balance, lateral_axis_error, log_verdict,
                           speed_scale_error, speed_scales, turning, usable)
@@ -58,7 +60,7 @@ from .repair import FLAGGED_ROLES, ChunkRepair, instants, interleaved_period
 from .resample import BRIDGE_PERIODS, StreamResampler, clean_series
 from .survey import auto_uses_clock
 from .timebase import add_channel_counts, summed
-from .types import Log
+from .types import GROUP_CLOCK, Log
 
 #: GNSS fixes come at 1-20 Hz: a gap up to this long (s) is interpolated across
 GNSS_MAX_GAP_S = 2.0
@@ -473,12 +475,29 @@ def assemble(src, cmap: ChannelMap, params: VehicleParams, fmt: str) -> Iterator
                                 f"(it has: {', '.join(src.names) or 'nothing'})")
     if src.shared_clock:
         yield from _tables(src, cmap, params, fmt, roles, gnss)
+    elif group_clock(src, cmap, roles, gnss):
+        clock = replace(cmap, channels={**cmap.channels, "time": ChannelSpec("time", GROUP_CLOCK, "s")})
+        yield from _tables(src, clock, params, fmt, roles, gnss, grouped=True)
     else:
         yield from _channels(src, cmap, params, fmt, roles, gnss)
 
 
-def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
-    """A table: every column on the table's time column."""
+def group_clock(src, cmap: ChannelMap, roles, gnss) -> bool:
+    """Whether a channel source's channels to read (``roles`` and ``gnss``) share one time array -- an MDF4 file's
+    channels of one channel group, a logger's raster -- and are read as a table on it (the source then gives them
+    so: :meth:`~roadbank.io.sources.WholeSource.one_clock`): their stamps as stored (repaired as a table's clock
+    is) and, where ``time_base = "auto"`` finds every channel at the clock's rate, their values as stored, as a CSV
+    or Parquet table's are. Where the map asks for another time base (``"uniform"``, a role), or the channels lie
+    in several groups, each keeps its own clock and is interpolated (:func:`_channels`)."""
+    one_clock = getattr(src, "one_clock", None)
+    if one_clock is None or cmap.time_base not in ("auto", "clock"):
+        return False
+    return bool(one_clock({cmap.channels[r].column: r for r in roles + gnss}))
+
+
+def _tables(src, cmap, params, fmt, roles, gnss, grouped: bool = False) -> Iterator[Log]:
+    """A table: every column on the table's time column (``grouped``: an MDF4 channel group's stamps,
+    :func:`group_clock`; no truth columns, and the clock's period checked as a channel's own stamps are)."""
     p, names = src.path, src.names
     if "time" not in cmap.channels:
         raise LogError(f"{cmap.source}: channel map has no 'time' channel (required for {fmt})")
@@ -486,10 +505,10 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     cmap, said = stated_units(p, cmap, src.units)
     note += said
     tspec = cmap.channels["time"]
-    if tspec.column not in names:
+    if tspec.column not in names and not grouped:
         raise missing_column(p, "time", tspec.column, names)
     wanted = {spec.column: role for role, spec in cmap.channels.items()}
-    prefix = cmap.truth_prefix
+    prefix = None if grouped else cmap.truth_prefix
     truth_cols = [c for c in names if prefix and c.startswith(prefix) and c not in wanted]
     tb = _time_base(p, cmap, roles)
     if tb == "auto" and not src.whole:    # decided on the whole log, as when it is read in one chunk
@@ -501,7 +520,9 @@ def _tables(src, cmap, params, fmt, roles, gnss) -> Iterator[Log]:
     logs = _Logs(p, fmt, cmap, params, roles, gnss, truth_cols, src.metadata, carried)
     logs.warnings += src.warnings + note
     finite = dict.fromkeys(roles, False)
-    period = _Period(p, "time", tspec.column, tspec.unit)
+    # (a channel group's master: named by the channel it clocks, as each channel's own stamps are in _channels)
+    period = (_Period(p, CLOCKED_ROLES[0], cmap.channels[CLOCKED_ROLES[0]].column, "s", "its time stamps: ")
+              if grouped else _Period(p, "time", tspec.column, tspec.unit))
     drops = Dropouts(p, {r: cmap.channels[r].column for r in roles})
     rs = None
     empty: list[str] = []       # a steering role without a finite value in the whole log

@@ -165,18 +165,19 @@ def arrow_column_floats(p, c: str, label: str, col, row0: int = 0, flag: bool = 
 def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTable:
     """Read channels of an ASAM MDF4 file (needs the optional ``asammdf``: ``pip install roadbank[mdf]``).
 
-    Each MDF channel carries its own time stamps (its master channel, s); the
-    channel map's ``time`` entry is not used for MDF4.
+    Each MDF channel carries its own time stamps (its master channel, s), and its channel group is recorded
+    (``groups``: the channels of one group share the group's stamps); the channel map's ``time`` entry is not used
+    for MDF4.
     """
     p = existing_nonempty(path)
     mdf = open_mdf(p)
     try:
         names = [n for n in mdf.channels_db if n not in ("time", "t")] if hasattr(mdf, "channels_db") else []
-        data, times = {}, {}
+        data, times, groups = {}, {}, {}
         units = mdf_units(mdf, names)
         for c in names:
             if c in wanted or (prefix and c.startswith(prefix)):
-                mdf_place(mdf, p, c, column_label(wanted, c))      # one channel group, as the streamed reader
+                groups[c] = mdf_place(mdf, p, c, column_label(wanted, c))[0]   # one group, as the streamed reader
                 try:
                     sig = mdf.get(c, ignore_invalidation_bits=True)
                 except Exception as exc:
@@ -191,7 +192,8 @@ def read_mdf4(path, wanted: dict[str, str], prefix: str | None = None) -> RawTab
             meta["comment"] = str(comment)
     finally:
         mdf.close()
-    return RawTable(names, data, times=times, metadata=meta, row_label="sample", rownums=None, units=units)
+    return RawTable(names, data, times=times, metadata=meta, row_label="sample", rownums=None, units=units,
+                    groups=groups)
 
 
 def mdf_units(mdf, names: list[str]) -> dict[str, str]:

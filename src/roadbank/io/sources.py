@@ -26,6 +26,12 @@ Read whole (``chunk_rows=None``) a source gives one chunk: the whole file (the r
 in record batches, MDF4 in windows of records per channel group, a KITTI drive in frames and a CSV file in
 blocks of lines (:class:`~roadbank.io.csvtable.CsvLines`; one separated by ``;`` or tabs, not UTF-8 or short is
 read whole), so memory stays bounded by the chunk size; the other formats are read whole either way.
+
+An MDF4 source whose channels to read all lie in one channel group shares that group's time stamps: asked by
+:meth:`~WholeSource.one_clock` (the assembler asks, knowing which channels it reads), it gives them from then on as a
+table, row for row with those stamps under the column :data:`GROUP_CLOCK`, as a logger's raster holds them: the
+assembler reads it as it reads a CSV or Parquet table (its clock kept where ``time_base = "auto"`` finds every
+channel at its rate), nothing interpolated.
 """
 
 from __future__ import annotations
@@ -45,7 +51,7 @@ from .fields import column_label, unique_names
 from .files import open_mdf
 from .formats import CAN_FORMATS, ROS_FORMATS
 from .kitti import DriveSource
-from .types import RawChunk, RawTable
+from .types import GROUP_CLOCK, RawChunk, RawTable
 
 
 class WholeSource:
@@ -63,6 +69,19 @@ class WholeSource:
         self.carried: dict[str, float] = {}
         self.time_typed = dict(table.time_typed)
         self.units = dict(table.units)
+
+    def one_clock(self, wanted: dict[str, str]) -> bool:
+        """Whether the channels of ``wanted`` (column -> role) all come from one MDF4 channel group; if so the source
+        gives them from now on as a table on the group's stamps (column :data:`GROUP_CLOCK`, s), values as read.
+        False (nothing changed) for a table, for channels of several groups and for the other channel formats."""
+        groups = {self.table.groups.get(c) for c in wanted}
+        if self.shared_clock or len(groups) != 1 or None in groups:
+            return False
+        tab = self.table
+        cols = {GROUP_CLOCK: tab.times[next(iter(wanted))], **{c: tab.data[c] for c in wanted}}
+        self.table = RawTable(tab.names, cols, metadata=tab.metadata, row_label=tab.row_label, units=tab.units)
+        self.shared_clock = True
+        return True
 
     def close(self) -> None:
         """Nothing to close: the file was read when the source was opened."""
@@ -142,6 +161,10 @@ class Mdf4Windows:
     channel (about 6.5 MiB each). Channels of the group not asked for yet wait as
     converted arrays (one window each).
 
+    Where the channels to read all lie in one channel group (:meth:`one_clock`), they are given as a table
+    instead: one window of the group a chunk, every channel from one pass over its data, row for row with
+    the group's stamps.
+
     The file is opened as a Python file object rather than by name: asammdf then reads
     with ``read()`` instead of memory-mapping the file, whose touched pages would
     otherwise count in the process's resident memory as the log is read (page cache,
@@ -175,6 +198,42 @@ class Mdf4Windows:
         self.wanted: dict = {}       # column -> (group, index, label)
         self.offset: dict = {}       # group -> next record to read
         self.waiting: dict = {}      # column -> [(t, v)] read along with another channel of its group
+        self.row_label = "sample"
+        self.clocked: list[str] = []  # the columns given as a table on their group's stamps (one_clock)
+
+    def one_clock(self, wanted: dict[str, str]) -> bool:
+        """Whether the channels of ``wanted`` (column -> role) all lie in one channel group; if so :meth:`chunks`
+        gives them from now on as a table on the group's stamps (column :data:`GROUP_CLOCK`, s). LogError naming a
+        channel that is not in the file or in several groups."""
+        groups = set()
+        for c in wanted:
+            self._want(c, column_label(wanted, c))
+            groups.add(self.wanted[c][0])
+        if len(groups) != 1:
+            return False
+        self.shared_clock = True
+        self.clocked = list(wanted)
+        return True
+
+    def _table_chunks(self) -> Iterator[RawChunk]:
+        """The :meth:`one_clock` columns a window of their group at a time, with the group's stamps, from its first
+        record (each call: a first pass decides ``time_base = "auto"``); then an empty final chunk."""
+        cols = self.clocked
+        group = self.wanted[cols[0]][0]
+        n = int(self.mdf.groups[group].channel_group.cycles_nr)
+        for start in range(0, n, self.chunk):
+            try:
+                sigs = self.mdf.select([(None, group, self.wanted[c][1]) for c in cols], record_offset=start,
+                                       record_count=self.chunk, copy_master=False)
+            except Exception as exc:
+                raise LogError(f"{self.path}: {self.wanted[cols[0]][2]}: cannot read (truncated or corrupt?): "
+                               f"{exc}") from None
+            t = np.asarray(sigs[0].timestamps, dtype=np.float64)
+            data = {c: readers.mdf_signal_floats(self.path, c, self.wanted[c][2], sig, start)
+                    for c, sig in zip(cols, sigs)}
+            yield RawChunk({GROUP_CLOCK: t, **data}, rownums=np.arange(start, start + len(t)))
+        yield RawChunk({GROUP_CLOCK: np.zeros(0), **{c: np.zeros(0) for c in cols}},
+                       rownums=np.zeros(0, dtype=np.int64), last=True)
 
     def _want(self, name: str, label: str) -> None:
         group, index = readers.mdf_place(self.mdf, self.path, name, label)
@@ -209,7 +268,10 @@ class Mdf4Windows:
 
     def chunks(self, wanted: dict[str, str], prefix: str | None = None) -> Iterator[RawChunk]:
         """The channels of ``wanted`` (column -> role, for messages), one window of one channel a chunk
-        (``prefix`` is not used: truth channels go with tables only)."""
+        (``prefix`` is not used: truth channels go with tables only); the :meth:`one_clock` table where it is one."""
+        if self.shared_clock:
+            yield from self._table_chunks()
+            return
         for c in wanted:
             self._want(c, column_label(wanted, c))
         last_t: dict[str, float | None] = dict.fromkeys(wanted)

@@ -12,6 +12,10 @@ import numpy as np
 from ..signals import Signals
 from .channels import ChannelMap
 
+#: the column under which an MDF4 source read as a table (:meth:`roadbank.io.sources.WholeSource.one_clock`) gives
+#: its channel group's time stamps (s)
+GROUP_CLOCK = "time"
+
 
 @dataclass
 class RawTable:
@@ -41,6 +45,9 @@ class RawTable:
     units : dict name -> str
         The unit the file itself states for a column, as written (a CSV's units row under its header, an MDF4
         channel's unit); empty where it states none (:func:`roadbank.io.assemble.stated_units` reads them).
+    groups : dict name -> int
+        MDF4: the channel group of each channel read (the channels of one group share its time stamps); empty for
+        the other formats.
     """
 
     names: list[str]
@@ -52,6 +59,7 @@ class RawTable:
     time_typed: dict[str, str] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
     units: dict[str, str] = field(default_factory=dict)
+    groups: dict[str, int] = field(default_factory=dict)
 
 
 @dataclass
