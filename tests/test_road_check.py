@@ -13,6 +13,7 @@ import pytest
 from roadbank import Signals
 from roadbank.fleet.process import estimate_log
 from roadbank.io import load_log
+from roadbank.mapping.build import MapSettings, map_one_log
 from roadbank.signals import concat_signals
 from roadbank.vehicle.conditions import RoadCheck, design_ay_floor
 
@@ -20,11 +21,15 @@ DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 DRIVES = ("2011_09_26_drive_0036", "2011_09_26_drive_0022", "2011_09_26_drive_0064", "2011_09_30_drive_0034")
 
 
-def _drives() -> list[Signals]:
+def _logs():
     found = [next(iter(DATA.glob(f"*/{d}")), None) for d in DRIVES]
     if any(f is None for f in found):
         pytest.skip(f"the KITTI drives {DRIVES} are not all under {DATA}")
-    return [load_log(f).signals for f in found]
+    return [load_log(f) for f in found]
+
+
+def _drives() -> list[Signals]:
+    return [log.signals for log in _logs()]
 
 
 def _esp(s: Signals, t0: float, smooth: bool = False, seed: int = 0) -> Signals:
@@ -80,3 +85,24 @@ def test_roads_that_stay_as_they_began_are_not_said(tmp_path):
     rough = _stitched([(x, False) for x in d])            # rough throughout: loud, nothing to check
     summary = estimate_log(_write(rough, tmp_path / "rough.parquet"), tmp_path / "out2.csv")
     assert not summary.design["quiet"] and "reads quiet" not in summary.warnings
+
+
+def test_map_says_it_too(tmp_path):
+    """roadbank map designs on the first minute as estimate does (its smoother is pif-smoother on a quiet log), and
+    says so the same way."""
+    logs = _logs()
+    parts = [(logs[0], True), (logs[1], True)] + [(x, False) for x in logs]
+    sig = _stitched([(log.signals, smooth) for log, smooth in parts])
+    lat = np.concatenate([log.extra["lat_deg"] for log, _ in parts])
+    lon = np.concatenate([log.extra["lon_deg"] for log, _ in parts])
+    pd.DataFrame({"t": sig.t, "vx": sig.vx, "ay": sig.ay, "r": sig.r, "lat": lat, "lon": lon}).to_parquet(
+        tmp_path / "drive.parquet")
+    (tmp_path / "map.toml").write_text(
+        'convention = "ISO"\n[channels]\ntime = { column = "t", unit = "s" }\n'
+        'speed = { column = "vx", unit = "m/s" }\nlateral_acceleration = { column = "ay", unit = "m/s^2" }\n'
+        'yaw_rate = { column = "r", unit = "rad/s" }\nlatitude = { column = "lat", unit = "deg" }\n'
+        'longitude = { column = "lon", unit = "deg" }\n')
+    rec, _, _ = map_one_log(tmp_path / "drive.parquet", 0, MapSettings(channels=tmp_path / "map.toml"))
+    assert rec.status == "ok", rec.error
+    said = [w for w in rec.warnings if "which reads quiet" in w]
+    assert len(said) == 1 and "kinematic-smoother is pif-smoother" in said[0]

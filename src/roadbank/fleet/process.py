@@ -18,8 +18,8 @@ from ..io.writers import TableWriter, estimate_table, write_error
 from ..signals import Estimate
 from ..vehicle import (DESIGN_MAX_S, car_for_log, for_conditions, has_design_span, load_vehicle, log_conditions,
                        undescribed_params)
-from ..vehicle.conditions import (GYRO_MODELS, LOUDER_FACTOR, QUIET_MODELS, ROLL_SLOPE_RANGE, RoadCheck,
-                                  design_ay_floor, quiet_reads_roll_rate, roll_rate_usable)
+from ..vehicle.conditions import (GYRO_MODELS, QUIET_MODELS, ROLL_SLOPE_RANGE, RoadCheck, design_ay_floor,
+                                  louder_warnings, quiet_reads_roll_rate, roll_rate_usable)
 
 #: columns of the summary table, in order (see LogSummary)
 SUMMARY_COLUMNS = ("log", "status", "error", "output", "estimator", "samples", "duration_s", "valid_share",
@@ -162,22 +162,6 @@ def design_words(design: dict, estimator: str) -> str:
         words += (f"; written faster than their sensor, noise (and the gate's yaw rate, where r is so written) read at "
                   f"the sensor's rate: {design['source']}")
     return words
-
-
-def louder_warnings(path: str, names, design: dict, loud_s: float, driving_s: float) -> list[str]:
-    """A warning (a list of at most one) where a log designed quiet (``design``: :attr:`LogSummary.design`) reads loud
-    on at least half of its driving (``loud_s`` of ``driving_s`` s, :class:`~roadbank.vehicle.conditions.RoadCheck`):
-    the estimators of ``names`` that keep the car's model there hold it over roads where the low-pass blend does
-    better."""
-    if not (driving_s > 0 and loud_s >= 0.5 * driving_s):
-        return []
-    which = ", ".join(f"{n} is {QUIET_MODELS[n]}" for n in names if n in QUIET_MODELS)
-    unread = ", its roll rate not read" if roll_rate_usable(design.get("roll_rate")) else ""
-    return [f"{path}: designed on its first minute of driving, which reads quiet (so {which}: the car's model"
-            f"{unread}), but {loud_s / 60:.1f} of its {driving_s / 60:.1f} minutes of driving read at least "
-            f"{LOUDER_FACTOR:g} times that ay noise, where the car's model does worse than the low-pass blend (a "
-            "drive onto rougher roads): split the log where the road changes, so that each piece is designed on "
-            "its own first minute"]
 
 
 #: what a roll or pitch rate's check slope (:func:`~roadbank.vehicle.conditions.roll_rate_slope`: 1 for a right
@@ -392,7 +376,7 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
         if stats:
             warns += unsettled_warnings(str(path), names[0], stats[0], ests[0].settle_time)
         if road is not None:
-            warns += louder_warnings(str(path), names, summary.design, *road.finish())
+            warns += louder_warnings(str(path), names, summary.design.get("roll_rate"), *road.finish())
         summary.warnings = "; ".join(warns)
         if keep:
             whole = (np.concatenate(kept_t), [concat_estimates(x) for x in kept_est],

@@ -19,6 +19,8 @@ from ..io.writers import write_error
 from ..params import VehicleParams
 from ..vehicle import (DESIGN_MAX_S, Vehicle, for_conditions, has_design_span, load_vehicle, log_conditions,
                        undescribed_params)
+from ..vehicle.conditions import QUIET_MODELS, RoadCheck, design_ay_floor, is_quiet, louder_warnings
+from ..vehicle.sensors import SensorSpec
 from .geo import CourseStream, LocalProjection, PositionJumps, TrackScale
 from .grid import BankMap
 
@@ -137,14 +139,18 @@ class MapSettings:
 def _design(settings: MapSettings, signals, designs: dict):
     """The estimator for a log (its sample rate and road noise, :func:`roadbank.vehicle.for_conditions`; a car
     that is not described chosen for the log, :func:`roadbank.vehicle.undescribed_params`), memoised in
-    ``designs`` by those conditions and the car."""
+    ``designs`` by those conditions and the car, and where the log reads quiet and the estimator keeps the car's
+    model there, the :class:`~roadbank.vehicle.conditions.RoadCheck` of its roads (else None)."""
     cond = log_conditions(signals)
     car = (settings.params if settings.params is not None or settings.vehicle is not None
            else undescribed_params(signals))
     key = (tuple(round(v, 6) if v is not None and np.isfinite(v) else None for v in cond.values()), car)
     if key not in designs:
         designs[key] = for_conditions(settings.estimator, cond, car, vehicle=settings.vehicle)
-    return designs[key]
+    sensors = settings.vehicle.sensors if settings.vehicle is not None else SensorSpec()
+    quiet = settings.estimator in QUIET_MODELS and is_quiet(sensors, cond.get("log_rate"), cond.get("log_ay_noise"),
+                                                              log_ay_floor=cond.get("log_ay_floor"))
+    return designs[key], (RoadCheck(design_ay_floor(signals)) if quiet else None), cond.get("log_roll_rate")
 
 
 def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection | None = None,
@@ -185,6 +191,7 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
         must_exist(path)     # before its format is guessed from a suffix it may not have
         chunks = ReadAhead(stream_log(path, channels=s.channels, format=s.format, params=params,
                                       chunk_rows=s.chunk_rows or CHUNK_ROWS))
+        road, roll_rate = None, None       # whether a log designed quiet stays so (RoadCheck), its roll-rate check
         # an offline estimator smooths each chunk with the chunks after it as lookahead
         for k, chunk in enumerate(chunks):
             if "lat_deg" not in chunk.extra or "lon_deg" not in chunk.extra:
@@ -200,7 +207,10 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
             if part is None and plane is not None:
                 part = BankMap(plane, s.cell_m, s.sectors)
             if k == 0:      # designed on the log's first minute of driving, as roadbank estimate does
-                est = _design(s, chunks.leading(chunk.signals, DESIGN_MAX_S, has_design_span), designs)
+                est, road, roll_rate = _design(s, chunks.leading(chunk.signals, DESIGN_MAX_S, has_design_span),
+                                               designs)
+            if road is not None:
+                road.add(correct(chunk.signals))
             nxt = chunks.following(est.lookahead_s) if s.estimator in OFFLINE else None
             out = est.run(correct(chunk.signals), reset=(k == 0), lookahead=None if nxt is None else correct(nxt))
             rec.samples += len(out.t)
@@ -220,6 +230,8 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
         why = seen.problem(path, cmap)
         if why is not None:
             raise LogError(why)
+        if road is not None:
+            rec.warnings += louder_warnings(str(path), [s.estimator], roll_rate, *road.finish())
         if settled < UNSETTLED_SHARE * valid:
             rec.warnings.append(f"{path}: {settled} of its {valid} valid estimates had settled, and only those are "
                                 f"mapped ({s.estimator} settles {est.settle_time:.3g} s after each (re)start of the "

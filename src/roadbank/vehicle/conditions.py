@@ -505,6 +505,22 @@ class RoadCheck:
         return self.loud_s, self.driving_s
 
 
+def louder_warnings(path: str, names, roll_rate: float | None, loud_s: float, driving_s: float) -> list[str]:
+    """A warning (a list of at most one) where a log designed quiet reads loud on at least half of its driving
+    (``loud_s`` of ``driving_s`` s, :class:`RoadCheck`): the estimators of ``names`` that keep the car's model there
+    hold it over roads where the low-pass blend does better (``roll_rate``: the log's roll-rate check slope,
+    ``log_roll_rate``, -; a usable one is said not read)."""
+    if not (driving_s > 0 and loud_s >= 0.5 * driving_s):
+        return []
+    which = ", ".join(f"{n} is {QUIET_MODELS[n]}" for n in names if n in QUIET_MODELS)
+    unread = ", its roll rate not read" if roll_rate_usable(roll_rate) else ""
+    return [f"{path}: designed on its first minute of driving, which reads quiet (so {which}: the car's model"
+            f"{unread}), but {loud_s / 60:.1f} of its {driving_s / 60:.1f} minutes of driving read at least "
+            f"{LOUDER_FACTOR:g} times that ay noise, where the car's model does worse than the low-pass blend (a "
+            "drive onto rougher roads): split the log where the road changes, so that each piece is designed on "
+            "its own first minute"]
+
+
 def _floor_signal(signals, vx: np.ndarray) -> np.ndarray:
     """The channel :data:`QUIET_FLOOR_SIGNAL` names (m/s^2) of ``signals``, speed ``vx`` (m/s)."""
     if QUIET_FLOOR_SIGNAL not in QUIET_FLOOR_SIGNALS:
