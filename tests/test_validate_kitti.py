@@ -479,3 +479,15 @@ def test_the_short_log_section_reports_the_medians_of_the_drives_pieces():
     row = next(line for line in "\n".join(short_log_lines(v, "##")).splitlines() if line.startswith("| validation 8 s"))
     assert f"| {part['pieces']} |" in row and f"{part['median_rms_raw_deg']['kinematic-pif']:.3f}" in row
     assert to_json(v)["splits"]["validation"]["short_logs"]["8"]["pieces"] == part["pieces"]
+
+
+@needs_kitti
+def test_a_repeated_estimators_option_scores_every_one_named():
+    """`-e a -e b` scores both, as `-e a,b` does (it had kept the last alone, as click does with a single option)."""
+    drive = str(next(KITTI.glob("*/oxts")).parent)
+    runs = [CliRunner().invoke(main, ["validate", "kitti", drive, *opts, "--json", "--no-sensitivity"])
+            for opts in (["-e", "kinematic", "-e", "kinematic-lp"], ["-e", "kinematic,kinematic-lp"])]
+    for res in runs:
+        assert res.exit_code == 0, res.output
+    scores = [json.loads(res.stdout)["drives"] for res in runs]
+    assert scores[0] == scores[1] and all(set(v) == {"kinematic", "kinematic-lp"} for v in scores[0].values())

@@ -48,8 +48,13 @@ def _outcome(pool, task, what) -> tuple:
     return value if failure is None else (None, f"{what}: {failure}")
 
 
-_ESTIMATORS = click.option("--estimators", "-e", "names", default="all", show_default=True,
-                           help="Comma-separated estimator names or 'all'.")
+def _joined(ctx, param, value) -> str | None:
+    """A repeated ``-e`` as one comma-separated value (None where none was given and there is no default)."""
+    return ",".join(value) if value else None
+
+
+_ESTIMATORS = click.option("--estimators", "-e", "names", multiple=True, default=("all",), show_default="all",
+                           callback=_joined, help="Comma-separated estimator names or 'all' (may be repeated).")
 
 
 def _warn(notes) -> None:
@@ -347,10 +352,10 @@ def _sim_command(names, drives: int | None, seed: int, output, sources: bool = T
 
 
 @validate.command("sim")
-@click.option("--estimators", "-e", "names", default=None,
-              help="Comma-separated estimator names or 'all'. Default: kinematic-pif (the default estimator), "
-                   "kinematic-lp, pif-modified, pif-adaptive, pif-gated, pif-smoother and kinematic-smoother "
-                   "(offline).")
+@click.option("--estimators", "-e", "names", multiple=True, callback=_joined,
+              help="Comma-separated estimator names or 'all' (may be repeated). Default: kinematic-pif (the default "
+                   "estimator), kinematic-lp, pif-modified, pif-adaptive, pif-gated, pif-smoother and "
+                   "kinematic-smoother (offline).")
 @click.option("-n", "--drives", type=click.IntRange(min=1), default=None,
               help="Drives per car. Default: as many as roadbank tune's validation set (40).")
 @click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of the drive set.")
