@@ -19,7 +19,7 @@ from ..signals import Estimate
 from ..vehicle import (DESIGN_MAX_S, car_for_log, for_conditions, has_design_span, load_vehicle, log_conditions,
                        undescribed_params)
 from ..vehicle.conditions import (GYRO_MODELS, QUIET_MODELS, ROLL_SLOPE_RANGE, RoadCheck, design_ay_floor,
-                                  louder_warnings, quiet_reads_roll_rate, roll_rate_usable)
+                                  keeps_cars_model, louder_warnings, roll_rate_usable)
 
 #: columns of the summary table, in order (see LogSummary)
 SUMMARY_COLUMNS = ("log", "status", "error", "output", "estimator", "samples", "duration_s", "valid_share",
@@ -142,7 +142,7 @@ def design_words(design: dict, estimator: str) -> str:
         grade = f"; corrected for the grade by its ax{pitch}" if roll_rate_usable(ax) else ""
         free = ", free of offset (an INS's)" if design.get("roll_rate_unbiased") else ""
         loud = f"{GYRO_MODELS[estimator]} (the log has a roll rate{free}{grade})" if gyro else "the low-pass blend"
-        model = design["quiet"] and not (gyro and quiet_reads_roll_rate())
+        model = keeps_cars_model(design["quiet"], slope)
         unread = " (its roll rate not read: a quiet log keeps the car's model)" if model and gyro else ""
         words += f", so {estimator} is {QUIET_MODELS[estimator] + unread if model else loud}"
     if slope is not None and not gyro:
@@ -342,7 +342,8 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
                 cond = log_conditions(lead)
                 car, summary.design = car_for_log(lead, cond, params, vehicle)
                 ests = [for_conditions(n, cond, car, vehicle=vehicle) for n in names]
-                if summary.design.get("quiet") and any(n in QUIET_MODELS for n in names):
+                if (keeps_cars_model(summary.design["quiet"], summary.design.get("roll_rate"))
+                        and any(n in QUIET_MODELS for n in names)):
                     road = RoadCheck(design_ay_floor(lead))
                 if online_offsets:      # causal ones: a smoother's later samples would see later offsets
                     ests = [e if n in OFFLINE else with_online_offsets(e, car) for e, n in zip(ests, names)]

@@ -19,7 +19,8 @@ from ..io.writers import write_error
 from ..params import VehicleParams
 from ..vehicle import (DESIGN_MAX_S, Vehicle, for_conditions, has_design_span, load_vehicle, log_conditions,
                        undescribed_params)
-from ..vehicle.conditions import QUIET_MODELS, RoadCheck, design_ay_floor, is_quiet, louder_warnings
+from ..vehicle.conditions import (QUIET_MODELS, RoadCheck, design_ay_floor, is_quiet, keeps_cars_model,
+                                  louder_warnings)
 from ..vehicle.sensors import SensorSpec
 from .geo import CourseStream, LocalProjection, PositionJumps, TrackScale
 from .grid import BankMap
@@ -148,9 +149,10 @@ def _design(settings: MapSettings, signals, designs: dict):
     if key not in designs:
         designs[key] = for_conditions(settings.estimator, cond, car, vehicle=settings.vehicle)
     sensors = settings.vehicle.sensors if settings.vehicle is not None else SensorSpec()
-    quiet = settings.estimator in QUIET_MODELS and is_quiet(sensors, cond.get("log_rate"), cond.get("log_ay_noise"),
-                                                              log_ay_floor=cond.get("log_ay_floor"))
-    return designs[key], (RoadCheck(design_ay_floor(signals)) if quiet else None), cond.get("log_roll_rate")
+    model = settings.estimator in QUIET_MODELS and keeps_cars_model(
+        is_quiet(sensors, cond.get("log_rate"), cond.get("log_ay_noise"), log_ay_floor=cond.get("log_ay_floor")),
+        cond.get("log_roll_rate"))
+    return designs[key], (RoadCheck(design_ay_floor(signals)) if model else None), cond.get("log_roll_rate")
 
 
 def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection | None = None,
@@ -209,10 +211,11 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
             if k == 0:      # designed on the log's first minute of driving, as roadbank estimate does
                 est, road, roll_rate = _design(s, chunks.leading(chunk.signals, DESIGN_MAX_S, has_design_span),
                                                designs)
+            signals = correct(chunk.signals)
             if road is not None:
-                road.add(correct(chunk.signals))
+                road.add(signals)
             nxt = chunks.following(est.lookahead_s) if s.estimator in OFFLINE else None
-            out = est.run(correct(chunk.signals), reset=(k == 0), lookahead=None if nxt is None else correct(nxt))
+            out = est.run(signals, reset=(k == 0), lookahead=None if nxt is None else correct(nxt))
             rec.samples += len(out.t)
             valid += int(np.count_nonzero(out.valid))
             settled += int(np.count_nonzero(out.settled))

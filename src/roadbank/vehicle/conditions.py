@@ -358,17 +358,19 @@ def default_reads_roll_rate(cond: dict, sensors: SensorSpec | None = None) -> bo
     quiet too. That filter has no car model."""
     if not roll_rate_usable(cond.get("log_roll_rate")):
         return False
-    return quiet_reads_roll_rate() or not is_quiet(sensors if sensors is not None else SensorSpec(),
-                                                   cond.get("log_rate"), cond.get("log_ay_noise"), QUIET_RATIO,
-                                                   cond.get("log_ay_floor"))
+    quiet = is_quiet(sensors if sensors is not None else SensorSpec(), cond.get("log_rate"), cond.get("log_ay_noise"),
+                     QUIET_RATIO, cond.get("log_ay_floor"))
+    return not keeps_cars_model(quiet, cond.get("log_roll_rate"))
 
 
-def quiet_reads_roll_rate() -> bool:
-    """:data:`QUIET_READS_ROLL_RATE`, checked against its choices."""
+def keeps_cars_model(quiet: bool, roll_rate: float | None) -> bool:
+    """Whether the default (and its offline form, :data:`QUIET_MODELS`) keeps the car's model for a log: a ``quiet`` one
+    (:func:`is_quiet`), unless its roll rate (check slope ``roll_rate``, -: :func:`roll_rate_usable`) is usable and
+    :data:`QUIET_READS_ROLL_RATE`."""
     if QUIET_READS_ROLL_RATE not in QUIET_READS_ROLL_RATE_CHOICES:
         raise ValueError(f"QUIET_READS_ROLL_RATE must be one of {QUIET_READS_ROLL_RATE_CHOICES}, "
                          f"got {QUIET_READS_ROLL_RATE!r}")
-    return bool(QUIET_READS_ROLL_RATE)
+    return bool(quiet) and not (QUIET_READS_ROLL_RATE and roll_rate_usable(roll_rate))
 
 
 def _octave_top(t) -> float:
@@ -693,11 +695,10 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         lead_samples = (float(options.pop("lead_samples", estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES))
                         if name == "kinematic-pif" else None)        # the blend's option only
         own_gate = any(k in options for k in _GATE_OPTIONS)
-        gyro = roll_rate_usable(log_roll_rate)
-        if not own_gate and not (gyro and quiet_reads_roll_rate()) and is_quiet(sensors, log_rate, log_ay_noise,
-                                                                                ratio, log_ay_floor):
+        if not own_gate and keeps_cars_model(is_quiet(sensors, log_rate, log_ay_noise, ratio, log_ay_floor),
+                                             log_roll_rate):
             name, options = quiet_filter, {k: v for k, v in options.items() if k not in _BLEND_OPTIONS}
-        elif not own_gate and gyro:
+        elif not own_gate and roll_rate_usable(log_roll_rate):
             # the default's roll separation (its PIF's tuning chose the roll model) unless the options name one
             roll = estimators.pif.DEFAULT_TUNING["roll"]
             window = estimators.gyro.GRADE_WINDOW_S if roll_rate_usable(log_ax) else 0.0
