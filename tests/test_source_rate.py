@@ -15,7 +15,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from roadbank.signals import Signals, road_noise_std, source_step
+from roadbank.signals import Signals, road_noise_std, source_step, value_step
 from roadbank.tuning.real import design_settings
 from roadbank.vehicle import conditions, for_log, log_conditions
 
@@ -44,6 +44,56 @@ def test_a_linearly_interpolated_channel_reads_its_source(jitter):
     assert source_step(x) == 1                               # the source itself
 
 
+@pytest.mark.parametrize("jitter, steps", [(0.0, {10}), (0.4, {10, 11})])
+def test_a_rounded_interpolated_channel_reads_its_source_with_the_rounding_tolerance(jitter, steps):
+    """Written with two decimals (a step of 1 % of the source's spread), the rounding bends the interpolated lines by
+    up to two steps, above 1 % of the largest bends: read without the tolerance, the channel is taken for its own
+    source (the fifty-seventh stage's failure); with it, for the 10 Hz source (with a jittered source a bend that
+    falls below the rounding is missed now and then, and the median distance reads 11)."""
+    for seed in range(3):
+        t, x = _source(jitter=jitter, seed=seed)
+        up = np.round(np.interp(_grid(t), t, x), 2)
+        assert source_step(up) == 1
+        assert source_step(up, rounding=True) in steps
+        assert source_step(np.round(x, 2), rounding=True) == 1        # the source itself, rounded
+
+
+def test_the_grid_step_of_a_channel():
+    """The step of a channel's value grid: two decimals, a CAN signal's resolution and offset, none for a float
+    channel, none where too few values change."""
+    t, x = _source()
+    up = np.interp(_grid(t), t, x)
+    assert value_step(np.round(up, 2)) == pytest.approx(0.01, rel=1e-9)
+    can = -10.0 + 0.0125 * np.round((up + 10.0) / 0.0125)       # raw * factor + offset
+    assert value_step(can) == pytest.approx(0.0125, rel=1e-9)
+    assert value_step(up) == 0.0 and value_step(x) == 0.0
+    assert value_step(np.round(x[:50], 2)) == 0.0                  # too few differences to tell
+    valid = np.ones(up.size, bool)
+    valid[::7] = False
+    spoilt = np.round(up, 2)
+    spoilt[::7] = np.pi                                             # off the grid, but flagged
+    assert value_step(spoilt, valid) == pytest.approx(0.01, rel=1e-9) and value_step(spoilt) == 0.0
+
+
+@pytest.mark.parametrize("noise", [1.0, 0.5, 0.2])
+@pytest.mark.parametrize("scenario", ["const-bank", "bank-lane-change", "s-curve"])
+def test_a_quantised_sensor_at_its_own_rate_is_no_rounded_source(noise, scenario):
+    """The simulator's 100 Hz ESP channels are quantised (ay 0.005 g, yaw rate 0.3 deg/s) with noise at or below
+    their step: their values lie on a grid and many second differences are within two steps, but those steps are the
+    channel's bends, so the rounding tolerance is not applied and each reads its own rate."""
+    from roadbank.sim import sensors as S
+    from roadbank.sim.scenarios import run_scenario
+
+    cfg = S.SensorConfig()
+    cfg = dataclasses.replace(cfg, yaw_rate=dataclasses.replace(cfg.yaw_rate, noise_std=cfg.yaw_rate.noise_std * noise),
+                              ay=dataclasses.replace(cfg.ay, noise_std=cfg.ay.noise_std * noise))
+    s = run_scenario(scenario, sensors=cfg).signals
+    moving = s.vx > 5
+    # ay shows its grid (with a fifth of the noise it may change too seldom to tell, as the yaw rate on a straight)
+    assert value_step(s.ay, moving) > 0 or noise < 0.5
+    assert source_step(s.ay, moving, rounding=True) == 1 and source_step(s.r, moving, rounding=True) == 1
+
+
 @pytest.mark.parametrize("k", [4, 5, 10, 20])
 def test_a_held_channel_reads_its_source(k):
     _, x = _source()
@@ -65,7 +115,7 @@ def test_channels_at_their_own_rate_read_one():
     # a gyro quantised at 0.01 rad/s whose noise is below its step: the value holds between random steps
     gyro = np.round((0.002 * rng.normal(size=t.size) + 0.05 * np.sin(2 * np.pi * 0.05 * t)) / 0.01) * 0.01
     assert np.mean(np.diff(gyro, 2) == 0.0) > 0.5                 # most second differences vanish here too
-    assert source_step(gyro) == 1
+    assert source_step(gyro) == 1 and source_step(gyro, rounding=True) == 1
     assert source_step(rng.normal(size=50)) == 1                  # too few samples
 
 
@@ -157,3 +207,23 @@ def test_the_design_says_which_channels_were_read_at_their_source():
     assert design_words(record, "kinematic-pif").endswith("read at the sensor's rate: ay 10 Hz, r 10 Hz")
     _, plain = car_for_log(own, log_conditions(own))
     assert "source" not in plain and "sensor's rate" not in design_words(plain, "kinematic-pif")
+
+
+@pytest.mark.parametrize("drive", ["2011_09_26_drive_0070", "2011_10_03_drive_0047"])
+def test_a_kitti_drive_interpolated_and_rounded_is_designed_as_unrounded(drive):
+    """A KITTI drive interpolated onto 100 Hz and written with ay to 0.001 m/s^2 and the yaw rate to 0.01 deg/s (a
+    CSV with a few decimals): the design reads its ay noise on the INS's samples as for the unrounded drive (within
+    10 %); read without the rounding tolerance (as before the fifty-seventh stage) it took about half of it."""
+    from roadbank.io.kitti import load_kitti_oxts
+
+    found = sorted(DATA.glob(f"*/{drive}"))
+    if not found:
+        pytest.skip(f"KITTI drive {drive} not under {DATA}")
+    s = dataclasses.replace(load_kitti_oxts(found[0]).signals, p=None)
+    up = _upsampled(s)
+    rounded = dataclasses.replace(up, ay=np.round(up.ay, 3), r=np.round(up.r / np.radians(0.01)) * np.radians(0.01))
+    want, got = log_conditions(up)["log_ay_noise"], log_conditions(rounded)["log_ay_noise"]
+    assert abs(got / want - 1.0) < 0.1
+    with design_settings(source_rounding=False):
+        before = log_conditions(rounded)["log_ay_noise"]
+    assert before < 0.7 * want

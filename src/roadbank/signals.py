@@ -415,7 +415,40 @@ SOURCE_ZERO_REL = 1e-2
 SOURCE_SPREAD = 0.5
 
 
-def source_step(x, valid=None) -> int:
+#: a channel's values lie on a grid (:func:`value_step`) where this share (-) of the differences between consecutive
+#: samples are whole multiples of the smallest one
+GRID_SHARE = 0.99
+#: how close (-, relative) a difference must come to a whole multiple of the grid step to count as one (a value written
+#: with a few decimals and read back as a float is a multiple to about 1e-15)
+GRID_TOL = 1e-6
+
+
+def value_step(x, valid=None) -> float:
+    """The grid step (unit of ``x``) on which the values of the channel ``x`` lie, 0 where they lie on none: a channel
+    written with a few decimals (0.001 for three) or at a sensor's resolution changes by whole multiples of one step.
+    Read on the differences between consecutive finite samples that are both ``valid`` (bool array, default all) and
+    not zero: the smallest of them where :data:`GRID_SHARE` of them are multiples of it (within :data:`GRID_TOL`);
+    0 with fewer than :data:`MIN_NOISE_TRIPLES` such differences."""
+    x = np.asarray(x, dtype=np.float64)
+    ok = np.isfinite(x) if valid is None else np.isfinite(x) & np.asarray(valid, dtype=bool)
+    d = np.abs(np.diff(x))[ok[1:] & ok[:-1]]
+    d = d[d > 0.0]
+    if d.size < MIN_NOISE_TRIPLES:
+        return 0.0
+    step = float(d.min())
+    n = d / step
+    whole = np.abs(n - np.round(n)) <= GRID_TOL * n
+    return step if whole.mean() >= GRID_SHARE else 0.0
+
+
+#: the share (-) of a channel's 99th percentile of second differences that its rounding bound (two grid steps,
+#: :func:`value_step`) may reach for :func:`source_step` to let that bound vanish too (``rounding``): the rounding must
+#: be small against the bends that mark the source's samples; a quantised sensor at its own rate, whose steps are
+#: its bends, is read without it
+SOURCE_ROUNDING_SHARE = 0.25
+
+
+def source_step(x, valid=None, rounding: bool = False) -> int:
     """How many samples of the sampled channel ``x`` (any unit) make one sample of its source: 1 for a channel at
     its own rate, ``k`` for one that a logger interpolated linearly (or held) onto a grid ``k`` times faster than
     the sensor (a 10 Hz INS written at 100 Hz: 10). Between the source's samples such a channel is a straight line,
@@ -423,7 +456,11 @@ def source_step(x, valid=None) -> int:
     :data:`SOURCE_ZERO_SHARE` of them do and the runs that do not start at a steady pace (:data:`SOURCE_SPREAD`),
     ``k`` is the median distance (samples) between those starts (with every triple between them read). It reads
     ``k`` >= 4 (below, too few vanish: 2 and 3 read 1). Only triples of finite samples that are all
-    ``valid`` (bool array, default all) count; 1 with fewer than :data:`MIN_NOISE_TRIPLES` of them."""
+    ``valid`` (bool array, default all) count; 1 with fewer than :data:`MIN_NOISE_TRIPLES` of them.
+
+    ``rounding``: a channel written with few decimals (its values on a grid, :func:`value_step`) carries its
+    rounding between the source's samples, up to two grid steps of second difference; with ``rounding`` those vanish
+    too, where two steps are at most :data:`SOURCE_ROUNDING_SHARE` of the 99th percentile."""
     x = np.asarray(x, dtype=np.float64)
     ok = np.isfinite(x) if valid is None else np.isfinite(x) & np.asarray(valid, dtype=bool)
     ok3 = ok[2:] & ok[1:-1] & ok[:-2]
@@ -432,7 +469,12 @@ def source_step(x, valid=None) -> int:
     d2 = np.abs(x[2:] - 2.0 * x[1:-1] + x[:-2])
     d2[~ok3] = 0.0
     top = float(np.percentile(d2[ok3], 99.0))
-    bent = d2 > SOURCE_ZERO_REL * top
+    zero = SOURCE_ZERO_REL * top
+    if rounding:
+        bound = 2.0 * value_step(x, valid) * (1.0 + GRID_TOL)
+        if bound <= SOURCE_ROUNDING_SHARE * top:
+            zero = max(zero, bound)
+    bent = d2 > zero
     if top <= 0.0 or 1.0 - bent[ok3].mean() < SOURCE_ZERO_SHARE:
         return 1
     starts = np.flatnonzero(bent & ~np.r_[False, bent[:-1]])

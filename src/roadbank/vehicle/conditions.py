@@ -157,6 +157,11 @@ READ_AT_SOURCE_CHOICES = (False, True)
 QUIET_READS_ROLL_RATE = False
 #: the values :data:`QUIET_READS_ROLL_RATE` may take
 QUIET_READS_ROLL_RATE_CHOICES = (False, True)
+#: whether a channel written with few decimals is read as written faster than its sensor where its rounding, not its
+#: source, bends it between the source's samples (:func:`roadbank.signals.source_step`'s ``rounding``): the
+#: fifty-seventh stage of :mod:`roadbank.tuning.real` chooses it
+SOURCE_ROUNDING = True
+SOURCE_ROUNDING_CHOICES = (False, True)
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
 #: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it
 NOISE_OCTAVE_TOP = 1.5
@@ -411,8 +416,10 @@ def _source_steps(signals, moving) -> dict[str, int]:
     on the ``moving`` samples) that :data:`NOISE_AT_SOURCE` reads at the source's rate, 1 for the others."""
     if NOISE_AT_SOURCE not in NOISE_AT_SOURCE_CHOICES:
         raise ValueError(f"NOISE_AT_SOURCE must be one of {NOISE_AT_SOURCE_CHOICES}, got {NOISE_AT_SOURCE!r}")
-    return {"ay": source_step(signals.ay, moving) if NOISE_AT_SOURCE != "none" else 1,
-            "r": source_step(signals.r, moving) if NOISE_AT_SOURCE == "all" else 1}
+    if SOURCE_ROUNDING not in SOURCE_ROUNDING_CHOICES:
+        raise ValueError(f"SOURCE_ROUNDING must be one of {SOURCE_ROUNDING_CHOICES}, got {SOURCE_ROUNDING!r}")
+    return {"ay": source_step(signals.ay, moving, SOURCE_ROUNDING) if NOISE_AT_SOURCE != "none" else 1,
+            "r": source_step(signals.r, moving, SOURCE_ROUNDING) if NOISE_AT_SOURCE == "all" else 1}
 
 
 def source_rates(signals, v_min: float = 5.0) -> dict[str, float]:

@@ -367,6 +367,19 @@ READ_SOURCE_WORSE_LOGS = 4
 QUIET_GYRO_LOSS_DEG = 0.005
 #: the roll-rate offsets (rad/s) of its simulated sets (:func:`gyro_sim_sets`)
 QUIET_GYRO_OFFSETS = (0.0, math.radians(0.3))
+#: the fifty-seventh stage's rule (docs/estimators.md): B ships if its median over the ESP forms is below A's by more
+#: than this (deg), its median over the gyro-aided forms not above A's by more than it ...
+SOURCE_ROUNDING_GAIN_DEG = 0.005
+#: ... and it is worse than A by more than this (deg) on at most :data:`SOURCE_ROUNDING_WORSE_LOGS` of all the logs
+SOURCE_ROUNDING_WORSE_DEG = 0.02
+SOURCE_ROUNDING_WORSE_LOGS = 4
+#: its two roundings (grid step per channel, SI units: m/s, m/s^2, rad/s): a CSV in SI units with three decimals, and
+#: ``ay`` to 0.001 m/s^2 with the rates to 0.01 deg/s and the speed to 0.01 m/s
+ROUNDINGS = ({"vx": 1e-3, "ay": 1e-3, "ax": 1e-3, "r": 1e-3, "p": 1e-3, "q": 1e-3},
+             {"vx": 1e-2, "ay": 1e-3, "ax": 1e-3, "r": math.radians(0.01), "p": math.radians(0.01),
+              "q": math.radians(0.01)})
+#: the noise scales (-, of the data sheet's) of its simulated guard drives
+SOURCE_ROUNDING_SIM_NOISE = (1.0, 0.5)
 #: the stages before the fourteenth took the bank-rate prior as a rate in time
 _TIME_RATE = {"bank_speed_exp": 0.0}
 #: the stages before the twelfth ran on the design span's noise throughout
@@ -556,7 +569,8 @@ def design_settings(**settings):
 
 #: the module settings of :mod:`roadbank.vehicle.conditions` that :func:`design_settings` sets
 _DESIGN_SETTINGS = ("QUIET_FLOOR_RATE", "QUIET_FLOOR_SIGNAL", "NOISE_AT_SOURCE", "NOISE_OCTAVE", "NOISE_OCTAVE_TOP",
-                    "TRUST_FIXED_CHANNELS", "GATE_AT_SOURCE", "READ_AT_SOURCE", "QUIET_READS_ROLL_RATE")
+                    "TRUST_FIXED_CHANNELS", "GATE_AT_SOURCE", "READ_AT_SOURCE", "QUIET_READS_ROLL_RATE",
+                    "SOURCE_ROUNDING")
 #: the settings as each stage ran: the eighteenth and nineteenth before the twentieth, the twentieth before the
 #: twenty-first
 _BEFORE_SOURCE = {"noise_at_source": "none", "noise_octave": "none"}
@@ -683,6 +697,57 @@ def choose_read_at_source(esp_logs, gyro_logs, esp_forms, gyro_forms) -> tuple:
     worse = int(np.sum(np.array(b1 + b2) > np.array(a1 + a2) + READ_SOURCE_WORSE_DEG))
     ships = (np.median(b1) < np.median(a1) - READ_SOURCE_GAIN_DEG
              and np.median(b2) <= np.median(a2) + READ_SOURCE_GAIN_DEG and worse <= READ_SOURCE_WORSE_LOGS)
+    return bool(ships), errs
+
+
+def rounded_logs(logs, steps: dict, rate: float = UPSAMPLED_RATE_HZ, scoring=KITTI_SCORING) -> list:
+    """``logs`` (:func:`training_logs`) as a logger that interpolates every channel linearly onto a ``rate`` (Hz) grid
+    and writes it rounded to ``steps`` (``{channel: grid step}``, the channel's unit; a channel not named is written
+    as it is) writes them; the reference roll (rad) linear onto the same grid; the scored samples recomputed with
+    ``scoring``."""
+    out = []
+    for s, ref, _ in logs:
+        t = _grid(s.t, rate)
+        chans = {c: np.interp(t, s.t, getattr(s, c)) for c in s.channels if c != "t"}
+        chans = {c: np.round(x / steps[c]) * steps[c] if c in steps else x for c, x in chans.items()}
+        up = Signals(t=t, **chans, fixed=s.fixed, unbiased=s.unbiased)
+        out.append((up, np.interp(t, s.t, ref), masks(up.t, up.vx, scoring)[1]))
+    return out
+
+
+def quiet_noise_sets(scale: float, cars=SIM_CARS, n=SIM_DRIVES) -> list:
+    """``roadbank tune``'s training drives (seed 0) of each car in ``cars`` (:func:`simulated_sets`' drives) with the
+    noise of the ESP yaw-rate sensor and accelerometer ``scale`` (-) times the data sheet's, their resolution kept."""
+    cfg = SensorConfig()
+    cfg = dataclasses.replace(cfg, yaw_rate=dataclasses.replace(cfg.yaw_rate, noise_std=cfg.yaw_rate.noise_std * scale),
+                              ay=dataclasses.replace(cfg.ay, noise_std=cfg.ay.noise_std * scale))
+    return [drive_set("train", n, 0, load_vehicle(car).params, sensors=cfg) for car in cars]
+
+
+def choose_source_rounding(esp_logs, gyro_logs, esp_forms, gyro_forms, guard_forms, guard_sims) -> tuple:
+    """The fifty-seventh stage (docs/estimators.md): ``kinematic-pif`` as ``roadbank estimate`` runs it (designed for
+    each log, behind the online offset learner) with :data:`roadbank.vehicle.conditions.SOURCE_ROUNDING` False (A, as
+    shipped before) and True (B), on the KITTI training drives interpolated and rounded (:func:`rounded_logs`) with
+    their ESP channels alone (``esp_forms``) and with their roll rate (``gyro_forms``). Returns ``(chosen, {choice:
+    (raw RMS per ESP form, per gyro form) (deg)})``. The drives as recorded (``esp_logs``, ``gyro_logs``), the other
+    forms of ``guard_forms`` (lists of logs) and the simulated drives of ``guard_sims`` (lists of drive sets) must give
+    the same outputs under both: a ValueError where they do not."""
+    def build(choice):
+        at = _with_settings(source_rounding=choice)
+        return lambda s: with_online_offsets(at(s))
+
+    kept = [s for s, _, _ in esp_logs + gyro_logs + [f for form in guard_forms for f in form]]
+    kept += [d.signals for sets in guard_sims for drives in sets for d in drives]
+    for s in kept:
+        a, b = (build(c)(s).run(s).theta for c in (False, True))
+        if not np.array_equal(a, b, equal_nan=True):
+            raise ValueError("a log that is not rounded between its source's samples was read otherwise: the stage's "
+                             "guard fails")
+    errs = {c: (log_errors(build(c), esp_forms), log_errors(build(c), gyro_forms)) for c in (False, True)}
+    (a1, a2), (b1, b2) = errs[False], errs[True]
+    worse = int(np.sum(np.array(b1 + b2) > np.array(a1 + a2) + SOURCE_ROUNDING_WORSE_DEG))
+    ships = (np.median(b1) < np.median(a1) - SOURCE_ROUNDING_GAIN_DEG
+             and np.median(b2) <= np.median(a2) + SOURCE_ROUNDING_GAIN_DEG and worse <= SOURCE_ROUNDING_WORSE_LOGS)
     return bool(ships), errs
 
 
