@@ -272,3 +272,40 @@ def test_dead_steering_channel_is_refused_naming_the_channel(tmp_path):
 def _columns(path):
     s = load_log(path).signals
     return {"t": s.t, "vx": s.vx, "ay": s.ay, "r": s.r}
+
+
+def test_steering_gain_is_the_bicycle_models(tmp_path):
+    """On the bicycle model's steering angle ``delta = L r / vx + Kus ay`` (ay = vx r in steady turns) the gain
+    over the kinematic angle is ``1 + Kus vx^2 / L``: 1.333 for the test log (L 2.7 m, Kus 0.004, 15 m/s)."""
+    from roadbank.identification.identify import steering_gain       # new with the check
+
+    log = load_log(_turning_log(tmp_path / "log.csv"))
+    sig = log.signals
+    seg = segment(to_grid(sig.t, sig.vx, sig.ay, sig.r, sig.delta_f), IdentifySettings())
+    gain, secs = steering_gain(seg, IdentifySettings(), 2.7)
+    assert gain == pytest.approx(1.0 + 0.004 * 15.0 ** 2 / 2.7, rel=0.03) and secs > 20, (gain, secs)
+
+
+@pytest.mark.parametrize("role,unit,scale,needles", [
+    # an angle in rad declared as deg: 57 times too small (it gave Kus "not determined: needs more cornering",
+    # and a steering offset 57 times too small written to the file)
+    ("road_wheel_angle", "deg", 1.0, ["far too small", "rad declared as deg"]),
+    # a steering-wheel angle (ratio 16) mapped as the road-wheel angle: 16 times too large
+    ("road_wheel_angle", "rad", 16.0, ["far too large", "steering-wheel angle read as the road-wheel angle"]),
+])
+def test_steering_angle_of_the_wrong_size_is_refused_naming_the_channel(tmp_path, role, unit, scale, needles):
+    src = load_log(_turning_log(tmp_path / "src.csv")).signals
+    log = tmp_path / "log.csv"
+    write_table(log, {**_columns(tmp_path / "src.csv"), "steer": scale * src.delta_f}, {})
+    cmap = tmp_path / "map.toml"
+    cmap.write_text('[channels]\ntime = { column = "t", unit = "s" }\nspeed = { column = "vx", unit = "m/s" }\n'
+                    'lateral_acceleration = { column = "ay", unit = "m/s^2" }\n'
+                    'yaw_rate = { column = "r", unit = "rad/s" }\n'
+                    f'{role} = {{ column = "steer", unit = "{unit}" }}\n')
+    out = tmp_path / "car.toml"
+    res = _identify(log, "--channels", cmap, "-o", out)
+    assert res.exit_code == 1 and not out.exists(), res.output
+    assert "NOT USED" in res.output and "steering angle of the wrong size" in res.output, res.output
+    assert "delta_f" in res.output and "channel map" in res.output, res.output
+    assert all(n in res.output for n in needles), res.output
+    assert "REFUSED" not in res.output and "identified from" not in res.output  # nothing identified from it

@@ -35,6 +35,15 @@ MIN_USABLE_S = 20.0
 #: negative steering angle is a channel map's sign, not the car; the correct sign gives 0.9 .. 1
 STEERING_SIGN_CORR = -0.5
 
+#: the band (-) of a log's steering gain in its turns, the road-wheel angle per kinematic angle ``L r / vx``
+#: (:func:`steering_gain`): a road car's is ``1 + Kus vx^2 / L`` in its linear range, 1.2-2.1 on the simulated
+#: identification drives of the four shipped cars, a sports car and a loaded light truck (5.5 deg/g) at 12-31 m/s,
+#: and below 10 for 15 deg/g at 35 m/s; above 0.15 for an oversteering car short of its critical speed. An angle in
+#: rad declared as deg is 57 times too small (0.02-0.04 on those drives), a steering-wheel angle read as the
+#: road-wheel angle a steering ratio (12-20) too large: outside the band, each gave a Kus refused as "needs more
+#: cornering" (or absurd) and a steering offset in the wrong unit written to the file
+STEERING_GAIN_BAND = (0.15, 10.0)
+
 #: the channels the identification reads: Signals field -> how the messages name it
 CHANNEL_NAMES = {"vx": "speed (vx)", "ay": "lateral acceleration (ay)", "r": "yaw rate (r)",
                  "delta_f": "steering angle (delta_f)"}
@@ -69,6 +78,12 @@ def _usable_problem(seg, s: IdentifySettings, top_speed: float) -> str:
             f"of >= {s.min_run:g} s; {need}")
 
 
+def _straight_median(seg, name: str) -> float:
+    """Median of a :class:`~.segments.Piece` channel ``name`` over a log's straights (its unit; 0 without any)."""
+    x = np.concatenate([getattr(p, name)[p.straight] for p in seg.pieces]) if seg.pieces else np.zeros(0)
+    return float(np.median(x)) if len(x) else 0.0
+
+
 def steering_sign(seg, s: IdentifySettings) -> tuple[float, float]:
     """How a log's steering angle follows its yaw rate in the turns: ``(correlation, seconds)``.
 
@@ -77,11 +92,7 @@ def steering_sign(seg, s: IdentifySettings) -> tuple[float, float]:
     ``s.corner_ay``); ``seconds`` (s) of such samples. NaN when fewer than ``s.corner_min`` seconds turn;
     0 when the steering angle does not change over them (a dead channel).
     """
-    def straight_median(name: str) -> float:
-        x = np.concatenate([getattr(p, name)[p.straight] for p in seg.pieces]) if seg.pieces else np.zeros(0)
-        return float(np.median(x)) if len(x) else 0.0
-
-    d0, r0 = straight_median("delta"), straight_median("r")
+    d0, r0 = _straight_median(seg, "delta"), _straight_median(seg, "r")
     sdr = sdd = srr = 0.0
     n = 0
     for p in seg.pieces:
@@ -109,6 +120,48 @@ def _sign_problem(seg, s: IdentifySettings) -> str:
             f"{secs:.0f} s of turning (correlation {corr:.2f}): a left turn reads as a negative steering angle, "
             f"which no car does (the understeer gradient would come out absurd); flip the steering channel's sign "
             f"in the channel map (invert = true on road_wheel_angle or steering_wheel_angle, docs/io.md)")
+
+
+def steering_gain(seg, s: IdentifySettings, wheelbase: float) -> tuple[float, float]:
+    """How large a log's steering angle is against the kinematic angle in its turns: ``(gain, seconds)``.
+
+    The least-squares slope (-) of ``delta - delta0`` on ``L (r - r0) / vx`` (``L`` = ``wheelbase``, m; road-wheel
+    angle in rad, yaw rate in rad/s, speed in m/s), both about their median values on the straights (0 without
+    straights), over the turning samples of :func:`steering_sign`; ``seconds`` (s) of them. A road car's gain
+    is ``1 + Kus vx^2 / L`` (:data:`STEERING_GAIN_BAND`). NaN when fewer than ``s.corner_min`` seconds turn.
+    """
+    d0, r0 = _straight_median(seg, "delta"), _straight_median(seg, "r")
+    skk = sdk = 0.0
+    n = 0
+    for p in seg.pieces:
+        turn = p.regress & (np.abs(p.vx * (p.r_f - r0)) >= s.corner_ay)
+        kin = wheelbase * (p.r_f[turn] - r0) / p.vx[turn]
+        skk, sdk, n = skk + float(kin @ kin), sdk + float((p.delta[turn] - d0) @ kin), n + int(turn.sum())
+    secs = n / seg.fs
+    if secs < s.corner_min or skk <= 0:
+        return float("nan"), secs
+    return sdk / skk, secs
+
+
+def _gain_problem(seg, s: IdentifySettings, wheelbase: float, ratio: float) -> str:
+    """Why a log's steering angle is of the wrong size for the car's turns ("" if it is not, or cannot be told);
+    ``wheelbase`` (m) and the steering ``ratio`` (-) of the base vehicle."""
+    gain, secs = steering_gain(seg, s, wheelbase)
+    lo, hi = STEERING_GAIN_BAND
+    if not (gain < lo or gain > hi):
+        return ""
+    size = (f"over {secs:.0f} s of turning the steering angle (delta_f) is {gain:.3g} times the kinematic angle "
+            f"L r / vx (a road car's is 1 + Kus vx^2 / L, between {lo:g} and {hi:g})")
+    if gain <= 0:
+        cause = "it does not follow the turns: a channel that is not the steering angle"
+    elif gain < lo:
+        cause = ("far too small: a steering channel in rad declared as deg (a factor 57), or a steering ratio far "
+                 "too large")
+    else:
+        cause = (f"far too large: a steering channel in deg declared as rad (a factor 57), or a steering-wheel angle "
+                 f"read as the road-wheel angle (a factor of the steering ratio; the base vehicle's is {ratio:g})")
+    return (f"steering angle of the wrong size: {size}, {cause}; check the unit and the role (road_wheel_angle or "
+            f"steering_wheel_angle) of the channel map's steering column and the steering ratio (docs/io.md)")
 
 
 def _merge_refusal(straights: Quantity, regression: Quantity) -> Quantity:
@@ -170,7 +223,7 @@ def identify(logs, params: VehicleParams | None = None, settings: IdentifySettin
             continue
         vx = np.asarray(sig.vx, float)
         top = float(np.nanmax(vx)) if np.isfinite(vx).any() else float("nan")
-        problem = _usable_problem(seg, s, top) or _sign_problem(seg, s)
+        problem = _usable_problem(seg, s, top) or _sign_problem(seg, s) or _gain_problem(seg, s, p.L, p.steering_ratio)
         reports.append(LogReport(source, not problem, problem, dict(seg.seconds), seg.n_corners, seg.speed_range))
         if not problem:
             segs.append(seg)
