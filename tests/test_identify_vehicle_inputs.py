@@ -4,16 +4,22 @@ never a silent absurd value."""
 
 from __future__ import annotations
 
+import math
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from click.testing import CliRunner
 
 from roadbank.cli import main
 from roadbank.identification import IdentifySettings, identify
+from roadbank.identification.check import SimCase
 from roadbank.identification.prepare import to_grid
 from roadbank.identification.segments import segment
 from roadbank.io import load_log
 from roadbank.io.writers import write_table
+from roadbank.sim import PlantParams, run
+from roadbank.sim.drives import DriveSpec, mixed_drive
 from roadbank.vehicle import Vehicle, VehicleFileError, load_vehicle
 
 BASE = "[vehicle]\nm = 1687\nIz = 3000\nLf = 1.2\nLr = 1.5\nCf = 80000\nCr = 90000\n"
@@ -200,12 +206,19 @@ def _turning_log(path, seconds: float = 80.0, flip: bool = False, steering: bool
 
 
 def test_log_without_steering_says_the_steering_channel_is_missing(tmp_path):
+    """It gives the straights' offsets (the log has none: 0 within the uncertainty) and nothing that needs the
+    steering angle, each refusal saying so (it had been left out whole, the offsets with it)."""
     log = _turning_log(tmp_path / "nosteer.csv", steering=False)
     out = tmp_path / "car.toml"
     res = _identify(log, "-o", out)
-    assert res.exit_code == 1 and not out.exists(), res.output
-    assert "NOT USED" in res.output and "no steering channel" in res.output, res.output
-    assert "delta_f" in res.output and "too slow" not in res.output
+    assert res.exit_code == 1, res.output
+    assert "no steering channel" in res.output and "used for the yaw-rate and ay offsets only" in res.output
+    assert "delta_f" in res.output and "too slow" not in res.output and "NOT USED" not in res.output
+    assert res.output.count("REFUSED: no steering channel") == 4, res.output    # Cf, Cr, Kus, steering offset
+    ident = Vehicle.from_toml(out).identified
+    assert set(ident) == {"yaw_rate_offset", "ay_offset"}, ident
+    for q in ident.values():
+        assert abs(q["value"]) < 3 * q["std"], ident
 
 
 def test_short_log_says_how_long_it_is_and_how_long_it_must_be(tmp_path):
@@ -309,3 +322,30 @@ def test_steering_angle_of_the_wrong_size_is_refused_naming_the_channel(tmp_path
     assert "delta_f" in res.output and "channel map" in res.output, res.output
     assert all(n in res.output for n in needles), res.output
     assert "REFUSED" not in res.output and "identified from" not in res.output  # nothing identified from it
+
+
+def test_logs_without_steering_give_the_offsets_injected(tmp_path):
+    """Simulated mixed drives (2 % crown, told) whose yaw rate and ay carry known offsets: without a steering
+    channel the logs were left out whole and nothing was identified; they give both offsets within 3 sigma of the
+    injected ones, alone and beside a log with steering (whose stiffnesses are still identified)."""
+    crown = 0.02
+    paths = []
+    for seed in (1, 2):
+        case = SimCase(drive=DriveSpec(crown=crown), seed=seed)
+        sens = case.sensors.replace(yaw_rate=replace(case.sensors.yaw_rate, bias=case.r_bias),
+                                    ay=replace(case.sensors.ay, bias=case.ay_bias))
+        plant = PlantParams(vehicle=case.params, cornering_scale_front=case.scale_front,
+                            cornering_scale_rear=case.scale_rear)
+        sg = run(mixed_drive(case.seed, case.drive), plant=plant, sensors=sens, seed=seed).signals
+        cols = {"t": sg.t, "vx": sg.vx, "ay": sg.ay, "r": sg.r}
+        paths.append(tmp_path / f"drive{seed}.csv")
+        write_table(paths[-1], {**cols, "delta_f": sg.delta_f} if seed == 2 else cols, {})
+    truth = {"yaw_rate_offset": case.r_bias, "ay_offset": case.ay_bias}
+    for logs in ([paths[0]], paths):
+        out = tmp_path / f"car{len(logs)}.toml"
+        res = _identify(*logs, "--straight-bank", math.degrees(math.atan(crown)), "-o", out)
+        assert out.exists(), res.output
+        ident = Vehicle.from_toml(out).identified
+        for name, true in truth.items():
+            assert abs(ident[name]["value"] - true) < 3 * ident[name]["std"], (name, ident[name], true)
+        assert ("Kus" in ident) == (len(logs) == 2), ident

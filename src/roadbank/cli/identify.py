@@ -48,7 +48,7 @@ def format_result(result) -> list[str]:
             s = r.seconds
             lines.append(f"  log {r.source}: {s['usable']:.0f} s usable, {s['straight']:.0f} s straight, "
                          f"{r.n_corners} quasi-steady corners ({s['corners']:.0f} s), "
-                         f"{r.speed_range[0]:.1f}-{r.speed_range[1]:.1f} m/s")
+                         f"{r.speed_range[0]:.1f}-{r.speed_range[1]:.1f} m/s" + (f"; {r.problem}" if r.problem else ""))
         else:
             lines.append(f"  log {r.source}: NOT USED: {r.problem}")
     return lines
@@ -104,9 +104,10 @@ def identify(logs, vehicle, channels, fmt, output, straight_bank, ay_max, as_jso
     Each value comes with a standard uncertainty (block bootstrap). A quantity the
     logs do not excite (straight driving only, too slow, too few corners or yaw
     transients) is REFUSED with the reason, never guessed. A log that cannot be
-    read, has no usable driving (too short, too slow), lacks a channel (no steering
-    angle) or has its steering sign flipped is reported (NOT USED, with what is
-    missing) and the others are used. The file is
+    read, has no usable driving (too short, too slow), lacks the speed, ay or yaw
+    rate, or has a steering angle of the wrong sign or size is reported (NOT USED,
+    with what is missing) and the others are used; a log without a steering angle
+    gives the yaw-rate and ay offsets only (said on its line). The file is
     written when anything was identified; the exit code is 0 only when every
     quantity was identified from every log, else 1. Method: docs/identification.md.
     """

@@ -22,7 +22,7 @@ from .offsets import Offsets, straight_offsets
 from .prepare import to_grid
 from .results import IdentificationResult, LogReport, Quantity, refused
 from .roll import identify_roll_gain
-from .segments import segment
+from .segments import Segmented, segment
 from .settings import IdentifySettings
 from .stiffness import identify_stiffness
 
@@ -48,6 +48,9 @@ STEERING_GAIN_BAND = (0.15, 10.0)
 CHANNEL_NAMES = {"vx": "speed (vx)", "ay": "lateral acceleration (ay)", "r": "yaw rate (r)",
                  "delta_f": "steering angle (delta_f)"}
 
+#: how a log without a steering angle is named (it gives the straights' offsets only)
+NO_STEERING = "no steering channel"
+
 ORDER = ("Cf", "Cr", "Kus", "steering_offset", "yaw_rate_offset", "ay_offset", "roll_gain")
 
 
@@ -57,7 +60,7 @@ def _channel_problem(sig) -> str:
     if not missing:
         return ""
     if missing == ["delta_f"]:
-        return ("no steering channel: the steering angle (delta_f) holds no value; the understeer gradient, the "
+        return (f"{NO_STEERING}: the steering angle (delta_f) holds no value; the understeer gradient, the "
                 "stiffnesses and the steering offset need the road-wheel or steering-wheel angle (a channel map's "
                 "road_wheel_angle or steering_wheel_angle, docs/io.md)")
     return f"no {' and no '.join(CHANNEL_NAMES[m] for m in missing)}: every sample is missing"
@@ -179,6 +182,41 @@ def _samples_digest(sig) -> str:
     return h.hexdigest()
 
 
+def _examine(log, p: VehicleParams, s: IdentifySettings, seen: dict[str, Path]
+             ) -> tuple[LogReport, Segmented | None, bool]:
+    """What one log can give: ``(report, segmented log or None, has a steering angle)``.
+
+    A log without a steering angle (every sample NaN) whose driving is usable gives the straights' yaw-rate
+    and ay offsets (which need no steering) and nothing else: its report is used, with a problem saying so.
+    ``seen`` (digest of a log's samples -> its source) is updated; a copy of an earlier log is not used.
+    """
+    source = Path(getattr(log, "source", "") or "")
+    sig = log.signals
+    missing = _channel_problem(sig)
+    steering = not missing
+    if missing and not missing.startswith(NO_STEERING):
+        return LogReport(source, False, missing), None, steering
+    digest = _samples_digest(sig)
+    if digest in seen:      # a copy is no new evidence: counted twice it passes the corner minimum
+        return (LogReport(source, False, f"the same samples as {seen[digest]}: a copy adds no evidence"),
+                None, steering)
+    seen[digest] = source
+    delta = sig.delta_f if steering else np.zeros(len(sig.t))     # read by no quantity of such a log
+    try:
+        seg = segment(to_grid(sig.t, sig.vx, sig.ay, sig.r, delta, log.reference_roll), s)
+    except Exception as exc:  # one log that cannot be analysed never loses the others
+        return LogReport(source, False, f"cannot be analysed: {type(exc).__name__}: {exc}"), None, steering
+    vx = np.asarray(sig.vx, float)
+    top = float(np.nanmax(vx)) if np.isfinite(vx).any() else float("nan")
+    problem = _usable_problem(seg, s, top)
+    if not problem and steering:
+        problem = _sign_problem(seg, s) or _gain_problem(seg, s, p.L, p.steering_ratio)
+    if problem:
+        return LogReport(source, False, problem, dict(seg.seconds), seg.n_corners, seg.speed_range), None, steering
+    note = "" if steering else f"{missing}; used for the yaw-rate and ay offsets only (straight driving)"
+    return LogReport(source, True, note, dict(seg.seconds), seg.n_corners, seg.speed_range), seg, steering
+
+
 def identify(logs, params: VehicleParams | None = None, settings: IdentifySettings | None = None
              ) -> IdentificationResult:
     """Identify a car's parameters and sensor offsets from driving logs.
@@ -202,33 +240,18 @@ def identify(logs, params: VehicleParams | None = None, settings: IdentifySettin
     """
     p = params or VehicleParams()
     s = settings or IdentifySettings()
-    reports, segs = [], []
+    reports: list[LogReport] = []
+    segs: list[Segmented] = []
+    offset_segs: list[Segmented] = []
     seen: dict[str, Path] = {}        # digest of a log's samples -> the first log that had them
     for log in logs:
-        source = Path(getattr(log, "source", "") or "")
-        sig = log.signals
-        missing = _channel_problem(sig)
-        if missing:
-            reports.append(LogReport(source, False, missing))
-            continue
-        digest = _samples_digest(sig)
-        if digest in seen:      # a copy is no new evidence: counted twice it passes the corner minimum
-            reports.append(LogReport(source, False, f"the same samples as {seen[digest]}: a copy adds no evidence"))
-            continue
-        seen[digest] = source
-        try:
-            seg = segment(to_grid(sig.t, sig.vx, sig.ay, sig.r, sig.delta_f, log.reference_roll), s)
-        except Exception as exc:  # one log that cannot be analysed never loses the others
-            reports.append(LogReport(source, False, f"cannot be analysed: {type(exc).__name__}: {exc}"))
-            continue
-        vx = np.asarray(sig.vx, float)
-        top = float(np.nanmax(vx)) if np.isfinite(vx).any() else float("nan")
-        problem = _usable_problem(seg, s, top) or _sign_problem(seg, s) or _gain_problem(seg, s, p.L, p.steering_ratio)
-        reports.append(LogReport(source, not problem, problem, dict(seg.seconds), seg.n_corners, seg.speed_range))
-        if not problem:
-            segs.append(seg)
+        report, seg, steering = _examine(log, p, s, seen)
+        reports.append(report)
+        if seg is not None:
+            (segs if steering else offset_segs).append(seg)
     base_roll = steady_roll_gain(p)
-    per_log, q_r, q_a = straight_offsets(segs, s, p.g, base_roll)
+    per_log, q_r, q_a = straight_offsets(segs + offset_segs, s, p.g, base_roll)
+    per_log = per_log[:len(segs)]     # the logs without steering give the offsets, nothing the regression reads
     # below, a quantity that is ``ok`` has a float value and std
     pooled = Offsets(q_r.value, q_a.value) if q_r.ok and q_a.ok else Offsets(0.0, 0.0)  # type: ignore[arg-type]
     offs = [o if o is not None else pooled for o in per_log]
@@ -243,6 +266,10 @@ def identify(logs, params: VehicleParams | None = None, settings: IdentifySettin
     fit = identify_stiffness(segs, offs, p, roll_gain, s, offsets_std, roll_std)  # type: ignore[arg-type]
     if "yaw_rate_offset" in fit:  # no straights: the regression's estimate or both reasons
         fit["yaw_rate_offset"] = _merge_refusal(q_r, fit["yaw_rate_offset"])
+    if offset_segs and not segs:      # say what is missing, not that the offsets-only logs have no corners
+        why = (f"{NO_STEERING}: none of the logs used has a steering angle (delta_f) ({len(offset_segs)} without one "
+               f"gave the yaw-rate and ay offsets only)")
+        fit = {k: refused(k, q.unit, why) if not q.ok else q for k, q in fit.items()}
     quantities.update(fit)
     quantities = {k: quantities[k] for k in ORDER if k in quantities}
     out_p = p

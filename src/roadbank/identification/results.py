@@ -67,7 +67,8 @@ class LogReport:
     """What one log contributed.
 
     ``used`` is False when the log could not be read or has no usable driving;
-    ``problem`` then says why. ``seconds`` holds durations (s) of the kinds of
+    ``problem`` then says why (for a used log, what it could not give: a log without a
+    steering angle). ``seconds`` holds durations (s) of the kinds of
     driving found (``usable``, ``straight``, ``corners``) and ``n_corners``.
     """
 
@@ -110,5 +111,6 @@ class IdentificationResult:
 
     @property
     def complete(self) -> bool:
-        """True when every quantity was identified and every log was used."""
-        return not self.refusals() and all(r.used for r in self.logs)
+        """True when every quantity was identified and every log was used for all it could give (a log without
+        a steering angle gives the offsets only)."""
+        return not self.refusals() and all(r.used and not r.problem for r in self.logs)
