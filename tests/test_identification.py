@@ -21,7 +21,7 @@ from roadbank.identification.quantisation import mean_bias_bound
 from roadbank.sim.drives import DriveSpec
 from roadbank.io import Log
 from roadbank.io.writers import write_table
-from roadbank.sim import Driver, Scenario, SensorConfig, run, straight_road
+from roadbank.sim import Driver, PlantParams, Scenario, SensorConfig, run, straight_road
 from roadbank.vehicle import Vehicle, load_vehicle
 
 CROWN = 0.02  # 2 % cross slope on the straights
@@ -316,3 +316,22 @@ def test_a_noisy_yaw_rate_on_a_straight_makes_no_corner():
     res = run(Scenario("straight", straight_road(), Driver(speed=25.0, path=((0.0,), (0.0,))), 90.0),
               sensors=_yaw_noise(NOISY_GYRO), seed=4)
     assert _corners(Log(signals=res.signals, source=Path("straight"))) == 0
+
+
+@pytest.mark.parametrize("front_scale", [0.6, 1.0])
+def test_straight_steering_offset_covers_the_base_cars_understeer(front_scale):
+    """On crowned straights alone the steering offset is the mean angle less the base car's ``Kus g sin(bank)``:
+    a base car whose Kus is not the plant's (front tyres at 0.6 of the file's) moved it by 0.062 deg road wheel
+    with a stated sigma of 0.00005 (and by 0.0005 with the right car: 9 sigma); the term's size (0.072 deg) is now
+    in the uncertainty, so the injected offset (3 deg at the steering wheel) is within 3 sigma either way."""
+    crown = math.atan(0.02)
+    sens = SensorConfig()
+    sens = sens.replace(steering=dataclasses.replace(sens.steering, noise_std=math.radians(0.05),
+                                                     bias=math.radians(3.0)))
+    plant = PlantParams(vehicle=VehicleParams(), cornering_scale_front=front_scale)
+    res = run(Scenario("crowned", straight_road(bank=crown), Driver(speed=25.0, path=((0.0,), (0.0,))), 60.0),
+              plant=plant, sensors=sens, seed=4)
+    q = identify([Log(signals=res.signals, source=Path("crowned"))], VehicleParams(),
+                 IdentifySettings(straight_bank=crown)).quantities["steering_offset"]
+    true = math.radians(3.0) / VehicleParams().steering_ratio
+    assert q.ok and abs(q.value - true) < 3 * q.std, (math.degrees(q.value), math.degrees(q.std), math.degrees(true))
