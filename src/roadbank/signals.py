@@ -150,6 +150,23 @@ class Signals:
         return cls(t, vx, ay, r, road_wheel_angle(steering_wheel_angle, params))
 
 
+def stretch_index(t, t0: float, window_s: float) -> np.ndarray:
+    """The stretch of log time each stamp of ``t`` (s) falls in: ``floor((t - t0) / window_s)`` (``t0``, the log's first
+    stamp, s; ``window_s`` s), never decreasing (a stamp out of order or NaN belongs to the stretch before it; -1 before
+    the first finite one): the same stretches whatever chunks the log is read in."""
+    with np.errstate(invalid="ignore"):
+        w = np.floor((np.asarray(t, dtype=np.float64) - t0) / window_s)
+    return np.maximum.accumulate(np.where(np.isfinite(w), w, -1.0)).astype(np.int64)
+
+
+def driving_s(signals: "Signals", v_min: float = 5.0) -> float:
+    """How long (s) ``signals`` drive at ``vx >= v_min`` (m/s): the intervals after each such sample summed."""
+    with np.errstate(invalid="ignore"):
+        moving = np.asarray(signals.vx, dtype=np.float64) >= v_min
+    dt = np.diff(np.asarray(signals.t, dtype=np.float64))
+    return float(np.nansum(np.where(moving[1:], dt, 0.0)))
+
+
 def concat_signals(parts) -> "Signals":
     """The :class:`Signals` of consecutive pieces of one log, one after the other (every channel)."""
     parts = list(parts)

@@ -10,15 +10,16 @@ the sensors' weights, and how explicit options override them, is
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np
 
 from ..constants import MAX_GAP_S, G
 from ..models.attitude import euler_pitch_rate, kinematic_roll
 from ..params import VehicleParams
-from ..signals import (DYNAMICS_BAND_HZ, band_inner, band_windows, concat_signals, diff_noise_std, held_copies,
-                       integral_band_fit, is_held, noise_band_hz, road_noise_floor_std, road_noise_std,
-                       running_integral, sample_rate, source_step)
+from ..signals import (DYNAMICS_BAND_HZ, band_inner, band_windows, concat_signals, diff_noise_std, driving_s,
+                       held_copies, integral_band_fit, is_held, noise_band_hz, road_noise_floor_std, road_noise_std,
+                       running_integral, sample_rate, source_step, stretch_index)
 from ..io.errors import LogError
 from .sensors import SensorSpec
 
@@ -162,6 +163,11 @@ QUIET_READS_ROLL_RATE_CHOICES = (False, True)
 #: fifty-seventh stage of :mod:`roadbank.tuning.real` chooses it
 SOURCE_ROUNDING = True
 SOURCE_ROUNDING_CHOICES = (False, True)
+#: whether a log designed quiet is handed to the design of its first loud stretch when its roads turn loud
+#: (:func:`loud_stretch`, :class:`roadbank.estimators.HandOver`): the fifty-eighth stage of :mod:`roadbank.tuning.real`
+#: chooses it
+ROAD_CHANGE = True
+ROAD_CHANGE_CHOICES = (False, True)
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
 #: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it
 NOISE_OCTAVE_TOP = 1.5
@@ -484,9 +490,7 @@ class RoadCheck:
         t = np.asarray(signals.t, dtype=np.float64)
         if math.isnan(self._t0) and np.isfinite(t).any():
             self._t0 = float(t[np.isfinite(t)][0])
-        with np.errstate(invalid="ignore"):
-            w = np.floor((t - self._t0) / ROAD_CHECK_WINDOW_S)
-        w = np.maximum.accumulate(np.where(np.isfinite(w), w, -1.0)).astype(np.int64)   # a NaN stamp: its window
+        w = stretch_index(t, self._t0, ROAD_CHECK_WINDOW_S)
         for win in np.unique(w):
             if win != self._window:
                 self._close()
@@ -498,10 +502,7 @@ class RoadCheck:
             return
         part = concat_signals(self._parts)
         self._parts = []
-        with np.errstate(invalid="ignore"):
-            moving = np.asarray(part.vx, dtype=np.float64) >= self.v_min
-        dt = np.diff(np.asarray(part.t, dtype=np.float64))
-        driving = float(np.nansum(np.where(moving[1:], dt, 0.0)))
+        driving = driving_s(part, self.v_min)
         if driving < ROAD_CHECK_MIN_S:
             return
         self.driving_s += driving
@@ -512,6 +513,26 @@ class RoadCheck:
         """``(loud s, driving s)`` over the log (after its last chunk)."""
         self._close()
         return self.loud_s, self.driving_s
+
+
+def loud_stretch(stretch, *, design_floor: float, sensors: SensorSpec, ratio: float = QUIET_RATIO,
+                 v_min: float = 5.0) -> dict | None:
+    """The conditions (:func:`log_conditions`) of a stretch of a log designed quiet, where its roads have turned loud:
+    it drives :data:`ROAD_CHECK_MIN_S` or more at ``vx >= v_min`` (m/s), its ``ay`` floor as the design reads it
+    (``log_ay_floor``, m/s^2) is at least :data:`LOUDER_FACTOR` times ``design_floor`` (the design's, m/s^2), and its
+    own conditions would not keep the car's model (:func:`is_quiet` with ``sensors`` and ``ratio``,
+    :func:`keeps_cars_model`); else None (a stretch whose conditions cannot be read too)."""
+    if driving_s(stretch, v_min) < ROAD_CHECK_MIN_S:
+        return None
+    try:
+        cond = log_conditions(stretch, v_min)
+    except LogError:
+        return None
+    floor = cond["log_ay_floor"]
+    if not (floor is not None and floor >= LOUDER_FACTOR * design_floor):
+        return None
+    quiet = is_quiet(sensors, cond["log_rate"], cond["log_ay_noise"], ratio, floor)
+    return None if keeps_cars_model(quiet, cond["log_roll_rate"]) else cond
 
 
 def louder_warnings(path: str, names, roll_rate: float | None, loud_s: float, driving_s: float) -> list[str]:
@@ -696,6 +717,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
 
     sensors = sensors if sensors is not None else SensorSpec()
     label = name
+    given = dict(options)                   # what a design for another stretch of the log is built with
+    handover = None
     if name in QUIET_MODELS:
         ratio = float(options.pop("quiet_ratio", QUIET_RATIO))
         quiet_filter = options.pop("quiet_filter", QUIET_MODELS[name])
@@ -705,6 +728,9 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         if not own_gate and keeps_cars_model(is_quiet(sensors, log_rate, log_ay_noise, ratio, log_ay_floor),
                                              log_roll_rate):
             name, options = quiet_filter, {k: v for k, v in options.items() if k not in _BLEND_OPTIONS}
+            if _road_change() and label not in estimators.OFFLINE and log_ay_floor is not None:
+                handover = (partial(loud_stretch, design_floor=log_ay_floor, sensors=sensors, ratio=ratio),
+                            partial(make_estimator, label, params, sensors=sensors, **given))
         elif not own_gate and roll_rate_usable(log_roll_rate):
             # the default's roll separation (its PIF's tuning chose the roll model) unless the options name one
             roll = estimators.pif.DEFAULT_TUNING["roll"]
@@ -729,4 +755,12 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
             options = {"Q_ay": Q_ay, "R": R, **options}
     est = estimators.make(name, params, **options)
     est.name = label
-    return estimators.AtSource(est) if log_held else est
+    out = est if handover is None else estimators.HandOver(est, *handover)
+    return estimators.AtSource(out) if log_held else out
+
+
+def _road_change() -> bool:
+    """:data:`ROAD_CHANGE`, checked."""
+    if ROAD_CHANGE not in ROAD_CHANGE_CHOICES:
+        raise ValueError(f"ROAD_CHANGE must be one of {ROAD_CHANGE_CHOICES}, got {ROAD_CHANGE!r}")
+    return bool(ROAD_CHANGE)

@@ -25,6 +25,7 @@ The stages, one module per topic, each module's docstring holding its stages' ru
 * :mod:`.gyro` — the roll-rate filter ``kinematic-gyro``;
 * :mod:`.grade` — the grade and the pitch that correct the roll rate;
 * :mod:`.checks` — the check that a log's roll rate is one;
+* :mod:`.roads` — the fifty-eighth stage: a design decided again as a log's roads change;
 * :mod:`.common` — what every stage shares: the training drives, the simulated sets, the objective, ties, pieces.
 
 Every name of the stages is importable from here.
@@ -67,8 +68,12 @@ from .grade import (ANCHORED_BANDWIDTHS, GRADE_FIRST_SPANS_S, GRADE_START_WINDOW
 from .checks import (CHECK_MAX_CORR, CHECK_PIECES_S, CHECK_RANGES, CHECK_WINDOWS_S, FIXED_CHANNEL_RULES,
                      SHORT_CHECK_WINDOWS_S, choose_fixed_channels, choose_roll_check, choose_roll_check_again,
                      choose_short_check, short_rows)
+from .roads import (ROAD_CHANGE_GAIN_DEG, ROAD_CHANGE_LOSS_DEG, choose_road_change, long_quiet_sets,
+                    long_sim_errors, road_change_build, smooth_start_logs)
 
-__all__ = ["ANCHORED_BANDWIDTHS", "ANCHORED_BIAS_TAUS_S", "ANCHORED_CUTOFFS_HZ", "BANDWIDTH_39", "BANK_RATES_DEG",
+__all__ = ["ROAD_CHANGE_GAIN_DEG", "ROAD_CHANGE_LOSS_DEG", "choose_road_change", "long_quiet_sets",
+           "long_sim_errors", "road_change_build", "smooth_start_logs",
+           "ANCHORED_BANDWIDTHS", "ANCHORED_BIAS_TAUS_S", "ANCHORED_CUTOFFS_HZ", "BANDWIDTH_39", "BANK_RATES_DEG",
            "BANK_SPEED_EXPS", "BEFORE_38", "CAR_MARGINS", "CHECK_MAX_CORR", "CHECK_PIECES_S", "CHECK_RANGES",
            "CHECK_WINDOWS_S", "CLIPS", "CUTOFFS_HZ", "DESCRIBED_FILTERS", "EQUAL_DEG", "FIXED_CHANNEL_RULES",
            "GAP_LENGTHS_S", "GAP_PLACES",

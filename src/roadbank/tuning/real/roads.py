@@ -1,0 +1,146 @@
+"""The fifty-eighth stage: a design decided again as a log's roads change (docs/estimators.md).
+
+A log's design is read on its first minute of driving; a smooth first minute holds a long drive to the car's model
+over rough roads. Candidates (:data:`roadbank.vehicle.conditions.ROAD_CHANGE`): A, decided once; B, a log designed
+quiet handed to the design of its first loud stretch (:class:`roadbank.estimators.HandOver`). Sets: long logs of the
+KITTI training drives after a smooth start (:func:`smooth_start_logs`), with the ESP channels and with the roll rate,
+and long quiet simulated logs of each shipped car (:func:`long_quiet_sets`); the rule in :func:`choose_road_change`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...estimators.offsets import with_online_offsets
+from ...evaluation.compare import usable_samples
+from ...evaluation.metrics import error_metrics
+from ...signals import Signals, concat_signals
+from ..objective import FAILED_DEG, SETTLE
+from .common import log_errors
+from .esp import _with_settings
+
+#: the rule: B ships if its median over the ESP long logs is below A's by more than this (deg) ...
+ROAD_CHANGE_GAIN_DEG = 0.05
+#: ... and its median over the long logs with the roll rate, and its median over the cars on the long simulated logs,
+#: are not above A's by more than this (deg)
+ROAD_CHANGE_LOSS_DEG = 0.005
+#: the smooth start: how many drives, the centred moving mean (samples at KITTI's 10 Hz) and the white noise added to
+#: ``ay`` (m/s^2) and to the yaw and roll rates (rad/s): a smooth road on a data sheet's sensors
+SMOOTH_DRIVES = 2
+SMOOTH_SAMPLES = 20
+SMOOTH_AY_NOISE = 0.02
+SMOOTH_RATE_NOISE = 0.002
+#: the time (s) between drives stitched on one clock: KITTI drives (one road after another), simulated drives (the
+#: filter starts again after each, as after a gap)
+KITTI_GAP_S = 0.1
+SIM_GAP_S = 2.0
+
+
+def _smooth(s: Signals, seed: int) -> Signals:
+    """``s`` as a smooth road on a data sheet's sensors: ``ay``, ``r`` and ``p`` (where it has one) through a centred
+    moving mean of :data:`SMOOTH_SAMPLES` samples plus white noise (:data:`SMOOTH_AY_NOISE` m/s^2,
+    :data:`SMOOTH_RATE_NOISE` rad/s)."""
+    rng = np.random.default_rng(seed)
+    k = np.ones(SMOOTH_SAMPLES) / SMOOTH_SAMPLES
+
+    def mean(x, noise):
+        return np.convolve(np.asarray(x, dtype=np.float64), k, mode="same") + noise * rng.standard_normal(len(x))
+    out = {"ay": mean(s.ay, SMOOTH_AY_NOISE), "r": mean(s.r, SMOOTH_RATE_NOISE)}
+    if s.p is not None:
+        out["p"] = mean(s.p, SMOOTH_RATE_NOISE)
+    return Signals(**{c: out.get(c, getattr(s, c)) for c in s.channels}, fixed=s.fixed, unbiased=s.unbiased)
+
+
+def _on_one_clock(parts: list[Signals], gap: float) -> tuple[Signals, list[int]]:
+    """``parts`` one after another on one clock, ``gap`` (s) between the last stamp of one and the first of the next;
+    and the first row of each."""
+    out, starts, t0, row = [], [], 0.0, 0
+    for s in parts:
+        t = np.asarray(s.t, dtype=np.float64)
+        out.append(Signals(**{c: t - t[0] + t0 if c == "t" else getattr(s, c) for c in s.channels},
+                           fixed=s.fixed, unbiased=s.unbiased))
+        starts.append(row)
+        row += len(s)
+        t0 += float(t[-1] - t[0]) + gap
+    return concat_signals(out), starts
+
+
+def smooth_start_logs(logs) -> list:
+    """Long logs of ``logs`` (``(signals, reference roll rad, scored mask)`` of each KITTI drive, in order:
+    :func:`~roadbank.tuning.real.training_logs`): log ``k`` is drives ``k`` to ``k + SMOOTH_DRIVES - 1`` (mod their
+    number) smoothed (:func:`_smooth`), then every drive as recorded from drive ``k`` on, :data:`KITTI_GAP_S` apart;
+    as ``(signals, reference roll, mask)``, the mask that of the drives as recorded (the smooth start unscored)."""
+    n = len(logs)
+    out = []
+    for k in range(n):
+        order = [logs[(k + i) % n] for i in range(n)]
+        smooth = [(_smooth(logs[(k + i) % n][0], seed=i), logs[(k + i) % n][1], False)
+                  for i in range(SMOOTH_DRIVES)]
+        parts = smooth + [(s, ref, m) for s, ref, m in order]
+        signals, _ = _on_one_clock([p[0] for p in parts], KITTI_GAP_S)
+        ref = np.concatenate([p[1] for p in parts])
+        mask = np.concatenate([np.zeros(len(p[0]), bool) if p[2] is False else p[2] for p in parts])
+        out.append((signals, ref, mask))
+    return out
+
+
+def long_quiet_sets(sim_sets) -> list:
+    """Each set of ``sim_sets`` (lists of simulated drives, :func:`~roadbank.tuning.real.simulated_sets`) on one clock,
+    :data:`SIM_GAP_S` apart: ``(signals, drives, first row of each)`` per set."""
+    out = []
+    for drives in sim_sets:
+        signals, starts = _on_one_clock([d.signals for d in drives], SIM_GAP_S)
+        out.append((signals, drives, starts))
+    return out
+
+
+def long_sim_errors(build, long_sets) -> list[list[float]]:
+    """The bank RMS error (deg) of each simulated drive in the long logs ``long_sets`` (:func:`long_quiet_sets`), as
+    ``roadbank tune`` scores it (after :data:`~roadbank.tuning.objective.SETTLE` s of each drive, on its usable
+    samples), of one run of ``build(signals)`` over the long log."""
+    out = []
+    for signals, drives, starts in long_sets:
+        est = build(signals)
+        e = est.run(signals)
+        errs = []
+        for d, a in zip(drives, starts):
+            b = a + len(d.signals)
+            m = error_metrics(d.signals.t, e.phi_b[a:b], d.phi_b, usable_samples(d.signals, est.v_min), settle=SETTLE)
+            errs.append(float(m.rms_deg) if np.isfinite(m.rms_deg) else FAILED_DEG)
+        out.append(errs)
+    return out
+
+
+def road_change_build(choice: bool):
+    """``build``: ``kinematic-pif`` as ``roadbank estimate`` runs it (designed for the log, behind the online offset
+    learner) with :data:`roadbank.vehicle.conditions.ROAD_CHANGE` ``choice``."""
+    at = _with_settings(road_change=choice)
+    return lambda s: with_online_offsets(at(s))
+
+
+def choose_road_change(esp_logs, gyro_logs, esp_long, gyro_long, sim_sets, long_sets) -> tuple:
+    """The fifty-eighth stage (docs/estimators.md) with :data:`roadbank.vehicle.conditions.ROAD_CHANGE` False (A) and
+    True (B), on the long logs ``esp_long`` and ``gyro_long`` (:func:`smooth_start_logs` of the KITTI training drives
+    with the ESP channels and with the roll rate) and ``long_sets`` (:func:`long_quiet_sets`). Returns ``(chosen,
+    {choice: (raw RMS per ESP long log, per gyro long log (deg), per car: bank RMS per drive (deg))})``. The drives as
+    recorded (``esp_logs``, ``gyro_logs``) and the simulated drives of ``sim_sets`` one by one must give the same
+    outputs under both: a ValueError where they do not."""
+    kept = [s for s, _, _ in esp_logs + gyro_logs] + [d.signals for drives in sim_sets for d in drives]
+    for s in kept:
+        a, b = (road_change_build(c)(s).run(s).theta for c in (False, True))
+        if not np.array_equal(a, b, equal_nan=True):
+            raise ValueError("a log whose roads do not change was read otherwise: the stage's guard fails")
+    errs = {c: (log_errors(road_change_build(c), esp_long), log_errors(road_change_build(c), gyro_long),
+                long_sim_errors(road_change_build(c), long_sets)) for c in (False, True)}
+    (a1, a2, a3), (b1, b2, b3) = errs[False], errs[True]
+
+    def cars(e):
+        return float(np.median([np.median(x) for x in e]))
+    ships = (np.median(b1) < np.median(a1) - ROAD_CHANGE_GAIN_DEG
+             and np.median(b2) <= np.median(a2) + ROAD_CHANGE_LOSS_DEG
+             and cars(b3) <= cars(a3) + ROAD_CHANGE_LOSS_DEG)
+    return bool(ships), errs
+
+
+__all__ = ["choose_road_change", "smooth_start_logs", "long_quiet_sets", "long_sim_errors", "road_change_build",
+           "ROAD_CHANGE_GAIN_DEG", "ROAD_CHANGE_LOSS_DEG"]
