@@ -165,9 +165,9 @@ SOURCE_ROUNDING = True
 SOURCE_ROUNDING_CHOICES = (False, True)
 #: whether a log designed quiet is handed to the design of its first loud stretch when its roads turn loud
 #: (:func:`loud_stretch`, :class:`roadbank.estimators.HandOver`): the fifty-eighth stage of :mod:`roadbank.tuning.real`
-#: chooses it
-ROAD_CHANGE = True
-ROAD_CHANGE_CHOICES = (False, True)
+#: chooses it; ``"esp"``, only a log without a usable roll rate (the fifty-ninth stage's candidate)
+ROAD_CHANGE: bool | str = True
+ROAD_CHANGE_CHOICES = (False, True, "esp")
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
 #: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it
 NOISE_OCTAVE_TOP = 1.5
@@ -728,7 +728,7 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         if not own_gate and keeps_cars_model(is_quiet(sensors, log_rate, log_ay_noise, ratio, log_ay_floor),
                                              log_roll_rate):
             name, options = quiet_filter, {k: v for k, v in options.items() if k not in _BLEND_OPTIONS}
-            if _road_change() and label not in estimators.OFFLINE and log_ay_floor is not None:
+            if hands_over(log_roll_rate) and label not in estimators.OFFLINE and log_ay_floor is not None:
                 handover = (partial(loud_stretch, design_floor=log_ay_floor, sensors=sensors, ratio=ratio),
                             partial(make_estimator, label, params, sensors=sensors, **given))
         elif not own_gate and roll_rate_usable(log_roll_rate):
@@ -759,8 +759,9 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     return estimators.AtSource(out) if log_held else out
 
 
-def _road_change() -> bool:
-    """:data:`ROAD_CHANGE`, checked."""
+def hands_over(roll_rate: float | None) -> bool:
+    """Whether a log designed quiet whose check slope of the roll rate is ``roll_rate`` (-, None: it has none) is handed
+    over when its roads turn loud (:data:`ROAD_CHANGE`)."""
     if ROAD_CHANGE not in ROAD_CHANGE_CHOICES:
         raise ValueError(f"ROAD_CHANGE must be one of {ROAD_CHANGE_CHOICES}, got {ROAD_CHANGE!r}")
-    return bool(ROAD_CHANGE)
+    return ROAD_CHANGE is True or (ROAD_CHANGE == "esp" and not roll_rate_usable(roll_rate))

@@ -65,10 +65,10 @@ def _on_one_clock(parts: list[Signals], gap: float) -> tuple[Signals, list[int]]
     return concat_signals(out), starts
 
 
-def smooth_start_logs(logs) -> list:
+def smooth_start_logs(logs, gap: float = KITTI_GAP_S) -> list:
     """Long logs of ``logs`` (``(signals, reference roll rad, scored mask)`` of each KITTI drive, in order:
     :func:`~roadbank.tuning.real.training_logs`): log ``k`` is drives ``k`` to ``k + SMOOTH_DRIVES - 1`` (mod their
-    number) smoothed (:func:`_smooth`), then every drive as recorded from drive ``k`` on, :data:`KITTI_GAP_S` apart;
+    number) smoothed (:func:`_smooth`), then every drive as recorded from drive ``k`` on, ``gap`` (s) apart;
     as ``(signals, reference roll, mask)``, the mask that of the drives as recorded (the smooth start unscored)."""
     n = len(logs)
     out = []
@@ -77,7 +77,7 @@ def smooth_start_logs(logs) -> list:
         smooth = [(_smooth(logs[(k + i) % n][0], seed=i), logs[(k + i) % n][1], False)
                   for i in range(SMOOTH_DRIVES)]
         parts = smooth + [(s, ref, m) for s, ref, m in order]
-        signals, _ = _on_one_clock([p[0] for p in parts], KITTI_GAP_S)
+        signals, _ = _on_one_clock([p[0] for p in parts], gap)
         ref = np.concatenate([p[1] for p in parts])
         mask = np.concatenate([np.zeros(len(p[0]), bool) if p[2] is False else p[2] for p in parts])
         out.append((signals, ref, mask))
@@ -111,7 +111,7 @@ def long_sim_errors(build, long_sets) -> list[list[float]]:
     return out
 
 
-def road_change_build(choice: bool):
+def road_change_build(choice: bool | str):
     """``build``: ``kinematic-pif`` as ``roadbank estimate`` runs it (designed for the log, behind the online offset
     learner) with :data:`roadbank.vehicle.conditions.ROAD_CHANGE` ``choice``."""
     at = _with_settings(road_change=choice)
@@ -142,5 +142,27 @@ def choose_road_change(esp_logs, gyro_logs, esp_long, gyro_long, sim_sets, long_
     return bool(ships), errs
 
 
-__all__ = ["choose_road_change", "smooth_start_logs", "long_quiet_sets", "long_sim_errors", "road_change_build",
+#: the fifty-ninth stage: B ships if its median is below A's by more than this (deg)
+ROAD_CHANGE_GYRO_GAIN_DEG = 0.005
+#: ... on long logs whose drives are this far apart (s): longer than the filters' ``max_gap``, so each starts again
+RESTART_GAP_S = 2.0
+
+
+def choose_road_change_gyro(esp_long, gyro_long) -> tuple:
+    """The fifty-ninth stage (docs/estimators.md): :data:`roadbank.vehicle.conditions.ROAD_CHANGE` ``True`` (A, a
+    hand-over to the gyro-aided filter where the log has a usable roll rate) and ``"esp"`` (B, none there), on the long
+    logs ``gyro_long`` (:func:`smooth_start_logs` of the KITTI training drives with their roll rate,
+    :data:`RESTART_GAP_S` apart). Returns ``(chosen setting, {setting: raw RMS per long log (deg)})``. The same logs
+    with the ESP channels alone (``esp_long``) must give the same outputs under both: a ValueError where not."""
+    for s, _, _ in esp_long:
+        a, b = (road_change_build(c)(s).run(s).theta for c in (True, "esp"))
+        if not np.array_equal(a, b, equal_nan=True):
+            raise ValueError("a log without a roll rate was handed over otherwise: the stage's guard fails")
+    errs = {c: log_errors(road_change_build(c), gyro_long) for c in (True, "esp")}
+    ships = np.median(errs["esp"]) < np.median(errs[True]) - ROAD_CHANGE_GYRO_GAIN_DEG
+    return ("esp" if ships else True), errs
+
+
+__all__ = ["choose_road_change_gyro", "ROAD_CHANGE_GYRO_GAIN_DEG", "RESTART_GAP_S", "choose_road_change",
+           "smooth_start_logs", "long_quiet_sets", "long_sim_errors", "road_change_build",
            "ROAD_CHANGE_GAIN_DEG", "ROAD_CHANGE_LOSS_DEG"]
