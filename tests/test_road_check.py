@@ -15,7 +15,9 @@ from roadbank.fleet.process import estimate_log
 from roadbank.io import load_log
 from roadbank.mapping.build import MapSettings, map_one_log
 from roadbank.signals import concat_signals
-from roadbank.vehicle.conditions import RoadCheck, design_ay_floor
+from roadbank.fleet.process import design_words
+from roadbank.tuning.real import design_settings
+from roadbank.vehicle.conditions import ROAD_CHECK_WINDOW_S, RoadCheck, design_ay_floor
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 DRIVES = ("2011_09_26_drive_0036", "2011_09_26_drive_0022", "2011_09_26_drive_0064", "2011_09_30_drive_0034")
@@ -59,12 +61,22 @@ def _write(s: Signals, path: Path) -> Path:
 
 
 def test_a_smooth_first_minute_then_rough_roads_is_said(tmp_path):
+    """estimate hands kinematic-pif over to the design of the first loud minute (the fifty-eighth stage) and says when;
+    with the hand-over switched off (as before that stage), it warns: split the log."""
     d = _drives()
     log = _stitched([(d[0], True), (d[1], True)] + [(x, False) for x in d])
-    summary = estimate_log(_write(log, tmp_path / "smooth_then_rough.parquet"), tmp_path / "out.csv")
+    path = _write(log, tmp_path / "smooth_then_rough.parquet")
+    summary = estimate_log(path, tmp_path / "out.csv")
     assert summary.status == "ok" and summary.design["quiet"]
     assert "designed on its first minute of driving, which reads quiet" in summary.warnings
-    assert "split the log where the road changes" in summary.warnings
+    assert "but its roads turned loud: from" in summary.warnings
+    assert "split the log where the road changes" not in summary.warnings
+    smooth_s = float(_esp(d[0], 0.0).t[-1] + 0.1 + _esp(d[1], 0.0).t[-1])       # where the rough roads begin
+    assert smooth_s < summary.design["handed_over_s"] <= smooth_s + 2 * ROAD_CHECK_WINDOW_S
+    assert "until its roads turn loud" in design_words(summary.design, "kinematic-pif")
+    with design_settings(road_change=False):
+        before = estimate_log(path, tmp_path / "out_before.csv")
+    assert "split the log where the road changes" in before.warnings and "handed_over_s" not in before.design
     # read in chunks of any size, the check reads the same stretches
     whole = RoadCheck(design_ay_floor(log))
     whole.add(log)

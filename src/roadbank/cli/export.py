@@ -131,6 +131,8 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
                              vehicle=vehicle, **overrides)
     except (ValueError, TypeError, NoStabilisingSolution) as exc:
         raise click.ClickException(f"{name}: cannot design for vehicle {car_name!r}: {exc}") from None
+    if isinstance(est, estimators.HandOver):        # an ECU runs one design: a hand-over is the log tool's
+        est = est.inner
     if online_offsets:
         est = estimators.with_online_offsets(est)
     try:

@@ -43,8 +43,9 @@ class HandOver(Wrapper):
 
     ``run`` and ``step`` agree, and a log read in chunks (``run(reset=False)``) gives what one run gives. After the
     hand-over :attr:`handed_at` is the log time (s) of the first sample of the new estimator's outputs and
-    :attr:`handed_to` that estimator; the states of the inner estimator are NaN from there on (each chunk keeps them
-    as columns). Every other attribute is the inner estimator's.
+    :attr:`handed_to` that estimator; the states keep the inner estimator's names (each chunk the same columns), each
+    the new estimator's state of that name from there on, NaN where it has none. Every other attribute is the inner
+    estimator's.
     """
 
     def __init__(self, inner, read, redesign, stretch_s: float = STRETCH_S):
@@ -110,10 +111,10 @@ class HandOver(Wrapper):
         return est
 
     def _padded(self, est: Estimate) -> Estimate:
-        """``est`` with the inner estimator's state names too (NaN where the handed-over estimator has none)."""
-        for k in self._names or ():
-            if k not in est.states:
-                est.states[k] = np.full(len(est.t), math.nan)
+        """``est`` under the inner estimator's state names (NaN where the handed-over estimator has none; its others
+        left out): every chunk of a log has the same columns."""
+        names = self._names if self._names is not None else tuple(est.states)
+        est.states = {k: est.states[k] if k in est.states else np.full(len(est.t), math.nan) for k in names}
         return est
 
     @staticmethod

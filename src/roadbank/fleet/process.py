@@ -19,7 +19,7 @@ from ..signals import Estimate
 from ..vehicle import (DESIGN_MAX_S, car_for_log, for_conditions, has_design_span, load_vehicle, log_conditions,
                        undescribed_params)
 from ..vehicle.conditions import (GYRO_MODELS, QUIET_MODELS, ROLL_SLOPE_RANGE, RoadCheck, design_ay_floor,
-                                  keeps_cars_model, louder_warnings, roll_rate_usable)
+                                  hands_over, keeps_cars_model, louder_warnings, roll_rate_usable)
 
 #: columns of the summary table, in order (see LogSummary)
 SUMMARY_COLUMNS = ("log", "status", "error", "output", "estimator", "samples", "duration_s", "valid_share",
@@ -144,7 +144,9 @@ def design_words(design: dict, estimator: str) -> str:
         loud = f"{GYRO_MODELS[estimator]} (the log has a roll rate{free}{grade})" if gyro else "the low-pass blend"
         model = keeps_cars_model(design["quiet"], slope)
         unread = " (its roll rate not read: a quiet log keeps the car's model)" if model and gyro else ""
-        words += f", so {estimator} is {QUIET_MODELS[estimator] + unread if model else loud}"
+        until = (" until its roads turn loud (then the design of its first loud minute)"
+                 if model and hands_over(slope) and estimator not in OFFLINE else "")
+        words += f", so {estimator} is {QUIET_MODELS[estimator] + unread + until if model else loud}"
     if slope is not None and not gyro:
         off = _off(slope, ROLL_RATE_MISTAKES, ROLL_SUSPECTS)
         words += f"; its roll rate does not follow the roll in its ay ({off}), so it is not used"
@@ -239,6 +241,16 @@ def unsettled_warnings(source: str, name: str, stats: _BankStats, settle_s: floa
         return [f"{source}: {name} never settled: no stretch of valid samples lasts its settling time "
                 f"({settle_s:.1f} s), so its bank is the filter's start, not an estimate"]
     return []
+
+
+def handed_over_warnings(source: str, handed: dict, t0: float) -> list[str]:
+    """What ``roadbank estimate`` says of the estimators of ``handed`` (name -> the log time, s, of the first sample
+    of the handed-over design's outputs; ``t0``: the log's first stamp, s) that a log designed quiet handed to the
+    design of its first loud stretch (:class:`roadbank.estimators.HandOver`)."""
+    return [f"{source}: designed on its first minute of driving, which reads quiet ({n} is "
+            f"{QUIET_MODELS.get(n, n)}: the car's model), but its roads turned loud: from {at - t0:.1f} s on {n} is "
+            "the design for the first loud minute (the low-pass blend, or the gyro-aided filter with a roll rate)"
+            for n, at in handed.items()]
 
 
 def concat_estimates(parts: list):
@@ -376,8 +388,13 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
         summary.estimators = {n: st.stats() for n, st in zip(names, stats)}
         if stats:
             warns += unsettled_warnings(str(path), names[0], stats[0], ests[0].settle_time)
+        handed = {n: e.handed_at for n, e in zip(names, ests) if math.isfinite(getattr(e, "handed_at", math.nan))}
+        if handed:
+            warns += handed_over_warnings(str(path), handed, float(stats[0].t0))
+            summary.design["handed_over_s"] = float(f"{min(handed.values()) - stats[0].t0:.4g}")
         if road is not None:
-            warns += louder_warnings(str(path), names, summary.design.get("roll_rate"), *road.finish())
+            warns += louder_warnings(str(path), [n for n in names if n not in handed], summary.design.get("roll_rate"),
+                                     *road.finish())
         summary.warnings = "; ".join(warns)
         if keep:
             whole = (np.concatenate(kept_t), [concat_estimates(x) for x in kept_est],

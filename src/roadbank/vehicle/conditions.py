@@ -539,10 +539,11 @@ def louder_warnings(path: str, names, roll_rate: float | None, loud_s: float, dr
     """A warning (a list of at most one) where a log designed quiet reads loud on at least half of its driving
     (``loud_s`` of ``driving_s`` s, :class:`RoadCheck`): the estimators of ``names`` that keep the car's model there
     hold it over roads where the low-pass blend does better (``roll_rate``: the log's roll-rate check slope,
-    ``log_roll_rate``, -; a usable one is said not read)."""
-    if not (driving_s > 0 and loud_s >= 0.5 * driving_s):
-        return []
+    ``log_roll_rate``, -; a usable one is said not read). None of them among ``names`` (those handed over to another
+    design, :class:`roadbank.estimators.HandOver`, are left out by the caller): no warning."""
     which = ", ".join(f"{n} is {QUIET_MODELS[n]}" for n in names if n in QUIET_MODELS)
+    if not (which and driving_s > 0 and loud_s >= 0.5 * driving_s):
+        return []
     unread = ", its roll rate not read" if roll_rate_usable(roll_rate) else ""
     return [f"{path}: designed on its first minute of driving, which reads quiet (so {which}: the car's model"
             f"{unread}), but {loud_s / 60:.1f} of its {driving_s / 60:.1f} minutes of driving read at least "

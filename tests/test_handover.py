@@ -1,0 +1,115 @@
+"""A log designed quiet whose roads turn loud is handed to the design of its first loud minute (estimators.HandOver,
+vehicle.conditions.ROAD_CHANGE: the fifty-eighth stage).
+
+Truth: simulated drives (the true bank known) on one clock, six on a data sheet's sensors (quiet) and then six with
+0.5 m/s^2 of white noise added to ay (a shaking accelerometer: loud); the same log without the loud part; and the
+estimators' own contracts (a run in chunks and sample by sample give the whole run's outputs)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from roadbank import estimators
+from roadbank.estimators import HandOver
+from roadbank.signals import Signals
+from roadbank.tuning.real import design_settings, simulated_sets
+from roadbank.tuning.real.roads import _on_one_clock
+from roadbank.vehicle import for_log
+from roadbank.vehicle.conditions import ROAD_CHANGE, ROAD_CHECK_WINDOW_S
+
+LOUD_AY = 0.5       # m/s^2, white
+
+
+@pytest.fixture(scope="module")
+def quiet_then_loud():
+    """``(log, true bank rad, first row of the loud part)``."""
+    drives = simulated_sets(cars=("sedan",), n=12)[0]
+    rng = np.random.default_rng(1)
+    loud = [Signals(d.signals.t, d.signals.vx, d.signals.ay + LOUD_AY * rng.standard_normal(len(d.signals)),
+                    d.signals.r, d.signals.delta_f) for d in drives[6:]]
+    log, starts = _on_one_clock([d.signals for d in drives[:6]] + loud, 0.1)
+    return log, np.concatenate([d.phi_b for d in drives]), starts[6]
+
+
+def _bank_rms_deg(est, bank, rows):
+    return float(np.degrees(np.sqrt(np.mean((est.phi_b[rows] - bank[rows]) ** 2))))
+
+
+def test_the_shipped_setting_hands_over():
+    assert ROAD_CHANGE is True
+
+
+def test_a_log_whose_roads_turn_loud_is_handed_over_when_the_first_loud_stretch_closes(quiet_then_loud):
+    log, bank, loud_row = quiet_then_loud
+    est = for_log("kinematic-pif", log)
+    assert isinstance(est, HandOver) and isinstance(est.inner, estimators.PIFAdaptive)     # designed quiet
+    out = est.run(log)
+    # the loud part begins inside the third stretch of 60 s: the first wholly loud one closes at 180 s
+    assert log.t[loud_row] < 2 * ROAD_CHECK_WINDOW_S + 1.0
+    j = int(np.searchsorted(log.t, est.handed_at))
+    assert log.t[j - 1] < 3 * ROAD_CHECK_WINDOW_S <= est.handed_at
+    assert isinstance(est.handed_to, estimators.KinematicPIF) and est.handed_to.name == "kinematic-pif"
+    with design_settings(road_change=False):
+        before = for_log("kinematic-pif", log)
+        once = before.run(log)
+    assert not isinstance(before, HandOver)
+    assert np.array_equal(out.theta[:j], once.theta[:j])                # causal: nothing changes before it
+    after = np.flatnonzero((np.arange(len(log)) >= j) & (log.vx >= 5.0) & out.valid & once.valid)
+    # the car's model on a shaking accelerometer against the blend designed for it (measured 1.11 and 0.48 deg)
+    assert _bank_rms_deg(out, bank, after) < 0.6 * _bank_rms_deg(once, bank, after)
+
+
+def test_a_log_whose_roads_stay_quiet_is_not_handed_over(quiet_then_loud):
+    log, _, loud_row = quiet_then_loud
+    quiet = log[:loud_row]
+    est = for_log("kinematic-pif", quiet)
+    out = est.run(quiet)
+    assert math.isnan(est.handed_at) and est.handed_to is None
+    assert np.array_equal(out.theta, est.inner.run(quiet).theta)
+
+
+@pytest.mark.parametrize("rows", [97, 1000, 7001])
+def test_chunks_and_steps_give_the_whole_run(quiet_then_loud, rows):
+    log = quiet_then_loud[0]
+    whole = for_log("kinematic-pif", log)
+    ref = whole.run(log)
+    est = for_log("kinematic-pif", log)
+    parts = [est.run(log[a:a + rows], reset=a == 0) for a in range(0, len(log), rows)]
+    assert np.array_equal(np.concatenate([p.theta for p in parts]), ref.theta)
+    assert np.array_equal(np.concatenate([p.valid for p in parts]), ref.valid)
+    assert est.handed_at == whole.handed_at
+    assert all(set(p.states) == set(parts[0].states) for p in parts)        # the same columns in every chunk
+    if rows == 1000:
+        stepper = for_log("kinematic-pif", log)
+        theta = np.array([stepper.step(log.t[i], log.vx[i], log.ay[i], log.r[i], log.delta_f[i]).theta
+                          for i in range(len(log))])
+        assert np.array_equal(theta, ref.theta) and stepper.handed_at == whole.handed_at
+
+
+def test_reset_forgets_the_hand_over(quiet_then_loud):
+    log, _, loud_row = quiet_then_loud
+    est = for_log("kinematic-pif", log)
+    est.run(log)
+    assert est.handed_to is not None
+    est.run(log[:loud_row])                          # reset=True: a new log
+    assert est.handed_to is None and math.isnan(est.handed_at)
+
+
+def test_behind_the_offset_learner_and_offline_estimators(quiet_then_loud):
+    log = quiet_then_loud[0]
+    learnt = estimators.with_online_offsets(for_log("kinematic-pif", log))
+    learnt.run(log)
+    assert math.isfinite(learnt.handed_at)               # the learner in front, the hand-over behind it
+    assert not isinstance(for_log("kinematic-smoother", log), HandOver)      # offline: roadbank map warns instead
+    with design_settings(road_change="esp"):
+        assert isinstance(for_log("kinematic-pif", log), HandOver)            # no roll rate: as True
+
+
+def test_a_bad_stretch_reader_or_stretch_is_refused():
+    with pytest.raises(TypeError, match="HandOver expects a roadbank estimator"):
+        HandOver(object(), lambda s: None, lambda **c: None)
+    with pytest.raises(ValueError, match="stretch_s must be > 0"):
+        HandOver(estimators.make("pif-adaptive"), lambda s: None, lambda **c: None, stretch_s=0.0)
