@@ -334,7 +334,8 @@ def test_a_drive_at_the_tyres_limit_on_data_sheet_sensors_is_quiet(s_curves, car
     car_params = undescribed_params(s)
     default = for_conditions("kinematic-pif", cond, car_params)
     by_mean = for_conditions("kinematic-pif", {**cond, "log_ay_floor": None}, car_params)
-    assert type(default) is type(E.make(QUIET_FILTER)) and type(by_mean) is not type(default)
+    assert isinstance(default, E.HandOver) and not isinstance(by_mean, E.HandOver)   # (the quiet one's hand-over)
+    assert type(default.inner) is type(E.make(QUIET_FILTER)) and type(by_mean) is not type(default.inner)
     m = s.t >= s.t[0] + 5.0
 
     def rms(est):

@@ -113,3 +113,21 @@ def test_a_bad_stretch_reader_or_stretch_is_refused():
         HandOver(object(), lambda s: None, lambda **c: None)
     with pytest.raises(ValueError, match="stretch_s must be > 0"):
         HandOver(estimators.make("pif-adaptive"), lambda s: None, lambda **c: None, stretch_s=0.0)
+
+
+def test_a_held_log_is_read_at_its_source_and_handed_over(quiet_then_loud):
+    """Its 25 Hz frames held onto the 100 Hz grid (a logger's hold; at 10 Hz the quiet part's white noise, sampled
+    without an anti-alias filter, reads loud): read at the frames' rate (AtSource, outermost) and handed over at the
+    same stretch's end as the frames themselves."""
+    log = quiet_then_loud[0]
+    frames = log.take(np.arange(0, len(log), 4))
+    held = Signals(log.t, *(np.repeat(getattr(frames, c), 4)[:len(log)] for c in ("vx", "ay", "r", "delta_f")))
+    est = for_log("kinematic-pif", held)
+    assert isinstance(est, estimators.AtSource) and isinstance(est.inner, HandOver)
+    learnt = estimators.with_online_offsets(est)
+    assert isinstance(learnt, estimators.AtSource) and isinstance(learnt.inner.inner, HandOver)
+    out = est.run(held)
+    own = for_log("kinematic-pif", frames)
+    own.run(frames)
+    assert est.inner.handed_at == own.handed_at
+    assert np.isfinite(out.theta).all()
