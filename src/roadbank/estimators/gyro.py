@@ -200,18 +200,22 @@ class GradeCarry:
     """The roll rate of a log corrected for its grade (:func:`roadbank.models.attitude.euler_roll_rate`), chunk by
     chunk: :func:`~roadbank.models.attitude.grade_pitch` over ``window`` s (0: no correction) continues across
     chunks with the last window of samples kept, so a log in chunks gets what one run gets. ``g`` (m/s^2);
-    ``first_span`` (s) as :func:`~roadbank.models.attitude.grade_pitch`'s. Given a ``pitch`` observer
+    ``first_span`` and ``max_gap`` (s) as :func:`~roadbank.models.attitude.grade_pitch`'s (``max_gap`` the filter's:
+    after a longer interval between the samples it is given the window starts again, as at a log's start, so no
+    window reads the speed's change across the filter's restart gap). Given a ``pitch`` observer
     (:class:`~roadbank.estimators.pitch.PitchObserver`), a log with a pitch rate ``q`` takes the pitch from it
     instead (its state carried across chunks); the window serves logs without one."""
 
-    def __init__(self, window: float, g: float, first_span: float = math.inf, pitch: PitchObserver | None = None):
+    def __init__(self, window: float, g: float, first_span: float = math.inf, pitch: PitchObserver | None = None,
+                 max_gap: float = math.inf):
         self.window, self.g, self.first_span = float(window), float(g), float(first_span)
+        self.max_gap = float(max_gap)
         self.pitch = pitch
         self.reset()
 
     def __repr__(self) -> str:
         return (f"GradeCarry(window={self.window!r}, g={self.g!r}, first_span={self.first_span!r}, "
-                f"pitch={self.pitch!r})")
+                f"pitch={self.pitch!r}, max_gap={self.max_gap!r})")
 
     def reset(self) -> None:
         """Forget the samples kept: the next chunk starts a log."""
@@ -240,7 +244,7 @@ class GradeCarry:
             t, vx, ax = (np.concatenate([a, b]) for a, b in zip(tail, (t, vx, ax)))
             start = tail[3]
         area = running_area(t, vx, ax, start)
-        pitch = grade_pitch(t, vx, ax, self.window, self.g, area, self.first_span)[len(t) - len(s):]
+        pitch = grade_pitch(t, vx, ax, self.window, self.g, area, self.first_span, self.max_gap)[len(t) - len(s):]
         n = len(s) if advance is None else advance
         if n:
             end = len(t) - len(s) + n
@@ -421,7 +425,7 @@ class KinematicGyro(ScheduledObserver):
         self.pitch_anchor = PITCH_ANCHOR if pitch_anchor == () else pitch_anchor
         observer = (PitchObserver(self.pitch_bandwidth, self.params.g, self.pitch_start, pitch_offset_tau,
                                   self.pitch_anchor) if self.pitch_bandwidth > 0 else None)
-        self.grade = GradeCarry(window, self.params.g, first_span, observer)
+        self.grade = GradeCarry(window, self.params.g, first_span, observer, self.max_gap)
 
     @property
     def grade_window(self) -> float:

@@ -115,8 +115,9 @@ class ExportDesign:
     #: the observer's first input: ``"delta_f"`` (the steering angle), or ``"p"`` (the gyro-aided filter's roll rate)
     first_input: str = "delta_f"
     #: the gyro-aided filter's grade correction (:class:`~roadbank.estimators.gyro.GradeCarry`): ``window`` and
-    #: ``first_span`` (s; inf: none), ``g`` (m/s^2), ``max_sin`` (-, :data:`~roadbank.models.attitude.MAX_SIN_PITCH`)
-    #: and ``observer`` (the pitch observer's ``cfg``, :mod:`roadbank.estimators.kernels.attitude`; None: the
+    #: ``first_span`` (s; inf: none), ``g`` (m/s^2), ``max_sin`` (-, :data:`~roadbank.models.attitude.MAX_SIN_PITCH`),
+    #: ``max_gap`` (s: the interval after which the window starts again, the filter's ``max_gap``, in the fingerprint
+    #: as that) and ``observer`` (the pitch observer's ``cfg``, :mod:`roadbank.estimators.kernels.attitude`; None: the
     #: window's pitch); None without a correction
     grade: dict | None = None
     #: the vehicle file's identified sensor offsets the module takes off the measured channels (measured minus true,
@@ -320,6 +321,7 @@ def _grade(est) -> dict | None:
     if not isinstance(carry, GradeCarry) or carry.window <= 0:
         return None
     return {"window": carry.window, "first_span": carry.first_span, "g": carry.g, "max_sin": MAX_SIN_PITCH,
+            "max_gap": carry.max_gap,
             "observer": None if carry.pitch is None else np.array(carry.pitch.cfg, float)}
 
 

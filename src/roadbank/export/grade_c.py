@@ -27,7 +27,9 @@ _WINDOW_HEADER = Template("""
  * This module's first input p is the rate of the roll angle, p + r tan(pitch) (rad/s), the pitch
  * (rad, positive nose down) from the speed and the longitudinal accelerometer over the last
  * ${window} s (from the first sample once the log has lasted ${first} s): asin((vx - vx_w -
- * int ax) / (g dt)). ${p}_roll_rate() gives it: call it on every sample, in time order, and give
+ * int ax) / (g dt)). After more than ${max_gap} s between samples (where the filter starts again)
+ * the window starts again as at a log's start: it never reaches back across such a gap.
+ * ${p}_roll_rate() gives it: call it on every sample, in time order, and give
  * its result to ${p}_step (or _step_dt) as p. Where no pitch is read (the log has not lasted
  * long enough, a non-finite vx or ax lies in the window, or a pitch steeper than asin(${maxsin}))
  * it returns p as measured. q is not read by this module. */
@@ -91,6 +93,7 @@ _WINDOW_SOURCE = Template("""
 #define RBG_TAN ${tan}
 #define RBG_WINDOW (${window})
 #define RBG_FIRST (${first})
+#define RBG_MAX_GAP (${max_gap})
 #define RBG_G (${g})
 #define RBG_MAXSIN (${maxsin})
 
@@ -140,6 +143,11 @@ static real_t rbg_roll_rate(grade_t *g, double t, real_t vx, real_t ay, real_t r
     } else {
         g->area += 0.5 * ((double)a + (double)g->a_last) * (t - g->t_last);
         g->nbad += (bad || g->bad_last) ? 1 : 0;
+        if (t - g->t_last > RBG_MAX_GAP) {     /* the filter's restart gap: the window starts again */
+            g->head = 0;
+            g->count = 0;
+            g->t0 = t;
+        }
     }
     g->n_seen = 1;
     g->t_last = t;
@@ -350,7 +358,9 @@ This module is the gyro-aided filter: its first input is a roll rate (rad/s), no
 graded road the roll angle's rate is `p + r tan(pitch)`; `{p}_roll_rate(&grade, t, vx, ay, r, p, ax, q)`
 (state `{p}_grade`, `{p}_grade_init`) reads the pitch {how} and returns that rate: call it on every
 sample, in time order, then `{p}_step(&state, t, vx, ay, r, rate, &out)`. The same operations as roadbank's
-`GradeCarry` before the filter's kernel (`KinematicGyro.run`/`step`). Across an interval of 1-10 s between
+`GradeCarry` before the filter's kernel (`KinematicGyro.run`/`step`). After an interval longer than the filter's
+`max_gap` between samples, where the filter starts again, the window starts again too (as at a log's start: no
+window reaches back across the gap). Across an interval of 1-10 s between
 samples (a logger's dropout in a replayed log; an ECU's task has none) the module takes the roll rate linear
 between the samples either side, as roadbank's `log_gaps="trapezoid"`; roadbank's filter holds its state across such
 a gap by default (`roadbank.estimators.gyro.gap_time`): to replay such a log as it does, give both calls the time
@@ -374,12 +384,13 @@ def grade_parts(prefix: str, grade: dict, rate: float, float32: bool) -> tuple[s
     if obs is None:
         first = grade["first_span"]
         cap = _cap(grade, rate)
+        gap = float(grade.get("max_gap", math.inf))
         head = _WINDOW_HEADER.substitute(names, window=f"{grade['window']:g}", first=f"{first:g}",
                                          maxsin=f"{maxsin:g}", window_lit=lit(grade["window"]),
-                                         cap=cap)
+                                         cap=cap, max_gap=f"{gap:g}")
         src = _WINDOW_SOURCE.substitute(names, tan=tan, lean=_LEAN, window=lit(grade["window"]),
                                         first=lit(first if math.isfinite(first) else 1e300), g=lit(grade["g"]),
-                                        maxsin=lit(maxsin))
+                                        maxsin=lit(maxsin), max_gap=lit(gap if math.isfinite(gap) else 1e300))
         nbytes = 48 + cap * (8 + 8 + 8 + (4 if float32 else 8) + 1)
         how = (f"from the speed and `ax` over the last {grade['window']:g} s (the state keeps {cap} samples, about "
                f"{nbytes / 1024:.1f} KiB of RAM)")

@@ -56,7 +56,8 @@ def running_area(t, vx, ax, start: tuple[float, float] = (0.0, 0.0)) -> tuple[np
     return area, nbad
 
 
-def grade_pitch(t, vx, ax, window: float, g: float = G, area=None, first_span: float = math.inf) -> np.ndarray:
+def grade_pitch(t, vx, ax, window: float, g: float = G, area=None, first_span: float = math.inf,
+                max_gap: float = math.inf) -> np.ndarray:
     r"""The pitch (rad, positive nose down) from the speed and the longitudinal accelerometer, causal (module
     docstring).
 
@@ -77,19 +78,30 @@ def grade_pitch(t, vx, ax, window: float, g: float = G, area=None, first_span: f
     first_span : float, optional
         Before the log (its first sample here) has lasted ``window``, the span (s, > 0) after which the estimate
         averages from the first sample instead (a window growing to ``window``); ``inf`` (default): none.
+    max_gap : float, optional
+        An interval between consecutive samples longer than this (s, > 0) starts the log again: the samples before
+        it are not read (no window reaches back across it, the speed's change across it is no grade) and
+        ``first_span`` counts from the first sample after it. The filter's own restart gap
+        (:class:`~roadbank.estimators.gyro.KinematicGyro`'s ``max_gap``); ``inf`` (default): none.
 
     Returns
     -------
     array (rad)
-        NaN where the log has not yet lasted ``window`` (or ``first_span``), where a non-finite ``vx`` or ``ax`` lies
-        in the window (its ends included) or where the reading is steeper than :data:`MAX_SIN_PITCH`.
+        NaN where the log (since its last restart) has not yet lasted ``window`` (or ``first_span``), where a
+        non-finite ``vx`` or ``ax`` lies in the window (its ends included) or where the reading is steeper than
+        :data:`MAX_SIN_PITCH`.
     """
     t, vx, ax = (np.asarray(a, dtype=np.float64) for a in (t, vx, ax))
     area, nbad = running_area(t, vx, ax) if area is None else area
     bad = ~(np.isfinite(vx) & np.isfinite(ax))
+    n = len(t)
+    with np.errstate(invalid="ignore"):
+        restart = np.concatenate([[True], np.diff(t) > max_gap])[:n]
+    first = np.maximum.accumulate(np.where(restart, np.arange(n), 0))   # the (re)start each sample's log began at
     start = np.searchsorted(t, t - window, side="right") - 1     # the last sample at least the window back
-    ok = (start >= 0) | (t - t[0] >= first_span)                 # else: from the first sample, once first_span in
-    m = np.where(start >= 0, start, 0)
+    inside = start >= first                                      # ... since that (re)start
+    ok = inside | (t - t[first] >= first_span)                   # else: from the (re)start, once first_span in
+    m = np.where(inside, start, first)
     with np.errstate(invalid="ignore", divide="ignore"):
         s = (vx - vx[m] - (area - area[m])) / (g * (t - t[m]))
     ok &= (nbad - nbad[m] == 0) & ~bad & ~bad[m] & (np.abs(s) <= MAX_SIN_PITCH)
