@@ -688,15 +688,31 @@ def choose_read_at_source(esp_logs, gyro_logs, esp_forms, gyro_forms) -> tuple:
         at = _with_settings(read_at_source=choice)
         return lambda s: with_online_offsets(at(s))
 
-    for s, _, _ in esp_logs + gyro_logs:
-        a, b = (build(c)(s).run(s).theta for c in (False, True))
-        if not np.array_equal(a, b):
-            raise ValueError("a log at its sensors' rate was read otherwise: the stage's guard fails")
+    same_outputs(build, [s for s, _, _ in esp_logs + gyro_logs], (False, True),
+                 "a log at its sensors' rate was read otherwise: the stage's guard fails")
+    return esp_and_gyro_rule(build, esp_forms, gyro_forms, READ_SOURCE_GAIN_DEG, READ_SOURCE_WORSE_DEG,
+                             READ_SOURCE_WORSE_LOGS)
+
+
+def same_outputs(build, signals, choices, why: str) -> None:
+    """A stage's guard: ``build(choice)(s)`` gives the same ``theta`` for every choice of ``choices`` on each log of
+    ``signals``; a ValueError saying ``why`` where it does not."""
+    for s in signals:
+        first, *others = (build(c)(s).run(s).theta for c in choices)
+        if not all(np.array_equal(first, o, equal_nan=True) for o in others):
+            raise ValueError(why)
+
+
+def esp_and_gyro_rule(build, esp_forms, gyro_forms, gain: float, worse_deg: float, worse_logs: int) -> tuple:
+    """The rule of the fifty-fifth and fifty-seventh stages between ``build(False)`` (A) and ``build(True)`` (B): B
+    ships if its median raw RMS over ``esp_forms`` is below A's by more than ``gain`` (deg), its median over
+    ``gyro_forms`` not above A's by more than ``gain``, and it is worse than A by more than ``worse_deg`` (deg) on at
+    most ``worse_logs`` of all the logs. Returns ``(B ships, {choice: (raw RMS per ESP form, per gyro form)
+    (deg)})``."""
     errs = {c: (log_errors(build(c), esp_forms), log_errors(build(c), gyro_forms)) for c in (False, True)}
     (a1, a2), (b1, b2) = errs[False], errs[True]
-    worse = int(np.sum(np.array(b1 + b2) > np.array(a1 + a2) + READ_SOURCE_WORSE_DEG))
-    ships = (np.median(b1) < np.median(a1) - READ_SOURCE_GAIN_DEG
-             and np.median(b2) <= np.median(a2) + READ_SOURCE_GAIN_DEG and worse <= READ_SOURCE_WORSE_LOGS)
+    worse = int(np.sum(np.array(b1 + b2) > np.array(a1 + a2) + worse_deg))
+    ships = np.median(b1) < np.median(a1) - gain and np.median(b2) <= np.median(a2) + gain and worse <= worse_logs
     return bool(ships), errs
 
 
@@ -738,17 +754,10 @@ def choose_source_rounding(esp_logs, gyro_logs, esp_forms, gyro_forms, guard_for
 
     kept = [s for s, _, _ in esp_logs + gyro_logs + [f for form in guard_forms for f in form]]
     kept += [d.signals for sets in guard_sims for drives in sets for d in drives]
-    for s in kept:
-        a, b = (build(c)(s).run(s).theta for c in (False, True))
-        if not np.array_equal(a, b, equal_nan=True):
-            raise ValueError("a log that is not rounded between its source's samples was read otherwise: the stage's "
-                             "guard fails")
-    errs = {c: (log_errors(build(c), esp_forms), log_errors(build(c), gyro_forms)) for c in (False, True)}
-    (a1, a2), (b1, b2) = errs[False], errs[True]
-    worse = int(np.sum(np.array(b1 + b2) > np.array(a1 + a2) + SOURCE_ROUNDING_WORSE_DEG))
-    ships = (np.median(b1) < np.median(a1) - SOURCE_ROUNDING_GAIN_DEG
-             and np.median(b2) <= np.median(a2) + SOURCE_ROUNDING_GAIN_DEG and worse <= SOURCE_ROUNDING_WORSE_LOGS)
-    return bool(ships), errs
+    same_outputs(build, kept, (False, True), "a log that is not rounded between its source's samples was read "
+                                             "otherwise: the stage's guard fails")
+    return esp_and_gyro_rule(build, esp_forms, gyro_forms, SOURCE_ROUNDING_GAIN_DEG, SOURCE_ROUNDING_WORSE_DEG,
+                             SOURCE_ROUNDING_WORSE_LOGS)
 
 
 def gyro_sim_sets(offset: float, cars=SIM_CARS, n=SIM_DRIVES) -> list:

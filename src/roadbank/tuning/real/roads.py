@@ -17,7 +17,7 @@ from ...evaluation.metrics import error_metrics
 from ...signals import Signals, concat_signals
 from ..objective import FAILED_DEG, SETTLE
 from .common import log_errors
-from .esp import _with_settings
+from .esp import _with_settings, same_outputs
 
 #: the rule: B ships if its median over the ESP long logs is below A's by more than this (deg) ...
 ROAD_CHANGE_GAIN_DEG = 0.05
@@ -126,10 +126,8 @@ def choose_road_change(esp_logs, gyro_logs, esp_long, gyro_long, sim_sets, long_
     recorded (``esp_logs``, ``gyro_logs``) and the simulated drives of ``sim_sets`` one by one must give the same
     outputs under both: a ValueError where they do not."""
     kept = [s for s, _, _ in esp_logs + gyro_logs] + [d.signals for drives in sim_sets for d in drives]
-    for s in kept:
-        a, b = (road_change_build(c)(s).run(s).theta for c in (False, True))
-        if not np.array_equal(a, b, equal_nan=True):
-            raise ValueError("a log whose roads do not change was read otherwise: the stage's guard fails")
+    same_outputs(road_change_build, kept, (False, True),
+                 "a log whose roads do not change was read otherwise: the stage's guard fails")
     errs = {c: (log_errors(road_change_build(c), esp_long), log_errors(road_change_build(c), gyro_long),
                 long_sim_errors(road_change_build(c), long_sets)) for c in (False, True)}
     (a1, a2, a3), (b1, b2, b3) = errs[False], errs[True]
@@ -154,10 +152,8 @@ def choose_road_change_gyro(esp_long, gyro_long) -> tuple:
     logs ``gyro_long`` (:func:`smooth_start_logs` of the KITTI training drives with their roll rate,
     :data:`RESTART_GAP_S` apart). Returns ``(chosen setting, {setting: raw RMS per long log (deg)})``. The same logs
     with the ESP channels alone (``esp_long``) must give the same outputs under both: a ValueError where not."""
-    for s, _, _ in esp_long:
-        a, b = (road_change_build(c)(s).run(s).theta for c in (True, "esp"))
-        if not np.array_equal(a, b, equal_nan=True):
-            raise ValueError("a log without a roll rate was handed over otherwise: the stage's guard fails")
+    same_outputs(road_change_build, [s for s, _, _ in esp_long], (True, "esp"),
+                 "a log without a roll rate was handed over otherwise: the stage's guard fails")
     errs = {c: log_errors(road_change_build(c), gyro_long) for c in (True, "esp")}
     ships = np.median(errs["esp"]) < np.median(errs[True]) - ROAD_CHANGE_GYRO_GAIN_DEG
     return ("esp" if ships else True), errs
