@@ -131,3 +131,12 @@ def test_a_held_log_is_read_at_its_source_and_handed_over(quiet_then_loud):
     own.run(frames)
     assert est.inner.handed_at == own.handed_at
     assert np.isfinite(out.theta).all()
+
+
+def test_estimate_says_what_it_handed_over_to():
+    from roadbank.fleet.process import handed_over_warnings
+
+    gyro, = handed_over_warnings("log.csv", {"kinematic-pif": (130.5, estimators.make("kinematic-gyro"))}, 10.0)
+    blend, = handed_over_warnings("log.csv", {"kinematic-pif": (130.5, estimators.make("kinematic-pif"))}, 10.0)
+    assert "from 120.5 s on kinematic-pif is kinematic-gyro, the gyro-aided filter" in gyro
+    assert "from 120.5 s on kinematic-pif is the low-pass blend" in blend and "pif-adaptive" in blend
