@@ -184,12 +184,34 @@ def test_names_after_a_message_prefix_are_guessed(tmp_path, form):
         np.testing.assert_allclose(getattr(got, k), getattr(s, k), rtol=1e-9, atol=1e-12, err_msg=k)
 
 
+@pytest.mark.skipif(not KITTI_0070.is_dir(), reason="../shared/data/kitti-oxts is not here")
+def test_vw_style_can_signal_names_are_guessed(tmp_path):
+    """KITTI 0070 written with a VW-style ESP message's signal names, no unit in them (ESP_v_Signal: the speed in
+    km/h; before: 'speed not found', exit 1): the guessed map takes the speed in km/h from the data, and reads the
+    drive back in SI to the digits written."""
+    s = load_log(KITTI_0070).signals
+    names = ("Zeit", "ESP_v_Signal", "ESP_Querbeschleunigung", "ESP_Gierrate", "ESP_Laengsbeschl")
+    f = tmp_path / "vw.csv"
+    write_table(f, dict(zip(names, (s.t, s.vx * 3.6, s.ay, np.degrees(s.r), s.ax))))
+    m = tmp_path / "map.toml"
+    res = CliRunner().invoke(main, ["channels", str(f), "-o", str(m)])
+    assert res.exit_code == 0, res.output
+    for role, name, unit in [("speed", names[1], "km/h"), ("lateral_acceleration", names[2], "m/s^2"),
+                             ("yaw_rate", names[3], "deg/s"), ("longitudinal_acceleration", names[4], "m/s^2")]:
+        assert f"{role:<26} <- {name!r} in {unit}" in res.output, res.output
+    got = load_log(f, channels=read_channel_map(m)).signals
+    for k in ("t", "vx", "ay", "r", "ax"):
+        np.testing.assert_allclose(getattr(got, k), getattr(s, k), rtol=1e-9, atol=1e-12, err_msg=k)
+
+
 @pytest.mark.parametrize("name, role", [("ESP_LatAcc", "lateral_acceleration"),
                                         ("ESP_21.LatAcc", "lateral_acceleration"), ("ESP_YawRate", "yaw_rate"),
                                         ("ESP_Querbeschleunigung", "lateral_acceleration"),
                                         ("IMU_RollRate", "roll_rate"), ("ESP_21.VehSpeed[km/h]", "speed"),
                                         ("ESP_Gierrate", "yaw_rate"), ("ESP_Geschwindigkeit", "speed"),
-                                        ("IMU_Wankrate", "roll_rate")])
+                                        ("IMU_Wankrate", "roll_rate"), ("ESP_v_Signal", "speed"),
+                                        ("ESP_21.ESP_v_Signal", "speed"),
+                                        ("ESP_Laengsbeschl", "longitudinal_acceleration")])
 def test_a_message_prefix_names_one_role(name, role):
     """A known spelling after a message prefix is that role's and no other's, ranked below the spelling alone."""
     assert name_match(role, name)[0] == 1, name
@@ -199,7 +221,10 @@ def test_a_message_prefix_names_one_role(name, role):
 @pytest.mark.parametrize("name, role, today", [("LatAcc_YawRate", "yaw_rate", "lateral_acceleration"),
                                                ("ay_r", "yaw_rate", None), ("Brake_p", "roll_rate", None),
                                                ("Engine_Speed", "speed", None), ("Wheel_Speed", "speed", None),
-                                               ("Lenkrad_Geschwindigkeit", "speed", None)])
+                                               ("Lenkrad_Geschwindigkeit", "speed", None),
+                                               ("ESP_v_Signal_Qualibit", "speed", None),
+                                               ("Motor_v_Signal", "speed", None), ("ESP_p_Signal", "roll_rate", None),
+                                               ("ESP_VL_Radgeschw_02", "speed", None)])
 def test_a_prefix_that_names_a_signal_itself_is_no_message(name, role, today):
     """A name whose prefix is a signal too (LatAcc_YawRate could be either), a letter after a prefix (Brake_p: a
     pressure) or a speed of another part (an engine's, a wheel's, the steering wheel's) gets no role from its end:

@@ -48,6 +48,8 @@ NAMES = {
     "time": ("t", "time", "timestamp", "times", "ts", "timest", "zeit", "timesec", "stamp", "logtime"),
     "speed": ("vx", "v", "speed", "vehspd", "vehiclespeed", "velocity", "vel", "spd", "vspeed", "vehspeed",
               "speedx", "velx", "vlgt", "groundspeed", "vehiclevelocity",
+              # a VW-style CAN signal (``ESP_v_Signal`` of the ESP's message, km/h): v as a symbol, then "Signal"
+              "vsignal",
               # German (an umlaut reads as its vowel, or written ae, oe, ue), French (accents dropped)
               "geschwindigkeit", "fahrzeuggeschwindigkeit", "vfzg", "vitesse", "vitessevehicule"),
     "lateral_acceleration": ("ay", "accy", "latacc", "lataccel", "lateralacceleration", "lateralaccel",
@@ -66,7 +68,8 @@ NAMES = {
                    "angularvelocityy", "ry", "nickrate", "nickgeschwindigkeit", "vitessedetangage", "tangage"),
     "longitudinal_acceleration": ("ax", "accx", "longacc", "lonacc", "longaccel", "lngacc", "longitudinalacceleration",
                                   "longitudinalaccel", "accelx", "alon", "alng", "accelerationx", "longg",
-                                  "laengsbeschleunigung", "langsbeschleunigung", "alaengs",
+                                  "laengsbeschleunigung", "langsbeschleunigung", "alaengs", "laengsbeschl",
+                                  "langsbeschl",
                                   "accelerationlongitudinale", "acclong"),
     # a GNSS position, for `roadbank map`
     "latitude": ("lat", "latitude", "gpslat", "gnsslat", "latdeg", "poslat", "breite", "breitengrad"),
