@@ -4,7 +4,9 @@
 Columns (SI): ``t`` (s), then for every estimator ``<name>.theta`` (rad, bank +
 body roll), ``<name>.phi_b`` (rad, road bank), ``<name>.valid`` (0/1: the sample was usable),
 ``<name>.settled`` (0/1: valid, and the estimator's settling time after its last (re)start:
-:attr:`roadbank.signals.Estimate.settled`), and ``reference_roll`` (rad) when the log has one.
+:attr:`roadbank.signals.Estimate.settled`), and ``reference_roll`` (rad) when the log has one. ``t`` is the log's
+own clock as its reader gives it (``Log.signals.t``), not shifted here: what it counts from is the format's (seconds
+since the epoch, from the recording's start, or as a file's numeric time column is written; docs/io.md).
 """
 
 from __future__ import annotations
@@ -21,7 +23,9 @@ OUTPUT_FORMATS = {".csv": "csv", ".parquet": "parquet", ".pq": "parquet"}
 
 
 def estimate_table(t, estimates, reference_roll=None) -> dict[str, np.ndarray]:
-    """Columns of the output table, in order (see module doc)."""
+    """Columns of the output table, in order (see module doc): ``t`` (s, the log's own clock as read), then per
+    estimator its ``theta`` and ``phi_b`` (rad) and its ``valid`` and ``settled`` flags, and ``reference_roll``
+    (rad)."""
     cols = {"t": np.asarray(t, dtype=np.float64)}
     for est in estimates:
         cols[f"{est.name}.theta"] = np.asarray(est.theta, dtype=np.float64)
