@@ -446,3 +446,81 @@ def test_no_real_drive_has_a_dropout_written_as_zero():
     """The 16 shared KITTI drives, read as a user reads them, hold no sample the zero rule takes."""
     for drive in KITTI_DRIVES:
         assert not [w for w in load_log(drive).warnings if "exactly 0" in w], drive.name
+
+
+def _stop_and_go(rate_hz: float, decel: float, stand_s: float = 180.0, go: bool = True):
+    """Stamps (s) and speeds (m/s) of a car at 15 m/s braking at ``decel`` (m/s^2) to exactly 0, standing for
+    ``stand_s`` (exact zeros, as a speed signal reads at a standstill) and, with ``go``, pulling away at 2.5 m/s^2,
+    sampled at ``rate_hz``."""
+    stop = 10.0 + 15.0 / decel
+    t = np.arange(0.0, stop + stand_s + (10.0 if go else 0.0), 1.0 / rate_hz)
+    v = np.clip(15.0 - decel * np.clip(t - 10.0, 0.0, None), 0.0, None)
+    if go:
+        v = np.where(t > stop + stand_s, np.minimum(2.5 * (t - stop - stand_s), 15.0), v)
+    return t, v
+
+
+def _slow_speed_mdf(path, t, v):
+    """An MDF4 log: the speed on its own stamps ``t`` (a GNSS speed's group), ay and the yaw rate at 100 Hz."""
+    asammdf = pytest.importorskip("asammdf")
+    tt = np.arange(0.0, t[-1], 0.01)
+    rng = np.random.default_rng(0)
+    mdf = asammdf.MDF(version="4.10")
+    mdf.append([asammdf.Signal(np.asarray(v, float), np.asarray(t, float), name="vx")])
+    mdf.append([asammdf.Signal(0.05 * rng.standard_normal(len(tt)), tt, name="ay"),
+                asammdf.Signal(0.001 * rng.standard_normal(len(tt)), tt, name="r")])
+    mdf.save(path, overwrite=True)
+    return path
+
+
+@pytest.mark.parametrize("rate_hz, decel, go", [(1.0, 3.0, True), (1.0, 3.0, False), (1.0, 5.0, True),
+                                                (2.0, 5.0, False), (2.0, 8.0, False)])
+def test_a_slow_speed_that_stops_is_a_car_standing_not_a_dropout(tmp_path, rate_hz, decel, go):
+    """A speed logged at 1-2 Hz (a GNSS speed, docs/io.md) braking at 3-8 m/s^2 to a standstill of 3 minutes
+    (exact zeros; pulling away after it or the log ending there) enters its zeros from 2.5-7.5 m/s, beyond the rule's
+    2 m/s (before: all 180-360 zeros read as dropouts, NaN, with a warning): read as written, no warning, whole and
+    streamed. The speed's samples are the truth: on the grid it is their straight line, 0 at the standstill."""
+    from roadbank.io.stream import stream_log
+    t, v = _stop_and_go(rate_hz, decel, go=go)
+    p = _slow_speed_mdf(tmp_path / "gnss.mf4", t, v)
+    log = load_log(p)
+    assert not [w for w in log.warnings if "exactly 0" in w], log.warnings
+    s = log.signals
+    np.testing.assert_allclose(s.vx, np.interp(s.t, t, v), rtol=0, atol=1e-9)
+    assert np.count_nonzero(s.vx == 0.0) > 100 * 170
+    chunks = list(stream_log(p, chunk_rows=997))
+    assert not [w for c in chunks for w in c.warnings if "exactly 0" in w]
+    np.testing.assert_array_equal(np.concatenate([c.signals.vx for c in chunks]), s.vx)
+
+
+def test_a_dropout_written_as_zero_is_still_one_at_any_rate(tmp_path):
+    """What no car does stays a dropout: a 1 Hz speed at 25 m/s reading 0 for 3 samples and 25 m/s again (25 m/s in
+    1 s is more than 2 g), and at 10 Hz a speed going 3 -> 0 -> 3 m/s (30 m/s^2), as before."""
+    t = np.arange(0.0, 60.0, 1.0)
+    v = np.full(len(t), 25.0)
+    v[30:33] = 0.0
+    log = load_log(_slow_speed_mdf(tmp_path / "gnss.mf4", t, v))
+    said = [w for w in log.warnings if "channel 'speed'" in w and "exactly 0" in w]
+    assert len(said) == 1 and "3 sample(s)" in said[0], log.warnings
+    t = np.arange(0.0, 60.0, 0.1)
+    v = np.full(len(t), 3.0)
+    v[300:320] = 0.0
+    log = load_log(_slow_speed_mdf(tmp_path / "ten.mf4", t, v))
+    assert [w for w in log.warnings if "channel 'speed'" in w and "20 sample(s) exactly 0" in w], log.warnings
+
+
+def test_zero_runs_with_times_read_the_step_against_the_rate():
+    """The rate bound on each step into and out of a run, against the rule written by hand: a step of 3 into 0 one
+    time unit apart passes a rate of 4 and is judged by the jump alone at 0.25 apart; across a chunk's end the
+    entry's time is carried (:func:`entering_time`)."""
+    from roadbank.io.limits import entering_time, zero_runs
+    v = np.array([5.0, 3.0, 0.0, 0.0, 3.0, 5.0])
+    for dt_, want in ((1.0, False), (0.25, True)):
+        t = np.arange(len(v)) * dt_
+        m, _ = zero_runs(v, np.nan, 2.0, t, np.nan, 4.0)
+        assert m.tolist() == [False, False, want, want, False, False], dt_
+        m1, b1 = zero_runs(v[:3], np.nan, 2.0, t[:3], np.nan, 4.0)
+        b1_t = entering_time(v[:3], t[:3], np.nan)
+        m2, _ = zero_runs(v[3:], b1, 2.0, t[3:], b1_t, 4.0)
+        assert (b1, b1_t) == (3.0, t[1]) and np.concatenate([m1, m2])[2:4].tolist() == [want, want], dt_
+    assert zero_runs(v, np.nan, 2.0)[0][2:4].tolist() == [True, True]          # no times: the jump alone

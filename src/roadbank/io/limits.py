@@ -14,9 +14,13 @@ So a run of samples exactly 0 of the speed, ``ay`` or the yaw rate, entered from
 :data:`ZERO_JUMPS` and left to one beyond it of the same sign, is read as dropouts too: no car goes there and back
 between two samples (a speed from 2 m/s to 0 and back is 2 g of braking at 10 Hz; a real channel crossing zero
 leaves it with the other sign or near 0). A run at the end of a chunk (or of the log) is judged by the sample
-that enters it. The samples of the 16 KITTI drives, the comma2k19 segment and the paper's scenarios hold no such
-run; a quantised ``ay`` with heavy road vibration (Student-t, scale 0.3 m/s^2, resolution 0.005 g) gives about
-one in 10 000 samples, a harmless NaN each.
+that enters it. That holds at 10 Hz and faster; a slower channel (a GNSS speed at 1-2 Hz) does go from a few m/s to 0
+between two samples when the car stops, so the speed's step into (and out of) a run must also be more than 2 g
+(:data:`ZERO_RATES`) could change it in the time between the two samples: a car braking to a standstill at 3-5 m/s^2
+logged at 1-2 Hz (entering its zeros from 2.5-5 m/s) is a car standing, not a dropout, while at 10 Hz and faster
+the rule is as it was (2 g in 0.1 s is 1.96 m/s, under the 2 m/s). The samples of the 16 KITTI drives, the
+comma2k19 segment and the paper's scenarios hold no such run; a quantised ``ay`` with heavy road vibration
+(Student-t, scale 0.3 m/s^2, resolution 0.005 g) gives about one in 10 000 samples, a harmless NaN each.
 """
 
 from __future__ import annotations
@@ -36,13 +40,20 @@ LIMITS = {"speed": (-30.0, SPEED_MAX), "lateral_acceleration": (-AY_MAX, AY_MAX)
 #: written as 0. Speed 2 m/s (wheel-speed sensors read 0 only below about 0.5 m/s), ``ay`` 1 m/s^2 (6 deg of bank;
 #: above road vibration's usual samples), yaw rate 0.02 rad/s (1.1 deg/s, well above a gyro's noise)
 ZERO_JUMPS = {"speed": 2.0, "lateral_acceleration": 1.0, "yaw_rate": 0.02}
+#: per channel role (SI per second): the step into or out of such a run must also exceed this rate times the time
+#: between the two samples; speed: 2 g, twice what braking or pulling away on road tyres reaches
+ZERO_RATES = {"speed": 2.0 * G}
 
 
-def zero_runs(v: np.ndarray, before: float, jump: float) -> tuple[np.ndarray, float]:
+def zero_runs(v: np.ndarray, before: float, jump: float, t: np.ndarray | None = None, before_t: float = np.nan,
+              rate: float = 0.0) -> tuple[np.ndarray, float]:
     """Which samples of ``v`` are dropouts written as 0: runs of exact zeros entered from a sample beyond
     ``jump`` (the one before ``v`` for a run at its start: ``before``, NaN if none) and left to a sample beyond
-    ``jump`` of the same sign, or reaching the end of ``v``. Returns the mask and the ``before`` of the next
-    chunk (the sample entering a run ``v`` ends in, else ``v``'s last sample). Units: any, ``jump`` in those."""
+    ``jump`` of the same sign, or reaching the end of ``v``; with times ``t`` (s; ``before_t`` that of ``before``)
+    and a ``rate`` (units per second), each step into and out of the run must also exceed ``rate`` times the time
+    between its two samples (a run reaching the end: the step into it). Returns the mask and the ``before`` of the
+    next chunk (the sample entering a run ``v`` ends in, else ``v``'s last sample; :func:`entering_time` gives its
+    time). Units: any, ``jump`` in those."""
     v = np.asarray(v, float)
     n = len(v)
     zero = v == 0.0
@@ -53,13 +64,33 @@ def zero_runs(v: np.ndarray, before: float, jump: float) -> tuple[np.ndarray, fl
     ext = np.concatenate(([before], v))
     entry = ext[starts]                                     # the sample before each run (ext is shifted by one)
     exit_ = np.where(ends < n, v[np.minimum(ends, n - 1)], entry)
+    need_in = need_out = np.full(len(starts), float(jump))
+    if t is not None and rate > 0.0:
+        te = np.concatenate(([before_t], np.asarray(t, float)))
+        step_in = te[starts + 1] - te[starts]               # entry sample -> first zero
+        step_out = np.where(ends < n, te[np.minimum(ends, n - 1) + 1] - te[ends], step_in)   # last zero -> exit
+        with np.errstate(invalid="ignore"):
+            need_in, need_out = np.fmax(need_in, rate * step_in), np.fmax(need_out, rate * step_out)
     with np.errstate(invalid="ignore"):
-        hit = (np.abs(entry) > jump) & (np.abs(exit_) > jump) & (np.sign(entry) == np.sign(exit_))
+        hit = (np.abs(entry) > need_in) & (np.abs(exit_) > need_out) & (np.sign(entry) == np.sign(exit_))
     mask = np.zeros(n, bool)
     for a, b in zip(starts[hit], ends[hit]):
         mask[a:b] = True
     nxt = float(entry[-1]) if ends[-1] == n else float(v[-1])
     return mask, nxt
+
+
+def entering_time(v: np.ndarray, t: np.ndarray, before_t: float) -> float:
+    """The time (s) of the ``before`` :func:`zero_runs` returns for ``v`` on times ``t`` (s): that of the sample
+    entering the run of zeros ``v`` ends in (``before_t``, the time of the one before ``v``, when the run fills
+    ``v``), else ``t``'s last."""
+    v = np.asarray(v, float)
+    if not len(v):
+        return before_t
+    if v[-1] != 0.0:
+        return float(np.asarray(t)[-1])
+    nonzero = np.flatnonzero(v != 0.0)
+    return float(np.asarray(t)[nonzero[-1]]) if len(nonzero) else before_t
 
 
 class Dropouts:
@@ -70,7 +101,7 @@ class Dropouts:
         self.count: dict = {}
         self.first: dict = {}
         self.zeros: dict = {}         # role -> (count, first time) of the dropouts written as 0
-        self._before: dict = {}       # role -> the sample entering the next chunk (see zero_runs)
+        self._before: dict = {}       # role -> the sample entering the next chunk (see zero_runs) and its time (s)
 
     def apply(self, role: str, t: np.ndarray, v: np.ndarray) -> np.ndarray:
         """``v`` (SI) with its samples beyond the role's limits and its dropouts written as 0 (:func:`zero_runs`,
@@ -88,7 +119,9 @@ class Dropouts:
                 self.first[role] = float(np.asarray(t)[np.argmax(bad)])
             self.count[role] = self.count.get(role, 0) + n
         if role in ZERO_JUMPS:
-            zero, self._before[role] = zero_runs(v, self._before.get(role, np.nan), ZERO_JUMPS[role])
+            before, before_t = self._before.get(role, (np.nan, np.nan))
+            zero, nxt = zero_runs(v, before, ZERO_JUMPS[role], t, before_t, ZERO_RATES.get(role, 0.0))
+            self._before[role] = (nxt, entering_time(v, t, before_t))
             k = int(np.count_nonzero(zero))
             if k:
                 v = np.where(zero, np.nan, v)
