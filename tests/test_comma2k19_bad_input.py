@@ -341,3 +341,29 @@ def test_repair_counts_are_given_channel_by_channel(tmp_path):
     res = CliRunner().invoke(main, ["estimate", str(seg), "-o", str(tmp_path / "x.csv"), "--json"])
     doc = json.loads(res.stdout)["logs"][0]
     assert doc["time_repairs_by_channel"] == {k: v for k, v in by.items() if v}
+
+
+@needs_data
+def test_the_optional_files_stamps_are_repaired_and_counted_once(tmp_path):
+    """The steering angle and the pose are optional: their stamps are first tried for a time base (a file whose stamps
+    cannot be repaired is read as missing), which only checks them; the assembler's repair is the one that counts.
+    Three steering stamps written twice and a pair swapped, one pose stamp written twice and a pair swapped: each
+    counted once, in time_repairs_by_channel, the sums and the warnings, the stamps as in the file."""
+    seg = _copy(tmp_path, "seg")
+    f = seg / STEERING / "t"
+    t = _load(f)
+    t[[100, 200, 300]] = t[[99, 199, 299]]
+    t[[500, 501]] = t[[501, 500]]
+    _save(f, t)
+    f = seg / "global_pose/frame_times"
+    t = _load(f)
+    t[50] = t[49]
+    t[[80, 81]] = t[[81, 80]]
+    _save(f, t)
+    log = load_log(seg)
+    by = {ch: {k: v for k, v in c.items() if v} for ch, c in log.time_repairs_by_channel.items()}
+    assert by["steering_wheel_angle"] == {"duplicate": 3, "swapped": 1, "flagged": 5}      # 3 firsts + the pair
+    assert by["reference_roll"] == {"duplicate": 1, "swapped": 1, "flagged": 3}
+    assert {k: v for k, v in log.time_repairs.items() if v} == {"duplicate": 4, "swapped": 2, "flagged": 8}
+    said = [w for w in log.warnings if "time stamps repaired" in w]
+    assert len(said) == 2 and any("3 duplicate stamps dropped, 1 swapped pair" in w for w in said), said

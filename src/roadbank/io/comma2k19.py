@@ -328,7 +328,8 @@ class SegmentSource:
 
 def _repairable(head: str, t: np.ndarray) -> None:
     """LogError ``<head>: <why>`` where the stamps ``t`` (s) hold no increasing time base
-    (:func:`~roadbank.io.timebase.repair_time`): an optional file is then read as missing."""
+    (:func:`~roadbank.io.timebase.repair_time`): an optional file is then read as missing. A check only: the stamps
+    are left as they are and nothing is counted; the assembler repairs and counts them, once."""
     try:
         repair_time(t)
     except UnrepairableTime as exc:
