@@ -89,6 +89,45 @@ def test_chunks_and_steps_give_the_whole_run(quiet_then_loud, rows):
         assert np.array_equal(theta, ref.theta) and stepper.handed_at == whole.handed_at
 
 
+@pytest.mark.parametrize("fault", ["nan", "repeated", "back"])
+def test_a_bad_stamp_sample_by_sample_neither_fails_nor_moves_the_hand_over(quiet_then_loud, fault):
+    """A NaN, repeated or backward stamp stepped in the middle of a stretch (the bare estimator takes each) belongs to
+    the stretch before it, as in one run: the log is handed over where the whole run of it hands over (it raised a
+    ValueError from the stretch's samples, or with a stamp back by 50 s split the stretch and handed over 60 s
+    late)."""
+    log = quiet_then_loud[0]
+    whole = for_log("kinematic-pif", log)
+    whole.run(log)
+    j = int(np.searchsorted(log.t, 150.0))
+    stamps = {"nan": [math.nan], "repeated": [log.t[j], log.t[j]], "back": [log.t[j] - 50.0]}[fault]
+    est = for_log("kinematic-pif", log)
+    for i in range(len(log)):
+        for t in stamps if i == j else [log.t[i]]:
+            est.step(t, log.vx[i], log.ay[i], log.r[i], log.delta_f[i])
+    assert est.handed_at == whole.handed_at
+
+
+def test_a_nan_stamp_where_a_stretch_begins_hands_over_at_the_next_stamp(quiet_then_loud):
+    log = quiet_then_loud[0]
+    whole = for_log("kinematic-pif", log)
+    whole.run(log)
+    j = int(np.searchsorted(log.t, whole.handed_at))
+    est = for_log("kinematic-pif", log)
+    for i in range(len(log)):
+        est.step(math.nan if i == j else log.t[i], log.vx[i], log.ay[i], log.r[i], log.delta_f[i])
+    assert est.handed_at == log.t[j + 1]             # it was NaN: no hand-over said
+
+
+def test_chunks_that_overlap_are_read_as_the_log(quiet_then_loud):
+    log = quiet_then_loud[0]
+    whole = for_log("kinematic-pif", log)
+    whole.run(log)
+    est = for_log("kinematic-pif", log)
+    est.run(log[:15000])
+    est.run(log[14990:], reset=False)                # ten samples again
+    assert est.handed_at == whole.handed_at
+
+
 def test_reset_forgets_the_hand_over(quiet_then_loud):
     log, _, loud_row = quiet_then_loud
     est = for_log("kinematic-pif", log)

@@ -59,6 +59,7 @@ class HandOver(Wrapper):
     def _forget(self) -> None:
         self._t0 = math.nan
         self._stretch = -1
+        self._last = -math.inf                      # the last stamp kept of the open stretch (s)
         self._parts: list[Signals] = []             # run(): the open stretch's samples
         self._rows: list[dict[str, float]] = []     # step(): the same, sample by sample
         self._names: tuple[str, ...] | None = None  # the inner estimator's state names
@@ -71,9 +72,21 @@ class HandOver(Wrapper):
         self._forget()
 
     def _index(self, t: np.ndarray) -> np.ndarray:
+        """The stretch of each stamp of ``t`` (s), never before the open one: a stamp that is NaN or goes back (in a
+        later chunk, or a later :meth:`step`) belongs to the stretch before it, as in one run
+        (:func:`~roadbank.signals.stretch_index`)."""
         if math.isnan(self._t0) and np.isfinite(t).any():
             self._t0 = float(t[np.isfinite(t)][0])
-        return stretch_index(t, self._t0, self.stretch_s)
+        return np.maximum(stretch_index(t, self._t0, self.stretch_s), self._stretch)
+
+    def _kept(self, t: np.ndarray) -> np.ndarray:
+        """Which stamps of ``t`` (s) the stretch reader is given: finite and later than every one kept before (a
+        repeated, NaN or backward stamp is left out, as a log's reader repairs them)."""
+        with np.errstate(invalid="ignore"):
+            keep = np.isfinite(t) & (t > np.fmax.accumulate(np.concatenate([[self._last], t]))[:-1])
+        if keep.any():
+            self._last = float(t[keep][-1])
+        return keep
 
     def _close(self, stretch: Signals | None):
         """The estimator handed over to where the closed ``stretch`` reads loud (run over it), else None."""
@@ -107,7 +120,9 @@ class HandOver(Wrapper):
                 if to is not None:
                     self.handed_to, self.handed_at = to, float(signals.t[rows[0]])
                     return self._spliced(est, self._padded(to.run(signals[rows[0]:], reset=False)), rows[0])
-            self._parts.append(signals.take(rows))
+            rows = rows[self._kept(np.asarray(signals.t, dtype=np.float64)[rows])]
+            if len(rows):
+                self._parts.append(signals.take(rows))
         return est
 
     def _padded(self, est: Estimate) -> Estimate:
@@ -142,8 +157,9 @@ class HandOver(Wrapper):
                     self.handed_to, self.handed_at = to, float(t)
         if self.handed_to is not None:
             return self.handed_to.step(t, vx, ay, r, delta_f, **more)
-        self._rows.append({"t": t, "vx": vx, "ay": ay, "r": r, "delta_f": delta_f,
-                           **{c: more[c] for c in _MORE if c in more}})
+        if self._kept(np.array([t], dtype=np.float64))[0]:
+            self._rows.append({"t": t, "vx": vx, "ay": ay, "r": r, "delta_f": delta_f,
+                               **{c: more[c] for c in _MORE if c in more}})
         return self.inner.step(t, vx, ay, r, delta_f, **more)
 
     def _stretch_of_rows(self) -> Signals | None:
