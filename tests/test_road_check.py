@@ -99,9 +99,8 @@ def test_roads_that_stay_as_they_began_are_not_said(tmp_path):
     assert not summary.design["quiet"] and "reads quiet" not in summary.warnings
 
 
-def test_map_says_it_too(tmp_path):
-    """roadbank map designs on the first minute as estimate does (its smoother is pif-smoother on a quiet log), and
-    says so the same way."""
+def _map_log(tmp_path) -> None:
+    """``drive.parquet`` (smooth then rough, with positions) and ``map.toml`` in ``tmp_path``."""
     logs = _logs()
     parts = [(logs[0], True), (logs[1], True)] + [(x, False) for x in logs]
     sig = _stitched([(log.signals, smooth) for log, smooth in parts])
@@ -114,7 +113,27 @@ def test_map_says_it_too(tmp_path):
         'speed = { column = "vx", unit = "m/s" }\nlateral_acceleration = { column = "ay", unit = "m/s^2" }\n'
         'yaw_rate = { column = "r", unit = "rad/s" }\nlatitude = { column = "lat", unit = "deg" }\n'
         'longitude = { column = "lon", unit = "deg" }\n')
+
+
+def test_map_says_it_too(tmp_path):
+    """roadbank map designs on the first minute as estimate does (its smoother is pif-smoother on a quiet log), and
+    says so the same way."""
+    _map_log(tmp_path)
     rec, _, _ = map_one_log(tmp_path / "drive.parquet", 0, MapSettings(channels=tmp_path / "map.toml"))
     assert rec.status == "ok", rec.error
     said = [w for w in rec.warnings if "which reads quiet" in w]
     assert len(said) == 1 and "kinematic-smoother is pif-smoother" in said[0]
+
+
+def test_map_with_a_causal_estimator_says_its_hand_over(tmp_path):
+    """roadbank map -e kinematic-pif hands over as estimate does: it says when, as estimate says it, not that the car's
+    model was kept (it said 'split the log where the road changes' of an estimator that had been handed over)."""
+    _map_log(tmp_path)
+    rec, _, _ = map_one_log(tmp_path / "drive.parquet", 0,
+                            MapSettings(estimator="kinematic-pif", channels=tmp_path / "map.toml"))
+    assert rec.status == "ok", rec.error
+    est = estimate_log(tmp_path / "drive.parquet", tmp_path / "out.csv", channels=tmp_path / "map.toml")
+    assert "handed_over_s" in est.design
+    said = [w for w in rec.warnings if "which reads quiet" in w]
+    assert len(said) == 1 and "split the log" not in said[0]
+    assert f"from {est.design['handed_over_s']:.1f} s on kinematic-pif is the low-pass blend" in said[0]

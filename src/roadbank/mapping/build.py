@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -9,6 +10,7 @@ import numpy as np
 
 from ..defaults import MAP_ESTIMATOR
 from ..estimators import OFFLINE
+from ..fleet.process import handed_over_warnings
 from ..io import LogError
 from ..io.assemble import gnss_roles
 from ..io.channels import ChannelMap
@@ -194,6 +196,7 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
         chunks = ReadAhead(stream_log(path, channels=s.channels, format=s.format, params=params,
                                       chunk_rows=s.chunk_rows or CHUNK_ROWS))
         road, roll_rate = None, None       # whether a log designed quiet stays so (RoadCheck), its roll-rate check
+        t0 = math.nan                      # the log's first stamp (s)
         # an offline estimator smooths each chunk with the chunks after it as lookahead
         for k, chunk in enumerate(chunks):
             if "lat_deg" not in chunk.extra or "lon_deg" not in chunk.extra:
@@ -209,6 +212,7 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
             if part is None and plane is not None:
                 part = BankMap(plane, s.cell_m, s.sectors)
             if k == 0:      # designed on the log's first minute of driving, as roadbank estimate does
+                t0 = float(chunk.signals.t[0])
                 est, road, roll_rate = _design(s, chunks.leading(chunk.signals, DESIGN_MAX_S, has_design_span),
                                                designs)
             signals = correct(chunk.signals)
@@ -233,7 +237,10 @@ def map_one_log(path, log_id, settings: MapSettings, projection: LocalProjection
         why = seen.problem(path, cmap)
         if why is not None:
             raise LogError(why)
-        if road is not None:
+        handed_at = getattr(est, "handed_at", math.nan)     # a causal estimator handed over as roads turned loud
+        if math.isfinite(handed_at):
+            rec.warnings += handed_over_warnings(str(path), {s.estimator: (handed_at, est.handed_to)}, t0)
+        elif road is not None:
             rec.warnings += louder_warnings(str(path), [s.estimator], roll_rate, *road.finish())
         if settled < UNSETTLED_SHARE * valid:
             rec.warnings.append(f"{path}: {settled} of its {valid} valid estimates had settled, and only those are "
