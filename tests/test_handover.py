@@ -128,6 +128,14 @@ def test_chunks_that_overlap_are_read_as_the_log(quiet_then_loud):
     assert est.handed_at == whole.handed_at
 
 
+def test_repr_says_the_estimator_in_charge(quiet_then_loud):
+    log = quiet_then_loud[0]
+    est = for_log("kinematic-pif", log)
+    assert "handed to" not in repr(est)
+    est.run(log)
+    assert repr(est.handed_to) in repr(est) and f"{est.handed_at:.6g} s" in repr(est)     # it named pif-adaptive alone
+
+
 def test_reset_forgets_the_hand_over(quiet_then_loud):
     log, _, loud_row = quiet_then_loud
     est = for_log("kinematic-pif", log)

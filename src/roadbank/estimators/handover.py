@@ -172,4 +172,6 @@ class HandOver(Wrapper):
                        ax=chans.get("ax"), q=chans.get("q"))
 
     def __repr__(self) -> str:
-        return f"<HandOver of {self.inner!r}>"
+        """The inner estimator, and where handed over the estimator in charge and from when (s of log time)."""
+        to = "" if self.handed_to is None else f", handed to {self.handed_to!r} at {self.handed_at:.6g} s"
+        return f"<HandOver of {self.inner!r}{to}>"
