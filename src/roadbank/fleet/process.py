@@ -356,9 +356,10 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
                 cond = log_conditions(lead)
                 car, summary.design = car_for_log(lead, cond, params, vehicle)
                 ests = [for_conditions(n, cond, car, vehicle=vehicle) for n in names]
-                if (keeps_cars_model(summary.design["quiet"], summary.design.get("roll_rate"))
-                        and any(n in QUIET_MODELS for n in names)):
-                    road = RoadCheck(design_ay_floor(lead))
+                slope = summary.design.get("roll_rate")
+                if keeps_cars_model(summary.design["quiet"], slope) and any(
+                        n in QUIET_MODELS and (n in OFFLINE or not hands_over(slope)) for n in names):
+                    road = RoadCheck(design_ay_floor(lead))     # (one that hands over reads its roads itself)
                 if online_offsets:      # causal ones: a smoother's later samples would see later offsets
                     ests = [e if n in OFFLINE else with_online_offsets(e, car) for e, n in zip(ests, names)]
                 span = max((e.lookahead_s for e, n in zip(ests, names) if n in OFFLINE), default=None)

@@ -202,20 +202,13 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
     than its sensor at the sensor's rate (:func:`_at_source`), :data:`NOISE_OCTAVE` in which band the density is
     read (:func:`_octave_top`: just above the dynamics band, taken as the whole band's).
     """
-    signals, vx, moving = _design_part(signals, v_min)
-    held = _held_rows(signals, moving)
-    if held is not None:            # the rows that bring new values: the log as its sensors wrote it
-        signals, vx, moving = signals.take(held), vx[held], moving[held]
+    signals, vx, moving, held = _read_part(signals, v_min)
     steps = _source_steps(signals, moving)
     k_quiet = steps["ay"]
     k_ay = k_quiet if NOISE_AT_SOURCE == "all" else 1
     k_r = steps["r"]
-    ay_floor = _at_source(_floor, signals.ay, signals.t, moving, k_ay)
-    ay_noise = _at_most(_at_source(_noise, signals.ay, signals.t, moving, k_ay), ay_floor)
-    if QUIET_FLOOR_RATE > 0.0 or QUIET_FLOOR_SIGNAL != "ay":   # what the quiet decision reads; the cap keeps ay's
-        ay_floor = road_noise_floor_std(_floor_signal(signals, vx), signals.t, moving, at_rate=QUIET_FLOOR_RATE)
-    elif k_quiet != k_ay:
-        ay_floor = _at_source(_floor, signals.ay, signals.t, moving, k_quiet)
+    cap_floor, ay_floor = _ay_floors(signals, vx, moving, k_quiet, k_ay)
+    ay_noise = _at_most(_at_source(_noise, signals.ay, signals.t, moving, k_ay), cap_floor)
     r_noise = _at_most(_at_source(_noise, signals.r, signals.t, moving, k_r),
                        _at_source(_floor, signals.r, signals.t, moving, k_r))
     with np.errstate(invalid="ignore"):
@@ -233,6 +226,37 @@ def log_conditions(signals, v_min: float = 5.0) -> dict[str, float | None]:
             "log_gyro_unbiased": 1.0 if "p" in signals.unbiased and has_channel(signals, "p", moving) else None,
             "log_pitch_rate": (_checked(signals, "q", vx, moving, pitch_rate_slope) if "q" in signals.unbiased
                                else None)}
+
+
+def _read_part(signals, v_min: float):
+    """``(signals, vx m/s, moving, held rows or None)``: the part of a log its conditions are read on, the log's first
+    :data:`DESIGN_SPAN_S` of driving (:func:`_design_part`), its rows that bring new values alone where it was written
+    by holding its sensors' frames (:func:`_held_rows`)."""
+    signals, vx, moving = _design_part(signals, v_min)
+    held = _held_rows(signals, moving)
+    if held is not None:            # the rows that bring new values: the log as its sensors wrote it
+        signals, vx, moving = signals.take(held), vx[held], moving[held]
+    return signals, vx, moving, held
+
+
+def _ay_floors(signals, vx, moving, k_quiet: int, k_ay: int) -> tuple[float, float]:
+    """``(the ay floor that caps its noise, the floor the quiet decision reads)`` (m/s^2) of a log's read part, its
+    ``ay`` source ``k_quiet`` rows per sample (``k_ay`` as :data:`NOISE_AT_SOURCE` reads it for the noise)."""
+    cap = _at_source(_floor, signals.ay, signals.t, moving, k_ay)
+    if QUIET_FLOOR_RATE > 0.0 or QUIET_FLOOR_SIGNAL != "ay":   # what the quiet decision reads; the cap keeps ay's
+        return cap, road_noise_floor_std(_floor_signal(signals, vx), signals.t, moving, at_rate=QUIET_FLOOR_RATE)
+    if k_quiet != k_ay:
+        return cap, _at_source(_floor, signals.ay, signals.t, moving, k_quiet)
+    return cap, cap
+
+
+def quiet_floor_of(signals, v_min: float = 5.0) -> float:
+    """``log_conditions(signals, v_min)["log_ay_floor"]`` (m/s^2, two significant digits) alone, without reading the
+    rest of the conditions."""
+    signals, vx, moving, _ = _read_part(signals, v_min)
+    k_quiet = _source_steps(signals, moving, ("ay",))["ay"]
+    k_ay = k_quiet if NOISE_AT_SOURCE == "all" else 1
+    return float(f"{_ay_floors(signals, vx, moving, k_quiet, k_ay)[1]:.2g}")
 
 
 def _held_rows(signals, moving) -> np.ndarray | None:
@@ -417,15 +441,16 @@ def _design_part(signals, v_min: float):
         return signals, vx, vx >= v_min
 
 
-def _source_steps(signals, moving) -> dict[str, int]:
-    """``{"ay": k, "r": k}``: the log samples per sample of each channel's source (:func:`roadbank.signals.source_step`
-    on the ``moving`` samples) that :data:`NOISE_AT_SOURCE` reads at the source's rate, 1 for the others."""
+def _source_steps(signals, moving, channels=("ay", "r")) -> dict[str, int]:
+    """``{"ay": k, "r": k}`` (of ``channels``): the log samples per sample of each channel's source
+    (:func:`roadbank.signals.source_step` on the ``moving`` samples) that :data:`NOISE_AT_SOURCE` reads at the source's
+    rate, 1 for the others."""
     if NOISE_AT_SOURCE not in NOISE_AT_SOURCE_CHOICES:
         raise ValueError(f"NOISE_AT_SOURCE must be one of {NOISE_AT_SOURCE_CHOICES}, got {NOISE_AT_SOURCE!r}")
     if SOURCE_ROUNDING not in SOURCE_ROUNDING_CHOICES:
         raise ValueError(f"SOURCE_ROUNDING must be one of {SOURCE_ROUNDING_CHOICES}, got {SOURCE_ROUNDING!r}")
-    return {"ay": source_step(signals.ay, moving, SOURCE_ROUNDING) if NOISE_AT_SOURCE != "none" else 1,
-            "r": source_step(signals.r, moving, SOURCE_ROUNDING) if NOISE_AT_SOURCE == "all" else 1}
+    read = {"ay": NOISE_AT_SOURCE != "none", "r": NOISE_AT_SOURCE == "all"}
+    return {c: source_step(getattr(signals, c), moving, SOURCE_ROUNDING) if read[c] else 1 for c in channels}
 
 
 def source_rates(signals, v_min: float = 5.0) -> dict[str, float]:
@@ -524,14 +549,13 @@ def loud_stretch(stretch, *, design_floor: float, sensors: SensorSpec, ratio: fl
     :func:`keeps_cars_model`); else None (a stretch whose conditions cannot be read too)."""
     if driving_s(stretch, v_min) < ROAD_CHECK_MIN_S:
         return None
+    if not quiet_floor_of(stretch, v_min) >= LOUDER_FACTOR * design_floor:     # (the rest read only where it is)
+        return None
     try:
         cond = log_conditions(stretch, v_min)
     except LogError:
         return None
-    floor = cond["log_ay_floor"]
-    if not (floor is not None and floor >= LOUDER_FACTOR * design_floor):
-        return None
-    quiet = is_quiet(sensors, cond["log_rate"], cond["log_ay_noise"], ratio, floor)
+    quiet = is_quiet(sensors, cond["log_rate"], cond["log_ay_noise"], ratio, cond["log_ay_floor"])
     return None if keeps_cars_model(quiet, cond["log_roll_rate"]) else cond
 
 
