@@ -187,3 +187,17 @@ def test_estimate_says_what_it_handed_over_to():
     blend, = handed_over_warnings("log.csv", {"kinematic-pif": (130.5, estimators.make("kinematic-pif"))}, 10.0)
     assert "from 120.5 s on kinematic-pif is kinematic-gyro, the gyro-aided filter" in gyro
     assert "from 120.5 s on kinematic-pif is the low-pass blend" in blend and "pif-adaptive" in blend
+
+
+def test_the_stretch_floor_read_alone_is_the_conditions_floor(quiet_then_loud):
+    """The hand-over reads a stretch's ay floor alone first (vehicle.conditions.quiet_floor_of) and its whole
+    conditions only where that reads loud: the same number as log_conditions' log_ay_floor, quiet or loud, held too."""
+    from roadbank.vehicle.conditions import log_conditions, quiet_floor_of
+
+    log = quiet_then_loud[0]
+    frames = log.take(np.arange(0, len(log), 4))
+    held = Signals(log.t, *(np.repeat(getattr(frames, c), 4)[:len(log)] for c in ("vx", "ay", "r", "delta_f")))
+    for s in (log, held):
+        for a in range(0, len(s), 6000):
+            part = s[a:a + 6000]
+            assert quiet_floor_of(part) == log_conditions(part)["log_ay_floor"]
