@@ -200,4 +200,6 @@ def test_the_stretch_floor_read_alone_is_the_conditions_floor(quiet_then_loud):
     for s in (log, held):
         for a in range(0, len(s), 6000):
             part = s[a:a + 6000]
-            assert quiet_floor_of(part) == log_conditions(part)["log_ay_floor"]
+            alone, whole = quiet_floor_of(part), log_conditions(part)["log_ay_floor"]
+            assert alone == whole or (math.isnan(alone) and math.isnan(whole))      # (a short tail: none)
+    assert np.isfinite(quiet_floor_of(log[:6000]))
