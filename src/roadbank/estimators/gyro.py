@@ -424,7 +424,7 @@ class KinematicGyro(ScheduledObserver):
         self.pitch_offset_tau = pitch_offset_tau
         self.pitch_anchor = PITCH_ANCHOR if pitch_anchor == () else pitch_anchor
         observer = (PitchObserver(self.pitch_bandwidth, self.params.g, self.pitch_start, pitch_offset_tau,
-                                  self.pitch_anchor) if self.pitch_bandwidth > 0 else None)
+                                  self.pitch_anchor, self.max_gap) if self.pitch_bandwidth > 0 else None)
         self.grade = GradeCarry(window, self.params.g, first_span, observer, self.max_gap)
 
     @property

@@ -15,6 +15,7 @@ Linearised, the error of :math:`(\hat v, \hat\vartheta)` has the characteristic 
 lag. A constant offset :math:`b` of the pitch rate leaves :math:`2\zeta b / \omega` in the pitch, unless the
 observer learns it as a third state (``offset_tau``: the error's poles then at :math:`(s + 1/T_q)(s^2 + 2\zeta\omega
 s + \omega^2)`). It starts at :math:`\hat v = v_x`, :math:`\hat\vartheta = 0` on the log's first usable sample,
+and again after a gap longer than ``max_gap`` (the gyro-aided filter's, where the filter starts again),
 optionally with a faster bandwidth for a first span, or anchored: for a first span the pitch is the first pitch that,
 with the pitch rate integrated since, explains the speed gained beyond :math:`a_x`'s integral (least squares over the
 samples so far, with a prior), and the observer goes on from it. :math:`\omega`, the start and where it is used were
@@ -31,8 +32,8 @@ import numpy as np
 
 from ..constants import G
 from ..models.attitude import MAX_SIN_PITCH, euler_pitch_rate, kinematic_roll
-from .kernels.attitude import (C_ANCHOR, C_GAP, C_G, C_PRIOR, C_TQ, C_TSTART, C_W, C_WSTART, C_ZETA, M_B, M_INIT,
-                               N_CFG, N_MEM, pitch_run)
+from .kernels.attitude import (C_ANCHOR, C_GAP, C_G, C_PRIOR, C_RESTART, C_TQ, C_TSTART, C_W, C_WSTART, C_ZETA, M_B,
+                               M_INIT, N_CFG, N_MEM, pitch_run)
 
 #: the observer's damping (-)
 PITCH_ZETA = 0.7
@@ -68,10 +69,15 @@ class PitchObserver:
         over the samples so far, prior :data:`ANCHOR_GRADE_SD`, :data:`ANCHOR_SPEED_SD`;
         :mod:`roadbank.estimators.kernels.attitude`); the observer goes on from it. None: the observer from a zero
         pitch.
+    max_gap : float, optional
+        The gap (s, > 0) between usable samples after which the observer starts again as at the log's first usable
+        sample (speed, pitch and offset anew, the start and the anchored start again): the gyro-aided filter's
+        ``max_gap``, where it starts again (:class:`~roadbank.estimators.gyro.KinematicGyro`). None (default):
+        never; a gap longer than :data:`PITCH_MAX_GAP_S` and at most this restarts the speed state alone.
     """
 
     def __init__(self, bandwidth: float, g: float = G, start: tuple[float, float] | None = None,
-                 offset_tau: float | None = None, anchor: float | None = None):
+                 offset_tau: float | None = None, anchor: float | None = None, max_gap: float | None = None):
         w = float(bandwidth)
         ws, span = (w, 0.0) if start is None else (float(start[0]), float(start[1]))
         tq = 0.0 if offset_tau is None else float(offset_tau)
@@ -83,15 +89,20 @@ class PitchObserver:
         span_a = 0.0 if anchor is None else float(anchor)
         if not (math.isfinite(span_a) and (anchor is None or span_a > 0)):
             raise ValueError(f"pitch observer: anchor must be > 0 s or None, got {anchor}")
+        restart = math.inf if max_gap is None else float(max_gap)
+        if not restart > 0:
+            raise ValueError(f"pitch observer: max_gap must be > 0 s or None, got {max_gap}")
         self.bandwidth, self.start, self.offset_tau, self.anchor = w, start, offset_tau, anchor
+        self.max_gap = max_gap
         self._cfg = np.zeros(N_CFG)
-        self._cfg[[C_W, C_ZETA, C_G, C_WSTART, C_TSTART, C_GAP, C_TQ, C_ANCHOR, C_PRIOR]] = (
-            w, PITCH_ZETA, float(g), ws, span, PITCH_MAX_GAP_S, tq, span_a, (ANCHOR_SPEED_SD / ANCHOR_GRADE_SD) ** 2)
+        self._cfg[[C_W, C_ZETA, C_G, C_WSTART, C_TSTART, C_GAP, C_TQ, C_ANCHOR, C_PRIOR, C_RESTART]] = (
+            w, PITCH_ZETA, float(g), ws, span, PITCH_MAX_GAP_S, tq, span_a, (ANCHOR_SPEED_SD / ANCHOR_GRADE_SD) ** 2,
+            restart)
         self.reset()
 
     def __repr__(self) -> str:
         return (f"PitchObserver(bandwidth={self.bandwidth!r}, g={float(self._cfg[C_G])!r}, start={self.start!r}, "
-                f"offset_tau={self.offset_tau!r}, anchor={self.anchor!r})")
+                f"offset_tau={self.offset_tau!r}, anchor={self.anchor!r}, max_gap={self.max_gap!r})")
 
     @property
     def cfg(self) -> np.ndarray:

@@ -58,7 +58,7 @@ _OBSERVER_HEADER = Template("""
  * This module's first input p is the rate of the roll angle, p + r tan(pitch) (rad/s), the pitch
  * (rad, positive nose down) from an observer of speed and pitch driven by the pitch rate q (rad/s,
  * positive nose down) and corrected by the speed the longitudinal accelerometer predicts
- * (roadbank.estimators.pitch: bandwidth ${w} rad/s${start}${anchor}${offset}).
+ * (roadbank.estimators.pitch: bandwidth ${w} rad/s${start}${anchor}${offset}).${restart}
  * ${p}_roll_rate() gives it: call it on every sample, in time order, and give its result to
  * ${p}_step (or _step_dt) as p. Where no pitch is read (a non-finite vx, ax, q, ay or r, or a
  * pitch steeper than asin(${maxsin})) it returns p as measured. */
@@ -192,6 +192,7 @@ _OBSERVER_SOURCE = Template("""
 #define RBG_TQ (${tq})
 #define RBG_ANCHOR (${anchor})
 #define RBG_PRIOR (${prior})
+#define RBG_RESTART (${restart})
 #define RBG_MAXSIN (${maxsin})
 enum { RBG_V, RBG_PITCH, RBG_B, RBG_TLAST, RBG_TFIRST, RBG_INIT, RBG_ANCHORED, RBG_AXLAST, RBG_RLAST, RBG_A,
        RBG_Q, RBG_S, RBG_N, RBG_ST, RBG_STT, RBG_SY, RBG_STY, RBG_NMEM };
@@ -266,7 +267,7 @@ static double rbg_pitch(double *mem, double ti, double v, double a, double q)
     if (!(isfinite(ti) && isfinite(v) && isfinite(a) && isfinite(q))) {
         return NAN;
     }
-    if (mem[RBG_INIT] == 0.0) {
+    if (mem[RBG_INIT] == 0.0 || ti - mem[RBG_TLAST] > RBG_RESTART) {   /* a (re)start */
         mem[RBG_V] = v;
         mem[RBG_PITCH] = 0.0;
         mem[RBG_B] = 0.0;
@@ -359,12 +360,12 @@ graded road the roll angle's rate is `p + r tan(pitch)`; `{p}_roll_rate(&grade, 
 (state `{p}_grade`, `{p}_grade_init`) reads the pitch {how} and returns that rate: call it on every
 sample, in time order, then `{p}_step(&state, t, vx, ay, r, rate, &out)`. The same operations as roadbank's
 `GradeCarry` before the filter's kernel (`KinematicGyro.run`/`step`). After an interval longer than the filter's
-`max_gap` between samples, where the filter starts again, the window starts again too (as at a log's start: no
-window reaches back across the gap). Across an interval of 1-10 s between
-samples (a logger's dropout in a replayed log; an ECU's task has none) the module takes the roll rate linear
-between the samples either side, as roadbank's `log_gaps="trapezoid"`; roadbank's filter holds its state across such
-a gap by default (`roadbank.estimators.gyro.gap_time`): to replay such a log as it does, give both calls the time
-stamps `gap_time(t, (nan, 0, nan), 1.0, 10.0, "hold")` returns.
+`max_gap` between samples, where the filter starts again, the grade's pitch starts again too, as at a log's start
+(no window reaches back across the gap; the pitch observer begins anew, its start included). Across an interval of
+1-10 s between samples (a logger's dropout in a replayed log; an ECU's task has none) the module takes the roll
+rate linear between the samples either side, as roadbank's `log_gaps="trapezoid"`; roadbank's filter holds its state
+across such a gap by default (`roadbank.estimators.gyro.gap_time`): to replay such a log as it does, give both calls
+the time stamps `gap_time(t, (nan, 0, nan), 1.0, 10.0, "hold")` returns.
 """
 
 
@@ -397,15 +398,19 @@ def grade_parts(prefix: str, grade: dict, rate: float, float32: bool) -> tuple[s
     else:
         cfg = np.asarray(obs, dtype=np.float64)
         w, ws, ts, tq, anchor = (float(cfg[i]) for i in (K.C_W, K.C_WSTART, K.C_TSTART, K.C_TQ, K.C_ANCHOR))
+        restart = float(cfg[K.C_RESTART]) if len(cfg) > K.C_RESTART else math.inf
         head = _OBSERVER_HEADER.substitute(
             names, w=f"{w:g}", maxsin=f"{maxsin:g}", nmem=K.N_MEM,
+            restart=(f"\n * After more than {restart:g} s between the samples it reads (where the filter starts again)"
+                     "\n * the observer starts again as at a log's first sample, its start included."
+                     if math.isfinite(restart) else ""),
             start=f", {ws:g} rad/s for the first {ts:g} s" if ts > 0 and ws != w else "",
             anchor=f", the first pitch fitted over the first {anchor:g} s" if anchor > 0 else "",
             offset=f", the pitch rate's offset learnt in {tq:g} s" if tq > 0 else "")
         src = _OBSERVER_SOURCE.substitute(
             names, tan=tan, lean=_LEAN, w=lit(w), zeta=lit(cfg[K.C_ZETA]), g=lit(cfg[K.C_G]), wstart=lit(ws),
             tstart=lit(ts), gap=lit(cfg[K.C_GAP]), tq=lit(tq), anchor=lit(anchor), prior=lit(cfg[K.C_PRIOR]),
-            maxsin=lit(maxsin))
+            restart=lit(restart if math.isfinite(restart) else 1e300), maxsin=lit(maxsin))
         how = "from the pitch observer (pitch rate `q`, `ax` and the speed)"
     decls = _DECLS.substitute(names)
     return head + decls, src, README.format(p=prefix, how=how)

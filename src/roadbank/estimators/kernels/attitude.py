@@ -24,7 +24,9 @@ observer goes on (a gap longer than ``max_gap`` ends the span). The state ``mem`
 :data:`M_B`, :data:`M_TLAST`, :data:`M_TFIRST`, :data:`M_INIT`, and the anchored start's integrals and sums) carries
 over between calls, so a log in chunks gets what one call gets. A sample with a non-finite input is skipped (its output
 NaN, the state kept); after a gap longer than ``max_gap`` the speed state restarts at the measured speed and the pitch
-and offset are kept. Units: t (s), vx (m/s), ax (m/s^2), rates (rad/s), g (m/s^2), pitch (rad, positive nose down).
+and offset are kept; after one longer than ``cfg[C_RESTART]`` (the gyro-aided filter's own ``max_gap``, where it
+starts again; ``inf``: never) the observer starts again as at a log's first sample, its faster and anchored starts
+included. Units: t (s), vx (m/s), ax (m/s^2), rates (rad/s), g (m/s^2), pitch (rad, positive nose down).
 """
 
 from __future__ import annotations
@@ -36,7 +38,7 @@ from numba import njit
 from ._jit import ENTRY, HELPER
 
 # ---- cfg: settings; mem: state ----------------------------------------------------------------
-(C_W, C_ZETA, C_G, C_WSTART, C_TSTART, C_GAP, C_TQ, C_ANCHOR, C_PRIOR, N_CFG) = range(10)
+(C_W, C_ZETA, C_G, C_WSTART, C_TSTART, C_GAP, C_TQ, C_ANCHOR, C_PRIOR, C_RESTART, N_CFG) = range(11)
 (M_V, M_PITCH, M_B, M_TLAST, M_TFIRST, M_INIT,
  M_ANCHORED, M_AXLAST, M_RLAST, M_A, M_Q, M_S, M_N, M_ST, M_STT, M_SY, M_STY, N_MEM) = range(18)
 
@@ -46,14 +48,15 @@ def pitch_run(mem, cfg, t, vx, ax, rate, out):
     """The observer over the samples (``t``, ``vx``, ``ax``, ``rate`` the Euler pitch rate) into ``out`` (rad; NaN
     where a sample is skipped), from the state ``mem`` (updated); ``cfg``: bandwidth (rad/s), damping (-), g (m/s^2),
     start bandwidth (rad/s) and span (s, from the first sample used), the longest gap bridged (s), the offset's time
-    constant T_q (s; 0: no offset state), the anchored start's span (s; 0: none) and prior weight ((m/s)^2/rad^2)."""
+    constant T_q (s; 0: no offset state), the anchored start's span (s; 0: none) and prior weight ((m/s)^2/rad^2),
+    the gap (s) after which the observer starts again as at the log's first sample (inf: never)."""
     g = cfg[C_G]
     for i in range(t.shape[0]):
         ti, v, a, q = t[i], vx[i], ax[i], rate[i]
         if not (math.isfinite(ti) and math.isfinite(v) and math.isfinite(a) and math.isfinite(q)):
             out[i] = math.nan
             continue
-        if mem[M_INIT] == 0.0:
+        if mem[M_INIT] == 0.0 or ti - mem[M_TLAST] > cfg[C_RESTART]:      # a (re)start
             mem[M_V], mem[M_PITCH], mem[M_B], mem[M_TLAST], mem[M_TFIRST], mem[M_INIT] = v, 0.0, 0.0, ti, ti, 1.0
             mem[M_ANCHORED] = 1.0 if cfg[C_ANCHOR] > 0.0 else 0.0
             mem[M_AXLAST], mem[M_RLAST], mem[M_A], mem[M_Q], mem[M_S] = a, q, 0.0, 0.0, 0.0
