@@ -50,3 +50,34 @@ def linear_plant_run(params: VehicleParams, *, vx=22.2, bank_deg=5.0, delta=0.01
 @pytest.fixture(scope="session")
 def params():
     return VehicleParams()
+
+
+@pytest.fixture
+def c_restarts_as_alone(tmp_path):
+    """``check(est, log, b, k, rate)``: ``est`` (a ``KinematicGyro`` with its grade correction) exported to C and
+    compiled: on ``log`` (a drive, a gap longer than ``est.max_gap``, then drive ``b`` from row ``k``) the C module's
+    corrected roll rate equals ``est.grade``'s (NaN where it is) and its estimate ``est.run``'s to 1e-9 rad, and its
+    roll rate and estimate of ``b`` from the restart on equal its run of ``b`` alone; ``rate`` (Hz) the export's.
+    A log without ``q`` gives the C module NaN for it (the window's path)."""
+    from roadbank.export import CModule, export_c
+
+    def check(est, log, b, k, rate):
+        ref = est.run(log)
+        est.grade.reset()
+        py_rate = est.grade.correct(log).p
+        mod = CModule(export_c(est, tmp_path, rate=rate).source, tmp_path)
+        assert mod.has_grade
+
+        def c_run(s):
+            q = s.q if s.q is not None else np.full(len(s), np.nan)
+            roll = mod.roll_rates(s.t, s.vx, s.ay, s.r, s.p, s.ax, q)
+            return roll, mod.run(s.t, s.vx, s.ay, s.r, roll)
+        roll, c = c_run(log)
+        np.testing.assert_array_equal(np.isnan(roll), np.isnan(py_rate))
+        assert np.nanmax(np.abs(roll - py_rate)) <= 1e-9
+        np.testing.assert_array_equal(c["valid"], ref.valid)
+        assert np.max(np.abs(c["theta"] - ref.theta)) <= 1e-9
+        roll_b, c_b = c_run(b)
+        assert np.nanmax(np.abs(roll[k:] - roll_b)) <= 1e-9
+        assert np.max(np.abs(c["theta"][k:] - c_b["theta"])) <= 1e-9
+    return check

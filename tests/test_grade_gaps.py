@@ -17,7 +17,6 @@ import pytest
 
 from roadbank.constants import G
 from roadbank.estimators.gyro import LOG_GAPS, GradeCarry, KinematicGyro, gap_time
-from roadbank.export import CModule, export_c
 from roadbank.models.attitude import MAX_SIN_PITCH, euler_roll_rate, grade_pitch, running_area
 from roadbank.signals import Signals, concat_signals
 
@@ -221,27 +220,9 @@ def test_grade_carry_in_chunks_gives_the_whole_pitch_across_a_restart_gap():
 
 # ------------------------------------------------------------------ the C export
 @pytest.mark.slow
-def test_the_c_module_restarts_its_window_as_the_python_filter_does(tmp_path):
+def test_the_c_module_restarts_its_window_as_the_python_filter_does(c_restarts_as_alone):
     """Exported with its grade window and compiled: on the log of two drives 12 s apart the C module's corrected roll
     rate equals GradeCarry's (NaN where it is) and its estimate KinematicGyro.run's to 1e-9 rad; and the C module's
     own estimate of drive B from the restart on equals its run of B alone."""
     log, b, _, k = _joined(12.0)
-    est = KinematicGyro(sample_rate=RATE)
-    ref = est.run(log)
-    est.grade.reset()
-    py_rate = est.grade.correct(log).p
-    res = export_c(est, tmp_path, rate=RATE)
-    mod = CModule(res.source, tmp_path)
-    assert mod.has_grade
-
-    def c_run(s):
-        rate = mod.roll_rates(s.t, s.vx, s.ay, s.r, s.p, s.ax, np.full(len(s), np.nan))
-        return rate, mod.run(s.t, s.vx, s.ay, s.r, rate)
-    rate, c = c_run(log)
-    np.testing.assert_array_equal(np.isnan(rate), np.isnan(py_rate))
-    assert np.nanmax(np.abs(rate - py_rate)) <= 1e-9
-    np.testing.assert_array_equal(c["valid"], ref.valid)
-    assert np.max(np.abs(c["theta"] - ref.theta)) <= 1e-9
-    rate_b, c_b = c_run(b)
-    assert np.nanmax(np.abs(rate[k:] - rate_b)) <= 1e-9
-    assert np.max(np.abs(c["theta"][k:] - c_b["theta"])) <= 1e-9
+    c_restarts_as_alone(KinematicGyro(sample_rate=RATE), log, b, k, RATE)

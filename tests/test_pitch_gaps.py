@@ -22,7 +22,6 @@ from roadbank.estimators.gyro import GYRO_MAX_GAP_S, LOG_GAPS, KinematicGyro
 from roadbank.estimators.kernels.attitude import (C_ANCHOR, C_G, C_GAP, C_PRIOR, C_RESTART, C_TQ, C_TSTART, C_W,
                                                   C_WSTART, C_ZETA)
 from roadbank.estimators.pitch import ANCHOR_GRADE_SD, ANCHOR_SPEED_SD, PitchObserver
-from roadbank.export import CModule, export_c
 from roadbank.models.attitude import MAX_SIN_PITCH, euler_pitch_rate, kinematic_roll
 from roadbank.signals import Signals, concat_signals
 
@@ -297,30 +296,12 @@ def test_step_and_chunks_give_what_one_run_gives_across_a_restart_gap(gaps_of):
 # ------------------------------------------------------------------ the C export
 @pytest.mark.slow
 @pytest.mark.parametrize("kw", [OBSERVER, STARTED], ids=["anchored", "started"])
-def test_the_c_module_restarts_its_observer_as_the_python_filter_does(kw, tmp_path):
+def test_the_c_module_restarts_its_observer_as_the_python_filter_does(kw, c_restarts_as_alone):
     """Exported with the pitch observer and compiled: on the log of two drives 12 s apart the C module's corrected
     roll rate equals GradeCarry's (NaN where it is) and its estimate KinematicGyro.run's to 1e-9 rad; and the C
     module's own roll rate and estimate of drive B from the restart on equal its run of B alone."""
     log, b, _, k = _joined(12.0)
-    est = KinematicGyro(sample_rate=RATE, **kw)
-    ref = est.run(log)
-    est.grade.reset()
-    py_rate = est.grade.correct(log).p
-    res = export_c(est, tmp_path, rate=RATE)
-    mod = CModule(res.source, tmp_path)
-    assert mod.has_grade
-
-    def c_run(s):
-        rate = mod.roll_rates(s.t, s.vx, s.ay, s.r, s.p, s.ax, s.q)
-        return rate, mod.run(s.t, s.vx, s.ay, s.r, rate)
-    rate, c = c_run(log)
-    np.testing.assert_array_equal(np.isnan(rate), np.isnan(py_rate))
-    assert np.nanmax(np.abs(rate - py_rate)) <= 1e-9
-    np.testing.assert_array_equal(c["valid"], ref.valid)
-    assert np.max(np.abs(c["theta"] - ref.theta)) <= 1e-9
-    rate_b, c_b = c_run(b)
-    assert np.nanmax(np.abs(rate[k:] - rate_b)) <= 1e-9
-    assert np.max(np.abs(c["theta"][k:] - c_b["theta"])) <= 1e-9
+    c_restarts_as_alone(KinematicGyro(sample_rate=RATE, **kw), log, b, k, RATE)
 
 
 # ------------------------------------------------------------------ the KITTI drives on one clock
