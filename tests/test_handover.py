@@ -181,7 +181,7 @@ def test_a_held_log_is_read_at_its_source_and_handed_over(quiet_then_loud):
 
 
 def test_estimate_says_what_it_handed_over_to():
-    from roadbank.fleet.process import handed_over_warnings
+    from roadbank.vehicle.conditions import handed_over_warnings
 
     gyro, = handed_over_warnings("log.csv", {"kinematic-pif": (130.5, estimators.make("kinematic-gyro"))}, 10.0)
     blend, = handed_over_warnings("log.csv", {"kinematic-pif": (130.5, estimators.make("kinematic-pif"))}, 10.0)

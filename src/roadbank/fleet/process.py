@@ -10,7 +10,7 @@ import numpy as np
 
 from ..constants import G as G_UNIT
 from ..defaults import ESTIMATOR as DEFAULT
-from ..estimators import OFFLINE, KinematicGyro, with_online_offsets
+from ..estimators import OFFLINE, with_online_offsets
 from ..io import LogError
 from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..io.timebase import add_channel_counts, add_counts
@@ -18,8 +18,9 @@ from ..io.writers import TableWriter, estimate_table, write_error
 from ..signals import Estimate
 from ..vehicle import (DESIGN_MAX_S, car_for_log, for_conditions, has_design_span, load_vehicle, log_conditions,
                        undescribed_params)
-from ..vehicle.conditions import (GYRO_FILTER, GYRO_MODELS, QUIET_MODELS, ROLL_SLOPE_RANGE, RoadCheck, design_ay_floor,
-                                  hands_over, keeps_cars_model, louder_warnings, roll_rate_usable)
+from ..vehicle.conditions import (GYRO_MODELS, QUIET_MODELS, ROLL_SLOPE_RANGE, RoadCheck, design_ay_floor,
+                                  handed_over_warnings, hands_over, keeps_cars_model, louder_warnings,
+                                  roll_rate_usable)
 
 #: columns of the summary table, in order (see LogSummary)
 SUMMARY_COLUMNS = ("log", "status", "error", "output", "estimator", "samples", "duration_s", "valid_share",
@@ -241,18 +242,6 @@ def unsettled_warnings(source: str, name: str, stats: _BankStats, settle_s: floa
         return [f"{source}: {name} never settled: no stretch of valid samples lasts its settling time "
                 f"({settle_s:.1f} s), so its bank is the filter's start, not an estimate"]
     return []
-
-
-def handed_over_warnings(source: str, handed: dict, t0: float) -> list[str]:
-    """What ``roadbank estimate`` says of the estimators of ``handed`` (name -> (the log time, s, of the first sample
-    of the handed-over design's outputs, that design); ``t0``: the log's first stamp, s) that a log designed quiet
-    handed to the design of its first loud stretch (:class:`roadbank.estimators.HandOver`)."""
-    def what(est) -> str:
-        return (f"{GYRO_FILTER}, the gyro-aided filter (the log has a roll rate)" if isinstance(est, KinematicGyro)
-                else "the low-pass blend")
-    return [f"{source}: designed on its first minute of driving, which reads quiet ({n} is "
-            f"{QUIET_MODELS.get(n, n)}: the car's model), but its roads turned loud: from {at - t0:.1f} s on {n} is "
-            f"{what(to)}, designed for its first loud minute" for n, (at, to) in handed.items()]
 
 
 def concat_estimates(parts: list):

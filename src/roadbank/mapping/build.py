@@ -10,7 +10,6 @@ import numpy as np
 
 from ..defaults import MAP_ESTIMATOR
 from ..estimators import OFFLINE
-from ..fleet.process import handed_over_warnings
 from ..io import LogError
 from ..io.assemble import gnss_roles
 from ..io.channels import ChannelMap
@@ -21,8 +20,8 @@ from ..io.writers import write_error
 from ..params import VehicleParams
 from ..vehicle import (DESIGN_MAX_S, Vehicle, for_conditions, has_design_span, load_vehicle, log_conditions,
                        undescribed_params)
-from ..vehicle.conditions import (QUIET_MODELS, RoadCheck, design_ay_floor, is_quiet, keeps_cars_model,
-                                  louder_warnings)
+from ..vehicle.conditions import (QUIET_MODELS, RoadCheck, design_ay_floor, handed_over_warnings, is_quiet,
+                                  keeps_cars_model, louder_warnings)
 from ..vehicle.sensors import SensorSpec
 from .geo import CourseStream, LocalProjection, PositionJumps, TrackScale
 from .grid import BankMap

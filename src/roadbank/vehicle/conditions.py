@@ -559,6 +559,18 @@ def loud_stretch(stretch, *, design_floor: float, sensors: SensorSpec, ratio: fl
     return None if keeps_cars_model(quiet, cond["log_roll_rate"]) else cond
 
 
+def handed_over_warnings(source: str, handed: dict, t0: float) -> list[str]:
+    """What ``roadbank estimate`` and ``map`` say of the estimators of ``handed`` (name -> (the log time, s, of the
+    first sample of the handed-over design's outputs, that design); ``t0``: the log's first stamp, s) that a log
+    designed quiet handed to the design of its first loud stretch (:class:`roadbank.estimators.HandOver`)."""
+    def what(est) -> str:
+        return (f"{GYRO_FILTER}, the gyro-aided filter (the log has a roll rate)"
+                if getattr(est, "first_input", None) == "p" else "the low-pass blend")
+    return [f"{source}: designed on its first minute of driving, which reads quiet ({n} is "
+            f"{QUIET_MODELS.get(n, n)}: the car's model), but its roads turned loud: from {at - t0:.1f} s on {n} is "
+            f"{what(to)}, designed for its first loud minute" for n, (at, to) in handed.items()]
+
+
 def louder_warnings(path: str, names, roll_rate: float | None, loud_s: float, driving_s: float) -> list[str]:
     """A warning (a list of at most one) where a log designed quiet reads loud on at least half of its driving
     (``loud_s`` of ``driving_s`` s, :class:`RoadCheck`): the estimators of ``names`` that keep the car's model there
