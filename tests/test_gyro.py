@@ -206,6 +206,25 @@ def test_the_default_on_a_log_with_a_roll_rate_is_the_gyro_filter_and_it_beats_t
     assert isinstance(for_log("kinematic-pif", s, gate_on=4.0), estimators.KinematicPIF)
 
 
+def test_a_quiet_log_reads_an_ins_roll_rate_and_keeps_the_cars_model_with_another():
+    """The sixtieth stage: a KITTI training drive as a smooth road (quiet) with the INS's roll rate, documented free of
+    offset by the format, gets the gyro-aided filter, which follows the INS roll far better than the car's model; the
+    same log with its roll rate not so documented keeps the car's model (behind the hand-over)."""
+    from roadbank.tuning.real import rms_deg, smooth_road_logs, training_logs
+
+    logs = training_logs(DATA, roll_rate=True)
+    if not logs:
+        pytest.skip(f"no KITTI training drive under {DATA}")
+    (s, ref, m), = smooth_road_logs(logs[:1])
+    assert "p" in s.unbiased
+    ins = for_log("kinematic-pif", s)
+    assert isinstance(ins, estimators.KinematicGyro)
+    other = dataclasses.replace(s, unbiased=frozenset())
+    kept = for_log("kinematic-pif", other)
+    assert isinstance(kept, estimators.HandOver) and type(kept.inner).__name__ == "PIFAdaptive"
+    assert rms_deg(ins.run(s).theta[m], ref[m]) < 0.5 * rms_deg(kept.run(other).theta[m], ref[m])
+
+
 def test_a_quiet_log_keeps_the_cars_model_with_a_roll_rate():
     """The roll rate changes only the loud log's filter: a simulated ESP log with a roll-rate gyro is quiet and gets
     the car's model (the quiet filter) as without it."""
@@ -358,8 +377,9 @@ def test_estimate_runs_a_gyro_estimator_by_name_and_names_a_log_without_a_roll_r
 def test_the_car_is_fitted_on_the_esp_default_unless_the_default_reads_the_roll_rate(monkeypatch):
     """design_car fits the car for the estimators that model it: the default it runs per candidate car is the ESP
     one even where the log has a roll rate (the gyro filter has no car, so every car would tie); where the default
-    itself reads the roll rate (a loud log) it runs nothing and keeps the static car, which the fit on the same
-    drive without its roll rate also keeps; a quiet log with a roll rate is still fitted, on its ESP channels."""
+    itself reads the roll rate (a loud log, or a quiet one with an INS's) it runs nothing and keeps the static car,
+    which the fit on the same drive without its roll rate also keeps; a quiet log with another roll rate is still
+    fitted, on its ESP channels."""
     from roadbank import defaults
     from roadbank.io.kitti import load_kitti_oxts
     from roadbank.vehicle import car_for_log, default_reads_roll_rate, design_car, factory, log_conditions
@@ -377,9 +397,11 @@ def test_the_car_is_fitted_on_the_esp_default_unless_the_default_reads_the_roll_
     assert car_for_log(s, cond)[1]["car_from"] == factory.NOT_FITTED
     assert design_car(dataclasses.replace(s, p=None)) == defaults.VEHICLE
     assert len(seen) == 4 and all(v is None for v in seen)
-    # the same drive read as quiet (a data sheet as loud as the log): fitted on its ESP channels, roll rate left out
-    quiet = {**cond, "log_ay_noise": 1e-4, "log_ay_floor": 1e-4}
+    # the same drive read as quiet (a data sheet as loud as the log), its roll rate not documented free of offset (an
+    # INS's is read on a quiet log too: the sixtieth stage): fitted on its ESP channels, roll rate left out
+    quiet = {**cond, "log_ay_noise": 1e-4, "log_ay_floor": 1e-4, "log_gyro_unbiased": None}
     assert not default_reads_roll_rate(quiet)
+    assert default_reads_roll_rate({**quiet, "log_gyro_unbiased": 1.0})
     seen.clear()
     design_car(s, cond=quiet)
     assert len(seen) == 4 and all(v is None for v in seen)
@@ -387,7 +409,7 @@ def test_the_car_is_fitted_on_the_esp_default_unless_the_default_reads_the_roll_
     # the predicate is the default's own branch: what make_estimator builds for the same conditions
     from roadbank.estimators import KinematicGyro
     from roadbank.vehicle import for_conditions
-    for c in (cond, quiet, {**cond, "log_roll_rate": None}):
+    for c in (cond, quiet, {**quiet, "log_gyro_unbiased": 1.0}, {**cond, "log_roll_rate": None}):
         built = for_conditions("kinematic-pif", c, factory.undescribed_params())
         assert isinstance(getattr(built, "inner", built), KinematicGyro) == default_reads_roll_rate(c)
 

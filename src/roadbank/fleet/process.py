@@ -143,7 +143,7 @@ def design_words(design: dict, estimator: str) -> str:
         grade = f"; corrected for the grade by its ax{pitch}" if roll_rate_usable(ax) else ""
         free = ", free of offset (an INS's)" if design.get("roll_rate_unbiased") else ""
         loud = f"{GYRO_MODELS[estimator]} (the log has a roll rate{free}{grade})" if gyro else "the low-pass blend"
-        model = keeps_cars_model(design["quiet"], slope)
+        model = keeps_cars_model(design["quiet"], slope, bool(design.get("roll_rate_unbiased")))
         unread = " (its roll rate not read: a quiet log keeps the car's model)" if model and gyro else ""
         until = (" until its roads turn loud (then the design of its first loud minute)"
                  if model and hands_over(slope) and estimator not in OFFLINE else "")
@@ -345,8 +345,8 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
                 cond = log_conditions(lead)
                 car, summary.design = car_for_log(lead, cond, params, vehicle)
                 ests = [for_conditions(n, cond, car, vehicle=vehicle) for n in names]
-                slope = summary.design.get("roll_rate")
-                if keeps_cars_model(summary.design["quiet"], slope) and any(
+                slope, ins = summary.design.get("roll_rate"), bool(summary.design.get("roll_rate_unbiased"))
+                if keeps_cars_model(summary.design["quiet"], slope, ins) and any(
                         n in QUIET_MODELS and (n in OFFLINE or not hands_over(slope)) for n in names):
                     road = RoadCheck(design_ay_floor(lead))     # (one that hands over reads its roads itself)
                 if online_offsets:      # causal ones: a smoother's later samples would see later offsets

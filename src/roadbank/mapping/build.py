@@ -152,7 +152,7 @@ def _design(settings: MapSettings, signals, designs: dict):
     sensors = settings.vehicle.sensors if settings.vehicle is not None else SensorSpec()
     model = settings.estimator in QUIET_MODELS and keeps_cars_model(
         is_quiet(sensors, cond.get("log_rate"), cond.get("log_ay_noise"), log_ay_floor=cond.get("log_ay_floor")),
-        cond.get("log_roll_rate"))
+        cond.get("log_roll_rate"), bool(cond.get("log_gyro_unbiased")))
     return designs[key], (RoadCheck(design_ay_floor(signals)) if model else None), cond.get("log_roll_rate")
 
 

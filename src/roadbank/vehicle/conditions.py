@@ -154,10 +154,12 @@ READ_AT_SOURCE = True
 #: the values :data:`READ_AT_SOURCE` may take
 READ_AT_SOURCE_CHOICES = (False, True)
 #: whether a usable roll rate makes the default the gyro-aided filter on a quiet log too (False: a quiet log keeps the
-#: car's model whatever its roll rate). The fifty-sixth stage of :mod:`roadbank.tuning.real` chooses it
-QUIET_READS_ROLL_RATE = False
+#: car's model whatever its roll rate; ``"unbiased"``: only a roll rate documented free of offset, an INS's). The
+#: fifty-sixth stage of :mod:`roadbank.tuning.real` kept False against True (an ESP-class gyro), the sixtieth chose
+#: ``"unbiased"``
+QUIET_READS_ROLL_RATE: bool | str = "unbiased"
 #: the values :data:`QUIET_READS_ROLL_RATE` may take
-QUIET_READS_ROLL_RATE_CHOICES = (False, True)
+QUIET_READS_ROLL_RATE_CHOICES = (False, True, "unbiased")
 #: whether a channel written with few decimals is read as written faster than its sensor where its rounding, not its
 #: source, bends it between the source's samples (:func:`roadbank.signals.source_step`'s ``rounding``): the
 #: fifty-seventh stage of :mod:`roadbank.tuning.real` chooses it
@@ -395,17 +397,19 @@ def default_reads_roll_rate(cond: dict, sensors: SensorSpec | None = None) -> bo
         return False
     quiet = is_quiet(sensors if sensors is not None else SensorSpec(), cond.get("log_rate"), cond.get("log_ay_noise"),
                      QUIET_RATIO, cond.get("log_ay_floor"))
-    return not keeps_cars_model(quiet, cond.get("log_roll_rate"))
+    return not keeps_cars_model(quiet, cond.get("log_roll_rate"), bool(cond.get("log_gyro_unbiased")))
 
 
-def keeps_cars_model(quiet: bool, roll_rate: float | None) -> bool:
+def keeps_cars_model(quiet: bool, roll_rate: float | None, unbiased: bool = False) -> bool:
     """Whether the default (and its offline form, :data:`QUIET_MODELS`) keeps the car's model for a log: a ``quiet`` one
     (:func:`is_quiet`), unless its roll rate (check slope ``roll_rate``, -: :func:`roll_rate_usable`) is usable and
-    :data:`QUIET_READS_ROLL_RATE`."""
+    :data:`QUIET_READS_ROLL_RATE` is True, or ``"unbiased"`` and the roll rate is documented free of offset
+    (``unbiased``: an INS's, ``Signals.unbiased``)."""
     if QUIET_READS_ROLL_RATE not in QUIET_READS_ROLL_RATE_CHOICES:
         raise ValueError(f"QUIET_READS_ROLL_RATE must be one of {QUIET_READS_ROLL_RATE_CHOICES}, "
                          f"got {QUIET_READS_ROLL_RATE!r}")
-    return bool(quiet) and not (QUIET_READS_ROLL_RATE and roll_rate_usable(roll_rate))
+    reads = QUIET_READS_ROLL_RATE is True or (QUIET_READS_ROLL_RATE == "unbiased" and bool(unbiased))
+    return bool(quiet) and not (reads and roll_rate_usable(roll_rate))
 
 
 def _octave_top(t) -> float:
@@ -556,7 +560,7 @@ def loud_stretch(stretch, *, design_floor: float, sensors: SensorSpec, ratio: fl
     except LogError:
         return None
     quiet = is_quiet(sensors, cond["log_rate"], cond["log_ay_noise"], ratio, cond["log_ay_floor"])
-    return None if keeps_cars_model(quiet, cond["log_roll_rate"]) else cond
+    return None if keeps_cars_model(quiet, cond["log_roll_rate"], bool(cond["log_gyro_unbiased"])) else cond
 
 
 def handed_over_warnings(source: str, handed: dict, t0: float) -> list[str]:
@@ -763,7 +767,7 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
                         if name == "kinematic-pif" else None)        # the blend's option only
         own_gate = any(k in options for k in _GATE_OPTIONS)
         if not own_gate and keeps_cars_model(is_quiet(sensors, log_rate, log_ay_noise, ratio, log_ay_floor),
-                                             log_roll_rate):
+                                             log_roll_rate, bool(log_gyro_unbiased)):
             name, options = quiet_filter, {k: v for k, v in options.items() if k not in _BLEND_OPTIONS}
             if hands_over(log_roll_rate) and label not in estimators.OFFLINE and log_ay_floor is not None:
                 handover = (partial(loud_stretch, design_floor=log_ay_floor, sensors=sensors, ratio=ratio),

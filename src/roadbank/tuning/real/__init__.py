@@ -68,11 +68,13 @@ from .grade import (ANCHORED_BANDWIDTHS, GRADE_FIRST_SPANS_S, GRADE_START_WINDOW
 from .checks import (CHECK_MAX_CORR, CHECK_PIECES_S, CHECK_RANGES, CHECK_WINDOWS_S, FIXED_CHANNEL_RULES,
                      SHORT_CHECK_WINDOWS_S, choose_fixed_channels, choose_roll_check, choose_roll_check_again,
                      choose_short_check, short_rows)
-from .roads import (RESTART_GAP_S, ROAD_CHANGE_GAIN_DEG, ROAD_CHANGE_GYRO_GAIN_DEG, ROAD_CHANGE_LOSS_DEG,
+from .roads import (QUIET_INS_GAIN_DEG, choose_quiet_ins, smooth_road_logs, RESTART_GAP_S, ROAD_CHANGE_GAIN_DEG,
+                    ROAD_CHANGE_GYRO_GAIN_DEG, ROAD_CHANGE_LOSS_DEG,
                     choose_road_change, choose_road_change_gyro, long_quiet_sets, long_sim_errors, road_change_build,
                     smooth_start_logs)
 
-__all__ = ["RESTART_GAP_S", "ROAD_CHANGE_GYRO_GAIN_DEG", "choose_road_change_gyro",
+__all__ = ["QUIET_INS_GAIN_DEG", "choose_quiet_ins", "smooth_road_logs",
+           "RESTART_GAP_S", "ROAD_CHANGE_GYRO_GAIN_DEG", "choose_road_change_gyro",
            "ROAD_CHANGE_GAIN_DEG", "ROAD_CHANGE_LOSS_DEG", "choose_road_change", "long_quiet_sets",
            "long_sim_errors", "road_change_build", "smooth_start_logs",
            "ANCHORED_BANDWIDTHS", "ANCHORED_BIAS_TAUS_S", "ANCHORED_CUTOFFS_HZ", "BANDWIDTH_39", "BANK_RATES_DEG",

@@ -9,12 +9,16 @@ and long quiet simulated logs of each shipped car (:func:`long_quiet_sets`); the
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
+from scipy.signal import butter, filtfilt
 
 from ...estimators.offsets import with_online_offsets
 from ...evaluation.compare import usable_samples
 from ...evaluation.metrics import error_metrics
-from ...signals import Signals, concat_signals
+from ...signals import Signals, concat_signals, sample_rate
+from ...sim.sensors import SensorConfig
 from ..objective import FAILED_DEG, SETTLE
 from .common import log_errors
 from .esp import _with_settings, same_outputs
@@ -159,6 +163,51 @@ def choose_road_change_gyro(esp_long, gyro_long) -> tuple:
     return ("esp" if ships else True), errs
 
 
-__all__ = ["choose_road_change_gyro", "ROAD_CHANGE_GYRO_GAIN_DEG", "RESTART_GAP_S", "choose_road_change",
+#: the sixtieth stage's smooth road: ``ay`` and the yaw rate through a zero-phase Butterworth low-pass of this order and
+#: cut-off (Hz), plus the white noise of the ESP sensors' data sheet (:class:`roadbank.sim.sensors.SensorConfig`)
+SMOOTH_ROAD_ORDER = 2
+SMOOTH_ROAD_CUTOFF_HZ = 0.5
+#: its rule: B ships if its median is below A's by more than this (deg)
+QUIET_INS_GAIN_DEG = 0.005
+
+
+def smooth_road_logs(logs) -> list:
+    """``logs`` (``(signals, reference roll rad, scored mask)``, :func:`~roadbank.tuning.real.training_logs`) as the
+    same drives on a smooth road read by a data sheet's sensors: ``ay`` (m/s^2) and the yaw rate (rad/s) through a
+    zero-phase :data:`SMOOTH_ROAD_ORDER` order Butterworth low-pass at :data:`SMOOTH_ROAD_CUTOFF_HZ` (at the drive's own
+    rate) plus the ESP data sheet's white noise (seeded by the drive's place in ``logs``); every other channel, the
+    reference and the mask as they are."""
+    cfg = SensorConfig()
+    out = []
+    for i, (s, ref, mask) in enumerate(logs):
+        rng = np.random.default_rng(i)
+        b, a = butter(SMOOTH_ROAD_ORDER, SMOOTH_ROAD_CUTOFF_HZ / (0.5 * sample_rate(s.t)))
+        ay = filtfilt(b, a, s.ay) + cfg.ay.noise_std * rng.standard_normal(len(s))
+        r = filtfilt(b, a, s.r) + cfg.yaw_rate.noise_std * rng.standard_normal(len(s))
+        out.append((dataclasses.replace(s, ay=ay, r=r), ref, mask))
+    return out
+
+
+def choose_quiet_ins(gyro_logs, smooth_logs, sim_gyro_sets) -> tuple:
+    """The sixtieth stage (docs/estimators.md): ``kinematic-pif`` as ``roadbank estimate`` runs it (designed for each
+    log, behind the online offset learner) with :data:`roadbank.vehicle.conditions.QUIET_READS_ROLL_RATE` False (A) and
+    ``"unbiased"`` (B), on ``smooth_logs`` (:func:`smooth_road_logs` of the KITTI training drives with their INS roll
+    rate). Returns ``(chosen setting, {setting: raw RMS per log (deg)})``. The drives as recorded (``gyro_logs``) and
+    the simulated drives with an ESP-class roll-rate gyro (``sim_gyro_sets``: lists, per offset, of drive sets) must
+    give the same outputs under both: a ValueError where they do not."""
+    def build(choice):
+        at = _with_settings(quiet_reads_roll_rate=choice)
+        return lambda s: with_online_offsets(at(s))
+
+    kept = [s for s, _, _ in gyro_logs] + [d.signals for sets in sim_gyro_sets for drives in sets for d in drives]
+    same_outputs(build, kept, (False, "unbiased"),
+                 "a log without an INS's roll rate, or a loud one, was read otherwise: the stage's guard fails")
+    errs = {c: log_errors(build(c), smooth_logs) for c in (False, "unbiased")}
+    ships = np.median(errs["unbiased"]) < np.median(errs[False]) - QUIET_INS_GAIN_DEG
+    return ("unbiased" if ships else False), errs
+
+
+__all__ = ["choose_quiet_ins", "smooth_road_logs", "QUIET_INS_GAIN_DEG",
+           "choose_road_change_gyro", "ROAD_CHANGE_GYRO_GAIN_DEG", "RESTART_GAP_S", "choose_road_change",
            "smooth_start_logs", "long_quiet_sets", "long_sim_errors", "road_change_build",
            "ROAD_CHANGE_GAIN_DEG", "ROAD_CHANGE_LOSS_DEG"]
