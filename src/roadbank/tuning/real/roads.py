@@ -117,8 +117,10 @@ def long_sim_errors(build, long_sets) -> list[list[float]]:
 
 def road_change_build(choice: bool | str):
     """``build``: ``kinematic-pif`` as ``roadbank estimate`` runs it (designed for the log, behind the online offset
-    learner) with :data:`roadbank.vehicle.conditions.ROAD_CHANGE` ``choice``."""
-    at = _with_settings(road_change=choice)
+    learner) with :data:`roadbank.vehicle.conditions.ROAD_CHANGE` ``choice``, as the fifty-eighth and fifty-ninth stages
+    ran: before the sixtieth, a quiet log kept the car's model whatever its roll rate (``QUIET_READS_ROLL_RATE``
+    False)."""
+    at = _with_settings(road_change=choice, quiet_reads_roll_rate=False)
     return lambda s: with_online_offsets(at(s))
 
 
