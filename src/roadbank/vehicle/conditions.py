@@ -745,10 +745,14 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         The estimator's keyword options; an explicit ``R``, ``Q_ay`` or ``tuning`` keeps the
         sensor out of that weight. ``kinematic-pif`` also takes ``quiet_ratio`` (-, default
         :data:`QUIET_RATIO`; 0: never) and ``quiet_filter`` (default :data:`QUIET_FILTER`): on a
-        quiet log (:func:`is_quiet` with that ratio) it is that filter, with the car's model
-        throughout, built from the same options less those of the low-pass and the gate and
+        quiet log (:func:`is_quiet` with that ratio) it is that filter, with the car's model,
+        built from the same options less those of the low-pass and the gate and
         named ``kinematic-pif`` (its outputs keep their columns); unless the options set the
-        gate themselves. ``kinematic-smoother`` likewise (:data:`QUIET_MODELS`: ``pif-smoother``).
+        gate themselves, or the log's usable roll rate is documented free of offset (``log_gyro_unbiased``,
+        :data:`QUIET_READS_ROLL_RATE`: then the gyro-aided filter). ``kinematic-smoother`` likewise
+        (:data:`QUIET_MODELS`: ``pif-smoother``). The causal one is handed over to the design of the log's
+        first loud stretch where its roads turn loud (:class:`roadbank.estimators.HandOver`,
+        :func:`loud_stretch`, :data:`ROAD_CHANGE`), needing ``log_ay_floor``.
         The blend's low-pass gets the sampled-data lead of the log's rate:
         ``lead = lead_samples / rate`` (s; ``lead_samples`` default
         :data:`~roadbank.estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES`), unless ``lead`` is given.
