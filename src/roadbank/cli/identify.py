@@ -77,7 +77,8 @@ def _stop(error: str, as_json: bool, failed) -> NoReturn:
 
 @click.command()
 @click.argument("logs", nargs=-1, required=True, type=PathOption(path_type=Path))
-@vehicle_option("Its m, Iz, Lf, Lr and roll data are taken as known; the output starts from it.")
+@vehicle_option("Its m, Iz, Lf, Lr, steering ratio and roll data are taken as known; the output starts from it.",
+                none_if_absent=True)
 @click.option("--channels", "channels", type=PathOption(path_type=Path), default=None,
               help="Channel map (TOML), as for `roadbank estimate`.")
 @click.option("--format", "fmt", default=None,
@@ -116,6 +117,13 @@ def identify(logs, vehicle, channels, fmt, output, straight_bank, ay_max, as_jso
     from .inputs import channel_map_and_logs
 
     settings = IdentifySettings(straight_bank=math.radians(straight_bank), ay_max=ay_max)  # options in range
+    if vehicle is None:         # said: what the identified values rest on is then not the user's car
+        from ..vehicle import load_vehicle
+        vehicle = load_vehicle(None)
+        click.echo(f"warning: no --vehicle: the base car is {vehicle.name}, whose m, Iz, Lf, Lr and steering ratio "
+                   f"({vehicle.params.steering_ratio:g}) are taken as known; the understeer gradient, the axle "
+                   "stiffnesses and the steering offset rest on them (a wrong steering ratio scales the understeer "
+                   "gradient): give your car's file, or a built-in car near it, with --vehicle", err=True)
     cmap, logs = channel_map_and_logs(channels, logs)
     params = vehicle.params
     loaded, failed = [], []
