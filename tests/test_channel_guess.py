@@ -171,17 +171,26 @@ def test_names_after_a_message_prefix_are_guessed(tmp_path, form):
     guessed map reads the drive back, in SI, to the digits written."""
     s = load_log(KITTI_0070).signals
     names = PREFIXED[form]
-    f = tmp_path / "esp.csv"
-    write_table(f, dict(zip(names, (s.t, s.vx * 3.6, s.ay, np.degrees(s.r), np.degrees(s.p)))))
+    output = _guessed_and_read_back(tmp_path, s, names, (s.t, s.vx * 3.6, s.ay, np.degrees(s.r), np.degrees(s.p)),
+                                    ("t", "vx", "ay", "r", "p"))
+    for role, name, unit in [("speed", names[1], "km/h"), ("lateral_acceleration", names[2], "m/s^2"),
+                             ("yaw_rate", names[3], "deg/s"), ("roll_rate", names[4], "deg/s")]:
+        assert f"{role:<21} <- {name!r} in {unit}" in output, output
+
+
+def _guessed_and_read_back(tmp_path, s, names, columns, channels) -> str:
+    """``columns`` of the drive ``s`` written to a CSV under ``names``; ``roadbank channels`` guesses its map (exit 0),
+    and the log read with that map gives ``channels`` of ``s`` back, in SI, to the digits written. Returns what
+    ``channels`` printed."""
+    f = tmp_path / "log.csv"
+    write_table(f, dict(zip(names, columns)))
     m = tmp_path / "map.toml"
     res = CliRunner().invoke(main, ["channels", str(f), "-o", str(m)])
     assert res.exit_code == 0, res.output
-    for role, name, unit in [("speed", names[1], "km/h"), ("lateral_acceleration", names[2], "m/s^2"),
-                             ("yaw_rate", names[3], "deg/s"), ("roll_rate", names[4], "deg/s")]:
-        assert f"{role:<21} <- {name!r} in {unit}" in res.output, res.output
     got = load_log(f, channels=read_channel_map(m)).signals
-    for k in ("t", "vx", "ay", "r", "p"):
+    for k in channels:
         np.testing.assert_allclose(getattr(got, k), getattr(s, k), rtol=1e-9, atol=1e-12, err_msg=k)
+    return res.output
 
 
 @pytest.mark.skipif(not KITTI_0070.is_dir(), reason="../shared/data/kitti-oxts is not here")
@@ -191,17 +200,11 @@ def test_vw_style_can_signal_names_are_guessed(tmp_path):
     drive back in SI to the digits written."""
     s = load_log(KITTI_0070).signals
     names = ("Zeit", "ESP_v_Signal", "ESP_Querbeschleunigung", "ESP_Gierrate", "ESP_Laengsbeschl")
-    f = tmp_path / "vw.csv"
-    write_table(f, dict(zip(names, (s.t, s.vx * 3.6, s.ay, np.degrees(s.r), s.ax))))
-    m = tmp_path / "map.toml"
-    res = CliRunner().invoke(main, ["channels", str(f), "-o", str(m)])
-    assert res.exit_code == 0, res.output
+    output = _guessed_and_read_back(tmp_path, s, names, (s.t, s.vx * 3.6, s.ay, np.degrees(s.r), s.ax),
+                                    ("t", "vx", "ay", "r", "ax"))
     for role, name, unit in [("speed", names[1], "km/h"), ("lateral_acceleration", names[2], "m/s^2"),
                              ("yaw_rate", names[3], "deg/s"), ("longitudinal_acceleration", names[4], "m/s^2")]:
-        assert f"{role:<26} <- {name!r} in {unit}" in res.output, res.output
-    got = load_log(f, channels=read_channel_map(m)).signals
-    for k in ("t", "vx", "ay", "r", "ax"):
-        np.testing.assert_allclose(getattr(got, k), getattr(s, k), rtol=1e-9, atol=1e-12, err_msg=k)
+        assert f"{role:<26} <- {name!r} in {unit}" in output, output
 
 
 @pytest.mark.parametrize("name, role", [("ESP_LatAcc", "lateral_acceleration"),

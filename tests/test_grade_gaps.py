@@ -59,14 +59,24 @@ def _drive(duration: float, v0: float, dv: float, pitch0: float, seed: int, t0: 
     return s, bank
 
 
-def _joined(gap: float):
-    """Drive A (60 s, 20 m/s, uphill) then, ``gap`` s after its last sample, drive B (40 s from 6 m/s, downhill: a
-    jump of 14 m/s in speed across the gap that ax never shows). Returns the log, drive B alone (its own clock from
-    0), B's true roll and B's first row in the log."""
-    a, _ = _drive(60.0, 20.0, 2.0, 3.0, seed=1)
-    b, roll = _drive(40.0, 6.0, 3.0, -4.0, seed=2)
+def _joined(gap: float, drive=_drive):
+    """Drive A (60 s, 20 m/s, 3 deg uphill) then, ``gap`` s after its last sample, drive B (40 s from 6 m/s, 4 deg
+    downhill: a jump of 14 m/s in speed across the gap that ax never shows), each made by ``drive`` (a module's
+    ``_drive``). Returns the log, drive B alone (its own clock from 0), B's true roll and B's first row in the log."""
+    a, _ = drive(60.0, 20.0, 2.0, 3.0, seed=1)
+    b, roll = drive(40.0, 6.0, 3.0, -4.0, seed=2)
     moved = dataclasses.replace(b, t=b.t + a.t[-1] + gap)
     return concat_signals([a, moved]), b, roll, len(a)
+
+
+def _with_held_gaps(s: Signals) -> Signals:
+    """``s`` (at least 1601 samples) with its stamps on a grid of 1/1024 s (sums of them exact) and gaps of 3 s after
+    row 800 and of exactly 10 s (``max_gap``: held through) after row 1600."""
+    t = np.round(s.t * 1024.0) / 1024.0
+    t[800:] += 3.0
+    t[1600:] += 10.0 - (t[1600] - t[1599])
+    assert np.max(np.diff(t)) == 10.0
+    return dataclasses.replace(s, t=t)
 
 
 # ------------------------------------------------------------------ the pitch itself
@@ -118,12 +128,7 @@ def test_gaps_up_to_max_gap_read_the_pitch_as_before():
 def test_the_filter_across_held_gaps_reads_the_roll_rate_the_former_formula_corrects():
     """A drive with gaps of 3 and 10 s (at most max_gap): under each gap mode the filter's estimate equals that of the
     filter without a grade correction fed the roll rate the former formula corrects on the stamps it reads."""
-    s, _ = _drive(120.0, 15.0, 3.0, 2.0, seed=4)
-    t = np.round(s.t * 1024.0) / 1024.0             # exact sums: the second interval is 10 s to the bit
-    t[800:] += 3.0
-    t[1600:] += 10.0 - (t[1600] - t[1599])
-    assert np.max(np.diff(t)) == 10.0
-    s = dataclasses.replace(s, t=t)
+    s = _with_held_gaps(_drive(120.0, 15.0, 3.0, 2.0, seed=4)[0])
     for mode in LOG_GAPS:
         if mode == "restart":
             continue                                 # every gap there is made longer than max_gap: a restart
@@ -183,20 +188,32 @@ def test_step_and_chunks_give_what_one_run_gives_across_a_restart_gap(gaps_of):
     """A log with a held 3 s gap in drive A, a 12 s restart gap, a 15 s stop (rows below v_min: a restart gap of
     the usable samples) and NaN samples in ax: step() and chunks (of 13 and 37 samples, and split at the gap) give
     one run's numbers bit for bit, under every gap mode."""
-    log, _, _, k = _joined(12.0)
+    log, k = _with_gap_and_stop(*_joined(12.0)[::3])
+    _steps_and_chunks_as_one_run(log, k, lambda mode: KinematicGyro(log_gaps=mode, sample_rate=RATE), gaps_of)
+
+
+def _with_gap_and_stop(log: Signals, k: int) -> tuple[Signals, int]:
+    """``log`` (two drives on one clock, the second from row ``k``) with a held 3 s gap after row 500, a 15 s stop
+    (rows below v_min) from 10 s into the second drive and NaN ax at rows 300 and ``k + 5``; and ``k``."""
     t, vx, ax = log.t.copy(), log.vx.copy(), log.ax.copy()
     t[500:] += 3.0
-    stop = (t > t[k] + 10.0) & (t < t[k] + 25.0)
-    vx[stop] = 0.0
+    vx[(t > t[k] + 10.0) & (t < t[k] + 25.0)] = 0.0
     ax[[300, k + 5]] = np.nan
-    log = dataclasses.replace(log, t=t, vx=vx, ax=ax)
+    return dataclasses.replace(log, t=t, vx=vx, ax=ax), k
+
+
+def _steps_and_chunks_as_one_run(log: Signals, k: int, make, gaps_of: str) -> None:
+    """Under every gap mode, the estimator ``make(mode)`` (its ``gaps_of`` set) gives one run's ``theta`` bit for bit
+    sample by sample (with the log's roll rate, ax and pitch rate where it has them) and in chunks of 13 and 37
+    samples and split at row ``k``."""
+    more = [c for c in ("p", "ax", "q") if getattr(log, c) is not None]
     for mode in LOG_GAPS:
-        est = KinematicGyro(log_gaps=mode, sample_rate=RATE)
+        est = make(mode)
         est.gaps_of = gaps_of
         whole = est.run(log).theta
         est.reset()
         steps = np.array([est.step(*(float(getattr(log, c)[i]) for c in ("t", "vx", "ay", "r", "delta_f")),
-                                   p=float(log.p[i]), ax=float(log.ax[i])).theta for i in range(len(log))])
+                                   **{c: float(getattr(log, c)[i]) for c in more}).theta for i in range(len(log))])
         np.testing.assert_array_equal(steps, whole, err_msg=f"step {mode}")
         for cuts in (range(0, len(log), 13), range(0, len(log), 37), [0, k - 2, k, k + 1, len(log)]):
             est.reset()

@@ -23,7 +23,8 @@ from roadbank.estimators.kernels.attitude import (C_ANCHOR, C_G, C_GAP, C_PRIOR,
                                                   C_WSTART, C_ZETA)
 from roadbank.estimators.pitch import ANCHOR_GRADE_SD, ANCHOR_SPEED_SD, PitchObserver
 from roadbank.models.attitude import MAX_SIN_PITCH, euler_pitch_rate, kinematic_roll
-from roadbank.signals import Signals, concat_signals
+from roadbank.signals import Signals
+from test_grade_gaps import _joined as joined, _steps_and_chunks_as_one_run, _with_gap_and_stop, _with_held_gaps
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 RATE = 16.0
@@ -120,12 +121,8 @@ def _drive(duration: float, v0: float, dv: float, pitch0: float, seed: int) -> t
 
 
 def _joined(gap: float):
-    """Drive A (60 s, 20 m/s, 3 deg uphill) then, ``gap`` s after its last sample, drive B (40 s from 6 m/s, 4 deg
-    downhill). Returns the log, drive B alone (its own clock from 0), B's true roll and B's first row in the log."""
-    a, _ = _drive(60.0, 20.0, 2.0, 3.0, seed=1)
-    b, roll = _drive(40.0, 6.0, 3.0, -4.0, seed=2)
-    moved = dataclasses.replace(b, t=b.t + a.t[-1] + gap)
-    return concat_signals([a, moved]), b, roll, len(a)
+    """:func:`test_grade_gaps._joined` of this module's drives (with a pitch rate)."""
+    return joined(gap, _drive)
 
 
 def _euler_rate(s: Signals, g: float = G) -> np.ndarray:
@@ -217,12 +214,7 @@ def test_gaps_up_to_max_gap_read_the_pitch_as_before():
 def test_the_filter_across_held_gaps_reads_what_it_read_before():
     """A drive with gaps of 3 and 10 s (at most max_gap), under each gap mode but "restart": the filter's estimate
     equals that of the filter whose observer never restarts (max_gap None), bit for bit."""
-    s, _ = _drive(120.0, 15.0, 3.0, 2.0, seed=5)
-    t = s.t.copy()
-    t[800:] += 3.0
-    t[1600:] += 10.0 - (t[1600] - t[1599])
-    assert np.max(np.diff(t)) == 10.0
-    s = dataclasses.replace(s, t=t)
+    s = _with_held_gaps(_drive(120.0, 15.0, 3.0, 2.0, seed=5)[0])      # (its stamps on that grid already)
     for mode in LOG_GAPS:
         if mode == "restart":
             continue                                 # every gap there is made longer than max_gap: a restart
@@ -268,29 +260,11 @@ def test_step_and_chunks_give_what_one_run_gives_across_a_restart_gap(gaps_of):
     """A log with a held 3 s gap in drive A, a 12 s restart gap, a 15 s stop (rows below v_min) and NaN samples in
     ax and q: step() and chunks (of 13 and 37 samples, and split at the gap) give one run's numbers bit for bit,
     under every gap mode."""
-    log, _, _, k = _joined(12.0)
-    t, vx, ax, q = log.t.copy(), log.vx.copy(), log.ax.copy(), log.q.copy()
-    t[500:] += 3.0
-    stop = (t > t[k] + 10.0) & (t < t[k] + 25.0)
-    vx[stop] = 0.0
-    ax[[300, k + 5]] = np.nan
+    log, k = _with_gap_and_stop(*_joined(12.0)[::3])
+    q = log.q.copy()
     q[[301, k, k + 40]] = np.nan
-    log = dataclasses.replace(log, t=t, vx=vx, ax=ax, q=q)
-    for mode in LOG_GAPS:
-        est = KinematicGyro(log_gaps=mode, sample_rate=RATE, **OBSERVER)
-        est.gaps_of = gaps_of
-        whole = est.run(log).theta
-        est.reset()
-        steps = np.array([est.step(*(float(getattr(log, c)[i]) for c in ("t", "vx", "ay", "r", "delta_f")),
-                                   p=float(log.p[i]), ax=float(log.ax[i]), q=float(log.q[i])).theta
-                          for i in range(len(log))])
-        np.testing.assert_array_equal(steps, whole, err_msg=f"step {mode}")
-        for cuts in (range(0, len(log), 13), range(0, len(log), 37), [0, k - 2, k, k + 1, len(log)]):
-            est.reset()
-            bounds = [*cuts, len(log)]
-            pieces = np.concatenate([est.run(log[a:z], reset=False).theta for a, z in zip(bounds, bounds[1:])
-                                     if z > a])
-            np.testing.assert_array_equal(pieces, whole, err_msg=f"chunks {mode}")
+    _steps_and_chunks_as_one_run(dataclasses.replace(log, q=q), k,
+                                 lambda mode: KinematicGyro(log_gaps=mode, sample_rate=RATE, **OBSERVER), gaps_of)
 
 
 # ------------------------------------------------------------------ the C export
