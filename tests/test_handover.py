@@ -16,7 +16,7 @@ from roadbank import estimators
 from roadbank.estimators import HandOver
 from roadbank.signals import Signals
 from roadbank.tuning.real import design_settings, simulated_sets
-from roadbank.tuning.real.roads import _on_one_clock
+from roadbank.tuning.real.roads import on_one_clock
 from roadbank.vehicle import for_log
 from roadbank.vehicle.conditions import ROAD_CHANGE, ROAD_CHECK_WINDOW_S
 
@@ -30,7 +30,7 @@ def quiet_then_loud():
     rng = np.random.default_rng(1)
     loud = [Signals(d.signals.t, d.signals.vx, d.signals.ay + LOUD_AY * rng.standard_normal(len(d.signals)),
                     d.signals.r, d.signals.delta_f) for d in drives[6:]]
-    log, starts = _on_one_clock([d.signals for d in drives[:6]] + loud, 0.1)
+    log, starts = on_one_clock([d.signals for d in drives[:6]] + loud, 0.1)
     return log, np.concatenate([d.phi_b for d in drives]), starts[6]
 
 

@@ -287,19 +287,19 @@ def test_kitti_0034_after_0018_reads_as_alone_after_a_restart_gap():
     0018 and 0.10000 s for 0034, the two differ by 1e-6 rad), so its raw RMS against its INS roll is the alone run's
     (0.2271 deg); the former observer gave 0.3156. Held 2 s apart: as before, bit for bit."""
     from roadbank.tuning.real import training_logs
-    from roadbank.tuning.real.roads import _on_one_clock
+    from roadbank.tuning.real.roads import on_one_clock
     from roadbank.vehicle import for_log
     logs = training_logs(DATA, roll_rate=True, pitch_rate=True)
     if len(logs) < 8:
         pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
     (a, _, _), (b, ref, mask) = logs[6], logs[7]
-    b_alone, _ = _on_one_clock([b], 0.0)
+    b_alone, _ = on_one_clock([b], 0.0)
     est = for_log("kinematic-pif", b)
     assert isinstance(est, KinematicGyro) and est.grade.pitch is not None
     auto_alone = _rms_deg(est.run(b).theta[mask], ref[mask])
     assert auto_alone == pytest.approx(0.2271, abs=5e-5)
     for gap in (2.0, 12.0, 30.0, 100.0):
-        log, (_, k) = _on_one_clock([a, b], gap)
+        log, (_, k) = on_one_clock([a, b], gap)
         est = for_log("kinematic-pif", log)
         auto = _rms_deg(est.run(log).theta[k:][mask], ref[mask])
         est.set_sample_rate(10.0)

@@ -14,9 +14,9 @@ from roadbank import Signals
 from roadbank.fleet.process import estimate_log
 from roadbank.io import load_log
 from roadbank.mapping.build import MapSettings, map_one_log
-from roadbank.signals import concat_signals
 from roadbank.fleet.process import design_words
 from roadbank.tuning.real import design_settings
+from roadbank.tuning.real.roads import on_one_clock, smoothed_drive
 from roadbank.vehicle.conditions import ROAD_CHECK_WINDOW_S, RoadCheck, design_ay_floor
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
@@ -34,25 +34,15 @@ def _drives() -> list[Signals]:
     return [log.signals for log in _logs()]
 
 
-def _esp(s: Signals, t0: float, smooth: bool = False, seed: int = 0) -> Signals:
-    """The drive's ESP channels from ``t0`` (s) on; ``smooth``: ay and the yaw rate through a 2 s moving mean with
-    0.02 m/s^2 (0.002 rad/s) of white noise, a smooth road on a data sheet's sensors."""
-    ay, r = np.array(s.ay), np.array(s.r)
-    if smooth:
-        rng = np.random.default_rng(seed)
-        k = np.ones(20) / 20.0
-        ay = np.convolve(ay, k, mode="same") + 0.02 * rng.standard_normal(len(ay))
-        r = np.convolve(r, k, mode="same") + 0.002 * rng.standard_normal(len(r))
-    return Signals(s.t - s.t[0] + t0, s.vx, ay, r, np.full(len(s), np.nan))
+def _esp(s: Signals, smooth: bool = False, seed: int = 0) -> Signals:
+    """The drive's ESP channels; ``smooth``: ay and the yaw rate as a smooth road on a data sheet's sensors (a 2 s
+    moving mean with 0.02 m/s^2, 0.002 rad/s of white noise: ``tuning.real.roads.smoothed_drive``)."""
+    x = smoothed_drive(s, seed) if smooth else s
+    return Signals(x.t, x.vx, x.ay, x.r, np.full(len(x), np.nan))
 
 
 def _stitched(parts: list[tuple[Signals, bool]]) -> Signals:
-    out, t0 = [], 0.0
-    for k, (s, smooth) in enumerate(parts):
-        e = _esp(s, t0, smooth, seed=k)
-        out.append(e)
-        t0 = float(e.t[-1]) + 0.1
-    return concat_signals(out)
+    return on_one_clock([_esp(s, smooth, seed=k) for k, (s, smooth) in enumerate(parts)], 0.1)[0]
 
 
 def _write(s: Signals, path: Path) -> Path:
@@ -71,7 +61,7 @@ def test_a_smooth_first_minute_then_rough_roads_is_said(tmp_path):
     assert "designed on its first minute of driving, which reads quiet" in summary.warnings
     assert "but its roads turned loud: from" in summary.warnings
     assert "split the log where the road changes" not in summary.warnings
-    smooth_s = float(_esp(d[0], 0.0).t[-1] + 0.1 + _esp(d[1], 0.0).t[-1])       # where the rough roads begin
+    smooth_s = float(np.ptp(d[0].t) + 0.1 + np.ptp(d[1].t))        # where the rough roads begin
     assert smooth_s < summary.design["handed_over_s"] <= smooth_s + 2 * ROAD_CHECK_WINDOW_S
     assert "until its roads turn loud" in design_words(summary.design, "kinematic-pif")
     with design_settings(road_change=False):

@@ -40,7 +40,7 @@ KITTI_GAP_S = 0.1
 SIM_GAP_S = 2.0
 
 
-def _smooth(s: Signals, seed: int) -> Signals:
+def smoothed_drive(s: Signals, seed: int) -> Signals:
     """``s`` as a smooth road on a data sheet's sensors: ``ay``, ``r`` and ``p`` (where it has one) through a centred
     moving mean of :data:`SMOOTH_SAMPLES` samples plus white noise (:data:`SMOOTH_AY_NOISE` m/s^2,
     :data:`SMOOTH_RATE_NOISE` rad/s)."""
@@ -55,7 +55,7 @@ def _smooth(s: Signals, seed: int) -> Signals:
     return Signals(**{c: out.get(c, getattr(s, c)) for c in s.channels}, fixed=s.fixed, unbiased=s.unbiased)
 
 
-def _on_one_clock(parts: list[Signals], gap: float) -> tuple[Signals, list[int]]:
+def on_one_clock(parts: list[Signals], gap: float) -> tuple[Signals, list[int]]:
     """``parts`` one after another on one clock, ``gap`` (s) between the last stamp of one and the first of the next;
     and the first row of each."""
     out, starts, t0, row = [], [], 0.0, 0
@@ -72,16 +72,16 @@ def _on_one_clock(parts: list[Signals], gap: float) -> tuple[Signals, list[int]]
 def smooth_start_logs(logs, gap: float = KITTI_GAP_S) -> list:
     """Long logs of ``logs`` (``(signals, reference roll rad, scored mask)`` of each KITTI drive, in order:
     :func:`~roadbank.tuning.real.training_logs`): log ``k`` is drives ``k`` to ``k + SMOOTH_DRIVES - 1`` (mod their
-    number) smoothed (:func:`_smooth`), then every drive as recorded from drive ``k`` on, ``gap`` (s) apart;
+    number) smoothed (:func:`smoothed_drive`), then every drive as recorded from drive ``k`` on, ``gap`` (s) apart;
     as ``(signals, reference roll, mask)``, the mask that of the drives as recorded (the smooth start unscored)."""
     n = len(logs)
     out = []
     for k in range(n):
         order = [logs[(k + i) % n] for i in range(n)]
-        smooth = [(_smooth(logs[(k + i) % n][0], seed=i), logs[(k + i) % n][1], False)
+        smooth = [(smoothed_drive(logs[(k + i) % n][0], seed=i), logs[(k + i) % n][1], False)
                   for i in range(SMOOTH_DRIVES)]
         parts = smooth + [(s, ref, m) for s, ref, m in order]
-        signals, _ = _on_one_clock([p[0] for p in parts], gap)
+        signals, _ = on_one_clock([p[0] for p in parts], gap)
         ref = np.concatenate([p[1] for p in parts])
         mask = np.concatenate([np.zeros(len(p[0]), bool) if p[2] is False else p[2] for p in parts])
         out.append((signals, ref, mask))
@@ -93,7 +93,7 @@ def long_quiet_sets(sim_sets) -> list:
     :data:`SIM_GAP_S` apart: ``(signals, drives, first row of each)`` per set."""
     out = []
     for drives in sim_sets:
-        signals, starts = _on_one_clock([d.signals for d in drives], SIM_GAP_S)
+        signals, starts = on_one_clock([d.signals for d in drives], SIM_GAP_S)
         out.append((signals, drives, starts))
     return out
 
@@ -209,7 +209,7 @@ def choose_quiet_ins(gyro_logs, smooth_logs, sim_gyro_sets) -> tuple:
     return ("unbiased" if ships else False), errs
 
 
-__all__ = ["choose_quiet_ins", "smooth_road_logs", "QUIET_INS_GAIN_DEG",
+__all__ = ["on_one_clock", "smoothed_drive", "choose_quiet_ins", "smooth_road_logs", "QUIET_INS_GAIN_DEG",
            "choose_road_change_gyro", "ROAD_CHANGE_GYRO_GAIN_DEG", "RESTART_GAP_S", "choose_road_change",
            "smooth_start_logs", "long_quiet_sets", "long_sim_errors", "road_change_build",
            "ROAD_CHANGE_GAIN_DEG", "ROAD_CHANGE_LOSS_DEG"]
