@@ -19,7 +19,8 @@ import numpy as np
 from ..signals import Estimate, Signals, concat_signals, stretch_index
 from .base import StepResult, Wrapper
 
-#: the stretches of log time (s) a :class:`HandOver` reads, as :class:`roadbank.vehicle.conditions.RoadCheck` does
+#: the stretches of log time (s) a :class:`HandOver` reads by default (``roadbank estimate`` gives it
+#: :data:`roadbank.vehicle.conditions.ROAD_CHECK_WINDOW_S`, the road check's)
 STRETCH_S = 60.0
 #: the channels a sample may carry besides t, vx, ay, r, delta_f (:meth:`HandOver.step`)
 _MORE = ("p", "ax", "q")

@@ -481,7 +481,8 @@ def _at_source(read, x, t, valid, k: int) -> float:
 #: car's model (a long drive's test: a smooth first minute, then rough roads, 2.5 times the error of the same drives
 #: designed on their own)
 LOUDER_FACTOR = 3.0
-#: the stretches of log time (s) :class:`RoadCheck` reads, and the driving (s at 5 m/s or more) a stretch needs
+#: the stretches of log time (s) :class:`RoadCheck` and the hand-over (:class:`roadbank.estimators.HandOver`) read, and
+#: the driving (s at 5 m/s or more) a stretch needs
 ROAD_CHECK_WINDOW_S = 60.0
 ROAD_CHECK_MIN_S = 30.0
 
@@ -800,7 +801,7 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
             options = {"Q_ay": Q_ay, "R": R, **options}
     est = estimators.make(name, params, **options)
     est.name = label
-    out = est if handover is None else estimators.HandOver(est, *handover)
+    out = est if handover is None else estimators.HandOver(est, *handover, stretch_s=ROAD_CHECK_WINDOW_S)
     return estimators.AtSource(out) if log_held else out
 
 
