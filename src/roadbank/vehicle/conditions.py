@@ -170,6 +170,12 @@ SOURCE_ROUNDING_CHOICES = (False, True)
 #: chooses it; ``"esp"``, only a log without a usable roll rate (the fifty-ninth stage's candidate)
 ROAD_CHANGE: bool | str = True
 ROAD_CHANGE_CHOICES = (False, True, "esp")
+#: whether the default's design for a loud log (the low-pass blend, or the gyro-aided filter with a roll rate that a
+#: quiet log would not read) is handed back to the car's model where a stretch of its roads reads quiet
+#: (:func:`quiet_stretch`), and that design handed over again where its roads turn loud: the sixty-first stage of
+#: :mod:`roadbank.tuning.real` chooses it (False: one way, quiet to loud, as the fifty-eighth shipped)
+ROAD_CHANGE_BACK = False
+ROAD_CHANGE_BACK_CHOICES = (False, True)
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
 #: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it
 NOISE_OCTAVE_TOP = 1.5
@@ -255,10 +261,16 @@ def _ay_floors(signals, vx, moving, k_quiet: int, k_ay: int) -> tuple[float, flo
 def quiet_floor_of(signals, v_min: float = 5.0) -> float:
     """``log_conditions(signals, v_min)["log_ay_floor"]`` (m/s^2, two significant digits) alone, without reading the
     rest of the conditions."""
+    return floor_and_rate(signals, v_min)[0]
+
+
+def floor_and_rate(signals, v_min: float = 5.0) -> tuple[float, float]:
+    """``(log_ay_floor m/s^2, log_rate Hz)`` of ``log_conditions(signals, v_min)`` alone: what :func:`is_quiet` reads,
+    without reading the rest of the conditions."""
     signals, vx, moving, _ = _read_part(signals, v_min)
     k_quiet = _source_steps(signals, moving, ("ay",))["ay"]
     k_ay = k_quiet if NOISE_AT_SOURCE == "all" else 1
-    return float(f"{_ay_floors(signals, vx, moving, k_quiet, k_ay)[1]:.2g}")
+    return float(f"{_ay_floors(signals, vx, moving, k_quiet, k_ay)[1]:.2g}"), sample_rate(signals.t)
 
 
 def _held_rows(signals, moving) -> np.ndarray | None:
@@ -564,6 +576,24 @@ def loud_stretch(stretch, *, design_floor: float, sensors: SensorSpec, ratio: fl
     return None if keeps_cars_model(quiet, cond["log_roll_rate"], bool(cond["log_gyro_unbiased"])) else cond
 
 
+def quiet_stretch(stretch, *, sensors: SensorSpec, ratio: float = QUIET_RATIO, v_min: float = 5.0) -> dict | None:
+    """The conditions (:func:`log_conditions`) of a stretch of a log designed loud, where its roads have turned quiet:
+    it drives :data:`ROAD_CHECK_MIN_S` or more at ``vx >= v_min`` (m/s) and its own conditions keep the car's model
+    (:func:`is_quiet` with ``sensors`` and ``ratio``, :func:`keeps_cars_model`), as a log's first minute would; else
+    None (a stretch whose conditions cannot be read too)."""
+    if driving_s(stretch, v_min) < ROAD_CHECK_MIN_S:
+        return None
+    floor, rate = floor_and_rate(stretch, v_min)
+    if not is_quiet(sensors, rate, None, ratio, floor):        # (the rest read only where it is)
+        return None
+    try:
+        cond = log_conditions(stretch, v_min)
+    except LogError:
+        return None
+    quiet = is_quiet(sensors, cond["log_rate"], cond["log_ay_noise"], ratio, cond["log_ay_floor"])
+    return cond if keeps_cars_model(quiet, cond["log_roll_rate"], bool(cond["log_gyro_unbiased"])) else None
+
+
 def handed_over_warnings(source: str, handed: dict, t0: float) -> list[str]:
     """What ``roadbank estimate`` and ``map`` say of the estimators of ``handed`` (name -> (the log time, s, of the
     first sample of the handed-over design's outputs, that design); ``t0``: the log's first stamp, s) that a log
@@ -794,6 +824,10 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
                 options.setdefault("gate_tf", max(estimators.gated.GATED_TUNING["gate_tf"], 1.0 / log_r_source))
             if log_diff_noise is not None and math.isfinite(log_diff_noise) and log_diff_noise > 0:
                 options.setdefault("noise_ref", log_diff_noise ** 2)
+        if (name != quiet_filter and not own_gate and ratio > 0
+                and hands_back(label not in estimators.OFFLINE, log_roll_rate, bool(log_gyro_unbiased))):
+            handover = (partial(quiet_stretch, sensors=sensors, ratio=ratio),
+                        partial(make_estimator, label, params, sensors=sensors, **given))
     if sensors.r_variance > 0:
         R, Q_ay = noise_densities(sensors, log_rate, log_ay_noise, log_r_noise)
         options = with_sensor_noise(name, options, R, Q_ay)
@@ -811,3 +845,14 @@ def hands_over(roll_rate: float | None) -> bool:
     if ROAD_CHANGE not in ROAD_CHANGE_CHOICES:
         raise ValueError(f"ROAD_CHANGE must be one of {ROAD_CHANGE_CHOICES}, got {ROAD_CHANGE!r}")
     return ROAD_CHANGE is True or (ROAD_CHANGE == "esp" and not roll_rate_usable(roll_rate))
+
+
+def hands_back(causal: bool, roll_rate: float | None, unbiased: bool) -> bool:
+    """Whether the default's loud design of a log (a ``causal`` estimator; check slope ``roll_rate`` of its roll rate,
+    -, None: it has none; ``unbiased``: documented free of offset) is handed back to the car's model where its roads
+    turn quiet (:data:`ROAD_CHANGE_BACK`): where a quiet log would keep the car's model and a log designed quiet would
+    be handed over (:func:`hands_over`)."""
+    if ROAD_CHANGE_BACK not in ROAD_CHANGE_BACK_CHOICES:
+        raise ValueError(f"ROAD_CHANGE_BACK must be one of {ROAD_CHANGE_BACK_CHOICES}, got {ROAD_CHANGE_BACK!r}")
+    return (ROAD_CHANGE_BACK and causal and keeps_cars_model(True, roll_rate, unbiased)
+            and hands_over(roll_rate))

@@ -1,10 +1,14 @@
-"""The fifty-eighth stage: a design decided again as a log's roads change (docs/estimators.md).
+"""The fifty-eighth to sixty-first stages: a design decided again as a log's roads change (docs/estimators.md).
 
 A log's design is read on its first minute of driving; a smooth first minute holds a long drive to the car's model
 over rough roads. Candidates (:data:`roadbank.vehicle.conditions.ROAD_CHANGE`): A, decided once; B, a log designed
 quiet handed to the design of its first loud stretch (:class:`roadbank.estimators.HandOver`). Sets: long logs of the
 KITTI training drives after a smooth start (:func:`smooth_start_logs`), with the ESP channels and with the roll rate,
 and long quiet simulated logs of each shipped car (:func:`long_quiet_sets`); the rule in :func:`choose_road_change`.
+The fifty-ninth (:func:`choose_road_change_gyro`): the roll-rate path after a hand-over; the sixtieth
+(:func:`choose_quiet_ins`): a quiet log with an INS's roll rate; the sixty-first (:func:`choose_road_change_back`): a
+loud design handed back to the car's model where the roads turn quiet
+(:data:`~roadbank.vehicle.conditions.ROAD_CHANGE_BACK`).
 """
 
 from __future__ import annotations
@@ -20,8 +24,8 @@ from ...evaluation.metrics import error_metrics
 from ...signals import Signals, concat_signals, sample_rate
 from ...sim.sensors import SensorConfig
 from ..objective import FAILED_DEG, SETTLE
-from .common import log_errors
-from .esp import _with_settings, same_outputs
+from .common import log_errors, per_log
+from .esp import _with_settings, design_settings, same_outputs
 
 #: the rule: B ships if its median over the ESP long logs is below A's by more than this (deg) ...
 ROAD_CHANGE_GAIN_DEG = 0.05
@@ -209,7 +213,92 @@ def choose_quiet_ins(gyro_logs, smooth_logs, sim_gyro_sets) -> tuple:
     return ("unbiased" if ships else False), errs
 
 
-__all__ = ["on_one_clock", "smoothed_drive", "choose_quiet_ins", "smooth_road_logs", "QUIET_INS_GAIN_DEG",
+__all__ = ["BACK_LOUD_AY", "ROAD_CHANGE_BACK_GAIN_DEG", "ROAD_CHANGE_BACK_LOSS_DEG", "ROAD_CHANGE_BACK_WORSE_DEG",
+           "choose_road_change_back", "loud_and_quiet_logs", "loud_then_quiet_sets",
+           "on_one_clock", "smoothed_drive", "choose_quiet_ins", "smooth_road_logs", "QUIET_INS_GAIN_DEG",
            "choose_road_change_gyro", "ROAD_CHANGE_GYRO_GAIN_DEG", "RESTART_GAP_S", "choose_road_change",
            "smooth_start_logs", "long_quiet_sets", "long_sim_errors", "road_change_build",
            "ROAD_CHANGE_GAIN_DEG", "ROAD_CHANGE_LOSS_DEG"]
+
+
+#: the sixty-first stage's sets: the drives as recorded (loud) and as a smooth road (quiet) in two orders, and the loud
+#: simulated drives' white ``ay`` noise (m/s^2, a shaking accelerometer, as tests/test_handover.py builds them)
+BACK_LOUD_AY = 0.5
+#: its rule: B ships if its median over the real long logs is below A's by more than this (deg) ...
+ROAD_CHANGE_BACK_GAIN_DEG = 0.02
+#: ... its median over the cars on each simulated set, and its median over the drives as recorded, are not above A's by
+#: more than this (deg) ...
+ROAD_CHANGE_BACK_LOSS_DEG = 0.005
+#: ... and no drive as recorded is worse than under A by more than this (deg)
+ROAD_CHANGE_BACK_WORSE_DEG = 0.02
+
+
+def loud_and_quiet_logs(logs, smooth) -> tuple[list, list]:
+    """The sixty-first stage's real long logs from ``logs`` (``(signals, reference roll rad, scored mask)`` of each
+    KITTI drive, in order) and ``smooth`` (the same drives as a smooth road, :func:`smooth_road_logs`), on one clock
+    :data:`KITTI_GAP_S` apart, every drive scored on its own mask: ``(loud then quiet, quiet then loud then quiet)``,
+    log ``k`` of the first drives ``k`` and ``k + 1`` (mod their number) as recorded and the others from ``k + 2`` on
+    smooth, of the second drives ``k``, ``k + 1`` smooth, ``k + 2``, ``k + 3`` as recorded, the others smooth."""
+    n = len(logs)
+
+    def joined(parts):
+        signals, _ = on_one_clock([p[0] for p in parts], KITTI_GAP_S)
+        return signals, np.concatenate([p[1] for p in parts]), np.concatenate([p[2] for p in parts])
+
+    def order(k, loud):
+        return [(logs if (i in loud) else smooth)[(k + i) % n] for i in range(n)]
+    return ([joined(order(k, (0, 1))) for k in range(n)], [joined(order(k, (2, 3))) for k in range(n)])
+
+
+def loud_then_quiet_sets(sim_sets, seed: int = 0) -> list:
+    """Each set of ``sim_sets`` (lists of simulated drives) as one long log (:func:`long_quiet_sets`' form,
+    :data:`SIM_GAP_S` apart): its first half with :data:`BACK_LOUD_AY` m/s^2 of white noise added to ``ay`` (one numpy
+    generator, ``seed``, in the sets' order), then its second half as simulated."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for drives in sim_sets:
+        half = len(drives) // 2
+        loud = [dataclasses.replace(d, signals=dataclasses.replace(
+            d.signals, ay=d.signals.ay + BACK_LOUD_AY * rng.standard_normal(len(d.signals)))) for d in drives[:half]]
+        out += long_quiet_sets([loud + list(drives[half:])])
+    return out
+
+
+def choose_road_change_back(esp_logs, gyro_logs, loud_quiet, quiet_loud_quiet, sim_sets, sim_loud_quiet,
+                            gyro_loud_quiet) -> tuple:
+    """The sixty-first stage (docs/estimators.md): ``kinematic-pif`` as ``roadbank estimate`` runs it (designed for
+    each log, behind the online offset learner) with :data:`roadbank.vehicle.conditions.ROAD_CHANGE_BACK` False (A) and
+    True (B), the setting in force while the logs run (a hand-over designs anew). Sets: ``loud_quiet`` and
+    ``quiet_loud_quiet`` (:func:`loud_and_quiet_logs` of the KITTI training drives, ESP channels), ``sim_loud_quiet``
+    and ``gyro_loud_quiet`` (:func:`loud_then_quiet_sets` of the simulated training drives, and of those with an
+    ESP-class roll-rate gyro). Returns ``(chosen, {choice: (raw RMS per real long log, per ESP drive as recorded
+    (deg), per car: bank RMS per drive (deg), the same with the gyro)})``. The drives with their INS roll rate
+    (``gyro_logs``) and the simulated drives of ``sim_sets`` one by one must give the same outputs under both: a
+    ValueError where they do not."""
+    build = per_log("kinematic-pif")
+
+    def online(s):
+        return with_online_offsets(build(s))
+
+    def run_with(choice, measure, *args):
+        with design_settings(road_change_back=choice):
+            return measure(online, *args)
+
+    kept = [s for s, _, _ in gyro_logs] + [d.signals for drives in sim_sets for d in drives]
+    for s in kept:
+        a, b = (run_with(c, lambda build_, s_: build_(s_).run(s_).theta, s) for c in (False, True))
+        if not np.array_equal(a, b, equal_nan=True):
+            raise ValueError("a log whose roads do not turn quiet was read otherwise: the stage's guard fails")
+    errs = {c: (run_with(c, log_errors, loud_quiet + quiet_loud_quiet), run_with(c, log_errors, esp_logs),
+                run_with(c, long_sim_errors, sim_loud_quiet), run_with(c, long_sim_errors, gyro_loud_quiet))
+            for c in (False, True)}
+    (a1, a2, a3, a4), (b1, b2, b3, b4) = errs[False], errs[True]
+
+    def cars(e):
+        return float(np.median([np.median(x) for x in e]))
+    ships = (np.median(b1) < np.median(a1) - ROAD_CHANGE_BACK_GAIN_DEG
+             and cars(b3) <= cars(a3) + ROAD_CHANGE_BACK_LOSS_DEG
+             and cars(b4) <= cars(a4) + ROAD_CHANGE_BACK_LOSS_DEG
+             and np.median(b2) <= np.median(a2) + ROAD_CHANGE_BACK_LOSS_DEG
+             and not np.any(np.array(b2) > np.array(a2) + ROAD_CHANGE_BACK_WORSE_DEG))
+    return bool(ships), errs
