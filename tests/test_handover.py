@@ -203,3 +203,72 @@ def test_the_stretch_floor_read_alone_is_the_conditions_floor(quiet_then_loud):
             alone, whole = quiet_floor_of(part), log_conditions(part)["log_ay_floor"]
             assert alone == whole or (math.isnan(alone) and math.isnan(whole))      # (a short tail: none)
     assert np.isfinite(quiet_floor_of(log[:6000]))
+
+
+@pytest.fixture(scope="module")
+def loud_quiet_loud():
+    """``log``: six simulated sedan drives with a shaking accelerometer, six as simulated, the first six again."""
+    drives = simulated_sets(cars=("sedan",), n=12)[0]
+    rng = np.random.default_rng(1)
+    loud = [Signals(d.signals.t, d.signals.vx, d.signals.ay + LOUD_AY * rng.standard_normal(len(d.signals)),
+                    d.signals.r, d.signals.delta_f) for d in drives[:6]]
+    log, starts = on_one_clock(loud + [d.signals for d in drives[6:]] + loud, 0.1)
+    return log, log.t[starts[6]], log.t[starts[12]]
+
+
+def test_the_shipped_setting_hands_one_way(loud_quiet_loud):
+    """The sixty-first stage kept the hand-over one way (ROAD_CHANGE_BACK False): a log designed loud is not read on."""
+    from roadbank.vehicle.conditions import ROAD_CHANGE_BACK
+
+    assert ROAD_CHANGE_BACK is False
+    est = for_log("kinematic-pif", loud_quiet_loud[0])
+    assert isinstance(est, estimators.KinematicPIF) and not isinstance(est, HandOver)
+
+
+def test_the_candidate_hands_back_where_the_roads_turn_quiet_and_over_again(loud_quiet_loud):
+    """The stage's candidate B (ROAD_CHANGE_BACK True): the blend designed on the loud first minute hands to the car's
+    model when the first wholly quiet stretch closes (the quiet part begins in the third stretch: at 180 s), which
+    hands over again when the first wholly loud stretch after it closes (at 300 s); one run, chunks and steps agree."""
+    log, quiet_at, loud_at = loud_quiet_loud
+    assert 2 * ROAD_CHECK_WINDOW_S < quiet_at + 60.0 and loud_at < 5 * ROAD_CHECK_WINDOW_S
+    with design_settings(road_change_back=True):
+        est = for_log("kinematic-pif", log)
+        whole = est.run(log)
+        assert isinstance(est, HandOver) and isinstance(est.inner, estimators.KinematicPIF)
+        back = est.handed_to
+        assert isinstance(back, HandOver) and isinstance(back.inner, estimators.PIFAdaptive)
+        assert 3 * ROAD_CHECK_WINDOW_S <= est.handed_at < 3 * ROAD_CHECK_WINDOW_S + 0.1
+        assert isinstance(back.handed_to, HandOver) and isinstance(back.handed_to.inner, estimators.KinematicPIF)
+        assert 5 * ROAD_CHECK_WINDOW_S <= back.handed_at < 5 * ROAD_CHECK_WINDOW_S + 0.1
+        chunked = for_log("kinematic-pif", log)
+        parts = [chunked.run(log[a:a + 997], reset=a == 0).theta for a in range(0, len(log), 997)]
+        stepper = for_log("kinematic-pif", log)
+        stepped = [stepper.step(log.t[i], log.vx[i], log.ay[i], log.r[i], log.delta_f[i]).theta
+                   for i in range(len(log))]
+    assert np.array_equal(np.concatenate(parts), whole.theta)
+    assert np.array_equal(np.array(stepped), whole.theta)
+    assert not isinstance(for_log("kinematic-smoother", log), HandOver)     # offline: never
+
+
+def test_a_stretch_reads_quiet_as_a_first_minute_would(loud_quiet_loud):
+    """quiet_stretch gives a stretch's conditions where they would keep the car's model (is_quiet, keeps_cars_model) and
+    it drives 30 s or more; None on a loud stretch, on one that drives less, and where an INS's roll rate is read."""
+    import dataclasses
+
+    from roadbank.vehicle import SensorSpec, log_conditions
+    from roadbank.vehicle.conditions import is_quiet, quiet_stretch
+
+    log, quiet_at, loud_at = loud_quiet_loud
+    quiet = log[int(np.searchsorted(log.t, quiet_at)):int(np.searchsorted(log.t, quiet_at + 60.0))]
+    loud = log[:int(np.searchsorted(log.t, 60.0))]
+    c = quiet_stretch(quiet, sensors=SensorSpec())
+    assert c == log_conditions(quiet) and is_quiet(SensorSpec(), c["log_rate"], c["log_ay_noise"],
+                                                   log_ay_floor=c["log_ay_floor"])
+    assert quiet_stretch(loud, sensors=SensorSpec()) is None
+    assert quiet_stretch(quiet[:int(np.searchsorted(quiet.t, quiet.t[0] + 20.0))], sensors=SensorSpec()) is None
+    roll = (quiet.ay - quiet.vx * quiet.r) / 9.81          # a roll rate that follows the roll ay shows, an INS's
+    ins = dataclasses.replace(quiet, p=np.gradient(roll, quiet.t), unbiased=frozenset({"p"}))
+    c = log_conditions(ins)
+    assert c["log_gyro_unbiased"] and 0.5 <= c["log_roll_rate"] <= 2.0
+    assert quiet_stretch(ins, sensors=SensorSpec()) is None
+    assert quiet_stretch(dataclasses.replace(ins, unbiased=frozenset()), sensors=SensorSpec()) is not None  # a phone's
