@@ -176,6 +176,12 @@ ROAD_CHANGE_CHOICES = (False, True, "esp")
 #: :mod:`roadbank.tuning.real` chooses it (False: one way, quiet to loud, as the fifty-eighth shipped)
 ROAD_CHANGE_BACK = False
 ROAD_CHANGE_BACK_CHOICES = (False, True)
+#: whether the default keeps the car's model on a quiet log whose car nobody described (``described=False``: the car
+#: :func:`roadbank.vehicle.undescribed_params` chose for the log); False: such a log is designed as a loud one (the
+#: low-pass blend, or the gyro-aided filter with a usable roll rate). The sixty-second stage of
+#: :mod:`roadbank.tuning.real` chooses it; a car described (a vehicle file, parameters given) keeps its model either way
+UNDESCRIBED_KEEPS_MODEL = True
+UNDESCRIBED_KEEPS_MODEL_CHOICES = (True, False)
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
 #: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it
 NOISE_OCTAVE_TOP = 1.5
@@ -784,6 +790,9 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
         (:data:`QUIET_MODELS`: ``pif-smoother``). The causal one is handed over to the design of the log's
         first loud stretch where its roads turn loud (:class:`roadbank.estimators.HandOver`,
         :func:`loud_stretch`, :data:`ROAD_CHANGE`), needing ``log_ay_floor``.
+        ``described`` (bool, default True): False for a car nobody described (the one
+        :func:`roadbank.vehicle.undescribed_params` chose for the log), whose quiet log the causal default then designs
+        as a loud one unless :data:`UNDESCRIBED_KEEPS_MODEL` (:func:`models_car`).
         The blend's low-pass gets the sampled-data lead of the log's rate:
         ``lead = lead_samples / rate`` (s; ``lead_samples`` default
         :data:`~roadbank.estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES`), unless ``lead`` is given.
@@ -794,9 +803,10 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     sensors = sensors if sensors is not None else SensorSpec()
     label = name
     given = dict(options)                   # what a design for another stretch of the log is built with
+    described = bool(options.pop("described", True))
     handover = None
     if name in QUIET_MODELS:
-        ratio = float(options.pop("quiet_ratio", QUIET_RATIO))
+        ratio = float(options.pop("quiet_ratio", QUIET_RATIO)) if models_car(name, described) else 0.0
         quiet_filter = options.pop("quiet_filter", QUIET_MODELS[name])
         lead_samples = (float(options.pop("lead_samples", estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES))
                         if name == "kinematic-pif" else None)        # the blend's option only
@@ -856,3 +866,13 @@ def hands_back(causal: bool, roll_rate: float | None, unbiased: bool) -> bool:
         raise ValueError(f"ROAD_CHANGE_BACK must be one of {ROAD_CHANGE_BACK_CHOICES}, got {ROAD_CHANGE_BACK!r}")
     return (ROAD_CHANGE_BACK and causal and keeps_cars_model(True, roll_rate, unbiased)
             and hands_over(roll_rate))
+
+
+def models_car(name: str, described: bool) -> bool:
+    """Whether ``name`` (one of :data:`QUIET_MODELS`) may keep the car's model on a quiet log, its car ``described``
+    (a vehicle file, parameters given) or not (:data:`UNDESCRIBED_KEEPS_MODEL`; the causal default alone: the offline
+    ``kinematic-smoother`` keeps it either way)."""
+    if UNDESCRIBED_KEEPS_MODEL not in UNDESCRIBED_KEEPS_MODEL_CHOICES:
+        raise ValueError(f"UNDESCRIBED_KEEPS_MODEL must be one of {UNDESCRIBED_KEEPS_MODEL_CHOICES}, "
+                         f"got {UNDESCRIBED_KEEPS_MODEL!r}")
+    return described or UNDESCRIBED_KEEPS_MODEL or name != "kinematic-pif"

@@ -176,17 +176,22 @@ def car_for_log(signals, cond: dict, params: VehicleParams | None = None, vehicl
     return _car(name), design_record(cond, name, how, sources=sources)
 
 
-def for_conditions(name: str, cond: dict, params: VehicleParams | None = None, *, vehicle=None, **tuning):
+def for_conditions(name: str, cond: dict, params: VehicleParams | None = None, *, vehicle=None,
+                   described: bool | None = None, **tuning):
     """Build the estimator ``name`` for a log's conditions ``cond`` (:func:`log_conditions`).
 
     The car is ``vehicle`` (a :class:`Vehicle`: its parameters, sensors and tuning tables) or
     ``params`` with the data sheet's sensors; neither: :func:`undescribed_params` without a log
-    (the callers that have the log pass ``undescribed_params(signals)`` as ``params``). What
-    ``roadbank estimate``, ``map`` and :func:`for_log` build.
+    (the callers that have the log pass ``undescribed_params(signals)`` as ``params``, and ``described=False``: a car
+    nobody described, :data:`~roadbank.vehicle.conditions.UNDESCRIBED_KEEPS_MODEL`; default: described where
+    ``vehicle`` or ``params`` is given). What ``roadbank estimate``, ``map`` and :func:`for_log` build.
     """
     if vehicle is not None:
         return vehicle.make(name, **cond, **tuning)
-    return make_estimator(name, params if params is not None else undescribed_params(), **cond, **tuning)
+    if described is None:
+        described = params is not None
+    return make_estimator(name, params if params is not None else undescribed_params(), described=described, **cond,
+                          **tuning)
 
 
 def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=None, **tuning):
@@ -202,6 +207,7 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
     if not isinstance(signals, Signals):
         raise TypeError(f"for_log() expects a roadbank.Signals, got {type(signals).__name__}")
     cond = log_conditions(signals)
-    if params is None and vehicle is None:
+    described = params is not None or vehicle is not None
+    if not described:
         params = undescribed_params(signals, cond=cond)
-    return for_conditions(name, cond, params, vehicle=vehicle, **tuning)
+    return for_conditions(name, cond, params, vehicle=vehicle, described=described, **tuning)

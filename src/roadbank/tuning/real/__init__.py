@@ -25,7 +25,7 @@ The stages, one module per topic, each module's docstring holding its stages' ru
 * :mod:`.gyro` — the roll-rate filter ``kinematic-gyro``;
 * :mod:`.grade` — the grade and the pitch that correct the roll rate;
 * :mod:`.checks` — the check that a log's roll rate is one;
-* :mod:`.roads` — the fifty-eighth to sixty-first stages: a design decided again as a log's roads change;
+* :mod:`.roads` — the fifty-eighth to sixty-second stages: a design decided again as a log's roads change;
 * :mod:`.common` — what every stage shares: the training drives, the simulated sets, the objective, ties, pieces.
 
 Every name of the stages is importable from here.
@@ -68,14 +68,16 @@ from .grade import (ANCHORED_BANDWIDTHS, GRADE_FIRST_SPANS_S, GRADE_START_WINDOW
 from .checks import (CHECK_MAX_CORR, CHECK_PIECES_S, CHECK_RANGES, CHECK_WINDOWS_S, FIXED_CHANNEL_RULES,
                      SHORT_CHECK_WINDOWS_S, choose_fixed_channels, choose_roll_check, choose_roll_check_again,
                      choose_short_check, short_rows)
-from .roads import (BACK_LOUD_AY, ROAD_CHANGE_BACK_GAIN_DEG, ROAD_CHANGE_BACK_LOSS_DEG, ROAD_CHANGE_BACK_WORSE_DEG,
+from .roads import (STEEP_ROAD_ORDER, STEEP_ROAD_CUTOFF_HZ, UNDESCRIBED_GAIN_DEG, choose_undescribed_quiet,
+                    BACK_LOUD_AY, ROAD_CHANGE_BACK_GAIN_DEG, ROAD_CHANGE_BACK_LOSS_DEG, ROAD_CHANGE_BACK_WORSE_DEG,
                     choose_road_change_back, loud_and_quiet_logs, loud_then_quiet_sets,
                     QUIET_INS_GAIN_DEG, choose_quiet_ins, smooth_road_logs, RESTART_GAP_S, ROAD_CHANGE_GAIN_DEG,
                     ROAD_CHANGE_GYRO_GAIN_DEG, ROAD_CHANGE_LOSS_DEG,
                     choose_road_change, choose_road_change_gyro, long_quiet_sets, long_sim_errors, road_change_build,
                     smooth_start_logs)
 
-__all__ = ["BACK_LOUD_AY", "ROAD_CHANGE_BACK_GAIN_DEG", "ROAD_CHANGE_BACK_LOSS_DEG", "ROAD_CHANGE_BACK_WORSE_DEG",
+__all__ = ["STEEP_ROAD_ORDER", "STEEP_ROAD_CUTOFF_HZ", "UNDESCRIBED_GAIN_DEG", "choose_undescribed_quiet",
+           "BACK_LOUD_AY", "ROAD_CHANGE_BACK_GAIN_DEG", "ROAD_CHANGE_BACK_LOSS_DEG", "ROAD_CHANGE_BACK_WORSE_DEG",
            "choose_road_change_back", "loud_and_quiet_logs", "loud_then_quiet_sets",
            "QUIET_INS_GAIN_DEG", "choose_quiet_ins", "smooth_road_logs",
            "RESTART_GAP_S", "ROAD_CHANGE_GYRO_GAIN_DEG", "choose_road_change_gyro",

@@ -8,7 +8,8 @@ and long quiet simulated logs of each shipped car (:func:`long_quiet_sets`); the
 The fifty-ninth (:func:`choose_road_change_gyro`): the roll-rate path after a hand-over; the sixtieth
 (:func:`choose_quiet_ins`): a quiet log with an INS's roll rate; the sixty-first (:func:`choose_road_change_back`): a
 loud design handed back to the car's model where the roads turn quiet
-(:data:`~roadbank.vehicle.conditions.ROAD_CHANGE_BACK`).
+(:data:`~roadbank.vehicle.conditions.ROAD_CHANGE_BACK`); the sixty-second (:func:`choose_undescribed_quiet`): the car's
+model on a quiet log whose car nobody described (:data:`~roadbank.vehicle.conditions.UNDESCRIBED_KEEPS_MODEL`).
 """
 
 from __future__ import annotations
@@ -16,15 +17,16 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from scipy.signal import butter, filtfilt
+from scipy.signal import butter, filtfilt, sosfiltfilt
 
 from ...estimators.offsets import with_online_offsets
 from ...evaluation.compare import usable_samples
 from ...evaluation.metrics import error_metrics
+from ...vehicle import load_vehicle
 from ...signals import Signals, concat_signals, sample_rate
 from ...sim.sensors import SensorConfig
 from ..objective import FAILED_DEG, SETTLE
-from .common import log_errors, per_log
+from .common import cars_median, log_errors, per_log, sim_errors
 from .esp import _with_settings, design_settings, same_outputs
 
 #: the rule: B ships if its median over the ESP long logs is below A's by more than this (deg) ...
@@ -177,19 +179,25 @@ SMOOTH_ROAD_CUTOFF_HZ = 0.5
 QUIET_INS_GAIN_DEG = 0.005
 
 
-def smooth_road_logs(logs) -> list:
+def smooth_road_logs(logs, order: int = SMOOTH_ROAD_ORDER, cutoff: float = SMOOTH_ROAD_CUTOFF_HZ) -> list:
     """``logs`` (``(signals, reference roll rad, scored mask)``, :func:`~roadbank.tuning.real.training_logs`) as the
     same drives on a smooth road read by a data sheet's sensors: ``ay`` (m/s^2) and the yaw rate (rad/s) through a
-    zero-phase :data:`SMOOTH_ROAD_ORDER` order Butterworth low-pass at :data:`SMOOTH_ROAD_CUTOFF_HZ` (at the drive's own
-    rate) plus the ESP data sheet's white noise (seeded by the drive's place in ``logs``); every other channel, the
-    reference and the mask as they are."""
+    zero-phase Butterworth low-pass of ``order`` at ``cutoff`` (Hz, at the drive's own rate; default the sixtieth
+    stage's, :data:`SMOOTH_ROAD_ORDER` at :data:`SMOOTH_ROAD_CUTOFF_HZ`) plus the ESP data sheet's white noise (seeded
+    by the drive's place in ``logs``); every other channel, the reference and the mask as they are."""
     cfg = SensorConfig()
     out = []
     for i, (s, ref, mask) in enumerate(logs):
         rng = np.random.default_rng(i)
-        b, a = butter(SMOOTH_ROAD_ORDER, SMOOTH_ROAD_CUTOFF_HZ / (0.5 * sample_rate(s.t)))
-        ay = filtfilt(b, a, s.ay) + cfg.ay.noise_std * rng.standard_normal(len(s))
-        r = filtfilt(b, a, s.r) + cfg.yaw_rate.noise_std * rng.standard_normal(len(s))
+        wn = cutoff / (0.5 * sample_rate(s.t))
+        if order == SMOOTH_ROAD_ORDER:          # (as the sixtieth stage ran; the sections' form for a steep one)
+            b, a = butter(order, wn)
+            ay, r = filtfilt(b, a, s.ay), filtfilt(b, a, s.r)
+        else:
+            sos = butter(order, wn, output="sos")
+            ay, r = sosfiltfilt(sos, s.ay), sosfiltfilt(sos, s.r)
+        ay = ay + cfg.ay.noise_std * rng.standard_normal(len(s))
+        r = r + cfg.yaw_rate.noise_std * rng.standard_normal(len(s))
         out.append((dataclasses.replace(s, ay=ay, r=r), ref, mask))
     return out
 
@@ -213,7 +221,50 @@ def choose_quiet_ins(gyro_logs, smooth_logs, sim_gyro_sets) -> tuple:
     return ("unbiased" if ships else False), errs
 
 
-__all__ = ["BACK_LOUD_AY", "ROAD_CHANGE_BACK_GAIN_DEG", "ROAD_CHANGE_BACK_LOSS_DEG", "ROAD_CHANGE_BACK_WORSE_DEG",
+#: the sixty-second stage's second smooth road: a steep zero-phase Butterworth low-pass (order, cut-off Hz) that keeps
+#: the car's motion up to about 0.7 Hz and leaves the KITTI training drives quiet (0.71-1.45 times the density)
+STEEP_ROAD_ORDER = 8
+STEEP_ROAD_CUTOFF_HZ = 0.8
+#: its rule: B ships if its objective is below A's by more than this (deg)
+UNDESCRIBED_GAIN_DEG = 0.02
+
+
+def choose_undescribed_quiet(smooth_logs, sim_quiet_sets, kept_logs, known_sets) -> tuple:
+    """The sixty-second stage (docs/estimators.md): ``kinematic-pif`` as ``roadbank estimate`` runs it without a
+    vehicle file (designed for each log, behind the online offset learner) with
+    :data:`roadbank.vehicle.conditions.UNDESCRIBED_KEEPS_MODEL` True (A) and False (B). Objective: the median raw RMS
+    (deg) over ``smooth_logs`` (the KITTI training drives as two smooth roads, ESP channels) plus the median over the
+    cars of each car's median bank RMS (deg) over its drives in ``sim_quiet_sets`` (per car, a list of drives: its
+    quiet simulated training drives with every sensor set pooled). Returns ``(chosen, {choice: objective}, {choice: (raw
+    RMS per smooth log, per car: bank RMS per drive)})``. ``kept_logs`` (signals) and the drives of ``known_sets``
+    (``(car name, drives)``, each built with that car's file) must give the same outputs under both: a ValueError
+    where they do not."""
+    build = per_log("kinematic-pif")
+
+    def online(s):
+        return with_online_offsets(build(s))
+
+    def known(car):
+        v = load_vehicle(car)
+        return lambda s: with_online_offsets(per_log("kinematic-pif", vehicle=v)(s))
+
+    def theta(choice, make, s):
+        with design_settings(undescribed_keeps_model=choice):
+            return make(s).run(s).theta
+    pairs = [(online, s) for s in kept_logs] + [(known(car), d.signals) for car, drives in known_sets for d in drives]
+    for make, s in pairs:
+        if not np.array_equal(theta(True, make, s), theta(False, make, s), equal_nan=True):
+            raise ValueError("a loud log, or a car described, was read otherwise: the stage's guard fails")
+    errs = {}
+    for c in (True, False):
+        with design_settings(undescribed_keeps_model=c):
+            errs[c] = (log_errors(online, smooth_logs), sim_errors(online, sim_quiet_sets))
+    obj = {c: float(np.median(e[0])) + cars_median(e[1]) for c, e in errs.items()}
+    return (False if obj[False] < obj[True] - UNDESCRIBED_GAIN_DEG else True), obj, errs
+
+
+__all__ = ["STEEP_ROAD_ORDER", "STEEP_ROAD_CUTOFF_HZ", "UNDESCRIBED_GAIN_DEG", "choose_undescribed_quiet",
+           "BACK_LOUD_AY", "ROAD_CHANGE_BACK_GAIN_DEG", "ROAD_CHANGE_BACK_LOSS_DEG", "ROAD_CHANGE_BACK_WORSE_DEG",
            "choose_road_change_back", "loud_and_quiet_logs", "loud_then_quiet_sets",
            "on_one_clock", "smoothed_drive", "choose_quiet_ins", "smooth_road_logs", "QUIET_INS_GAIN_DEG",
            "choose_road_change_gyro", "ROAD_CHANGE_GYRO_GAIN_DEG", "RESTART_GAP_S", "choose_road_change",
