@@ -383,22 +383,30 @@ def test_the_ninth_stage_ties_on_training_and_the_paper_scenarios_choose_the_flo
 
 
 def test_the_command_line_reads_the_floor_as_the_library_does(tmp_path, s_curves):
-    """A log quiet by its floor only (the SUV's S-curve): `roadbank estimate` (the streamed path, on its
-    read-ahead first minute) builds the quiet filter as for_log does, sample for sample, and says so."""
+    """A log quiet by its floor only (the SUV's S-curve): `roadbank estimate --vehicle suv-paper` (the streamed path,
+    on its read-ahead first minute) builds the quiet filter as for_log does, sample for sample, and says so; without
+    the vehicle file, the blend (a car nobody described: the sixty-second stage), as for_log builds it too."""
     import pyarrow as pa
     import pyarrow.parquet as pq
     from click.testing import CliRunner
 
     from roadbank.cli import main
-    from roadbank.vehicle import for_log
+    from roadbank.vehicle import for_log, load_vehicle
 
     s = s_curves["suv-paper"].signals
     log = tmp_path / "s-curve.parquet"
     pq.write_table(pa.table({"t": s.t, "vx": s.vx, "ay": s.ay, "r": s.r, "delta_f": s.delta_f}), log)
-    res = CliRunner().invoke(main, ["estimate", str(log), "-o", str(tmp_path / "o.parquet"), "--no-online-offsets"])
+    res = CliRunner().invoke(main, ["estimate", str(log), "-o", str(tmp_path / "o.parquet"), "--no-online-offsets",
+                                    "--vehicle", "suv-paper"])
     assert res.exit_code == 0, res.output
     assert "quiet, so kinematic-pif is pif-adaptive" in res.stderr
     cli = pq.read_table(tmp_path / "o.parquet").to_pandas()["kinematic-pif.theta"].to_numpy()
+    suv = load_vehicle("suv-paper")
+    np.testing.assert_allclose(cli, for_log("kinematic-pif", s, vehicle=suv).run(s).theta, rtol=0, atol=1e-12)
+    res = CliRunner().invoke(main, ["estimate", str(log), "-o", str(tmp_path / "n.parquet"), "--no-online-offsets"])
+    assert res.exit_code == 0, res.output
+    assert "quiet, so kinematic-pif is the low-pass blend (a quiet log, but the car's model" in res.stderr
+    cli = pq.read_table(tmp_path / "n.parquet").to_pandas()["kinematic-pif.theta"].to_numpy()
     np.testing.assert_allclose(cli, for_log("kinematic-pif", s).run(s).theta, rtol=0, atol=1e-12)
 
 

@@ -439,8 +439,16 @@ def test_cli_designs_for_a_recorded_drive(tmp_path):
     pq.write_table(pa.table({"t": quiet.t, "vx": quiet.vx, "ay": quiet.ay, "r": quiet.r, "delta_f": quiet.delta_f}),
                    tmp_path / "quiet.parquet")
     res = CliRunner().invoke(main, ["export", "c", "-e", "kinematic-pif", "--log", str(tmp_path / "quiet.parquet"),
-                                   "-o", str(tmp_path / "q")])
+                                   "--vehicle", "suv-paper", "-o", str(tmp_path / "q")])
     assert res.exit_code == 1 and "the log is quiet, so kinematic-pif is pif-adaptive for it" in res.output
+    # a car nobody described: the quiet log is designed loud (the sixty-second stage), as for_log builds it
+    res = CliRunner().invoke(main, ["export", "c", "-e", "kinematic-pif", "--log", str(tmp_path / "quiet.parquet"),
+                                   "-o", str(tmp_path / "qn")])
+    assert res.exit_code == 0, res.output
+    blend = for_log("kinematic-pif", quiet)
+    assert isinstance(blend, E.KinematicPIF)
+    assert (tmp_path / "qn" / "roadbank_kinematic_pif.c").read_text() == export_c(
+        blend, tmp_path / "pyq", rate=log_conditions(quiet)["log_rate"]).source.read_text()
     res = CliRunner().invoke(main, ["export", "c", "--log", str(tmp_path / "none.csv"), "-o", str(tmp_path / "n")])
     assert res.exit_code == 1 and "none.csv" in res.output and "Traceback" not in res.output
 

@@ -20,7 +20,7 @@ from roadbank.params import ESP_R_NOISE, ESP_R_RESOLUTION
 from roadbank.signals import Signals
 from roadbank.sim.scenarios import SCENARIOS, run
 from roadbank.sim.sensors import ChannelErrorModel, SensorConfig
-from roadbank.vehicle import for_log
+from roadbank.vehicle import for_log, load_vehicle
 from roadbank.vehicle.conditions import GYRO_FILTER, QUIET_FILTER
 
 G = 9.80665
@@ -220,17 +220,21 @@ def test_a_quiet_log_reads_an_ins_roll_rate_and_keeps_the_cars_model_with_anothe
     ins = for_log("kinematic-pif", s)
     assert isinstance(ins, estimators.KinematicGyro)
     other = dataclasses.replace(s, unbiased=frozenset())
-    kept = for_log("kinematic-pif", other)
+    kept = for_log("kinematic-pif", other, described=True)       # the fitted car read as described, as the stage ran
     assert isinstance(kept, estimators.HandOver) and type(kept.inner).__name__ == "PIFAdaptive"
+    # a car nobody described: designed as a loud log, with its usable roll rate (the sixty-second stage)
+    assert isinstance(for_log("kinematic-pif", other), estimators.KinematicGyro)
     assert rms_deg(ins.run(s).theta[m], ref[m]) < 0.5 * rms_deg(kept.run(other).theta[m], ref[m])
 
 
 def test_a_quiet_log_keeps_the_cars_model_with_a_roll_rate():
     """The roll rate changes only the loud log's filter: a simulated ESP log with a roll-rate gyro is quiet and gets
-    the car's model (the quiet filter) as without it."""
+    the car's model (the quiet filter) as without it, its car described (the paper's SUV, the scenario's car); a car
+    nobody described is designed as a loud log (the sixty-second stage): the gyro-aided filter."""
     cfg = SensorConfig(roll_rate=ChannelErrorModel(noise_std=ESP_R_NOISE, resolution=ESP_R_RESOLUTION))
     s = run(SCENARIOS["s-curve"], sensors=cfg, seed=0).signals
-    est = for_log("kinematic-pif", s)
+    est = for_log("kinematic-pif", s, vehicle=load_vehicle("suv-paper"))
+    assert isinstance(for_log("kinematic-pif", s), estimators.KinematicGyro)
     # (behind the hand-over to a loud minute's design, where its roads turn loud: the fifty-eighth stage)
     assert isinstance(est, estimators.HandOver)
     assert type(est.inner).__name__ == type(estimators.make(QUIET_FILTER)).__name__
@@ -239,11 +243,13 @@ def test_a_quiet_log_keeps_the_cars_model_with_a_roll_rate():
     from roadbank.fleet.process import design_words
     from roadbank.vehicle import design_record, log_conditions
     cond = log_conditions(s)
-    words = design_words(design_record(cond, "suv-paper", "fitted to the log"), "kinematic-pif")
+    words = design_words(design_record(cond, "suv-paper", "vehicle file"), "kinematic-pif")
     assert f"so kinematic-pif is {QUIET_FILTER} (its roll rate not read: a quiet log keeps the car's model)" in words
     plain = design_words(design_record(log_conditions(dataclasses.replace(s, p=None)), "suv-paper",
-                                       "fitted to the log"), "kinematic-pif")
+                                       "vehicle file"), "kinematic-pif")
     assert f"so kinematic-pif is {QUIET_FILTER}" in plain and "not read" not in plain
+    nobody = design_words(design_record(cond, "suv-paper", "fitted to the log"), "kinematic-pif")
+    assert "so kinematic-pif is kinematic-gyro (the log has a roll rate) (a quiet log, but the car's model" in nobody
 
 
 @needs_kitti

@@ -17,10 +17,17 @@ from roadbank.estimators import HandOver
 from roadbank.signals import Signals
 from roadbank.tuning.real import design_settings, simulated_sets
 from roadbank.tuning.real.roads import on_one_clock
-from roadbank.vehicle import for_log
+from roadbank.vehicle import for_log, load_vehicle
 from roadbank.vehicle.conditions import ROAD_CHANGE, ROAD_CHECK_WINDOW_S
 
 LOUD_AY = 0.5       # m/s^2, white
+SEDAN = load_vehicle("sedan")
+
+
+def built(name, log):
+    """``name`` as ``roadbank estimate --vehicle sedan`` builds it for ``log``: the simulated drives' car, described
+    (a quiet log of a car nobody described is designed loud and never handed over: the sixty-second stage)."""
+    return for_log(name, log, vehicle=SEDAN)
 
 
 @pytest.fixture(scope="module")
@@ -44,7 +51,7 @@ def test_the_shipped_setting_hands_over():
 
 def test_a_log_whose_roads_turn_loud_is_handed_over_when_the_first_loud_stretch_closes(quiet_then_loud):
     log, bank, loud_row = quiet_then_loud
-    est = for_log("kinematic-pif", log)
+    est = built("kinematic-pif", log)
     assert isinstance(est, HandOver) and isinstance(est.inner, estimators.PIFAdaptive)     # designed quiet
     out = est.run(log)
     # the loud part begins inside the third stretch of 60 s: the first wholly loud one closes at 180 s
@@ -53,7 +60,7 @@ def test_a_log_whose_roads_turn_loud_is_handed_over_when_the_first_loud_stretch_
     assert log.t[j - 1] < 3 * ROAD_CHECK_WINDOW_S <= est.handed_at
     assert isinstance(est.handed_to, estimators.KinematicPIF) and est.handed_to.name == "kinematic-pif"
     with design_settings(road_change=False):
-        before = for_log("kinematic-pif", log)
+        before = built("kinematic-pif", log)
         once = before.run(log)
     assert not isinstance(before, HandOver)
     assert np.array_equal(out.theta[:j], once.theta[:j])                # causal: nothing changes before it
@@ -65,7 +72,7 @@ def test_a_log_whose_roads_turn_loud_is_handed_over_when_the_first_loud_stretch_
 def test_a_log_whose_roads_stay_quiet_is_not_handed_over(quiet_then_loud):
     log, _, loud_row = quiet_then_loud
     quiet = log[:loud_row]
-    est = for_log("kinematic-pif", quiet)
+    est = built("kinematic-pif", quiet)
     out = est.run(quiet)
     assert math.isnan(est.handed_at) and est.handed_to is None
     assert np.array_equal(out.theta, est.inner.run(quiet).theta)
@@ -74,16 +81,16 @@ def test_a_log_whose_roads_stay_quiet_is_not_handed_over(quiet_then_loud):
 @pytest.mark.parametrize("rows", [97, 1000, 7001])
 def test_chunks_and_steps_give_the_whole_run(quiet_then_loud, rows):
     log = quiet_then_loud[0]
-    whole = for_log("kinematic-pif", log)
+    whole = built("kinematic-pif", log)
     ref = whole.run(log)
-    est = for_log("kinematic-pif", log)
+    est = built("kinematic-pif", log)
     parts = [est.run(log[a:a + rows], reset=a == 0) for a in range(0, len(log), rows)]
     assert np.array_equal(np.concatenate([p.theta for p in parts]), ref.theta)
     assert np.array_equal(np.concatenate([p.valid for p in parts]), ref.valid)
     assert est.handed_at == whole.handed_at
     assert all(set(p.states) == set(parts[0].states) for p in parts)        # the same columns in every chunk
     if rows == 1000:
-        stepper = for_log("kinematic-pif", log)
+        stepper = built("kinematic-pif", log)
         theta = np.array([stepper.step(log.t[i], log.vx[i], log.ay[i], log.r[i], log.delta_f[i]).theta
                           for i in range(len(log))])
         assert np.array_equal(theta, ref.theta) and stepper.handed_at == whole.handed_at
@@ -96,11 +103,11 @@ def test_a_bad_stamp_sample_by_sample_neither_fails_nor_moves_the_hand_over(quie
     ValueError from the stretch's samples, or with a stamp back by 50 s split the stretch and handed over 60 s
     late)."""
     log = quiet_then_loud[0]
-    whole = for_log("kinematic-pif", log)
+    whole = built("kinematic-pif", log)
     whole.run(log)
     j = int(np.searchsorted(log.t, 150.0))
     stamps = {"nan": [math.nan], "repeated": [log.t[j], log.t[j]], "back": [log.t[j] - 50.0]}[fault]
-    est = for_log("kinematic-pif", log)
+    est = built("kinematic-pif", log)
     for i in range(len(log)):
         for t in stamps if i == j else [log.t[i]]:
             est.step(t, log.vx[i], log.ay[i], log.r[i], log.delta_f[i])
@@ -109,10 +116,10 @@ def test_a_bad_stamp_sample_by_sample_neither_fails_nor_moves_the_hand_over(quie
 
 def test_a_nan_stamp_where_a_stretch_begins_hands_over_at_the_next_stamp(quiet_then_loud):
     log = quiet_then_loud[0]
-    whole = for_log("kinematic-pif", log)
+    whole = built("kinematic-pif", log)
     whole.run(log)
     j = int(np.searchsorted(log.t, whole.handed_at))
-    est = for_log("kinematic-pif", log)
+    est = built("kinematic-pif", log)
     for i in range(len(log)):
         est.step(math.nan if i == j else log.t[i], log.vx[i], log.ay[i], log.r[i], log.delta_f[i])
     assert est.handed_at == log.t[j + 1]             # it was NaN: no hand-over said
@@ -120,9 +127,9 @@ def test_a_nan_stamp_where_a_stretch_begins_hands_over_at_the_next_stamp(quiet_t
 
 def test_chunks_that_overlap_are_read_as_the_log(quiet_then_loud):
     log = quiet_then_loud[0]
-    whole = for_log("kinematic-pif", log)
+    whole = built("kinematic-pif", log)
     whole.run(log)
-    est = for_log("kinematic-pif", log)
+    est = built("kinematic-pif", log)
     est.run(log[:15000])
     est.run(log[14990:], reset=False)                # ten samples again
     assert est.handed_at == whole.handed_at
@@ -130,7 +137,7 @@ def test_chunks_that_overlap_are_read_as_the_log(quiet_then_loud):
 
 def test_repr_says_the_estimator_in_charge(quiet_then_loud):
     log = quiet_then_loud[0]
-    est = for_log("kinematic-pif", log)
+    est = built("kinematic-pif", log)
     assert "handed to" not in repr(est)
     est.run(log)
     assert repr(est.handed_to) in repr(est) and f"{est.handed_at:.6g} s" in repr(est)     # it named pif-adaptive alone
@@ -138,7 +145,7 @@ def test_repr_says_the_estimator_in_charge(quiet_then_loud):
 
 def test_reset_forgets_the_hand_over(quiet_then_loud):
     log, _, loud_row = quiet_then_loud
-    est = for_log("kinematic-pif", log)
+    est = built("kinematic-pif", log)
     est.run(log)
     assert est.handed_to is not None
     est.run(log[:loud_row])                          # reset=True: a new log
@@ -147,12 +154,12 @@ def test_reset_forgets_the_hand_over(quiet_then_loud):
 
 def test_behind_the_offset_learner_and_offline_estimators(quiet_then_loud):
     log = quiet_then_loud[0]
-    learnt = estimators.with_online_offsets(for_log("kinematic-pif", log))
+    learnt = estimators.with_online_offsets(built("kinematic-pif", log))
     learnt.run(log)
     assert math.isfinite(learnt.handed_at)               # the learner in front, the hand-over behind it
-    assert not isinstance(for_log("kinematic-smoother", log), HandOver)      # offline: roadbank map warns instead
+    assert not isinstance(built("kinematic-smoother", log), HandOver)      # offline: roadbank map warns instead
     with design_settings(road_change="esp"):
-        assert isinstance(for_log("kinematic-pif", log), HandOver)            # no roll rate: as True
+        assert isinstance(built("kinematic-pif", log), HandOver)            # no roll rate: as True
 
 
 def test_a_bad_stretch_reader_or_stretch_is_refused():
@@ -169,12 +176,12 @@ def test_a_held_log_is_read_at_its_source_and_handed_over(quiet_then_loud):
     log = quiet_then_loud[0]
     frames = log.take(np.arange(0, len(log), 4))
     held = Signals(log.t, *(np.repeat(getattr(frames, c), 4)[:len(log)] for c in ("vx", "ay", "r", "delta_f")))
-    est = for_log("kinematic-pif", held)
+    est = built("kinematic-pif", held)
     assert isinstance(est, estimators.AtSource) and isinstance(est.inner, HandOver)
     learnt = estimators.with_online_offsets(est)
     assert isinstance(learnt, estimators.AtSource) and isinstance(learnt.inner.inner, HandOver)
     out = est.run(held)
-    own = for_log("kinematic-pif", frames)
+    own = built("kinematic-pif", frames)
     own.run(frames)
     assert est.inner.handed_at == own.handed_at
     assert np.isfinite(out.theta).all()
@@ -221,7 +228,7 @@ def test_the_shipped_setting_hands_one_way(loud_quiet_loud):
     from roadbank.vehicle.conditions import ROAD_CHANGE_BACK
 
     assert ROAD_CHANGE_BACK is False
-    est = for_log("kinematic-pif", loud_quiet_loud[0])
+    est = built("kinematic-pif", loud_quiet_loud[0])
     assert isinstance(est, estimators.KinematicPIF) and not isinstance(est, HandOver)
 
 
@@ -232,7 +239,7 @@ def test_the_candidate_hands_back_where_the_roads_turn_quiet_and_over_again(loud
     log, quiet_at, loud_at = loud_quiet_loud
     assert 2 * ROAD_CHECK_WINDOW_S < quiet_at + 60.0 and loud_at < 5 * ROAD_CHECK_WINDOW_S
     with design_settings(road_change_back=True):
-        est = for_log("kinematic-pif", log)
+        est = built("kinematic-pif", log)
         whole = est.run(log)
         assert isinstance(est, HandOver) and isinstance(est.inner, estimators.KinematicPIF)
         back = est.handed_to
@@ -240,14 +247,14 @@ def test_the_candidate_hands_back_where_the_roads_turn_quiet_and_over_again(loud
         assert 3 * ROAD_CHECK_WINDOW_S <= est.handed_at < 3 * ROAD_CHECK_WINDOW_S + 0.1
         assert isinstance(back.handed_to, HandOver) and isinstance(back.handed_to.inner, estimators.KinematicPIF)
         assert 5 * ROAD_CHECK_WINDOW_S <= back.handed_at < 5 * ROAD_CHECK_WINDOW_S + 0.1
-        chunked = for_log("kinematic-pif", log)
+        chunked = built("kinematic-pif", log)
         parts = [chunked.run(log[a:a + 997], reset=a == 0).theta for a in range(0, len(log), 997)]
-        stepper = for_log("kinematic-pif", log)
+        stepper = built("kinematic-pif", log)
         stepped = [stepper.step(log.t[i], log.vx[i], log.ay[i], log.r[i], log.delta_f[i]).theta
                    for i in range(len(log))]
     assert np.array_equal(np.concatenate(parts), whole.theta)
     assert np.array_equal(np.array(stepped), whole.theta)
-    assert not isinstance(for_log("kinematic-smoother", log), HandOver)     # offline: never
+    assert not isinstance(built("kinematic-smoother", log), HandOver)     # offline: never
 
 
 def test_a_stretch_reads_quiet_as_a_first_minute_would(loud_quiet_loud):
@@ -272,3 +279,29 @@ def test_a_stretch_reads_quiet_as_a_first_minute_would(loud_quiet_loud):
     assert c["log_gyro_unbiased"] and 0.5 <= c["log_roll_rate"] <= 2.0
     assert quiet_stretch(ins, sensors=SensorSpec()) is None
     assert quiet_stretch(dataclasses.replace(ins, unbiased=frozenset()), sensors=SensorSpec()) is not None  # a phone's
+
+
+def test_a_quiet_log_of_a_car_nobody_described_is_designed_loud_and_not_handed_over(quiet_then_loud):
+    """The sixty-second stage (UNDESCRIBED_KEEPS_MODEL False): without a vehicle file the quiet log is designed as a
+    loud one, the low-pass blend, which it stays (nothing to hand over); the design line says why; with the car
+    described (or the fitted car read as described) it keeps the car's model until its roads turn loud."""
+    from roadbank.fleet.process import design_words
+    from roadbank.vehicle import car_for_log, log_conditions
+    from roadbank.vehicle.conditions import UNDESCRIBED_KEEPS_MODEL
+
+    log = quiet_then_loud[0]
+    assert UNDESCRIBED_KEEPS_MODEL is False
+    est = for_log("kinematic-pif", log)
+    assert isinstance(est, estimators.KinematicPIF) and not isinstance(est, HandOver)
+    assert isinstance(for_log("kinematic-pif", log, described=True).inner, estimators.PIFAdaptive)
+    with design_settings(undescribed_keeps_model=True):
+        assert isinstance(for_log("kinematic-pif", log).inner, estimators.PIFAdaptive)
+    assert not isinstance(for_log("kinematic-smoother", log), estimators.KinematicSmoother)    # offline: as before
+    cond = log_conditions(log)
+    _, nobody = car_for_log(log, cond)
+    _, file = car_for_log(log, cond, vehicle=SEDAN)
+    assert nobody["quiet"] and file["quiet"]
+    assert design_words(nobody, "kinematic-pif").endswith(
+        "so kinematic-pif is the low-pass blend (a quiet log, but the car's model is kept only for a car described: "
+        "a vehicle file)")
+    assert "so kinematic-pif is pif-adaptive until its roads turn loud" in design_words(file, "kinematic-pif")

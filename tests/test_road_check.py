@@ -17,7 +17,12 @@ from roadbank.mapping.build import MapSettings, map_one_log
 from roadbank.fleet.process import design_words
 from roadbank.tuning.real import design_settings
 from roadbank.tuning.real.roads import on_one_clock, smoothed_drive
+from roadbank.vehicle import load_vehicle
 from roadbank.vehicle.conditions import ROAD_CHECK_WINDOW_S, RoadCheck, design_ay_floor
+
+#: the car described (a vehicle file): a quiet log of a car nobody described is designed loud from its start (the
+#: sixty-second stage), and only the car's model is handed over or warned about
+CAR = load_vehicle("sedan")
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 DRIVES = ("2011_09_26_drive_0036", "2011_09_26_drive_0022", "2011_09_26_drive_0064", "2011_09_30_drive_0034")
@@ -52,11 +57,16 @@ def _write(s: Signals, path: Path) -> Path:
 
 def test_a_smooth_first_minute_then_rough_roads_is_said(tmp_path):
     """estimate hands kinematic-pif over to the design of the first loud minute (the fifty-eighth stage) and says when;
-    with the hand-over switched off (as before that stage), it warns: split the log."""
+    with the hand-over switched off (as before that stage), it warns: split the log. Without the vehicle file the log
+    is the blend from its start: nothing to hand over or to say but why."""
     d = _drives()
     log = _stitched([(d[0], True), (d[1], True)] + [(x, False) for x in d])
     path = _write(log, tmp_path / "smooth_then_rough.parquet")
-    summary = estimate_log(path, tmp_path / "out.csv")
+    nobody = estimate_log(path, tmp_path / "out_nobody.csv")
+    assert nobody.status == "ok" and nobody.design["quiet"] and "handed_over_s" not in nobody.design
+    assert "reads quiet" not in nobody.warnings
+    assert "the low-pass blend (a quiet log, but" in design_words(nobody.design, "kinematic-pif")
+    summary = estimate_log(path, tmp_path / "out.csv", vehicle=CAR)
     assert summary.status == "ok" and summary.design["quiet"]
     assert "designed on its first minute of driving, which reads quiet" in summary.warnings
     assert "but its roads turned loud: from" in summary.warnings
@@ -65,7 +75,7 @@ def test_a_smooth_first_minute_then_rough_roads_is_said(tmp_path):
     assert smooth_s < summary.design["handed_over_s"] <= smooth_s + 2 * ROAD_CHECK_WINDOW_S
     assert "until its roads turn loud" in design_words(summary.design, "kinematic-pif")
     with design_settings(road_change=False):
-        before = estimate_log(path, tmp_path / "out_before.csv")
+        before = estimate_log(path, tmp_path / "out_before.csv", vehicle=CAR)
     assert "split the log where the road changes" in before.warnings and "handed_over_s" not in before.design
     # read in chunks of any size, the check reads the same stretches
     whole = RoadCheck(design_ay_floor(log))
@@ -120,9 +130,9 @@ def test_map_with_a_causal_estimator_says_its_hand_over(tmp_path):
     model was kept (it said 'split the log where the road changes' of an estimator that had been handed over)."""
     _map_log(tmp_path)
     rec, _, _ = map_one_log(tmp_path / "drive.parquet", 0,
-                            MapSettings(estimator="kinematic-pif", channels=tmp_path / "map.toml"))
+                            MapSettings(estimator="kinematic-pif", channels=tmp_path / "map.toml", vehicle=CAR))
     assert rec.status == "ok", rec.error
-    est = estimate_log(tmp_path / "drive.parquet", tmp_path / "out.csv", channels=tmp_path / "map.toml")
+    est = estimate_log(tmp_path / "drive.parquet", tmp_path / "out.csv", channels=tmp_path / "map.toml", vehicle=CAR)
     assert "handed_over_s" in est.design
     said = [w for w in rec.warnings if "which reads quiet" in w]
     assert len(said) == 1 and "split the log" not in said[0]

@@ -128,7 +128,7 @@ def export_c_cmd(vehicle, name: str, rate: float | None, float32: bool, roll: st
         # C step takes every sample
         est = for_conditions(name, {**(cond if roll_rate else esp_conditions(cond)), "log_rate": rate,
                                     "log_held": None}, params,
-                             vehicle=vehicle, **overrides)
+                             vehicle=vehicle, described=params is None, **overrides)
     except (ValueError, TypeError, NoStabilisingSolution) as exc:
         raise click.ClickException(f"{name}: cannot design for vehicle {car_name!r}: {exc}") from None
     if isinstance(est, estimators.HandOver):        # an ECU runs one design: a hand-over is the log tool's

@@ -18,9 +18,10 @@ from ..io.writers import TableWriter, estimate_table, write_error
 from ..signals import Estimate
 from ..vehicle import (DESIGN_MAX_S, car_for_log, for_conditions, has_design_span, load_vehicle, log_conditions,
                        undescribed_params)
+from ..vehicle.factory import is_described
 from ..vehicle.conditions import (GYRO_MODELS, QUIET_MODELS, ROLL_SLOPE_RANGE, RoadCheck, design_ay_floor,
                                   handed_over_warnings, hands_over, keeps_cars_model, louder_warnings,
-                                  roll_rate_usable)
+                                  models_car, roll_rate_usable)
 
 #: columns of the summary table, in order (see LogSummary)
 SUMMARY_COLUMNS = ("log", "status", "error", "output", "estimator", "samples", "duration_s", "valid_share",
@@ -143,11 +144,14 @@ def design_words(design: dict, estimator: str) -> str:
         grade = f"; corrected for the grade by its ax{pitch}" if roll_rate_usable(ax) else ""
         free = ", free of offset (an INS's)" if design.get("roll_rate_unbiased") else ""
         loud = f"{GYRO_MODELS[estimator]} (the log has a roll rate{free}{grade})" if gyro else "the low-pass blend"
-        model = keeps_cars_model(design["quiet"], slope, bool(design.get("roll_rate_unbiased")))
+        quiet = keeps_cars_model(design["quiet"], slope, bool(design.get("roll_rate_unbiased")))
+        model = quiet and models_car(estimator, is_described(design))
         unread = " (its roll rate not read: a quiet log keeps the car's model)" if model and gyro else ""
         until = (" until its roads turn loud (then the design of its first loud minute)"
                  if model and hands_over(slope) and estimator not in OFFLINE else "")
+        nobody = " (a quiet log, but the car's model is kept only for a car described: a vehicle file)"
         words += f", so {estimator} is {QUIET_MODELS[estimator] + unread + until if model else loud}"
+        words += nobody if quiet and not model else ""
     if slope is not None and not gyro:
         off = _off(slope, ROLL_RATE_MISTAKES, ROLL_SUSPECTS)
         words += f"; its roll rate does not follow the roll in its ay ({off}), so it is not used"
@@ -344,10 +348,12 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
                 lead = chunks.leading(chunk.signals, DESIGN_MAX_S, has_design_span)
                 cond = log_conditions(lead)
                 car, summary.design = car_for_log(lead, cond, params, vehicle)
-                ests = [for_conditions(n, cond, car, vehicle=vehicle) for n in names]
+                described = vehicle is not None or params is not None
+                ests = [for_conditions(n, cond, car, vehicle=vehicle, described=described) for n in names]
                 slope, ins = summary.design.get("roll_rate"), bool(summary.design.get("roll_rate_unbiased"))
                 if keeps_cars_model(summary.design["quiet"], slope, ins) and any(
-                        n in QUIET_MODELS and (n in OFFLINE or not hands_over(slope)) for n in names):
+                        n in QUIET_MODELS and models_car(n, described) and (n in OFFLINE or not hands_over(slope))
+                        for n in names):
                     road = RoadCheck(design_ay_floor(lead))     # (one that hands over reads its roads itself)
                 if online_offsets:      # causal ones: a smoother's later samples would see later offsets
                     ests = [e if n in OFFLINE else with_online_offsets(e, car) for e, n in zip(ests, names)]
@@ -386,8 +392,8 @@ def estimate_log(path, output, estimators=(DEFAULT,), *, channels=None, format: 
             warns += handed_over_warnings(str(path), handed, float(stats[0].t0))
             summary.design["handed_over_s"] = float(f"{min(at for at, _ in handed.values()) - stats[0].t0:.4g}")
         if road is not None:
-            warns += louder_warnings(str(path), [n for n in names if n not in handed], summary.design.get("roll_rate"),
-                                     *road.finish())
+            kept = [n for n in names if n not in handed and models_car(n, described)]
+            warns += louder_warnings(str(path), kept, summary.design.get("roll_rate"), *road.finish())
         summary.warnings = "; ".join(warns)
         if keep:
             whole = (np.concatenate(kept_t), [concat_estimates(x) for x in kept_est],

@@ -21,7 +21,7 @@ from ..params import VehicleParams
 from ..vehicle import (DESIGN_MAX_S, Vehicle, for_conditions, has_design_span, load_vehicle, log_conditions,
                        undescribed_params)
 from ..vehicle.conditions import (QUIET_MODELS, RoadCheck, design_ay_floor, handed_over_warnings, is_quiet,
-                                  keeps_cars_model, louder_warnings)
+                                  keeps_cars_model, louder_warnings, models_car)
 from ..vehicle.sensors import SensorSpec
 from .geo import CourseStream, LocalProjection, PositionJumps, TrackScale
 from .grid import BankMap
@@ -146,11 +146,12 @@ def _design(settings: MapSettings, signals, designs: dict):
     cond = log_conditions(signals)
     car = (settings.params if settings.params is not None or settings.vehicle is not None
            else undescribed_params(signals))
-    key = (tuple(round(v, 6) if v is not None and np.isfinite(v) else None for v in cond.values()), car)
+    described = settings.params is not None or settings.vehicle is not None
+    key = (tuple(round(v, 6) if v is not None and np.isfinite(v) else None for v in cond.values()), car, described)
     if key not in designs:
-        designs[key] = for_conditions(settings.estimator, cond, car, vehicle=settings.vehicle)
+        designs[key] = for_conditions(settings.estimator, cond, car, vehicle=settings.vehicle, described=described)
     sensors = settings.vehicle.sensors if settings.vehicle is not None else SensorSpec()
-    model = settings.estimator in QUIET_MODELS and keeps_cars_model(
+    model = settings.estimator in QUIET_MODELS and models_car(settings.estimator, described) and keeps_cars_model(
         is_quiet(sensors, cond.get("log_rate"), cond.get("log_ay_noise"), log_ay_floor=cond.get("log_ay_floor")),
         cond.get("log_roll_rate"), bool(cond.get("log_gyro_unbiased")))
     return designs[key], (RoadCheck(design_ay_floor(signals)) if model else None), cond.get("log_roll_rate")

@@ -131,7 +131,7 @@ def score_simulated(names, cars=SIM_CARS, n: int = DEFAULT_VALIDATION, seed: int
         drives = drive_set("validation", n, seed, v.params)
         roads[car] = tuple(d.road for d in drives)
         for nm in names:
-            builds = {"known": per_log(nm, vehicle=v), "undescribed": per_log(nm)}
+            builds = {"known": per_log(nm, vehicle=v), "undescribed": per_log(nm, described=False)}
             for mode in MODES:
                 errors[(nm, mode, car)] = np.array([drive_errors(builds[mode](d.signals), [d])[0][0]
                                                     for d in drives])

@@ -173,7 +173,8 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     dt = float(np.median(np.diff(t)))
     # a car not described: designed for the one that fits the segment (read with the static one)
     design = undescribed_params(s) if described is None else params
-    run = run_and_score(s, log.reference_roll[cut], names, design, scoring, per_estimator=tuning, sensors=sensors)
+    run = run_and_score(s, log.reference_roll[cut], names, design, scoring, per_estimator=tuning, sensors=sensors,
+                        described=described is not None)
     scores, smoothed = run.scores, run.estimates
     m_fit, m_sc = run.fit, run.scored
     m_all = m_fit | m_sc

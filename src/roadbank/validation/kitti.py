@@ -196,7 +196,7 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     # a car not described: the one that fits the drive
     params, design = car_for_log(log.signals, log_conditions(log.signals), params, sensors=sensors)
     run = run_and_score(log.signals, log.reference_roll, names, params, scoring, per_estimator=tuning,
-                        sensors=sensors)
+                        sensors=sensors, described=given is not None)
     sens = {}
     if sensitivity:
         sens["suv"] = run_and_score(log.signals, log.reference_roll, names, VehicleParams(), scoring).scores
@@ -250,7 +250,8 @@ def _piece_scores(log, length: float, names, params, scoring: Scoring, sensors) 
     rms: dict = {n: [] for n in names}
     for a, b, piece, _ in scored_pieces(log.signals, length, scoring):
         car, _ = car_for_log(piece, log_conditions(piece), params, sensors=sensors)
-        run = run_and_score(piece, log.reference_roll[a:b], names, car, scoring, sensors=sensors)
+        run = run_and_score(piece, log.reference_roll[a:b], names, car, scoring, sensors=sensors,
+                            described=params is not None)
         for n in names:
             rms[n].append(run.scores[n].rms_raw_deg)
     return rms

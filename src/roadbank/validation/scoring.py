@@ -417,6 +417,9 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
         ``[tuning]`` tables).
     sensors : SensorSpec, optional
         The car's sensor cluster (a vehicle file's ``[sensors]``); default the paper's ESP.
+    **tuning
+        Options of every estimator (:func:`roadbank.vehicle.make_estimator`'s: ``described=False`` for a car nobody
+        described, chosen for the log).
 
     Notes
     -----

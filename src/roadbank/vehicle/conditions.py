@@ -180,7 +180,7 @@ ROAD_CHANGE_BACK_CHOICES = (False, True)
 #: :func:`roadbank.vehicle.undescribed_params` chose for the log); False: such a log is designed as a loud one (the
 #: low-pass blend, or the gyro-aided filter with a usable roll rate). The sixty-second stage of
 #: :mod:`roadbank.tuning.real` chooses it; a car described (a vehicle file, parameters given) keeps its model either way
-UNDESCRIBED_KEEPS_MODEL = True
+UNDESCRIBED_KEEPS_MODEL = False
 UNDESCRIBED_KEEPS_MODEL_CHOICES = (True, False)
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
 #: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it
@@ -806,7 +806,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     described = bool(options.pop("described", True))
     handover = None
     if name in QUIET_MODELS:
-        ratio = float(options.pop("quiet_ratio", QUIET_RATIO)) if models_car(name, described) else 0.0
+        ratio = float(options.pop("quiet_ratio", QUIET_RATIO))
+        ratio = ratio if models_car(name, described) else 0.0
         quiet_filter = options.pop("quiet_filter", QUIET_MODELS[name])
         lead_samples = (float(options.pop("lead_samples", estimators.gated.KINEMATIC_PIF_LEAD_SAMPLES))
                         if name == "kinematic-pif" else None)        # the blend's option only

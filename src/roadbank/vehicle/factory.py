@@ -34,6 +34,14 @@ FIT_BAND_HZ = (0.2, 3.0)
 FIT_SETTLE_S = 2.0
 #: how :func:`design_record` names a car :func:`design_car` chose: by the misfits, or without a fit
 FITTED, NOT_FITTED = "fitted to the log", "not fitted: the default reads the roll rate"
+#: ... and where the user described it (a vehicle file, parameters given)
+FROM_FILE, FROM_PARAMS = "vehicle file", "parameters given"
+
+
+def is_described(design: dict) -> bool:
+    """Whether the car of a log's :func:`design_record` ``design`` was described by the user (:data:`FROM_FILE`,
+    :data:`FROM_PARAMS`), not chosen for the log."""
+    return design.get("car_from") in (FROM_FILE, FROM_PARAMS)
 
 
 @functools.lru_cache(maxsize=None)
@@ -168,9 +176,9 @@ def car_for_log(signals, cond: dict, params: VehicleParams | None = None, vehicl
     :func:`undescribed_car` of the log's ``signals`` (the one that fits it)."""
     sources = source_rates(signals)
     if vehicle is not None:
-        return vehicle.params, design_record(cond, vehicle.name, "vehicle file", vehicle.sensors, sources)
+        return vehicle.params, design_record(cond, vehicle.name, FROM_FILE, vehicle.sensors, sources)
     if params is not None:
-        return params, design_record(cond, "-", "parameters given", sensors, sources)
+        return params, design_record(cond, "-", FROM_PARAMS, sensors, sources)
     name = undescribed_car(signals, cond=cond)
     how = NOT_FITTED if default_reads_roll_rate(cond) else FITTED
     return _car(name), design_record(cond, name, how, sources=sources)
@@ -194,7 +202,8 @@ def for_conditions(name: str, cond: dict, params: VehicleParams | None = None, *
                           **tuning)
 
 
-def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=None, **tuning):
+def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=None, described: bool | None = None,
+            **tuning):
     """Build the estimator ``name`` for the log ``signals`` as ``roadbank estimate`` does.
 
     A default-tuned PIF is designed for the log's sample rate and the road noise measured on
@@ -203,11 +212,14 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
     ``for_log(name, s).run(s)`` is what the command line writes for the log ``s`` with ``--no-online-offsets``;
     by default it adds the online offset learner
     (``with_online_offsets(for_log(name, s), est.params).run(s)``), which differs after a standstill.
+    ``described`` (default: whether ``params`` or ``vehicle`` is given): True reads the car chosen for the log as one
+    described (:func:`for_conditions`).
     """
     if not isinstance(signals, Signals):
         raise TypeError(f"for_log() expects a roadbank.Signals, got {type(signals).__name__}")
     cond = log_conditions(signals)
-    described = params is not None or vehicle is not None
-    if not described:
+    if described is None:
+        described = params is not None or vehicle is not None
+    if params is None and vehicle is None:
         params = undescribed_params(signals, cond=cond)
     return for_conditions(name, cond, params, vehicle=vehicle, described=described, **tuning)

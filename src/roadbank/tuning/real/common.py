@@ -115,7 +115,10 @@ def per_log(name: str, car_margin: float | None = None, **options):
     """``build`` for :func:`objective`: ``name`` designed for each log as the command line does
     (no car given: :func:`roadbank.vehicle.undescribed_params` of the log; ``car_margin`` (-) other than
     the shipped :data:`~roadbank.vehicle.CAR_MARGIN`: with that margin, ``inf`` the static car, as the
-    stages before the eighth ran)."""
+    stages before the eighth ran), that car read as described (its model kept on a quiet log, as every stage before
+    the sixty-second ran) unless the options say ``described=False`` (as the command line reads it since,
+    :data:`~roadbank.vehicle.conditions.UNDESCRIBED_KEEPS_MODEL`)."""
+    options = {"described": True, **options}
     def build(signals):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)

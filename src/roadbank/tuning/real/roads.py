@@ -239,7 +239,7 @@ def choose_undescribed_quiet(smooth_logs, sim_quiet_sets, kept_logs, known_sets)
     RMS per smooth log, per car: bank RMS per drive)})``. ``kept_logs`` (signals) and the drives of ``known_sets``
     (``(car name, drives)``, each built with that car's file) must give the same outputs under both: a ValueError
     where they do not."""
-    build = per_log("kinematic-pif")
+    build = per_log("kinematic-pif", described=False)
 
     def online(s):
         return with_online_offsets(build(s))
