@@ -182,6 +182,8 @@ ROAD_CHANGE_BACK_CHOICES = (False, True)
 #: :mod:`roadbank.tuning.real` chooses it; a car described (a vehicle file, parameters given) keeps its model either way
 UNDESCRIBED_KEEPS_MODEL = False
 UNDESCRIBED_KEEPS_MODEL_CHOICES = (True, False)
+#: the same for the offline ``kinematic-smoother`` (``roadbank map``'s default): the sixty-third stage chooses it
+UNDESCRIBED_SMOOTHER_KEEPS_MODEL = True
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
 #: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it
 NOISE_OCTAVE_TOP = 1.5
@@ -871,9 +873,10 @@ def hands_back(causal: bool, roll_rate: float | None, unbiased: bool) -> bool:
 
 def models_car(name: str, described: bool) -> bool:
     """Whether ``name`` (one of :data:`QUIET_MODELS`) may keep the car's model on a quiet log, its car ``described``
-    (a vehicle file, parameters given) or not (:data:`UNDESCRIBED_KEEPS_MODEL`; the causal default alone: the offline
-    ``kinematic-smoother`` keeps it either way)."""
-    if UNDESCRIBED_KEEPS_MODEL not in UNDESCRIBED_KEEPS_MODEL_CHOICES:
-        raise ValueError(f"UNDESCRIBED_KEEPS_MODEL must be one of {UNDESCRIBED_KEEPS_MODEL_CHOICES}, "
-                         f"got {UNDESCRIBED_KEEPS_MODEL!r}")
-    return described or UNDESCRIBED_KEEPS_MODEL or name != "kinematic-pif"
+    (a vehicle file, parameters given) or not (:data:`UNDESCRIBED_KEEPS_MODEL` for the causal default,
+    :data:`UNDESCRIBED_SMOOTHER_KEEPS_MODEL` for the offline ``kinematic-smoother``)."""
+    keeps = UNDESCRIBED_SMOOTHER_KEEPS_MODEL if name == "kinematic-smoother" else UNDESCRIBED_KEEPS_MODEL
+    if keeps not in UNDESCRIBED_KEEPS_MODEL_CHOICES:
+        raise ValueError(f"UNDESCRIBED_KEEPS_MODEL and UNDESCRIBED_SMOOTHER_KEEPS_MODEL must be one of "
+                         f"{UNDESCRIBED_KEEPS_MODEL_CHOICES}, got {keeps!r}")
+    return described or keeps

@@ -19,6 +19,7 @@ import dataclasses
 import numpy as np
 from scipy.signal import butter, filtfilt, sosfiltfilt
 
+from ...estimators import OFFLINE
 from ...estimators.offsets import with_online_offsets
 from ...evaluation.compare import usable_samples
 from ...evaluation.metrics import error_metrics
@@ -229,27 +230,32 @@ STEEP_ROAD_CUTOFF_HZ = 0.8
 UNDESCRIBED_GAIN_DEG = 0.02
 
 
-def choose_undescribed_quiet(smooth_logs, sim_quiet_sets, kept_logs, known_sets) -> tuple:
+def choose_undescribed_quiet(smooth_logs, sim_quiet_sets, kept_logs, known_sets, name: str = "kinematic-pif",
+                             setting: str = "undescribed_keeps_model") -> tuple:
     """The sixty-second stage (docs/estimators.md): ``kinematic-pif`` as ``roadbank estimate`` runs it without a
     vehicle file (designed for each log, behind the online offset learner) with
-    :data:`roadbank.vehicle.conditions.UNDESCRIBED_KEEPS_MODEL` True (A) and False (B). Objective: the median raw RMS
+    :data:`roadbank.vehicle.conditions.UNDESCRIBED_KEEPS_MODEL` True (A) and False (B); the sixty-third: ``name``
+    ``"kinematic-smoother"`` as ``roadbank map`` runs it (no offset learner: an offline estimator) with ``setting``
+    ``"undescribed_smoother_keeps_model"`` (:data:`~roadbank.vehicle.conditions.UNDESCRIBED_SMOOTHER_KEEPS_MODEL`),
+    the causal default as shipped. Objective: the median raw RMS
     (deg) over ``smooth_logs`` (the KITTI training drives as two smooth roads, ESP channels) plus the median over the
     cars of each car's median bank RMS (deg) over its drives in ``sim_quiet_sets`` (per car, a list of drives: its
     quiet simulated training drives with every sensor set pooled). Returns ``(chosen, {choice: objective}, {choice: (raw
     RMS per smooth log, per car: bank RMS per drive)})``. ``kept_logs`` (signals) and the drives of ``known_sets``
     (``(car name, drives)``, each built with that car's file) must give the same outputs under both: a ValueError
     where they do not."""
-    build = per_log("kinematic-pif", described=False)
+    offline = name in OFFLINE
+    build = per_log(name, described=False)
 
     def online(s):
-        return with_online_offsets(build(s))
+        return build(s) if offline else with_online_offsets(build(s))
 
     def known(car):
-        v = load_vehicle(car)
-        return lambda s: with_online_offsets(per_log("kinematic-pif", vehicle=v)(s))
+        made = per_log(name, vehicle=load_vehicle(car))
+        return lambda s: made(s) if offline else with_online_offsets(made(s))
 
     def theta(choice, make, s):
-        with design_settings(undescribed_keeps_model=choice):
+        with design_settings(**{setting: choice}):
             return make(s).run(s).theta
     pairs = [(online, s) for s in kept_logs] + [(known(car), d.signals) for car, drives in known_sets for d in drives]
     for make, s in pairs:
@@ -257,7 +263,7 @@ def choose_undescribed_quiet(smooth_logs, sim_quiet_sets, kept_logs, known_sets)
             raise ValueError("a loud log, or a car described, was read otherwise: the stage's guard fails")
     errs = {}
     for c in (True, False):
-        with design_settings(undescribed_keeps_model=c):
+        with design_settings(**{setting: c}):
             errs[c] = (log_errors(online, smooth_logs), sim_errors(online, sim_quiet_sets))
     obj = {c: float(np.median(e[0])) + cars_median(e[1]) for c, e in errs.items()}
     return (False if obj[False] < obj[True] - UNDESCRIBED_GAIN_DEG else True), obj, errs
