@@ -116,13 +116,17 @@ def _map_log(tmp_path) -> None:
 
 
 def test_map_says_it_too(tmp_path):
-    """roadbank map designs on the first minute as estimate does (its smoother is pif-smoother on a quiet log), and
-    says so the same way."""
+    """roadbank map designs on the first minute as estimate does (its smoother is pif-smoother on a quiet log, the car
+    described), and says so the same way; without the vehicle file the smoother is the low-pass one from the start
+    (the sixty-third stage): nothing to say."""
     _map_log(tmp_path)
-    rec, _, _ = map_one_log(tmp_path / "drive.parquet", 0, MapSettings(channels=tmp_path / "map.toml"))
+    rec, _, _ = map_one_log(tmp_path / "drive.parquet", 0, MapSettings(channels=tmp_path / "map.toml", vehicle=CAR))
     assert rec.status == "ok", rec.error
     said = [w for w in rec.warnings if "which reads quiet" in w]
     assert len(said) == 1 and "kinematic-smoother is pif-smoother" in said[0]
+    rec, _, _ = map_one_log(tmp_path / "drive.parquet", 0, MapSettings(channels=tmp_path / "map.toml"))
+    assert rec.status == "ok", rec.error
+    assert not [w for w in rec.warnings if "which reads quiet" in w]
 
 
 def test_map_with_a_causal_estimator_says_its_hand_over(tmp_path):

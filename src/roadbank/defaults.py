@@ -5,12 +5,14 @@
   ``kinematic-pif`` (``kinematic-ff``, handed to the default PIF while the yaw rate changes fast), chosen
   on training data only by the real-roads-first rule of :mod:`roadbank.tuning.real` (the KITTI training
   drives first, the simulated drives of cars that are not described to break ties; docs/estimators.md). Its
-  low-pass uses no tyre data. On a quiet log it is ``pif-adaptive`` (:func:`roadbank.vehicle.is_quiet`); on a
+  low-pass uses no tyre data. On a quiet log of a car described (a vehicle file, parameters given) it is
+  ``pif-adaptive`` (:func:`roadbank.vehicle.is_quiet`; a car nobody described keeps the blend: the sixty-second
+  stage of :mod:`roadbank.tuning.real`); on a
   loud log that carries a roll rate it is ``kinematic-gyro`` (the complementary filter of the kinematic estimate and
   the roll-rate gyro; :data:`roadbank.vehicle.conditions.GYRO_FILTER`).
 * :data:`MAP_ESTIMATOR` — the estimator of ``roadbank map`` (a map is built after the drives, so it
   may use the samples after each instant): ``kinematic-smoother``, the kinematic estimate low-passed
-  forward and backward; on a quiet log ``pif-smoother``.
+  forward and backward; on a quiet log of a car described (a vehicle file) ``pif-smoother``.
 * :data:`VEHICLE` — a log whose car is not described: the estimators that need a car model are
   designed for the parameters of this shipped car (with the data sheet's ESP sensors) in every
   command that reads logs (``estimate``, ``map``, ``validate``) and in

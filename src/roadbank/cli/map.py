@@ -38,8 +38,8 @@ def _origin(ctx, param, value):
               help="Input format (default: from the suffix / directory layout).")
 @click.option("--estimator", "-e", "estimator", default=MAP_ESTIMATOR, show_default=True,
               help="Estimator whose settled bank estimates are mapped (default: the offline kinematic smoother, "
-                   "pif-smoother on a quiet log, kinematic-gyro-smoother on a loud one with a roll rate, as a map is "
-                   "made after the drives; docs/estimators.md).")
+                   "pif-smoother on a quiet log with --vehicle, kinematic-gyro-smoother on a loud one with a roll "
+                   "rate, as a map is made after the drives; docs/estimators.md).")
 @click.option("--cell", "cell_m", type=click.FloatRange(*CELL_RANGE_M), default=10.0, show_default=True,
               help="Cell edge (m).")
 @click.option("--sectors", type=click.IntRange(*SECTOR_RANGE), default=4, show_default=True,

@@ -320,7 +320,7 @@ def map_logs(logs, estimator: str = MAP_ESTIMATOR, *, channels=None, format: str
     estimator : str
         Estimator whose settled ``phi_b`` is mapped (:attr:`~roadbank.signals.Estimate.settled`); default
         :data:`roadbank.defaults.MAP_ESTIMATOR`,
-        the offline ``kinematic-smoother`` (``pif-smoother`` on a quiet log; a map is made after
+        the offline ``kinematic-smoother`` (``pif-smoother`` on a quiet log of a car described; a map is made after
         the drives, so the samples after each instant may be used; each streamed chunk is smoothed
         with the chunks after it as lookahead, as one run over the log).
     channels, format, params, vehicle

@@ -183,7 +183,7 @@ ROAD_CHANGE_BACK_CHOICES = (False, True)
 UNDESCRIBED_KEEPS_MODEL = False
 UNDESCRIBED_KEEPS_MODEL_CHOICES = (True, False)
 #: the same for the offline ``kinematic-smoother`` (``roadbank map``'s default): the sixty-third stage chooses it
-UNDESCRIBED_SMOOTHER_KEEPS_MODEL = True
+UNDESCRIBED_SMOOTHER_KEEPS_MODEL = False
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
 #: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it
 NOISE_OCTAVE_TOP = 1.5
