@@ -10,7 +10,7 @@ from roadbank import Signals
 from roadbank import estimators as E
 from roadbank.estimators.kinematic_smoother import SMOOTHER_CUTOFF_HZ
 from roadbank.params import G
-from roadbank.vehicle import for_log
+from roadbank.vehicle import for_log, load_vehicle
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 
@@ -79,11 +79,15 @@ def test_a_quiet_log_gets_the_offline_pif_and_a_loud_one_the_smoother():
     s = run_scenario("track-lane-change", "nominal", seed=0).signals
     rng = np.random.default_rng(1)
     loud = Signals(s.t, s.vx, s.ay + 0.15 * rng.standard_normal(len(s.t)), s.r, s.delta_f)
-    quiet_est, loud_est = for_log("kinematic-smoother", s), for_log("kinematic-smoother", loud)
+    # the car described (the scenario's, the paper's SUV): the quiet log gets the offline PIF; a car nobody described
+    # the smoother on the quiet log too (the sixty-third stage)
+    suv = load_vehicle("suv-paper")
+    quiet_est, loud_est = for_log("kinematic-smoother", s, vehicle=suv), for_log("kinematic-smoother", loud)
     assert quiet_est.name == loud_est.name == "kinematic-smoother"
     assert isinstance(loud_est, E.KinematicSmoother) and isinstance(quiet_est, E.PIFSmoother)
-    np.testing.assert_array_equal(quiet_est.run(s).w, for_log("pif-smoother", s).run(s).w)
-    assert isinstance(for_log("kinematic-smoother", s, quiet_ratio=0.0), E.KinematicSmoother)
+    np.testing.assert_array_equal(quiet_est.run(s).w, for_log("pif-smoother", s, vehicle=suv).run(s).w)
+    assert isinstance(for_log("kinematic-smoother", s, vehicle=suv, quiet_ratio=0.0), E.KinematicSmoother)
+    assert isinstance(for_log("kinematic-smoother", s), E.KinematicSmoother)
     with pytest.raises(ValueError, match="bad tuning option"):      # the blend's option is not the smoother's
         for_log("kinematic-smoother", loud, lead_samples=0.5)
 
