@@ -576,12 +576,8 @@ def loud_stretch(stretch, *, design_floor: float, sensors: SensorSpec, ratio: fl
         return None
     if not quiet_floor_of(stretch, v_min) >= LOUDER_FACTOR * design_floor:     # (the rest read only where it is)
         return None
-    try:
-        cond = log_conditions(stretch, v_min)
-    except LogError:
-        return None
-    quiet = is_quiet(sensors, cond["log_rate"], cond["log_ay_noise"], ratio, cond["log_ay_floor"])
-    return None if keeps_cars_model(quiet, cond["log_roll_rate"], bool(cond["log_gyro_unbiased"])) else cond
+    read = _stretch_design(stretch, sensors, ratio, v_min)
+    return read[0] if read is not None and not read[1] else None
 
 
 def quiet_stretch(stretch, *, sensors: SensorSpec, ratio: float = QUIET_RATIO, v_min: float = 5.0) -> dict | None:
@@ -594,12 +590,19 @@ def quiet_stretch(stretch, *, sensors: SensorSpec, ratio: float = QUIET_RATIO, v
     floor, rate = floor_and_rate(stretch, v_min)
     if not is_quiet(sensors, rate, None, ratio, floor):        # (the rest read only where it is)
         return None
+    read = _stretch_design(stretch, sensors, ratio, v_min)
+    return read[0] if read is not None and read[1] else None
+
+
+def _stretch_design(stretch, sensors: SensorSpec, ratio: float, v_min: float) -> tuple[dict, bool] | None:
+    """A stretch's conditions (:func:`log_conditions`) and whether they would keep the car's model (:func:`is_quiet`
+    with ``sensors`` and ``ratio``, :func:`keeps_cars_model`); None where they cannot be read."""
     try:
         cond = log_conditions(stretch, v_min)
     except LogError:
         return None
     quiet = is_quiet(sensors, cond["log_rate"], cond["log_ay_noise"], ratio, cond["log_ay_floor"])
-    return cond if keeps_cars_model(quiet, cond["log_roll_rate"], bool(cond["log_gyro_unbiased"])) else None
+    return cond, keeps_cars_model(quiet, cond["log_roll_rate"], bool(cond["log_gyro_unbiased"]))
 
 
 def handed_over_warnings(source: str, handed: dict, t0: float) -> list[str]:
