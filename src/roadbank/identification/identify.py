@@ -19,6 +19,7 @@ import numpy as np
 from ..models.roll import roll_stiffness_for_gain, steady_roll_gain
 from ..params import VehicleParams
 from .offsets import Offsets, straight_offsets
+from .pair import PairCheck, stiffness_pair
 from .prepare import to_grid
 from .results import IdentificationResult, LogReport, Quantity, refused
 from .roll import identify_roll_gain
@@ -217,8 +218,8 @@ def _examine(log, p: VehicleParams, s: IdentifySettings, seen: dict[str, Path]
     return LogReport(source, True, note, dict(seg.seconds), seg.n_corners, seg.speed_range), seg, steering
 
 
-def identify(logs, params: VehicleParams | None = None, settings: IdentifySettings | None = None
-             ) -> IdentificationResult:
+def identify(logs, params: VehicleParams | None = None, settings: IdentifySettings | None = None,
+             check: PairCheck | None = None) -> IdentificationResult:
     """Identify a car's parameters and sensor offsets from driving logs.
 
     Parameters
@@ -230,12 +231,18 @@ def identify(logs, params: VehicleParams | None = None, settings: IdentifySettin
         Base vehicle: m, Iz, Lf, Lr and the roll data are taken as known.
         Default: the paper's SUV.
     settings : IdentifySettings, optional
+    check : callable, optional
+        ``params -> ""`` when a Cf, Cr pair with one stiffness derived from ``Kus`` may be written, else
+        why not (``roadbank identify`` passes the vehicle file's plausibility checks). Default: positive
+        values only.
 
     Returns
     -------
     IdentificationResult
         Every quantity with its value and standard uncertainty, or the reason it
-        was refused; a report per log; ``params`` with the identified Cf, Cr and the roll stiffness that gives
+        was refused; a report per log; ``params`` with the identified Cf, Cr (or, one of them refused, the
+        identified one and the other derived from ``Kus``: ``derived``; if that is not possible, the base
+        pair, with a warning when it contradicts the identified ``Kus``) and the roll stiffness that gives
         the identified roll gain.
     """
     p = params or VehicleParams()
@@ -272,10 +279,8 @@ def identify(logs, params: VehicleParams | None = None, settings: IdentifySettin
         fit = {k: refused(k, q.unit, why) if not q.ok else q for k, q in fit.items()}
     quantities.update(fit)
     quantities = {k: quantities[k] for k in ORDER if k in quantities}
-    out_p = p
-    if quantities["Cf"].ok and quantities["Cr"].ok:
-        out_p = p.replace(Cf=quantities["Cf"].value, Cr=quantities["Cr"].value)  # type: ignore[arg-type]
+    out_p, derived, warnings = stiffness_pair(quantities, p, check)
     rg = quantities.get("roll_gain")
     if rg is not None and rg.ok and rg.value > 0 and p.ms * p.h_roll > 0:  # type: ignore[operator]
         out_p = out_p.replace(k_roll=roll_stiffness_for_gain(p, rg.value))  # type: ignore[arg-type]
-    return IdentificationResult(quantities, reports, out_p)
+    return IdentificationResult(quantities, reports, out_p, derived, warnings)

@@ -93,13 +93,23 @@ class IdentificationResult:
     logs : list of LogReport
     params : VehicleParams
         The base parameters with ``Cf``, ``Cr`` replaced by the identified
-        values where both were identified, and ``k_roll`` (N m/rad) by the one that gives the identified
+        values where both were identified, or by one identified and the other derived from ``Kus`` (see
+        ``derived``), and ``k_roll`` (N m/rad) by the one that gives the identified
         roll gain (``ms``, ``h_roll`` kept).
+    derived : dict name -> Quantity
+        A refused axle stiffness derived from the identified ``Kus`` and the other axle's, so that ``params``
+        agrees with the identified understeer gradient (:mod:`.pair`); its ``note`` says from what. Empty when
+        none was.
+    warnings : list of str
+        What the caller must know about ``params``: the base car's ``Cf``, ``Cr`` kept although their
+        understeer gradient contradicts the identified one (both named).
     """
 
     quantities: dict
     logs: list
     params: VehicleParams
+    derived: dict = field(default_factory=dict)
+    warnings: list = field(default_factory=list)
 
     def identified(self) -> dict[str, dict[str, float | str]]:
         """The identified quantities as ``{name: {"value", "std", "unit", "note"}}``."""
