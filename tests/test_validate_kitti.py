@@ -491,3 +491,34 @@ def test_a_repeated_estimators_option_scores_every_one_named():
         assert res.exit_code == 0, res.output
     scores = [json.loads(res.stdout)["drives"] for res in runs]
     assert scores[0] == scores[1] and all(set(v) == {"kinematic", "kinematic-lp"} for v in scores[0].values())
+
+
+@needs_kitti
+def test_the_smooth_road_section_scores_each_drive_as_estimate_reads_it_quiet():
+    """Drive 0070 as each smooth road (validation.roads.smooth_road): it reads quiet; each score is the CLI's
+    estimator on that log (vehicle.for_log, no vehicle file) against the INS roll; the split's medians, the markdown
+    and the JSON give them; the default without the roll rate beats the car's model of a car nobody described there
+    (the sixty-second stage's finding on the training drives, here on a validation drive)."""
+    from roadbank.io.kitti import load_kitti_oxts
+    from roadbank.validation.kitti import KITTI_SCORING, SMOOTH_NAMES, validate_kitti
+    from roadbank.validation.kitti_report import smooth_road_lines, to_json
+    from roadbank.validation.roads import SMOOTH_ROADS, smooth_road
+    from roadbank.vehicle import SensorSpec, for_log, is_quiet, log_conditions
+    log = load_kitti_oxts(KITTI / "2011_09_26_drive_0070")
+    v = validate_kitti([KITTI / "2011_09_26_drive_0070"], names=list(SMOOTH_NAMES))
+    got = v.drives[0].data["smooth_roads"]
+    m = masks(log.signals.t, log.signals.vx, KITTI_SCORING)[1]
+    for form, (order, cutoff) in SMOOTH_ROADS.items():
+        s = smooth_road(log.signals, order, cutoff, seed=0)
+        c = log_conditions(s)
+        assert is_quiet(SensorSpec(), c["log_rate"], c["log_ay_noise"], log_ay_floor=c["log_ay_floor"])
+        theta = for_log("kinematic-pif", s).run(s).theta
+        assert got[form]["kinematic-pif"] == pytest.approx(
+            np.degrees(np.sqrt(np.mean((theta[m] - log.reference_roll[m]) ** 2))), rel=1e-9)
+        assert got[form]["kinematic-pif-esp"] < got[form]["pif-adaptive"]
+        part = v.by_split["validation"]["smooth_roads"][form]
+        assert part["drives"] == 1 and part["median_rms_raw_deg"]["kinematic-lp"] == got[form]["kinematic-lp"]
+        row = next(line for line in "\n".join(smooth_road_lines(v, "##")).splitlines()
+                   if line.startswith(f"| validation, {form} |"))
+        assert f"{got[form]['kinematic-pif-esp']:.3f}" in row
+        assert to_json(v)["splits"]["validation"]["smooth_roads"][form]["drives"] == 1

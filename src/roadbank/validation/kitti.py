@@ -44,6 +44,7 @@ from ..signals import sample_rate
 from ..vehicle import SensorSpec, car_for_log, log_conditions, noise_densities
 from .comma2k19 import ValidationResult
 from .datasets import find_datasets
+from .roads import SMOOTH_ROADS, smooth_road
 from .scoring import (ESP_DEFAULT, SHORT_PIECES_S, VALIDATION_NAMES, Scoring, _rms_deg, hold_invalid, lowpass_t, masks,
                       pooled, run_and_score, scored_pieces)
 from .splits import split_of
@@ -224,6 +225,8 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     data["warnings"] = list(log.warnings)
     if sensitivity:
         data["pieces"] = short_log_scores(log, [n for n in SHORT_NAMES if n in names], given, scoring, sensors)
+        data["smooth_roads"] = smooth_road_scores(log, [n for n in SMOOTH_NAMES if n in names], given, scoring,
+                                                  sensors)
     return ValidationResult(scores=run.scores, params=params, t=t, reference=run.reference,
                             estimates=run.estimates, split_time=float(t[first[0]]) if len(first) else float(t[0]),
                             data=data, sensitivity=sens, settings=settings, run=run,
@@ -255,6 +258,40 @@ def _piece_scores(log, length: float, names, params, scoring: Scoring, sensors) 
         for n in names:
             rms[n].append(run.scores[n].rms_raw_deg)
     return rms
+
+
+#: the estimators scored on a drive made a smooth road (:func:`smooth_road_scores`): those of the short pieces and the
+#: car's model (``pif-adaptive``, the default's quiet filter for a car described)
+SMOOTH_NAMES = SHORT_NAMES + ("pif-adaptive",)
+
+
+def smooth_road_scores(log, names, params: VehicleParams | None, scoring: Scoring, sensors=None) -> dict:
+    """``{form: {name: raw RMS deg}}``: each estimator of ``names`` on the drive ``log`` as each smooth road of
+    :data:`roadbank.validation.roads.SMOOTH_ROADS` (:func:`~roadbank.validation.roads.smooth_road`, seed 0), read as a
+    log of its own (its design and fitted car unless ``params`` is given): what a quiet log of the same drive gives.
+    Its designs are not written to the design cache."""
+    out = {}
+    with not_stored():
+        for form, (order, cutoff) in SMOOTH_ROADS.items():
+            s = smooth_road(log.signals, order, cutoff, seed=0)
+            car, _ = car_for_log(s, log_conditions(s), params, sensors=sensors)
+            run = run_and_score(s, log.reference_roll, names, car, scoring, sensors=sensors,
+                                described=params is not None)
+            out[form] = {n: run.scores[n].rms_raw_deg for n in names}
+    return out
+
+
+def _smooth_split(ds, names) -> dict:
+    """``{form: {"drives": n, "median_rms_raw_deg": {name: deg}, "default_below_lp": k}}`` over the drives ``ds`` made
+    a smooth road (:func:`smooth_road_scores`, in ``data["smooth_roads"]``); empty when none has them."""
+    ds = [d for d in ds if "smooth_roads" in d.data]
+    out = {}
+    for form in SMOOTH_ROADS if ds and names else ():
+        per = {n: [d.data["smooth_roads"][form][n] for d in ds] for n in names}
+        pairs = zip(per.get(ESP_DEFAULT, []), per.get("kinematic-lp", []))
+        out[form] = {"drives": len(ds), "median_rms_raw_deg": {n: _median(v) for n, v in per.items()},
+                     "default_below_lp": sum(a < b for a, b in pairs)}
+    return out
 
 
 def _short_split(ds, names) -> dict:
@@ -436,7 +473,8 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
                                                       for n in names},
                                "median_rms_raw_each_start_deg": {n: _median([d.data["rms_raw_each_start_deg"][n]
                                                                              for d in ds]) for n in names},
-                               "short_logs": _short_split(ds, [n for n in SHORT_NAMES if n in names])}
+                               "short_logs": _short_split(ds, [n for n in SHORT_NAMES if n in names]),
+                               "smooth_roads": _smooth_split(ds, [n for n in SMOOTH_NAMES if n in names])}
     return KittiValidation(drives=drives, pooled=pooled([d.run for d in credible], names), errors=errors,
                            settings={"tau": scoring.tau, "warmup_s": scoring.warmup_s,
                                      "v_gate": scoring.v_gate, "fit_fraction": scoring.fit_fraction,

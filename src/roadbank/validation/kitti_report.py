@@ -13,6 +13,7 @@ from ..report.tables import targets_markdown
 from ..report.timeseries import reference_figure, save_figure
 from ..vehicle import QUIET_RATIO
 from .kitti import KittiValidation, below_kinematic
+from .scoring import ESP_DEFAULT
 from .targets import kitti_targets
 
 #: the best value of each score column: smallest RMS, largest correlation
@@ -41,6 +42,31 @@ def short_log_lines(v: KittiValidation, h: str) -> list[str]:
                      body, digits=3, align="lr" + "r" * (len(names) + 1)), ""]
 
 
+def smooth_road_lines(v: KittiValidation, h: str) -> list[str]:
+    """The "The drives as a smooth road" section: per split and form, the median raw RMS over the drives made a smooth
+    road (:func:`roadbank.validation.kitti.smooth_road_scores`); nothing when no drive has them."""
+    parts = {k: part["smooth_roads"] for k, part in v.by_split.items() if part.get("smooth_roads")}
+    if not parts:
+        return []
+    first = next(x for by_form in parts.values() for x in by_form.values())
+    names = list(first["median_rms_raw_deg"])
+    body = [[f"{split}, {form}", int(x["drives"])] + [x["median_rms_raw_deg"][n] for n in names]
+            + [f"{x['default_below_lp']} of {x['drives']}"]
+            for split, by_form in parts.items() for form, x in by_form.items()]
+    return [f"{h}# The drives as a smooth road\n",
+            "Every drive here reads loud, so the default's quiet branch would meet no real log. Each credible drive "
+            "with its `ay` and yaw rate through a zero-phase Butterworth low-pass (second order at 0.5 Hz; eighth "
+            "order at 0.8 Hz, which keeps the car's motion up to about 0.7 Hz) plus the ESP data sheet's noise "
+            "(`roadbank.validation.roads.smooth_road`; both read quiet), the INS roll and the speed as recorded, "
+            "read as a log of its own: median raw theta RMS (deg) over the drives, and on how many the default "
+            f"without the roll rate (`{ESP_DEFAULT}`) is below `kinematic-lp`. No vehicle file: a quiet log of a car "
+            "nobody described is designed as a loud one (the sixty-second stage, docs/estimators.md); "
+            "`pif-adaptive` is the car's model, what the default was there before (and is with a vehicle file).\n",
+            md_table(["split, road", "drives"] + [f"{n} (deg)" for n in names]
+                     + [f"{ESP_DEFAULT} below kinematic-lp"],
+                     body, digits=3, align="lr" + "r" * (len(names) + 1)), ""]
+
+
 def _f(x, nd=3):
     return "n/a" if x is None or (isinstance(x, float) and math.isnan(x)) else f"{x:.{nd}f}"
 
@@ -52,7 +78,8 @@ def _j(x):
 def to_json(v: KittiValidation) -> dict:
     """``{"drives": {drive: {estimator: {...}}}, "pooled": {estimator: {...}}, "errors": [...],
     "excluded": [{"drive", "path", "reason"}], "notes": [...],
-    "splits": {split: {"drives", "short_logs", "median_rms_raw_deg", "median_rms_raw_each_start_deg", "pooled"}},
+    "splits": {split: {"drives", "short_logs", "smooth_roads", "median_rms_raw_deg", "median_rms_raw_each_start_deg",
+    "pooled"}},
     "flagged": [{"drive", "reason"}], "designs": {drive: design}}`` (``design``:
     :func:`roadbank.vehicle.design_record`; ``excluded``: the drives not read or not scored, ``drive``
     null for a path that holds no KITTI folder; ``notes``: :attr:`KittiValidation.notes`).
@@ -72,6 +99,9 @@ def to_json(v: KittiValidation) -> dict:
                                                  "median_rms_raw_deg": {n: _j(y) for n, y in
                                                                         x["median_rms_raw_deg"].items()}}
                                  for length, x in part.get("short_logs", {}).items()},
+                  "smooth_roads": {form: {"drives": x["drives"], "default_below_lp": x["default_below_lp"],
+                                          "median_rms_raw_deg": {n: _j(y) for n, y in x["median_rms_raw_deg"].items()}}
+                                   for form, x in part.get("smooth_roads", {}).items()},
                   "median_rms_raw_deg": {n: _j(x) for n, x in part["median_rms_raw_deg"].items()},
                   "median_rms_raw_each_start_deg": {n: _j(x)
                                                     for n, x in part["median_rms_raw_each_start_deg"].items()},
@@ -297,6 +327,7 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
                       digits=3, best=_BEST, best_in="column"))
     L.append("\nBest of each score column in bold (smallest RMS, largest r).\n")
     L += short_log_lines(v, h)
+    L += smooth_road_lines(v, h)
     L += limits_lines(v, h)
     L.append(f"{h}# Method (KITTI)\n")
     L.append("- Reader: `roadbank.io.load_log(drive)` (format `kitti-oxts`, detected from the folder): "

@@ -17,15 +17,14 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from scipy.signal import butter, filtfilt, sosfiltfilt
 
 from ...estimators import OFFLINE
 from ...estimators.offsets import with_online_offsets
 from ...evaluation.compare import usable_samples
 from ...evaluation.metrics import error_metrics
 from ...vehicle import load_vehicle
-from ...signals import Signals, concat_signals, sample_rate
-from ...sim.sensors import SensorConfig
+from ...signals import Signals, concat_signals
+from ...validation.roads import SMOOTH_ROADS, smooth_road
 from ..objective import FAILED_DEG, SETTLE
 from .common import cars_median, log_errors, per_log, sim_errors
 from .esp import _with_settings, design_settings, same_outputs
@@ -174,33 +173,17 @@ def choose_road_change_gyro(esp_long, gyro_long) -> tuple:
 
 #: the sixtieth stage's smooth road: ``ay`` and the yaw rate through a zero-phase Butterworth low-pass of this order and
 #: cut-off (Hz), plus the white noise of the ESP sensors' data sheet (:class:`roadbank.sim.sensors.SensorConfig`)
-SMOOTH_ROAD_ORDER = 2
-SMOOTH_ROAD_CUTOFF_HZ = 0.5
+SMOOTH_ROAD_ORDER, SMOOTH_ROAD_CUTOFF_HZ = SMOOTH_ROADS["0.5 Hz"]
 #: its rule: B ships if its median is below A's by more than this (deg)
 QUIET_INS_GAIN_DEG = 0.005
 
 
 def smooth_road_logs(logs, order: int = SMOOTH_ROAD_ORDER, cutoff: float = SMOOTH_ROAD_CUTOFF_HZ) -> list:
     """``logs`` (``(signals, reference roll rad, scored mask)``, :func:`~roadbank.tuning.real.training_logs`) as the
-    same drives on a smooth road read by a data sheet's sensors: ``ay`` (m/s^2) and the yaw rate (rad/s) through a
-    zero-phase Butterworth low-pass of ``order`` at ``cutoff`` (Hz, at the drive's own rate; default the sixtieth
-    stage's, :data:`SMOOTH_ROAD_ORDER` at :data:`SMOOTH_ROAD_CUTOFF_HZ`) plus the ESP data sheet's white noise (seeded
-    by the drive's place in ``logs``); every other channel, the reference and the mask as they are."""
-    cfg = SensorConfig()
-    out = []
-    for i, (s, ref, mask) in enumerate(logs):
-        rng = np.random.default_rng(i)
-        wn = cutoff / (0.5 * sample_rate(s.t))
-        if order == SMOOTH_ROAD_ORDER:          # (as the sixtieth stage ran; the sections' form for a steep one)
-            b, a = butter(order, wn)
-            ay, r = filtfilt(b, a, s.ay), filtfilt(b, a, s.r)
-        else:
-            sos = butter(order, wn, output="sos")
-            ay, r = sosfiltfilt(sos, s.ay), sosfiltfilt(sos, s.r)
-        ay = ay + cfg.ay.noise_std * rng.standard_normal(len(s))
-        r = r + cfg.yaw_rate.noise_std * rng.standard_normal(len(s))
-        out.append((dataclasses.replace(s, ay=ay, r=r), ref, mask))
-    return out
+    same drives on a smooth road read by a data sheet's sensors (:func:`roadbank.validation.roads.smooth_road` of
+    ``order`` at ``cutoff`` Hz, default the sixtieth stage's, :data:`SMOOTH_ROAD_ORDER` at
+    :data:`SMOOTH_ROAD_CUTOFF_HZ`, seeded by the drive's place in ``logs``); the reference and the mask as they are."""
+    return [(smooth_road(s, order, cutoff, seed=i), ref, mask) for i, (s, ref, mask) in enumerate(logs)]
 
 
 def choose_quiet_ins(gyro_logs, smooth_logs, sim_gyro_sets) -> tuple:
@@ -224,8 +207,7 @@ def choose_quiet_ins(gyro_logs, smooth_logs, sim_gyro_sets) -> tuple:
 
 #: the sixty-second stage's second smooth road: a steep zero-phase Butterworth low-pass (order, cut-off Hz) that keeps
 #: the car's motion up to about 0.7 Hz and leaves the KITTI training drives quiet (0.71-1.45 times the density)
-STEEP_ROAD_ORDER = 8
-STEEP_ROAD_CUTOFF_HZ = 0.8
+STEEP_ROAD_ORDER, STEEP_ROAD_CUTOFF_HZ = SMOOTH_ROADS["0.8 Hz, steep"]
 #: its rule: B ships if its objective is below A's by more than this (deg)
 UNDESCRIBED_GAIN_DEG = 0.02
 
