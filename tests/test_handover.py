@@ -305,5 +305,5 @@ def test_a_quiet_log_of_a_car_nobody_described_is_designed_loud_and_not_handed_o
     assert nobody["quiet"] and file["quiet"]
     assert design_words(nobody, "kinematic-pif").endswith(
         "so kinematic-pif is the low-pass blend (a quiet log, but the car's model is kept only for a car described: "
-        "a vehicle file)")
+        "a vehicle file, --vehicle; roadbank identify writes one from logs with a steering angle)")
     assert "so kinematic-pif is pif-adaptive until its roads turn loud" in design_words(file, "kinematic-pif")

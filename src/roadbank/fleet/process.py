@@ -149,7 +149,8 @@ def design_words(design: dict, estimator: str) -> str:
         unread = " (its roll rate not read: a quiet log keeps the car's model)" if model and gyro else ""
         until = (" until its roads turn loud (then the design of its first loud minute)"
                  if model and hands_over(slope) and estimator not in OFFLINE else "")
-        nobody = " (a quiet log, but the car's model is kept only for a car described: a vehicle file)"
+        nobody = (" (a quiet log, but the car's model is kept only for a car described: a vehicle file, --vehicle; "
+                  "roadbank identify writes one from logs with a steering angle)")
         words += f", so {estimator} is {QUIET_MODELS[estimator] + unread + until if model else loud}"
         words += nobody if quiet and not model else ""
     if slope is not None and not gyro:
