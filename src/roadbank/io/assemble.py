@@ -76,16 +76,18 @@ CLOCKED_ROLES = ("lateral_acceleration", "yaw_rate")
 
 
 def missing_column(p, role: str, column: str | None, names,
-                   what: str = "column not found in the file") -> LogError:
+                   what: str = "column not found in the file", guessed: str = "") -> LogError:
     """The error for a required channel whose column is not in the file, with the way out: a
     channel map (``--channels map.toml``) that ``roadbank channels`` writes for the file's columns, or for an MDF4
-    bus log (raw CAN frames) a map with its DBC."""
+    bus log (raw CAN frames) a map with its DBC. ``guessed``: what the guess of a map for the file's columns found and
+    why it was not trusted (:mod:`roadbank.io.mapchoice`), said after the file's columns."""
     if any(str(n).startswith("CAN_DataFrame") for n in names):
         return channel_error(p, role, column, f"{what}: it is an MDF4 bus log (raw CAN frames, CAN_DataFrame), read "
                              "with a DBC: give a channel map with dbc = \"car.dbc\" and the signals of each channel "
                              "(--channels map.toml; docs/io.md, Raw CAN with a DBC)")
     return channel_error(p, role, column, f"{what} (it has: "
-                         f"{', '.join(names) or 'nothing'}); for a log with other column names give a "
+                         f"{', '.join(names) or 'nothing'}){'; ' + guessed if guessed else ''}; for a log with other "
+                         "column names give a "
                          f"channel map with --channels map.toml (`roadbank channels {Path(p).name} -o map.toml` "
                          "writes one for these columns)")
 

@@ -174,6 +174,18 @@ def name_match(role: str, name: str) -> tuple[int, str | None]:
     return score, hint
 
 
+def named_as(role: str, name: str) -> bool:
+    """Whether column ``name`` is a known spelling of ``role``: alone (``roll_rate``, ``gyro_x``, ``RollRate``), with a
+    unit in it (``roll_rate_dps``) or after a message's or a device's prefix (``IMU.RollRate``) -- not a longer word
+    that only starts with one (``RollRateQuality``, which :func:`name_match` ranks 1 as well). What a log read without
+    a channel map needs of a column to read it as an optional channel (:mod:`roadbank.io.mapchoice`)."""
+    score = _bare_match(role, name)[0]
+    if score == 2:
+        return True
+    tail = _after_prefix(name) if score == 0 else None
+    return tail is not None and tail[0] == role
+
+
 @functools.lru_cache(maxsize=4096)
 def _after_prefix(name: str) -> tuple[str, str | None] | None:
     """(role, unit hint) of a column ``name`` that is a message prefix, a separator (:data:`PREFIX_SEPARATORS`) and a

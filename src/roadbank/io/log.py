@@ -25,7 +25,9 @@ def load_log(path, channels: ChannelMap | str | Path | None = None, format: str 
         A CSV, Parquet or MDF4 file, a raw CAN log, a ROS bag, a comma2k19 segment directory,
         or a KITTI raw drive (its ``oxts`` folder, the drive folder or a folder holding one drive).
     channels : ChannelMap or path to a TOML channel map, optional
-        Default: roadbank's own columns (what ``roadbank simulate`` writes).
+        Default: roadbank's own columns (what ``roadbank simulate`` writes); a CSV, Parquet or MDF4 log named
+        otherwise is read with the map guessed from its columns where the guess is sure, and a roll rate, ``ax`` or
+        pitch rate under another name is read too, each said in ``Log.warnings`` (:mod:`roadbank.io.mapchoice`).
         Not used for comma2k19 and KITTI (fixed layouts, their own maps).
     format : str, optional
         "csv", "parquet", "mdf4", "comma2k19" or "kitti-oxts"; default from the

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from .csvtable import read_csv, time_text
+from .csvtable import CsvLines, read_csv, time_text
 from .errors import LogError
 from .fields import column_label, not_numbers, parse_floats, unique_names
 from .files import existing_nonempty, must_exist, open_mdf
@@ -243,4 +243,85 @@ def mdf_signal_floats(p, c: str, label: str, sig, row0: int = 0) -> np.ndarray:
 
 
 READERS = {"csv": read_csv, "parquet": read_parquet, "mdf4": read_mdf4}
+
+
+def read_head(path, fmt: str, columns: list[str], rows: int):
+    """``(data, times, stated, unread)`` of ``columns`` of the CSV, Parquet or MDF4 log ``path``: their first ``rows``
+    rows (MDF4: samples of each channel) as float64 in the file's own units, the MDF4 channels' stamps (s; empty for a
+    table), the units the file states, and the columns that cannot be read as numbers (column -> why), left out.
+
+    The same rows whatever chunks the log is read in later: a CSV file streamed (:class:`CsvLines`) gives its first
+    block of ``rows`` lines, one read whole (:func:`read_csv`) its first ``rows`` rows; memory is bounded by them.
+    What :func:`roadbank.io.guess.guess_channels` reads of a log given without a channel map."""
+    data: dict[str, np.ndarray] = {}
+    times: dict[str, np.ndarray] = {}
+    stated: dict[str, str] = {}
+    unread: dict[str, str] = {}
+    if not columns:
+        return data, times, stated, unread
+    read = {"csv": _csv_head, "parquet": _parquet_head, "mdf4": _mdf4_head}[fmt]
+    try:
+        data, times, stated = read(path, columns, rows)
+    except LogError:                        # a column that holds no numbers (a gear as text): the others alone
+        for c in columns:
+            try:
+                d, t, s = read(path, [c], rows)
+            except LogError as exc:
+                unread[c] = str(exc)
+                continue
+            data.update(d)
+            times.update(t)
+            stated.update(s)
+    return data, times, stated, unread
+
+
+def _csv_head(path, columns: list[str], rows: int):
+    wanted = {c: c for c in columns}
+    p = existing_nonempty(path)
+    lines = CsvLines.open(p, rows, wanted)
+    if lines is not None:                   # a long file: its first block of lines
+        chunk = next(iter(lines.chunks(wanted)))
+        return dict(chunk.data), {}, dict(lines.units)
+    tab = read_csv(p, wanted)
+    return {c: v[:rows] for c, v in tab.data.items()}, {}, dict(tab.units)
+
+
+def _parquet_head(path, columns: list[str], rows: int):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    p = existing_nonempty(path)
+    parts: dict[str, list[np.ndarray]] = {c: [] for c in columns}
+    n = 0
+    try:
+        pf = pq.ParquetFile(p, pre_buffer=False)
+        for b in pf.iter_batches(batch_size=rows, columns=columns, use_threads=False):
+            for c in columns:
+                parts[c].append(arrow_column_floats(p, c, f"column '{c}'", b.column(c), n))
+            n += b.num_rows
+            if n >= rows:
+                break
+    except (pa.ArrowException, OSError, ValueError) as exc:
+        raise LogError(f"{p}: not a readable Parquet file (truncated or corrupt?): {exc}") from None
+    return {c: np.concatenate(v)[:rows] if v else np.zeros(0) for c, v in parts.items()}, {}, {}
+
+
+def _mdf4_head(path, columns: list[str], rows: int):
+    p = existing_nonempty(path)
+    mdf = open_mdf(p)
+    data, times = {}, {}
+    try:
+        stated = mdf_units(mdf, columns)
+        for c in columns:
+            label = f"channel '{c}'"
+            group, index = mdf_place(mdf, p, c, label)
+            try:
+                sig = mdf.get(group=group, index=index, record_offset=0, record_count=rows)
+            except Exception as exc:
+                raise LogError(f"{p}: {label}: cannot read ({exc})") from None
+            data[c] = mdf_signal_floats(p, c, label, sig)
+            times[c] = np.asarray(sig.timestamps, dtype=np.float64)
+    finally:
+        mdf.close()
+    return data, times, stated
 

@@ -32,6 +32,7 @@ from .channels import ChannelMap, default_channel_map, read_channel_map
 from .errors import LogError
 from .files import must_exist
 from .formats import DATASET_FORMATS, FORMATS
+from .mapchoice import choose_map
 from .repair import HOLD_ROWS, ChunkRepair  # noqa: F401  (where streaming code looks for them)
 from .resample import StreamResampler  # noqa: F401
 from .sources import open_layout, open_source
@@ -49,7 +50,9 @@ def log_chunks(path, channels: ChannelMap | str | Path | None = None, format: st
     """The chunks of one log: its source (:func:`~roadbank.io.sources.open_source`) through the
     assembler (:func:`~roadbank.io.assemble.assemble`); ``chunk_rows=None`` reads it in one chunk.
     Arguments as :func:`stream_log`; comma2k19 segments and KITTI drives (fixed layouts) bring
-    their own channel map (``channels`` is not used)."""
+    their own channel map (``channels`` is not used). Without ``channels`` a table log is read with the map
+    :func:`~roadbank.io.mapchoice.choose_map` chooses (the default map, or the one guessed from its columns), the same
+    whatever ``chunk_rows``."""
     p = must_exist(path)              # before a format is guessed from a suffix it may not have
     fmt = (format or readers.detect_format(p)).lower()
     if fmt not in FORMATS:
@@ -69,6 +72,16 @@ def log_chunks(path, channels: ChannelMap | str | Path | None = None, format: st
         if fmt == "mdf4" and cmap.dbc is not None:
             fmt = "mdf4-can"                  # an MDF4 file with a DBC: bus logging
         src = open_source(p, fmt, cmap, rows)
+        if channels is None:                  # no map given: the default's columns, or the guessed map's
+            try:
+                chosen, note = choose_map(src, fmt, cmap)
+            except BaseException:
+                src.close()
+                raise
+            if chosen is not None:
+                src.close()
+                cmap = chosen
+                src = open_source(p, fmt, cmap, rows)
     try:
         for log in assemble(src, cmap, params, fmt):
             log.warnings, note = note + log.warnings, []
