@@ -238,6 +238,18 @@ def test_map_reads_the_guessed_log_as_with_the_map_channels_writes(drive, tmp_pa
         np.testing.assert_array_equal(outs[0][c].to_numpy(), outs[1][c].to_numpy(), err_msg=c)
 
 
+@pytest.mark.parametrize("command", [["identify"], ["export", "c", "--roll-rate"]])
+def test_identify_and_export_read_the_guessed_log_and_say_so(drive, tmp_path, command):
+    log = _write(tmp_path / "guessed.csv", _renamed(drive.signals))
+    out = tmp_path / ("car.toml" if command[0] == "identify" else "c")
+    args = [*command, str(log)] if command[0] == "identify" else [*command, "--log", str(log)]
+    res = CliRunner().invoke(main, [*args, "-o", str(out)])
+    assert "Traceback" not in res.output and "FAILED" not in res.output, res.output
+    assert f"warning: {log}: no column 'vx' (the default channel map's speed): read with the channel map guessed" \
+        in res.stderr, res.stderr
+    assert out.exists()
+
+
 def test_an_mdf4_log_with_its_own_channel_names(drive, tmp_path):
     asammdf = pytest.importorskip("asammdf", reason="optional extra 'mdf' (asammdf) not installed")
     s = drive.signals

@@ -70,6 +70,10 @@ def channels(log, output, fmt):
     the default estimator does not read it. Check the map before using it. Exit code 1 if
     time, speed, ay or yaw rate was not found (the map is written, with that channel to fill
     in) or the map does not read the log.
+
+    Without --channels, estimate, map, identify and export c --log read a log named
+    otherwise with this guess where every one of time, speed, ay and yaw rate is high,
+    and say so (docs/io.md): this command writes it down, to check and to pin.
     """
     from ..io import LogError, load_log, read_channel_map
     from ..io.channels import STEERING
