@@ -20,17 +20,25 @@ from .targets import kitti_targets
 _BEST = {"rms raw (deg)": "min", "r raw": "max", "rms smoothed (deg)": "min", "r smoothed": "max", "r causal LP": "max"}
 
 
+def _medians_table(parts: dict, label, count: str, heads: list[str], default: str) -> str:
+    """The table of a section of medians per split: ``parts`` ``{split: {key: {count: n, "median_rms_raw_deg": {name:
+    deg}, "default_below_lp": k}}}``, a row per split and key labelled ``label(split, key)``, ``heads`` the first two
+    columns' headings, ``default`` the estimator counted below ``kinematic-lp``."""
+    first = next(x for by_key in parts.values() for x in by_key.values())
+    names = list(first["median_rms_raw_deg"])
+    body = [[label(split, key), int(x[count])] + [x["median_rms_raw_deg"][n] for n in names]
+            + [f"{x['default_below_lp']} of {x[count]}"]
+            for split, by_key in parts.items() for key, x in by_key.items()]
+    return md_table(heads + [f"{n} (deg)" for n in names] + [f"{default} below kinematic-lp"], body, digits=3,
+                    align="lr" + "r" * (len(names) + 1))
+
+
 def short_log_lines(v: KittiValidation, h: str) -> list[str]:
     """The "Short logs" section: per split and piece length, the median raw RMS over the drives' short pieces
     (:func:`roadbank.validation.kitti.short_log_scores`); nothing when no drive has them."""
     parts = {k: part["short_logs"] for k, part in v.by_split.items() if part.get("short_logs")}
     if not parts:
         return []
-    first = next(x for by_length in parts.values() for x in by_length.values())
-    names = list(first["median_rms_raw_deg"])
-    body = [[f"{split} {length:g} s", int(x["pieces"])] + [x["median_rms_raw_deg"][n] for n in names]
-            + [f"{x['default_below_lp']} of {x['pieces']}"]
-            for split, by_length in parts.items() for length, x in by_length.items()]
     return [f"{h}# Short logs\n",
             "Many raw drives last 10-30 s. Each credible drive cut into consecutive whole pieces of 8, 12 and 20 s, "
             "each piece read as a log of its own (its own design and fitted car, the scoring within it), as "
@@ -38,8 +46,8 @@ def short_log_lines(v: KittiValidation, h: str) -> list[str]:
             f"pieces the default (`{DEFAULT}`) is below `kinematic-lp`. On a piece too short for the roll-rate "
             "check the format's own roll rate is still used (docs/estimators.md, \"Short logs and a format's own "
             "channels\").\n",
-            md_table(["split, piece", "pieces"] + [f"{n} (deg)" for n in names] + [f"{DEFAULT} below kinematic-lp"],
-                     body, digits=3, align="lr" + "r" * (len(names) + 1)), ""]
+            _medians_table(parts, lambda split, length: f"{split} {length:g} s", "pieces", ["split, piece", "pieces"],
+                           DEFAULT), ""]
 
 
 def smooth_road_lines(v: KittiValidation, h: str) -> list[str]:
@@ -48,11 +56,6 @@ def smooth_road_lines(v: KittiValidation, h: str) -> list[str]:
     parts = {k: part["smooth_roads"] for k, part in v.by_split.items() if part.get("smooth_roads")}
     if not parts:
         return []
-    first = next(x for by_form in parts.values() for x in by_form.values())
-    names = list(first["median_rms_raw_deg"])
-    body = [[f"{split}, {form}", int(x["drives"])] + [x["median_rms_raw_deg"][n] for n in names]
-            + [f"{x['default_below_lp']} of {x['drives']}"]
-            for split, by_form in parts.items() for form, x in by_form.items()]
     return [f"{h}# The drives as a smooth road\n",
             "Every drive here reads loud, so the default's quiet branch would meet no real log. Each credible drive "
             "with its `ay` and yaw rate through a zero-phase Butterworth low-pass (second order at 0.5 Hz; eighth "
@@ -62,9 +65,8 @@ def smooth_road_lines(v: KittiValidation, h: str) -> list[str]:
             f"without the roll rate (`{ESP_DEFAULT}`) is below `kinematic-lp`. No vehicle file: a quiet log of a car "
             "nobody described is designed as a loud one (the sixty-second stage, docs/estimators.md); "
             "`pif-adaptive` is the car's model, what the default was there before (and is with a vehicle file).\n",
-            md_table(["split, road", "drives"] + [f"{n} (deg)" for n in names]
-                     + [f"{ESP_DEFAULT} below kinematic-lp"],
-                     body, digits=3, align="lr" + "r" * (len(names) + 1)), ""]
+            _medians_table(parts, lambda split, form: f"{split}, {form}", "drives", ["split, road", "drives"],
+                           ESP_DEFAULT), ""]
 
 
 def _f(x, nd=3):
