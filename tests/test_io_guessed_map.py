@@ -13,6 +13,7 @@ the bit. Streamed in chunks, the same as read whole.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,7 @@ import pytest
 from click.testing import CliRunner
 
 from roadbank.cli import main
+from roadbank.identification.check import SimCase, simulate_case
 from roadbank.io import LogError, csvtable, load_log, mapchoice
 from roadbank.io.assemble import concat_logs
 from roadbank.io.guess import named_as
@@ -266,3 +268,220 @@ def test_an_mdf4_log_with_its_own_channel_names(drive, tmp_path):
     assert "speed <- 'VehicleSpeed' (m/s" in log.warnings[0], log.warnings
     _same_signals(log, load_log(own))
     _same_signals(concat_logs(list(stream_log(guessed, chunk_rows=100))), log)
+
+
+# ------------------------------------------------------------------ a GNSS position under the default map
+def _gnss(drive, **more) -> dict:
+    """The drive under roadbank's own names with its GNSS position as ``lat``, ``lon`` (deg)."""
+    s = drive.signals
+    return {"t": s.t, "vx": s.vx, "ay": s.ay, "r": s.r, "lat": drive.extra["lat_deg"], "lon": drive.extra["lon_deg"],
+            **more}
+
+
+def _map(log: Path, out: Path, *args) -> tuple[int, str]:
+    res = CliRunner().invoke(main, ["map", str(log), "-o", str(out), *args])
+    assert "Traceback" not in res.output, res.output
+    return res.exit_code, res.stderr
+
+
+GNSS_MAP = """[channels]
+time = { column = "t", unit = "s" }
+speed = { column = "vx", unit = "m/s" }
+lateral_acceleration = { column = "ay", unit = "m/s^2" }
+yaw_rate = { column = "r", unit = "rad/s" }
+latitude = { column = "lat", unit = "deg" }
+longitude = { column = "lon", unit = "deg" }
+"""
+
+
+def test_map_reads_lat_lon_beside_roadbanks_own_names_as_with_a_map(drive, tmp_path):
+    """t, vx, ay, r, lat, lon: before, ``roadbank map`` without a map failed (no GNSS position: the default map found
+    t, vx, ay, r and read nothing more); now the pair is read, and the bank map is the one a map naming it gives, to the
+    byte."""
+    log = _write(tmp_path / "gnss.csv", _gnss(drive))
+    m = tmp_path / "m.toml"
+    m.write_text(GNSS_MAP)
+    code, said = _map(log, tmp_path / "guessed.parquet")
+    assert code == 0, said
+    assert code == _map(log, tmp_path / "pinned.parquet", "--channels", str(m))[0]
+    assert (tmp_path / "guessed.parquet").read_bytes() == (tmp_path / "pinned.parquet").read_bytes()
+    assert pq.read_table(tmp_path / "guessed.parquet").num_rows > 0
+    assert (f"warning: {log}: channels 'latitude', 'longitude' (columns 'lat', 'lon'): read as a GNSS position in deg "
+            "(the default channel map has none") in said, said
+    assert PIN.format("gnss.csv") in said
+    read = load_log(log)
+    np.testing.assert_allclose(read.extra["lat_deg"], drive.extra["lat_deg"], rtol=1e-15)
+    np.testing.assert_allclose(read.extra["lon_deg"], drive.extra["lon_deg"], rtol=1e-15)
+    _same_signals(read, load_log(log, channels=m))
+    # estimate does not read the position: its output is that of the log without it
+    without = _write(tmp_path / "plain.csv", {k: v for k, v in _gnss(drive).items() if k not in ("lat", "lon")})
+    assert _estimate(log, tmp_path)[0] == _estimate(without, tmp_path)[0]
+
+
+@pytest.mark.parametrize("names", [("latitude", "longitude"), ("gps_lat", "gps_lon"), ("lat_deg", "lon_deg")])
+def test_other_spellings_of_the_pair_are_read(drive, tmp_path, names):
+    cols = _gnss(drive)
+    cols[names[0]], cols[names[1]] = cols.pop("lat"), cols.pop("lon")
+    read = load_log(_write(tmp_path / "gnss.parquet", cols))
+    assert {read.channel_map.channels[r].column for r in ("latitude", "longitude")} == set(names)
+    np.testing.assert_allclose(read.extra["lat_deg"], drive.extra["lat_deg"], rtol=1e-15)
+
+
+def test_one_coordinate_alone_is_not_read(drive, tmp_path):
+    """``lat`` without a longitude: no half position (``lat`` may be anything else, too), said by ``roadbank map``,
+    which finds none; the log reads as without it."""
+    cols = {k: v for k, v in _gnss(drive).items() if k != "lon"}
+    log = _write(tmp_path / "lat.csv", cols)
+    read = load_log(log)
+    assert "lat_deg" not in read.extra and "latitude" not in read.channel_map.channels
+    assert not any("'lat'" in w for w in read.warnings), read.warnings
+    code, said = _map(log, tmp_path / "o.parquet")
+    assert code != 0 and f"FAILED {log}: no GNSS position" in said, said
+
+
+@pytest.mark.parametrize("scaled", ["lat", "lon"])
+def test_a_pair_beyond_the_earths_degrees_is_not_read_and_said(drive, tmp_path, scaled):
+    """A coordinate as a scaled integer (deg x 1e7, as many receivers log it) is not degrees: the pair is not read,
+    and a warning names the column, the value and how to read it."""
+    cols = _gnss(drive)
+    cols[scaled] = np.round(cols[scaled] * 1e7)
+    log = _write(tmp_path / "e7.csv", cols)
+    read = load_log(log)
+    assert "lat_deg" not in read.extra and "latitude" not in read.channel_map.channels
+    (w,) = [w for w in read.warnings if "GNSS" in w]
+    limit = {"lat": "the latitude's 90 deg", "lon": "the longitude's 180 deg"}[scaled]
+    assert w.startswith(f"{log}: columns 'lat', 'lon' are named like a GNSS position, not read as one: '{scaled}' "
+                        "reaches "), w
+    assert f"beyond {limit} (a scaled integer, or another unit)" in w and PIN.format("e7.csv") in w, w
+    code, said = _map(log, tmp_path / "o.parquet")
+    assert code != 0 and f"FAILED {log}: no GNSS position" in said, said
+
+
+def test_a_pair_that_leaves_the_earth_after_the_rows_guessed_fails_loudly(drive, tmp_path, monkeypatch):
+    """The guess reads the first rows; a latitude beyond 90 deg later is not taken silently: the reader's own check
+    of a position names it, whole or streamed."""
+    monkeypatch.setattr(mapchoice, "GUESS_ROWS", 700)
+    cols = _gnss(drive)
+    cols["lat"] = cols["lat"].copy()
+    cols["lat"][800:] *= 1e7
+    log = _write(tmp_path / "late.csv", cols)
+    with pytest.raises(LogError, match=r"channel 'latitude' \(column 'lat'\): \|value\| beyond 90 deg"):
+        load_log(log)
+    with pytest.raises(LogError, match=r"\|value\| beyond 90 deg"):
+        list(stream_log(log, chunk_rows=100))
+
+
+def test_a_guessed_log_whose_pair_is_not_degrees_says_so(drive, tmp_path):
+    """The same rule where the whole map is guessed: a pair not read is said, not passed over."""
+    cols = dict(_renamed(drive.signals), lat=drive.extra["lat_deg"], lon=np.round(drive.extra["lon_deg"] * 1e7))
+    read = load_log(_write(tmp_path / "g.csv", cols))
+    assert "latitude" not in read.channel_map.channels and "lat_deg" not in read.extra
+    assert any("are named like a GNSS position, not read as one: 'lon' reaches" in w for w in read.warnings)
+
+
+@pytest.mark.parametrize("kind", ["gnss.csv", "gnss.parquet"])
+def test_the_position_streamed_equals_the_position_read_whole(drive, tmp_path, monkeypatch, kind):
+    monkeypatch.setattr(mapchoice, "GUESS_ROWS", 700)
+    monkeypatch.setattr(csvtable, "CSV_WHOLE_BYTES", 0)
+    p = _write(tmp_path / kind, _gnss(drive))
+    whole = load_log(p)
+    assert {"latitude", "longitude"} <= set(whole.channel_map.channels)
+    for rows in (61, 1000):
+        chunks = list(stream_log(p, chunk_rows=rows))
+        assert all(c.channel_map == whole.channel_map for c in chunks)
+        joined = concat_logs(chunks)
+        _same_signals(joined, whole)
+        for k in ("lat_deg", "lon_deg"):
+            np.testing.assert_array_equal(joined.extra[k], whole.extra[k], err_msg=k)
+        assert chunks[0].warnings == whole.warnings
+
+
+# ------------------------------------------------------------------ a steering angle under another name
+@pytest.fixture(scope="module")
+def sim():
+    """A simulated SUV drive with steering (identification.check's case: offsets on every sensor) and its steering
+    ratio."""
+    case = SimCase()
+    log, _ = simulate_case(case)
+    return log.signals, case.params.steering_ratio
+
+
+def _steer_cols(sim, name: str, unit: str = "deg") -> dict:
+    s, ratio = sim
+    swa = s.delta_f * ratio
+    return {"t": s.t, "vx": s.vx, "ay": s.ay, "r": s.r, name: np.degrees(swa) if unit == "deg" else swa}
+
+
+def _pinned(tmp_path: Path, name: str, unit: str = "deg") -> Path:
+    m = tmp_path / "steer.toml"
+    m.write_text(GNSS_MAP.split("latitude")[0] + f'steering_wheel_angle = {{ column = "{name}", unit = "{unit}" }}\n')
+    return m
+
+
+def test_identify_reads_a_steering_angle_named_swa_as_with_a_map(sim, tmp_path):
+    """t, vx, ay, r, SWA (deg): before, the steering was NaN (the default map's delta_f and steering_wheel_angle not
+    in the file) and identify refused Cf, Cr, Kus and the steering offset; now the column is read (its guess high:
+    name, size against L r / vx and sign agree), and identify gives what it gives with a map naming it."""
+    log = _write(tmp_path / "swa.csv", _steer_cols(sim, "SWA"))
+    m = _pinned(tmp_path, "SWA")
+    outs, said = [], ""
+    for args in ([], ["--channels", str(m)]):
+        res = CliRunner().invoke(main, ["identify", str(log), "--json", "-o", str(tmp_path / f"c{len(args)}.toml"),
+                                        *args])
+        assert res.exit_code == 0 and "Traceback" not in res.output, res.output
+        outs.append(res.stdout)
+        said = said or res.stderr
+    assert outs[0] == outs[1]
+    assert set(json.loads(outs[0])["quantities"]) >= {"Cf", "Cr", "Kus", "steering_offset"}
+    assert all("refused" not in q for q in json.loads(outs[0])["quantities"].values())
+    assert (f"warning: {log}: channel 'steering_wheel_angle' (column 'SWA'): read as the steering wheel angle in deg, "
+            "sign as stored (the default channel map's columns 'delta_f' and 'steering_wheel_angle' are not in the "
+            "file; this one is named like it and its guess is high") in said, said
+    assert "no column 'delta_f'" not in said.replace("columns 'delta_f'", "")
+
+
+@pytest.mark.parametrize("name, unit", [("SWA", "deg"), ("steer_deg", "deg"), ("SteeringWheelAngle", "deg")])
+def test_a_steering_angle_named_otherwise_reads_as_with_a_map(sim, tmp_path, name, unit):
+    log = _write(tmp_path / "s.parquet", _steer_cols(sim, name, unit))
+    read = load_log(log)
+    assert read.channel_map.channels["steering_wheel_angle"].column == name
+    assert "road_wheel_angle" not in read.channel_map.channels
+    _same_signals(read, load_log(log, channels=_pinned(tmp_path, name, unit)))
+
+
+def test_a_steering_angle_whose_guess_is_not_high_is_left_out_and_said(sim, tmp_path):
+    """A steering-wheel angle in rad: against L r / vx (x32 here, the SUV understeers) its size fits a road-wheel
+    angle in deg as well, so the guess is medium: not read, the steering NaN as before, with today's warning and one
+    that says why."""
+    log = _write(tmp_path / "rad.csv", _steer_cols(sim, "SteeringWheelAngle", "rad"))
+    read = load_log(log)
+    assert np.isnan(read.signals.delta_f).all()
+    (why,) = [w for w in read.warnings if "'SteeringWheelAngle'" in w]
+    assert why.startswith(f"{log}: channel 'steering_wheel_angle' (column 'SteeringWheelAngle'): not read as the "
+                          "steering angle, its guess is medium (not high: "), why
+    assert PIN.format("rad.csv") + ", check its unit and sign" in why
+    assert any("channel 'steering': no column 'delta_f' or 'steering_wheel_angle', so the steering angle is NaN" in w
+               for w in read.warnings), read.warnings
+    # the same log under a map naming the column in rad reads it
+    pinned = load_log(log, channels=_pinned(tmp_path, "SteeringWheelAngle", "rad"))
+    assert np.isfinite(pinned.signals.delta_f).all()
+
+
+def test_a_steering_column_that_is_not_a_spelling_is_not_guessed(sim, tmp_path):
+    """``steer_rate`` only starts like a steering angle: not read, and no guess is made for it."""
+    cols = _steer_cols(sim, "steer_rate")
+    read = load_log(_write(tmp_path / "rate.csv", cols))
+    assert np.isnan(read.signals.delta_f).all() and not any("steer_rate" in w for w in read.warnings)
+
+
+def test_the_steering_streamed_equals_the_steering_read_whole(sim, tmp_path, monkeypatch):
+    monkeypatch.setattr(mapchoice, "GUESS_ROWS", 5000)          # of its 18 321 rows
+    monkeypatch.setattr(csvtable, "CSV_WHOLE_BYTES", 0)
+    p = _write(tmp_path / "swa.csv", _steer_cols(sim, "SWA"))
+    whole = load_log(p)
+    assert whole.channel_map.channels["steering_wheel_angle"].column == "SWA"
+    for rows in (777, 20_000):
+        chunks = list(stream_log(p, chunk_rows=rows))
+        assert all(c.channel_map == whole.channel_map for c in chunks)
+        _same_signals(concat_logs(chunks), whole)
+        assert chunks[0].warnings == whole.warnings
