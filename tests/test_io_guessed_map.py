@@ -3,7 +3,9 @@
 Where the default map (t, vx, ay, r, SI) misses a required column, the log is read with the map
 ``roadbank channels`` guesses, if every required channel's guess is ``high``; else it is refused as before, the
 message naming the file, what the guess found and why it was not trusted. Where the default map reads the log, a
-column named like a roll rate (longitudinal acceleration, pitch rate) under another name is read too.
+column named like a roll rate (longitudinal acceleration, pitch rate) under another name is read too, and so are a
+GNSS position named ``lat``/``lon`` (both, in degrees) and a steering angle named otherwise (``SWA``, where its guess
+is high): ``roadbank map`` and ``roadbank identify`` then give what they give with a map naming them.
 
 Truth: a real drive (KITTI 2011_10_03_drive_0047: its INS's speed, ay, yaw rate and roll rate) written with roadbank's
 own column names and read with the default map. The same columns under other names in the same units give the same

@@ -18,7 +18,13 @@ roadbank's own columns. A log whose columns are named otherwise is read with the
   a roll rate (longitudinal acceleration, pitch rate) by a known spelling (``roll_rate``, ``gyro_x``, ``RollRate``,
   ``IMU.RollRate``, ``roll_rate_dps``): the default map reads it, in the unit the guess gives (the name's, else the
   range's). The estimator's own check of a roll rate (it must follow the roll that ``ay`` shows) still decides
-  whether it is used.
+  whether it is used. So is a GNSS position (for ``roadbank map``): a column named like a latitude and one named like
+  a longitude (``lat``/``lon``, ``gps_lat``...), both, in deg, where both lie within the Earth's
+  (:data:`~roadbank.io.guess.POSITION_LIMITS_DEG`) in the rows guessed; one alone is not read, a pair that is not
+  degrees is not read and said (:func:`_positions`). And a steering angle, where the file has none of the default
+  map's steering columns but one named like it (``SWA``, ``steer_deg``): read where its guess is ``high`` and was made
+  against the speed and yaw rate as the default map reads them; else left out (NaN, as before) with a warning that
+  says why (:func:`_steering`).
 
 Either way a warning says which columns were taken, in which unit and sign, and how to pin the map
 (``roadbank channels LOG -o map.toml``, then ``--channels map.toml``). The guess reads the file's columns named like
