@@ -33,7 +33,9 @@ def _origin(ctx, param, value):
 @click.option("--geojson", type=PathOption(path_type=Path), default=None, help="Also write the cells as GeoJSON.")
 @click.option("--png", type=PathOption(path_type=Path), default=None, help="Also draw the map (PNG).")
 @click.option("--channels", type=PathOption(path_type=Path), default=None,
-              help="Channel map (TOML) with 'latitude' and 'longitude' channels (docs/io.md).")
+              help="Channel map (TOML) with 'latitude' and 'longitude' channels (docs/io.md); without one, a CSV, "
+                   "Parquet or MDF4 log's columns named lat and lon (latitude/longitude, gps_lat/gps_lon, in deg) "
+                   "are read as its position.")
 @click.option("--format", "fmt", type=click.Choice(list(FORMATS)), default=None,
               help="Input format (default: from the suffix / directory layout).")
 @click.option("--estimator", "-e", "estimator", default=MAP_ESTIMATOR, show_default=True,
@@ -60,7 +62,8 @@ def map_command(logs, output, geojson, png, channels, fmt, estimator, cell_m, se
     roadbank map drives/ --channels car.toml --cell 5 -o bank_map.parquet
 
     LOGS are files, log directories, directories of logs or glob patterns, with a
-    position: channel-map 'latitude'/'longitude' roles, comma2k19 (ECEF pose),
+    position: channel-map 'latitude'/'longitude' roles (without --channels: columns
+    named lat and lon, in deg), comma2k19 (ECEF pose),
     KITTI oxts, ROS NavSatFix. Columns: cell indices, cell-centre lat/lon, heading
     sector, count, logs, bank mean/std/min/max (deg, left side up in the sector's
     heading). A bad log is reported and skipped, and so is a log without a GNSS fix (its latitude or
