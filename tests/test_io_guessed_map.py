@@ -26,7 +26,7 @@ from click.testing import CliRunner
 
 from roadbank.cli import main
 from roadbank.identification.check import SimCase, simulate_case
-from roadbank.io import LogError, csvtable, load_log, mapchoice
+from roadbank.io import LogError, csvtable, load_log, mapchoice, read_channel_map
 from roadbank.io.assemble import concat_logs
 from roadbank.io.guess import named_as
 from roadbank.io.kitti import load_kitti_oxts
@@ -359,18 +359,33 @@ def test_a_pair_beyond_the_earths_degrees_is_not_read_and_said(drive, tmp_path, 
     assert code != 0 and f"FAILED {log}: no GNSS position" in said, said
 
 
-def test_a_pair_that_leaves_the_earth_after_the_rows_guessed_fails_loudly(drive, tmp_path, monkeypatch):
-    """The guess reads the first rows; a latitude beyond 90 deg later is not taken silently: the reader's own check
-    of a position names it, whole or streamed."""
+def test_a_pair_that_leaves_the_earth_after_the_rows_guessed_is_no_position_there_and_said(drive, tmp_path,
+                                                                                            monkeypatch):
+    """The guess reads the first rows; a latitude beyond 90 deg later (a logger's fill value on a lost fix) is not taken
+    silently, nor does it lose the log, whose estimate does not need the position: those samples are no position
+    (NaN) and a warning names the channel and how many, whole or streamed; the estimate is the log's without the pair.
+    A map the user wrote that names the channel still fails the read there."""
     monkeypatch.setattr(mapchoice, "GUESS_ROWS", 700)
     cols = _gnss(drive)
     cols["lat"] = cols["lat"].copy()
     cols["lat"][800:] *= 1e7
     log = _write(tmp_path / "late.csv", cols)
+    read = load_log(log)
+    lat = read.extra["lat_deg"]
+    assert np.isnan(lat[800:]).all() and np.isfinite(lat[:800]).all()
+    said = [w for w in read.warnings if "channel 'latitude' (column 'lat'): |value| beyond 90 deg" in w]
+    assert len(said) == 1 and f"in {len(lat) - 800} sample(s)" in said[0]
+    chunks = list(stream_log(log, chunk_rows=100))
+    assert np.array_equal(np.concatenate([c.extra["lat_deg"] for c in chunks]), lat, equal_nan=True)
+    assert any("beyond 90 deg" in w for c in chunks for w in c.warnings)
+    assert np.array_equal(read.signals.ay, load_log(_write(tmp_path / "plain.csv", _gnss(drive))).signals.ay)
+    (tmp_path / "map.toml").write_text(
+        'convention = "ISO"\n[channels]\ntime = { column = "t", unit = "s" }\n'
+        'speed = { column = "vx", unit = "m/s" }\nlateral_acceleration = { column = "ay", unit = "m/s^2" }\n'
+        'yaw_rate = { column = "r", unit = "rad/s" }\nlatitude = { column = "lat", unit = "deg" }\n'
+        'longitude = { column = "lon", unit = "deg" }\n')
     with pytest.raises(LogError, match=r"channel 'latitude' \(column 'lat'\): \|value\| beyond 90 deg"):
-        load_log(log)
-    with pytest.raises(LogError, match=r"\|value\| beyond 90 deg"):
-        list(stream_log(log, chunk_rows=100))
+        load_log(log, channels=read_channel_map(tmp_path / "map.toml"))
 
 
 def test_a_guessed_log_whose_pair_is_not_degrees_says_so(drive, tmp_path):

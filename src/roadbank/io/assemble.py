@@ -49,7 +49,7 @@ import numpy as np
 from ..params import VehicleParams
 from ..signals import Signals, concat_signals, road_wheel_angle
 from . import units
-from .channels import (DEFAULT_MAP_SOURCE, OPTIONAL, STEERING, ChannelMap, ChannelSpec, check_period,
+from .channels import (DEFAULT_MAP_SOURCE, UNWRITTEN_MAPS, OPTIONAL, STEERING, ChannelMap, ChannelSpec, check_period,
                        check_plausible)
 from .limits import Dropouts
 from .consistency import (MIN_SAMPLES, SCALE_SPAN_S, Sums, check_balance, lateral_axis_error, log_verdict,
@@ -231,8 +231,11 @@ def gnss_roles(cmap: ChannelMap) -> list[str]:
     return []
 
 
-def gnss_extra(p, cmap: ChannelMap, vals: dict) -> dict:
-    """``{"lat_deg", "lon_deg"}`` (deg) from position channels already on the time base (SI: rad or m)."""
+def gnss_extra(p, cmap: ChannelMap, vals: dict, notes: list | None = None) -> dict:
+    """``{"lat_deg", "lon_deg"}`` (deg) from position channels already on the time base (SI: rad or m). A value beyond
+    the Earth's limits fails the read where the user's map names the channel; where a map the user did not write read
+    it by its name (:data:`~roadbank.io.channels.UNWRITTEN_MAPS`), those samples are NaN and ``notes`` gets a warning
+    (an estimate does not need the position, and a log's fill value, 999 on a lost fix, must not lose it)."""
     if "ecef_x" in vals:
         pos = np.stack([vals["ecef_x"], vals["ecef_y"], vals["ecef_z"]], axis=1)
         r = np.linalg.norm(pos, axis=1)
@@ -247,10 +250,18 @@ def gnss_extra(p, cmap: ChannelMap, vals: dict) -> dict:
         lat, lon = vals["latitude"], vals["longitude"]
     out = {"lat_deg": np.degrees(lat), "lon_deg": np.degrees(lon)}
     for role, key, limit in (("latitude", "lat_deg", 90.0), ("longitude", "lon_deg", 180.0)):
-        if role in cmap.channels and np.nanmax(np.abs(out[key]), initial=0.0) > limit:
-            spec = cmap.channels[role]
-            raise channel_error(p, role, spec.column, f"|value| beyond {limit:g} deg after converting "
-                                f"from '{spec.unit}'")
+        with np.errstate(invalid="ignore"):
+            beyond = np.abs(out[key]) > limit
+        if role not in cmap.channels or not beyond.any():
+            continue
+        spec = cmap.channels[role]
+        what = f"|value| beyond {limit:g} deg after converting from '{spec.unit}'"
+        if cmap.source not in UNWRITTEN_MAPS:
+            raise channel_error(p, role, spec.column, what)
+        out[key] = np.where(beyond, np.nan, out[key])
+        if notes is not None:
+            notes.append(channel_text(p, role, spec.column, f"{what} in {int(beyond.sum())} sample(s), read as no "
+                                      "position there (NaN)"))
     return out
 
 
@@ -301,7 +312,7 @@ class _Logs:
         except ValueError as exc:
             raise LogError(f"{p}: {exc}") from None
         pos = {r: out[r] for r in self.gnss}
-        extra = gnss_extra(p, cmap, pos) if pos else {}
+        extra = gnss_extra(p, cmap, pos, self.warnings) if pos else {}
         extra.update({c: out[c] for c in self.carried})
         log = Log(signals=sig, reference_roll=out.get("reference_roll"), source=p, format=self.fmt,
                   metadata=dict(self.metadata), truth={c: out[c] for c in self.truth_cols},

@@ -270,6 +270,10 @@ class ChannelMap:
 
 #: the :attr:`ChannelMap.source` of :func:`default_channel_map`: the map a log is read with when the user gave none
 DEFAULT_MAP_SOURCE = "default channel map"
+#: ... and of the map :func:`roadbank.io.mapchoice.choose_map` guesses for a log given without one
+GUESSED_MAP_SOURCE = "channel map guessed from the log's columns"
+#: the maps the user did not write: a channel they name is read where it can be, not demanded
+UNWRITTEN_MAPS = (DEFAULT_MAP_SOURCE, GUESSED_MAP_SOURCE)
 
 
 def steering_ratio_problem(ratio: float) -> str | None:

@@ -41,7 +41,7 @@ import numpy as np
 
 from . import readers
 from .assemble import missing_column
-from .channels import OPTIONAL, STEERING, ChannelMap, ChannelSpec
+from .channels import GUESSED_MAP_SOURCE, OPTIONAL, STEERING, ChannelMap, ChannelSpec
 from .guess import NAMES, POSITION_LIMITS_DEG, Guess, guess_channels, name_match, named_as, stated_hint
 
 #: the rows of a table (samples of an MDF4 channel) the guess reads from the log's start: 33 min at 100 Hz, more
@@ -52,7 +52,6 @@ GUESSED_FORMATS = ("csv", "parquet", "mdf4")
 #: the confidence every required channel's guess must have for a log to be read with it
 SURE = "high"
 #: the :attr:`ChannelMap.source` of a guessed map
-GUESSED_MAP_SOURCE = "channel map guessed from the log's columns"
 #: the required roles of a table, in the order a missing one is named (a channel source: no time)
 _REQUIRED = ("speed", "lateral_acceleration", "yaw_rate", "time")
 
