@@ -144,9 +144,8 @@ def _design(settings: MapSettings, signals, designs: dict):
     ``designs`` by those conditions and the car, and where the log reads quiet and the estimator keeps the car's
     model there, the :class:`~roadbank.vehicle.conditions.RoadCheck` of its roads (else None)."""
     cond = log_conditions(signals)
-    car = (settings.params if settings.params is not None or settings.vehicle is not None
-           else undescribed_params(signals))
     described = settings.params is not None or settings.vehicle is not None
+    car = settings.params if described else undescribed_params(signals)
     key = (tuple(round(v, 6) if v is not None and np.isfinite(v) else None for v in cond.values()), car, described)
     if key not in designs:
         designs[key] = for_conditions(settings.estimator, cond, car, vehicle=settings.vehicle, described=described)

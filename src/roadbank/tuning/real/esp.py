@@ -704,6 +704,17 @@ def same_outputs(build, signals, choices, why: str) -> None:
             raise ValueError(why)
 
 
+def two_choice_rule(build, kept, choices, why: str, logs, gain: float) -> tuple:
+    """A stage's rule between ``build(a)`` (A, shipped) and ``build(b)`` (B), ``choices = (a, b)``: the guard
+    :func:`same_outputs` on the signals ``kept`` (``why``), then the raw RMS per log of ``logs``
+    (:func:`~roadbank.tuning.real.log_errors`); B if its median is below A's by more than ``gain`` (deg), else A.
+    Returns ``(chosen, {choice: raw RMS per log (deg)})``."""
+    a, b = choices
+    same_outputs(build, kept, choices, why)
+    errs = {c: log_errors(build(c), logs) for c in choices}
+    return (b if np.median(errs[b]) < np.median(errs[a]) - gain else a), errs
+
+
 def esp_and_gyro_rule(build, esp_forms, gyro_forms, gain: float, worse_deg: float, worse_logs: int) -> tuple:
     """The rule of the fifty-fifth and fifty-seventh stages between ``build(False)`` (A) and ``build(True)`` (B): B
     ships if its median raw RMS over ``esp_forms`` is below A's by more than ``gain`` (deg), its median over

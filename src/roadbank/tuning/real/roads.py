@@ -27,7 +27,7 @@ from ...signals import Signals, concat_signals
 from ...validation.roads import SMOOTH_ROADS, smooth_road
 from ..objective import FAILED_DEG, SETTLE
 from .common import cars_median, log_errors, per_log, sim_errors
-from .esp import _with_settings, design_settings, same_outputs
+from .esp import _with_settings, design_settings, same_outputs, two_choice_rule
 
 #: the rule: B ships if its median over the ESP long logs is below A's by more than this (deg) ...
 ROAD_CHANGE_GAIN_DEG = 0.05
@@ -143,12 +143,9 @@ def choose_road_change(esp_logs, gyro_logs, esp_long, gyro_long, sim_sets, long_
     errs = {c: (log_errors(road_change_build(c), esp_long), log_errors(road_change_build(c), gyro_long),
                 long_sim_errors(road_change_build(c), long_sets)) for c in (False, True)}
     (a1, a2, a3), (b1, b2, b3) = errs[False], errs[True]
-
-    def cars(e):
-        return float(np.median([np.median(x) for x in e]))
     ships = (np.median(b1) < np.median(a1) - ROAD_CHANGE_GAIN_DEG
              and np.median(b2) <= np.median(a2) + ROAD_CHANGE_LOSS_DEG
-             and cars(b3) <= cars(a3) + ROAD_CHANGE_LOSS_DEG)
+             and cars_median(b3) <= cars_median(a3) + ROAD_CHANGE_LOSS_DEG)
     return bool(ships), errs
 
 
@@ -164,11 +161,9 @@ def choose_road_change_gyro(esp_long, gyro_long) -> tuple:
     logs ``gyro_long`` (:func:`smooth_start_logs` of the KITTI training drives with their roll rate,
     :data:`RESTART_GAP_S` apart). Returns ``(chosen setting, {setting: raw RMS per long log (deg)})``. The same logs
     with the ESP channels alone (``esp_long``) must give the same outputs under both: a ValueError where not."""
-    same_outputs(road_change_build, [s for s, _, _ in esp_long], (True, "esp"),
-                 "a log without a roll rate was handed over otherwise: the stage's guard fails")
-    errs = {c: log_errors(road_change_build(c), gyro_long) for c in (True, "esp")}
-    ships = np.median(errs["esp"]) < np.median(errs[True]) - ROAD_CHANGE_GYRO_GAIN_DEG
-    return ("esp" if ships else True), errs
+    return two_choice_rule(road_change_build, [s for s, _, _ in esp_long], (True, "esp"),
+                           "a log without a roll rate was handed over otherwise: the stage's guard fails", gyro_long,
+                           ROAD_CHANGE_GYRO_GAIN_DEG)
 
 
 #: the sixtieth stage's smooth road: ``ay`` and the yaw rate through a zero-phase Butterworth low-pass of this order and
@@ -198,11 +193,8 @@ def choose_quiet_ins(gyro_logs, smooth_logs, sim_gyro_sets) -> tuple:
         return lambda s: with_online_offsets(at(s))
 
     kept = [s for s, _, _ in gyro_logs] + [d.signals for sets in sim_gyro_sets for drives in sets for d in drives]
-    same_outputs(build, kept, (False, "unbiased"),
-                 "a log without an INS's roll rate, or a loud one, was read otherwise: the stage's guard fails")
-    errs = {c: log_errors(build(c), smooth_logs) for c in (False, "unbiased")}
-    ships = np.median(errs["unbiased"]) < np.median(errs[False]) - QUIET_INS_GAIN_DEG
-    return ("unbiased" if ships else False), errs
+    why = "a log without an INS's roll rate, or a loud one, was read otherwise: the stage's guard fails"
+    return two_choice_rule(build, kept, (False, "unbiased"), why, smooth_logs, QUIET_INS_GAIN_DEG)
 
 
 #: the sixty-second stage's second smooth road: a steep zero-phase Butterworth low-pass (order, cut-off Hz) that keeps
@@ -236,17 +228,11 @@ def choose_undescribed_quiet(smooth_logs, sim_quiet_sets, kept_logs, known_sets,
         made = per_log(name, vehicle=load_vehicle(car))
         return lambda s: made(s) if offline else with_online_offsets(made(s))
 
-    def theta(choice, make, s):
-        with design_settings(**{setting: choice}):
-            return make(s).run(s).theta
     pairs = [(online, s) for s in kept_logs] + [(known(car), d.signals) for car, drives in known_sets for d in drives]
-    for make, s in pairs:
-        if not np.array_equal(theta(True, make, s), theta(False, make, s), equal_nan=True):
-            raise ValueError("a loud log, or a car described, was read otherwise: the stage's guard fails")
-    errs = {}
-    for c in (True, False):
-        with design_settings(**{setting: c}):
-            errs[c] = (log_errors(online, smooth_logs), sim_errors(online, sim_quiet_sets))
+    _same_in_force(setting, (True, False), pairs,
+                   "a loud log, or a car described, was read otherwise: the stage's guard fails")
+    errs = {c: (_in_force(setting, c, log_errors, online, smooth_logs),
+                _in_force(setting, c, sim_errors, online, sim_quiet_sets)) for c in (True, False)}
     obj = {c: float(np.median(e[0])) + cars_median(e[1]) for c, e in errs.items()}
     return (False if obj[False] < obj[True] - UNDESCRIBED_GAIN_DEG else True), obj, errs
 
@@ -258,6 +244,26 @@ __all__ = ["STEEP_ROAD_ORDER", "STEEP_ROAD_CUTOFF_HZ", "UNDESCRIBED_GAIN_DEG", "
            "choose_road_change_gyro", "ROAD_CHANGE_GYRO_GAIN_DEG", "RESTART_GAP_S", "choose_road_change",
            "smooth_start_logs", "long_quiet_sets", "long_sim_errors", "road_change_build",
            "ROAD_CHANGE_GAIN_DEG", "ROAD_CHANGE_LOSS_DEG"]
+
+
+def _in_force(setting: str, choice, measure, *args):
+    """``measure(*args)`` with the design setting ``setting`` (:func:`~roadbank.tuning.real.design_settings`' keyword)
+    at ``choice`` while it runs, not only while the estimators are built: a hand-over designs anew mid-log."""
+    with design_settings(**{setting: choice}):
+        return measure(*args)
+
+
+def _theta(build, s):
+    return build(s).run(s).theta
+
+
+def _same_in_force(setting: str, choices, pairs, why: str) -> None:
+    """A stage's guard with ``setting`` in force while each log runs (:func:`_in_force`): every ``(build, signals)``
+    of ``pairs`` gives the same ``theta`` under each of ``choices``; a ValueError saying ``why`` where not."""
+    for build, s in pairs:
+        first, *others = (_in_force(setting, c, _theta, build, s) for c in choices)
+        if not all(np.array_equal(first, o, equal_nan=True) for o in others):
+            raise ValueError(why)
 
 
 #: the sixty-first stage's sets: the drives as recorded (loud) and as a smooth road (quiet) in two orders, and the loud
@@ -319,25 +325,19 @@ def choose_road_change_back(esp_logs, gyro_logs, loud_quiet, quiet_loud_quiet, s
     def online(s):
         return with_online_offsets(build(s))
 
-    def run_with(choice, measure, *args):
-        with design_settings(road_change_back=choice):
-            return measure(online, *args)
-
+    setting = "road_change_back"
     kept = [s for s, _, _ in gyro_logs] + [d.signals for drives in sim_sets for d in drives]
-    for s in kept:
-        a, b = (run_with(c, lambda build_, s_: build_(s_).run(s_).theta, s) for c in (False, True))
-        if not np.array_equal(a, b, equal_nan=True):
-            raise ValueError("a log whose roads do not turn quiet was read otherwise: the stage's guard fails")
-    errs = {c: (run_with(c, log_errors, loud_quiet + quiet_loud_quiet), run_with(c, log_errors, esp_logs),
-                run_with(c, long_sim_errors, sim_loud_quiet), run_with(c, long_sim_errors, gyro_loud_quiet))
+    _same_in_force(setting, (False, True), [(online, s) for s in kept],
+                   "a log whose roads do not turn quiet was read otherwise: the stage's guard fails")
+    errs = {c: (_in_force(setting, c, log_errors, online, loud_quiet + quiet_loud_quiet),
+                _in_force(setting, c, log_errors, online, esp_logs),
+                _in_force(setting, c, long_sim_errors, online, sim_loud_quiet),
+                _in_force(setting, c, long_sim_errors, online, gyro_loud_quiet))
             for c in (False, True)}
     (a1, a2, a3, a4), (b1, b2, b3, b4) = errs[False], errs[True]
-
-    def cars(e):
-        return float(np.median([np.median(x) for x in e]))
     ships = (np.median(b1) < np.median(a1) - ROAD_CHANGE_BACK_GAIN_DEG
-             and cars(b3) <= cars(a3) + ROAD_CHANGE_BACK_LOSS_DEG
-             and cars(b4) <= cars(a4) + ROAD_CHANGE_BACK_LOSS_DEG
+             and cars_median(b3) <= cars_median(a3) + ROAD_CHANGE_BACK_LOSS_DEG
+             and cars_median(b4) <= cars_median(a4) + ROAD_CHANGE_BACK_LOSS_DEG
              and np.median(b2) <= np.median(a2) + ROAD_CHANGE_BACK_LOSS_DEG
              and not np.any(np.array(b2) > np.array(a2) + ROAD_CHANGE_BACK_WORSE_DEG))
     return bool(ships), errs
