@@ -379,11 +379,7 @@ def test_a_pair_that_leaves_the_earth_after_the_rows_guessed_is_no_position_ther
     assert np.array_equal(np.concatenate([c.extra["lat_deg"] for c in chunks]), lat, equal_nan=True)
     assert any("beyond 90 deg" in w for c in chunks for w in c.warnings)
     assert np.array_equal(read.signals.ay, load_log(_write(tmp_path / "plain.csv", _gnss(drive))).signals.ay)
-    (tmp_path / "map.toml").write_text(
-        'convention = "ISO"\n[channels]\ntime = { column = "t", unit = "s" }\n'
-        'speed = { column = "vx", unit = "m/s" }\nlateral_acceleration = { column = "ay", unit = "m/s^2" }\n'
-        'yaw_rate = { column = "r", unit = "rad/s" }\nlatitude = { column = "lat", unit = "deg" }\n'
-        'longitude = { column = "lon", unit = "deg" }\n')
+    (tmp_path / "map.toml").write_text(GNSS_MAP)
     with pytest.raises(LogError, match=r"channel 'latitude' \(column 'lat'\): \|value\| beyond 90 deg"):
         load_log(log, channels=read_channel_map(tmp_path / "map.toml"))
 
