@@ -144,6 +144,11 @@ def optional_notes(p, cmap: ChannelMap, roles: list[str]) -> list[str]:
                          f"{OPTIONAL_LOSS[r]}") for r in OPTIONAL if r in cmap.channels and r not in roles]
 
 
+#: what a steering angle that is NaN means for the estimators (the end of every warning that says so)
+STEERING_NAN = ("the default estimator and the modified-model filters do not read it, the original-model ones, uio, "
+                "dfc and kalman give no valid sample")
+
+
 def steering_note(p, cmap: ChannelMap, roles: list[str]) -> list[str]:
     """The warning for a file read without the steering columns its (optional-steering) map names: the
     steering angle is NaN; ``[]`` otherwise."""
@@ -151,9 +156,7 @@ def steering_note(p, cmap: ChannelMap, roles: list[str]) -> list[str]:
     if not steer or any(r in roles for r in steer):
         return []
     cols = " or ".join(f"'{cmap.channels[r].column}'" for r in steer)
-    return [f"{Path(p).name}: channel 'steering': no column {cols}, so the steering angle is NaN (the default "
-            "estimator and the modified-model filters do not read it, the original-model ones, uio, dfc and "
-            "kalman give no valid sample)"]
+    return [f"{Path(p).name}: channel 'steering': no column {cols}, so the steering angle is NaN ({STEERING_NAN})"]
 
 
 def empty_steering(p, role: str, column: str | None, what: str = "no finite values") -> str:
@@ -161,8 +164,7 @@ def empty_steering(p, role: str, column: str | None, what: str = "no finite valu
     finite values, or no samples): the log is read as one without steering, its steering angle NaN, as
     :func:`steering_note` words it for a file without the column."""
     return channel_text(p, role, column, f"{what}, so the steering angle is NaN, as for a log without "
-                        "steering (the default estimator and the modified-model filters do not read it, the "
-                        "original-model ones, uio, dfc and kalman give no valid sample)")
+                        f"steering ({STEERING_NAN})")
 
 
 def own_time_unit(p, cmap: ChannelMap, time_typed: dict[str, str]) -> tuple[ChannelMap, list[str]]:

@@ -40,7 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from . import readers
-from .assemble import missing_column
+from .assemble import STEERING_NAN, missing_column
 from .channels import GUESSED_MAP_SOURCE, OPTIONAL, STEERING, ChannelMap, ChannelSpec
 from .guess import NAMES, POSITION_LIMITS_DEG, Guess, guess_channels, name_match, named_as, stated_hint
 
@@ -219,9 +219,8 @@ def _guessed(p, fmt: str, names: list[str], default: ChannelMap, first_missing: 
             continue
         if g.role in STEERING and g.confidence != SURE:
             notes.append(f"{p}: channel '{g.role}' (column '{g.column}'): not read, its guess is {g.confidence} "
-                         f"(not {SURE}), so the steering angle is NaN (the default estimator and the modified-model "
-                         "filters do not read it, the original-model ones, uio, dfc and kalman give no valid sample) "
-                         f"-- to read it: {_pin(p)}, check its unit and sign")
+                         f"(not {SURE}), so the steering angle is NaN ({STEERING_NAN}) -- to read it: {_pin(p)}, "
+                         "check its unit and sign")
             continue
         if g.role in OPTIONAL and not named_as(g.role, g.column):
             continue
