@@ -1,0 +1,90 @@
+"""The sixty-fourth stage: the map's low-pass smoother through hard manoeuvres (docs/estimators.md).
+
+``roadbank map``'s offline default is the kinematic estimate low-passed both ways (``kinematic-smoother``) on a loud
+log, and since the sixty-third stage on a quiet log of a car nobody described too. It has no gate to a model: on the
+simulator's hard manoeuvres (near the tyres' limit, lane changes) it reads the sideslip acceleration that the
+kinematic estimate neglects as bank. The causal default has such a gate (the blend's PIF while the yaw accelerates).
+Candidates (:data:`roadbank.vehicle.conditions.SMOOTHER_GATE`): A, ``False`` (shipped); B, ``True``: where the map
+builds the low-pass smoother, its output moves to ``pif-smoother`` designed for the same log and car where an offline
+gate is open (:class:`roadbank.estimators.GatedSmoother`: the causal blend's gate measure, held open both ways).
+
+Sets (training only): (1) the eight KITTI training drives with their ESP channels as recorded (loud) and as the two
+smooth roads of the sixty-second stage (quiet), 24 logs, raw RMS of theta against the INS roll on the scored samples,
+the smoother as ``roadbank map`` builds it without a vehicle file; (2) each shipped car's quiet simulated training
+drives of the sixty-second stage (24 on the data sheet's sensors, 48 with the ESP-class roll-rate gyro), the car not
+described; (3) each car's 24 ESP training drives with :data:`~.roads.BACK_LOUD_AY` m/s^2 of white noise on ``ay``
+(loud: a shaking accelerometer), built with the car's vehicle file; bank RMS as ``roadbank tune`` scores it.
+Objective: the median over (1) plus the median over the cars of each car's median over (2) and (3) pooled. Tail: the
+95th percentile (numpy's default) of the bank RMS over every simulated drive of (2) and (3), all cars pooled.
+Rule: B ships if (a) its median over (1) is not above A's by more than :data:`GATE_REAL_LOSS_DEG`, and (b) its
+objective is below A's by more than :data:`GATE_GAIN_DEG`, or its objective is not above A's by more than
+:data:`GATE_REAL_LOSS_DEG` and its tail is below A's by more than :data:`GATE_TAIL_GAIN` of A's; otherwise A. Guard:
+the eight training drives with their INS roll rate (the gyro-aided smoother) and each car's 24 quiet ESP drives built
+with its vehicle file (``pif-smoother``) give the same outputs under both.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ...vehicle import load_vehicle
+from .common import SIM_CARS, cars_median, log_errors, per_log, sim_errors
+from .roads import BACK_LOUD_AY, _in_force, _same_in_force
+
+#: the rule: B's real median may be above A's by at most this (deg), and so may its objective where the tail decides
+GATE_REAL_LOSS_DEG = 0.005
+#: ... B ships on the objective where it is below A's by more than this (deg) ...
+GATE_GAIN_DEG = 0.02
+#: ... or on the tail where its simulated 95th percentile is below A's by more than this share of A's (-)
+GATE_TAIL_GAIN = 0.10
+#: the seed of the white ``ay`` noise of set (3)
+SHAKEN_SEED = 0
+
+
+def shaken_sets(sim_sets, seed: int = SHAKEN_SEED) -> list:
+    """Each drive of ``sim_sets`` (per car, a list of simulated drives) with :data:`~.roads.BACK_LOUD_AY` m/s^2 of white
+    noise added to ``ay`` (one numpy generator, ``seed``, in the sets' order): a shaking accelerometer."""
+    rng = np.random.default_rng(seed)
+    return [[dataclasses.replace(d, signals=dataclasses.replace(
+        d.signals, ay=d.signals.ay + BACK_LOUD_AY * rng.standard_normal(len(d.signals)))) for d in drives]
+        for drives in sim_sets]
+
+
+def choose_smoother_gate(logs, quiet_sets, shaken, kept_logs, known_quiet, cars=SIM_CARS) -> tuple:
+    """The sixty-fourth stage (module docstring): ``kinematic-smoother`` as ``roadbank map`` builds it with
+    :data:`roadbank.vehicle.conditions.SMOOTHER_GATE` False (A) and True (B). ``logs``: set (1) (``(signals, reference
+    roll rad, scored mask)``); ``quiet_sets``: set (2), per car of ``cars`` a list of drives; ``shaken``: set (3), per
+    car (:func:`shaken_sets`); ``kept_logs`` (signals) and ``known_quiet`` (per car, drives built with its file): the
+    guard. Returns ``(chosen, {choice: (objective, tail)}, {choice: (raw RMS per log, per car: bank RMS per drive of (2),
+    of (3))})``; a ValueError where the guard fails."""
+    undescribed = per_log("kinematic-smoother", described=False)
+    known = {car: per_log("kinematic-smoother", vehicle=load_vehicle(car)) for car in cars}
+    setting = "smoother_gate"
+    pairs = ([(undescribed, s) for s in kept_logs]
+             + [(known[car], d.signals) for car, drives in zip(cars, known_quiet) for d in drives])
+    _same_in_force(setting, (False, True), pairs,
+                   "a log with a usable roll rate, or a quiet one of a car described, was read otherwise: the stage's "
+                   "guard fails")
+
+    def shaken_errors():
+        return [sim_errors(known[car], [drives])[0] for car, drives in zip(cars, shaken)]
+
+    errs = {c: (_in_force(setting, c, log_errors, undescribed, logs),
+                _in_force(setting, c, sim_errors, undescribed, quiet_sets),
+                _in_force(setting, c, shaken_errors)) for c in (False, True)}
+    scores = {}
+    for c, (real, quiet, loud) in errs.items():
+        pooled = [list(q) + list(s) for q, s in zip(quiet, loud)]
+        scores[c] = (float(np.median(real)) + cars_median(pooled),
+                     float(np.percentile(np.concatenate(pooled), 95)))
+    (obj_a, tail_a), (obj_b, tail_b) = scores[False], scores[True]
+    real_ok = np.median(errs[True][0]) <= np.median(errs[False][0]) + GATE_REAL_LOSS_DEG
+    gains = obj_b < obj_a - GATE_GAIN_DEG or (obj_b <= obj_a + GATE_REAL_LOSS_DEG
+                                              and tail_b < (1.0 - GATE_TAIL_GAIN) * tail_a)
+    return bool(real_ok and gains), scores, errs
+
+
+__all__ = ["GATE_GAIN_DEG", "GATE_REAL_LOSS_DEG", "GATE_TAIL_GAIN", "SHAKEN_SEED", "choose_smoother_gate",
+           "shaken_sets"]
