@@ -27,6 +27,7 @@ from .base import Estimator, StepResult
 from .dfc import DFC
 from .gated import KinematicPIF, PIFGated
 from .gyro import KinematicGyro, KinematicGyroSmoother
+from .gated_smoother import GatedSmoother
 from .handover import HandOver
 from .held import AtSource
 from .kalman import Kalman
@@ -125,4 +126,4 @@ __all__ = ["NAMES", "PRESETS", "DEFAULT", "OFFLINE", "TUNED_AS", "make", "Estima
            "Kinematic", "KinematicLowPass", "KinematicFeedForward", "KinematicPIF", "DFC",
            "UIO", "PIO", "PIF", "PIFRate", "PIFAdaptive", "PIFRateAdaptive", "PIFGated", "PIFSmoother",
            "Kalman", "KinematicSmoother", "with_online_offsets", "OnlineOffsets", "OffsetSettings",
-           "AtSource", "HandOver"]
+           "AtSource", "GatedSmoother", "HandOver"]

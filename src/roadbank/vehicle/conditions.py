@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from functools import partial
+from typing import Any
 
 import numpy as np
 
@@ -184,6 +185,15 @@ UNDESCRIBED_KEEPS_MODEL = False
 UNDESCRIBED_KEEPS_MODEL_CHOICES = (True, False)
 #: the same for the offline ``kinematic-smoother`` (``roadbank map``'s default): the sixty-third stage chooses it
 UNDESCRIBED_SMOOTHER_KEEPS_MODEL = False
+#: whether ``kinematic-smoother``, where its design is the low-pass both ways, moves to ``pif-smoother`` (the same log
+#: and car) where an offline gate on the yaw part of the lateral jerk is open
+#: (:class:`roadbank.estimators.GatedSmoother`, :data:`SMOOTHER_GATE_HOLD_S`): the sixty-fourth stage of
+#: :mod:`roadbank.tuning.real` chose it (False before)
+SMOOTHER_GATE = True
+SMOOTHER_GATE_CHOICES = (False, True)
+#: how long (s) that gate stays open before and after each ramp of its measure: the causal blend's release time
+#: constant (:data:`roadbank.estimators.gated.KINEMATIC_PIF_GATE`), fixed before the stage ran
+SMOOTHER_GATE_HOLD_S = 8.0
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
 #: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it
 NOISE_OCTAVE_TOP = 1.5
@@ -851,7 +861,15 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
             options = {"Q_ay": Q_ay, "R": R, **options}
     est = estimators.make(name, params, **options)
     est.name = label
-    out = est if handover is None else estimators.HandOver(est, *handover, stretch_s=ROAD_CHECK_WINDOW_S)
+    out: Any = est
+    if name == "kinematic-smoother" and gates_smoother():
+        model = make_estimator("pif-smoother", params, sensors=sensors, log_rate=log_rate, log_ay_noise=log_ay_noise,
+                               log_r_noise=log_r_noise, **{k: v for k, v in given.items()
+                                                           if k in estimators.base.ESTIMATOR_OPTIONS})
+        gate = estimators.gated.KINEMATIC_PIF_GATE
+        out = estimators.GatedSmoother(est, model, gate_tf=gate["gate_tf"], gate_on=gate["gate_on"],
+                                       gate_span=gate["gate_span"], hold=SMOOTHER_GATE_HOLD_S)
+    out = out if handover is None else estimators.HandOver(out, *handover, stretch_s=ROAD_CHECK_WINDOW_S)
     return estimators.AtSource(out) if log_held else out
 
 
@@ -872,6 +890,14 @@ def hands_back(causal: bool, roll_rate: float | None, unbiased: bool) -> bool:
         raise ValueError(f"ROAD_CHANGE_BACK must be one of {ROAD_CHANGE_BACK_CHOICES}, got {ROAD_CHANGE_BACK!r}")
     return (ROAD_CHANGE_BACK and causal and keeps_cars_model(True, roll_rate, unbiased)
             and hands_over(roll_rate))
+
+
+def gates_smoother() -> bool:
+    """Whether ``kinematic-smoother``, where its design is the low-pass both ways, is gated to ``pif-smoother``
+    (:data:`SMOOTHER_GATE`)."""
+    if SMOOTHER_GATE not in SMOOTHER_GATE_CHOICES:
+        raise ValueError(f"SMOOTHER_GATE must be one of {SMOOTHER_GATE_CHOICES}, got {SMOOTHER_GATE!r}")
+    return bool(SMOOTHER_GATE)
 
 
 def models_car(name: str, described: bool) -> bool:

@@ -25,7 +25,9 @@ The stages, one module per topic, each module's docstring holding its stages' ru
 * :mod:`.gyro` — the roll-rate filter ``kinematic-gyro``;
 * :mod:`.grade` — the grade and the pitch that correct the roll rate;
 * :mod:`.checks` — the check that a log's roll rate is one;
-* :mod:`.roads` — the fifty-eighth to sixty-second stages: a design decided again as a log's roads change;
+* :mod:`.roads` — the fifty-eighth to sixty-third stages: a design decided again as a log's roads change, a quiet log
+  of a car nobody described;
+* :mod:`.offline` — the sixty-fourth stage: the map's low-pass smoother gated to the model smoother;
 * :mod:`.common` — what every stage shares: the training drives, the simulated sets, the objective, ties, pieces.
 
 Every name of the stages is importable from here.
@@ -33,8 +35,9 @@ Every name of the stages is importable from here.
 
 from __future__ import annotations
 
-from .common import (BANDWIDTH_39, BEFORE_38, EQUAL_DEG, SIM_CARS, SIM_DRIVES, START_40, TIE_DEG, UNBIASED_36,
-                     cars_median, check_pieces, fixed, guarded, lengths_objective, log_errors, lowest_tied, objective,
+from .common import (BANDWIDTH_39, BEFORE_38, BEFORE_64, EQUAL_DEG, SIM_CARS, SIM_DRIVES, START_40, TIE_DEG,
+                     UNBIASED_36, cars_median, check_pieces, fixed, guarded, lengths_objective, log_errors, lowest_tied,
+                     objective,
                      per_log, rms_deg, sim_errors, simulated_sets, training_logs, whole_and_pieces, without_roll_rate)
 from .esp import (BANK_RATES_DEG, BANK_SPEED_EXPS, CAR_MARGINS, CLIPS, CUTOFFS_HZ, DESCRIBED_FILTERS, GATE_GRID,
                   GATE_TFS, GATE_TF_RATES, KAPPAS, LEADS_SAMPLES, LIMIT_TAUS, LONG_GAP_S, LOUD_AY_NOISE, LOUD_DOF,
@@ -49,7 +52,7 @@ from .esp import (BANK_RATES_DEG, BANK_SPEED_EXPS, CAR_MARGINS, CLIPS, CUTOFFS_H
                   choose_quiet_floor_rate, choose_quiet_floor_signal, choose_quiet_measure, choose_smoother,
                   design_settings, gate_filter_sets, kinematic_pif_candidates, long_errors, long_logs, long_median,
                   loud_gate_candidates, loud_sets, paper_median, paper_sets, prior_candidates, resampled_logs,
-                  smoother_clip_candidates, upsampled_logs, held_logs, HELD_RATES_HZ)
+                  smoother_clip_candidates, upsampled_logs, held_logs, HELD_RATES_HZ, within)
 from .gyro import (ANCHORED_BIAS_TAUS_S, ANCHORED_CUTOFFS_HZ, GAP_LENGTHS_S, GAP_PLACES, GYRO_BIAS_TAUS,
                    GYRO_CUTOFFS_HZ, GYRO_MAX_GAPS,
                    GYRO_OFFSET_DEG, GYRO_ORDER4_CUTOFFS_HZ, GYRO_SIDESLIPS, GYRO_START_HOLDS_S, GYRO_START_OFFSETS_DEG,
@@ -75,8 +78,12 @@ from .roads import (STEEP_ROAD_ORDER, STEEP_ROAD_CUTOFF_HZ, UNDESCRIBED_GAIN_DEG
                     ROAD_CHANGE_GYRO_GAIN_DEG, ROAD_CHANGE_LOSS_DEG,
                     choose_road_change, choose_road_change_gyro, long_quiet_sets, long_sim_errors, road_change_build,
                     smooth_start_logs)
+from .offline import GATE_GAIN_DEG, GATE_REAL_LOSS_DEG, GATE_TAIL_GAIN, SHAKEN_SEED, choose_smoother_gate, shaken_sets
 
-__all__ = ["STEEP_ROAD_ORDER", "STEEP_ROAD_CUTOFF_HZ", "UNDESCRIBED_GAIN_DEG", "choose_undescribed_quiet",
+__all__ = ["GATE_GAIN_DEG", "GATE_REAL_LOSS_DEG", "GATE_TAIL_GAIN", "SHAKEN_SEED", "choose_smoother_gate",
+           "shaken_sets",
+           "BEFORE_64", "within", "STEEP_ROAD_ORDER", "STEEP_ROAD_CUTOFF_HZ", "UNDESCRIBED_GAIN_DEG",
+           "choose_undescribed_quiet",
            "BACK_LOUD_AY", "ROAD_CHANGE_BACK_GAIN_DEG", "ROAD_CHANGE_BACK_LOSS_DEG", "ROAD_CHANGE_BACK_WORSE_DEG",
            "choose_road_change_back", "loud_and_quiet_logs", "loud_then_quiet_sets",
            "QUIET_INS_GAIN_DEG", "choose_quiet_ins", "smooth_road_logs",

@@ -33,6 +33,9 @@ START_40 = (3.0, 3.0)
 #: the thirty-sixth stage's constants of the gyro-aided filter for a roll rate free of offset (cut-off Hz, offset time
 #: constant s), as the thirty-seventh to forty-third stages ran it (the forty-third chose anew)
 UNBIASED_36 = {"cutoff": 0.07, "bias_tau": 40.0}
+#: the design settings (:func:`~roadbank.tuning.real.design_settings`) as the stages before the sixty-fourth ran
+#: ``kinematic-smoother``: the low-pass both ways, no gate to ``pif-smoother``
+BEFORE_64 = {"smoother_gate": False}
 #: objectives closer than this (deg) count as equal
 TIE_DEG = 0.002
 #: the rule's simulated tie-break counts medians as equal to this (deg): the size of float rounding

@@ -276,8 +276,8 @@ from ...signals import Signals, concat_signals, sample_rate
 from ...validation.kitti import KITTI_SCORING
 from ...validation.scoring import masks
 from ...vehicle import load_vehicle
-from .common import (EQUAL_DEG, SIM_CARS, SIM_DRIVES, TIE_DEG, cars_median, fixed, guarded, log_errors, lowest_tied,
-                     objective, per_log, rms_deg, sim_errors)
+from .common import (BEFORE_64, EQUAL_DEG, SIM_CARS, SIM_DRIVES, TIE_DEG, cars_median, fixed, guarded, log_errors,
+                     lowest_tied, objective, per_log, rms_deg, sim_errors)
 
 
 #: candidate cut-offs (Hz) and feed-forward gains (-)
@@ -571,7 +571,7 @@ def design_settings(**settings):
 _DESIGN_SETTINGS = ("QUIET_FLOOR_RATE", "QUIET_FLOOR_SIGNAL", "NOISE_AT_SOURCE", "NOISE_OCTAVE", "NOISE_OCTAVE_TOP",
                     "TRUST_FIXED_CHANNELS", "GATE_AT_SOURCE", "READ_AT_SOURCE", "QUIET_READS_ROLL_RATE",
                     "SOURCE_ROUNDING", "ROAD_CHANGE", "ROAD_CHANGE_BACK", "UNDESCRIBED_KEEPS_MODEL",
-                    "UNDESCRIBED_SMOOTHER_KEEPS_MODEL")
+                    "UNDESCRIBED_SMOOTHER_KEEPS_MODEL", "SMOOTHER_GATE")
 #: the settings as each stage ran: the eighteenth and nineteenth before the twentieth, the twentieth before the
 #: twenty-first
 _BEFORE_SOURCE = {"noise_at_source": "none", "noise_octave": "none"}
@@ -589,8 +589,12 @@ def choose_octave_top(logs, up, resampled, sim_sets, tops=NOISE_OCTAVE_TOPS) -> 
 def _with_settings(**settings):
     """``build`` of the default as the command line builds it, within :func:`design_settings` ``(**settings)``: the
     design, where the settings are read, is built inside the block."""
-    build = per_log("kinematic-pif")
+    return within(per_log("kinematic-pif"), **settings)
 
+
+def within(build, **settings):
+    """``build`` (signals -> estimator) run within :func:`design_settings` ``(**settings)``: a design read at build
+    time, as a stage ran it."""
     def at(signals):
         with design_settings(**settings):
             return build(signals)
@@ -947,7 +951,7 @@ def smoother_clip_candidates() -> dict:
     """``{clip: build}`` of ``kinematic-smoother`` over :data:`CLIPS` (the linear smoother first), each
     designed for the log as the command line does (the log's noise measures the limit), for
     :func:`choose_by_roads`: the eleventh stage, the limit of the offline default's two passes."""
-    return {c: per_log("kinematic-smoother", clip=c) for c in CLIPS}
+    return {c: within(per_log("kinematic-smoother", clip=c), **BEFORE_64) for c in CLIPS}
 
 
 def _quiet_by(measure: str):

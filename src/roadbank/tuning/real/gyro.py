@@ -197,8 +197,9 @@ from ...estimators.gyro import (GAPS_OF, GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_C
                                SMOOTHER_SETTLED, UNBIASED_PITCH, KinematicGyro, KinematicGyroSmoother)
 from ...estimators.offsets import with_online_offsets
 from ...validation.scoring import SHORT_PIECES_S
-from .common import (BANDWIDTH_39, BEFORE_38, START_40, TIE_DEG, UNBIASED_36, fixed, lengths_objective, log_errors,
-                     lowest_tied, per_log, rms_deg, whole_and_pieces, without_roll_rate)
+from .esp import within
+from .common import (BANDWIDTH_39, BEFORE_38, BEFORE_64, START_40, TIE_DEG, UNBIASED_36, fixed, lengths_objective,
+                     log_errors, lowest_tied, per_log, rms_deg, whole_and_pieces, without_roll_rate)
 
 
 #: the twenty-ninth stage's candidates: the sideslip acceleration ``kinematic-gyro`` takes out of the kinematic estimate
@@ -266,7 +267,7 @@ def choose_gyro_map(logs) -> tuple[float, float, bool]:
     rate). Returns ``(kinematic-gyro-smoother's objective, the shipped map default's, the first is the default)``."""
     sets = gyro_sets(logs)
     smoother = gyro_objective(fixed(KinematicGyroSmoother(grade_window=0.0, max_gap=1.0)), sets)   # as it ran
-    shipped = gyro_objective(per_log("kinematic-smoother"), [without_roll_rate(logs)])
+    shipped = gyro_objective(within(per_log("kinematic-smoother"), **BEFORE_64), [without_roll_rate(logs)])
     return smoother, shipped, smoother < shipped
 
 

@@ -57,10 +57,10 @@ def shaken_sets(sim_sets, seed: int = SHAKEN_SEED) -> list:
 def choose_smoother_gate(logs, quiet_sets, shaken, kept_logs, known_quiet, cars=SIM_CARS) -> tuple:
     """The sixty-fourth stage (module docstring): ``kinematic-smoother`` as ``roadbank map`` builds it with
     :data:`roadbank.vehicle.conditions.SMOOTHER_GATE` False (A) and True (B). ``logs``: set (1) (``(signals, reference
-    roll rad, scored mask)``); ``quiet_sets``: set (2), per car of ``cars`` a list of drives; ``shaken``: set (3), per
-    car (:func:`shaken_sets`); ``kept_logs`` (signals) and ``known_quiet`` (per car, drives built with its file): the
-    guard. Returns ``(chosen, {choice: (objective, tail)}, {choice: (raw RMS per log, per car: bank RMS per drive of (2),
-    of (3))})``; a ValueError where the guard fails."""
+    roll rad, scored mask)``); ``quiet_sets``: set (2), per car of ``cars`` a list of drives; ``shaken``: set (3),
+    per car (:func:`shaken_sets`); ``kept_logs`` (signals) and ``known_quiet`` (per car, drives built with its file):
+    the guard. Returns ``(chosen, {choice: (objective, tail)}, {choice: (raw RMS per log, per car: bank RMS per drive
+    of (2), of (3))})``; a ValueError where the guard fails."""
     undescribed = per_log("kinematic-smoother", described=False)
     known = {car: per_log("kinematic-smoother", vehicle=load_vehicle(car)) for car in cars}
     setting = "smoother_gate"

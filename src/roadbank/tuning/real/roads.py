@@ -26,8 +26,8 @@ from ...vehicle import load_vehicle
 from ...signals import Signals, concat_signals
 from ...validation.roads import SMOOTH_ROADS, smooth_road
 from ..objective import FAILED_DEG, SETTLE
-from .common import cars_median, log_errors, per_log, sim_errors
-from .esp import _with_settings, design_settings, same_outputs, two_choice_rule
+from .common import BEFORE_64, cars_median, log_errors, per_log, sim_errors
+from .esp import _with_settings, design_settings, same_outputs, two_choice_rule, within
 
 #: the rule: B ships if its median over the ESP long logs is below A's by more than this (deg) ...
 ROAD_CHANGE_GAIN_DEG = 0.05
@@ -219,13 +219,13 @@ def choose_undescribed_quiet(smooth_logs, sim_quiet_sets, kept_logs, known_sets,
     (``(car name, drives)``, each built with that car's file) must give the same outputs under both: a ValueError
     where they do not."""
     offline = name in OFFLINE
-    build = per_log(name, described=False)
+    build = within(per_log(name, described=False), **BEFORE_64)     # the map's smoother as it ran then
 
     def online(s):
         return build(s) if offline else with_online_offsets(build(s))
 
     def known(car):
-        made = per_log(name, vehicle=load_vehicle(car))
+        made = within(per_log(name, vehicle=load_vehicle(car)), **BEFORE_64)
         return lambda s: made(s) if offline else with_online_offsets(made(s))
 
     pairs = [(online, s) for s in kept_logs] + [(known(car), d.signals) for car, drives in known_sets for d in drives]

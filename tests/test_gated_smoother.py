@@ -1,0 +1,163 @@
+"""GatedSmoother: the offline gate's measure against the analytic yaw acceleration, its window against a brute-force
+one, the blend shut and open, streamed chunks as one run, bad samples held, and where the map's design builds it."""
+
+import math
+
+import numpy as np
+import pytest
+
+from roadbank import Signals
+from roadbank import estimators as E
+from roadbank.estimators.gated import KINEMATIC_PIF_GATE
+from roadbank.estimators.gated_smoother import gate_ramps, held_open
+from roadbank.sim.scenarios import run_scenario
+from roadbank.tuning.real import design_settings
+from roadbank.vehicle import for_log, load_vehicle
+
+
+@pytest.mark.parametrize("rate,accel,want", [(100.0, 0.225, 0.5), (10.0, 0.225, 0.5), (100.0, 0.25, 1.0),
+                                             (100.0, 0.19, 0.0)])
+def test_the_measure_is_the_speed_times_the_yaw_acceleration_ramped(rate, accel, want):
+    """A yaw rate rising at a constant ``accel`` rad/s^2 at 20 m/s: the first-order low-pass of a ramp rises at the
+    ramp's slope once its transient is gone, so j = 20 accel m/s^3 and the ramp (j - 4) / 1, clipped."""
+    t = np.arange(0.0, 3.0, 1.0 / rate)
+    vx, r = np.full_like(t, 20.0), accel * t
+    ramps, (t_last, rf) = gate_ramps(t, vx, r, np.ones(len(t), bool), 0.05, 4.0, 1.0, 1.0)
+    assert ramps[0] == 0.0                                      # a start: no rate yet
+    np.testing.assert_allclose(ramps[t > 1.0], want, atol=1e-9)
+    h, k = 1.0 / rate, 1.0 - math.exp(-1.0 / rate / 0.05)
+    lag = h * (1.0 - k) / k                 # the sampled first-order filter's lag behind a ramp (about tf - h/2)
+    assert t_last == t[-1] and abs(rf - accel * (t[-1] - lag)) < 1e-9
+
+
+def test_the_measure_restarts_after_a_gap_and_steps_over_unread_samples():
+    t = np.concatenate([np.arange(0.0, 1.0, 0.01), np.arange(3.0, 4.0, 0.01)])
+    r = 0.3 * t
+    use = np.ones(len(t), bool)
+    use[10:20] = False
+    ramps, _ = gate_ramps(t, np.full_like(t, 20.0), r, use, 0.05, 4.0, 1.0, 1.0)
+    assert np.all(ramps[10:20] == 0.0)
+    assert ramps[100] == 0.0 and ramps[99] > 0.0                # the first sample after the 2 s gap starts again
+    assert ramps[20] > 0.0                                      # the stepped-over samples are no gap (0.11 s)
+
+
+def test_the_window_is_the_largest_event_within_the_hold_either_side():
+    rng = np.random.default_rng(0)
+    t = np.sort(rng.uniform(0.0, 100.0, 400))
+    ev_t, ev_g = np.sort(rng.uniform(-10.0, 110.0, 30)), rng.uniform(0.0, 1.0, 30)
+    g = held_open(t, ev_t, ev_g, 3.0, 5.0)
+    brute = np.array([max([e for te, e in zip(ev_t, ev_g) if tk - 3.0 <= te <= tk + 5.0], default=0.0) for tk in t])
+    np.testing.assert_array_equal(g, brute)
+
+
+def _noisy(s, seed=0):
+    """``s`` with a shaking accelerometer (0.5 m/s^2 of white noise on ay): a loud log."""
+    rng = np.random.default_rng(seed)
+    return Signals(s.t, s.vx, s.ay + 0.5 * rng.standard_normal(len(s.t)), s.r, s.delta_f)
+
+
+def _hard_drive(seed=0):
+    """The track lane change (a hard transient at 140 km/h), loud."""
+    return _noisy(run_scenario("track-lane-change", "nominal", seed=seed).signals, seed)
+
+
+def _pair(s, car="sedan", **gate):
+    car = load_vehicle(car).params
+    lp, model = for_log("kinematic-smoother", s, car), for_log("pif-smoother", s, car)
+    opts = {"gate_tf": 0.05, "gate_on": 4.0, "gate_span": 1.0, "hold": 8.0, **gate}
+    return lp, model, E.GatedSmoother(for_log("kinematic-smoother", s, car), for_log("pif-smoother", s, car), **opts)
+
+
+def test_shut_it_is_the_low_pass_smoother_open_the_model_smoother():
+    s = _hard_drive()
+    lp, model, shut = _pair(s, gate_on=1e9)
+    a, m = lp.run(s), model.run(s)
+    out = shut.run(s)
+    np.testing.assert_array_equal(out.w, a.w)
+    np.testing.assert_array_equal(out.phi_b, a.phi_b)
+    _, _, open_ = _pair(s, gate_on=-1e9)
+    out = open_.run(s)
+    both = a.valid & m.valid
+    assert both.mean() > 0.9
+    np.testing.assert_allclose(out.w[both], m.w[both], rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(out.valid, a.valid)
+
+
+def test_the_gate_opens_within_the_hold_of_a_hard_turn_and_nowhere_else():
+    """A minute at 20 m/s, straight but for one quick turn in and out at 30-32 s (yaw acceleration up to 0.5 rad/s^2,
+    10 m/s^3 of the yaw part of the jerk): the blend moves to the model smoother from 8 s before the turn to 8 s
+    after it, and is the low-pass smoother elsewhere."""
+    t = np.arange(0.0, 60.0, 0.01)
+    r = np.where((t > 30.0) & (t < 32.0), 0.16 * np.sin(np.pi * (t - 30.0)), 0.0)
+    s = Signals(t, np.full_like(t, 20.0), 20.0 * r + 0.05 * np.random.default_rng(0).standard_normal(len(t)), r,
+                np.full_like(t, np.nan))
+    lp, model, gated = _pair(s)
+    a, m, out = lp.run(s), model.run(s), gated.run(s)
+    moved = np.abs(out.w - a.w) > 1e-12
+    assert moved.any() and not moved[(t < 30.0 - 8.0 - 0.05) | (t > 32.0 + 8.0 + 0.05)].any()
+    inner = (t > 31.0 - 8.0) & (t < 31.0 + 8.0)
+    np.testing.assert_allclose(out.w[inner], m.w[inner], rtol=0, atol=1e-15)
+
+
+def test_where_the_cars_model_is_right_the_blend_follows_a_hard_s_curve_better():
+    """The paper's S-curve (near the limit) with a shaking accelerometer, the plant's own car: the low-pass
+    smoother reads the sideslip acceleration as bank (theta RMS about 1 deg against the truth), the gated one
+    follows the model smoother (about 0.5 deg)."""
+    r = run_scenario("s-curve", "nominal", seed=0)
+    s = _noisy(r.signals)
+    lp, _, gated = _pair(s, car="suv-paper")
+    truth = np.interp(s.t, r.truth.t, r.truth.theta)
+    k = s.t > 2.0
+    err_lp, err_g = (np.degrees(np.sqrt(np.mean((e.theta - truth)[k] ** 2))) for e in (lp.run(s), gated.run(s)))
+    assert err_g < 0.7 * err_lp
+
+
+@pytest.mark.parametrize("size", [137, 600])
+def test_chunks_with_lookahead_are_one_run(size):
+    s = _hard_drive(1)
+    _, _, est = _pair(s)
+    whole = est.run(s)
+    assert est.lookahead_s >= 8.0
+    chunks = [s[a:a + size] for a in range(0, len(s), size)]
+    est.reset()
+    parts = [est.run(c, reset=False, lookahead=s[a + size:] if a + size < len(s) else None)
+             for c, a in zip(chunks, range(0, len(s), size))]
+    np.testing.assert_allclose(np.concatenate([p.w for p in parts]), whole.w, rtol=0, atol=1e-10)
+    np.testing.assert_array_equal(np.concatenate([p.valid for p in parts]), whole.valid)
+
+
+def test_bad_samples_are_held_and_flagged():
+    s = _hard_drive(2)
+    ay, vx = s.ay.copy(), s.vx.copy()
+    ay[500:520] = np.nan
+    vx[900:950] = 0.0
+    bad = Signals(s.t, vx, ay, s.r, s.delta_f)
+    _, _, est = _pair(bad)
+    out = est.run(bad)
+    assert not out.valid[500:520].any() and not out.valid[900:950].any()
+    assert np.all(out.w[500:520] == out.w[499]) and np.all(np.isfinite(out.w))
+
+
+def test_step_is_the_causal_blend_and_ends_where_run_ends():
+    s = _hard_drive(3)
+    _, _, est = _pair(s)
+    whole = est.run(s)
+    est.reset()
+    stepped = [est.step(float(t), float(v), float(a), float(r)) for t, v, a, r in zip(s.t, s.vx, s.ay, s.r)]
+    assert math.isclose(stepped[-1].w, whole.w[-1], abs_tol=1e-9)
+    assert all(math.isfinite(x.w) for x in stepped)
+
+
+def test_the_map_design_builds_it_only_where_the_low_pass_smoother_is_the_design():
+    """With SMOOTHER_GATE on: a loud log (a car described or not) gets the gated smoother, with the blend's gate
+    measure; a quiet log of a car described the model smoother; a log with a usable roll rate the gyro-aided one."""
+    s = _hard_drive()
+    with design_settings(smoother_gate=True):
+        loud = for_log("kinematic-smoother", s, described=False)
+        assert isinstance(loud, E.GatedSmoother) and loud.name == "kinematic-smoother"
+        assert (loud.gate_tf, loud.gate_on, loud.gate_span) == tuple(
+            KINEMATIC_PIF_GATE[k] for k in ("gate_tf", "gate_on", "gate_span"))
+        quiet = run_scenario("track-lane-change", "nominal", seed=0).signals
+        assert not isinstance(for_log("kinematic-smoother", quiet, vehicle=load_vehicle("sedan")), E.GatedSmoother)
+    with design_settings(smoother_gate=False):
+        assert not isinstance(for_log("kinematic-smoother", s, described=False), E.GatedSmoother)
