@@ -84,10 +84,12 @@ def test_a_quiet_log_gets_the_offline_pif_and_a_loud_one_the_smoother():
     suv = load_vehicle("suv-paper")
     quiet_est, loud_est = for_log("kinematic-smoother", s, vehicle=suv), for_log("kinematic-smoother", loud)
     assert quiet_est.name == loud_est.name == "kinematic-smoother"
-    assert isinstance(loud_est, E.KinematicSmoother) and isinstance(quiet_est, E.PIFSmoother)
+    # the low-pass smoother gated to pif-smoother through hard manoeuvres (the sixty-fourth stage)
+    assert isinstance(loud_est, E.GatedSmoother) and isinstance(loud_est.inner, E.KinematicSmoother)
+    assert isinstance(quiet_est, E.PIFSmoother)
     np.testing.assert_array_equal(quiet_est.run(s).w, for_log("pif-smoother", s, vehicle=suv).run(s).w)
-    assert isinstance(for_log("kinematic-smoother", s, vehicle=suv, quiet_ratio=0.0), E.KinematicSmoother)
-    assert isinstance(for_log("kinematic-smoother", s), E.KinematicSmoother)
+    assert isinstance(for_log("kinematic-smoother", s, vehicle=suv, quiet_ratio=0.0).inner, E.KinematicSmoother)
+    assert isinstance(for_log("kinematic-smoother", s).inner, E.KinematicSmoother)
     with pytest.raises(ValueError, match="bad tuning option"):      # the blend's option is not the smoother's
         for_log("kinematic-smoother", loud, lead_samples=0.5)
 
@@ -185,15 +187,16 @@ def test_the_cutoff_and_the_map_default_are_what_the_rule_picks():
     the map's default is the real-roads-first rule's among the offline estimators; on the real training
     drives it is below half of pif-smoother's error (which restarts from one sample after each stop)."""
     from roadbank.defaults import MAP_ESTIMATOR
-    from roadbank.tuning.real import CUTOFFS_HZ, choose_by_roads, choose_smoother, per_log, simulated_sets
-    from roadbank.tuning.real import training_logs
+    from roadbank.tuning.real import BEFORE_64, CUTOFFS_HZ, choose_by_roads, choose_smoother, per_log, simulated_sets
+    from roadbank.tuning.real import training_logs, within
 
     logs, sims = training_logs(DATA), simulated_sets()
     i = CUTOFFS_HZ.index(SMOOTHER_CUTOFF_HZ)
     chosen, obj = choose_smoother(logs, sims, cutoffs=CUTOFFS_HZ[max(0, i - 1):i + 2])
     assert chosen == SMOOTHER_CUTOFF_HZ, obj
-    builds = {name: per_log(name) for name in E.OFFLINE if name in E.NAMES}   # the ESP ones: the stage's set
-    builds["kinematic-smoother, never quiet"] = per_log("kinematic-smoother", quiet_ratio=0.0)
+    # the ESP ones: the stage's set, as it ran (the low-pass smoother not gated: the sixty-fourth stage came after)
+    builds = {name: within(per_log(name), **BEFORE_64) for name in E.OFFLINE if name in E.NAMES}
+    builds["kinematic-smoother, never quiet"] = within(per_log("kinematic-smoother", quiet_ratio=0.0), **BEFORE_64)
     best, real, sim = choose_by_roads(builds, logs, sims)
     assert best == MAP_ESTIMATOR == "kinematic-smoother", (real, sim)
     assert real["kinematic-smoother"] < 0.5 * real["pif-smoother"]
