@@ -31,6 +31,7 @@ import math
 import numpy as np
 
 from ..signals import Estimate, Signals
+from . import kernels as K
 from .base import StepResult, Wrapper
 from .kinematic_smoother import KinematicSmoother
 from .smoother import PIFSmoother
@@ -40,37 +41,28 @@ def gate_ramps(t: np.ndarray, vx: np.ndarray, r: np.ndarray, usable: np.ndarray,
                max_gap: float, state: tuple[float, float] = (math.nan, math.nan)) -> tuple[np.ndarray, tuple]:
     """The ramp (-, in [0, 1]) of the yaw part of the lateral jerk at each sample: ``t`` (s), ``vx`` (m/s), ``r``
     (rad/s); ``usable`` (bool) the samples read (others 0, stepped over). The yaw rate through a first-order low-pass
-    (time constant ``tf``, s), ``j = vx |r_f' |`` (m/s^3) between consecutive usable samples, ``clip((j - on) / span, 0,
-    1)`` (``on``, ``span`` m/s^3); 0 at a (re)start: the first usable sample, or one more than ``max_gap`` (s) after
-    the last. ``state``: ``(t, r_f)`` of the last usable sample before ``t`` (NaN: none). Returns ``(ramps, state)``."""
-    ramps = np.zeros(len(t))
-    t_last, rf = state
-    for k in np.flatnonzero(usable):
-        dt = t[k] - t_last
-        if not dt <= max_gap:                       # the first sample, or after a gap (NaN compares False)
-            t_last, rf = float(t[k]), float(r[k])
-            continue
-        if dt <= 0.0:                               # a stamp that does not advance is not read
-            continue
-        rf_new = rf + (1.0 - math.exp(-dt / tf)) * (r[k] - rf)
-        ramps[k] = min(1.0, max(0.0, (vx[k] * abs(rf_new - rf) / dt - on) / span))
-        t_last, rf = float(t[k]), rf_new
-    return ramps, (t_last, rf)
+    (time constant ``tf``, s), ``j = vx |r_f'|`` (m/s^3) between consecutive usable samples, ``clip((j - on) / span,
+    0, 1)`` (``on``, ``span`` m/s^3); 0 at a (re)start: the first usable sample, or one more than ``max_gap`` (s) after
+    the last (:func:`roadbank.estimators.kernels.jerk_ramps`). ``state``: ``(t, r_f)`` of the last usable sample
+    before ``t`` (NaN: none). Returns ``(ramps, state)``."""
+    out = np.empty(len(t))
+    st = np.array(state, dtype=np.float64)
+    K.jerk_ramps(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(vx, dtype=np.float64),
+                 np.ascontiguousarray(r, dtype=np.float64), np.ascontiguousarray(usable, dtype=np.bool_), float(tf),
+                 float(on), float(span), float(max_gap), st, out)
+    return out, (float(st[0]), float(st[1]))
 
 
 def held_open(t: np.ndarray, ev_t: np.ndarray, ev_g: np.ndarray, before: float, after: float) -> np.ndarray:
     """The gate (-) at the stamps ``t`` (s, non-decreasing where finite): the largest ramp ``ev_g`` of the events at
-    ``ev_t`` (s) from ``before`` s before each stamp to ``after`` s after it (0 where none; NaN stamps 0)."""
-    g = np.zeros(len(t))
-    ok = np.isfinite(t)
-    tt = t[ok]
-    out = np.zeros(len(tt))
-    for te, ge in zip(ev_t, ev_g):
-        a, b = np.searchsorted(tt, te - after, "left"), np.searchsorted(tt, te + before, "right")
-        if b > a:
-            np.maximum(out[a:b], ge, out=out[a:b])
-    g[ok] = out
-    return g
+    ``ev_t`` (s) from ``before`` s before each stamp to ``after`` s after it (0 where none; NaN stamps 0;
+    :func:`roadbank.estimators.kernels.window_max`)."""
+    order = np.argsort(ev_t, kind="stable")
+    out = np.empty(len(t))
+    K.window_max(np.ascontiguousarray(t, dtype=np.float64), np.ascontiguousarray(ev_t[order], dtype=np.float64),
+                 np.ascontiguousarray(ev_g[order], dtype=np.float64), float(before), float(after), out,
+                 np.empty(len(ev_t), dtype=np.int64))
+    return out
 
 
 class GatedSmoother(Wrapper):

@@ -127,11 +127,11 @@ from .gated import gated_run, gated_step
 from .lpv import lpv3_run, lpv_run, lpv_step, observer_update
 from .riccati import riccati_run, riccati_step
 from .sample import ASIN_POLY_MAX, asin_fast
-from .smoother import smooth_backward
+from .smoother import jerk_ramps, smooth_backward, window_max
 
 __all__ = ["ASIN_POLY_MAX", "DT_REL_TOL", "ENTRIES", "adaptive_run", "adaptive_step", "asin_fast", "dfc_run",
-           "dfc_step", "entries", "gated_run", "gated_step", "lpv3_run", "lpv_run", "lpv_step", "observer_update",
-           "riccati_run", "riccati_step", "smooth_backward"]
+           "dfc_step", "entries", "gated_run", "gated_step", "jerk_ramps", "lpv3_run", "lpv_run", "lpv_step",
+           "observer_update", "riccati_run", "riccati_step", "smooth_backward", "window_max"]
 
 #: the ``(run, step)`` kernels by family and variant (:func:`entries`)
 ENTRIES = {

@@ -125,3 +125,54 @@ def smooth_backward(tab, ftab, hfix, v0, dv, n, max_sub, t, vx, ay, xf, a, b, ou
                 work[orhs + n + p] = acc / work[oA + p * n + p]
         for p in range(n):
             out[k, p] = work[orhs + n + p]
+
+
+@njit(**ENTRY)
+def jerk_ramps(t, vx, r, usable, tf, on, span, max_gap, state, out):
+    r"""The offline gate's measure (:class:`roadbank.estimators.GatedSmoother`): the ramp (-, in [0, 1]) of the yaw part
+    of the lateral jerk at each sample into ``out``, as :func:`roadbank.estimators.kernels.gated_step` reads it. The yaw
+    rate through a first-order low-pass, :math:`r_f \mathrel{+}= (1 - e^{-\Delta t/t_f})(r - r_f)`, between
+    consecutive ``usable`` samples (the others 0, stepped over), :math:`j = v_x |\Delta r_f| / \Delta t` and
+    :math:`\min(1, \max(0, (j - j_{on}) / j_{span}))`; 0 at a (re)start (no sample before, or one more than
+    ``max_gap`` s before) and where a stamp does not advance (not read). Units: t, tf, max_gap (s), vx (m/s), r
+    (rad/s), on, span (m/s^3). ``state``: ``[t, r_f]`` of the last sample read (NaN: none), updated in place."""
+    t_last, rf = state[0], state[1]
+    for k in range(t.shape[0]):
+        out[k] = 0.0
+        if not usable[k]:
+            continue
+        dt = t[k] - t_last
+        if not dt <= max_gap:                   # the first sample, or after a gap (NaN compares False)
+            t_last, rf = t[k], r[k]
+            continue
+        if dt <= 0.0:
+            continue
+        rf_new = rf + (1.0 - math.exp(-dt / tf)) * (r[k] - rf)
+        g = (vx[k] * abs(rf_new - rf) / dt - on) / span
+        out[k] = 0.0 if g < 0.0 else (1.0 if g > 1.0 else g)
+        t_last, rf = t[k], rf_new
+    state[0], state[1] = t_last, rf
+
+
+@njit(**ENTRY)
+def window_max(t, ev_t, ev_g, before, after, out, queue):
+    """The largest ``ev_g`` of the events at ``ev_t`` (s, sorted) from ``before`` s before each stamp of ``t`` (s,
+    non-decreasing; NaN stamps none) to ``after`` s after it, into ``out`` (0 where none): a sliding maximum over a
+    window of log time, each event entering and leaving ``queue`` (int64 work, as long as ``ev_t``), whose values
+    decrease, once."""
+    m = ev_t.shape[0]
+    head, tail, nxt = 0, 0, 0
+    for k in range(t.shape[0]):
+        out[k] = 0.0
+        if not math.isfinite(t[k]):
+            continue
+        while nxt < m and ev_t[nxt] <= t[k] + after:
+            while tail > head and ev_g[queue[tail - 1]] <= ev_g[nxt]:
+                tail -= 1
+            queue[tail] = nxt
+            tail += 1
+            nxt += 1
+        while tail > head and ev_t[queue[head]] < t[k] - before:
+            head += 1
+        if tail > head:
+            out[k] = ev_g[queue[head]]
