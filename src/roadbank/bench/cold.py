@@ -17,7 +17,8 @@ compiles:
 * ``gated`` — ``pif-gated``: the ``lpv`` step of its stacked observer plus the gate, batch and
   streaming, general and fixed-rate paths;
 * ``smooth`` — the backward pass of the offline ``pif-smoother`` (its forward ``lpv`` pass is
-  compiled before the timing).
+  compiled before the timing) and the offline gate's measure and window of the map's ``kinematic-smoother``
+  (:class:`roadbank.estimators.GatedSmoother`).
 
 Each probe prints one JSON line; the compile time is measured as the wall
 time of the first calls minus the wall time of the same calls repeated
@@ -120,8 +121,11 @@ n = 60
 s = Signals(np.arange(n) * 0.01, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
 e = estimators.make("pif-smoother", v_max=30.0)     # small design: scipy, not compilation
 estimators.make("pif-modified", v_max=30.0).run(s)  # the forward (lpv) kernel: its own family
+from roadbank.estimators.gated_smoother import gate_ramps, held_open
 def work():
     e.run(s)
+    g, _ = gate_ramps(s.t, s.vx, s.r, np.ones(n, bool), 0.05, 4.0, 1.0, 1.0)
+    held_open(s.t, s.t, g, 8.0, 8.0)
 """,
 }
 
