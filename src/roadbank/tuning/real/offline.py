@@ -1,4 +1,4 @@
-"""The sixty-fourth stage: the map's low-pass smoother through hard manoeuvres (docs/estimators.md).
+"""The sixty-fourth and sixty-fifth stages: the map's low-pass smoother through hard manoeuvres (docs/estimators.md).
 
 ``roadbank map``'s offline default is the kinematic estimate low-passed both ways (``kinematic-smoother``) on a loud
 log, and since the sixty-third stage on a quiet log of a car nobody described too. It has no gate to a model: on the
@@ -22,6 +22,12 @@ objective is below A's by more than :data:`GATE_GAIN_DEG`, or its objective is n
 the eight training drives with their INS roll rate (the gyro-aided smoother) and each car's ESP drives built with its
 vehicle file that its design reads quiet (``pif-smoother``: 95 of the 96; corrected before any score was computed, the
 guard as first written having failed on the one van drive that reads loud) give the same outputs under both.
+
+The sixty-fifth (:func:`choose_gate_speed`): the lowest speed at which the gate's measure counts. On the training drive
+0034 (and, reported after the sixty-fourth stage, on the validation drive 0020) the gate opens on tight turns at 4-14
+m/s (yaw rate up to 40 deg/s), where the model smoother of a car nobody described errs by 1.5-2.5 deg and the
+low-pass smoother by 0.3-0.5: a tyre model is for a car at speed. Candidates :data:`GATE_SPEEDS`; the rule weighs the
+real drives by their mean, since the cost is a tail over drives that a median does not see.
 """
 
 from __future__ import annotations
@@ -32,7 +38,7 @@ import numpy as np
 
 from ...estimators import PIFSmoother
 from ...vehicle import load_vehicle
-from .common import SIM_CARS, cars_median, log_errors, per_log, sim_errors
+from .common import SIM_CARS, cars_median, log_errors, lowest_tied, per_log, sim_errors
 from .roads import BACK_LOUD_AY, _in_force, _same_in_force
 
 #: the rule: B's real median may be above A's by at most this (deg), and so may its objective where the tail decides
@@ -89,5 +95,47 @@ def choose_smoother_gate(logs, quiet_sets, shaken, kept_logs, known_quiet, cars=
     return bool(real_ok and gains), scores, errs
 
 
+
+
+#: the sixty-fifth stage's candidates: the lowest speed (m/s) at which the offline gate's measure counts
+#: (:data:`roadbank.vehicle.conditions.SMOOTHER_GATE_V_MIN`; 0, the first, as the sixty-fourth shipped)
+GATE_SPEEDS = (0.0, 10.0, 15.0, 20.0)
+#: its rule: a candidate is eligible where its simulated 95th percentile is not above the shipped one's by more than
+#: this share (-) ...
+GATE_SPEED_TAIL_LOSS = 0.10
+#: ... and its median over the cars not above the shipped one's by more than this (deg)
+GATE_SPEED_SIM_LOSS_DEG = 0.01
+
+
+def choose_gate_speed(logs, quiet_sets, shaken, speeds=GATE_SPEEDS, cars=SIM_CARS) -> tuple:
+    """The sixty-fifth stage (docs/estimators.md): ``kinematic-smoother`` as ``roadbank map`` builds it, its gate's
+    measure counted only at ``vx >=`` each of ``speeds`` (m/s; :data:`~roadbank.vehicle.conditions.SMOOTHER_GATE_V_MIN`,
+    the shipped first), on the sixty-fourth stage's sets (:func:`choose_smoother_gate`). Scores per candidate: the
+    mean raw RMS (deg) over the real logs, the median over the cars of each car's median over its simulated drives
+    (quiet and shaken pooled) and the 95th percentile over all of them. Rule: among the candidates whose simulated
+    95th percentile is not above the shipped one's by more than :data:`GATE_SPEED_TAIL_LOSS` of it and whose median
+    over the cars is not above the shipped one's by more than :data:`GATE_SPEED_SIM_LOSS_DEG`, the lowest real mean
+    wins, ties within :data:`~.common.TIE_DEG` going to the lower speed. Returns ``(chosen, {speed: (real mean, sims
+    median, sims p95)}, {speed: (raw RMS per log, per car: bank RMS per drive, quiet then shaken)})``."""
+    undescribed = per_log("kinematic-smoother", described=False)
+    known = {car: per_log("kinematic-smoother", vehicle=load_vehicle(car)) for car in cars}
+
+    def shaken_errors():
+        return [sim_errors(known[car], [drives])[0] for car, drives in zip(cars, shaken)]
+
+    def measure():
+        real = log_errors(undescribed, logs)
+        pooled = [list(q) + list(s) for q, s in zip(sim_errors(undescribed, quiet_sets), shaken_errors())]
+        return real, pooled
+
+    errs = {v: _in_force("smoother_gate_v_min", v, measure) for v in speeds}
+    scores = {v: (float(np.mean(real)), cars_median(pooled), float(np.percentile(np.concatenate(pooled), 95)))
+              for v, (real, pooled) in errs.items()}
+    first = scores[speeds[0]]
+    eligible = [v for v in speeds if scores[v][2] <= (1.0 + GATE_SPEED_TAIL_LOSS) * first[2]
+                and scores[v][1] <= first[1] + GATE_SPEED_SIM_LOSS_DEG]
+    return lowest_tied({v: scores[v][0] for v in eligible}, lambda v: v), scores, errs
+
+
 __all__ = ["GATE_GAIN_DEG", "GATE_REAL_LOSS_DEG", "GATE_TAIL_GAIN", "SHAKEN_SEED", "choose_smoother_gate",
-           "shaken_sets"]
+           "shaken_sets", "GATE_SPEEDS", "GATE_SPEED_TAIL_LOSS", "GATE_SPEED_SIM_LOSS_DEG", "choose_gate_speed"]
