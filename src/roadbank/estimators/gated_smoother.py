@@ -13,8 +13,10 @@ with :math:`\rho_j` the ramp of the causal gate's measure at sample :math:`j` (:
 through a first-order low-pass of time constant ``gate_tf``, its rate of change times the speed, the yaw part of the
 lateral jerk, ramped from ``gate_on`` over ``gate_span`` m/s^3, as :func:`roadbank.estimators.kernels.gated_step`
 reads it) and :math:`T` the ``hold`` (s): the gate is open from :math:`T` before a hard transient to :math:`T` after
-it, where the causal gate opens at it and releases after. ``roadbank map`` builds it where the low-pass smoother is
-its design (:data:`roadbank.vehicle.conditions.SMOOTHER_GATE`, the sixty-fourth stage of :mod:`roadbank.tuning.real`).
+it, where the causal gate opens at it and releases after; the ramps count only at ``vx >= v_gate``. ``roadbank map``
+builds it where the low-pass smoother is its design (:data:`roadbank.vehicle.conditions.SMOOTHER_GATE`, the
+sixty-fourth stage of :mod:`roadbank.tuning.real`; ``v_gate`` :data:`~roadbank.vehicle.conditions.SMOOTHER_GATE_V_MIN`,
+the sixty-fifth).
 
 Outputs: the blend where the low-pass smoother's output is valid (its own where the model's is not), held where it
 is not (before its first valid sample: its own output, or after ``run(reset=False)`` the last of the previous chunk);
@@ -80,19 +82,24 @@ class GatedSmoother(Wrapper):
         The ramp starts at ``gate_on`` m/s^3 of the yaw part of the lateral jerk and is 1 ``gate_span`` m/s^3 above.
     hold : float
         The gate is open from ``hold`` s before each ramp to ``hold`` s after it (s).
+    v_gate : float, optional
+        The measure counts only at ``vx >= v_gate`` (m/s; default 0: at every speed the low-pass smoother reads).
     """
 
     offline = True
     inner: KinematicSmoother
     model: PIFSmoother
 
-    def __init__(self, inner, model, *, gate_tf: float, gate_on: float, gate_span: float, hold: float):
-        if not (gate_tf > 0 and gate_span > 0 and hold >= 0 and math.isfinite(gate_on) and math.isfinite(hold)):
-            raise ValueError(f"GatedSmoother: need gate_tf, gate_span > 0, hold >= 0 (s) and a finite gate_on; got "
-                             f"{gate_tf}, {gate_span}, {hold}, {gate_on}")
+    def __init__(self, inner, model, *, gate_tf: float, gate_on: float, gate_span: float, hold: float,
+                 v_gate: float = 0.0):
+        if not (gate_tf > 0 and gate_span > 0 and hold >= 0 and v_gate >= 0 and math.isfinite(gate_on)
+                and math.isfinite(hold) and math.isfinite(v_gate)):
+            raise ValueError(f"GatedSmoother: need gate_tf, gate_span > 0, hold, v_gate >= 0 and a finite gate_on; "
+                             f"got {gate_tf}, {gate_span}, {hold}, {v_gate}, {gate_on}")
         self.inner, self.model = inner, model
         self.gate_tf, self.gate_on, self.gate_span, self.hold = (float(gate_tf), float(gate_on), float(gate_span),
                                                                  float(hold))
+        self.v_gate = float(v_gate)
         self._forget()
 
     def _forget(self) -> None:
@@ -119,8 +126,12 @@ class GatedSmoother(Wrapper):
             return np.isfinite(s.t) & np.isfinite(s.vx) & np.isfinite(s.r) & (s.vx >= self.inner.v_min)
 
     def _ramps(self, s: Signals, state: tuple[float, float]) -> tuple[np.ndarray, tuple]:
-        return gate_ramps(np.asarray(s.t, dtype=float), np.asarray(s.vx, dtype=float), np.asarray(s.r, dtype=float),
-                          self._usable(s), self.gate_tf, self.gate_on, self.gate_span, self.inner.max_gap, state)
+        vx = np.asarray(s.vx, dtype=float)
+        ramps, state = gate_ramps(np.asarray(s.t, dtype=float), vx, np.asarray(s.r, dtype=float), self._usable(s),
+                                  self.gate_tf, self.gate_on, self.gate_span, self.inner.max_gap, state)
+        with np.errstate(invalid="ignore"):
+            ramps[~(vx >= self.v_gate)] = 0.0       # counted only at speed
+        return ramps, state
 
     def _gate(self, signals: Signals, lookahead: Signals | None) -> np.ndarray:
         """The gate over ``signals`` from the events of the chunks before, of ``signals`` and of ``lookahead``; the

@@ -194,6 +194,10 @@ SMOOTHER_GATE_CHOICES = (False, True)
 #: how long (s) that gate stays open before and after each ramp of its measure: the causal blend's release time
 #: constant (:data:`roadbank.estimators.gated.KINEMATIC_PIF_GATE`), fixed before the stage ran
 SMOOTHER_GATE_HOLD_S = 8.0
+#: the lowest speed (m/s) at which that gate's measure counts (0: every speed, as the sixty-fourth stage shipped): the
+#: sixty-fifth stage of :mod:`roadbank.tuning.real` chooses it among :data:`SMOOTHER_GATE_V_MIN_CHOICES`
+SMOOTHER_GATE_V_MIN = 0.0
+SMOOTHER_GATE_V_MIN_CHOICES = (0.0, 10.0, 15.0, 20.0)
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
 #: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it
 NOISE_OCTAVE_TOP = 1.5
@@ -868,7 +872,7 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
                                                            if k in estimators.base.ESTIMATOR_OPTIONS})
         gate = estimators.gated.KINEMATIC_PIF_GATE
         out = estimators.GatedSmoother(est, model, gate_tf=gate["gate_tf"], gate_on=gate["gate_on"],
-                                       gate_span=gate["gate_span"], hold=SMOOTHER_GATE_HOLD_S)
+                                       gate_span=gate["gate_span"], hold=SMOOTHER_GATE_HOLD_S, v_gate=gate_speed())
     out = out if handover is None else estimators.HandOver(out, *handover, stretch_s=ROAD_CHECK_WINDOW_S)
     return estimators.AtSource(out) if log_held else out
 
@@ -898,6 +902,14 @@ def gates_smoother() -> bool:
     if SMOOTHER_GATE not in SMOOTHER_GATE_CHOICES:
         raise ValueError(f"SMOOTHER_GATE must be one of {SMOOTHER_GATE_CHOICES}, got {SMOOTHER_GATE!r}")
     return bool(SMOOTHER_GATE)
+
+
+def gate_speed() -> float:
+    """The lowest speed (m/s) at which the map smoother's gate counts (:data:`SMOOTHER_GATE_V_MIN`)."""
+    if SMOOTHER_GATE_V_MIN not in SMOOTHER_GATE_V_MIN_CHOICES:
+        raise ValueError(f"SMOOTHER_GATE_V_MIN must be one of {SMOOTHER_GATE_V_MIN_CHOICES}, got "
+                         f"{SMOOTHER_GATE_V_MIN!r}")
+    return float(SMOOTHER_GATE_V_MIN)
 
 
 def models_car(name: str, described: bool) -> bool:
