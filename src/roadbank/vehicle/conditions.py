@@ -195,8 +195,8 @@ SMOOTHER_GATE_CHOICES = (False, True)
 #: constant (:data:`roadbank.estimators.gated.KINEMATIC_PIF_GATE`), fixed before the stage ran
 SMOOTHER_GATE_HOLD_S = 8.0
 #: the lowest speed (m/s) at which that gate's measure counts (0: every speed, as the sixty-fourth stage shipped): the
-#: sixty-fifth stage of :mod:`roadbank.tuning.real` chooses it among :data:`SMOOTHER_GATE_V_MIN_CHOICES`
-SMOOTHER_GATE_V_MIN = 0.0
+#: sixty-fifth stage of :mod:`roadbank.tuning.real` chose it among :data:`SMOOTHER_GATE_V_MIN_CHOICES`
+SMOOTHER_GATE_V_MIN = 10.0
 SMOOTHER_GATE_V_MIN_CHOICES = (0.0, 10.0, 15.0, 20.0)
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
 #: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it

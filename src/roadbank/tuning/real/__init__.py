@@ -35,7 +35,7 @@ Every name of the stages is importable from here.
 
 from __future__ import annotations
 
-from .common import (BANDWIDTH_39, BEFORE_38, BEFORE_64, EQUAL_DEG, SIM_CARS, SIM_DRIVES, START_40, TIE_DEG,
+from .common import (BANDWIDTH_39, BEFORE_38, BEFORE_64, BEFORE_65, EQUAL_DEG, SIM_CARS, SIM_DRIVES, START_40, TIE_DEG,
                      UNBIASED_36, cars_median, check_pieces, fixed, guarded, lengths_objective, log_errors, lowest_tied,
                      objective,
                      per_log, rms_deg, sim_errors, simulated_sets, training_logs, whole_and_pieces, without_roll_rate)
@@ -78,11 +78,13 @@ from .roads import (STEEP_ROAD_ORDER, STEEP_ROAD_CUTOFF_HZ, UNDESCRIBED_GAIN_DEG
                     ROAD_CHANGE_GYRO_GAIN_DEG, ROAD_CHANGE_LOSS_DEG,
                     choose_road_change, choose_road_change_gyro, long_quiet_sets, long_sim_errors, road_change_build,
                     smooth_start_logs)
-from .offline import GATE_GAIN_DEG, GATE_REAL_LOSS_DEG, GATE_TAIL_GAIN, SHAKEN_SEED, choose_smoother_gate, shaken_sets
+from .offline import (GATE_GAIN_DEG, GATE_REAL_LOSS_DEG, GATE_SPEEDS, GATE_SPEED_SIM_LOSS_DEG, GATE_SPEED_TAIL_LOSS,
+                      GATE_TAIL_GAIN, SHAKEN_SEED, choose_gate_speed, choose_smoother_gate, shaken_sets)
 
 __all__ = ["GATE_GAIN_DEG", "GATE_REAL_LOSS_DEG", "GATE_TAIL_GAIN", "SHAKEN_SEED", "choose_smoother_gate",
            "shaken_sets",
-           "BEFORE_64", "within", "STEEP_ROAD_ORDER", "STEEP_ROAD_CUTOFF_HZ", "UNDESCRIBED_GAIN_DEG",
+           "BEFORE_64", "BEFORE_65", "within", "GATE_SPEEDS", "GATE_SPEED_SIM_LOSS_DEG", "GATE_SPEED_TAIL_LOSS",
+           "choose_gate_speed", "STEEP_ROAD_ORDER", "STEEP_ROAD_CUTOFF_HZ", "UNDESCRIBED_GAIN_DEG",
            "choose_undescribed_quiet",
            "BACK_LOUD_AY", "ROAD_CHANGE_BACK_GAIN_DEG", "ROAD_CHANGE_BACK_LOSS_DEG", "ROAD_CHANGE_BACK_WORSE_DEG",
            "choose_road_change_back", "loud_and_quiet_logs", "loud_then_quiet_sets",

@@ -36,6 +36,8 @@ UNBIASED_36 = {"cutoff": 0.07, "bias_tau": 40.0}
 #: the design settings (:func:`~roadbank.tuning.real.design_settings`) as the stages before the sixty-fourth ran
 #: ``kinematic-smoother``: the low-pass both ways, no gate to ``pif-smoother``
 BEFORE_64 = {"smoother_gate": False}
+#: ... and as the sixty-fourth ran it: the gate's measure counted at every speed
+BEFORE_65 = {"smoother_gate_v_min": 0.0}
 #: objectives closer than this (deg) count as equal
 TIE_DEG = 0.002
 #: the rule's simulated tie-break counts medians as equal to this (deg): the size of float rounding

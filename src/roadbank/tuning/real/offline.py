@@ -38,7 +38,8 @@ import numpy as np
 
 from ...estimators import PIFSmoother
 from ...vehicle import load_vehicle
-from .common import SIM_CARS, cars_median, log_errors, lowest_tied, per_log, sim_errors
+from .common import BEFORE_65, SIM_CARS, cars_median, log_errors, lowest_tied, per_log, sim_errors
+from .esp import within
 from .roads import BACK_LOUD_AY, _in_force, _same_in_force
 
 #: the rule: B's real median may be above A's by at most this (deg), and so may its objective where the tail decides
@@ -67,8 +68,8 @@ def choose_smoother_gate(logs, quiet_sets, shaken, kept_logs, known_quiet, cars=
     per car (:func:`shaken_sets`); ``kept_logs`` (signals) and ``known_quiet`` (per car, drives built with its file):
     the guard. Returns ``(chosen, {choice: (objective, tail)}, {choice: (raw RMS per log, per car: bank RMS per drive
     of (2), of (3))})``; a ValueError where the guard fails."""
-    undescribed = per_log("kinematic-smoother", described=False)
-    known = {car: per_log("kinematic-smoother", vehicle=load_vehicle(car)) for car in cars}
+    undescribed = within(per_log("kinematic-smoother", described=False), **BEFORE_65)      # as it ran
+    known = {car: within(per_log("kinematic-smoother", vehicle=load_vehicle(car)), **BEFORE_65) for car in cars}
     setting = "smoother_gate"
     pairs = ([(undescribed, s) for s in kept_logs]
              + [(known[car], d.signals) for car, drives in zip(cars, known_quiet) for d in drives
