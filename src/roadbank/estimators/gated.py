@@ -59,7 +59,7 @@ _COMMON = tuple(k for k in ESTIMATOR_OPTIONS if k != "sample_rate")
 @dataclass(frozen=True)
 class GatedDesign(DesignInputs):
     """Design inputs of a gated pair: the two filters' design inputs (``slow``, ``fast``) and the
-    gate's ``gate_tf``, ``gate_release`` (s), ``gate_on``, ``gate_span`` (m/s^3)."""
+    gate's ``gate_tf``, ``gate_release`` (s), ``gate_on``, ``gate_span`` (m/s^3), ``gate_v_min`` (m/s)."""
 
     slow: DesignInputs
     fast: DesignInputs
@@ -67,6 +67,7 @@ class GatedDesign(DesignInputs):
     gate_release: float
     gate_on: float
     gate_span: float
+    gate_v_min: float
 
 
 class _GatedPair(ScheduledObserver):
@@ -86,13 +87,15 @@ class _GatedPair(ScheduledObserver):
     gate_release: float
     gate_on: float
     gate_span: float
+    gate_v_min: float = 0.0
     if TYPE_CHECKING:
         @property
         def design(self) -> GatedDesign: ...     # an instance of design_type
 
     def _design_fields(self) -> dict:
         return dict(slow=self._slow.design, fast=self._fast.design, gate_tf=self.gate_tf,
-                    gate_release=self.gate_release, gate_on=self.gate_on, gate_span=self.gate_span)
+                    gate_release=self.gate_release, gate_on=self.gate_on, gate_span=self.gate_span,
+                    gate_v_min=self.gate_v_min)
 
     @property
     def slow(self) -> ScheduledObserver:
@@ -138,7 +141,7 @@ class _GatedPair(ScheduledObserver):
         H[:, :, :ns] = Hs
         G, J = np.concatenate([Gs, Gf], axis=1), np.concatenate([Js, Jf], axis=1)
         rows = np.concatenate([a.reshape(g, -1) for a in (F, G, H, Ds, J)], axis=1)
-        extra = np.concatenate([self.fast_output(), [d.gate_tf, d.gate_release, d.gate_on, d.gate_span],
+        extra = np.concatenate([self.fast_output(), [d.gate_tf, d.gate_release, d.gate_on, d.gate_span, d.gate_v_min],
                                 self.limit_constants()])
         return np.ascontiguousarray(rows), len(self.state_names), extra
 
@@ -198,11 +201,17 @@ def _check_gate(label: str, opt: dict) -> None:
             and np.isfinite(opt["gate_on"])):
         raise ValueError(f"{label}: need gate_tf, gate_release, gate_span > 0 and a finite gate_on; got "
                          f"{opt['gate_tf']}, {opt['gate_release']}, {opt['gate_span']}, {opt['gate_on']}")
+    v = opt.get("gate_v_min", 0.0)
+    if not (np.isfinite(v) and v >= 0):
+        raise ValueError(f"{label}: gate_v_min must be a speed >= 0 (m/s), got {v}")
 
 
 #: the gate of :class:`KinematicPIF` (chosen by the rule of :mod:`roadbank.tuning.real`):
 #: ``gate_tf``, ``gate_release`` (s), ``gate_on``, ``gate_span`` (m/s^3)
 KINEMATIC_PIF_GATE = dict(gate_tf=0.05, gate_release=8.0, gate_on=4.0, gate_span=1.0)
+#: the lowest speed (m/s) at which :class:`KinematicPIF`'s gate measure counts (0: every speed; the sixty-sixth stage of
+#: :mod:`roadbank.tuning.real`)
+KINEMATIC_PIF_GATE_V_MIN = 0.0
 #: root-mean-square bank rate of roads (rad/s) that schedules :class:`KinematicPIF`'s low-pass on the
 #: log's noise (:func:`roadbank.estimators.lowpass.cutoff_for_noise`; the rule of :mod:`roadbank.tuning.real`)
 KINEMATIC_PIF_BANK_RATE = float(np.radians(0.6))
@@ -276,6 +285,8 @@ class KinematicPIF(_GatedPair):
         ``[tuning.pif-modified]`` applies).
     gate_tf, gate_release, gate_on, gate_span : float, optional
         As :class:`PIFGated`; defaults :data:`KINEMATIC_PIF_GATE`.
+    gate_v_min : float, optional
+        The gate's measure counts only at ``vx >= gate_v_min`` (m/s; default :data:`KINEMATIC_PIF_GATE_V_MIN`).
     clip : float, optional
         The low-pass's update limit (-, >= 0; default :data:`KINEMATIC_PIF_CLIP`; 0: linear): the low-pass
         reads ``ay`` less what its innovation exceeds ``clip`` standard deviations of the white noise
@@ -300,12 +311,13 @@ class KinematicPIF(_GatedPair):
     def __init__(self, params=None, *, cutoff=None, kappa=None, bank_rate=None, lead=None, tuning=None, Q=None, R=None,
                  S=None, th=None, Q_ay=None, adapt_th=None, gate_tf=None, gate_release=None, gate_on=None,
                  gate_span=None, clip=None, noise_tau=None, noise_ref=None, limit_tau=None, bank_speed_exp=None,
-                 **kw):
+                 gate_v_min=None, **kw):
         d = KINEMATIC_PIF_GATE
         if clip is not None and not (np.isfinite(clip) and clip >= 0):
             raise ValueError(f"{self.name}: clip must be >= 0 (standard deviations), got {clip}")
         opt = {k: float(d[k] if v is None else v) for k, v in (
-            ("gate_tf", gate_tf), ("gate_release", gate_release), ("gate_on", gate_on), ("gate_span", gate_span))}
+            ("gate_tf", gate_tf), ("gate_release", gate_release), ("gate_on", gate_on), ("gate_span", gate_span),
+            ("gate_v_min", KINEMATIC_PIF_GATE_V_MIN if gate_v_min is None else gate_v_min))}
         _check_gate(self.name, opt)
         kw.setdefault("v_min", self.default_v_min)       # both filters' (one schedule, one validity)
         common = {k: kw[k] for k in _COMMON if k in kw}

@@ -342,14 +342,16 @@ def adaptive_state(n: int, nr: int) -> AdaptiveState:
 class GatedBlock(NamedTuple):
     """Offsets in ``cfg`` of the ``gated`` family's constants: the second observer's output row
     ``HF`` (n, over the stacked states), the yaw-rate low-pass time constant ``TF`` (s), the gate's
-    release time constant ``TAU`` (s), the yaw jerk ``ON`` (m/s^3) where it starts to open and the
-    ``SPAN`` (m/s^3) over which it opens fully (then, with a limit, its :class:`LimitBlock`)."""
+    release time constant ``TAU`` (s), the yaw jerk ``ON`` (m/s^3) where it starts to open, the
+    ``SPAN`` (m/s^3) over which it opens fully and the lowest speed ``VMIN`` (m/s) at which it counts (then, with a
+    limit, its :class:`LimitBlock`)."""
 
     HF: int
     TF: int
     TAU: int
     ON: int
     SPAN: int
+    VMIN: int
     end: int
 
 
@@ -357,7 +359,7 @@ class GatedBlock(NamedTuple):
 def gated_block(n: int, nr: int) -> GatedBlock:
     """:class:`GatedBlock` after the roll block of ``nr`` states (at ``cfg[C_OFAM]``)."""
     o = roll_block(nr).end
-    return GatedBlock(o, o + n, o + n + 1, o + n + 2, o + n + 3, o + n + 4)
+    return GatedBlock(o, o + n, o + n + 1, o + n + 2, o + n + 3, o + n + 4, o + n + 5)
 
 
 #: number of constants of a :class:`LimitBlock`

@@ -714,10 +714,12 @@ def _gate_parts(d: ExportDesign, float32: bool) -> dict:
     lit = lambda x: real_literal(x, float32)  # noqa: E731
     consts = (f"#define RB_EXP {'expf' if float32 else 'exp'}\n"
               "/* gate between the two observers (the second's w = RB_GATE_HF . x): yaw rate low-pass (s),\n"
-              " * release (s), yaw jerk vx |r'| where it starts to open and over which it opens (m/s^3) */\n"
+              " * release (s), yaw jerk vx |r'| where it starts to open and over which it opens (m/s^3), lowest\n"
+              " * speed at which it counts (m/s) */\n"
               f"static const real_t RB_GATE_HF[RB_N] = {{{_array(g['HF'], float32, 8, '')}}};\n"
               f"#define RB_GATE_TF ({lit(g['tf'])})\n#define RB_GATE_TAU ({lit(g['tau'])})\n"
-              f"#define RB_GATE_ON ({lit(g['on'])})\n#define RB_GATE_SPAN ({lit(g['span'])})\n")
+              f"#define RB_GATE_ON ({lit(g['on'])})\n#define RB_GATE_SPAN ({lit(g['span'])})\n"
+              f"#define RB_GATE_VMIN ({lit(g['v_min'])})\n")
     call = ("    if (restart) {\n"
             "        st->rf = r;\n"
             "        st->g = 0.0_R;\n"
@@ -728,6 +730,7 @@ def _gate_parts(d: ExportDesign, float32: bool) -> dict:
             "        gk = (vx * RB_FABS(st->rf - rf0) / dt - RB_GATE_ON) / RB_GATE_SPAN;\n"
             "        gk = gk > 0.0_R ? gk : 0.0_R;\n"
             "        gk = gk < 1.0_R ? gk : 1.0_R;\n"
+            "        gk = vx >= RB_GATE_VMIN ? gk : 0.0_R;\n"
             "        st->g = gk > st->g ? gk : st->g + (1.0_R - RB_EXP(-dt / RB_GATE_TAU)) * (gk - st->g);\n"
             "    }\n"
             "    {\n"

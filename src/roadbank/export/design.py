@@ -312,7 +312,7 @@ def _gate(est, n: int, nr: int) -> dict | None:
     b = gated_block(n, nr)
     cfg = est._cfg
     return {"HF": np.array(cfg[b.HF:b.TF], float), "tf": float(cfg[b.TF]), "tau": float(cfg[b.TAU]),
-            "on": float(cfg[b.ON]), "span": float(cfg[b.SPAN])}
+            "on": float(cfg[b.ON]), "span": float(cfg[b.SPAN]), "v_min": float(cfg[b.VMIN])}
 
 
 def _grade(est) -> dict | None:

@@ -198,6 +198,11 @@ SMOOTHER_GATE_HOLD_S = 8.0
 #: sixty-fifth stage of :mod:`roadbank.tuning.real` chose it among :data:`SMOOTHER_GATE_V_MIN_CHOICES`
 SMOOTHER_GATE_V_MIN = 10.0
 SMOOTHER_GATE_V_MIN_CHOICES = (0.0, 10.0, 15.0, 20.0)
+#: the lowest speed (m/s) at which the causal blend's gate counts where ``kinematic-pif`` is the blend (None: the
+#: estimator's own, :data:`roadbank.estimators.gated.KINEMATIC_PIF_GATE_V_MIN`); the sixty-sixth stage of
+#: :mod:`roadbank.tuning.real` runs its candidates through it
+BLEND_GATE_V_MIN: float | None = None
+BLEND_GATE_V_MIN_CHOICES = (None, 0.0, 10.0, 15.0, 20.0)
 #: the top of that band as a multiple of its lower edge (-; 2: one octave, as the twenty-first stage ran; 1.5: half of
 #: one, 3-4.5 Hz at 100 Hz, 1-1.5 Hz at 10 Hz). The twenty-second stage of :mod:`roadbank.tuning.real` chooses it
 NOISE_OCTAVE_TOP = 1.5
@@ -850,6 +855,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
                 options = {**estimators.gyro.UNBIASED_PITCH, **options}
         elif lead_samples is not None:
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
+            if blend_gate_speed() is not None:
+                options.setdefault("gate_v_min", blend_gate_speed())
             if log_r_source is not None and log_r_source > 0:
                 options.setdefault("gate_tf", max(estimators.gated.GATED_TUNING["gate_tf"], 1.0 / log_r_source))
             if log_diff_noise is not None and math.isfinite(log_diff_noise) and log_diff_noise > 0:
@@ -902,6 +909,14 @@ def gates_smoother() -> bool:
     if SMOOTHER_GATE not in SMOOTHER_GATE_CHOICES:
         raise ValueError(f"SMOOTHER_GATE must be one of {SMOOTHER_GATE_CHOICES}, got {SMOOTHER_GATE!r}")
     return bool(SMOOTHER_GATE)
+
+
+def blend_gate_speed() -> float | None:
+    """The lowest speed (m/s) at which the causal blend's gate counts (:data:`BLEND_GATE_V_MIN`; None: the
+    estimator's own)."""
+    if BLEND_GATE_V_MIN not in BLEND_GATE_V_MIN_CHOICES:
+        raise ValueError(f"BLEND_GATE_V_MIN must be one of {BLEND_GATE_V_MIN_CHOICES}, got {BLEND_GATE_V_MIN!r}")
+    return BLEND_GATE_V_MIN
 
 
 def gate_speed() -> float:

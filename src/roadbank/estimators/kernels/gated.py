@@ -28,7 +28,8 @@ def gated_sample(mem, cfg, tab, work, t, vx, d, ay, r):
     yaw acceleration: the yaw rate through a first-order low-pass (time constant ``tf``),
     :math:`r_f \mathrel{+}= (1 - e^{-\Delta t/t_f})(r - r_f)`, its rate of change times the
     speed, :math:`j = v_x |\Delta r_f| / \Delta t` (m/s^3, the yaw part of the lateral jerk),
-    the ramp :math:`g_k = \min(1, \max(0, (j - j_{on}) / j_{span}))` and a peak follower that
+    the ramp :math:`g_k = \min(1, \max(0, (j - j_{on}) / j_{span}))` (0 below the speed ``v_gate``) and a peak
+    follower that
     rises at once and falls back with the release time constant ``tau``:
     :math:`g \leftarrow g_k` if :math:`g_k > g`, else :math:`g \mathrel{+}= (1 -
     e^{-\Delta t/\tau})(g_k - g)`. At a (re)start ``r_f = r``, ``g = 0``. Output
@@ -59,6 +60,7 @@ def gated_sample(mem, cfg, tab, work, t, vx, d, ay, r):
         gk = (vx * abs(rf - rf0) / dt - cfg[gb.ON]) / cfg[gb.SPAN]
         gk = gk if gk > 0.0 else 0.0
         gk = gk if gk < 1.0 else 1.0
+        gk = gk if vx >= cfg[gb.VMIN] else 0.0
         g = mem[gs.G]
         g = gk if gk > g else g + (1.0 - math.exp(-dt / cfg[gb.TAU])) * (gk - g)
     mem[gs.RF] = rf

@@ -39,10 +39,10 @@ BLEND_GATE_SIM_LOSS_DEG = 0.01
 
 
 def choose_blend_gate_speed(parts, sim_sets, shaken, speeds=BLEND_GATE_SPEEDS) -> tuple:
-    """The sixty-sixth stage (module docstring). ``parts``: set (1) as :func:`~.common.whole_and_pieces` gives it (the
-    drives whole, then their pieces of each length); ``sim_sets``: set (2), per shipped car (:data:`~.common.SIM_CARS`); ``shaken``: set (3).
-    Returns ``(chosen speed, {speed: (real score, sims median, sims p95)}, {speed: (raw RMS per log of each part, per
-    car: bank RMS per drive, plain then shaken)})``."""
+    """The sixty-sixth stage (module docstring). ``parts``: set (1) as :func:`~.common.whole_and_pieces` gives it
+    (the drives whole, then their pieces of each length); ``sim_sets``: set (2), per shipped car
+    (:data:`~.common.SIM_CARS`); ``shaken``: set (3). Returns ``(chosen speed, {speed: (real score, sims median, sims
+    p95)}, {speed: (raw RMS per log of each part, per car: bank RMS per drive, plain then shaken)})``."""
     build = per_log("kinematic-pif", described=False)
 
     def online(s):

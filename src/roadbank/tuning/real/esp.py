@@ -571,7 +571,8 @@ def design_settings(**settings):
 _DESIGN_SETTINGS = ("QUIET_FLOOR_RATE", "QUIET_FLOOR_SIGNAL", "NOISE_AT_SOURCE", "NOISE_OCTAVE", "NOISE_OCTAVE_TOP",
                     "TRUST_FIXED_CHANNELS", "GATE_AT_SOURCE", "READ_AT_SOURCE", "QUIET_READS_ROLL_RATE",
                     "SOURCE_ROUNDING", "ROAD_CHANGE", "ROAD_CHANGE_BACK", "UNDESCRIBED_KEEPS_MODEL",
-                    "UNDESCRIBED_SMOOTHER_KEEPS_MODEL", "SMOOTHER_GATE", "SMOOTHER_GATE_V_MIN")
+                    "UNDESCRIBED_SMOOTHER_KEEPS_MODEL", "SMOOTHER_GATE", "SMOOTHER_GATE_V_MIN",
+                    "BLEND_GATE_V_MIN")
 #: the settings as each stage ran: the eighteenth and nineteenth before the twentieth, the twentieth before the
 #: twenty-first
 _BEFORE_SOURCE = {"noise_at_source": "none", "noise_octave": "none"}
