@@ -186,6 +186,22 @@ def test_a_limited_low_pass_exports_its_limit(scenarios, tmp_path):
     assert acted
 
 
+def test_the_gates_lowest_speed_is_exported(scenarios, tmp_path):
+    """kinematic-pif with its gate counted only from 25 m/s (the paper's manoeuvres at 60-100 km/h): the module reads
+    RB_GATE_VMIN as the kernel does, float64 equal to step() on every scenario and a hard log; it differs from the
+    gate at every speed where the car turns hard below 25 m/s."""
+    est, plain = make("kinematic-pif", gate_v_min=25.0), make("kinematic-pif")
+    res = export_c(est, tmp_path / "vmin", rate=100.0)
+    assert "#define RB_GATE_VMIN (25.0" in res.source.read_text()
+    mod = CModule(res.source, tmp_path / "vmin")
+    acted = False
+    for scen, cols in {**scenarios, "hard": hard_log(scenarios, v_min=est.v_min)}.items():
+        py = python_steps(est, cols)
+        assert_same(py, mod.run(*cols), TOL64, TOL64, f"kinematic-pif gated from 25 m/s on {scen}")
+        acted |= bool(np.nanmax(np.abs(py["w"] - python_steps(plain, cols)["w"])) > 1e-6)
+    assert acted
+
+
 @pytest.mark.parametrize("discrete,limit_tau", [(False, None), (True, None), (False, 0.0)])
 def test_a_low_pass_following_its_running_noise_exports_it(discrete, limit_tau, scenarios, tmp_path):
     """kinematic-pif as built for a log (a running noise estimate relative to the design span's: here a reference
