@@ -176,13 +176,18 @@ def test_a_limited_low_pass_exports_its_limit(scenarios, tmp_path):
     res = export_c(est, tmp_path / "lim", rate=100.0)
     assert "RB_CLIP" in res.source.read_text()
     assert "RB_CLIP" not in export_c(BUILT["kinematic-lp"], tmp_path / "lin", rate=100.0).source.read_text()
-    mod = CModule(res.source, tmp_path / "lim")
-    lin = make("kinematic-lp")
+    assert_module_steps_and_acts(est, make("kinematic-lp"), CModule(res.source, tmp_path / "lim"), scenarios,
+                                 "limited kinematic-lp")
+
+
+def assert_module_steps_and_acts(est, plain, mod, scenarios, label):
+    """``mod`` (the C module of ``est``) float64 equal to ``est``'s steps on every scenario and a hard log, and ``est``
+    different from ``plain`` (the same without the option under test) by more than 1e-6 on one of them."""
     acted = False
     for scen, cols in {**scenarios, "hard": hard_log(scenarios, v_min=est.v_min)}.items():
         py = python_steps(est, cols)
-        assert_same(py, mod.run(*cols), TOL64, TOL64, f"limited kinematic-lp on {scen}")
-        acted |= bool(np.nanmax(np.abs(py["w"] - python_steps(lin, cols)["w"])) > 1e-6)
+        assert_same(py, mod.run(*cols), TOL64, TOL64, f"{label} on {scen}")
+        acted |= bool(np.nanmax(np.abs(py["w"] - python_steps(plain, cols)["w"])) > 1e-6)
     assert acted
 
 
@@ -193,13 +198,8 @@ def test_the_gates_lowest_speed_is_exported(scenarios, tmp_path):
     est, plain = make("kinematic-pif", gate_v_min=25.0), make("kinematic-pif")
     res = export_c(est, tmp_path / "vmin", rate=100.0)
     assert "#define RB_GATE_VMIN (25.0" in res.source.read_text()
-    mod = CModule(res.source, tmp_path / "vmin")
-    acted = False
-    for scen, cols in {**scenarios, "hard": hard_log(scenarios, v_min=est.v_min)}.items():
-        py = python_steps(est, cols)
-        assert_same(py, mod.run(*cols), TOL64, TOL64, f"kinematic-pif gated from 25 m/s on {scen}")
-        acted |= bool(np.nanmax(np.abs(py["w"] - python_steps(plain, cols)["w"])) > 1e-6)
-    assert acted
+    assert_module_steps_and_acts(est, plain, CModule(res.source, tmp_path / "vmin"), scenarios,
+                                 "kinematic-pif gated from 25 m/s")
 
 
 @pytest.mark.parametrize("discrete,limit_tau", [(False, None), (True, None), (False, 0.0)])

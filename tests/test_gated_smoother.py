@@ -185,26 +185,28 @@ def test_the_map_design_builds_it_only_where_the_low_pass_smoother_is_the_design
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 
 
+@pytest.fixture(scope="module")
+def stage_sets():
+    """The sixty-fourth and sixty-fifth stages' sets (tuning.real.stage_sets); skipped without the training drives."""
+    from roadbank.tuning.real import stage_sets, training_logs
+
+    if len(training_logs(DATA)) < 8:
+        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
+    return stage_sets(DATA)
+
+
 @pytest.mark.slow
-def test_the_sixty_fourth_stage_gates_the_maps_smoother():
+def test_the_sixty_fourth_stage_gates_the_maps_smoother(stage_sets):
     """The sixty-fourth stage (tuning.real.choose_smoother_gate) on training data: the gate costs the real drives at
     most 0.005 deg of median (0.2174 -> 0.2182: two drives as recorded change, the smooth roads not at all), and takes
     the simulated tail from 1.379 to 0.930 deg and the objective from 0.6175 to 0.5763: B ships; a log with a usable
     roll rate and a quiet one of a car described are read the same (the guard)."""
-    from roadbank.tuning.real import (GATE_TAIL_GAIN, QUIET_GYRO_OFFSETS, STEEP_ROAD_CUTOFF_HZ, STEEP_ROAD_ORDER,
-                                      choose_smoother_gate, gyro_sim_sets, shaken_sets, simulated_sets,
-                                      smooth_road_logs, training_logs)
+    from roadbank.tuning.real import GATE_TAIL_GAIN, choose_smoother_gate, training_logs
     from roadbank.vehicle.conditions import SMOOTHER_GATE
 
-    logs = training_logs(DATA)
-    if len(logs) < 8:
-        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
-    real = logs + smooth_road_logs(logs) + smooth_road_logs(logs, STEEP_ROAD_ORDER, STEEP_ROAD_CUTOFF_HZ)
-    sims = simulated_sets()
-    gs = [gyro_sim_sets(o) for o in QUIET_GYRO_OFFSETS]
-    quiet = [list(sims[k]) + [d for g in gs for d in g[k]] for k in range(len(sims))]
+    real, quiet, shaken, sims = stage_sets
     kept = [s for s, _, _ in training_logs(DATA, roll_rate=True)]
-    chosen, scores, errs = choose_smoother_gate(real, quiet, shaken_sets(sims), kept, sims)
+    chosen, scores, errs = choose_smoother_gate(real, quiet, shaken, kept, sims)
     assert chosen is True and SMOOTHER_GATE is True
     (obj_a, tail_a), (obj_b, tail_b) = scores[False], scores[True]
     assert obj_b < obj_a - 0.03 and tail_b < (1.0 - 3 * GATE_TAIL_GAIN) * tail_a
@@ -214,23 +216,15 @@ def test_the_sixty_fourth_stage_gates_the_maps_smoother():
 
 
 @pytest.mark.slow
-def test_the_sixty_fifth_stage_counts_the_gate_from_10_m_s():
+def test_the_sixty_fifth_stage_counts_the_gate_from_10_m_s(stage_sets):
     """The sixty-fifth stage (tuning.real.choose_gate_speed) on the sixty-fourth's sets: from 10 m/s the training
     drive 0034's tight turn no longer opens the gate (0.409 -> 0.357 deg; the real mean 0.2717 -> 0.2695) and the
     simulated drives are unchanged; 15 and 20 m/s lower the real mean by 0.0003 more (a tie) and 20 m/s costs the
     simulated median; the lower speed of the tie wins."""
-    from roadbank.tuning.real import (GATE_SPEEDS, QUIET_GYRO_OFFSETS, STEEP_ROAD_CUTOFF_HZ, STEEP_ROAD_ORDER,
-                                      choose_gate_speed, gyro_sim_sets, shaken_sets, simulated_sets,
-                                      smooth_road_logs, training_logs)
+    from roadbank.tuning.real import GATE_SPEEDS, choose_gate_speed
 
-    logs = training_logs(DATA)
-    if len(logs) < 8:
-        pytest.skip(f"the eight KITTI training drives are not all under {DATA}")
-    real = logs + smooth_road_logs(logs) + smooth_road_logs(logs, STEEP_ROAD_ORDER, STEEP_ROAD_CUTOFF_HZ)
-    sims = simulated_sets()
-    gs = [gyro_sim_sets(o) for o in QUIET_GYRO_OFFSETS]
-    quiet = [list(sims[k]) + [d for g in gs for d in g[k]] for k in range(len(sims))]
-    chosen, scores, errs = choose_gate_speed(real, quiet, shaken_sets(sims))
+    real, quiet, shaken, _ = stage_sets
+    chosen, scores, errs = choose_gate_speed(real, quiet, shaken)
     assert chosen == SMOOTHER_GATE_V_MIN == 10.0 and GATE_SPEEDS[0] == 0.0
     assert scores[10.0][0] < scores[0.0][0] - 0.002
     assert scores[10.0][1:] == scores[0.0][1:]                      # the simulated drives: the same

@@ -79,12 +79,12 @@ from .roads import (STEEP_ROAD_ORDER, STEEP_ROAD_CUTOFF_HZ, UNDESCRIBED_GAIN_DEG
                     choose_road_change, choose_road_change_gyro, long_quiet_sets, long_sim_errors, road_change_build,
                     smooth_start_logs)
 from .offline import (GATE_GAIN_DEG, GATE_REAL_LOSS_DEG, GATE_SPEEDS, GATE_SPEED_SIM_LOSS_DEG, GATE_SPEED_TAIL_LOSS,
-                      GATE_TAIL_GAIN, SHAKEN_SEED, choose_gate_speed, choose_smoother_gate, shaken_sets)
+                      GATE_TAIL_GAIN, SHAKEN_SEED, choose_gate_speed, choose_smoother_gate, shaken_sets, stage_sets)
 
 __all__ = ["GATE_GAIN_DEG", "GATE_REAL_LOSS_DEG", "GATE_TAIL_GAIN", "SHAKEN_SEED", "choose_smoother_gate",
            "shaken_sets",
            "BEFORE_64", "BEFORE_65", "within", "GATE_SPEEDS", "GATE_SPEED_SIM_LOSS_DEG", "GATE_SPEED_TAIL_LOSS",
-           "choose_gate_speed", "STEEP_ROAD_ORDER", "STEEP_ROAD_CUTOFF_HZ", "UNDESCRIBED_GAIN_DEG",
+           "choose_gate_speed", "stage_sets", "STEEP_ROAD_ORDER", "STEEP_ROAD_CUTOFF_HZ", "UNDESCRIBED_GAIN_DEG",
            "choose_undescribed_quiet",
            "BACK_LOUD_AY", "ROAD_CHANGE_BACK_GAIN_DEG", "ROAD_CHANGE_BACK_LOSS_DEG", "ROAD_CHANGE_BACK_WORSE_DEG",
            "choose_road_change_back", "loud_and_quiet_logs", "loud_then_quiet_sets",

@@ -38,9 +38,11 @@ import numpy as np
 
 from ...estimators import PIFSmoother
 from ...vehicle import load_vehicle
-from .common import BEFORE_65, SIM_CARS, cars_median, log_errors, lowest_tied, per_log, sim_errors
-from .esp import within
-from .roads import BACK_LOUD_AY, _in_force, _same_in_force
+from .common import (BEFORE_65, SIM_CARS, cars_median, log_errors, lowest_tied, per_log, sim_errors, simulated_sets,
+                     training_logs)
+from .esp import QUIET_GYRO_OFFSETS, gyro_sim_sets, within
+from .roads import (BACK_LOUD_AY, STEEP_ROAD_CUTOFF_HZ, STEEP_ROAD_ORDER, _in_force, _same_in_force,
+                    smooth_road_logs)
 
 #: the rule: B's real median may be above A's by at most this (deg), and so may its objective where the tail decides
 GATE_REAL_LOSS_DEG = 0.005
@@ -59,6 +61,20 @@ def shaken_sets(sim_sets, seed: int = SHAKEN_SEED) -> list:
     return [[dataclasses.replace(d, signals=dataclasses.replace(
         d.signals, ay=d.signals.ay + BACK_LOUD_AY * rng.standard_normal(len(d.signals)))) for d in drives]
         for drives in sim_sets]
+
+
+def stage_sets(data_dir) -> tuple[list, list, list, list]:
+    """The sixty-fourth and sixty-fifth stages' sets from the KITTI drives under ``data_dir``: ``(real, quiet,
+    shaken, sims)``, set (1) (the eight training drives' ESP channels as recorded, as the sixtieth stage's smooth road
+    and as the sixty-second's steep one), set (2) (per car, its 24 training drives and the same with the ESP-class gyro
+    at each of :data:`~.esp.QUIET_GYRO_OFFSETS`), set (3) (:func:`shaken_sets` of the 24) and the 24 per car as
+    drawn."""
+    logs = training_logs(data_dir)
+    real = logs + smooth_road_logs(logs) + smooth_road_logs(logs, STEEP_ROAD_ORDER, STEEP_ROAD_CUTOFF_HZ)
+    sims = simulated_sets()
+    gyro = [gyro_sim_sets(o) for o in QUIET_GYRO_OFFSETS]
+    quiet = [list(sims[k]) + [d for g in gyro for d in g[k]] for k in range(len(sims))]
+    return real, quiet, shaken_sets(sims), sims
 
 
 def choose_smoother_gate(logs, quiet_sets, shaken, kept_logs, known_quiet, cars=SIM_CARS) -> tuple:
@@ -139,4 +155,4 @@ def choose_gate_speed(logs, quiet_sets, shaken, speeds=GATE_SPEEDS, cars=SIM_CAR
 
 
 __all__ = ["GATE_GAIN_DEG", "GATE_REAL_LOSS_DEG", "GATE_TAIL_GAIN", "SHAKEN_SEED", "choose_smoother_gate",
-           "shaken_sets", "GATE_SPEEDS", "GATE_SPEED_TAIL_LOSS", "GATE_SPEED_SIM_LOSS_DEG", "choose_gate_speed"]
+           "shaken_sets", "stage_sets", "GATE_SPEEDS", "GATE_SPEED_TAIL_LOSS", "GATE_SPEED_SIM_LOSS_DEG", "choose_gate_speed"]
