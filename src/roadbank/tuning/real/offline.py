@@ -148,12 +148,20 @@ def choose_gate_speed(logs, quiet_sets, shaken, speeds=GATE_SPEEDS, cars=SIM_CAR
     errs = {v: _in_force("smoother_gate_v_min", v, measure) for v in speeds}
     scores = {v: (float(np.mean(real)), cars_median(pooled), float(np.percentile(np.concatenate(pooled), 95)))
               for v, (real, pooled) in errs.items()}
+    return lowest_eligible_speed(scores, speeds, GATE_SPEED_TAIL_LOSS, GATE_SPEED_SIM_LOSS_DEG), scores, errs
+
+
+def lowest_eligible_speed(scores: dict, speeds, tail_loss: float, sim_loss_deg: float) -> float:
+    """The sixty-fifth and sixty-sixth stages' rule: of ``speeds`` (the shipped first), those whose simulated 95th
+    percentile (``scores[v][2]``, deg) is not above the shipped one's by more than ``tail_loss`` of it and whose
+    simulated median (``scores[v][1]``) not above it by more than ``sim_loss_deg``; the lowest real score
+    (``scores[v][0]``) of those, ties within :data:`~.common.TIE_DEG` going to the lower speed."""
     first = scores[speeds[0]]
-    eligible = [v for v in speeds if scores[v][2] <= (1.0 + GATE_SPEED_TAIL_LOSS) * first[2]
-                and scores[v][1] <= first[1] + GATE_SPEED_SIM_LOSS_DEG]
-    return lowest_tied({v: scores[v][0] for v in eligible}, lambda v: v), scores, errs
+    eligible = [v for v in speeds if scores[v][2] <= (1.0 + tail_loss) * first[2]
+                and scores[v][1] <= first[1] + sim_loss_deg]
+    return lowest_tied({v: scores[v][0] for v in eligible}, lambda v: v)
 
 
 __all__ = ["GATE_GAIN_DEG", "GATE_REAL_LOSS_DEG", "GATE_TAIL_GAIN", "SHAKEN_SEED", "choose_smoother_gate",
            "shaken_sets", "stage_sets", "GATE_SPEEDS", "GATE_SPEED_TAIL_LOSS", "GATE_SPEED_SIM_LOSS_DEG",
-           "choose_gate_speed"]
+           "choose_gate_speed", "lowest_eligible_speed"]
