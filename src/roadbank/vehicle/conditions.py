@@ -303,9 +303,7 @@ def floor_and_rate(signals, v_min: float = 5.0) -> tuple[float, float]:
 def _held_rows(signals, moving) -> np.ndarray | None:
     """The rows of ``signals`` that bring new values (indices), where :data:`READ_AT_SOURCE` and the log was written
     by holding a slower sensor's frames (:func:`roadbank.signals.is_held` on its ``moving`` rows); else None."""
-    if READ_AT_SOURCE not in READ_AT_SOURCE_CHOICES:
-        raise ValueError(f"READ_AT_SOURCE must be one of {READ_AT_SOURCE_CHOICES}, got {READ_AT_SOURCE!r}")
-    if not READ_AT_SOURCE:
+    if not _setting("READ_AT_SOURCE"):
         return None
     copies = held_copies(signals)
     return np.flatnonzero(~copies) if is_held(copies, moving) else None
@@ -444,10 +442,8 @@ def keeps_cars_model(quiet: bool, roll_rate: float | None, unbiased: bool = Fals
     (:func:`is_quiet`), unless its roll rate (check slope ``roll_rate``, -: :func:`roll_rate_usable`) is usable and
     :data:`QUIET_READS_ROLL_RATE` is True, or ``"unbiased"`` and the roll rate is documented free of offset
     (``unbiased``: an INS's, ``Signals.unbiased``)."""
-    if QUIET_READS_ROLL_RATE not in QUIET_READS_ROLL_RATE_CHOICES:
-        raise ValueError(f"QUIET_READS_ROLL_RATE must be one of {QUIET_READS_ROLL_RATE_CHOICES}, "
-                         f"got {QUIET_READS_ROLL_RATE!r}")
-    reads = QUIET_READS_ROLL_RATE is True or (QUIET_READS_ROLL_RATE == "unbiased" and bool(unbiased))
+    choice = _setting("QUIET_READS_ROLL_RATE")
+    reads = choice is True or (choice == "unbiased" and bool(unbiased))
     return bool(quiet) and not (reads and roll_rate_usable(roll_rate))
 
 
@@ -488,12 +484,9 @@ def _source_steps(signals, moving, channels=("ay", "r")) -> dict[str, int]:
     """``{"ay": k, "r": k}`` (of ``channels``): the log samples per sample of each channel's source
     (:func:`roadbank.signals.source_step` on the ``moving`` samples) that :data:`NOISE_AT_SOURCE` reads at the source's
     rate, 1 for the others."""
-    if NOISE_AT_SOURCE not in NOISE_AT_SOURCE_CHOICES:
-        raise ValueError(f"NOISE_AT_SOURCE must be one of {NOISE_AT_SOURCE_CHOICES}, got {NOISE_AT_SOURCE!r}")
-    if SOURCE_ROUNDING not in SOURCE_ROUNDING_CHOICES:
-        raise ValueError(f"SOURCE_ROUNDING must be one of {SOURCE_ROUNDING_CHOICES}, got {SOURCE_ROUNDING!r}")
-    read = {"ay": NOISE_AT_SOURCE != "none", "r": NOISE_AT_SOURCE == "all"}
-    return {c: source_step(getattr(signals, c), moving, SOURCE_ROUNDING) if read[c] else 1 for c in channels}
+    at, rounding = _setting("NOISE_AT_SOURCE"), _setting("SOURCE_ROUNDING")
+    read = {"ay": at != "none", "r": at == "all"}
+    return {c: source_step(getattr(signals, c), moving, rounding) if read[c] else 1 for c in channels}
 
 
 def source_rates(signals, v_min: float = 5.0) -> dict[str, float]:
@@ -855,8 +848,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
                 options = {**estimators.gyro.UNBIASED_PITCH, **options}
         elif lead_samples is not None:
             options.setdefault("lead", lead_samples / sensors.rate_for(log_rate))
-            if blend_gate_speed() is not None:
-                options.setdefault("gate_v_min", blend_gate_speed())
+            if _setting("BLEND_GATE_V_MIN") is not None:
+                options.setdefault("gate_v_min", BLEND_GATE_V_MIN)
             if log_r_source is not None and log_r_source > 0:
                 options.setdefault("gate_tf", max(estimators.gated.GATED_TUNING["gate_tf"], 1.0 / log_r_source))
             if log_diff_noise is not None and math.isfinite(log_diff_noise) and log_diff_noise > 0:
@@ -873,13 +866,14 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
     est = estimators.make(name, params, **options)
     est.name = label
     out: Any = est
-    if name == "kinematic-smoother" and gates_smoother():
+    if name == "kinematic-smoother" and _setting("SMOOTHER_GATE"):
         model = make_estimator("pif-smoother", params, sensors=sensors, log_rate=log_rate, log_ay_noise=log_ay_noise,
                                log_r_noise=log_r_noise, **{k: v for k, v in given.items()
                                                            if k in estimators.base.ESTIMATOR_OPTIONS})
         gate = estimators.gated.KINEMATIC_PIF_GATE
         out = estimators.GatedSmoother(est, model, gate_tf=gate["gate_tf"], gate_on=gate["gate_on"],
-                                       gate_span=gate["gate_span"], hold=SMOOTHER_GATE_HOLD_S, v_gate=gate_speed())
+                                       gate_span=gate["gate_span"], hold=SMOOTHER_GATE_HOLD_S,
+                                       v_gate=_setting("SMOOTHER_GATE_V_MIN"))
     out = out if handover is None else estimators.HandOver(out, *handover, stretch_s=ROAD_CHECK_WINDOW_S)
     return estimators.AtSource(out) if log_held else out
 
@@ -887,9 +881,8 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
 def hands_over(roll_rate: float | None) -> bool:
     """Whether a log designed quiet whose check slope of the roll rate is ``roll_rate`` (-, None: it has none) is handed
     over when its roads turn loud (:data:`ROAD_CHANGE`)."""
-    if ROAD_CHANGE not in ROAD_CHANGE_CHOICES:
-        raise ValueError(f"ROAD_CHANGE must be one of {ROAD_CHANGE_CHOICES}, got {ROAD_CHANGE!r}")
-    return ROAD_CHANGE is True or (ROAD_CHANGE == "esp" and not roll_rate_usable(roll_rate))
+    choice = _setting("ROAD_CHANGE")
+    return choice is True or (choice == "esp" and not roll_rate_usable(roll_rate))
 
 
 def hands_back(causal: bool, roll_rate: float | None, unbiased: bool) -> bool:
@@ -897,42 +890,23 @@ def hands_back(causal: bool, roll_rate: float | None, unbiased: bool) -> bool:
     -, None: it has none; ``unbiased``: documented free of offset) is handed back to the car's model where its roads
     turn quiet (:data:`ROAD_CHANGE_BACK`): where a quiet log would keep the car's model and a log designed quiet would
     be handed over (:func:`hands_over`)."""
-    if ROAD_CHANGE_BACK not in ROAD_CHANGE_BACK_CHOICES:
-        raise ValueError(f"ROAD_CHANGE_BACK must be one of {ROAD_CHANGE_BACK_CHOICES}, got {ROAD_CHANGE_BACK!r}")
-    return (ROAD_CHANGE_BACK and causal and keeps_cars_model(True, roll_rate, unbiased)
+    return (_setting("ROAD_CHANGE_BACK") and causal and keeps_cars_model(True, roll_rate, unbiased)
             and hands_over(roll_rate))
 
 
-def gates_smoother() -> bool:
-    """Whether ``kinematic-smoother``, where its design is the low-pass both ways, is gated to ``pif-smoother``
-    (:data:`SMOOTHER_GATE`)."""
-    if SMOOTHER_GATE not in SMOOTHER_GATE_CHOICES:
-        raise ValueError(f"SMOOTHER_GATE must be one of {SMOOTHER_GATE_CHOICES}, got {SMOOTHER_GATE!r}")
-    return bool(SMOOTHER_GATE)
-
-
-def blend_gate_speed() -> float | None:
-    """The lowest speed (m/s) at which the causal blend's gate counts (:data:`BLEND_GATE_V_MIN`; None: the
-    estimator's own)."""
-    if BLEND_GATE_V_MIN not in BLEND_GATE_V_MIN_CHOICES:
-        raise ValueError(f"BLEND_GATE_V_MIN must be one of {BLEND_GATE_V_MIN_CHOICES}, got {BLEND_GATE_V_MIN!r}")
-    return BLEND_GATE_V_MIN
-
-
-def gate_speed() -> float:
-    """The lowest speed (m/s) at which the map smoother's gate counts (:data:`SMOOTHER_GATE_V_MIN`)."""
-    if SMOOTHER_GATE_V_MIN not in SMOOTHER_GATE_V_MIN_CHOICES:
-        raise ValueError(f"SMOOTHER_GATE_V_MIN must be one of {SMOOTHER_GATE_V_MIN_CHOICES}, got "
-                         f"{SMOOTHER_GATE_V_MIN!r}")
-    return float(SMOOTHER_GATE_V_MIN)
+def _setting(name: str, choices: str | None = None):
+    """The module setting ``name`` (one of this module's constants that the stages of :mod:`roadbank.tuning.real`
+    choose, :func:`~roadbank.tuning.real.design_settings` sets), checked against its choices (the constant
+    ``choices``, default ``<name>_CHOICES``) when a design reads it: a ValueError where it is none of them."""
+    value, allowed = globals()[name], globals()[choices or f"{name}_CHOICES"]
+    if value not in allowed:
+        raise ValueError(f"{name} must be one of {allowed}, got {value!r}")
+    return value
 
 
 def models_car(name: str, described: bool) -> bool:
     """Whether ``name`` (one of :data:`QUIET_MODELS`) may keep the car's model on a quiet log, its car ``described``
     (a vehicle file, parameters given) or not (:data:`UNDESCRIBED_KEEPS_MODEL` for the causal default,
     :data:`UNDESCRIBED_SMOOTHER_KEEPS_MODEL` for the offline ``kinematic-smoother``)."""
-    keeps = UNDESCRIBED_SMOOTHER_KEEPS_MODEL if name == "kinematic-smoother" else UNDESCRIBED_KEEPS_MODEL
-    if keeps not in UNDESCRIBED_KEEPS_MODEL_CHOICES:
-        raise ValueError(f"UNDESCRIBED_KEEPS_MODEL and UNDESCRIBED_SMOOTHER_KEEPS_MODEL must be one of "
-                         f"{UNDESCRIBED_KEEPS_MODEL_CHOICES}, got {keeps!r}")
-    return described or keeps
+    setting = "UNDESCRIBED_SMOOTHER_KEEPS_MODEL" if name == "kinematic-smoother" else "UNDESCRIBED_KEEPS_MODEL"
+    return described or _setting(setting, "UNDESCRIBED_KEEPS_MODEL_CHOICES")
