@@ -192,8 +192,10 @@ UNDESCRIBED_SMOOTHER_KEEPS_MODEL = False
 SMOOTHER_GATE = True
 SMOOTHER_GATE_CHOICES = (False, True)
 #: how long (s) that gate stays open before and after each ramp of its measure: the causal blend's release time
-#: constant (:data:`roadbank.estimators.gated.KINEMATIC_PIF_GATE`), fixed before the stage ran
+#: constant (:data:`roadbank.estimators.gated.KINEMATIC_PIF_GATE`), fixed before the sixty-fourth stage ran; the
+#: sixty-seventh chooses it among :data:`SMOOTHER_GATE_HOLD_S_CHOICES`
 SMOOTHER_GATE_HOLD_S = 8.0
+SMOOTHER_GATE_HOLD_S_CHOICES = (8.0, 4.0, 2.0, 1.0)
 #: the lowest speed (m/s) at which that gate's measure counts (0: every speed, as the sixty-fourth stage shipped): the
 #: sixty-fifth stage of :mod:`roadbank.tuning.real` chose it among :data:`SMOOTHER_GATE_V_MIN_CHOICES`
 SMOOTHER_GATE_V_MIN = 10.0
@@ -872,7 +874,7 @@ def make_estimator(name: str, params: VehicleParams | None = None, *, sensors: S
                                                            if k in estimators.base.ESTIMATOR_OPTIONS})
         gate = estimators.gated.KINEMATIC_PIF_GATE
         out = estimators.GatedSmoother(est, model, gate_tf=gate["gate_tf"], gate_on=gate["gate_on"],
-                                       gate_span=gate["gate_span"], hold=SMOOTHER_GATE_HOLD_S,
+                                       gate_span=gate["gate_span"], hold=_setting("SMOOTHER_GATE_HOLD_S"),
                                        v_gate=_setting("SMOOTHER_GATE_V_MIN"))
     out = out if handover is None else estimators.HandOver(out, *handover, stretch_s=ROAD_CHECK_WINDOW_S)
     return estimators.AtSource(out) if log_held else out

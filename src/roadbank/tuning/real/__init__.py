@@ -27,8 +27,8 @@ The stages, one module per topic, each module's docstring holding its stages' ru
 * :mod:`.checks` — the check that a log's roll rate is one;
 * :mod:`.roads` — the fifty-eighth to sixty-third stages: a design decided again as a log's roads change, a quiet log
   of a car nobody described;
-* :mod:`.offline` — the sixty-fourth and sixty-fifth stages: the map's low-pass smoother gated to the model smoother,
-  from a lowest speed;
+* :mod:`.offline` — the sixty-fourth, sixty-fifth and sixty-seventh stages: the map's low-pass smoother gated to the
+  model smoother, from a lowest speed, held open for a time;
 * :mod:`.blend_gate` — the sixty-sixth stage: the causal blend's gate at every speed;
 * :mod:`.common` — what every stage shares: the training drives, the simulated sets, the objective, ties, pieces.
 
@@ -37,7 +37,8 @@ Every name of the stages is importable from here.
 
 from __future__ import annotations
 
-from .common import (BANDWIDTH_39, BEFORE_38, BEFORE_64, BEFORE_65, EQUAL_DEG, SIM_CARS, SIM_DRIVES, START_40, TIE_DEG,
+from .common import (BANDWIDTH_39, BEFORE_38, BEFORE_64, BEFORE_65, BEFORE_67, EQUAL_DEG, SIM_CARS, SIM_DRIVES,
+                     START_40, TIE_DEG,
                      UNBIASED_36, cars_median, check_pieces, fixed, guarded, lengths_objective, log_errors, lowest_tied,
                      objective,
                      per_log, rms_deg, sim_errors, simulated_sets, training_logs, whole_and_pieces, without_roll_rate)
@@ -83,13 +84,15 @@ from .roads import (STEEP_ROAD_ORDER, STEEP_ROAD_CUTOFF_HZ, UNDESCRIBED_GAIN_DEG
 from .blend_gate import (BLEND_GATE_SIM_LOSS_DEG, BLEND_GATE_SPEEDS, BLEND_GATE_TAIL_LOSS,
                          choose_blend_gate_speed)
 from .offline import (GATE_GAIN_DEG, GATE_REAL_LOSS_DEG, GATE_SPEEDS, GATE_SPEED_SIM_LOSS_DEG, GATE_SPEED_TAIL_LOSS,
-                      GATE_TAIL_GAIN, SHAKEN_SEED, choose_gate_speed, choose_smoother_gate, lowest_eligible_speed,
+                      GATE_TAIL_GAIN, SHAKEN_SEED, choose_gate_speed, choose_smoother_gate, lowest_eligible,
+                      GATE_HOLDS_S, choose_gate_hold,
                       shaken_sets, stage_sets)
 
 __all__ = ["GATE_GAIN_DEG", "GATE_REAL_LOSS_DEG", "GATE_TAIL_GAIN", "SHAKEN_SEED", "choose_smoother_gate",
            "shaken_sets",
            "BEFORE_64", "BEFORE_65", "within", "GATE_SPEEDS", "GATE_SPEED_SIM_LOSS_DEG", "GATE_SPEED_TAIL_LOSS",
-           "choose_gate_speed", "stage_sets", "lowest_eligible_speed", "BLEND_GATE_SIM_LOSS_DEG",
+           "choose_gate_speed", "stage_sets", "lowest_eligible", "GATE_HOLDS_S", "choose_gate_hold", "BEFORE_67",
+           "BLEND_GATE_SIM_LOSS_DEG",
            "BLEND_GATE_SPEEDS", "BLEND_GATE_TAIL_LOSS", "choose_blend_gate_speed", "STEEP_ROAD_ORDER",
            "STEEP_ROAD_CUTOFF_HZ", "UNDESCRIBED_GAIN_DEG", "choose_undescribed_quiet",
            "BACK_LOUD_AY", "ROAD_CHANGE_BACK_GAIN_DEG", "ROAD_CHANGE_BACK_LOSS_DEG", "ROAD_CHANGE_BACK_WORSE_DEG",

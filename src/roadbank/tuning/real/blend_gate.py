@@ -27,7 +27,7 @@ import numpy as np
 
 from ...estimators.offsets import with_online_offsets
 from .common import cars_median, log_errors, per_log, sim_errors
-from .offline import lowest_eligible_speed
+from .offline import lowest_eligible
 from .roads import _in_force
 
 #: the candidates (m/s), the shipped first
@@ -57,7 +57,7 @@ def choose_blend_gate_speed(parts, sim_sets, shaken, speeds=BLEND_GATE_SPEEDS) -
     errs = {v: _in_force("blend_gate_v_min", v, measure) for v in speeds}
     scores = {v: (float(np.mean([np.mean(e) for e in real])), cars_median(pooled),
                   float(np.percentile(np.concatenate(pooled), 95))) for v, (real, pooled) in errs.items()}
-    return lowest_eligible_speed(scores, speeds, BLEND_GATE_TAIL_LOSS, BLEND_GATE_SIM_LOSS_DEG), scores, errs
+    return lowest_eligible(scores, speeds, BLEND_GATE_TAIL_LOSS, BLEND_GATE_SIM_LOSS_DEG), scores, errs
 
 
 __all__ = ["BLEND_GATE_SPEEDS", "BLEND_GATE_TAIL_LOSS", "BLEND_GATE_SIM_LOSS_DEG", "choose_blend_gate_speed"]

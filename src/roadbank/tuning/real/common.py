@@ -38,6 +38,8 @@ UNBIASED_36 = {"cutoff": 0.07, "bias_tau": 40.0}
 BEFORE_64 = {"smoother_gate": False}
 #: ... and as the sixty-fourth ran it: the gate's measure counted at every speed
 BEFORE_65 = {"smoother_gate_v_min": 0.0}
+#: ... and as the sixty-fourth and sixty-fifth ran it: held open 8 s before and after each ramp
+BEFORE_67 = {"smoother_gate_hold_s": 8.0}
 #: objectives closer than this (deg) count as equal
 TIE_DEG = 0.002
 #: the rule's simulated tie-break counts medians as equal to this (deg): the size of float rounding

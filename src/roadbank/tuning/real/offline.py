@@ -1,4 +1,5 @@
-"""The sixty-fourth and sixty-fifth stages: the map's low-pass smoother through hard manoeuvres (docs/estimators.md).
+"""The sixty-fourth, sixty-fifth and sixty-seventh stages: the map's low-pass smoother through hard manoeuvres
+(docs/estimators.md).
 
 ``roadbank map``'s offline default is the kinematic estimate low-passed both ways (``kinematic-smoother``) on a loud
 log, and since the sixty-third stage on a quiet log of a car nobody described too. It has no gate to a model: on the
@@ -28,6 +29,14 @@ The sixty-fifth (:func:`choose_gate_speed`): the lowest speed at which the gate'
 m/s (yaw rate up to 40 deg/s), where the model smoother of a car nobody described errs by 1.5-2.5 deg and the
 low-pass smoother by 0.3-0.5: a tyre model is for a car at speed. Candidates :data:`GATE_SPEEDS`; the rule weighs the
 real drives by their mean, since the cost is a tail over drives that a median does not see.
+
+The sixty-seventh (:func:`choose_gate_hold`): how long the gate stays open before and after each ramp. The sixty-fourth
+fixed it at the causal blend's release time constant, 8 s, without a search. The low-pass smoother it corrects
+spreads a manoeuvre's sideslip acceleration over only a few of its time constants (0.5 Hz both ways: 1/(2 pi 0.5) =
+0.32 s), and in a steady turn the sideslip acceleration is gone; on the training drive 0034 (and, reported after the
+sixty-fifth stage, on the validation drive 0020) the 8 s reach from a turn at speed into the slow stretches around
+it, where the model smoother of a car nobody described errs. Candidates :data:`GATE_HOLDS_S`; the sixty-fifth stage's
+sets, scores and eligibility, ties going to the longer hold.
 """
 
 from __future__ import annotations
@@ -38,9 +47,9 @@ import numpy as np
 
 from ...estimators import PIFSmoother
 from ...vehicle import load_vehicle
-from .common import (BEFORE_65, SIM_CARS, cars_median, log_errors, lowest_tied, per_log, sim_errors, simulated_sets,
-                     training_logs)
-from .esp import QUIET_GYRO_OFFSETS, gyro_sim_sets, within
+from .common import (BEFORE_65, BEFORE_67, SIM_CARS, cars_median, log_errors, lowest_tied, per_log, sim_errors,
+                     simulated_sets, training_logs)
+from .esp import QUIET_GYRO_OFFSETS, design_settings, gyro_sim_sets, within
 from .roads import (BACK_LOUD_AY, STEEP_ROAD_CUTOFF_HZ, STEEP_ROAD_ORDER, _in_force, _same_in_force,
                     smooth_road_logs)
 
@@ -84,8 +93,9 @@ def choose_smoother_gate(logs, quiet_sets, shaken, kept_logs, known_quiet, cars=
     per car (:func:`shaken_sets`); ``kept_logs`` (signals) and ``known_quiet`` (per car, drives built with its file):
     the guard. Returns ``(chosen, {choice: (objective, tail)}, {choice: (raw RMS per log, per car: bank RMS per drive
     of (2), of (3))})``; a ValueError where the guard fails."""
-    undescribed = within(per_log("kinematic-smoother", described=False), **BEFORE_65)      # as it ran
-    known = {car: within(per_log("kinematic-smoother", vehicle=load_vehicle(car)), **BEFORE_65) for car in cars}
+    as_ran = {**BEFORE_65, **BEFORE_67}
+    undescribed = within(per_log("kinematic-smoother", described=False), **as_ran)
+    known = {car: within(per_log("kinematic-smoother", vehicle=load_vehicle(car)), **as_ran) for car in cars}
     setting = "smoother_gate"
     pairs = ([(undescribed, s) for s in kept_logs]
              + [(known[car], d.signals) for car, drives in zip(cars, known_quiet) for d in drives
@@ -134,8 +144,17 @@ def choose_gate_speed(logs, quiet_sets, shaken, speeds=GATE_SPEEDS, cars=SIM_CAR
     over the cars is not above the shipped one's by more than :data:`GATE_SPEED_SIM_LOSS_DEG`, the lowest real mean
     wins, ties within :data:`~.common.TIE_DEG` going to the lower speed. Returns ``(chosen, {speed: (real mean, sims
     median, sims p95)}, {speed: (raw RMS per log, per car: bank RMS per drive, quiet then shaken)})``."""
-    undescribed = per_log("kinematic-smoother", described=False)
-    known = {car: per_log("kinematic-smoother", vehicle=load_vehicle(car)) for car in cars}
+    scores, errs = _offline_gate_scores("smoother_gate_v_min", speeds, logs, quiet_sets, shaken, cars, BEFORE_67)
+    return lowest_eligible(scores, speeds, GATE_SPEED_TAIL_LOSS, GATE_SPEED_SIM_LOSS_DEG), scores, errs
+
+
+def _offline_gate_scores(setting: str, choices, logs, quiet_sets, shaken, cars, before: dict) -> tuple[dict, dict]:
+    """The sixty-fifth and sixty-seventh stages' scores: ``kinematic-smoother`` as ``roadbank map`` builds it, with the
+    design setting ``setting`` at each of ``choices`` (and the settings ``before``, as the stage ran), on the
+    sixty-fourth stage's sets. Returns ``({choice: (real mean, sims median over the cars, sims p95)}, {choice: (raw
+    RMS per log, per car: bank RMS per drive, quiet then shaken)})`` (deg)."""
+    undescribed = within(per_log("kinematic-smoother", described=False), **before)
+    known = {car: within(per_log("kinematic-smoother", vehicle=load_vehicle(car)), **before) for car in cars}
 
     def shaken_errors():
         return [sim_errors(known[car], [drives])[0] for car, drives in zip(cars, shaken)]
@@ -145,23 +164,41 @@ def choose_gate_speed(logs, quiet_sets, shaken, speeds=GATE_SPEEDS, cars=SIM_CAR
         pooled = [list(q) + list(s) for q, s in zip(sim_errors(undescribed, quiet_sets), shaken_errors())]
         return real, pooled
 
-    errs = {v: _in_force("smoother_gate_v_min", v, measure) for v in speeds}
-    scores = {v: (float(np.mean(real)), cars_median(pooled), float(np.percentile(np.concatenate(pooled), 95)))
-              for v, (real, pooled) in errs.items()}
-    return lowest_eligible_speed(scores, speeds, GATE_SPEED_TAIL_LOSS, GATE_SPEED_SIM_LOSS_DEG), scores, errs
+    with design_settings(**before):
+        errs = {c: _in_force(setting, c, measure) for c in choices}
+    scores = {c: (float(np.mean(real)), cars_median(pooled), float(np.percentile(np.concatenate(pooled), 95)))
+              for c, (real, pooled) in errs.items()}
+    return scores, errs
 
 
-def lowest_eligible_speed(scores: dict, speeds, tail_loss: float, sim_loss_deg: float) -> float:
-    """The sixty-fifth and sixty-sixth stages' rule: of ``speeds`` (the shipped first), those whose simulated 95th
+def lowest_eligible(scores: dict, choices, tail_loss: float, sim_loss_deg: float, order=lambda v: v) -> float:
+    """The sixty-fifth to sixty-seventh stages' rule: of ``choices`` (the shipped first), those whose simulated 95th
     percentile (``scores[v][2]``, deg) is not above the shipped one's by more than ``tail_loss`` of it and whose
     simulated median (``scores[v][1]``) not above it by more than ``sim_loss_deg``; the lowest real score
-    (``scores[v][0]``) of those, ties within :data:`~.common.TIE_DEG` going to the lower speed."""
-    first = scores[speeds[0]]
-    eligible = [v for v in speeds if scores[v][2] <= (1.0 + tail_loss) * first[2]
+    (``scores[v][0]``) of those, ties within :data:`~.common.TIE_DEG` going to the first by ``order`` (a sort key;
+    default the lowest value: the lower speed)."""
+    first = scores[choices[0]]
+    eligible = [v for v in choices if scores[v][2] <= (1.0 + tail_loss) * first[2]
                 and scores[v][1] <= first[1] + sim_loss_deg]
-    return lowest_tied({v: scores[v][0] for v in eligible}, lambda v: v)
+    return lowest_tied({v: scores[v][0] for v in eligible}, order)
+
+
+#: the sixty-seventh stage's candidates: how long (s) the offline gate stays open before and after each ramp
+#: (:data:`roadbank.vehicle.conditions.SMOOTHER_GATE_HOLD_S`; 8, the first, as the sixty-fourth shipped)
+GATE_HOLDS_S = (8.0, 4.0, 2.0, 1.0)
+
+
+def choose_gate_hold(logs, quiet_sets, shaken, holds=GATE_HOLDS_S, cars=SIM_CARS) -> tuple:
+    """The sixty-seventh stage (docs/estimators.md): ``kinematic-smoother`` as ``roadbank map`` builds it, its gate
+    held open ``hold`` s before and after each ramp for each of ``holds`` (s; the shipped first), on the sixty-fourth
+    stage's sets (:func:`choose_smoother_gate`) with the sixty-fifth stage's scores and eligibility
+    (:func:`choose_gate_speed`: :data:`GATE_SPEED_TAIL_LOSS`, :data:`GATE_SPEED_SIM_LOSS_DEG`): among the eligible
+    candidates the lowest real mean wins, ties within :data:`~.common.TIE_DEG` going to the longer hold. Returns
+    ``(chosen, {hold: (real mean, sims median, sims p95)}, {hold: (raw RMS per log, per car: bank RMS per drive)})``."""
+    scores, errs = _offline_gate_scores("smoother_gate_hold_s", holds, logs, quiet_sets, shaken, cars, {})
+    return lowest_eligible(scores, holds, GATE_SPEED_TAIL_LOSS, GATE_SPEED_SIM_LOSS_DEG, lambda h: -h), scores, errs
 
 
 __all__ = ["GATE_GAIN_DEG", "GATE_REAL_LOSS_DEG", "GATE_TAIL_GAIN", "SHAKEN_SEED", "choose_smoother_gate",
            "shaken_sets", "stage_sets", "GATE_SPEEDS", "GATE_SPEED_TAIL_LOSS", "GATE_SPEED_SIM_LOSS_DEG",
-           "choose_gate_speed", "lowest_eligible_speed"]
+           "choose_gate_speed", "lowest_eligible", "GATE_HOLDS_S", "choose_gate_hold"]
