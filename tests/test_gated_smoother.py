@@ -230,3 +230,20 @@ def test_the_sixty_fifth_stage_counts_the_gate_from_10_m_s(stage_sets):
     assert scores[10.0][1:] == scores[0.0][1:]                      # the simulated drives: the same
     assert errs[10.0][0][7] < errs[0.0][0][7] - 0.04                # drive 0034
     assert scores[20.0][1] > scores[0.0][1]
+
+
+@pytest.mark.slow
+def test_the_sixty_seventh_stage_keeps_the_gate_open_8_s(stage_sets):
+    """The sixty-seventh stage (tuning.real.choose_gate_hold) on the sixty-fourth's sets, its grid's two ends (the
+    whole grid takes twice as long; docs/estimators.md has all four): a 1 s hold lowers the real mean by less than the
+    tie (0.2695 -> 0.2692 deg: only drive 0034 moves) and raises the simulated tail (0.930 -> 0.982 deg); 8 s stays."""
+    from roadbank.tuning.real import TIE_DEG, choose_gate_hold
+    from roadbank.vehicle.conditions import SMOOTHER_GATE_HOLD_S
+
+    real, quiet, shaken, _ = stage_sets
+    chosen, scores, errs = choose_gate_hold(real, quiet, shaken, holds=(8.0, 1.0))
+    assert chosen == SMOOTHER_GATE_HOLD_S == 8.0
+    assert abs(scores[1.0][0] - scores[8.0][0]) <= TIE_DEG
+    assert scores[1.0][2] > scores[8.0][2]
+    moved = np.flatnonzero(np.array(errs[1.0][0]) != np.array(errs[8.0][0]))
+    np.testing.assert_array_equal(moved, [7])                       # drive 0034 alone
