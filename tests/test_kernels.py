@@ -100,7 +100,7 @@ def test_each_estimator_runs_the_batch_kernel_of_its_size(name):
     from roadbank.estimators import kernels as K
     from roadbank.estimators.layout import C_N, C_NR
     est = _make(name, sample_rate=100.0)
-    three = est.kernel == "lpv" and est._cfg[C_N] == 3 and est._cfg[C_NR] in (0, 2)
+    three = est.kernel == "lpv" and est._cfg[C_N] == 3 and est._cfg[C_NR] in (0, 2) and est.batch3_loop
     assert (est._run_fn is K.lpv3_run) == three
     assert (est._run_fn, est._step_fn) == K.ENTRIES["lpv3" if three else est.kernel]
 
@@ -115,6 +115,20 @@ def test_three_state_batch_loop_equals_the_plain_loop():
     assert batch._run_fn is K.lpv3_run
     plain._run_fn = K.lpv_run
     a, b = batch.run(s), plain.run(s)
+    for field in ("w", "theta", "phi_b", "valid"):
+        assert np.array_equal(getattr(a, field), getattr(b, field)), field
+
+
+def test_the_smoothers_forward_pass_takes_the_general_loop_and_is_the_pif():
+    """``pif-smoother``'s forward pass runs through ``lpv_run`` (``batch3_loop`` False: no three-state loop to compile
+    for ``roadbank map``), and gives what ``pif-modified``, its causal filter in the three-state loop, gives, to the
+    bit, on a log that switches paths."""
+    from roadbank.estimators import PIF
+    from roadbank.estimators import kernels as K
+    s = _mixed_log()
+    smoother, pif = _make("pif-smoother", sample_rate=100.0), _make("pif-modified", sample_rate=100.0)
+    assert smoother._run_fn is K.lpv_run and pif._run_fn is K.lpv3_run
+    a, b = PIF.run(smoother, s), pif.run(s)
     for field in ("w", "theta", "phi_b", "valid"):
         assert np.array_equal(getattr(a, field), getattr(b, field)), field
 

@@ -216,6 +216,10 @@ class Estimator:
     design_type: type[DesignInputs] = DesignInputs
     #: ``v_min`` (m/s) when none is given
     default_v_min: float = 5.0
+    #: whether a three-state ``lpv`` observer's batch run takes its fixed-rate samples through the three-state loop
+    #: (:func:`roadbank.estimators.kernels.entries`: ``lpv3_run``, compiled on its first use); False: the general
+    #: ``lpv_run``, the same output to the bit
+    batch3_loop: bool = True
 
     def __init__(self, params: VehicleParams | None = None, *, v_min: float | None = None,
                  roll: str = "static", max_substep: float = 0.02, max_gap: float = MAX_GAP_S,
@@ -248,7 +252,8 @@ class Estimator:
         self._inputs = self.design_type(params=self.params, v_min=self.v_min, v_step=self.v_step,
                                         v_max=self.v_max, **self._design_fields())
         self._tab_cont, self._nstate, self._extra = self._designed()
-        self._run_fn, self._step_fn = K.entries(self.kernel, self._nstate == 3 and self._roll[0].shape[0] in (0, 2))
+        self._run_fn, self._step_fn = K.entries(self.kernel, self.batch3_loop and self._nstate == 3
+                                                and self._roll[0].shape[0] in (0, 2))
         self._work = np.zeros(L.work_size(self._nstate))
         self._buffers = OutputBuffers()     # the last run()'s output arrays, reused when dropped
         self.fixed_dt: float | None = None
