@@ -97,9 +97,10 @@ path has no per-dimension special cases, and ``lpv_step`` is compiled once and c
 chosen in Python (:func:`entries`: ``lpv3_run``), its body written once as an inlined helper taking the
 variant as a constant that numba prunes before typing, so an observer of another size (the gyro-aided
 default, two states) never compiles it: its first run on a KITTI drive 8.0 s instead of 9.1 when this was
-measured, the same output to the bit. Nor does ``pif-smoother``'s forward pass (``Estimator.batch3_loop``), whose
-backward pass takes most of its run: a first ``roadbank map`` on an ESP log 2 s shorter, 20 ns/sample more warm. (A variant for the limited low-pass too saved another 0.7 s there but
-cost the first ``roadbank reproduce``, which runs both, 4 s: not kept.) LLVM optimises the per-sample step and
+measured, the same output to the bit. (A variant for the limited low-pass too saved another 0.7 s there but
+cost the first ``roadbank reproduce``, which runs both, 4 s: not kept.) Nor does ``pif-smoother``'s forward pass
+(``Estimator.batch3_loop``), whose backward pass takes most of its run: a first ``roadbank map`` on an ESP log 2 s
+shorter, 20 ns/sample more warm. LLVM optimises the per-sample step and
 the general path for size (:func:`._jit.optimise_for_size`: ``lpv_step``, ``gated_run``, ``riccati_run``, the LU),
 not the fixed-rate batch loop: their loops over a few states are then not vectorised nor unrolled, which only cost
 compile time (CPU s of the first calls, median of five: lpv 5.6 -> 4.3, gated 4.9 -> 4.0, riccati 4.8 -> 3.6; the

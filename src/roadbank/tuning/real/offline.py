@@ -150,11 +150,11 @@ def choose_gate_speed(logs, quiet_sets, shaken, speeds=GATE_SPEEDS, cars=SIM_CAR
 
 def _offline_gate_scores(setting: str, choices, logs, quiet_sets, shaken, cars, before: dict) -> tuple[dict, dict]:
     """The sixty-fifth and sixty-seventh stages' scores: ``kinematic-smoother`` as ``roadbank map`` builds it, with the
-    design setting ``setting`` at each of ``choices`` (and the settings ``before``, as the stage ran), on the
+    design setting ``setting`` at each of ``choices`` (and the settings ``before`` throughout, as the stage ran), on the
     sixty-fourth stage's sets. Returns ``({choice: (real mean, sims median over the cars, sims p95)}, {choice: (raw
     RMS per log, per car: bank RMS per drive, quiet then shaken)})`` (deg)."""
-    undescribed = within(per_log("kinematic-smoother", described=False), **before)
-    known = {car: within(per_log("kinematic-smoother", vehicle=load_vehicle(car)), **before) for car in cars}
+    undescribed = per_log("kinematic-smoother", described=False)
+    known = {car: per_log("kinematic-smoother", vehicle=load_vehicle(car)) for car in cars}
 
     def shaken_errors():
         return [sim_errors(known[car], [drives])[0] for car, drives in zip(cars, shaken)]
