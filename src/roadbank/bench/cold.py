@@ -120,7 +120,7 @@ from roadbank import Signals, estimators
 n = 60
 s = Signals(np.arange(n) * 0.01, np.full(n, 20.0), np.full(n, 0.5), np.full(n, 0.01), np.full(n, 0.002))
 e = estimators.make("pif-smoother", v_max=30.0)     # small design: scipy, not compilation
-estimators.make("pif-modified", v_max=30.0).run(s)  # the forward (lpv) kernel: its own family
+estimators.PIF.run(e, s)      # its forward pass (the lpv kernel): that family's
 from roadbank.estimators.gated_smoother import gate_ramps, held_open
 def work():
     e.run(s)
