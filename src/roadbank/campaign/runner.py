@@ -11,7 +11,10 @@ Failure of an estimator in a run (:data:`FAIL_RMS_DEG`): any non-finite output,
 a bank RMS error above 2 deg, or an error raised. ``failed`` is that flag.
 
 Estimators are built once per process (:func:`estimators_for`) and reused with
-``run(reset=True)``: they all keep the design parameters, only the plant varies.
+``run(reset=True)``: they all keep the design parameters, only the plant varies, but for the rear cornering
+stiffness, trimmed to each run as every command trims a described car's to its log
+(:func:`roadbank.vehicle.rear_trim`, where :data:`roadbank.vehicle.conditions.REAR_TRIM` says so; the column
+``rear_trim``, the scale, 1 where not trimmed), one design per scale.
 
 Runs start with ``RunOptions.standstill`` seconds (default 3 s) of the car at rest
 (:func:`roadbank.sim.standstill.with_standstill`), as real drives do, and the estimators
@@ -36,9 +39,11 @@ import numpy as np
 
 from .. import estimators as E
 from ..evaluation import error_metrics
+from ..params import VehicleParams
 from ..sim import SCENARIOS
 from ..sim import run as sim_run
 from ..sim.standstill import with_standstill
+from ..vehicle import rear_trim
 from .sampling import RunSpec
 
 if TYPE_CHECKING:
@@ -51,7 +56,8 @@ FAIL_RMS_DEG = 2.0
 #: row columns besides the RunSpec fields
 SCORE_COLUMNS = ("estimator", "rms_deg", "max_deg", "bias_deg", "steady_deg", "theta_rms_deg",
                  "valid_frac", "nonfinite", "failed", "max_beta_deg", "min_vx", "sim_s", "est_s",
-                 "duration_s", "error", "standstill_s", "offsets", "r_offset_err_dps", "r_offset_learnt_s")
+                 "duration_s", "error", "standstill_s", "offsets", "r_offset_err_dps", "r_offset_learnt_s",
+                 "rear_trim")
 
 
 @dataclass(frozen=True)
@@ -119,18 +125,23 @@ class RunOptions:
 _ESTIMATORS: dict = {}
 
 
-def estimators_for(names, vehicle=None, offsets: bool = False) -> dict:
+def estimators_for(names, vehicle=None, offsets: bool = False, rear: float = 1.0) -> dict:
     """Estimators ``name -> Estimator`` with the design parameters, built once per process.
 
     ``vehicle`` (a :class:`roadbank.vehicle.Vehicle`): designed for it (``vehicle.make(name)``).
     ``offsets``: each behind the online offset learner (:func:`roadbank.estimators.with_online_offsets`).
+    ``rear``: the scale (-) of the design's rear cornering stiffness (a run's :func:`roadbank.vehicle.rear_trim`).
     """
     out = {}
     car = None if vehicle is None else vehicle.dumps()
     for name in names:
-        key = (name, car, bool(offsets))
+        key = (name, car, bool(offsets), float(rear))
         if key not in _ESTIMATORS:
-            est = E.make(name) if vehicle is None else vehicle.make(name)
+            if vehicle is None:
+                paper = VehicleParams()
+                est = E.make(name) if rear == 1.0 else E.make(name, paper.replace(Cr=paper.Cr * rear))
+            else:
+                est = (vehicle if rear == 1.0 else vehicle.with_params(Cr=vehicle.params.Cr * rear)).make(name)
             _ESTIMATORS[key] = E.with_online_offsets(est) if offsets else est
         out[name] = _ESTIMATORS[key]
     return out
@@ -175,8 +186,10 @@ def run_one(spec: RunSpec, options: RunOptions = RunOptions()) -> list[dict]:
     extra = {"max_beta_deg": tr.max_sideslip_deg(k0), "min_vx": float(np.nanmin(tr.vx[k0:])),
              "duration_s": float(sig.t[-1] - sig.t[k0]), "sim_s": sim_s, "standstill_s": still, **setup}
     true_r_offset = sensors.yaw_rate.bias
+    rear = rear_trim(sig, VehicleParams() if options.vehicle is None else options.vehicle.params)
+    extra["rear_trim"] = rear
     rows = []
-    for name, est in estimators_for(names, options.vehicle, options.offsets).items():
+    for name, est in estimators_for(names, options.vehicle, options.offsets, rear).items():
         t1 = time.perf_counter()
         try:
             e = est.run(sig)
@@ -211,7 +224,7 @@ def _row(base: dict, name: str, **values) -> dict:
                 "theta_rms_deg": nan, "valid_frac": nan, "nonfinite": False, "failed": True,
                 "max_beta_deg": nan, "min_vx": nan, "sim_s": nan, "est_s": nan, "duration_s": nan,
                 "error": "", "standstill_s": nan, "offsets": False, "r_offset_err_dps": nan,
-                "r_offset_learnt_s": nan})
+                "r_offset_learnt_s": nan, "rear_trim": nan})
     row.update(values)
     return row
 

@@ -27,7 +27,7 @@ from .. import estimators
 from ..io.comma2k19 import CHANNELS, POSE, SegmentSource, load_comma2k19
 from ..io.errors import LogError
 from ..params import VehicleParams
-from ..vehicle import undescribed_params
+from ..vehicle import described_car, undescribed_params
 from .scoring import (VALIDATION_NAMES, Score, Scored, Scoring, covered_span, hold_invalid, lowpass, pearson_r,
                       reference_covered, run_and_score, score)
 
@@ -172,7 +172,7 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     t = s.t
     dt = float(np.median(np.diff(t)))
     # a car not described: designed for the one that fits the segment (read with the static one)
-    design = undescribed_params(s) if described is None else params
+    design = undescribed_params(s) if described is None else described_car(s, params)
     run = run_and_score(s, log.reference_roll[cut], names, design, scoring, per_estimator=tuning, sensors=sensors,
                         described=described is not None)
     scores, smoothed = run.scores, run.estimates

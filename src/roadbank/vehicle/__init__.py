@@ -59,7 +59,8 @@ from .conditions import (DESIGN_MAX_S, DESIGN_SPAN_S, QUIET_FILTER, QUIET_RATIO,
                          has_design_span, is_quiet, log_conditions, make_estimator, noise_densities)
 from .errors import VehicleFileError
 from .factory import (CAR_MARGIN, UNDESCRIBED_CARS, bank_band_power, car_for_log, design_car, design_record,
-                      for_conditions, for_log, undescribed_car, undescribed_params)
+                      for_conditions, for_log, undescribed_car, undescribed_params, rear_trim,
+                      described_car)
 from .file import (BUILTINS, DEFAULT_VEHICLE, META_KEYS, OFFSET_CHANNELS, REQUIRED_VEHICLE_KEYS, TABLES, Vehicle,
                    builtin_names, load_vehicle)
 from .plausibility import PLANT_FIELDS, PLAUSIBLE, SENSOR_FIELDS, WHEELBASE_RANGE
@@ -71,6 +72,7 @@ __all__ = ["Vehicle", "SensorSpec", "VehicleFileError", "load_vehicle", "builtin
            "SI_UNIT", "DEFAULT_VEHICLE", "TABLES", "META_KEYS", "REQUIRED_VEHICLE_KEYS", "OFFSET_CHANNELS",
            "WHEELBASE_RANGE", "SENSOR_FIELDS", "PLANT_FIELDS", "DESIGN_SPAN_S", "DESIGN_MAX_S", "design_span",
            "has_design_span", "log_conditions", "noise_densities", "QUIET_RATIO",
-           "QUIET_FILTER", "is_quiet", "make_estimator", "for_conditions", "for_log", "undescribed_car",
+           "QUIET_FILTER", "is_quiet", "make_estimator", "for_conditions", "for_log", "rear_trim",
+           "described_car", "undescribed_car",
            "undescribed_params", "UNDESCRIBED_CARS", "CAR_MARGIN", "design_car", "design_record", "car_for_log",
            "bank_band_power", "default_reads_roll_rate"]

@@ -196,6 +196,14 @@ SMOOTHER_GATE_CHOICES = (False, True)
 #: sixty-seventh chooses it among :data:`SMOOTHER_GATE_HOLD_S_CHOICES`
 SMOOTHER_GATE_HOLD_S = 8.0
 SMOOTHER_GATE_HOLD_S_CHOICES = (8.0, 4.0, 2.0, 1.0)
+#: whether a described car's rear cornering stiffness is trimmed to the log (:func:`roadbank.vehicle.rear_trim`: the
+#: misfit of the undescribed car's rule over :data:`REAR_TRIM_SCALES` of it, the described value kept unless another
+#: fits :data:`~roadbank.vehicle.CAR_MARGIN` times better): the sixty-eighth stage of :mod:`roadbank.tuning.real`
+#: chooses it
+REAR_TRIM = False
+REAR_TRIM_CHOICES = (False, True)
+#: the scales (-) of the described ``Cr`` that the trim tries (1: as described)
+REAR_TRIM_SCALES = (0.5, 0.6, 0.7, 0.85, 1.0, 1.2, 1.4)
 #: the lowest speed (m/s) at which that gate's measure counts (0: every speed, as the sixty-fourth stage shipped): the
 #: sixty-fifth stage of :mod:`roadbank.tuning.real` chose it among :data:`SMOOTHER_GATE_V_MIN_CHOICES`
 SMOOTHER_GATE_V_MIN = 10.0
@@ -904,6 +912,11 @@ def _setting(name: str, choices: str | None = None):
     if value not in allowed:
         raise ValueError(f"{name} must be one of {allowed}, got {value!r}")
     return value
+
+
+def trims_rear() -> bool:
+    """Whether a described car's rear cornering stiffness is trimmed to each log (:data:`REAR_TRIM`)."""
+    return bool(_setting("REAR_TRIM"))
 
 
 def models_car(name: str, described: bool) -> bool:

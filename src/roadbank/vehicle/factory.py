@@ -9,19 +9,20 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import cast
 
 import numpy as np
 
 from .. import defaults
 from ..params import VehicleParams
 from ..signals import Signals, sample_rate
-from .conditions import (default_reads_roll_rate, design_span, esp_conditions, is_quiet, log_conditions,
-                         make_estimator, quiet_noise_ratio, source_rates)
+from .conditions import (REAR_TRIM_SCALES, default_reads_roll_rate, design_span, esp_conditions, is_quiet,
+                         log_conditions, make_estimator, quiet_noise_ratio, source_rates, trims_rear)
 from .file import load_vehicle
 from .sensors import SensorSpec
 
 __all__ = ["UNDESCRIBED_CARS", "CAR_MARGIN", "FIT_BAND_HZ", "undescribed_car", "undescribed_params", "design_car",
-           "bank_band_power", "design_record", "car_for_log", "for_conditions", "for_log"]
+           "bank_band_power", "design_record", "car_for_log", "for_conditions", "for_log", "rear_trim", "described_car"]
 
 #: the shipped cars a log whose car is not described may be designed for: the range of passenger cars
 UNDESCRIBED_CARS = ("suv-paper", "sedan", "compact", "van")
@@ -115,21 +116,63 @@ def design_car(signals, margin: float = CAR_MARGIN, cond: dict | None = None) ->
     (on the 16 KITTI drives and the comma2k19 segment within 7 % of the sedan's, docs/estimators.md), so the fit
     would only cost its four designs and runs (and, on a first run, the compilation of the ESP default's kernels).
     """
+    power = _misfits(signals, {car: _car(car) for car in UNDESCRIBED_CARS}, cond)
+    if power is None:
+        return defaults.VEHICLE
+    return _fits_better(power, defaults.VEHICLE, margin)
+
+
+def _misfits(signals, cars: dict, cond: dict | None) -> dict | None:
+    """``{key: misfit}`` (:func:`bank_band_power`) of the default estimator built for each car of ``cars`` (key ->
+    :class:`VehicleParams`) and the log's conditions (its ESP channels alone), run over the log's design span
+    (:func:`~roadbank.vehicle.design_span`); inf for a design the conditions leave without a solution. None where the
+    default reads the log's roll rate (it has no car model: nothing to fit). ``cond``: the log's conditions, measured
+    on that span where None."""
     n = design_span(signals)
     span = signals[:n] if n < len(signals) else signals
     if cond is None:
         cond = log_conditions(span)
     if default_reads_roll_rate(cond):
-        return defaults.VEHICLE
+        return None
     cond = esp_conditions(cond)
     power = {}
-    for car in UNDESCRIBED_CARS:
+    for key, car in cars.items():
         try:
-            power[car] = bank_band_power(span, make_estimator(defaults.ESTIMATOR, _car(car), **cond).run(span))
+            power[key] = bank_band_power(span, make_estimator(defaults.ESTIMATOR, car, **cond).run(span))
         except ValueError:          # a design the log's conditions leave without a solution: not this car
-            power[car] = math.inf
-    best = min(UNDESCRIBED_CARS, key=lambda c: power[c])
-    return best if power[best] * margin < power[defaults.VEHICLE] else defaults.VEHICLE
+            power[key] = math.inf
+    return power
+
+
+def _fits_better(power: dict, kept, margin: float):
+    """The key of ``power`` (key -> misfit) with the lowest misfit where it is ``margin`` times below that of
+    ``kept``, else ``kept`` (also where every misfit is infinite)."""
+    best = min(power, key=lambda c: power[c])
+    return best if power[best] * margin < power[kept] else kept
+
+
+def rear_trim(signals, params: VehicleParams, margin: float = CAR_MARGIN, cond: dict | None = None) -> float:
+    """The scale (-) of a described car's rear cornering stiffness ``params.Cr`` that a log is designed for: the
+    undescribed car's rule (:func:`design_car`) over :data:`~roadbank.vehicle.conditions.REAR_TRIM_SCALES` of it,
+    the rest of ``params`` as described. The scale whose default estimate of the log's design span has the lowest
+    misfit (:func:`bank_band_power`) where it is ``margin`` times below the described car's, else 1 (and 1 where the
+    default reads the log's roll rate, or :data:`~roadbank.vehicle.conditions.REAR_TRIM` is False).
+
+    Real tyres are not their data sheet's: worn, at another pressure, on another load, a rear axle's stiffness is
+    off by tens of per cent, and the modified model, which keeps only the rear tyres, reads the error at every
+    yaw transient as bank (docs/campaign.md). ``cond``: as :func:`design_car`."""
+    if not trims_rear():
+        return 1.0
+    cars = {k: params.replace(Cr=params.Cr * k) if k != 1.0 else params for k in REAR_TRIM_SCALES}
+    power = _misfits(signals, cars, cond)
+    return 1.0 if power is None else float(_fits_better(power, 1.0, margin))
+
+
+def described_car(signals, params: VehicleParams, cond: dict | None = None) -> VehicleParams:
+    """``params`` (a described car) with its rear cornering stiffness trimmed to the log ``signals``
+    (:func:`rear_trim`; ``cond`` as there); ``params`` itself where the scale is 1."""
+    k = rear_trim(signals, params, cond=cond)
+    return params if k == 1.0 else params.replace(Cr=params.Cr * k)
 
 
 def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | None = None,
@@ -172,13 +215,18 @@ def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | Non
 def car_for_log(signals, cond: dict, params: VehicleParams | None = None, vehicle=None,
                 sensors: SensorSpec | None = None) -> tuple[VehicleParams, dict]:
     """The car a log's estimators are designed for, and its :func:`design_record` (``cond``: the log's
-    :func:`log_conditions`): ``vehicle``'s (a :class:`Vehicle`), else ``params`` (with ``sensors``), else
-    :func:`undescribed_car` of the log's ``signals`` (the one that fits it)."""
+    :func:`log_conditions`): ``vehicle``'s (a :class:`Vehicle`), else ``params`` (with ``sensors``), each with its
+    rear cornering stiffness trimmed to the log (:func:`described_car`; the record's ``rear_trim``, the scale, where
+    it is not 1), else :func:`undescribed_car` of the log's ``signals`` (the one that fits it)."""
     sources = source_rates(signals)
-    if vehicle is not None:
-        return vehicle.params, design_record(cond, vehicle.name, FROM_FILE, vehicle.sensors, sources)
-    if params is not None:
-        return params, design_record(cond, "-", FROM_PARAMS, sensors, sources)
+    if vehicle is not None or params is not None:
+        given = vehicle.params if vehicle is not None else cast(VehicleParams, params)
+        car = described_car(signals, given, cond)
+        record = (design_record(cond, vehicle.name, FROM_FILE, vehicle.sensors, sources) if vehicle is not None
+                  else design_record(cond, "-", FROM_PARAMS, sensors, sources))
+        if car is not given:
+            record["rear_trim"] = float(f"{car.Cr / given.Cr:.3g}")
+        return car, record
     name = undescribed_car(signals, cond=cond)
     how = NOT_FITTED if default_reads_roll_rate(cond) else FITTED
     return _car(name), design_record(cond, name, how, sources=sources)
@@ -188,13 +236,16 @@ def for_conditions(name: str, cond: dict, params: VehicleParams | None = None, *
                    described: bool | None = None, **tuning):
     """Build the estimator ``name`` for a log's conditions ``cond`` (:func:`log_conditions`).
 
-    The car is ``vehicle`` (a :class:`Vehicle`: its parameters, sensors and tuning tables) or
+    The car is ``vehicle`` (a :class:`Vehicle`: its parameters, sensors and tuning tables; with ``params`` too, those
+    in place of its own: the car :func:`car_for_log` trimmed to the log) or
     ``params`` with the data sheet's sensors; neither: :func:`undescribed_params` without a log
     (the callers that have the log pass ``undescribed_params(signals)`` as ``params``, and ``described=False``: a car
     nobody described, :data:`~roadbank.vehicle.conditions.UNDESCRIBED_KEEPS_MODEL`; default: described where
     ``vehicle`` or ``params`` is given). What ``roadbank estimate``, ``map`` and :func:`for_log` build.
     """
     if vehicle is not None:
+        if params is not None and params != vehicle.params:     # its car trimmed to the log (car_for_log)
+            vehicle = vehicle.replace(params=params)
         return vehicle.make(name, **cond, **tuning)
     if described is None:
         described = params is not None
@@ -208,9 +259,9 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
 
     A default-tuned PIF is designed for the log's sample rate and the road noise measured on
     its ``ay`` and yaw rate (:func:`log_conditions`); the car as :func:`for_conditions`, a car that is
-    not described chosen for the log (:func:`undescribed_params` of ``signals``).
-    ``for_log(name, s).run(s)`` is what the command line writes for the log ``s`` with ``--no-online-offsets``;
-    by default it adds the online offset learner
+    not described chosen for the log (:func:`undescribed_params` of ``signals``), a car described with its rear
+    cornering stiffness trimmed to the log (:func:`described_car`). ``for_log(name, s).run(s)`` is what the command
+    line writes for the log ``s`` with ``--no-online-offsets``; by default it adds the online offset learner
     (``with_online_offsets(for_log(name, s), est.params).run(s)``), which differs after a standstill.
     ``described`` (default: whether ``params`` or ``vehicle`` is given): True reads the car chosen for the log as one
     described (:func:`for_conditions`).
@@ -222,4 +273,6 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
         described = params is not None or vehicle is not None
     if params is None and vehicle is None:
         params = undescribed_params(signals, cond=cond)
+    else:       # a car described: its rear stiffness trimmed to the log, as car_for_log does
+        params = described_car(signals, params if params is not None else vehicle.params, cond)
     return for_conditions(name, cond, params, vehicle=vehicle, described=described, **tuning)

@@ -30,6 +30,7 @@ The stages, one module per topic, each module's docstring holding its stages' ru
 * :mod:`.offline` — the sixty-fourth, sixty-fifth and sixty-seventh stages: the map's low-pass smoother gated to the
   model smoother, from a lowest speed, held open for a time;
 * :mod:`.blend_gate` — the sixty-sixth stage: the causal blend's gate at every speed;
+* :mod:`.rear_trim` — the sixty-eighth stage: a described car's rear cornering stiffness trimmed to the log;
 * :mod:`.common` — what every stage shares: the training drives, the simulated sets, the objective, ties, pieces.
 
 Every name of the stages is importable from here.
@@ -83,12 +84,17 @@ from .roads import (STEEP_ROAD_ORDER, STEEP_ROAD_CUTOFF_HZ, UNDESCRIBED_GAIN_DEG
                     smooth_start_logs)
 from .blend_gate import (BLEND_GATE_SIM_LOSS_DEG, BLEND_GATE_SPEEDS, BLEND_GATE_TAIL_LOSS,
                          choose_blend_gate_speed)
+from .rear_trim import (REAR_TRIM_LOSS_DEG, REAR_TRIM_REAL_CAR, REAR_TRIM_REAL_LOSS_DEG, REAR_TRIM_RUNS,
+                        REAR_TRIM_SEEDS, REAR_TRIM_SIM_TAIL_LOSS, REAR_TRIM_TAIL_GAIN, campaign_errors,
+                        choose_rear_trim)
 from .offline import (GATE_GAIN_DEG, GATE_REAL_LOSS_DEG, GATE_SPEEDS, GATE_SPEED_SIM_LOSS_DEG, GATE_SPEED_TAIL_LOSS,
                       GATE_TAIL_GAIN, SHAKEN_SEED, choose_gate_speed, choose_smoother_gate, lowest_eligible,
                       GATE_HOLDS_S, choose_gate_hold,
                       shaken_sets, stage_sets)
 
-__all__ = ["GATE_GAIN_DEG", "GATE_REAL_LOSS_DEG", "GATE_TAIL_GAIN", "SHAKEN_SEED", "choose_smoother_gate",
+__all__ = ["REAR_TRIM_LOSS_DEG", "REAR_TRIM_REAL_CAR", "REAR_TRIM_REAL_LOSS_DEG", "REAR_TRIM_RUNS", "REAR_TRIM_SEEDS",
+           "REAR_TRIM_SIM_TAIL_LOSS", "REAR_TRIM_TAIL_GAIN", "campaign_errors", "choose_rear_trim",
+           "GATE_GAIN_DEG", "GATE_REAL_LOSS_DEG", "GATE_TAIL_GAIN", "SHAKEN_SEED", "choose_smoother_gate",
            "shaken_sets",
            "BEFORE_64", "BEFORE_65", "within", "GATE_SPEEDS", "GATE_SPEED_SIM_LOSS_DEG", "GATE_SPEED_TAIL_LOSS",
            "choose_gate_speed", "stage_sets", "lowest_eligible", "GATE_HOLDS_S", "choose_gate_hold", "BEFORE_67",

@@ -572,7 +572,7 @@ _DESIGN_SETTINGS = ("QUIET_FLOOR_RATE", "QUIET_FLOOR_SIGNAL", "NOISE_AT_SOURCE",
                     "TRUST_FIXED_CHANNELS", "GATE_AT_SOURCE", "READ_AT_SOURCE", "QUIET_READS_ROLL_RATE",
                     "SOURCE_ROUNDING", "ROAD_CHANGE", "ROAD_CHANGE_BACK", "UNDESCRIBED_KEEPS_MODEL",
                     "UNDESCRIBED_SMOOTHER_KEEPS_MODEL", "SMOOTHER_GATE", "SMOOTHER_GATE_V_MIN",
-                    "BLEND_GATE_V_MIN", "SMOOTHER_GATE_HOLD_S")
+                    "BLEND_GATE_V_MIN", "SMOOTHER_GATE_HOLD_S", "REAR_TRIM")
 #: the settings as each stage ran: the eighteenth and nineteenth before the twentieth, the twentieth before the
 #: twenty-first
 _BEFORE_SOURCE = {"noise_at_source": "none", "noise_octave": "none"}
