@@ -1,0 +1,74 @@
+"""A described car's rear cornering stiffness trimmed to the log (roadbank.vehicle.rear_trim; off as shipped: the
+sixty-eighth stage of roadbank.tuning.real kept it off, docs/estimators.md). The truth is the simulator's plant,
+whose rear axle is drawn softer or stiffer than the data sheet the estimators are designed for."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from roadbank import VehicleParams
+from roadbank.campaign.runner import RunOptions, run_one
+from roadbank.campaign.sampling import RunSpec
+from roadbank.evaluation import error_metrics
+from roadbank.fleet.process import design_words
+from roadbank.sim import PlantParams, run
+from roadbank.sim.scenarios import SCENARIOS
+from roadbank.tuning.real import design_settings
+from roadbank.vehicle import car_for_log, described_car, for_conditions, load_vehicle, log_conditions, rear_trim
+from roadbank.vehicle.conditions import REAR_TRIM, REAR_TRIM_SCALES
+
+
+def _drive(rear: float, seed: int = 3):
+    """The track lane change (banked lanes, weaving) with the plant's rear axle ``rear`` times the paper SUV's."""
+    return run(SCENARIOS["track-lane-change"], PlantParams().replace(cornering_scale_rear=rear), seed=seed)
+
+
+@pytest.fixture(scope="module")
+def soft():
+    return _drive(0.55)
+
+
+def test_off_as_shipped(soft):
+    """As shipped (REAR_TRIM False) a described car is designed as described, whatever the log."""
+    assert REAR_TRIM is False and 1.0 in REAR_TRIM_SCALES
+    p = VehicleParams()
+    assert rear_trim(soft.signals, p) == 1.0 and described_car(soft.signals, p) is p
+
+
+def test_a_softer_rear_axle_is_found_and_the_bank_error_falls(soft):
+    """On a drive whose rear axle is 0.55 times the data sheet's, the trim picks a softer one (0.5-0.7), and the
+    default designed for it has a lower bank RMS against the plant's bank than the data sheet's design; on a drive of
+    the data sheet's car the trim keeps it."""
+    p = VehicleParams()
+    with design_settings(rear_trim=True):
+        k = rear_trim(soft.signals, p)
+        same = rear_trim(_drive(1.0).signals, p)
+        trimmed = described_car(soft.signals, p)
+    assert 0.5 <= k <= 0.7 and trimmed.Cr == pytest.approx(p.Cr * k)
+    assert same == 1.0
+    cond = log_conditions(soft.signals)
+
+    def bank_rms(params):
+        e = for_conditions("kinematic-pif", cond, params).run(soft.signals)
+        return error_metrics(soft.signals.t, e.phi_b, soft.truth.phi_b, e.valid, settle=2.0).rms_deg
+    assert bank_rms(trimmed) < 0.8 * bank_rms(p)
+
+
+def test_every_command_reads_the_trimmed_car(soft):
+    """car_for_log gives the trimmed car and says so (the summary line), a vehicle's estimators take it
+    (for_conditions with the vehicle and the trimmed parameters), and the campaign trims each run."""
+    sedan = load_vehicle("suv-paper")
+    cond = log_conditions(soft.signals)
+    with design_settings(rear_trim=True):
+        car, record = car_for_log(soft.signals, cond, vehicle=sedan)
+        est = for_conditions("pif-modified", cond, car, vehicle=sedan)
+        rows = run_one(RunSpec(run_id=0, base_seed=0, scenario="track-lane-change", cr_scale=0.55),
+                       RunOptions(names=("pif-modified",)))
+    assert record["rear_trim"] == pytest.approx(car.Cr / sedan.params.Cr, rel=1e-3) and record["rear_trim"] < 1
+    assert "rear cornering stiffness x" in design_words(record, "kinematic-pif")
+    assert est.params.Cr == car.Cr and est.params.m == sedan.params.m
+    assert rows[0]["rear_trim"] < 1.0 and np.isfinite(rows[0]["rms_deg"])
+    plain = run_one(RunSpec(run_id=0, base_seed=0, scenario="track-lane-change", cr_scale=0.55),
+                    RunOptions(names=("pif-modified",)))
+    assert plain[0]["rear_trim"] == 1.0 and rows[0]["rms_deg"] < plain[0]["rms_deg"]
