@@ -198,10 +198,10 @@ SMOOTHER_GATE_HOLD_S = 8.0
 SMOOTHER_GATE_HOLD_S_CHOICES = (8.0, 4.0, 2.0, 1.0)
 #: whether a described car's rear cornering stiffness is trimmed to the log (:func:`roadbank.vehicle.rear_trim`: the
 #: misfit of the undescribed car's rule over :data:`REAR_TRIM_SCALES` of it, the described value kept unless another
-#: fits :data:`~roadbank.vehicle.CAR_MARGIN` times better): the sixty-eighth stage of :mod:`roadbank.tuning.real`
-#: chooses it
-REAR_TRIM = False
-REAR_TRIM_CHOICES = (False, True)
+#: fits :data:`~roadbank.vehicle.CAR_MARGIN` times better; ``"softer"``: over those scales at most 1 only): the
+#: sixty-eighth stage of :mod:`roadbank.tuning.real` kept it off against True, the sixty-ninth decides ``"softer"``
+REAR_TRIM: bool | str = False
+REAR_TRIM_CHOICES = (False, True, "softer")
 #: the scales (-) of the described ``Cr`` that the trim tries (1: as described)
 REAR_TRIM_SCALES = (0.5, 0.6, 0.7, 0.85, 1.0, 1.2, 1.4)
 #: the lowest speed (m/s) at which that gate's measure counts (0: every speed, as the sixty-fourth stage shipped): the
@@ -914,9 +914,13 @@ def _setting(name: str, choices: str | None = None):
     return value
 
 
-def trims_rear() -> bool:
-    """Whether a described car's rear cornering stiffness is trimmed to each log (:data:`REAR_TRIM`)."""
-    return bool(_setting("REAR_TRIM"))
+def rear_trim_scales() -> tuple:
+    """The scales (-) of a described car's rear cornering stiffness that the trim to each log tries
+    (:data:`REAR_TRIM`): none where it is off, those of :data:`REAR_TRIM_SCALES` at most 1 where ``"softer"``."""
+    choice = _setting("REAR_TRIM")
+    if choice is False:
+        return ()
+    return tuple(k for k in REAR_TRIM_SCALES if choice is True or k <= 1.0)
 
 
 def models_car(name: str, described: bool) -> bool:

@@ -16,8 +16,8 @@ import numpy as np
 from .. import defaults
 from ..params import VehicleParams
 from ..signals import Signals, sample_rate
-from .conditions import (REAR_TRIM_SCALES, default_reads_roll_rate, design_span, esp_conditions, is_quiet,
-                         log_conditions, make_estimator, quiet_noise_ratio, source_rates, trims_rear)
+from .conditions import (default_reads_roll_rate, design_span, esp_conditions, is_quiet, log_conditions,
+                         make_estimator, quiet_noise_ratio, rear_trim_scales, source_rates)
 from .file import load_vehicle
 from .sensors import SensorSpec
 
@@ -153,17 +153,19 @@ def _fits_better(power: dict, kept, margin: float):
 
 def rear_trim(signals, params: VehicleParams, margin: float = CAR_MARGIN, cond: dict | None = None) -> float:
     """The scale (-) of a described car's rear cornering stiffness ``params.Cr`` that a log is designed for: the
-    undescribed car's rule (:func:`design_car`) over :data:`~roadbank.vehicle.conditions.REAR_TRIM_SCALES` of it,
-    the rest of ``params`` as described. The scale whose default estimate of the log's design span has the lowest
+    undescribed car's rule (:func:`design_car`) over the scales of it that
+    :data:`~roadbank.vehicle.conditions.REAR_TRIM` says (:func:`~roadbank.vehicle.conditions.rear_trim_scales`), the
+    rest of ``params`` as described. The scale whose default estimate of the log's design span has the lowest
     misfit (:func:`bank_band_power`) where it is ``margin`` times below the described car's, else 1 (and 1 where the
-    default reads the log's roll rate, or :data:`~roadbank.vehicle.conditions.REAR_TRIM` is False).
+    default reads the log's roll rate, or the trim is off).
 
     Real tyres are not their data sheet's: worn, at another pressure, on another load, a rear axle's stiffness is
     off by tens of per cent, and the modified model, which keeps only the rear tyres, reads the error at every
     yaw transient as bank (docs/campaign.md). ``cond``: as :func:`design_car`."""
-    if not trims_rear():
+    scales = rear_trim_scales()
+    if not scales:
         return 1.0
-    cars = {k: params.replace(Cr=params.Cr * k) if k != 1.0 else params for k in REAR_TRIM_SCALES}
+    cars = {k: params.replace(Cr=params.Cr * k) if k != 1.0 else params for k in dict.fromkeys((*scales, 1.0))}
     power = _misfits(signals, cars, cond)
     return 1.0 if power is None else float(_fits_better(power, 1.0, margin))
 
