@@ -199,8 +199,8 @@ SMOOTHER_GATE_HOLD_S_CHOICES = (8.0, 4.0, 2.0, 1.0)
 #: whether a described car's rear cornering stiffness is trimmed to the log (:func:`roadbank.vehicle.rear_trim`: the
 #: misfit of the undescribed car's rule over :data:`REAR_TRIM_SCALES` of it, the described value kept unless another
 #: fits :data:`~roadbank.vehicle.CAR_MARGIN` times better; ``"softer"``: over those scales at most 1 only): the
-#: sixty-eighth stage of :mod:`roadbank.tuning.real` kept it off against True, the sixty-ninth decides ``"softer"``
-REAR_TRIM: bool | str = False
+#: sixty-eighth stage of :mod:`roadbank.tuning.real` kept it off against True, the sixty-ninth chose ``"softer"``
+REAR_TRIM: bool | str = "softer"
 REAR_TRIM_CHOICES = (False, True, "softer")
 #: the scales (-) of the described ``Cr`` that the trim tries (1: as described)
 REAR_TRIM_SCALES = (0.5, 0.6, 0.7, 0.85, 1.0, 1.2, 1.4)
