@@ -38,8 +38,8 @@ Every name of the stages is importable from here.
 
 from __future__ import annotations
 
-from .common import (BANDWIDTH_39, BEFORE_38, BEFORE_64, BEFORE_65, BEFORE_67, EQUAL_DEG, SIM_CARS, SIM_DRIVES,
-                     START_40, TIE_DEG,
+from .common import (BANDWIDTH_39, BEFORE_38, BEFORE_64, BEFORE_65, BEFORE_67, BEFORE_69, design_settings, within,
+                     EQUAL_DEG, SIM_CARS, SIM_DRIVES, START_40, TIE_DEG,
                      UNBIASED_36, cars_median, check_pieces, fixed, guarded, lengths_objective, log_errors, lowest_tied,
                      objective,
                      per_log, rms_deg, sim_errors, simulated_sets, training_logs, whole_and_pieces, without_roll_rate)
@@ -54,9 +54,9 @@ from .esp import (BANK_RATES_DEG, BANK_SPEED_EXPS, CAR_MARGINS, CLIPS, CUTOFFS_H
                   choose_loud_gate, choose_lowpass,
                   choose_noise_at_source, choose_noise_octave, choose_noise_tau, choose_octave_top, choose_prior_again,
                   choose_quiet_floor_rate, choose_quiet_floor_signal, choose_quiet_measure, choose_smoother,
-                  design_settings, gate_filter_sets, kinematic_pif_candidates, long_errors, long_logs, long_median,
+                  gate_filter_sets, kinematic_pif_candidates, long_errors, long_logs, long_median,
                   loud_gate_candidates, loud_sets, paper_median, paper_sets, prior_candidates, resampled_logs,
-                  smoother_clip_candidates, upsampled_logs, held_logs, HELD_RATES_HZ, within)
+                  smoother_clip_candidates, upsampled_logs, held_logs, HELD_RATES_HZ)
 from .gyro import (ANCHORED_BIAS_TAUS_S, ANCHORED_CUTOFFS_HZ, GAP_LENGTHS_S, GAP_PLACES, GYRO_BIAS_TAUS,
                    GYRO_CUTOFFS_HZ, GYRO_MAX_GAPS,
                    GYRO_OFFSET_DEG, GYRO_ORDER4_CUTOFFS_HZ, GYRO_SIDESLIPS, GYRO_START_HOLDS_S, GYRO_START_OFFSETS_DEG,
@@ -98,6 +98,7 @@ __all__ = ["REAR_TRIM_LOSS_DEG", "REAR_TRIM_REAL_CAR", "REAR_TRIM_REAL_LOSS_DEG"
            "shaken_sets",
            "BEFORE_64", "BEFORE_65", "within", "GATE_SPEEDS", "GATE_SPEED_SIM_LOSS_DEG", "GATE_SPEED_TAIL_LOSS",
            "choose_gate_speed", "stage_sets", "lowest_eligible", "GATE_HOLDS_S", "choose_gate_hold", "BEFORE_67",
+           "BEFORE_69",
            "BLEND_GATE_SIM_LOSS_DEG",
            "BLEND_GATE_SPEEDS", "BLEND_GATE_TAIL_LOSS", "choose_blend_gate_speed", "STEEP_ROAD_ORDER",
            "STEEP_ROAD_CUTOFF_HZ", "UNDESCRIBED_GAIN_DEG", "choose_undescribed_quiet",

@@ -73,7 +73,7 @@ from ...constants import G
 from ...vehicle import conditions
 from ...validation.scoring import SHORT_PIECES_S
 from .common import check_pieces, lowest_tied, rms_deg
-from .esp import design_settings
+from .common import design_settings
 
 
 #: the thirtieth stage's pieces (s) and candidates: the check's centred-mean windows (s) and its slope range (-)

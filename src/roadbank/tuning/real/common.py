@@ -8,6 +8,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import warnings
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +18,7 @@ from ...io.kitti import load_kitti_oxts
 from ...validation.kitti import KITTI_SCORING
 from ...validation.scoring import SHORT_PIECES_S, masks, scored_pieces
 from ...validation.splits import KITTI_TRAINING
-from ...vehicle import load_vehicle
+from ...vehicle import conditions, load_vehicle
 from ..manoeuvres import drive_set
 from ..objective import drive_errors
 
@@ -40,6 +41,8 @@ BEFORE_64 = {"smoother_gate": False}
 BEFORE_65 = {"smoother_gate_v_min": 0.0}
 #: ... and as the sixty-fourth and sixty-fifth ran it: held open 8 s before and after each ramp
 BEFORE_67 = {"smoother_gate_hold_s": 8.0}
+#: a car not trimmed to the log (as every stage before the sixty-eighth ran, and as a fitted car is read)
+BEFORE_69 = {"rear_trim": False}
 #: objectives closer than this (deg) count as equal
 TIE_DEG = 0.002
 #: the rule's simulated tie-break counts medians as equal to this (deg): the size of float rounding
@@ -47,6 +50,41 @@ EQUAL_DEG = 1e-9
 #: the shipped cars of the simulated part, and the number of training drives per car
 SIM_CARS = ("suv-paper", "sedan", "compact", "van")
 SIM_DRIVES = 24
+
+
+@contextmanager
+def design_settings(**settings):
+    """Within the block, the settings of :mod:`roadbank.vehicle.conditions` that the stages from the eighteenth on
+    choose (``QUIET_FLOOR_RATE``, ``QUIET_FLOOR_SIGNAL``, ``NOISE_AT_SOURCE``, ``NOISE_OCTAVE``, ``NOISE_OCTAVE_TOP``:
+    keyword names in lower case) as given, restored after: every command's design reads them, so a stage runs each
+    candidate as it would ship. A value that is not one of the setting's choices is refused when a design reads it."""
+    names = {k: k.upper() for k in settings}
+    unknown = [k for k, n in names.items() if n not in _DESIGN_SETTINGS]
+    if unknown:
+        raise ValueError(f"not a design setting: {', '.join(unknown)} (one of {', '.join(_DESIGN_SETTINGS).lower()})")
+    before = {n: getattr(conditions, n) for n in names.values()}
+    for k, n in names.items():
+        setattr(conditions, n, settings[k])
+    try:
+        yield
+    finally:
+        for n, v in before.items():
+            setattr(conditions, n, v)
+
+
+#: the module settings of :mod:`roadbank.vehicle.conditions` that :func:`design_settings` sets
+_DESIGN_SETTINGS = ("QUIET_FLOOR_RATE", "QUIET_FLOOR_SIGNAL", "NOISE_AT_SOURCE", "NOISE_OCTAVE", "NOISE_OCTAVE_TOP",
+                    "TRUST_FIXED_CHANNELS", "GATE_AT_SOURCE", "READ_AT_SOURCE", "QUIET_READS_ROLL_RATE",
+                    "SOURCE_ROUNDING", "ROAD_CHANGE", "ROAD_CHANGE_BACK", "UNDESCRIBED_KEEPS_MODEL",
+                    "UNDESCRIBED_SMOOTHER_KEEPS_MODEL", "SMOOTHER_GATE", "SMOOTHER_GATE_V_MIN",
+                    "BLEND_GATE_V_MIN", "SMOOTHER_GATE_HOLD_S", "REAR_TRIM")
+def within(build, **settings):
+    """``build`` (signals -> estimator) run within :func:`design_settings` ``(**settings)``: a design read at build
+    time, as a stage ran it."""
+    def at(signals):
+        with design_settings(**settings):
+            return build(signals)
+    return at
 
 
 def lowest_tied(obj: dict, order):
@@ -122,15 +160,17 @@ def per_log(name: str, car_margin: float | None = None, **options):
     """``build`` for :func:`objective`: ``name`` designed for each log as the command line does
     (no car given: :func:`roadbank.vehicle.undescribed_params` of the log; ``car_margin`` (-) other than
     the shipped :data:`~roadbank.vehicle.CAR_MARGIN`: with that margin, ``inf`` the static car, as the
-    stages before the eighth ran), that car read as described (its model kept on a quiet log, as every stage before
-    the sixty-second ran) unless the options say ``described=False`` (as the command line reads it since,
+    stages before the eighth ran, never trimmed to the log: :data:`BEFORE_69`), that car read as described (its
+    model kept on a quiet log, as every stage before the sixty-second ran) unless the options say
+    ``described=False`` (as the command line reads it since,
     :data:`~roadbank.vehicle.conditions.UNDESCRIBED_KEEPS_MODEL`)."""
     options = {"described": True, **options}
     def build(signals):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
             if car_margin is not None and "params" not in options and "vehicle" not in options:
-                return vehicle.for_log(name, signals, vehicle.undescribed_params(signals, car_margin), **options)
+                with design_settings(**BEFORE_69):      # the fitted car given as params: no user described it
+                    return vehicle.for_log(name, signals, vehicle.undescribed_params(signals, car_margin), **options)
             return vehicle.for_log(name, signals, **options)
     return build
 

@@ -254,7 +254,6 @@ import dataclasses
 import itertools
 import math
 import warnings
-from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -276,8 +275,8 @@ from ...signals import Signals, concat_signals, sample_rate
 from ...validation.kitti import KITTI_SCORING
 from ...validation.scoring import masks
 from ...vehicle import load_vehicle
-from .common import (BEFORE_64, EQUAL_DEG, SIM_CARS, SIM_DRIVES, TIE_DEG, cars_median, fixed, guarded, log_errors,
-                     lowest_tied, objective, per_log, rms_deg, sim_errors)
+from .common import (BEFORE_64, EQUAL_DEG, SIM_CARS, SIM_DRIVES, TIE_DEG, cars_median, fixed, guarded,
+                     log_errors, lowest_tied, objective, per_log, rms_deg, sim_errors, within)
 
 
 #: candidate cut-offs (Hz) and feed-forward gains (-)
@@ -547,32 +546,6 @@ def upsampled_logs(logs, rate: float = UPSAMPLED_RATE_HZ, scoring=KITTI_SCORING)
     return out
 
 
-@contextmanager
-def design_settings(**settings):
-    """Within the block, the settings of :mod:`roadbank.vehicle.conditions` that the stages from the eighteenth on
-    choose (``QUIET_FLOOR_RATE``, ``QUIET_FLOOR_SIGNAL``, ``NOISE_AT_SOURCE``, ``NOISE_OCTAVE``, ``NOISE_OCTAVE_TOP``:
-    keyword names in lower case) as given, restored after: every command's design reads them, so a stage runs each
-    candidate as it would ship. A value that is not one of the setting's choices is refused when a design reads it."""
-    names = {k: k.upper() for k in settings}
-    unknown = [k for k, n in names.items() if n not in _DESIGN_SETTINGS]
-    if unknown:
-        raise ValueError(f"not a design setting: {', '.join(unknown)} (one of {', '.join(_DESIGN_SETTINGS).lower()})")
-    before = {n: getattr(conditions, n) for n in names.values()}
-    for k, n in names.items():
-        setattr(conditions, n, settings[k])
-    try:
-        yield
-    finally:
-        for n, v in before.items():
-            setattr(conditions, n, v)
-
-
-#: the module settings of :mod:`roadbank.vehicle.conditions` that :func:`design_settings` sets
-_DESIGN_SETTINGS = ("QUIET_FLOOR_RATE", "QUIET_FLOOR_SIGNAL", "NOISE_AT_SOURCE", "NOISE_OCTAVE", "NOISE_OCTAVE_TOP",
-                    "TRUST_FIXED_CHANNELS", "GATE_AT_SOURCE", "READ_AT_SOURCE", "QUIET_READS_ROLL_RATE",
-                    "SOURCE_ROUNDING", "ROAD_CHANGE", "ROAD_CHANGE_BACK", "UNDESCRIBED_KEEPS_MODEL",
-                    "UNDESCRIBED_SMOOTHER_KEEPS_MODEL", "SMOOTHER_GATE", "SMOOTHER_GATE_V_MIN",
-                    "BLEND_GATE_V_MIN", "SMOOTHER_GATE_HOLD_S", "REAR_TRIM")
 #: the settings as each stage ran: the eighteenth and nineteenth before the twentieth, the twentieth before the
 #: twenty-first
 _BEFORE_SOURCE = {"noise_at_source": "none", "noise_octave": "none"}
@@ -591,15 +564,6 @@ def _with_settings(**settings):
     """``build`` of the default as the command line builds it, within :func:`design_settings` ``(**settings)``: the
     design, where the settings are read, is built inside the block."""
     return within(per_log("kinematic-pif"), **settings)
-
-
-def within(build, **settings):
-    """``build`` (signals -> estimator) run within :func:`design_settings` ``(**settings)``: a design read at build
-    time, as a stage ran it."""
-    def at(signals):
-        with design_settings(**settings):
-            return build(signals)
-    return at
 
 
 def choose_quiet_floor_rate(logs, up, sim_sets, rates=QUIET_FLOOR_RATES) -> tuple:

@@ -27,7 +27,8 @@ from ...signals import Signals, concat_signals
 from ...validation.roads import SMOOTH_ROADS, smooth_road
 from ..objective import FAILED_DEG, SETTLE
 from .common import BEFORE_64, cars_median, log_errors, per_log, sim_errors
-from .esp import _with_settings, design_settings, same_outputs, two_choice_rule, within
+from .common import design_settings, within
+from .esp import _with_settings, same_outputs, two_choice_rule
 
 #: the rule: B ships if its median over the ESP long logs is below A's by more than this (deg) ...
 ROAD_CHANGE_GAIN_DEG = 0.05
