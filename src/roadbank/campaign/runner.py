@@ -29,6 +29,7 @@ the start until the yaw-rate offset is flagged learnt; NaN if never) say what wa
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 import traceback
@@ -37,6 +38,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from .. import defaults
 from .. import estimators as E
 from ..evaluation import error_metrics
 from ..params import VehicleParams
@@ -147,6 +149,17 @@ def estimators_for(names, vehicle=None, offsets: bool = False, rear: float = 1.0
     return out
 
 
+def _trial(vehicle, car):
+    """The default (:data:`roadbank.defaults.ESTIMATOR`) for ``car`` (a trial of :func:`roadbank.vehicle.rear_trim`),
+    built as this module builds every estimator: once per process, for the data sheet's sensors (``vehicle``'s where
+    given: its sensors and tuning, ``car`` its parameters)."""
+    key = ("trial", car, None if vehicle is None else vehicle.dumps())
+    if key not in _ESTIMATORS:
+        _ESTIMATORS[key] = E.make(defaults.ESTIMATOR, car) if vehicle is None else vehicle.replace(
+            params=car).make(defaults.ESTIMATOR)
+    return _ESTIMATORS[key]
+
+
 def _scenario(spec: RunSpec, options: RunOptions):
     sc = SCENARIOS[spec.scenario]
     changes: dict[str, Any] = {}
@@ -186,7 +199,8 @@ def run_one(spec: RunSpec, options: RunOptions = RunOptions()) -> list[dict]:
     extra = {"max_beta_deg": tr.max_sideslip_deg(k0), "min_vx": float(np.nanmin(tr.vx[k0:])),
              "duration_s": float(sig.t[-1] - sig.t[k0]), "sim_s": sim_s, "standstill_s": still, **setup}
     true_r_offset = sensors.yaw_rate.bias
-    rear = rear_trim(sig, VehicleParams() if options.vehicle is None else options.vehicle.params)
+    rear = rear_trim(sig, VehicleParams() if options.vehicle is None else options.vehicle.params,
+                     build=functools.partial(_trial, options.vehicle))
     extra["rear_trim"] = rear
     rows = []
     for name, est in estimators_for(names, options.vehicle, options.offsets, rear).items():

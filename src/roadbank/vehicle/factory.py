@@ -122,23 +122,29 @@ def design_car(signals, margin: float = CAR_MARGIN, cond: dict | None = None) ->
     return _fits_better(power, defaults.VEHICLE, margin)
 
 
-def _misfits(signals, cars: dict, cond: dict | None) -> dict | None:
+def _misfits(signals, cars: dict, cond: dict | None, build=None) -> dict | None:
     """``{key: misfit}`` (:func:`bank_band_power`) of the default estimator built for each car of ``cars`` (key ->
     :class:`VehicleParams`) and the log's conditions (its ESP channels alone), run over the log's design span
     (:func:`~roadbank.vehicle.design_span`); inf for a design the conditions leave without a solution. None where the
     default reads the log's roll rate (it has no car model: nothing to fit). ``cond``: the log's conditions, measured
-    on that span where None."""
+    on that span where None. ``build`` (a car -> an estimator): a caller that builds its estimators its own way (the
+    campaign: once per process, for the data sheet's sensors) builds these too; the log's conditions are then not
+    read."""
     n = design_span(signals)
     span = signals[:n] if n < len(signals) else signals
-    if cond is None:
-        cond = log_conditions(span)
-    if default_reads_roll_rate(cond):
-        return None
-    cond = esp_conditions(cond)
+    if build is None:
+        if cond is None:
+            cond = log_conditions(span)
+        if default_reads_roll_rate(cond):
+            return None
+        esp = esp_conditions(cond)
+
+        def build(car):
+            return make_estimator(defaults.ESTIMATOR, car, **esp)
     power = {}
     for key, car in cars.items():
         try:
-            power[key] = bank_band_power(span, make_estimator(defaults.ESTIMATOR, car, **cond).run(span))
+            power[key] = bank_band_power(span, build(car).run(span))
         except ValueError:          # a design the log's conditions leave without a solution: not this car
             power[key] = math.inf
     return power
@@ -151,7 +157,8 @@ def _fits_better(power: dict, kept, margin: float):
     return best if power[best] * margin < power[kept] else kept
 
 
-def rear_trim(signals, params: VehicleParams, margin: float = CAR_MARGIN, cond: dict | None = None) -> float:
+def rear_trim(signals, params: VehicleParams, margin: float = CAR_MARGIN, cond: dict | None = None,
+              build=None) -> float:
     """The scale (-) of a described car's rear cornering stiffness ``params.Cr`` that a log is designed for: the
     undescribed car's rule (:func:`design_car`) over the scales of it that
     :data:`~roadbank.vehicle.conditions.REAR_TRIM` says (:func:`~roadbank.vehicle.conditions.rear_trim_scales`), the
@@ -161,12 +168,12 @@ def rear_trim(signals, params: VehicleParams, margin: float = CAR_MARGIN, cond: 
 
     Real tyres are not their data sheet's: worn, at another pressure, on another load, a rear axle's stiffness is
     off by tens of per cent, and the modified model, which keeps only the rear tyres, reads the error at every
-    yaw transient as bank (docs/campaign.md). ``cond``: as :func:`design_car`."""
+    yaw transient as bank (docs/campaign.md). ``cond``: as :func:`design_car`; ``build``: as :func:`_misfits`."""
     scales = rear_trim_scales()
     if not scales:
         return 1.0
     cars = {k: params.replace(Cr=params.Cr * k) if k != 1.0 else params for k in dict.fromkeys((*scales, 1.0))}
-    power = _misfits(signals, cars, cond)
+    power = _misfits(signals, cars, cond, build)
     return 1.0 if power is None else float(_fits_better(power, 1.0, margin))
 
 
