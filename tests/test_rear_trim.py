@@ -101,3 +101,38 @@ def test_the_sixty_ninth_stage_trims_to_a_softer_axle_only():
     assert c[1] < (1.0 - REAR_TRIM_TAIL_GAIN) * a[1] and c[0] <= a[0]
     assert c[2:] == pytest.approx(a[2:], abs=1e-4)
     np.testing.assert_array_equal(errs[False][2], errs["softer"][2])      # the real drives: nothing trimmed
+
+
+def test_the_commands_say_the_trim_and_design_as_for_log(soft, tmp_path):
+    """`roadbank estimate LOG --vehicle suv-paper` on the soft drive says the trim on its summary line and writes what
+    for_log(..., vehicle=...) gives; `roadbank export c --log LOG --vehicle suv-paper -e pif-modified` designs the
+    trimmed car (its C equals export_c of that estimator) and says so."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+    from click.testing import CliRunner
+
+    from roadbank.cli import main
+    from roadbank.estimators.offsets import with_online_offsets
+    from roadbank.export import export_c
+    from roadbank.io import load_log
+    from roadbank.vehicle import for_log
+
+    s = soft.signals
+    pq.write_table(pa.table({"t": s.t, "vx": s.vx, "ay": s.ay, "r": s.r}), tmp_path / "soft.parquet")
+    res = CliRunner().invoke(main, ["estimate", str(tmp_path / "soft.parquet"), "--vehicle", "suv-paper", "-o",
+                                    str(tmp_path / "out.csv")])
+    assert res.exit_code == 0, res.output
+    assert "its rear cornering stiffness x 0.7 (trimmed to the log)" in res.output
+    read = load_log(tmp_path / "soft.parquet").signals
+    est = for_log("kinematic-pif", read, vehicle=load_vehicle("suv-paper"))
+    assert est.params.Cr == pytest.approx(0.7 * load_vehicle("suv-paper").params.Cr)
+    want = with_online_offsets(est, est.params).run(read)
+    got = np.loadtxt(tmp_path / "out.csv", delimiter=",", skiprows=1, usecols=1)
+    np.testing.assert_allclose(got, want.theta, atol=1e-12)
+    res = CliRunner().invoke(main, ["export", "c", "-e", "pif-modified", "--log", str(tmp_path / "soft.parquet"),
+                                    "--vehicle", "suv-paper", "-o", str(tmp_path / "c")])
+    assert res.exit_code == 0, res.output
+    assert "rear cornering stiffness x 0.7 (trimmed to the log)" in res.output
+    pif = for_log("pif-modified", read, vehicle=load_vehicle("suv-paper"))
+    assert (tmp_path / "c" / "roadbank_pif_modified.c").read_text() == export_c(
+        pif, tmp_path / "py", rate=log_conditions(read)["log_rate"]).source.read_text()

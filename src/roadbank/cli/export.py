@@ -177,7 +177,8 @@ def _gyro_words(d) -> str:
 def _log_design(log: Path | None, channels: Path | None, fmt: str | None, vehicle) -> tuple[dict, object, str | None]:
     """``(conditions, params, car name)`` of ``log``: its :func:`roadbank.vehicle.log_conditions` (of its first minute
     of driving) and, when no car is given, the shipped car fitted to it (:func:`roadbank.vehicle.car_for_log`,
-    as ``roadbank estimate`` chooses it); ``({}, None, None)`` without a log, ``params`` None with a car. A log
+    as ``roadbank estimate`` chooses it); ``({}, None, None)`` without a log; with a car, ``params`` its parameters
+    where its rear stiffness is trimmed to the log (:func:`roadbank.vehicle.car_for_log`), else None. A log
     that cannot be read is a one-line error naming the file; the reader's warnings (a line left out, a gap
     repaired) are printed as ``warning: ...``, as ``roadbank estimate`` prints them."""
     if log is None:
@@ -203,7 +204,12 @@ def _log_design(log: Path | None, channels: Path | None, fmt: str | None, vehicl
                 f"too little driving to design on ({moving} sample(s) at 5 m/s or more)")
         click.echo(f"warning: --log {log}: {what}; using the default design (the data sheet's sensor noise, "
                    "not the log's)", err=True)
-    if vehicle is not None:
-        return cond, None, None
+    if vehicle is not None:     # its rear stiffness trimmed to the log, as `roadbank estimate --vehicle` does
+        car, design = car_for_log(signals, cond, vehicle=vehicle)
+        if "rear_trim" not in design:
+            return cond, None, None
+        click.echo(f"designed for {log.name}: {vehicle.name}, its rear cornering stiffness x {design['rear_trim']:g} "
+                   "(trimmed to the log)", err=True)
+        return cond, car, None
     params, design = car_for_log(signals, cond)
     return cond, params, f"{design['car']} ({'the default design for' if idle else 'fitted to'} {log.name})"
