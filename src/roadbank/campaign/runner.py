@@ -136,27 +136,29 @@ def estimators_for(names, vehicle=None, offsets: bool = False, rear: float = 1.0
     """
     out = {}
     car = None if vehicle is None else vehicle.dumps()
+    base = VehicleParams() if vehicle is None else vehicle.params
+    params = base if rear == 1.0 else base.replace(Cr=base.Cr * rear)
     for name in names:
         key = (name, car, bool(offsets), float(rear))
         if key not in _ESTIMATORS:
-            if vehicle is None:
-                paper = VehicleParams()
-                est = E.make(name) if rear == 1.0 else E.make(name, paper.replace(Cr=paper.Cr * rear))
-            else:
-                est = (vehicle if rear == 1.0 else vehicle.with_params(Cr=vehicle.params.Cr * rear)).make(name)
+            est = _make(name, vehicle, params)
             _ESTIMATORS[key] = E.with_online_offsets(est) if offsets else est
         out[name] = _ESTIMATORS[key]
     return out
 
 
-def _trial(vehicle, car):
+def _make(name: str, vehicle, params: VehicleParams):
+    """``name`` for ``params`` as this module builds every estimator: the data sheet's sensors, or ``vehicle``'s
+    sensors and tuning."""
+    return E.make(name, params) if vehicle is None else vehicle.replace(params=params).make(name)
+
+
+def _trial(vehicle, car: VehicleParams):
     """The default (:data:`roadbank.defaults.ESTIMATOR`) for ``car`` (a trial of :func:`roadbank.vehicle.rear_trim`),
-    built as this module builds every estimator: once per process, for the data sheet's sensors (``vehicle``'s where
-    given: its sensors and tuning, ``car`` its parameters)."""
+    built once per process as :func:`_make` builds every estimator."""
     key = ("trial", car, None if vehicle is None else vehicle.dumps())
     if key not in _ESTIMATORS:
-        _ESTIMATORS[key] = E.make(defaults.ESTIMATOR, car) if vehicle is None else vehicle.replace(
-            params=car).make(defaults.ESTIMATOR)
+        _ESTIMATORS[key] = _make(defaults.ESTIMATOR, vehicle, car)
     return _ESTIMATORS[key]
 
 
