@@ -136,3 +136,65 @@ def test_the_commands_say_the_trim_and_design_as_for_log(soft, tmp_path):
     pif = for_log("pif-modified", read, vehicle=load_vehicle("suv-paper"))
     assert (tmp_path / "c" / "roadbank_pif_modified.c").read_text() == export_c(
         pif, tmp_path / "py", rate=log_conditions(read)["log_rate"]).source.read_text()
+
+
+def test_a_rear_stiffness_measured_on_the_car_is_kept(soft, tmp_path):
+    """A vehicle file whose `[identified.Cr]` holds its Cr (what `roadbank identify` writes) is used as it is on the
+    soft drive that trims the same car without it: car_for_log, for_log, the campaign and `roadbank estimate` keep the
+    file's Cr and say no trim. A table whose value is not the file's Cr (edited since) does not count."""
+    from click.testing import CliRunner
+
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from roadbank.cli import main
+    from roadbank.vehicle import for_log, trims_rear
+
+    suv = load_vehicle("suv-paper")
+    measured = suv.with_identified({"Cr": {"value": suv.params.Cr, "std": 2000.0, "unit": "N/rad",
+                                           "note": "quasi-steady cornering"}})
+    measured.to_toml(tmp_path / "measured.toml")
+    measured = load_vehicle(tmp_path / "measured.toml")
+    stale = suv.with_identified({"Cr": {"value": 0.9 * suv.params.Cr, "unit": "N/rad"}})
+    assert measured.rear_measured and not trims_rear(measured)
+    assert not stale.rear_measured and not suv.rear_measured and trims_rear(suv) and trims_rear(None)
+    assert not suv.with_identified({"Cr": {"value": "105 kN/rad"}}).rear_measured
+
+    s = soft.signals
+    cond = log_conditions(s)
+    car, record = car_for_log(s, cond, vehicle=measured)
+    assert car == measured.params and "rear_trim" not in record
+    assert "rear_trim" in car_for_log(s, cond, vehicle=stale)[1]
+    assert for_log("pif-modified", s, vehicle=measured).params.Cr == suv.params.Cr
+    assert for_log("pif-modified", s, vehicle=suv).params.Cr < suv.params.Cr
+    spec = RunSpec(run_id=0, base_seed=0, scenario="track-lane-change", cr_scale=0.55)
+    assert run_one(spec, RunOptions(names=("pif-modified",), vehicle=measured))[0]["rear_trim"] == 1.0
+    assert run_one(spec, RunOptions(names=("pif-modified",), vehicle=suv))[0]["rear_trim"] < 1.0
+
+    pq.write_table(pa.table({"t": s.t, "vx": s.vx, "ay": s.ay, "r": s.r}), tmp_path / "soft.parquet")
+    res = CliRunner().invoke(main, ["estimate", str(tmp_path / "soft.parquet"), "--vehicle",
+                                    str(tmp_path / "measured.toml"), "-o", str(tmp_path / "out.csv")])
+    assert res.exit_code == 0, res.output
+    assert "(vehicle file, its rear cornering stiffness as measured)" in res.output and "trimmed" not in res.output
+
+
+def test_a_campaign_carries_its_trim_to_every_run_and_refuses_to_resume_across_it(tmp_path):
+    """RunOptions.rear_trim is the library's setting when the options are made (so it reaches Dask workers, whose
+    module settings are their own): off, a run is not trimmed; it is one of the campaign's stored settings, so a
+    campaign stored before the trim (untrimmed runs, no such key) does not resume with it on."""
+    from roadbank.campaign import store
+    from roadbank.campaign.execute import settings_of
+
+    spec = RunSpec(run_id=0, base_seed=0, scenario="track-lane-change", cr_scale=0.55)
+    assert RunOptions().rear_trim == REAR_TRIM and RunOptions().as_dict()["rear_trim"] == REAR_TRIM
+    with design_settings(rear_trim=False):
+        made_off = RunOptions(names=("pif-modified",))
+    assert made_off.rear_trim is False and "rear_trim" not in made_off.as_dict()
+    assert run_one(spec, made_off)[0]["rear_trim"] == 1.0
+    with pytest.raises(ValueError, match="rear trim"):
+        RunOptions(rear_trim="stiffer")
+    out = tmp_path / "camp"
+    store.check_settings(out, settings_of(10, 1, made_off), resume=False)
+    store.check_settings(out, settings_of(20, 1, made_off), resume=True)        # the same settings: resumes
+    with pytest.raises(store.StoreError, match="rear_trim"):
+        store.check_settings(out, settings_of(20, 1, RunOptions(names=("pif-modified",))), resume=True)

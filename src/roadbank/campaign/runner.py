@@ -13,8 +13,9 @@ a bank RMS error above 2 deg, or an error raised. ``failed`` is that flag.
 Estimators are built once per process (:func:`estimators_for`) and reused with
 ``run(reset=True)``: they all keep the design parameters, only the plant varies, but for the rear cornering
 stiffness, trimmed to each run as every command trims a described car's to its log
-(:func:`roadbank.vehicle.rear_trim`, where :data:`roadbank.vehicle.conditions.REAR_TRIM` says so; the column
-``rear_trim``, the scale, 1 where not trimmed), one design per scale.
+(:func:`roadbank.vehicle.rear_trim`, as ``RunOptions.rear_trim`` says, by default
+:data:`roadbank.vehicle.conditions.REAR_TRIM`; never a vehicle's measured one, :func:`roadbank.vehicle.trims_rear`; the
+column ``rear_trim``, the scale, 1 where not trimmed), one design per scale.
 
 Runs start with ``RunOptions.standstill`` seconds (default 3 s) of the car at rest
 (:func:`roadbank.sim.standstill.with_standstill`), as real drives do, and the estimators
@@ -33,7 +34,7 @@ import functools
 import math
 import time
 import traceback
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -45,7 +46,7 @@ from ..params import VehicleParams
 from ..sim import SCENARIOS
 from ..sim import run as sim_run
 from ..sim.standstill import with_standstill
-from ..vehicle import rear_trim
+from ..vehicle import conditions, rear_trim, trims_rear
 from .sampling import RunSpec
 
 if TYPE_CHECKING:
@@ -87,6 +88,10 @@ class RunOptions:
         Seconds of standstill before each run (s; 0: none).
     offsets : bool
         Run every estimator behind the online offset learner.
+    rear_trim : bool or str
+        Which trim of the design's rear cornering stiffness each run gets (one of
+        :data:`roadbank.vehicle.conditions.REAR_TRIM_CHOICES`; default: the library's setting
+        :data:`~roadbank.vehicle.conditions.REAR_TRIM` when the options are made, so it reaches every worker).
     """
 
     names: tuple = ()
@@ -97,6 +102,7 @@ class RunOptions:
     vehicle: Vehicle | None = None
     standstill: float = 3.0
     offsets: bool = True
+    rear_trim: bool | str = field(default_factory=lambda: conditions.REAR_TRIM)
 
     __hash__ = None  # type: ignore[assignment]  # a Vehicle holds dicts: not hashable
 
@@ -109,6 +115,7 @@ class RunOptions:
             raise ValueError("pre_roll must be >= 0")
         if not (math.isfinite(self.standstill) and self.standstill >= 0):
             raise ValueError("standstill must be >= 0 s")
+        conditions.rear_trim_scales(self.rear_trim)         # a ValueError for none of the choices
 
     def estimator_names(self) -> tuple:
         return tuple(self.names) or E.NAMES
@@ -118,6 +125,8 @@ class RunOptions:
         del d["vehicle"]  # absent for the paper SUV: campaigns stored before vehicles resume
         if not self.standstill and not self.offsets:   # as campaigns stored before standstill starts
             del d["standstill"], d["offsets"]
+        if self.rear_trim is False:         # as campaigns stored before the trim (which ran untrimmed)
+            del d["rear_trim"]
         if self.vehicle is not None:
             d["vehicle"] = self.vehicle.dumps()
         d["names"] = list(self.estimator_names())
@@ -178,9 +187,10 @@ def _error_text(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}{where}"
 
 
-def run_one(spec: RunSpec, options: RunOptions = RunOptions()) -> list[dict]:
+def run_one(spec: RunSpec, options: RunOptions | None = None) -> list[dict]:
     """Simulate ``spec``, run and score every estimator; one row per estimator. Never raises
-    for a failing run (see the module docstring)."""
+    for a failing run (see the module docstring). ``options``: default ``RunOptions()`` made now."""
+    options = options or RunOptions()
     names = options.estimator_names()
     base = spec.as_dict()
     t0 = time.perf_counter()
@@ -201,8 +211,10 @@ def run_one(spec: RunSpec, options: RunOptions = RunOptions()) -> list[dict]:
     extra = {"max_beta_deg": tr.max_sideslip_deg(k0), "min_vx": float(np.nanmin(tr.vx[k0:])),
              "duration_s": float(sig.t[-1] - sig.t[k0]), "sim_s": sim_s, "standstill_s": still, **setup}
     true_r_offset = sensors.yaw_rate.bias
-    rear = rear_trim(sig, VehicleParams() if options.vehicle is None else options.vehicle.params,
-                     build=functools.partial(_trial, options.vehicle))
+    rear = (rear_trim(sig, VehicleParams() if options.vehicle is None else options.vehicle.params,
+                      build=functools.partial(_trial, options.vehicle),
+                      scales=conditions.rear_trim_scales(options.rear_trim))
+            if trims_rear(options.vehicle) else 1.0)
     extra["rear_trim"] = rear
     rows = []
     for name, est in estimators_for(names, options.vehicle, options.offsets, rear).items():
@@ -245,9 +257,10 @@ def _row(base: dict, name: str, **values) -> dict:
     return row
 
 
-def warm_up(options: RunOptions = RunOptions()) -> float:
+def warm_up(options: RunOptions | None = None) -> float:
     """Build the estimators and run a 0.5 s simulation in this process, so the numba
     kernels are loaded (or compiled) before a campaign is timed. Returns seconds spent."""
+    options = options or RunOptions()
     t0 = time.perf_counter()
     sc = dataclasses.replace(SCENARIOS["const-bank"], duration=0.5, pre_roll=0.1)
     sim = sim_run(sc, dt=options.sim_dt)
@@ -256,8 +269,9 @@ def warm_up(options: RunOptions = RunOptions()) -> float:
     return time.perf_counter() - t0
 
 
-def run_batch(specs, options: RunOptions = RunOptions()) -> list[dict]:
+def run_batch(specs, options: RunOptions | None = None) -> list[dict]:
     """:func:`run_one` over a batch of specs (one Dask task); rows of all of them."""
+    options = options or RunOptions()
     rows = []
     for spec in specs:
         rows.extend(run_one(spec, options))

@@ -85,6 +85,19 @@ def load(outdir):
     return df.sort_values(["run_id", "estimator"]).reset_index(drop=True)
 
 
+def _differences(old: dict, new: dict, within: str = "") -> dict:
+    """``{key: (stored, now)}`` of the settings ``new`` that differ from ``old``, a setting that is a mapping in both
+    compared key by key (named ``options.rear_trim``); absent on one side is None."""
+    out = {}
+    for k in sorted(set(new) | (set(old) if within else set())):
+        a, b = old.get(k), new.get(k)
+        if isinstance(a, dict) and isinstance(b, dict):
+            out.update(_differences(a, b, f"{within}{k}."))
+        elif a != b:
+            out[f"{within}{k}"] = (a, b)
+    return out
+
+
 def check_settings(outdir, settings: dict, resume: bool) -> None:
     """Record ``settings`` in a new campaign directory, or check them when resuming.
 
@@ -102,7 +115,7 @@ def check_settings(outdir, settings: dict, resume: bool) -> None:
             old = json.loads(path.read_text())
         except (OSError, ValueError) as exc:
             raise StoreError(f"{path}: unreadable campaign settings ({exc})") from None
-        diff = {k: (old.get(k), v) for k, v in settings.items() if k != "runs" and old.get(k) != v}
+        diff = _differences(old, {k: v for k, v in settings.items() if k != "runs"})
         if diff:
             raise StoreError(f"{out}: cannot resume, settings differ from the stored campaign: "
                              + "; ".join(f"{k}: stored {a!r}, now {b!r}" for k, (a, b) in diff.items()))

@@ -21,7 +21,7 @@ _VEHICLE = vehicle_option("The estimators are designed for this car: its paramet
 def _car(vehicle) -> dict:
     """``validate_*`` keyword arguments for ``--vehicle`` (none: the data set's default car)."""
     return {} if vehicle is None else {"params": vehicle.params, "tuning": dict(vehicle.tuning),
-                                       "sensors": vehicle.sensors}
+                                       "sensors": vehicle.sensors, "trim": not vehicle.rear_measured}
 
 
 @click.group()

@@ -136,8 +136,8 @@ def design_words(design: dict, estimator: str) -> str:
     else:
         heard = (f"ay noise {noise:.2g} m/s^2, floor {floor:.2g} ({_times(ratio)}): "
                  f"{'quiet' if design['quiet'] else 'loud'}")
-    trim = (f", its rear cornering stiffness x {design['rear_trim']:g} (trimmed to the log)"
-            if "rear_trim" in design else "")
+    trim = (f", its rear cornering stiffness x {design['rear_trim']:g} (trimmed to the log)" if "rear_trim" in design
+            else ", its rear cornering stiffness as measured" if design.get("rear_measured") else "")
     words = f"{design['car']} ({design['car_from']}{trim}); {heard}"
     slope, ax = design.get("roll_rate"), design.get("ax")
     gyro = roll_rate_usable(slope)

@@ -20,7 +20,7 @@ from ..io.stream import CHUNK_ROWS, ReadAhead, stream_log
 from ..io.writers import write_error
 from ..params import VehicleParams
 from ..vehicle import (DESIGN_MAX_S, Vehicle, described_car, for_conditions, has_design_span, load_vehicle,
-                       log_conditions, undescribed_params)
+                       log_conditions, trims_rear, undescribed_params)
 from ..vehicle.conditions import (QUIET_MODELS, RoadCheck, design_ay_floor, handed_over_warnings, is_quiet,
                                   keeps_cars_model, louder_warnings, models_car)
 from ..vehicle.sensors import SensorSpec
@@ -142,14 +142,14 @@ class MapSettings:
 def _design(settings: MapSettings, signals, designs: dict):
     """The estimator for a log (its sample rate and road noise, :func:`roadbank.vehicle.for_conditions`; a car
     that is not described chosen for the log, :func:`roadbank.vehicle.undescribed_params`, one described with its rear
-    stiffness trimmed to the log, :func:`roadbank.vehicle.described_car`), memoised in
+    stiffness trimmed to the log, :func:`roadbank.vehicle.described_car`, unless measured), memoised in
     ``designs`` by those conditions and the car, and where the log reads quiet and the estimator keeps the car's
     model there, the :class:`~roadbank.vehicle.conditions.RoadCheck` of its roads (else None)."""
     cond = log_conditions(signals)
     described = settings.params is not None or settings.vehicle is not None
     if described:
         given = settings.vehicle.params if settings.vehicle is not None else settings.params
-        car = described_car(signals, cast(VehicleParams, given), cond)
+        car = described_car(signals, cast(VehicleParams, given), cond, trims_rear(settings.vehicle))
     else:
         car = undescribed_params(signals)
     key = (tuple(round(v, 6) if v is not None and np.isfinite(v) else None for v in cond.values()), car, described)

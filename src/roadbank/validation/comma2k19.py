@@ -130,7 +130,7 @@ def comma2k19_outcome(path, **kwargs) -> tuple:
 
 def validate_comma2k19(path, names=None, params: VehicleParams | None = None, tau: float = 2.0 / 3.0,
                        warmup_s: float = 5.0, fit_fraction: float = 0.3,
-                       sensitivity: bool = True, tuning=None, sensors=None) -> ValidationResult:
+                       sensitivity: bool = True, tuning=None, sensors=None, trim: bool = True) -> ValidationResult:
     """Run every estimator on a comma2k19 segment and score it against the pose roll.
 
     Parameters
@@ -154,6 +154,10 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     sensors : roadbank.vehicle.SensorSpec, optional
         The car's sensors (a vehicle file's ``[sensors]``; default the paper's ESP): the
         default PIFs' ``R`` is their noise density at the log's rate.
+    trim : bool
+        With ``params``: whether its rear cornering stiffness is trimmed to the segment
+        (:func:`roadbank.vehicle.described_car`; False for a stiffness measured on the car,
+        :func:`roadbank.vehicle.trims_rear`).
     """
     described, params = params, params or undescribed_params()
     names = list(names or VALIDATION_NAMES)
@@ -172,7 +176,7 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     t = s.t
     dt = float(np.median(np.diff(t)))
     # a car not described: designed for the one that fits the segment (read with the static one)
-    design = undescribed_params(s) if described is None else described_car(s, params)
+    design = undescribed_params(s) if described is None else described_car(s, params, trim=trim)
     run = run_and_score(s, log.reference_roll[cut], names, design, scoring, per_estimator=tuning, sensors=sensors,
                         described=described is not None)
     scores, smoothed = run.scores, run.estimates

@@ -153,7 +153,7 @@ def rms_each_start(run, vx) -> dict[str, float]:
 
 def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
                          scoring: Scoring = KITTI_SCORING, sensitivity: bool = True,
-                         tuning=None, sensors=None) -> ValidationResult:
+                         tuning=None, sensors=None, trim: bool = True) -> ValidationResult:
     """Run every estimator on one KITTI drive and score ``theta`` against the INS roll.
 
     Parameters
@@ -178,6 +178,10 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     sensors : roadbank.vehicle.SensorSpec, optional
         The car's sensors (a vehicle file's ``[sensors]``): the default PIFs' ``R`` is their
         noise density at the drive's rate (:func:`roadbank.vehicle.make_estimator`).
+    trim : bool
+        With ``params``: whether its rear cornering stiffness is trimmed to each drive and piece
+        (:func:`roadbank.vehicle.described_car`; False for a stiffness measured on the car,
+        :func:`roadbank.vehicle.trims_rear`).
 
     Raises
     ------
@@ -195,7 +199,7 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
                        f"first {scoring.warmup_s:g} s)")
     given = params
     # a car not described: the one that fits the drive
-    params, design = car_for_log(log.signals, log_conditions(log.signals), params, sensors=sensors)
+    params, design = car_for_log(log.signals, log_conditions(log.signals), params, sensors=sensors, trim=trim)
     run = run_and_score(log.signals, log.reference_roll, names, params, scoring, per_estimator=tuning,
                         sensors=sensors, described=given is not None)
     sens = {}
@@ -224,9 +228,9 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     data["design"] = design
     data["warnings"] = list(log.warnings)
     if sensitivity:
-        data["pieces"] = short_log_scores(log, [n for n in SHORT_NAMES if n in names], given, scoring, sensors)
+        data["pieces"] = short_log_scores(log, [n for n in SHORT_NAMES if n in names], given, scoring, sensors, trim)
         data["smooth_roads"] = smooth_road_scores(log, [n for n in SMOOTH_NAMES if n in names], given, scoring,
-                                                  sensors)
+                                                  sensors, trim)
     return ValidationResult(scores=run.scores, params=params, t=t, reference=run.reference,
                             estimates=run.estimates, split_time=float(t[first[0]]) if len(first) else float(t[0]),
                             data=data, sensitivity=sens, settings=settings, run=run,
@@ -238,21 +242,23 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
 SHORT_NAMES = ("kinematic", "kinematic-lp", DEFAULT, ESP_DEFAULT)
 
 
-def short_log_scores(log, names, params: VehicleParams | None, scoring: Scoring, sensors=None) -> dict:
+def short_log_scores(log, names, params: VehicleParams | None, scoring: Scoring, sensors=None,
+                     trim: bool = True) -> dict:
     """``{length: {name: [raw RMS deg per piece]}}``: each estimator of ``names`` on the consecutive whole pieces of
     each of :data:`SHORT_PIECES_S` (s) of the drive ``log`` (:func:`~roadbank.validation.scoring.piece_bounds`), each
     piece read as a log of its own (its design, its fitted car unless ``params`` is given, ``scoring`` within it);
     pieces with no scored sample left out. What a user with a short log gets. Their designs (one set per piece) are
-    not written to the design cache (:func:`roadbank.cache.not_stored`): they would fill it."""
+    not written to the design cache (:func:`roadbank.cache.not_stored`): they would fill it. ``trim``: as
+    :func:`validate_kitti_drive`."""
     with not_stored():
-        return {length: _piece_scores(log, length, names, params, scoring, sensors) for length in SHORT_PIECES_S}
+        return {length: _piece_scores(log, length, names, params, scoring, sensors, trim) for length in SHORT_PIECES_S}
 
 
-def _piece_scores(log, length: float, names, params, scoring: Scoring, sensors) -> dict:
+def _piece_scores(log, length: float, names, params, scoring: Scoring, sensors, trim: bool) -> dict:
     """:func:`short_log_scores` for one piece ``length`` (s): ``{name: [raw RMS deg per piece]}``."""
     rms: dict = {n: [] for n in names}
     for a, b, piece, _ in scored_pieces(log.signals, length, scoring):
-        car, _ = car_for_log(piece, log_conditions(piece), params, sensors=sensors)
+        car, _ = car_for_log(piece, log_conditions(piece), params, sensors=sensors, trim=trim)
         run = run_and_score(piece, log.reference_roll[a:b], names, car, scoring, sensors=sensors,
                             described=params is not None)
         for n in names:
@@ -265,16 +271,17 @@ def _piece_scores(log, length: float, names, params, scoring: Scoring, sensors) 
 SMOOTH_NAMES = SHORT_NAMES + ("pif-adaptive",)
 
 
-def smooth_road_scores(log, names, params: VehicleParams | None, scoring: Scoring, sensors=None) -> dict:
+def smooth_road_scores(log, names, params: VehicleParams | None, scoring: Scoring, sensors=None,
+                       trim: bool = True) -> dict:
     """``{form: {name: raw RMS deg}}``: each estimator of ``names`` on the drive ``log`` as each smooth road of
     :data:`roadbank.validation.roads.SMOOTH_ROADS` (:func:`~roadbank.validation.roads.smooth_road`, seed 0), read as a
     log of its own (its design and fitted car unless ``params`` is given): what a quiet log of the same drive gives.
-    Its designs are not written to the design cache."""
+    Its designs are not written to the design cache. ``trim``: as :func:`validate_kitti_drive`."""
     out = {}
     with not_stored():
         for form, (order, cutoff) in SMOOTH_ROADS.items():
             s = smooth_road(log.signals, order, cutoff, seed=0)
-            car, _ = car_for_log(s, log_conditions(s), params, sensors=sensors)
+            car, _ = car_for_log(s, log_conditions(s), params, sensors=sensors, trim=trim)
             run = run_and_score(s, log.reference_roll, names, car, scoring, sensors=sensors,
                                 described=params is not None)
             out[form] = {n: run.scores[n].rms_raw_deg for n in names}
@@ -379,7 +386,7 @@ def unique_drives(paths) -> tuple[list[Path], list[str]]:
     return [p for _, p in kept.values()], notes
 
 
-def _drive_outcome(path, names, params, scoring, sensitivity, tuning, sensors, figure=None):
+def _drive_outcome(path, names, params, scoring, sensitivity, tuning, sensors, trim=True, figure=None):
     """``(ValidationResult, None, figure)`` of one drive (``figure(result)``, or None without
     ``figure``), or ``(None, reason, None)`` when it cannot be read or scored: one task of
     :func:`validate_kitti` (in this process or on a worker).
@@ -388,7 +395,7 @@ def _drive_outcome(path, names, params, scoring, sensitivity, tuning, sensors, f
     any other failure is reported with its type, so one drive never stops the others.
     """
     try:
-        res = validate_kitti_drive(path, names, params, scoring, sensitivity, tuning, sensors)
+        res = validate_kitti_drive(path, names, params, scoring, sensitivity, tuning, sensors, trim)
     except (LogError, OSError) as exc:
         return None, str(exc), None
     except Exception as exc:        # a drive the reader took but the scoring could not: still one drive
@@ -416,14 +423,14 @@ def drive_frames(path) -> int:
 
 def validate_kitti(paths, names=None, params: VehicleParams | None = None,
                    scoring: Scoring = KITTI_SCORING, sensitivity: bool = True,
-                   tuning=None, sensors=None, pool=None, figure=None) -> KittiValidation:
+                   tuning=None, sensors=None, trim: bool = True, pool=None, figure=None) -> KittiValidation:
     """Validate any number of KITTI drives; a drive that cannot be read is reported, the others go on.
 
     Parameters
     ----------
     paths : sequence of path-like
         Drive folders, oxts folders, or folders holding drive folders.
-    names, params, scoring, sensitivity, tuning, sensors
+    names, params, scoring, sensitivity, tuning, sensors, trim
         As :func:`validate_kitti_drive`.
     pool : optional
         Where the drives run, one task each (a pool of :func:`roadbank.fleet.cluster.open_pool`;
@@ -440,7 +447,7 @@ def validate_kitti(paths, names=None, params: VehicleParams | None = None,
     names = list(names or VALIDATION_NAMES)
     drives, errors, figures, excluded = [], [], {}, []
     expanded, notes = unique_drives(paths)
-    args = (names, params, scoring, sensitivity, tuning, sensors, figure)
+    args = (names, params, scoring, sensitivity, tuning, sensors, trim, figure)
     if pool is None:
         outcomes = (_drive_outcome(p, *args) for p in expanded)
     else:

@@ -914,10 +914,14 @@ def _setting(name: str, choices: str | None = None):
     return value
 
 
-def rear_trim_scales() -> tuple:
-    """The scales (-) of a described car's rear cornering stiffness that the trim to each log tries
-    (:data:`REAR_TRIM`): none where it is off, those of :data:`REAR_TRIM_SCALES` at most 1 where ``"softer"``."""
-    choice = _setting("REAR_TRIM")
+def rear_trim_scales(choice=None) -> tuple:
+    """The scales (-) of a described car's rear cornering stiffness that the trim to each log tries for ``choice``
+    (one of :data:`REAR_TRIM_CHOICES`; default :data:`REAR_TRIM`): none where it is off, those of
+    :data:`REAR_TRIM_SCALES` at most 1 where ``"softer"``."""
+    if choice is None:
+        choice = _setting("REAR_TRIM")
+    elif choice not in REAR_TRIM_CHOICES:
+        raise ValueError(f"the rear trim must be one of {REAR_TRIM_CHOICES}, got {choice!r}")
     if choice is False:
         return ()
     return tuple(k for k in REAR_TRIM_SCALES if choice is True or k <= 1.0)

@@ -22,7 +22,8 @@ from .file import load_vehicle
 from .sensors import SensorSpec
 
 __all__ = ["UNDESCRIBED_CARS", "CAR_MARGIN", "FIT_BAND_HZ", "undescribed_car", "undescribed_params", "design_car",
-           "bank_band_power", "design_record", "car_for_log", "for_conditions", "for_log", "rear_trim", "described_car"]
+           "bank_band_power", "design_record", "car_for_log", "for_conditions", "for_log", "rear_trim", "described_car",
+           "trims_rear"]
 
 #: the shipped cars a log whose car is not described may be designed for: the range of passenger cars
 UNDESCRIBED_CARS = ("suv-paper", "sedan", "compact", "van")
@@ -158,7 +159,7 @@ def _fits_better(power: dict, kept, margin: float):
 
 
 def rear_trim(signals, params: VehicleParams, margin: float = CAR_MARGIN, cond: dict | None = None,
-              build=None) -> float:
+              build=None, scales: tuple | None = None) -> float:
     """The scale (-) of a described car's rear cornering stiffness ``params.Cr`` that a log is designed for: the
     undescribed car's rule (:func:`design_car`) over the scales of it that
     :data:`~roadbank.vehicle.conditions.REAR_TRIM` says (:func:`~roadbank.vehicle.conditions.rear_trim_scales`), the
@@ -168,8 +169,10 @@ def rear_trim(signals, params: VehicleParams, margin: float = CAR_MARGIN, cond: 
 
     Real tyres are not their data sheet's: worn, at another pressure, on another load, a rear axle's stiffness is
     off by tens of per cent, and the modified model, which keeps only the rear tyres, reads the error at every
-    yaw transient as bank (docs/campaign.md). ``cond``: as :func:`design_car`; ``build``: as :func:`_misfits`."""
-    scales = rear_trim_scales()
+    yaw transient as bank (docs/campaign.md). ``cond``: as :func:`design_car`; ``build``: as :func:`_misfits`;
+    ``scales``: those tried, default :func:`~roadbank.vehicle.conditions.rear_trim_scales` (the campaign's: its
+    options')."""
+    scales = rear_trim_scales() if scales is None else scales
     if not scales:
         return 1.0
     cars = {k: params.replace(Cr=params.Cr * k) if k != 1.0 else params for k in dict.fromkeys((*scales, 1.0))}
@@ -177,11 +180,21 @@ def rear_trim(signals, params: VehicleParams, margin: float = CAR_MARGIN, cond: 
     return 1.0 if power is None else float(_fits_better(power, 1.0, margin))
 
 
-def described_car(signals, params: VehicleParams, cond: dict | None = None) -> VehicleParams:
+def described_car(signals, params: VehicleParams, cond: dict | None = None, trim: bool = True) -> VehicleParams:
     """``params`` (a described car) with its rear cornering stiffness trimmed to the log ``signals``
-    (:func:`rear_trim`; ``cond`` as there); ``params`` itself where the scale is 1."""
+    (:func:`rear_trim`; ``cond`` as there); ``params`` itself where the scale is 1, or where ``trim`` is False (a
+    stiffness measured on the car: :func:`trims_rear`)."""
+    if not trim:
+        return params
     k = rear_trim(signals, params, cond=cond)
     return params if k == 1.0 else params.replace(Cr=params.Cr * k)
+
+
+def trims_rear(vehicle) -> bool:
+    """Whether a described car's rear cornering stiffness is trimmed to each log (:func:`described_car`): always, but
+    for a :class:`Vehicle` whose ``Cr`` was measured on the car (:attr:`Vehicle.rear_measured`: ``roadbank
+    identify``'s, or a file's ``[identified.Cr]``), which is used as it is."""
+    return vehicle is None or not vehicle.rear_measured
 
 
 def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | None = None,
@@ -222,19 +235,22 @@ def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | Non
 
 
 def car_for_log(signals, cond: dict, params: VehicleParams | None = None, vehicle=None,
-                sensors: SensorSpec | None = None) -> tuple[VehicleParams, dict]:
+                sensors: SensorSpec | None = None, trim: bool | None = None) -> tuple[VehicleParams, dict]:
     """The car a log's estimators are designed for, and its :func:`design_record` (``cond``: the log's
     :func:`log_conditions`): ``vehicle``'s (a :class:`Vehicle`), else ``params`` (with ``sensors``), each with its
     rear cornering stiffness trimmed to the log (:func:`described_car`; the record's ``rear_trim``, the scale, where
-    it is not 1), else :func:`undescribed_car` of the log's ``signals`` (the one that fits it)."""
+    it is not 1) unless ``trim`` is False (default: :func:`trims_rear` of ``vehicle``; the record's ``rear_measured``
+    where the vehicle's was measured), else :func:`undescribed_car` of the log's ``signals`` (the one that fits it)."""
     sources = source_rates(signals)
     if vehicle is not None or params is not None:
         given = vehicle.params if vehicle is not None else cast(VehicleParams, params)
-        car = described_car(signals, given, cond)
+        car = described_car(signals, given, cond, trims_rear(vehicle) if trim is None else trim)
         record = (design_record(cond, vehicle.name, FROM_FILE, vehicle.sensors, sources) if vehicle is not None
                   else design_record(cond, "-", FROM_PARAMS, sensors, sources))
         if car is not given:
             record["rear_trim"] = float(f"{car.Cr / given.Cr:.3g}")
+        elif vehicle is not None and vehicle.rear_measured:
+            record["rear_measured"] = True
         return car, record
     name = undescribed_car(signals, cond=cond)
     how = NOT_FITTED if default_reads_roll_rate(cond) else FITTED
@@ -269,7 +285,8 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
     A default-tuned PIF is designed for the log's sample rate and the road noise measured on
     its ``ay`` and yaw rate (:func:`log_conditions`); the car as :func:`for_conditions`, a car that is
     not described chosen for the log (:func:`undescribed_params` of ``signals``), a car described with its rear
-    cornering stiffness trimmed to the log (:func:`described_car`). ``for_log(name, s).run(s)`` is what the command
+    cornering stiffness trimmed to the log (:func:`described_car`; a vehicle's measured one kept,
+    :func:`trims_rear`). ``for_log(name, s).run(s)`` is what the command
     line writes for the log ``s`` with ``--no-online-offsets``; by default it adds the online offset learner
     (``with_online_offsets(for_log(name, s), est.params).run(s)``), which differs after a standstill.
     ``described`` (default: whether ``params`` or ``vehicle`` is given): True reads the car chosen for the log as one
@@ -283,5 +300,5 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
     if params is None and vehicle is None:
         params = undescribed_params(signals, cond=cond)
     else:       # a car described: its rear stiffness trimmed to the log, as car_for_log does
-        params = described_car(signals, params if params is not None else vehicle.params, cond)
+        params = described_car(signals, params if params is not None else vehicle.params, cond, trims_rear(vehicle))
     return for_conditions(name, cond, params, vehicle=vehicle, described=described, **tuning)

@@ -208,6 +208,17 @@ class Vehicle:
                               **{**tuning, **overrides})
 
     @property
+    def rear_measured(self) -> bool:
+        """Whether the rear cornering stiffness ``params.Cr`` (N/rad) was measured on this car: the file has an
+        ``[identified.Cr]`` table (what ``roadbank identify`` writes, or your own) whose ``value`` is that ``Cr``
+        within 0.1 %. Such a ``Cr`` is used as it is; any other is trimmed to each log where a softer axle fits it
+        clearly better (:func:`roadbank.vehicle.described_car`)."""
+        entry = self.identified.get("Cr")
+        value = entry.get("value") if isinstance(entry, Mapping) else None
+        return (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+                and abs(value - self.params.Cr) <= 1e-3 * abs(self.params.Cr))
+
+    @property
     def sensor_offsets(self) -> dict[str, float]:
         """The identified sensor offsets (measured minus true, SI) by :class:`~roadbank.Signals` channel.
 
