@@ -227,6 +227,7 @@ def test_cli_writes_vehicle_file_and_reports_bad_logs(tmp_path, drive, straight_
     assert car.params.Cr == pytest.approx(car.identified["Cr"]["value"])
     assert abs(car.identified["Cr"]["value"] / truth["Cr"] - 1) < 0.10
     assert car.identified["Cr"]["std"] > 0 and car.identified["Cr"]["unit"] == "N/rad"
+    assert car.rear_measured        # used as measured: never trimmed to a log (docs/vehicles.md)
 
 
 def test_cli_straight_only_refuses_and_exits_nonzero(tmp_path, straight_log):

@@ -169,6 +169,7 @@ def test_cli_writes_the_derived_pair_and_says_so(tmp_path):
     assert car.params.Cf == car.identified["Cf"]["value"]
     cr = car.identified["Cr"]
     assert car.params.Cr == cr["value"] and cr["derived_from"] == ["Kus", "Cf"]
+    assert car.rear_measured        # derived from this car's logs: kept as measured too
     assert cr["note"].startswith("derived, not identified") and cr["std"] > 0
     assert "with Cr derived from Kus and Cf" in car.description
     assert not any(ln.startswith("warning: Cf, Cr kept") for ln in res.output.splitlines())
