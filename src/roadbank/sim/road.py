@@ -378,3 +378,13 @@ def truth_bank(road, s, n, psi, lf, lr, tf, tr):
         dist = math.sqrt(dh * dh + ds * ds)
         tot += math.atan2(zl - zr, dist)
     return 0.5 * tot
+
+
+@njit(cache=True)
+def truth_banks(road, s, n, psi, lf, lr, tf, tr):
+    """:func:`truth_bank` (rad) at each of the positions ``s``, ``n`` (m) and headings ``psi`` (rad; arrays of one
+    length): one compiled loop, the same values to the bit."""
+    out = np.empty(len(s))
+    for k in range(len(s)):
+        out[k] = truth_bank(road, s[k], n[k], psi[k], lf, lr, tf, tr)
+    return out

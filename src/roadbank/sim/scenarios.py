@@ -26,7 +26,7 @@ from .integrate import outputs_at, simulate
 from .params import PlantParams
 from .plant import (A_AX, A_AY, A_DVY, A_FXW, A_FYW, A_FZW, NX, X_DPHI, X_FXL, X_FYL, X_N, X_OMEGA, X_PHI, X_PSI, X_R,
                     X_S, X_VX, X_VY)
-from .road import Road, flat_road, straight_road, test_track, track_curve_start, truth_bank, two_lane_road
+from .road import Road, flat_road, straight_road, test_track, track_curve_start, truth_banks, two_lane_road
 from .scenario import Scenario
 from .sensors import SensorConfig, measure
 
@@ -294,14 +294,11 @@ def roll_rate(X: np.ndarray, rows: np.ndarray, road_p, v, dt: float) -> np.ndarr
     """The rate (rad/s) of bank + body roll at the integration ``rows`` of the plant's states ``X``: the body's
     roll rate plus the rate at which the contact-height bank under the car changes (a central difference over
     the integration step ``dt``, s; one-sided at the ends), what a roll-rate gyro on the body reads."""
-    def bank(k):
-        return truth_bank(road_p, X[k, X_S], X[k, X_N], X[k, X_PSI], v.Lf, v.Lr, v.track_f, v.track_r)
-    last = len(X) - 1
-    out = np.empty(len(rows))
-    for i, k in enumerate(rows):
-        a, b = max(int(k) - 1, 0), min(int(k) + 1, last)
-        out[i] = X[k, X_DPHI] + (bank(b) - bank(a)) / ((b - a) * dt)
-    return out
+    rows = np.asarray(rows, dtype=np.int64)
+    a, b = np.maximum(rows - 1, 0), np.minimum(rows + 1, len(X) - 1)
+    ends = np.concatenate([a, b])
+    bank = truth_banks(road_p, X[ends, X_S], X[ends, X_N], X[ends, X_PSI], v.Lf, v.Lr, v.track_f, v.track_r)
+    return X[rows, X_DPHI] + (bank[len(rows):] - bank[:len(rows)]) / ((b - a) * dt)
 
 
 def run(scenario: Scenario, plant: PlantParams | None = None, sensors: SensorConfig | None = None,
@@ -359,8 +356,7 @@ def run(scenario: Scenario, plant: PlantParams | None = None, sensors: SensorCon
     meas = measure(true, sensors, rng)
     signals = Signals(ts, meas["vx"], meas["ay"], meas["r"], meas["swa"] / v.steering_ratio, meas.get("p"))
     Xt = X[rows]
-    phib = np.array([truth_bank(road_p, Xt[k, X_S], Xt[k, X_N], Xt[k, X_PSI], v.Lf, v.Lr, v.track_f, v.track_r)
-                     for k in range(n_samp)])
+    phib = truth_banks(road_p, Xt[:, X_S], Xt[:, X_N], Xt[:, X_PSI], v.Lf, v.Lr, v.track_f, v.track_r)
     phi = Xt[:, X_PHI].copy()
     truth = Truth(t=ts, phi_b=phib, phi=phi, theta=phib + phi, vy=Xt[:, X_VY].copy(), dvy_dt=Yt[:, A_DVY].copy(),
                   r=Xt[:, X_R].copy(), ay_true=Yt[:, A_AY].copy(), ax_true=Yt[:, A_AX].copy(),
