@@ -189,8 +189,15 @@ def test_cli_campaign_on_a_scheduler_and_bad_input(tmp_path, cluster):
                           "--duration-scale", "0.15", "--estimators", "kinematic,pif-modified"])
     assert res.exit_code == 0, res.output
     assert (out / "report.md").exists() and (out / "summary.csv").exists()
+    assert "rear cornering stiffness trimmed to each run to a softer axle only" in (out / "report.md").read_text()
+    # the trim is one of the stored settings: resuming without it would mix trimmed and untrimmed runs
+    res = r.invoke(main, ["campaign", "--runs", "3", "-o", str(out), "--scheduler", cluster.scheduler_address,
+                          "--duration-scale", "0.15", "--estimators", "kinematic,pif-modified", "--resume",
+                          "--rear-trim", "off"])
+    assert res.exit_code == 1 and "options.rear_trim: stored 'softer', now None" in res.output, res.output
     for args, msg in ((["--runs", "0"], "--runs"), (["--runs", "2", "--estimators", "nope"], "nope"),
-                      (["--runs", "2", "--duration-scale", "2"], "duration-scale")):
+                      (["--runs", "2", "--duration-scale", "2"], "duration-scale"),
+                      (["--runs", "2", "--rear-trim", "stiffer"], "--rear-trim")):
         res = r.invoke(main, ["campaign", "-o", str(tmp_path / "x"), *args])
         assert res.exit_code == 2 and msg in res.output and "Traceback" not in res.output
     res = r.invoke(main, ["campaign", "--runs", "2", "-o", str(out), "--scheduler", cluster.scheduler_address,

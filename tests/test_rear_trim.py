@@ -191,6 +191,17 @@ def test_a_campaign_carries_its_trim_to_every_run_and_refuses_to_resume_across_i
         made_off = RunOptions(names=("pif-modified",))
     assert made_off.rear_trim is False and "rear_trim" not in made_off.as_dict()
     assert run_one(spec, made_off)[0]["rear_trim"] == 1.0
+    # the report says which trim ran and on how many runs
+    import pandas as pd
+
+    from roadbank.campaign.report import write_report
+
+    made_on = RunOptions(names=("pif-modified",))
+    for options, words in ((made_off, "rear cornering stiffness not trimmed"),
+                           (made_on, "trimmed to each run to a softer axle only (1 runs trimmed)")):
+        (tmp_path / str(options.rear_trim)).mkdir()
+        df = pd.DataFrame(run_one(spec, options))
+        assert words in write_report(tmp_path / str(options.rear_trim), df, settings_of(1, 0, options)).read_text()
     with pytest.raises(ValueError, match="rear trim"):
         RunOptions(rear_trim="stiffer")
     out = tmp_path / "camp"

@@ -161,6 +161,16 @@ def _step_text(sim_dt) -> str:
             else f"{sim_dt * 1e3:g} ms")
 
 
+def _trim_text(choice, runs) -> str:
+    """What the report says of the designs' rear trim (``RunOptions.rear_trim``, absent from a campaign stored before
+    it: off) and on how many of ``runs`` (a row per run) it trimmed."""
+    if not choice:
+        return "; the designs' rear cornering stiffness not trimmed to the runs"
+    trimmed = int((runs["rear_trim"].fillna(1.0) != 1.0).sum()) if "rear_trim" in runs else 0
+    how = "to a softer axle only" if choice == "softer" else "either way"
+    return f"; the designs' rear cornering stiffness trimmed to each run {how} ({trimmed} runs trimmed)"
+
+
 def write_report(outdir, df, settings: dict, throughput: dict | None = None) -> Path:
     """Write summary.csv, failure_cells.csv, errors.csv, boxplot.png, report.md and report.html into
     ``outdir``; returns the path of report.md.
@@ -194,6 +204,7 @@ def write_report(outdir, df, settings: dict, throughput: dict | None = None) -> 
              + (f" of driving; each run starts with {opts['standstill']:g} s of standstill"
                 if opts.get("standstill") else "")
              + ("; sensor offsets learnt online" if opts.get("offsets") else "; no online offset learning")
+             + _trim_text(opts.get("rear_trim"), runs)
              + ". Perturbations: see roadbank.campaign.sampling.", "",
              f"Failure of an estimator in a run: non-finite output, bank RMS error > {FAIL_RMS_DEG:g} deg, "
              "or an error raised.", ""]

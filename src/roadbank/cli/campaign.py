@@ -16,6 +16,9 @@ import click
 from .options import PathOption, SEED, checked_output, vehicle_option
 from .parallel import scheduler_option
 
+#: ``--rear-trim`` -> :attr:`roadbank.campaign.runner.RunOptions.rear_trim`
+_TRIMS = {"softer": "softer", "either": True, "off": False}
+
 
 @click.command()
 @click.option("--runs", "-n", type=click.IntRange(min=1), required=True, help="Number of runs.")
@@ -38,10 +41,13 @@ from .parallel import scheduler_option
               help="Seconds of standstill before each run (s).")
 @click.option("--offsets/--no-offsets", default=True, show_default=True,
               help="Estimators learn the yaw-rate and steering offsets online.")
+@click.option("--rear-trim", type=click.Choice(sorted(_TRIMS)), default=None,
+              help="Trim the designs' rear cornering stiffness to each run: to a softer axle only, either way, or "
+                   "not [default: softer, as every command trims a described car's to its log].")
 @vehicle_option("Runs perturb this car (plant and sensors); the estimators are designed for it "
                 "(parameters and [tuning] tables).")
 def campaign(runs, outdir, scheduler, workers, resume, seed, batch_size, duration_scale, sim_dt, estimators,
-             standstill, offsets, vehicle):
+             standstill, offsets, rear_trim, vehicle):
     """Run a Monte-Carlo campaign and write its report into OUTDIR."""
     from ..campaign import store
     from ..campaign.runner import RunOptions
@@ -56,9 +62,9 @@ def campaign(runs, outdir, scheduler, workers, resume, seed, batch_size, duratio
     from ..vehicle import load_vehicle
 
     # the paper SUV stays None: its campaigns resume those stored before vehicle files
+    trim = {} if rear_trim is None else {"rear_trim": _TRIMS[rear_trim]}
     options = RunOptions(names=names, duration_scale=duration_scale, sim_dt=sim_dt, standstill=standstill,
-                         offsets=offsets,
-                         vehicle=None if vehicle == load_vehicle(None) else vehicle)
+                         offsets=offsets, vehicle=None if vehicle == load_vehicle(None) else vehicle, **trim)
     from ..campaign.execute import DaskMissing, run_campaign, settings_of
 
     def progress(done, total):
