@@ -78,6 +78,29 @@ def test_missing_frame_is_dropped_and_counted(tmp_path):
     assert any("0000000003.txt" in w and "dropped" in w for w in log.warnings)
 
 
+@pytest.mark.parametrize("blank", [[0], [2, 3], [3]])
+def test_a_frame_whose_time_stamp_was_lost_is_dropped_and_counted(tmp_path, blank):
+    """A blank line inside timestamps.txt (KITTI's recordings lost data now and then) is a frame without a stamp: it
+    is dropped, its data file there or not, and counted, with a warning naming the file and the first line; every
+    other frame keeps its own absolute stamp (before: the whole drive refused). The time origin is the first frame
+    kept."""
+    stamps = [f"2011-01-01 12:00:00.{k}00000000" for k in range(8)]
+    for k in blank:
+        stamps[k] = ""
+    drive = write_drive(tmp_path, n=8, stamps=stamps)
+    if len(blank) > 1:
+        (drive / "oxts" / "data" / f"{blank[1]:010d}.txt").unlink()          # its data lost too
+    log = load_log(drive)
+    kept = [k for k in range(8) if k not in blank]
+    assert log.metadata["dropped_frames"] == str(len(blank)) and len(log) == len(kept)
+    np.testing.assert_allclose(log.signals.t, (np.array(kept) - kept[0]) / 10.0, atol=1e-6)
+    np.testing.assert_allclose(log.signals.vx, 0.08 + np.array(kept) / 1000.0)
+    assert log.metadata["time_origin"] == f"2011-01-01 12:00:00.{kept[0]}00000000 UTC"
+    assert any(f"timestamps.txt: {len(blank)} blank line(s) (first: line {blank[0] + 1})" in w and "dropped" in w
+               for w in log.warnings), log.warnings
+    assert not any("missing from the numbering" in w for w in log.warnings)
+
+
 @pytest.mark.parametrize("kept", [14, 29])
 def test_a_last_frame_cut_off_is_left_out(tmp_path, kept):
     """The last frame file cut off while the drive was written (14 or 29 of its 30 fields, the last one mid-number):
@@ -132,8 +155,9 @@ MALFORMED = {
                                  r"timestamps\.txt: line 4: .* not later than line 3's"),
     "repeated time stamp": (lambda d: _stamps(d, GOOD[:3] + [GOOD[2]] + GOOD[4:]),
                             r"timestamps\.txt: line 4: .* out of order"),
-    "blank line inside the time stamps": (lambda d: _stamps(d, GOOD[:2] + [""] + GOOD[3:]),
-                                          r"timestamps\.txt: line 3: unparsable"),
+    "only blank time stamps": (lambda d: _stamps(d, ["", "  ", ""] + [" "] * 3), r"timestamps\.txt: no time stamps"),
+    "out of order across a lost stamp": (lambda d: _stamps(d, GOOD[:2] + ["", GOOD[1]] + GOOD[4:]),
+                                         r"timestamps\.txt: line 4: .* not later than line 2's"),
     "no time stamps": (lambda d: _stamps(d, []), r"timestamps\.txt: no time stamps"),
     "frame without a time stamp": (lambda d: _stamps(d, GOOD[:4]), r"0000000004\.txt: frame 4 has no time stamp"),
     "fewer than two frames": (lambda d: [f.unlink() for f in sorted((d / "oxts/data").iterdir())[1:]],

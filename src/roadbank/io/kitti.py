@@ -41,10 +41,12 @@ Malformed input (decided per kind, see docs/io.md):
   numbered beyond the time stamps -> :class:`LogError` naming the file and the
   line. These mean a corrupted or edited download; guessing would silently
   misalign the columns or the clock.
-* a data file missing from the numbering (a time stamp without its frame) ->
-  the frame is dropped and counted (``metadata["dropped_frames"]`` and a
-  warning): the remaining frames keep their true time stamps, so a missing
-  frame is just a longer step, which the estimators handle.
+* a data file missing from the numbering (a time stamp without its frame), or a
+  blank line inside ``timestamps.txt`` (a frame whose stamp was lost: KITTI's
+  recordings lost data now and then) -> the frame is dropped and counted
+  (``metadata["dropped_frames"]`` and a warning): every stamp is absolute, so the
+  remaining frames keep their true time stamps, and a missing frame is just a
+  longer step, which the estimators handle.
 """
 
 from __future__ import annotations
@@ -141,8 +143,9 @@ def drive_name(oxts: Path) -> str:
 def parse_timestamps(path) -> np.ndarray:
     """Read ``timestamps.txt``: seconds since the epoch (UTC, float64, ns resolution kept to ~0.1 us).
 
-    Blank lines at the end are ignored. Raises :class:`LogError` naming the
-    file and line for an unparsable or non-increasing time stamp.
+    Blank lines at the end are ignored; a blank line before them is a frame whose stamp was lost (KITTI's
+    recordings lost data now and then): NaN. Raises :class:`LogError` naming the file and line for an unparsable
+    time stamp or one not later than the stamp before it, and where no line holds a stamp.
     """
     p = Path(path)
     lines = p.read_text(errors="replace").splitlines()
@@ -150,8 +153,11 @@ def parse_timestamps(path) -> np.ndarray:
         lines.pop()
     if not lines:
         raise LogError(f"{p}: no time stamps")
-    t = np.empty(len(lines))
+    t = np.full(len(lines), np.nan)
+    before = None           # the line of the last stamp read
     for i, line in enumerate(lines):
+        if not line.strip():
+            continue
         m = _STAMP.match(line.strip())
         try:
             if m is None:
@@ -162,9 +168,12 @@ def parse_timestamps(path) -> np.ndarray:
                            "(expected 'YYYY-MM-DD hh:mm:ss.fffffffff')") from None
         frac = m.group(3) or "0"
         t[i] = whole.astype(np.int64) + int(frac) / 10 ** len(frac)
-        if i and t[i] <= t[i - 1]:
+        if before is not None and t[i] <= t[before]:
             raise LogError(f"{p}: line {i + 1}: time stamp {line.strip()!r} is not later than "
-                           f"line {i}'s (time stamps out of order)")
+                           f"line {before + 1}'s (time stamps out of order)")
+        before = i
+    if before is None:
+        raise LogError(f"{p}: no time stamps")
     return t
 
 
@@ -263,7 +272,11 @@ class DriveSource:
                 raise LogError(f"{f}: frame {k} has no time stamp ({oxts / 'timestamps.txt'} has "
                                f"{len(stamps)} lines)")
             frames[k] = f
+        last = max(frames, default=None)
         cut = _cut_last_frame(frames)
+        blank = {k for k in range(len(stamps)) if not np.isfinite(stamps[k])}      # stamps lost: frames dropped
+        for k in blank:
+            frames.pop(k, None)
         keep = np.array(sorted(frames), dtype=np.int64)
         dropped = len(stamps) - len(keep)
         if len(keep) < 2:
@@ -280,10 +293,14 @@ class DriveSource:
         self.warnings = []
         if cut:
             self.warnings.append(cut)
-        elif dropped:
-            missing = sorted(set(range(len(stamps))) - set(keep.tolist()))
-            self.warnings.append(f"{oxts / 'data'}: {dropped} frame file(s) missing from the numbering "
+        missing = sorted(set(range(len(stamps))) - set(keep.tolist()) - blank - ({last} if cut else set()))
+        if missing:
+            self.warnings.append(f"{oxts / 'data'}: {len(missing)} frame file(s) missing from the numbering "
                                  f"(first: {missing[0]:010d}.txt): dropped, the others keep their time stamps")
+        if blank:
+            self.warnings.append(f"{oxts / 'timestamps.txt'}: {len(blank)} blank line(s) (first: line "
+                                 f"{min(blank) + 1}): their frames have no time stamp and are dropped, the others "
+                                 "keep theirs")
         origin = (oxts / "timestamps.txt").read_text(errors="replace").splitlines()[int(keep[0])].strip()
         self.metadata = {"dataset": "kitti-raw", "drive": drive_name(oxts), "time_origin": f"{origin} UTC",
                          "dropped_frames": str(dropped), "frames": str(len(keep))}
