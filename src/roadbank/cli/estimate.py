@@ -107,10 +107,8 @@ def estimate(logs, channels, fmt, est_names, output, output_format, plot, steeri
     and said so; the exit code is 1 if any log failed, 0 otherwise. A folder of
     KITTI drives gives each drive. Time stamps a logger duplicated, swapped or
     sent back are repaired (samples reordered or dropped, the ones next to a
-    repair flagged not valid) and counted in the summary; a log with no
-    increasing time base is refused, and so is a KITTI drive whose
-    timestamps.txt is out of order (its frames are numbered: the line is
-    named; docs/io.md). Output columns
+    repair flagged not valid) and counted in the summary, a KITTI drive's
+    too; a log with no increasing time base is refused (docs/io.md). Output columns
     are SI (rad); the summary is in degrees, one row per log and estimator, and a
     line per log (on stderr; the design column of summary.csv, design in --json)
     says what it was designed for: the car (without --vehicle the shipped one
