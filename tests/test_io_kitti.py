@@ -101,6 +101,19 @@ def test_a_frame_whose_time_stamp_was_lost_is_dropped_and_counted(tmp_path, blan
     assert not any("missing from the numbering" in w for w in log.warnings)
 
 
+def test_frames_past_the_last_time_stamp_are_dropped_and_counted(tmp_path):
+    """timestamps.txt shorter than the frames (its last lines lost): the frames past it are dropped and counted with
+    a warning naming the first; the others keep their stamps. Most frames without a stamp is refused
+    (test_malformed_drive_names_file_and_line: not the drive's time stamps)."""
+    drive = write_drive(tmp_path, n=8)
+    _stamps(drive, (drive / "oxts" / "timestamps.txt").read_text().splitlines()[:6])
+    log = load_log(drive)
+    assert len(log) == 6 and log.metadata["dropped_frames"] == "2"
+    np.testing.assert_allclose(log.signals.vx, 0.08 + np.arange(6) / 1000.0)
+    assert any("timestamps.txt has 6 lines: 2 frame file(s) after them (first: 0000000006.txt)" in w
+               for w in log.warnings), log.warnings
+
+
 STAMPS = [f"2011-01-01 12:00:00.{k}00000000" for k in range(8)]
 REPAIRED = {    # timestamps.txt -> (frames kept in time order, the warning's words)
     "swapped pair": (STAMPS[:3] + [STAMPS[4], STAMPS[3]] + STAMPS[5:], [0, 1, 2, 4, 3, 5, 6, 7],
@@ -184,7 +197,8 @@ MALFORMED = {
     "every stamp the same": (lambda d: _stamps(d, [GOOD[0]] * 6),
                              r"\(column 'timestamps\.txt'\): no increasing time base: all 6 stamps equal"),
     "no time stamps": (lambda d: _stamps(d, []), r"timestamps\.txt: no time stamps"),
-    "frame without a time stamp": (lambda d: _stamps(d, GOOD[:4]), r"0000000004\.txt: frame 4 has no time stamp"),
+    "most frames without a time stamp": (lambda d: _stamps(d, GOOD[:2]),
+                                         r"0000000002\.txt: frame 2 has no time stamp .*2 lines for 6 frame files"),
     "fewer than two frames": (lambda d: [f.unlink() for f in sorted((d / "oxts/data").iterdir())[1:]],
                               r"1 frame file\(s\); at least 2"),
 }

@@ -37,15 +37,17 @@ check. Streamed, it parses ``chunk_rows`` frame files a chunk.
 Malformed input (decided per kind, see docs/io.md):
 
 * an unparsable time stamp, a data file with the wrong number of fields or a
-  non-numeric field, a data file numbered beyond the time stamps ->
-  :class:`LogError` naming the file and the line. These mean a corrupted or
-  edited download; guessing would silently misalign the columns or the clock.
+  non-numeric field, more than half of the data files numbered beyond the time
+  stamps -> :class:`LogError` naming the file and the line. These mean a
+  corrupted or edited download; guessing would silently misalign the columns or
+  the clock.
 * a time stamp not later than the one before (repeated, swapped) -> repaired by
   the assembler as in every table (:mod:`roadbank.io.timebase`), with a warning
   naming the frame; no increasing time base at all -> :class:`LogError`.
-* a data file missing from the numbering (a time stamp without its frame), or a
-  blank line inside ``timestamps.txt`` (a frame whose stamp was lost: KITTI's
-  recordings lost data now and then) -> the frame is dropped and counted
+* a data file missing from the numbering (a time stamp without its frame), a
+  blank line inside ``timestamps.txt`` or fewer lines than frames (a frame whose
+  stamp was lost: KITTI's recordings lost data now and then) -> the frame is
+  dropped and counted
   (``metadata["dropped_frames"]`` and a warning): every stamp is absolute, so the
   remaining frames keep their true time stamps, and a missing frame is just a
   longer step, which the estimators handle.
@@ -264,18 +266,20 @@ class DriveSource:
             m = _FRAME.match(f.name)
             if m is None or not f.is_file():
                 continue
-            k = int(m.group(1))
-            if k >= len(stamps):
-                raise LogError(f"{f}: frame {k} has no time stamp ({oxts / 'timestamps.txt'} has "
-                               f"{len(stamps)} lines)")
-            frames[k] = f
+            frames[int(m.group(1))] = f
+        beyond = sorted(k for k in frames if k >= len(stamps))       # numbered past the stamps: their lines lost
+        if beyond and 2 * len(beyond) > len(frames):
+            raise LogError(f"{frames[beyond[0]]}: frame {beyond[0]} has no time stamp ({oxts / 'timestamps.txt'} has "
+                           f"{len(stamps)} lines for {len(frames)} frame files: not this drive's time stamps?)")
+        for k in beyond:
+            del frames[k]
         last = max(frames, default=None)
         cut = _cut_last_frame(frames)
         blank = {k for k in range(len(stamps)) if not np.isfinite(stamps[k])}      # stamps lost: frames dropped
         for k in blank:
             frames.pop(k, None)
         keep = np.array(sorted(frames), dtype=np.int64)
-        dropped = len(stamps) - len(keep)
+        dropped = len(stamps) - len(keep) + len(beyond)
         if len(keep) < 2:
             raise LogError(f"{oxts / 'data'}: {len(keep)} frame file(s); at least 2 are needed")
         self.path, self.frames, self.keep = oxts, frames, keep
@@ -298,6 +302,9 @@ class DriveSource:
             self.warnings.append(f"{oxts / 'timestamps.txt'}: {len(blank)} blank line(s) (first: line "
                                  f"{min(blank) + 1}): their frames have no time stamp and are dropped, the others "
                                  "keep theirs")
+        if beyond:
+            self.warnings.append(f"{oxts / 'timestamps.txt'} has {len(stamps)} lines: {len(beyond)} frame file(s) "
+                                 f"after them (first: {beyond[0]:010d}.txt) have no time stamp and are dropped")
         origin = (oxts / "timestamps.txt").read_text(errors="replace").splitlines()[int(keep[0])].strip()
         self.metadata = {"dataset": "kitti-raw", "drive": drive_name(oxts), "time_origin": f"{origin} UTC",
                          "dropped_frames": str(dropped), "frames": str(len(keep))}
