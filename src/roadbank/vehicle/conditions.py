@@ -18,9 +18,9 @@ import numpy as np
 from ..constants import MAX_GAP_S, G
 from ..models.attitude import euler_pitch_rate, kinematic_roll
 from ..params import VehicleParams
-from ..signals import (DYNAMICS_BAND_HZ, band_inner, band_windows, concat_signals, diff_noise_std, driving_s,
-                       held_copies, integral_band_fit, is_held, noise_band_hz, road_noise_floor_std, road_noise_std,
-                       running_integral, sample_rate, source_step, stretch_index)
+from ..signals import (DYNAMICS_BAND_HZ, band_inner, band_windows, bridged, concat_signals, diff_noise_std,
+                       driving_s, held_copies, integral_band_fit, is_held, noise_band_hz, road_noise_floor_std,
+                       road_noise_std, running_integral, sample_rate, source_step, stretch_index)
 from ..io.errors import LogError
 from .sensors import SensorSpec
 
@@ -480,11 +480,10 @@ def _floor(x, t, valid) -> float:
 
 
 def _design_part(signals, v_min: float):
-    """``(signals, vx m/s, moving)``: the log's first :data:`DESIGN_SPAN_S` of driving (:func:`design_span`), its speed
-    and where it is at least ``v_min`` (m/s)."""
+    """``(signals, vx m/s, moving)``: the log's first :data:`DESIGN_SPAN_S` of driving (:func:`design_span`) with each
+    single dropout bridged (:func:`~roadbank.signals.bridged`), its speed and where it is at least ``v_min`` (m/s)."""
     n = design_span(signals, v_min)
-    if n < len(signals):
-        signals = signals[:n]
+    signals = bridged(signals[:n] if n < len(signals) else signals)      # a single dropout does not move the design
     vx = np.asarray(signals.vx, dtype=np.float64)
     with np.errstate(invalid="ignore"):
         return signals, vx, vx >= v_min
@@ -531,7 +530,9 @@ ROAD_CHECK_MIN_S = 30.0
 
 def ay_floor_of(signals, v_min: float = 5.0) -> float:
     """The noise floor (m/s^2) of the ``ay`` of ``signals`` on its samples at ``vx >= v_min`` (m/s), read at the log's
-    own rate in the band the design reads (:func:`_floor`); NaN where too few."""
+    own rate in the band the design reads (:func:`_floor`), each single dropout bridged
+    (:func:`~roadbank.signals.bridged`); NaN where too few."""
+    signals = bridged(signals)
     with np.errstate(invalid="ignore"):
         moving = np.asarray(signals.vx, dtype=np.float64) >= v_min
     return _floor(np.asarray(signals.ay, dtype=np.float64), np.asarray(signals.t, dtype=np.float64), moving)
