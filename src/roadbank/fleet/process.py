@@ -240,14 +240,15 @@ class _BankStats:
 
 def unsettled_warnings(source: str, name: str, stats: _BankStats, settle_s: float) -> list[str]:
     """A warning where the estimator ``name`` gave no valid sample, or no settled one (its valid samples all
-    within ``settle_s`` seconds of a (re)start, :mod:`roadbank.estimators.settle`): its bank columns are then
-    no estimate, which the summary's numbers alone do not say."""
+    within ``settle_s`` seconds of a (re)start, :mod:`roadbank.estimators.settle`): its bank columns may then still
+    carry part of the error it started with, which the summary's numbers alone do not say."""
     if stats.n and not stats.nvalid:
         return [f"{source}: {name} gave no valid sample: the log never drives forward at its lowest speed "
                 "(or its channels are not finite)"]
     if stats.nvalid and not stats.nsettled:
         return [f"{source}: {name} never settled: no stretch of valid samples lasts its settling time "
-                f"({settle_s:.1f} s), so its bank is the filter's start, not an estimate"]
+                f"({settle_s:.1f} s), so its bank may still carry part of the error of its start (one sample's "
+                f"estimate; the column {name}.settled is False throughout)"]
     return []
 
 
