@@ -47,10 +47,9 @@ Malformed input (decided per kind, see docs/io.md):
 * a data file missing from the numbering (a time stamp without its frame), a
   blank line inside ``timestamps.txt`` or fewer lines than frames (a frame whose
   stamp was lost: KITTI's recordings lost data now and then) -> the frame is
-  dropped and counted
-  (``metadata["dropped_frames"]`` and a warning): every stamp is absolute, so the
-  remaining frames keep their true time stamps, and a missing frame is just a
-  longer step, which the estimators handle.
+  dropped and counted (``metadata["dropped_frames"]`` and a warning): every
+  stamp is absolute, so the remaining frames keep their true time stamps, and a
+  missing frame is just a longer step, which the estimators handle.
 """
 
 from __future__ import annotations
@@ -148,8 +147,9 @@ def parse_timestamps(path) -> np.ndarray:
     """Read ``timestamps.txt``: seconds since the epoch (UTC, float64, ns resolution kept to ~0.1 us).
 
     Blank lines at the end are ignored; a blank line before them is a frame whose stamp was lost (KITTI's
-    recordings lost data now and then): NaN. Raises :class:`LogError` naming the file and line for an unparsable
-    time stamp or one not later than the stamp before it, and where no line holds a stamp.
+    recordings lost data now and then): NaN. Stamps out of order are returned as they are (the assembler repairs
+    them as in every log). Raises :class:`LogError` naming the file and line for an unparsable time stamp, and where
+    no line holds a stamp.
     """
     p = Path(path)
     lines = p.read_text(errors="replace").splitlines()
