@@ -273,9 +273,9 @@ class DriveSource:
                            f"{len(stamps)} lines for {len(frames)} frame files: not this drive's time stamps?)")
         for k in beyond:
             del frames[k]
-        last = max(frames, default=None)
+        blank = [k for k in range(len(stamps)) if not np.isfinite(stamps[k])]      # stamps lost: frames dropped
+        missing = [k for k in range(len(stamps)) if k not in frames and np.isfinite(stamps[k])]
         cut = _cut_last_frame(frames)
-        blank = {k for k in range(len(stamps)) if not np.isfinite(stamps[k])}      # stamps lost: frames dropped
         for k in blank:
             frames.pop(k, None)
         keep = np.array(sorted(frames), dtype=np.int64)
@@ -294,13 +294,12 @@ class DriveSource:
         self.warnings = []
         if cut:
             self.warnings.append(cut)
-        missing = sorted(set(range(len(stamps))) - set(keep.tolist()) - blank - ({last} if cut else set()))
         if missing:
             self.warnings.append(f"{oxts / 'data'}: {len(missing)} frame file(s) missing from the numbering "
                                  f"(first: {missing[0]:010d}.txt): dropped, the others keep their time stamps")
         if blank:
             self.warnings.append(f"{oxts / 'timestamps.txt'}: {len(blank)} blank line(s) (first: line "
-                                 f"{min(blank) + 1}): their frames have no time stamp and are dropped, the others "
+                                 f"{blank[0] + 1}): their frames have no time stamp and are dropped, the others "
                                  "keep theirs")
         if beyond:
             self.warnings.append(f"{oxts / 'timestamps.txt'} has {len(stamps)} lines: {len(beyond)} frame file(s) "
