@@ -151,7 +151,7 @@ def _design(settings: MapSettings, signals, designs: dict):
         given = settings.vehicle.params if settings.vehicle is not None else settings.params
         car = described_car(signals, cast(VehicleParams, given), cond, trims_rear(settings.vehicle))
     else:
-        car = undescribed_params(signals)
+        car = undescribed_params(signals, cond=cond)
     key = (tuple(round(v, 6) if v is not None and np.isfinite(v) else None for v in cond.values()), car, described)
     if key not in designs:
         designs[key] = for_conditions(settings.estimator, cond, car, vehicle=settings.vehicle, described=described)
