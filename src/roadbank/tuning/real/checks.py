@@ -72,8 +72,7 @@ from ... import vehicle
 from ...constants import G
 from ...vehicle import conditions
 from ...validation.scoring import SHORT_PIECES_S
-from .common import check_pieces, lowest_tied, rms_deg
-from .common import design_settings
+from .common import check_pieces, design_settings, lowest_tied, rms_deg
 
 
 #: the thirtieth stage's pieces (s) and candidates: the check's centred-mean windows (s) and its slope range (-)

@@ -78,6 +78,8 @@ _DESIGN_SETTINGS = ("QUIET_FLOOR_RATE", "QUIET_FLOOR_SIGNAL", "NOISE_AT_SOURCE",
                     "SOURCE_ROUNDING", "ROAD_CHANGE", "ROAD_CHANGE_BACK", "UNDESCRIBED_KEEPS_MODEL",
                     "UNDESCRIBED_SMOOTHER_KEEPS_MODEL", "SMOOTHER_GATE", "SMOOTHER_GATE_V_MIN",
                     "BLEND_GATE_V_MIN", "SMOOTHER_GATE_HOLD_S", "REAR_TRIM")
+
+
 def within(build, **settings):
     """``build`` (signals -> estimator) run within :func:`design_settings` ``(**settings)``: a design read at build
     time, as a stage ran it."""

@@ -197,9 +197,8 @@ from ...estimators.gyro import (GAPS_OF, GRADE_WINDOW_S, GYRO_BIAS_TAU_S, GYRO_C
                                SMOOTHER_SETTLED, UNBIASED_PITCH, KinematicGyro, KinematicGyroSmoother)
 from ...estimators.offsets import with_online_offsets
 from ...validation.scoring import SHORT_PIECES_S
-from .common import within
 from .common import (BANDWIDTH_39, BEFORE_38, BEFORE_64, START_40, TIE_DEG, UNBIASED_36, fixed, lengths_objective,
-                     log_errors, lowest_tied, per_log, rms_deg, whole_and_pieces, without_roll_rate)
+                     log_errors, lowest_tied, per_log, rms_deg, whole_and_pieces, within, without_roll_rate)
 
 
 #: the twenty-ninth stage's candidates: the sideslip acceleration ``kinematic-gyro`` takes out of the kinematic estimate

@@ -47,9 +47,8 @@ import numpy as np
 
 from ...estimators import PIFSmoother
 from ...vehicle import load_vehicle
-from .common import (BEFORE_65, BEFORE_67, SIM_CARS, cars_median, log_errors, lowest_tied, per_log, sim_errors,
-                     simulated_sets, training_logs)
-from .common import design_settings, within
+from .common import (BEFORE_65, BEFORE_67, SIM_CARS, cars_median, design_settings, log_errors, lowest_tied, per_log,
+                     sim_errors, simulated_sets, training_logs, within)
 from .esp import QUIET_GYRO_OFFSETS, gyro_sim_sets
 from .roads import (BACK_LOUD_AY, STEEP_ROAD_CUTOFF_HZ, STEEP_ROAD_ORDER, _in_force, _same_in_force,
                     smooth_road_logs)

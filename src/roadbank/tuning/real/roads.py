@@ -26,8 +26,7 @@ from ...vehicle import load_vehicle
 from ...signals import Signals, concat_signals
 from ...validation.roads import SMOOTH_ROADS, smooth_road
 from ..objective import FAILED_DEG, SETTLE
-from .common import BEFORE_64, cars_median, log_errors, per_log, sim_errors
-from .common import design_settings, within
+from .common import BEFORE_64, cars_median, design_settings, log_errors, per_log, sim_errors, within
 from .esp import _with_settings, same_outputs, two_choice_rule
 
 #: the rule: B ships if its median over the ESP long logs is below A's by more than this (deg) ...
