@@ -143,8 +143,9 @@ def drive_name(oxts: Path) -> str:
     return oxts.parent.name if oxts.name == "oxts" else oxts.name
 
 
-def parse_timestamps(path) -> np.ndarray:
-    """Read ``timestamps.txt``: seconds since the epoch (UTC, float64, ns resolution kept to ~0.1 us).
+def parse_timestamps(path) -> tuple[np.ndarray, list[str]]:
+    """Read ``timestamps.txt``: seconds since the epoch (UTC, float64, ns resolution kept to ~0.1 us), and the
+    file's lines (their text, for the time origin as written).
 
     Blank lines at the end are ignored; a blank line before them is a frame whose stamp was lost (KITTI's
     recordings lost data now and then): NaN. Stamps out of order are returned as they are (the assembler repairs
@@ -152,28 +153,28 @@ def parse_timestamps(path) -> np.ndarray:
     no line holds a stamp.
     """
     p = Path(path)
-    lines = p.read_text(errors="replace").splitlines()
-    while lines and not lines[-1].strip():
+    lines = [s.strip() for s in p.read_text(errors="replace").splitlines()]
+    while lines and not lines[-1]:
         lines.pop()
     if not lines:
         raise LogError(f"{p}: no time stamps")
     t = np.full(len(lines), np.nan)
     for i, line in enumerate(lines):
-        if not line.strip():
+        if not line:
             continue
-        m = _STAMP.match(line.strip())
+        m = _STAMP.match(line)
         try:
             if m is None:
                 raise ValueError
             whole = np.datetime64(f"{m.group(1)}T{m.group(2)}", "s")
         except ValueError:
-            raise LogError(f"{p}: line {i + 1}: unparsable time stamp {line.strip()!r} "
+            raise LogError(f"{p}: line {i + 1}: unparsable time stamp {line!r} "
                            "(expected 'YYYY-MM-DD hh:mm:ss.fffffffff')") from None
         frac = m.group(3) or "0"
         t[i] = whole.astype(np.int64) + int(frac) / 10 ** len(frac)
     if not np.isfinite(t).any():
         raise LogError(f"{p}: no time stamps")
-    return t
+    return t, lines
 
 
 def parse_frame(path) -> np.ndarray:
@@ -260,7 +261,7 @@ class DriveSource:
 
     def __init__(self, path, chunk_rows: int | None = None):
         oxts = find_drive(path)
-        stamps = parse_timestamps(oxts / "timestamps.txt")
+        stamps, lines = parse_timestamps(oxts / "timestamps.txt")
         frames = {}
         for f in sorted((oxts / "data").iterdir()):
             m = _FRAME.match(f.name)
@@ -304,8 +305,7 @@ class DriveSource:
         if beyond:
             self.warnings.append(f"{oxts / 'timestamps.txt'} has {len(stamps)} lines: {len(beyond)} frame file(s) "
                                  f"after them (first: {beyond[0]:010d}.txt) have no time stamp and are dropped")
-        origin = (oxts / "timestamps.txt").read_text(errors="replace").splitlines()[int(keep[0])].strip()
-        self.metadata = {"dataset": "kitti-raw", "drive": drive_name(oxts), "time_origin": f"{origin} UTC",
+        self.metadata = {"dataset": "kitti-raw", "drive": drive_name(oxts), "time_origin": f"{lines[keep[0]]} UTC",
                          "dropped_frames": str(dropped), "frames": str(len(keep))}
 
     def close(self) -> None:
