@@ -275,7 +275,7 @@ from ...signals import Signals, concat_signals, sample_rate
 from ...validation.kitti import KITTI_SCORING
 from ...validation.scoring import masks
 from ...vehicle import load_vehicle
-from .common import (BEFORE_64, EQUAL_DEG, SIM_CARS, SIM_DRIVES, TIE_DEG, cars_median, fixed, guarded,
+from .common import (BEFORE_64, BEFORE_69, EQUAL_DEG, SIM_CARS, SIM_DRIVES, TIE_DEG, cars_median, fixed, guarded,
                      log_errors, lowest_tied, objective, per_log, rms_deg, sim_errors, within)
 
 
@@ -432,14 +432,15 @@ def choose_described_ratio(sim_sets, cars=SIM_CARS, ratios=QUIET_RATIOS) -> tupl
     """The seventh stage: the quiet ratio of ``kinematic-pif`` for a car that is described. Each candidate
     ratio (:data:`QUIET_RATIOS`) builds the default for each simulated training drive of each car in
     ``cars`` with that car's own file (``for_log(..., vehicle=load_vehicle(car))``, as
-    ``roadbank estimate --vehicle CAR`` does); bank RMS per drive, median per car, median over the cars
+    ``roadbank estimate --vehicle CAR`` does, never trimmed to the drive: :data:`~.common.BEFORE_69`, as the stage
+    ran); bank RMS per drive, median per car, median over the cars
     (deg). No real log of a described car is at hand, so the simulated drives alone decide; the lowest
     wins, ties within :data:`EQUAL_DEG` to the smaller ratio (fewer logs leave the low-pass). Returns
     ``(ratio, {ratio: median})``."""
     meds: dict[float, float] = {}
     for q in sorted(ratios):
-        meds[q] = float(np.median([objective(per_log("kinematic-pif", vehicle=load_vehicle(car), quiet_ratio=q), [],
-                                             [drives]) for car, drives in zip(cars, sim_sets)]))
+        builds = [within(per_log("kinematic-pif", vehicle=load_vehicle(c), quiet_ratio=q), **BEFORE_69) for c in cars]
+        meds[q] = float(np.median([objective(b, [], [drives]) for b, drives in zip(builds, sim_sets)]))
     return min(meds, key=lambda q: (round(meds[q] / EQUAL_DEG), q)), meds
 
 
@@ -447,13 +448,14 @@ def choose_described_filter(sim_sets, cars=SIM_CARS, filters=DESCRIBED_FILTERS) 
     """The fifteenth stage: the filter of a quiet log whose car is described (module docstring). Each candidate of
     ``filters`` (default :data:`DESCRIBED_FILTERS`, the shipped one first) builds the default for each simulated
     training drive of each car in ``cars`` (``sim_sets`` from :func:`simulated_sets`, in that order) with that
-    car's own file and ``quiet_filter``; bank RMS per drive (deg). The lowest median over the cars of the per-car
+    car's own file and ``quiet_filter`` (never trimmed to the drive: :data:`~.common.BEFORE_69`, as the stage ran);
+    bank RMS per drive (deg). The lowest median over the cars of the per-car
     medians wins, ties within :data:`TIE_DEG` to the earlier candidate; a candidate other than the first wins only
     where the mean over every drive is lower than the first's too. Returns ``(filter, {filter: (median, mean)})``."""
     scores: dict[str, tuple[float, float]] = {}
     for f in filters:
-        errs = [sim_errors(per_log("kinematic-pif", vehicle=load_vehicle(car), quiet_filter=f), [drives])[0]
-                for car, drives in zip(cars, sim_sets)]
+        errs = [sim_errors(within(per_log("kinematic-pif", vehicle=load_vehicle(car), quiet_filter=f), **BEFORE_69),
+                           [drives])[0] for car, drives in zip(cars, sim_sets)]
         scores[f] = (cars_median(errs), float(np.mean(np.concatenate(errs))))
     best = min(m for m, _ in scores.values())
     chosen = next(f for f in filters if scores[f][0] <= best + TIE_DEG)

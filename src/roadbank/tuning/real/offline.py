@@ -47,8 +47,8 @@ import numpy as np
 
 from ...estimators import PIFSmoother
 from ...vehicle import load_vehicle
-from .common import (BEFORE_65, BEFORE_67, SIM_CARS, cars_median, design_settings, log_errors, lowest_tied, per_log,
-                     sim_errors, simulated_sets, training_logs, within)
+from .common import (BEFORE_65, BEFORE_67, BEFORE_69, SIM_CARS, cars_median, design_settings, log_errors, lowest_tied,
+                     per_log, sim_errors, simulated_sets, training_logs, within)
 from .esp import QUIET_GYRO_OFFSETS, gyro_sim_sets
 from .roads import (BACK_LOUD_AY, STEEP_ROAD_CUTOFF_HZ, STEEP_ROAD_ORDER, _in_force, _same_in_force,
                     smooth_road_logs)
@@ -93,7 +93,7 @@ def choose_smoother_gate(logs, quiet_sets, shaken, kept_logs, known_quiet, cars=
     per car (:func:`shaken_sets`); ``kept_logs`` (signals) and ``known_quiet`` (per car, drives built with its file):
     the guard. Returns ``(chosen, {choice: (objective, tail)}, {choice: (raw RMS per log, per car: bank RMS per drive
     of (2), of (3))})``; a ValueError where the guard fails."""
-    as_ran = {**BEFORE_65, **BEFORE_67}
+    as_ran = {**BEFORE_65, **BEFORE_67, **BEFORE_69}
     undescribed = within(per_log("kinematic-smoother", described=False), **as_ran)
     known = {car: within(per_log("kinematic-smoother", vehicle=load_vehicle(car)), **as_ran) for car in cars}
     setting = "smoother_gate"
@@ -150,7 +150,8 @@ def choose_gate_speed(logs, quiet_sets, shaken, speeds=GATE_SPEEDS, cars=SIM_CAR
 
 def _offline_gate_scores(setting: str, choices, logs, quiet_sets, shaken, cars, before: dict) -> tuple[dict, dict]:
     """The sixty-fifth and sixty-seventh stages' scores: ``kinematic-smoother`` as ``roadbank map`` builds it, with the
-    design setting ``setting`` at each of ``choices`` (and the settings ``before`` throughout, as the stage ran), on the
+    design setting ``setting`` at each of ``choices`` (and the settings ``before`` throughout, as the stage ran, the car
+    never trimmed to the log: :data:`~.common.BEFORE_69`), on the
     sixty-fourth stage's sets. Returns ``({choice: (real mean, sims median over the cars, sims p95)}, {choice: (raw
     RMS per log, per car: bank RMS per drive, quiet then shaken)})`` (deg)."""
     undescribed = per_log("kinematic-smoother", described=False)
@@ -164,7 +165,7 @@ def _offline_gate_scores(setting: str, choices, logs, quiet_sets, shaken, cars, 
         pooled = [list(q) + list(s) for q, s in zip(sim_errors(undescribed, quiet_sets), shaken_errors())]
         return real, pooled
 
-    with design_settings(**before):
+    with design_settings(**before, **BEFORE_69):
         errs = {c: _in_force(setting, c, measure) for c in choices}
     scores = {c: (float(np.mean(real)), cars_median(pooled), float(np.percentile(np.concatenate(pooled), 95)))
               for c, (real, pooled) in errs.items()}

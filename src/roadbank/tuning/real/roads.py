@@ -26,7 +26,7 @@ from ...vehicle import load_vehicle
 from ...signals import Signals, concat_signals
 from ...validation.roads import SMOOTH_ROADS, smooth_road
 from ..objective import FAILED_DEG, SETTLE
-from .common import BEFORE_64, cars_median, design_settings, log_errors, per_log, sim_errors, within
+from .common import BEFORE_64, BEFORE_69, cars_median, design_settings, log_errors, per_log, sim_errors, within
 from .esp import _with_settings, same_outputs, two_choice_rule
 
 #: the rule: B ships if its median over the ESP long logs is below A's by more than this (deg) ...
@@ -225,7 +225,7 @@ def choose_undescribed_quiet(smooth_logs, sim_quiet_sets, kept_logs, known_sets,
         return build(s) if offline else with_online_offsets(build(s))
 
     def known(car):
-        made = within(per_log(name, vehicle=load_vehicle(car)), **BEFORE_64)
+        made = within(per_log(name, vehicle=load_vehicle(car)), **BEFORE_64, **BEFORE_69)
         return lambda s: made(s) if offline else with_online_offsets(made(s))
 
     pairs = [(online, s) for s in kept_logs] + [(known(car), d.signals) for car, drives in known_sets for d in drives]
