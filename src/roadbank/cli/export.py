@@ -183,6 +183,7 @@ def _log_design(log: Path | None, channels: Path | None, fmt: str | None, vehicl
     repaired) are printed as ``warning: ...``, as ``roadbank estimate`` prints them."""
     if log is None:
         return {}, None, None
+    from ..fleet.process import trim_words
     from ..io import LogError, load_log, read_channel_map
     from ..vehicle import car_for_log, log_conditions, undescribed_params
 
@@ -208,8 +209,7 @@ def _log_design(log: Path | None, channels: Path | None, fmt: str | None, vehicl
         car, design = car_for_log(signals, cond, vehicle=vehicle)
         if "rear_trim" not in design:
             return cond, None, None
-        click.echo(f"designed for {log.name}: {vehicle.name}, its rear cornering stiffness x {design['rear_trim']:g} "
-                   "(trimmed to the log)", err=True)
+        click.echo(f"designed for {log.name}: {vehicle.name}{trim_words(design)}", err=True)
         return cond, car, None
     params, design = car_for_log(signals, cond)
     return cond, params, f"{design['car']} ({'the default design for' if idle else 'fitted to'} {log.name})"

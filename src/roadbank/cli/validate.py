@@ -20,8 +20,10 @@ _VEHICLE = vehicle_option("The estimators are designed for this car: its paramet
 
 def _car(vehicle) -> dict:
     """``validate_*`` keyword arguments for ``--vehicle`` (none: the data set's default car)."""
+    from ..vehicle import trims_rear
+
     return {} if vehicle is None else {"params": vehicle.params, "tuning": dict(vehicle.tuning),
-                                       "sensors": vehicle.sensors, "trim": not vehicle.rear_measured}
+                                       "sensors": vehicle.sensors, "trim": trims_rear(vehicle)}
 
 
 @click.group()

@@ -119,6 +119,15 @@ def _times(ratio: float) -> str:
             else "the data sheet gives no ay noise")
 
 
+def trim_words(design: dict) -> str:
+    """What a design record (:func:`roadbank.vehicle.car_for_log`) says of the described car's rear cornering
+    stiffness, as a clause after the car (', ...'; '' where it says nothing): the scale it was trimmed to, or that it
+    was measured."""
+    if "rear_trim" in design:
+        return f", its rear cornering stiffness x {design['rear_trim']:g} (trimmed to the log)"
+    return ", its rear cornering stiffness as measured" if design.get("rear_measured") else ""
+
+
 def design_words(design: dict, estimator: str) -> str:
     """:attr:`LogSummary.design` in words, for the estimator ``estimator`` ('' when empty): the car, the
     ``ay`` noise and floor (m/s^2; what was not measured is said so, and what the design took instead), the channels
@@ -136,9 +145,7 @@ def design_words(design: dict, estimator: str) -> str:
     else:
         heard = (f"ay noise {noise:.2g} m/s^2, floor {floor:.2g} ({_times(ratio)}): "
                  f"{'quiet' if design['quiet'] else 'loud'}")
-    trim = (f", its rear cornering stiffness x {design['rear_trim']:g} (trimmed to the log)" if "rear_trim" in design
-            else ", its rear cornering stiffness as measured" if design.get("rear_measured") else "")
-    words = f"{design['car']} ({design['car_from']}{trim}); {heard}"
+    words = f"{design['car']} ({design['car_from']}{trim_words(design)}); {heard}"
     slope, ax = design.get("roll_rate"), design.get("ax")
     gyro = roll_rate_usable(slope)
     if estimator in QUIET_MODELS:
