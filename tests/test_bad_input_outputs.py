@@ -266,3 +266,18 @@ def test_a_folder_inside_a_log_names_the_log_to_give():
     assert res.exit_code == 1
     assert "error: no logs found in d1/oxts/data (parts of the log d1/oxts: give that folder)" in res.output
     assert _run(["estimate", "d1", "-e", "kinematic", "-o", "o.csv"], Path.cwd()).exit_code == 0
+
+
+@pytest.mark.parametrize("part", ["d1/oxts/data/0000000007.txt", "d1/oxts/timestamps.txt"])
+def test_a_file_inside_a_log_names_the_log_to_give(part):
+    """One frame of a drive, or its time stamps, given for the drive: skipped as a part of the log and the one-line
+    error names the folder that is the log (before: read as a table, "no data rows after the header"). A CSV put
+    into the drive's folder is still read as the log it is."""
+    _drive(Path.cwd(), "d1")
+    res = _run(["estimate", part, "-e", "kinematic", "-o", "o.csv"], Path.cwd())
+    assert res.exit_code == 1
+    assert f"skipped {part} (a part of a log, not a log)" in res.output
+    assert f"error: no logs left to read in {part} (parts of the log d1/oxts: give that folder)" in res.output
+    _csv(Path("d1/mine.csv"))
+    res = _run(["estimate", "d1/mine.csv", "-e", "kinematic", "-o", "o.csv"], Path.cwd())
+    assert res.exit_code == 0, res.output

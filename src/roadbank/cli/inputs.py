@@ -28,8 +28,11 @@ def not_a_log(path: Path, fmt: str | None) -> str | None:
     """Why ``path`` is not a log to read with ``fmt`` (None: the format from its suffix), or None if it may be.
 
     Only files are judged; directories and missing paths are left to the readers (their errors
-    name the problem).
+    name the problem). A file inside a log folder (:func:`roadbank.fleet.run.enclosing_log`) that only that
+    folder's reader reads (a KITTI drive's frame or ``timestamps.txt``, a comma2k19 segment's ``value``, a ROS 2
+    bag's database: no log suffix) is a part of that log, not a log; a CSV put there is still read.
     """
+    from ..fleet.run import LOG_SUFFIXES, enclosing_log
     from ..io import LogError, detect_format
     from ..io.files import must_exist
 
@@ -45,6 +48,9 @@ def not_a_log(path: Path, fmt: str | None) -> str | None:
     except LogError:
         detected = None
     if fmt is None:
+        if (detected in (None, "csv") and suffix not in LOG_SUFFIXES | NOT_LOG_SUFFIXES
+                and enclosing_log(path, 4) is not None):
+            return "a part of a log, not a log"
         hint = SPREADSHEET_HINT if suffix in SPREADSHEET_SUFFIXES else ""
         return None if detected else f"not a log of a known format: suffix '{path.suffix}'{hint}"
     if suffix in NOT_LOG_SUFFIXES or (detected in _OWN_SUFFIX and detected != fmt
@@ -98,12 +104,18 @@ def channel_map_and_logs(channels, logs, fmt: str | None = None):
     if not kept:
         what = "no logs found" if not paths else "no logs left to read"
         hint = " (--format reads a log whose suffix is not its format's)" if paths and fmt is None else ""
-        inside = sorted({os.path.relpath(e) for a in logs if (e := enclosing_log(Path(a))) is not None})
+        inside = sorted({_shown(e) for a in logs if (e := enclosing_log(Path(a), 4)) is not None})
         if inside:              # a part of a log given for the log: name the log
             hint = f" (parts of the log {', '.join(inside)}: give that folder)"
         click.echo(f"error: {what} in {', '.join(map(str, logs))}{hint}", err=True)
         sys.exit(1)
     return cmap, kept
+
+
+def _shown(path: Path) -> str:
+    """``path`` as a message names it: relative to the working directory where it lies below it, else absolute."""
+    rel = os.path.relpath(path)
+    return str(path) if rel.startswith("..") else rel
 
 
 def _gives_nothing(arg, paths: list) -> str | None:
