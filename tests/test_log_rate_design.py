@@ -196,3 +196,30 @@ def test_validate_kitti_also_scores_the_default_pif_designed_for_100_hz():
     rms = [res.scores["pif-modified"].rms_raw_deg] + [res.sensitivity[k]["pif-modified"].rms_raw_deg
                                                       for k in ("sheet_rate", "R_nominal")]
     assert rms[0] != pytest.approx(rms[1], abs=0.01) and rms[1] != pytest.approx(rms[2], abs=0.01)
+
+
+@needs_kitti
+def test_validate_kitti_reads_a_vehicles_tuning_as_roadbank_estimate_does(tmp_path):
+    """A vehicle file's `[tuning.pif-modified]` reaches `pif-gated`, which runs `pif-modified`
+    (`estimators.TUNED_AS`), in `validate_kitti_drive` as in `roadbank estimate --vehicle` (`Vehicle.make`):
+    the same theta to 1e-12 rad. Before, the validation looked up `[tuning.pif-gated]` alone and scored the untuned
+    filter (more than 1e-3 rad away on this drive)."""
+    from roadbank.io import load_log
+    from roadbank.validation.kitti import validate_kitti_drive
+
+    car = load_vehicle("sedan").replace(tuning={"pif-modified": {"Q": 1.0e-4, "th": 2.0e4}})
+    path = tmp_path / "tuned.toml"
+    car.to_toml(path)
+    out = tmp_path / "k.csv"
+    res = CliRunner().invoke(main, ["estimate", str(DRIVE), "-o", str(out), "-e", "pif-gated", "--vehicle", str(path)])
+    assert res.exit_code == 0, res.output
+    got = _read_csv(out)
+    run = validate_kitti_drive(DRIVE, names=["pif-gated"], params=car.params, tuning=dict(car.tuning),
+                               sensors=car.sensors, sensitivity=False).run
+    valid = run.valid["pif-gated"]
+    assert valid.sum() > 300 and np.array_equal(got["pif-gated.valid"].astype(bool), valid)
+    np.testing.assert_allclose(got["pif-gated.theta"][valid], run.raw_estimates["pif-gated"][valid],
+                               rtol=0, atol=1e-12)
+    signals = load_log(DRIVE).signals
+    untuned = load_vehicle("sedan").make("pif-gated", **log_conditions(signals)).run(signals).theta
+    assert np.max(np.abs(untuned[valid] - run.raw_estimates["pif-gated"][valid])) > 1e-3   # the tuning matters

@@ -209,3 +209,38 @@ def test_a_campaign_carries_its_trim_to_every_run_and_refuses_to_resume_across_i
     store.check_settings(out, settings_of(20, 1, made_off), resume=True)        # the same settings: resumes
     with pytest.raises(store.StoreError, match="rear_trim"):
         store.check_settings(out, settings_of(20, 1, RunOptions(names=("pif-modified",))), resume=True)
+
+
+def _tuned_suv():
+    """The paper's SUV with a tuned PIF (a table as `roadbank tune` writes it; docs/vehicles.md's example values)."""
+    return load_vehicle("suv-paper").replace(tuning={"pif-modified": {"Q": 1.0e-4, "th": 2.0e4}})
+
+
+def test_the_trials_are_built_as_the_described_car_builds_the_logs_estimator(soft, monkeypatch):
+    """A described car's trim tries the default as the car builds it for the log (Vehicle.make: its sensors and
+    [tuning] tables, what the log's estimator then is), not as the data sheet does: with a file that tunes the PIF,
+    one trial (the described stiffness) is the vehicle's own default on the design span, to the bit, and none is the
+    untuned one. Before, every command's trials ignored the file's tuning (the campaign's did not)."""
+    from roadbank import defaults
+    from roadbank.vehicle import factory
+    from roadbank.vehicle.conditions import design_span, esp_conditions
+
+    tuned, plain = _tuned_suv(), load_vehicle("suv-paper")
+    s = soft.signals
+    n = design_span(s)
+    span = s[:n] if n < len(s) else s
+    esp = esp_conditions(log_conditions(span))
+    own = tuned.make(defaults.ESTIMATOR, **esp).run(span).theta.copy()
+    untuned = plain.make(defaults.ESTIMATOR, **esp).run(span).theta.copy()
+    assert np.nanmax(np.abs(own - untuned)) > 1e-3           # the tuning matters on this drive
+    trials = []
+    real = factory.bank_band_power
+
+    def spy(signals, estimate):
+        trials.append(np.array(estimate.theta))
+        return real(signals, estimate)
+    monkeypatch.setattr(factory, "bank_band_power", spy)
+    car_for_log(s, log_conditions(s), vehicle=tuned)
+    assert len(trials) == len(rear_trim_scales())
+    assert any(np.array_equal(t, own, equal_nan=True) for t in trials)
+    assert not any(np.array_equal(t, untuned, equal_nan=True) for t in trials)

@@ -148,8 +148,9 @@ def _design(settings: MapSettings, signals, designs: dict):
     cond = log_conditions(signals)
     described = settings.params is not None or settings.vehicle is not None
     if described:
-        given = settings.vehicle.params if settings.vehicle is not None else settings.params
-        car = described_car(signals, cast(VehicleParams, given), cond, trims_rear(settings.vehicle))
+        v = settings.vehicle
+        given, sensors, tuning = (v.params, v.sensors, v.tuning) if v is not None else (settings.params, None, None)
+        car = described_car(signals, cast(VehicleParams, given), cond, trims_rear(v), sensors, tuning)
     else:
         car = undescribed_params(signals, cond=cond)
     key = (tuple(round(v, 6) if v is not None and np.isfinite(v) else None for v in cond.values()), car, described)

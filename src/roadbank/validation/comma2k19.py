@@ -150,7 +150,8 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     sensitivity : bool
         Also score with the paper's SUV parameters and a PIF Q sweep.
     tuning : mapping, optional
-        ``{estimator: {option: value}}`` for the main scores (a vehicle file's ``[tuning]``).
+        ``{estimator: {option: value}}`` for the main scores and the rear trim's trial designs (a vehicle file's
+        ``[tuning]``, read as :func:`roadbank.vehicle.tuning_of` reads it).
     sensors : roadbank.vehicle.SensorSpec, optional
         The car's sensors (a vehicle file's ``[sensors]``; default the paper's ESP): the
         default PIFs' ``R`` is their noise density at the log's rate.
@@ -176,7 +177,8 @@ def validate_comma2k19(path, names=None, params: VehicleParams | None = None, ta
     t = s.t
     dt = float(np.median(np.diff(t)))
     # a car not described: designed for the one that fits the segment (read with the static one)
-    design = undescribed_params(s) if described is None else described_car(s, params, trim=trim)
+    design = (undescribed_params(s) if described is None
+              else described_car(s, params, trim=trim, sensors=sensors, tuning=tuning))
     run = run_and_score(s, log.reference_roll[cut], names, design, scoring, per_estimator=tuning, sensors=sensors,
                         described=described is not None)
     scores, smoothed = run.scores, run.estimates

@@ -41,7 +41,7 @@ from ..io.kitti import drive_name, find_oxts_dirs, load_kitti_oxts
 from ..models.attitude import kinematic_roll
 from ..params import VehicleParams
 from ..signals import sample_rate
-from ..vehicle import SensorSpec, car_for_log, log_conditions, noise_densities
+from ..vehicle import SensorSpec, car_for_log, log_conditions, noise_densities, tuning_of
 from .comma2k19 import ValidationResult
 from .datasets import find_datasets
 from .roads import SMOOTH_ROADS, smooth_road
@@ -174,7 +174,9 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
         without the ``ay`` noise measured on it (``sensitivity["sheet_rate"]``), and for the
         sensor's nominal rate (``sensitivity["R_nominal"]``, what ``estimators.make`` builds).
     tuning : mapping, optional
-        ``{estimator: {option: value}}`` for the main scores (a vehicle file's ``[tuning]``).
+        ``{estimator: {option: value}}`` (a vehicle file's ``[tuning]``), read as ``roadbank estimate --vehicle``
+        reads it (:func:`roadbank.vehicle.tuning_of`): the main scores, the short pieces and the smooth roads, and the
+        rear trim's trial designs.
     sensors : roadbank.vehicle.SensorSpec, optional
         The car's sensors (a vehicle file's ``[sensors]``): the default PIFs' ``R`` is their
         noise density at the drive's rate (:func:`roadbank.vehicle.make_estimator`).
@@ -199,7 +201,8 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
                        f"first {scoring.warmup_s:g} s)")
     given = params
     # a car not described: the one that fits the drive
-    params, design = car_for_log(log.signals, log_conditions(log.signals), params, sensors=sensors, trim=trim)
+    params, design = car_for_log(log.signals, log_conditions(log.signals), params, sensors=sensors, trim=trim,
+                                 tuning=tuning)
     run = run_and_score(log.signals, log.reference_roll, names, params, scoring, per_estimator=tuning,
                         sensors=sensors, described=given is not None)
     sens = {}
@@ -209,12 +212,12 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
         # the sensor's nominal rate (100 Hz)
 
         spec = sensors or SensorSpec()
-        at_rate = [n for n in names if n in SENSOR_R_ESTIMATORS and "R" not in (tuning or {}).get(n, {})]
+        at_rate = [n for n in names if n in SENSOR_R_ESTIMATORS and "R" not in tuning_of(tuning or {}, n)]
         for key, rate in (("sheet_rate", sample_rate(log.signals.t)), ("R_nominal", None)) if at_rate else ():
             R, Q_ay = noise_densities(spec, rate)          # the data sheet's: no log noise given
             sheet = {"R": R, "Q_ay": Q_ay}
             sens[key] = run_and_score(log.signals, log.reference_roll, at_rate, params, scoring,
-                                      per_estimator={n: {**(tuning or {}).get(n, {}), **sheet}
+                                      per_estimator={n: {**tuning_of(tuning or {}, n), **sheet}
                                                      for n in at_rate}).scores
     t = log.signals.t
     first = np.flatnonzero(run.scored)
@@ -228,9 +231,10 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     data["design"] = design
     data["warnings"] = list(log.warnings)
     if sensitivity:
-        data["pieces"] = short_log_scores(log, [n for n in SHORT_NAMES if n in names], given, scoring, sensors, trim)
+        data["pieces"] = short_log_scores(log, [n for n in SHORT_NAMES if n in names], given, scoring, sensors, trim,
+                                          tuning)
         data["smooth_roads"] = smooth_road_scores(log, [n for n in SMOOTH_NAMES if n in names], given, scoring,
-                                                  sensors, trim)
+                                                  sensors, trim, tuning)
     return ValidationResult(scores=run.scores, params=params, t=t, reference=run.reference,
                             estimates=run.estimates, split_time=float(t[first[0]]) if len(first) else float(t[0]),
                             data=data, sensitivity=sens, settings=settings, run=run,
@@ -243,23 +247,24 @@ SHORT_NAMES = ("kinematic", "kinematic-lp", DEFAULT, ESP_DEFAULT)
 
 
 def short_log_scores(log, names, params: VehicleParams | None, scoring: Scoring, sensors=None,
-                     trim: bool = True) -> dict:
+                     trim: bool = True, tuning=None) -> dict:
     """``{length: {name: [raw RMS deg per piece]}}``: each estimator of ``names`` on the consecutive whole pieces of
     each of :data:`SHORT_PIECES_S` (s) of the drive ``log`` (:func:`~roadbank.validation.scoring.piece_bounds`), each
     piece read as a log of its own (its design, its fitted car unless ``params`` is given, ``scoring`` within it);
     pieces with no scored sample left out. What a user with a short log gets. Their designs (one set per piece) are
-    not written to the design cache (:func:`roadbank.cache.not_stored`): they would fill it. ``trim``: as
-    :func:`validate_kitti_drive`."""
+    not written to the design cache (:func:`roadbank.cache.not_stored`): they would fill it. ``sensors``, ``trim`` and
+    ``tuning``: as :func:`validate_kitti_drive`."""
     with not_stored():
-        return {length: _piece_scores(log, length, names, params, scoring, sensors, trim) for length in SHORT_PIECES_S}
+        return {length: _piece_scores(log, length, names, params, scoring, sensors, trim, tuning)
+                for length in SHORT_PIECES_S}
 
 
-def _piece_scores(log, length: float, names, params, scoring: Scoring, sensors, trim: bool) -> dict:
+def _piece_scores(log, length: float, names, params, scoring: Scoring, sensors, trim: bool, tuning) -> dict:
     """:func:`short_log_scores` for one piece ``length`` (s): ``{name: [raw RMS deg per piece]}``."""
     rms: dict = {n: [] for n in names}
     for a, b, piece, _ in scored_pieces(log.signals, length, scoring):
-        car, _ = car_for_log(piece, log_conditions(piece), params, sensors=sensors, trim=trim)
-        run = run_and_score(piece, log.reference_roll[a:b], names, car, scoring, sensors=sensors,
+        car, _ = car_for_log(piece, log_conditions(piece), params, sensors=sensors, trim=trim, tuning=tuning)
+        run = run_and_score(piece, log.reference_roll[a:b], names, car, scoring, per_estimator=tuning, sensors=sensors,
                             described=params is not None)
         for n in names:
             rms[n].append(run.scores[n].rms_raw_deg)
@@ -272,17 +277,18 @@ SMOOTH_NAMES = SHORT_NAMES + ("pif-adaptive",)
 
 
 def smooth_road_scores(log, names, params: VehicleParams | None, scoring: Scoring, sensors=None,
-                       trim: bool = True) -> dict:
+                       trim: bool = True, tuning=None) -> dict:
     """``{form: {name: raw RMS deg}}``: each estimator of ``names`` on the drive ``log`` as each smooth road of
     :data:`roadbank.validation.roads.SMOOTH_ROADS` (:func:`~roadbank.validation.roads.smooth_road`, seed 0), read as a
     log of its own (its design and fitted car unless ``params`` is given): what a quiet log of the same drive gives.
-    Its designs are not written to the design cache. ``trim``: as :func:`validate_kitti_drive`."""
+    Its designs are not written to the design cache. ``sensors``, ``trim`` and ``tuning``: as
+    :func:`validate_kitti_drive`."""
     out = {}
     with not_stored():
         for form, (order, cutoff) in SMOOTH_ROADS.items():
             s = smooth_road(log.signals, order, cutoff, seed=0)
-            car, _ = car_for_log(s, log_conditions(s), params, sensors=sensors, trim=trim)
-            run = run_and_score(s, log.reference_roll, names, car, scoring, sensors=sensors,
+            car, _ = car_for_log(s, log_conditions(s), params, sensors=sensors, trim=trim, tuning=tuning)
+            run = run_and_score(s, log.reference_roll, names, car, scoring, per_estimator=tuning, sensors=sensors,
                                 described=params is not None)
             out[form] = {n: run.scores[n].rms_raw_deg for n in names}
     return out

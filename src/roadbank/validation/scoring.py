@@ -40,7 +40,7 @@ from ..defaults import ESTIMATOR
 from ..estimators import NAMES
 from ..estimators.base import NoSteeringWarning
 from ..signals import sample_rate
-from ..vehicle import SensorSpec, log_conditions, make_estimator
+from ..vehicle import SensorSpec, log_conditions, make_estimator, tuning_of
 from ..vehicle.conditions import GYRO_MODELS, esp_conditions
 
 #: the real-road estimators built as for a log without a roll rate (the ESP channels alone), by label: on a log with
@@ -414,7 +414,9 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
         Settings.
     per_estimator : mapping, optional
         ``{name: {option: value}}`` on top of ``tuning`` for that estimator (a vehicle file's
-        ``[tuning]`` tables).
+        ``[tuning]`` tables), read as :meth:`roadbank.vehicle.Vehicle.make` reads them
+        (:func:`roadbank.vehicle.tuning_of`: an estimator that runs another's filter takes that one's table under its
+        own; a label of :data:`ESP_LABELS` its estimator's).
     sensors : SensorSpec, optional
         The car's sensor cluster (a vehicle file's ``[sensors]``); default the paper's ESP.
     **tuning
@@ -443,7 +445,7 @@ def run_and_score(signals, ref, names, params, scoring: Scoring, per_estimator=N
         with warnings.catch_warnings():     # a log without steering: the table says "needs the steering angle"
             warnings.simplefilter("ignore", NoSteeringWarning)
             est = make_estimator(build, params, sensors=sensors, **built_for,
-                                 **{**tuning, **per_estimator.get(name, {})}).run(signals)
+                                 **{**tuning, **tuning_of(per_estimator, build)}).run(signals)
         th, pb = hold_invalid(est.theta), hold_invalid(est.phi_b)
         sc = score(t, th, pb, est.valid, ref, fit, scored, scoring, grid=grid)
         scores[name] = sc

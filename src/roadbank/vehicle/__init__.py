@@ -62,7 +62,7 @@ from .factory import (CAR_MARGIN, UNDESCRIBED_CARS, bank_band_power, car_for_log
                       for_conditions, for_log, undescribed_car, undescribed_params, rear_trim,
                       described_car, trims_rear)
 from .file import (BUILTINS, DEFAULT_VEHICLE, META_KEYS, OFFSET_CHANNELS, REQUIRED_VEHICLE_KEYS, TABLES, Vehicle,
-                   builtin_names, load_vehicle)
+                   builtin_names, load_vehicle, tuning_of)
 from .plausibility import PLANT_FIELDS, PLAUSIBLE, SENSOR_FIELDS, WHEELBASE_RANGE
 from .sensors import SensorSpec
 
@@ -73,6 +73,6 @@ __all__ = ["Vehicle", "SensorSpec", "VehicleFileError", "load_vehicle", "builtin
            "WHEELBASE_RANGE", "SENSOR_FIELDS", "PLANT_FIELDS", "DESIGN_SPAN_S", "DESIGN_MAX_S", "design_span",
            "has_design_span", "log_conditions", "noise_densities", "QUIET_RATIO",
            "QUIET_FILTER", "is_quiet", "make_estimator", "for_conditions", "for_log", "rear_trim",
-           "described_car", "trims_rear", "undescribed_car",
+           "described_car", "trims_rear", "tuning_of", "undescribed_car",
            "undescribed_params", "UNDESCRIBED_CARS", "CAR_MARGIN", "design_car", "design_record", "car_for_log",
            "bank_band_power", "default_reads_roll_rate"]

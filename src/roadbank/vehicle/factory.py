@@ -18,7 +18,7 @@ from ..params import VehicleParams
 from ..signals import Signals, sample_rate
 from .conditions import (default_reads_roll_rate, design_span, esp_conditions, is_quiet, log_conditions,
                          make_estimator, quiet_noise_ratio, rear_trim_scales, source_rates)
-from .file import load_vehicle
+from .file import load_vehicle, tuning_of
 from .sensors import SensorSpec
 
 __all__ = ["UNDESCRIBED_CARS", "CAR_MARGIN", "FIT_BAND_HZ", "undescribed_car", "undescribed_params", "design_car",
@@ -123,14 +123,17 @@ def design_car(signals, margin: float = CAR_MARGIN, cond: dict | None = None) ->
     return _fits_better(power, defaults.VEHICLE, margin)
 
 
-def _misfits(signals, cars: dict, cond: dict | None, build=None) -> dict | None:
+def _misfits(signals, cars: dict, cond: dict | None, build=None, sensors: SensorSpec | None = None,
+             tuning=None) -> dict | None:
     """``{key: misfit}`` (:func:`bank_band_power`) of the default estimator built for each car of ``cars`` (key ->
     :class:`VehicleParams`) and the log's conditions (its ESP channels alone), run over the log's design span
     (:func:`~roadbank.vehicle.design_span`); inf for a design the conditions leave without a solution. None where the
     default reads the log's roll rate (it has no car model: nothing to fit). ``cond``: the log's conditions, measured
-    on that span where None. ``build`` (a car -> an estimator): a caller that builds its estimators its own way (the
-    campaign: once per process, for the data sheet's sensors) builds these too; the log's conditions are then not
-    read."""
+    on that span where None. ``sensors`` and ``tuning`` (a described car's :class:`SensorSpec` and ``[tuning]``
+    tables; default the data sheet's sensors, no tables): the default is built with them, as :meth:`Vehicle.make`
+    builds the estimator the log then gets. ``build`` (a car -> an estimator): a caller that builds its estimators its
+    own way (the campaign: once per process, for its car's sensors and tuning at the data sheet's rate) builds these
+    too; the log's conditions are then not read."""
     n = design_span(signals)
     span = signals[:n] if n < len(signals) else signals
     if build is None:
@@ -140,8 +143,10 @@ def _misfits(signals, cars: dict, cond: dict | None, build=None) -> dict | None:
             return None
         esp = esp_conditions(cond)
 
+        options = tuning_of(tuning or {}, defaults.ESTIMATOR)
+
         def build(car):
-            return make_estimator(defaults.ESTIMATOR, car, **esp)
+            return make_estimator(defaults.ESTIMATOR, car, sensors=sensors, **esp, **options)
     power = {}
     for key, car in cars.items():
         try:
@@ -159,7 +164,7 @@ def _fits_better(power: dict, kept, margin: float):
 
 
 def rear_trim(signals, params: VehicleParams, margin: float = CAR_MARGIN, cond: dict | None = None,
-              build=None, scales: tuple | None = None) -> float:
+              build=None, scales: tuple | None = None, sensors: SensorSpec | None = None, tuning=None) -> float:
     """The scale (-) of a described car's rear cornering stiffness ``params.Cr`` that a log is designed for: the
     undescribed car's rule (:func:`design_car`) over the scales of it that
     :data:`~roadbank.vehicle.conditions.REAR_TRIM` says (:func:`~roadbank.vehicle.conditions.rear_trim_scales`), the
@@ -169,24 +174,25 @@ def rear_trim(signals, params: VehicleParams, margin: float = CAR_MARGIN, cond: 
 
     Real tyres are not their data sheet's: worn, at another pressure, on another load, a rear axle's stiffness is
     off by tens of per cent, and the modified model, which keeps only the rear tyres, reads the error at every
-    yaw transient as bank (docs/campaign.md). ``cond``: as :func:`design_car`; ``build``: as :func:`_misfits`;
-    ``scales``: those tried, default :func:`~roadbank.vehicle.conditions.rear_trim_scales` (the campaign's: its
-    options')."""
+    yaw transient as bank (docs/campaign.md). ``cond``: as :func:`design_car`; ``build``, ``sensors`` and ``tuning``
+    (the described car's, with which the trials are built): as :func:`_misfits`; ``scales``: those tried, default
+    :func:`~roadbank.vehicle.conditions.rear_trim_scales` (the campaign's: its options')."""
     scales = rear_trim_scales() if scales is None else scales
     if not scales:
         return 1.0
     cars = {k: params.replace(Cr=params.Cr * k) if k != 1.0 else params for k in dict.fromkeys((*scales, 1.0))}
-    power = _misfits(signals, cars, cond, build)
+    power = _misfits(signals, cars, cond, build, sensors, tuning)
     return 1.0 if power is None else float(_fits_better(power, 1.0, margin))
 
 
-def described_car(signals, params: VehicleParams, cond: dict | None = None, trim: bool = True) -> VehicleParams:
+def described_car(signals, params: VehicleParams, cond: dict | None = None, trim: bool = True,
+                  sensors: SensorSpec | None = None, tuning=None) -> VehicleParams:
     """``params`` (a described car) with its rear cornering stiffness trimmed to the log ``signals``
-    (:func:`rear_trim`; ``cond`` as there); ``params`` itself where the scale is 1, or where ``trim`` is False (a
-    stiffness measured on the car: :func:`trims_rear`)."""
+    (:func:`rear_trim`; ``cond``, and the car's ``sensors`` and ``[tuning]`` tables ``tuning``, as there); ``params``
+    itself where the scale is 1, or where ``trim`` is False (a stiffness measured on the car: :func:`trims_rear`)."""
     if not trim:
         return params
-    k = rear_trim(signals, params, cond=cond)
+    k = rear_trim(signals, params, cond=cond, sensors=sensors, tuning=tuning)
     return params if k == 1.0 else params.replace(Cr=params.Cr * k)
 
 
@@ -235,16 +241,20 @@ def design_record(cond: dict, car: str, car_from: str, sensors: SensorSpec | Non
 
 
 def car_for_log(signals, cond: dict, params: VehicleParams | None = None, vehicle=None,
-                sensors: SensorSpec | None = None, trim: bool | None = None) -> tuple[VehicleParams, dict]:
+                sensors: SensorSpec | None = None, trim: bool | None = None,
+                tuning=None) -> tuple[VehicleParams, dict]:
     """The car a log's estimators are designed for, and its :func:`design_record` (``cond``: the log's
-    :func:`log_conditions`): ``vehicle``'s (a :class:`Vehicle`), else ``params`` (with ``sensors``), each with its
-    rear cornering stiffness trimmed to the log (:func:`described_car`; the record's ``rear_trim``, the scale, where
+    :func:`log_conditions`): ``vehicle``'s (a :class:`Vehicle`), else ``params`` (with ``sensors`` and the ``[tuning]``
+    tables ``tuning``), each with its rear cornering stiffness trimmed to the log (:func:`described_car`, its trials
+    built with that car's sensors and tuning; the record's ``rear_trim``, the scale, where
     it is not 1) unless ``trim`` is False (default: :func:`trims_rear` of ``vehicle``; the record's ``rear_measured``
     where the vehicle's was measured), else :func:`undescribed_car` of the log's ``signals`` (the one that fits it)."""
     sources = source_rates(signals)
     if vehicle is not None or params is not None:
         given = vehicle.params if vehicle is not None else cast(VehicleParams, params)
-        car = described_car(signals, given, cond, trims_rear(vehicle) if trim is None else trim)
+        if vehicle is not None:
+            sensors, tuning = vehicle.sensors, vehicle.tuning
+        car = described_car(signals, given, cond, trims_rear(vehicle) if trim is None else trim, sensors, tuning)
         record = (design_record(cond, vehicle.name, FROM_FILE, vehicle.sensors, sources) if vehicle is not None
                   else design_record(cond, "-", FROM_PARAMS, sensors, sources))
         if car is not given:
@@ -300,5 +310,7 @@ def for_log(name: str, signals, params: VehicleParams | None = None, *, vehicle=
     if params is None and vehicle is None:
         params = undescribed_params(signals, cond=cond)
     else:       # a car described: its rear stiffness trimmed to the log, as car_for_log does
-        params = described_car(signals, params if params is not None else vehicle.params, cond, trims_rear(vehicle))
+        on_car = (vehicle.sensors, vehicle.tuning) if vehicle is not None else (None, None)
+        params = described_car(signals, params if params is not None else vehicle.params, cond, trims_rear(vehicle),
+                               *on_car)
     return for_conditions(name, cond, params, vehicle=vehicle, described=described, **tuning)

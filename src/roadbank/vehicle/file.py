@@ -30,7 +30,8 @@ from .tomltext import fmt_options, fmt_value, is_scalar, toml_key, toml_type, to
 # roadbank.estimators and roadbank.sim (numba) are imported inside the functions that use
 # them: loading a car (load_vehicle, --vehicle) loads neither
 
-__all__ = ["Vehicle", "load_vehicle", "builtin_names", "BUILTINS", "DEFAULT_VEHICLE", "OFFSET_CHANNELS"]
+__all__ = ["Vehicle", "load_vehicle", "builtin_names", "BUILTINS", "DEFAULT_VEHICLE", "OFFSET_CHANNELS",
+           "tuning_of"]
 
 
 TABLES = ("meta", "vehicle", "sensors", "plant", "tuning", "scores", "identified")
@@ -65,6 +66,16 @@ def _plain(mapping, depth: int):
     if depth == 0:
         return {str(k): _py(v) for k, v in mapping.items()}
     return {str(k): _plain(v, depth - 1) for k, v in mapping.items()}
+
+
+def tuning_of(tuning: Mapping, name: str) -> dict:
+    """The options the estimator ``name`` is built with from a car's ``[tuning]`` tables ``tuning`` (estimator name ->
+    options, :attr:`Vehicle.tuning`): its own table's over that of the estimator whose filter it runs
+    (:data:`roadbank.estimators.TUNED_AS`: ``pif-smoother``, ``pif-gated`` and ``kinematic-pif`` run ``pif-modified``);
+    {} where neither has one. What :meth:`Vehicle.make`, the rear trim's trial designs and the validations read."""
+    from ..estimators import TUNED_AS
+    # an estimator tuned as itself looks up None: no table
+    return {**tuning.get(TUNED_AS.get(name), {}), **tuning.get(name, {})}
 
 
 @dataclass(frozen=True, eq=True)
@@ -197,10 +208,7 @@ class Vehicle:
         where that roll rate is documented free of offset (``log_gyro_unbiased``), its pitch from the pitch rate where
         one documented free of offset follows the pitch (``log_pitch_rate``).
         """
-        from ..estimators import TUNED_AS
-        # an estimator tuned as itself looks up None: no table
-        tuning = {**self.tuning.get(TUNED_AS.get(estimator_name), {}),  # type: ignore[arg-type]
-                  **self.tuning.get(estimator_name, {})}
+        tuning = tuning_of(self.tuning, estimator_name)
         return make_estimator(estimator_name, self.params, sensors=self.sensors, log_rate=log_rate,
                               log_ay_noise=log_ay_noise, log_r_noise=log_r_noise, log_ay_floor=log_ay_floor,
                               log_diff_noise=log_diff_noise, log_roll_rate=log_roll_rate, log_ax=log_ax,
