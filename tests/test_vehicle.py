@@ -448,18 +448,22 @@ def test_dataclass_fields_are_all_in_the_file_format():
 @pytest.mark.slow
 def test_reproduce_cell_with_a_vehicle():
     """--vehicle on reproduce: the car is plant and design; its [tuning.<name>] table drives the
-    column of that name, so pif-modified is the car's tuned PIF; pif-paper stays Table 4."""
+    column of that name, so pif-modified is the car's tuned PIF, and pif-gated, which runs pif-modified, takes that
+    table as `estimate` does (Vehicle.make; before, reproduce left it untuned); pif-paper stays Table 4."""
     from roadbank import estimators
     from roadbank.report.reproduce import run_cell
 
     car = load_vehicle("van").with_tuning("pif-modified", {"tuning": "paper", "Q": 3.0}) \
                              .with_tuning("dfc", {"a_ref": 1.5})
-    cell = run_cell("const-bank", "nominal", names=("pif-paper", "pif-modified", "dfc"), vehicle=car)
+    cell = run_cell("const-bank", "nominal", names=("pif-paper", "pif-modified", "dfc", "pif-gated"), vehicle=car)
     sim = car.simulate("const-bank", "nominal")
     np.testing.assert_array_equal(cell.inputs["vx"], sim.truth.vx)
     s = sim.signals
     np.testing.assert_array_equal(cell.phi_b["pif-modified"], car.make("pif-modified").run(s).phi_b)
     np.testing.assert_array_equal(cell.phi_b["dfc"], car.make("dfc").run(s).phi_b)
+    np.testing.assert_array_equal(cell.phi_b["pif-gated"], car.make("pif-gated").run(s).phi_b)
+    untuned = estimators.make("pif-gated", car.params).run(s).phi_b
+    assert np.max(np.abs(untuned - cell.phi_b["pif-gated"])) > 1e-4          # the table matters here
     published = estimators.make("pif-modified", car.params, tuning="paper").run(s).phi_b
     np.testing.assert_array_equal(cell.phi_b["pif-paper"], published)
 

@@ -19,6 +19,7 @@ import numpy as np
 from .. import estimators
 from ..evaluation import evaluate
 from ..sim import CONDITIONS_BY_SCENARIO, run_scenario
+from ..vehicle import tuning_of
 from .document import write_report
 from .tables import write_tables
 
@@ -84,11 +85,13 @@ def _evaluate_columns(sim, names, settle: float, vehicle=None):
     """:func:`evaluate` for the study columns ``names``, each ``estimators.make(name)``.
 
     With a ``vehicle`` (:class:`roadbank.vehicle.Vehicle`) every estimator is designed for
-    its parameters and its ``[tuning.<name>]`` table applies to the column of that name
-    (``pif-paper`` has none: it is Table 4 as published).
+    its parameters and its ``[tuning]`` tables apply as ``roadbank estimate`` reads them
+    (:func:`roadbank.vehicle.tuning_of`: the column of that name, under it the table of the filter it runs,
+    ``[tuning.pif-modified]`` for ``pif-gated``, ``pif-smoother`` and ``kinematic-pif``; ``pif-paper`` has none: it is
+    Table 4 as published).
     """
     params = vehicle.params if vehicle is not None else None
-    car_tuning = dict(vehicle.tuning) if vehicle is not None else {}
+    car_tuning = {name: tuning_of(vehicle.tuning, name) for name in names} if vehicle is not None else {}
     return evaluate(sim, list(names), params, settle=settle, tuning=car_tuning)
 
 
