@@ -148,9 +148,10 @@ def _design(settings: MapSettings, signals, designs: dict):
     cond = log_conditions(signals)
     described = settings.params is not None or settings.vehicle is not None
     if described:
-        v = settings.vehicle
-        given, sensors, tuning = (v.params, v.sensors, v.tuning) if v is not None else (settings.params, None, None)
-        car = described_car(signals, cast(VehicleParams, given), cond, trims_rear(v), sensors, tuning)
+        car_file = settings.vehicle
+        given = car_file.params if car_file is not None else settings.params
+        on_car = (car_file.sensors, car_file.tuning) if car_file is not None else (None, None)
+        car = described_car(signals, cast(VehicleParams, given), cond, trims_rear(car_file), *on_car)
     else:
         car = undescribed_params(signals, cond=cond)
     key = (tuple(round(v, 6) if v is not None and np.isfinite(v) else None for v in cond.values()), car, described)
