@@ -216,11 +216,27 @@ def _tuned_suv():
     return load_vehicle("suv-paper").replace(tuning={"pif-modified": {"Q": 1.0e-4, "th": 2.0e4}})
 
 
-def test_the_trials_are_built_as_the_described_car_builds_the_logs_estimator(soft, monkeypatch):
+def _trim_by_car_for_log(signals, vehicle):          # estimate, export c --log, validate
+    car_for_log(signals, log_conditions(signals), vehicle=vehicle)
+
+
+def _trim_by_for_log(signals, vehicle):              # the Python API
+    from roadbank.vehicle import for_log
+    for_log("kinematic-pif", signals, vehicle=vehicle)
+
+
+def _trim_by_map(signals, vehicle):                  # roadbank map
+    from roadbank.mapping.build import MapSettings, _design
+    _design(MapSettings(vehicle=vehicle), signals, {})
+
+
+@pytest.mark.parametrize("trim", [_trim_by_car_for_log, _trim_by_for_log, _trim_by_map])
+def test_the_trials_are_built_as_the_described_car_builds_the_logs_estimator(soft, monkeypatch, trim):
     """A described car's trim tries the default as the car builds it for the log (Vehicle.make: its sensors and
     [tuning] tables, what the log's estimator then is), not as the data sheet does: with a file that tunes the PIF,
     one trial (the described stiffness) is the vehicle's own default on the design span, to the bit, and none is the
-    untuned one. Before, every command's trials ignored the file's tuning (the campaign's did not)."""
+    untuned one; so for every command that trims. Before, their trials ignored the file's tuning (the campaign's did
+    not)."""
     from roadbank import defaults
     from roadbank.vehicle import factory
     from roadbank.vehicle.conditions import design_span, esp_conditions
@@ -240,7 +256,7 @@ def test_the_trials_are_built_as_the_described_car_builds_the_logs_estimator(sof
         trials.append(np.array(estimate.theta))
         return real(signals, estimate)
     monkeypatch.setattr(factory, "bank_band_power", spy)
-    car_for_log(s, log_conditions(s), vehicle=tuned)
+    trim(s, tuned)
     assert len(trials) == len(rear_trim_scales())
     assert any(np.array_equal(t, own, equal_nan=True) for t in trials)
     assert not any(np.array_equal(t, untuned, equal_nan=True) for t in trials)
