@@ -216,8 +216,12 @@ def _tuned_suv():
     return load_vehicle("suv-paper").replace(tuning={"pif-modified": {"Q": 1.0e-4, "th": 2.0e4}})
 
 
-def _trim_by_car_for_log(signals, vehicle):          # estimate, export c --log, validate
+def _trim_by_car_for_log(signals, vehicle):          # estimate, export c --log
     car_for_log(signals, log_conditions(signals), vehicle=vehicle)
+
+
+def _trim_by_validate(signals, vehicle):             # validate kitti / comma2k19 --vehicle: the file's parts
+    car_for_log(signals, log_conditions(signals), vehicle.params, sensors=vehicle.sensors, tuning=dict(vehicle.tuning))
 
 
 def _trim_by_for_log(signals, vehicle):              # the Python API
@@ -230,7 +234,7 @@ def _trim_by_map(signals, vehicle):                  # roadbank map
     _design(MapSettings(vehicle=vehicle), signals, {})
 
 
-@pytest.mark.parametrize("trim", [_trim_by_car_for_log, _trim_by_for_log, _trim_by_map])
+@pytest.mark.parametrize("trim", [_trim_by_car_for_log, _trim_by_validate, _trim_by_for_log, _trim_by_map])
 def test_the_trials_are_built_as_the_described_car_builds_the_logs_estimator(soft, monkeypatch, trim):
     """A described car's trim tries the default as the car builds it for the log (Vehicle.make: its sensors and
     [tuning] tables, what the log's estimator then is), not as the data sheet does: with a file that tunes the PIF,
