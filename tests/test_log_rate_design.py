@@ -223,3 +223,26 @@ def test_validate_kitti_reads_a_vehicles_tuning_as_roadbank_estimate_does(tmp_pa
     signals = load_log(DRIVE).signals
     untuned = load_vehicle("sedan").make("pif-gated", **log_conditions(signals)).run(signals).theta
     assert np.max(np.abs(untuned[valid] - run.raw_estimates["pif-gated"][valid])) > 1e-3   # the tuning matters
+
+
+@needs_kitti
+def test_a_tuned_pif_without_a_design_at_the_data_sheets_noise_loses_only_those_rows(tmp_path):
+    """A file's `th` that has a stabilising design at the drive's measured noise but none at the data sheet's alone
+    (the sensitivity rows of the sensor-weighted PIFs): `validate kitti --vehicle` used to exclude the whole drive
+    for it. Now the drive is scored (the same scores as without the sensitivity rows), those two rows are left out and
+    a note says why; the paper SUV's row stays."""
+    from roadbank.validation.kitti import validate_kitti_drive
+
+    car = load_vehicle("sedan").replace(tuning={"pif-modified": {"Q": 1.0e-4, "th": 2.0e4}})
+    kw = dict(names=["kinematic", "pif-modified"], params=car.params, tuning=dict(car.tuning), sensors=car.sensors)
+    full = validate_kitti_drive(DRIVE, sensitivity=True, **kw)
+    plain = validate_kitti_drive(DRIVE, sensitivity=False, **kw)
+    assert full.scores["pif-modified"].rms_raw_deg == plain.scores["pif-modified"].rms_raw_deg
+    assert "suv" in full.sensitivity and not {"sheet_rate", "R_nominal"} & set(full.sensitivity)
+    assert any("from the data sheet alone are not scored" in w and "lower th" in w for w in full.data["warnings"])
+    path = tmp_path / "tuned.toml"
+    car.to_toml(path)
+    res = CliRunner().invoke(main, ["validate", "kitti", str(DRIVE), "--vehicle", str(path), "-o",
+                                    str(tmp_path / "v.md")])
+    assert res.exit_code == 0, res.output
+    assert "excluded" not in res.output and "are not scored" in res.output

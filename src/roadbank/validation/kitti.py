@@ -35,6 +35,7 @@ import numpy as np
 
 from ..cache import not_stored
 from ..defaults import ESTIMATOR as DEFAULT
+from ..estimators import NoStabilisingSolution
 from ..estimators.pif import SENSOR_R_ESTIMATORS
 from ..io import LogError
 from ..io.kitti import drive_name, find_oxts_dirs, load_kitti_oxts
@@ -205,20 +206,25 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
                                  tuning=tuning)
     run = run_and_score(log.signals, log.reference_roll, names, params, scoring, per_estimator=tuning,
                         sensors=sensors, described=given is not None)
-    sens = {}
+    sens: dict = {}
+    notes: list[str] = []
     if sensitivity:
         sens["suv"] = run_and_score(log.signals, log.reference_roll, names, VehicleParams(), scoring).scores
         # the sensor-weighted PIFs designed from the data sheet alone: at the drive's rate, and at
         # the sensor's nominal rate (100 Hz)
-
         spec = sensors or SensorSpec()
         at_rate = [n for n in names if n in SENSOR_R_ESTIMATORS and "R" not in tuning_of(tuning or {}, n)]
-        for key, rate in (("sheet_rate", sample_rate(log.signals.t)), ("R_nominal", None)) if at_rate else ():
-            R, Q_ay = noise_densities(spec, rate)          # the data sheet's: no log noise given
-            sheet = {"R": R, "Q_ay": Q_ay}
-            sens[key] = run_and_score(log.signals, log.reference_roll, at_rate, params, scoring,
-                                      per_estimator={n: {**tuning_of(tuning or {}, n), **sheet}
-                                                     for n in at_rate}).scores
+        sheets = {}
+        try:
+            for key, rate in (("sheet_rate", sample_rate(log.signals.t)), ("R_nominal", None)) if at_rate else ():
+                R, Q_ay = noise_densities(spec, rate)          # the data sheet's: no log noise given
+                sheet = {"R": R, "Q_ay": Q_ay}
+                sheets[key] = run_and_score(log.signals, log.reference_roll, at_rate, params, scoring,
+                                            per_estimator={n: {**tuning_of(tuning or {}, n), **sheet}
+                                                           for n in at_rate}).scores
+            sens.update(sheets)
+        except NoStabilisingSolution as exc:    # a diagnostic: the drive's scores stand without it
+            notes.append(f"the sensor-weighted PIFs from the data sheet alone are not scored: {exc}")
     t = log.signals.t
     first = np.flatnonzero(run.scored)
     settings = {"tau": scoring.tau, "warmup_s": scoring.warmup_s, "fit_fraction": scoring.fit_fraction,
@@ -229,7 +235,7 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     data["split"] = split_of(log.metadata["drive"])
     data["ins_doubt"] = ins_doubt(log, scoring.v_gate)
     data["design"] = design
-    data["warnings"] = list(log.warnings)
+    data["warnings"] = list(log.warnings) + notes
     if sensitivity:
         data["pieces"] = short_log_scores(log, [n for n in SHORT_NAMES if n in names], given, scoring, sensors, trim,
                                           tuning)

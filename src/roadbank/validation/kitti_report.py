@@ -314,7 +314,7 @@ def markdown(v: KittiValidation, figures: dict | None = None, level: int = 2) ->
                  "alone at 10 Hz (no measured `ay` noise), and from the data sheet at the sensor's nominal "
                  "100 Hz (`R`, `Q_ay` ten times smaller, a faster filter; see the 10 Hz section for the "
                  "same comparison on the simulator):\n")
-        names = [n for n in v.drives[0].sensitivity.get("R_nominal", {})]
+        names = list(next(d.sensitivity["R_nominal"] for d in v.drives if "R_nominal" in d.sensitivity))
         body = [[d.label] + [f"{_f(d.scores[n].rms_raw_deg)} / {_f(d.sensitivity['sheet_rate'][n].rms_raw_deg)}"
                              f" / {_f(d.sensitivity['R_nominal'][n].rms_raw_deg)}"
                              for n in names] for d in v.drives if "R_nominal" in d.sensitivity]
