@@ -238,9 +238,9 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
     data["warnings"] = list(log.warnings) + notes
     if sensitivity:
         data["pieces"] = short_log_scores(log, [n for n in SHORT_NAMES if n in names], given, scoring, sensors, trim,
-                                          tuning)
+                                          tuning, data["warnings"])
         data["smooth_roads"] = smooth_road_scores(log, [n for n in SMOOTH_NAMES if n in names], given, scoring,
-                                                  sensors, trim, tuning)
+                                                  sensors, trim, tuning, data["warnings"])
     return ValidationResult(scores=run.scores, params=params, t=t, reference=run.reference,
                             estimates=run.estimates, split_time=float(t[first[0]]) if len(first) else float(t[0]),
                             data=data, sensitivity=sens, settings=settings, run=run,
@@ -253,27 +253,37 @@ SHORT_NAMES = ("kinematic", "kinematic-lp", DEFAULT, ESP_DEFAULT)
 
 
 def short_log_scores(log, names, params: VehicleParams | None, scoring: Scoring, sensors=None,
-                     trim: bool = True, tuning=None) -> dict:
+                     trim: bool = True, tuning=None, notes: list | None = None) -> dict:
     """``{length: {name: [raw RMS deg per piece]}}``: each estimator of ``names`` on the consecutive whole pieces of
     each of :data:`SHORT_PIECES_S` (s) of the drive ``log`` (:func:`~roadbank.validation.scoring.piece_bounds`), each
     piece read as a log of its own (its design, its fitted car unless ``params`` is given, ``scoring`` within it);
     pieces with no scored sample left out. What a user with a short log gets. Their designs (one set per piece) are
     not written to the design cache (:func:`roadbank.cache.not_stored`): they would fill it. ``sensors``, ``trim`` and
-    ``tuning``: as :func:`validate_kitti_drive`."""
+    ``tuning``: as :func:`validate_kitti_drive`. A piece on which an estimator has no stabilising design (a car's
+    tuning too tight for that piece's noise) is left out, said in ``notes`` (a list, appended to)."""
     with not_stored():
-        return {length: _piece_scores(log, length, names, params, scoring, sensors, trim, tuning)
+        return {length: _piece_scores(log, length, names, params, scoring, sensors, trim, tuning,
+                                      notes if notes is not None else [])
                 for length in SHORT_PIECES_S}
 
 
-def _piece_scores(log, length: float, names, params, scoring: Scoring, sensors, trim: bool, tuning) -> dict:
+def _piece_scores(log, length: float, names, params, scoring: Scoring, sensors, trim: bool, tuning,
+                  notes: list) -> dict:
     """:func:`short_log_scores` for one piece ``length`` (s): ``{name: [raw RMS deg per piece]}``."""
     rms: dict = {n: [] for n in names}
+    left_out = []
     for a, b, piece, _ in scored_pieces(log.signals, length, scoring):
-        car, _ = car_for_log(piece, log_conditions(piece), params, sensors=sensors, trim=trim, tuning=tuning)
-        run = run_and_score(piece, log.reference_roll[a:b], names, car, scoring, per_estimator=tuning, sensors=sensors,
-                            described=params is not None)
+        try:
+            car, _ = car_for_log(piece, log_conditions(piece), params, sensors=sensors, trim=trim, tuning=tuning)
+            run = run_and_score(piece, log.reference_roll[a:b], names, car, scoring, per_estimator=tuning,
+                                sensors=sensors, described=params is not None)
+        except NoStabilisingSolution as exc:
+            left_out.append(exc)
+            continue
         for n in names:
             rms[n].append(run.scores[n].rms_raw_deg)
+    if left_out:
+        notes.append(f"{len(left_out)} of its {length:g} s pieces left out: {left_out[0]}")
     return rms
 
 
@@ -283,19 +293,26 @@ SMOOTH_NAMES = SHORT_NAMES + ("pif-adaptive",)
 
 
 def smooth_road_scores(log, names, params: VehicleParams | None, scoring: Scoring, sensors=None,
-                       trim: bool = True, tuning=None) -> dict:
+                       trim: bool = True, tuning=None, notes: list | None = None) -> dict:
     """``{form: {name: raw RMS deg}}``: each estimator of ``names`` on the drive ``log`` as each smooth road of
     :data:`roadbank.validation.roads.SMOOTH_ROADS` (:func:`~roadbank.validation.roads.smooth_road`, seed 0), read as a
     log of its own (its design and fitted car unless ``params`` is given): what a quiet log of the same drive gives.
     Its designs are not written to the design cache. ``sensors``, ``trim`` and ``tuning``: as
-    :func:`validate_kitti_drive`."""
+    :func:`validate_kitti_drive`. A road on which an estimator has no stabilising design scores NaN for every
+    estimator, said in ``notes`` (a list, appended to)."""
     out = {}
     with not_stored():
         for form, (order, cutoff) in SMOOTH_ROADS.items():
             s = smooth_road(log.signals, order, cutoff, seed=0)
-            car, _ = car_for_log(s, log_conditions(s), params, sensors=sensors, trim=trim, tuning=tuning)
-            run = run_and_score(s, log.reference_roll, names, car, scoring, per_estimator=tuning, sensors=sensors,
-                                described=params is not None)
+            try:
+                car, _ = car_for_log(s, log_conditions(s), params, sensors=sensors, trim=trim, tuning=tuning)
+                run = run_and_score(s, log.reference_roll, names, car, scoring, per_estimator=tuning,
+                                    sensors=sensors, described=params is not None)
+            except NoStabilisingSolution as exc:
+                if notes is not None:
+                    notes.append(f"not scored as the smooth road {form}: {exc}")
+                out[form] = {n: math.nan for n in names}
+                continue
             out[form] = {n: run.scores[n].rms_raw_deg for n in names}
     return out
 
