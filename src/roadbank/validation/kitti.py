@@ -202,10 +202,7 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
                        f"first {scoring.warmup_s:g} s)")
     given = params
     # a car not described: the one that fits the drive
-    params, design = car_for_log(log.signals, log_conditions(log.signals), params, sensors=sensors, trim=trim,
-                                 tuning=tuning)
-    run = run_and_score(log.signals, log.reference_roll, names, params, scoring, per_estimator=tuning,
-                        sensors=sensors, described=given is not None)
+    run, params, design = _scored_as_log(log.signals, log.reference_roll, names, given, scoring, sensors, trim, tuning)
     sens: dict = {}
     notes: list[str] = []
     if sensitivity:
@@ -247,6 +244,17 @@ def validate_kitti_drive(path, names=None, params: VehicleParams | None = None,
                             label=log.metadata["drive"], dataset="kitti", valid=run.valid)
 
 
+def _scored_as_log(signals, ref, names, params, scoring: Scoring, sensors, trim: bool, tuning):
+    """``(run, car, design)``: ``signals`` read as a log of its own, as ``roadbank estimate`` reads it: its car
+    (:func:`roadbank.vehicle.car_for_log`: ``params``, with ``sensors`` and ``tuning``, trimmed to it unless ``trim`` is
+    False; None: the shipped car that fits it) and its design record, and each estimator of ``names`` designed for
+    it and scored against ``ref`` (:func:`~roadbank.validation.scoring.run_and_score`)."""
+    car, design = car_for_log(signals, log_conditions(signals), params, sensors=sensors, trim=trim, tuning=tuning)
+    run = run_and_score(signals, ref, names, car, scoring, per_estimator=tuning, sensors=sensors,
+                        described=params is not None)
+    return run, car, design
+
+
 #: the estimators scored on a drive's short pieces (:func:`short_log_scores`): the baselines, the default, and the
 #: default without the roll rate
 SHORT_NAMES = ("kinematic", "kinematic-lp", DEFAULT, ESP_DEFAULT)
@@ -274,9 +282,7 @@ def _piece_scores(log, length: float, names, params, scoring: Scoring, sensors, 
     left_out = []
     for a, b, piece, _ in scored_pieces(log.signals, length, scoring):
         try:
-            car, _ = car_for_log(piece, log_conditions(piece), params, sensors=sensors, trim=trim, tuning=tuning)
-            run = run_and_score(piece, log.reference_roll[a:b], names, car, scoring, per_estimator=tuning,
-                                sensors=sensors, described=params is not None)
+            run = _scored_as_log(piece, log.reference_roll[a:b], names, params, scoring, sensors, trim, tuning)[0]
         except NoStabilisingSolution as exc:
             left_out.append(exc)
             continue
@@ -305,9 +311,7 @@ def smooth_road_scores(log, names, params: VehicleParams | None, scoring: Scorin
         for form, (order, cutoff) in SMOOTH_ROADS.items():
             s = smooth_road(log.signals, order, cutoff, seed=0)
             try:
-                car, _ = car_for_log(s, log_conditions(s), params, sensors=sensors, trim=trim, tuning=tuning)
-                run = run_and_score(s, log.reference_roll, names, car, scoring, per_estimator=tuning,
-                                    sensors=sensors, described=params is not None)
+                run = _scored_as_log(s, log.reference_roll, names, params, scoring, sensors, trim, tuning)[0]
             except NoStabilisingSolution as exc:
                 if notes is not None:
                     notes.append(f"not scored as the smooth road {form}: {exc}")
